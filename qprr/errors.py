@@ -1,0 +1,53 @@
+"""Exceptions raised by qprr.
+
+Every exception derives from :class:`QprrError` and from the built-in that matches
+its meaning, so ``except ValueError`` keeps working for callers that do not know
+qprr.  Messages name the offending argument and its value.
+"""
+
+from __future__ import annotations
+
+
+class QprrError(Exception):
+    """Base class of every error raised by qprr."""
+
+
+class InputError(QprrError, ValueError):
+    """An argument has the wrong shape, a non-finite entry or a forbidden value."""
+
+
+class ShapeError(InputError):
+    """An array argument has the wrong shape."""
+
+
+class NonFiniteError(InputError):
+    """An array argument contains NaN or inf."""
+
+
+class LimitError(InputError):
+    """A joint value lies outside its limits where the function requires it inside."""
+
+
+class EulerSingularityError(InputError):
+    """ZYX Euler angles are singular (pitch theta = +-pi/2): rates or angles are not unique."""
+
+
+class UnknownNameError(QprrError, KeyError):
+    """An unknown name (layout, scenario, controller, method, option...) was given."""
+
+    def __init__(self, kind: str, name: object, valid: "list[str] | tuple[str, ...]") -> None:
+        self.kind = kind
+        self.name = name
+        self.valid = tuple(valid)
+        super().__init__(f"unknown {kind} {name!r}; valid: {', '.join(map(repr, self.valid))}")
+
+    def __str__(self) -> str:  # KeyError would otherwise repr() the message
+        return str(self.args[0])
+
+
+class DivergenceError(QprrError, RuntimeError):
+    """A simulation or an iterative algorithm diverged (NaN or runaway state)."""
+
+
+class SolverError(QprrError, RuntimeError):
+    """A numerical solver (QP, linear system) failed to return a trustworthy answer."""

@@ -1,0 +1,232 @@
+"""Physical parameters of the Q-PRR, each with its provenance.
+
+Frames: B is the body frame at the multirotor centre of gravity, x_B forward (the
+prismatic axis), z_B along the thrust, y_B = z_B x x_B.  Link frames i = 1..3 have the
+joint at their origin and coincide in orientation with B when theta2 = theta3 = 0;
+every link extends along its +z axis (Thesis (3.58): p_eb = [r0 + d2 s2 + d3 s23, 0,
+d0 + d1 + d2 c2 + d3 c23]).  World frame E: z up, gravity -g e3 (Thesis (5.27)-(5.29)).
+
+Values printed in the thesis cite their table or equation; values the thesis does not
+print say "chosen" with a one-line reason (see the README of the seeds: d0..d3, l, b, c
+are not printed).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class Link:
+    """One rigid body of the arm.
+
+    ``com`` is the centre of mass in the link frame [m]; ``inertia`` the rotational
+    inertia about the CoM in link-frame axes, (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg m^2].
+    """
+
+    name: str
+    mass: float
+    length: float
+    com: tuple[float, float, float]
+    inertia: tuple[float, float, float, float, float, float]
+
+    def inertia_matrix(self) -> np.ndarray:
+        ixx, iyy, izz, ixy, ixz, iyz = self.inertia
+        return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+
+
+@dataclass(frozen=True)
+class Rotor:
+    """A rotor: position in B [m], spin sign (+1: reaction torque along +z_B)."""
+
+    position: tuple[float, float, float]
+    spin: int
+
+
+LAYOUTS = ("plus", "x")
+
+
+@dataclass(frozen=True)
+class QPRRParams:
+    """Immutable parameter set of the Q-PRR (SI units)."""
+
+    g: float
+    multirotor_mass: float
+    multirotor_inertia: tuple[float, float, float, float, float, float]
+    d0: float
+    d1: float
+    d2: float
+    d3: float
+    links: tuple[Link, Link, Link]
+    r0_limits: tuple[float, float]
+    theta2_limits: tuple[float, float]
+    theta3_limits: tuple[float, float]
+    effort_limits: tuple[float, float, float]
+    velocity_limits: tuple[float, float, float]
+    arm_length: float  # l: distance from a rotor axis to z_B
+    thrust_factor: float  # b: f_i = b w_i^2
+    drag_factor: float  # c: tau_i = c w_i^2
+    thrust_max: float  # per rotor [N]
+    thrust_min: float = 0.0
+    rail: Link | None = None  # manipulator base fixed to the multirotor (CAD variant only)
+    variant: str = "thesis"
+    provenance: dict = field(default_factory=dict, compare=False, hash=False, repr=False)
+
+    # --- derived quantities -------------------------------------------------------
+    @property
+    def arm_mass(self) -> float:
+        return float(sum(link.mass for link in self.links))
+
+    @property
+    def total_mass(self) -> float:
+        rail = self.rail.mass if self.rail is not None else 0.0
+        return self.multirotor_mass + self.arm_mass + rail
+
+    @property
+    def kappa(self) -> float:
+        """Yaw torque per newton of thrust, c/b [m] (the factor the force form of (3.36) needs)."""
+        return self.drag_factor / self.thrust_factor
+
+    @property
+    def lower_limits(self) -> np.ndarray:
+        return np.array([self.r0_limits[0], self.theta2_limits[0], self.theta3_limits[0]])
+
+    @property
+    def upper_limits(self) -> np.ndarray:
+        return np.array([self.r0_limits[1], self.theta2_limits[1], self.theta3_limits[1]])
+
+    def multirotor_inertia_matrix(self) -> np.ndarray:
+        ixx, iyy, izz, ixy, ixz, iyz = self.multirotor_inertia
+        return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
+
+    def rotors(self, layout: str = "plus") -> tuple[Rotor, Rotor, Rotor, Rotor]:
+        """Rotor positions in B for the "+" layout of Thesis (3.36) or the "X" layout.
+
+        "+": rotor 1 on -x_B, 2 on -y_B, 3 on +x_B, 4 on +y_B, so that with thrust along
+        +z_B the body torque is tau = [l(f4 - f2), l(f1 - f3), kappa(f1 - f2 + f3 - f4)]
+        exactly as (3.34)-(3.36).  "x": the same rotors turned by +45 deg about z_B.
+        """
+        if layout not in LAYOUTS:
+            from .errors import UnknownNameError
+
+            raise UnknownNameError("layout", layout, LAYOUTS)
+        l = self.arm_length
+        plus = [(-l, 0.0), (0.0, -l), (l, 0.0), (0.0, l)]
+        if layout == "x":
+            c = s = np.sqrt(0.5)
+            plus = [(c * x - s * y, s * x + c * y) for x, y in plus]
+        spins = (1, -1, 1, -1)
+        return tuple(Rotor((float(x), float(y), 0.0), spin) for (x, y), spin in zip(plus, spins))
+
+    def hover_thrust(self) -> float:
+        """Per-rotor thrust [N] that holds the whole system's weight, m_G g / 4."""
+        return self.total_mass * self.g / 4.0
+
+    def with_changes(self, **changes) -> "QPRRParams":
+        """A copy with some fields replaced (the original stays untouched)."""
+        unknown = set(changes) - set(self.__dataclass_fields__)
+        if unknown:
+            raise InputError(f"unknown parameter field(s) {sorted(unknown)}; valid: {sorted(self.__dataclass_fields__)}")
+        return replace(self, **changes)
+
+
+def _homogeneous_link(name: str, mass: float, length: float, inertia: tuple[float, float, float]) -> Link:
+    """Hypothesis 1 (Thesis 3.3.2): homogeneous link, CoM at mid-length on the link axis."""
+    return Link(name, mass, length, (0.0, 0.0, length / 2.0), (*inertia, 0.0, 0.0, 0.0))
+
+
+# Table 3.1 masses [kg] and Table 3.2 principal inertias [kg m^2] (products zero: Table 3.2 text).
+_TABLE_3_1_MASS = {"base": 0.033, "link1": 0.1172, "link2": 0.2773, "link3": 0.0961}
+_TABLE_3_1_COM_MM = {
+    "base": (-14.17, 17.5, -19.87),
+    "link1": (-23.88, 13.11, 27.67),
+    "link2": (12.45, 19.31, 5.0),
+    "link3": (7.05, -0.05, 4.99),
+}
+_TABLE_3_2_INERTIA = {
+    "base": (1.67e-6, 1.32e-6, 2.56e-6),
+    "link1": (1.981e-5, 1.972e-5, 2.28e-5),
+    "link2": (2.274e-5, 5.013e-5, 2.2767e-5),
+    "link3": (4.33e-6, 7.99e-6, 3.94e-6),
+}
+
+PROVENANCE = {
+    "g": "Thesis (5.29): g = 9.8 m/s^2",
+    "multirotor_mass": "Table 3.3: 3.029 kg; the 33 g arm base of Table 3.1 is absent from the closed forms (3.77)-(3.78), so this variant leaves it out (the CAD variant adds it)",
+    "multirotor_inertia": "Table 3.3: Ixx, Iyy, Izz, Ixy, Ixz, Iyz at the CoG in B axes, products used as tensor entries",
+    "link masses": "Table 3.1: 0.1172, 0.2773, 0.0961 kg",
+    "link inertias": "Table 3.2: principal moments in link axes (products zero by symmetry, Table 3.2 text)",
+    "link CoM": "Hypothesis 1 (Sec. 3.3.2): homogeneous links, CoM at mid-length, as in (3.78)",
+    "d2": "(4.46)-(4.48): the coefficient 4 d2^2 = 0.1299 gives d2 = 0.18 m",
+    "d0 + d1": "(4.47): 2 (d0 + d1) d2 = 0.0342 gives d0 + d1 = 0.095 m",
+    "d1": "chosen: 0.055 m = twice the 27.67 mm CoM height of link 1 (Table 3.1), so the CoM is mid-length",
+    "d0": "chosen: 0.095 - d1 = 0.040 m (rail height between B and the slider)",
+    "d3": "chosen: 0.10 m; not recoverable from (4.46)-(4.48); a short wrist link lighter than link 2 (Table 3.1)",
+    "r0 limits": "Sec. 4.4.3: r0 in [-0.04, 0.04] m",
+    "theta2 limits": "chosen: +-2pi/3 rad, servo range of a hobby-grade joint, keeps theta2 = pi (arm folded into the body) out",
+    "theta3 limits": "chosen: +-2pi/3 rad, same servo class as theta2",
+    "effort limits": "chosen: 20 N for the slider, 5 N m for each revolute joint (hold link 2+3 horizontal with margin)",
+    "velocity limits": "chosen: 0.5 m/s slider, 6 rad/s revolute",
+    "l": "chosen: 0.225 m, a 450 mm-class frame consistent with Izz = 0.0116 kg m^2 of Table 3.3",
+    "b": "chosen: 3.0e-5 N s^2: hover (8.6 N per rotor) at ~540 rad/s, typical of 10-inch propellers",
+    "c": "chosen: 7.5e-7 N m s^2: c/b = 0.025 m yaw torque per newton, typical of 10-inch propellers",
+    "thrust_max": "chosen: 20 N per rotor: thrust-to-weight ratio 2.3 for the 3.52 kg system",
+    "rail": "CAD variant only: Table 3.1 'Base' (33 g) with its CoM offset, fixed to the multirotor",
+    "CAD CoM": "CAD variant only: Table 3.1 p_C [mm] read as the CoM in the link frame (the CAD origin is not printed: interpretation)",
+}
+
+
+def thesis_params() -> QPRRParams:
+    """Default parameters: the inertial model assumed by the thesis's closed forms (Hypothesis 1)."""
+    d0, d1, d2, d3 = 0.040, 0.055, 0.18, 0.10
+    links = (
+        _homogeneous_link("link1", _TABLE_3_1_MASS["link1"], d1, _TABLE_3_2_INERTIA["link1"]),
+        _homogeneous_link("link2", _TABLE_3_1_MASS["link2"], d2, _TABLE_3_2_INERTIA["link2"]),
+        _homogeneous_link("link3", _TABLE_3_1_MASS["link3"], d3, _TABLE_3_2_INERTIA["link3"]),
+    )
+    rev = 2.0 * np.pi / 3.0
+    return QPRRParams(
+        g=9.8,
+        multirotor_mass=3.029,
+        multirotor_inertia=(6.98664e-3, 7.23191e-3, 11.57173e-3, -3.6e-7, 2.876e-4, -8.01e-5),
+        d0=d0,
+        d1=d1,
+        d2=d2,
+        d3=d3,
+        links=links,
+        r0_limits=(-0.04, 0.04),
+        theta2_limits=(-rev, rev),
+        theta3_limits=(-rev, rev),
+        effort_limits=(20.0, 5.0, 5.0),
+        velocity_limits=(0.5, 6.0, 6.0),
+        arm_length=0.225,
+        thrust_factor=3.0e-5,
+        drag_factor=7.5e-7,
+        thrust_max=20.0,
+        provenance=dict(PROVENANCE),
+    )
+
+
+def cad_params() -> QPRRParams:
+    """Variant with the CAD centres of mass of Table 3.1 and the 33 g arm base as a separate body."""
+    base = thesis_params()
+
+    def cad(link: Link) -> Link:
+        com = tuple(v / 1000.0 for v in _TABLE_3_1_COM_MM[link.name])
+        return replace(link, com=com)
+
+    rail = Link(
+        "rail",
+        _TABLE_3_1_MASS["base"],
+        0.0,
+        tuple(v / 1000.0 for v in _TABLE_3_1_COM_MM["base"]),
+        (*_TABLE_3_2_INERTIA["base"], 0.0, 0.0, 0.0),
+    )
+    return replace(base, links=tuple(cad(k) for k in base.links), rail=rail, variant="cad")
+
+
+VARIANTS = {"thesis": thesis_params, "cad": cad_params}
