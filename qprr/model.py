@@ -62,7 +62,7 @@ class Robot:
         lo, hi = self.params.lower_limits, self.params.upper_limits
         bad = [i for i in range(3) if not lo[i] - 1e-12 <= q_arm[i] <= hi[i] + 1e-12]
         if bad:
-            parts = [f"{ARM_JOINTS[i]} = {q_arm[i]!r} not in [{lo[i]!r}, {hi[i]!r}]" for i in bad]
+            parts = [f"{ARM_JOINTS[i]} = {float(q_arm[i])!r} not in [{float(lo[i])!r}, {float(hi[i])!r}]" for i in bad]
             raise LimitError(f"{name}: " + "; ".join(parts))
         return q_arm
 
@@ -165,7 +165,7 @@ def arm_com(robot: Robot, data: pin.Data, q) -> tuple[float, np.ndarray, np.ndar
     q = _check_q(robot, q)
     pin.centerOfMass(robot.model, data, q, True)
     j = robot.arm_joint_ids[0]
-    c_world = data.com[j].copy()
+    c_world = data.oMi[j].act(data.com[j])  # subtree CoMs (j > 0) are expressed in joint j's frame
     return float(data.mass[j]), c_world, data.oMi[1].actInv(c_world)
 
 
