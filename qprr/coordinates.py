@@ -15,6 +15,8 @@ T is singular at theta = +-pi/2 (cos theta = 0): functions that need T^-1 raise
 
 from __future__ import annotations
 
+from math import atan2, cos, hypot, sin
+
 import numpy as np
 import pinocchio as pin
 
@@ -29,34 +31,47 @@ def as_vector(x, n: int, name: str) -> np.ndarray:
     a = np.asarray(x, dtype=float)
     if a.shape != (n,):
         raise ShapeError(f"{name} must have shape ({n},), got shape {a.shape}")
-    if not np.all(np.isfinite(a)):
-        raise NonFiniteError(f"{name} must be finite, got {a.tolist()}")
+    if not np.isfinite(a.sum()):  # a sum is finite iff every entry is (and far cheaper than isfinite().all())
+        if not np.all(np.isfinite(a)):
+            raise NonFiniteError(f"{name} must be finite, got {a.tolist()}")
     return a
 
 
+_EX, _EY, _EZ = (pin.skew(np.eye(3)[i]) for i in range(3))
+
+
 def rot_x(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = cos(a), sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = cos(a), sin(a)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(a: float) -> np.ndarray:
-    c, s = np.cos(a), np.sin(a)
+    c, s = cos(a), sin(a)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
 
+def _rotation(phi: float, theta: float, psi: float) -> np.ndarray:
+    sf, cf, st, ct, sp, cp = sin(phi), cos(phi), sin(theta), cos(theta), sin(psi), cos(psi)
+    return np.array([
+        [ct * cp, sf * st * cp - cf * sp, cf * st * cp + sf * sp],
+        [ct * sp, sf * st * sp + cf * cp, cf * st * sp - sf * cp],
+        [-st, sf * ct, cf * ct],
+    ])
+
+
 def euler_to_rotation(euler_zyx) -> np.ndarray:
-    """R_b = Rz(psi) Ry(theta) Rx(phi) for ``euler_zyx = [phi, theta, psi]`` (Thesis (3.4))."""
-    phi, theta, psi = as_vector(euler_zyx, 3, "euler_zyx")
-    return rot_z(psi) @ rot_y(theta) @ rot_x(phi)
+    """R_b = Rz(psi) Ry(theta) Rx(phi) for ``euler_zyx = [phi, theta, psi]``, expanded as Thesis (3.4)."""
+    phi, theta, psi = as_vector(euler_zyx, 3, "euler_zyx").tolist()
+    return _rotation(phi, theta, psi)
 
 
 def _check_pitch(theta: float, what: str) -> None:
-    if abs(np.cos(theta)) < EULER_TOL:
+    if abs(cos(theta)) < EULER_TOL:
         raise EulerSingularityError(
             f"{what}: ZYX Euler angles are singular at pitch theta = {theta!r} rad "
             f"(|cos theta| < {EULER_TOL:g}); roll and yaw rates are not defined there"
@@ -74,10 +89,10 @@ def rotation_to_euler(R) -> np.ndarray:
         raise ShapeError(f"R must have shape (3, 3), got {R.shape}")
     if not np.all(np.isfinite(R)):
         raise NonFiniteError("R must be finite")
-    theta = np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2]))
+    theta = atan2(-R[2, 0], hypot(R[2, 1], R[2, 2]))
     _check_pitch(theta, "rotation_to_euler")
-    phi = np.arctan2(R[2, 1], R[2, 2])
-    psi = np.arctan2(R[1, 0], R[0, 0])
+    phi = atan2(R[2, 1], R[2, 2])
+    psi = atan2(R[1, 0], R[0, 0])
     return np.array([phi, theta, psi])
 
 
@@ -86,27 +101,30 @@ def euler_rate_matrix(euler_zyx) -> np.ndarray:
 
     The world-frame angular velocity is omega_world = R_b T phi_b_dot.
     """
-    phi, theta, _ = as_vector(euler_zyx, 3, "euler_zyx")
-    sf, cf, st, ct = np.sin(phi), np.cos(phi), np.sin(theta), np.cos(theta)
+    phi, theta, _ = as_vector(euler_zyx, 3, "euler_zyx").tolist()
+    return _rate_matrix(phi, theta)
+
+
+def _rate_matrix(phi: float, theta: float) -> np.ndarray:
+    sf, cf, st, ct = sin(phi), cos(phi), sin(theta), cos(theta)
     return np.array([[1.0, 0.0, -st], [0.0, cf, sf * ct], [0.0, -sf, cf * ct]])
 
 
 def rate_map(xi) -> np.ndarray:
     """S(xi) = blockdiag(R^T, T, I3) (9x9): v = S xi_dot, u_xi = S^T tau."""
-    xi = as_vector(xi, 9, "xi")
+    phi, theta, psi = as_vector(xi, 9, "xi")[3:6].tolist()
     S = np.eye(9)
-    S[0:3, 0:3] = euler_to_rotation(xi[3:6]).T
-    S[3:6, 3:6] = euler_rate_matrix(xi[3:6])
+    S[0:3, 0:3] = _rotation(phi, theta, psi).T
+    S[3:6, 3:6] = _rate_matrix(phi, theta)
     return S
 
 
 def rate_map_derivatives(xi) -> np.ndarray:
     """dS/dxi_k for k = phi, theta, psi as an array of shape (3, 9, 9) (S depends on nothing else)."""
-    phi, theta, psi = as_vector(xi, 9, "xi")[3:6]
+    phi, theta, psi = as_vector(xi, 9, "xi")[3:6].tolist()
     Rx, Ry, Rz = rot_x(phi), rot_y(theta), rot_z(psi)
-    ex, ey, ez = (pin.skew(np.eye(3)[i]) for i in range(3))
-    dR = (Rz @ Ry @ Rx @ ex, Rz @ Ry @ ey @ Rx, Rz @ ez @ Ry @ Rx)
-    sf, cf, st, ct = np.sin(phi), np.cos(phi), np.sin(theta), np.cos(theta)
+    dR = (Rz @ Ry @ Rx @ _EX, Rz @ Ry @ _EY @ Rx, Rz @ _EZ @ Ry @ Rx)
+    sf, cf, st, ct = sin(phi), cos(phi), sin(theta), cos(theta)
     dT = (
         np.array([[0.0, 0.0, 0.0], [0.0, -sf, cf * ct], [0.0, -cf, -sf * ct]]),
         np.array([[0.0, 0.0, -ct], [0.0, 0.0, -sf * st], [0.0, 0.0, -cf * st]]),
@@ -122,9 +140,17 @@ def rate_map_derivatives(xi) -> np.ndarray:
 def xi_to_q(xi) -> np.ndarray:
     """Pinocchio configuration q (nq = 10) of thesis coordinates xi."""
     xi = as_vector(xi, 9, "xi")
-    quat = pin.Quaternion(euler_to_rotation(xi[3:6]))
-    quat.normalize()
-    return np.concatenate([xi[0:3], quat.coeffs(), xi[6:9]])
+    hf, ht, hp = 0.5 * xi[3], 0.5 * xi[4], 0.5 * xi[5]
+    cf, sf, ct, st, cp, sp = cos(hf), sin(hf), cos(ht), sin(ht), cos(hp), sin(hp)
+    q = np.empty(10)
+    q[0:3] = xi[0:3]
+    # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w) order as in Pinocchio
+    q[3] = sf * ct * cp - cf * st * sp
+    q[4] = cf * st * cp + sf * ct * sp
+    q[5] = cf * ct * sp - sf * st * cp
+    q[6] = cf * ct * cp + sf * st * sp
+    q[7:10] = xi[6:9]
+    return q
 
 
 def q_to_xi(q) -> np.ndarray:
