@@ -187,6 +187,9 @@ def com_jacobian_body(robot: Robot, data: pin.Data, q) -> np.ndarray:
 def arm_gravity_torque_body(robot: Robot, data: pin.Data, q) -> np.ndarray:
     """Torque about B, in B, that the arm's weight exerts on the multirotor [N m], Thesis (3.43).
 
+    Sign: world z up, tau = m_G xi_c x R_b^T (-g e3); the printed (3.43) has the opposite
+    sign because (3.42) takes gravity along +e3 (NED), see docs/thesis-errata.md.
+
     Read from RNEA at rest: ``data.f`` of the prismatic joint is the wrench the base
     applies to the arm subtree; the arm applies its opposite to the base.
     """
