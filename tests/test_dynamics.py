@@ -18,27 +18,12 @@ from hypothesis import strategies as st
 from qprr import coordinates as co
 from qprr import model as qm
 from qprr import symbolic as sy
+from .strategies import rates_strategy, xi_strategy
 from qprr.errors import EulerSingularityError, NonFiniteError, ShapeError
 from qprr.params import thesis_params
 
 SETTINGS = settings(max_examples=30, deadline=None, derandomize=True)
 REL = 1e-9
-
-_p = thesis_params()
-_angle = st.floats(-math.pi, math.pi)
-_pitch = st.floats(-1.39, 1.39)
-_pos = st.floats(-5.0, 5.0)
-_rate = st.floats(-3.0, 3.0)
-
-
-def xi_strategy():
-    arm = [st.floats(float(a), float(b)) for a, b in zip(_p.lower_limits, _p.upper_limits)]
-    return st.tuples(_pos, _pos, _pos, _angle, _pitch, _angle, *arm).map(np.array)
-
-
-def rates_strategy():
-    return st.lists(_rate, min_size=9, max_size=9).map(np.array)
-
 
 @pytest.fixture(scope="module", params=["thesis", "cad"])
 def pair(request):

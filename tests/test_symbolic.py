@@ -17,6 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from qprr import symbolic as sy
+from .strategies import rates_strategy, xi_strategy
 from qprr.errors import EulerSingularityError, InputError, NonFiniteError, ShapeError
 from qprr.params import Link, cad_params, thesis_params
 
@@ -24,22 +25,6 @@ SETTINGS = settings(max_examples=25, deadline=None, derandomize=True)
 VARIANTS = {"thesis": thesis_params(), "cad": cad_params()}
 
 _p = thesis_params()
-_angle = st.floats(-math.pi, math.pi)
-_pitch = st.floats(-1.39, 1.39)
-_pos = st.floats(-5.0, 5.0)
-_rate = st.floats(-3.0, 3.0)
-
-
-def xi_strategy():
-    lo, hi = _p.lower_limits, _p.upper_limits
-    arm = [st.floats(float(a), float(b)) for a, b in zip(lo, hi)]
-    return st.tuples(_pos, _pos, _pos, _angle, _pitch, _angle, *arm).map(np.array)
-
-
-def rates_strategy():
-    return st.lists(_rate, min_size=9, max_size=9).map(np.array)
-
-
 @pytest.fixture(scope="module", params=list(VARIANTS))
 def sm(request) -> sy.SymbolicModel:
     return sy.symbolic_model(VARIANTS[request.param])
