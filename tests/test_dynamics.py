@@ -18,9 +18,9 @@ from hypothesis import strategies as st
 from qprr import coordinates as co
 from qprr import model as qm
 from qprr import symbolic as sy
-from .strategies import rates_strategy, xi_strategy
 from qprr.errors import EulerSingularityError, NonFiniteError, ShapeError
-from qprr.params import thesis_params
+
+from .strategies import rates_strategy, xi_strategy
 
 SETTINGS = settings(max_examples=30, deadline=None, derandomize=True)
 REL = 1e-9

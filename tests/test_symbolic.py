@@ -14,12 +14,12 @@ import sys
 import numpy as np
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from qprr import symbolic as sy
-from .strategies import rates_strategy, xi_strategy
 from qprr.errors import EulerSingularityError, InputError, NonFiniteError, ShapeError
 from qprr.params import Link, cad_params, thesis_params
+
+from .strategies import rates_strategy, xi_strategy
 
 SETTINGS = settings(max_examples=25, deadline=None, derandomize=True)
 VARIANTS = {"thesis": thesis_params(), "cad": cad_params()}
