@@ -740,8 +740,7 @@ def _solve_dls(robot, data, p_d, R_d, xi0, opts: DLSOptions, t0):
             if lam > 1e10:
                 break
         if lam > 1e10 or slow >= 3:
-            status = "stalled"
-            reason = f"LM stalled after {it} iterations (no further decrease of ||log6||)"
+            status = "stalled"  # _finish words the reason from the measured pose errors
             break
     # the failure (if any) is worded by _finish from the measured errors
     return _finish(robot, data, "dls", q, None, p_d, R_d, opts, status=status, reason="", iterations=it,
