@@ -1,0 +1,194 @@
+"""Model-free control (MFC) with intelligent PIDs, Thesis Sec. 6.3.3.2, (6.36)-(6.39).
+
+Each coordinate y = xi_i gets the ultra-local model (6.36) with nu = 2:
+
+    y_ddot = F + alpha u
+
+where u is the generalised force on that coordinate (thesis coordinates: the world force
+u_fb for x, y, z, the Euler-angle torques, the arm efforts) and F lumps everything else
+(coupling, gravity, disturbances).  F is estimated at each step from measured outputs and
+the last input, F_est = y_ddot_meas - alpha u_prev, with y_ddot_meas the backward difference
+of the measured rate (optionally low-passed).  The iPID closes the loop:
+
+    u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha,   e = y* - y,
+
+so that e_ddot + K_D e_dot + K_P e + K_I int e = F_est - F (6.38).  The thesis prints (6.37)
+as u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha: with (6.36) that gives
+y_ddot = F + F_est - y*_ddot - ..., not (6.38), and a tracking error with negative damping
+(:func:`ipid_thesis_printed`, disproved in tests/test_control.py).
+
+As in the IDC, roll and pitch references come from u_fb through (6.17) and a command filter;
+the MFC needs no model: alpha_i = 1 / B_ii is evaluated once at the initial configuration
+("alpha is chosen so that the three terms of (6.36) have the same magnitude").
+Gains: K_P = 60, K_I = 8, K_D = 35 for every coordinate (Sec. 6.3.3.2).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..coordinates import as_vector, rate_map
+from ..errors import InputError
+from ..model import Robot
+from .base import Controller, Reference, State, TiltReference
+
+
+def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
+         kp: float, ki: float, kd: float) -> float:
+    """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y."""
+    return (-F_est + y_ddot_ref + kp * e + ki * e_int + kd * e_dot) / alpha
+
+
+def ipid_thesis_printed(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
+                        kp: float, ki: float, kd: float) -> float:
+    """(6.37) exactly as printed: u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha (wrong sign, see module docstring)."""
+    return (F_est - y_ddot_ref - kp * e - ki * e_int - kd * e_dot) / alpha
+
+
+@dataclass(frozen=True)
+class MFCGains:
+    """iPID gains per coordinate (x, y, z, phi, theta, psi, r0, theta2, theta3) and estimator settings.
+
+    ``kp``, ``ki``, ``kd``: 60, 8, 35 for all (Sec. 6.3.3.2, printed).  The rest is not printed;
+    chosen values and why (static mission, measured):
+
+    * ``alpha`` (None: ``alpha_scale`` (B^-1)_ii at the initial state, scale 3, one common
+      value for x, y, z).  F_est uses the previous step's inputs, so the coupled channels
+      update as u_k = (I - diag(1/alpha) B^-1) u_(k-1) + ...; the natural guess
+      alpha = 1 / B_ii gives spectral radius 16 at hover (diverges in milliseconds);
+      c (B^-1)_ii contracts for c > 1.2 (eigenvalues of diag(1/(B^-1)_ii) B^-1 lie in
+      [0.05, 2.34] at hover).  Measured on the static mission: c = 2 tracks the arm ten
+      times worse than c = 3; c = 4 and 6 are worse again.
+    * ``f_filter`` [s]: first-order low-pass on F_est per coordinate (0.2 s on x, y, none
+      elsewhere).  B sits 2.5 cm below the CoG, so a pitch acceleration moves B sideways at
+      once; unfiltered, F_x feeds that straight back into the pitch reference.
+    * ``filter_omega`` (15 rad/s): bandwidth of the feedback part of the roll/pitch reference
+      (:class:`~qprr.control.base.TiltReference`).  With K_D = 35 on the velocity of B the
+      reference feeds back its own rate with gain ~K_D z_cm / (alpha m g); the filter's
+      damping must exceed it: 50 rad/s diverges, 30 tracks poorly, 12-20 are best, 8 lags.
+    """
+
+    kp: tuple[float, ...] = (60.0,) * 9
+    ki: tuple[float, ...] = (8.0,) * 9
+    kd: tuple[float, ...] = (35.0,) * 9
+    alpha: tuple[float, ...] | None = None
+    alpha_scale: float = 3.0
+    f_filter: tuple[float, ...] = (0.2, 0.2) + (0.0,) * 7
+    filter_omega: float = 15.0
+    max_tilt: float = 0.8
+
+    def __post_init__(self) -> None:
+        for name in ("kp", "ki", "kd"):
+            a = as_vector(getattr(self, name), 9, name)
+            if np.any(a < 0):
+                raise InputError(f"{name} must be >= 0, got {a.tolist()}")
+            object.__setattr__(self, name, tuple(float(v) for v in a))
+        if self.alpha is not None:
+            a = as_vector(self.alpha, 9, "alpha")
+            if np.any(a <= 0):
+                raise InputError(f"alpha must be > 0, got {a.tolist()}")
+            object.__setattr__(self, "alpha", tuple(float(v) for v in a))
+        ff = as_vector(self.f_filter, 9, "f_filter")
+        if np.any(ff < 0):
+            raise InputError(f"f_filter must be >= 0, got {ff.tolist()}")
+        object.__setattr__(self, "f_filter", tuple(float(v) for v in ff))
+        if not (self.alpha_scale > 0 and self.filter_omega > 0 and 0 < self.max_tilt < math.pi / 2):
+            raise InputError("need alpha_scale > 0, filter_omega > 0, 0 < max_tilt < pi/2")
+
+    @classmethod
+    def thesis(cls) -> "MFCGains":
+        """K_P = 60 I9, K_I = 8 I9, K_D = 35 I9 (Sec. 6.3.3.2)."""
+        return cls()
+
+
+class ModelFreeController(Controller):
+    """iPID model-free control of every coordinate, with (6.17) roll/pitch references (Sec. 6.3.3.2)."""
+
+    name = "mfc"
+    uses_applied_force = True
+
+    def __init__(self, robot: Robot, gains: MFCGains | None = None) -> None:
+        self.robot = robot
+        self.gains = MFCGains() if gains is None else gains
+        if not isinstance(self.gains, MFCGains):
+            raise InputError(f"gains must be an MFCGains, got {type(self.gains).__name__}")
+        self.dt = 1e-3
+        self.reset(State(), Reference(), 1e-3)
+
+    def _alpha_from_inertia(self, state: State) -> list[float]:
+        """alpha_i = c (B^-1)_ii with B = S^T M S at the given state (computed once, not in the loop)."""
+        data = self.robot.model.createData()
+        M = pin.crba(self.robot.model, data, state.q)
+        S = rate_map(state.xi)
+        Binv = np.linalg.inv(S.T @ M @ S)
+        d = np.diag(Binv).copy()
+        d[0:3] = d[0:3].mean()  # one alpha for x, y, z: u_fb keeps the direction (6.17) reads
+        return [self.gains.alpha_scale * float(v) for v in d]
+
+    def reset(self, state: State, ref: Reference, dt: float) -> None:
+        self.dt = dt
+        g = self.gains
+        self.alpha = list(g.alpha) if g.alpha is not None else self._alpha_from_inertia(state)
+        self.integral = [0.0] * 9
+        self.u_prev = [0.0] * 9
+        self.yd_prev = None
+        self.F = [0.0] * 9
+        self._have_F = False
+        self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
+        p = self.robot.params
+        self.tilt = TiltReference(g.filter_omega, g.max_tilt, 0.05 * p.total_mass * p.g)
+        self._g = p.g
+
+    def _estimate_F(self, state: State) -> None:
+        """F_est = y_ddot_meas - alpha u_applied (backward difference, optional low-pass).
+
+        u_applied is the measured input of the previous step (``state.u_applied``): for x, y, z
+        the force the tilted thrust really produced, not the u_fb asked for.
+        """
+        yd = state._xd
+        if self.yd_prev is None:
+            self.yd_prev = list(yd)
+            return
+        dt, a, up, F, kf = self.dt, self.alpha, state.u_applied.tolist(), self.F, self._kf
+        first = not self._have_F
+        for i in range(9):
+            raw = (yd[i] - self.yd_prev[i]) / dt - a[i] * up[i]
+            F[i] = raw if first else F[i] + kf[i] * (raw - F[i])
+        self._have_F = True
+        self.yd_prev = list(yd)
+
+    def _ipid(self, i: int, x, xd, r, rd, rdd) -> float:
+        g = self.gains
+        e = r[i] - x[i]
+        if i == 5:
+            e = (e + math.pi) % (2.0 * math.pi) - math.pi
+        self.integral[i] += e * self.dt
+        return ipid(self.F[i], rdd[i], e, self.integral[i], rd[i] - xd[i], self.alpha[i], g.kp[i], g.ki[i], g.kd[i])
+
+    def _attitude_references(self, state: State, ref: Reference, u_fb) -> None:
+        """(6.17) on u_fb -> :class:`TiltReference` -> phi_d, theta_d (and rates) into ``ref``."""
+        self.tilt.update(state.xi[5], u_fb, ref.xi_ddot[0:3].tolist(), self._g, self.dt)
+        self.tilt.write(ref)
+
+    def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
+        """u_i from the iPID (6.37, corrected) of each coordinate; roll/pitch references from (6.17)."""
+        self._estimate_F(state)
+        x, xd = state.xi.tolist(), state._xd
+        r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
+        u = [0.0] * 9
+        for i in (0, 1, 2, 5, 6, 7, 8):
+            u[i] = self._ipid(i, x, xd, r, rd, rdd)
+        tilt = self.tilt
+        tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, self.dt)
+        tilt.write(ref)
+        r[3], r[4] = tilt.x
+        rd[3], rd[4] = tilt.xd
+        rdd[3], rdd[4] = tilt.xdd
+        u[3] = self._ipid(3, x, xd, r, rd, rdd)
+        u[4] = self._ipid(4, x, xd, r, rd, rdd)
+        self.u_prev = u
+        return np.array(u)

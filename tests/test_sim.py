@@ -1,0 +1,227 @@
+"""Simulator: static equilibria, conservation laws, integrator accuracy, divergence, hooks, results."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import qprr
+from qprr.control.base import Controller
+from qprr.control.bsg import cog_betas
+from qprr.coordinates import xi_to_qv
+from qprr.errors import DivergenceError, InputError, UnknownNameError
+from qprr.model import com_body, dynamics_xi
+from qprr.scenarios import run
+from qprr.sim import Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
+from qprr.trajectory import Hold
+
+
+class OpenLoop(Controller):
+    """Constant generalised force (thesis coordinates) - no feedback."""
+
+    name = "open-loop"
+
+    def __init__(self, u):
+        self.u = np.asarray(u, dtype=float)
+
+    def step(self, t, state, ref):
+        return self.u
+
+
+def _hover_u(robot, xi):
+    """u = G(xi): the generalised force that holds the system at rest at xi."""
+    _, _, G = dynamics_xi(robot, robot.data(), xi, np.zeros(9))
+    return G
+
+
+# ------------------------------------------------------------------------------ equilibria
+def test_hover_total_thrust_equals_weight_with_zero_arm_effort(robot):
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    u = _hover_u(robot, xi)
+    m, g = robot.params.total_mass, robot.params.g
+    np.testing.assert_allclose(u, [0, 0, m * g, 0, 0, 0, 0, 0, 0], atol=1e-10)
+    res = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 2.0, integrator="midpoint")
+    np.testing.assert_allclose(res.f, m * g / 4, atol=1e-9)
+    np.testing.assert_allclose(res.arm_effort, 0.0, atol=1e-12)
+    assert np.abs(res.xi - xi).max() < 1e-9
+
+
+def test_hover_at_a_cog_balanced_pose(robot):
+    """CoG on the thrust axis (x_cm = 0 by (6.33)): equal rotor thrusts m g / 4 and the arm's static torques hold it."""
+    b1, b2, b3 = cog_betas(robot.params)
+    t2, t3 = 0.4, -0.4
+    r0 = -(b2 * np.sin(t2) + b3 * np.sin(t2 + t3)) / b1
+    xi = np.r_[1, 2, 5, 0, 0, 0.3, r0, t2, t3]
+    q, _ = xi_to_qv(xi, np.zeros(9))
+    assert abs(com_body(robot, robot.data(), q)[0]) < 1e-12
+    u = _hover_u(robot, xi)
+    res = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 1.0, integrator="midpoint")
+    np.testing.assert_allclose(res.f, robot.params.total_mass * robot.params.g / 4, atol=1e-9)
+    assert np.abs(res.arm_effort[0] - u[6:9]).max() < 1e-12 and abs(u[7]) > 0.1  # theta2 holds its links
+    assert np.abs(res.xi - xi).max() < 1e-8
+    assert np.abs(res.x_cm[:, 0]).max() < 1e-9
+
+
+# ------------------------------------------------------------------------------ conservation
+@pytest.fixture(scope="module")
+def free_robot():
+    return qprr.load(qprr.thesis_params().with_changes(g=0.0))
+
+
+XI0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]
+XID0 = np.r_[0.5, -0.3, 0.2, 1.0, -2.0, 0.7, 0.05, 1.5, -2.0]
+
+
+def _invariants(robot, res, every=25):
+    m, d = robot.model, robot.model.createData()
+    E, P, L = [], [], []
+    for k in range(0, res.n, every):
+        q, v = xi_to_qv(res.xi[k], res.xi_dot[k])
+        E.append(pin.computeKineticEnergy(m, d, q, v))
+        h = pin.computeCentroidalMomentum(m, d, q, v)
+        P.append(h.linear.copy())
+        L.append(h.angular.copy())
+    E, P, L = np.array(E), np.array(P), np.array(L)
+    return np.abs(E - E[0]).max() / E[0], np.abs(P - P[0]).max(), np.abs(L - L[0]).max()
+
+
+@pytest.mark.parametrize("integrator, e_tol, p_tol, l_tol", [
+    ("midpoint", 1e-6, 1e-5, 1e-6),  # scenarios' integrator: measured 7.0e-7, 7.1e-6, 6.2e-7 over 10 s
+    ("rk4", 1e-10, 1e-6, 1e-8),      # measured 3.2e-12, 4.4e-7, 7.7e-9
+])
+def test_free_flight_conserves_energy_and_momentum(free_robot, integrator, e_tol, p_tol, l_tol):
+    """No gravity, no input, tumbling with the arm moving: 10 s at 1 kHz (|E| = 0.71 J, |p| = 1.9 N s)."""
+    zero = OpenLoop(np.zeros(9))
+    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, integrator=integrator, xi0=XI0, xi_dot0=XID0)
+    dE, dP, dL = _invariants(free_robot, res)
+    assert dE < e_tol and dP < p_tol and dL < l_tol
+
+
+def test_semi_implicit_euler_drifts_at_first_order(free_robot):
+    """Why it is not the default: its energy drifts (1.4 % in 10 s here) and halving dt halves the drift."""
+    zero = OpenLoop(np.zeros(9))
+    drift = []
+    for dt in (1e-3, 5e-4):
+        res = simulate(free_robot, zero, Hold(tuple(XI0)), 5.0, dt=dt, integrator="euler", xi0=XI0, xi_dot0=XID0)
+        drift.append(_invariants(free_robot, res)[0])
+    assert drift[0] > 1e-3
+    assert drift[0] / drift[1] == pytest.approx(2.0, rel=0.1)
+
+
+def test_midpoint_and_rk4_agree_in_closed_loop(robot):
+    """On the static mission (first 16 s) the default integrator matches RK4 to well under a millimetre."""
+    a = run("static-idc", robot=robot, duration=16.0)
+    b = run("static-idc", robot=robot, duration=16.0, integrator="rk4")
+    e = run("static-idc", robot=robot, duration=16.0, integrator="euler")
+    assert np.abs(a.xi - b.xi)[:, 0:3].max() < 1e-5  # measured 1.1e-6 m
+    assert np.abs(a.xi - b.xi)[:, 3:9].max() < 1e-5
+    assert np.abs(e.xi - b.xi)[:, 0:3].max() > 1e-3  # semi-implicit Euler: 1.9 mm off
+
+
+# ------------------------------------------------------------------------------ divergence
+class NaNController(Controller):
+    name = "nan"
+
+    def step(self, t, state, ref):
+        return np.full(9, np.nan) if t > 0.05 else np.r_[0, 0, 34.5, 0, 0, 0, 0, 0, 0]
+
+
+def test_divergence_raises_with_time_and_state(robot):
+    with pytest.raises(DivergenceError, match=r"t = 0\.0[5-9]\d* s") as err:
+        simulate(robot, NaNController(), Hold((0, 0, 1, 0, 0, 0, 0, 0, 0)), 1.0, integrator="midpoint")
+    res = err.value.result
+    assert res.status == "diverged" and res.n < 100
+
+def test_runaway_names_the_state(free_robot):
+    """No gravity, no input, 10 m/s along x: the position bound stops the run and says which coordinate."""
+    zero = OpenLoop(np.zeros(9))
+    with pytest.raises(DivergenceError, match=r"t = 2\.0\d\d s: position x") as err:
+        simulate(free_robot, zero, Hold(), 5.0, xi_dot0=np.r_[10.0, 0, 0, 0, 0, 0, 0, 0, 0], limits=Limits(position=20.0), integrator="midpoint")
+    assert err.value.result.status == "diverged"
+
+
+# ------------------------------------------------------------------------------ hooks
+def test_payload_changes_the_plant_copy_only(robot):
+    """Hover with a 0.2 kg payload needs (m + m_p) g; at m g the system sinks at m_p g / (m + m_p)."""
+    m, g, mp = robot.params.total_mass, robot.params.g, 0.2
+    inertia_before = [robot.model.inertias[j].mass for j in range(robot.model.njoints)]
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    sched = PayloadSchedule((PayloadChange(0.0, mp, (0.0, 0.0, 0.02)),))
+    held = simulate(robot, OpenLoop(np.r_[0, 0, (m + mp) * g, 0, 0, 0, 0, 0, 0]), Hold(tuple(xi)), 1.0, payload=sched, integrator="midpoint")
+    assert np.abs(held.xi - xi).max() < 1e-9
+    np.testing.assert_allclose(held.f.sum(axis=1), (m + mp) * g)
+    sink = simulate(robot, OpenLoop(np.r_[0, 0, m * g, 0, 0, 0, 0, 0, 0]), Hold(tuple(xi)), 1.0, payload=sched, integrator="midpoint")
+    a = -mp * g / (m + mp)
+    assert sink.xi[-1, 2] - 5.0 == pytest.approx(0.5 * a * sink.t[-1] ** 2, rel=1e-3)
+    # a release at 0.5 s: from then on the same thrust lifts the lighter system
+    drop = PayloadSchedule((PayloadChange(0.0, mp), PayloadChange(0.5, 0.0)))
+    rel = simulate(robot, OpenLoop(np.r_[0, 0, (m + mp) * g, 0, 0, 0, 0, 0, 0]), Hold(tuple(xi)), 1.0, payload=drop, integrator="midpoint")
+    assert abs(rel.xi[500, 2] - 5.0) < 1e-9 and rel.xi[-1, 2] - 5.0 == pytest.approx(0.5 * mp * g / m * 0.5**2, rel=2e-2)
+    assert [robot.model.inertias[j].mass for j in range(robot.model.njoints)] == inertia_before
+    with pytest.raises(InputError):
+        PayloadChange(-1.0, 0.1)
+    with pytest.raises(InputError):
+        PayloadSchedule((PayloadChange(1.0, 0.1), PayloadChange(0.5, 0.0)))
+
+
+def test_external_wrench_at_the_end_effector(robot):
+    """A world-vertical pull of m g at the end effector (on the thrust axis at the zero pose) holds the unpowered system."""
+    m, g = robot.params.total_mass, robot.params.g
+    seen = []
+
+    def pull(t, q, v):
+        seen.append(t)
+        return np.array([0.0, 0.0, m * g, 0.0, 0.0, 0.0])
+
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    res = simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, external_wrench=pull, integrator="midpoint")
+    assert np.abs(res.xi - xi).max() < 1e-9 and len(seen) == res.n
+    with pytest.raises(InputError):
+        simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 0.01, external_wrench=lambda t, q, v: np.zeros(3), integrator="midpoint")
+
+
+# ------------------------------------------------------------------------------ results, disturbances
+def test_result_save_load_and_rmse(robot, tmp_path):
+    res = run("static-idc", robot=robot, duration=3.0)
+    path = res.save(tmp_path / "r.npz")
+    back = SimResult.load(path)
+    for name in ("t", "xi", "xi_d", "u", "f", "arm_effort", "x_cm", "unallocated", "flags", "u_ext"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(res, name))
+    assert back.scenario == "static-idc" and back.controller == "idc" and back.status == "ok"
+    e = res.xi_d - res.xi
+    assert res.rmse()["z"] == pytest.approx(np.sqrt(np.mean(e[:, 2] ** 2)))
+    with pytest.raises(InputError):
+        res.save(tmp_path / "r.txt")
+
+
+def test_noise_is_seeded_and_bounded_and_pulses_are_timed():
+    t = np.arange(1000) * 1e-3
+    a = WhiteNoise(0.3).values(t, np.random.default_rng(5))
+    b = WhiteNoise(0.3).values(t, np.random.default_rng(5))
+    c = WhiteNoise(0.3).values(t, np.random.default_rng(6))
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c) and np.abs(a).max() <= 0.3 and np.abs(a).max() > 0.29
+    held = WhiteNoise(0.3, sample_time=0.1).values(t, np.random.default_rng(5))
+    assert len(np.unique(held[:, 0])) == 10
+    p = Pulse(0.2, 0.4, (0, 0, 5.0, 0, 0, 0, 0, 0, 0)).values(t)
+    assert p[199, 2] == 0 and p[200, 2] == 5.0 and p[399, 2] == 5.0 and p[400, 2] == 0
+    with pytest.raises(InputError):
+        Pulse(1.0, 0.5, (0,) * 9)
+    with pytest.raises(InputError):
+        WhiteNoise(-1.0)
+
+
+def test_bad_simulation_arguments(robot):
+    ctrl = OpenLoop(np.zeros(9))
+    with pytest.raises(UnknownNameError, match="midpoint"):
+        simulate(robot, ctrl, Hold(), 1.0, integrator="verlet")
+    with pytest.raises(InputError):
+        simulate(robot, ctrl, Hold(), 1.0, dt=-1.0, integrator="midpoint")
+    with pytest.raises(InputError):
+        simulate(robot, object(), Hold(), 1.0, integrator="midpoint")
+
+
+def test_progress_bar_on_stderr(robot, capsys):
+    simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold(), 0.2, progress=True, integrator="midpoint")
+    assert "100.0%" in capsys.readouterr().err
