@@ -28,7 +28,7 @@ import numpy as np
 from . import model as qm
 from .actuation import rotor_matrix
 from .coordinates import as_vector
-from .errors import DivergenceError, UnknownNameError
+from .errors import UnknownNameError
 from .interaction import PrescribedWrench, PushedMass
 from .sim import PayloadChange, PayloadSchedule, Pulse, SimResult, simulate
 from .trajectory import Hold, MultiPhase, Phase
@@ -460,32 +460,3 @@ def summary(result: SimResult) -> list[str]:
         lines.append(f"deflection at t = {d['t']:.3f} s: " + ", ".join(parts))
         lines.append(f"arm reference saturated on {info['saturated_steps']} steps")
     return lines
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m qprr.interaction_scenarios NAME [--controller C] [--plot PNG] [--progress]``."""
-    import argparse
-
-    parser = argparse.ArgumentParser(prog="python -m qprr.interaction_scenarios", description=__doc__.splitlines()[0])
-    parser.add_argument("scenario", choices=sorted(SCENARIOS))
-    parser.add_argument("--controller", default=None, help="controller name (see CONTROLLERS); default: the scenario's first")
-    parser.add_argument("--plot", default=None, help="write the figure to this PNG")
-    parser.add_argument("--progress", action="store_true")
-    args = parser.parse_args(argv)
-    try:
-        result = SCENARIOS[args.scenario](args.controller, args.progress)
-    except DivergenceError as err:
-        partial = getattr(err, "result", None)
-        print(f"{args.scenario}: {err}")
-        if partial is not None:
-            print(f"partial run: {partial.n} steps logged (t = 0 .. {partial.t[-1]:.3f} s)")
-        return 1
-    for line in summary(result):
-        print(line)
-    if args.plot:
-        print(f"figure: {PLOTS[args.scenario](result, args.plot)}")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -202,32 +202,55 @@ def _summary(res: SimResult) -> str:
     return "\n".join(lines)
 
 
+_RUN_OPTIONS = {"duration": None, "dt": 1e-3, "integrator": "midpoint", "seed": 0, "law": "quintic"}
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .errors import QprrError
 
+    inter = _interaction()
+    progress = not args.quiet and sys.stderr.isatty()
+    given = {k: getattr(args, k) for k in _RUN_OPTIONS if getattr(args, k) is not None}
     try:
-        get_scenario(args.scenario)
-        if args.controller is not None and args.controller not in CONTROLLERS:
-            raise UnknownNameError("controller", args.controller, tuple(CONTROLLERS))
+        if args.scenario in inter.SCENARIOS:
+            valid = inter.CONTROLLERS[args.scenario]
+            if args.controller is not None and args.controller not in valid:
+                raise UnknownNameError("controller", args.controller, valid)
+            if given:
+                raise UnknownNameError("option for the Sec. 6.4 scenarios", "--" + next(iter(given)), ("--controller", "--plot", "--save"))
+        else:
+            get_scenario(args.scenario)
+            if args.controller is not None and args.controller not in CONTROLLERS:
+                raise UnknownNameError("controller", args.controller, tuple(CONTROLLERS))
     except UnknownNameError as err:
+        if "scenario" == err.kind:
+            err = UnknownNameError("scenario", args.scenario, tuple(SCENARIOS) + tuple(inter.SCENARIOS))
         print(f"qprr simulate: error: {err}", file=sys.stderr)
         return 2
     try:
-        res = run(args.scenario, args.controller, duration=args.duration, dt=args.dt, integrator=args.integrator,
-                  seed=args.seed, law=args.law, progress=not args.quiet and sys.stderr.isatty())
+        if args.scenario in inter.SCENARIOS:
+            res = inter.SCENARIOS[args.scenario](args.controller, progress)
+        else:
+            res = run(args.scenario, args.controller, progress=progress, **{**_RUN_OPTIONS, **given})
         code = 0
     except QprrError as err:
         res = getattr(err, "result", None)
         if res is None:
             raise
+        print(f"qprr simulate: {type(err).__name__}: {err}", file=sys.stderr)
         code = 1
     print(_summary(res))
+    if args.scenario in inter.SCENARIOS and code == 0:
+        print("\n".join(inter.summary(res)[1:]))
     if args.save:
         print(f"saved {res.save(args.save)}")
     if args.plot:
-        from .plots import plot_result
+        if args.scenario in inter.SCENARIOS and code == 0:
+            print(f"figure {inter.PLOTS[args.scenario](res, args.plot)}")
+        else:
+            from .plots import plot_result
 
-        print(f"figure {plot_result(res, args.plot)}")
+            print(f"figure {plot_result(res, args.plot)}")
     return code
 
 
@@ -241,23 +264,34 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     return 0 if all(s == "ok" for s in cmp.status.values()) else 1
 
 
+def _interaction():
+    """The payload and interaction scenarios of Sec. 6.4 (qprr.interaction_scenarios)."""
+    from . import interaction_scenarios
+
+    return interaction_scenarios
+
+
 def register_cli(subparsers) -> None:
     """Add ``simulate`` and ``compare`` to the ``qprr`` command line."""
-    lines = [f"  {n:<12} {s.description} [{s.thesis}]" for n, s in SCENARIOS.items()]
+    inter = _interaction()
+    lines = [f"  {n:<15} {s.description} [{s.thesis}]" for n, s in SCENARIOS.items()]
+    lines += [f"  {n:<15} {(fn.__doc__ or '').strip().splitlines()[0]} [Sec. 6.4; controllers: {', '.join(inter.CONTROLLERS[n])}]"
+              for n, fn in inter.SCENARIOS.items()]
+    names = list(SCENARIOS) + list(inter.SCENARIOS)
     p = subparsers.add_parser(
         "simulate", help="run a thesis flight scenario (prints RMSE; optional figure and .npz)",
         description="Run a named scenario of Thesis Chapter 6.\n\nscenarios:\n" + "\n".join(lines)
-        + "\n\ncontrollers: " + ", ".join(f"{c} ({THESIS_NAMES[c]})" for c in CONTROLLERS),
+        + "\n\ncontrollers (Sec. 6.3 scenarios): " + ", ".join(f"{c} ({THESIS_NAMES[c]})" for c in CONTROLLERS),
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("scenario", help="one of: " + ", ".join(SCENARIOS))
-    p.add_argument("--controller", default=None, help="override the scenario's controller: " + ", ".join(CONTROLLERS))
+    p.add_argument("scenario", help="one of: " + ", ".join(names))
+    p.add_argument("--controller", default=None, help="override the scenario's controller (see the list above)")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save a figure of the run")
     p.add_argument("--save", default=None, metavar="FILE.npz", help="save the logged run")
     p.add_argument("--duration", type=float, default=None, help="seconds (default: the scenario's, 30 s)")
-    p.add_argument("--dt", type=float, default=1e-3, help="step [s] (default 1e-3)")
-    p.add_argument("--integrator", default="midpoint", help="midpoint (default, 2nd order), rk4 or euler (semi-implicit)")
-    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    p.add_argument("--law", default="quintic", help="transition law: quintic (default) or thesis (printed (6.16))")
+    p.add_argument("--dt", type=float, default=None, help="step [s] (default 1e-3)")
+    p.add_argument("--integrator", default=None, help="midpoint (default, 2nd order), rk4 or euler (semi-implicit)")
+    p.add_argument("--seed", type=int, default=None, help="noise seed (default 0)")
+    p.add_argument("--law", default=None, help="transition law: quintic (default) or thesis (printed (6.16))")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
     p = subparsers.add_parser("compare", help="IDC vs desired-state ID ('MPC') vs MFC on the static mission: Table 6.3")
