@@ -12,22 +12,10 @@ one-off derivation + code-generation time of the sympy model, and sympy/pinocchi
 from __future__ import annotations
 
 import argparse
-import platform
-import sys
 import time
 
 import numpy as np
-
-
-def _cpu_name() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
+from machine import machine_lines
 
 
 def _states(robot, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -66,17 +54,14 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     import pinocchio as pin
-    import sympy
 
     from qprr import coordinates as co
     from qprr import model as qm
     from qprr import symbolic as sy
 
     print("machine")
-    print(f"  platform : {platform.platform()}")
-    print(f"  cpu      : {_cpu_name()}")
-    print(f"  python   : {sys.version.split()[0]}")
-    print(f"  pinocchio {pin.__version__}, numpy {np.__version__}, sympy {sympy.__version__}")
+    for line in machine_lines(("sympy",)):
+        print(f"  {line}")
 
     robot = qm.load(args.variant)
     data = robot.data()

@@ -39,8 +39,6 @@ import argparse
 import gc
 import logging
 import math
-import os
-import platform
 import re
 import sys
 import tempfile
@@ -50,6 +48,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from machine import machine_lines
 import pinocchio as pin
 
 import qprr
@@ -63,36 +62,10 @@ HOVER_COLS = [0, 1, 2, 5, 6, 7, 8]  # xi entries of the 7-dof hover chain
 
 
 # --------------------------------------------------------------------------- machine
-def _cpu_name() -> str:
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
-def _version(mod: str) -> str:
-    try:
-        from importlib.metadata import version
-
-        return version(mod)
-    except Exception:  # noqa: BLE001
-        return "not installed"
-
-
 def print_machine() -> None:
-    import proxsuite
-
-    load = os.getloadavg() if hasattr(os, "getloadavg") else ("?",)
     print("## Machine")
-    print(f"- CPU: {_cpu_name()} ({os.cpu_count()} logical cores), load average {load[0]:.2f}")
-    print(f"- {platform.system()} {platform.release()}, Python {platform.python_version()}")
-    print(f"- numpy {np.__version__}, pinocchio {pin.__version__}, proxsuite {proxsuite.__version__}, qprr {qprr.__version__}")
-    print(f"- peers: pin-pink {_version('pin-pink')}, roboticstoolbox-python {_version('roboticstoolbox-python')}, "
-          f"ikpy {_version('ikpy')}")
+    for line in machine_lines(("pin-pink", "roboticstoolbox-python", "ikpy")):
+        print(f"- {line}")
     print()
 
 

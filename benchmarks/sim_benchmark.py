@@ -14,15 +14,12 @@ breakdown and the integrator costs.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import statistics
 import sys
 import timeit
 
 import numpy as np
-import pinocchio as pin
-import proxsuite
+from machine import machine_lines
 
 from qprr import load
 from qprr.control import make_controller
@@ -38,17 +35,7 @@ TARGET_S = 1.0
 
 
 def machine() -> str:
-    cpu = platform.processor() or "?"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return (f"{platform.platform()} | {cpu} | {os.cpu_count()} CPU | Python {platform.python_version()} | "
-            f"numpy {np.__version__} | pinocchio {pin.__version__} | proxsuite {proxsuite.__version__}")
+    return " | ".join(machine_lines())
 
 
 class _Hover(Controller):
