@@ -12,10 +12,14 @@ one-off derivation + code-generation time of the sympy model, and sympy/pinocchi
 from __future__ import annotations
 
 import argparse
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
-from machine import machine_lines
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
+from machine import machine_lines  # noqa: E402
 
 
 def _states(robot, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -48,7 +48,6 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from machine import machine_lines
 import pinocchio as pin
 
 import qprr
@@ -56,6 +55,9 @@ from qprr import coordinates as co
 from qprr import ik
 from qprr import model as qm
 from qprr.urdf import build_urdf
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
+from machine import machine_lines  # noqa: E402
 
 TOL = 1e-6
 HOVER_COLS = [0, 1, 2, 5, 6, 7, 8]  # xi entries of the 7-dof hover chain

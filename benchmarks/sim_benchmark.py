@@ -17,9 +17,9 @@ import argparse
 import statistics
 import sys
 import timeit
+from pathlib import Path
 
 import numpy as np
-from machine import machine_lines
 
 from qprr import load
 from qprr.control import make_controller
@@ -28,6 +28,9 @@ from qprr.coordinates import xi_to_qv
 from qprr.scenarios import SCENARIOS, THESIS_RUN_TIME_S, run
 from qprr.sim import simulate
 from qprr.trajectory import Hold
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
+from machine import machine_lines  # noqa: E402
 
 THESIS_FOR = {"static-idc": "idc", "static-dsid": "dsid", "static-mfc": "mfc", "spiral": "idc", "noise": "idc",
               "pulses": "idc", "dynamic-bsg": "mfc"}

@@ -40,6 +40,7 @@ proxsuite 0.8, see tests/test_allocation.py).  Any other status raises :class:`S
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
 
 import numpy as np
@@ -189,7 +190,7 @@ class Allocator:
 
     def rotor_thrusts(self, w) -> tuple[np.ndarray, bool]:
         """(f, saturated) for w = [f_bz, tau_x, tau_y, tau_z] (body, N and N m)."""
-        f = self.Omega_z_inv @ w
+        f = self.Omega_z_inv.dot(w)  # = Omega_z_inv @ w (same BLAS product), less call overhead
         f0, f1, f2, f3 = f.tolist()
         lo, hi = self.f_min, self.f_max
         if min(f0, f1, f2, f3) >= lo and max(f0, f1, f2, f3) <= hi:
@@ -224,27 +225,52 @@ class Allocator:
     def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
         """In-loop allocation without validation: writes f (7,) into ``f_out`` and, if given, N f into ``tau_out``.
 
+        ``tau_d`` (9,) float64; ``f_out`` (7,) and ``tau_out`` (9,) float64 arrays.
         Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.
         """
-        f, sat = self.rotor_thrusts(tau_d[2:6])
-        f_out[0:4] = f
-        flags = 1 if sat else 0
-        arm = tau_d[6:9]
+        td = tau_d.tolist()
+        w = tau_d[2:6]
+        f = self.Omega_z_inv.dot(w)  # fast path of :meth:`rotor_thrusts`, inlined
+        f0, f1, f2, f3 = f.tolist()
+        lo, hi = self.f_min, self.f_max
+        if lo <= f0 <= hi and lo <= f1 <= hi and lo <= f2 <= hi and lo <= f3 <= hi:
+            flags = 0
+        elif min(f0, f1, f2, f3) >= lo and max(f0, f1, f2, f3) <= hi:  # rotor_thrusts's test (differs on NaN)
+            flags = 0
+        else:
+            f = self._solve_qp(np.asarray(w, dtype=float))
+            f0, f1, f2, f3 = f.tolist()
+            flags = 1
+        a0, a1, a2 = td[6:9]
         if self.clip_arm:
-            a0, a1, a2 = arm.tolist()
             l0, l1, l2 = self._lim
             if a0 > l0 or a0 < -l0 or a1 > l1 or a1 < -l1 or a2 > l2 or a2 < -l2:
-                arm = np.clip(arm, -self.effort_limits, self.effort_limits)
+                a0, a1, a2 = np.clip(tau_d[6:9], -self.effort_limits, self.effort_limits).tolist()
                 flags |= 2
-        f_out[4:7] = arm
+        if f_out.dtype is _F8:
+            try:  # straight into the buffer: half the cost of f_out[:] = ...
+                _PACK7(f_out, 0, f0, f1, f2, f3, a0, a1, a2)
+            except (TypeError, struct.error):  # not C-contiguous, or too small
+                f_out[:] = (f0, f1, f2, f3, a0, a1, a2)
+        else:
+            f_out[:] = (f0, f1, f2, f3, a0, a1, a2)
         if tau_out is not None:
-            if flags:
+            if flags or not self._axial:
                 tau_out[0:6] = self.Omega @ f
-                tau_out[6:9] = arm
-            elif self._axial:  # exact: Omega f = [0, 0, w] (rotor axes along z_B), arm efforts unchanged
-                tau_out[:] = tau_d
-                tau_out[0] = tau_out[1] = 0.0
-            else:
-                tau_out[0:6] = self.Omega @ f
-                tau_out[6:9] = arm
+                tau_out[6:9] = (a0, a1, a2)
+            else:  # exact: Omega f = [0, 0, w] (rotor axes along z_B), arm efforts unchanged
+                td[0] = td[1] = 0.0
+                if tau_out.dtype is _F8:
+                    try:
+                        _PACK9(tau_out, 0, *td)
+                    except (TypeError, struct.error):
+                        tau_out[:] = td
+                else:
+                    tau_out[:] = td
         return flags
+
+
+_PACK7 = struct.Struct("=7d").pack_into
+_PACK9 = struct.Struct("=9d").pack_into
+_F8 = np.dtype(np.float64)
+

@@ -16,6 +16,7 @@ T is singular at theta = +-pi/2 (cos theta = 0): functions that need T^-1 raise
 from __future__ import annotations
 
 import math
+import struct
 from math import atan2, cos, hypot, sin
 
 import numpy as np
@@ -216,20 +217,27 @@ def a_to_xi_ddot(xi, xi_dot, a) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the hot-loop form
+_PACK9 = struct.Struct("=9d").pack_into  # 9 floats into the buffer of a C-contiguous float64 (9,) array
+_PACK10 = struct.Struct("=10d").pack_into
+_F8 = np.dtype(np.float64)
+
+
 class State:
     # The functions above on plain floats, for loops that run every millisecond (simulator,
     # controllers): one xi <-> (q, v) update caches R_b and the trigonometry that S, S_dot
-    # and S^-T need, so each map below is a few multiplications.
+    # and S^-T need, so each map below is a few multiplications.  The plain-float copies
+    # ``_xi``, ``_xd``, ``_v`` (and ``_ua``) let controllers skip array round trips.
     """Measured state at one step (updated in place by :meth:`update`; no allocation per step).
 
     Attributes: ``q`` (10,), ``v`` (9,) Pinocchio; ``xi`` (9,), ``xi_dot`` (9,) thesis;
     ``R`` (3, 3) body-to-world rotation (property); trigonometric values of phi and theta;
     ``u_applied`` (9,): the generalised force the actuators applied during the previous step
     (thesis coordinates, u = R_Q N f, disturbances excluded) - the "measured input" of the
-    model-free controller; filled only for controllers with ``uses_applied_force = True``.
+    model-free controller; filled only for controllers with ``uses_applied_force = True``
+    (stored as floats by :meth:`set_applied`; reading the property builds the array).
     """
 
-    __slots__ = ("t", "q", "v", "xi", "xi_dot", "u_applied", "_r", "_v", "_xd", "sf", "cf", "st", "ct")
+    __slots__ = ("t", "q", "v", "xi", "xi_dot", "_ua", "_r", "_v", "_xi", "_xd", "_qv", "sf", "cf", "st", "ct")
 
     def __init__(self) -> None:
         self.t = 0.0
@@ -238,10 +246,12 @@ class State:
         self.v = np.zeros(9)
         self.xi = np.zeros(9)
         self.xi_dot = np.zeros(9)
-        self.u_applied = np.zeros(9)
+        self._ua = [0.0] * 9
         self._r = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
         self._v = [0.0] * 9
+        self._xi = (0.0,) * 9
         self._xd = [0.0] * 9
+        self._qv = None
         self.sf, self.cf, self.st, self.ct = 0.0, 1.0, 0.0, 1.0
 
     @property
@@ -249,38 +259,67 @@ class State:
         """Body-to-world rotation R_b (3, 3) (a new array)."""
         return np.array(self._r).reshape(3, 3)
 
-    def update_xi(self, t: float, xi, xi_dot, arrays: bool = True) -> None:
+    @property
+    def u_applied(self) -> np.ndarray:
+        """Generalised force applied during the previous step, thesis coordinates (9,) (a new array)."""
+        return np.array(self._ua)
+
+    @u_applied.setter
+    def u_applied(self, value) -> None:
+        self._ua = as_vector(value, 9, "u_applied").tolist()
+
+    def set_applied(self, tau: np.ndarray) -> None:
+        """Store u_applied = S^T tau for the Pinocchio generalised force ``tau`` the actuators applied."""
+        self._ua = self.force_to_xi_list(tau)
+
+    def update_xi(self, t: float, xi, xi_dot, arrays: bool = True, reuse: bool = False) -> None:
         """Fill the state from thesis coordinates (used to evaluate a model at a desired state).
 
         ``arrays=False`` skips writing the ``xi`` / ``xi_dot`` arrays (q, v and the maps are set).
+        ``reuse=True`` writes q and v into two arrays this State owns and overwrites at each
+        such call (no allocation; a caller that keeps ``q`` or ``v`` must copy them).
         """
-        x, y, z, phi, theta, psi, r0, t2, t3 = xi.tolist() if isinstance(xi, np.ndarray) else xi
-        xd = xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else list(xi_dot)
-        c1, s1 = math.cos(0.5 * phi), math.sin(0.5 * phi)
-        c2, s2 = math.cos(0.5 * theta), math.sin(0.5 * theta)
-        c3, s3 = math.cos(0.5 * psi), math.sin(0.5 * psi)
+        self._from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else xi,
+                      xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else list(xi_dot), arrays, reuse)
+
+    def _from_xi(self, t: float, xi, xd: list, arrays: bool, reuse: bool) -> None:
+        """:meth:`update_xi` for ``xi`` a sequence and ``xd`` a list of floats (kept as ``_xd``)."""
+        x, y, z, phi, theta, psi, r0, t2, t3 = xi
+        c1, s1 = cos(0.5 * phi), sin(0.5 * phi)
+        c2, s2 = cos(0.5 * theta), sin(0.5 * theta)
+        c3, s3 = cos(0.5 * psi), sin(0.5 * psi)
         # sin/cos of the full angles from the half angles
         sf, cf = 2.0 * s1 * c1, c1 * c1 - s1 * s1
         st, ct = 2.0 * s2 * c2, c2 * c2 - s2 * s2
         sp, cp = 2.0 * s3 * c3, c3 * c3 - s3 * s3
-        r = (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
-             sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
-             -st, ct * sf, ct * cf)
-        px, py, pz, pd, td, sd = xd[0:6]
+        r00, r01, r02 = cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf
+        r10, r11, r12 = sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf
+        r20, r21, r22 = -st, ct * sf, ct * cf
+        px, py, pz, pd, td, sd, q1, q2, q3 = xd
         # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
-        v = [r[0] * px + r[3] * py + r[6] * pz, r[1] * px + r[4] * py + r[7] * pz, r[2] * px + r[5] * py + r[8] * pz,
-             pd - st * sd, cf * td + sf * ct * sd, -sf * td + cf * ct * sd, xd[6], xd[7], xd[8]]
+        v = [r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
+             pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd, q1, q2, q3]
         self.t = t
         # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
-        self.q = np.array((x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
-                           c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, r0, t2, t3))
-        self.v = np.array(v)
-        self._r = r
+        qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
+              c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, r0, t2, t3)
+        if reuse:
+            if self._qv is None:
+                self._qv = (np.zeros(10), np.zeros(9))
+            self.q, self.v = qv = self._qv
+            _PACK10(qv[0], 0, *qt)
+            _PACK9(qv[1], 0, *v)
+        else:
+            self.q = np.array(qt)
+            self.v = np.array(v)
+        self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
         self._v = v
         self._xd = xd
         self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
+        xi_t = (x, y, z, phi, theta, psi, r0, t2, t3)
+        self._xi = xi_t
         if arrays:
-            self.xi = np.array((x, y, z, phi, theta, psi, r0, t2, t3))
+            self.xi = np.array(xi_t)
             self.xi_dot = np.array(xd)
 
     def update(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
@@ -289,49 +328,64 @@ class State:
         self.q = q
         self.v = v
         x, y, z, qx, qy, qz, qw, r0, t2, t3 = q.tolist()
-        vl = v.tolist()
+        self._v = vl = v.tolist()
+        vx, vy, vz, wx_, wy_, wz_, q1, q2, q3 = vl
         xx, yy, zz = qx * qx, qy * qy, qz * qz
         xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
-        r = (1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy),
-             2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx),
-             2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy))
-        self._r = r
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = r
-        ch = math.hypot(r21, r22)
+        r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
+        r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
+        r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
+        self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+        ch = hypot(r21, r22)
         if not ch > 1e-6:  # also catches NaN
             raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; q = {q.tolist()}")
-        theta = math.atan2(-r20, ch)
-        phi = math.atan2(r21, r22)
         # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
-        sf, cf, st, ct = r21 / ch, r22 / ch, -r20, ch
-        self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
-        self.xi[:] = (x, y, z, phi, theta, math.atan2(r10, r00), r0, t2, t3)
-        vx, vy, vz, wx_, wy_, wz_, q1, q2, q3 = vl
+        self.sf = sf = r21 / ch
+        self.cf = cf = r22 / ch
+        self.st = st = -r20
+        self.ct = ch
+        self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), r0, t2, t3)
+        arr = self.xi
+        if arr.dtype is _F8:
+            try:  # straight into the array's buffer: half the cost of arr[:] = xi
+                _PACK9(arr, 0, *xi)
+            except (TypeError, struct.error):  # not C-contiguous, or not 9 entries
+                arr[:] = xi
+        else:
+            arr[:] = xi
         # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
-        psi_d = (sf * wy_ + cf * wz_) / ct
-        xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
-              wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, q1, q2, q3]
-        self._v = vl
-        self._xd = xd
-        self.xi_dot[:] = xd
+        psi_d = (sf * wy_ + cf * wz_) / ch
+        self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
+                         wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, q1, q2, q3]
+        arr = self.xi_dot
+        if arr.dtype is _F8:
+            try:
+                _PACK9(arr, 0, *xd)
+            except (TypeError, struct.error):
+                arr[:] = xd
+        else:
+            arr[:] = xd
 
     # --------------------------------------------------------------- coordinate maps
+    def accel_to_v_list(self, xi_ddot) -> list[float]:
+        """:meth:`accel_to_v` as a list of floats (``xi_ddot``: a sequence of 9 floats)."""
+        ax, ay, az, pdd, tdd, sdd, q1, q2, q3 = xi_ddot
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+        vx, vy, vz, wx, wy, wz, _, _, _ = self._v
+        _, _, _, pd, td, sd, _, _, _ = self._xd
+        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
+        # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
+        return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
+                r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
+                r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
+                pdd - st * sdd - ct * td * sd,
+                cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
+                -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd,
+                q1, q2, q3]
+
     def accel_to_v(self, xi_ddot) -> np.ndarray:
         """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot (cf. :func:`qprr.coordinates.xi_ddot_to_a`)."""
-        ax, ay, az, pdd, tdd, sdd, q1, q2, q3 = xi_ddot.tolist() if isinstance(xi_ddot, np.ndarray) else xi_ddot
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-        vx, vy, vz, wx, wy, wz = self._v[0:6]
-        _, _, _, pd, td, sd = self._xd[0:6]
-        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot)
-        bx = r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy)
-        by = r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz)
-        bz = r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx)
-        # a_ang = T euler_ddot + T_dot euler_dot
-        a0 = pdd - st * sdd - ct * td * sd
-        a1 = cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd
-        a2 = -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd
-        return np.array((bx, by, bz, a0, a1, a2, q1, q2, q3))
+        return np.array(self.accel_to_v_list(xi_ddot.tolist() if isinstance(xi_ddot, np.ndarray) else xi_ddot))
 
     def lin_to_world(self, f_body) -> tuple[float, float, float]:
         """R f for a body-frame 3-vector (plain floats)."""
@@ -344,33 +398,46 @@ class State:
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         return (a0 - st * a2, cf * a1 + sf * ct * a2, -sf * a1 + cf * ct * a2)
 
-    def force_to_xi(self, tau) -> np.ndarray:
-        """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
+    def force_to_xi_list(self, tau) -> list[float]:
+        """:meth:`force_to_xi` as a list of floats."""
         f0, f1, f2, m0, m1, m2, a, b, c = tau.tolist() if isinstance(tau, np.ndarray) else tau
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        return np.array((
-            r00 * f0 + r01 * f1 + r02 * f2,
-            r10 * f0 + r11 * f1 + r12 * f2,
-            r20 * f0 + r21 * f1 + r22 * f2,
-            m0,
-            cf * m1 - sf * m2,
-            -st * m0 + sf * ct * m1 + cf * ct * m2,
-            a, b, c,
-        ))
+        return [r00 * f0 + r01 * f1 + r02 * f2,
+                r10 * f0 + r11 * f1 + r12 * f2,
+                r20 * f0 + r21 * f1 + r22 * f2,
+                m0,
+                cf * m1 - sf * m2,
+                -st * m0 + sf * ct * m1 + cf * ct * m2,
+                a, b, c]
 
-    def force_from_xi(self, u) -> np.ndarray:
-        """Pinocchio generalised force tau = S^-T u (inverse of :meth:`force_to_xi`)."""
+    def force_to_xi(self, tau) -> np.ndarray:
+        """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
+        return np.array(self.force_to_xi_list(tau))
+
+    def force_from_xi(self, u, out: np.ndarray | None = None) -> np.ndarray:
+        """Pinocchio generalised force tau = S^-T u (inverse of :meth:`force_to_xi`).
+
+        ``out``: a C-contiguous float64 (9,) array to write tau into (returned), else a new array.
+        """
         u0, u1, u2, m0, m1, m2, a, b, c = u.tolist() if isinstance(u, np.ndarray) else u
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        w = (m2 + st * m0) / ct
-        return np.array((
-            r00 * u0 + r10 * u1 + r20 * u2,
-            r01 * u0 + r11 * u1 + r21 * u2,
-            r02 * u0 + r12 * u1 + r22 * u2,
-            m0,
-            cf * m1 + sf * w,
-            -sf * m1 + cf * w,
-            a, b, c,
-        ))
+        sf, cf = self.sf, self.cf
+        w = (m2 + self.st * m0) / self.ct
+        tau = (r00 * u0 + r10 * u1 + r20 * u2,
+               r01 * u0 + r11 * u1 + r21 * u2,
+               r02 * u0 + r12 * u1 + r22 * u2,
+               m0,
+               cf * m1 + sf * w,
+               -sf * m1 + cf * w,
+               a, b, c)
+        if out is None:
+            return np.array(tau)
+        if out.dtype is _F8:
+            try:
+                _PACK9(out, 0, *tau)
+                return out
+            except (TypeError, struct.error):
+                pass
+        out[:] = tau
+        return out

@@ -370,8 +370,10 @@ def simulate(
         raise ShapeError(f"disturbance values must have shape ({n}, 9), got {u_ext.shape}")
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
-    has_ext = bool(np.any(u_ext != 0.0, axis=1).any())
     ext_rows = np.any(u_ext != 0.0, axis=1)
+    has_ext = bool(ext_rows.any())
+    # per-step disturbance rows as float lists (None where zero): no array indexing in the loop
+    u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if has_ext else None
 
     payload_model = _PayloadModel(robot, payload or PayloadSchedule())
     model = payload_model.model  # the plant: a copy, never robot.model
@@ -398,7 +400,6 @@ def simulate(
     state.update(0.0, q, v)
     ref = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
     controller.reset(state, ref, dt)
-    f = np.zeros(7)
     tau = np.zeros(9)
     bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
     pos_lim, vlin_lim, w_lim, qd_lim = limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity
@@ -410,8 +411,12 @@ def simulate(
     pin_out = getattr(controller, "output", "xi") == "pinocchio"
     payload_pending = len(payload_model.changes) > payload_model.next
     half = 0.5 * dt
+    # the step sizes as arrays: array * array is cheaper than float * array, and the same numbers
+    half_v, dt_v = np.full(9, half), np.full(9, dt)
+    mul, add, b1, vh, tau_d_buf = np.multiply, np.add, np.empty(9), np.empty(9), np.empty(9)
     aba, integrate, com, step = pin.aba, pin.integrate, pin.centerOfMass, controller.step
     allocate = alloc.allocate_into
+    update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     t_start = time.perf_counter()
     k = 0
     status, reason = "ok", "completed"
@@ -422,7 +427,7 @@ def simulate(
                 payload_model.apply_until(tk)
                 payload_pending = len(payload_model.changes) > payload_model.next
             state.xi, state.xi_dot = xi_log[k], xid_log[k]  # the state writes its xi straight into the log
-            state.update(tk, q, v)
+            update(tk, q, v)
             ref.xi, ref.xi_dot, ref.xi_ddot = xi_d[k], xi_dot_d[k], xi_ddot_d[k]
             if pin_out:
                 tau_d = step(tk, state, ref)
@@ -430,15 +435,16 @@ def simulate(
             else:
                 u = step(tk, state, ref)
                 u_log[k] = u
-                tau_d = state.force_from_xi(u)
-            fl = allocate(tau_d, f, tau)
-            f_log[k] = f
+                tau_d = force_from_xi(u, tau_d_buf)
+            fl = allocate(tau_d, f_log[k], tau)  # f straight into the log
             if fl:
                 flags[k] = fl
             if wants_applied:
-                state.u_applied = state.force_to_xi(tau)
-            if has_ext and ext_rows[k]:
-                tau += state.force_from_xi(u_ext[k])
+                set_applied(tau)
+            if has_ext:
+                ue = u_ext_rows[k]
+                if ue is not None:
+                    add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext
             if external_wrench is not None:
                 h = np.asarray(external_wrench(tk, q, v), dtype=float)
                 if h.shape != (6,) or not np.all(np.isfinite(h)):
@@ -447,11 +453,11 @@ def simulate(
                 tau += J.T @ h
             a = aba(model, data, q, v, tau, WORLD)
             com_log[k] = com(model, data, POSITION, False)
-            if rk2:
-                vh = v + half * a
-                a2 = aba(model, data, integrate(model, q, half * v), vh, tau)
-                q = integrate(model, q, dt * vh)
-                v = v + dt * a2
+            if rk2:  # temporaries in buffers (v itself is a new array each step: the caller may keep it)
+                vh = add(v, mul(half_v, a, b1), vh)
+                a2 = aba(model, data, integrate(model, q, mul(half_v, v, b1)), vh, tau)
+                q = integrate(model, q, mul(dt_v, vh, b1))
+                v = v + mul(dt_v, a2, b1)
             elif rk4:
                 v2 = v + half * a
                 a2 = aba(model, data, integrate(model, q, half * v), v2, tau)

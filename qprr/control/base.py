@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
+from math import asin, atan, cos, sin, sqrt
 
 import numpy as np
 
@@ -53,7 +54,7 @@ class Controller(ABC):
 
     name: str = "controller"
     uses_applied_force: bool = False
-    """Set True to have the simulator fill ``state.u_applied`` (costs ~2 us per step)."""
+    """Set True to have the simulator fill ``state.u_applied`` (costs ~1 us per step)."""
     output: str = "xi"
     """What :meth:`step` returns: "xi" (default), u in thesis coordinates; or "pinocchio",
     tau = S^-T u at the measured state (a controller that computes tau anyway saves two
@@ -128,7 +129,7 @@ class TiltReference:
     deceleration) the last raw reference is held.  Angles are clamped to ``max_tilt``.
     """
 
-    __slots__ = ("omega", "omega_ff", "max_tilt", "uz_min", "filter", "ff_filter", "x", "xd", "xdd", "_ff", "_ffd", "_n", "_raw")
+    __slots__ = ("omega", "omega_ff", "max_tilt", "uz_min", "x", "xd", "xdd", "_s", "_k", "_ff", "_n", "_raw")
 
     def __init__(self, omega: float, max_tilt: float, uz_min: float, omega_ff: float = 700.0) -> None:
         self.omega, self.max_tilt, self.uz_min = float(omega), float(max_tilt), float(uz_min)
@@ -136,11 +137,13 @@ class TiltReference:
         self.reset()
 
     def reset(self) -> None:
-        self.filter = CommandFilter(2, self.omega)
-        self.ff_filter = CommandFilter(2, self.omega_ff)
+        """Forget the filter states; the bandwidths ``omega``, ``omega_ff`` are read from here on."""
         self.x, self.xd, self.xdd = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
-        self._ff = [[0.0, 0.0], [0.0, 0.0], [0.0, 0.0]]
-        self._ffd = [0.0, 0.0]
+        # the two CommandFilter-like states, flat: (x, xd) of the feedback filter and of the
+        # feedforward filter for roll, then for pitch; set at the first update
+        self._s = (0.0,) * 8
+        self._k = (None, self.omega, self.omega_ff)  # (dt, w^2, 2 w, wf^2, 2 wf) once dt is known
+        self._ff = (0.0, 0.0)  # last feedforward tilt (held when (6.17) is undefined)
         self._n = 0
         self._raw = None
 
@@ -153,38 +156,66 @@ class TiltReference:
 
     def update(self, psi: float, u_fb, a_ref, g: float, dt: float) -> None:
         """Advance one step: ``u_fb`` (3,) world force asked for, ``a_ref`` (3,) reference acceleration [m/s^2]."""
-        cp, sp = math.cos(psi), math.sin(psi)
+        # (6.17) written out twice (see :meth:`_tilt`; min/max as comparisons, same results)
+        cp, sp = cos(psi), sin(psi)
+        lim = self.max_tilt
         ax, ay, az = a_ref
         azg = az + g
-        ff = self._tilt(ax, ay, azg, cp, sp) if azg > 0.05 * g else self._ff[0]
+        if azg > 0.05 * g:
+            ff1 = atan((ax * cp + ay * sp) / azg)
+            if not -lim < ff1 < lim:  # clamp: max(-lim, min(lim, angle)), NaN included
+                ff1 = ff1 if ff1 < lim else lim
+                ff1 = ff1 if ff1 > -lim else -lim
+            ff0 = asin((ax * sp - ay * cp) / sqrt(ax * ax + ay * ay + azg * azg))
+            if not -lim < ff0 < lim:
+                ff0 = ff0 if ff0 < lim else lim
+                ff0 = ff0 if ff0 > -lim else -lim
+            self._ff = (ff0, ff1)
+        else:
+            ff0, ff1 = self._ff
         ux, uy, uz = u_fb
         if uz > self.uz_min:
-            raw = self._raw = self._tilt(ux, uy, uz, cp, sp)
+            raw1 = atan((ux * cp + uy * sp) / uz)
+            if not -lim < raw1 < lim:
+                raw1 = raw1 if raw1 < lim else lim
+                raw1 = raw1 if raw1 > -lim else -lim
+            raw0 = asin((ux * sp - uy * cp) / sqrt(ux * ux + uy * uy + uz * uz))
+            if not -lim < raw0 < lim:
+                raw0 = raw0 if raw0 < lim else lim
+                raw0 = raw0 if raw0 > -lim else -lim
+            self._raw = (raw0, raw1)
+        elif self._raw is not None:
+            raw0, raw1 = self._raw
         else:
-            raw = self._raw if self._raw is not None else ff
-        if self._n == 0:
-            self.filter.reset((raw[0] - ff[0], raw[1] - ff[1]))
-            self.ff_filter.reset(ff)
+            raw0, raw1 = ff0, ff1
+        if self._n == 0:  # filters start at rest on the first raw values
+            self._s = (raw0 - ff0, 0.0, ff0, 0.0, raw1 - ff1, 0.0, ff1, 0.0)
         self._n += 1
-        self._ff[0] = ff
-        # both second-order filters, semi-implicit Euler (see CommandFilter), unrolled
-        fb, ffl = self.filter, self.ff_filter
-        w = min(fb.omega, 0.7 / dt)
-        wf = min(ffl.omega, 0.7 / dt)
-        out_x, out_xd, out_xdd = self.x, self.xd, self.xdd
-        for i in (0, 1):
-            e = raw[i] - ff[i]
-            a1 = w * w * (e - fb.x[i]) - 2.0 * w * fb.xd[i]
-            fb.xdd[i] = a1
-            fb.xd[i] += dt * a1
-            fb.x[i] += dt * fb.xd[i]
-            a2 = wf * wf * (ff[i] - ffl.x[i]) - 2.0 * wf * ffl.xd[i]
-            ffl.xdd[i] = a2
-            ffl.xd[i] += dt * a2
-            ffl.x[i] += dt * ffl.xd[i]
-            out_x[i] = ffl.x[i] + fb.x[i]
-            out_xd[i] = ffl.xd[i] + fb.xd[i]
-            out_xdd[i] = a2 + a1
+        k = self._k
+        if k[0] != dt:  # bandwidths min(omega, 0.7 / dt) (CommandFilter's stability bound)
+            w = k[1] if k[1] < 0.7 / dt else 0.7 / dt
+            wf = k[2] if k[2] < 0.7 / dt else 0.7 / dt
+            self._k = k = (dt, k[1], k[2], w * w, 2.0 * w, wf * wf, 2.0 * wf)
+        _, _, _, w2, w2x, wf2, wf2x = k
+        bx0, bxd0, fx0, fxd0, bx1, bxd1, fx1, fxd1 = self._s
+        # both second-order filters (feedback part b, feedforward part f), semi-implicit Euler
+        # as in CommandFilter: a = w^2 (x_raw - x) - 2 w xd, xd += dt a, x += dt xd
+        ab0 = w2 * ((raw0 - ff0) - bx0) - w2x * bxd0
+        bxd0 = bxd0 + dt * ab0
+        bx0 = bx0 + dt * bxd0
+        af0 = wf2 * (ff0 - fx0) - wf2x * fxd0
+        fxd0 = fxd0 + dt * af0
+        fx0 = fx0 + dt * fxd0
+        ab1 = w2 * ((raw1 - ff1) - bx1) - w2x * bxd1
+        bxd1 = bxd1 + dt * ab1
+        bx1 = bx1 + dt * bxd1
+        af1 = wf2 * (ff1 - fx1) - wf2x * fxd1
+        fxd1 = fxd1 + dt * af1
+        fx1 = fx1 + dt * fxd1
+        self._s = (bx0, bxd0, fx0, fxd0, bx1, bxd1, fx1, fxd1)
+        self.x = [fx0 + bx0, fx1 + bx1]
+        self.xd = [fxd0 + bxd0, fxd1 + bxd1]
+        self.xdd = [af0 + ab0, af1 + ab1]
 
     def write(self, ref: "Reference") -> None:
         """Store the current references in ``ref`` (entries 3, 4 of xi, xi_dot, xi_ddot)."""

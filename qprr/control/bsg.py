@@ -83,9 +83,9 @@ class CogStabilizer(Controller):
 
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """Write r0_d, theta3_d (filtered, with rates) into ``ref`` and return the inner controller's u."""
-        tilt = getattr(self.inner, "tilt", None)
-        theta = state.xi[4] if (self.pitch == "measured" or tilt is None) else tilt.x[1]
-        r0_d, t3_d = self.joint_references(float(theta), float(ref.xi[7]))
+        tilt = None if self.pitch == "measured" else getattr(self.inner, "tilt", None)
+        theta = state._xi[4] if tilt is None else tilt.x[1]
+        r0_d, t3_d = self.joint_references(float(theta), ref.xi.item(7))
         if not self._started:
             self.filter.reset((r0_d, t3_d))
             self._started = True

@@ -47,6 +47,7 @@ attitude ones (documented there).
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
 
 import numpy as np
@@ -56,6 +57,12 @@ from ..coordinates import as_vector
 from ..errors import InputError
 from ..model import Robot
 from .base import Controller, Reference, State, TiltReference
+
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_rnea, _crba = pin.rnea, pin.crba
+_PACK3 = struct.Struct("=3d").pack  # exact key of three floats (tells -0.0 from 0.0)
+_PACK9 = struct.Struct("=9d").pack_into  # 9 floats into a float64 (9,) buffer
 
 
 def _nine(x, name: str) -> tuple[float, ...]:
@@ -144,6 +151,7 @@ class InverseDynamicsController(Controller):
 
     name = "idc"
     output = "pinocchio"  # returns tau = S^-T u at the measured state (the simulator logs u)
+    _reuse_mass = False  # the measured arm joints change at every step: no point in reusing M
     default_gains = staticmethod(IDCGains.default)
 
     def __init__(self, robot: Robot, gains: IDCGains | None = None, *, realizable: bool = True) -> None:
@@ -164,6 +172,12 @@ class InverseDynamicsController(Controller):
         self.tilt = TiltReference(self.gains.filter_omega, self.gains.max_tilt, 0.05 * p.total_mass * p.g)
         self._g = p.g
         self._started = False
+        # the outer loops' gains looked up once (see :meth:`_alpha_plan`)
+        self._loops_outer = self._alpha_plan((0, 1, 2, 5, 6, 7, 8))
+        self._loops_tilt = self._alpha_plan((3, 4))
+        self._abuf = np.zeros(9)  # the accelerations handed to RNEA
+        self._mass_key = None  # arm joints of the reused mass-matrix rows (see step)
+        self._mass_rows = None
 
     # ------------------------------------------------------------------ pieces
     def _alpha(self, x, xd, r, rd, rdd, idx, al: list[float]) -> list[float]:
@@ -171,16 +185,30 @@ class InverseDynamicsController(Controller):
 
         ``x``, ``xd``: measured xi, xi_dot; ``r``, ``rd``, ``rdd``: references (plain lists).
         """
+        return self._alpha_loops(x, xd, r, rd, rdd, self._alpha_plan(idx), al)
+
+    def _alpha_plan(self, idx) -> tuple[tuple, tuple]:
+        """Gains of the coordinates ``idx`` for :meth:`_alpha_loops`: ((i, k_P, k_D) without
+        integral action, ...), ((i, k_P, k_D, k_I) with integral action or yaw (wrapped error), ...)."""
         g = self.gains
-        kp, kd, ki, integ, dt = g.kp, g.kd, g.ki, self.integral, self.dt
-        for i in idx:
+        plain = tuple((i, g.kp[i], g.kd[i]) for i in idx if i != 5 and not g.ki[i])
+        other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if i == 5 or g.ki[i])
+        return plain, other
+
+    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float]) -> list[float]:
+        """:meth:`_alpha` for a :meth:`_alpha_plan` (gains looked up once, in :meth:`reset`)."""
+        plain, other = plan
+        for i, kp, kd in plain:  # PD: alpha = xi_ddot_d + k_D e_dot + k_P e
+            al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * (r[i] - x[i])
+        integ, dt = self.integral, self.dt
+        for i, kp, kd, ki in other:  # + k_I int e; the yaw error wrapped to [-pi, pi)
             e = r[i] - x[i]
             if i == 5:
-                e = (e + math.pi) % (2.0 * math.pi) - math.pi
-            a = rdd[i] + kd[i] * (rd[i] - xd[i]) + kp[i] * e
-            if ki[i]:
+                e = (e + _PI) % _TWO_PI - _PI
+            a = rdd[i] + kd * (rd[i] - xd[i]) + kp * e
+            if ki:
                 integ[i] += e * dt
-                a += ki[i] * integ[i]
+                a += ki * integ[i]
             al[i] = a
         return al
 
@@ -197,34 +225,53 @@ class InverseDynamicsController(Controller):
     # ------------------------------------------------------------------ step
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u = B alpha + C xi_dot + G with alpha from (6.20), (6.23), (6.24) and roll/pitch from (6.17)."""
-        x, xd = state.xi.tolist(), state._xd
+        x, xd = state._xi, state._xd
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         ms = self._model_state(state, r, rd)
-        alpha = self._alpha(x, xd, r, rd, rdd, (0, 1, 2, 5, 6, 7, 8), [0.0] * 9)
-        a = ms.accel_to_v(alpha)
-        tau0 = pin.rnea(self.model, self.data, ms.q, ms.v, a)
-        t0 = tau0.tolist()
-        self.tilt.update(x[5], ms.lin_to_world(t0[0:3]), rdd[0:3], self._g, self.dt)
+        model, data, q, v = self.model, self.data, ms.q, ms.v
+        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * 9)
+        a = ms.accel_to_v_list(alpha)
+        abuf = self._abuf
+        _PACK9(abuf, 0, *a)  # = np.array(a), into a buffer RNEA only reads
+        t0 = _rnea(model, data, q, v, abuf).tolist()
         tilt = self.tilt
+        # u_fb of (6.21) with alpha_phi = alpha_theta = 0: R times the body force of RNEA (State.lin_to_world)
+        f0, f1, f2 = t0[0:3]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = ms._r
+        u_fb = (r00 * f0 + r01 * f1 + r02 * f2, r10 * f0 + r11 * f1 + r12 * f2, r20 * f0 + r21 * f1 + r22 * f2)
+        tilt.update(x[5], u_fb, rdd[0:3], self._g, self.dt)
         tilt.write(ref)
         self._started = True
         r[3], r[4] = tilt.x
         rd[3], rd[4] = tilt.xd
         rdd[3], rdd[4] = tilt.xdd
-        self._alpha(x, xd, r, rd, rdd, (3, 4), alpha)
-        d3, d4, d5 = ms.euler_accel_to_omega_dot(alpha[3], alpha[4], 0.0)
+        self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha)
+        # omega_dot change of the roll/pitch accelerations: T [alpha_phi, alpha_theta, 0] (State.euler_accel_to_omega_dot)
+        a3, a4 = alpha[3], alpha[4]
+        sf, cf, st, ct = ms.sf, ms.cf, ms.st, ms.ct
+        d3, d4, d5 = a3 - st * 0.0, cf * a4 + sf * ct * 0.0, -sf * a4 + cf * ct * 0.0
         if self.realizable:
             # body-lateral accelerations d0, d1 chosen so that the applied force has no
             # body-lateral part: (tau0 + M delta)[0:2] = 0 with M[0:2, 0:2] = m I2
-            M = pin.crba(self.model, self.data, ms.q)  # Pinocchio 3+: full symmetric matrix
-            m = M[0, 0]
-            (m03, m04, m05), (m13, m14, m15) = M[0:2, 3:6].tolist()
+            if self._reuse_mass:
+                # M (CRBA, local convention) depends on the arm joints only: reused while they
+                # are bit for bit those of the previous step (a held desired arm pose)
+                xm = ms._xi
+                key = _PACK3(xm[6], xm[7], xm[8])
+                if key != self._mass_key:
+                    self._mass_rows = _crba(model, data, q)[0:2, 0:6].tolist()
+                    self._mass_key = key
+                (m, _, _, m03, m04, m05), (_, _, _, m13, m14, m15) = self._mass_rows
+            else:
+                M = _crba(model, data, q)  # Pinocchio 3+: full symmetric matrix
+                (m, _, _, m03, m04, m05), (_, _, _, m13, m14, m15) = M[0:2, 0:6].tolist()
             a[0] -= (t0[0] + m03 * d3 + m04 * d4 + m05 * d5) / m
             a[1] -= (t0[1] + m13 * d3 + m14 * d4 + m15 * d5) / m
         a[3] += d3
         a[4] += d4
         a[5] += d5
-        tau = pin.rnea(self.model, self.data, ms.q, ms.v, a)
+        _PACK9(abuf, 0, *a)
+        tau = _rnea(model, data, q, v, abuf)
         return tau if self.output == "pinocchio" else ms.force_to_xi(tau)
 
 
@@ -244,6 +291,7 @@ class DesiredStateInverseDynamics(InverseDynamicsController):
 
     name = "dsid"
     output = "xi"  # tau is computed at the desired state: u = S_d^T tau_d is what applies
+    _reuse_mass = True  # the desired arm pose is often held: M(q_d) is reused while it is
     default_gains = staticmethod(IDCGains.desired_state_default)
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
@@ -256,6 +304,6 @@ class DesiredStateInverseDynamics(InverseDynamicsController):
             xi_d[3], xi_d[4] = self.tilt.x
             xi_dot_d[3], xi_dot_d[4] = self.tilt.xd
         else:  # first step: none yet, use the measured tilt
-            xi_d[3], xi_d[4] = state.xi[3], state.xi[4]
-        self._desired.update_xi(state.t, xi_d, xi_dot_d, arrays=False)
+            xi_d[3], xi_d[4] = state._xi[3], state._xi[4]
+        self._desired._from_xi(state.t, xi_d, xi_dot_d, False, True)  # update_xi(..., arrays=False, reuse=True)
         return self._desired

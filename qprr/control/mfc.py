@@ -36,6 +36,9 @@ from ..errors import InputError
 from ..model import Robot
 from .base import Controller, Reference, State, TiltReference
 
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+
 
 def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
          kp: float, ki: float, kd: float) -> float:
@@ -142,6 +145,9 @@ class ModelFreeController(Controller):
         p = self.robot.params
         self.tilt = TiltReference(g.filter_omega, g.max_tilt, 0.05 * p.total_mass * p.g)
         self._g = p.g
+        # (i, k_P,i, k_I,i, k_D,i) of the iPIDs, looked up once: outer loops, then roll and pitch
+        self._loops_outer = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (0, 1, 2, 5, 6, 7, 8))
+        self._loops_tilt = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (3, 4))
 
     def _estimate_F(self, state: State) -> None:
         """F_est = y_ddot_meas - alpha u_applied (backward difference, optional low-pass).
@@ -153,11 +159,12 @@ class ModelFreeController(Controller):
         if self.yd_prev is None:
             self.yd_prev = list(yd)
             return
-        dt, a, up, F, kf = self.dt, self.alpha, state.u_applied.tolist(), self.F, self._kf
-        first = not self._have_F
-        for i in range(9):
-            raw = (yd[i] - self.yd_prev[i]) / dt - a[i] * up[i]
-            F[i] = raw if first else F[i] + kf[i] * (raw - F[i])
+        dt = self.dt
+        zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state._ua)
+        if self._have_F:  # raw = (y_dot - y_dot_prev) / dt - alpha u, low-passed: F += k (raw - F)
+            self.F = [f + k * ((y - p) / dt - al * ua - f) for f, k, y, p, al, ua in zipped]
+        else:
+            self.F = [(y - p) / dt - al * ua for f, k, y, p, al, ua in zipped]
         self._have_F = True
         self.yd_prev = list(yd)
 
@@ -174,21 +181,30 @@ class ModelFreeController(Controller):
         self.tilt.update(state.xi[5], u_fb, ref.xi_ddot[0:3].tolist(), self._g, self.dt)
         self.tilt.write(ref)
 
+    def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float]) -> None:
+        """:meth:`_ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...), results into ``u``."""
+        integ, dt, F, al = self.integral, self.dt, self.F, self.alpha
+        for i, kp, ki, kd in loops:
+            e = r[i] - x[i]
+            if i == 5:
+                e = (e + _PI) % _TWO_PI - _PI
+            ie = integ[i] + e * dt
+            integ[i] = ie
+            u[i] = (-F[i] + rdd[i] + kp * e + ki * ie + kd * (rd[i] - xd[i])) / al[i]  # ipid()
+
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u_i from the iPID (6.37, corrected) of each coordinate; roll/pitch references from (6.17)."""
         self._estimate_F(state)
-        x, xd = state.xi.tolist(), state._xd
+        x, xd = state._xi, state._xd
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         u = [0.0] * 9
-        for i in (0, 1, 2, 5, 6, 7, 8):
-            u[i] = self._ipid(i, x, xd, r, rd, rdd)
+        self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u)
         tilt = self.tilt
         tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, self.dt)
         tilt.write(ref)
         r[3], r[4] = tilt.x
         rd[3], rd[4] = tilt.xd
         rdd[3], rdd[4] = tilt.xdd
-        u[3] = self._ipid(3, x, xd, r, rd, rdd)
-        u[4] = self._ipid(4, x, xd, r, rd, rdd)
+        self._ipid_loops(self._loops_tilt, x, xd, r, rd, rdd, u)
         self.u_prev = u
         return np.array(u)
