@@ -227,7 +227,8 @@ class SimResult:
     (thesis generalised forces: u_fb world force, u_tau Euler torques, u_mu arm efforts);
     f (n, 4) rotor thrusts [N]; arm_effort (n, 3) [N, N m, N m] applied; x_cm (n, 3) system
     CoM in B [m] (Thesis (3.78)); unallocated (n, 9) tau_d - N f (Pinocchio coordinates);
-    flags (n,) allocation bits (1 rotor bound, 2 arm limit); u_ext (n, 9) disturbance.
+    flags (n,) bits: 1 rotor bound, 2 arm effort clipped (allocation), 4 an arm joint at its mechanical stop;
+    u_ext (n, 9) disturbance.
     """
 
     scenario: str
@@ -338,12 +339,16 @@ def simulate(
     allocator: Allocator | None = None,
     seed: int | None = 0,
     limits: Limits = Limits(),
+    joint_stops: bool = True,
     progress: bool = False,
     scenario: str = "custom",
 ) -> SimResult:
     """Run ``controller`` on the Q-PRR along ``trajectory`` for ``duration`` seconds.
 
     ``xi0`` defaults to the trajectory at t = 0 (zero rates); ``seed`` seeds the noise.
+    ``joint_stops``: the arm joints end at mechanical stops (the joint limits of the
+    parameters, e.g. the +-0.04 m slider stroke): see :func:`_apply_joint_stops`; steps
+    where a stop acted carry bit 4 in ``SimResult.flags``.
     Returns a :class:`SimResult`; raises :class:`DivergenceError` (with ``.result``) on NaN
     or runaway states.  See the module docstring for the step.
     """
@@ -363,6 +368,9 @@ def simulate(
     xi_dot_d = sample.xi_dot.copy()
     xi_ddot_d = sample.xi_ddot.copy()
     xi0 = xi_d[0].copy() if xi0 is None else as_vector(xi0, 9, "xi0")
+    lo, hi = robot.params.lower_limits.tolist(), robot.params.upper_limits.tolist()
+    if joint_stops:
+        robot.check_arm_limits(xi0[6:9], "xi0[6:9]")
     xi_dot0 = np.zeros(9) if xi_dot0 is None else as_vector(xi_dot0, 9, "xi_dot0")
     rng = np.random.default_rng(seed)
     u_ext = np.zeros((n, 9)) if disturbance is None else np.asarray(disturbance.values(t, rng), dtype=float)
@@ -470,6 +478,11 @@ def simulate(
             else:
                 v = v + dt * a
                 q = integrate(model, q, dt * v)
+            if joint_stops:
+                r0, t2, t3 = q[7:10].tolist()
+                if not (lo[0] <= r0 <= hi[0] and lo[1] <= t2 <= hi[1] and lo[2] <= t3 <= hi[2]):
+                    q, v = _apply_joint_stops(model, data, q, v, lo, hi)
+                    flags[k] |= 4
             if not k & 15:
                 _check(tk + dt, q, v, pos_lim, vlin_lim, w_lim, qd_lim)
                 if progress and k % bar.every == 0:
@@ -489,6 +502,52 @@ def simulate(
             bar.close()
     return _result(scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
                    com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out)
+
+
+def _apply_joint_stops(model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray, lo, hi) -> tuple[np.ndarray, np.ndarray]:
+    """Mechanical stops of the arm joints: plastic impacts at the limits.
+
+    Position: a joint past its limit is moved back onto it by the mass-weighted correction
+    dq = -M^-1 E (E^T M^-1 E)^-1 penetration, the displacement an internal joint force
+    produces, so the system's centre of mass does not move (and the base recoils as it would).
+    Velocity: the impulses E lambda that zero the outward rates of the joints at their stops
+    act on the whole tree, v+ = v - M^-1 E lambda (M^-1 from Pinocchio), found by projected
+    Gauss-Seidel (an impulse only pushes a joint inward).  Being internal they leave the
+    momentum unchanged, and kinetic energy can only decrease; a joint held against its stop by
+    the controller stays there step after step.
+    """
+    stops = []  # (velocity index, limit, +1 at the upper stop / -1 at the lower): on or past it
+    for j in range(3):
+        if q[7 + j] <= lo[j]:
+            stops.append((6 + j, lo[j], -1.0))
+        elif q[7 + j] >= hi[j]:
+            stops.append((6 + j, hi[j], 1.0))
+    if not stops:
+        return q, v
+    idx = [i for i, _, _ in stops]
+    Minv = pin.computeMinverse(model, data, q)
+    Minv = np.triu(Minv) + np.triu(Minv, 1).T  # Pinocchio guarantees the upper triangle
+    penetration = np.array([q[i + 1] - limit for i, limit, _ in stops])
+    lam = np.linalg.solve(Minv[np.ix_(idx, idx)], penetration)
+    q = pin.integrate(model, q, -(Minv[:, idx] @ lam))
+    for i, limit, _ in stops:
+        q[i + 1] = limit  # exactly on the stop (the correction is exact to first order)
+    Minv = pin.computeMinverse(model, data, q)  # the impulses act at the corrected configuration
+    Minv = np.triu(Minv) + np.triu(Minv, 1).T
+    v = v.copy()
+    impulse = {i: 0.0 for i in idx}  # accumulated; side * impulse >= 0 (pushes inward)
+    for _ in range(50):
+        largest = 0.0
+        for i, _, side in stops:
+            new = side * max(0.0, side * (impulse[i] + v[i] / Minv[i, i]))
+            d = new - impulse[i]
+            if d != 0.0:
+                v -= Minv[:, i] * d
+                impulse[i] = new
+                largest = max(largest, abs(d) * Minv[i, i])
+        if largest < 1e-12:
+            break
+    return q, v
 
 
 def _force_from_xi(R: np.ndarray, xi: np.ndarray, u: np.ndarray) -> np.ndarray:

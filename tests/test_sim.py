@@ -91,11 +91,69 @@ def _invariants(robot, res, every=25):
     ("rk4", 1e-10, 1e-6, 1e-8),      # measured 3.2e-12, 4.4e-7, 7.7e-9
 ])
 def test_free_flight_conserves_energy_and_momentum(free_robot, integrator, e_tol, p_tol, l_tol):
-    """No gravity, no input, tumbling with the arm moving: 10 s at 1 kHz (|E| = 0.71 J, |p| = 1.9 N s)."""
+    """No gravity, no input, tumbling with the arm moving: 10 s at 1 kHz (|E| = 0.71 J, |p| = 1.9 N s).
+
+    The integrator on the smooth dynamics: joint stops off (the free arm would hit them).
+    """
     zero = OpenLoop(np.zeros(9))
-    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, integrator=integrator, xi0=XI0, xi_dot0=XID0)
+    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, integrator=integrator, xi0=XI0, xi_dot0=XID0,
+                   joint_stops=False)
     dE, dP, dL = _invariants(free_robot, res)
     assert dE < e_tol and dP < p_tol and dL < l_tol
+
+
+def test_joint_stop_impulse_is_internal_and_plastic(free_robot):
+    """At the stops: joints put back on their limits, outward rates removed, centroidal momentum unchanged
+    (the impulses are joint reactions), kinetic energy lost, inward rates left alone."""
+    from qprr.sim import _apply_joint_stops
+
+    m, d = free_robot.model, free_robot.model.createData()
+    p = free_robot.params
+    lo, hi = p.lower_limits.tolist(), p.upper_limits.tolist()
+    rng = np.random.default_rng(5)
+    for case in range(20):
+        xi = np.r_[rng.uniform(-1, 1, 6), rng.uniform(p.lower_limits, p.upper_limits)]
+        v = rng.normal(size=9)
+        xi[6], v[6] = hi[0], abs(v[6])  # slider exactly at its upper stop, moving out
+        if case % 2:
+            xi[8], v[8] = lo[2], -abs(v[8])  # and theta3 at its lower stop, moving out
+        q = xi_to_qv(xi, np.zeros(9))[0]
+        q2, v2 = _apply_joint_stops(m, d, q, v, lo, hi)
+        np.testing.assert_allclose(q2, q, atol=1e-15)  # nothing to correct in position
+        # no joint keeps moving out of its stop (a stop may release when the others push it inward)
+        assert v2[6] < 1e-12 and (case % 2 == 0 or v2[8] > -1e-12)
+        h1 = pin.computeCentroidalMomentum(m, d, q, v).np.copy()
+        h2 = pin.computeCentroidalMomentum(m, d, q, v2).np.copy()
+        np.testing.assert_allclose(h2, h1, atol=1e-12)
+        assert pin.computeKineticEnergy(m, d, q, v2) < pin.computeKineticEnergy(m, d, q, v)
+    # moving inward from a stop: no impulse
+    q = xi_to_qv(np.r_[np.zeros(6), hi[0], 0.0, 0.0], np.zeros(9))[0]
+    v = np.r_[np.zeros(6), -0.3, 0.0, 0.0]
+    assert np.array_equal(_apply_joint_stops(m, d, q, v, lo, hi)[1], v)
+
+
+def test_the_free_arm_stays_inside_its_stops(free_robot):
+    """Free tumbling with the stops on: the arm never leaves its range, and the stops did act."""
+    zero = OpenLoop(np.zeros(9))
+    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, xi0=XI0, xi_dot0=XID0)
+    p = free_robot.params
+    assert np.all(res.xi[:, 6:9] >= p.lower_limits - 1e-12) and np.all(res.xi[:, 6:9] <= p.upper_limits + 1e-12)
+    assert (res.flags & 4).any()
+
+
+def test_a_joint_pushed_into_its_stop_stays_there(free_robot):
+    """No gravity, 5 N pushing the slider outward from rest: it travels to +0.04 m and stays pressed there."""
+    xi = np.zeros(9)
+    u = np.zeros(9)
+    u[6] = 5.0
+    res = simulate(free_robot, OpenLoop(u), Hold(tuple(xi)), 1.0, xi0=xi)
+    hi = free_robot.params.r0_limits[1]
+    assert res.xi[:, 6].max() <= hi + 1e-12
+    assert res.xi[-1, 6] == pytest.approx(hi, abs=1e-12)
+    assert np.abs(res.xi_dot[-100:, 6]).max() < 1e-9
+    assert (res.flags[-100:] & 4).all()
+    with pytest.raises(qprr.LimitError, match="xi0"):
+        simulate(free_robot, OpenLoop(u), Hold(tuple(xi)), 0.01, xi0=np.r_[0, 0, 0, 0, 0, 0, 0.05, 0, 0])
 
 
 def test_semi_implicit_euler_drifts_at_first_order(free_robot):
@@ -103,7 +161,8 @@ def test_semi_implicit_euler_drifts_at_first_order(free_robot):
     zero = OpenLoop(np.zeros(9))
     drift = []
     for dt in (1e-3, 5e-4):
-        res = simulate(free_robot, zero, Hold(tuple(XI0)), 5.0, dt=dt, integrator="euler", xi0=XI0, xi_dot0=XID0)
+        res = simulate(free_robot, zero, Hold(tuple(XI0)), 5.0, dt=dt, integrator="euler", xi0=XI0, xi_dot0=XID0,
+                       joint_stops=False)
         drift.append(_invariants(free_robot, res)[0])
     assert drift[0] > 1e-3
     assert drift[0] / drift[1] == pytest.approx(2.0, rel=0.1)
