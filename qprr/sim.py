@@ -526,28 +526,33 @@ def _apply_joint_stops(model: pin.Model, data: pin.Data, q: np.ndarray, v: np.nd
         return q, v
     idx = [i for i, _, _ in stops]
     Minv = pin.computeMinverse(model, data, q)
-    Minv = np.triu(Minv) + np.triu(Minv, 1).T  # Pinocchio guarantees the upper triangle
+    cols = np.array([_upper_column(Minv, i) for i in idx]).T  # M^-1 E
     penetration = np.array([q[i + 1] - limit for i, limit, _ in stops])
-    lam = np.linalg.solve(Minv[np.ix_(idx, idx)], penetration)
-    q = pin.integrate(model, q, -(Minv[:, idx] @ lam))
+    q = pin.integrate(model, q, -(cols @ np.linalg.solve(cols[idx], penetration)))
     for i, limit, _ in stops:
         q[i + 1] = limit  # exactly on the stop (the correction is exact to first order)
     Minv = pin.computeMinverse(model, data, q)  # the impulses act at the corrected configuration
-    Minv = np.triu(Minv) + np.triu(Minv, 1).T
+    cols = {i: _upper_column(Minv, i) for i in idx}
     v = v.copy()
     impulse = {i: 0.0 for i in idx}  # accumulated; side * impulse >= 0 (pushes inward)
     for _ in range(50):
         largest = 0.0
         for i, _, side in stops:
-            new = side * max(0.0, side * (impulse[i] + v[i] / Minv[i, i]))
+            c = cols[i]
+            new = side * max(0.0, side * (impulse[i] + v[i] / c[i]))
             d = new - impulse[i]
             if d != 0.0:
-                v -= Minv[:, i] * d
+                v -= c * d
                 impulse[i] = new
-                largest = max(largest, abs(d) * Minv[i, i])
+                largest = max(largest, abs(d) * c[i])
         if largest < 1e-12:
             break
     return q, v
+
+
+def _upper_column(Minv: np.ndarray, i: int) -> np.ndarray:
+    """Column i of the symmetric M^-1 read from its upper triangle (all Pinocchio versions fill it)."""
+    return np.concatenate((Minv[:i, i], Minv[i, i:]))
 
 
 def _force_from_xi(R: np.ndarray, xi: np.ndarray, u: np.ndarray) -> np.ndarray:
