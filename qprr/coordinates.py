@@ -15,7 +15,6 @@ T is singular at theta = +-pi/2 (cos theta = 0): functions that need T^-1 raise
 
 from __future__ import annotations
 
-import math
 import struct
 from math import atan2, cos, hypot, sin
 

@@ -698,14 +698,13 @@ def _solve_dls(robot, data, p_d, R_d, xi0, opts: DLSOptions, t0):
 
     Me, Merr, f, cost = evaluate(q)
     lam = opts.damping
-    status, reason, it, slow = "max_iterations", "", 0, 0
+    status, it, slow = "max_iterations", 0, 0  # _finish words the reason from the measured errors
     while True:
         pos_err, rot_err = pose_errors(Me, p_d, R_d)
         if pos_err < opts.position_tol and rot_err < opts.orientation_tol:
             status = "converged"
             break
         if it >= opts.max_iter:
-            reason = f"LM did not converge in {opts.max_iter} iterations"
             break
         it += 1
         J_all = pin.Jlog6(Merr) @ pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
