@@ -286,7 +286,7 @@ def push_model_6_66(theta: float, T1: float, T3: float, F_oj: float, M_G: float,
 
 def push_model(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy: float, l: float,
                contact_b, com_b=(0.0, 0.0, 0.0)) -> PushState:
-    """Corrected planar model of pushing along world x with the thrust, arm locked (z up, "+" rotors).
+    """Thesis (6.66) corrected: planar model of pushing along world x with the thrust, arm locked (z up, "+" rotors).
 
     Rotors 1 (at -l x_B) and 3 (at +l x_B) give the thrust T1 + T3 along z_B (rotors 2, 4 off or
     balanced), the object pushes back with F_oj along -x (world) at the contact point

@@ -312,7 +312,7 @@ def holding_torques_6_4_1(params: QPRRParams, m_cl: float) -> tuple[float, float
 
 
 def holding_torques_corrected(q_arm, params: QPRRParams, m_cl: float) -> np.ndarray:
-    """Efforts holding the arm and a point payload m_cl at the tip, body level, homogeneous links (Hypothesis 1).
+    """Thesis 6.4.1.1 corrected: efforts holding the arm and a point payload m_cl at the tip, body level (Hypothesis 1).
 
     u_theta2 = -g [(m2/2 + m3 + m_cl) d2 s2 + (m3/2 + m_cl) d3 s23],
     u_theta3 = -g (m3/2 + m_cl) d3 s23, u_r0 = 0 (the slider is horizontal).

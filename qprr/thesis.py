@@ -536,7 +536,7 @@ def kinetic_multirotor_5_15(euler_zyx, euler_rates, params: QPRRParams) -> float
 
 
 def kinetic_multirotor_5_15_corrected(euler_zyx, euler_rates, params: QPRRParams) -> float:
-    """1/2 phi_dot^T T^T I_b T phi_dot (I_b in B axes, omega_body = T phi_dot)."""
+    """Thesis (5.15) corrected: 1/2 phi_dot^T T^T I_b T phi_dot (I_b in B axes, omega_body = T phi_dot)."""
     f, t, _ = as_vector(euler_zyx, 3, "euler_zyx")
     w = as_vector(euler_rates, 3, "euler_rates")
     T = T_3_25(f, t)
@@ -568,7 +568,7 @@ def R_Q_5_43(xi) -> np.ndarray:
 
 
 def R_Q_corrected(xi) -> np.ndarray:
-    """R_Q = diag(R_b, T^T, I3): by virtual power u^T xi_dot = f_world . p_dot + tau_body . omega_body."""
+    """Thesis (5.41)/(5.43) corrected: R_Q = diag(R_b, T^T, I3), by virtual power u^T xi_dot = f_world . p_dot + tau_body . omega_body."""
     xi = as_vector(xi, 9, "xi")
     return _blockdiag(rotation_3_4(*xi[3:6]), T_3_25(xi[3], xi[4]).T, np.eye(3))
 
@@ -666,7 +666,7 @@ def arm_C_5_5(q_arm, q_arm_dot, params: QPRRParams) -> np.ndarray:
 
 
 def arm_C_5_5_corrected(q_arm, q_arm_dot, params: QPRRParams) -> np.ndarray:
-    """Christoffel matrix of the corrected B: the (I_x3 - I_z3) terms vanish,
+    """Thesis 5.5.1 corrected: Christoffel matrix of the corrected B; the (I_x3 - I_z3) terms vanish,
     c23 = -(1/2) d2 d3 m3 s3 (theta2_dot + theta3_dot), c32 = (1/2) d2 d3 m3 s3 theta2_dot, c33 = 0."""
     _, _, t3 = _arm(q_arm)
     _, w2, w3 = as_vector(q_arm_dot, 3, "q_arm_dot")
