@@ -40,14 +40,13 @@ proxsuite 0.8, see tests/test_allocation.py).  Any other status raises :class:`S
 
 from __future__ import annotations
 
-import struct
 from dataclasses import dataclass
 
 import numpy as np
 import proxsuite
 
 from .actuation import rotor_matrix
-from .coordinates import as_vector
+from .coordinates import as_vector, write_floats
 from .errors import InputError, SolverError
 from .model import Robot
 
@@ -247,30 +246,15 @@ class Allocator:
             if a0 > l0 or a0 < -l0 or a1 > l1 or a1 < -l1 or a2 > l2 or a2 < -l2:
                 a0, a1, a2 = np.clip(tau_d[6:9], -self.effort_limits, self.effort_limits).tolist()
                 flags |= 2
-        if f_out.dtype is _F8:
-            try:  # straight into the buffer: half the cost of f_out[:] = ...
-                _PACK7(f_out, 0, f0, f1, f2, f3, a0, a1, a2)
-            except (TypeError, struct.error):  # not C-contiguous, or too small
-                f_out[:] = (f0, f1, f2, f3, a0, a1, a2)
-        else:
-            f_out[:] = (f0, f1, f2, f3, a0, a1, a2)
+        write_floats(f_out, (f0, f1, f2, f3, a0, a1, a2))
         if tau_out is not None:
             if flags or not self._axial:
                 tau_out[0:6] = self.Omega @ f
                 tau_out[6:9] = (a0, a1, a2)
             else:  # exact: Omega f = [0, 0, w] (rotor axes along z_B), arm efforts unchanged
                 td[0] = td[1] = 0.0
-                if tau_out.dtype is _F8:
-                    try:
-                        _PACK9(tau_out, 0, *td)
-                    except (TypeError, struct.error):
-                        tau_out[:] = td
-                else:
-                    tau_out[:] = td
+                write_floats(tau_out, td)
         return flags
 
 
-_PACK7 = struct.Struct("=7d").pack_into
-_PACK9 = struct.Struct("=9d").pack_into
-_F8 = np.dtype(np.float64)
 

@@ -216,9 +216,25 @@ def a_to_xi_ddot(xi, xi_dot, a) -> np.ndarray:
 
 
 # ------------------------------------------------------------------ the hot-loop form
-_PACK9 = struct.Struct("=9d").pack_into  # 9 floats into the buffer of a C-contiguous float64 (9,) array
-_PACK10 = struct.Struct("=10d").pack_into
+_PACKERS = {n: struct.Struct(f"={n}d").pack_into for n in (3, 7, 9, 10)}
 _F8 = np.dtype(np.float64)
+
+
+def write_floats(arr: np.ndarray, values) -> np.ndarray:
+    """``arr[:] = values`` for a float64 vector, straight into its buffer when it can (half the cost).
+
+    ``values`` is a sequence of Python floats of ``len(arr)``; any other array (not float64,
+    not C-contiguous, other length) takes the plain numpy assignment.
+    """
+    pack = _PACKERS.get(len(values))
+    if pack is not None and arr.dtype is _F8:
+        try:
+            pack(arr, 0, *values)
+            return arr
+        except (TypeError, struct.error):  # not C-contiguous, or too small
+            pass
+    arr[:] = values
+    return arr
 
 
 class State:
@@ -306,8 +322,8 @@ class State:
             if self._qv is None:
                 self._qv = (np.zeros(10), np.zeros(9))
             self.q, self.v = qv = self._qv
-            _PACK10(qv[0], 0, *qt)
-            _PACK9(qv[1], 0, *v)
+            write_floats(qv[0], qt)
+            write_floats(qv[1], v)
         else:
             self.q = np.array(qt)
             self.v = np.array(v)
@@ -344,26 +360,12 @@ class State:
         self.st = st = -r20
         self.ct = ch
         self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), r0, t2, t3)
-        arr = self.xi
-        if arr.dtype is _F8:
-            try:  # straight into the array's buffer: half the cost of arr[:] = xi
-                _PACK9(arr, 0, *xi)
-            except (TypeError, struct.error):  # not C-contiguous, or not 9 entries
-                arr[:] = xi
-        else:
-            arr[:] = xi
+        write_floats(self.xi, xi)
         # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
         psi_d = (sf * wy_ + cf * wz_) / ch
         self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
                          wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, q1, q2, q3]
-        arr = self.xi_dot
-        if arr.dtype is _F8:
-            try:
-                _PACK9(arr, 0, *xd)
-            except (TypeError, struct.error):
-                arr[:] = xd
-        else:
-            arr[:] = xd
+        write_floats(self.xi_dot, xd)
 
     # --------------------------------------------------------------- coordinate maps
     def accel_to_v_list(self, xi_ddot) -> list[float]:
@@ -430,13 +432,4 @@ class State:
                cf * m1 + sf * w,
                -sf * m1 + cf * w,
                a, b, c)
-        if out is None:
-            return np.array(tau)
-        if out.dtype is _F8:
-            try:
-                _PACK9(out, 0, *tau)
-                return out
-            except (TypeError, struct.error):
-                pass
-        out[:] = tau
-        return out
+        return np.array(tau) if out is None else write_floats(out, tau)

@@ -108,6 +108,23 @@ class CommandFilter:
             x[i] += dt * xd[i]
 
 
+def _tilt_6_17(fx: float, fy: float, fz: float, cp: float, sp: float, lim: float) -> tuple[float, float]:
+    """(phi, theta) that point z_B along the world force f at yaw psi, Thesis (6.17), clamped to +-lim.
+
+    theta = atan((fx c_psi + fy s_psi) / fz), phi = asin((fx s_psi - fy c_psi) / |f|); the clamp
+    is max(-lim, min(lim, angle)) written so that NaN ends on a bound.
+    """
+    theta = atan((fx * cp + fy * sp) / fz)
+    if not -lim < theta < lim:
+        theta = theta if theta < lim else lim
+        theta = theta if theta > -lim else -lim
+    phi = asin((fx * sp - fy * cp) / sqrt(fx * fx + fy * fy + fz * fz))
+    if not -lim < phi < lim:
+        phi = phi if phi < lim else lim
+        phi = phi if phi > -lim else -lim
+    return phi, theta
+
+
 class TiltReference:
     """Roll/pitch references of Thesis (6.17) with the rates and accelerations (6.20) needs.
 
@@ -162,28 +179,12 @@ class TiltReference:
         ax, ay, az = a_ref
         azg = az + g
         if azg > 0.05 * g:
-            ff1 = atan((ax * cp + ay * sp) / azg)
-            if not -lim < ff1 < lim:  # clamp: max(-lim, min(lim, angle)), NaN included
-                ff1 = ff1 if ff1 < lim else lim
-                ff1 = ff1 if ff1 > -lim else -lim
-            ff0 = asin((ax * sp - ay * cp) / sqrt(ax * ax + ay * ay + azg * azg))
-            if not -lim < ff0 < lim:
-                ff0 = ff0 if ff0 < lim else lim
-                ff0 = ff0 if ff0 > -lim else -lim
-            self._ff = (ff0, ff1)
+            self._ff = ff0, ff1 = _tilt_6_17(ax, ay, azg, cp, sp, lim)
         else:
             ff0, ff1 = self._ff
         ux, uy, uz = u_fb
         if uz > self.uz_min:
-            raw1 = atan((ux * cp + uy * sp) / uz)
-            if not -lim < raw1 < lim:
-                raw1 = raw1 if raw1 < lim else lim
-                raw1 = raw1 if raw1 > -lim else -lim
-            raw0 = asin((ux * sp - uy * cp) / sqrt(ux * ux + uy * uy + uz * uz))
-            if not -lim < raw0 < lim:
-                raw0 = raw0 if raw0 < lim else lim
-                raw0 = raw0 if raw0 > -lim else -lim
-            self._raw = (raw0, raw1)
+            self._raw = raw0, raw1 = _tilt_6_17(ux, uy, uz, cp, sp, lim)
         elif self._raw is not None:
             raw0, raw1 = self._raw
         else:

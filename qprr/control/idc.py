@@ -53,7 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..coordinates import as_vector
+from ..coordinates import as_vector, write_floats
 from ..errors import InputError
 from ..model import Robot
 from .base import Controller, Reference, State, TiltReference
@@ -62,7 +62,6 @@ _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 _rnea, _crba = pin.rnea, pin.crba
 _PACK3 = struct.Struct("=3d").pack  # exact key of three floats (tells -0.0 from 0.0)
-_PACK9 = struct.Struct("=9d").pack_into  # 9 floats into a float64 (9,) buffer
 
 
 def _nine(x, name: str) -> tuple[float, ...]:
@@ -232,7 +231,7 @@ class InverseDynamicsController(Controller):
         alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * 9)
         a = ms.accel_to_v_list(alpha)
         abuf = self._abuf
-        _PACK9(abuf, 0, *a)  # = np.array(a), into a buffer RNEA only reads
+        write_floats(abuf, a)  # = np.array(a), into a buffer RNEA only reads
         t0 = _rnea(model, data, q, v, abuf).tolist()
         tilt = self.tilt
         # u_fb of (6.21) with alpha_phi = alpha_theta = 0: R times the body force of RNEA (State.lin_to_world)
@@ -248,8 +247,8 @@ class InverseDynamicsController(Controller):
         self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha)
         # omega_dot change of the roll/pitch accelerations: T [alpha_phi, alpha_theta, 0] (State.euler_accel_to_omega_dot)
         a3, a4 = alpha[3], alpha[4]
-        sf, cf, st, ct = ms.sf, ms.cf, ms.st, ms.ct
-        d3, d4, d5 = a3 - st * 0.0, cf * a4 + sf * ct * 0.0, -sf * a4 + cf * ct * 0.0
+        sf, cf = ms.sf, ms.cf
+        d3, d4, d5 = a3, cf * a4, -sf * a4  # T(phi, theta) [a3, a4, 0]
         if self.realizable:
             # body-lateral accelerations d0, d1 chosen so that the applied force has no
             # body-lateral part: (tau0 + M delta)[0:2] = 0 with M[0:2, 0:2] = m I2
@@ -270,7 +269,7 @@ class InverseDynamicsController(Controller):
         a[3] += d3
         a[4] += d4
         a[5] += d5
-        _PACK9(abuf, 0, *a)
+        write_floats(abuf, a)
         tau = _rnea(model, data, q, v, abuf)
         return tau if self.output == "pinocchio" else ms.force_to_xi(tau)
 
