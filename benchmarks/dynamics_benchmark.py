@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
-from machine import machine_lines  # noqa: E402
+from machine import machine_lines
 
 
 def _states(robot, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:

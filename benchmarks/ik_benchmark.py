@@ -57,7 +57,7 @@ from qprr import model as qm
 from qprr.urdf import build_urdf
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
-from machine import machine_lines  # noqa: E402
+from machine import machine_lines
 
 TOL = 1e-6
 HOVER_COLS = [0, 1, 2, 5, 6, 7, 8]  # xi entries of the 7-dof hover chain
@@ -217,7 +217,7 @@ def peer_methods(robot, urdf_path: str):
             conf = pink.Configuration(model, pdata, h0_of(M))
             task = FrameTask("end_effector", position_cost=1.0, orientation_cost=1.0)
             task.set_target(M)
-            for it in range(100):
+            for it in range(100):  # noqa: B007 (the count is reported)
                 pe, oe = ik.pose_errors(conf.get_transform_frame_to_world("end_effector"), M.translation, M.rotation)
                 if pe < TOL and oe < TOL:
                     break
@@ -226,7 +226,7 @@ def peer_methods(robot, urdf_path: str):
             return Outcome(_xi_of_chain(conf.q), None, it)
 
         m.solve = run_pink
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         m.unavailable = _why(exc)
     out.append(m)
 
@@ -245,7 +245,7 @@ def peer_methods(robot, urdf_path: str):
 
         run_rtb(pin.SE3.Identity())
         m.solve = run_rtb
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         m.unavailable = _why(exc)
     out.append(m)
 
@@ -279,7 +279,7 @@ def peer_methods(robot, urdf_path: str):
             return Outcome(_xi_of_chain(sol[1:8]), None, float("nan"))
 
         m.solve = run_ikpy
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         m.unavailable = _why(exc)
     out.append(m)
     return out

@@ -30,7 +30,7 @@ from qprr.sim import simulate
 from qprr.trajectory import Hold
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
-from machine import machine_lines  # noqa: E402
+from machine import machine_lines
 
 THESIS_FOR = {"static-idc": "idc", "static-dsid": "dsid", "static-mfc": "mfc", "spiral": "idc", "noise": "idc",
               "pulses": "idc", "dynamic-bsg": "mfc"}

@@ -74,7 +74,7 @@ class AllocationResult:
     reason: str
 
 
-def _new_qp(n_eq: int, eps: float, n: int = 4) -> "proxsuite.proxqp.dense.QP":
+def _new_qp(n_eq: int, eps: float, n: int = 4) -> proxsuite.proxqp.dense.QP:
     qp = proxsuite.proxqp.dense.QP(n, n_eq, 4)
     s = qp.settings
     s.eps_abs = eps

@@ -19,8 +19,8 @@ from __future__ import annotations
 import importlib
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -54,7 +54,7 @@ class Check:
 
     equation: str
     quantity: str
-    run: Callable[["Context"], Evidence]
+    run: Callable[[Context], Evidence]
     tolerance: float
     convention: str | None = None
 
@@ -431,7 +431,8 @@ def _c_4_27(ctx: Context) -> Evidence:
 
 
 def _c_4_28(ctx: Context) -> Evidence:
-    err = max(abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(mdl.arm_jacobian_body(ctx.robot, ctx.data, xi[6:9])[[0, 2, 4]])) for xi, _ in ctx.states)
+    err = max(abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(mdl.arm_jacobian_body(ctx.robot, ctx.data, xi[6:9])[[0, 2, 4]]))
+              for xi, _ in ctx.states)
     return Evidence(err, None, "det of the reduced Pinocchio arm Jacobian")
 
 
@@ -563,7 +564,11 @@ def _c_5_37(ctx: Context) -> Evidence:
     err = 0.0
     for xi, xid in ctx.states:
         G = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)[2]
-        fd = np.array([(mdl.potential_energy(ctx.robot, ctx.data, _q(xi + h * e)) - mdl.potential_energy(ctx.robot, ctx.data, _q(xi - h * e))) / (2 * h) for e in np.eye(9)])
+
+        def U(x):
+            return mdl.potential_energy(ctx.robot, ctx.data, _q(x))
+
+        fd = np.array([(U(xi + h * e) - U(xi - h * e)) / (2 * h) for e in np.eye(9)])
         err = max(err, _maxabs(G - fd))
     return Evidence(err, None, "model G vs central differences of the potential energy in xi")
 

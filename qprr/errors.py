@@ -35,7 +35,7 @@ class EulerSingularityError(InputError):
 class UnknownNameError(QprrError, KeyError):
     """An unknown name (layout, scenario, controller, method, option...) was given."""
 
-    def __init__(self, kind: str, name: object, valid: "list[str] | tuple[str, ...]") -> None:
+    def __init__(self, kind: str, name: object, valid: list[str] | tuple[str, ...]) -> None:
         self.kind = kind
         self.name = name
         self.valid = tuple(valid)

@@ -24,8 +24,8 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -52,7 +52,7 @@ def generalized_wrench_xi(robot: Robot, data: pin.Data, xi, h_world) -> np.ndarr
 
 def generalized_wrench_blocks(xi, h_world, d) -> np.ndarray:
     """The corrected block form of (6.59) in closed form (docstring of :func:`generalized_wrench_xi`)."""
-    from .thesis import J_eb_4_26, T_3_25, rotation_3_4
+    from .thesis import T_3_25, J_eb_4_26, rotation_3_4
 
     xi = as_vector(xi, 9, "xi")
     h = as_vector(h_world, 6, "h_world")
@@ -72,7 +72,7 @@ def generalized_wrench_6_59(xi, h, d) -> np.ndarray:
     Consistent only at level attitude (R_b = I): the first row needs h_f in world axes, the
     other rows need it in B.  Corrected form: :func:`generalized_wrench_blocks`.
     """
-    from .thesis import J_eb_4_26, T_3_25
+    from .thesis import T_3_25, J_eb_4_26
 
     xi = as_vector(xi, 9, "xi")
     h = as_vector(h, 6, "h")

@@ -19,9 +19,9 @@ draws the thesis-like figure (attitude, joints, forces, torques, interaction) in
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 

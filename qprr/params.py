@@ -126,7 +126,7 @@ class QPRRParams:
         """Per-rotor thrust [N] that holds the whole system's weight, m_G g / 4."""
         return self.total_mass * self.g / 4.0
 
-    def with_changes(self, **changes) -> "QPRRParams":
+    def with_changes(self, **changes) -> QPRRParams:
         """A copy with some fields replaced (the original stays untouched)."""
         unknown = set(changes) - set(self.__dataclass_fields__)
         if unknown:
@@ -156,7 +156,8 @@ _TABLE_3_2_INERTIA = {
 
 PROVENANCE = {
     "g": "Thesis (5.29): g = 9.8 m/s^2",
-    "multirotor_mass": "Table 3.3: 3.029 kg; the 33 g arm base of Table 3.1 is absent from the closed forms (3.77)-(3.78), so this variant leaves it out (the CAD variant adds it)",
+    "multirotor_mass": "Table 3.3: 3.029 kg; the 33 g arm base of Table 3.1 is absent from the closed forms (3.77)-(3.78), "
+    "so this variant leaves it out (the CAD variant adds it)",
     "multirotor_inertia": "Table 3.3: Ixx, Iyy, Izz, Ixy, Ixz, Iyz at the CoG in B axes, products used as tensor entries",
     "link masses": "Table 3.1: 0.1172, 0.2773, 0.0961 kg",
     "link inertias": "Table 3.2: principal moments in link axes (products zero by symmetry, Table 3.2 text)",

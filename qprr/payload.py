@@ -65,7 +65,7 @@ class Payload:
             raise InputError(f"payload inertia must be positive semi-definite, got {self.inertia!r}")
 
     @classmethod
-    def sphere(cls, mass: float, radius: float, com_ee=(0.0, 0.0, 0.0)) -> "Payload":
+    def sphere(cls, mass: float, radius: float, com_ee=(0.0, 0.0, 0.0)) -> Payload:
         """Solid homogeneous sphere: I_xx = I_yy = I_zz = 2/5 m R^2 (the result stated after Thesis (6.43))."""
         if not (np.isfinite(radius) and radius >= 0.0):
             raise InputError(f"sphere radius must be a finite number >= 0 m, got {radius!r}")

@@ -47,9 +47,9 @@ from __future__ import annotations
 import math
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from collections.abc import Callable
 from typing import Protocol
 
 import numpy as np
@@ -281,7 +281,7 @@ class SimResult:
         return path
 
     @classmethod
-    def load(cls, path: str | Path) -> "SimResult":
+    def load(cls, path: str | Path) -> SimResult:
         """Read a file written by :meth:`save`."""
         with np.load(Path(path), allow_pickle=False) as z:
             arrays = {k: z[k] for k in _ARRAYS}

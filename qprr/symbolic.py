@@ -35,6 +35,7 @@ import tempfile
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+
 import numpy as np
 
 try:
@@ -73,11 +74,11 @@ def _num(x: float):
     return sp.Float(float(x), 17)
 
 
-def _nvec(v) -> "sp.Matrix":
+def _nvec(v) -> sp.Matrix:
     return sp.Matrix([_num(a) for a in v])
 
 
-def _nmat(m: np.ndarray) -> "sp.Matrix":
+def _nmat(m: np.ndarray) -> sp.Matrix:
     return sp.Matrix(3, 3, [_num(a) for a in np.asarray(m, dtype=float).ravel()])
 
 
@@ -364,7 +365,7 @@ class SymbolicModel:
 def _build(p: QPRRParams) -> SymbolicModel:
     src, seconds, from_disk = _load_or_generate(p)
     ns: dict = {}
-    exec(compile(src, f"<qprr.symbolic {p.variant}>", "exec"), ns)  # noqa: S102 - our own generated code
+    exec(compile(src, f"<qprr.symbolic {p.variant}>", "exec"), ns)
     ns["_B_dest"] = np.array(ns["B_DEST"], dtype=int)
     ns["_B_src"] = np.array(ns["B_SRC"], dtype=int)
     ns["_dyn_dest"] = np.array(ns["DYN_DEST"], dtype=int)

@@ -42,7 +42,8 @@ def test_N_f_equals_the_rotor_forces_applied_as_external_forces(robot, layout):
         frame = robot.model.frames[fid]  # attached to joint 1: placement is in B
         z = frame.placement.rotation[:, 2]
         local = pin.Force(fi * z, rotor.spin * robot.params.kappa * fi * z)  # at the rotor origin
-        fext[frame.parentJoint] += frame.placement.act(pin.Force(frame.placement.rotation.T @ local.linear, frame.placement.rotation.T @ local.angular))
+        Rt = frame.placement.rotation.T
+        fext[frame.parentJoint] += frame.placement.act(pin.Force(Rt @ local.linear, Rt @ local.angular))
     tau = np.concatenate([np.zeros(6), f[4:]])
     a_ext = pin.aba(robot.model, data, q, v, tau, fext)
     np.testing.assert_allclose(a_N, a_ext, atol=1e-10)

@@ -218,7 +218,7 @@ class TiltReference:
         self.xd = [fxd0 + bxd0, fxd1 + bxd1]
         self.xdd = [af0 + ab0, af1 + ab1]
 
-    def write(self, ref: "Reference") -> None:
+    def write(self, ref: Reference) -> None:
         """Store the current references in ``ref`` (entries 3, 4 of xi, xi_dot, xi_ddot)."""
         ref.xi[3], ref.xi[4] = self.x
         ref.xi_dot[3], ref.xi_dot[4] = self.xd

@@ -91,12 +91,12 @@ class IDCGains:
             raise InputError(f"need filter_omega > 0 and 0 < max_tilt < pi/2, got {self.filter_omega!r}, {self.max_tilt!r}")
 
     @classmethod
-    def table_6_2(cls) -> "IDCGains":
+    def table_6_2(cls) -> IDCGains:
         """Printed Table 6.2: K_pP = 1.4 I3, K_pD = 0.3 I3, K_qP = 16 I3, K_qD = 3 I3, attitude PIDs (20, 70, 3), (6, 14, 1.1), (1.5, 1.7, 0.2)."""
         return cls()
 
     @classmethod
-    def default(cls) -> "IDCGains":
+    def default(cls) -> IDCGains:
         """Table 6.2 position and arm gains; attitude PIDs retuned to be stable.
 
         The printed attitude gains make e''' + k_D e'' + k_P e' + k_I e = 0 unstable (module
@@ -113,7 +113,7 @@ class IDCGains:
         return cls(kp=kp, kd=kd, ki=ki)
 
     @classmethod
-    def desired_state_default(cls) -> "IDCGains":
+    def desired_state_default(cls) -> IDCGains:
         """Gains of the desired-state controller: (A.3)'s K_P = 30, K_D = 18 on position, the
         retuned attitude PIDs of :meth:`default`, stiffer arm loops, roll/pitch filter 20 rad/s.
 
@@ -136,7 +136,7 @@ class IDCGains:
         return cls(kp=kp, kd=kd, ki=base.ki, filter_omega=20.0, max_tilt=base.max_tilt)
 
     @classmethod
-    def annex_a3(cls) -> "IDCGains":
+    def annex_a3(cls) -> IDCGains:
         """(A.3) with Table 6.2's K_P = 30 I9, K_D = 18 I9 (no integral), as for the desired-state controller."""
         return cls(kp=(30.0,) * 9, kd=(18.0,) * 9, ki=(0.0,) * 9)
 

@@ -28,8 +28,8 @@ position and arm rows.  alpha comes from (6.77) (attitude PD), (6.78) (position)
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import numpy as np
 
@@ -62,12 +62,12 @@ class ImpedanceGains:
                 raise InputError(f"impedance {name} must be {n} finite numbers > 0, got {v!r}")
 
     @classmethod
-    def table_6_7(cls) -> "ImpedanceGains":
+    def table_6_7(cls) -> ImpedanceGains:
         """Thesis Table 6.7: M_D = 0.1 I4, D_D = I4, K_P = 0.5 I4; M_D^q = 0.02 I3, D_D^q = I3, K_P^q = 0.08 I3."""
         return cls()
 
     @classmethod
-    def default(cls) -> "ImpedanceGains":
+    def default(cls) -> ImpedanceGains:
         """Table 6.7 with the slider stiffness raised to 2.5 N/m.
 
         With K_P^q = 0.08 N/m the slider yields 0.625 m under the 0.05 N of Sec. 6.4.3.4,

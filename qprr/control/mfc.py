@@ -103,7 +103,7 @@ class MFCGains:
             raise InputError("need alpha_scale > 0, filter_omega > 0, 0 < max_tilt < pi/2")
 
     @classmethod
-    def thesis(cls) -> "MFCGains":
+    def thesis(cls) -> MFCGains:
         """K_P = 60 I9, K_I = 8 I9, K_D = 35 I9 (Sec. 6.3.3.2)."""
         return cls()
 

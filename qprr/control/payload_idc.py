@@ -36,8 +36,8 @@ layers are the per-group instances; they are not used on top of the layer gains.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
-from typing import Callable
 
 import numpy as np
 import pinocchio as pin
@@ -77,12 +77,12 @@ class LayeredGains:
             raise InputError(f"need filter_omega > 0 and 0 < max_tilt < pi/2, got {self.filter_omega!r}, {self.max_tilt!r}")
 
     @classmethod
-    def table_6_5(cls) -> "LayeredGains":
+    def table_6_5(cls) -> LayeredGains:
         """Thesis Table 6.5 as printed: position PD (20, 2), attitude PI (6.56), arm PID (10, 2, 15)."""
         return cls()
 
     @classmethod
-    def payload_default(cls) -> "LayeredGains":
+    def payload_default(cls) -> LayeredGains:
         """Table 6.5 position PD kept; attitude and arm retuned (module docstring).
 
         Attitude: the printed PI is unstable; PID of (s + 15)^3.  Arm: the printed PID
@@ -95,14 +95,14 @@ class LayeredGains:
         return replace(cls.table_6_5(), **_pid_cubed("att", 15.0), **_pid_cubed("arm", 10.0))
 
     @classmethod
-    def table_6_7(cls) -> "LayeredGains":
+    def table_6_7(cls) -> LayeredGains:
         """Thesis Table 6.7 as printed: position PD (6, 5), attitude PD (5, 2; 5, 2; 25, 4.5), arm PI (8, 2)."""
         return cls(kp_pos=(6.0,) * 3, kd_pos=(5.0,) * 3, ki_pos=(0.0,) * 3,
                    kp_att=(5.0, 5.0, 25.0), kd_att=(2.0, 2.0, 4.5), ki_att=(0.0,) * 3,
                    kp_arm=(8.0,) * 3, kd_arm=(0.0,) * 3, ki_arm=(2.0,) * 3)
 
     @classmethod
-    def impedance_default(cls) -> "LayeredGains":
+    def impedance_default(cls) -> LayeredGains:
         """Table 6.7 position PD kept (poles -2, -3); attitude and arm retuned.
 
         Attitude: the printed PD (k_P = 5, k_D = 2: poles -1 +- 2j) is slower than the position
