@@ -51,3 +51,15 @@ class DivergenceError(QprrError, RuntimeError):
 
 class SolverError(QprrError, RuntimeError):
     """A numerical solver (QP, linear system) failed to return a trustworthy answer."""
+
+
+class NonPhysicalError(InputError):
+    """A mass, inertia or length that no rigid body can have (negative mass, triangle inequality...)."""
+
+
+class MissingDependencyError(QprrError, ImportError):
+    """An optional dependency is not installed; the message gives the install command."""
+
+    def __init__(self, package: str, purpose: str, install: str) -> None:
+        self.package, self.purpose, self.install = package, purpose, install
+        super().__init__(f"{package} is needed for {purpose}: {install}")

@@ -1,0 +1,245 @@
+"""The thesis nomenclature of aerial manipulators (Thesis Sec. 2.4, formula (2.1)) as a builder.
+
+(2.1) names a system ``n1 XXX ... - m1 YY..Y ...``: ``n`` vehicles of type ``XXX`` (Table 2.3:
+``Q``/``QUA`` quadrotor, ``HEX`` hexarotor, ``OCT`` octorotor, ``HEL`` helicopter, ``FXW`` fixed
+wing, ``FLW`` flying wing) carrying ``m`` arms whose letters give the joints (``R`` revolute,
+``P`` prismatic, ``C`` cable); a count of 1 is not written (Hypothesis 1 of Sec. 2.4).  Examples:
+``Q-PRR`` (the thesis's robot), ``HEL-RRR``, ``3Q-RR``, ``Q-3RP``.
+
+:func:`parse` reads a name; :func:`build` makes a :class:`~qprr.platform.Platform` of one
+multirotor and one serial arm: ``Q``, ``HEX``, ``OCT`` (with ``X`` or ``+`` after the code for the
+rotor layout, e.g. ``QX-PRR``, or the ``layout`` argument) and ``R``/``P`` joints.  Names that
+(2.1) allows but :func:`build` does not make raise :class:`UnsupportedDesignError` saying why:
+several vehicles (``3Q-RR``) or several arms (``Q-3RP``) close kinematic loops or branch the
+tree, which needs constrained dynamics (Pinocchio's constraint models and a contact/loop
+solver) and an allocation across vehicles; cables (``C``) need a cable model (unilateral,
+tension-only); helicopters and fixed wings need other actuator models than rotors.
+
+Generated geometry (the thesis's convention, Sec. 3.3.1): the arm is mounted at ``mount_xyz`` in
+B; a ``P`` joint slides along the x axis of its parent frame, an ``R`` joint turns about its y
+axis; each link extends along +z (``arm_direction="up"``, as the Q-PRR) or -z (``"down"``, a
+hanging arm) by its length to the next joint; the end-effector frame is at the tip of the last
+link.  Bodies are homogeneous (Hypothesis 1 of Sec. 3.3.2): links are solid cylinders, the
+multirotor a solid disc.  Every default is a keyword argument, documented in :func:`build`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from . import urdfgen as ug
+from .errors import InputError, QprrError
+from .platform import Platform, from_urdf
+from .rotors import Rotor, layout_rotors
+
+UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
+"""Multirotor codes of Table 2.3 that :func:`build` makes, and their rotor counts."""
+
+OTHER_UAVS = {"HEL": "helicopter", "FXW": "fixed wing", "FLW": "flying wing"}
+"""Codes of Table 2.3 that are not multirotors."""
+
+JOINTS = {"R": "revolute", "P": "prismatic", "C": "cable"}
+
+_NAME = re.compile(r"^(\d*)([A-Z+]+)-(\d*)([A-Z]+)$")
+
+
+class UnsupportedDesignError(QprrError, NotImplementedError):
+    """A name that formula (2.1) allows but :func:`build` does not make; the message says why."""
+
+
+@dataclass(frozen=True)
+class Designation:
+    """A parsed (2.1) name: ``n_uav`` vehicles ``uav`` (layout ``layout`` or None), ``n_arms`` arms ``joints``."""
+
+    name: str
+    n_uav: int
+    uav: str
+    layout: str | None
+    n_arms: int
+    joints: str
+
+    @property
+    def n_rotors(self) -> int | None:
+        return UAV_ROTORS.get(self.uav)
+
+
+def parse(name: str) -> Designation:
+    """Read a name of formula (2.1): ``[n]XXX[X|+]-[m]YY..Y`` (e.g. ``Q-PRR``, ``QX-PRR``, ``3Q-RR``)."""
+    if not isinstance(name, str):
+        raise InputError(f"a (2.1) name is a string such as 'Q-PRR', got {name!r}")
+    m = _NAME.match(name.strip().upper())
+    if m is None:
+        raise InputError(f"{name!r} is not a name of formula (2.1) [n]XXX-[m]YY..Y (e.g. 'Q-PRR', 'HEX-RRR', 'QX-PRR', '3Q-RR')")
+    n_uav, uav, n_arms, joints = m.groups()
+    layout = ""
+    if uav not in UAV_ROTORS and uav not in OTHER_UAVS and uav[-1] in "X+":
+        uav, layout = uav[:-1], uav[-1]  # "QX": a quadrotor in the X layout
+    if uav not in UAV_ROTORS and uav not in OTHER_UAVS:
+        raise InputError(f"{name!r}: unknown vehicle code {uav!r}; Table 2.3 codes: "
+                         f"{', '.join(list(UAV_ROTORS) + list(OTHER_UAVS))}")
+    bad = set(joints) - set(JOINTS)
+    if bad:
+        raise InputError(f"{name!r}: unknown joint letter(s) {''.join(sorted(bad))!r}; (2.1) letters: R, P, C")
+    layout = {"X": "x", "+": "plus", "": None}[layout]
+    return Designation(name, int(n_uav or 1), uav, layout, int(n_arms or 1), joints)
+
+
+def _check_buildable(d: Designation) -> None:
+    if d.n_uav == 0:
+        raise UnsupportedDesignError(f"{d.name}: n = 0 names a parallel robot (Hypothesis 1 of Sec. 2.4), not an aerial manipulator")
+    if d.uav in OTHER_UAVS:
+        raise UnsupportedDesignError(f"{d.name}: a {OTHER_UAVS[d.uav]} is not a multirotor; build() makes Q, HEX and OCT vehicles "
+                                     "(it needs an actuator model other than rotors)")
+    if d.n_uav > 1:
+        raise UnsupportedDesignError(
+            f"{d.name}: {d.n_uav} cooperating vehicles sharing an arm form a closed kinematic chain; supporting it needs "
+            "loop-closure constraints (Pinocchio's constraint models with constrained forward dynamics) and an allocation "
+            "across the vehicles")
+    if d.n_arms > 1:
+        raise UnsupportedDesignError(
+            f"{d.name}: {d.n_arms} arms make the kinematic tree branch at the base; supporting it needs one end-effector task "
+            "per arm and arm-indexed efforts (the platform core assumes one serial arm)")
+    if "C" in d.joints:
+        raise UnsupportedDesignError(f"{d.name}: cable joints (C) need a tension-only cable model, not a rigid joint")
+
+
+@dataclass(frozen=True)
+class LinkSpec:
+    """One arm joint and the link after it (lengths [m], masses [kg], inertias about the CoM in link axes).
+
+    ``inertia`` None: a homogeneous solid cylinder of ``radius`` along the link; ``com`` None:
+    mid-length.  ``axis`` None: x for a P joint, y for an R joint.
+    """
+
+    kind: str
+    length: float = 0.15
+    mass: float = 0.1
+    radius: float = 0.01
+    lower: float | None = None
+    upper: float | None = None
+    effort: float | None = None
+    velocity: float | None = None
+    axis: tuple[float, float, float] | None = None
+    inertia: tuple[float, float, float, float, float, float] | None = None
+    com: tuple[float, float, float] | None = None
+
+
+_JOINT_DEFAULTS = {"P": (-0.05, 0.05, 20.0, 0.5), "R": (-2.0 * math.pi / 3.0, 2.0 * math.pi / 3.0, 5.0, 6.0)}
+_UAV_DEFAULTS = {4: (1.5, 0.225), 6: (2.5, 0.3), 8: (3.5, 0.35)}  # (body mass [kg], arm length l [m])
+
+
+def _cylinder_inertia(mass: float, radius: float, length: float) -> tuple[float, float, float, float, float, float]:
+    ixx = mass * (3.0 * radius**2 + length**2) / 12.0
+    return (ixx, ixx, 0.5 * mass * radius**2, 0.0, 0.0, 0.0)
+
+
+def build(
+    name: str = "Q-PRR",
+    *,
+    layout: str | None = None,
+    links: Sequence[LinkSpec] | None = None,
+    body_mass: float | None = None,
+    body_inertia: tuple[float, float, float, float, float, float] | None = None,
+    arm_length: float | None = None,
+    body_height: float = 0.1,
+    mount_xyz: tuple[float, float, float] = (0.0, 0.0, 0.04),
+    arm_direction: str = "up",
+    rotors: Sequence[Rotor] | None = None,
+    kappa: float = 0.016,
+    thrust_to_weight: float = 2.0,
+    f_min: float = 0.0,
+    tilt: float = 0.0,
+    g: float = 9.81,
+    joint_names: Sequence[str] | None = None,
+    link_names: Sequence[str] | None = None,
+    base_name: str = "base",
+    ee_name: str = "end_effector",
+    platform_name: str | None = None,
+) -> Platform:
+    """A platform of one multirotor and one serial arm from a (2.1) name (see the module docstring).
+
+    Parameters (SI units)
+    ---------------------
+    name : "Q-PRR", "QX-PRR", "HEX-RRR", "OCT-RR", "Q-RRR", ...
+    layout : "plus" or "x" rotor ring (default: from the name, else "plus").
+    links : one :class:`LinkSpec` per joint letter (default: 0.15 m, 0.1 kg solid cylinders of
+        radius 1 cm; P joints +-0.05 m, 20 N, 0.5 m/s; R joints +-2pi/3, 5 N m, 6 rad/s).
+    body_mass, body_inertia : the multirotor (default: Q 1.5 kg, HEX 2.5 kg, OCT 3.5 kg, a solid
+        disc of radius ``arm_length`` and height ``body_height``).
+    arm_length : rotor distance from z_B (default Q 0.225 m, HEX 0.3 m, OCT 0.35 m).
+    mount_xyz : position of the first joint in B.  arm_direction : "up" (+z, the thesis) or "down".
+    rotors : an explicit rotor set (overrides the ring); otherwise ``kappa`` [m] (0.016, a 10-inch
+        propeller's drag ratio), ``f_min``, ``f_max = thrust_to_weight m g / n`` and ``tilt`` [rad]
+        (alternating tilts about the rotor arms: ``tilt > 0`` on a HEX is fully actuated).
+    g : gravity [m/s^2].  joint_names, link_names, base_name, ee_name : URDF names.
+    """
+    d = parse(name)
+    _check_buildable(d)
+    n_rot = UAV_ROTORS[d.uav]
+    layout = layout or d.layout or "plus"
+    if d.layout is not None and layout != d.layout:
+        raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
+    if arm_direction not in ("up", "down"):
+        raise InputError(f"arm_direction must be 'up' or 'down', got {arm_direction!r}")
+    n = len(d.joints)
+    if links is None:
+        links = [LinkSpec(k) for k in d.joints]
+    links = list(links)
+    if len(links) != n or any(spec.kind != k for spec, k in zip(links, d.joints)):
+        raise InputError(f"{name!r} needs {n} links of kinds {d.joints!r}, got {[s.kind for s in links]}")
+    default_mass, default_l = _UAV_DEFAULTS[n_rot]
+    m_body = default_mass if body_mass is None else float(body_mass)
+    l_rot = default_l if arm_length is None else float(arm_length)
+    if body_inertia is None:
+        ixx = m_body * (3.0 * l_rot**2 + body_height**2) / 12.0
+        body_inertia = (ixx, ixx, 0.5 * m_body * l_rot**2, 0.0, 0.0, 0.0)
+    joint_names = list(joint_names) if joint_names is not None else [f"joint{i + 1}" for i in range(n)]
+    link_names = list(link_names) if link_names is not None else [f"link{i + 1}" for i in range(n)]
+    if len(joint_names) != n or len(link_names) != n:
+        raise InputError(f"joint_names and link_names need {n} entries each")
+    sign = 1.0 if arm_direction == "up" else -1.0
+
+    parts = [ug.link(base_name, ug.inertial(m_body, (0.0, 0.0, 0.0), body_inertia)
+                     + ug.cylinder_visual(0.3 * l_rot, 0.4 * body_height, rgba=(0.55, 0.63, 0.75, 1.0)))]
+    parent, origin = base_name, tuple(mount_xyz)
+    total_mass = m_body
+    for spec, jn, ln in zip(links, joint_names, link_names):
+        lo, hi, eff, vel = _JOINT_DEFAULTS[spec.kind]
+        lo = lo if spec.lower is None else spec.lower
+        hi = hi if spec.upper is None else spec.upper
+        eff = eff if spec.effort is None else spec.effort
+        vel = vel if spec.velocity is None else spec.velocity
+        axis = spec.axis or ((1.0, 0.0, 0.0) if spec.kind == "P" else (0.0, 1.0, 0.0))
+        inertia = spec.inertia or _cylinder_inertia(spec.mass, spec.radius, spec.length)
+        com = spec.com or (0.0, 0.0, sign * spec.length / 2.0)
+        visual = ug.cylinder_visual(spec.radius, spec.length, (0.0, 0.0, sign * spec.length / 2.0), rgba=(0.3, 0.3, 0.3, 1.0))
+        parts.append(ug.link(ln, ug.inertial(spec.mass, com, inertia) + visual))
+        kind = "prismatic" if spec.kind == "P" else "revolute"
+        parts.append(ug.joint(jn, kind, parent, ln, origin, axis, (lo, hi, eff, vel)))
+        parent, origin = ln, (0.0, 0.0, sign * spec.length)
+        total_mass += spec.mass
+    parts.append(ug.link(ee_name, ug.sphere_visual(0.015)))
+    parts.append(ug.joint(f"{ee_name}_fixed", "fixed", parent, ee_name, origin))
+    if rotors is None:
+        f_max = thrust_to_weight * total_mass * g / n_rot
+        rotors = layout_rotors(n_rot, l_rot, layout, kappa=kappa, f_min=f_min, f_max=f_max, tilt=tilt)
+    for k, r in enumerate(rotors):
+        rn = f"rotor_{k + 1}"
+        parts.append(ug.link(rn, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))))
+        parts.append(ug.joint(f"{rn}_fixed", "fixed", base_name, rn, r.position_body, rpy=_rpy_of_axis(r.axis_body)))
+    text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
+    prov = {"design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
+            "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)"}
+    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, spec=d, provenance=prov)
+
+
+def _rpy_of_axis(axis) -> tuple[float, float, float]:
+    """Roll-pitch-yaw (URDF convention) of a frame whose z axis is ``axis`` (a unit vector)."""
+    ax, ay, az = axis
+    # z = Rz(yaw) Ry(pitch) Rx(roll) e3 with yaw = 0: (cos r sin p, -sin r, cos r cos p)
+    roll = math.asin(max(-1.0, min(1.0, -ay)))
+    pitch = math.atan2(ax, az)
+    return (roll, pitch, 0.0)

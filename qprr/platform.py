@@ -1,0 +1,517 @@
+"""The description of an aerial manipulator: a free-flying multirotor base, a serial arm, a rotor set.
+
+A :class:`Platform` is immutable.  It holds
+
+* ``model``: the Pinocchio model, root joint a free flyer (q = [p_world, quat_xyzw, q_arm],
+  v = [v_body, omega_body, q_arm_dot], both base velocities in B), gravity -g e3 (world z up);
+* ``base_frame``: the frame B of the free-flyer joint (the root link of the URDF);
+* ``ee_frame`` (and ``ee_frames``): the end-effector frame(s);
+* ``arm``: one :class:`ArmJoint` per arm joint (1-DOF prismatic or revolute, in model order,
+  so ``q_arm = q[7:]`` and ``v_arm = v[6:]``) with its limits and effort bound;
+* ``rotors``: the :class:`~qprr.rotors.Rotor` set (positions and thrust axes in B, spins, drag
+  ratios, thrust bounds).
+
+Algorithms take ``(platform, data, state)``; ``data`` comes from :meth:`Platform.data` and is the
+only thing they write.  Nothing in qprr modifies ``platform.model``: variants (another rotor set,
+a payload) are new platforms (:meth:`Platform.replace`, :meth:`Platform.with_model`).
+
+Build one with :func:`from_urdf` (any URDF + a rotor description), :func:`qprr.build` (the
+thesis nomenclature (2.1): ``"Q-PRR"``, ``"HEX-RRR"``...) or :func:`qprr.load` (named platforms:
+the thesis Q-PRR, example-robot-data's ``borinot_flying_arm_2`` and ``hextilt_flying_arm_5``).
+Every name is checked when the platform is made: an unknown frame or joint raises
+:class:`~qprr.errors.UnknownNameError` listing the names that exist.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import xml.etree.ElementTree as ET
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
+from .rotors import Rotor, rotor_matrix, rotors_from_mapping
+
+_REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
+_PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
+_HUGE = 1e300  # Pinocchio's "no limit" is the largest double
+
+
+def _readonly(a: np.ndarray) -> np.ndarray:
+    a.setflags(write=False)
+    return a
+
+
+@dataclass(frozen=True)
+class ArmJoint:
+    """One joint of the arm: ``kind`` "prismatic" [m] or "revolute" [rad], its indices and bounds.
+
+    ``lower``/``upper`` are position limits (``-inf``/``inf`` when the URDF gives none),
+    ``effort`` the largest force [N] or torque [N m], ``velocity`` the largest rate.
+    """
+
+    name: str
+    kind: str
+    joint_id: int
+    idx_q: int
+    idx_v: int
+    lower: float
+    upper: float
+    effort: float
+    velocity: float
+
+
+# ============================================================================ physics checks
+def check_inertia(mass: float, inertia, body: str, com=None) -> None:
+    """Raise :class:`NonPhysicalError` unless (mass, rotational inertia about the CoM) can be a rigid body.
+
+    Checks: finite mass >= 0; finite symmetric 3x3 inertia; principal moments >= 0 and the
+    triangle inequalities I_a + I_b >= I_c (equivalently, every second moment of mass
+    integral of x_i^2 dm >= 0), with a relative tolerance of 1e-9 of the trace.
+    """
+    if not (isinstance(mass, (int, float, np.floating)) and math.isfinite(mass) and mass >= 0.0):
+        raise NonPhysicalError(f"body {body!r}: mass must be finite and >= 0 kg, got {mass!r}")
+    I = np.asarray(inertia, dtype=float)
+    if I.shape != (3, 3) or not np.all(np.isfinite(I)):
+        raise NonPhysicalError(f"body {body!r}: inertia must be a finite 3x3 matrix, got {np.asarray(inertia).tolist()}")
+    if com is not None and not np.all(np.isfinite(np.asarray(com, dtype=float))):
+        raise NonPhysicalError(f"body {body!r}: centre of mass must be finite, got {com!r}")
+    if not np.allclose(I, I.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(I).max()))):
+        raise NonPhysicalError(f"body {body!r}: inertia must be symmetric, got {I.tolist()}")
+    moments = np.linalg.eigvalsh(0.5 * (I + I.T))
+    tol = 1e-9 * max(float(np.trace(I)), 1e-300)
+    if moments[0] < -tol:
+        raise NonPhysicalError(f"body {body!r}: inertia is not positive semi-definite (principal moments {moments.tolist()} kg m^2)")
+    a, b, c = moments  # ascending: only a + b >= c can fail
+    if a + b < c - tol:
+        raise NonPhysicalError(
+            f"body {body!r}: principal moments {moments.tolist()} kg m^2 break the triangle inequality "
+            f"I1 + I2 >= I3 by {c - a - b:.3g} kg m^2 (a negative second moment of mass: no rigid body has it)"
+        )
+    if mass == 0.0 and np.any(np.abs(I) > 0.0):
+        raise NonPhysicalError(f"body {body!r}: a massless body cannot have a rotational inertia, got {I.tolist()}")
+
+
+def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
+    """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
+
+    Each mass and the six inertia entries must be numbers; the values must pass :func:`check_inertia`.
+    """
+    try:
+        root = ET.fromstring(xml_text)
+    except ET.ParseError as exc:
+        raise InputError(f"{source} is not valid XML: {exc}") from exc
+    for link in root.iter("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        name = link.get("name", "?")
+        mass_el = inertial.find("mass")
+        inertia_el = inertial.find("inertia")
+        if mass_el is None or inertia_el is None:
+            raise NonPhysicalError(f"{source}: link {name!r} has an <inertial> without <mass> or <inertia>")
+        try:
+            mass = float(mass_el.get("value"))
+            vals = {k: float(inertia_el.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
+        except (TypeError, ValueError) as exc:
+            raise NonPhysicalError(f"{source}: link {name!r} has a non-numeric mass or inertia ({exc})") from exc
+        I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
+                      [vals["ixz"], vals["iyz"], vals["izz"]]])
+        check_inertia(mass, I, name)
+
+
+def check_model_inertias(model: pin.Model) -> None:
+    """:func:`check_inertia` on every body of a Pinocchio model (after fixed links are merged)."""
+    for j in range(1, model.njoints):
+        Y = model.inertias[j]
+        check_inertia(float(Y.mass), Y.inertia, model.names[j], Y.lever)
+
+
+# ============================================================================== platform
+@dataclass(frozen=True, eq=False)
+class Platform:
+    """An aerial manipulator (see the module docstring).  Build with :func:`from_urdf` or :func:`qprr.build`.
+
+    ``spec`` keeps what the platform was built from (for the thesis's Q-PRR, its parameter set);
+    library code never reads it.  ``provenance`` says where each value comes from.
+    """
+
+    name: str
+    model: pin.Model
+    base_frame: int
+    ee_frame: int
+    arm: tuple[ArmJoint, ...]
+    rotors: tuple[Rotor, ...]
+    ee_frames: tuple[int, ...] = ()
+    spec: object = None
+    provenance: Mapping[str, str] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        model = self.model
+        if not isinstance(model, pin.Model):
+            raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__}")
+        if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer" or model.parents[1] != 0:
+            raise InputError("a platform's model needs a free-flyer root joint (load the URDF with pin.JointModelFreeFlyer())")
+        n_arm = model.njoints - 2
+        if len(self.arm) != n_arm:
+            raise InputError(f"the model has {n_arm} joints after the free flyer, the arm lists {len(self.arm)}")
+        for k, j in enumerate(self.arm):
+            if j.joint_id != 2 + k or j.idx_q != 7 + k or j.idx_v != 6 + k:
+                raise InputError(f"arm joint {j.name!r} is not the {k + 1}-th 1-DOF joint after the free flyer")
+        for fid, label in [(self.base_frame, "base_frame"), (self.ee_frame, "ee_frame")] + [(f, "ee_frames") for f in self.ee_frames]:
+            if not (isinstance(fid, (int, np.integer)) and 0 <= fid < model.nframes):
+                raise InputError(f"{label} must be a frame id in [0, {model.nframes}), got {fid!r}")
+        if model.frames[self.base_frame].parentJoint != 1:
+            raise InputError(f"base_frame {model.frames[self.base_frame].name!r} is not attached to the free-flyer joint")
+        if not self.ee_frames:
+            object.__setattr__(self, "ee_frames", (self.ee_frame,))
+        if len(self.rotors) == 0:
+            raise InputError("a platform needs at least one rotor")
+        if not all(isinstance(r, Rotor) for r in self.rotors):
+            raise InputError("rotors must be qprr.rotors.Rotor objects")
+        object.__setattr__(self, "arm", tuple(self.arm))
+        object.__setattr__(self, "rotors", tuple(self.rotors))
+        gvec = model.gravity.linear
+        if not (abs(gvec[0]) == 0.0 and abs(gvec[1]) == 0.0 and gvec[2] < 0.0):
+            raise InputError(f"model.gravity must point along -z of the world frame, got {gvec.tolist()} m/s^2")
+
+    # -------------------------------------------------------------- sizes and names
+    @property
+    def nq(self) -> int:
+        return self.model.nq
+
+    @property
+    def nv(self) -> int:
+        return self.model.nv
+
+    @property
+    def n_arm(self) -> int:
+        """Number of arm joints (the thesis chart xi has 6 + n_arm entries)."""
+        return len(self.arm)
+
+    @property
+    def n_rotors(self) -> int:
+        return len(self.rotors)
+
+    @property
+    def n_xi(self) -> int:
+        """Size of the thesis chart xi = [x, y, z, phi, theta, psi, q_arm]: 6 + n_arm (= nv)."""
+        return 6 + len(self.arm)
+
+    @property
+    def n_actuators(self) -> int:
+        """Rotor thrusts then arm efforts: n_rotors + n_arm."""
+        return len(self.rotors) + len(self.arm)
+
+    @property
+    def arm_names(self) -> tuple[str, ...]:
+        return tuple(j.name for j in self.arm)
+
+    @property
+    def xi_names(self) -> tuple[str, ...]:
+        """Names of the thesis coordinates: x, y, z, phi, theta, psi, then the arm joints."""
+        return ("x", "y", "z", "phi", "theta", "psi", *self.arm_names)
+
+    @property
+    def g(self) -> float:
+        """Gravity [m/s^2] (model.gravity = -g e3)."""
+        return float(-self.model.gravity.linear[2])
+
+    def data(self) -> pin.Data:
+        """A fresh ``pin.Data`` (the only thing algorithms write)."""
+        return self.model.createData()
+
+    def frame_id(self, name: str | int) -> int:
+        """Frame id of ``name`` (or a valid id); :class:`UnknownNameError` lists the frames."""
+        return frame_id(self.model, name)
+
+    # -------------------------------------------------------------- inertial
+    @cached_property
+    def total_mass(self) -> float:
+        """Mass of the whole system [kg]."""
+        return float(pin.computeTotalMass(self.model))
+
+    # -------------------------------------------------------------- arm
+    @cached_property
+    def arm_lower(self) -> np.ndarray:
+        return _readonly(np.array([j.lower for j in self.arm]))
+
+    @cached_property
+    def arm_upper(self) -> np.ndarray:
+        return _readonly(np.array([j.upper for j in self.arm]))
+
+    @cached_property
+    def arm_effort_limits(self) -> np.ndarray:
+        """Largest |effort| per arm joint [N or N m]."""
+        return _readonly(np.array([j.effort for j in self.arm]))
+
+    @cached_property
+    def arm_velocity_limits(self) -> np.ndarray:
+        return _readonly(np.array([j.velocity for j in self.arm]))
+
+    def check_arm_limits(self, q_arm, name: str = "q_arm") -> np.ndarray:
+        """Return ``q_arm`` (n_arm,) if finite and inside the joint limits, else raise :class:`LimitError`."""
+        from .charts import as_vector
+
+        q_arm = as_vector(q_arm, self.n_arm, name)
+        bad = [k for k, j in enumerate(self.arm) if not j.lower - 1e-12 <= q_arm[k] <= j.upper + 1e-12]
+        if bad:
+            parts = [f"{self.arm[k].name} = {float(q_arm[k])!r} not in [{self.arm[k].lower!r}, {self.arm[k].upper!r}]" for k in bad]
+            raise LimitError(f"{name}: " + "; ".join(parts))
+        return q_arm
+
+    def neutral_q(self) -> np.ndarray:
+        """q at the world origin, level, arm joints at 0 (or at the limit nearest 0)."""
+        q = pin.neutral(self.model)
+        q[7:] = np.clip(0.0, self.arm_lower, self.arm_upper) if self.n_arm else q[7:]
+        return q
+
+    def neutral_xi(self) -> np.ndarray:
+        """xi of :meth:`neutral_q`."""
+        xi = np.zeros(self.n_xi)
+        xi[6:] = self.neutral_q()[7:]
+        return xi
+
+    def arm_model(self) -> pin.Model:
+        """A fixed-base Pinocchio model of the arm: the base link is the fixed root (a new model)."""
+        return pin.buildReducedModel(self.model, [1], self.neutral_q())
+
+    # -------------------------------------------------------------- rotors
+    @cached_property
+    def rotor_matrix(self) -> np.ndarray:
+        """Omega (6 x n_rotors): [f_B; tau_B] = Omega f (Thesis (3.31)-(3.36), :func:`qprr.rotors.rotor_matrix`)."""
+        return _readonly(rotor_matrix(self.rotors))
+
+    @cached_property
+    def actuation_matrix(self) -> np.ndarray:
+        """N (nv x n_actuators) = blockdiag(Omega, I): Pinocchio's tau = N [f; efforts] (Thesis (5.44)-(5.46))."""
+        N = np.zeros((self.nv, self.n_actuators))
+        N[0:6, 0:self.n_rotors] = self.rotor_matrix
+        N[6:, self.n_rotors:] = np.eye(self.n_arm)
+        return _readonly(N)
+
+    @cached_property
+    def thrust_min(self) -> np.ndarray:
+        return _readonly(np.array([r.f_min for r in self.rotors]))
+
+    @cached_property
+    def thrust_max(self) -> np.ndarray:
+        return _readonly(np.array([r.f_max for r in self.rotors]))
+
+    @cached_property
+    def wrench_rank(self) -> int:
+        """Dimension of the base wrench the rotors can produce: 4 for coplanar rotors, 6 when fully actuated."""
+        return int(np.linalg.matrix_rank(self.rotor_matrix, tol=1e-9))
+
+    @property
+    def fully_actuated(self) -> bool:
+        """True when the rotors span every base force and torque (e.g. a tilted hexarotor)."""
+        return self.wrench_rank == 6
+
+    @cached_property
+    def thrust_axis(self) -> tuple[np.ndarray, np.ndarray]:
+        """(point_body, direction_body): the line of action of equal rotor thrusts, in B.
+
+        For equal thrusts the rotors apply f sum_i [a_i; p_i x a_i + s_i kappa_i a_i]; the force
+        F = sum a_i acts along the line through c = F x tau / |F|^2 (the point of that line nearest
+        B) with direction F / |F|.  A platform hovers with equal thrusts only with its CoG on this
+        line (the "CoG on the thrust axis" of the thesis, x_cm = y_cm = 0 for the Q-PRR).
+        """
+        w = self.rotor_matrix.sum(axis=1)
+        F, tau = w[0:3], w[3:6]
+        nF = float(np.linalg.norm(F))
+        if not nF > 1e-12:
+            raise InputError(f"platform {self.name!r}: equal rotor thrusts give no net force (rotor axes cancel)")
+        point = np.cross(F, tau) / nF**2
+        point[np.abs(point) < 1e-15] = 0.0
+        return _readonly(point), _readonly(F / nF)
+
+    # -------------------------------------------------------------- variants
+    def replace(self, **changes) -> Platform:
+        """A copy with some fields replaced (e.g. ``rotors=...``); the model is shared, never modified."""
+        unknown = set(changes) - {f.name for f in dataclasses.fields(self)}
+        if unknown:
+            raise UnknownNameError("platform field", sorted(unknown)[0], tuple(f.name for f in dataclasses.fields(self)))
+        return dataclasses.replace(self, **changes)
+
+    def with_model(self, model: pin.Model) -> Platform:
+        """The same platform on another model of the same structure (e.g. with a payload inertia)."""
+        if model.nq != self.model.nq or model.nv != self.model.nv or model.nframes != self.model.nframes:
+            raise ShapeError(f"model of another structure: nq {model.nq}, nv {model.nv}, nframes {model.nframes}")
+        return dataclasses.replace(self, model=model)
+
+    def __repr__(self) -> str:
+        kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.arm)
+        return (f"Platform({self.name!r}, {self.n_rotors} rotors, arm {kinds or '-'}, {self.total_mass:.3f} kg, "
+                f"{'fully actuated' if self.fully_actuated else 'under-actuated'})")
+
+
+# ============================================================================== loading
+def frame_id(model: pin.Model, name: str | int) -> int:
+    """Frame id of ``name`` in ``model`` (or a valid id); :class:`UnknownNameError` lists the frames."""
+    if isinstance(name, (int, np.integer)) and not isinstance(name, bool):
+        if 0 <= name < model.nframes:
+            return int(name)
+        raise UnknownNameError("frame id", name, tuple(str(i) for i in range(model.nframes)))
+    if isinstance(name, str) and model.existFrame(name):
+        return model.getFrameId(name)
+    raise UnknownNameError("frame", name, tuple(f.name for f in model.frames))
+
+
+def _arm_joints(model: pin.Model) -> tuple[ArmJoint, ...]:
+    out = []
+    for j in range(2, model.njoints):
+        jm = model.joints[j]
+        short = jm.shortname()
+        name = model.names[j]
+        if short in _REVOLUTE:
+            kind = "revolute"
+        elif short in _PRISMATIC:
+            kind = "prismatic"
+        elif short.startswith("JointModelRU") or short == "JointModelRevoluteUnboundedUnaligned":
+            raise InputError(f"joint {name!r} is continuous (unbounded revolute, nq = 2): not supported as an arm joint yet; "
+                             "give it limits in the URDF (type revolute)")
+        else:
+            raise InputError(f"joint {name!r} of type {short} is not supported as an arm joint (1-DOF prismatic or revolute only)")
+        if model.parents[j] == 0:
+            raise InputError(f"joint {name!r} hangs from the world, not from the multirotor")
+        lo, hi = float(model.lowerPositionLimit[jm.idx_q]), float(model.upperPositionLimit[jm.idx_q])
+        lo = -math.inf if lo <= -_HUGE else lo
+        hi = math.inf if hi >= _HUGE else hi
+        if not lo <= hi:
+            raise InputError(f"joint {name!r}: lower limit {lo!r} is above the upper limit {hi!r}")
+        eff = float(model.effortLimit[jm.idx_v])
+        vel = float(model.velocityLimit[jm.idx_v])
+        out.append(ArmJoint(name, kind, j, jm.idx_q, jm.idx_v, lo, hi, math.inf if eff >= _HUGE else eff,
+                            math.inf if vel >= _HUGE else vel))
+    return tuple(out)
+
+
+def _default_ee_frame(model: pin.Model, arm: Sequence[ArmJoint]) -> int:
+    """The last frame on the last arm joint, when the arm is a chain (each joint on the previous one)."""
+    if not arm:
+        raise InputError("a platform without arm joints needs an explicit ee_frame")
+    for k in range(1, len(arm)):
+        if model.parents[arm[k].joint_id] != arm[k - 1].joint_id:
+            names = [f.name for f in model.frames]
+            raise UnknownNameError("ee_frame (the arm is a tree: name the end effector)", None, names)
+    last = arm[-1].joint_id
+    candidates = [i for i, f in enumerate(model.frames) if f.parentJoint == last]
+    return candidates[-1]
+
+
+def _base_frame(model: pin.Model) -> int:
+    for i, f in enumerate(model.frames):
+        if f.parentJoint == 1 and f.type == pin.FrameType.BODY and f.placement.isIdentity():
+            return i
+    raise InputError("no body frame on the free-flyer joint with identity placement (the URDF root link)")
+
+
+def from_model(
+    model: pin.Model,
+    rotors,
+    *,
+    ee_frame: str | int | None = None,
+    ee_frames: Sequence[str | int] = (),
+    name: str | None = None,
+    spec: object = None,
+    provenance: Mapping[str, str] | None = None,
+) -> Platform:
+    """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
+
+    ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
+    entries may name frames of ``model`` (see :func:`qprr.rotors.rotors_from_mapping`).
+    """
+    model = pin.Model(model)
+    check_model_inertias(model)
+    arm = _arm_joints(model)
+    base = _base_frame(model)
+    if isinstance(rotors, Mapping):
+        frames = {}
+        data = model.createData()
+        pin.framesForwardKinematics(model, data, pin.neutral(model))
+        oMb = data.oMf[base]
+        for i, f in enumerate(model.frames):
+            bMf = oMb.actInv(data.oMf[i])
+            frames[f.name] = (tuple(bMf.translation), tuple(bMf.rotation[:, 2]))
+        rotors = rotors_from_mapping(rotors, frames)
+    ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame)
+    extra = tuple(frame_id(model, f) for f in ee_frames)
+    platform = Platform(
+        name=name or model.name or "platform",
+        model=model,
+        base_frame=base,
+        ee_frame=ee,
+        arm=arm,
+        rotors=tuple(rotors),
+        ee_frames=(ee, *[f for f in extra if f != ee]),
+        spec=spec,
+        provenance=dict(provenance or {}),
+    )
+    _check_mass_matrix(platform)
+    return platform
+
+
+def _check_mass_matrix(platform: Platform) -> None:
+    """The joint-space inertia must be positive definite (no massless actuated subtree)."""
+    model = platform.model
+    data = model.createData()
+    M = pin.crba(model, data, platform.neutral_q())
+    M = np.triu(M) + np.triu(M, 1).T
+    try:
+        np.linalg.cholesky(M)
+    except np.linalg.LinAlgError:
+        diag = np.diag(M)
+        k = int(np.argmin(diag[6:])) if platform.n_arm else None
+        which = f"arm joint {platform.arm[k].name!r} moves no mass" if k is not None and diag[6 + k] <= 0 else "the inertia is degenerate"
+        raise NonPhysicalError(f"platform {platform.name!r}: the mass matrix is not positive definite ({which})") from None
+
+
+def from_urdf(
+    urdf: str | Path,
+    rotors,
+    *,
+    ee_frame: str | int | None = None,
+    ee_frames: Sequence[str | int] = (),
+    g: float = 9.81,
+    name: str | None = None,
+    spec: object = None,
+    provenance: Mapping[str, str] | None = None,
+) -> Platform:
+    """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
+
+    The URDF's inertials are checked first (:func:`check_urdf_inertials`: Pinocchio's parser
+    drops a malformed one silently), then the model is built with a free-flyer root and gravity
+    -g e3.  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
+    or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
+    to the last frame of the last arm joint of a serial arm.
+    """
+    text, source = _urdf_text(urdf)
+    if not (isinstance(g, (int, float)) and math.isfinite(g) and g > 0.0):
+        raise InputError(f"g must be a positive number of m/s^2, got {g!r}")
+    check_urdf_inertials(text, source)
+    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
+    if isinstance(rotors, (str, Path)) and str(rotors).endswith(".toml"):
+        from .rotors import read_rotor_file
+
+        rotors = read_rotor_file(rotors)
+    prov = {"model": source, **(provenance or {})}
+    return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, spec=spec, provenance=prov)
+
+
+def _urdf_text(urdf: str | Path) -> tuple[str, str]:
+    if isinstance(urdf, Path) or (isinstance(urdf, str) and not urdf.lstrip().startswith("<")):
+        path = Path(urdf)
+        if not path.is_file():
+            raise InputError(f"URDF file {str(path)!r} does not exist")
+        return path.read_text(), str(path)
+    if isinstance(urdf, str):
+        return urdf, "URDF text"
+    raise InputError(f"urdf must be a path or the URDF XML text, got {type(urdf).__name__}")

@@ -1,0 +1,79 @@
+"""Named platforms: the thesis's Q-PRR and real aerial manipulators from example-robot-data.
+
+=========================  ==========================================================================
+name                       what
+=========================  ==========================================================================
+``q-prr``                  the thesis's Q-PRR ("+" layout; ``layout="x"`` for "X"), :mod:`qprr.thesis`
+``borinot_flying_arm_2``   example-robot-data: a coplanar hexarotor (2.9 kg) with a 2-DOF arm (HEX-RR)
+``hextilt_flying_arm_5``   example-robot-data: a tilted, fully actuated hexarotor with a 5-DOF arm
+=========================  ==========================================================================
+
+The URDFs of the last two carry no rotors: their rotor descriptions (``qprr/data/*.rotors.toml``)
+come from the upstream models the URDFs were made from, cited in each file.  Note that
+borinot_flying_arm_2 is a hexarotor (six rotors in its upstream Gazebo model), not a quadrotor.
+"""
+
+from __future__ import annotations
+
+from importlib import metadata
+from pathlib import Path
+
+import pinocchio as pin
+
+from .errors import QprrError, UnknownNameError
+from .platform import Platform, from_urdf
+from .rotors import read_rotor_file
+
+DATA_DIR = Path(__file__).resolve().parent / "data"
+
+_EXAMPLE_ROBOTS = {
+    "borinot_flying_arm_2": ("borinot_description/urdf/borinot_flying_arm_2.urdf", "flying_arm_2__ee"),
+    "hextilt_flying_arm_5": ("hextilt_description/urdf/hextilt_flying_arm_5.urdf", "flying_arm_5__gripper"),
+}
+_BARE_MULTIROTORS = {
+    "hector": "hector_description/robots/quadrotor_base.urdf",
+    "iris": "iris_description/robots/iris_simple.urdf",
+}
+NAMES = ("q-prr", *_EXAMPLE_ROBOTS)
+"""Names accepted by :func:`load`."""
+
+
+def robots_dir() -> Path:
+    """Folder of example-robot-data's robot descriptions (installed by the ``example-robot-data`` wheel)."""
+    try:
+        dist = metadata.distribution("example-robot-data")
+    except metadata.PackageNotFoundError as exc:  # pragma: no cover - runtime dependency
+        raise QprrError("example-robot-data is not installed: pip install example-robot-data") from exc
+    path = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    if not path.is_dir():  # pragma: no cover - layout of a future wheel
+        raise QprrError(f"example-robot-data robots folder not found at {path}")
+    return path
+
+
+def load(name: str = "q-prr", **kwargs) -> Platform:
+    """The platform called ``name`` (see the module table); keyword arguments go to its loader.
+
+    ``q-prr`` takes those of :func:`qprr.thesis.load` (``variant``, ``layout``, ``params``); the
+    example-robot-data platforms take ``g`` (default 9.81 m/s^2).
+    """
+    if name == "q-prr":
+        from .thesis import load as load_thesis
+
+        return load_thesis(**kwargs)
+    if name not in _EXAMPLE_ROBOTS:
+        raise UnknownNameError("platform", name, NAMES)
+    unknown = set(kwargs) - {"g"}
+    if unknown:
+        raise UnknownNameError(f"option of platform {name!r}", sorted(unknown)[0], ("g",))
+    rel, ee = _EXAMPLE_ROBOTS[name]
+    urdf = robots_dir() / rel
+    rotors = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
+    prov = {"model": f"example-robot-data {rel}", "rotors": f"qprr/data/{name}.rotors.toml (sources cited in the file)"}
+    return from_urdf(urdf, rotors, ee_frame=ee, g=kwargs.get("g", 9.81), name=name, provenance=prov)
+
+
+def multirotor_model(name: str = "hector") -> pin.Model:
+    """A free-flyer Pinocchio model of an example-robot-data multirotor without arm (``"hector"`` or ``"iris"``)."""
+    if name not in _BARE_MULTIROTORS:
+        raise UnknownNameError("multirotor model", name, tuple(_BARE_MULTIROTORS))
+    return pin.buildModelFromUrdf(str(robots_dir() / _BARE_MULTIROTORS[name]), pin.JointModelFreeFlyer())
