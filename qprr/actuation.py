@@ -1,93 +1,246 @@
-"""From rotor thrusts and arm efforts to generalised forces: u = R_Q N f (Thesis (5.40)-(5.46)).
+"""From rotor thrusts and arm efforts to generalised forces, and back: u = R_Q N f and the allocation.
 
-The actuator vector is f = [f1, f2, f3, f4, f_r0, tau_theta2, tau_theta3] (rotor thrusts [N],
-prismatic force [N], joint torques [N m]).
+The actuator vector is f = [f_1..f_n (rotor thrusts, N), arm efforts (N or N m)].  Pinocchio's
+generalised force is tau = N f with N = blockdiag(Omega, I) (Thesis (5.44)-(5.46),
+:attr:`Platform.actuation_matrix`); in thesis coordinates u = R_Q N f with R_Q = S(xi)^T =
+blockdiag(R_b, T^T, I) (Thesis (5.41), corrected: the thesis prints R_b^T T and R_b T in the
+middle block; by virtual power it must be T^T).
 
-* ``rotor_matrix`` (Omega, 6x4): body wrench [f_B; tau_B] at B, in B, per unit thrust,
-  built from the rotor frames of the Pinocchio model and their spin signs.  For the "+"
-  layout its rows 3..6 are (3.36) with c read as c/b (see docs/thesis-errata.md).
-* ``actuation_matrix`` (N, 9x7): [Omega 0; 0 I3] (5.44)-(5.46).  N f is directly the
-  generalised force in Pinocchio's coordinates (body wrench at B, then arm efforts).
-* ``input_map_matrix`` (R_Q, 9x9) = S(xi)^T = blockdiag(R_b, T^T, I3): the generalised
-  force in thesis coordinates is u = R_Q N f.  (The thesis prints R_b^T T and R_b T in the
-  middle block; by virtual power it must be T^T.)
+:class:`Allocator` inverts tau = N f under the rotor bounds (control allocation): an exact
+solution when one lies inside the bounds, otherwise PX4-like priorities on proxsuite: first
+the force and the roll/pitch torque, then the yaw torque, then (redundant rotor sets) the
+thrusts closest to the unconstrained ones.  The base wrench the rotors cannot produce at all
+(the body-lateral force of coplanar rotors) is reported as unallocated.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pinocchio as pin
 
-from . import coordinates as co
-from .coordinates import as_vector
-from .errors import UnknownNameError
-from .model import Robot
-from .params import LAYOUTS
-
-
-def _check_layout(layout: str) -> None:
-    if layout not in LAYOUTS:
-        raise UnknownNameError("layout", layout, LAYOUTS)
-
-
-def rotor_matrix(robot: Robot, layout: str = "plus") -> np.ndarray:
-    """Omega (6x4): [f_B; tau_B] = Omega [f1..f4], from the rotor frames (thrust along each frame's z).
-
-    Column i: [z_i; p_i x z_i + spin_i kappa z_i] with p_i, z_i the rotor position and axis
-    in B and kappa = c/b the yaw torque per newton (Thesis (3.31), (3.36)).
-    """
-    _check_layout(layout)
-    model = robot.model
-    base = model.frames[robot.base_frame].placement
-    kappa = robot.params.kappa
-    cols = []
-    for fid, rotor in zip(robot.rotor_frames[layout], robot.params.rotors(layout)):
-        frame = model.frames[fid]
-        # both frames hang on the free-flyer joint: their placements are relative to B
-        M = base.actInv(frame.placement)
-        z = M.rotation[:, 2]
-        cols.append(np.concatenate([z, np.cross(M.translation, z) + rotor.spin * kappa * z]))
-    return np.array(cols).T
-
-
-def actuation_matrix(robot: Robot, layout: str = "plus") -> np.ndarray:
-    """N (9x7) = diag(Omega, I3), Thesis (5.44)-(5.46): Pinocchio's tau = N f."""
-    N = np.zeros((9, 7))
-    N[0:6, 0:4] = rotor_matrix(robot, layout)
-    N[6:9, 4:7] = np.eye(3)
-    return N
+from . import charts as ch
+from .charts import FloatWriter, as_vector
+from .errors import DivergenceError, InputError
+from .kinematics import frame_jacobian_world
+from .optim import Lexicographic, QPSettings
+from .platform import Platform
 
 
 def input_map_matrix(xi) -> np.ndarray:
-    """R_Q(xi) = blockdiag(R_b, T(phi_b)^T, I3) = S(xi)^T, Thesis (5.41) corrected."""
-    return co.rate_map(xi).T
+    """R_Q(xi) = blockdiag(R_b, T(phi_b)^T, I) = S(xi)^T, Thesis (5.41) corrected."""
+    return ch.rate_map(xi).T
 
 
-def input_map(robot: Robot, xi, f, layout: str = "plus") -> np.ndarray:
-    """u = R_Q N f: generalised forces in thesis coordinates, Thesis (5.43)."""
-    f = as_vector(f, 7, "f")
-    return input_map_matrix(xi) @ (actuation_matrix(robot, layout) @ f)
+def input_map(platform: Platform, xi, f) -> np.ndarray:
+    """u = R_Q N f: generalised forces in thesis coordinates of the actuator vector ``f``, Thesis (5.43)."""
+    f = as_vector(f, platform.n_actuators, "f")
+    return input_map_matrix(ch.as_xi(xi, "xi", platform.n_xi)) @ (platform.actuation_matrix @ f)
 
 
-def allocation_inverse(robot: Robot, layout: str = "plus") -> np.ndarray:
-    """Omega_z^-1 (4x4): rotor thrusts from [f_bz, tau_phi, tau_theta, tau_psi] (Thesis Annex A (A.1), corrected)."""
-    Omega = rotor_matrix(robot, layout)
-    return np.linalg.inv(Omega[2:6, :])
-
-
-def hover_thrusts(robot: Robot, layout: str = "plus") -> np.ndarray:
-    """Rotor thrusts [N] that hold the system level at rest when its CoG is on z_B: f_i = m_G g / 4."""
-    wrench = np.array([robot.params.total_mass * robot.params.g, 0.0, 0.0, 0.0])
-    return allocation_inverse(robot, layout) @ wrench
-
-
-def generalized_force_from_wrench(robot: Robot, data: pin.Data, q, wrench_world, frame: str | int = "end_effector") -> np.ndarray:
-    """Pinocchio generalised force J^T h of a wrench h = [f; mu] (world axes, applied at the frame origin)."""
-    q = as_vector(q, robot.nq, "q")
+def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_world, frame=None) -> np.ndarray:
+    """Pinocchio generalised force J^T h of a wrench h = [f; mu] (world axes, applied at the frame origin; default: end effector)."""
     h = as_vector(wrench_world, 6, "wrench_world")
-    fid = robot.model.getFrameId(frame) if isinstance(frame, str) else int(frame)
-    if fid >= len(robot.model.frames):
-        names = [f.name for f in robot.model.frames]
-        raise UnknownNameError("frame", frame, names)
-    J = pin.computeFrameJacobian(robot.model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
-    return J.T @ h
+    return frame_jacobian_world(platform, data, q, frame).T @ h
+
+
+# ================================================================================ allocation
+ALLOCATION_SETTINGS = QPSettings(eps_abs=1e-10, eps_primal_inf=1e-12, eps_dual_inf=1e-12, max_iter=10000)
+"""proxsuite settings of the allocation QPs: thrusts to 1e-10 N in the scaled problem."""
+
+
+@dataclass(frozen=True)
+class AllocationResult:
+    """Outcome of one allocation.
+
+    ``f`` = [rotor thrusts (N), arm efforts]; ``tau_desired`` and ``tau_achieved`` = N f are
+    Pinocchio generalised forces (body wrench at B in B axes, then arm efforts); ``residual`` =
+    desired - achieved (what could not be allocated).  ``status`` is "exact" (every producible
+    component met) or "saturated" (a bound was active); ``reason`` says which.
+    """
+
+    f: np.ndarray
+    tau_desired: np.ndarray
+    tau_achieved: np.ndarray
+    residual: np.ndarray
+    rotor_saturated: bool
+    arm_saturated: bool
+    status: str
+    reason: str
+
+
+class Allocator:
+    """Rotor thrusts and arm efforts from a desired generalised force tau_d (nv,) of ``platform``.
+
+    * Producible rows: the rows of Omega that are not zero (coplanar rotors: f_z and the three
+      torques; a tilted hexarotor: all six).  When they are independent (the usual case) the
+      exact allocation is f = Omega_P^-1 w_P (square) or the minimum-norm Omega_P^+ w_P; in
+      general, f = Omega^+ w.  Inside [f_min, f_max] this is the answer of every level below.
+    * Otherwise, lexicographic bounded least squares (:class:`qprr.optim.Lexicographic`):
+      level 1 the force rows and the roll/pitch torques, weighted (``weight_force`` per newton,
+      ``weight_torque`` per newton metre; default 10 / l with l the mean rotor distance from the
+      thrust axis: a torque error counts ten times the same per-rotor force error, attitude
+      authority first as PX4 does); level 2 the yaw torque; level 3 (redundant rotor sets) the
+      thrusts closest to the exact allocation.  Variables are scaled by max f_max.
+    * Arm efforts are clipped to the platform's effort limits.
+
+    :meth:`allocate` is the validated call; :meth:`allocate_into` the allocation-free one of the
+    simulator.  The object owns its QPs (warm-started between calls); it can be copied or pickled.
+    """
+
+    def __init__(self, platform: Platform, *, thrust_bounds: tuple[float, float] | None = None, weight_force: float = 1.0,
+                 weight_torque: float | None = None, clip_arm: bool = True, settings: QPSettings = ALLOCATION_SETTINGS) -> None:
+        if not isinstance(platform, Platform):
+            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        n = platform.n_rotors
+        if thrust_bounds is None:
+            f_min, f_max = platform.thrust_min.copy(), platform.thrust_max.copy()
+        else:
+            lo, hi = thrust_bounds
+            if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 <= lo < hi):
+                raise InputError(f"thrust_bounds must satisfy 0 <= min < max, got {thrust_bounds!r}")
+            f_min, f_max = np.full(n, float(lo)), np.full(n, float(hi))
+        if not np.all(np.isfinite(f_max)):
+            raise InputError(f"platform {platform.name!r} has rotors without a finite f_max: allocation needs thrust bounds")
+        Omega = np.array(platform.rotor_matrix)
+        point, axis = platform.thrust_axis
+        radial = [np.linalg.norm(np.cross(np.array(r.position_body) - point, axis)) for r in platform.rotors]
+        l_mean = float(np.mean(radial))
+        if weight_torque is None:
+            weight_torque = 10.0 / l_mean if l_mean > 0 else 10.0
+        if not (weight_force > 0 and weight_torque > 0):
+            raise InputError(f"allocation weights must be > 0, got {(weight_force, weight_torque)!r}")
+        self.platform = platform
+        self.n_rotors, self.n_arm = n, platform.n_arm
+        self.f_min, self.f_max = f_min, f_max
+        self._lo, self._hi = f_min.tolist(), f_max.tolist()
+        self.effort_limits = np.array(platform.arm_effort_limits)
+        self._lim = self.effort_limits.tolist()
+        self.clip_arm = bool(clip_arm)
+        self.Omega = Omega
+        rows = [i for i in range(6) if np.abs(Omega[i]).max() > 1e-12]
+        rank = int(np.linalg.matrix_rank(Omega, tol=1e-9))
+        self.aligned = len(rows) == rank  # the producible wrench set is spanned by axes of B
+        self.rows = rows if self.aligned else list(range(6))
+        self._rows = slice(rows[0], rows[-1] + 1) if self.aligned and rows == list(range(rows[0], rows[-1] + 1)) else self.rows
+        Omega_P = Omega[self.rows]
+        self.square = self.aligned and len(rows) == n
+        self.Omega_P_inv = np.linalg.inv(Omega_P) if self.square else np.linalg.pinv(Omega_P)
+        # level rows within the producible ones: forces and roll/pitch torques, then yaw
+        self._lvl1 = [k for k, i in enumerate(self.rows) if i != 5]
+        self._lvl2 = [k for k, i in enumerate(self.rows) if i == 5]
+        self._W = np.array([weight_force if self.rows[k] < 3 else weight_torque for k in self._lvl1])
+        self._scale = float(f_max.max())
+        self._lex = Lexicographic(n, None, settings=settings, regularization=0.0, rank_tol=1e-9, warm_start=True)
+        self._write = FloatWriter(self.n_rotors + self.n_arm)
+        self._tau_write = FloatWriter(platform.nv)
+        self.qp_calls = 0
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Level-1 row weights (force rows, then roll/pitch torque rows)."""
+        return self._W.copy()
+
+    # ------------------------------------------------------------------ rotors
+    def _solve_qp(self, w: np.ndarray, f_exact: np.ndarray) -> np.ndarray:
+        """Prioritised allocation of the producible wrench rows ``w`` (bounds active)."""
+        self.qp_calls += 1
+        if not np.all(np.isfinite(w)):
+            raise DivergenceError(f"the controller asked for a non-finite rotor wrench {w.tolist()}")
+        s = self._scale
+        OP = self.Omega[self.rows] * s  # x = f / s
+        A1 = self._W[:, None] * OP[self._lvl1]
+        b1 = self._W * w[self._lvl1]
+        obj = max(1.0, float(np.linalg.norm(b1)) / (self.n_rotors * s))  # objective scale: eps_abs stays meaningful
+        levels = [(A1 / obj, b1 / obj)]
+        if self._lvl2:
+            levels.append((OP[self._lvl2], w[self._lvl2]))
+        if self.n_rotors > len(self.rows):  # redundant rotors: closest to the exact allocation
+            levels.append((np.eye(self.n_rotors), np.clip(f_exact, self.f_min, self.f_max) / s))
+        x = self._lex.solve(levels, self.f_min / s, self.f_max / s).x
+        return np.clip(x * s, self.f_min, self.f_max)
+
+    def rotor_thrusts(self, wrench_body) -> tuple[np.ndarray, bool]:
+        """(f, saturated) for a body wrench [f_B; tau_B] (6,) at B in B axes."""
+        w = as_vector(wrench_body, 6, "wrench_body")
+        f = self.Omega_P_inv.dot(w[self._rows])
+        if np.all(f >= self.f_min) and np.all(f <= self.f_max):
+            return f, False
+        return self._solve_qp(w[self.rows], f), True
+
+    # ------------------------------------------------------------------ public API
+    def allocate(self, tau_desired) -> AllocationResult:
+        """Allocate a desired Pinocchio generalised force ``tau_desired`` (nv,): see the class docstring."""
+        tau_d = as_vector(tau_desired, self.platform.nv, "tau_desired")
+        f = np.empty(self.n_rotors + self.n_arm)
+        flags = self.allocate_into(tau_d, f)
+        achieved = self.platform.actuation_matrix @ f
+        residual = tau_d - achieved
+        rot, arm = bool(flags & 1), bool(flags & 2)
+        reasons = []
+        if rot:
+            reasons.append(f"rotor thrust bounds active: unallocated base wrench {np.round(residual[0:6], 12).tolist()}")
+        if arm:
+            reasons.append(f"arm effort limits {self.effort_limits.tolist()} active: unallocated {np.round(residual[6:], 12).tolist()}")
+        if not rot:
+            lost = float(np.linalg.norm(residual[0:6]))
+            if lost > 1e-9:
+                reasons.append(f"base wrench {np.round(residual[0:6], 12).tolist()} outside what the rotors can produce "
+                               f"(rank {self.platform.wrench_rank} of 6)")
+        status = "saturated" if (rot or arm) else "exact"
+        return AllocationResult(f, tau_d.copy(), achieved, residual, rot, arm, status, "; ".join(reasons) or "all producible components met")
+
+    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+        """In-loop allocation without validation: writes f into ``f_out`` and, if given, N f into ``tau_out``.
+
+        ``tau_d`` (nv,) float64; ``f_out`` (n_rotors + n_arm,) and ``tau_out`` (nv,) float64 arrays.
+        Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.
+        """
+        f = self.Omega_P_inv.dot(tau_d[self._rows])
+        fl = f.tolist()
+        flags = 0
+        lo, hi = self._lo, self._hi
+        for k in range(self.n_rotors):
+            if not lo[k] <= fl[k] <= hi[k]:
+                f = self._solve_qp(tau_d[self.rows], f)
+                fl = f.tolist()
+                flags = 1
+                break
+        td = tau_d.tolist()
+        arm = td[6:]
+        if self.clip_arm:
+            lim = self._lim
+            for k, a in enumerate(arm):
+                if a > lim[k] or a < -lim[k]:
+                    arm = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
+                    flags |= 2
+                    break
+        self._write(f_out, fl + arm)
+        if tau_out is not None:
+            if flags or not self.square:
+                tau_out[0:6] = self.Omega @ f
+                tau_out[6:] = arm
+            else:  # exact: Omega f = tau_d on the producible rows, zero on the others; arm efforts as asked
+                out = [0.0] * 6 + arm
+                for i in self.rows:
+                    out[i] = td[i]
+                self._tau_write(tau_out, out)
+        return flags
+
+    def hover_thrusts(self, data: pin.Data | None = None, q=None) -> np.ndarray:
+        """Rotor thrusts that hold the platform still at ``q`` (default: level at the origin, arm at 0).
+
+        The base part of the generalised gravity g(q) allocated exactly; for the thesis's Q-PRR with
+        its CoG on z_B, f_i = m_G g / 4.  Raises InputError if a bound is violated.
+        """
+        p = self.platform
+        q = p.neutral_q() if q is None else q
+        data = p.data() if data is None else data
+        from .dynamics import generalized_gravity
+
+        w = generalized_gravity(p, data, q)[0:6]
+        f = self.Omega_P_inv.dot(w[self._rows])
+        if np.any(f < self.f_min - 1e-12) or np.any(f > self.f_max + 1e-12):
+            raise InputError(f"platform {p.name!r} cannot hover at this configuration within its thrust bounds: f = {f.tolist()} N")
+        return f
