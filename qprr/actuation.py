@@ -23,7 +23,7 @@ import pinocchio as pin
 from . import charts as ch
 from .charts import FloatWriter, as_vector
 from .errors import DivergenceError, InputError
-from .kinematics import frame_jacobian_world
+from .kinematics import ee_jacobian_world
 from .optim import Lexicographic, QPSettings
 from .platform import Platform
 
@@ -42,7 +42,7 @@ def input_map(platform: Platform, xi, f) -> np.ndarray:
 def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_world, frame=None) -> np.ndarray:
     """Pinocchio generalised force J^T h of a wrench h = [f; mu] (world axes, applied at the frame origin; default: end effector)."""
     h = as_vector(wrench_world, 6, "wrench_world")
-    return frame_jacobian_world(platform, data, q, frame).T @ h
+    return ee_jacobian_world(platform, data, q, frame).T @ h
 
 
 # ================================================================================ allocation

@@ -27,14 +27,14 @@ def _frame(platform: Platform, frame) -> int:
     return platform.ee_frame if frame is None else platform.frame_id(frame)
 
 
-def frame_placement(platform: Platform, data: pin.Data, q, frame=None) -> pin.SE3:
+def ee_placement(platform: Platform, data: pin.Data, q, frame=None) -> pin.SE3:
     """World pose oMf of ``frame`` (default: the end effector), ^eT_eb of Thesis (3.61) for the Q-PRR."""
     fid = _frame(platform, frame)
     pin.framesForwardKinematics(platform.model, data, check_q(platform, q))
     return data.oMf[fid].copy()
 
 
-def frame_placement_body(platform: Platform, data: pin.Data, q, frame=None) -> pin.SE3:
+def ee_placement_body(platform: Platform, data: pin.Data, q, frame=None) -> pin.SE3:
     """Pose bMf of ``frame`` (default: the end effector) in B, ^bT_eb of Thesis (3.58) for the Q-PRR."""
     fid = _frame(platform, frame)
     pin.framesForwardKinematics(platform.model, data, check_q(platform, q))
@@ -43,11 +43,11 @@ def frame_placement_body(platform: Platform, data: pin.Data, q, frame=None) -> p
 
 def ee_pose_xi(platform: Platform, data: pin.Data, xi, frame=None) -> tuple[np.ndarray, np.ndarray]:
     """(p_e_world, R_e_world) of thesis coordinates, Thesis (3.61)."""
-    M = frame_placement(platform, data, ch.xi_to_q(ch.as_xi(xi, "xi", platform.n_xi)), frame)
+    M = ee_placement(platform, data, ch.xi_to_q(ch.as_xi(xi, "xi", platform.n_xi)), frame)
     return M.translation.copy(), M.rotation.copy()
 
 
-def frame_jacobian_world(platform: Platform, data: pin.Data, q, frame=None) -> np.ndarray:
+def ee_jacobian_world(platform: Platform, data: pin.Data, q, frame=None) -> np.ndarray:
     """6 x nv Jacobian of [p_dot_world; omega_world] of ``frame`` (default: end effector) w.r.t. Pinocchio's v."""
     fid = _frame(platform, frame)
     return pin.computeFrameJacobian(platform.model, data, check_q(platform, q), fid, pin.LOCAL_WORLD_ALIGNED)
@@ -56,14 +56,14 @@ def frame_jacobian_world(platform: Platform, data: pin.Data, q, frame=None) -> n
 def jacobian_xi(platform: Platform, data: pin.Data, xi, frame=None) -> np.ndarray:
     """J_e (6 x (6 + n)) with [p_e_dot; omega_e] (world) = J_e xi_dot, Thesis (4.11)-(4.13)."""
     xi = ch.as_xi(xi, "xi", platform.n_xi)
-    return frame_jacobian_world(platform, data, ch.xi_to_q(xi), frame) @ ch.rate_map(xi)
+    return ee_jacobian_world(platform, data, ch.xi_to_q(xi), frame) @ ch.rate_map(xi)
 
 
 def arm_jacobian_body(platform: Platform, data: pin.Data, q_arm, frame=None) -> np.ndarray:
     """J_eb (6 x n_arm) of the arm in B: [p_eb_dot; omega_eb] = J_eb q_arm_dot, Thesis (4.26)."""
     q = pin.neutral(platform.model)
     q[7:] = as_vector(q_arm, platform.n_arm, "q_arm")
-    return frame_jacobian_world(platform, data, q, frame)[:, 6:]
+    return ee_jacobian_world(platform, data, q, frame)[:, 6:]
 
 
 # ------------------------------------------------------------------- centre of mass
@@ -79,24 +79,15 @@ def com_body(platform: Platform, data: pin.Data, q) -> np.ndarray:
     return data.oMi[_BASE_JOINT].actInv(c)
 
 
-def _axis_basis(direction: np.ndarray) -> np.ndarray:
-    """Two unit vectors (rows) spanning the plane normal to ``direction``: (x_B, y_B) when it is z_B."""
-    e1 = np.array([1.0, 0.0, 0.0]) - direction[0] * direction
-    if np.linalg.norm(e1) < 1e-6:
-        e1 = np.array([0.0, 1.0, 0.0]) - direction[1] * direction
-    e1 /= np.linalg.norm(e1)
-    return np.vstack([e1, np.cross(direction, e1)])
-
-
 def cog_offset_body(platform: Platform, data: pin.Data, q) -> np.ndarray:
     """Distance of the CoG from the thrust axis, (2,) [m] in B: [x_cm, y_cm] for a thrust axis along z_B.
 
     The thrust axis is :attr:`Platform.thrust_axis`; the offset is the CoG minus the axis point,
-    projected on the plane normal to the axis (basis x_B, y_B when the axis is z_B).  Zero means the
+    projected on the plane normal to the axis (:attr:`Platform.thrust_axis_basis`: x_B, y_B when
+    the axis is z_B).  Zero means the
     platform hovers with equal thrusts (Thesis Sec. 2.5, (3.79)-(3.81)).
     """
-    point, direction = platform.thrust_axis
-    return _axis_basis(direction) @ (com_body(platform, data, q) - point)
+    return platform.thrust_axis_basis @ (com_body(platform, data, q) - platform.thrust_axis[0])
 
 
 def arm_com(platform: Platform, data: pin.Data, q) -> tuple[float, np.ndarray, np.ndarray]:
@@ -130,7 +121,7 @@ def com_jacobian_body_from(data: pin.Data, Jc: np.ndarray) -> np.ndarray:
 
 def cog_offset_jacobian(platform: Platform, data: pin.Data, Jc_body: np.ndarray) -> np.ndarray:
     """2 x nv Jacobian of :func:`cog_offset_body` from the body-frame CoM Jacobian."""
-    return _axis_basis(platform.thrust_axis[1]) @ Jc_body
+    return platform.thrust_axis_basis @ Jc_body
 
 
 def arm_gravity_torque_body(platform: Platform, data: pin.Data, q) -> np.ndarray:

@@ -233,7 +233,7 @@ def build(
     text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
     prov = {"design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
             "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)"}
-    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, spec=d, provenance=prov)
+    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov)
 
 
 def _rpy_of_axis(axis) -> tuple[float, float, float]:

@@ -103,11 +103,13 @@ class QPSettings:
 
 @dataclass(frozen=True)
 class LexResult:
-    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k||; ``iterations`` ProxQP iterations summed over levels."""
+    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k||; ``iterations`` ProxQP iterations summed over levels;
+    ``x_levels[k]`` the solution after level k (the optimum of levels 1..k)."""
 
     x: np.ndarray
     residuals: tuple[float, ...]
     iterations: int
+    x_levels: tuple = ()
 
 
 class Lexicographic:
@@ -215,23 +217,30 @@ class Lexicographic:
         return z, int(res.info.iter)
 
     # ------------------------------------------------------------------ solve
-    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None) -> LexResult:
+    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None) -> LexResult:
         """Solve ``levels`` (sequence of (A_k, b_k)) under ``lower <= x[bounded] <= upper``.
 
         ``x0`` (default 0) is the point the regularisation of level 1 pulls towards; it must
-        satisfy the bounds.
+        satisfy the bounds.  ``damping`` (one value per level) is added to the regularisation of
+        each level (damped least squares: it shortens steps, it never moves a point where every
+        level's gradient vanishes).
         """
-        n, reg, tol, b_idx = self.n, self.regularization, self.rank_tol, self.bounded
+        n, tol, b_idx = self.n, self.rank_tol, self.bounded
         lo = np.asarray(lower, dtype=float)
         up = np.asarray(upper, dtype=float)
         x = np.zeros(n) if x0 is None else np.array(x0, dtype=float)
         iters = 0
+        x_levels = []
         Z = None  # basis of the free directions (None: the whole space)
         for k, (A, b) in enumerate(levels):
+            reg = self.regularization
             if Z is not None and Z.shape[1] == 0:
-                break
+                x_levels.append(x)
+                continue
             B = A if Z is None else A @ Z
             r = b - A @ x
+            if damping is not None:
+                reg += float(damping[k])
             xb = x[b_idx]
             # the earlier optimum (z = 0) must stay feasible: ProxQP meets bounds only to eps_abs
             lo_z = np.minimum(lo - xb, 0.0)
@@ -246,11 +255,12 @@ class Lexicographic:
                 z, it = self.solve_box_qp(k, H, -(B.T @ r), Cz, lo_z, up_z)
                 iters += it
             x = x + (z if Z is None else Z @ z)
+            x_levels.append(x)
             if k < len(levels) - 1:
                 N = null_space(B, tol)
                 Z = N if Z is None else Z @ N
         residuals = tuple(float(np.linalg.norm(A @ x - b)) for A, b in levels)
-        return LexResult(x, residuals, iters)
+        return LexResult(x, residuals, iters, tuple(x_levels))
 
 
 def _clamped_1d(B: np.ndarray, r: np.ndarray, reg: float, c: np.ndarray, lo: np.ndarray, up: np.ndarray) -> np.ndarray:

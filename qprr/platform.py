@@ -138,8 +138,9 @@ def check_model_inertias(model: pin.Model) -> None:
 class Platform:
     """An aerial manipulator (see the module docstring).  Build with :func:`from_urdf` or :func:`qprr.build`.
 
-    ``spec`` keeps what the platform was built from (for the thesis's Q-PRR, its parameter set);
-    library code never reads it.  ``provenance`` says where each value comes from.
+    ``params`` keeps what the platform was built from (for the thesis's Q-PRR its parameter set
+    :class:`qprr.thesis.params.QPRRParams`, for :func:`qprr.build` the parsed (2.1) name); library
+    code never reads it, only :mod:`qprr.thesis` does.  ``provenance`` says where each value comes from.
     """
 
     name: str
@@ -149,7 +150,7 @@ class Platform:
     arm: tuple[ArmJoint, ...]
     rotors: tuple[Rotor, ...]
     ee_frames: tuple[int, ...] = ()
-    spec: object = None
+    params: object = None
     provenance: Mapping[str, str] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -332,6 +333,19 @@ class Platform:
         point[np.abs(point) < 1e-15] = 0.0
         return _readonly(point), _readonly(F / nF)
 
+    @cached_property
+    def thrust_axis_basis(self) -> np.ndarray:
+        """(2, 3): two unit vectors (rows, in B) spanning the plane normal to the thrust axis; (x_B, y_B) for z_B."""
+        d = self.thrust_axis[1]
+        e1 = np.array([1.0, 0.0, 0.0]) - d[0] * d
+        if np.linalg.norm(e1) < 1e-6:
+            e1 = np.array([0.0, 1.0, 0.0]) - d[1] * d
+        e1 /= np.linalg.norm(e1)
+        e2 = np.array([d[1] * e1[2] - d[2] * e1[1], d[2] * e1[0] - d[0] * e1[2], d[0] * e1[1] - d[1] * e1[0]])
+        B = np.vstack([e1, e2])
+        B[np.abs(B) < 1e-15] = 0.0
+        return _readonly(B)
+
     # -------------------------------------------------------------- variants
     def replace(self, **changes) -> Platform:
         """A copy with some fields replaced (e.g. ``rotors=...``); the model is shared, never modified."""
@@ -420,16 +434,22 @@ def from_model(
     ee_frame: str | int | None = None,
     ee_frames: Sequence[str | int] = (),
     name: str | None = None,
-    spec: object = None,
+    params: object = None,
     provenance: Mapping[str, str] | None = None,
+    allow_nonphysical: bool = False,
 ) -> Platform:
     """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
 
     ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
     entries may name frames of ``model`` (see :func:`qprr.rotors.rotors_from_mapping`).
+    ``allow_nonphysical=True`` skips the inertia checks (to study a printed, non-physical table:
+    the provenance then says so); the mass matrix must still be positive definite.
     """
     model = pin.Model(model)
-    check_model_inertias(model)
+    if allow_nonphysical:
+        provenance = {**(provenance or {}), "WARNING": "inertia checks skipped (allow_nonphysical=True): not a physical body set"}
+    else:
+        check_model_inertias(model)
     arm = _arm_joints(model)
     base = _base_frame(model)
     if isinstance(rotors, Mapping):
@@ -451,7 +471,7 @@ def from_model(
         arm=arm,
         rotors=tuple(rotors),
         ee_frames=(ee, *[f for f in extra if f != ee]),
-        spec=spec,
+        params=params,
         provenance=dict(provenance or {}),
     )
     _check_mass_matrix(platform)
@@ -481,8 +501,9 @@ def from_urdf(
     ee_frames: Sequence[str | int] = (),
     g: float = 9.81,
     name: str | None = None,
-    spec: object = None,
+    params: object = None,
     provenance: Mapping[str, str] | None = None,
+    allow_nonphysical: bool = False,
 ) -> Platform:
     """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
 
@@ -495,7 +516,8 @@ def from_urdf(
     text, source = _urdf_text(urdf)
     if not (isinstance(g, (int, float)) and math.isfinite(g) and g > 0.0):
         raise InputError(f"g must be a positive number of m/s^2, got {g!r}")
-    check_urdf_inertials(text, source)
+    if not allow_nonphysical:
+        check_urdf_inertials(text, source)
     model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
     model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
     if isinstance(rotors, (str, Path)) and str(rotors).endswith(".toml"):
@@ -503,7 +525,8 @@ def from_urdf(
 
         rotors = read_rotor_file(rotors)
     prov = {"model": source, **(provenance or {})}
-    return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, spec=spec, provenance=prov)
+    return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
+                      allow_nonphysical=allow_nonphysical)
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

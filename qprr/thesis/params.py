@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from .errors import InputError
+from ..errors import InputError
 
 
 @dataclass(frozen=True)
@@ -111,7 +111,7 @@ class QPRRParams:
         exactly as (3.34)-(3.36).  "x": the same rotors turned by +45 deg about z_B.
         """
         if layout not in LAYOUTS:
-            from .errors import UnknownNameError
+            from ..errors import UnknownNameError
 
             raise UnknownNameError("layout", layout, LAYOUTS)
         l = self.arm_length

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .params import LAYOUTS, Link, QPRRParams, thesis_params
 
-URDF_PATH = Path(__file__).resolve().parent.parent / "urdf" / "qprr.urdf"
+URDF_PATH = Path(__file__).resolve().parent.parent.parent / "urdf" / "qprr.urdf"
 
 
 def _f(x: float) -> str:

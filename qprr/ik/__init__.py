@@ -1,0 +1,47 @@
+"""Inverse kinematics of any platform: tasks, the strict-priority hierarchy, methods, one result type.
+
+    solver = qprr.ik.IKSolver(platform, method="qp")   # build once (owns its QPs)
+    result = solver.solve(data, target)                # solve many
+
+or ``qprr.ik.solve(platform, data, target, method="qp")``.  See :mod:`qprr.ik.solver` for the
+problem and the methods, :mod:`qprr.ik.tasks` for the tasks (write your own), and
+:mod:`qprr.thesis.igm` for the thesis's analytic IGM of the Q-PRR.
+"""
+
+from . import tasks
+from .hierarchy import ELIMINATIONS, HierarchySolver, HierarchyStep
+from .solver import (
+    METHODS,
+    OPTIONS,
+    ClikaOptions,
+    DLSOptions,
+    IKResult,
+    IKSolver,
+    QPOptions,
+    default_guess,
+    default_levels,
+    make_options,
+    parse_target,
+    pose_errors,
+    solve,
+)
+
+__all__ = [
+    "ELIMINATIONS",
+    "METHODS",
+    "OPTIONS",
+    "ClikaOptions",
+    "DLSOptions",
+    "HierarchySolver",
+    "HierarchyStep",
+    "IKResult",
+    "IKSolver",
+    "QPOptions",
+    "default_guess",
+    "default_levels",
+    "make_options",
+    "parse_target",
+    "pose_errors",
+    "solve",
+    "tasks",
+]

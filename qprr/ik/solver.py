@@ -1,0 +1,651 @@
+"""Inverse kinematics of any platform: options, the result type, the methods and the solver object.
+
+    solver = IKSolver(platform, method="qp")          # owns its QPs: one per thread
+    result = solver.solve(data, target, xi0=None)     # or ik.solve(platform, data, target, ...)
+
+``target``: the desired end-effector placement in the world, a ``pin.SE3`` or a pair
+``(p_world, R_world)``, or a position ``p_world`` (3,) alone (the orientation is then left free).
+The problem solved is the *static* IK of an aerial manipulator: the end effector at the target,
+the arm inside its joint limits and, unless an option says otherwise, the multirotor able to
+hover there (roll = pitch = 0: a multirotor whose rotors all push along z_B holds still only
+with its thrust vertical).  The CoG offset from the thrust axis is reported, never a failure.
+
+Methods (``METHODS``):
+
+* ``"qp"``    strict task-priority QP IK: 1 end-effector pose (or position), 2 hover (thrust
+  axis vertical; on a fully actuated platform: the base pose, :class:`BasePoseTask`), 3 CoG on
+  the thrust axis, 4 arm posture; joint limits hard at every level (:mod:`qprr.ik.hierarchy`).
+* ``"clika"`` closed-loop inverse kinematics (4.38)-(4.41) with the right pseudo-inverse
+  (4.36) or the weighted one (4.34), Euler-integrated in thesis coordinates (4.30).
+* ``"dls"``   damped least squares (Levenberg-Marquardt) on the SE(3) error log6, joint limits by
+  an active set.
+
+The thesis's analytic IGM (Algorithms 3-5) is the Q-PRR's own: :func:`qprr.thesis.igm.solve`
+adds it as method ``"igm"`` and uses it as the QP's initial guess.
+
+Position error: ||p_e - p_d|| [m]; orientation error: ||log3(R_d^T R_e)|| [rad], both from
+Pinocchio's forward kinematics at the returned configuration.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field, fields
+
+import numpy as np
+import pinocchio as pin
+
+from .. import charts as ch
+from ..charts import as_vector
+from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
+from ..platform import Platform
+from .hierarchy import HierarchySolver
+from .tasks import BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
+
+METHODS = ("clika", "dls", "qp")
+
+
+# ============================================================================ options
+def _check_pos(name: str, value, strict: bool = True) -> None:
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and (value > 0 if strict else value >= 0)
+    if not ok:
+        raise InputError(f"option {name} must be a finite number {'>' if strict else '>='} 0, got {value!r}")
+
+
+def _check_int(name: str, value) -> None:
+    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
+        raise InputError(f"option {name} must be an integer >= 1, got {value!r}")
+
+
+def _check_bool(name: str, value) -> None:
+    if not isinstance(value, bool):
+        raise InputError(f"option {name} must be a bool, got {value!r}")
+
+
+@dataclass(frozen=True)
+class Tolerances:
+    position_tol: float = 1e-6  # [m] success threshold on ||p_e - p_d||
+    orientation_tol: float = 1e-6  # [rad] success threshold on ||log3(R_d^T R_e)||
+    hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
+
+    def _check_tolerances(self) -> None:
+        for name in ("position_tol", "orientation_tol", "hover_tol"):
+            _check_pos(name, getattr(self, name))
+
+
+@dataclass(frozen=True)
+class ClikaOptions(Tolerances):
+    """CLIKA (4.41): xi_dot = J^+ K e, xi <- xi + dt xi_dot.  ``gains``: diag K (thesis example
+    values); ``weights``: diag W of (4.34) in xi order (None: W = I, the right pseudo-inverse
+    (4.36)); ``hover``: keep roll = pitch = 0 (drop their columns of J; the thesis uses all)."""
+
+    gains: tuple = (40.0, 35.0, 10.0, 15.0, 12.0, 10.0)
+    dt: float = 0.02
+    weights: tuple | None = None
+    hover: bool = False
+    max_iter: int = 2000
+
+    def __post_init__(self):
+        self._check_tolerances()
+        k = as_vector(self.gains, 6, "option gains")
+        if np.any(k <= 0):
+            raise InputError(f"option gains must be positive, got {k.tolist()}")
+        if self.weights is not None:
+            w = ch.as_array(self.weights, "option weights")
+            if w.ndim != 1 or w.shape[0] < 6 or np.any(~np.isfinite(w)) or np.any(w <= 0):
+                raise InputError(f"option weights must be 6 + n_arm positive numbers, got {np.asarray(self.weights).tolist()}")
+        _check_pos("dt", self.dt)
+        _check_int("max_iter", self.max_iter)
+        _check_bool("hover", self.hover)
+
+
+@dataclass(frozen=True)
+class DLSOptions(Tolerances):
+    """Levenberg-Marquardt on f = log6(M_d^-1 M_e): (J^T J + lambda I) dv = -J^T f, lambda adapted
+    (/3 on success, x4 on failure); arm joints held on their limits by an active set; ``hover``
+    restricts dv to the directions that keep roll = pitch = 0."""
+
+    hover: bool = True
+    damping: float = 1e-3
+    max_iter: int = 100
+
+    def __post_init__(self):
+        self._check_tolerances()
+        _check_pos("damping", self.damping)
+        _check_int("max_iter", self.max_iter)
+        _check_bool("hover", self.hover)
+
+
+@dataclass(frozen=True)
+class QPOptions(Tolerances):
+    """Strict task-priority QP IK.  ``posture``: q_arm of the posture level (default: the initial
+    guess).  ``levels``: your own sequence of sequences of :class:`qprr.ik.tasks.Task` instead of
+    :func:`default_levels`.  ``require_hover``: success needs roll = pitch = 0 (within
+    ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when the pose is
+    reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``,
+    ``elimination``: of :class:`qprr.ik.hierarchy.HierarchySolver`."""
+
+    require_hover: bool | None = None
+    posture: tuple | None = None
+    levels: Sequence | None = None
+    max_iter: int = 50
+    step_tol: float = 1e-7
+    max_step: float = 0.5
+    eps_abs: float = 1e-9
+    regularization: float = 1e-7
+    rank_tol: float = 1e-9
+    elimination: str = "nullspace"
+
+    def __post_init__(self):
+        self._check_tolerances()
+        if self.elimination not in ("nullspace", "equality"):
+            raise UnknownNameError("elimination", self.elimination, ("nullspace", "equality"))
+        _check_int("max_iter", self.max_iter)
+        for name in ("step_tol", "max_step", "eps_abs", "rank_tol"):
+            _check_pos(name, getattr(self, name))
+        _check_pos("regularization", self.regularization, strict=False)
+        if self.require_hover is not None:
+            _check_bool("require_hover", self.require_hover)
+        if self.posture is not None:
+            ch.as_array(self.posture, "option posture")
+        if self.levels is not None:
+            ok = len(self.levels) > 0 and all(len(level) > 0 and all(isinstance(t, Task) for t in level) for level in self.levels)
+            if not ok:
+                raise InputError("option levels must be a non-empty sequence of non-empty sequences of qprr.ik.tasks.Task")
+
+
+OPTIONS = {"clika": ClikaOptions, "dls": DLSOptions, "qp": QPOptions}
+
+
+def make_options(method: str, options=None, table: Mapping | None = None):
+    """The options object of ``method`` from None, a dict of overrides or an options instance."""
+    table = OPTIONS if table is None else table
+    if method not in table:
+        raise UnknownNameError("IK method", method, tuple(table))
+    cls = table[method]
+    if options is None:
+        return cls()
+    if isinstance(options, cls):
+        return options
+    if isinstance(options, Mapping):
+        valid = [f.name for f in fields(cls)]
+        for key in options:
+            if key not in valid:
+                raise UnknownNameError(f"option of IK method {method!r}", key, valid)
+        return cls(**options)
+    raise InputError(f"options for method {method!r} must be None, a dict or {cls.__name__}, got {type(options).__name__}")
+
+
+# ============================================================================= result
+@dataclass(slots=True)
+class IKResult:
+    """Outcome of an IK solve.
+
+    ``success``: pose within tolerance, arm within limits and (when required) hover-feasible.
+    ``status``: "converged", "unreachable", "not_hover_feasible", "limits", "max_iterations",
+    "stalled", "diverged" or "solver_error"; ``reason`` says why in words when ``success`` is
+    False (empty otherwise).  ``xi`` and ``q`` hold the returned (best-effort when failed)
+    configuration.  Errors: world position [m] and rotation angle [rad] (0 for a position-only
+    target); ``x_cm``, ``y_cm``: CoG offset from the thrust axis in B [m]; ``roll``, ``pitch``:
+    base ZYX angles [rad]; ``wall_time`` [s]; ``initial_guess``: how the starting configuration
+    was obtained; ``level_errors`` (method "qp"): ||e_k|| of each level at the returned
+    configuration.
+    """
+
+    method: str
+    success: bool
+    status: str
+    reason: str
+    xi: np.ndarray | None
+    q: np.ndarray | None
+    iterations: int
+    position_error: float
+    orientation_error: float
+    x_cm: float
+    y_cm: float
+    roll: float
+    pitch: float
+    hover_feasible: bool
+    within_limits: bool
+    wall_time: float
+    initial_guess: str
+    level_errors: tuple = field(default=())
+
+
+def failed_result(method: str, status: str, reason: str, iterations: int, t0: float, init: str) -> IKResult:
+    """A result without a configuration (the method could not produce one)."""
+    nan = float("nan")
+    return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False,
+                    time.perf_counter() - t0, init)
+
+
+# ============================================================================= inputs
+def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
+    """(p_world, R_world) of a ``pin.SE3``, a ``(p_world, R_world)`` pair or a position alone (R None), validated.
+
+    Raises ShapeError / NonFiniteError / InputError (R not a rotation: |R^T R - I| > 1e-9
+    entry-wise or det R < 0).
+    """
+    if isinstance(target, pin.SE3):
+        p, R = target.translation.copy(), target.rotation.copy()
+    elif isinstance(target, (tuple, list)) and len(target) == 2:
+        p = as_vector(target[0], 3, "target position")
+        R = ch.as_array(target[1], "target rotation")
+        if R.shape != (3, 3):
+            raise ShapeError(f"target rotation must have shape (3, 3), got {R.shape}")
+    else:
+        try:
+            p = ch.as_array(target, "target")
+        except InputError:
+            raise InputError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position (3,), got {target!r}") from None
+        if p.shape != (3,):
+            raise ShapeError(f"a position target must have shape (3,), got {p.shape}")
+        if not np.all(np.isfinite(p)):
+            raise NonFiniteError(f"target must be finite, got p = {p.tolist()}")
+        return p, None
+    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(R))):
+        raise NonFiniteError(f"target must be finite, got p = {p.tolist()}, R = {R.tolist()}")
+    dev = float(np.abs(R.T @ R - np.eye(3)).max())
+    det = float(np.linalg.det(R))
+    if dev > 1e-9 or det < 0.0:
+        raise InputError(f"target rotation must be a rotation matrix (R^T R = I within 1e-9, det = +1); "
+                         f"max |R^T R - I| = {dev:.3g}, det = {det:.3g}")
+    return p, R
+
+
+def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[float, float]:
+    """(||p - p_d|| [m], ||log3(R_d^T R)|| [rad]) of a placement M against the target (angle 0 if R_d is None).
+
+    The angle comes from sin = |skew(N)| / 2 and cos = (tr N - 1) / 2 with N = R_d^T R,
+    accurate near 0 and pi (scalar code: cheaper than numpy on 3x3 matrices).
+    """
+    x, y, z = M.translation.tolist()
+    px, py, pz = p_d.tolist()
+    pos = math.sqrt((x - px) ** 2 + (y - py) ** 2 + (z - pz) ** 2)
+    if R_d is None:
+        return pos, 0.0
+    (a, b, c), (d, e, f), (g, h, i) = M.rotation.tolist()
+    (A, B, C), (D, E, F), (G, H, I) = R_d.tolist()
+    n21_12 = (C * b + F * e + I * h) - (B * c + E * f + H * i)
+    n02_20 = (A * c + D * f + G * i) - (C * a + F * d + I * g)
+    n10_01 = (B * a + E * d + H * g) - (A * b + D * e + G * h)
+    trace = A * a + D * d + G * g + B * b + E * e + H * h + C * c + F * f + I * i
+    sin = 0.5 * math.sqrt(n21_12 * n21_12 + n02_20 * n02_20 + n10_01 * n10_01)
+    return pos, math.atan2(sin, 0.5 * (trace - 1.0))
+
+
+def hover_q(platform: Platform, xi) -> np.ndarray:
+    """q of a level configuration xi (roll = pitch = 0): quaternion of the yaw alone."""
+    half = 0.5 * xi[5]
+    return np.array([xi[0], xi[1], xi[2], 0.0, 0.0, math.sin(half), math.cos(half), *xi[6:]])
+
+
+def default_guess(platform: Platform, data: pin.Data, p_world, R_world) -> np.ndarray:
+    """Initial guess xi0: level base, arm at its neutral posture, placed so that the end effector
+    is at ``p_world`` with the yaw that best aligns its orientation with ``R_world`` (keeps the
+    current yaw convention of a position target: yaw 0)."""
+    q0 = platform.neutral_q()
+    pin.framesForwardKinematics(platform.model, data, q0)
+    bMe = data.oMi[1].actInv(data.oMf[platform.ee_frame])
+    if R_world is None:
+        psi = 0.0
+    else:
+        Bm = bMe.rotation @ R_world.T  # maximise tr(R_d^T Rz(psi) R_e0) = tr(Rz(psi) Bm)
+        psi = math.atan2(Bm[0, 1] - Bm[1, 0], Bm[0, 0] + Bm[1, 1])
+    c, s = math.cos(psi), math.sin(psi)
+    pe = bMe.translation
+    offset = (c * pe[0] - s * pe[1], s * pe[0] + c * pe[1], pe[2])
+    xi = np.zeros(platform.n_xi)
+    xi[0:3] = np.asarray(p_world) - offset
+    xi[5] = psi
+    xi[6:] = q0[7:]
+    return xi
+
+
+# ======================================================================== evaluation
+def finish(platform: Platform, data: pin.Data, method: str, q: np.ndarray, xi, p_d, R_d, opts, *, status: str, reason: str,
+           iterations: int, t0: float, init: str, require_hover: bool, level_errors=(), kinematics_ready: bool = False,
+           unreachable_hint: Callable | None = None) -> IKResult:
+    """Evaluate q with Pinocchio (FK, CoM) and build the result; decide success.
+
+    ``unreachable_hint(R_d) -> str``: a platform-specific explanation of why a target is not
+    reachable in hover (the Q-PRR: its end-effector y axis must be horizontal), or "" if it is.
+    """
+    model = platform.model
+    if kinematics_ready:  # data already holds FK, frames and CoM at q
+        c = data.com[0]
+        M = data.oMf[platform.ee_frame]
+    else:
+        c = pin.centerOfMass(model, data, q, False)
+        M = pin.updateFramePlacement(model, data, platform.ee_frame)
+    pos_err, rot_err = pose_errors(M, p_d, R_d)
+    base = data.oMi[1]
+    Rb = base.rotation
+    off = platform.thrust_axis_basis @ (base.actInv(c) - platform.thrust_axis[0])
+    r20, r21, r22 = Rb[2].tolist()
+    roll = math.atan2(r21, r22)
+    pitch = math.atan2(-r20, math.hypot(r21, r22))
+    hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
+    q_arm = q[7:]
+    lo, hi = platform.arm_lower, platform.arm_upper
+    within = bool(np.all(q_arm >= lo - 1e-12) and np.all(q_arm <= hi + 1e-12))
+    pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
+    success = pose_ok and within and (hover_ok or not require_hover) and not reason
+    hint = unreachable_hint(R_d) if (unreachable_hint is not None and R_d is not None) else ""
+    if not success and not reason:
+        if not within:
+            status = "limits"
+            reason = f"joints out of limits: q_arm = {q_arm.tolist()} not in [{lo.tolist()}, {hi.tolist()}]"
+        elif not pose_ok:
+            status = status if status != "converged" else "stalled"
+            reason = f"pose not reached after {iterations} iterations: position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
+        else:
+            status = "not_hover_feasible"
+            if hint:
+                reason = f"the pose is reached only with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad: not reachable in hover ({hint})"
+            else:
+                reason = (f"the pose is reached with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: the iteration "
+                          "stopped at a tilted configuration (joint limit or local minimum from this start, or a target that "
+                          "needs a tilted base); try another xi0")
+    if not success and status != "not_hover_feasible" and require_hover and "hover" not in reason and hint:
+        reason += f"; the target is unreachable in hover ({hint})"
+    if xi is None:
+        xi = _xi_of_q(q, Rb)
+    return IKResult(
+        method=method, success=bool(success), status=status if not success else "converged", reason=reason,
+        xi=xi, q=q, iterations=int(iterations), position_error=pos_err, orientation_error=rot_err,
+        x_cm=float(off[0]), y_cm=float(off[1]), roll=roll, pitch=pitch, hover_feasible=bool(hover_ok),
+        within_limits=within, wall_time=time.perf_counter() - t0, initial_guess=init, level_errors=level_errors,
+    )
+
+
+def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
+    """xi of q whose base rotation is R (None at the ZYX singularity |cos theta| < EULER_TOL)."""
+    (r00, _, _), (r10, _, _), (r20, r21, r22) = R.tolist()
+    pitch = math.atan2(-r20, math.hypot(r21, r22))
+    if abs(math.cos(pitch)) < ch.EULER_TOL:
+        return None
+    ql = q.tolist()
+    return np.array([ql[0], ql[1], ql[2], math.atan2(r21, r22), pitch, math.atan2(r10, r00), *ql[7:]])
+
+
+def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
+    """``xi0`` validated: shape, finite, arm inside its limits, level when ``hover``."""
+    xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
+    platform.check_arm_limits(xi0[6:], "xi0[6:]")
+    if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
+        raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); "
+                         "set hover=False or level xi0")
+    return xi0
+
+
+# ============================================================================ methods
+def _hover_cols(platform: Platform) -> np.ndarray:
+    """Tangent (and xi) directions that keep roll = pitch = 0: x, y, z, yaw, the arm."""
+    return np.r_[0, 1, 2, 5, np.arange(6, platform.nv)]
+
+
+def solve_clika(platform, data, p_d, R_d, xi, init, opts: ClikaOptions, t0, hint=None) -> IKResult:
+    """CLIKA, Thesis (4.38)-(4.41): xi_dot = W^-1/2 (J W^-1/2)^+ K e integrated with step dt (4.30)."""
+    if R_d is None:
+        raise InputError("method 'clika' needs a full pose target (p_world, R_world); use 'qp' or 'dls' for a position")
+    model, fid = platform.model, platform.ee_frame
+    n = platform.n_xi
+    cols = _hover_cols(platform) if opts.hover else np.arange(n)
+    K = np.asarray(opts.gains, dtype=float)
+    weights = np.ones(n) if opts.weights is None else as_vector(opts.weights, n, "option weights")
+    w_isqrt = 1.0 / np.sqrt(weights[cols])
+    e = np.empty(6)
+    status, reason = "max_iterations", ""
+    it, best, best_it = 0, math.inf, 0
+    while True:
+        q = ch.xi_to_q(xi)
+        Jw = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+        pin.updateFramePlacement(model, data, fid)
+        M = data.oMf[fid]
+        e[0:3] = p_d - M.translation  # (4.38) position part
+        e[3:6] = pin.log3(R_d @ M.rotation.T)  # orientation error on SO(3), world axes
+        if np.linalg.norm(e[0:3]) < opts.position_tol and np.linalg.norm(e[3:6]) < opts.orientation_tol:
+            status = "converged"
+            break
+        if not np.isfinite(e).all() or np.abs(xi).max() > 1e6:
+            status, reason = "diverged", f"CLIKA diverged after {it} iterations"
+            break
+        if it >= opts.max_iter:
+            break
+        err = float(e @ e)
+        if err < best * (1.0 - 1e-9):
+            best, best_it = err, it
+        elif it - best_it >= 100:  # no progress in 100 steps: the target is out of reach
+            status, reason = "stalled", f"CLIKA stalled after {it} iterations (error stopped decreasing)"
+            break
+        it += 1
+        J = (Jw @ ch.rate_map(xi))[:, cols]  # (4.13): [p_e_dot; omega_e] = J xi_dot
+        # (4.41) with the weighted pseudo-inverse W^-1/2 (J W^-1/2)^+, equal to (4.34) (and to
+        # (4.36) for W = I) when J has full row rank; under hover J may lose rank (the Q-PRR's
+        # end-effector roll about x_e is not controllable), where (4.34) is singular.
+        xi[cols] += opts.dt * (w_isqrt * (np.linalg.pinv(J * w_isqrt, rcond=1e-10) @ (K * e)))  # (4.30)
+    xi[3:6] = ch.wrap_angle(xi[3:6])
+    q = ch.xi_to_q(xi)
+    if status == "max_iterations":
+        reason = f"CLIKA did not converge in {opts.max_iter} iterations"
+    if status == "converged" and not opts.hover:
+        roll, pitch = float(xi[3]), float(xi[4])
+        if max(abs(roll), abs(pitch)) > opts.hover_tol:
+            # the pose is reached but the base is tilted: say so (success still needs only the pose)
+            pass
+    return finish(platform, data, "clika", q, None, p_d, R_d, opts, status=status, reason=reason, iterations=it,
+                  t0=t0, init=init, require_hover=opts.hover, unreachable_hint=hint)
+
+
+def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=None) -> IKResult:
+    """Damped least squares (Levenberg-Marquardt) on log6 (or on the position error for a position target)."""
+    model, fid = platform.model, platform.ee_frame
+    cols = _hover_cols(platform) if opts.hover else np.arange(platform.nv)
+    lo, hi = platform.arm_lower, platform.arm_upper
+    q = ch.xi_to_q(xi)
+    dv = np.zeros(platform.nv)
+    M_d_inv = pin.SE3(R_d, p_d).inverse() if R_d is not None else None
+
+    def evaluate(q):
+        pin.framesForwardKinematics(model, data, q)
+        Me = data.oMf[fid]
+        if M_d_inv is None:
+            f = Me.translation - p_d
+            return Me, None, f, float(f @ f)
+        Merr = M_d_inv * Me
+        f = pin.log6(Merr).vector
+        return Me, Merr, f, float(f @ f)
+
+    Me, Merr, f, cost = evaluate(q)
+    lam = opts.damping
+    status, it, slow = "max_iterations", 0, 0  # finish() words the reason from the measured errors
+    while True:
+        pos_err, rot_err = pose_errors(Me, p_d, R_d)
+        if pos_err < opts.position_tol and rot_err < opts.orientation_tol:
+            status = "converged"
+            break
+        if it >= opts.max_iter:
+            break
+        it += 1
+        if M_d_inv is None:
+            J_all = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)[0:3]
+        else:
+            J_all = pin.Jlog6(Merr) @ pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL)
+        # (J^T J + lam I)^-1 J^T f through the SVD J = U S V^T: V S/(S^2 + lam) U^T f.  An arm
+        # joint on a limit whose step points outwards is frozen (active set), otherwise the
+        # projection would halve the remaining error per iteration instead of converging.
+        free = cols
+        for _ in range(4):
+            U, sv, Vt = np.linalg.svd(J_all[:, free], full_matrices=False)
+            Utf = U.T @ f
+            step = -(Vt.T @ (sv / (sv * sv + lam) * Utf))
+            block = [j for j, d in zip(free, step)
+                     if j >= 6 and ((d < 0 and q[j + 1] <= lo[j - 6] + 1e-12) or (d > 0 and q[j + 1] >= hi[j - 6] - 1e-12))]
+            if not block:
+                break
+            free = np.array([j for j in free if j not in block])
+        dv[:] = 0.0
+        while True:
+            dv[free] = -(Vt.T @ (sv / (sv * sv + lam) * Utf))
+            q_new = pin.integrate(model, q, dv)
+            np.clip(q_new[7:], lo, hi, out=q_new[7:])  # joint limits by projection
+            Me_n, Merr_n, f_n, cost_n = evaluate(q_new)
+            if cost_n < cost:
+                slow = slow + 1 if cost_n > (1.0 - 1e-6) * cost else 0
+                q, Me, Merr, f, cost = q_new, Me_n, Merr_n, f_n, cost_n
+                lam = max(lam / 3.0, 1e-12)
+                break
+            lam *= 4.0
+            if lam > 1e10:
+                break
+        if lam > 1e10 or slow >= 3:
+            status = "stalled"
+            break
+    return finish(platform, data, "dls", q, None, p_d, R_d, opts, status=status, reason="", iterations=it,
+                  t0=t0, init=init, require_hover=opts.hover, unreachable_hint=hint)
+
+
+def default_levels(platform: Platform, target, q_arm_posture, base_target: pin.SE3 | None = None) -> list[list[Task]]:
+    """The hierarchy of method "qp": end-effector pose (or position) > hover > CoG on the thrust axis > posture.
+
+    On a fully actuated platform level 2 is the base pose ``base_target`` (default: level at
+    the initial guess) instead of hover.  A list you may edit and pass back through the
+    ``levels`` option.
+    """
+    if isinstance(target, pin.SE3):
+        first = PoseTask(platform, target)
+    else:
+        first = PositionTask(platform, target)
+    if platform.fully_actuated:
+        if base_target is None:
+            raise InputError("a fully actuated platform's default hierarchy needs base_target (the base pose of level 2)")
+        second = BasePoseTask(platform, base_target)
+    else:
+        second = HoverTask()
+    return [[first], [second], [ComTask()], [PostureTask(platform, q_arm_posture)]]
+
+
+class IKSolver:
+    """An IK method bound to a platform, with the solver state it needs (QPs, warm starts).
+
+    ``initial_guess``: callable ``(platform, data, p_world, R_world) -> (xi0, label)`` used when
+    ``solve`` gets no ``xi0`` (default: :func:`default_guess`); ``unreachable_hint``: callable
+    ``R_world -> str`` explaining why a target is not reachable in hover ("" if it is).  One
+    solver per thread: its result depends on the inputs only (warm starts are reset per solve).
+    """
+
+    def __init__(self, platform: Platform, method: str = "qp", options=None, *, initial_guess: Callable | None = None,
+                 unreachable_hint: Callable | None = None) -> None:
+        if not isinstance(platform, Platform):
+            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        self.platform = platform
+        self.method = method
+        self.options = make_options(method, options)
+        self.initial_guess = initial_guess
+        self.unreachable_hint = unreachable_hint
+        self._engine = None
+        if method == "qp":
+            o = self.options
+            self._engine = HierarchySolver(platform, eps_abs=o.eps_abs, regularization=o.regularization, rank_tol=o.rank_tol,
+                                           elimination=o.elimination)
+
+    def _guess(self, data, p_d, R_d, hover: bool):
+        if self.initial_guess is not None:
+            xi, label = self.initial_guess(self.platform, data, p_d, R_d)
+            return prepare_xi0(self.platform, xi, hover).copy(), label
+        return default_guess(self.platform, data, p_d, R_d), "level base, arm at its neutral posture, end effector on the target"
+
+    def solve(self, data: pin.Data, target, xi0=None) -> IKResult:
+        """Configuration reaching ``target`` from ``xi0`` (default: the initial guess); see the module docstring."""
+        t0 = time.perf_counter()
+        p_d, R_d = parse_target(target)
+        opts = self.options
+        hover = getattr(opts, "hover", False)
+        if xi0 is not None:
+            xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
+        else:
+            xi, init = self._guess(data, p_d, R_d, hover)
+        if self.method == "clika":
+            return solve_clika(self.platform, data, p_d, R_d, xi, init, opts, t0, self.unreachable_hint)
+        if self.method == "dls":
+            return solve_dls(self.platform, data, p_d, R_d, xi, init, opts, t0, self.unreachable_hint)
+        return self._solve_qp(data, p_d, R_d, xi, init, t0)
+
+    def _solve_qp(self, data, p_d, R_d, xi, init, t0) -> IKResult:
+        platform, opts = self.platform, self.options
+        model = platform.model
+        q = ch.xi_to_q(xi)
+        require_hover = (not platform.fully_actuated) if opts.require_hover is None else opts.require_hover
+        posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
+        target = pin.SE3(R_d, p_d) if R_d is not None else p_d
+        if opts.levels is not None:
+            levels = opts.levels
+        else:
+            base_target = pin.SE3(ch.euler_to_rotation([0.0, 0.0, xi[5]]), xi[0:3].copy()) if platform.fully_actuated else None
+            levels = default_levels(platform, target, posture, base_target)
+        engine = self._engine
+        engine.reset()
+        lo, hi = engine.lower, engine.upper
+        fid = platform.ee_frame
+        status, it, step, ready = "max_iterations", 0, None, False
+        lower_prev, flat = math.inf, 0
+        try:
+            while it < opts.max_iter:
+                update_kinematics(platform, data, q)
+                pos_err, rot_err = pose_errors(data.oMf[fid], p_d, R_d)
+                pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
+                it += 1
+                step = engine.solve(platform, data, q, levels)
+                largest = float(np.abs(step.dv).max())
+                small = largest < opts.step_tol
+                if small and largest < 1e-15:
+                    status, ready = ("converged" if pose_ok else "stalled"), True
+                    break
+                # the lower levels may converge only linearly (damped, unsatisfiable): once the
+                # pose holds, stop when their errors no longer decrease
+                lower = sum(x * x for x in step.errors[1:])
+                flat = flat + 1 if (pose_ok and lower > (1.0 - 1e-9) * lower_prev) else 0
+                lower_prev = lower
+                if flat >= 3:
+                    status, ready = "converged", True
+                    break
+                dv = step.dv
+                if largest > opts.max_step:
+                    d1 = step.dv_first
+                    rest = dv - d1
+                    m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
+                    dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (
+                        rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
+                q = pin.integrate(model, q, dv)
+                np.clip(q[7:], lo, hi, out=q[7:])  # ProxQP meets the bounds to eps_abs; remove that slack
+                if small:  # stationary: every level settled; the last (tiny) Newton step is kept
+                    status = "converged" if pose_ok else "stalled"
+                    break
+        except SolverError as exc:
+            return finish(platform, data, "qp", q, None, p_d, R_d, opts, status="solver_error", reason=str(exc),
+                          iterations=it, t0=t0, init=init, require_hover=require_hover, unreachable_hint=self.unreachable_hint)
+        return finish(platform, data, "qp", q, None, p_d, R_d, opts, status=status, reason="", iterations=it, t0=t0,
+                      init=init, require_hover=require_hover, kinematics_ready=ready,
+                      level_errors=_level_errors(platform, data, q, levels, ready, step), unreachable_hint=self.unreachable_hint)
+
+
+def _level_errors(platform, data, q, levels, ready, step) -> tuple[float, ...]:
+    """||e_k|| of every level at the returned q."""
+    if step is not None and ready:
+        return step.errors
+    update_kinematics(platform, data, q)
+    return tuple(math.sqrt(sum(float(e @ e) for e in (t.linearize(platform, data, q)[1] for t in level))) for level in levels)
+
+
+def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=None, options=None) -> IKResult:
+    """Inverse kinematics: a configuration reaching ``target`` (see the module docstring).
+
+    A new :class:`IKSolver` per call (its QPs are built each time); keep one
+    :class:`IKSolver` to solve many targets fast.  Bad input raises a qprr InputError /
+    UnknownNameError / LimitError; a target that cannot be reached returns a result with
+    ``success = False`` and a ``reason``.
+    """
+    return IKSolver(platform, method, options).solve(data, target, xi0)

@@ -1,0 +1,58 @@
+"""The task contract: one wish about the configuration, linearised as J dv = e."""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+import pinocchio as pin
+
+from ...charts import as_vector
+from ...errors import InputError
+from ...platform import Platform
+
+
+def update_kinematics(platform: Platform, data: pin.Data, q: np.ndarray) -> None:
+    """Fill ``data`` at q with what :meth:`Task.linearize` may read.
+
+    Joint placements and Jacobians (``computeJointJacobians``), frame placements and the
+    centre of mass with its world Jacobian ``data.Jcom`` (``jacobianCenterOfMass``).
+    """
+    model = platform.model
+    pin.computeJointJacobians(model, data, q)
+    pin.updateFramePlacements(model, data)
+    pin.jacobianCenterOfMass(model, data, False)
+
+
+class Task(ABC):
+    """One wish about the configuration, linearised at q as ``J dv = e``.
+
+    ``J`` (dim x nv) maps Pinocchio's tangent step dv (body-frame base twist, then arm rates)
+    to the change of the task quantity; ``e`` (dim,) is the change wanted.  ``linearize`` may
+    read from ``data`` what :func:`update_kinematics` left there at q.
+    """
+
+    name: str = "task"
+    dim: int = 0
+
+    @abstractmethod
+    def linearize(self, platform: Platform, data: pin.Data, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(J, e): J of shape (dim, nv) and the wanted change e of shape (dim,)."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r}, dim={self.dim})"
+
+
+def sqrt_weights(weights, n: int, name: str) -> np.ndarray | None:
+    """sqrt of positive row weights (None: unit weights, nothing to scale)."""
+    if weights is None:
+        return None
+    w = as_vector(weights, n, name)
+    if np.any(w <= 0.0):
+        raise InputError(f"{name} must be positive, got {w.tolist()}")
+    return np.sqrt(w)
+
+
+def scaled(sw, J, e):
+    """Rows of (J, e) scaled by the square-root weights ``sw`` (None: unchanged)."""
+    return (J, e) if sw is None else (sw[:, None] * J, sw * e)

@@ -1,0 +1,31 @@
+"""Centre of gravity on the thrust axis (Thesis Sec. 2.5: the reason for the prismatic joint)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...charts import as_vector
+from ...kinematics import com_jacobian_body_from
+from .base import Task, scaled, sqrt_weights
+
+
+class ComTask(Task):
+    """The CoG offset from the thrust axis (:func:`qprr.kinematics.cog_offset_body`) -> ``target_xy``.
+
+    For the Q-PRR the offset is [x_cm, y_cm] in B (Thesis (3.79)-(3.81)).  Jacobian from
+    Pinocchio's CoM Jacobian (:func:`qprr.kinematics.com_jacobian_body`).
+    """
+
+    dim = 2
+
+    def __init__(self, target_xy=(0.0, 0.0), weights=None, name: str = "com"):
+        self.target = np.zeros(2) if tuple(target_xy) == (0.0, 0.0) else as_vector(target_xy, 2, "ComTask target_xy")
+        self._sw = sqrt_weights(weights, 2, "ComTask weights")
+        self.name = name
+
+    def linearize(self, platform, data, q):
+        point, E = platform.thrust_axis[0], platform.thrust_axis_basis
+        base = data.oMi[1]
+        c_b = base.rotation.T @ (data.com[0] - base.translation)
+        J = E @ com_jacobian_body_from(data, data.Jcom)
+        return scaled(self._sw, J, self.target - E @ (c_b - point))

@@ -1,0 +1,60 @@
+"""Frame pose and position tasks (the end effector by default, or the base)."""
+
+from __future__ import annotations
+
+import pinocchio as pin
+
+from ...charts import as_vector
+from ...errors import InputError
+from ...platform import Platform
+from .base import Task, scaled, sqrt_weights
+
+
+class PoseTask(Task):
+    """Frame pose: f = log6(M_d^-1 M(q)) -> 0, J = Jlog6(M_d^-1 M) J_local.
+
+    ``target`` is the desired world placement of ``frame`` (default: the end effector);
+    ``weights`` (6,) scale the [translation, rotation] rows of the error (metres and radians).
+    """
+
+    dim = 6
+
+    def __init__(self, platform: Platform, target: pin.SE3, frame=None, weights=None, name: str = "pose"):
+        if not isinstance(target, pin.SE3):
+            raise InputError(f"PoseTask target must be a pinocchio.SE3, got {type(target).__name__}")
+        self.frame = platform.ee_frame if frame is None else platform.frame_id(frame)
+        self.target = target
+        self._target_inv = target.inverse()
+        self._sw = sqrt_weights(weights, 6, "PoseTask weights")
+        self.name = name
+
+    def linearize(self, platform, data, q):
+        J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL)
+        M = self._target_inv * data.oMf[self.frame]
+        return scaled(self._sw, pin.Jlog6(M) @ J, -pin.log6(M).vector)
+
+
+class BasePoseTask(PoseTask):
+    """Pose of the base frame B: the level-2 task of a fully actuated platform (it may hold any attitude)."""
+
+    def __init__(self, platform: Platform, target: pin.SE3, weights=None, name: str = "base_pose"):
+        super().__init__(platform, target, platform.base_frame, weights, name)
+
+
+class PositionTask(Task):
+    """Frame position only: p(q) -> ``p_world`` (world axes), the orientation left free.
+
+    J = rows 0..2 of the LOCAL_WORLD_ALIGNED frame Jacobian (d p_world / dt = J v).
+    """
+
+    dim = 3
+
+    def __init__(self, platform: Platform, p_world, frame=None, weights=None, name: str = "position"):
+        self.frame = platform.ee_frame if frame is None else platform.frame_id(frame)
+        self.target = as_vector(p_world, 3, "PositionTask p_world").copy()
+        self._sw = sqrt_weights(weights, 3, "PositionTask weights")
+        self.name = name
+
+    def linearize(self, platform, data, q):
+        J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL_WORLD_ALIGNED)[0:3]
+        return scaled(self._sw, J, self.target - data.oMf[self.frame].translation)

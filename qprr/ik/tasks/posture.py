@@ -1,0 +1,26 @@
+"""Arm posture: a preferred configuration of the arm joints (the last, lowest-priority level)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...charts import as_vector
+from .base import Task, scaled, sqrt_weights
+
+
+class PostureTask(Task):
+    """Arm posture: q_arm -> ``q_arm_ref`` (inside the joint limits), the configuration entries 7 onwards."""
+
+    dim = 0
+
+    def __init__(self, platform, q_arm_ref, weights=None, name: str = "posture"):
+        self.ref = platform.check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"),
+                                             "PostureTask q_arm_ref").copy()
+        self.dim = platform.n_arm
+        self._sw = sqrt_weights(weights, platform.n_arm, "PostureTask weights")
+        self.name = name
+        self._J = np.zeros((platform.n_arm, platform.nv))
+        self._J[:, 6:] = np.eye(platform.n_arm)
+
+    def linearize(self, platform, data, q):
+        return scaled(self._sw, self._J, self.ref - q[7:])
