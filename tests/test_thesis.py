@@ -21,9 +21,11 @@ from qprr import actuation as act
 from qprr import coordinates as co
 from qprr import model as qm
 from qprr import thesis as th
-from qprr.checks import body_rate_fd, christoffel, fixed_base_arm
-from qprr.errors import ShapeError
+from qprr.checks import body_rate_fd, christoffel, doolittle, fixed_base_arm
+from qprr.control import CogStabilizer, make_controller
+from qprr.errors import InputError, ShapeError
 from qprr.params import thesis_params
+from qprr.payload import Payload, com_with_payload
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 
@@ -270,6 +272,42 @@ def test_com_3_78_z_misprint(robot, data):
     assert th.com_3_78_corrected(np.zeros(3), P)[2] == pytest.approx(true, abs=1e-15)
 
 
+def test_payload_centre_3_76(robot, data):
+    q_arm, d_cl = np.array([0.02, 0.8, 0.4]), 0.03
+    M = qm.ee_placement_body(robot, data, co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
+    np.testing.assert_allclose(th.payload_com_3_76(q_arm, D, d_cl), M.act(np.array([0.0, 0.0, d_cl])), atol=1e-15)
+
+
+def test_com_3_78_payload_term_misprint(robot, data):
+    q_arm, m_l, d_cl = np.array([0.02, 0.8, 0.4]), 0.1, 0.03
+    model = com_with_payload(robot, data, q_arm, Payload(m_l, com_ee=(0.0, 0.0, d_cl)))
+    printed = th.com_3_78(q_arm, P, m_l=m_l, d_cl=d_cl)
+    x_cl = th.payload_com_3_76(q_arm, D, d_cl)[0]
+    m_G = P.total_mass + m_l  # (3.77)
+    # "+ x_cl" adds a length where (3.76) has m_l x_cl: printed - true = (1 - m_l) x_cl / m_G
+    assert printed[0] - model[0] == pytest.approx((1.0 - m_l) * x_cl / m_G, abs=1e-15)
+    assert abs(printed[0] - model[0]) > 0.02
+    np.testing.assert_allclose(th.com_3_78_corrected(q_arm, P, m_l=m_l, d_cl=d_cl), model, atol=1e-15)
+    # Remark 3: without load p_cl = 0, and the printed form is the no-load (3.78)
+    np.testing.assert_allclose(th.com_3_78(q_arm, P, m_l=0.0, d_cl=d_cl), th.com_3_78(q_arm, P), atol=0)
+
+
+@SETTINGS
+@given(_arm, st.floats(0.0, 2.0), st.floats(-0.05, 0.2))
+def test_com_3_78_corrected_with_any_payload_is_pinocchio(robot, q_arm, m_l, d_cl):
+    model = com_with_payload(robot, robot.data(), q_arm, Payload(m_l, com_ee=(0.0, 0.0, d_cl)))
+    np.testing.assert_allclose(th.com_3_78_corrected(q_arm, P, m_l=m_l, d_cl=d_cl), model, atol=1e-15)
+
+
+def test_com_3_78_rejects_a_bad_payload():
+    with pytest.raises(InputError, match="m_l"):
+        th.com_3_78(np.zeros(3), P, m_l=-0.1)
+    with pytest.raises(InputError, match="d_cl"):
+        th.com_3_78_corrected(np.zeros(3), P, m_l=0.1, d_cl=float("inf"))
+    with pytest.raises(TypeError):
+        th.com_3_78(np.zeros(3), P, 0.1)  # the payload arguments are keyword-only
+
+
 # ================================================================== kinematics (4.12)-(4.28)
 def _arm_jacobian_fd(q_arm, h=1e-6):
     J = np.zeros((6, 3))
@@ -346,6 +384,83 @@ def test_jacobian_never_loses_rank_at_zero_euler_angles():
     # (4.44) >= 6 - 2 (d0 + d1) d2 > 0: the conclusion of Sec. 4.4.3 holds
     grid = [th.det_JJt_4_44(r0, t, D) for r0 in (-0.04, 0.0, 0.04) for t in np.linspace(-np.pi, np.pi, 181)]
     assert min(grid) > 6.0
+
+
+def _model_lu(robot, data, q_arm):
+    J = qm.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
+    A = J @ J.T
+    return A, *doolittle(A)
+
+
+def _entry(name, L, U):
+    return (L if name[0] == "a" else U)[int(name[1]) - 1, int(name[2]) - 1]
+
+
+LU_SAMPLES = [np.array([0.0, 0.0, 0.0]), np.array([0.03, 0.9, -0.6]), np.array([-0.02, -1.7, 1.2]), np.array([0.04, 2.0, 0.3])]
+LU_MISPRINTS = ("a53", "b55")
+
+
+@pytest.mark.parametrize("name", [n for n in th.LU_L_NAMES + th.LU_U_NAMES if n != "a31"])
+def test_lu_factor_4_42_one_by_one(robot, data, name):
+    for q in LU_SAMPLES:
+        A, L, U = _model_lu(robot, data, q)
+        np.testing.assert_allclose(L @ U, A, atol=1e-15)
+        printed, corrected = th.lu_factors_4_42(q, D)[name], th.lu_factors_4_42_corrected(q, D)[name]
+        assert corrected == pytest.approx(_entry(name, L, U), abs=1e-14)
+        if name not in LU_MISPRINTS:
+            assert printed == pytest.approx(_entry(name, L, U), abs=1e-14)
+    if name in LU_MISPRINTS:  # wrong on at least one sample, by far more than round-off
+        assert max(abs(th.lu_factors_4_42(q, D)[name] - _entry(name, *_model_lu(robot, data, q)[1:])) for q in LU_SAMPLES) > 1e-4
+
+
+def test_lu_4_42_sparsity_and_factorisation(robot, data):
+    for q in LU_SAMPLES:
+        A, L, U = _model_lu(robot, data, q)
+        Lc, Uc = th.lu_matrices_4_42(th.lu_factors_4_42_corrected(q, D))
+        np.testing.assert_allclose(Lc, L, atol=1e-14)  # zeros exactly where (4.42) prints them
+        np.testing.assert_allclose(Uc, U, atol=1e-14)
+        assert th.lu_factors_4_42_corrected(q, D)["a31"] == pytest.approx(L[2, 0], abs=1e-15)  # a31: no printed formula
+
+
+def test_lu_a53_no_reading_of_the_printed_parentheses_holds(robot, data):
+    q = np.array([0.03, 0.9, -0.6])
+    _, L, _ = _model_lu(robot, data, q)
+    f = th.lu_factors_4_42(q, D)
+    r0, t2, t3 = q
+    X = r0 + 3 * P.d3 * np.sin(t2 + t3) + 2 * P.d2 * np.sin(t2)
+    N = -f["b13"]
+    literal = -(X - N * f["b15"] / f["b11"]) - N**2 / f["b11"] + 1  # the text, unmatched ")" dropped
+    as_fraction = -(X - N * f["b15"] / f["b11"]) / (1 - N**2 / f["b11"])  # the missing "/(" restored
+    assert f["a53"] == pytest.approx(literal)
+    for reading in (literal, as_fraction):
+        assert abs(reading - L[4, 2]) > 1e-2  # round-off is 1e-16
+    assert f["b35"] / f["b33"] == pytest.approx(L[4, 2], abs=1e-15)  # a53 = b35 / b33
+
+
+def test_det_4_43_product_of_the_printed_b_ii(robot, data):
+    q = np.array([0.03, 0.9, -0.6])
+    A, _, U = _model_lu(robot, data, q)
+    det = np.linalg.det(A)
+    assert np.prod(np.diag(U)) == pytest.approx(det, rel=1e-14)  # (4.43) as an identity
+    assert th.det_4_43(th.lu_factors_4_42_corrected(q, D)) == pytest.approx(det, rel=1e-14)
+    assert abs(th.det_4_43(th.lu_factors_4_42(q, D)) - det) > 1e-5  # the printed b55 spoils it
+    assert th.det_4_43(th.lu_factors_4_42_corrected(q, D)) == pytest.approx(th.det_JJt_4_44(q[0], q[1], D), rel=1e-14)
+
+
+def test_det_4_45_basis_needs_r0_s2(robot, data):
+    rng = np.random.default_rng(45)
+    qs = [np.array([rng.uniform(-0.04, 0.04), rng.uniform(-np.pi, np.pi), rng.uniform(-2, 2)]) for _ in range(60)]
+    dets = np.array([_det_zero_euler(robot, data, q) for q in qs])
+    B = np.array([th.basis_4_45(q[0], q[1]) for q in qs])
+    lam = np.linalg.lstsq(B, dets, rcond=None)[0]
+    assert np.abs(B @ lam - dets).max() > 1e-2  # no constant lambda_1..8 fits: the r0 s2 term is missing
+    for q, det in zip(qs, dets):
+        assert th.det_JJt_4_45_corrected(q[0], q[1], D) == pytest.approx(det, rel=1e-13)
+        assert th.det_JJt_4_45_corrected(q[0], q[1], D) == pytest.approx(th.det_JJt_4_44(q[0], q[1], D), rel=1e-14)
+    # lambda_7 r0 = 4 d2 r0 is the s2 coefficient of (4.46) and (4.48): -+0.0288 at r0 = -+0.04
+    assert th.lambdas_4_45_corrected(D)[6] * 0.04 == pytest.approx(0.0288, abs=1e-15)
+    with pytest.raises(ShapeError, match="lambdas"):
+        th.det_JJt_4_45(0.0, 0.0, np.ones(7))
 
 
 # ================================================================== inertia blocks Sec. 5.2.2, (5.15)
@@ -526,6 +641,109 @@ def test_arm_u_5_5_3_misprints(arm_fixed_down):
     tau3 = pin.rnea(model, data, q, np.zeros(3), np.array([0.0, 0.0, 1.0]))[2] - pin.computeGeneralizedGravity(model, data, q)[2]
     p3 = th.arm_u_5_5(q, np.zeros(3), np.array([0.0, 0.0, 1.0]), P)[2] - th.arm_G_5_5(q, P)[2]
     assert p3 - tau3 == pytest.approx(P.links[2].inertia[2], abs=1e-15)
+
+
+def test_arm_u3_5_5_3_with_velocities_and_s23_nonzero(arm_fixed_down):
+    model, data = arm_fixed_down
+    q, qd, qdd = np.array([0.01, 0.5, 0.4]), np.array([0.2, -1.1, 0.8]), np.array([0.3, -0.5, 0.7])
+    Ix3, Iy3, Iz3 = P.links[2].inertia[:3]
+    s23, c23, s3 = np.sin(0.9), np.cos(0.9), np.sin(0.4)
+    w2, w3 = qd[1], qd[2]
+    tau = pin.rnea(model, data, q, qd, qdd)[2]
+    printed = th.arm_u_5_5(q, qd, qdd, P)[2]
+    # printed - true: the spurious b33 terms, in the acceleration AND in the velocity products
+    spurious = (Iz3 + s23**2 * (Ix3 - Iz3)) * qdd[2] + (Ix3 - Iz3) * s23 * c23 * (w3**2 + 2 * w2 * w3)
+    assert printed - tau == pytest.approx(spurious, abs=1e-15)
+    # the velocity part alone (zero accelerations): model = (1/2) d2 d3 m3 s3 theta2_dot^2 + G
+    g3 = pin.computeGeneralizedGravity(model, data, q)[2]
+    v_true = pin.rnea(model, data, q, qd, np.zeros(3))[2] - g3
+    assert v_true == pytest.approx(0.5 * P.d2 * P.d3 * M3 * s3 * w2**2, abs=1e-15)
+    v_printed = th.arm_u_5_5(q, qd, np.zeros(3), P)[2] - th.arm_G_5_5(q, P)[2]
+    assert v_printed - v_true == pytest.approx((Ix3 - Iz3) * s23 * c23 * (w3**2 + 2 * w2 * w3), abs=1e-15)
+    if Ix3 != Iz3:  # the velocity misprint is visible whenever link 3 is not axisymmetric about its axis
+        assert abs(v_printed - v_true) > 0.1 * abs(Ix3 - Iz3)
+    assert th.arm_u_5_5_corrected(q, qd, qdd, P)[2] == pytest.approx(tau, abs=1e-15)
+
+
+# ================================================================== CoG motion and BSG, (6.29)-(6.35)
+@SETTINGS
+@given(_xi, _rates9)
+def test_cog_6_29_position_and_rate(robot, xi, xid):
+    data = robot.data()
+    q, v = co.xi_to_qv(xi, xid)
+    p_cm = qm.com_body(robot, data, q)
+    R = co.euler_to_rotation(xi[3:6])
+    np.testing.assert_allclose(th.p_c_6_29(xi[0:3], R, p_cm), qm.com_world(robot, data, q), atol=1e-14)
+    pin.centerOfMass(robot.model, data, q, v)
+    vcom = data.vcom[0].copy()
+    p_cm_dot = qm.com_jacobian_body(robot, data, q) @ v
+    np.testing.assert_allclose(th.p_c_dot_6_29(xid[0:3], R, v[3:6], p_cm, p_cm_dot), vcom, atol=1e-13)
+
+
+def test_cog_6_29_rate_needs_the_body_rate(robot, data):
+    xi = np.array([0, 0, 0, 0.6, 0.0, 0.0, 0.0, 1.0, 0.3])  # rolled, arm bent forward
+    xid = np.array([0, 0, 0, 0, 0, 1.0, 0, 0, 0])  # pure yaw rate
+    q, v = co.xi_to_qv(xi, xid)
+    pin.centerOfMass(robot.model, data, q, v)
+    p_cm, R = qm.com_body(robot, data, q), co.euler_to_rotation(xi[3:6])
+    np.testing.assert_allclose(th.p_c_dot_6_29(np.zeros(3), R, v[3:6], p_cm, np.zeros(3)), data.vcom[0], atol=1e-15)
+    world = th.p_c_dot_6_29(np.zeros(3), R, R @ v[3:6], p_cm, np.zeros(3))  # omega_b read as a world rate
+    assert np.linalg.norm(world - data.vcom[0]) > 1e-3
+
+
+@SETTINGS
+@given(_arm)
+def test_com_6_30_z_misprint(robot, q_arm):
+    c = qm.com_body(robot, robot.data(), co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
+    printed = th.com_6_30(q_arm, P)
+    np.testing.assert_allclose(printed[0:2], c[0:2], atol=1e-15)
+    assert printed[2] - c[2] == pytest.approx(M1 * P.d1 / (2 * P.total_mass), abs=1e-15)  # m1 (d0 + d1) for m1 (d0 + d1/2)
+    assert th.com_3_78_corrected(q_arm, P)[2] == pytest.approx(c[2], abs=1e-15)
+
+
+def test_cog_6_31_6_32_pitch_moves_the_cog_in_world_axes_only(robot, data):
+    xi = np.array([0.5, -0.2, 1.0, 0.0, 0.25, 0.0, 0.02, -0.7, 0.4])  # phi = psi = 0
+    q = co.xi_to_q(xi)
+    p_cm = qm.com_body(robot, data, q)
+    offset = qm.com_world(robot, data, q) - xi[0:3]
+    np.testing.assert_allclose(th.p_cm_prime_6_31(0.25, p_cm), offset, atol=1e-15)
+    np.testing.assert_allclose(th.nabla_p_cm_6_32(0.25, p_cm), offset - p_cm, atol=1e-15)
+    level = xi.copy()
+    level[4] = 0.0
+    np.testing.assert_allclose(qm.com_body(robot, data, co.xi_to_q(level)), p_cm, atol=1e-15)  # in B nothing moved
+    rolled = xi.copy()
+    rolled[3] = 0.3
+    q = co.xi_to_q(rolled)
+    assert np.abs(th.p_cm_prime_6_31(0.25, p_cm) - (qm.com_world(robot, data, q) - xi[0:3])).max() > 1e-3
+
+
+@SETTINGS
+@given(_tilt, _angle, _arm)
+def test_theta_e_6_34_is_the_end_effector_pitch_at_zero_roll(robot, theta, psi, q_arm):
+    xi = np.array([0.0, 0.0, 0.0, 0.0, theta, psi, *q_arm])
+    R_e = qm.ee_placement(robot, robot.data(), co.xi_to_q(xi)).rotation
+    np.testing.assert_allclose(R_e, co.rot_z(psi) @ co.rot_y(th.theta_e_6_34(theta, q_arm[1], q_arm[2])), atol=1e-14)
+
+
+def test_theta_e_6_34_is_not_the_zyz_angle_and_needs_zero_roll(robot, data):
+    xi = np.array([0.0, 0.0, 0.0, 0.0, 0.1, 0.3, 0.0, -0.2, -0.3])  # theta + theta2 + theta3 = -0.4
+    R_e = qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation
+    assert th.euler_3_64(R_e)[1] == pytest.approx(0.4)  # the ZYZ theta_e of (3.64) is |theta_e|
+    xi[3] = 0.2
+    R_e = qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation
+    assert np.abs(R_e - co.rot_z(0.3) @ co.rot_y(-0.4)).max() > 0.1
+
+
+def test_bsg_6_35_references_put_the_cog_on_the_thrust_axis_in_the_model(robot, data):
+    bsg = CogStabilizer(robot, make_controller("mfc", robot))
+    for theta, theta2_d, theta_e_d, psi in [(0.1, -0.3, 0.2, 0.5), (-0.2, 0.4, -0.1, -2.0), (0.0, 0.2, 0.0, 1.0)]:
+        bsg.theta_e_d = theta_e_d
+        r0_d, theta3_d = bsg.joint_references(theta, theta2_d)
+        assert P.r0_limits[0] < r0_d < P.r0_limits[1]  # not clamped
+        q = co.xi_to_q(np.array([0.3, 0.1, 2.0, 0.0, theta, psi, r0_d, theta2_d, theta3_d]))
+        assert qm.com_body(robot, data, q)[0] == pytest.approx(0.0, abs=1e-15)
+        R_e = qm.ee_placement(robot, data, q).rotation
+        np.testing.assert_allclose(R_e, co.rot_z(psi) @ co.rot_y(theta_e_d), atol=1e-15)
 
 
 # ================================================================== inputs

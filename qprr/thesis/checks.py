@@ -27,6 +27,7 @@ import pinocchio as pin
 
 from . import actuation as act
 from . import coordinates as co
+from . import mdh
 from . import model as mdl
 from . import thesis as th
 from .model import Robot
@@ -403,6 +404,219 @@ def _c_3_80(ctx: Context) -> Evidence:
     return Evidence(err, None, "F(r0, theta2, theta3) vs Pinocchio x_cm")
 
 
+# ------------------------------------------------------------ modified Denavit-Hartenberg
+def _urdf_arm(ctx: Context):
+    """The URDF arm with its base locked at the origin (frames in B), cached per context."""
+    if "urdf_arm" not in ctx.cache:
+        ctx.cache["urdf_arm"] = fixed_base_arm(ctx.robot)
+    return ctx.cache["urdf_arm"]
+
+
+def urdf_arm_frames(model: pin.Model, data: pin.Data, q_arm) -> tuple[list[np.ndarray], list[np.ndarray], np.ndarray]:
+    """(joint placements in B (4x4) of r0, theta2, theta3; their joint axes in B; the end-effector pose in B).
+
+    ``model`` is the URDF arm with a locked base (:func:`fixed_base_arm`).  A joint axis is the
+    angular (revolute) or linear (prismatic) part of the joint's own column of its WORLD Jacobian.
+    """
+    pin.computeJointJacobians(model, data, q_arm)
+    pin.updateFramePlacements(model, data)
+    placements, axes = [], []
+    for name in mdl.ARM_JOINTS:
+        jid = model.getJointId(name)
+        placements.append(data.oMi[jid].homogeneous.copy())
+        col = pin.getJointJacobian(model, data, jid, pin.WORLD)[:, model.joints[jid].idx_v]
+        axes.append(col[3:6].copy() if np.linalg.norm(col[3:6]) > 0.5 else col[0:3].copy())
+    return placements, axes, data.oMf[model.getFrameId(mdl.EE_FRAME)].homogeneous.copy()
+
+
+def mdh_frame_errors(frames, model: pin.Model, data: pin.Data, q_arm) -> dict[str, float]:
+    """Frame-by-frame distance between an MDH chain and the URDF arm at ``q_arm``.
+
+    ``frames`` = [^bT_1, ^bT_2, ^bT_3, ^bT_4, ^bT_eb] (4x4, in B).  Returns max-abs errors of:
+    "origins" (R_1..R_3 vs the URDF joint frames, R_4 vs the end effector), "axes" (z_1..z_3
+    vs the URDF joint axes, sign included), "end effector" (^bT_eb vs the URDF pose) and
+    "offsets" R_urdf^T R_mdh of R_1..R_3 (returned for the caller to compare across q).
+    """
+    placements, axes, ee = urdf_arm_frames(model, data, q_arm)
+    frames = [np.asarray(F, dtype=float) for F in frames]
+    origins = [F[0:3, 3] - M[0:3, 3] for F, M in zip(frames[0:3], placements)]
+    origins.append(frames[3][0:3, 3] - ee[0:3, 3])
+    return {
+        "origins": _maxabs(origins),
+        "axes": _maxabs([F[0:3, 2] - a for F, a in zip(frames[0:3], axes)]),
+        "end effector": _maxabs(frames[4] - ee),
+        "offsets": np.array([M[0:3, 0:3].T @ F[0:3, 0:3] for F, M in zip(frames[0:3], placements)]),
+    }
+
+
+def _arm_qs(ctx: Context) -> list[np.ndarray]:
+    return [xi[6:9] for xi, _ in ctx.states]
+
+
+def _chain_vs_urdf(ctx: Context, frames_fn) -> tuple[float, dict[str, float]]:
+    """Max frame-by-frame error of ``frames_fn(q_arm)`` over the seeded arm states (offsets must stay constant)."""
+    model, data = _urdf_arm(ctx)
+    worst = {"origins": 0.0, "axes": 0.0, "end effector": 0.0, "offsets": 0.0}
+    ref = None
+    for q in _arm_qs(ctx):
+        e = mdh_frame_errors(frames_fn(q), model, data, q)
+        ref = e["offsets"] if ref is None else ref
+        e["offsets"] = _maxabs(e["offsets"] - ref)
+        worst = {k: max(worst[k], e[k]) for k in worst}
+    return max(worst.values()), worst
+
+
+def _fmt(errs: dict[str, float]) -> str:
+    return ", ".join(f"{k} {v:.1g}" for k, v in errs.items())
+
+
+def _mdh_chain(rows, transform=None):
+    kw = {} if transform is None else {"transform": transform}
+    return lambda q: mdh.chain(rows, q, base=th.T_b0_3_49(), tool=th.T_4eb_3_51(), **kw)
+
+
+def _c_3_27(ctx: Context) -> Evidence:
+    rows = th.table_3_4_corrected(ctx.d)
+    err, parts = _chain_vs_urdf(ctx, _mdh_chain(rows))
+    model = mdh.build_model(rows, base=th.T_b0_3_49(), tool=th.T_4eb_3_51())
+    data = model.createData()
+    urdf, udata = _urdf_arm(ctx)
+    tool, ee = model.getFrameId(mdh.TOOL_FRAME), urdf.getFrameId(mdl.EE_FRAME)
+    e_pin = 0.0
+    for q in _arm_qs(ctx):
+        frames = _mdh_chain(rows)(q)
+        pin.framesForwardKinematics(model, data, q)
+        e_pin = max(e_pin, max(_maxabs(data.oMf[model.getFrameId(mdh.frame_name(j))].homogeneous - frames[j - 1]) for j in range(1, 5)))
+        J = pin.computeFrameJacobian(model, data, q, tool, pin.LOCAL_WORLD_ALIGNED)
+        Ju = pin.computeFrameJacobian(urdf, udata, q, ee, pin.LOCAL_WORLD_ALIGNED)
+        e_pin = max(e_pin, _maxabs(J - Ju))
+    return Evidence(max(err, e_pin), None, f"chain (3.29)-(3.30) of the product (3.27) with Table 3.4 (alpha = pi/2 on the theta2 "
+                    f"row, as (3.53)), ^bT_0 (3.49), ^4T_eb (3.51), frame by frame vs the URDF: {_fmt(parts)}; the Pinocchio "
+                    f"model built from the table (qprr.mdh.build_model): frames and end-effector Jacobian vs the URDF {e_pin:.1g}")
+
+
+def _c_3_28(ctx: Context) -> Evidence:
+    rows = th.table_3_4_corrected(ctx.d)
+    ep, parts = _chain_vs_urdf(ctx, _mdh_chain(rows, th.mdh_3_28))
+    ec, _ = _chain_vs_urdf(ctx, _mdh_chain(rows, th.mdh_3_28_corrected))
+    rng = np.random.default_rng(SEED + 28)
+    direct = orth = 0.0
+    for _ in range(N_STATES):
+        a, d, t, r = rng.uniform(-np.pi, np.pi), rng.normal(), rng.uniform(-np.pi, np.pi), rng.normal()
+        P = th.mdh_3_28(a, d, t, r)
+        direct = max(direct, _maxabs(P - mdh.kk_transform(a, d, t, r)))
+        orth = max(orth, _maxabs(P[0:3, 0:3].T @ P[0:3, 0:3] - np.eye(3)))
+        ec = max(ec, _maxabs(th.mdh_3_28_corrected(a, d, t, r) - mdh.kk_transform(a, d, t, r)))
+    return Evidence(max(ep, direct), ec, f"entry (1,2) printed +sin(theta), the product (3.27) gives -sin(theta): vs the product "
+                    f"{direct:.2g}; as printed R^T R - I reaches {orth:.2g} (not a rotation); chained as in (3.29) vs the URDF: "
+                    f"{_fmt(parts)}")
+
+
+def _c_table_3_4(ctx: Context) -> Evidence:
+    ep, parts = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4(ctx.d)))
+    ec, _ = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4_corrected(ctx.d)))
+    z2 = mdh.chain(th.table_3_4(ctx.d), np.zeros(3), base=th.T_b0_3_49())[1][0:3, 2]
+    return Evidence(ep, ec, f"printed alpha = pi on the theta2 row puts z_2 = {np.round(z2, 12).tolist()} (the slider axis), "
+                    f"the URDF joint theta2 turns about +y_B; frame by frame: {_fmt(parts)}; alpha = pi/2, as (3.53) is printed, holds")
+
+
+def _required_tool(ctx: Context, q) -> np.ndarray:
+    """^4T_eb that ends the chain (3.49) + Table 3.4 (corrected) on the URDF end effector: (^bT_4)^-1 ^bT_eb."""
+    model, data = _urdf_arm(ctx)
+    T_b4 = mdh.chain(th.table_3_4_corrected(ctx.d), q, base=th.T_b0_3_49())[-1]
+    return np.linalg.solve(T_b4, urdf_arm_frames(model, data, q)[2])
+
+
+def _c_3_48(ctx: Context) -> Evidence:
+    model, data = _urdf_arm(ctx)
+    stated = _maxabs(th.T_b0_3_48() - th.T_b0_3_49())
+    req = 0.0
+    for q in _arm_qs(ctx):  # ^bT_0 that ends (3.27)-(3.30) with (3.51) on the URDF end effector
+        T_0eb = mdh.chain(th.table_3_4_corrected(ctx.d), q, tool=th.T_4eb_3_51())[-1]
+        req = max(req, _maxabs(urdf_arm_frames(model, data, q)[2] @ np.linalg.inv(T_0eb) - th.T_b0_3_49()))
+    return Evidence(max(stated, req), None, f"Rot(y, pi/2) Rot(z, pi) vs the printed matrix (3.49): {stated:.1g}; the ^bT_0 the URDF "
+                    f"requires (end effector times the inverse of ^0T_eb) vs (3.49): {req:.1g}; z_0 = x_B, the slider axis")
+
+
+def _c_3_50(ctx: Context) -> Evidence:
+    ep = max(_maxabs(th.T_4eb_3_50() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
+    ec = max(_maxabs(th.T_4eb_3_50_corrected() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
+    return Evidence(ep, ec, f"Rot(y, pi/2) Rot(z, -pi/2) = {np.round(th.T_4eb_3_50()[0:3, 0:3], 12).astype(int).tolist()} vs the "
+                    f"^4T_eb the URDF requires ((^bT_4)^-1 ^bT_eb, constant): the matrix printed as its result (3.51) is "
+                    f"Rot(y, pi/2) Rot(z, +pi/2)")
+
+
+def _c_3_51(ctx: Context) -> Evidence:
+    err = max(_maxabs(th.T_4eb_3_51() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
+    return Evidence(err, None, "printed matrix vs the ^4T_eb the URDF requires ((^bT_4)^-1 ^bT_eb, constant over q)")
+
+
+def _c_3_52(ctx: Context) -> Evidence:
+    d0, d1, d2, d3 = ctx.d
+    rows, printed_rows = th.table_3_4_corrected(ctx.d), th.table_3_4(ctx.d)
+    e_kk = e_tab = 0.0
+    for q in _arm_qs(ctx):
+        r0, t2, t3 = q
+        printed = (th.T_01_3_52(r0, d0), th.T_12_3_53(t2, d1), th.T_23_3_54(t3, d2), th.T_34_3_55(d3))
+        values = (r0, t2, t3, 0.0)
+        e_kk = max(e_kk, max(_maxabs(P - row.transform(v)) for P, row, v in zip(printed, rows, values)))
+        e_tab = max(e_tab, _maxabs(printed[1] - printed_rows[1].transform(t2)))
+    err, parts = _chain_vs_urdf(ctx, lambda q: th.mdh_frames_3_56(q, ctx.d))
+    return Evidence(max(e_kk, err), None, f"each printed matrix vs (3.27) of its row {e_kk:.1g}; chained, frame by frame vs the URDF: "
+                    f"{_fmt(parts)}; (3.53) is printed with alpha = pi/2: vs (3.27) of the printed Table 3.4 row (alpha = pi) "
+                    f"it is off by {e_tab:.2g}")
+
+
+def _c_3_56(ctx: Context) -> Evidence:
+    model, data = _urdf_arm(ctx)
+    e_urdf = max(_maxabs(th.T_eb_3_56(q, ctx.d) - urdf_arm_frames(model, data, q)[2]) for q in _arm_qs(ctx))
+    e_58 = max(_maxabs(th.T_eb_3_56(q, ctx.d) - th.T_eb_3_58(q, ctx.d)) for q in _arm_qs(ctx))
+    return Evidence(max(e_urdf, e_58), None, f"product of the printed (3.49), (3.52)-(3.55), (3.51) vs the URDF end effector "
+                    f"({e_urdf:.1g}) and vs (3.58) ({e_58:.1g})")
+
+
+# ------------------------------------------------------------------ payload in (3.76)-(3.78)
+PAYLOAD_MASS, PAYLOAD_OFFSET = 0.1, 0.03
+"""m_l [kg] (the 0.1 kg of Sec. 6.4.1) and d_cl [m] of the payload rows."""
+
+
+def _payload(ctx: Context):
+    if "payload" not in ctx.cache:
+        from .payload import Payload, com_with_payload
+
+        load = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
+        ctx.cache["payload"] = (load, com_with_payload)
+    return ctx.cache["payload"]
+
+
+def _c_3_76(ctx: Context) -> Evidence:
+    err = 0.0
+    for xi, _ in ctx.states:
+        M = mdl.ee_placement_body(ctx.robot, ctx.data, _q(xi))
+        err = max(err, _maxabs(th.payload_com_3_76(xi[6:9], ctx.d, PAYLOAD_OFFSET) - M.act(np.array([0.0, 0.0, PAYLOAD_OFFSET]))))
+    return Evidence(err, None, f"p_cl at d_cl = {PAYLOAD_OFFSET} m beyond the end effector along link 3 vs Pinocchio "
+                    "(end-effector placement in B applied to (0, 0, d_cl))")
+
+
+def _c_3_78_payload(ctx: Context) -> Evidence:
+    load, com_with_payload = _payload(ctx)
+    m_l, d_cl = PAYLOAD_MASS, PAYLOAD_OFFSET
+    ep = ec = ez = 0.0
+    worst = None
+    for xi, _ in ctx.states:
+        ref = com_with_payload(ctx.robot, ctx.data, xi[6:9], load)
+        printed = th.com_3_78(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl)
+        e = abs(printed[0] - ref[0])
+        ez = max(ez, abs(printed[2] - ref[2]))
+        ec = max(ec, _maxabs(th.com_3_78_corrected(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl) - ref))
+        if e > ep:
+            ep, worst = e, (xi[6:9], printed[0], ref[0])
+    return Evidence(ep, ec, f"x_cm (whose only misprint is the payload term) with m_l = {m_l} kg at d_cl = {d_cl} m vs Pinocchio "
+                    f"(qprr.payload.com_with_payload): at q_arm = {np.round(worst[0], 3).tolist()} printed {worst[1]:.5f} m, model "
+                    f"{worst[2]:.5f} m; printed - true = (1 - m_l[kg]) x_cl / m_G: '+ x_cl' adds a length to kg m; z_cm is off by "
+                    f"{ez:.2g} m (payload term and the z_cm misprint above); the corrected form (m_l p_cl, (3.76)) holds in x, y, z")
+
+
 # ------------------------------------------------------------------------------ chapter 4
 def _ee_body_fd(ctx: Context, q_arm, h: float = 1e-6) -> np.ndarray:
     """J_eb by central differences: [d p_eb; log3(R_eb^- ^T R_eb^+) expressed in B] / 2h."""
@@ -485,6 +699,91 @@ def _sol_check(fn, r0):
                         f"({emod:.1g}) with d0 + d1 = 0.095, d2 = 0.18, theta2 on a grid; min over theta2 = {lo:.4f} (never 0)")
 
     return run
+
+
+def doolittle(A) -> tuple[np.ndarray, np.ndarray]:
+    """A = L U with L unit lower triangular and U upper triangular, no pivoting (the unique such
+    factorisation when the leading minors of A are non-zero, as for the J_L J_U of Thesis (4.42))."""
+    A = np.asarray(A, dtype=float)
+    n = A.shape[0]
+    L, U = np.eye(n), np.zeros((n, n))
+    for i in range(n):
+        U[i, i:] = A[i, i:] - L[i, :i] @ U[:i, i:]
+        L[i + 1 :, i] = (A[i + 1 :, i] - L[i + 1 :, :i] @ U[:i, i]) / U[i, i]
+    return L, U
+
+
+def _lu_samples(ctx: Context):
+    """(q_arm, J J^T of the model at zero Euler angles, its Doolittle factors), cached per context."""
+    if "lu" not in ctx.cache:
+        out = []
+        for q in _arm_qs(ctx):
+            J = mdl.jacobian_xi(ctx.robot, ctx.data, np.concatenate([np.zeros(6), q]))
+            A = J @ J.T
+            out.append((q, A, *doolittle(A)))
+        ctx.cache["lu"] = out
+    return ctx.cache["lu"]
+
+
+def _lu_entry(name: str, L: np.ndarray, U: np.ndarray) -> float:
+    return float((L if name[0] == "a" else U)[int(name[1]) - 1, int(name[2]) - 1])
+
+
+def _lu_check(names: tuple[str, ...], what: str):
+    def run(ctx: Context) -> Evidence:
+        ep, ec = {n: 0.0 for n in names}, 0.0
+        for q, _, L, U in _lu_samples(ctx):
+            printed, corrected = th.lu_factors_4_42(q, ctx.d), th.lu_factors_4_42_corrected(q, ctx.d)
+            for n in names:
+                ref = _lu_entry(n, L, U)
+                ep[n] = max(ep[n], abs(printed[n] - ref))
+                ec = max(ec, abs(corrected[n] - ref))
+        wrong = [n for n in names if ep[n] > 1e-10]
+        return Evidence(max(ep.values()), ec if wrong else None,
+                        "each factor vs the Doolittle factorisation (unit lower J_L, unique) of the model J J^T at zero Euler "
+                        "angles (J of (4.13)): " + ", ".join(f"{n} {e:.1g}" for n, e in ep.items()) + (f"; {what}" if what else ""))
+
+    return run
+
+
+def _c_4_42_pattern(ctx: Context) -> Evidence:
+    zeros = prod = 0.0
+    for q, A, L, U in _lu_samples(ctx):
+        Lc, Uc = th.lu_matrices_4_42(th.lu_factors_4_42_corrected(q, ctx.d))
+        zeros = max(zeros, _maxabs(L[(Lc == 0) & ~np.eye(6, dtype=bool)]), _maxabs(U[Uc == 0]))
+        prod = max(prod, _maxabs(Lc @ Uc - A))
+    return Evidence(max(zeros, prod), None, f"the model's Doolittle factors vanish where (4.42) prints 0 ({zeros:.1g}); J_L J_U rebuilt "
+                    f"from the factors (a31 = b13/b11 is not printed) equals J J^T ({prod:.1g})")
+
+
+def _c_4_43(ctx: Context) -> Evidence:
+    ep = ec = ident = 0.0
+    for q, A, _, U in _lu_samples(ctx):
+        det = np.linalg.det(A)
+        ep = max(ep, abs(th.det_4_43(th.lu_factors_4_42(q, ctx.d)) - det) / det)
+        ec = max(ec, abs(th.det_4_43(th.lu_factors_4_42_corrected(q, ctx.d)) - det) / det)
+        ident = max(ident, abs(np.prod(np.diag(U)) - det) / det)
+    return Evidence(ep, ec, f"relative error vs det(J J^T) of the model; the identity det = prod of Doolittle's b_ii holds "
+                    f"({ident:.1g}), the printed b55 spoils the product; the text says det(J_U) = 1 where it means det(J_L) = 1")
+
+
+def _c_4_45(ctx: Context) -> Evidence:
+    rng = np.random.default_rng(SEED + 45)
+    p = ctx.params
+    pts, dets = [], []
+    for _ in range(6 * N_STATES):
+        q = np.array([rng.uniform(*p.r0_limits), rng.uniform(-np.pi, np.pi), rng.uniform(*p.theta3_limits)])
+        pts.append(q)
+        dets.append(_zero_euler_det(ctx.robot, ctx.data, q))
+    dets = np.array(dets)
+    Bp = np.array([th.basis_4_45(q[0], q[1]) for q in pts])
+    lam, *_ = np.linalg.lstsq(Bp, dets, rcond=None)  # the best constants the printed basis allows
+    ep = _maxabs(Bp @ lam - dets)
+    ec = max(abs(th.det_JJt_4_45_corrected(q[0], q[1], ctx.d) - dt) for q, dt in zip(pts, dets))
+    return Evidence(ep, ec, f"best constant lambda_1..8 (least squares over {len(pts)} random (r0, theta2, theta3)) still misses the "
+                    f"model det(J J^T) by {ep:.2g}: (4.44) has 4 d2 r0 s2 (coefficient of s2 = {4 * p.d2:.4f} r0, cf. -0.0288 "
+                    f"and +0.0288 in (4.46), (4.48)) and no constant s2 term; with r0 s2 in place of s2 and the lambda of (4.44) "
+                    f"it is exact")
 
 
 # ------------------------------------------------------------------------------ chapter 5
@@ -725,13 +1024,137 @@ def _symbolic_check(name: str):
     return run
 
 
+# ------------------------------------------------------------------------------ chapter 6
+def _level_states(ctx: Context, phi: float = 0.0, psi: float | None = None, max_pitch: float = 0.4) -> list[np.ndarray]:
+    """The seeded states with roll ``phi``, |pitch| < ``max_pitch`` (and yaw ``psi`` when given): Sec. 6.3.3's hypotheses."""
+    out = []
+    for xi, _ in ctx.states:
+        x = xi.copy()
+        x[3], x[4] = phi, xi[4] * max_pitch / 1.3  # the seeded pitches lie in (-1.3, 1.3) (Context.random_xi)
+        if psi is not None:
+            x[5] = psi
+        out.append(x)
+    return out
+
+
+def _c_6_29(ctx: Context) -> Evidence:
+    err = 0.0
+    for xi, _ in ctx.states:
+        q = _q(xi)
+        err = max(err, _maxabs(th.p_c_6_29(xi[0:3], _R(xi), mdl.com_body(ctx.robot, ctx.data, q)) - mdl.com_world(ctx.robot, ctx.data, q)))
+    return Evidence(err, None, "p_b + R_b p_cm (p_cm: Pinocchio CoM in B) vs Pinocchio CoM in the world frame")
+
+
+def _c_6_29_rate(ctx: Context) -> Evidence:
+    h = 1e-6
+    ep = e_world = 0.0
+    for xi, xid in ctx.states:
+        q, v = co.xi_to_qv(xi, xid)
+        pin.centerOfMass(ctx.robot.model, ctx.data, q, v)
+        vcom = ctx.data.vcom[0].copy()
+        p_cm = mdl.com_body(ctx.robot, ctx.data, q)
+        darm = np.concatenate([np.zeros(6), xid[6:9]]) * h
+        p_cm_dot = (mdl.com_body(ctx.robot, ctx.data, _q(xi + darm)) - mdl.com_body(ctx.robot, ctx.data, _q(xi - darm))) / (2 * h)
+        omega_body, R = v[3:6], _R(xi)
+        ep = max(ep, _maxabs(th.p_c_dot_6_29(xid[0:3], R, omega_body, p_cm, p_cm_dot) - vcom))
+        e_world = max(e_world, _maxabs(th.p_c_dot_6_29(xid[0:3], R, R @ omega_body, p_cm, p_cm_dot) - vcom))
+    return Evidence(ep, None, f"vs Pinocchio CoM velocity (p_cm_dot by central differences along the arm joints) with omega_b = "
+                    f"T phi_b_dot, the body rate; with the world rate R_b T phi_b_dot (as (4.7) reads omega_b) it is off by "
+                    f"{e_world:.2g} m/s")
+
+
+def _c_6_30_xy(ctx: Context) -> Evidence:
+    err = max(_maxabs(th.com_6_30(xi[6:9], ctx.params)[0:2] - mdl.com_body(ctx.robot, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
+    return Evidence(err, None, "x_cm, y_cm in B vs Pinocchio centre of mass")
+
+
+def _c_6_30_z(ctx: Context) -> Evidence:
+    ep = ec = 0.0
+    for xi, _ in ctx.states:
+        z = mdl.com_body(ctx.robot, ctx.data, _q(xi))[2]
+        ep = max(ep, abs(th.com_6_30(xi[6:9], ctx.params)[2] - z))
+        ec = max(ec, abs(th.com_3_78_corrected(xi[6:9], ctx.params)[2] - z))
+    m1 = ctx.params.links[0].mass
+    return Evidence(ep, ec, f"(6.30c) fixes the (m2/2 + m3) d2 c2 of (3.78) but keeps sum m_i (d0 + d1): link 1's CoM is at d0 + d1/2, "
+                    f"printed - true = m1 d1 / (2 m_G) = {m1 * ctx.params.d1 / 2 / ctx.params.total_mass:.3g} m at every q")
+
+
+def _pitch_only_offsets(ctx: Context, phi: float = 0.0, psi: float = 0.0):
+    """(theta, p_cm in B, p_c - p_b in the world) from Pinocchio at roll ``phi``, yaw ``psi``."""
+    for xi in _level_states(ctx, phi, psi):
+        q = _q(xi)
+        yield xi[4], mdl.com_body(ctx.robot, ctx.data, q), mdl.com_world(ctx.robot, ctx.data, q) - xi[0:3]
+
+
+def _c_6_31(ctx: Context) -> Evidence:
+    err = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx))
+    rolled = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx, phi=0.3))
+    return Evidence(err, None, f"R_theta p_cm vs Pinocchio p_c - p_b (world axes) at phi = psi = 0, |theta| < 0.4; at phi = 0.3 rad "
+                    f"it is off by {rolled:.2g} m. A rigid pitch leaves p_cm in B (hence x_cm, the thrust-line offset) unchanged")
+
+
+def _c_6_32(ctx: Context) -> Evidence:
+    err = max(_maxabs(th.nabla_p_cm_6_32(t, p) - (w - p)) for t, p, w in _pitch_only_offsets(ctx))
+    return Evidence(err, None, "(R_theta - I) p_cm vs Pinocchio (p_c - p_b) - p_cm at phi = psi = 0")
+
+
+def _ee_pitch_error(ctx: Context, xi, theta_e: float) -> float:
+    """|R_e - Rz(psi) Ry(theta_e)| with R_e from Pinocchio."""
+    R_e = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation
+    return _maxabs(R_e - co.rot_z(xi[5]) @ co.rot_y(theta_e))
+
+
+def _c_6_34(ctx: Context) -> Evidence:
+    ep = e_roll = e_zyz = 0.0
+    for xi in _level_states(ctx):
+        te = th.theta_e_6_34(xi[4], xi[7], xi[8])
+        ep = max(ep, _ee_pitch_error(ctx, xi, te))
+        zyz = th.euler_3_64(mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation)[1]
+        e_zyz = max(e_zyz, abs(float(_wrap(zyz - te))))
+    for xi in _level_states(ctx, phi=0.2):
+        e_roll = max(e_roll, _ee_pitch_error(ctx, xi, th.theta_e_6_34(xi[4], xi[7], xi[8])))
+    return Evidence(ep, None, f"R_e of Pinocchio vs Rz(psi) Ry(theta + theta2 + theta3) at phi = 0 (any psi); read as the ZYZ "
+                    f"theta_e of (3.64) (in [0, pi]) it is off by {e_zyz:.2g} rad; at phi = 0.2 rad R_e is off by {e_roll:.2g}")
+
+
+def _c_6_35(ctx: Context) -> Evidence:
+    from .control import CogStabilizer, make_controller
+
+    bsg = CogStabilizer(ctx.robot, make_controller("mfc", ctx.robot))
+    rng = np.random.default_rng(SEED + 35)
+    p = ctx.params
+    err = e_roll = 0.0
+    n = clamped = 0
+    while n < N_STATES:
+        theta, theta2_d, theta_e_d, psi = rng.uniform(-0.3, 0.3), rng.uniform(-0.6, 0.6), rng.uniform(-0.4, 0.4), rng.uniform(-np.pi, np.pi)
+        bsg.theta_e_d = theta_e_d
+        r0_d, theta3_d = bsg.joint_references(theta, theta2_d)
+        if not (p.r0_limits[0] < r0_d < p.r0_limits[1] and p.theta3_limits[0] < theta3_d < p.theta3_limits[1]):
+            clamped += 1  # clamped references cannot reach x_cm = 0 (documented in qprr.control.bsg)
+            continue
+        n += 1
+        for phi in (0.0, 0.2):
+            xi = np.array([0.0, 0.0, 0.0, phi, theta, psi, r0_d, theta2_d, theta3_d])
+            e = max(abs(mdl.com_body(ctx.robot, ctx.data, _q(xi))[0]), _ee_pitch_error(ctx, xi, theta_e_d))
+            if phi == 0.0:
+                err = max(err, e)
+            else:
+                e_roll = max(e_roll, e)
+    return Evidence(err, None, f"CogStabilizer.joint_references(theta, theta2_d) -> (r0_d, theta3_d) from (6.35) and x_cm = 0 of "
+                    f"(6.33), put into the model: Pinocchio x_cm in B and R_e vs Rz(psi) Ry(theta_e^d), {n} states with "
+                    f"|theta| < 0.3 ({clamped} with clamped references skipped); at phi = 0.2 rad the end effector is off by {e_roll:.2g}")
+
+
 # ---------------------------------------------------------------------------- registry
 CONV_ZYZ = "ZYZ Euler angles for the end effector (R_e = Rz Ry Rz)"
+CONV_PITCH = "phi = psi = 0 (Hypothesis 4 of Sec. 6.3.3), p'_cm in world axes"
 
 CHECKS: tuple[Check, ...] = (
     Check("(3.4)", "R_b = Rz(psi) Ry(theta) Rx(phi), entries", _c_3_4, 1e-12),
     Check("(3.8)", "ZYX angles from R_b", _c_3_8, 1e-9),
     Check("(3.25)", "T(phi_b): omega = T phi_b_dot", _c_3_25, 1e-7, "omega in the body frame B (3.19), not inertial as (3.15) says"),
+    Check("(3.27)", "MDH chain (3.27), (3.29)-(3.30) vs URDF frames", _c_3_27, 1e-12),
+    Check("(3.28)", "MDH transform written out", _c_3_28, 1e-12),
     Check("(3.36)", "allocation [f_b; tau_b] = A f (force form)", _c_3_36, 1e-12),
     Check("(3.37)", "allocation u = A w^2", _c_3_37, 1e-12),
     Check("(3.37)", "det of the (3.37) matrix = 8 c l^2 b^3", _c_det_3_37, 1e-9),
@@ -739,6 +1162,12 @@ CHECKS: tuple[Check, ...] = (
     Check("(3.42)", "arm potential U = -sum m g e3^T R_b xi_ci", _c_3_42, 1e-10, "NED gravity +g e3"),
     Check("(3.43)", "arm torque on B: m_G g xi_c x R_b^T e3", _c_3_43, 1e-10, "NED gravity +g e3 of (3.42)"),
     Check("(3.44)", "arm CoM xi_c in B", _c_3_44, 1e-12),
+    Check("Tab. 3.4", "MDH parameter table through (3.27)", _c_table_3_4, 1e-12),
+    Check("(3.48)", "^bT_0 = Rot(y, pi/2) Rot(z, pi), matrix (3.49)", _c_3_48, 1e-12),
+    Check("(3.50)", "^4T_eb = Rot(y, pi/2) Rot(z, -pi/2)", _c_3_50, 1e-12),
+    Check("(3.51)", "^4T_eb matrix", _c_3_51, 1e-12),
+    Check("(3.52)", "^0T_1 .. ^3T_4 matrices (3.52)-(3.55)", _c_3_52, 1e-12),
+    Check("(3.56)", "^bT_eb, product of the printed matrices", _c_3_56, 1e-12),
     Check("(3.58)", "^bT_eb, end effector in B", _c_3_58, 1e-12),
     Check("(3.61)", "p_e expanded", _c_3_61, 1e-10),
     Check("(3.62)", "R_e = R_b R_eb, entries", _c_3_62, 1e-12),
@@ -748,6 +1177,8 @@ CHECKS: tuple[Check, ...] = (
     Check("(3.68)", "hover FK, lines 4-6 (phi_e, theta_e, psi_e)", _c_3_68_ang, 1e-9),
     Check("(3.78)", "CoG x_cm, y_cm in B", _c_3_78_xy, 1e-12),
     Check("(3.78)", "CoG z_cm in B", _c_3_78_z, 1e-12),
+    Check("(3.76)", "payload centre p_cl in B", _c_3_76, 1e-12),
+    Check("(3.78)", "CoG with payload m_l: '+ x_cl' for m_l x_cl", _c_3_78_payload, 1e-12),
     Check("(3.80)", "x_cm = F(r0, theta2, theta3)", _c_3_80, 1e-12),
     Check("(4.26)", "arm Jacobian J_eb (6x3) in B", _c_4_26, 1e-8),
     Check("(4.27)", "reduced arm Jacobian J_eb* (3x3)", _c_4_27, 1e-12),
@@ -755,6 +1186,16 @@ CHECKS: tuple[Check, ...] = (
     Check("(4.12)", "J_e assembled from J_b, T_A, J_eb", _c_4_12, 1e-10),
     Check("(4.13)", "model J_e vs differences of the pose", _c_4_13, 1e-7),
     Check("(4.44)", "det(J J^T) at zero Euler angles", _c_4_44, 1e-10),
+    Check("(4.42)", "J J^T = J_L J_U, sparsity pattern", _c_4_42_pattern, 1e-12),
+    Check("(4.42)", "L factors a42, a51, a62, a64", _lu_check(("a42", "a51", "a62", "a64"), ""), 1e-12),
+    Check("(4.42)", "L factor a53", _lu_check(("a53",), "a53 = b35 / b33 (the printed text has an unmatched parenthesis "
+                                                      "and lacks the terms of b33)"), 1e-12),
+    Check("(4.42)", "U factors b_ij except b55", _lu_check(tuple(n for n in th.LU_U_NAMES if n != "b55"), ""), 1e-12),
+    Check("(4.42)", "U factor b55", _lu_check(("b55",), "b55 = 3 - b15^2/b11 - b35^2/b33: the printed last denominator has "
+                                                      "d2^4 s2 c2 and 2 d2 d3 s23 c23 where b33 has d2^2 sin 2theta2 and "
+                                                      "2 d2 d3 sin(2theta2 + theta3)"), 1e-12),
+    Check("(4.43)", "det(J J^T) = b11 b22 b33 b44 b55 b66", _c_4_43, 1e-12),
+    Check("(4.45)", "det(J J^T) in the lambda basis", _c_4_45, 1e-10),
     Check("(4.46)", "sol(-0.04, theta2) numbers", _sol_check(th.sol_4_46, -0.04), 2e-4, "4-digit rounding of the printed coefficients"),
     Check("(4.47)", "sol(0, theta2) numbers", _sol_check(th.sol_4_47, 0.0), 2e-4, "4-digit rounding of the printed coefficients"),
     Check("(4.48)", "sol(0.04, theta2) numbers", _sol_check(th.sol_4_48, 0.04), 2e-4, "4-digit rounding of the printed coefficients"),
@@ -778,6 +1219,17 @@ CHECKS: tuple[Check, ...] = (
     Check("5.5.3", "u(1), prismatic force", _u_check(0, "the theta2_ddot coefficient halves its m3 part"), 1e-10),
     Check("5.5.3", "u(2), theta2 torque", _u_check(1, "m2 d2^2/2 (b22: /4), I_z2, theta3_dot for theta3_ddot, b33 terms"), 1e-10),
     Check("5.5.3", "u(3), theta3 torque", _u_check(2, "the spurious (I_x3 - I_z3) terms of b33"), 1e-10),
+    Check("(6.29)", "p_c = p_b + R_b p_cm", _c_6_29, 1e-12),
+    Check("(6.29)'", "p_c_dot = p_b_dot + R_b (w x p_cm + p_cm_dot)", _c_6_29_rate, 1e-7,
+          "omega_b the body rate T phi_b_dot (3.25)"),
+    Check("(6.30ab)", "CoG x_cm, y_cm in B", _c_6_30_xy, 1e-12),
+    Check("(6.30c)", "CoG z_cm in B", _c_6_30_z, 1e-12),
+    Check("(6.31)", "p'_cm = R_theta p_cm", _c_6_31, 1e-12, CONV_PITCH),
+    Check("(6.32)", "nabla p_cm = (R_theta - I) p_cm", _c_6_32, 1e-12, CONV_PITCH),
+    Check("(6.34)", "theta_e = theta + theta2 + theta3", _c_6_34, 1e-12,
+          "phi = 0, theta_e the pitch of R_e = Rz(psi) Ry(theta_e), not the ZYZ theta_e of (3.64)"),
+    Check("(6.35)", "BSG references (r0_d, theta3_d) in the model", _c_6_35, 1e-12,
+          "phi = 0 (Hypothesis 4 of Sec. 6.3.3), references inside the joint limits"),
     Check("conv.", "xi <-> (q, v, a) round trips", _c_conversion, 1e-7),
     Check("(5.36)", "B: Pinocchio vs sympy", _symbolic_check("B"), 1e-9),
     Check("(5.36)", "C: Pinocchio vs sympy", _symbolic_check("C"), 1e-9),

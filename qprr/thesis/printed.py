@@ -12,6 +12,8 @@ Conventions of the printed formulas (the ones of the thesis, not always ours):
 * Masses and inertias are read from a :class:`~qprr.params.QPRRParams` where a formula
   needs many of them; ``I_x3`` etc. are the principal moments (Ixx, Iyy, Izz) of
   Table 3.2 in the link frame (y parallel to the joint axis, as in the URDF).
+* The modified Denavit-Hartenberg convention of (3.27)-(3.30) is implemented once, in
+  :mod:`qprr.mdh`; Table 3.4 and the transforms (3.48)-(3.56) are here.
 * "c" in (3.36), (3.45)-(3.46) and (A.1) multiplies forces, so only c/b (kappa) makes
   those rows consistent with (3.31)-(3.35): the ``_corrected`` forms take (b, c).
 """
@@ -23,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .coordinates import as_vector, rot_y, rot_z
+from .errors import InputError
+from .mdh import MDHRow, kk_transform
 from .params import QPRRParams
 
 E3 = np.array([0.0, 0.0, 1.0])
@@ -85,6 +89,128 @@ def T_3_25(phi: float, theta: float) -> np.ndarray:
     """
     sf, cf, st, ct = np.sin(phi), np.cos(phi), np.sin(theta), np.cos(theta)
     return np.array([[1.0, 0.0, -st], [0.0, cf, sf * ct], [0.0, -sf, cf * ct]])
+
+
+# ------------------------------------------------ modified Denavit-Hartenberg, (3.27)-(3.30)
+def mdh_3_28(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
+    """^(i-1)T_i (4x4) written out as printed in Thesis (3.28) (printed with a_(i-1), alpha_(i-1) for d_i, alpha_i).
+
+    Misprint: entry (1, 2) is printed +sin(theta); the product (3.27)
+    Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r) gives -sin(theta)
+    (:func:`mdh_3_28_corrected`).  As printed the rotation block is not orthogonal.
+    """
+    sa, ca, st, ct = np.sin(alpha), np.cos(alpha), np.sin(theta), np.cos(theta)
+    return np.array(
+        [
+            [ct, st, 0.0, d],
+            [ca * st, ca * ct, -sa, -r * sa],
+            [sa * st, sa * ct, ca, r * ca],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    )
+
+
+def mdh_3_28_corrected(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
+    """(3.28) with entry (1, 2) = -sin(theta): the product (3.27), :func:`qprr.mdh.kk_transform`."""
+    return kk_transform(alpha, d, theta, r)
+
+
+def table_3_4(d) -> tuple[MDHRow, ...]:
+    """Table 3.4 as printed: rows (sigma, alpha, d, theta, r) = (1, 0, d0, 0, r0), (0, pi, d1, theta2, 0),
+    (0, 0, d2, theta3, 0), (0, 0, d3, 0, 0); the variables r0, theta2, theta3 are the joints.
+
+    The table numbers its rows 0..3 and row i gives ^iT_(i+1) ((3.52)-(3.55)).  Misprint:
+    alpha = pi on the theta2 row makes z_2 = -x_B (theta2 would turn about the slider
+    axis); (3.53) is printed with alpha = pi/2 (:func:`table_3_4_corrected`).
+    """
+    d0, d1, d2, d3 = _lengths(d)
+    return (
+        MDHRow(1, 0.0, d0, 0.0, 0.0),
+        MDHRow(0, np.pi, d1, 0.0, 0.0),
+        MDHRow(0, 0.0, d2, 0.0, 0.0),
+        MDHRow(0, 0.0, d3, 0.0, 0.0, joint=False),
+    )
+
+
+def table_3_4_corrected(d) -> tuple[MDHRow, ...]:
+    """Table 3.4 with alpha = pi/2 on the theta2 row (as (3.53) is printed): z_2 = +y_B."""
+    rows = table_3_4(d)
+    return (rows[0], MDHRow(0, np.pi / 2, rows[1].d, 0.0, 0.0), *rows[2:])
+
+
+def _rot4(R) -> np.ndarray:
+    T = np.eye(4)
+    T[0:3, 0:3] = R
+    return T
+
+
+def T_b0_3_48() -> np.ndarray:
+    """^bT_0 = Rot(y, pi/2) Rot(z, pi), the product stated in Thesis (3.48)."""
+    return _rot4(rot_y(np.pi / 2) @ rot_z(np.pi))
+
+
+def T_b0_3_49() -> np.ndarray:
+    """^bT_0 as printed in Thesis (3.49): rows (0 0 1 0), (0 -1 0 0), (1 0 0 0)."""
+    return np.array([[0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def T_4eb_3_50() -> np.ndarray:
+    """^4T_eb = Rot(y, pi/2) Rot(z, -pi/2), the product stated in Thesis (3.50).
+
+    Misprint: that product is [[0 0 1], [-1 0 0], [0 -1 0]], not the matrix printed as its
+    result in (3.51); the chain needs (3.51), which is Rot(y, pi/2) Rot(z, +pi/2)
+    (:func:`T_4eb_3_50_corrected`).
+    """
+    return _rot4(rot_y(np.pi / 2) @ rot_z(-np.pi / 2))
+
+
+def T_4eb_3_50_corrected() -> np.ndarray:
+    """(3.50) with Rot(z, +pi/2): Rot(y, pi/2) Rot(z, pi/2) = the matrix (3.51)."""
+    return _rot4(rot_y(np.pi / 2) @ rot_z(np.pi / 2))
+
+
+def T_4eb_3_51() -> np.ndarray:
+    """^4T_eb as printed in Thesis (3.51): rows (0 0 1 0), (1 0 0 0), (0 1 0 0)."""
+    return np.array([[0.0, 0.0, 1.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def T_01_3_52(r0: float, d0: float) -> np.ndarray:
+    """^0T_1 as printed in Thesis (3.52): translation (d0, 0, r0)."""
+    return np.array([[1.0, 0.0, 0.0, d0], [0.0, 1.0, 0.0, 0.0], [0.0, 0.0, 1.0, r0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def T_12_3_53(theta2: float, d1: float) -> np.ndarray:
+    """^1T_2 as printed in Thesis (3.53): [[c2, -s2, 0, d1], [0, 0, -1, 0], [s2, c2, 0, 0]] (alpha = pi/2)."""
+    s, c = np.sin(theta2), np.cos(theta2)
+    return np.array([[c, -s, 0.0, d1], [0.0, 0.0, -1.0, 0.0], [s, c, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def T_23_3_54(theta3: float, d2: float) -> np.ndarray:
+    """^2T_3 as printed in Thesis (3.54): Rot(z, theta3) with translation (d2, 0, 0)."""
+    s, c = np.sin(theta3), np.cos(theta3)
+    return np.array([[c, -s, 0.0, d2], [s, c, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def T_34_3_55(d3: float) -> np.ndarray:
+    """^3T_4 as printed in Thesis (3.55): translation (d3, 0, 0)."""
+    T = np.eye(4)
+    T[0, 3] = d3
+    return T
+
+
+def mdh_frames_3_56(q_arm, d) -> list[np.ndarray]:
+    """[^bT_1, ^bT_2, ^bT_3, ^bT_4, ^bT_eb] from the printed (3.49), (3.52)-(3.55), (3.51), Thesis (3.56)."""
+    r0, t2, t3 = _arm(q_arm)
+    d0, d1, d2, d3 = _lengths(d)
+    out = [T_b0_3_49() @ T_01_3_52(r0, d0)]
+    for T in (T_12_3_53(t2, d1), T_23_3_54(t3, d2), T_34_3_55(d3), T_4eb_3_51()):
+        out.append(out[-1] @ T)
+    return out
+
+
+def T_eb_3_56(q_arm, d) -> np.ndarray:
+    """^bT_eb = ^bT_0 ^0T_1 ^1T_2 ^2T_3 ^3T_4 ^4T_eb with the printed matrices, Thesis (3.56)."""
+    return mdh_frames_3_56(q_arm, d)[-1]
 
 
 def allocation_3_36(l: float, c: float) -> np.ndarray:
@@ -317,29 +443,63 @@ def hover_fk_3_68_corrected(x_b: float, y_b: float, z_b: float, psi: float, q_ar
     return out
 
 
-def com_3_78(q_arm, params: QPRRParams) -> np.ndarray:
-    """[x_cm, y_cm, z_cm] of the whole system in B, Thesis (3.78) as printed, no load.
+def _payload_args(m_l, d_cl) -> tuple[float, float]:
+    m_l, d_cl = float(m_l), float(d_cl)
+    if not (np.isfinite(m_l) and m_l >= 0.0):
+        raise InputError(f"m_l (payload mass) must be a finite number >= 0 kg, got {m_l!r}")
+    if not np.isfinite(d_cl):
+        raise InputError(f"d_cl (end effector to payload centre) must be finite, got {d_cl!r}")
+    return m_l, d_cl
 
-    z_cm is misprinted: sum m_i (d0 + d1) ignores the half-length of link 1 (p_c1 has
-    d0 + d1/2) and (1/2)(m2 + m3) d2 c2 should be (m2/2 + m3) d2 c2.
+
+def payload_com_3_76(q_arm, d, d_cl: float) -> np.ndarray:
+    """p_cl, the payload centre in B at d_cl [m] beyond the end effector along link 3, Thesis (3.76)-(3.77) list.
+
+    p_cl = [r0 + d2 s2 + (d3 + d_cl) s23, 0, d0 + d1 + d2 c2 + (d3 + d_cl) c23].
+    """
+    r0, t2, t3 = _arm(q_arm)
+    d0, d1, d2, d3 = _lengths(d)
+    _, d_cl = _payload_args(0.0, d_cl)
+    s2, c2, s23, c23 = np.sin(t2), np.cos(t2), np.sin(t2 + t3), np.cos(t2 + t3)
+    return np.array([r0 + d2 * s2 + (d3 + d_cl) * s23, 0.0, d0 + d1 + d2 * c2 + (d3 + d_cl) * c23])
+
+
+def com_3_78(q_arm, params: QPRRParams, *, m_l: float = 0.0, d_cl: float = 0.0) -> np.ndarray:
+    """[x_cm, y_cm, z_cm] of the whole system in B [m], Thesis (3.78) as printed.
+
+    ``m_l`` [kg] is a payload held with its centre at ``d_cl`` [m] beyond the end effector
+    (p_cl of :func:`payload_com_3_76`); m_G = m_b + sum m_i + m_l (3.77).  Remark 3 sets
+    p_cl = 0 when m_l = 0.  Two misprints:
+
+    * the payload enters as "+ x_cl", "+ z_cl" (a length added to masses times lengths)
+      where (3.76) has m_l p_cl;
+    * z_cm: sum m_i (d0 + d1) ignores the half-length of link 1 (p_c1 has d0 + d1/2) and
+      (1/2)(m2 + m3) d2 c2 should be (m2/2 + m3) d2 c2.
+
+    The corrected form is :func:`com_3_78_corrected`.
     """
     r0, t2, t3 = _arm(q_arm)
     d0, d1, d2, d3 = link_lengths(params)
+    m_l, d_cl = _payload_args(m_l, d_cl)
     m1, m2, m3 = _link_masses(params)
-    mG = params.total_mass
-    x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2) / mG
-    z = ((m1 + m2 + m3) * (d0 + d1) + (m2 + m3) * d2 * np.cos(t2) / 2 + m3 * d3 * np.cos(t2 + t3) / 2) / mG
+    mG = params.total_mass + m_l
+    x_cl, _, z_cl = payload_com_3_76(q_arm, (d0, d1, d2, d3), d_cl) if m_l > 0.0 else np.zeros(3)
+    x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2 + x_cl) / mG
+    z = ((m1 + m2 + m3) * (d0 + d1) + (m2 + m3) * d2 * np.cos(t2) / 2 + m3 * d3 * np.cos(t2 + t3) / 2 + z_cl) / mG
     return np.array([x, 0.0, z])
 
 
-def com_3_78_corrected(q_arm, params: QPRRParams) -> np.ndarray:
-    """(3.78) with z_cm = [m1 (d0 + d1/2) + (m2 + m3)(d0 + d1) + (m2/2 + m3) d2 c2 + m3 d3 c23 / 2] / m_G."""
+def com_3_78_corrected(q_arm, params: QPRRParams, *, m_l: float = 0.0, d_cl: float = 0.0) -> np.ndarray:
+    """(3.78) corrected: m_l p_cl for the payload term (3.76) and, in z_cm,
+    m1 (d0 + d1/2) + (m2 + m3)(d0 + d1) + (m2/2 + m3) d2 c2 + m3 d3 c23 / 2; divided by m_G of (3.77)."""
     r0, t2, t3 = _arm(q_arm)
     d0, d1, d2, d3 = link_lengths(params)
+    m_l, d_cl = _payload_args(m_l, d_cl)
     m1, m2, m3 = _link_masses(params)
-    out = com_3_78(q_arm, params)
-    out[2] = (m1 * (d0 + d1 / 2) + (m2 + m3) * (d0 + d1) + (m2 / 2 + m3) * d2 * np.cos(t2) + m3 * d3 * np.cos(t2 + t3) / 2) / params.total_mass
-    return out
+    x = (m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2
+    z = m1 * (d0 + d1 / 2) + (m2 + m3) * (d0 + d1) + (m2 / 2 + m3) * d2 * np.cos(t2) + m3 * d3 * np.cos(t2 + t3) / 2
+    first_moment = np.array([x, 0.0, z]) + m_l * payload_com_3_76(q_arm, (d0, d1, d2, d3), d_cl)
+    return first_moment / (params.total_mass + m_l)
 
 
 def x_cm_3_80(q_arm, params: QPRRParams) -> float:
@@ -416,6 +576,124 @@ def det_JJt_4_44(r0: float, theta2: float, d) -> float:
         + d2**2 * r0**2 * c2**2 + d0**2 * d2**2 * s2**2 + d1**2 * d2**2 * s2**2 + 2 * d0 * d2 * c2 + 2 * d1 * d2 * c2
         + 2 * d0 * d1 * d2**2 * s2**2 - d0 * d2**2 * r0 * 2 * s2 * c2 - d1 * d2**2 * r0 * 2 * s2 * c2 + 6
     )
+
+
+LU_L_NAMES = ("a31", "a42", "a51", "a53", "a62", "a64")
+"""Below-diagonal entries of J_L in (4.42) (a31 appears in the matrix but no formula is printed for it)."""
+LU_U_NAMES = ("b11", "b13", "b15", "b22", "b24", "b26", "b33", "b35", "b44", "b46", "b55", "b66")
+"""Non-zero entries of J_U in (4.42)."""
+
+
+def _lu_sums(q_arm, d):
+    """The sums the printed factors repeat: x = x_eb, z = z_eb of (3.58), e = d2 s2 + d3 s23, a = d2 c2 + d3 c23."""
+    r0, t2, t3 = _arm(q_arm)
+    d0, d1, d2, d3 = _lengths(d)
+    s2, c2, s23, c23 = np.sin(t2), np.cos(t2), np.sin(t2 + t3), np.cos(t2 + t3)
+    x, z = r0 + d3 * s23 + d2 * s2, d0 + d1 + d3 * c23 + d2 * c2
+    return r0, t2, t3, d0, d1, d2, d3, s2, c2, s23, c23, x, z, d3 * s23 + d2 * s2, d3 * c23 + d2 * c2
+
+
+def lu_factors_4_42(q_arm, d) -> dict[str, float]:
+    """a_ij, b_ij of J^gamma = J J^T = J_L J_U at zero Euler angles as printed after Thesis (4.42).
+
+    J_L is unit lower triangular (entries a_ij), J_U upper triangular (entries b_ij); rows
+    and columns are (x, y, z, omega_x, omega_y, omega_z).  The printed expressions repeat
+    the sums x = r0 + d2 s2 + d3 s23, z = d0 + d1 + d2 c2 + d3 c23, e = d2 s2 + d3 s23,
+    a = d2 c2 + d3 c23; they are named here, the expressions are otherwise as printed.
+    a31 has no printed formula (returned as NaN).  Two misprints (see ``_corrected``):
+
+    * a53: the text has one closing parenthesis too many; read literally,
+      a53 = -(X - N b15/b11) - N^2/b11 + 1 with X = r0 + 3 d3 s23 + 2 d2 s2 and
+      N = x z + e a + d3^2 c23 s23, where a53 = b35 / b33;
+    * b55: inside its last denominator (which should be b33) the text has d2^4 s2 c2 for
+      d2^2 sin(2 theta2) and 2 d2 d3 s23 c23 for 2 d2 d3 sin(2 theta2 + theta3).
+    """
+    r0, t2, t3, d0, d1, d2, d3, s2, c2, s23, c23, x, z, e, a = _lu_sums(q_arm, d)
+    D = d3**2 * c23**2 + z**2 + a**2 + 2  # the repeated denominator (= b11)
+    N = x * z + e * a + d3**2 * c23 * s23
+    B15 = d0 + d1 + 3 * d3 * c23 + 2 * d2 * c2
+    X = r0 + 3 * d3 * s23 + 2 * d2 * s2
+    Q = x**2 + z**2 + 1  # the repeated denominator (= b22)
+    f = {"a31": float("nan")}
+    f["a42"] = -z / (z * z + x * x + 1)
+    f["a51"] = B15 / D
+    f["a53"] = -(X - N * B15 / D) - N * N / D + 1
+    f["a62"] = x / Q
+    f["a64"] = -(x * z) / ((z**2 / Q - 1) * Q)
+    f["b11"] = D
+    f["b13"] = -a * e - x * z - d3**2 * c23 * s23
+    f["b15"] = B15
+    f["b22"] = Q
+    f["b24"] = -d0 - d1 - d3 * c23 - d2 * c2
+    f["b26"] = x
+    f["b33"] = d3**2 * s23**2 + x**2 - N**2 / D + e**2 + 1
+    f["b35"] = N * B15 / D - 3 * d3 * s23 - 2 * d2 * s2 - r0
+    f["b44"] = 1 - z**2 / Q
+    f["b46"] = x * z / Q
+    M = d2**2 * np.sin(2 * t2) / 2 + x * z + d3**2 * np.sin(2 * t2 + 2 * t3) + d2 * d3 * np.sin(2 * t2 + t3)
+    Y = d2**4 * s2 * c2 + 2 * x * z + 2 * d3**2 * np.sin(2 * t2 + 2 * t3) + 2 * d2 * d3 * s23 * c23
+    f["b55"] = 3 - B15**2 / D - (X - M * B15 / D) ** 2 / (d3**2 * s23**2 - Y**2 / (4 * D) + x**2 + e**2 + 1)
+    f["b66"] = x**2 * z**2 / ((z**2 / Q - 1) * Q**2) - x**2 / Q + 1
+    return {k: float(v) for k, v in f.items()}
+
+
+def lu_factors_4_42_corrected(q_arm, d) -> dict[str, float]:
+    """(4.42) factors with a31 = b13/b11, a53 = b35/b33 and b55 = 3 - b15^2/b11 - b35^2/b33 (Doolittle elimination)."""
+    f = lu_factors_4_42(q_arm, d)
+    f["a31"] = f["b13"] / f["b11"]
+    f["a53"] = f["b35"] / f["b33"]
+    f["b55"] = 3 - f["b15"] ** 2 / f["b11"] - f["b35"] ** 2 / f["b33"]
+    return f
+
+
+def lu_matrices_4_42(factors: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
+    """(J_L, J_U) (6x6) assembled from a_ij, b_ij with the sparsity pattern printed in (4.42)."""
+    L, U = np.eye(6), np.zeros((6, 6))
+    for name in LU_L_NAMES:
+        L[int(name[1]) - 1, int(name[2]) - 1] = factors[name]
+    for name in LU_U_NAMES:
+        U[int(name[1]) - 1, int(name[2]) - 1] = factors[name]
+    return L, U
+
+
+def det_4_43(factors: dict[str, float]) -> float:
+    """det(J^gamma) = det(J_U) = b11 b22 b33 b44 b55 b66, Thesis (4.43) (the text says det(J_U) = 1 where it means det(J_L))."""
+    return float(np.prod([factors[f"b{i}{i}"] for i in range(1, 7)]))
+
+
+def basis_4_45(r0: float, theta2: float) -> np.ndarray:
+    """The functions lambda_j multiplies in Thesis (4.45): r0^2, r0^2 c2^2, c2^2, s2^2, r0 s2 c2, c2, s2, 1.
+
+    Misprint: (4.44) has a term 4 d2 r0 s2 and no s2 term, so the seventh function must be
+    r0 s2 (:func:`basis_4_45_corrected`); no constant lambda_7 can stand for 4 d2 r0.
+    """
+    s2, c2 = np.sin(theta2), np.cos(theta2)
+    return np.array([r0**2, r0**2 * c2**2, c2**2, s2**2, r0 * s2 * c2, c2, s2, 1.0])
+
+
+def basis_4_45_corrected(r0: float, theta2: float) -> np.ndarray:
+    """(4.45) with r0 s2 as seventh function (the 4 d2 r0 s2 term of (4.44))."""
+    b = basis_4_45(r0, theta2)
+    b[6] *= r0
+    return b
+
+
+def det_JJt_4_45(r0: float, theta2: float, lambdas) -> float:
+    """det(J J^T) = lambda_1 r0^2 + lambda_2 r0^2 c2^2 + ... + lambda_7 s2 + lambda_8, Thesis (4.45) as printed."""
+    return float(as_vector(lambdas, 8, "lambdas") @ basis_4_45(r0, theta2))
+
+
+def lambdas_4_45_corrected(d) -> np.ndarray:
+    """lambda_1..8 read off (4.44) for the corrected basis (lambda_7 multiplies r0 s2):
+    (4, d2^2, 2 d2^2, d2^2 (4 + (d0 + d1)^2), -2 (d0 + d1) d2^2, 2 (d0 + d1) d2, 4 d2, 6 + 2 (d0 + d1)^2)."""
+    d0, d1, d2, _ = _lengths(d)
+    h = d0 + d1
+    return np.array([4.0, d2**2, 2 * d2**2, d2**2 * (4 + h**2), -2 * h * d2**2, 2 * h * d2, 4 * d2, 6 + 2 * h**2])
+
+
+def det_JJt_4_45_corrected(r0: float, theta2: float, d) -> float:
+    """(4.45) with the basis of :func:`basis_4_45_corrected` and the lambda_j of (4.44)."""
+    return float(lambdas_4_45_corrected(d) @ basis_4_45_corrected(r0, theta2))
 
 
 def sol_4_46(theta2: float) -> float:
@@ -741,3 +1019,61 @@ def arm_u_5_5_corrected(q_arm, q_arm_dot, q_arm_ddot, params: QPRRParams) -> np.
     qd = as_vector(q_arm_dot, 3, "q_arm_dot")
     qdd = as_vector(q_arm_ddot, 3, "q_arm_ddot")
     return arm_B_5_5_corrected(q_arm, params) @ qdd + arm_C_5_5_corrected(q_arm, qd, params) @ qd + arm_G_5_5(q_arm, params)
+
+
+# =========================================================================== chapter 6
+# ------------------------------------------------------------ CoG motion, (6.29)-(6.35)
+def p_c_6_29(p_b, R_b, p_cm) -> np.ndarray:
+    """p_c = p_b + R_b p_cm: the system CoG in the world frame from its position p_cm in B [m], Thesis (6.29)."""
+    return as_vector(p_b, 3, "p_b") + np.asarray(R_b, dtype=float) @ as_vector(p_cm, 3, "p_cm")
+
+
+def p_c_dot_6_29(p_b_dot, R_b, omega_b, p_cm, p_cm_dot) -> np.ndarray:
+    """p_c_dot = p_b_dot + R_b (omega_b x p_cm + p_cm_dot) [m/s], the derivative of (6.29) printed under it.
+
+    Holds with omega_b the BODY-frame rate T(phi_b) phi_b_dot of (3.25) (R_b_dot = R_b hat(omega_b));
+    read as a world-frame rate (as (4.7) uses omega_b) it is wrong.
+    """
+    R_b = np.asarray(R_b, dtype=float)
+    w, p = as_vector(omega_b, 3, "omega_b"), as_vector(p_cm, 3, "p_cm")
+    return as_vector(p_b_dot, 3, "p_b_dot") + R_b @ (np.cross(w, p) + as_vector(p_cm_dot, 3, "p_cm_dot"))
+
+
+def com_6_30(q_arm, params: QPRRParams) -> np.ndarray:
+    """[x_cm, y_cm, z_cm] in B as printed in Thesis (6.30a)-(6.30c) (no payload).
+
+    x_cm and y_cm are those of (3.78).  z_cm fixes the (m2/2 + m3) d2 c2 term of (3.78) but
+    keeps sum m_i (d0 + d1): link 1's CoM is at d0 + d1/2 (misprint, corrected form
+    :func:`com_3_78_corrected`).
+    """
+    r0, t2, t3 = _arm(q_arm)
+    d0, d1, d2, d3 = link_lengths(params)
+    m1, m2, m3 = _link_masses(params)
+    mG = params.total_mass
+    x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2) / mG
+    z = ((m1 + m2 + m3) * (d0 + d1) + (m2 / 2 + m3) * d2 * np.cos(t2) + m3 * d3 * np.cos(t2 + t3) / 2) / mG
+    return np.array([x, 0.0, z])
+
+
+def p_cm_prime_6_31(theta: float, p_cm) -> np.ndarray:
+    """p'_cm = R_theta p_cm [m], Thesis (6.31): the CoG after a pitch theta, in axes that do not pitch.
+
+    R_theta = Ry(theta), the pitch factor of (3.4); with phi = psi = 0 (Hypothesis 4 of
+    Sec. 6.3.3) p'_cm is p_c - p_b of (6.29).
+    """
+    return rot_y(float(theta)) @ as_vector(p_cm, 3, "p_cm")
+
+
+def nabla_p_cm_6_32(theta: float, p_cm) -> np.ndarray:
+    """nabla p_cm = (R_theta - I) p_cm [m], Thesis (6.32): the displacement of (6.31)."""
+    p = as_vector(p_cm, 3, "p_cm")
+    return p_cm_prime_6_31(theta, p) - p
+
+
+def theta_e_6_34(theta: float, theta2: float, theta3: float) -> float:
+    """theta_e = theta + theta2 + theta3 [rad], Thesis (6.34), the end-effector pitch.
+
+    Holds with phi = 0 and theta_e read as the angle of R_e = Rz(psi) Ry(theta_e) (the pitch
+    about y), not the ZYZ theta_e of (3.64), which lies in [0, pi].
+    """
+    return float(theta) + float(theta2) + float(theta3)
