@@ -45,7 +45,9 @@ def test_push_thrust_contact_force_is_unilateral_and_moves_the_object():
     assert np.all(c.force >= 0.0)
     friction = 0.3 * 0.5 * 9.8
     assert c.force.max() > friction  # the object was pushed through static friction
-    assert 0.15 <= c.position[-1] - c.position[0] <= 0.16
+    # pushed 0.15 m, then it slides at most v^2 / (2 mu g) from the peak push speed v = 2.1875 L / T (septic law)
+    v_peak = 2.1875 * 0.15 / 1.2
+    assert 0.15 <= c.position[-1] - c.position[0] <= 0.15 + v_peak**2 / (2 * 0.3 * 9.8)  # measured 0.1602 <= 0.1627
     assert c.velocity[-1] == 0.0  # Coulomb friction stopped it
     assert np.abs(res.xi_d - res.xi)[:, [3, 4, 5]].max() < 1.5e-3  # attitude tracked (measured 1.04e-3 rad)
 
@@ -63,7 +65,7 @@ def test_push_prismatic_needs_force_compensation():
 
 
 def test_plot_writes_png(tmp_path):
-    res = scn.push_prismatic(push=(0.05, 0.2), duration=0.3)
+    res = scn.push_prismatic(push=(0.05, 0.25), duration=0.3)  # 8 cm in 0.2 s: 15 m/s^2 peak (septic)
     robot = qprr.load()
     u = scn.applied_generalized_forces(res)
     for k in (0, 120, 299):  # the plotted forces are u = R_Q N f of Thesis (5.43)
@@ -84,7 +86,9 @@ def test_wrist_sensor_compensation_needs_a_filter():
 
     robot = qprr.load()
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *scn.ARM_PUSH])
-    traj = MultiPhase((Phase("x", 0.3, 1.5, 0.15),), tuple(xi0))
+    # the law the measurements below were made with (the limit cycle does not depend on it; its amplitude in
+    # the window does: with the septic 0.069 N, against 0.0017 N filtered)
+    traj = MultiPhase((Phase("x", 0.3, 1.5, 0.15),), tuple(xi0), law="quintic")
     p0, _ = qm.ee_pose_xi(robot, robot.data(), xi0)
     chatter = {}
     for filt in (None, scn.SENSOR_FILTER):
