@@ -168,6 +168,81 @@ def test_semi_implicit_euler_drifts_at_first_order(free_robot):
     assert drift[0] / drift[1] == pytest.approx(2.0, rel=0.1)
 
 
+class ConstantTau(Controller):
+    """Constant generalised force in Pinocchio coordinates (constant rotor thrusts and arm efforts)."""
+
+    name = "constant"
+    output = "pinocchio"
+
+    def __init__(self, tau):
+        self.tau = np.asarray(tau, dtype=float)
+
+    def step(self, t, state, ref):
+        return self.tau
+
+
+def _error_at(robot, res, ref, t):
+    """Largest entry of q_ref (-) q and v - v_ref at time t (a row of both logs)."""
+    qa, va = xi_to_qv(res.xi[int(round(t / res.dt))], res.xi_dot[int(round(t / res.dt))])
+    qb, vb = xi_to_qv(ref.xi[int(round(t / ref.dt))], ref.xi_dot[int(round(t / ref.dt))])
+    return max(np.abs(pin.difference(robot.model, qb, qa)).max(), np.abs(va - vb).max())
+
+
+def _orders(robot, controller, xi0, integrator, steps, **kw):
+    """Observed orders at t = 0.392 s (a row of every log) against RK4 at steps[0] / 64."""
+    ref = simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=steps[0] / 64, integrator="rk4", xi0=xi0, **kw)
+    errors = [_error_at(robot, simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=dt, integrator=integrator, xi0=xi0, **kw), ref, 0.392)
+              for dt in steps]
+    return np.array(errors), np.log2(np.array(errors[:-1]) / errors[1:])
+
+
+def test_rk4_is_fourth_order_for_the_base_too(free_robot):
+    """Free tumbling: halving dt (8, 4, 2, 1 ms) divides the error of the whole state (base position and attitude
+    included) by 16.  RK4 summing stage velocities taken at different points of the group without the inverse
+    differential of the exponential was second order for the base (ratios 4)."""
+    errors, orders = _orders(free_robot, ConstantTau(np.zeros(9)), XI0, "rk4", (8e-3, 4e-3, 2e-3, 1e-3), xi_dot0=2 * XID0,
+                             joint_stops=False)
+    assert np.all(np.abs(orders - 4.0) < 0.2), (errors, orders)
+
+
+def test_end_effector_hook_keeps_the_midpoint_second_order(robot):
+    """A state-dependent end-effector wrench (spring-damper to a point) is re-evaluated at every stage: the midpoint
+    rule stays second order (the wrench held over the step made it first order)."""
+    data = robot.model.createData()
+
+    def spring(t, q, v):
+        J = pin.computeFrameJacobian(robot.model, data, q, robot.ee_frame, pin.LOCAL_WORLD_ALIGNED)
+        h = np.zeros(6)
+        h[0:3] = -5.0 * (data.oMf[robot.ee_frame].translation - np.r_[0.3, 0.1, 1.2]) - 0.5 * (J @ v)[0:3]
+        return h
+
+    m, g = robot.params.total_mass, robot.params.g
+    xi0 = np.r_[0, 0, 1, 0.05, -0.05, 0.3, 0.01, 2.9, 0.3]  # arm hanging: a stable pendulum (joint stops off)
+    G = pin.computeGeneralizedGravity(robot.model, data, xi_to_qv(xi0, np.zeros(9))[0])
+    tau = np.r_[0, 0, 1.05 * m * g, 0.01, -0.01, 0.005, G[6:9]]
+    errors, orders = _orders(robot, ConstantTau(tau), xi0, "midpoint", (4e-3, 2e-3, 1e-3, 5e-4), external_wrench=spring,
+                             xi_dot0=np.r_[0.3, -0.2, 0.1, 0.3, -0.4, 0.2, 0.02, 0.5, -0.6], joint_stops=False)
+    assert np.all(np.abs(orders - 2.0) < 0.2), (errors, orders)
+
+
+def test_far_from_the_origin_the_dynamics_do_not_change(robot):
+    """Translation invariance: the same flight started 10 m and 1 km away gives the same velocities and attitude (ABA in
+    the LOCAL convention does not see the base position) and positions shifted by the offset to round-off.  With the
+    WORLD convention the accelerations lost precision with the distance (2e-10 m/s at 10 m, 2e-6 m/s at 1 km here)."""
+    m, g = robot.params.total_mass, robot.params.g
+    tau = np.r_[0, 0, 1.1 * m * g, 0.02, -0.03, 0.01, 0.5, 0.02, -0.005]
+    xi0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]
+    kw = dict(xi_dot0=np.r_[0.5, -0.3, 0.2, 1.0, -2.0, 0.7, 0.05, 1.5, -2.0], joint_stops=False, limits=Limits(position=1e5))
+    near = simulate(robot, ConstantTau(tau), Hold(tuple(xi0)), 1.0, xi0=xi0, **kw)
+    for offset in (10.0, 1e3):
+        far0 = xi0.copy()
+        far0[0:3] += (offset, -offset, 0.5 * offset)
+        far = simulate(robot, ConstantTau(tau), Hold(tuple(far0)), 1.0, xi0=far0, **kw)
+        assert np.abs(far.xi_dot - near.xi_dot).max() < 1e-13  # measured 0 (bit-identical)
+        assert np.abs(far.xi[:, 3:] - near.xi[:, 3:]).max() < 1e-13
+        assert np.abs(far.xi[:, 0:3] - far0[0:3] - near.xi[:, 0:3]).max() < 1e-11 * offset  # measured 1.4e-12 m at 1 km
+
+
 def test_midpoint_and_rk4_agree_in_closed_loop(robot):
     """On the static mission (first 16 s) the default integrator matches RK4 to well under a millimetre."""
     a = run("static-idc", robot=robot, duration=16.0)
@@ -225,7 +300,9 @@ def test_payload_changes_the_plant_copy_only(robot):
 
 
 def test_external_wrench_at_the_end_effector(robot):
-    """A world-vertical pull of m g at the end effector (on the thrust axis at the zero pose) holds the unpowered system."""
+    """A world-vertical pull of m g at the end effector (on the thrust axis at the zero pose) holds the unpowered system.
+
+    The hook is evaluated at every integration stage: at t_k and t_k + dt/2 for the midpoint rule."""
     m, g = robot.params.total_mass, robot.params.g
     seen = []
 
@@ -235,7 +312,9 @@ def test_external_wrench_at_the_end_effector(robot):
 
     xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
     res = simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, external_wrench=pull, integrator="midpoint")
-    assert np.abs(res.xi - xi).max() < 1e-9 and len(seen) == res.n
+    assert np.abs(res.xi - xi).max() < 1e-9 and len(seen) == 2 * res.n
+    np.testing.assert_allclose(seen[0::2], res.t, atol=1e-15)
+    np.testing.assert_allclose(seen[1::2], res.t + 0.5 * res.dt, atol=1e-15)
     with pytest.raises(InputError):
         simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 0.01, external_wrench=lambda t, q, v: np.zeros(3), integrator="midpoint")
 
