@@ -77,7 +77,7 @@ from .control.base import Controller, Reference, State
 from .coordinates import as_vector, xi_dot_to_v, xi_to_q
 from .environment import Environment
 from .errors import DivergenceError, InputError, NonFiniteError, QprrError, ShapeError, UnknownNameError
-from .integrators import STEPPERS
+from .integrators import STEPPERS, make_stepper
 from .model import Robot
 from .trajectory import XI_NAMES, check_sample
 
@@ -494,7 +494,8 @@ def simulate(
     plant = _Plant(model, data, tau, robot.ee_frame, external_wrench, state_dist)
     env, z = plant.env, plant.z0
     rhs, first_stage = plant.rhs, plant.first_stage
-    stepper = STEPPERS[integrator]
+    settle = env.settle if (env is not None and z is not None) else None
+    stepper = make_stepper(integrator, model, dt)
     bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
     pos_lim, vlin_lim, w_lim, qd_lim = limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity
     POSITION = pin.KinematicLevel.POSITION
@@ -533,15 +534,17 @@ def simulate(
                 ue = u_ext_rows[k]
                 if ue is not None:
                     add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext, held over the period
-            a = first_stage(tk, q, v, z)  # stage 1 of the first step (an Environment logs its tick here)
+            # stage 1 of the first step (an Environment observes its tick there); data then holds its kinematics
+            a = rhs(tk, q, v) if env is None else first_stage(tk, q, v, z)
             com_log[k] = com(model, data, POSITION, False)
             for j in range(substeps):
-                tj = tk + j * dt
-                q_new, v, z_new = stepper(model, rhs, tj, q, v, dt, z, a)
+                if settle is None:
+                    q, v, z = stepper(rhs, tk + j * dt, q, v, z, a)
+                else:
+                    z_before = z
+                    q, v, z = stepper(rhs, tk + j * dt, q, v, z, a)
+                    z = settle(tk + j * dt, z_before, z)
                 a = None
-                if env is not None and z is not None:
-                    z_new = env.settle(tj, z, z_new)
-                q, z = q_new, z_new
                 if joint_stops:
                     r0, t2, t3 = q[7:10].tolist()
                     if not (lo[0] <= r0 <= hi[0] and lo[1] <= t2 <= hi[1] and lo[2] <= t3 <= hi[2]):

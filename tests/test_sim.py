@@ -13,7 +13,7 @@ from qprr.coordinates import xi_to_qv
 from qprr.errors import DivergenceError, InputError, UnknownNameError
 from qprr.model import com_body, dynamics_xi
 from qprr.scenarios import run
-from qprr.sim import Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
+from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
 from qprr.trajectory import Hold
 
 
@@ -319,6 +319,72 @@ def test_external_wrench_at_the_end_effector(robot):
         simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 0.01, external_wrench=lambda t, q, v: np.zeros(3), integrator="midpoint")
 
 
+# ------------------------------------------------------------------------------ control period
+class Counting(Controller):
+    """Open loop that counts its calls and records the period it was reset with."""
+
+    name = "counting"
+
+    def __init__(self, u):
+        self.u = np.asarray(u, dtype=float)
+        self.calls = []
+
+    def reset(self, state, ref, dt):
+        self.period = dt
+
+    def step(self, t, state, ref):
+        self.calls.append(t)
+        return self.u
+
+
+def test_control_period_holds_the_controller_and_logs_one_row_per_tick(robot):
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    u = _hover_u(robot, xi) + np.r_[0.3, 0, 0.5, 0, 0.01, 0, 0, 0, 0]
+    ctrl = Counting(u)
+    res = simulate(robot, ctrl, Hold(tuple(xi)), 0.2, dt=1e-3, control_period=4e-3)
+    assert res.n == 50 and ctrl.period == 4e-3 and res.control_period == 4e-3 and res.dt == 1e-3
+    np.testing.assert_allclose(ctrl.calls, np.arange(50) * 4e-3, atol=1e-15)
+    np.testing.assert_allclose(res.t, np.arange(50) * 4e-3, atol=1e-15)
+    # the default is one control call per integration step: the same run as an explicit control_period = dt
+    a = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3)
+    b = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3, control_period=1e-3)
+    np.testing.assert_array_equal(a.xi, b.xi)
+    assert a.control_period == a.dt == 1e-3
+    for bad in (2.5e-3, 0.5e-3, -1.0):
+        with pytest.raises(InputError, match="control_period"):
+            simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3, control_period=bad)
+
+
+def test_noise_and_payload_changes_sit_on_the_control_grid(robot):
+    """A noise sample is held over a control period; a release at 0.5021 s acts at the tick 0.504 s (control period 4 ms),
+    whatever the integration step."""
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    m, g, mp = robot.params.total_mass, robot.params.g, 0.2
+    noisy = simulate(robot, OpenLoop(_hover_u(robot, xi)), Hold(tuple(xi)), 0.1, dt=1e-3, control_period=4e-3,
+                     disturbance=WhiteNoise(0.3))
+    assert noisy.u_ext.shape == (25, 9) and len(np.unique(noisy.u_ext[:, 0])) == 25
+    drop = PayloadSchedule((PayloadChange(0.0, mp), PayloadChange(0.5021, 0.0)))
+    u = np.r_[0, 0, (m + mp) * g, 0, 0, 0, 0, 0, 0]
+    for dt in (1e-3, 5e-4):
+        res = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.6, dt=dt, control_period=4e-3, payload=drop)
+        k = int(round(0.504 / 4e-3))
+        assert np.abs(res.xi[: k + 1, 2] - 5.0).max() < 1e-12 and res.xi[k + 1, 2] > 5.0 + 1e-7
+
+
+def test_state_disturbance_drag_is_evaluated_at_every_stage(free_robot):
+    """Linear drag -c v on the base, no gravity, no input, arm straight up (CoM on z_B), climbing along z: a pure
+    translation with m_G v_z' = -c v_z, v_z(t) = v0 exp(-c t / m_G) (RK4 matches it to 1e-12)."""
+    c, v0 = 0.8, 2.0
+    xi = np.zeros(9)
+    res = simulate(free_robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, dt=1e-3, integrator="rk4", xi0=xi,
+                   xi_dot0=np.r_[0, 0, v0, 0, 0, 0, 0, 0, 0], disturbance=BaseDrag(linear=c))
+    mG = free_robot.params.total_mass
+    np.testing.assert_allclose(res.xi_dot[:, 2], v0 * np.exp(-c * res.t / mG), rtol=1e-12)
+    assert np.abs(res.xi_dot[:, [0, 1, 3, 4, 5, 6, 7, 8]]).max() < 1e-14
+    with pytest.raises(InputError):
+        BaseDrag(linear=-1.0)
+
+
 # ------------------------------------------------------------------------------ results, disturbances
 def test_result_save_load_and_rmse(robot, tmp_path):
     res = run("static-idc", robot=robot, duration=3.0)
@@ -326,6 +392,7 @@ def test_result_save_load_and_rmse(robot, tmp_path):
     back = SimResult.load(path)
     for name in ("t", "xi", "xi_d", "u", "f", "arm_effort", "x_cm", "unallocated", "flags", "u_ext"):
         np.testing.assert_array_equal(getattr(back, name), getattr(res, name))
+    assert back.control_period == res.control_period == res.dt
     assert back.scenario == "static-idc" and back.controller == "idc" and back.status == "ok"
     e = res.xi_d - res.xi
     assert res.rmse()["z"] == pytest.approx(np.sqrt(np.mean(e[:, 2] ** 2)))
