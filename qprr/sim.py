@@ -496,6 +496,8 @@ def simulate(
     rhs, first_stage = plant.rhs, plant.first_stage
     settle = env.settle if (env is not None and z is not None) else None
     stepper = make_stepper(integrator, model, dt)
+    steps = [j * dt for j in range(substeps)]  # step start times within a control period
+    plain = plant.plain  # ABA alone: no state-dependent input
     bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
     pos_lim, vlin_lim, w_lim, qd_lim = limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity
     POSITION = pin.KinematicLevel.POSITION
@@ -503,7 +505,7 @@ def simulate(
     pin_out = getattr(controller, "output", "xi") == "pinocchio"
     payload_pending = len(payload_model.changes) > payload_model.next
     b1, tau_d_buf = np.empty(9), np.empty(9)
-    add, com, step = np.add, pin.centerOfMass, controller.step
+    add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
     allocate = alloc.allocate_into
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     t_start = time.perf_counter()
@@ -535,15 +537,15 @@ def simulate(
                 if ue is not None:
                     add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext, held over the period
             # stage 1 of the first step (an Environment observes its tick there); data then holds its kinematics
-            a = rhs(tk, q, v) if env is None else first_stage(tk, q, v, z)
+            a = aba(model, data, q, v, tau) if plain else first_stage(tk, q, v, z)
             com_log[k] = com(model, data, POSITION, False)
-            for j in range(substeps):
+            for j in steps:
                 if settle is None:
-                    q, v, z = stepper(rhs, tk + j * dt, q, v, z, a)
+                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
                 else:
                     z_before = z
-                    q, v, z = stepper(rhs, tk + j * dt, q, v, z, a)
-                    z = settle(tk + j * dt, z_before, z)
+                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
+                    z = settle(tk + j, z_before, z)
                 a = None
                 if joint_stops:
                     r0, t2, t3 = q[7:10].tolist()
@@ -596,7 +598,8 @@ class _Plant:
                 raise NonFiniteError(f"environment initial state must be finite, got {z0.tolist()}")
             self.z0 = z0 if z0.size else None
         aba = pin.aba
-        if self.env is None and self.fn is None and not self.state_dist:
+        self.plain = self.env is None and self.fn is None and not self.state_dist
+        if self.plain:
             self.rhs = lambda t, q, v: aba(model, data, q, v, tau)  # LOCAL convention (the default)
         elif self.z0 is None:
             self.rhs = self._rhs
