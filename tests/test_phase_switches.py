@@ -158,8 +158,12 @@ def test_push_prismatic_contact_chatter_is_a_tilt_lever_instability(robot):
 
     lo_f, hi_f = steady(scn.push_prismatic(stiffness=200.0, push=push, duration=duration))
     assert lo_f > 0.4 and hi_f - lo_f < 0.01 * hi_f  # measured 0.491-0.493 N
-    lo_f, hi_f = steady(scn.push_prismatic(stiffness=500.0, push=push, duration=duration))
-    assert lo_f == 0.0 and hi_f > 0.2  # measured 0-0.51 N: the contact opens and closes
+    res = scn.push_prismatic(stiffness=500.0, push=push, duration=duration)
+    c = res.info["contact"]
+    late = c.t >= 4.0
+    # measured: 0-0.53 N bounces from 4.25 s, then the contact opens for good at 5.2 s (object and
+    # robot integrated together, issue 8); either way no steady contact force is held
+    assert c.force[late].min() == 0.0 and c.force[late].max() > 0.2
     # the same 500 N/m contact without the force cancelled through the thrust: steady
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, *scn.ARM_PUSH[1:]])
     p0, _ = ee_pose_xi(robot, robot.data(), xi0)
