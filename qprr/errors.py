@@ -28,6 +28,11 @@ class LimitError(InputError):
     """A joint value lies outside its limits where the function requires it inside."""
 
 
+class NonPhysicalError(InputError):
+    """A parameter set describes a body or a device that cannot exist (negative mass, an inertia that breaks the
+    triangle inequality, lower limit above the upper one...); the message names the body and the inequality."""
+
+
 class EulerSingularityError(InputError):
     """ZYX Euler angles are singular (pitch theta = +-pi/2): rates or angles are not unique."""
 
@@ -51,10 +56,6 @@ class DivergenceError(QprrError, RuntimeError):
 
 class SolverError(QprrError, RuntimeError):
     """A numerical solver (QP, linear system) failed to return a trustworthy answer."""
-
-
-class NonPhysicalError(InputError):
-    """A mass, inertia or length that no rigid body can have (negative mass, triangle inequality...)."""
 
 
 class MissingDependencyError(QprrError, ImportError):

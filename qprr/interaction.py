@@ -3,9 +3,10 @@
 * :func:`generalized_wrench_xi`: u_e(h) of Thesis (6.58)-(6.59), the generalised force in
   thesis coordinates of a wrench h = [f; mu] (world axes) applied at the end-effector origin,
   u_e = S^T J_e^T h; :func:`generalized_wrench_6_59` is the printed block form.
-* Contact models, usable as the simulator's ``external_wrench`` hook (``h = env(t, q, v)``,
-  world axes, at the end effector) and as force sensors for the controllers
-  (:meth:`measured`):
+* Contact models: :class:`qprr.environment.Environment` objects, the simulator's
+  ``external_wrench`` hook (world wrench at the end effector, their own state integrated with
+  the robot's by the same integrator, force evaluated at every stage) and force sensors for
+  the controllers (:meth:`measured`, sampled at the control ticks):
 
   - :class:`PushedMass`: a point object on a straight line, pushed through a unilateral
     compliant contact (spring k, damper d, force never negative), with optional Coulomb
@@ -13,10 +14,7 @@
   - :class:`CompliantWall`: a fixed unilateral compliant plane;
   - :class:`PrescribedWrench`: a wrench given as a function of time (Sec. 6.4.3.4's h).
 
-  The contact models carry their own state, integrated with the simulator's zero-order
-  hold: the call at t_k first advances the object from t_(k-1) to t_k under the force of
-  t_(k-1) (semi-implicit Euler, the simulator's default), then returns the force at t_k.
-  Every call is logged (:meth:`history`).
+  Each control tick is logged (:meth:`history`).
 * :func:`push_model_6_66` / :func:`push_model`: the planar reduced model of pushing with the
   thrust (Thesis (6.66)), printed and corrected.
 """
@@ -32,6 +30,7 @@ import pinocchio as pin
 
 from . import coordinates as co
 from .coordinates import as_vector
+from .environment import Environment
 from .errors import InputError
 from .model import Robot
 
@@ -87,7 +86,7 @@ def generalized_wrench_6_59(xi, h, d) -> np.ndarray:
 # ======================================================================= contact models
 @dataclass(frozen=True)
 class ContactHistory:
-    """Log of a contact model, one row per simulator step.
+    """Log of a contact model, one row per control tick of the run (the rows of ``SimResult``).
 
     ``t`` [s]; ``force`` (n,) normal force the environment exerts on the end effector along
     -normal [N] (>= 0); ``wrench`` (n, 6) world wrench on the end effector; ``position``,
@@ -103,8 +102,13 @@ class ContactHistory:
     penetration: np.ndarray
 
 
-class _Contact:
-    """Shared machinery: end-effector kinematics, time bookkeeping, log."""
+class _Contact(Environment):
+    """Unilateral compliant contact at the end effector: F = max(0, k delta + d delta_dot) while delta > 0.
+
+    Subclasses give the penetration delta (:meth:`_gap`) and, if the obstacle moves, its state
+    and derivative.  An :class:`qprr.environment.Environment`: the simulator integrates the
+    state with the robot and evaluates the force at every integration stage.
+    """
 
     def __init__(self, robot: Robot, normal, stiffness: float, damping: float) -> None:
         n = as_vector(normal, 3, "normal")
@@ -123,53 +127,44 @@ class _Contact:
         self.reset()
 
     def reset(self) -> None:
-        """Back to the initial state, empty log (call before reusing the object for a new run)."""
-        self._t = None
-        self._force = 0.0
-        self._h = np.zeros(6)
+        """Empty log, no reading (the simulator calls it at the start of a run)."""
+        super().reset()
         self._log: list[tuple] = []
 
-    def _ee(self, q, v) -> tuple[np.ndarray, np.ndarray]:
-        model, data = self.robot.model, self._data
-        pin.forwardKinematics(model, data, q, v)
-        pin.updateFramePlacement(model, data, self.robot.ee_frame)
-        p = data.oMf[self.robot.ee_frame].translation.copy()
-        vel = pin.getFrameVelocity(model, data, self.robot.ee_frame, pin.LOCAL_WORLD_ALIGNED).linear.copy()
-        return p, vel
-
-    def _advance(self, dt: float) -> None:
-        """Integrate the object's own state over dt under the held force (default: nothing moves)."""
-
-    def _gap(self, p_e: np.ndarray, v_e: np.ndarray) -> tuple[float, float]:
+    def _gap(self, p_e: np.ndarray, v_e: np.ndarray, z: np.ndarray) -> tuple[float, float]:
         raise NotImplementedError
 
-    def _coordinates(self) -> tuple[float, float]:
-        return 0.0, 0.0
+    def _object_derivative(self, z: np.ndarray, force: float) -> np.ndarray:
+        return _NO_STATE
 
-    def __call__(self, t: float, q, v) -> np.ndarray:
-        """World wrench on the end effector at time ``t`` (the simulator's ``external_wrench`` hook)."""
-        if self._t is not None:
-            if t < self._t - 1e-12:
-                raise InputError(f"contact model called at t = {t!r} after t = {self._t!r}: it is stateful, call reset() before a new run")
-            if abs(t - self._t) <= 1e-12:
-                return self._h.copy()
-            self._advance(t - self._t)
-        self._t = float(t)
-        p_e, v_e = self._ee(q, v)
-        pen, pen_dot = self._gap(p_e, v_e)
-        F = 0.0
-        if pen > 0.0:
-            F = max(0.0, self.k * pen + self.d * pen_dot)  # unilateral: the damper never pulls
-        self._force = F
-        self._h = np.zeros(6)
-        self._h[0:3] = -F * self.normal
-        s, sd = self._coordinates()
-        self._log.append((self._t, F, s, sd, pen))
-        return self._h.copy()
+    def _force(self, p_e: np.ndarray, v_e: np.ndarray, z: np.ndarray) -> tuple[float, float]:
+        """(F, delta): normal force on the obstacle [N] (>= 0) and the penetration [m]."""
+        pen, pen_dot = self._gap(p_e, v_e, z)
+        if pen <= 0.0:
+            return 0.0, pen
+        F = self.k * pen + self.d * pen_dot
+        return (F if F > 0.0 else 0.0), pen  # unilateral: the damper never pulls
 
-    def measured(self, t: float | None = None) -> np.ndarray:
-        """Last wrench computed (world, on the end effector): what a wrist force sensor reads, one step late in the loop."""
-        return self._h.copy()
+    def evaluate(self, t: float, p_world, R_world, twist_world, z) -> tuple[np.ndarray, np.ndarray]:
+        """(h_world, z_dot): -F normal on the end effector, and the obstacle's state derivative."""
+        F, _ = self._force(p_world, twist_world[0:3], z)
+        h = np.zeros(6)
+        h[0:3] = -F * self.normal
+        return h, self._object_derivative(z, F)
+
+    def observe(self, t: float, p_world, R_world, twist_world, z, h_world) -> None:
+        F, pen = self._force(p_world, twist_world[0:3], z)
+        self._h = np.array(h_world, dtype=float)
+        s, sd = (float(z[0]), float(z[1])) if len(z) else (0.0, 0.0)
+        self._log.append((float(t), F, s, sd, pen))
+
+    def wrench(self, t: float, q, v, z=None) -> np.ndarray:
+        """World wrench on the end effector with the robot at (q, v) and the obstacle at ``z`` (default: its initial state)."""
+        model, data = self.robot.model, self._data
+        J = pin.computeFrameJacobian(model, data, as_vector(q, model.nq, "q"), self.robot.ee_frame, pin.LOCAL_WORLD_ALIGNED)
+        M = data.oMf[self.robot.ee_frame]
+        z = self.initial_state() if z is None else np.asarray(z, dtype=float)
+        return self.evaluate(t, M.translation, M.rotation, J @ as_vector(v, model.nv, "v"), z)[0]
 
     def history(self) -> ContactHistory:
         if not self._log:
@@ -180,6 +175,9 @@ class _Contact:
         return ContactHistory(a[:, 0], a[:, 1], np.hstack([wrench, np.zeros((a.shape[0], 3))]), a[:, 2], a[:, 3], a[:, 4])
 
 
+_NO_STATE = np.zeros(0)
+
+
 class PushedMass(_Contact):
     """A point object of mass ``mass`` sliding on a straight line, pushed by the end effector.
 
@@ -187,8 +185,13 @@ class PushedMass(_Contact):
     contact normal); the object's face is at origin + s direction.  Penetration
     delta = direction . (p_e - origin) - s; in contact (delta > 0) the force on the object is
     F = max(0, k delta + d delta_dot) along +direction, and -F direction on the end effector.
-    The object obeys m s_ddot = F - Coulomb friction (coefficient ``friction``, normal force
-    m g): it sticks while F <= mu m g.  Semi-implicit Euler with the simulator's step.
+
+    State z = [s, s_dot] [m, m/s], integrated with the robot by the simulator's integrator:
+    s_ddot = (F - F_f) / m with Coulomb friction (coefficient ``friction``, normal force m g):
+    F_f = mu m g sign(s_dot) while sliding, and F_f = clip(F, -mu m g, mu m g) at rest (static
+    friction: the object sticks while F <= mu m g).  A sliding object whose velocity changes
+    sign during an integration step is caught by static friction at the end of that step
+    (:meth:`settle`, an event resolved at step boundaries).
     """
 
     def __init__(self, robot: Robot, *, mass: float, origin, direction=(1.0, 0.0, 0.0), position: float = 0.0,
@@ -205,45 +208,54 @@ class PushedMass(_Contact):
         self.g = robot.params.g if g is None else float(g)
         super().__init__(robot, direction, stiffness, damping)
 
-    def reset(self) -> None:
-        super().reset()
-        self.s, self.sd = self.s0, self.sd0
+    def initial_state(self) -> np.ndarray:
+        return np.array([self.s0, self.sd0])
 
-    def _gap(self, p_e, v_e):
+    def _gap(self, p_e, v_e, z):
         n = self.normal
-        return float(n @ (p_e - self.origin)) - self.s, float(n @ v_e) - self.sd
+        return float(n @ (p_e - self.origin)) - float(z[0]), float(n @ v_e) - float(z[1])
 
-    def _coordinates(self):
-        return self.s, self.sd
+    def friction_force(self, s_dot: float, force: float) -> float:
+        """Coulomb friction on the object along +direction's opposite [N] (static: balances ``force`` up to mu m g)."""
+        limit = self.mu * self.mass * self.g
+        if s_dot > 0.0:
+            return limit
+        if s_dot < 0.0:
+            return -limit
+        return force if -limit <= force <= limit else math.copysign(limit, force)
 
-    def _advance(self, dt: float) -> None:
-        F, m = self._force, self.mass
-        v_trial = self.sd + dt * F / m
-        dv_fric = dt * self.mu * self.g
-        if abs(v_trial) <= dv_fric:
-            self.sd = 0.0  # static friction holds the object (stick)
-        else:
-            self.sd = v_trial - math.copysign(dv_fric, v_trial)
-        self.s += dt * self.sd
+    def _object_derivative(self, z, force: float) -> np.ndarray:
+        sd = float(z[1])
+        return np.array([sd, (force - self.friction_force(sd, force)) / self.mass])
+
+    def settle(self, t: float, z_before, z_after) -> np.ndarray:
+        """Static friction catches an object whose velocity changed sign (or reached zero) during the step."""
+        if self.mu > 0.0:
+            v0, v1 = float(z_before[1]), float(z_after[1])
+            if v0 != 0.0 and (v0 > 0.0) != (v1 > 0.0):
+                return np.array([z_after[0], 0.0])
+        return z_after
 
 
 class CompliantWall(_Contact):
     """A fixed plane through ``point`` with outward unit ``normal`` (towards the robot): F = max(0, k delta + d delta_dot),
-    delta = -normal . (p_e - point) > 0 when the end effector is inside."""
+    delta = -normal . (p_e - point) > 0 when the end effector is inside.  No state of its own."""
 
     def __init__(self, robot: Robot, *, point, normal, stiffness: float = 2000.0, damping: float = 20.0) -> None:
         self.point = as_vector(point, 3, "point").copy()
         super().__init__(robot, -as_vector(normal, 3, "normal"), stiffness, damping)
 
-    def _gap(self, p_e, v_e):
+    def _gap(self, p_e, v_e, z):
         n = self.normal  # points into the wall
         return float(n @ (p_e - self.point)), float(n @ v_e)
 
 
-class PrescribedWrench:
+class PrescribedWrench(Environment):
     """A world wrench on the end effector given in time: h(t) = ``wrench`` for t_on <= t < t_off, else 0.
 
-    ``wrench`` is a 6-vector or a callable t -> 6-vector.  Also a perfect sensor (:meth:`measured`).
+    ``wrench`` is a 6-vector or a callable t -> 6-vector (evaluated at every integration stage).
+    In a simulation the window opens and closes at control ticks (the first tick at or after
+    t_on, t_off), like every other switched input.  Also a perfect sensor (:meth:`measured`).
     """
 
     def __init__(self, wrench, t_on: float = 0.0, t_off: float = math.inf) -> None:
@@ -256,8 +268,22 @@ class PrescribedWrench:
             w = as_vector(wrench, 6, "wrench").copy()
             self._fn = lambda t: w
         self.t_on, self.t_off = float(t_on), float(t_off)
+        self.reset()
 
-    def measured(self, t: float) -> np.ndarray:
+    def reset(self) -> None:
+        super().reset()
+        self._on = None
+
+    def on_tick(self, t: float) -> None:
+        self._on = self.t_on <= t < self.t_off
+
+    def evaluate(self, t: float, p_world=None, R_world=None, twist_world=None, z=None) -> tuple[np.ndarray, np.ndarray]:
+        on = self._on if self._on is not None else self.t_on <= t < self.t_off
+        return (self._fn(t).copy() if on else np.zeros(6)), _NO_STATE
+
+    def measured(self, t: float | None = None) -> np.ndarray:
+        if t is None:
+            return super().measured()
         return self._fn(t).copy() if self.t_on <= t < self.t_off else np.zeros(6)
 
     def __call__(self, t: float, q=None, v=None) -> np.ndarray:

@@ -211,7 +211,7 @@ def push_thrust(controller: str | None = None, progress: bool = False, *, distan
     """Push an object along x with the thrust, arm locked (Thesis Sec. 6.4.3.1).
 
     The Q-PRR hovers at (0, 0, 1) m with the arm at :data:`ARM_PUSH`, its end effector
-    touching the object's face; x_d goes 0 -> ``distance`` during ``push`` (quintic (6.16)).
+    touching the object's face; x_d goes 0 -> ``distance`` during ``push`` ((6.16), septic law).
     The object (``object_mass`` kg, Coulomb ``friction`` on its line) is pushed through a
     compliant contact (``stiffness`` N/m, ``damping`` N s/m).  The thesis assumes a
     frictionless line (``friction=0``): the object then only resists its acceleration

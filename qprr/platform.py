@@ -36,6 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
+from .inertia import check_rigid_body
 from .rotors import Rotor, rotor_matrix, rotors_from_mapping
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
@@ -68,40 +69,10 @@ class ArmJoint:
 
 
 # ============================================================================ physics checks
-def check_inertia(mass: float, inertia, body: str, com=None) -> None:
-    """Raise :class:`NonPhysicalError` unless (mass, rotational inertia about the CoM) can be a rigid body.
-
-    Checks: finite mass >= 0; finite symmetric 3x3 inertia; principal moments >= 0 and the
-    triangle inequalities I_a + I_b >= I_c (equivalently, every second moment of mass
-    integral of x_i^2 dm >= 0), with a relative tolerance of 1e-9 of the trace.
-    """
-    if not (isinstance(mass, (int, float, np.floating)) and math.isfinite(mass) and mass >= 0.0):
-        raise NonPhysicalError(f"body {body!r}: mass must be finite and >= 0 kg, got {mass!r}")
-    I = np.asarray(inertia, dtype=float)
-    if I.shape != (3, 3) or not np.all(np.isfinite(I)):
-        raise NonPhysicalError(f"body {body!r}: inertia must be a finite 3x3 matrix, got {np.asarray(inertia).tolist()}")
-    if com is not None and not np.all(np.isfinite(np.asarray(com, dtype=float))):
-        raise NonPhysicalError(f"body {body!r}: centre of mass must be finite, got {com!r}")
-    if not np.allclose(I, I.T, rtol=0.0, atol=1e-12 * max(1.0, float(np.abs(I).max()))):
-        raise NonPhysicalError(f"body {body!r}: inertia must be symmetric, got {I.tolist()}")
-    moments = np.linalg.eigvalsh(0.5 * (I + I.T))
-    tol = 1e-9 * max(float(np.trace(I)), 1e-300)
-    if moments[0] < -tol:
-        raise NonPhysicalError(f"body {body!r}: inertia is not positive semi-definite (principal moments {moments.tolist()} kg m^2)")
-    a, b, c = moments  # ascending: only a + b >= c can fail
-    if a + b < c - tol:
-        raise NonPhysicalError(
-            f"body {body!r}: principal moments {moments.tolist()} kg m^2 break the triangle inequality "
-            f"I1 + I2 >= I3 by {c - a - b:.3g} kg m^2 (a negative second moment of mass: no rigid body has it)"
-        )
-    if mass == 0.0 and np.any(np.abs(I) > 0.0):
-        raise NonPhysicalError(f"body {body!r}: a massless body cannot have a rotational inertia, got {I.tolist()}")
-
-
 def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
     """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
 
-    Each mass and the six inertia entries must be numbers; the values must pass :func:`check_inertia`.
+    Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.inertia.check_rigid_body`.
     """
     try:
         root = ET.fromstring(xml_text)
@@ -123,14 +94,14 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
             raise NonPhysicalError(f"{source}: link {name!r} has a non-numeric mass or inertia ({exc})") from exc
         I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
                       [vals["ixz"], vals["iyz"], vals["izz"]]])
-        check_inertia(mass, I, name)
+        check_rigid_body(name, mass, (0.0, 0.0, 0.0), I, allow_massless=True)
 
 
 def check_model_inertias(model: pin.Model) -> None:
-    """:func:`check_inertia` on every body of a Pinocchio model (after fixed links are merged)."""
+    """:func:`qprr.inertia.check_rigid_body` on every body of a Pinocchio model (after fixed links are merged)."""
     for j in range(1, model.njoints):
         Y = model.inertias[j]
-        check_inertia(float(Y.mass), Y.inertia, model.names[j], Y.lever)
+        check_rigid_body(model.names[j], float(Y.mass), Y.lever, Y.inertia, allow_massless=True)
 
 
 # ============================================================================== platform

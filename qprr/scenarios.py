@@ -7,7 +7,7 @@ name               what it runs
                    x 5-10 s, y 10-15 s, arm 15-25 s, inverse-dynamics control (IDC)
 ``static-dsid``    the same with desired-state inverse dynamics (the thesis's "MPC", Annex A.2)
 ``static-mfc``     the same with model-free control (iPID, Sec. 6.3.3.2)
-``spiral``         climb, then the spiral (6.25) from t_f = 5 s, IDC
+``spiral``         climb, then the spiral (6.25) from t_f = 5 s (faded in over 2 s), IDC
 ``noise``          static mission + white noise on the generalised forces (6.27), IDC
 ``pulses``         static mission + finite pulses (6.28) in the three phases, IDC
 ``dynamic-bsg``    Sec. 6.3.3.3: same flight, theta2_d = -0.5, theta_e^d = 0, CoG stabiliser
@@ -15,9 +15,12 @@ name               what it runs
 =================  =========================================================================
 
 Every scenario lasts 30 s at 1 kHz by default and is reproducible (noise seeded).  The
-transition law is the quintic polynomial (``law="quintic"``); ``law="thesis"`` uses the
-rational formula printed as (6.16), whose 10 m climb in 5 s asks for a 1.55 g deceleration
-(see :mod:`qprr.trajectory`): the rotors saturate at zero thrust.
+transition law is the minimum-snap septic polynomial (``law="septic"``: jerk zero at both
+ends of a phase, so the thrust direction (6.17) starts and stops turning smoothly);
+``law="quintic"`` uses the order-5 polynomial the text names (its jerk steps at every phase
+switch: a step of the tilt rate, see docs/notes-spikes.md) and ``law="thesis"`` the rational
+formula printed as (6.16), whose 10 m climb in 5 s asks for a 1.55 g deceleration (see
+:mod:`qprr.trajectory`): the rotors saturate at zero thrust.
 """
 
 from __future__ import annotations
@@ -34,7 +37,7 @@ from .control import CONTROLLERS, THESIS_NAMES, CogStabilizer, make_controller
 from .errors import UnknownNameError
 from .model import Robot, load
 from .sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
-from .trajectory import LAWS, XI_NAMES, Spiral, dynamic_mission, static_mission
+from .trajectory import DEFAULT_LAW, LAWS, XI_NAMES, Spiral, dynamic_mission, static_mission
 
 # ------------------------------------------------------------------------------ scenarios
 NOISE_AMPLITUDE = (0.3,) * 7 + (0.01, 0.01)
@@ -83,7 +86,7 @@ SCENARIOS: dict[str, Scenario] = {
                  "Annex A.2, Table 6.3 MPC", "dsid", lambda law: static_mission(law=law)),
         Scenario("static-mfc", "static manipulator mission, model-free control (iPID)", "Sec. 6.3.3.2, Table 6.3 MFC",
                  "mfc", lambda law: static_mission(law=law)),
-        Scenario("spiral", "climb then spiral (6.25) from t_f = 5 s, IDC", "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18",
+        Scenario("spiral", "climb then spiral (6.25) from t_f = 5 s (faded in over 2 s), IDC", "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18",
                  "idc", lambda law: Spiral()),
         Scenario("noise", "static mission with white noise on the generalised forces, IDC",
                  "Sec. 6.3.2.1, (6.27), Fig. 6.23-6.27", "idc", lambda law: static_mission(law=law),
@@ -105,7 +108,7 @@ def get_scenario(name: str) -> Scenario:
 
 
 def run(name: str, controller: str | None = None, *, robot: Robot | None = None, duration: float | None = None,
-        dt: float = 1e-3, integrator: str = "midpoint", seed: int = 0, law: str = "quintic",
+        dt: float = 1e-3, integrator: str = "midpoint", seed: int = 0, law: str = DEFAULT_LAW,
         progress: bool = False) -> SimResult:
     """Run scenario ``name`` (optionally with another ``controller`` by name); returns the :class:`SimResult`."""
     sc = get_scenario(name)
@@ -202,7 +205,7 @@ def _summary(res: SimResult) -> str:
     return "\n".join(lines)
 
 
-_RUN_OPTIONS = {"duration": None, "dt": 1e-3, "integrator": "midpoint", "seed": 0, "law": "quintic"}
+_RUN_OPTIONS = {"duration": None, "dt": 1e-3, "integrator": "midpoint", "seed": 0, "law": DEFAULT_LAW}
 
 
 def _cmd_simulate(args: argparse.Namespace) -> int:
@@ -291,7 +294,7 @@ def register_cli(subparsers) -> None:
     p.add_argument("--dt", type=float, default=None, help="step [s] (default 1e-3)")
     p.add_argument("--integrator", default=None, help="midpoint (default, 2nd order), rk4 or euler (semi-implicit)")
     p.add_argument("--seed", type=int, default=None, help="noise seed (default 0)")
-    p.add_argument("--law", default=None, help="transition law: quintic (default) or thesis (printed (6.16))")
+    p.add_argument("--law", default=None, help="transition law: septic (default, minimum snap), quintic or thesis (printed (6.16))")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
     p = subparsers.add_parser("compare", help="IDC vs desired-state ID ('MPC') vs MFC on the static mission: Table 6.3")

@@ -1,41 +1,58 @@
 """Closed-loop simulation of the Q-PRR: Pinocchio ABA on the Lie group, fixed step.
 
-One step (period ``dt``, 1 kHz by default), inputs held constant over the step (zero-order hold):
+A digital controller of period ``control_period`` (default: the integration step ``dt``)
+drives the plant; at each control tick t_k:
 
 1. state (q, v) -> thesis coordinates (xi, xi_dot) (:class:`qprr.control.base.State`);
 2. the controller returns the desired generalised force u (thesis coordinates, Thesis (5.40));
 3. tau_d = S^-T u is allocated to 4 rotor thrusts in [f_min, f_max] and 3 arm efforts
    (:class:`qprr.allocation.Allocator`); the applied force is tau = N f (Thesis (5.43));
-4. disturbances are added: u_ext of Thesis (6.27) (white noise, pulses (6.28)) as S^-T u_ext,
-   and an optional end-effector wrench h (world axes) as J_e^T h;
-5. ABA gives a = M^-1 (tau - h(q, v)) and the state is integrated on the Lie group.
+4. the disturbances known in advance are added: u_ext of Thesis (6.27) (white noise, pulses
+   (6.28)) as S^-T u_ext, sampled at the tick; payload changes take effect at the tick;
+5. tau is held over the period (zero-order hold: the physics of a digital controller) while
+   the plant is integrated over the period with ``control_period / dt`` steps of the
+   integrator; ABA (LOCAL convention) gives a = M^-1 (tau + tau_state - h(q, v)) at every
+   stage, where tau_state holds the inputs that depend on the state and are evaluated at
+   that stage: the end-effector wrench J_e^T h (Jacobian and contact force) and the
+   :class:`StateDisturbance` forces.  An :class:`qprr.environment.Environment` (contact
+   model with its own state, e.g. a pushed object) is integrated together with the robot by
+   the same integrator.
 
-Integrators (``integrator=``), inputs held over the step:
+Integrators (``integrator=``, :mod:`qprr.integrators`, all on the Lie group):
 
-* ``"midpoint"`` (the default): explicit midpoint on the Lie group, a1 = ABA(q, v),
-  v_h = v + dt/2 a1, q_h = q (+) dt/2 v, a2 = ABA(q_h, v_h), q+ = q (+) dt v_h,
-  v+ = v + dt a2 (``pin.integrate`` for (+)).  Two ABA per step, second order.
-* ``"rk4"``: classical Runge-Kutta 4 on the tangent space at q (stages q (+) c dt k),
-  four ABA per step, fourth order: the accuracy reference.
-* ``"euler"``: semi-implicit Euler, v+ = v + dt a(q, v), q+ = q (+) dt v+.  One ABA;
-  cheap but its energy drifts and it flatters tracking errors (see below).
+* ``"midpoint"`` (the default): explicit midpoint, two ABA per step, second order;
+* ``"rk4"``: classical Runge-Kutta 4 in the tangent chart at q_k (stage velocities mapped
+  through the inverse differential of ``pin.integrate``), four ABA per step, fourth order:
+  the accuracy reference;
+* ``"euler"``: semi-implicit Euler, v+ = v + dt a(q, v), q+ = q (+) dt v+.  One ABA, first
+  order; its energy drifts and it flatters tracking errors (see below).
 
-Measured (tests/test_sim.py): free tumbling without gravity or input for 10 s at 1 kHz
-(|E| = 0.71 J), relative energy error: midpoint 7e-7, RK4 3e-12, semi-implicit Euler 1.4 %
-and drifting (first order: the velocity-dependent Coriolis terms in body axes break its
-symplecticity).  In closed loop on the static mission the midpoint trajectory stays within
-1.1e-6 m of RK4 and Euler's 1.9 mm off; Euler also flatters the tracking errors (its
-discretisation matches the controllers' command filters).  Midpoint costs one extra ABA
-and ``integrate`` (~3 us per step) over Euler and about half of RK4.
+The orders hold for every input above (tests/test_convergence.py measures them: free motion,
+gravity and thrust, closed loop with every controller, each hook).  Measured
+(tests/test_sim.py): free tumbling without gravity or input for 10 s at 1 kHz (|E| = 0.71 J),
+relative energy error: midpoint 7e-7, RK4 3e-12, semi-implicit Euler 1.4 % and drifting.  In
+closed loop on the static mission the midpoint trajectory stays within 1.1e-6 m of RK4 and
+Euler's 1.9 mm off; Euler also flatters the tracking errors (its discretisation matches the
+controllers' command filters).  Midpoint costs one extra ABA and ``integrate`` (~3 us per
+step) over Euler and about half of RK4.
+
+ABA runs in Pinocchio's LOCAL convention at every stage: the WORLD convention expresses the
+spatial quantities about the world origin and loses precision far from it (relative error
+of the acceleration 2e-11 at 10 m, 2e-7 at 1 km); LOCAL does not depend on the base position.
 
 Hooks used by the interaction/payload work:
 
-* ``external_wrench``: a callable ``(t, q, v) -> h`` (6,) = [force; moment] in world
-  axes applied at the end-effector frame origin (:class:`ExternalWrench` documents it);
+* ``external_wrench``: an :class:`qprr.environment.Environment` (contact models of
+  :mod:`qprr.interaction`) or a plain callable ``(t, q, v) -> h`` (6,) = [force; moment] in
+  world axes applied at the end-effector frame origin (:class:`ExternalWrench`), evaluated at
+  every integration stage;
 * ``payload``: a :class:`PayloadSchedule` of (time, mass, CoM offset in the end-effector
   frame).  The simulator owns a COPY of the model (``pin.Model(robot.model)``) and changes
-  the inertia of the end effector's parent joint at those times; ``robot.model`` is never
-  touched and the controller keeps its nominal model.
+  the inertia of the end effector's parent joint at the first control tick at or after
+  each time; ``robot.model`` is never touched and the controller keeps its nominal model;
+* ``disturbance``: a :class:`Disturbance` (known in advance, sampled at the ticks), a
+  :class:`StateDisturbance` (e.g. :class:`BaseDrag`, evaluated at every stage) or a
+  :class:`Disturbances` sum of both kinds.
 
 A run that produces NaN, leaves the workspace bound or reaches the Euler singularity
 raises :class:`DivergenceError` naming the time and the state; the partial result is
@@ -58,26 +75,63 @@ import pinocchio as pin
 from .allocation import Allocator
 from .control.base import Controller, Reference, State
 from .coordinates import as_vector, xi_dot_to_v, xi_to_q
+from .environment import Environment
 from .errors import DivergenceError, InputError, NonFiniteError, QprrError, ShapeError, UnknownNameError
+from .integrators import STEPPERS, make_stepper
 from .model import Robot
 from .trajectory import XI_NAMES, check_sample
 
-INTEGRATORS = ("euler", "midpoint", "rk4")
+INTEGRATORS = tuple(STEPPERS)
 
 
 # =============================================================================== disturbances
 class Disturbance(Protocol):
-    """Additive generalised force u_ext(t) of Thesis (6.27), thesis coordinates, known in advance."""
+    """Additive generalised force u_ext(t) of Thesis (6.27), thesis coordinates, known in advance.
+
+    Sampled at the control ticks and held over each control period (a noise sample, a pulse
+    edge sit on the control grid)."""
 
     def values(self, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """u_ext at the step times ``t`` (n,), shape (n, 9)."""
+        """u_ext at the control ticks ``t`` (n,), shape (n, 9)."""
+
+
+class StateDisturbance(Protocol):
+    """A disturbance that depends on the state, evaluated at every integration stage.
+
+    ``generalized_force(t, q, v)`` returns tau (9,) in Pinocchio's coordinates (the free
+    flyer's entries are a body wrench [force; moment] in B at its origin)."""
+
+    def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class BaseDrag:
+    """Linear aerodynamic drag on the multirotor: force -c_lin v_B, moment -c_ang omega_B (body axes, at B).
+
+    ``linear`` [N s/m], ``angular`` [N m s/rad]; isotropic, so the world force is -c_lin p_dot.
+    A :class:`StateDisturbance`."""
+
+    linear: float = 0.0
+    angular: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("linear", "angular"):
+            c = getattr(self, name)
+            if not (np.isfinite(c) and c >= 0.0):
+                raise InputError(f"drag coefficient {name} must be finite and >= 0, got {c!r}")
+
+    def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        tau = np.zeros(v.shape[0])
+        tau[0:3] = -self.linear * v[0:3]
+        tau[3:6] = -self.angular * v[3:6]
+        return tau
 
 
 @dataclass(frozen=True)
 class WhiteNoise:
     """Uniform white noise in [-amplitude, amplitude] on the selected generalised forces (Sec. 6.3.2.1).
 
-    A new value per ``sample_time`` (default: every step), held in between.  Units are those
+    A new value per ``sample_time`` (default: every control tick), held in between.  Units are those
     of each generalised force (N for x, y, z, r0; N m for the angles and revolute joints),
     as in the thesis which applies the same [-0.3, 0.3] to all nine.
     """
@@ -130,22 +184,24 @@ class Pulse:
 
 @dataclass(frozen=True)
 class Disturbances:
-    """Sum of several disturbances."""
+    """Sum of several disturbances (:class:`Disturbance` and :class:`StateDisturbance` may be mixed)."""
 
     parts: tuple
 
     def values(self, t: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         out = np.zeros((t.shape[0], 9))
         for p in self.parts:
-            out += p.values(t, rng)
+            if not hasattr(p, "generalized_force"):
+                out += p.values(t, rng)
         return out
 
 
 # ================================================================================== hooks
 class ExternalWrench(Protocol):
-    """Wrench applied by the environment at the end-effector frame origin.
+    """Wrench applied by a stateless environment at the end-effector frame origin.
 
-    Called once per step as ``h = wrench(t, q, v)`` with the Pinocchio state; returns
+    Called at every integration stage as ``h = wrench(t, q, v)`` with the stage's Pinocchio
+    state (an environment with its own state is an :class:`qprr.environment.Environment`); returns
     h = [f_x, f_y, f_z, m_x, m_y, m_z] in world axes (N, N m).  It enters the dynamics as
     tau_ext = J_e^T h with J_e the LOCAL_WORLD_ALIGNED end-effector Jacobian (Thesis (5.38)).
     """
@@ -157,7 +213,8 @@ class ExternalWrench(Protocol):
 class PayloadChange:
     """From ``time`` on [s], the end effector carries ``mass`` [kg] (a point mass) at ``com_ee`` (end-effector frame) [m].
 
-    mass = 0 removes the payload (e.g. a release).
+    mass = 0 removes the payload (e.g. a release).  In a simulation the change takes effect at
+    the first control tick at or after ``time`` (payload changes sit on the control grid).
     """
 
     time: float
@@ -220,7 +277,10 @@ _ARRAYS = ("t", "xi", "xi_dot", "xi_d", "xi_dot_d", "u", "f", "arm_effort", "x_c
 
 @dataclass
 class SimResult:
-    """Logged run (one row per step, values at the start of the step).
+    """Logged run (one row per control tick, values at the tick).
+
+    ``dt`` [s] is the integration step, ``control_period`` [s] the controller's period (the
+    spacing of the rows; equal to ``dt`` unless the run set it).
 
     t (n,) [s]; xi, xi_dot (n, 9) measured thesis coordinates; xi_d, xi_dot_d (n, 9)
     references actually tracked (roll/pitch from the controller); u (n, 9) controller output
@@ -252,6 +312,11 @@ class SimResult:
     reason: str = ""
     seed: int | None = None
     info: dict = field(default_factory=dict)
+    control_period: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.control_period is None:
+            self.control_period = self.dt
 
     @property
     def n(self) -> int:
@@ -274,7 +339,7 @@ class SimResult:
             raise InputError(f"result files end in .npz, got {str(path)!r}")
         path.parent.mkdir(parents=True, exist_ok=True)
         meta = dict(scenario=self.scenario, controller=self.controller, dt=self.dt, integrator=self.integrator,
-                    wall_time=self.wall_time, status=self.status, reason=self.reason,
+                    control_period=self.control_period, wall_time=self.wall_time, status=self.status, reason=self.reason,
                     seed=-1 if self.seed is None else self.seed)
         arrays = {k: getattr(self, k) for k in _ARRAYS}
         np.savez_compressed(path, **arrays, **{f"meta_{k}": np.asarray(v) for k, v in meta.items()})
@@ -288,7 +353,7 @@ class SimResult:
             meta = {k[5:]: z[k].item() for k in z.files if k.startswith("meta_")}
         seed = int(meta.pop("seed"))
         return cls(**arrays, **{k: meta[k] for k in ("scenario", "controller", "dt", "integrator", "wall_time", "status", "reason")},
-                   seed=None if seed < 0 else seed)
+                   seed=None if seed < 0 else seed, control_period=meta.get("control_period"))
 
 
 # ============================================================================== progress
@@ -331,10 +396,11 @@ def simulate(
     *,
     dt: float = 1e-3,
     integrator: str = "midpoint",
+    control_period: float | None = None,
     xi0=None,
     xi_dot0=None,
-    disturbance: Disturbance | None = None,
-    external_wrench: Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
+    disturbance: Disturbance | StateDisturbance | None = None,
+    external_wrench: Environment | Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
     payload: PayloadSchedule | None = None,
     allocator: Allocator | None = None,
     seed: int | None = 0,
@@ -345,6 +411,13 @@ def simulate(
 ) -> SimResult:
     """Run ``controller`` on the Q-PRR along ``trajectory`` for ``duration`` seconds.
 
+    ``dt`` [s] is the integration step; ``control_period`` [s] (default ``dt``) the period of
+    the digital controller, an integer multiple of ``dt``: the controller, the allocation, the
+    disturbance samples of :class:`Disturbance` and the payload changes act at the control
+    ticks k control_period and are held in between (zero-order hold), while the plant is
+    integrated with ``control_period / dt`` steps of ``integrator`` per period.  The result
+    has one row per control tick.  State-dependent inputs (``external_wrench``, a
+    :class:`StateDisturbance`) are evaluated at every integration stage.
     ``xi0`` defaults to the trajectory at t = 0 (zero rates); ``seed`` seeds the noise.
     ``joint_stops``: the arm joints end at mechanical stops (the joint limits of the
     parameters, e.g. the +-0.04 m slider stroke): see :func:`_apply_joint_stops`; steps
@@ -356,12 +429,21 @@ def simulate(
         raise UnknownNameError("integrator", integrator, INTEGRATORS)
     if not (np.isfinite(dt) and dt > 0.0):
         raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
-    if not (np.isfinite(duration) and duration >= dt):
-        raise InputError(f"duration must be >= dt = {dt!r} s, got {duration!r}")
+    if control_period is None:
+        period, substeps = dt, 1
+    else:
+        if not (np.isfinite(control_period) and control_period > 0.0):
+            raise InputError(f"control_period must be a positive number of seconds, got {control_period!r}")
+        substeps = int(round(control_period / dt))
+        if substeps < 1 or abs(substeps * dt - control_period) > 1e-9 * control_period:
+            raise InputError(f"control_period = {control_period!r} s must be an integer multiple of dt = {dt!r} s")
+        period = float(control_period)
+    if not (np.isfinite(duration) and duration >= period):
+        raise InputError(f"duration must be >= the control period {period!r} s, got {duration!r}")
     if not isinstance(controller, Controller):
         raise InputError(f"controller must be a qprr.control Controller, got {type(controller).__name__}")
-    n = int(round(duration / dt))
-    t = np.arange(n) * dt
+    n = int(round(duration / period))
+    t = np.arange(n) * period
     sample = trajectory.sample(t)
     check_sample(sample, n)
     xi_d = sample.xi.copy()
@@ -373,14 +455,15 @@ def simulate(
         robot.check_arm_limits(xi0[6:9], "xi0[6:9]")
     xi_dot0 = np.zeros(9) if xi_dot0 is None else as_vector(xi_dot0, 9, "xi_dot0")
     rng = np.random.default_rng(seed)
-    u_ext = np.zeros((n, 9)) if disturbance is None else np.asarray(disturbance.values(t, rng), dtype=float)
+    timed, state_dist = _split_disturbance(disturbance)
+    u_ext = np.zeros((n, 9)) if timed is None else np.asarray(timed.values(t, rng), dtype=float)
     if u_ext.shape != (n, 9):
         raise ShapeError(f"disturbance values must have shape ({n}, 9), got {u_ext.shape}")
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
     ext_rows = np.any(u_ext != 0.0, axis=1)
     has_ext = bool(ext_rows.any())
-    # per-step disturbance rows as float lists (None where zero): no array indexing in the loop
+    # per-tick disturbance rows as float lists (None where zero): no array indexing in the loop
     u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if has_ext else None
 
     payload_model = _PayloadModel(robot, payload or PayloadSchedule())
@@ -391,7 +474,6 @@ def simulate(
     N = np.zeros((9, 7))
     N[0:6, 0:4] = alloc.Omega
     N[6:9, 4:7] = np.eye(3)
-    ee_frame = robot.ee_frame
 
     # logs (the world CoM is logged raw; x_cm in B and the unallocated force
     # tau_d - N f with tau_d = S^-T u are derived after the loop, vectorised)
@@ -407,22 +489,23 @@ def simulate(
     state = State()
     state.update(0.0, q, v)
     ref = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
-    controller.reset(state, ref, dt)
-    tau = np.zeros(9)
+    controller.reset(state, ref, period)
+    tau = np.zeros(9)  # generalised force held over the control period (allocated + timed disturbance)
+    plant = _Plant(model, data, tau, robot.ee_frame, external_wrench, state_dist)
+    env, z = plant.env, plant.z0
+    rhs, first_stage = plant.rhs, plant.first_stage
+    settle = env.settle if (env is not None and z is not None) else None
+    stepper = make_stepper(integrator, model, dt)
+    steps = [j * dt for j in range(substeps)]  # step start times within a control period
+    plain = plant.plain  # ABA alone: no state-dependent input
     bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
     pos_lim, vlin_lim, w_lim, qd_lim = limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity
     POSITION = pin.KinematicLevel.POSITION
-    WORLD = pin.Convention.WORLD
-    rk4 = integrator == "rk4"
-    rk2 = integrator == "midpoint"
     wants_applied = bool(getattr(controller, "uses_applied_force", False))
     pin_out = getattr(controller, "output", "xi") == "pinocchio"
     payload_pending = len(payload_model.changes) > payload_model.next
-    half = 0.5 * dt
-    # the step sizes as arrays: array * array is cheaper than float * array, and the same numbers
-    half_v, dt_v = np.full(9, half), np.full(9, dt)
-    mul, add, b1, vh, tau_d_buf = np.multiply, np.add, np.empty(9), np.empty(9), np.empty(9)
-    aba, integrate, com, step = pin.aba, pin.integrate, pin.centerOfMass, controller.step
+    b1, tau_d_buf = np.empty(9), np.empty(9)
+    add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
     allocate = alloc.allocate_into
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     t_start = time.perf_counter()
@@ -430,8 +513,8 @@ def simulate(
     status, reason = "ok", "completed"
     try:
         for k in range(n):
-            tk = k * dt
-            if payload_pending:
+            tk = k * period
+            if payload_pending:  # payload changes act at control ticks
                 payload_model.apply_until(tk)
                 payload_pending = len(payload_model.changes) > payload_model.next
             state.xi, state.xi_dot = xi_log[k], xid_log[k]  # the state writes its xi straight into the log
@@ -444,7 +527,7 @@ def simulate(
                 u = step(tk, state, ref)
                 u_log[k] = u
                 tau_d = force_from_xi(u, tau_d_buf)
-            fl = allocate(tau_d, f_log[k], tau)  # f straight into the log
+            fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
                 flags[k] = fl
             if wants_applied:
@@ -452,56 +535,136 @@ def simulate(
             if has_ext:
                 ue = u_ext_rows[k]
                 if ue is not None:
-                    add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext
-            if external_wrench is not None:
-                h = np.asarray(external_wrench(tk, q, v), dtype=float)
-                if h.shape != (6,) or not np.all(np.isfinite(h)):
-                    raise InputError(f"external_wrench must return 6 finite values, got {h!r} at t = {tk}")
-                J = pin.computeFrameJacobian(model, data, q, ee_frame, pin.LOCAL_WORLD_ALIGNED)
-                tau += J.T @ h
-            a = aba(model, data, q, v, tau, WORLD)
+                    add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext, held over the period
+            # stage 1 of the first step (an Environment observes its tick there); data then holds its kinematics
+            a = aba(model, data, q, v, tau) if plain else first_stage(tk, q, v, z)
             com_log[k] = com(model, data, POSITION, False)
-            if rk2:  # temporaries in buffers (v itself is a new array each step: the caller may keep it)
-                vh = add(v, mul(half_v, a, b1), vh)
-                a2 = aba(model, data, integrate(model, q, mul(half_v, v, b1)), vh, tau)
-                q = integrate(model, q, mul(dt_v, vh, b1))
-                v = v + mul(dt_v, a2, b1)
-            elif rk4:
-                v2 = v + half * a
-                a2 = aba(model, data, integrate(model, q, half * v), v2, tau)
-                v3 = v + half * a2
-                a3 = aba(model, data, integrate(model, q, half * v2), v3, tau)
-                v4 = v + dt * a3
-                a4 = aba(model, data, integrate(model, q, dt * v3), v4, tau)
-                q = integrate(model, q, (dt / 6.0) * (v + 2.0 * (v2 + v3) + v4))
-                v = v + (dt / 6.0) * (a + 2.0 * (a2 + a3) + a4)
-            else:
-                v = v + dt * a
-                q = integrate(model, q, dt * v)
-            if joint_stops:
-                r0, t2, t3 = q[7:10].tolist()
-                if not (lo[0] <= r0 <= hi[0] and lo[1] <= t2 <= hi[1] and lo[2] <= t3 <= hi[2]):
-                    q, v = _apply_joint_stops(model, data, q, v, lo, hi)
-                    flags[k] |= 4
+            for j in steps:
+                if settle is None:
+                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
+                else:
+                    z_before = z
+                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
+                    z = settle(tk + j, z_before, z)
+                a = None
+                if joint_stops:
+                    r0, t2, t3 = q[7:10].tolist()
+                    if not (lo[0] <= r0 <= hi[0] and lo[1] <= t2 <= hi[1] and lo[2] <= t3 <= hi[2]):
+                        q, v = _apply_joint_stops(model, data, q, v, lo, hi)
+                        flags[k] |= 4
             if not k & 15:
-                _check(tk + dt, q, v, pos_lim, vlin_lim, w_lim, qd_lim)
+                _check(tk + period, q, v, pos_lim, vlin_lim, w_lim, qd_lim)
                 if progress and k % bar.every == 0:
                     bar.update(k)
-        _check(n * dt, q, v, pos_lim, vlin_lim, w_lim, qd_lim)
+        _check(n * period, q, v, pos_lim, vlin_lim, w_lim, qd_lim)
         m = n
     except QprrError as err:
         m = k + 1
         if isinstance(err, DivergenceError) and not str(err).startswith(("t =", "diverged at")):
-            err = DivergenceError(f"diverged at t = {k * dt:.3f} s: {err}")
+            err = DivergenceError(f"diverged at t = {k * period:.3f} s: {err}")
         status, reason = ("diverged" if isinstance(err, DivergenceError) else "failed"), str(err)
         err.result = _result(scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
-                             com_log, N, flags, u_ext, time.perf_counter() - t_start, seed, m, status, reason, pin_out=pin_out)
+                             com_log, N, flags, u_ext, time.perf_counter() - t_start, seed, m, status, reason, pin_out=pin_out,
+                             period=period)
         raise err
     finally:
         if progress:
             bar.close()
     return _result(scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
-                   com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out)
+                   com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out, period)
+
+
+class _Plant:
+    """Right-hand side a = M^-1 (tau - h(q, v)) of the plant, Pinocchio's ABA in the LOCAL convention.
+
+    ``tau`` (a buffer the simulator refills at each control tick) is held over the period;
+    state-dependent inputs are evaluated at every call, i.e. at every integration stage:
+    the end-effector wrench J_e^T h (Jacobian and wrench at the stage's q, v and environment
+    state z) and the :class:`StateDisturbance` forces.  Without them the right-hand side is
+    ABA alone.  With an :class:`Environment` that has a state, ``rhs(t, q, v, z)`` returns
+    (a, z_dot) (the form :mod:`qprr.integrators` expects).
+    """
+
+    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist) -> None:
+        self.model, self.data, self.tau, self.ee = model, data, tau, ee_frame
+        self.state_dist = tuple(state_dist)
+        self.env = external_wrench if isinstance(external_wrench, Environment) else None
+        self.fn = None if self.env is not None else external_wrench
+        self.z0 = None
+        if self.env is not None:
+            self.env.reset()
+            z0 = np.array(self.env.initial_state(), dtype=float).ravel()
+            if not np.all(np.isfinite(z0)):
+                raise NonFiniteError(f"environment initial state must be finite, got {z0.tolist()}")
+            self.z0 = z0 if z0.size else None
+        aba = pin.aba
+        self.plain = self.env is None and self.fn is None and not self.state_dist
+        if self.plain:
+            self.rhs = lambda t, q, v: aba(model, data, q, v, tau)  # LOCAL convention (the default)
+        elif self.z0 is None:
+            self.rhs = self._rhs
+        else:
+            self.rhs = self._rhs_z
+
+    def _force(self, t: float, q, v, z) -> tuple[np.ndarray, np.ndarray | None]:
+        """(tau + J_e^T h + state disturbances, z_dot) at one stage."""
+        tau = self.tau.copy()
+        zd = None
+        for d in self.state_dist:
+            tau += np.asarray(d.generalized_force(t, q, v), dtype=float)
+        if self.env is not None or self.fn is not None:
+            J = pin.computeFrameJacobian(self.model, self.data, q, self.ee, pin.LOCAL_WORLD_ALIGNED)
+            if self.env is not None:
+                M = self.data.oMf[self.ee]
+                twist = J @ v
+                h, zd = self.env.evaluate(t, M.translation, M.rotation, twist, z if z is not None else _NO_STATE)
+                self._last = (M.translation.copy(), M.rotation.copy(), twist, h)
+            else:
+                h = np.asarray(self.fn(t, q, v), dtype=float)
+            if h.shape != (6,) or not np.all(np.isfinite(h)):
+                raise InputError(f"external_wrench must return 6 finite values, got {h!r} at t = {t}")
+            tau += J.T @ h
+        return tau, zd
+
+    def _rhs(self, t: float, q, v):
+        tau, _ = self._force(t, q, v, None)
+        return pin.aba(self.model, self.data, q, v, tau)
+
+    def _rhs_z(self, t: float, q, v, z):
+        tau, zd = self._force(t, q, v, z)
+        return pin.aba(self.model, self.data, q, v, tau), np.asarray(zd, dtype=float)
+
+    def first_stage(self, t: float, q, v, z):
+        """The right-hand side at a control tick (the stepper's ``first``); an Environment observes the tick."""
+        if self.env is None:
+            return self.rhs(t, q, v)
+        self.env.on_tick(t)
+        out = self.rhs(t, q, v) if z is None else self.rhs(t, q, v, z)
+        p, R, twist, h = self._last
+        self.env.observe(t, p, R, twist, z if z is not None else _NO_STATE, h)
+        return out
+
+
+_NO_STATE = np.zeros(0)
+
+
+def _split_disturbance(disturbance) -> tuple[object | None, list]:
+    """(timed part with ``values(t, rng)`` or None, state-dependent parts with ``generalized_force(t, q, v)``)."""
+    if disturbance is None:
+        return None, []
+    parts = disturbance.parts if isinstance(disturbance, Disturbances) else (disturbance,)
+    timed, state = [], []
+    for p in parts:
+        if hasattr(p, "generalized_force"):
+            state.append(p)
+        elif hasattr(p, "values"):
+            timed.append(p)
+        else:
+            raise InputError(f"a disturbance needs values(t, rng) (known in advance) or generalized_force(t, q, v) "
+                             f"(state-dependent), got {type(p).__name__}")
+    if not timed:
+        return None, state
+    return (timed[0] if len(timed) == 1 else Disturbances(tuple(timed))), state
 
 
 def _apply_joint_stops(model: pin.Model, data: pin.Data, q: np.ndarray, v: np.ndarray, lo, hi) -> tuple[np.ndarray, np.ndarray]:
@@ -597,7 +760,7 @@ def _rotations(euler: np.ndarray) -> np.ndarray:
 
 
 def _result(scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log, com_log,
-            N, flags, u_ext, wall, seed, m, status, reason, t_start=None, pin_out=False) -> SimResult:
+            N, flags, u_ext, wall, seed, m, status, reason, t_start=None, pin_out=False, period=None) -> SimResult:
     xi = xi_log[:m]
     R = _rotations(xi[:, 3:6])
     x_cm = np.einsum("nji,nj->ni", R, com_log[:m] - xi[:, 0:3])  # R^T (c - p)
@@ -613,7 +776,7 @@ def _result(scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_d
         scenario=scenario, controller=getattr(controller, "name", type(controller).__name__), dt=dt,
         integrator=integrator, t=t[:m].copy(), xi=xi, xi_dot=xid_log[:m], xi_d=xi_d[:m], xi_dot_d=xi_dot_d[:m],
         u=u_log[:m], f=f_log[:m, 0:4].copy(), arm_effort=f_log[:m, 4:7].copy(), x_cm=x_cm, unallocated=unalloc,
-        flags=flags[:m], u_ext=u_ext[:m], wall_time=wall, status=status, reason=reason, seed=seed,
+        flags=flags[:m], u_ext=u_ext[:m], wall_time=wall, status=status, reason=reason, seed=seed, control_period=period,
     )
 
 

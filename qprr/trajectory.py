@@ -1,6 +1,6 @@
 """Reference trajectories in thesis coordinates xi = [x, y, z, phi, theta, psi, r0, theta2, theta3].
 
-* :func:`transition` is the law of Thesis (6.16) with its first three time derivatives.
+* :func:`transition` is the law of Thesis (6.16) with its first four time derivatives.
 * :class:`MultiPhase` chains such transitions per coordinate (the missions of Thesis
   Sec. 6.3.1.4 and 6.3.3.3); :func:`static_mission`, :func:`dynamic_mission` build them.
 * :class:`Spiral` is the spiral of Thesis (6.25) after a vertical climb.
@@ -17,8 +17,16 @@ transition *duration*.  Its first four derivatives vanish at both ends, but its 
 is 5 L / T and its peak acceleration 38.1 L / T^2 (2.7 and 6.6 times the minimum-jerk
 quintic's 1.875 L / T and 5.77 L / T^2).  For the 10 m climb in 5 s of the missions that
 is a deceleration of 15.2 m/s^2 = 1.55 g: the rotors would have to pull downwards.  The
-missions therefore use the quintic polynomial the text names (``law="quintic"``, peak
-2.3 m/s^2); the printed formula stays available as ``law="thesis"``.
+quintic polynomial the text names (``law="quintic"``, peak 2.3 m/s^2) is feasible in
+acceleration but not for a multirotor: its jerk jumps from 0 to 60 L / T^3 at both ends of a
+phase.  A multirotor moves sideways by tilting its thrust (6.17), so the tilt follows the
+horizontal acceleration and the tilt *rate* its jerk (theta ~ a_x / g, theta_dot ~ j_x / g):
+the quintic asks the tilt rate to step (0.15 rad/s at the start of the x phase of the
+mission, 0.29 rad/s at the end of the y phase), i.e. an infinite angular acceleration
+(docs/notes-spikes.md).  The missions therefore use the minimum-snap septic
+(``law="septic"``, the default: rate, acceleration and jerk zero at both ends, like the
+printed law, peak acceleration 7.51 L / T^2 = 3.0 m/s^2 for the climb); the quintic and the
+printed formula stay available as ``law="quintic"`` and ``law="thesis"``.
 """
 
 from __future__ import annotations
@@ -76,13 +84,32 @@ def _quintic(tau: np.ndarray, order: int) -> list[np.ndarray]:
     return s[: order + 1]
 
 
-LAWS = ("quintic", "thesis")
-"""Transition laws: "quintic" (the order-5 polynomial the text of Sec. 6.3.1.2 names) and
-"thesis" (the rational formula printed as (6.16))."""
+def _septic(tau: np.ndarray, order: int) -> list[np.ndarray]:
+    """Minimum-snap septic s = 35 tau^4 - 84 tau^5 + 70 tau^6 - 20 tau^7 and its derivatives on [0, 1].
+
+    s' = 140 tau^3 (1 - tau)^3, s'' = 420 tau^2 (1 - tau)^2 (1 - 2 tau),
+    s''' = 840 tau (1 - tau) (1 - 5 tau + 5 tau^2): rate, acceleration and jerk vanish at both ends.
+    """
+    x = np.clip(tau, 0.0, 1.0)
+    w = 1.0 - x
+    s = [x**4 * (35 - 84 * x + 70 * x * x - 20 * x**3), 140 * (x * w) ** 3, 420 * (x * w) ** 2 * (1 - 2 * x),
+         840 * x * w * (1 - 5 * x + 5 * x * x), 840 - 10080 * x + 25200 * x * x - 16800 * x**3]
+    return s[: order + 1]
+
+
+LAWS = ("septic", "quintic", "thesis")
+"""Transition laws: "septic" (the missions' default: the minimum-snap polynomial, rate,
+acceleration and jerk zero at both ends), "quintic" (the order-5 polynomial the text of
+Sec. 6.3.1.2 names) and "thesis" (the rational formula printed as (6.16))."""
+
+DEFAULT_LAW = "septic"
+"""Transition law of the missions and of :class:`MultiPhase` (module docstring: why not the quintic)."""
+
+_LAW_FUNCTIONS = {"septic": _septic, "quintic": _quintic, "thesis": _sigmoid}
 
 
 def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, order: int = 3,
-               law: str = "quintic") -> list[np.ndarray]:
+               law: str = DEFAULT_LAW) -> list[np.ndarray]:
     """Smooth transition of Thesis (6.16) from ``start`` (t <= t1) to ``end`` (t >= t2).
 
     sigma(t) = start + (end - start) s((t - t1) / T), T = t2 - t1 (the thesis's T_s, printed
@@ -91,7 +118,10 @@ def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, or
     * "thesis": s(tau) = tau^5 / (tau^5 + (1 - tau)^5), the printed formula (peak
       acceleration 38.1 L / T^2);
     * "quintic": s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5, the "order-5 polynomial
-      interpolation" the text names (peak acceleration 5.77 L / T^2).
+      interpolation" the text names (peak acceleration 5.77 L / T^2, jerk 60 L / T^3 at
+      both ends);
+    * "septic" (default): s(tau) = 35 tau^4 - 84 tau^5 + 70 tau^6 - 20 tau^7, the
+      minimum-snap polynomial: jerk zero at both ends (peak acceleration 7.51 L / T^2).
 
     Returns [sigma, sigma_dot, sigma_ddot, sigma_dddot, ...][: order + 1] shaped like ``t``.
     """
@@ -107,7 +137,7 @@ def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, or
     T = t2 - t1
     tau = (t - t1) / T
     inside = (tau > 0.0) & (tau < 1.0)
-    s = _sigmoid(tau, order) if law == "thesis" else _quintic(tau, order)
+    s = _LAW_FUNCTIONS[law](tau, order)
     out = [start + (end - start) * s[0]]
     for n in range(1, order + 1):
         out.append(np.where(inside, (end - start) * s[n] / T**n, 0.0))
@@ -141,7 +171,7 @@ class MultiPhase:
     phases: tuple[Phase, ...]
     xi0: tuple[float, ...] = (0.0,) * 9
     name: str = "multi-phase"
-    law: str = "quintic"
+    law: str = DEFAULT_LAW
 
     def __post_init__(self) -> None:
         as_vector(self.xi0, 9, "xi0")
@@ -181,7 +211,7 @@ STATIC_TARGET = (3.0, 6.0, 10.0, 0.0, 0.04, 0.2, 0.6)
 
 
 def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10.0), y_phase=(10.0, 15.0),
-                   arm_phase=(15.0, 25.0), law: str = "quintic") -> MultiPhase:
+                   arm_phase=(15.0, 25.0), law: str = DEFAULT_LAW) -> MultiPhase:
     """The mission of Thesis Sec. 6.3.1.4 / 6.3.3.3: climb in z 0-5 s, x 5-10 s, y 10-15 s, arm 15-25 s.
 
     ``target`` = [x, y, z, psi, r0, theta2, theta3] (default [3, 6, 10, 0, 0.04, 0.2, 0.6]).
@@ -195,7 +225,7 @@ def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10
 
 
 def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_phase=(15.0, 25.0),
-                    law: str = "quintic") -> MultiPhase:
+                    law: str = DEFAULT_LAW) -> MultiPhase:
     """Mission of Thesis Sec. 6.3.3.3: same flight phases, theta2 -> ``theta2_d`` in 15-25 s.
 
     r0 and theta3 references are left at 0: the CoG stabiliser (BSG) computes them.
@@ -212,9 +242,16 @@ class Spiral:
 
     ``t_f`` is the start of the spiral (the thesis: "the instant the spiral starts"); before
     it the vehicle climbs to ``z`` with (6.16) over [0, ``climb_time``].  Radius grows at
-    ``rate`` = 1/5 m/s and one turn takes ``period`` = 20 s.  The printed law starts with a
-    speed of rate * |sin(2 pi t_f / 20)| (0.2 m/s in x for t_f = 5 s), not 0: the
-    reference velocity steps at t_f.
+    ``rate`` = 1/5 m/s and one turn takes ``period`` = 20 s.
+
+    The printed law starts with a speed of rate (|sin|, |cos|)(w t_f) (0.2 m/s in x for
+    t_f = 5 s, w = 2 pi / period) and an acceleration of magnitude 2 rate w (0.126 m/s^2,
+    in y), not 0: the reference velocity and acceleration step at t_f, and with them the
+    thrust direction (6.17) (a tilt step, i.e. an infinite angular acceleration).  The spiral is
+    therefore faded in: x_d, y_d are (6.25) times the septic transition sigma(t) from 0 at
+    t_f to 1 at t_f + ``blend`` [s] (default 2 s); since r = 0 at t_f and sigma is flat to
+    third order there, the reference starts at rest with zero acceleration and jerk, and it
+    is exactly (6.25) from t_f + ``blend`` on.  ``blend=0`` gives the printed law.
     """
 
     z: float = 10.0
@@ -223,7 +260,12 @@ class Spiral:
     rate: float = 0.2
     period: float = 20.0
     arm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    blend: float = 2.0
     name: str = field(default="spiral", compare=False)
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.blend) and self.blend >= 0.0):
+            raise InputError(f"spiral blend must be a duration >= 0 s, got {self.blend!r}")
 
     def sample(self, t) -> TrajectorySample:
         t = np.atleast_1d(np.asarray(t, dtype=float))
@@ -238,12 +280,19 @@ class Spiral:
         w = 2.0 * np.pi / self.period
         r = self.rate * (t - self.t_f)
         s, c = np.sin(w * t), np.cos(w * t)
-        xi[:, 0] = np.where(on, r * s, 0.0)
-        xi[:, 1] = np.where(on, r * c, 0.0)
-        xd[:, 0] = np.where(on, self.rate * s + r * w * c, 0.0)
-        xd[:, 1] = np.where(on, self.rate * c - r * w * s, 0.0)
-        xdd[:, 0] = np.where(on, 2 * self.rate * w * c - r * w * w * s, 0.0)
-        xdd[:, 1] = np.where(on, -2 * self.rate * w * s - r * w * w * c, 0.0)
+        # (6.25) and its derivatives: p = r (sin, cos)(w t)
+        p = (r * s, r * c)
+        pd = (self.rate * s + r * w * c, self.rate * c - r * w * s)
+        pdd = (2 * self.rate * w * c - r * w * w * s, -2 * self.rate * w * s - r * w * w * c)
+        if self.blend > 0.0:  # sigma p and its derivatives (Leibniz)
+            sg, sgd, sgdd = transition(t, self.t_f, self.t_f + self.blend, 0.0, 1.0, order=2, law="septic")
+            pdd = tuple(sgdd * a + 2.0 * sgd * b + sg * c2 for a, b, c2 in zip(p, pd, pdd))
+            pd = tuple(sgd * a + sg * b for a, b in zip(p, pd))
+            p = tuple(sg * a for a in p)
+        for i in (0, 1):
+            xi[:, i] = np.where(on, p[i], 0.0)
+            xd[:, i] = np.where(on, pd[i], 0.0)
+            xdd[:, i] = np.where(on, pdd[i], 0.0)
         return TrajectorySample(t, xi, xd, xdd)
 
 

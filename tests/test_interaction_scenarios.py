@@ -22,9 +22,9 @@ def test_payload_release_recovers_to_no_payload_hover():
     (positions within 1 mm, joints and yaw within 1 mrad, thrust within 1 % of m g) and stays there."""
     res = scn.payload_drop(mission="hover", release_time=0.5, duration=3.0)
     rec = res.info["recovery"]
-    assert rec.status == "recovered" and rec.time <= 1.5  # measured 1.18 s
+    assert rec.status == "recovered" and rec.time <= 1.5  # measured 1.14 s
     assert rec.peak_thrust > 0.02  # the release did disturb it: 0.1 kg = 2.8 % of the weight
-    assert res.info["mass_estimate_error"] < 1e-6  # noise-free: 5e-9 kg measured (midpoint steps, regression on the held input)
+    assert res.info["mass_estimate_error"] < 1e-6  # noise-free: 1.2e-8 kg measured (midpoint steps, regression on the held input)
     est = res.info["mass_estimate"]
     tau = 0.05  # estimator forgetting time constant
     after = res.t >= 0.5 + 5 * tau
@@ -45,7 +45,9 @@ def test_push_thrust_contact_force_is_unilateral_and_moves_the_object():
     assert np.all(c.force >= 0.0)
     friction = 0.3 * 0.5 * 9.8
     assert c.force.max() > friction  # the object was pushed through static friction
-    assert 0.15 <= c.position[-1] - c.position[0] <= 0.16
+    # pushed 0.15 m, then it slides at most v^2 / (2 mu g) from the peak push speed v = 2.1875 L / T (septic law)
+    v_peak = 2.1875 * 0.15 / 1.2
+    assert 0.15 <= c.position[-1] - c.position[0] <= 0.15 + v_peak**2 / (2 * 0.3 * 9.8)  # measured 0.1602 <= 0.1627
     assert c.velocity[-1] == 0.0  # Coulomb friction stopped it
     assert np.abs(res.xi_d - res.xi)[:, [3, 4, 5]].max() < 1.5e-3  # attitude tracked (measured 1.04e-3 rad)
 
@@ -57,13 +59,13 @@ def test_push_prismatic_needs_force_compensation():
     c = ft.info["contact"]
     assert np.all(c.force >= 0.0)
     assert c.position[-1] - c.position[0] == pytest.approx(0.08, abs=3e-3)  # the slider stroke
-    assert np.abs(ft.xi_d - ft.xi)[:, 8].max() < 2e-3  # measured 1.5e-3 rad
+    assert np.abs(ft.xi_d - ft.xi)[:, 8].max() < 2e-3  # measured 1.7e-3 rad
     free = scn.push_prismatic("layered-idc", push=(0.3, 1.5), duration=2.0)
     assert np.abs(free.xi_d - free.xi)[:, 8].max() > 0.3  # measured 0.61 rad
 
 
 def test_plot_writes_png(tmp_path):
-    res = scn.push_prismatic(push=(0.05, 0.2), duration=0.3)
+    res = scn.push_prismatic(push=(0.05, 0.25), duration=0.3)  # 8 cm in 0.2 s: 15 m/s^2 peak (septic)
     robot = qprr.load()
     u = scn.applied_generalized_forces(res)
     for k in (0, 120, 299):  # the plotted forces are u = R_Q N f of Thesis (5.43)
@@ -84,7 +86,9 @@ def test_wrist_sensor_compensation_needs_a_filter():
 
     robot = qprr.load()
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *scn.ARM_PUSH])
-    traj = MultiPhase((Phase("x", 0.3, 1.5, 0.15),), tuple(xi0))
+    # the law the measurements below were made with (the limit cycle does not depend on it; its amplitude in
+    # the window does: with the septic 0.069 N, against 0.0017 N filtered)
+    traj = MultiPhase((Phase("x", 0.3, 1.5, 0.15),), tuple(xi0), law="quintic")
     p0, _ = qm.ee_pose_xi(robot, robot.data(), xi0)
     chatter = {}
     for filt in (None, scn.SENSOR_FILTER):
@@ -93,4 +97,4 @@ def test_wrist_sensor_compensation_needs_a_filter():
         h = obj.history()
         sel = (h.t > 0.8) & (h.t < 1.3)
         chatter[filt] = np.sqrt(np.mean(np.diff(h.force[sel]) ** 2))  # rms step-to-step change [N]
-    assert chatter[None] > 0.1 and chatter[scn.SENSOR_FILTER] < 0.01  # measured 0.17 N and 0.0013 N
+    assert chatter[None] > 0.1 and chatter[scn.SENSOR_FILTER] < 0.01  # measured 0.16 N and 0.0012 N

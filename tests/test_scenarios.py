@@ -19,14 +19,15 @@ def comparison(robot):
 # Where ours may exceed Table 6.3, and why (the comparison is not like for like there):
 #  * idc theta2, theta3: our controller is digital (1 kHz zero-order hold); the errors halve
 #    with dt (test below), the thesis's Simulink controller ran in continuous time;
-#  * dsid x, y, psi: our position loop must tilt the vehicle (underactuated cascade through
-#    (6.17)); the thesis's "MPC" errors are those of a model fed the whole u_fb;
-#  * mfc x, y, r0, theta2, theta3: same cascade, plus alpha / F-estimator settings the thesis
-#    does not print (see MFCGains).
+#  * mfc x, y, r0, theta2, theta3: our position loop must tilt the vehicle (underactuated
+#    cascade through (6.17)), plus alpha / F-estimator settings the thesis does not print (see
+#    MFCGains).  x and y scale with the reference's peak acceleration: the missions' septic law
+#    (jerk-continuous, docs/notes-spikes.md) peaks 7.51 / 5.77 = 1.30 times higher than the
+#    quintic, and the MFC's x, y errors grew by that factor (1.48e-3 -> 1.93e-3, 2.97e-3 -> 3.87e-3).
+# (dsid needs no allowance since its position K_D is critically damped: x, y 3-6 times below the thesis.)
 NOT_LIKE_FOR_LIKE = {
     ("idc", "theta2"): 2.0, ("idc", "theta3"): 7.0,
-    ("dsid", "x"): 4.0, ("dsid", "y"): 1.6, ("dsid", "psi"): 60.0,
-    ("mfc", "x"): 3.5, ("mfc", "y"): 4.0, ("mfc", "r0"): 2.5, ("mfc", "theta2"): 25.0, ("mfc", "theta3"): 25.0,
+    ("mfc", "x"): 4.0, ("mfc", "y"): 5.0, ("mfc", "r0"): 2.5, ("mfc", "theta2"): 25.0, ("mfc", "theta3"): 25.0,
 }
 
 

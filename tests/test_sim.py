@@ -13,7 +13,7 @@ from qprr.coordinates import xi_to_qv
 from qprr.errors import DivergenceError, InputError, UnknownNameError
 from qprr.model import com_body, dynamics_xi
 from qprr.scenarios import run
-from qprr.sim import Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
+from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
 from qprr.trajectory import Hold
 
 
@@ -168,6 +168,81 @@ def test_semi_implicit_euler_drifts_at_first_order(free_robot):
     assert drift[0] / drift[1] == pytest.approx(2.0, rel=0.1)
 
 
+class ConstantTau(Controller):
+    """Constant generalised force in Pinocchio coordinates (constant rotor thrusts and arm efforts)."""
+
+    name = "constant"
+    output = "pinocchio"
+
+    def __init__(self, tau):
+        self.tau = np.asarray(tau, dtype=float)
+
+    def step(self, t, state, ref):
+        return self.tau
+
+
+def _error_at(robot, res, ref, t):
+    """Largest entry of q_ref (-) q and v - v_ref at time t (a row of both logs)."""
+    qa, va = xi_to_qv(res.xi[int(round(t / res.dt))], res.xi_dot[int(round(t / res.dt))])
+    qb, vb = xi_to_qv(ref.xi[int(round(t / ref.dt))], ref.xi_dot[int(round(t / ref.dt))])
+    return max(np.abs(pin.difference(robot.model, qb, qa)).max(), np.abs(va - vb).max())
+
+
+def _orders(robot, controller, xi0, integrator, steps, **kw):
+    """Observed orders at t = 0.392 s (a row of every log) against RK4 at steps[0] / 64."""
+    ref = simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=steps[0] / 64, integrator="rk4", xi0=xi0, **kw)
+    errors = [_error_at(robot, simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=dt, integrator=integrator, xi0=xi0, **kw), ref, 0.392)
+              for dt in steps]
+    return np.array(errors), np.log2(np.array(errors[:-1]) / errors[1:])
+
+
+def test_rk4_is_fourth_order_for_the_base_too(free_robot):
+    """Free tumbling: halving dt (8, 4, 2, 1 ms) divides the error of the whole state (base position and attitude
+    included) by 16.  RK4 summing stage velocities taken at different points of the group without the inverse
+    differential of the exponential was second order for the base (ratios 4)."""
+    errors, orders = _orders(free_robot, ConstantTau(np.zeros(9)), XI0, "rk4", (8e-3, 4e-3, 2e-3, 1e-3), xi_dot0=2 * XID0,
+                             joint_stops=False)
+    assert np.all(np.abs(orders - 4.0) < 0.2), (errors, orders)
+
+
+def test_end_effector_hook_keeps_the_midpoint_second_order(robot):
+    """A state-dependent end-effector wrench (spring-damper to a point) is re-evaluated at every stage: the midpoint
+    rule stays second order (the wrench held over the step made it first order)."""
+    data = robot.model.createData()
+
+    def spring(t, q, v):
+        J = pin.computeFrameJacobian(robot.model, data, q, robot.ee_frame, pin.LOCAL_WORLD_ALIGNED)
+        h = np.zeros(6)
+        h[0:3] = -5.0 * (data.oMf[robot.ee_frame].translation - np.r_[0.3, 0.1, 1.2]) - 0.5 * (J @ v)[0:3]
+        return h
+
+    m, g = robot.params.total_mass, robot.params.g
+    xi0 = np.r_[0, 0, 1, 0.05, -0.05, 0.3, 0.01, 2.9, 0.3]  # arm hanging: a stable pendulum (joint stops off)
+    G = pin.computeGeneralizedGravity(robot.model, data, xi_to_qv(xi0, np.zeros(9))[0])
+    tau = np.r_[0, 0, 1.05 * m * g, 0.01, -0.01, 0.005, G[6:9]]
+    errors, orders = _orders(robot, ConstantTau(tau), xi0, "midpoint", (4e-3, 2e-3, 1e-3, 5e-4), external_wrench=spring,
+                             xi_dot0=np.r_[0.3, -0.2, 0.1, 0.3, -0.4, 0.2, 0.02, 0.5, -0.6], joint_stops=False)
+    assert np.all(np.abs(orders - 2.0) < 0.2), (errors, orders)
+
+
+def test_far_from_the_origin_the_dynamics_do_not_change(robot):
+    """Translation invariance: the same flight started 10 m and 1 km away gives the same velocities and attitude (ABA in
+    the LOCAL convention does not see the base position) and positions shifted by the offset to round-off.  With the
+    WORLD convention the accelerations lost precision with the distance (2e-10 m/s at 10 m, 2e-6 m/s at 1 km here)."""
+    m, g = robot.params.total_mass, robot.params.g
+    tau = np.r_[0, 0, 1.1 * m * g, 0.02, -0.03, 0.01, 0.5, 0.02, -0.005]
+    xi0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]
+    kw = dict(xi_dot0=np.r_[0.5, -0.3, 0.2, 1.0, -2.0, 0.7, 0.05, 1.5, -2.0], joint_stops=False, limits=Limits(position=1e5))
+    near = simulate(robot, ConstantTau(tau), Hold(tuple(xi0)), 1.0, xi0=xi0, **kw)
+    for offset in (10.0, 1e3):
+        far0 = xi0.copy()
+        far0[0:3] += (offset, -offset, 0.5 * offset)
+        far = simulate(robot, ConstantTau(tau), Hold(tuple(far0)), 1.0, xi0=far0, **kw)
+        assert np.abs(far.xi_dot - near.xi_dot).max() < 1e-13  # measured 0 (bit-identical)
+        assert np.abs(far.xi[:, 3:] - near.xi[:, 3:]).max() < 1e-13
+        assert np.abs(far.xi[:, 0:3] - far0[0:3] - near.xi[:, 0:3]).max() < 1e-11 * offset  # measured 1.4e-12 m at 1 km
+
+
 def test_midpoint_and_rk4_agree_in_closed_loop(robot):
     """On the static mission (first 16 s) the default integrator matches RK4 to well under a millimetre."""
     a = run("static-idc", robot=robot, duration=16.0)
@@ -225,7 +300,9 @@ def test_payload_changes_the_plant_copy_only(robot):
 
 
 def test_external_wrench_at_the_end_effector(robot):
-    """A world-vertical pull of m g at the end effector (on the thrust axis at the zero pose) holds the unpowered system."""
+    """A world-vertical pull of m g at the end effector (on the thrust axis at the zero pose) holds the unpowered system.
+
+    The hook is evaluated at every integration stage: at t_k and t_k + dt/2 for the midpoint rule."""
     m, g = robot.params.total_mass, robot.params.g
     seen = []
 
@@ -235,9 +312,77 @@ def test_external_wrench_at_the_end_effector(robot):
 
     xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
     res = simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, external_wrench=pull, integrator="midpoint")
-    assert np.abs(res.xi - xi).max() < 1e-9 and len(seen) == res.n
+    assert np.abs(res.xi - xi).max() < 1e-9 and len(seen) == 2 * res.n
+    np.testing.assert_allclose(seen[0::2], res.t, atol=1e-15)
+    np.testing.assert_allclose(seen[1::2], res.t + 0.5 * res.dt, atol=1e-15)
     with pytest.raises(InputError):
         simulate(robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 0.01, external_wrench=lambda t, q, v: np.zeros(3), integrator="midpoint")
+
+
+# ------------------------------------------------------------------------------ control period
+class Counting(Controller):
+    """Open loop that counts its calls and records the period it was reset with."""
+
+    name = "counting"
+
+    def __init__(self, u):
+        self.u = np.asarray(u, dtype=float)
+        self.calls = []
+
+    def reset(self, state, ref, dt):
+        self.period = dt
+
+    def step(self, t, state, ref):
+        self.calls.append(t)
+        return self.u
+
+
+def test_control_period_holds_the_controller_and_logs_one_row_per_tick(robot):
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    u = _hover_u(robot, xi) + np.r_[0.3, 0, 0.5, 0, 0.01, 0, 0, 0, 0]
+    ctrl = Counting(u)
+    res = simulate(robot, ctrl, Hold(tuple(xi)), 0.2, dt=1e-3, control_period=4e-3)
+    assert res.n == 50 and ctrl.period == 4e-3 and res.control_period == 4e-3 and res.dt == 1e-3
+    np.testing.assert_allclose(ctrl.calls, np.arange(50) * 4e-3, atol=1e-15)
+    np.testing.assert_allclose(res.t, np.arange(50) * 4e-3, atol=1e-15)
+    # the default is one control call per integration step: the same run as an explicit control_period = dt
+    a = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3)
+    b = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3, control_period=1e-3)
+    np.testing.assert_array_equal(a.xi, b.xi)
+    assert a.control_period == a.dt == 1e-3
+    for bad in (2.5e-3, 0.5e-3, -1.0):
+        with pytest.raises(InputError, match="control_period"):
+            simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.2, dt=1e-3, control_period=bad)
+
+
+def test_noise_and_payload_changes_sit_on_the_control_grid(robot):
+    """A noise sample is held over a control period; a release at 0.5021 s acts at the tick 0.504 s (control period 4 ms),
+    whatever the integration step."""
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    m, g, mp = robot.params.total_mass, robot.params.g, 0.2
+    noisy = simulate(robot, OpenLoop(_hover_u(robot, xi)), Hold(tuple(xi)), 0.1, dt=1e-3, control_period=4e-3,
+                     disturbance=WhiteNoise(0.3))
+    assert noisy.u_ext.shape == (25, 9) and len(np.unique(noisy.u_ext[:, 0])) == 25
+    drop = PayloadSchedule((PayloadChange(0.0, mp), PayloadChange(0.5021, 0.0)))
+    u = np.r_[0, 0, (m + mp) * g, 0, 0, 0, 0, 0, 0]
+    for dt in (1e-3, 5e-4):
+        res = simulate(robot, OpenLoop(u), Hold(tuple(xi)), 0.6, dt=dt, control_period=4e-3, payload=drop)
+        k = int(round(0.504 / 4e-3))
+        assert np.abs(res.xi[: k + 1, 2] - 5.0).max() < 1e-12 and res.xi[k + 1, 2] > 5.0 + 1e-7
+
+
+def test_state_disturbance_drag_is_evaluated_at_every_stage(free_robot):
+    """Linear drag -c v on the base, no gravity, no input, arm straight up (CoM on z_B), climbing along z: a pure
+    translation with m_G v_z' = -c v_z, v_z(t) = v0 exp(-c t / m_G) (RK4 matches it to 1e-12)."""
+    c, v0 = 0.8, 2.0
+    xi = np.zeros(9)
+    res = simulate(free_robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, dt=1e-3, integrator="rk4", xi0=xi,
+                   xi_dot0=np.r_[0, 0, v0, 0, 0, 0, 0, 0, 0], disturbance=BaseDrag(linear=c))
+    mG = free_robot.params.total_mass
+    np.testing.assert_allclose(res.xi_dot[:, 2], v0 * np.exp(-c * res.t / mG), rtol=1e-12)
+    assert np.abs(res.xi_dot[:, [0, 1, 3, 4, 5, 6, 7, 8]]).max() < 1e-14
+    with pytest.raises(InputError):
+        BaseDrag(linear=-1.0)
 
 
 # ------------------------------------------------------------------------------ results, disturbances
@@ -247,6 +392,7 @@ def test_result_save_load_and_rmse(robot, tmp_path):
     back = SimResult.load(path)
     for name in ("t", "xi", "xi_d", "u", "f", "arm_effort", "x_cm", "unallocated", "flags", "u_ext"):
         np.testing.assert_array_equal(getattr(back, name), getattr(res, name))
+    assert back.control_period == res.control_period == res.dt
     assert back.scenario == "static-idc" and back.controller == "idc" and back.status == "ok"
     e = res.xi_d - res.xi
     assert res.rmse()["z"] == pytest.approx(np.sqrt(np.mean(e[:, 2] ** 2)))

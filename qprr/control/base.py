@@ -76,7 +76,9 @@ class CommandFilter:
     (a = w^2 (x_raw - x) - 2 w xd, xd += dt a, x += dt xd): (x, xd, a) are exactly consistent
     (a plant that integrates a the same way follows x step for step) and ``xdd`` is the
     acceleration actually used over the step.  The scheme is stable for w dt < 0.83: the
-    bandwidth used is min(omega, 0.7 / dt).
+    bandwidth used is min(omega, 0.7 / dt).  Its step matrix on (x, dt xd) has determinant
+    1 - 2 w dt, so for w dt > 0.5 one pole is negative (-0.58 at w dt = 0.7) and a step or
+    kink of the input rings on alternate steps; smooth inputs do not excite it.
     ``n`` channels; ``x``, ``xd``, ``xdd`` after :meth:`update`.
     """
 
@@ -135,9 +137,18 @@ class TiltReference:
     (feedback and coupling terms of u_fb).  Each goes through a critically damped
     second-order :class:`CommandFilter` that also gives its rates (Remark 4: numerical
     differentiation with noise-robust filters): the feedforward through a fast one
-    (``omega_ff`` = 700 rad/s, lag 3 ms; no loop closes through it, and it smooths the steps
-    of the tilt rate where a quintic phase starts with non-zero jerk), the rest through
-    ``omega``.  Filtering the whole of (6.17) with one filter costs either a lag of ~2/omega
+    (``omega_ff`` = 700 rad/s, lag 3 ms; no loop closes through it), the rest through
+    ``omega``.  The feedforward filter does not smooth a non-smooth reference, it
+    differentiates it: a step of the tilt rate (a jerk step of the reference, e.g. at the ends
+    of a quintic phase) comes out as a one-step tilt acceleration of (w dt)^2 times the
+    rate step divided by dt (72 rad/s^2 for the 0.15 rad/s step of the static mission's x
+    phase), ringing on alternate steps (w dt = 0.7, see :class:`CommandFilter`).  References
+    must therefore be C3 in position (jerk continuous, as the default septic law of
+    :mod:`qprr.trajectory`); the filter then follows with a 3 ms lag and no ringing.
+    Lowering it to w dt = 0.5 (no negative pole) costs 18 % of x RMSE on the static mission
+    through the longer lag (docs/notes-spikes.md).
+
+    Filtering the whole of (6.17) with one filter costs either a lag of ~2/omega
     on the nominal tilt or, with a fast filter, feeds the high-frequency content of u_fb
     (arm reactions, the sideways motion of B under pitch acceleration) back into the
     attitude loop, which diverges under disturbances; the split avoids both.

@@ -114,14 +114,24 @@ class IDCGains:
 
     @classmethod
     def desired_state_default(cls) -> IDCGains:
-        """Gains of the desired-state controller: (A.3)'s K_P = 30, K_D = 18 on position, the
-        retuned attitude PIDs of :meth:`default`, stiffer arm loops, roll/pitch filter 20 rad/s.
+        """Gains of the desired-state controller: (A.3)'s K_P = 30 with K_D = 2 sqrt(30) on
+        position, the retuned attitude PIDs of :meth:`default`, stiffer arm loops, roll/pitch
+        filter 20 rad/s.
 
-        * Position: Table 6.2's K_P = 30 I9, K_D = 18 I9, the gains (A.3) is written with.
-          They only work with a slow feedback part in the roll/pitch reference
-          (``filter_omega`` = 20 rad/s; 30 tracks poorly and 50 diverges, because B is 2.5 cm
-          below the CoG: a pitch acceleration moves B sideways at once and K_D = 18 on the
-          velocity of B feeds that back into the pitch reference).
+        * Position: Table 6.2's K_P = 30, the gain (A.3) is written with, and K_D = 2 sqrt(K_P)
+          = 10.95 (critical damping, double pole at -5.5 rad/s) instead of the printed 18.
+          The printed K_D = 18 puts the position loop's crossover at 18 rad/s (2.9 Hz), beyond
+          what the thrust-direction cascade (20 rad/s roll/pitch filter, (s + 10)^3 attitude
+          loops) delivers: the vehicle then keeps a barely damped 3 Hz roll/pitch oscillation
+          (+-1 deg on the static mission after 10 s; at hover a 1 mm offset rings at 3 Hz and
+          decays at only 0.1-0.25 /s; the IDC with the same gains does the same, so it is the
+          gains, not the desired-state model).  With K_D = 10.95 the same offset decays at
+          2.9 /s and the oscillation is gone (docs/notes-spikes.md).
+        * Roll/pitch: the feedback part of the reference stays slow (``filter_omega`` =
+          20 rad/s): B is 2.5 cm below the CoG, so a pitch acceleration moves B sideways at
+          once and K_D on the velocity of B feeds that back into the pitch reference (with
+          K_D = 18, 30 rad/s tracks poorly and 50 diverges; with K_D = 10.95, 20 to 50 rad/s
+          all track).
         * Arm: k_P = w^2, k_D = 2 w with w = 50 rad/s.  Our arm stands above B (z_B up,
           Thesis (3.58)): an inverted pendulum.  The IDC cancels its gravity torque at the
           measured configuration; the desired-state controller uses G(xi_d), so the mismatch
@@ -131,8 +141,9 @@ class IDCGains:
         """
         base = cls.default()
         w = 50.0
-        kp = (30.0,) * 3 + base.kp[3:6] + (w * w,) * 3
-        kd = (18.0,) * 3 + base.kd[3:6] + (2 * w,) * 3
+        kp_pos = 30.0
+        kp = (kp_pos,) * 3 + base.kp[3:6] + (w * w,) * 3
+        kd = (2.0 * math.sqrt(kp_pos),) * 3 + base.kd[3:6] + (2 * w,) * 3
         return cls(kp=kp, kd=kd, ki=base.ki, filter_omega=20.0, max_tilt=base.max_tilt)
 
     @classmethod
@@ -281,7 +292,7 @@ class DesiredStateInverseDynamics(InverseDynamicsController):
     The desired roll and pitch are those of (6.17) (the previous step's filtered values enter
     the model, the current ones the feedback).
 
-    Default gains: :meth:`IDCGains.desired_state_default` ((A.3)'s K_P = 30, K_D = 18 on
+    Default gains: :meth:`IDCGains.desired_state_default` ((A.3)'s K_P = 30, K_D = 2 sqrt(30) on
     position; it says what had to change elsewhere and why).  Table 6.2's K_P = 30 I9,
     K_D = 18 I9 on all nine coordinates (:meth:`IDCGains.annex_a3`) diverge: on the arm for
     the reason given there, and on attitude because (A.3) has no integral and a 1.8 rad/s

@@ -71,7 +71,7 @@ def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_p
     platform = from_urdf(urdf, rotor_set(params, layout), ee_frame=EE_FRAME, g=params.g,
                          name=f"Q-PRR ({params.variant}, {layout})", params=params,
                          provenance={"parameters": "qprr.thesis.params (Tables 3.1-3.3 and chosen values, each with its provenance)"},
-                         allow_nonphysical=True)  # TEMPORARY until the physical link-2 inertia (issue 8) is merged
+                         allow_nonphysical=bool(params.nonphysical))
     _check_agrees(platform, params)
     return platform
 

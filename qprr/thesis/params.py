@@ -17,7 +17,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, NonPhysicalError
+from ..inertia import _finite, check_rigid_body, nearest_physical_moments, second_moments  # noqa: F401 (re-exported)
 
 
 @dataclass(frozen=True)
@@ -74,7 +75,16 @@ class QPRRParams:
     thrust_min: float = 0.0
     rail: Link | None = None  # manipulator base fixed to the multirotor (CAD variant only)
     variant: str = "thesis"
+    nonphysical: tuple[str, ...] = ()
+    """Bodies whose rotational inertia is knowingly non-physical (the explicit opt-in of
+    ``thesis_params(table_3_2="printed-nonphysical")``): their triangle inequality is not
+    checked.  Every other check still applies.  Empty for every physical parameter set."""
     provenance: dict = field(default_factory=dict, compare=False, hash=False, repr=False)
+
+    def __post_init__(self) -> None:
+        """Validate on construction (also after :meth:`with_changes`): raise :class:`NonPhysicalError` naming the
+        body or device and the inequality that fails (see :func:`check_params`)."""
+        check_params(self)
 
     # --- derived quantities -------------------------------------------------------
     @property
@@ -134,6 +144,48 @@ class QPRRParams:
         return replace(self, **changes)
 
 
+def check_params(p: QPRRParams) -> None:
+    """Raise :class:`NonPhysicalError` naming the body or device and the inequality a parameter set breaks.
+
+    Checks: finite values everywhere; every body (multirotor, links, rail) by :func:`check_rigid_body`
+    (the bodies listed in ``p.nonphysical`` skip the triangle inequality only); g >= 0; positive lengths
+    (d1, d2, d3, every link length, the rotor arm l; d0 >= 0: the rail may sit at B's height; the rail's
+    length >= 0); lower <= upper joint limits; positive effort and velocity limits; positive rotor
+    factors b and c; f_min <= f_max with f_max > 0."""
+    if not isinstance(p.nonphysical, tuple):
+        raise InputError(f"nonphysical must be a tuple of body names, got {p.nonphysical!r}")
+    if not (_finite([p.g]) and p.g >= 0.0):
+        raise NonPhysicalError(f"gravity g must be a finite number >= 0 m/s^2, got {p.g!r}")
+    check_rigid_body("multirotor", p.multirotor_mass, (0.0, 0.0, 0.0), p.multirotor_inertia,
+                     check_triangle="multirotor" not in p.nonphysical)
+    if len(p.links) != 3 or not all(isinstance(link, Link) for link in p.links):
+        raise InputError(f"links must be three Link objects, got {p.links!r}")
+    bodies = list(p.links) + ([p.rail] if p.rail is not None else [])
+    for link in bodies:
+        check_rigid_body(link.name, link.mass, link.com, link.inertia, check_triangle=link.name not in p.nonphysical)
+    for link in p.links:
+        if not (_finite([link.length]) and link.length > 0.0):
+            raise NonPhysicalError(f"{link.name}: length must be a positive finite number of m, got {link.length!r}")
+    if p.rail is not None and not (_finite([p.rail.length]) and p.rail.length >= 0.0):
+        raise NonPhysicalError(f"{p.rail.name}: length must be a finite number >= 0 m, got {p.rail.length!r}")
+    for name in ("d1", "d2", "d3", "arm_length", "thrust_factor", "drag_factor", "thrust_max"):
+        value = getattr(p, name)
+        if not (_finite([value]) and value > 0.0):
+            raise NonPhysicalError(f"{name} must be a positive finite number, got {value!r}")
+    if not (_finite([p.d0]) and p.d0 >= 0.0):
+        raise NonPhysicalError(f"d0 must be a finite number >= 0 m, got {p.d0!r}")
+    if not (_finite([p.thrust_min]) and p.thrust_min <= p.thrust_max):
+        raise NonPhysicalError(f"rotor thrust bounds need f_min <= f_max, got f_min = {p.thrust_min!r} N, f_max = {p.thrust_max!r} N")
+    for name in ("r0_limits", "theta2_limits", "theta3_limits"):
+        lim = getattr(p, name)
+        if len(lim) != 2 or not _finite(lim) or not lim[0] <= lim[1]:
+            raise NonPhysicalError(f"{name} must be finite (lower, upper) with lower <= upper, got {lim!r}")
+    for name in ("effort_limits", "velocity_limits"):
+        lim = getattr(p, name)
+        if len(lim) != 3 or not _finite(lim) or min(lim) <= 0.0:
+            raise NonPhysicalError(f"{name} must be 3 positive finite numbers (r0, theta2, theta3), got {lim!r}")
+
+
 def _homogeneous_link(name: str, mass: float, length: float, inertia: tuple[float, float, float]) -> Link:
     """Hypothesis 1 (Thesis 3.3.2): homogeneous link, CoM at mid-length on the link axis."""
     return Link(name, mass, length, (0.0, 0.0, length / 2.0), (*inertia, 0.0, 0.0, 0.0))
@@ -153,6 +205,19 @@ _TABLE_3_2_INERTIA = {
     "link2": (2.274e-5, 5.013e-5, 2.2767e-5),
     "link3": (4.33e-6, 7.99e-6, 3.94e-6),
 }
+"""Table 3.2 as printed.  Link 2's moments break the triangle inequality (see :data:`LINK2_INERTIA_PHYSICAL`)."""
+
+LINK2_INERTIA_PHYSICAL = (2.5052e-5, 5.013e-5, 2.5079e-5)
+"""Link 2's principal moments [kg m^2] used by default, in link axes.  Table 3.2 prints (2.274e-5, 5.013e-5,
+2.2767e-5): I_yy exceeds I_xx + I_zz by 4.623e-6 kg m^2, i.e. a second moment of mass along y of
+-2.3115e-6 kg m^2, which no body has (an independent engine, MuJoCo, refuses the URDF).  The correction is
+:func:`nearest_physical_moments` (that second moment set to 0, the two others kept: I_yy, the moment about the
+joint axis that the planar arm dynamics use, unchanged; I_xx and I_zz + 2.3115e-6 kg m^2, 10 %), rounded up to
+the table's five significant digits (2.50515e-5 -> 2.5052e-5, 2.50785e-5 -> 2.5079e-5): the exact boundary (a
+lamina) is physical but one rounding away from unphysical in another program's arithmetic; rounded up, the
+second moment along y is +5e-10 kg m^2 (a 0.15 mm thick plate).  docs/thesis-errata.md, "Parameters"."""
+
+TABLE_3_2_CHOICES = ("physical", "printed-nonphysical")
 
 PROVENANCE = {
     "g": "Thesis (5.29): g = 9.8 m/s^2",
@@ -160,7 +225,9 @@ PROVENANCE = {
     "so this variant leaves it out (the CAD variant adds it)",
     "multirotor_inertia": "Table 3.3: Ixx, Iyy, Izz, Ixy, Ixz, Iyz at the CoG in B axes, products used as tensor entries",
     "link masses": "Table 3.1: 0.1172, 0.2773, 0.0961 kg",
-    "link inertias": "Table 3.2: principal moments in link axes (products zero by symmetry, Table 3.2 text)",
+    "link inertias": "Table 3.2: principal moments in link axes (products zero by symmetry, Table 3.2 text); link 2 corrected "
+    "to the nearest physical body (2.5052e-5, 5.013e-5, 2.5079e-5): the printed (2.274e-5, 5.013e-5, 2.2767e-5) breaks the "
+    "triangle inequality I_yy <= I_xx + I_zz by 4.623e-6 kg m^2 (LINK2_INERTIA_PHYSICAL, docs/thesis-errata.md)",
     "link CoM": "Hypothesis 1 (Sec. 3.3.2): homogeneous links, CoM at mid-length, as in (3.78)",
     "d2": "(4.46)-(4.48): the coefficient 4 d2^2 = 0.1299 gives d2 = 0.18 m",
     "d0 + d1": "(4.47): 2 (d0 + d1) d2 = 0.0342 gives d0 + d1 = 0.095 m",
@@ -181,12 +248,22 @@ PROVENANCE = {
 }
 
 
-def thesis_params() -> QPRRParams:
-    """Default parameters: the inertial model assumed by the thesis's closed forms (Hypothesis 1)."""
+def thesis_params(table_3_2: str = "physical") -> QPRRParams:
+    """Default parameters: the inertial model assumed by the thesis's closed forms (Hypothesis 1).
+
+    ``table_3_2``: "physical" (default) uses :data:`LINK2_INERTIA_PHYSICAL` for link 2;
+    "printed-nonphysical" keeps Table 3.2 as printed, a link-2 inertia no body can have (the
+    parameter set then lists "link2" in ``nonphysical`` and its variant says so).
+    """
+    if table_3_2 not in TABLE_3_2_CHOICES:
+        from ..errors import UnknownNameError
+
+        raise UnknownNameError("Table 3.2 choice", table_3_2, TABLE_3_2_CHOICES)
+    printed = table_3_2 == "printed-nonphysical"
     d0, d1, d2, d3 = 0.040, 0.055, 0.18, 0.10
     links = (
         _homogeneous_link("link1", _TABLE_3_1_MASS["link1"], d1, _TABLE_3_2_INERTIA["link1"]),
-        _homogeneous_link("link2", _TABLE_3_1_MASS["link2"], d2, _TABLE_3_2_INERTIA["link2"]),
+        _homogeneous_link("link2", _TABLE_3_1_MASS["link2"], d2, _TABLE_3_2_INERTIA["link2"] if printed else LINK2_INERTIA_PHYSICAL),
         _homogeneous_link("link3", _TABLE_3_1_MASS["link3"], d3, _TABLE_3_2_INERTIA["link3"]),
     )
     rev = 2.0 * np.pi / 3.0
@@ -208,6 +285,8 @@ def thesis_params() -> QPRRParams:
         thrust_factor=3.0e-5,
         drag_factor=7.5e-7,
         thrust_max=20.0,
+        variant="thesis-table-3.2-printed-nonphysical" if printed else "thesis",
+        nonphysical=("link2",) if printed else (),
         provenance=dict(PROVENANCE),
     )
 

@@ -1,0 +1,88 @@
+"""Rigid-body inertia: the conditions a mass and an inertia must meet to be a body, in one place.
+
+A body of mass m > 0 with rotational inertia I about its CoM exists iff I is symmetric positive
+(semi-)definite and its principal moments satisfy the triangle inequalities I_k <= I_i + I_j,
+i.e. every second moment of mass Sigma_k = integral of x_k^2 dm = (I_i + I_j - I_k) / 2 is >= 0.
+:func:`check_rigid_body` raises :class:`~qprr.errors.NonPhysicalError` naming the body and the
+inequality; platforms (:mod:`qprr.platform`) and parameter sets (:mod:`qprr.thesis.params`) call it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import NonPhysicalError
+
+TRIANGLE_RTOL = 1e-12
+"""Relative tolerance (of the largest principal moment) of the triangle inequalities: a body on the boundary
+(a lamina, one second moment of mass zero) is physical and its moments carry round-off."""
+
+
+def _finite(values) -> bool:
+    return all(isinstance(x, (int, float, np.floating, np.integer)) and math.isfinite(x) for x in values)
+
+
+def second_moments(moments) -> np.ndarray:
+    """Second moments of mass Sigma_k = (I_i + I_j - I_k) / 2 [kg m^2] along the axes of the moments (I_1, I_2, I_3).
+
+    Sigma_k = integral of x_k^2 dm: a body exists iff all three are >= 0, i.e. iff the moments satisfy the
+    triangle inequalities I_k <= I_i + I_j."""
+    I = np.asarray(moments, dtype=float)
+    return 0.5 * (I.sum() - 2.0 * I)
+
+
+def nearest_physical_moments(moments) -> np.ndarray:
+    """The physical principal moments nearest to ``moments`` in second moments of mass: negative Sigma_k set to 0.
+
+    For a diagonal tensor this is the projection of the second-moment matrix diag(Sigma) onto the positive
+    semi-definite cone (Frobenius norm), the condition of physical consistency of a rigid body's inertia.  The
+    moments whose axes keep their second moments change as little as possible; with one negative Sigma_k the
+    moment I_k about that axis is unchanged and the two others grow by -Sigma_k."""
+    S = np.maximum(second_moments(moments), 0.0)
+    return S.sum() - S
+
+
+def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bool = True, allow_massless: bool = False) -> None:
+    """Raise :class:`NonPhysicalError` unless (mass [kg], com [m], inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg m^2])
+    can be a rigid body: finite values, mass > 0, a symmetric positive-definite rotational inertia whose principal
+    moments satisfy the triangle inequalities I_k <= I_i + I_j (``check_triangle``), i.e. no negative second moment
+    of mass.  ``inertia`` may also be a 3x3 matrix.  ``allow_massless``: mass 0 with a zero inertia is accepted
+    (a frame-only link of a URDF)."""
+    I3 = np.asarray(inertia)
+    if I3.shape == (3, 3):
+        if not (I3.dtype.kind in "iuf" and np.all(np.isfinite(I3))) or not np.allclose(
+                I3, I3.T, rtol=0.0, atol=1e-12 * max(1e-300, float(np.abs(I3).max()))):
+            raise NonPhysicalError(f"{body}: inertia must be a finite symmetric 3x3 matrix, got {I3.tolist()}")
+        inertia = (float(I3[0, 0]), float(I3[1, 1]), float(I3[2, 2]), float(I3[0, 1]), float(I3[0, 2]), float(I3[1, 2]))
+    if allow_massless and _finite([mass]) and mass == 0.0:
+        if all(float(x) == 0.0 for x in inertia):
+            return
+        raise NonPhysicalError(f"{body}: a massless body cannot have a rotational inertia, got {tuple(inertia)!r}")
+    if not (_finite([mass]) and mass > 0.0):
+        raise NonPhysicalError(f"{body}: mass must be a positive finite number of kg, got {mass!r}")
+    com = [float(c) for c in com] if _finite(list(np.ravel(com))) else com
+    if len(com) != 3 or not _finite(com):
+        raise NonPhysicalError(f"{body}: centre of mass must be 3 finite coordinates in m, got {com!r}")
+    if len(inertia) != 6 or not _finite(inertia):
+        raise NonPhysicalError(f"{body}: inertia must be 6 finite values (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) in kg m^2, got {inertia!r}")
+    ixx, iyy, izz, ixy, ixz, iyz = (float(x) for x in inertia)
+    diagonal = ixy == 0.0 and ixz == 0.0 and iyz == 0.0
+    moments = np.array([ixx, iyy, izz]) if diagonal else np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
+    names = ("I_xx", "I_yy", "I_zz") if diagonal else ("I_1", "I_2", "I_3")
+    axes = ("x", "y", "z") if diagonal else ("principal axis 1", "principal axis 2", "principal axis 3")
+    if moments.min() <= 0.0:
+        k = int(np.argmin(moments))
+        raise NonPhysicalError(f"{body}: rotational inertia must be positive definite, got {names[k]} = {moments[k]:.6g} kg m^2 "
+                               f"(inertia {tuple(inertia)!r})")
+    if not check_triangle:
+        return
+    sigma = second_moments(moments)
+    k = int(np.argmin(sigma))
+    if sigma[k] < -TRIANGLE_RTOL * moments.max():
+        i, j = (m for m in range(3) if m != k)
+        raise NonPhysicalError(
+            f"{body}: principal moments {tuple(float(x) for x in moments)} kg m^2 break the triangle inequality "
+            f"{names[k]} <= {names[i]} + {names[j]}: {moments[k]:.6g} > {moments[i] + moments[j]:.6g} by {-2.0 * sigma[k]:.4g} kg m^2, "
+            f"a negative second moment of mass along {axes[k]} ({sigma[k]:.4g} kg m^2)")
