@@ -68,6 +68,12 @@ def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     return as_vector(a, a.shape[0], name)
 
 
+def xi_names(n_arm: int, arm_names=None) -> tuple[str, ...]:
+    """Names of the thesis coordinates: x, y, z, phi, theta, psi, then the arm joints (default q1..qn)."""
+    arm = tuple(arm_names) if arm_names is not None else tuple(f"q{i + 1}" for i in range(n_arm))
+    return ("x", "y", "z", "phi", "theta", "psi", *arm)
+
+
 def wrap_angle(a):
     """Angle(s) wrapped to [-pi, pi) [rad] (floats or arrays)."""
     return (a + _PI) % _TWO_PI - _PI

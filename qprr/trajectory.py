@@ -1,9 +1,10 @@
-"""Reference trajectories in thesis coordinates xi = [x, y, z, phi, theta, psi, r0, theta2, theta3].
+"""Reference trajectories in thesis coordinates xi = [x, y, z, phi, theta, psi, q_arm] (any platform).
 
 * :func:`transition` is the law of Thesis (6.16) with its first four time derivatives.
 * :class:`MultiPhase` chains such transitions per coordinate (the missions of Thesis
-  Sec. 6.3.1.4 and 6.3.3.3); :func:`static_mission`, :func:`dynamic_mission` build them.
-* :class:`Spiral` is the spiral of Thesis (6.25) after a vertical climb.
+  Sec. 6.3.1.4 and 6.3.3.3 are built in :mod:`qprr.thesis.missions`); :func:`hover_and_reach`
+  is a mission for any platform.
+* :class:`Spiral` is the spiral of Thesis (6.25) after a vertical climb; :class:`Hold` a constant.
 
 A trajectory is any object with ``sample(t) -> TrajectorySample`` for an array of times;
 the simulator samples the whole horizon once before the loop (references depend on time
@@ -35,18 +36,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .coordinates import as_vector
-from .errors import InputError, ShapeError
-
-XI_NAMES = ("x", "y", "z", "phi", "theta", "psi", "r0", "theta2", "theta3")
-"""Names of the nine thesis coordinates, in order."""
-
-_INDEX = {name: i for i, name in enumerate(XI_NAMES)}
+from .charts import as_array, as_vector, xi_names
+from .errors import InputError, UnknownNameError
 
 
 @dataclass(frozen=True)
 class TrajectorySample:
-    """Reference positions, rates and accelerations, each of shape (n, 9) (thesis coordinates)."""
+    """Reference positions, rates and accelerations, each of shape (m, 6 + n_arm) (thesis coordinates)."""
 
     t: np.ndarray
     xi: np.ndarray
@@ -130,8 +126,6 @@ def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, or
     if order not in (0, 1, 2, 3, 4):
         raise InputError(f"order must be 0..4, got {order!r}")
     if law not in LAWS:
-        from .errors import UnknownNameError
-
         raise UnknownNameError("transition law", law, LAWS)
     t = np.asarray(t, dtype=float)
     T = t2 - t1
@@ -146,18 +140,20 @@ def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, or
 
 @dataclass(frozen=True)
 class Phase:
-    """One transition of one coordinate: ``coordinate`` goes to ``value`` between t1 and t2 [s]."""
+    """One transition of one coordinate: ``coordinate`` (a name of xi, e.g. "z", "theta2", or its index)
+    goes to ``value`` between t1 and t2 [s]."""
 
-    coordinate: str
+    coordinate: str | int
     t1: float
     t2: float
     value: float
 
     def __post_init__(self) -> None:
-        if self.coordinate not in _INDEX:
-            from .errors import UnknownNameError
-
-            raise UnknownNameError("coordinate", self.coordinate, XI_NAMES)
+        if not isinstance(self.coordinate, (str, int)) or isinstance(self.coordinate, bool):
+            raise InputError(f"phase coordinate must be a name or an index of xi, got {self.coordinate!r}")
+        for name in ("t1", "t2", "value"):
+            if not isinstance(getattr(self, name), (int, float)) or isinstance(getattr(self, name), bool):
+                raise InputError(f"phase {self.coordinate!r}: {name} must be a number, got {getattr(self, name)!r}")
         if not (np.isfinite(self.t1) and np.isfinite(self.t2) and self.t2 > self.t1 >= 0.0):
             raise InputError(f"phase {self.coordinate!r}: need 0 <= t1 < t2, got t1 = {self.t1!r}, t2 = {self.t2!r}")
         if not np.isfinite(self.value):
@@ -166,34 +162,58 @@ class Phase:
 
 @dataclass(frozen=True)
 class MultiPhase:
-    """Sequence of (6.16) transitions per coordinate from ``xi0`` (phases of one coordinate must not overlap)."""
+    """Sequence of (6.16) transitions per coordinate from ``xi0`` (phases of one coordinate must not overlap).
+
+    ``names``: the names of xi's entries (default x, y, z, phi, theta, psi, q1..qn; pass
+    ``platform.xi_names`` to use the arm joints' names).
+    """
 
     phases: tuple[Phase, ...]
     xi0: tuple[float, ...] = (0.0,) * 9
     name: str = "multi-phase"
     law: str = DEFAULT_LAW
+    names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        as_vector(self.xi0, 9, "xi0")
+        xi0 = as_array(self.xi0, "xi0")
+        if xi0.ndim != 1 or xi0.shape[0] < 6 or not np.all(np.isfinite(xi0)):
+            raise InputError(f"xi0 must be 6 + n_arm finite values, got {self.xi0!r}")
+        names = tuple(self.names) if self.names is not None else xi_names(xi0.shape[0] - 6)
+        if len(names) != xi0.shape[0]:
+            raise InputError(f"names has {len(names)} entries for xi0 of {xi0.shape[0]}")
+        object.__setattr__(self, "names", names)
         if self.law not in LAWS:
-            from .errors import UnknownNameError
-
             raise UnknownNameError("transition law", self.law, LAWS)
-        for c in XI_NAMES:
-            ph = sorted((p for p in self.phases if p.coordinate == c), key=lambda p: p.t1)
+        index = self._index
+        for p in self.phases:
+            if not isinstance(p, Phase):
+                raise InputError(f"phases must be Phase objects, got {type(p).__name__}")
+            index(p.coordinate)
+        for c in range(len(names)):
+            ph = sorted((p for p in self.phases if index(p.coordinate) == c), key=lambda p: p.t1)
             for p, nxt in zip(ph, ph[1:]):
                 if nxt.t1 < p.t2:
-                    raise InputError(f"phases of {c!r} overlap: [{p.t1}, {p.t2}] and [{nxt.t1}, {nxt.t2}]")
+                    raise InputError(f"phases of {names[c]!r} overlap: [{p.t1}, {p.t2}] and [{nxt.t1}, {nxt.t2}]")
+
+    def _index(self, coordinate) -> int:
+        if isinstance(coordinate, str):
+            if coordinate not in self.names:
+                raise UnknownNameError("coordinate", coordinate, self.names)
+            return self.names.index(coordinate)
+        if not 0 <= coordinate < len(self.names):
+            raise UnknownNameError("coordinate index", coordinate, tuple(str(i) for i in range(len(self.names))))
+        return int(coordinate)
 
     def sample(self, t) -> TrajectorySample:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         n = t.shape[0]
+        m = len(self.names)
         xi = np.tile(np.asarray(self.xi0, dtype=float), (n, 1))
-        xd = np.zeros((n, 9))
-        xdd = np.zeros((n, 9))
+        xd = np.zeros((n, m))
+        xdd = np.zeros((n, m))
         current = list(self.xi0)
-        for p in sorted(self.phases, key=lambda p: (p.coordinate, p.t1)):
-            i = _INDEX[p.coordinate]
+        for p in sorted(self.phases, key=lambda p: (self._index(p.coordinate), p.t1)):
+            i = self._index(p.coordinate)
             s, sd, sdd = transition(t, p.t1, p.t2, 0.0, p.value - current[i], order=2, law=self.law)
             xi[:, i] += s
             xd[:, i] += sd
@@ -206,34 +226,23 @@ class MultiPhase:
         return self.sample([max(p.t2 for p in self.phases)]).xi[0]
 
 
-STATIC_TARGET = (3.0, 6.0, 10.0, 0.0, 0.04, 0.2, 0.6)
-"""xi_d = [x_b, y_b, z_b, psi, r0, theta2, theta3] of Thesis Sec. 6.3.1.4."""
-
-
-def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10.0), y_phase=(10.0, 15.0),
-                   arm_phase=(15.0, 25.0), law: str = DEFAULT_LAW) -> MultiPhase:
-    """The mission of Thesis Sec. 6.3.1.4 / 6.3.3.3: climb in z 0-5 s, x 5-10 s, y 10-15 s, arm 15-25 s.
-
-    ``target`` = [x, y, z, psi, r0, theta2, theta3] (default [3, 6, 10, 0, 0.04, 0.2, 0.6]).
-    The arm starts straight (r0 = theta2 = theta3 = 0); yaw is held at ``psi``.
-    """
-    x, y, z, psi, r0, t2, t3 = as_vector(target, 7, "target")
-    phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
-    phases += [Phase(c, *arm_phase, val) for c, val in (("r0", r0), ("theta2", t2), ("theta3", t3)) if val != 0.0]
-    xi0 = (0.0, 0.0, 0.0, 0.0, 0.0, psi, 0.0, 0.0, 0.0)
-    return MultiPhase(tuple(phases), xi0, name="static-mission", law=law)
-
-
-def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_phase=(15.0, 25.0),
+def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0, 3.0), reach=(3.0, 6.0), psi: float = 0.0,
                     law: str = DEFAULT_LAW) -> MultiPhase:
-    """Mission of Thesis Sec. 6.3.3.3: same flight phases, theta2 -> ``theta2_d`` in 15-25 s.
+    """A mission for any platform: climb from the origin to ``p_hover`` [m] (world), then move the arm to ``q_arm``.
 
-    r0 and theta3 references are left at 0: the CoG stabiliser (BSG) computes them.
+    ``q_arm`` (default: 60 % of the way from the neutral posture to the upper limit of each joint)
+    must lie inside the joint limits; the arm starts at its neutral posture; yaw held at ``psi``.
     """
-    x, y, z = as_vector(p_target, 3, "p_target")
-    phases = (Phase("z", 0.0, 5.0, z), Phase("x", 5.0, 10.0, x), Phase("y", 10.0, 15.0, y),
-              Phase("theta2", *arm_phase, float(theta2_d)))
-    return MultiPhase(phases, name="dynamic-mission", law=law)
+    p = as_vector(p_hover, 3, "p_hover")
+    q0 = platform.neutral_q()[7:]
+    if q_arm is None:
+        hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q0 + 1.0)
+        q_arm = q0 + 0.6 * (hi - q0)
+    q_arm = platform.check_arm_limits(q_arm)
+    phases = [Phase(i, *climb, float(p[i])) for i in range(3) if p[i] != 0.0]
+    phases += [Phase(6 + k, *reach, float(q_arm[k])) for k in range(platform.n_arm) if q_arm[k] != q0[k]]
+    xi0 = (0.0, 0.0, 0.0, 0.0, 0.0, float(psi), *q0.tolist())
+    return MultiPhase(tuple(phases), xi0, name="hover-and-reach", law=law, names=platform.xi_names)
 
 
 @dataclass(frozen=True)
@@ -259,7 +268,7 @@ class Spiral:
     t_f: float = 5.0
     rate: float = 0.2
     period: float = 20.0
-    arm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    arm: tuple[float, ...] = (0.0, 0.0, 0.0)
     blend: float = 2.0
     name: str = field(default="spiral", compare=False)
 
@@ -270,12 +279,13 @@ class Spiral:
     def sample(self, t) -> TrajectorySample:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         n = t.shape[0]
-        xi = np.zeros((n, 9))
-        xd = np.zeros((n, 9))
-        xdd = np.zeros((n, 9))
+        m = 6 + len(self.arm)
+        xi = np.zeros((n, m))
+        xd = np.zeros((n, m))
+        xdd = np.zeros((n, m))
         z, zd, zdd = transition(t, 0.0, self.climb_time, 0.0, self.z, order=2)
         xi[:, 2], xd[:, 2], xdd[:, 2] = z, zd, zdd
-        xi[:, 6:9] = self.arm
+        xi[:, 6:] = self.arm
         on = t >= self.t_f
         w = 2.0 * np.pi / self.period
         r = self.rate * (t - self.t_f)
@@ -298,25 +308,15 @@ class Spiral:
 
 @dataclass(frozen=True)
 class Hold:
-    """Constant reference ``xi`` (hover tests)."""
+    """Constant reference ``xi`` (6 + n_arm values; hover tests)."""
 
     xi: tuple[float, ...] = (0.0,) * 9
     name: str = field(default="hold", compare=False)
 
     def sample(self, t) -> TrajectorySample:
         t = np.atleast_1d(np.asarray(t, dtype=float))
-        x = as_vector(self.xi, 9, "xi")
+        x = as_array(self.xi, "xi")
+        if x.ndim != 1 or x.shape[0] < 6 or not np.all(np.isfinite(x)):
+            raise InputError(f"Hold xi must be 6 + n_arm finite values, got {self.xi!r}")
         n = t.shape[0]
-        return TrajectorySample(t, np.tile(x, (n, 1)), np.zeros((n, 9)), np.zeros((n, 9)))
-
-
-def check_sample(sample: TrajectorySample, n: int) -> None:
-    """Raise ShapeError/NonFiniteError if a trajectory returned wrong arrays for n times."""
-    for name in ("xi", "xi_dot", "xi_ddot"):
-        a = getattr(sample, name)
-        if a.shape != (n, 9):
-            raise ShapeError(f"trajectory sample {name} must have shape ({n}, 9), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            from .errors import NonFiniteError
-
-            raise NonFiniteError(f"trajectory sample {name} has non-finite entries")
+        return TrajectorySample(t, np.tile(x, (n, 1)), np.zeros((n, x.shape[0])), np.zeros((n, x.shape[0])))

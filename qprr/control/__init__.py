@@ -1,63 +1,78 @@
-"""Controllers of Thesis Chapter 6.
+"""Controllers for any platform: one inverse-dynamics core, model-free control, impedance control.
 
 Each controller is a :class:`~qprr.control.base.Controller` with one method
-``step(t, state, ref) -> u`` (u: generalised forces in thesis coordinates); the simulator
-(:func:`qprr.sim.simulate`) never needs to know which one runs.
+``step(t, state, ref) -> u`` (u: generalised forces in thesis coordinates, or Pinocchio's tau
+for ``output = "pinocchio"``); the simulator (:func:`qprr.sim.simulate`) never needs to know
+which one runs.
 
-========  ============================================================  ===================
-name      controller                                                    thesis
-========  ============================================================  ===================
-``idc``   :class:`InverseDynamicsController`                            Sec. 6.3.1, (6.17)-(6.24)
-``dsid``  :class:`DesiredStateInverseDynamics` (the thesis's "MPC")      Annex A.2, (A.2)-(A.3)
-``mfc``   :class:`ModelFreeController` (iPID)                           Sec. 6.3.3.2, (6.36)-(6.39)
-========  ============================================================  ===================
+===============  ======================================================  ================================
+name             controller                                              thesis
+===============  ======================================================  ================================
+``idc``          :class:`InverseDynamicsController`                      Sec. 6.3.1, (6.17)-(6.24)
+``dsid``         :class:`DesiredStateInverseDynamics` (thesis: "MPC")     Annex A.2, (A.2)-(A.3)
+``mfc``          :class:`ModelFreeController` (iPID)                     Sec. 6.3.3.2, (6.36)-(6.39)
+``layered-idc``  :class:`LayeredIDC`                                     Sec. 6.4.2, (6.53)-(6.57), (6.76)
+``payload-idc``  :class:`PayloadIDC` (estimated payload mass)            (6.53)-(6.57)
+``impedance``    :class:`ImpedanceController`                            Sec. 6.4.3.3, (6.71)-(6.81)
+===============  ======================================================  ================================
 
-:class:`CogStabilizer` (BSG, Sec. 6.3.3.1) wraps any of them.
+The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
+:mod:`qprr.thesis.bsg`; a receding-horizon MPC on crocoddyl in :mod:`qprr.control.mpc` (extra ``mpc``).
 """
 
 from __future__ import annotations
 
 from ..errors import UnknownNameError
-from ..model import Robot
-from .base import CommandFilter, Controller, Reference, State
-from .bsg import CogStabilizer, cog_betas, x_cm_thesis
-from .idc import DesiredStateInverseDynamics, IDCGains, InverseDynamicsController
-from .mfc import MFCGains, ModelFreeController, ipid, ipid_thesis_printed
+from ..platform import Platform
+from .base import Controller, Reference
+from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
+from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
+from .inverse_dynamics import (
+    DesiredStateInverseDynamics,
+    IDCGains,
+    InverseDynamicsController,
+    LayeredIDC,
+    PayloadIDC,
+)
+from .mfc import MFCGains, ModelFreeController, ipid
 
 CONTROLLERS = {
     "idc": InverseDynamicsController,
     "dsid": DesiredStateInverseDynamics,
     "mfc": ModelFreeController,
+    "layered-idc": LayeredIDC,
+    "payload-idc": PayloadIDC,
+    "impedance": ImpedanceController,
 }
 """Controller classes by name."""
 
-THESIS_NAMES = {"idc": "IDC", "dsid": "MPC", "mfc": "MFC"}
-"""What the thesis calls each controller (Table 6.3 columns)."""
 
-
-def make_controller(name: str, robot: Robot, **kwargs) -> Controller:
-    """A new controller by name (``idc``, ``dsid``, ``mfc``); keyword arguments go to its constructor."""
+def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
+    """A new controller by name (see :data:`CONTROLLERS`); keyword arguments go to its constructor."""
     if name not in CONTROLLERS:
         raise UnknownNameError("controller", name, tuple(CONTROLLERS))
-    return CONTROLLERS[name](robot, **kwargs)
+    return CONTROLLERS[name](platform, **kwargs)
 
 
 __all__ = [
     "CONTROLLERS",
-    "THESIS_NAMES",
-    "CogStabilizer",
     "CommandFilter",
     "Controller",
     "DesiredStateInverseDynamics",
     "IDCGains",
+    "ImpedanceController",
+    "ImpedanceFilter",
+    "ImpedanceGains",
     "InverseDynamicsController",
+    "LayeredIDC",
     "MFCGains",
     "ModelFreeController",
+    "PayloadIDC",
     "Reference",
-    "State",
-    "cog_betas",
+    "SingleTiltReference",
+    "TiltReference",
+    "analytic_wrench",
     "ipid",
-    "ipid_thesis_printed",
     "make_controller",
-    "x_cm_thesis",
+    "tilt_6_17",
 ]

@@ -1,4 +1,4 @@
-"""Position-based impedance control of the Q-PRR, Thesis Sec. 6.4.3.3 ((6.71), (6.74)-(6.81)).
+"""Position-based impedance control of any platform, Thesis Sec. 6.4.3.3 ((6.71), (6.74)-(6.81)).
 
 Impedance filters (second order, diagonal) turn the measured interaction into a deviation of
 the reference that the inner loop then tracks:
@@ -18,78 +18,62 @@ Delta = (reference) - (desired): the reference yields along the external force a
 steady-state deflection is +K^-1 h.
 
 Control law (6.76): u = B alpha + C xi_dot + G - u_e(h), i.e. the inverse dynamics of
-:class:`qprr.control.payload_idc.LayeredIDC` plus the compensation of the measured wrench
+:class:`qprr.control.inverse_dynamics.LayeredIDC` plus the compensation of the measured wrench
 (it cancels u_e in (6.58) exactly when the measurement is exact); (6.80) and (6.81) are its
 position and arm rows.  alpha comes from (6.77) (attitude PD), (6.78) (position) and (6.79)
-(arm PI) around the impedance-filtered references; gains :meth:`LayeredGains.table_6_7`
-(printed) or :meth:`LayeredGains.impedance_default` (made stable, see there).
+(arm PI) around the impedance-filtered references; gains of :mod:`qprr.thesis.gains`
+(``table_6_7`` printed, ``impedance_default`` made stable) or any :class:`IDCGains`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
+from scipy.linalg import expm
 
-from ..coordinates import as_vector, euler_rate_matrix, euler_to_rotation
+from ..charts import State, as_vector, euler_rate_matrix, euler_to_rotation
 from ..errors import InputError
-from ..model import Robot
-from .base import Reference, State
-from .payload_idc import LayeredGains, LayeredIDC
+from ..platform import Platform
+from .base import Reference
+from .inverse_dynamics import IDCGains, LayeredIDC
 
 Quad = tuple[float, float, float, float]
-Triple = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
 class ImpedanceGains:
-    """Diagonal impedance parameters of (6.74) (base, eta = [x, y, z, psi]) and (6.75) (arm, [r0, theta2, theta3])."""
+    """Diagonal impedance parameters of (6.74) (base, eta = [x, y, z, psi]) and (6.75) (arm joints).
+
+    ``*_base``: 4 values > 0; ``*_arm``: one value per arm joint (or one for all) > 0.  Table 6.7's
+    values are in :mod:`qprr.thesis.gains`.
+    """
 
     M_base: Quad = (0.1, 0.1, 0.1, 0.1)
     D_base: Quad = (1.0, 1.0, 1.0, 1.0)
     K_base: Quad = (0.5, 0.5, 0.5, 0.5)
-    M_arm: Triple = (0.02, 0.02, 0.02)
-    D_arm: Triple = (1.0, 1.0, 1.0)
-    K_arm: Triple = (0.08, 0.08, 0.08)
+    M_arm: tuple[float, ...] | float = 0.02
+    D_arm: tuple[float, ...] | float = 1.0
+    K_arm: tuple[float, ...] | float = 2.5
 
     def __post_init__(self) -> None:
         for name in ("M_base", "D_base", "K_base", "M_arm", "D_arm", "K_arm"):
-            v = getattr(self, name)
-            n = 4 if name.endswith("base") else 3
-            if len(v) != n or not all(np.isfinite(x) and x > 0.0 for x in v):
-                raise InputError(f"impedance {name} must be {n} finite numbers > 0, got {v!r}")
+            v = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            if (name.endswith("base") and v.shape != (4,)) or v.ndim != 1 or not np.all(np.isfinite(v) & (v > 0.0)):
+                raise InputError(f"impedance {name} must be {'4' if name.endswith('base') else 'n_arm (or 1)'} finite numbers > 0, "
+                                 f"got {getattr(self, name)!r}")
 
-    @classmethod
-    def table_6_7(cls) -> ImpedanceGains:
-        """Thesis Table 6.7: M_D = 0.1 I4, D_D = I4, K_P = 0.5 I4; M_D^q = 0.02 I3, D_D^q = I3, K_P^q = 0.08 I3."""
-        return cls()
-
-    @classmethod
-    def default(cls) -> ImpedanceGains:
-        """Table 6.7 with the slider stiffness raised to 2.5 N/m.
-
-        With K_P^q = 0.08 N/m the slider yields 0.625 m under the 0.05 N of Sec. 6.4.3.4,
-        15 times its +-0.04 m stroke; 2.5 N/m gives 0.02 m.  Its damping follows to keep the
-        printed time constant of the fast pole (D = 1 N s/m).
-        """
-        return replace(cls(), K_arm=(2.5, 0.08, 0.08))
-
-
-def _expm(A: np.ndarray) -> np.ndarray:
-    """Matrix exponential by scaling and squaring of a degree-18 Taylor series (small dense matrices)."""
-    norm = float(np.abs(A).sum(axis=1).max())
-    s = max(0, int(math.ceil(math.log2(norm))) + 1) if norm > 0.5 else 0
-    X = A / (2.0**s)
-    E = np.eye(A.shape[0])
-    term = np.eye(A.shape[0])
-    for k in range(1, 19):
-        term = term @ X / k
-        E = E + term
-    for _ in range(s):
-        E = E @ E
-    return E
+    def arm(self, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, D, K) of the arm filter for ``n_arm`` joints."""
+        out = []
+        for name in ("M_arm", "D_arm", "K_arm"):
+            v = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            if v.shape[0] not in (1, n_arm):
+                raise InputError(f"impedance {name} has {v.shape[0]} entries for {n_arm} arm joints")
+            out.append(np.broadcast_to(v, (n_arm,)).copy())
+        return tuple(out)
 
 
 class ImpedanceFilter:
@@ -122,7 +106,7 @@ class ImpedanceFilter:
             A = np.zeros((3, 3))
             A[0, 1] = 1.0
             A[1, 0], A[1, 1], A[1, 2] = -self.K[i] / self.M[i], -self.D[i] / self.M[i], 1.0 / self.M[i]
-            E = _expm(A * dt)
+            E = expm(A * dt)
             self._Phi[i], self._Gam[i] = E[0:2, 0:2], E[0:2, 2]
         self._dt = dt
 
@@ -166,23 +150,27 @@ class ImpedanceController(LayeredIDC):
 
     name = "impedance"
 
-    def __init__(self, robot: Robot, gains: LayeredGains | None = None, impedance: ImpedanceGains | None = None, *,
+    def __init__(self, platform: Platform, gains: IDCGains | None = None, impedance: ImpedanceGains | None = None, *,
                  ee_sensor: Callable[[float], np.ndarray] | None = None,
                  base_sensor: Callable[[float], np.ndarray] | None = None,
                  compensate: bool = True, limit_margin: float = 1e-3) -> None:
-        super().__init__(robot, LayeredGains.impedance_default() if gains is None else gains,
-                         ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
-        self.name = "impedance"
-        self.impedance = ImpedanceGains.default() if impedance is None else impedance
+        self.impedance = ImpedanceGains() if impedance is None else impedance
+        if not isinstance(self.impedance, ImpedanceGains):
+            raise InputError(f"impedance must be an ImpedanceGains, got {type(self.impedance).__name__}")
+        self.impedance.arm(platform.n_arm)  # sizes checked now
+        if not (isinstance(limit_margin, (int, float)) and math.isfinite(limit_margin) and limit_margin >= 0.0):
+            raise InputError(f"limit_margin must be a number >= 0, got {limit_margin!r}")
         self.limit_margin = float(limit_margin)
+        super().__init__(platform, gains, ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
+        self.name = "impedance"
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         super().reset(state, ref, dt)
         imp = self.impedance
         self.base_filter = ImpedanceFilter(imp.M_base, imp.D_base, imp.K_base)
-        self.arm_filter = ImpedanceFilter(imp.M_arm, imp.D_arm, imp.K_arm)
+        self.arm_filter = ImpedanceFilter(*imp.arm(self.platform.n_arm))
         self.saturated_steps = 0
-        self._u_e = np.zeros(9)
+        self._u_e = np.zeros(self.platform.n_xi)
         self._h_b = np.zeros(4)
         self.log: list[np.ndarray] = []
 
@@ -195,25 +183,26 @@ class ImpedanceController(LayeredIDC):
         ref.xi[idx] += d
         ref.xi_dot[idx] += dd
         ref.xi_ddot[idx] += ddd
-        qa, qad, qadd = self.arm_filter.step(u_e[6:9], dt)
-        lo = self.robot.params.lower_limits + self.limit_margin
-        hi = self.robot.params.upper_limits - self.limit_margin
-        target = ref.xi[6:9] + qa
+        qa, qad, qadd = self.arm_filter.step(u_e[6:], dt)
+        lo = self.platform.arm_lower + self.limit_margin
+        hi = self.platform.arm_upper - self.limit_margin
+        target = ref.xi[6:] + qa
         clipped = np.clip(target, lo, hi)
         if np.any(clipped != target):
             self.saturated_steps += 1
             over = clipped != target
             f = self.arm_filter
-            f.delta[over] = clipped[over] - ref.xi[6:9][over]
+            f.delta[over] = clipped[over] - ref.xi[6:][over]
             f.delta_dot[over] = 0.0
             f.delta_ddot[over] = 0.0
             qa, qad, qadd = f.delta, f.delta_dot, f.delta_ddot
-        ref.xi[6:9] += qa
-        ref.xi_dot[6:9] += qad
-        ref.xi_ddot[6:9] += qadd
+        ref.xi[6:] += qa
+        ref.xi_dot[6:] += qad
+        ref.xi_ddot[6:] += qadd
         self.log.append(np.concatenate([[t], d, qa, u_e]))
 
     def history(self) -> dict[str, np.ndarray]:
-        """Logged t, base deflection Delta_eta (n, 4), arm deflection Delta_q (n, 3), u_e (n, 9)."""
-        a = np.array(self.log) if self.log else np.zeros((0, 17))
-        return {"t": a[:, 0], "delta_eta": a[:, 1:5], "delta_q": a[:, 5:8], "u_e": a[:, 8:17]}
+        """Logged t, base deflection Delta_eta (m, 4), arm deflection Delta_q (m, n_arm), u_e (m, 6 + n_arm)."""
+        n_arm, n_xi = self.platform.n_arm, self.platform.n_xi
+        a = np.array(self.log) if self.log else np.zeros((0, 5 + n_arm + n_xi))
+        return {"t": a[:, 0], "delta_eta": a[:, 1:5], "delta_q": a[:, 5:5 + n_arm], "u_e": a[:, 5 + n_arm:]}

@@ -13,14 +13,13 @@ of the measured rate (optionally low-passed).  The iPID closes the loop:
     u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha,   e = y* - y,
 
 so that e_ddot + K_D e_dot + K_P e + K_I int e = F_est - F (6.38).  The thesis prints (6.37)
-as u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha: with (6.36) that gives
-y_ddot = F + F_est - y*_ddot - ..., not (6.38), and a tracking error with negative damping
-(:func:`ipid_thesis_printed`, disproved in tests/test_control.py).
+with the opposite sign, which gives a tracking error with negative damping
+(:func:`qprr.thesis.printed.ipid_thesis_printed`, disproved in tests/test_control.py).
 
 As in the IDC, roll and pitch references come from u_fb through (6.17) and a command filter;
 the MFC needs no model: alpha_i = 1 / B_ii is evaluated once at the initial configuration
 ("alpha is chosen so that the three terms of (6.36) have the same magnitude").
-Gains: K_P = 60, K_I = 8, K_D = 35 for every coordinate (Sec. 6.3.3.2).
+Gains: K_P = 60, K_I = 8, K_D = 35 for every coordinate (Sec. 6.3.3.2), for any platform.
 """
 
 from __future__ import annotations
@@ -31,10 +30,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..coordinates import as_vector, rate_map
+from ..charts import State, rate_map
 from ..errors import InputError
-from ..model import Robot
-from .base import Controller, Reference, State, TiltReference
+from ..platform import Platform
+from .base import Controller, Reference
+from .filters import TiltReference
 
 _PI = math.pi
 _TWO_PI = 2.0 * math.pi
@@ -46,18 +46,13 @@ def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, 
     return (-F_est + y_ddot_ref + kp * e + ki * e_int + kd * e_dot) / alpha
 
 
-def ipid_thesis_printed(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
-                        kp: float, ki: float, kd: float) -> float:
-    """(6.37) exactly as printed: u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha (wrong sign, see module docstring)."""
-    return (F_est - y_ddot_ref - kp * e - ki * e_int - kd * e_dot) / alpha
-
-
 @dataclass(frozen=True)
 class MFCGains:
-    """iPID gains per coordinate (x, y, z, phi, theta, psi, r0, theta2, theta3) and estimator settings.
+    """iPID gains per coordinate (x, y, z, phi, theta, psi, then the arm joints) and estimator settings.
 
-    ``kp``, ``ki``, ``kd``: 60, 8, 35 for all (Sec. 6.3.3.2, printed).  The rest is not printed;
-    chosen values and why (static mission, measured):
+    ``kp``, ``ki``, ``kd``: 60, 8, 35 for all (Sec. 6.3.3.2, printed); None: those for every
+    coordinate of the platform.  The rest is not printed; chosen values and why (Q-PRR, static
+    mission, measured):
 
     * ``alpha`` (None: ``alpha_scale`` (B^-1)_ii at the initial state, scale 3, one common
       value for x, y, z).  F_est uses the previous step's inputs, so the coupled channels
@@ -67,7 +62,7 @@ class MFCGains:
       [0.05, 2.34] at hover).  Measured on the static mission: c = 2 tracks the arm ten
       times worse than c = 3; c = 4 and 6 are worse again.
     * ``f_filter`` [s]: first-order low-pass on F_est per coordinate (0.2 s on x, y, none
-      elsewhere).  B sits 2.5 cm below the CoG, so a pitch acceleration moves B sideways at
+      elsewhere; None: that for any platform).  B sits 2.5 cm below the CoG, so a pitch acceleration moves B sideways at
       once; unfiltered, F_x feeds that straight back into the pitch reference.
     * ``filter_omega`` (15 rad/s): bandwidth of the feedback part of the roll/pitch reference
       (:class:`~qprr.control.base.TiltReference`).  With K_D = 35 on the velocity of B the
@@ -75,37 +70,42 @@ class MFCGains:
       damping must exceed it: 50 rad/s diverges, 30 tracks poorly, 12-20 are best, 8 lags.
     """
 
-    kp: tuple[float, ...] = (60.0,) * 9
-    ki: tuple[float, ...] = (8.0,) * 9
-    kd: tuple[float, ...] = (35.0,) * 9
+    kp: tuple[float, ...] | None = None
+    ki: tuple[float, ...] | None = None
+    kd: tuple[float, ...] | None = None
     alpha: tuple[float, ...] | None = None
     alpha_scale: float = 3.0
-    f_filter: tuple[float, ...] = (0.2, 0.2) + (0.0,) * 7
+    f_filter: tuple[float, ...] | None = None
     filter_omega: float = 15.0
     max_tilt: float = 0.8
 
     def __post_init__(self) -> None:
-        for name in ("kp", "ki", "kd"):
-            a = as_vector(getattr(self, name), 9, name)
-            if np.any(a < 0):
-                raise InputError(f"{name} must be >= 0, got {a.tolist()}")
-            object.__setattr__(self, name, tuple(float(v) for v in a))
-        if self.alpha is not None:
-            a = as_vector(self.alpha, 9, "alpha")
-            if np.any(a <= 0):
-                raise InputError(f"alpha must be > 0, got {a.tolist()}")
-            object.__setattr__(self, "alpha", tuple(float(v) for v in a))
-        ff = as_vector(self.f_filter, 9, "f_filter")
-        if np.any(ff < 0):
-            raise InputError(f"f_filter must be >= 0, got {ff.tolist()}")
-        object.__setattr__(self, "f_filter", tuple(float(v) for v in ff))
-        if not (self.alpha_scale > 0 and self.filter_omega > 0 and 0 < self.max_tilt < math.pi / 2):
+        if not (isinstance(self.alpha_scale, (int, float)) and self.alpha_scale > 0 and self.filter_omega > 0
+                and 0 < self.max_tilt < math.pi / 2):
             raise InputError("need alpha_scale > 0, filter_omega > 0, 0 < max_tilt < pi/2")
+        for name in ("kp", "ki", "kd", "alpha", "f_filter"):
+            v = getattr(self, name)
+            if v is not None:
+                a = np.asarray(v, dtype=float)
+                if a.ndim != 1 or a.shape[0] < 6 or not np.all(np.isfinite(a)) or np.any(a < 0) or (name == "alpha" and np.any(a <= 0)):
+                    raise InputError(f"{name} must be 6 + n_arm finite values {'> 0' if name == 'alpha' else '>= 0'}, got {v!r}")
+                object.__setattr__(self, name, tuple(float(x) for x in a))
 
-    @classmethod
-    def thesis(cls) -> MFCGains:
-        """K_P = 60 I9, K_I = 8 I9, K_D = 35 I9 (Sec. 6.3.3.2)."""
-        return cls()
+    def resolved(self, n_xi: int) -> MFCGains:
+        """The gains with every per-coordinate vector of length ``n_xi`` (defaults filled in, sizes checked)."""
+        from dataclasses import replace
+
+        def fill(v, default, name):
+            if v is None:
+                return tuple(default)
+            if len(v) != n_xi:
+                raise InputError(f"MFC gains {name} have {len(v)} entries, the platform's xi has {n_xi}")
+            return v
+
+        return replace(self, kp=fill(self.kp, (60.0,) * n_xi, "kp"), ki=fill(self.ki, (8.0,) * n_xi, "ki"),
+                       kd=fill(self.kd, (35.0,) * n_xi, "kd"),
+                       f_filter=fill(self.f_filter, (0.2, 0.2) + (0.0,) * (n_xi - 2), "f_filter"),
+                       alpha=None if self.alpha is None else fill(self.alpha, (), "alpha"))
 
 
 class ModelFreeController(Controller):
@@ -114,18 +114,21 @@ class ModelFreeController(Controller):
     name = "mfc"
     uses_applied_force = True
 
-    def __init__(self, robot: Robot, gains: MFCGains | None = None) -> None:
-        self.robot = robot
-        self.gains = MFCGains() if gains is None else gains
-        if not isinstance(self.gains, MFCGains):
-            raise InputError(f"gains must be an MFCGains, got {type(self.gains).__name__}")
+    def __init__(self, platform: Platform, gains: MFCGains | None = None) -> None:
+        if not isinstance(platform, Platform):
+            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        self.platform = platform
+        gains = MFCGains() if gains is None else gains
+        if not isinstance(gains, MFCGains):
+            raise InputError(f"gains must be an MFCGains, got {type(gains).__name__}")
+        self.gains = gains.resolved(platform.n_xi)
         self.dt = 1e-3
-        self.reset(State(), Reference(), 1e-3)
+        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
 
     def _alpha_from_inertia(self, state: State) -> list[float]:
         """alpha_i = c (B^-1)_ii with B = S^T M S at the given state (computed once, not in the loop)."""
-        data = self.robot.model.createData()
-        M = pin.crba(self.robot.model, data, state.q)
+        data = self.platform.model.createData()
+        M = pin.crba(self.platform.model, data, state.q)
         S = rate_map(state.xi)
         Binv = np.linalg.inv(S.T @ M @ S)
         d = np.diag(Binv).copy()
@@ -136,17 +139,18 @@ class ModelFreeController(Controller):
         self.dt = dt
         g = self.gains
         self.alpha = list(g.alpha) if g.alpha is not None else self._alpha_from_inertia(state)
-        self.integral = [0.0] * 9
-        self.u_prev = [0.0] * 9
+        n = self.platform.n_xi
+        self.integral = [0.0] * n
+        self.u_prev = [0.0] * n
         self.yd_prev = None
-        self.F = [0.0] * 9
+        self.F = [0.0] * n
         self._have_F = False
         self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
-        p = self.robot.params
+        p = self.platform
         self.tilt = TiltReference(g.filter_omega, g.max_tilt, 0.05 * p.total_mass * p.g)
         self._g = p.g
         # (i, k_P,i, k_I,i, k_D,i) of the iPIDs, looked up once: outer loops, then roll and pitch
-        self._loops_outer = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (0, 1, 2, 5, 6, 7, 8))
+        self._loops_outer = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (0, 1, 2, 5, *range(6, n)))
         self._loops_tilt = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (3, 4))
 
     def _estimate_F(self, state: State) -> None:
@@ -197,7 +201,7 @@ class ModelFreeController(Controller):
         self._estimate_F(state)
         x, xd = state._xi, state._xd
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
-        u = [0.0] * 9
+        u = [0.0] * len(x)
         self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u)
         tilt = self.tilt
         tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, self.dt)

@@ -62,7 +62,7 @@ def make_stepper(method: str, model: pin.Model, dt: float) -> Callable:
     one per call).  ``f`` must not keep references to the arrays it is given (buffers are reused).
     """
     if method not in _FACTORIES:
-        from .errors import UnknownNameError
+        from ..errors import UnknownNameError
 
         raise UnknownNameError("integrator", method, tuple(_FACTORIES))
     return _FACTORIES[method](model, float(dt))

@@ -23,9 +23,12 @@ import math
 
 import numpy as np
 
+from ..charts import State
+from ..control.base import Controller, Reference
+from ..control.filters import CommandFilter
 from ..errors import InputError, UnknownNameError
-from ..model import Robot
-from .base import CommandFilter, Controller, Reference, State
+from ..platform import Platform
+from . import params_of
 
 
 def cog_betas(params) -> tuple[float, float, float]:
@@ -46,7 +49,7 @@ class CogStabilizer(Controller):
 
     name = "bsg"
 
-    def __init__(self, robot: Robot, inner: Controller, *, theta_e_d: float = 0.0, pitch: str = "measured",
+    def __init__(self, platform: Platform, inner: Controller, *, theta_e_d: float = 0.0, pitch: str = "measured",
                  filter_omega: float = 20.0) -> None:
         if pitch not in ("measured", "desired"):
             raise UnknownNameError("BSG pitch source", pitch, ("measured", "desired"))
@@ -54,13 +57,14 @@ class CogStabilizer(Controller):
             raise InputError(f"inner must be a Controller, got {type(inner).__name__}")
         if not math.isfinite(theta_e_d):
             raise InputError(f"theta_e_d must be finite, got {theta_e_d!r}")
-        self.robot = robot
+        params = params_of(platform)
+        self.platform = platform
         self.inner = inner
         self.theta_e_d = float(theta_e_d)
         self.pitch = pitch
-        self.betas = cog_betas(robot.params)
-        self.lo = robot.params.lower_limits
-        self.hi = robot.params.upper_limits
+        self.betas = cog_betas(params)
+        self.lo = params.lower_limits
+        self.hi = params.upper_limits
         self.filter_omega = float(filter_omega)
         self.name = f"bsg+{inner.name}"
         self.uses_applied_force = inner.uses_applied_force

@@ -1077,3 +1077,11 @@ def theta_e_6_34(theta: float, theta2: float, theta3: float) -> float:
     about y), not the ZYZ theta_e of (3.64), which lies in [0, pi].
     """
     return float(theta) + float(theta2) + float(theta3)
+
+
+def ipid_thesis_printed(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
+                        kp: float, ki: float, kd: float) -> float:
+    """(6.37) exactly as printed: u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha (wrong sign, see module docstring)."""
+    return (F_est - y_ddot_ref - kp * e - ki * e_int - kd * e_dot) / alpha
+
+

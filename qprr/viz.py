@@ -3,8 +3,10 @@
 :func:`plot_result` draws one 3 x 3 page: positions of B vs desired (Fig. 6.7), attitude vs
 the (6.17) references (Fig. 6.8), arm joints (Fig. 6.9), tracking errors (Fig. 6.10, 6.18),
 u_fb (Fig. 6.11), u_tau and u_mu (Fig. 6.12), rotor thrusts with their bounds, the 3-D path
-(Fig. 6.13, 6.14) and the CoG offset x_cm in B (Fig. 6.42-6.43).  Plotting stays out of the
-simulator: it reads a :class:`qprr.sim.SimResult`.
+(Fig. 6.13, 6.14) and the CoG offset in B (Fig. 6.42-6.43).  Plotting stays out of the
+simulator: it reads a :class:`qprr.sim.SimResult`.  Figures are ``matplotlib.figure.Figure``
+objects saved directly (no pyplot, no backend selected: the library never calls
+``matplotlib.use``).
 """
 
 from __future__ import annotations
@@ -13,32 +15,41 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import InputError, MissingDependencyError
 from .sim import SimResult
-from .trajectory import XI_NAMES
 
 
-def _mpl():
-    import matplotlib
+def new_figure(figsize=(16, 12)):
+    """A matplotlib Figure not attached to pyplot (saved with ``fig.savefig``; no display, no backend choice)."""
+    try:
+        from matplotlib.figure import Figure
+    except ImportError as exc:  # pragma: no cover - runtime dependency
+        raise MissingDependencyError("matplotlib", "figures", "pip install matplotlib") from exc
+    return Figure(figsize=figsize)
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
 
-    return plt
-
-
-def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, thrust_bounds=(0.0, 20.0)) -> Path:
-    """Save a 3 x 3 figure of ``res`` to ``path`` (PNG) and return the path."""
-    plt = _mpl()
+def figure_path(path: str | Path) -> Path:
+    """``path`` as a PNG path whose folder exists (a missing folder is an error naming it, not created)."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if path.suffix.lower() not in (".png", ".pdf", ".svg"):
+        raise InputError(f"figure files end in .png, .pdf or .svg, got {str(path)!r}")
+    if not path.parent.is_dir():
+        raise InputError(f"cannot write {str(path)!r}: folder {str(path.parent)!r} does not exist")
+    return path
+
+
+def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, thrust_bounds=None) -> Path:
+    """Save a 3 x 3 figure of ``res`` to ``path`` (PNG) and return the path.  ``thrust_bounds`` (f_min, f_max) [N] drawn dotted."""
+    path = figure_path(path)
+    names = res.names
     t = res.t
-    fig = plt.figure(figsize=(16, 12))
+    fig = new_figure((16, 12))
     colors = ("tab:blue", "tab:orange", "tab:green")
 
     def tracks(ax, idx, ylabel, scale=1.0):
         for c, i in zip(colors, idx):
-            ax.plot(t, scale * res.xi[:, i], color=c, label=XI_NAMES[i])
-            ax.plot(t, scale * res.xi_d[:, i], color=c, ls="--", lw=1, label=f"{XI_NAMES[i]} desired")
+            ax.plot(t, scale * res.xi[:, i], color=c, label=names[i])
+            ax.plot(t, scale * res.xi_d[:, i], color=c, ls="--", lw=1, label=f"{names[i]} desired")
         ax.set_ylabel(ylabel)
         ax.legend(fontsize=7, ncol=2)
         ax.grid(alpha=0.3)
@@ -50,17 +61,18 @@ def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, t
     tracks(ax, (3, 4, 5), "attitude [deg]", 180 / np.pi)
     ax.set_title("attitude; roll/pitch references from (6.17)")
     ax = fig.add_subplot(3, 3, 3)
-    for c, i, s, u in zip(colors, (6, 7, 8), (100.0, 1.0, 1.0), ("r0 [cm]", "theta2 [rad]", "theta3 [rad]")):
-        ax.plot(t, s * res.xi[:, i], color=c, label=u)
-        ax.plot(t, s * res.xi_d[:, i], color=c, ls="--", lw=1)
-    ax.set_ylabel("arm joints")
+    for k in range(res.n_arm):
+        i = 6 + k
+        ax.plot(t, res.xi[:, i], color=f"C{k}", label=names[i])
+        ax.plot(t, res.xi_d[:, i], color=f"C{k}", ls="--", lw=1)
+    ax.set_ylabel("arm joints [m or rad]")
     ax.set_title("arm joints (Fig. 6.9), dashed: desired")
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
 
     ax = fig.add_subplot(3, 3, 4)
     e = np.abs(res.xi_d - res.xi)
-    for i, name in enumerate(XI_NAMES):
+    for i, name in enumerate(names):
         ax.semilogy(t, np.maximum(e[:, i], 1e-12), lw=0.8, label=name)
     ax.set_ylim(1e-9, None)
     ax.set_ylabel("|error| [m, rad]")
@@ -75,7 +87,8 @@ def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, t
     ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     ax = fig.add_subplot(3, 3, 6)
-    for i, lab in zip(range(3, 9), ("u_tau,phi", "u_tau,theta", "u_tau,psi", "u_mu,r0 [N]", "u_mu,theta2", "u_mu,theta3")):
+    for i in range(3, len(names)):
+        lab = f"u_tau,{names[i]}" if i < 6 else f"u_mu,{names[i]}"
         ax.plot(t, res.u[:, i], lw=0.9, label=lab)
     ax.set_ylabel("[N m, N]")
     ax.set_title("u_tau and u_mu (Fig. 6.12)")
@@ -83,13 +96,13 @@ def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, t
     ax.grid(alpha=0.3)
 
     ax = fig.add_subplot(3, 3, 7)
-    for i in range(4):
+    for i in range(res.f.shape[1]):
         ax.plot(t, res.f[:, i], lw=0.9, label=f"f{i + 1}")
-    for b in thrust_bounds:
+    for b in thrust_bounds or ():
         ax.axhline(b, color="k", ls=":", lw=0.8)
     sat = (res.flags & 1) != 0
     if sat.any():
-        ax.plot(t[sat], np.full(sat.sum(), thrust_bounds[1]), "r|", ms=4, label="saturated")
+        ax.plot(t[sat], np.full(sat.sum(), float(res.f.max())), "r|", ms=4, label="saturated")
     ax.set_ylabel("rotor thrust [N]")
     ax.set_title("rotor thrusts (allocation, bounds dotted)")
     ax.legend(fontsize=7, ncol=3)
@@ -118,5 +131,4 @@ def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, t
                  + f"\nRMSE (6.26): {sub}", fontsize=10)
     fig.tight_layout(rect=(0, 0, 1, 0.95))
     fig.savefig(path, dpi=90)
-    plt.close(fig)
     return path

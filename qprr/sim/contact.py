@@ -1,22 +1,16 @@
-"""Interaction with the environment at the end effector, Thesis Sec. 6.4.3.
+"""Contact models at the end effector, integrated with the robot by the simulator (Thesis Sec. 6.4.3).
 
-* :func:`generalized_wrench_xi`: u_e(h) of Thesis (6.58)-(6.59), the generalised force in
-  thesis coordinates of a wrench h = [f; mu] (world axes) applied at the end-effector origin,
-  u_e = S^T J_e^T h; :func:`generalized_wrench_6_59` is the printed block form.
-* Contact models: :class:`qprr.environment.Environment` objects, the simulator's
-  ``external_wrench`` hook (world wrench at the end effector, their own state integrated with
-  the robot's by the same integrator, force evaluated at every stage) and force sensors for
-  the controllers (:meth:`measured`, sampled at the control ticks):
+Each model is an :class:`~qprr.sim.environment.Environment`: the simulator's ``external_wrench``
+hook (world wrench at the end effector, evaluated at every integration stage, its own state
+integrated with the robot's by the same integrator) and a force sensor for the controllers
+(:meth:`measured`, sampled at the control ticks).
 
-  - :class:`PushedMass`: a point object on a straight line, pushed through a unilateral
-    compliant contact (spring k, damper d, force never negative), with optional Coulomb
-    friction on the line;
-  - :class:`CompliantWall`: a fixed unilateral compliant plane;
-  - :class:`PrescribedWrench`: a wrench given as a function of time (Sec. 6.4.3.4's h).
+* :class:`PushedMass`: a point object on a straight line, pushed through a unilateral compliant
+  contact (spring k, damper d, force never negative), with optional Coulomb friction on the line;
+* :class:`CompliantWall`: a fixed unilateral compliant plane;
+* :class:`PrescribedWrench`: a wrench given as a function of time (Sec. 6.4.3.4's h).
 
-  Each control tick is logged (:meth:`history`).
-* :func:`push_model_6_66` / :func:`push_model`: the planar reduced model of pushing with the
-  thrust (Thesis (6.66)), printed and corrected.
+Each control tick is logged (:meth:`history`).
 """
 
 from __future__ import annotations
@@ -28,62 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from . import coordinates as co
-from .coordinates import as_vector
+from ..charts import as_vector
+from ..errors import InputError
+from ..platform import Platform
 from .environment import Environment
-from .errors import InputError
-from .model import Robot
 
 
-# ===================================================================== (6.58)-(6.59): u_e(h)
-def generalized_wrench_xi(robot: Robot, data: pin.Data, xi, h_world) -> np.ndarray:
-    """u_e(h) (9,) of Thesis (6.58): u_e = S(xi)^T J_e(q)^T h, h = [f; mu] in world axes at the end-effector origin.
-
-    Block form (corrected (6.59)), with p_eb and J_eb in B and T of (3.25) (omega_body = T phi_dot):
-    u_e,f = h_f;  u_e,tau = T^T (p_eb^ R_b^T h_f + R_b^T h_tau);  u_e,mu = J_eb,P^T R_b^T h_f + J_eb,O^T R_b^T h_tau.
-    """
-    xi = as_vector(xi, 9, "xi")
-    h = as_vector(h_world, 6, "h_world")
-    q = co.xi_to_q(xi)
-    J = pin.computeFrameJacobian(robot.model, data, q, robot.ee_frame, pin.LOCAL_WORLD_ALIGNED)
-    return co.rate_map(xi).T @ (J.T @ h)
-
-
-def generalized_wrench_blocks(xi, h_world, d) -> np.ndarray:
-    """The corrected block form of (6.59) in closed form (docstring of :func:`generalized_wrench_xi`)."""
-    from .thesis import T_3_25, J_eb_4_26, rotation_3_4
-
-    xi = as_vector(xi, 9, "xi")
-    h = as_vector(h_world, 6, "h_world")
-    d0, d1, d2, d3 = as_vector(d, 4, "d")
-    Rb = rotation_3_4(*xi[3:6])
-    T = T_3_25(xi[3], xi[4])
-    r0, t2, t3 = xi[6:9]
-    p_eb = np.array([r0 + d2 * math.sin(t2) + d3 * math.sin(t2 + t3), 0.0, d0 + d1 + d2 * math.cos(t2) + d3 * math.cos(t2 + t3)])
-    Jeb = J_eb_4_26(xi[6:9], (d0, d1, d2, d3))
-    fb, mb = Rb.T @ h[0:3], Rb.T @ h[3:6]
-    return np.concatenate([h[0:3], T.T @ (pin.skew(p_eb) @ fb + mb), Jeb[0:3].T @ fb + Jeb[3:6].T @ mb])
-
-
-def generalized_wrench_6_59(xi, h, d) -> np.ndarray:
-    """u_e of Thesis (6.59) as printed: [I 0; T^T p_eb^ T^T; J_ebP^T J_ebO^T] h (one h for all rows).
-
-    Consistent only at level attitude (R_b = I): the first row needs h_f in world axes, the
-    other rows need it in B.  Corrected form: :func:`generalized_wrench_blocks`.
-    """
-    from .thesis import T_3_25, J_eb_4_26
-
-    xi = as_vector(xi, 9, "xi")
-    h = as_vector(h, 6, "h")
-    d0, d1, d2, d3 = as_vector(d, 4, "d")
-    T = T_3_25(xi[3], xi[4])
-    r0, t2, t3 = xi[6:9]
-    p_eb = np.array([r0 + d2 * math.sin(t2) + d3 * math.sin(t2 + t3), 0.0, d0 + d1 + d2 * math.cos(t2) + d3 * math.cos(t2 + t3)])
-    Jeb = J_eb_4_26(xi[6:9], (d0, d1, d2, d3))
-    return np.concatenate([h[0:3], T.T @ pin.skew(p_eb) @ h[0:3] + T.T @ h[3:6], Jeb[0:3].T @ h[0:3] + Jeb[3:6].T @ h[3:6]])
-
-
-# ======================================================================= contact models
 @dataclass(frozen=True)
 class ContactHistory:
     """Log of a contact model, one row per control tick of the run (the rows of ``SimResult``).
@@ -106,11 +50,11 @@ class _Contact(Environment):
     """Unilateral compliant contact at the end effector: F = max(0, k delta + d delta_dot) while delta > 0.
 
     Subclasses give the penetration delta (:meth:`_gap`) and, if the obstacle moves, its state
-    and derivative.  An :class:`qprr.environment.Environment`: the simulator integrates the
+    and derivative.  An :class:`qprr.sim.environment.Environment`: the simulator integrates the
     state with the robot and evaluates the force at every integration stage.
     """
 
-    def __init__(self, robot: Robot, normal, stiffness: float, damping: float) -> None:
+    def __init__(self, platform: Platform, normal, stiffness: float, damping: float) -> None:
         n = as_vector(normal, 3, "normal")
         norm = float(np.linalg.norm(n))
         if norm < 1e-12:
@@ -119,11 +63,11 @@ class _Contact(Environment):
             raise InputError(f"stiffness must be > 0 N/m, got {stiffness!r}")
         if not (np.isfinite(damping) and damping >= 0.0):
             raise InputError(f"damping must be >= 0 N s/m, got {damping!r}")
-        self.robot = robot
+        self.platform = platform
         self.normal = n / norm
         self.k = float(stiffness)
         self.d = float(damping)
-        self._data = robot.model.createData()
+        self._data = platform.model.createData()
         self.reset()
 
     def reset(self) -> None:
@@ -160,9 +104,9 @@ class _Contact(Environment):
 
     def wrench(self, t: float, q, v, z=None) -> np.ndarray:
         """World wrench on the end effector with the robot at (q, v) and the obstacle at ``z`` (default: its initial state)."""
-        model, data = self.robot.model, self._data
-        J = pin.computeFrameJacobian(model, data, as_vector(q, model.nq, "q"), self.robot.ee_frame, pin.LOCAL_WORLD_ALIGNED)
-        M = data.oMf[self.robot.ee_frame]
+        model, data = self.platform.model, self._data
+        J = pin.computeFrameJacobian(model, data, as_vector(q, model.nq, "q"), self.platform.ee_frame, pin.LOCAL_WORLD_ALIGNED)
+        M = data.oMf[self.platform.ee_frame]
         z = self.initial_state() if z is None else np.asarray(z, dtype=float)
         return self.evaluate(t, M.translation, M.rotation, J @ as_vector(v, model.nv, "v"), z)[0]
 
@@ -194,7 +138,7 @@ class PushedMass(_Contact):
     (:meth:`settle`, an event resolved at step boundaries).
     """
 
-    def __init__(self, robot: Robot, *, mass: float, origin, direction=(1.0, 0.0, 0.0), position: float = 0.0,
+    def __init__(self, platform: Platform, *, mass: float, origin, direction=(1.0, 0.0, 0.0), position: float = 0.0,
                  velocity: float = 0.0, stiffness: float = 500.0, damping: float = 20.0, friction: float = 0.0,
                  g: float | None = None) -> None:
         if not (np.isfinite(mass) and mass > 0.0):
@@ -205,8 +149,8 @@ class PushedMass(_Contact):
         self.origin = as_vector(origin, 3, "origin").copy()
         self.s0, self.sd0 = float(position), float(velocity)
         self.mu = float(friction)
-        self.g = robot.params.g if g is None else float(g)
-        super().__init__(robot, direction, stiffness, damping)
+        self.g = platform.g if g is None else float(g)
+        super().__init__(platform, direction, stiffness, damping)
 
     def initial_state(self) -> np.ndarray:
         return np.array([self.s0, self.sd0])
@@ -241,9 +185,9 @@ class CompliantWall(_Contact):
     """A fixed plane through ``point`` with outward unit ``normal`` (towards the robot): F = max(0, k delta + d delta_dot),
     delta = -normal . (p_e - point) > 0 when the end effector is inside.  No state of its own."""
 
-    def __init__(self, robot: Robot, *, point, normal, stiffness: float = 2000.0, damping: float = 20.0) -> None:
+    def __init__(self, platform: Platform, *, point, normal, stiffness: float = 2000.0, damping: float = 20.0) -> None:
         self.point = as_vector(point, 3, "point").copy()
-        super().__init__(robot, -as_vector(normal, 3, "normal"), stiffness, damping)
+        super().__init__(platform, -as_vector(normal, 3, "normal"), stiffness, damping)
 
     def _gap(self, p_e, v_e, z):
         n = self.normal  # points into the wall
@@ -288,41 +232,3 @@ class PrescribedWrench(Environment):
 
     def __call__(self, t: float, q=None, v=None) -> np.ndarray:
         return self.measured(t)
-
-
-# ================================================================ (6.66): pushing with thrust
-@dataclass(frozen=True)
-class PushState:
-    """Derivative of the planar push model's state [x, x_dot, theta, theta_dot]."""
-
-    x_ddot: float
-    theta_ddot: float
-
-
-def push_model_6_66(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy: float, L: float, p_cb_z: float) -> PushState:
-    """Thesis (6.66) as printed: x_ddot = -F/M_G + sin(theta)/M_G (T1 + T3),
-    theta_ddot = F p_cb^T e3 / I_yy + L/(2 I_yy) (T3 - T1).
-
-    With the "+" rotor numbering of (3.36) (pitch torque l (f1 - f3)) and z up, the rotor
-    term has the wrong sign, and the contact term is the moment for a z-down p_cb
-    (arm hanging below the CoG): :func:`push_model`.
-    """
-    return PushState((-F_oj + math.sin(theta) * (T1 + T3)) / M_G, (F_oj * p_cb_z + 0.5 * L * (T3 - T1)) / I_yy)
-
-
-def push_model(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy: float, l: float,
-               contact_b, com_b=(0.0, 0.0, 0.0)) -> PushState:
-    """Thesis (6.66) corrected: planar model of pushing along world x with the thrust, arm locked (z up, "+" rotors).
-
-    Rotors 1 (at -l x_B) and 3 (at +l x_B) give the thrust T1 + T3 along z_B (rotors 2, 4 off or
-    balanced), the object pushes back with F_oj along -x (world) at the contact point
-    ``contact_b`` (in B); ``com_b`` is the CoG in B (x_cm, z_cm).  For the CoG:
-    x_G_ddot = (sin(theta) (T1 + T3) - F_oj) / M_G,
-    theta_ddot = [l (T1 - T3) + x_cm (T1 + T3) - F_oj (cos(theta) z_c - sin(theta) x_c)] / I_yy,
-    with (x_c, z_c) = contact_b - com_b and I_yy about the CoG (at rest, no coupling with roll/yaw).
-    """
-    c = as_vector(contact_b, 3, "contact_b") - as_vector(com_b, 3, "com_b")
-    x_cm = float(as_vector(com_b, 3, "com_b")[0])
-    st, ct = math.sin(theta), math.cos(theta)
-    moment = l * (T1 - T3) + x_cm * (T1 + T3) - F_oj * (ct * c[2] - st * c[0])
-    return PushState((st * (T1 + T3) - F_oj) / M_G, moment / I_yy)

@@ -1,0 +1,491 @@
+"""One inverse-dynamics core for any platform, of which the thesis's model-based controllers are configurations.
+
+Virtual accelerations (outer loops), per coordinate i of xi = [x, y, z, phi, theta, psi, q_arm]:
+
+    alpha_i = xi_ddot_d,i + k_D,i (xi_dot_d,i - xi_dot_i) + k_P,i (xi_d,i - xi_i) + k_I,i int (xi_d,i - xi_i)
+
+(the position PD (6.23), the attitude PID (6.20), the arm PD (6.24), or (A.3), (6.54)-(6.57),
+(6.77)-(6.79); the yaw error is wrapped).  Roll and pitch references come from the thrust vector
+u_fb, Thesis (6.17): theta_r = atan((u_x c_psi + u_y s_psi) / u_z),
+phi_r = asin((u_x s_psi - u_y c_psi) / |u_fb|), with u_fb the world force of the model at
+alpha_phi = alpha_theta = 0 (an algebraic loop otherwise) and rates from a command filter
+(:mod:`qprr.control.filters`).  Inner loop: u = B alpha + C xi_dot + G ((6.19), (6.21), (6.22)
+stacked), computed as u = S^T RNEA(q, v, S alpha + S_dot xi_dot) (one Pinocchio call instead of
+B and C).
+
+:class:`InverseDynamicsController` is that core; its options make the thesis's controllers:
+
+==============================  =============================================================
+configuration                   options
+==============================  =============================================================
+IDC (Sec. 6.3.1)                model at the measured state, split tilt filter, realizable
+desired-state ID (Annex A.2)    ``at="desired"``: B, C, G at (xi_d, xi_dot_d) ((A.2)-(A.3));
+                                the thesis calls it "MPC" though it predicts nothing
+layered IDC (Sec. 6.4.2)        ``tilt="single"``, ``realizable=False``, a payload model and the
+                                measured wrench cancelled ((6.76)) - :class:`LayeredIDC`
+payload IDC ((6.53)-(6.57))     the model carries the estimated/known payload - :class:`PayloadIDC`
+impedance (Sec. 6.4.3.3)        impedance-filtered references - :class:`qprr.control.impedance.ImpedanceController`
+==============================  =============================================================
+
+* ``realizable`` (default True): (6.19)-(6.22) assume the whole u_fb is applied, but coplanar
+  rotors only push along z_B, so the part of the base wrench the rotors cannot produce (the
+  body-lateral force) is lost and the coupled attitude and arm accelerations then differ from
+  alpha.  With ``realizable`` the base accelerations along those directions are left to the
+  dynamics (partial feedback linearisation): the applied wrench has no unproducible part and
+  the actuated accelerations equal alpha exactly.  A fully actuated platform has nothing to
+  drop: the whole u is applied.
+* ``tilt``: "split" (:class:`~qprr.control.filters.TiltReference`: the part of (6.17) due to
+  the reference acceleration filtered at 700 rad/s, the rest at ``filter_omega``) or "single"
+  (:class:`~qprr.control.filters.SingleTiltReference`); "none" for a fully actuated platform
+  flying at the attitude of the trajectory (roll/pitch references as given).
+* psi in (6.17) is the measured yaw; tilt references are clamped to ``max_tilt``; when
+  u_fb,z < 5 % of the weight (Hypothesis 2 violated) the last tilt reference is held.
+
+Gains: :class:`IDCGains` (per-coordinate vectors); under exact linearisation each error obeys
+e''' + k_D e'' + k_P e' + k_I e = 0 whatever the platform, so the defaults suit any platform.
+The thesis's printed tables are in :mod:`qprr.thesis.gains`.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..charts import FloatWriter, State, as_array, as_vector
+from ..errors import InputError, UnknownNameError
+from ..payload import MassEstimator, PayloadModel
+from ..platform import Platform
+from .base import Controller, Reference
+from .filters import SingleTiltReference, TiltReference
+
+_PI = math.pi
+_TWO_PI = 2.0 * math.pi
+_rnea, _crba = pin.rnea, pin.crba
+
+TILTS = ("split", "single", "none")
+MODEL_STATES = ("measured", "desired")
+
+
+def _gain_vector(x, n: int, name: str) -> tuple[float, ...]:
+    a = as_vector(x, n, name)
+    if np.any(a < 0):
+        raise InputError(f"{name} must be >= 0, got {a.tolist()}")
+    return tuple(float(v) for v in a)
+
+
+@dataclass(frozen=True)
+class IDCGains:
+    """Per-coordinate gains of the outer loops, order x, y, z, phi, theta, psi, then the arm joints.
+
+    ``kp``, ``kd``, ``ki``: tuples of 6 + n_arm values >= 0; ``filter_omega`` [rad/s]: bandwidth
+    of the roll/pitch command filter; ``max_tilt`` [rad].  Build with :meth:`default` (any
+    platform) or :meth:`from_groups`; the thesis's tables: :mod:`qprr.thesis.gains`.
+    """
+
+    kp: tuple[float, ...]
+    kd: tuple[float, ...]
+    ki: tuple[float, ...]
+    filter_omega: float = 50.0
+    max_tilt: float = 0.8
+
+    def __post_init__(self) -> None:
+        n = len(self.kp) if hasattr(self.kp, "__len__") else -1
+        if n < 6:
+            raise InputError(f"kp must have 6 + n_arm entries, got {self.kp!r}")
+        for name in ("kp", "kd", "ki"):
+            object.__setattr__(self, name, _gain_vector(getattr(self, name), n, name))
+        if not (isinstance(self.filter_omega, (int, float)) and self.filter_omega > 0
+                and isinstance(self.max_tilt, (int, float)) and 0 < self.max_tilt < math.pi / 2):
+            raise InputError(f"need filter_omega > 0 and 0 < max_tilt < pi/2, got {self.filter_omega!r}, {self.max_tilt!r}")
+
+    @property
+    def n_xi(self) -> int:
+        return len(self.kp)
+
+    @classmethod
+    def from_groups(cls, n_arm: int, position=(4.0, 4.0, 0.0), attitude=(300.0, 30.0, 1000.0), arm=(36.0, 12.0, 0.0),
+                    **kwargs) -> IDCGains:
+        """Gains from (k_P, k_D, k_I) per group: ``position`` (x, y, z), ``attitude`` (phi, theta, psi), ``arm``.
+
+        Each group entry may be a number (all coordinates of the group) or a tuple per coordinate.
+        """
+        def expand(v, n):
+            a = np.broadcast_to(as_array(v, "gain"), (n,))
+            return tuple(float(x) for x in a)
+
+        kp = expand(position[0], 3) + expand(attitude[0], 3) + expand(arm[0], n_arm)
+        kd = expand(position[1], 3) + expand(attitude[1], 3) + expand(arm[1], n_arm)
+        ki = expand(position[2], 3) + expand(attitude[2], 3) + expand(arm[2], n_arm)
+        return cls(kp=kp, kd=kd, ki=ki, **kwargs)
+
+    @classmethod
+    def default(cls, n_arm: int) -> IDCGains:
+        """Defaults for any platform: position (s + 2)^2 (k_P = 4, k_D = 4), attitude (s + 10)^3
+        (k_P = 300, k_D = 30, k_I = 1000: five times faster than the position loop, as a cascade
+        needs), arm (s + 6)^2 (k_P = 36, k_D = 12).  Critically damped error dynamics."""
+        return cls.from_groups(n_arm)
+
+    def characteristic_polynomials(self, names=None) -> dict[str, np.ndarray]:
+        """Closed-loop error polynomial per coordinate under exact linearisation: [1, k_D, k_P, k_I] (or [1, k_D, k_P])."""
+        names = names or tuple(f"xi{i}" for i in range(self.n_xi))
+        return {n: (np.array([1.0, kd, kp, ki]) if ki > 0.0 else np.array([1.0, kd, kp]))
+                for n, kp, kd, ki in zip(names, self.kp, self.kd, self.ki)}
+
+    def unstable_axes(self, names=None) -> list[str]:
+        """Coordinates whose error polynomial is not Hurwitz (Routh: cubic needs k_D, k_I > 0 and k_D k_P > k_I; quadratic k_D, k_P > 0)."""
+        bad = []
+        for n, c in self.characteristic_polynomials(names).items():
+            ok = (c[1] > 0 and c[2] > 0 and c[3] > 0 and c[1] * c[2] > c[3]) if len(c) == 4 else (c[1] > 0 and c[2] > 0)
+            if not ok:
+                bad.append(n)
+        return bad
+
+
+class InverseDynamicsController(Controller):
+    """The inverse-dynamics core (module docstring): u = B_hat alpha + C_hat xi_dot + G_hat (+ feedforward).
+
+    Parameters
+    ----------
+    platform : the platform controlled (its model is copied when a payload model is used).
+    gains : :class:`IDCGains` (default :meth:`IDCGains.default`).
+    at : "measured" (IDC) or "desired" (B, C, G at the desired state, Annex A.2).
+    realizable : leave the unproducible base accelerations to the dynamics (module docstring).
+    tilt : "split", "single" or "none" (default "split"; "none" on a fully actuated platform).
+    output : "pinocchio" (return tau, the default at the measured state) or "xi" (return u).
+    name : the name logged in results.
+    """
+
+    name = "idc"
+
+    def __init__(self, platform: Platform, gains: IDCGains | None = None, *, at: str = "measured", realizable: bool = True,
+                 tilt: str | None = None, output: str | None = None, name: str | None = None) -> None:
+        if not isinstance(platform, Platform):
+            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        if at not in MODEL_STATES:
+            raise UnknownNameError("model state", at, MODEL_STATES)
+        tilt = tilt or ("none" if platform.fully_actuated else "split")
+        if tilt not in TILTS:
+            raise UnknownNameError("tilt reference", tilt, TILTS)
+        output = output or ("pinocchio" if at == "measured" else "xi")
+        if output not in ("pinocchio", "xi"):
+            raise UnknownNameError("controller output", output, ("pinocchio", "xi"))
+        self.platform = platform
+        self.gains = IDCGains.default(platform.n_arm) if gains is None else gains
+        if not isinstance(self.gains, IDCGains):
+            raise InputError(f"gains must be an IDCGains, got {type(self.gains).__name__}")
+        if self.gains.n_xi != platform.n_xi:
+            raise InputError(f"gains have {self.gains.n_xi} entries, the platform's xi has {platform.n_xi}")
+        self.at = at
+        self.realizable = bool(realizable)
+        self.tilt_mode = tilt
+        self.output = output
+        if name is not None:
+            self.name = name
+        self.model = platform.model
+        self.data = platform.model.createData()
+        # base directions the rotors cannot produce (coplanar rotors: the body-lateral force)
+        Omega = platform.rotor_matrix
+        self._lost = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12] if self.realizable else []
+        self._pack = struct.Struct(f"={platform.n_arm}d").pack  # exact key of the arm joints (tells -0.0 from 0.0)
+        self.dt = 1e-3
+        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
+
+    def reset(self, state: State, ref: Reference, dt: float) -> None:
+        self.dt = dt
+        n = self.platform.n_xi
+        self.integral = [0.0] * n
+        g = self.gains
+        uz_min = 0.05 * self.platform.total_mass * self.platform.g
+        if self.tilt_mode == "split":
+            self.tilt = TiltReference(g.filter_omega, g.max_tilt, uz_min)
+        elif self.tilt_mode == "single":
+            self.tilt = SingleTiltReference(g.filter_omega, g.max_tilt, uz_min)
+        else:
+            self.tilt = None
+        self._g = self.platform.g
+        self._started = False
+        tilt_idx = (3, 4) if self.tilt is not None else ()
+        self._loops_outer = self._alpha_plan(tuple(i for i in range(n) if i not in tilt_idx))
+        self._loops_tilt = self._alpha_plan(tilt_idx)
+        self._abuf = np.zeros(self.platform.nv)  # the accelerations handed to RNEA
+        self._write = FloatWriter(self.platform.nv)
+        self._mass_key = None  # arm joints of the reused mass-matrix rows (desired state)
+        self._mass_rows = None
+        self._desired = State(self.platform.n_arm) if self.at == "desired" else None
+
+    # ------------------------------------------------------------------ pieces
+    def _alpha_plan(self, idx) -> tuple[tuple, tuple]:
+        """Gains of the coordinates ``idx``: ((i, k_P, k_D) without integral action, ...),
+        ((i, k_P, k_D, k_I) with integral action or yaw (wrapped error), ...)."""
+        g = self.gains
+        plain = tuple((i, g.kp[i], g.kd[i]) for i in idx if i != 5 and not g.ki[i])
+        other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if i == 5 or g.ki[i])
+        return plain, other
+
+    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float]) -> list[float]:
+        """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists)."""
+        plain, other = plan
+        for i, kp, kd in plain:  # PD: alpha = xi_ddot_d + k_D e_dot + k_P e
+            al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * (r[i] - x[i])
+        integ, dt = self.integral, self.dt
+        for i, kp, kd, ki in other:  # + k_I int e; the yaw error wrapped to [-pi, pi)
+            e = r[i] - x[i]
+            if i == 5:
+                e = (e + _PI) % _TWO_PI - _PI
+            a = rdd[i] + kd * (rd[i] - xd[i]) + kp * e
+            if ki:
+                integ[i] += e * dt
+                a += ki * integ[i]
+            al[i] = a
+        return al
+
+    def _model_state(self, state: State, r: list, rd: list) -> State:
+        """State at which B, C, G are evaluated: the measured one, or the desired one (Annex A.2)."""
+        if self._desired is None:
+            return state
+        xi_d, xi_dot_d = list(r), list(rd)
+        if self.tilt is not None:
+            if self._started:  # roll/pitch of the desired state: the (6.17) references of the last step
+                xi_d[3], xi_d[4] = self.tilt.x
+                xi_dot_d[3], xi_dot_d[4] = self.tilt.xd
+            else:  # first step: none yet, use the measured tilt
+                xi_d[3], xi_d[4] = state._xi[3], state._xi[4]
+        self._desired._from_xi(state.t, xi_d, xi_dot_d, False, True)  # update_xi(..., arrays=False, reuse=True)
+        return self._desired
+
+    def update_references(self, t: float, state: State, ref: Reference) -> None:
+        """Change ``ref`` in place before the outer loops (default: nothing; impedance filters do)."""
+
+    def feedforward(self, t: float, state: State) -> list[float] | None:
+        """Generalised force (thesis coordinates) added to the model's output (default: none)."""
+        return None
+
+    def _mass_rows_of(self, ms: State, model, data, q) -> list:
+        """Rows of M for the unproducible base directions; at the desired state reused while its arm joints are unchanged.
+
+        M (CRBA, local convention) depends on the arm joints only, so at a held desired arm
+        pose the rows of the previous step are exact."""
+        if self._desired is not None:
+            key = self._pack(*ms._xi[6:])
+            if key != self._mass_key:
+                self._mass_rows = _crba(model, data, q)[self._lost, 0:6].tolist()
+                self._mass_key = key
+            return self._mass_rows
+        return _crba(model, data, q)[self._lost, 0:6].tolist()  # Pinocchio 3+: full symmetric matrix
+
+    # ------------------------------------------------------------------ step
+    def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
+        """u = B alpha + C xi_dot + G with alpha from the outer loops and roll/pitch from (6.17)."""
+        self.update_references(t, state, ref)
+        x, xd = state._xi, state._xd
+        r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
+        ms = self._model_state(state, r, rd)
+        model, data, q, v = self.model, self.data, ms.q, ms.v
+        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r))
+        a = ms.accel_to_v_list(alpha)
+        abuf = self._abuf
+        write = self._write
+        ff = self.feedforward(t, state)
+        tilt = self.tilt
+        if tilt is not None:
+            write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
+            t0 = _rnea(model, data, q, v, abuf).tolist()
+            # u_fb of (6.21) with alpha_phi = alpha_theta = 0: R times the body force of RNEA (State.lin_to_world)
+            f0, f1, f2 = t0[0:3]
+            r00, r01, r02, r10, r11, r12, r20, r21, r22 = ms._r
+            u_fb = (r00 * f0 + r01 * f1 + r02 * f2, r10 * f0 + r11 * f1 + r12 * f2, r20 * f0 + r21 * f1 + r22 * f2)
+            if ff is not None:
+                u_fb = (u_fb[0] + ff[0], u_fb[1] + ff[1], u_fb[2] + ff[2])
+            tilt.update(x[5], u_fb, rdd[0:3], self._g, self.dt)
+            tilt.write(ref)
+            self._started = True
+            r[3], r[4] = tilt.x
+            rd[3], rd[4] = tilt.xd
+            rdd[3], rdd[4] = tilt.xdd
+            self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha)
+            # omega_dot change of the roll/pitch accelerations: T [alpha_phi, alpha_theta, 0] (State.euler_accel_to_omega_dot)
+            a3, a4 = alpha[3], alpha[4]
+            sf, cf = ms.sf, ms.cf
+            d3, d4, d5 = a3, cf * a4, -sf * a4  # T(phi, theta) [a3, a4, 0]
+        else:
+            d3 = d4 = d5 = 0.0
+        if self._lost:
+            # base accelerations along the unproducible directions chosen so that the applied
+            # wrench has no component there: (tau0 + M delta)[lost] = 0, with M[lost, lost] = m I
+            # (the free flyer's translational block) and delta zero elsewhere but the attitude change
+            if tilt is None:
+                write(abuf, a)
+                t0 = _rnea(model, data, q, v, abuf).tolist()
+            rows = self._mass_rows_of(ms, model, data, q)
+            for i, row in zip(self._lost, rows):
+                a[i] -= (t0[i] + row[3] * d3 + row[4] * d4 + row[5] * d5) / row[i]
+        a[3] += d3
+        a[4] += d4
+        a[5] += d5
+        write(abuf, a)
+        tau = _rnea(model, data, q, v, abuf)
+        if self.output == "pinocchio":
+            if ff is not None:
+                tau = tau + ms.force_from_xi(ff)
+            return tau
+        u = ms.force_to_xi_list(tau)
+        if ff is not None:
+            u = [ui + fi for ui, fi in zip(u, ff)]
+        return np.array(u)
+
+
+class DesiredStateInverseDynamics(InverseDynamicsController):
+    """Inverse dynamics evaluated at the desired state, Thesis Annex A.2 (A.2)-(A.3) (the thesis's "MPC").
+
+    u = B(xi_d) y + C(xi_d, xi_dot_d) xi_dot_d + G(xi_d), y = xi_ddot_d + K_D e_dot + K_P e (A.3); the
+    desired roll and pitch are those of (6.17) (the previous step's filtered values enter the
+    model, the current ones the feedback).  Returns u in thesis coordinates: tau is computed at
+    the desired state, so u = S_d^T tau_d is what applies.
+    """
+
+    name = "dsid"
+
+    def __init__(self, platform: Platform, gains: IDCGains | None = None, **kwargs) -> None:
+        super().__init__(platform, gains, at="desired", **kwargs)
+
+
+# ======================================================================= Sec. 6.4 layered
+class LayeredIDC(InverseDynamicsController):
+    """The layered inverse dynamics of Thesis Sec. 6.4: u = B_hat alpha + C_hat xi_dot + G_hat - u_e(h), (6.53)-(6.57), (6.76).
+
+    The core with ``tilt="single"``, ``realizable=False``, output in thesis coordinates, the
+    model of :class:`~qprr.payload.PayloadModel` (a copy whose end-effector link carries a
+    payload mass, zero here) and, with sensors, the measured interaction cancelled:
+    ``ee_sensor(t) -> h`` (6,) world wrench on the end effector, ``base_sensor(t) -> h_b`` (4,)
+    generalised force on [x, y, z, psi]; u += -u_e(h) (Thesis (6.76)), u_e = S^T J_e^T h (6.59)
+    + h_b.  A wrist sensor read inside the loop is one step late; cancelling it unfiltered against
+    a stiff contact makes a limit cycle, which ``sensor_filter`` [rad/s] (first-order low-pass,
+    exact ZOH step) removes.  Named "layered-idc-ft" when it compensates a sensor.
+    """
+
+    name = "layered-idc"
+
+    def __init__(self, platform: Platform, gains: IDCGains | None = None, *,
+                 ee_sensor: Callable[[float], np.ndarray] | None = None,
+                 base_sensor: Callable[[float], np.ndarray] | None = None, compensate: bool = True,
+                 sensor_filter: float | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
+        if sensor_filter is not None and not (isinstance(sensor_filter, (int, float)) and math.isfinite(sensor_filter)
+                                              and sensor_filter > 0.0):
+            raise InputError(f"sensor_filter must be None or a bandwidth > 0 rad/s, got {sensor_filter!r}")
+        self.sensor_filter = sensor_filter
+        self.ee_sensor = ee_sensor
+        self.base_sensor = base_sensor
+        self.compensate = bool(compensate)
+        self.pm = PayloadModel(platform, com_ee)
+        super().__init__(platform, gains, tilt="single" if not platform.fully_actuated else "none", realizable=False,
+                         output="xi")
+        self.model, self.data = self.pm.model, self.pm.data
+        self._jdata = platform.model.createData()
+        if ee_sensor is not None or base_sensor is not None:
+            self.name = "layered-idc-ft" if compensate else "layered-idc"
+
+    def reset(self, state: State, ref: Reference, dt: float) -> None:
+        super().reset(state, ref, dt)
+        self._h_f = None
+        self._u_e = np.zeros(self.platform.n_xi)
+        self._h_b = np.zeros(4)
+
+    def measure(self, t: float, state: State) -> tuple[np.ndarray, np.ndarray]:
+        """(h_b (4,), u_e (6 + n_arm,)) from the sensors: u_e = S^T J_e^T h_ee (6.59) + h_b on [x, y, z, psi]."""
+        u_e = np.zeros(self.platform.n_xi)
+        h_b = np.zeros(4)
+        if self.ee_sensor is not None:
+            h = as_vector(self.ee_sensor(t), 6, "ee_sensor(t)")
+            if self.sensor_filter is not None:
+                if self._h_f is None:
+                    self._h_f = h.copy()
+                else:
+                    self._h_f += (1.0 - math.exp(-self.sensor_filter * self.dt)) * (h - self._h_f)
+                h = self._h_f
+            if np.any(h != 0.0):
+                J = pin.computeFrameJacobian(self.platform.model, self._jdata, state.q, self.platform.ee_frame,
+                                             pin.LOCAL_WORLD_ALIGNED)
+                u_e = state.force_to_xi(J.T @ h)
+        if self.base_sensor is not None:
+            h_b = as_vector(self.base_sensor(t), 4, "base_sensor(t)")
+            u_e[[0, 1, 2, 5]] += h_b
+        return h_b, u_e
+
+    def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
+        if self.ee_sensor is not None or self.base_sensor is not None:
+            self._h_b, self._u_e = self.measure(t, state)
+        return super().step(t, state, ref)
+
+    def feedforward(self, t: float, state: State) -> list[float] | None:
+        """-u_e(h) of (6.76) when compensating measured wrenches."""
+        if self.compensate and (self.ee_sensor is not None or self.base_sensor is not None):
+            return (-self._u_e).tolist()
+        return None
+
+
+PAYLOAD_MODES = ("estimate", "known", "none")
+
+
+class PayloadIDC(LayeredIDC):
+    """Layered IDC whose model carries the payload m_hat (estimated, known or none), Thesis (6.53)-(6.57).
+
+    ``payload``: "estimate" (:class:`~qprr.payload.MassEstimator` on the torque residual),
+    "known" (``known_mass``, the known-mass model (6.40)) or "none" (nominal model).
+    ``mass_log`` records m_hat at every step.
+    """
+
+    def __init__(self, platform: Platform, gains: IDCGains | None = None, *, payload: str = "estimate",
+                 known_mass: float = 0.0, estimator: MassEstimator | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
+        if payload not in PAYLOAD_MODES:
+            raise UnknownNameError("payload mode", payload, PAYLOAD_MODES)
+        self.mode = payload
+        self.known_mass = _mass(known_mass, "known_mass")
+        self.estimator = estimator if estimator is not None else (MassEstimator(platform, com_ee=com_ee) if payload == "estimate" else None)
+        self.mass_log: list[float] = []
+        super().__init__(platform, gains, com_ee=com_ee)
+        self.name = {"estimate": "payload-idc", "known": "payload-idc-known", "none": "payload-idc-none"}[payload]
+
+    def set_known_mass(self, mass: float) -> None:
+        """Change the known payload mass (mode "known"): e.g. a scheduled release the controller is told about."""
+        self.known_mass = _mass(mass, "mass")
+
+    def reset(self, state: State, ref: Reference, dt: float) -> None:
+        super().reset(state, ref, dt)
+        if self.estimator is not None:
+            self.estimator.reset()
+        self._prev = None
+        self.mass_log = []
+        self.pm.set_mass(self.known_mass if self.mode == "known" else 0.0)
+
+    def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
+        if self.mode == "estimate":
+            if self._prev is not None:
+                q0, v0, tau0 = self._prev
+                self.pm.set_mass(self.estimator.update(q0, v0, tau0, state.v, self.dt))
+        elif self.mode == "known":
+            if self.known_mass != self.pm.mass:
+                self.pm.set_mass(self.known_mass)
+        u = super().step(t, state, ref)
+        if self.mode == "estimate":
+            tau = state.force_from_xi(u)
+            for i in self._unproducible:
+                tau[i] = 0.0  # rotors produce no force there: applied = allocated (no saturation assumed)
+            self._prev = (state.q.copy(), state.v.copy(), tau)
+        self.mass_log.append(self.pm.mass)
+        return u
+
+    @property
+    def _unproducible(self) -> list[int]:
+        Omega = self.platform.rotor_matrix
+        return [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12]
+
+
+def _mass(m, name: str) -> float:
+    if not (isinstance(m, (int, float)) and math.isfinite(m) and m >= 0.0):
+        raise InputError(f"{name} must be a number >= 0 kg, got {m!r}")
+    return float(m)

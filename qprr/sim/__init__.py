@@ -1,0 +1,47 @@
+"""Closed-loop simulation of any platform (see :mod:`qprr.sim.loop` for the step).
+
+===============================  ==================================================================
+module                           what
+===============================  ==================================================================
+:mod:`qprr.sim.loop`             :func:`simulate`, :class:`Limits`
+:mod:`qprr.sim.result`           :class:`SimResult` (RMSE (6.26), extras, versioned .npz files)
+:mod:`qprr.sim.integrators`      Lie-group Euler, midpoint, RK4 of the stated orders
+:mod:`qprr.sim.disturbances`     white noise (6.27), pulses (6.28), drag
+:mod:`qprr.sim.environment`      the stateful-environment interface the simulator integrates
+:mod:`qprr.sim.contact`          pushed object, compliant wall, prescribed wrench
+:mod:`qprr.sim.payload`          payload changes during a run
+:mod:`qprr.sim.stops`            mechanical stops of the arm joints
+===============================  ==================================================================
+"""
+
+from .contact import CompliantWall, ContactHistory, PrescribedWrench, PushedMass
+from .disturbances import BaseDrag, Disturbance, Disturbances, Pulse, StateDisturbance, WhiteNoise
+from .environment import Environment
+from .integrators import ORDERS, STEPPERS
+from .loop import INTEGRATORS, Limits, simulate
+from .payload import PayloadChange, PayloadSchedule
+from .result import FORMAT_VERSION, SimResult, Status
+
+__all__ = [
+    "FORMAT_VERSION",
+    "INTEGRATORS",
+    "ORDERS",
+    "STEPPERS",
+    "BaseDrag",
+    "CompliantWall",
+    "ContactHistory",
+    "Disturbance",
+    "Disturbances",
+    "Environment",
+    "Limits",
+    "PayloadChange",
+    "PayloadSchedule",
+    "PrescribedWrench",
+    "Pulse",
+    "PushedMass",
+    "SimResult",
+    "StateDisturbance",
+    "Status",
+    "WhiteNoise",
+    "simulate",
+]

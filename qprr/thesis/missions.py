@@ -1,0 +1,38 @@
+"""The missions of Thesis Chapter 6 for the Q-PRR (Sec. 6.3.1.4 and 6.3.3.3), on :mod:`qprr.trajectory`."""
+
+from __future__ import annotations
+
+from ..charts import as_vector
+from ..trajectory import DEFAULT_LAW, MultiPhase, Phase
+
+NAMES = ("x", "y", "z", "phi", "theta", "psi", "r0", "theta2", "theta3")
+"""The Q-PRR's thesis coordinates (its arm joints' names)."""
+
+STATIC_TARGET = (3.0, 6.0, 10.0, 0.0, 0.04, 0.2, 0.6)
+"""xi_d = [x_b, y_b, z_b, psi, r0, theta2, theta3] of Thesis Sec. 6.3.1.4."""
+
+
+def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10.0), y_phase=(10.0, 15.0),
+                   arm_phase=(15.0, 25.0), law: str = DEFAULT_LAW) -> MultiPhase:
+    """The mission of Thesis Sec. 6.3.1.4 / 6.3.3.3: climb in z 0-5 s, x 5-10 s, y 10-15 s, arm 15-25 s.
+
+    ``target`` = [x, y, z, psi, r0, theta2, theta3] (default [3, 6, 10, 0, 0.04, 0.2, 0.6]).
+    The arm starts straight (r0 = theta2 = theta3 = 0); yaw is held at ``psi``.
+    """
+    x, y, z, psi, r0, t2, t3 = as_vector(target, 7, "target")
+    phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
+    phases += [Phase(c, *arm_phase, val) for c, val in (("r0", r0), ("theta2", t2), ("theta3", t3)) if val != 0.0]
+    xi0 = (0.0, 0.0, 0.0, 0.0, 0.0, psi, 0.0, 0.0, 0.0)
+    return MultiPhase(tuple(phases), xi0, name="static-mission", law=law, names=NAMES)
+
+
+def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_phase=(15.0, 25.0),
+                    law: str = DEFAULT_LAW) -> MultiPhase:
+    """Mission of Thesis Sec. 6.3.3.3: same flight phases, theta2 -> ``theta2_d`` in 15-25 s.
+
+    r0 and theta3 references are left at 0: the CoG stabiliser (BSG) computes them.
+    """
+    x, y, z = as_vector(p_target, 3, "p_target")
+    phases = (Phase("z", 0.0, 5.0, z), Phase("x", 5.0, 10.0, x), Phase("y", 10.0, 15.0, y),
+              Phase("theta2", *arm_phase, float(theta2_d)))
+    return MultiPhase(phases, name="dynamic-mission", law=law, names=NAMES)

@@ -1,0 +1,656 @@
+"""The scenarios of Thesis Chapter 6 on the Q-PRR, registered in :data:`qprr.scenarios.SCENARIOS`.
+
+=================  =========================================================================
+name               what it runs
+=================  =========================================================================
+``static-idc``     Sec. 6.3.1.4: xi_d = [3, 6, 10, psi = 0, 0.04, 0.2, 0.6], climb z 0-5 s,
+                   x 5-10 s, y 10-15 s, arm 15-25 s, inverse-dynamics control (IDC)
+``static-dsid``    the same with desired-state inverse dynamics (the thesis's "MPC", Annex A.2)
+``static-mfc``     the same with model-free control (iPID, Sec. 6.3.3.2)
+``spiral``         climb, then the spiral (6.25) from t_f = 5 s, IDC
+``noise``          static mission + white noise on the generalised forces (6.27), IDC
+``pulses``         static mission + finite pulses (6.28) in the three phases, IDC
+``dynamic-bsg``    Sec. 6.3.3.3: same flight, theta2_d = -0.5, theta_e^d = 0, CoG stabiliser
+                   (BSG) + MFC keeping x_cm near 0
+``payload-drop``   Sec. 6.4.2.3: carry 0.1 kg, release it at 18 s (payload IDC)
+``push-thrust``    Sec. 6.4.3.1: push an object with the thrust, arm locked
+``push-prismatic`` Sec. 6.4.3.2: push an object with the slider
+``impedance``      Sec. 6.4.3.4: interaction forces on a hovering Q-PRR, impedance control
+=================  =========================================================================
+
+Every scenario is reproducible (noise seeded); the Sec. 6.3 ones last 30 s at 1 kHz by
+default.  The transition law is the minimum-snap septic (``law="septic"``): jerk-continuous
+references, which a multirotor's tilt needs (docs/notes-spikes.md).  ``law="quintic"`` is the
+order-5 polynomial the text names and ``law="thesis"`` the rational formula printed as (6.16)
+(a 1.55 g deceleration on the 10 m climb: the rotors saturate at zero thrust).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import kinematics as kin
+from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
+from ..control import DesiredStateInverseDynamics, InverseDynamicsController, LayeredIDC, ModelFreeController, PayloadIDC
+from ..control.impedance import ImpedanceController
+from ..errors import QprrError, UnknownNameError
+from ..scenarios import _COMMON, Option, Scenario
+from ..sim import (
+    Disturbances,
+    PayloadChange,
+    PayloadSchedule,
+    PrescribedWrench,
+    Pulse,
+    PushedMass,
+    SimResult,
+    WhiteNoise,
+    simulate,
+)
+from ..trajectory import Hold, MultiPhase, Phase, Spiral
+from ..viz import figure_path, new_figure, plot_result
+from . import gains, load, params_of
+from .bsg import CogStabilizer
+from .missions import NAMES, dynamic_mission, static_mission
+
+SEED = 0
+DT = 1e-3
+
+THESIS_NAMES = {"idc": "IDC", "dsid": "MPC", "mfc": "MFC"}
+"""What the thesis calls each controller (Table 6.3 columns)."""
+
+NOISE_AMPLITUDE = (0.3,) * 7 + (0.01, 0.01)
+"""White-noise amplitude per generalised force (N or N m), a new value every step.  The thesis
+applies [-0.3, 0.3] to all nine; on the revolute joints that is 6 to 60 times the links' own
+gravity torque and, on the 2.5e-4 kg m^2 wrist, up to 1200 rad/s^2.  Measured with +-0.3 on
+all nine (static mission, 30 s): the IDC loses the wrist (theta3 RMSE 4.2 rad: it spins), the
+desired-state controller keeps it within 0.17 rad RMSE, the MFC within 0.036 rad (the thesis's
+remark that the MFC is the most robust to disturbances holds).  The scenario keeps +-0.3 on
+x, y, z, phi, theta, psi, r0 and gives the two revolute joints +-0.01 N m."""
+
+PULSES = (
+    Pulse(2.0, 2.5, (0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
+    Pulse(12.0, 12.5, (2.0, 2.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
+    Pulse(26.0, 26.5, (0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.1, 0.005, 0.0)),
+)
+"""(6.28) pulses Gamma [H(t - t1) - H(t - t2)] in the three phases of Sec. 6.3.2.2: during the
+climb in z (5 N on z), during the x-y transition (2 N on x and y) and after the arm task
+("t > 25 s": 0.1 N on r0, 0.005 N m on theta2).  The thesis does not print Gamma ("chosen so
+that the system does not diverge"); these values displace the arm by a few centimetres or
+hundredths of a radian with the Table 6.2 arm gains."""
+
+
+def flight_controller(name: str, platform):
+    """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`)."""
+    if name == "idc":
+        return InverseDynamicsController(platform, gains.idc())
+    if name == "dsid":
+        return DesiredStateInverseDynamics(platform, gains.desired_state())
+    if name == "mfc":
+        return ModelFreeController(platform, gains.mfc())
+    raise UnknownNameError("controller", name, tuple(THESIS_NAMES))
+
+
+def _q_prr(platform):
+    platform = load() if platform is None else platform
+    params_of(platform)  # a thesis scenario needs the Q-PRR
+    return platform
+
+
+def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = None, bsg: bool = False):
+    def runner(platform, controller, progress, duration, dt, integrator, seed, law):
+        platform = _q_prr(platform)
+        ctrl = flight_controller(controller, platform)
+        if bsg:
+            ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
+        dist = disturbance() if disturbance is not None else None
+        return simulate(platform, ctrl, trajectory(law), duration, dt=dt, integrator=integrator, disturbance=dist, seed=seed,
+                        progress=progress, scenario=scenario)
+
+    return runner
+
+
+_FLIGHT = {**_COMMON, "duration": Option(30.0, "run length [s]")}
+_FLIGHT_CONTROLLERS = ("idc", "dsid", "mfc")
+
+
+def _reordered(first: str) -> tuple[str, ...]:
+    return (first, *[c for c in _FLIGHT_CONTROLLERS if c != first])
+
+
+def _plot_flight(result: SimResult, path) -> Path:
+    return plot_result(result, path, thrust_bounds=(0.0, 20.0))
+
+
+FLIGHT_SCENARIOS = (
+    Scenario("static-idc", "static manipulator mission, inverse-dynamics control", _flight("static-idc", lambda law: static_mission(law=law)),
+             _reordered("idc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.1.4, Table 6.3 IDC, Fig. 6.7-6.13"),
+    Scenario("static-dsid", "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
+             _flight("static-dsid", lambda law: static_mission(law=law)), _reordered("dsid"), _FLIGHT, ("q-prr",), _plot_flight,
+             "Annex A.2, Table 6.3 MPC"),
+    Scenario("static-mfc", "static manipulator mission, model-free control (iPID)", _flight("static-mfc", lambda law: static_mission(law=law)),
+             _reordered("mfc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.3.2, Table 6.3 MFC"),
+    Scenario("spiral", "climb then spiral (6.25) from t_f = 5 s, IDC", _flight("spiral", lambda law: Spiral()), _reordered("idc"), _FLIGHT,
+             ("q-prr",), _plot_flight, "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18"),
+    Scenario("noise", "static mission with white noise on the generalised forces, IDC",
+             _flight("noise", lambda law: static_mission(law=law), lambda: WhiteNoise(NOISE_AMPLITUDE)), _reordered("idc"), _FLIGHT,
+             ("q-prr",), _plot_flight, "Sec. 6.3.2.1, (6.27), Fig. 6.23-6.27"),
+    Scenario("pulses", "static mission with finite pulses in the three phases, IDC",
+             _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)), _reordered("idc"), _FLIGHT,
+             ("q-prr",), _plot_flight, "Sec. 6.3.2.2, (6.28), Fig. 6.28-6.29"),
+    Scenario("dynamic-bsg", "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
+             _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True), _reordered("mfc"), _FLIGHT, ("q-prr",),
+             _plot_flight, "Sec. 6.3.3.3, Fig. 6.37-6.45"),
+)
+
+
+# ======================================================================= Sec. 6.4: helpers
+def _ee_world(platform, xi) -> np.ndarray:
+    p, _ = kin.ee_pose_xi(platform, platform.data(), xi)
+    return p
+
+
+@dataclass(frozen=True)
+class Recovery:
+    """Time to return to the no-payload hover after a release.
+
+    ``time`` [s] after ``release_time``: from then on every |p_d - p| <= ``tol_position``
+    (x, y, z and r0, m), every |q_d - q| <= ``tol_angle`` (theta2, theta3, psi, rad) and the
+    total thrust is within ``tol_thrust`` (relative) of the no-payload weight m g / (c_phi c_theta).
+    ``status`` "recovered" or "not recovered" (within the run); ``peak_*`` the largest
+    deviations after the release.
+    """
+
+    release_time: float
+    time: float
+    tol_position: float
+    tol_angle: float
+    tol_thrust: float
+    peak_position: float
+    peak_angle: float
+    peak_thrust: float
+    status: str
+    reason: str
+
+
+def recovery(result: SimResult, release_time: float, total_mass: float, g: float, *, tol_position: float = 1e-3,
+             tol_angle: float = 1e-3, tol_thrust: float = 0.01) -> Recovery:
+    """Measure :class:`Recovery` on a logged run (no-payload weight ``total_mass`` g)."""
+    t = result.t
+    after = t >= release_time
+    e = np.abs(result.xi_d - result.xi)
+    pos = e[:, [0, 1, 2, 6]].max(axis=1)
+    ang = e[:, [5, 7, 8]].max(axis=1)
+    tilt = np.cos(result.xi[:, 3]) * np.cos(result.xi[:, 4])
+    thrust = np.abs(result.f.sum(axis=1) * tilt / (total_mass * g) - 1.0)
+    ok = (pos <= tol_position) & (ang <= tol_angle) & (thrust <= tol_thrust)
+    idx = np.nonzero(after)[0]
+    bad = idx[~ok[idx]]
+    peaks = (float(pos[after].max()), float(ang[after].max()), float(thrust[after].max()))
+    if bad.size == 0:
+        return Recovery(release_time, 0.0, tol_position, tol_angle, tol_thrust, *peaks, "recovered", "within tolerance at the release")
+    last = bad[-1]
+    if last == idx[-1]:
+        return Recovery(release_time, math.inf, tol_position, tol_angle, tol_thrust, *peaks, "not recovered",
+                        f"still out of tolerance at the end of the run (t = {t[last]:.3f} s)")
+    return Recovery(release_time, float(t[last + 1] - release_time), tol_position, tol_angle, tol_thrust, *peaks, "recovered",
+                    "every tolerance holds from then to the end of the run")
+
+
+def applied_generalized_forces(result: SimResult, platform=None) -> np.ndarray:
+    """u = S^T N f (m, 9) actually applied (thesis coordinates): u_fb world thrust, u_tau Euler torques, arm efforts."""
+    platform = _q_prr(platform)
+    tau = np.hstack([result.f @ np.asarray(platform.rotor_matrix).T, result.arm_effort])
+    return force_to_xi_batch(euler_to_rotation_batch(result.xi[:, 3:6]), result.xi, tau)
+
+
+def _contact_series(res: SimResult, obj) -> None:
+    c = obj.history()
+    res.series.update({"contact_t": c.t, "contact_force": c.force, "contact_wrench": c.wrench, "contact_position": c.position,
+                       "contact_velocity": c.velocity, "contact_penetration": c.penetration})
+
+
+def contact_history(result: SimResult):
+    """The :class:`qprr.sim.ContactHistory` a push scenario logged in ``result.series``."""
+    from ..sim import ContactHistory
+
+    s = result.series
+    return ContactHistory(s["contact_t"], s["contact_force"], s["contact_wrench"], s["contact_position"], s["contact_velocity"],
+                          s["contact_penetration"])
+
+
+# ============================================================================ payload-drop
+PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc")
+
+
+def payload_drop(platform=None, controller: str = "payload-idc", progress: bool = False, *, mass: float = 0.1,
+                 release_time: float = 18.0, duration: float = 25.0, mission: str = "thesis", arm_target=(-0.04, 0.3, 0.5),
+                 arm_phase=(15.0, 17.0), noise: float = 0.0, seed: int = SEED) -> SimResult:
+    """Carry ``mass`` at the end effector and release it at ``release_time`` (Thesis Sec. 6.4.2.3).
+
+    ``mission="thesis"``: climb/x/y flight of Sec. 6.3.1.4 to (3, 6, 10) m, arm to ``arm_target``
+    during ``arm_phase``; ``mission="hover"``: start hovering at (0, 0, 1) m with the arm already
+    at ``arm_target`` (short runs for tests).  Controllers: "payload-idc" (mass estimated,
+    default), "payload-idc-known" (known mass, told of the release), "payload-idc-none",
+    "idc" (Sec. 6.3.1, nominal model).  ``noise`` > 0 adds the white noise of Thesis (6.27),
+    uniform in [-noise, noise] N, on the three forces (seeded by ``seed``).  The result's
+    ``series`` hold ``payload_mass`` and ``mass_estimate``; its ``metrics`` the ``release_time``,
+    the ``recovery_time`` (:class:`Recovery`) and ``mass_estimate_error``.
+    """
+    platform = _q_prr(platform)
+    missions = ("thesis", "hover")
+    if mission not in missions:
+        raise UnknownNameError("mission", mission, missions)
+    r0, t2, t3 = platform.check_arm_limits(arm_target, "arm_target")
+    if mission == "thesis":
+        phases = (Phase("z", 0.0, 5.0, 10.0), Phase("x", 5.0, 10.0, 3.0), Phase("y", 10.0, 15.0, 6.0))
+        phases += tuple(Phase(c, *arm_phase, v) for c, v in (("r0", r0), ("theta2", t2), ("theta3", t3)) if v != 0.0)
+        trajectory = MultiPhase(phases, name="payload-drop", names=NAMES)
+    else:
+        trajectory = Hold((0.0, 0.0, 1.0, 0.0, 0.0, 0.0, r0, t2, t3))
+
+    class _Told(PayloadIDC):
+        def step(self, t, state, ref):
+            if t >= release_time:
+                self.set_known_mass(0.0)
+            return super().step(t, state, ref)
+
+    g = gains.payload()
+    builders = {
+        "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
+        "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
+        "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
+        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+    }
+    if controller not in builders:
+        raise UnknownNameError("controller", controller, PAYLOAD_CONTROLLERS)
+    ctrl = builders[controller]()
+    schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
+    disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
+    res = simulate(platform, ctrl, trajectory, duration, dt=DT, payload=schedule, disturbance=disturbance, seed=seed,
+                   progress=progress, scenario="payload-drop")
+    res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
+    if getattr(ctrl, "mode", None) == "estimate":
+        res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
+        window = min(1.0, 0.5 * release_time)  # the last second before the release (half the carry time if shorter)
+        before = (res.t >= release_time - window) & (res.t < release_time)
+        res.metrics["mass_estimate_error"] = (float(np.max(np.abs(res.series["mass_estimate"][before] - mass)))
+                                              if before.any() else math.nan)
+    res.metrics["release_time"] = float(release_time)
+    rec = recovery(res, release_time, platform.total_mass, platform.g)
+    res.metrics.update({"recovery_time": rec.time, "recovery_peak_position": rec.peak_position,
+                        "recovery_peak_angle": rec.peak_angle, "recovery_peak_thrust": rec.peak_thrust})
+    return res
+
+
+def recovery_of(result: SimResult, platform=None) -> Recovery:
+    """:class:`Recovery` of a payload-drop result (recomputed from the logs)."""
+    platform = _q_prr(platform)
+    return recovery(result, result.metrics["release_time"], platform.total_mass, platform.g)
+
+
+# ============================================================================ pushing
+ARM_PUSH = (0.0, math.pi / 2, 0.0)
+"""Links 2 and 3 horizontal along x_B: the last segment parallel to the pushing direction (Sec. 6.4.3.1)."""
+
+PUSH_CONTROLLERS = ("layered-idc-ft", "layered-idc", "idc")
+SENSOR_FILTER = 50.0
+"""Bandwidth [rad/s] of the first-order filter on the wrist-sensor reading (see :class:`LayeredIDC`)."""
+
+PUSH_STIFFNESS = 500.0  # TEMPORARY 500 for the port comparison; 300 below k*
+"""Contact stiffness [N/m] of the push scenarios.  Cancelling the contact force F through the thrust
+needs a pitch F / (m g); pitching about the CoM moves the end effector, h = 8.3 cm above it, into
+the object: a loop of gain k h / (m g), unstable above k* = m g / h = 417 N/m (the 500 N/m first
+chosen bounced, then opened, once the object stuck; docs/notes-spikes.md)."""
+
+
+def _push_controller(name: str, platform, contact):
+    """"layered-idc-ft": layered IDC cancelling the contact wrench its wrist sensor read at the previous step
+    ((6.76)), filtered at :data:`SENSOR_FILTER`; "layered-idc": the same without force feedback (the arm
+    buckles under the compressive contact force); "idc": Sec. 6.3.1's controller."""
+    g = gains.payload()
+    builders = {
+        "layered-idc-ft": lambda: LayeredIDC(platform, g, ee_sensor=contact.measured, sensor_filter=SENSOR_FILTER),
+        "layered-idc": lambda: LayeredIDC(platform, g),
+        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+    }
+    if name not in builders:
+        raise UnknownNameError("controller", name, PUSH_CONTROLLERS)
+    return builders[name]()
+
+
+def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: bool = False, *, distance: float = 0.5,
+                push=(2.0, 7.0), duration: float = 12.0, object_mass: float = 0.5, friction: float = 0.3,
+                stiffness: float = PUSH_STIFFNESS, damping: float = 20.0, seed: int = SEED) -> SimResult:
+    """Push an object along x with the thrust, arm locked (Thesis Sec. 6.4.3.1).
+
+    The Q-PRR hovers at (0, 0, 1) m with the arm at :data:`ARM_PUSH`, its end effector
+    touching the object's face; x_d goes 0 -> ``distance`` during ``push`` ((6.16), septic law).
+    The object (``object_mass`` kg, Coulomb ``friction`` on its line) is pushed through a
+    compliant contact (``stiffness`` N/m, ``damping`` N s/m).  The thesis assumes a
+    frictionless line (``friction=0``): the object then only resists its acceleration
+    and slides on when the robot decelerates, the contact opening.
+    """
+    platform = _q_prr(platform)
+    xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
+    trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
+    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
+                     friction=friction)
+    ctrl = _push_controller(controller, platform, obj)
+    res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
+                   scenario="push-thrust")
+    _contact_series(res, obj)
+    res.metrics["object_mass"] = float(object_mass)
+    return res
+
+
+def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: bool = False, *, push=(2.0, 7.0),
+                   duration: float = 10.0, object_mass: float = 0.2, friction: float = 0.3, stiffness: float = PUSH_STIFFNESS,
+                   damping: float = 20.0, seed: int = SEED) -> SimResult:
+    """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2)."""
+    platform = _q_prr(platform)
+    lo, hi = params_of(platform).r0_limits
+    xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
+    trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
+    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
+                     friction=friction)
+    ctrl = _push_controller(controller, platform, obj)
+    res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
+                   scenario="push-prismatic")
+    _contact_series(res, obj)
+    res.metrics["object_mass"] = float(object_mass)
+    return res
+
+
+# ============================================================================ impedance
+IMPEDANCE_CONTROLLERS = ("impedance", "impedance-table-6.7", "idc")
+
+
+def impedance(platform=None, controller: str = "impedance", progress: bool = False, *, h_b=(0.2, 0.0, 0.0, 0.0),
+              h_q=(0.05, 0.01, 0.05), t_on: float = 0.0, t_off: float = 18.0, duration: float = 25.0, arm=ARM_PUSH,
+              impedance_gains=None, seed: int = SEED) -> SimResult:
+    """Interaction forces from ``t_on`` to ``t_off`` on a hovering Q-PRR under impedance control (Thesis Sec. 6.4.3.4).
+
+    ``h_b`` = generalised force on [x, y, z, psi] of the base (N, N, N, N m), applied as the
+    disturbance (6.28) pulse; ``h_q`` = force on the end effector [N, world axes] (the moments
+    are neglected, as the thesis states), applied through the end-effector wrench hook.  The
+    controller measures both exactly.  Controllers: "impedance" (stable gains), "impedance-
+    table-6.7" (printed impedance gains: the slider reference saturates), "idc" (no compliance).
+    """
+    platform = _q_prr(platform)
+    hb = as_vector(h_b, 4, "h_b").copy()
+    hq = np.concatenate([as_vector(h_q, 3, "h_q"), np.zeros(3)])
+    ee = PrescribedWrench(hq, t_on, t_off)
+
+    def base_sensor(t: float) -> np.ndarray:
+        return hb if t_on <= t < t_off else np.zeros(4)
+
+    gamma = np.zeros(9)
+    gamma[[0, 1, 2, 5]] = hb
+    pulse = Pulse(t_on, t_off, tuple(gamma))
+    xi0 = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *arm)
+    imp = gains.impedance_filters() if impedance_gains is None else impedance_gains
+    builders = {
+        "impedance": lambda: ImpedanceController(platform, gains.impedance(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
+        "impedance-table-6.7": lambda: ImpedanceController(platform, gains.impedance(), gains.impedance_table_6_7(),
+                                                           ee_sensor=ee.measured, base_sensor=base_sensor),
+        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+    }
+    if controller not in builders:
+        raise UnknownNameError("controller", controller, IMPEDANCE_CONTROLLERS)
+    ctrl = builders[controller]()
+    res = simulate(platform, ctrl, Hold(xi0), duration, dt=DT, external_wrench=ee, disturbance=pulse, seed=seed,
+                   progress=progress, scenario="impedance")
+    res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
+    res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
+    res.metrics["t_off"] = float(t_off)
+    if hasattr(ctrl, "history"):
+        h = ctrl.history()
+        res.series.update({"impedance_t": h["t"], "impedance_delta_eta": h["delta_eta"], "impedance_delta_q": h["delta_q"],
+                           "impedance_u_e": h["u_e"]})
+        K_arm = ctrl.impedance.arm(platform.n_arm)[2]
+        res.series["impedance_K"] = np.concatenate([np.asarray(ctrl.impedance.K_base, dtype=float), K_arm])
+        res.metrics["saturated_steps"] = float(ctrl.saturated_steps)
+    return res
+
+
+def impedance_steady_state(result: SimResult, at: float) -> dict[str, np.ndarray]:
+    """Deflection of the measured state from the unperturbed reference at time ``at`` vs the filter's K^-1 h.
+
+    Returns ``measured`` ([x, y, z, psi, r0, theta2, theta3] - their constant set points),
+    ``filter`` (the impedance filters' Delta at that step: what the inner loop tracks) and
+    ``predicted`` = [K_base^-1 h_b, K_arm^-1 u_e,mu] from the logged wrench.
+    """
+    k = int(np.searchsorted(result.t, at))
+    k = min(k, result.n - 1)
+    s = result.series
+    K = s["impedance_K"]
+    u_e = s["impedance_u_e"][k]
+    hb = s["base_wrench"][k]
+    predicted = np.concatenate([hb / K[0:4], u_e[6:9] / K[4:7]])
+    set_point = result.xi[0]  # the run starts at rest on its set point
+    idx = [0, 1, 2, 5, 6, 7, 8]
+    filt = np.concatenate([s["impedance_delta_eta"][k], s["impedance_delta_q"][k]])
+    return {"measured": result.xi[k, idx] - set_point[idx], "filter": filt, "predicted": predicted, "t": result.t[k]}
+
+
+# ============================================================================ figures (Sec. 6.4)
+_LABELS = ("x", "y", "z", r"$\phi$", r"$\theta$", r"$\psi$", r"$r_0$", r"$\theta_2$", r"$\theta_3$")
+
+
+def _figure(result: SimResult, path, extra_title: str, extra: Callable) -> Path:
+    path = figure_path(path)
+    u = applied_generalized_forces(result)
+    t = result.t
+    fig = new_figure((11, 9))
+    ax = fig.subplots(3, 2, sharex=True)
+    for i, c in zip((3, 4, 5), ("C0", "C1", "C2")):
+        ax[0, 0].plot(t, result.xi[:, i], c, lw=1.2, label=_LABELS[i])
+        ax[0, 0].plot(t, result.xi_d[:, i], c + "--", lw=0.8)
+    ax[0, 0].set_title("attitude (solid measured, dashed desired) [rad]")
+    for i, c in zip((6, 7, 8), ("C0", "C1", "C2")):
+        ax[0, 1].plot(t, result.xi[:, i], c, lw=1.2, label=_LABELS[i])
+        ax[0, 1].plot(t, result.xi_d[:, i], c + "--", lw=0.8)
+    ax[0, 1].set_title("arm joints [m, rad]")
+    for i, n in zip(range(3), (r"$u_{f_b,x}$", r"$u_{f_b,y}$", r"$u_{f_b,z}$")):
+        ax[1, 0].plot(t, u[:, i], lw=1.0, label=n)
+    ax[1, 0].set_title("thrust force, world axes [N]")
+    for i, n in zip(range(3, 6), (r"$u_{\tau_\phi}$", r"$u_{\tau_\theta}$", r"$u_{\tau_\psi}$")):
+        ax[1, 1].plot(t, u[:, i], lw=1.0, label=n)
+    ax[1, 1].set_title("attitude torques [N m]")
+    for i, n in zip(range(6, 9), (r"$u_{\mu,r_0}$ [N]", r"$u_{\mu,\theta_2}$ [N m]", r"$u_{\mu,\theta_3}$ [N m]")):
+        ax[2, 0].plot(t, u[:, i], lw=1.0, label=n)
+    ax[2, 0].set_title("slider force and joint torques")
+    extra(ax, t)
+    ax[2, 1].set_title(extra_title)
+    for a in ax.flat:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7, loc="best")
+    ax[2, 0].set_xlabel("t [s]")
+    ax[2, 1].set_xlabel("t [s]")
+    fig.suptitle(f"{result.scenario} / {result.controller}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    return path
+
+
+def plot_payload_drop(result: SimResult, path) -> Path:
+    """Attitude, joints, forces, torques and the payload mass (true and estimated) of ``payload-drop``."""
+    def extra(ax, t):
+        ax[2, 1].plot(t, result.series["payload_mass"], "k", lw=1.2, label="carried mass")
+        if "mass_estimate" in result.series:
+            ax[2, 1].plot(t, result.series["mass_estimate"], "C3", lw=1.0, label="estimate")
+        e = result.xi_d - result.xi
+        ax2 = ax[2, 1].twinx()
+        ax2.plot(t, np.linalg.norm(e[:, 0:3], axis=1), "C0", lw=0.8, label="|p_d - p| [m]")
+        ax2.set_yscale("log")
+        ax2.legend(fontsize=7, loc="center right")
+        for a in ax.flat:
+            a.axvline(result.metrics["release_time"], color="k", lw=0.6, ls=":")
+
+    return _figure(result, path, "payload mass [kg] (release dotted)", extra)
+
+
+def plot_push(result: SimResult, path) -> Path:
+    """Attitude, joints, forces, torques and the contact force / object motion of a push scenario."""
+    c = contact_history(result)
+
+    def extra(ax, t):
+        ax[2, 1].plot(c.t, c.force, "C3", lw=1.2, label="contact force [N]")
+        ax[1, 0].plot(c.t, c.wrench[:, 0], "k--", lw=1.0, label="interaction $h_x$ [N]")
+        ax2 = ax[2, 1].twinx()
+        ax2.plot(c.t, c.position, "C0", lw=1.0, label="object position [m]")
+        ax2.legend(fontsize=7, loc="center right")
+
+    return _figure(result, path, "object: contact force and position", extra)
+
+
+def plot_impedance(result: SimResult, path) -> Path:
+    """Attitude, joints, forces, torques and the impedance deflections of the ``impedance`` scenario."""
+    s = result.series
+
+    def extra(ax, t):
+        w = s["ee_wrench"]
+        hb = s["base_wrench"]
+        ax[1, 0].plot(t, w[:, 0] + hb[:, 0], "k--", lw=1.0, label="interaction x [N]")
+        set_point = result.xi[0]
+        ax[2, 1].plot(t, result.xi[:, 0] - set_point[0], "C0", lw=1.2, label="x - x_d [m]")
+        ax[2, 1].plot(t, result.xi[:, 6] - set_point[6], "C1", lw=1.2, label="r0 - r0_d [m]")
+        ax[2, 1].plot(t, result.xi[:, 7] - set_point[7], "C2", lw=1.2, label=r"$\theta_2 - \theta_{2d}$ [rad]")
+        if "impedance_t" in s:
+            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_eta"][:, 0], "C0:", lw=1.0, label="filter $\\Delta x$")
+            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_q"][:, 0], "C1:", lw=1.0, label="filter $\\Delta r_0$")
+            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_q"][:, 1], "C2:", lw=1.0, label="filter $\\Delta\\theta_2$")
+
+    return _figure(result, path, "compliant deflections (dotted: impedance filter)", extra)
+
+
+def summary(result: SimResult) -> list[str]:
+    """The numbers a Sec. 6.4 scenario reports, one per line."""
+    lines = []
+    m, s = result.metrics, result.series
+    if "recovery_time" in m:
+        r = recovery_of(result)
+        lines.append(f"recovery after release at {r.release_time:g} s: {r.time:.3f} s ({r.status}; |p_d - p| <= {r.tol_position:g} m, "
+                     f"|q_d - q| <= {r.tol_angle:g} rad, thrust within {100 * r.tol_thrust:g} % of m g); peaks after release: "
+                     f"position {r.peak_position:.4f} m, angle {r.peak_angle:.4f} rad, thrust {100 * r.peak_thrust:.2f} %")
+    if "mass_estimate_error" in m:
+        lines.append(f"mass estimate: max |m_hat - m| over the last second before the release = {m['mass_estimate_error']:.3e} kg")
+    if "contact_force" in s:
+        c = contact_history(result)
+        lines.append(f"contact force: max {c.force.max():.3f} N, min {c.force.min():.3f} N; object moved {c.position[-1] - c.position[0]:.4f} m")
+    if "impedance_K" in s:
+        d = impedance_steady_state(result, min(result.t[-1], m["t_off"] - result.dt))
+        names = ("x", "y", "z", "psi", "r0", "theta2", "theta3")
+        parts = [f"{n} {v:+.5f} (filter {f:+.5f}, h/K {p:+.5f})" for n, v, f, p in zip(names, d["measured"], d["filter"], d["predicted"])
+                 if abs(p) > 0 or abs(v) > 1e-6]
+        lines.append(f"deflection at t = {d['t']:.3f} s: " + ", ".join(parts))
+        lines.append(f"arm reference saturated on {int(m['saturated_steps'])} steps")
+    return lines
+
+
+def _interaction(fn: Callable) -> Callable:
+    def runner(platform, controller, progress, **options):
+        return fn(platform, controller, progress, **options)
+
+    return runner
+
+
+INTERACTION_SCENARIOS = (
+    Scenario("payload-drop", "carry 0.1 kg at the end effector, release it at 18 s (payload IDC)", _interaction(payload_drop),
+             PAYLOAD_CONTROLLERS,
+             {"mass": Option(0.1, "payload mass [kg]"), "release_time": Option(18.0, "release time [s]"),
+              "duration": Option(25.0, "run length [s]"), "mission": Option("thesis", "thesis (the flight of Sec. 6.3.1.4) or hover"),
+              "noise": Option(0.0, "white-noise amplitude on x, y, z [N] (6.27)"), "seed": Option(SEED, "noise seed")},
+             ("q-prr",), plot_payload_drop, "Sec. 6.4.2.3, Fig. 6.49-6.53", summary),
+    Scenario("push-thrust", "push a 0.5 kg object 0.5 m with the thrust, arm locked", _interaction(push_thrust), PUSH_CONTROLLERS,
+             {"distance": Option(0.5, "push distance [m]"), "duration": Option(12.0, "run length [s]"),
+              "object_mass": Option(0.5, "object mass [kg]"), "friction": Option(0.3, "Coulomb friction coefficient"),
+              "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"), "damping": Option(20.0, "contact damping [N s/m]"),
+              "seed": Option(SEED, "seed")},
+             ("q-prr",), plot_push, "Sec. 6.4.3.1, (6.65)-(6.67)", summary),
+    Scenario("push-prismatic", "push a 0.2 kg object with the slider while hovering", _interaction(push_prismatic), PUSH_CONTROLLERS,
+             {"duration": Option(10.0, "run length [s]"), "object_mass": Option(0.2, "object mass [kg]"),
+              "friction": Option(0.3, "Coulomb friction coefficient"), "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"),
+              "damping": Option(20.0, "contact damping [N s/m]"), "seed": Option(SEED, "seed")},
+             ("q-prr",), plot_push, "Sec. 6.4.3.2", summary),
+    Scenario("impedance", "interaction forces on a hovering Q-PRR under impedance control", _interaction(impedance),
+             IMPEDANCE_CONTROLLERS,
+             {"t_on": Option(0.0, "forces on [s]"), "t_off": Option(18.0, "forces off [s]"), "duration": Option(25.0, "run length [s]"),
+              "seed": Option(SEED, "seed")},
+             ("q-prr",), plot_impedance, "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7", summary),
+)
+
+SCENARIOS = FLIGHT_SCENARIOS + INTERACTION_SCENARIOS
+"""The thesis's scenarios (registered in :data:`qprr.scenarios.SCENARIOS`)."""
+
+
+# ============================================================================ Table 6.3
+TABLE_6_3 = {
+    "idc": (2.2012e-3, 4.1015e-3, 4.2852e-3, 2.6788e-05, 5.5766e-05, 8.6008e-04, 1.0759e-05, 2.9757e-05, 5.5746e-05),
+    "dsid": (1.4294e-04, 4.3873e-04, 6.2974e-04, 6.9541e-04, 4.1160e-04, 1.6472e-07, 1.0466e-04, 2.3679e-04, 2.5635e-04),
+    "mfc": (4.9975e-04, 8.0141e-04, 1.2238e-3, 5.2551e-04, 1.3367e-3, 3.2451e-5, 5.9445e-06, 2.9722e-05, 8.9167e-05),
+}
+"""Thesis Table 6.3: RMSE (6.26) per variable (x, y, z [m], phi, theta, psi [rad], r0 [m],
+theta2, theta3 [rad]) for IDC, "MPC" (our dsid) and MFC."""
+
+THESIS_RUN_TIME_S = {"idc": 14 * 60.0, "dsid": 25 * 60.0, "mfc": 11 * 60.0}
+"""Thesis run times T_x (Table 6.3 text: Matlab 2018, Intel Core i7 3.4 GHz): 14, 25, 11 min."""
+
+
+@dataclass
+class Comparison:
+    """RMSE (6.26) of each controller on the static mission, with wall times, next to Table 6.3."""
+
+    rmse: dict[str, dict[str, float]]
+    wall_time: dict[str, float]
+    status: dict[str, str]
+    reason: dict[str, str]
+
+    def table(self) -> str:
+        """Text table shaped like Table 6.3 (rows: variables; columns: ours and the thesis's, per controller)."""
+        ctrls = list(self.rmse)
+        head = f"{'variable':<9}" + "".join(f"{c + ' (ours)':>13}{THESIS_NAMES[c] + ' (thesis)':>15}" for c in ctrls)
+        lines = [head, "-" * len(head)]
+        for i, var in enumerate(NAMES):
+            row = f"{var:<9}"
+            for c in ctrls:
+                ours = self.rmse[c].get(var, float("nan"))
+                row += f"{ours:>13.3e}{TABLE_6_3[c][i]:>15.4e}"
+            lines.append(row)
+        lines.append("-" * len(head))
+        row = f"{'time':<9}"
+        for c in ctrls:
+            row += f"{self.wall_time[c]:>12.3f}s{THESIS_RUN_TIME_S[c] / 60:>12.0f}min"
+        lines.append(row)
+        row = f"{'ratio':<9}"
+        for c in ctrls:
+            row += f"{'':>13}{THESIS_RUN_TIME_S[c] / self.wall_time[c]:>14.0f}x"
+        lines.append(row)
+        for c in ctrls:
+            if self.status[c] != "ok":
+                lines.append(f"{c}: {self.status[c]}: {self.reason[c]}")
+        return "\n".join(lines)
+
+
+def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: float = 30.0, dt: float = 1e-3,
+            progress: bool = False) -> Comparison:
+    """Run the three controllers on the static mission (Sec. 6.3.1.4) and collect RMSE and wall times."""
+    platform = _q_prr(platform)
+    by_name = {s.name: s for s in FLIGHT_SCENARIOS}
+    rmse, wall, status, reason = {}, {}, {}, {}
+    for c in controllers:
+        if c not in THESIS_NAMES:
+            raise UnknownNameError("controller", c, tuple(THESIS_NAMES))
+        try:
+            res = by_name[f"static-{c}"].run(platform=platform, controller=c, progress=progress, duration=duration, dt=dt)
+        except QprrError as err:
+            res = getattr(err, "result", None)
+            if res is None:
+                raise
+        rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, str(res.status), res.reason
+    return Comparison(rmse, wall, status, reason)
