@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 import struct
 from math import atan2, cos, hypot, sin
+from types import MethodType
 
 import numpy as np
 import pinocchio as pin
@@ -369,6 +370,133 @@ class FloatWriter:
         return arr
 
 
+# The hot methods of State, on plain floats.  Their source is written once here and compiled per
+# State for its number of arm joints: "{Q}" stands for ", q0, q1, ..." (arm positions), "{D}" for
+# ", d0, d1, ..." (arm rates or accelerations or efforts); fixed-length unpacking of plain floats
+# costs half of star-unpacking, and these run several times per millisecond of simulated time.
+_HOT_METHODS = """
+def update(self, t, q, v):
+    self.t = t
+    self.q = q
+    self.v = v
+    x, y, z, qx, qy, qz, qw{Q} = q.tolist()
+    self._v = vl = v.tolist()
+    vx, vy, vz, wx_, wy_, wz_{D} = vl
+    xx, yy, zz = qx * qx, qy * qy, qz * qz
+    xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
+    r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
+    r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
+    r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
+    self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    ch = hypot(r21, r22)
+    if not ch > 1e-6:  # also catches NaN
+        raise DivergenceError(f"t = {{t:.4f}} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
+                              f"q = {{q.tolist()}}")
+    # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
+    self.sf = sf = r21 / ch
+    self.cf = cf = r22 / ch
+    self.st = st = -r20
+    self.ct = ch
+    self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00){Q})
+    self._wv(self.xi, xi)
+    # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
+    psi_d = (sf * wy_ + cf * wz_) / ch
+    self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
+                     wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d{D}]
+    self._wv(self.xi_dot, xd)
+
+
+def _from_xi(self, t, xi, xd, arrays, reuse):
+    x, y, z, phi, theta, psi{Q} = xi
+    c1, s1 = cos(0.5 * phi), sin(0.5 * phi)
+    c2, s2 = cos(0.5 * theta), sin(0.5 * theta)
+    c3, s3 = cos(0.5 * psi), sin(0.5 * psi)
+    # sin/cos of the full angles from the half angles
+    sf, cf = 2.0 * s1 * c1, c1 * c1 - s1 * s1
+    st, ct = 2.0 * s2 * c2, c2 * c2 - s2 * s2
+    sp, cp = 2.0 * s3 * c3, c3 * c3 - s3 * s3
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(sf, cf, st, ct, sp, cp)
+    px, py, pz, pd, td, sd{D} = xd
+    # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
+    v = [r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
+         pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd{D}]
+    self.t = t
+    # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
+    qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
+          c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3{Q})
+    if reuse:
+        if self._qv is None:
+            self._qv = (np.zeros(len(qt)), np.zeros(len(v)))
+        self.q, self.v = qv = self._qv
+        self._wq(qv[0], qt)
+        self._wv(qv[1], v)
+    else:
+        self.q = np.array(qt)
+        self.v = np.array(v)
+    self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+    self._v = v
+    self._xd = xd
+    self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
+    xi_t = (x, y, z, phi, theta, psi{Q})
+    self._xi = xi_t
+    if arrays:
+        self.xi = np.array(xi_t)
+        self.xi_dot = np.array(xd)
+
+
+def accel_to_v_list(self, xi_ddot):
+    ax, ay, az, pdd, tdd, sdd{D} = xi_ddot
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+    vx, vy, vz, wx, wy, wz{V} = self._v
+    _, _, _, pd, td, sd{V} = self._xd
+    sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
+    # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
+    return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
+            r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
+            r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
+            pdd - st * sdd - ct * td * sd,
+            cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
+            -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd{D}]
+
+
+def force_to_xi_list(self, tau):
+    f0, f1, f2, m0, m1, m2{D} = tau.tolist() if isinstance(tau, np.ndarray) else tau
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+    sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
+    return [r00 * f0 + r01 * f1 + r02 * f2,
+            r10 * f0 + r11 * f1 + r12 * f2,
+            r20 * f0 + r21 * f1 + r22 * f2,
+            m0,
+            cf * m1 - sf * m2,
+            -st * m0 + sf * ct * m1 + cf * ct * m2{D}]
+
+
+def force_from_xi(self, u, out=None):
+    u0, u1, u2, m0, m1, m2{D} = u.tolist() if isinstance(u, np.ndarray) else u
+    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+    sf, cf = self.sf, self.cf
+    w = (m2 + self.st * m0) / self.ct
+    tau = (r00 * u0 + r10 * u1 + r20 * u2,
+           r01 * u0 + r11 * u1 + r21 * u2,
+           r02 * u0 + r12 * u1 + r22 * u2,
+           m0,
+           cf * m1 + sf * w,
+           -sf * m1 + cf * w{D})
+    return np.array(tau) if out is None else self._wv(out, tau)
+"""
+_HOT_NAMES = ("update", "_from_xi", "accel_to_v_list", "force_to_xi_list", "force_from_xi")
+
+
+def _hot_methods(n_arm: int) -> dict:
+    """The hot methods of :class:`State` compiled for ``n_arm`` arm joints (the template above)."""
+    src = _HOT_METHODS.format(Q="".join(f", q{i}" for i in range(n_arm)), D="".join(f", d{i}" for i in range(n_arm)),
+                              V="".join(f", _{i}" for i in range(n_arm)))
+    ns = {"np": np, "cos": cos, "sin": sin, "atan2": atan2, "hypot": hypot, "DivergenceError": DivergenceError,
+          "_rotation_entries": _rotation_entries}
+    exec(compile(src, f"<qprr.charts.State hot methods, n_arm = {n_arm}>", "exec"), ns)
+    return {name: ns[name] for name in _HOT_NAMES}
+
+
 class State:
     # The array maps above on plain floats, for loops that run every millisecond (simulator,
     # controllers): one xi <-> (q, v) update caches R_b and the trigonometry that S, S_dot
@@ -382,16 +510,27 @@ class State:
     (thesis coordinates, disturbances excluded) - the "measured input" of the model-free
     controller; filled only for controllers with ``uses_applied_force = True``.
     ``n_arm`` arm joints (default 3, the Q-PRR's).
+
+    Methods (compiled for ``n_arm`` from one template, see ``_HOT_METHODS``; tests check them
+    against the array functions of this module):
+
+    * ``update(t, q, v)``: fill every field from (q, v); DivergenceError at the Euler singularity or on NaN;
+    * ``accel_to_v_list(xi_ddot)``: Pinocchio's a = S xi_ddot + S_dot xi_dot as a list of floats;
+    * ``force_to_xi_list(tau)``: u = S^T tau (Thesis (5.40)-(5.43), R_Q = S^T) as a list;
+    * ``force_from_xi(u, out=None)``: tau = S^-T u (into ``out`` if given, a float64 array);
+    * ``_from_xi(t, xi, xd, arrays, reuse)``: :meth:`update_xi` on plain sequences.
     """
 
     __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "_ua", "_r", "_v", "_xi", "_xd", "_qv", "_wq", "_wv",
-                 "sf", "cf", "st", "ct")
+                 "sf", "cf", "st", "ct", *_HOT_NAMES)
 
     def __init__(self, n_arm: int = 3) -> None:
         if not (isinstance(n_arm, (int, np.integer)) and n_arm >= 0):
             raise InputError(f"n_arm must be an integer >= 0, got {n_arm!r}")
         n = 6 + int(n_arm)
         self.n_arm = int(n_arm)
+        for name, fn in _hot_methods(self.n_arm).items():
+            setattr(self, name, MethodType(fn, self))
         self.t = 0.0
         self.q = np.zeros(n + 1)
         self.q[6] = 1.0
@@ -437,97 +576,8 @@ class State:
         ``reuse=True`` writes q and v into two arrays this State owns and overwrites at each
         such call (no allocation; a caller that keeps ``q`` or ``v`` must copy them).
         """
-        self._from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else xi,
+        self._from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else tuple(xi),
                       xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else list(xi_dot), arrays, reuse)
-
-    def _from_xi(self, t: float, xi, xd: list, arrays: bool, reuse: bool) -> None:
-        """:meth:`update_xi` for ``xi`` a sequence and ``xd`` a list of floats (kept as ``_xd``)."""
-        x, y, z, phi, theta, psi = xi[0:6]
-        arm = tuple(xi[6:])
-        c1, s1 = cos(0.5 * phi), sin(0.5 * phi)
-        c2, s2 = cos(0.5 * theta), sin(0.5 * theta)
-        c3, s3 = cos(0.5 * psi), sin(0.5 * psi)
-        # sin/cos of the full angles from the half angles
-        sf, cf = 2.0 * s1 * c1, c1 * c1 - s1 * s1
-        st, ct = 2.0 * s2 * c2, c2 * c2 - s2 * s2
-        sp, cp = 2.0 * s3 * c3, c3 * c3 - s3 * s3
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(sf, cf, st, ct, sp, cp)
-        px, py, pz, pd, td, sd = xd[0:6]
-        # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
-        v = [r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
-             pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd, *xd[6:]]
-        self.t = t
-        # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
-        qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
-              c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, *arm)
-        if reuse:
-            if self._qv is None:
-                self._qv = (np.zeros(len(qt)), np.zeros(len(v)))
-            self.q, self.v = qv = self._qv
-            self._wq(qv[0], qt)
-            self._wv(qv[1], v)
-        else:
-            self.q = np.array(qt)
-            self.v = np.array(v)
-        self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
-        self._v = v
-        self._xd = xd
-        self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
-        xi_t = (x, y, z, phi, theta, psi, *arm)
-        self._xi = xi_t
-        if arrays:
-            self.xi = np.array(xi_t)
-            self.xi_dot = np.array(xd)
-
-    def update(self, t: float, q: np.ndarray, v: np.ndarray) -> None:
-        """Fill every field from (q, v); raise DivergenceError at the Euler singularity or on NaN."""
-        self.t = t
-        self.q = q
-        self.v = v
-        ql = q.tolist()
-        x, y, z, qx, qy, qz, qw = ql[0:7]
-        arm = ql[7:]
-        self._v = vl = v.tolist()
-        vx, vy, vz, wx_, wy_, wz_ = vl[0:6]
-        xx, yy, zz = qx * qx, qy * qy, qz * qz
-        xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
-        r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
-        r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
-        r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
-        self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
-        ch = hypot(r21, r22)
-        if not ch > 1e-6:  # also catches NaN
-            raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
-                                  f"q = {ql}")
-        # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
-        self.sf = sf = r21 / ch
-        self.cf = cf = r22 / ch
-        self.st = st = -r20
-        self.ct = ch
-        self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), *arm)
-        self._wv(self.xi, xi)
-        # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
-        psi_d = (sf * wy_ + cf * wz_) / ch
-        self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
-                         wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, *vl[6:]]
-        self._wv(self.xi_dot, xd)
-
-    # --------------------------------------------------------------- coordinate maps
-    def accel_to_v_list(self, xi_ddot) -> list[float]:
-        """:meth:`accel_to_v` as a list of floats (``xi_ddot``: a sequence of 6 + n floats)."""
-        ax, ay, az, pdd, tdd, sdd = xi_ddot[0:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-        vx, vy, vz, wx, wy, wz = self._v[0:6]
-        _, _, _, pd, td, sd = self._xd[0:6]
-        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
-        return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
-                r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
-                r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
-                pdd - st * sdd - ct * td * sd,
-                cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
-                -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd,
-                *xi_ddot[6:]]
 
     def accel_to_v(self, xi_ddot) -> np.ndarray:
         """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot (cf. :func:`xi_ddot_to_a`)."""
@@ -550,39 +600,6 @@ class State:
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         return (a0 - st * a2, cf * a1 + sf * ct * a2, -sf * a1 + cf * ct * a2)
 
-    def force_to_xi_list(self, tau) -> list[float]:
-        """:meth:`force_to_xi` as a list of floats."""
-        tl = tau.tolist() if isinstance(tau, np.ndarray) else list(tau)
-        f0, f1, f2, m0, m1, m2 = tl[0:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        return [r00 * f0 + r01 * f1 + r02 * f2,
-                r10 * f0 + r11 * f1 + r12 * f2,
-                r20 * f0 + r21 * f1 + r22 * f2,
-                m0,
-                cf * m1 - sf * m2,
-                -st * m0 + sf * ct * m1 + cf * ct * m2,
-                *tl[6:]]
-
     def force_to_xi(self, tau) -> np.ndarray:
         """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
         return np.array(self.force_to_xi_list(tau))
-
-    def force_from_xi(self, u, out: np.ndarray | None = None) -> np.ndarray:
-        """Pinocchio generalised force tau = S^-T u (inverse of :meth:`force_to_xi`).
-
-        ``out``: a C-contiguous float64 array of the right length to write tau into (returned), else a new array.
-        """
-        ul = u.tolist() if isinstance(u, np.ndarray) else list(u)
-        u0, u1, u2, m0, m1, m2 = ul[0:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-        sf, cf = self.sf, self.cf
-        w = (m2 + self.st * m0) / self.ct
-        tau = (r00 * u0 + r10 * u1 + r20 * u2,
-               r01 * u0 + r11 * u1 + r21 * u2,
-               r02 * u0 + r12 * u1 + r22 * u2,
-               m0,
-               cf * m1 + sf * w,
-               -sf * m1 + cf * w,
-               *ul[6:])
-        return np.array(tau) if out is None else self._wv(out, tau)

@@ -191,7 +191,13 @@ class InverseDynamicsController(Controller):
         # base directions the rotors cannot produce (coplanar rotors: the body-lateral force)
         Omega = platform.rotor_matrix
         self._lost = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12] if self.realizable else []
+        contiguous = self._lost and self._lost == list(range(self._lost[0], self._lost[-1] + 1))
+        self._lost_rows = slice(self._lost[0], self._lost[-1] + 1) if contiguous else self._lost  # a slice is 4x cheaper
         self._pack = struct.Struct(f"={platform.n_arm}d").pack  # exact key of the arm joints (tells -0.0 from 0.0)
+        # hooks a configuration overrides (skipped in the loop when it does not)
+        cls = type(self)
+        self._refs_hook = cls.update_references is not InverseDynamicsController.update_references
+        self._ff_hook = cls.feedforward is not InverseDynamicsController.feedforward
         self.dt = 1e-3
         self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
 
@@ -273,15 +279,16 @@ class InverseDynamicsController(Controller):
         if self._desired is not None:
             key = self._pack(*ms._xi[6:])
             if key != self._mass_key:
-                self._mass_rows = _crba(model, data, q)[self._lost, 0:6].tolist()
+                self._mass_rows = _crba(model, data, q)[self._lost_rows, 0:6].tolist()
                 self._mass_key = key
             return self._mass_rows
-        return _crba(model, data, q)[self._lost, 0:6].tolist()  # Pinocchio 3+: full symmetric matrix
+        return _crba(model, data, q)[self._lost_rows, 0:6].tolist()  # Pinocchio 3+: full symmetric matrix
 
     # ------------------------------------------------------------------ step
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u = B alpha + C xi_dot + G with alpha from the outer loops and roll/pitch from (6.17)."""
-        self.update_references(t, state, ref)
+        if self._refs_hook:
+            self.update_references(t, state, ref)
         x, xd = state._xi, state._xd
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         ms = self._model_state(state, r, rd)
@@ -290,7 +297,7 @@ class InverseDynamicsController(Controller):
         a = ms.accel_to_v_list(alpha)
         abuf = self._abuf
         write = self._write
-        ff = self.feedforward(t, state)
+        ff = self.feedforward(t, state) if self._ff_hook else None
         tilt = self.tilt
         if tilt is not None:
             write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
