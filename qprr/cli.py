@@ -1,4 +1,4 @@
-"""Command line: ``qprr check | urdf | simulate | compare``."""
+"""Command line: ``qprr check | urdf | simulate | compare | view | animate``."""
 
 from __future__ import annotations
 
@@ -28,6 +28,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("urdf", help="regenerate urdf/qprr.urdf from the parameters")
     p.add_argument("-o", "--output", default=None, help="output path (default: the packaged urdf/qprr.urdf)")
     p.set_defaults(func=_cmd_urdf)
+    from .viz.cli import register_cli as register_viz  # view, animate (viser and matplotlib load when they run)
+
+    register_viz(sub)
     try:  # simulation commands are registered by qprr.scenarios when it is present
         from .scenarios import register_cli
     except ImportError:

@@ -1,0 +1,37 @@
+"""See the robot: visual geometry, headless 3-D animation of runs and an interactive browser viewer (Thesis Annex A).
+
+* :func:`animate` / :func:`animate_result`: a run (or an IK solution path, :func:`ik_path`) to
+  GIF or MP4 with matplotlib, no display needed (:mod:`qprr.viz.animation`);
+* :func:`visual_model`: the platform's visual ``GeometryModel`` (URDF shapes and meshes, or primitives);
+* :class:`RunLog`, :func:`save_run`, :func:`load_run`: a logged run and its ``.npz`` file;
+* the browser viewer (``qprr view``, :class:`qprr.viz.viewer.Viewer`): joint sliders (FK), a
+  draggable end-effector target solved by the task-priority IK, CoG and thrust-axis markers,
+  hover thrusts and margins, a player for saved runs.  It needs the ``viewer`` extra
+  (``pip install 'qprr[viewer]'``: viser); importing :mod:`qprr.viz.viewer` without it raises
+  :class:`~qprr.errors.MissingDependencyError`.
+"""
+
+from .animation import AnimationInfo, animate, animate_result
+from .geometry import primitive_visual_model, visual_model
+from .ikpath import IKPath, ik_levels, ik_path, ik_solve
+from .run import RunLog, load_run, save_run
+from .scene import HoverReport, RobotPose, hover_report, robot_pose
+
+__all__ = [
+    "AnimationInfo",
+    "HoverReport",
+    "IKPath",
+    "RobotPose",
+    "RunLog",
+    "animate",
+    "animate_result",
+    "hover_report",
+    "ik_levels",
+    "ik_path",
+    "ik_solve",
+    "load_run",
+    "primitive_visual_model",
+    "robot_pose",
+    "save_run",
+    "visual_model",
+]
