@@ -66,15 +66,17 @@ def _cmd_view(args: argparse.Namespace) -> int:
         from .viewer import Viewer
 
         platform = platform_from_name(args.platform)
-        viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog)
+        viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog, verbose=False)
     except QprrError as exc:
         print(f"qprr view: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        return 130
     if args.open:
         import webbrowser
 
         webbrowser.open(viewer.url)
-    viewer.serve_forever()
+    viewer.serve_forever(announce=True)  # the address is printed once Ctrl-C is handled
     return 0
 
 

@@ -300,7 +300,7 @@ class Viewer:
         if res.xi is not None:
             self._xi[:] = res.xi
             self._apply(move_target=False)
-        self._ik_md.content = _ik_markdown(res, self._hover_box.value, self._cog_box.value)
+        self._ik_md.content = _ik_markdown(res, not isinstance(target, np.ndarray), self._hover_box.value, self._cog_box.value)
         return res
 
     def _move_target_to_ee(self) -> None:
@@ -320,7 +320,7 @@ class Viewer:
         self._syncing = True
         try:
             for k, s in enumerate(self._sliders):
-                v = float(self._xi[k])
+                v = round(float(self._xi[k]), 9) + 0.0  # shown to 1e-9 (no "-0.000"); self._xi keeps every digit
                 if v < s.min:
                     s.min = v
                 if v > s.max:
@@ -450,8 +450,8 @@ class Viewer:
         self._player_stop.set()
         self.server.stop()
 
-    def serve_forever(self) -> None:
-        """Block until Ctrl-C (SIGINT) or SIGTERM, then close the server cleanly."""
+    def serve_forever(self, announce: bool = False) -> None:
+        """Block until Ctrl-C (SIGINT) or SIGTERM, then close the server cleanly (``announce``: print the address first)."""
         import signal
 
         def _stop(signum, frame):
@@ -463,6 +463,8 @@ class Viewer:
             for sig in (signal.SIGINT, signal.SIGTERM):
                 previous[sig] = signal.signal(sig, _stop)
         try:
+            if announce:
+                print(f"qprr viewer of {self.platform.name}: {self.url}  (Ctrl-C to stop)", flush=True)
             while not self._closed:
                 time.sleep(0.2)
         except KeyboardInterrupt:
@@ -500,15 +502,20 @@ def _thrust_colour(f: float, f_min: float, f_max: float) -> np.ndarray:
     return _THRUST_OK
 
 
-def _ik_markdown(res: IKResult, hover: bool, cog: bool) -> str:
-    levels = "pose/position" + (" > hover" if hover else "") + (" > CoG" if cog else "") + " > posture"
+def _f(x: float, digits: int) -> str:
+    """``x`` with ``digits`` decimals, without a minus sign on a rounded zero."""
+    return f"{round(float(x), digits) + 0.0:.{digits}f}"
+
+
+def _ik_markdown(res: IKResult, pose: bool, hover: bool, cog: bool) -> str:
+    levels = ("pose" if pose else "position") + (" > hover" if hover else "") + (" > CoG" if cog else "") + " > posture"
     head = f"**IK {res.status}** ({res.iterations} it, {1000 * res.wall_time:.1f} ms), levels {levels}"
     if res.xi is None:
         return f"{head}  \n{res.reason}"
     lines = [head,
              f"position error {res.position_error:.2e} m, orientation error {res.orientation_error:.2e} rad",
-             f"CoG offset ({1000 * res.x_cm:.2f}, {1000 * res.y_cm:.2f}) mm, roll {math.degrees(res.roll):.2f} deg, "
-             f"pitch {math.degrees(res.pitch):.2f} deg"]
+             f"CoG offset ({_f(1000 * res.x_cm, 2)}, {_f(1000 * res.y_cm, 2)}) mm, roll {_f(math.degrees(res.roll), 2)} deg, "
+             f"pitch {_f(math.degrees(res.pitch), 2)} deg"]
     if not res.success and res.reason:
         lines.append(res.reason)
     return "  \n".join(lines)
@@ -517,9 +524,9 @@ def _ik_markdown(res: IKResult, hover: bool, cog: bool) -> str:
 def _hover_markdown(platform: Platform, r: HoverReport, x_cm: np.ndarray, logged=None) -> str:
     rows = ["| rotor | hover f [N] | f - f_min | f_max - f |", "|---|---|---|---|"]
     for k in range(platform.n_rotors):
-        rows.append(f"| {k + 1} | {r.f[k]:.3f} | {r.margin_low[k]:.3f} | {r.margin_high[k]:.3f} |")
+        rows.append(f"| {k + 1} | {_f(r.f[k], 3)} | {_f(r.margin_low[k], 3)} | {_f(r.margin_high[k], 3)} |")
     state = "**can hover**" if r.feasible else f"**cannot hover**: {r.reason}"
-    text = f"{state}  \nCoG offset from the thrust axis ({1000 * x_cm[0]:.2f}, {1000 * x_cm[1]:.2f}) mm\n\n" + "\n".join(rows)
+    text = f"{state}  \nCoG offset from the thrust axis ({_f(1000 * x_cm[0], 2)}, {_f(1000 * x_cm[1], 2)}) mm\n\n" + "\n".join(rows)
     if logged is not None:
         text += "\n\narrows: logged thrusts [" + ", ".join(f"{v:.2f}" for v in logged) + "] N"
     return text
