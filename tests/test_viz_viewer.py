@@ -84,6 +84,12 @@ def test_player_shows_the_logged_samples(viewer, platform, tmp_path):
     viewer.load_run(save_run(RunLog(t, xi, f=f, platform=platform.name), tmp_path / "r.npz"))
     viewer.show_time(0.55)  # the sample at 0.5 s
     np.testing.assert_array_equal(viewer.xi, xi[5])
+    assert viewer.run_time == 0.5
+    viewer.play()
+    time.sleep(0.3)
+    viewer.stop_playing()
+    k = int(np.flatnonzero(t == viewer.run_time)[0])  # the player moved on and shows a logged sample
+    assert viewer.run_time != 0.5 and np.array_equal(viewer.xi, xi[k])
     with pytest.raises(qprr.InputError, match="does not exist"):
         viewer.load_run(tmp_path / "missing.npz")
     with pytest.raises(qprr.ShapeError, match="has 9"):

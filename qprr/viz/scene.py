@@ -99,7 +99,11 @@ class HoverReport:
 
 
 def hover_report(allocator: Allocator, data: pin.Data, q: np.ndarray) -> HoverReport:
-    """:class:`HoverReport` of the allocator's platform at ``q`` (writes ``data``)."""
+    """:class:`HoverReport` of the allocator's platform at ``q`` (writes ``data``).
+
+    At rest the generalised force N f must equal g(q) (Thesis (5.44)-(5.46)); its base rows
+    Omega f = g(q)[0:6] are solved exactly on the rows the rotors produce.
+    """
     p = allocator.platform
     w = generalized_gravity(p, data, q)[0:6]
     f = allocator.Omega_P_inv @ w[allocator.rows]

@@ -357,8 +357,8 @@ class Viewer:
                              f"{self.platform.name!r} has {self.platform.n_xi}")
         if run.f is not None and run.f.shape[1] != self.platform.n_rotors:
             raise ShapeError(f"the run logs {run.f.shape[1]} thrusts per sample; {self.platform.name!r} has {self.platform.n_rotors} rotors")
+        self.stop_playing()  # outside the lock: the player thread may be waiting for it
         with self._lock:
-            self.stop_playing()
             self.run = run
             stride = max(1, run.n // 2000)
             data = self.platform.data()
@@ -422,6 +422,17 @@ class Viewer:
             if t > float(run.t[-1]):
                 t = float(run.t[0])  # loop
             self.show_time(t)
+
+    def play(self) -> None:
+        """Start the player from the shown time (loops at the end; speed from the "speed" slider)."""
+        if self.run is None:
+            raise InputError("no run loaded: call load_run(path) first")
+        self._play.value = True
+
+    @property
+    def run_time(self) -> float:
+        """Time [s] of the run sample shown by the player."""
+        return self._run_time
 
     def stop_playing(self) -> None:
         """Stop the player (the run stays loaded)."""
