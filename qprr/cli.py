@@ -134,13 +134,9 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _animate(res, platform, path: Path) -> None:
     from .platforms import load as load_platform
+    from .viz.cli import animate_to_file
 
-    try:
-        from .viz_animation import animate_result
-    except ImportError:
-        print("qprr simulate: --animate needs qprr.viz_animation (not available in this build)", file=sys.stderr)
-        return
-    print(f"animation {animate_result(platform or load_platform(), res, path)}")
+    print(f"animation {animate_to_file(platform or load_platform(), res, path)}")
 
 
 def _summary(res) -> str:
@@ -240,7 +236,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default=None, help="output path (default: the packaged urdf/qprr.urdf)")
     p.set_defaults(func=_cmd_urdf)
 
-    for module in ("qprr.wheeled.cli", "qprr.analysis.cli", "qprr.viewer.cli"):  # optional command groups
+    for module in ("qprr.viz.cli", "qprr.wheeled.cli", "qprr.analysis.cli"):  # command groups of other packages
         try:
             mod = __import__(module, fromlist=["register_cli"])
         except ImportError:

@@ -64,3 +64,7 @@ class MissingDependencyError(QprrError, ImportError):
     def __init__(self, package: str, purpose: str, install: str) -> None:
         self.package, self.purpose, self.install = package, purpose, install
         super().__init__(f"{package} is needed for {purpose}: {install}")
+
+
+class PortInUseError(QprrError, OSError):
+    """A network port the caller asked for is already taken (e.g. by another ``qprr view``)."""

@@ -229,17 +229,9 @@ def build(
     for k, r in enumerate(rotors):
         rn = f"rotor_{k + 1}"
         parts.append(ug.link(rn, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))))
-        parts.append(ug.joint(f"{rn}_fixed", "fixed", base_name, rn, r.position_body, rpy=_rpy_of_axis(r.axis_body)))
+        parts.append(ug.joint(f"{rn}_fixed", "fixed", base_name, rn, r.position_body, rpy=ug.rpy_of_axis(r.axis_body)))
     text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
     prov = {"design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
             "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)"}
     return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov)
 
-
-def _rpy_of_axis(axis) -> tuple[float, float, float]:
-    """Roll-pitch-yaw (URDF convention) of a frame whose z axis is ``axis`` (a unit vector)."""
-    ax, ay, az = axis
-    # z = Rz(yaw) Ry(pitch) Rx(roll) e3 with yaw = 0: (cos r sin p, -sin r, cos r cos p)
-    roll = math.asin(max(-1.0, min(1.0, -ay)))
-    pitch = math.atan2(ax, az)
-    return (roll, pitch, 0.0)

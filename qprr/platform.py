@@ -112,6 +112,8 @@ class Platform:
     ``params`` keeps what the platform was built from (for the thesis's Q-PRR its parameter set
     :class:`qprr.thesis.params.QPRRParams`, for :func:`qprr.build` the parsed (2.1) name); library
     code never reads it, only :mod:`qprr.thesis` does.  ``provenance`` says where each value comes from.
+    ``urdf``: the URDF text the model was read from (None for :func:`from_model`), kept for its
+    visual geometry (:func:`qprr.viz.visual_model`).
     """
 
     name: str
@@ -123,6 +125,7 @@ class Platform:
     ee_frames: tuple[int, ...] = ()
     params: object = None
     provenance: Mapping[str, str] = field(default_factory=dict)
+    urdf: str | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         model = self.model
@@ -408,13 +411,15 @@ def from_model(
     params: object = None,
     provenance: Mapping[str, str] | None = None,
     allow_nonphysical: bool = False,
+    urdf: str | None = None,
 ) -> Platform:
     """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
 
     ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
     entries may name frames of ``model`` (see :func:`qprr.rotors.rotors_from_mapping`).
     ``allow_nonphysical=True`` skips the inertia checks (to study a printed, non-physical table:
-    the provenance then says so); the mass matrix must still be positive definite.
+    the provenance then says so); the mass matrix must still be positive definite.  ``urdf``: the
+    URDF text ``model`` was read from, kept on the platform for its visual geometry.
     """
     model = pin.Model(model)
     if allow_nonphysical:
@@ -444,6 +449,7 @@ def from_model(
         ee_frames=(ee, *[f for f in extra if f != ee]),
         params=params,
         provenance=dict(provenance or {}),
+        urdf=urdf,
     )
     _check_mass_matrix(platform)
     return platform
@@ -497,7 +503,7 @@ def from_urdf(
         rotors = read_rotor_file(rotors)
     prov = {"model": source, **(provenance or {})}
     return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
-                      allow_nonphysical=allow_nonphysical)
+                      allow_nonphysical=allow_nonphysical, urdf=text)
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

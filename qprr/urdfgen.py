@@ -5,6 +5,7 @@ Numbers are written with ``repr`` so a URDF read back gives the same doubles.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 
@@ -37,6 +38,26 @@ def cylinder_visual(radius: float, length: float, xyz=(0.0, 0.0, 0.0), rpy=(0.0,
         f'      <material name="c{"".join(f"{int(255 * c):02x}" for c in rgba[:3])}"><color rgba="{vec(rgba)}"/></material>\n'
         "    </visual>\n"
     )
+
+
+def box_visual(size, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0)) -> str:
+    """``<visual>`` of a box of side lengths ``size`` (3,) [m] centred at ``xyz``."""
+    return (
+        "    <visual>\n"
+        f'      <origin xyz="{vec(xyz)}" rpy="{vec(rpy)}"/>\n'
+        f'      <geometry><box size="{vec(size)}"/></geometry>\n'
+        f'      <material name="c{"".join(f"{int(255 * c):02x}" for c in rgba[:3])}"><color rgba="{vec(rgba)}"/></material>\n'
+        "    </visual>\n"
+    )
+
+
+def rpy_of_axis(axis) -> tuple[float, float, float]:
+    """Roll-pitch-yaw (URDF convention) of a frame whose z axis is ``axis`` (a unit vector)."""
+    ax, ay, az = axis
+    # z = Rz(yaw) Ry(pitch) Rx(roll) e3 with yaw = 0: (cos r sin p, -sin r, cos r cos p)
+    roll = math.asin(max(-1.0, min(1.0, -ay)))
+    pitch = math.atan2(ax, az)
+    return (roll, pitch, 0.0)
 
 
 def sphere_visual(radius: float, xyz=(0.0, 0.0, 0.0), rgba=(0.8, 0.2, 0.2, 1.0)) -> str:

@@ -49,7 +49,8 @@ def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_p
     ``params``: a :class:`QPRRParams`, a variant name (``"thesis"`` default: Hypothesis 1;
     ``"cad"``: Table 3.1 CoMs and the arm base as a body), or None.  ``layout``: ``"plus"``
     (Thesis (3.36)) or ``"x"``.  With default parameters the committed ``urdf/qprr.urdf`` is
-    read, otherwise the URDF is generated from ``params``; ``urdf_path`` reads another file,
+    read for the "plus" layout, otherwise the URDF is generated from ``params`` (its rotor
+    visuals on the ``layout``'s frames); ``urdf_path`` reads another file,
     which must describe the same robot (its masses are checked against ``params``).
     """
     if params is None:
@@ -64,10 +65,10 @@ def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_p
         raise UnknownNameError("layout", layout, LAYOUTS)
     if urdf_path is not None:
         urdf = Path(urdf_path)
-    elif params == thesis_params() and URDF_PATH.exists():
+    elif params == thesis_params() and layout == "plus" and URDF_PATH.exists():
         urdf = URDF_PATH
     else:
-        urdf = build_urdf(params)
+        urdf = build_urdf(params, layout=layout)
     platform = from_urdf(urdf, rotor_set(params, layout), ee_frame=EE_FRAME, g=params.g,
                          name=f"Q-PRR ({params.variant}, {layout})", params=params,
                          provenance={"parameters": "qprr.thesis.params (Tables 3.1-3.3 and chosen values, each with its provenance)"},

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, MissingDependencyError
-from .sim import SimResult
+from ..errors import InputError, MissingDependencyError
+from ..sim import SimResult
 
 
 def new_figure(figsize=(16, 12)):

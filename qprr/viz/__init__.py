@@ -1,0 +1,44 @@
+"""See the robot and its runs: figures, visual geometry, headless 3-D animation, an interactive browser viewer (Thesis Annex A).
+
+* :func:`plot_result`: the 3 x 3 page of a run (Chapter 6 figures); :func:`new_figure`,
+  :func:`figure_path` for your own (matplotlib Figures, no pyplot, no backend chosen);
+
+* :func:`animate` / :func:`animate_result`: a run (or an IK solution path, :func:`ik_path`) to
+  GIF or MP4 with matplotlib, no display needed (:mod:`qprr.viz.animation`);
+* :func:`visual_model`: the platform's visual ``GeometryModel`` (URDF shapes and meshes, or primitives);
+* :class:`RunLog`, :func:`save_run`, :func:`load_run`: a logged run and its ``.npz`` file;
+* the browser viewer (``qprr view``, :class:`qprr.viz.viewer.Viewer`): joint sliders (FK), a
+  draggable end-effector target solved by the task-priority IK, CoG and thrust-axis markers,
+  hover thrusts and margins, a player for saved runs.  It needs the ``viewer`` extra
+  (``pip install 'qprr[viewer]'``: viser); importing :mod:`qprr.viz.viewer` without it raises
+  :class:`~qprr.errors.MissingDependencyError`.
+"""
+
+from .animation import AnimationInfo, animate, animate_result
+from .geometry import primitive_visual_model, visual_model
+from .ikpath import IKPath, ik_levels, ik_path, ik_solve
+from .plots import figure_path, new_figure, plot_result
+from .run import RunLog, load_run, save_run
+from .scene import HoverReport, RobotPose, hover_report, robot_pose
+
+__all__ = [
+    "AnimationInfo",
+    "HoverReport",
+    "IKPath",
+    "RobotPose",
+    "RunLog",
+    "animate",
+    "animate_result",
+    "figure_path",
+    "hover_report",
+    "ik_levels",
+    "ik_path",
+    "ik_solve",
+    "load_run",
+    "new_figure",
+    "plot_result",
+    "primitive_visual_model",
+    "robot_pose",
+    "save_run",
+    "visual_model",
+]

@@ -1,0 +1,469 @@
+"""Headless 3-D animation of a run (or of an IK solution path) to GIF or MP4.
+
+:func:`animate` draws, with matplotlib on its Agg canvas (no display, no ``matplotlib.use``):
+the multirotor (hub, booms, propeller discs), the arm as a polyline through its joint origins
+(from Pinocchio's frames), the rotor thrusts as arrows scaled by force and coloured by the
+fraction of the rotor's maximum thrust, the centre of gravity and the thrust axis (with their
+distance), the trails of the base and of the end effector and the contact force at the end
+effector.  Frames are decimated to ``fps`` (a 30 s run at 1 kHz becomes 600 frames at 20 fps)
+and written as they are drawn: GIF through Pillow, MP4 through ``ffmpeg`` when it is installed.
+:func:`animate_result` reads the arrays of a run object (``SimResult``, :class:`~qprr.viz.run.RunLog`).
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import charts as ch
+from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError
+from ..platform import Platform
+from .geometry import characteristic_length, rotor_radius
+from .scene import RobotPose, arm_chain, robot_pose
+
+VIEWS = ("follow", "fixed")
+"""Camera modes: "follow" centres a cube of half-width ``radius`` on the base; "fixed" frames the whole run."""
+
+_ARM = "#1f3a5f"
+_BODY = "#3f4552"
+_DISC = "#4a8cf0"
+_COG = "#c0392b"
+_AXIS = "#7f8c8d"
+_EE_TRAIL = "#e67e22"
+_BASE_TRAIL = "#95a5a6"
+_FORCE = "#8e44ad"
+_CMAP = ((0.0, "#27ae60"), (0.6, "#f39c12"), (1.0, "#c0392b"))  # thrust colour from 0 to f_max
+
+
+@dataclass(frozen=True)
+class AnimationInfo:
+    """What :func:`animate` wrote: ``path``, ``frames`` at ``fps`` [1/s], covering ``duration`` [s] of the run, in ``wall_time`` [s]."""
+
+    path: Path
+    frames: int
+    fps: float
+    duration: float
+    wall_time: float
+    writer: str
+
+
+# ============================================================================ inputs
+def _check_inputs(platform: Platform, t, xi, f, contact):
+    if not isinstance(platform, Platform):
+        raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+    t = ch.as_array(t, "t")
+    if t.ndim != 1 or t.shape[0] < 1:
+        raise ShapeError(f"t must have shape (n,) with n >= 1, got {t.shape}")
+    n = t.shape[0]
+    if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
+        raise InputError("t must be finite and non-decreasing [s]")
+    xi = ch.as_array(xi, "xi")
+    if xi.shape != (n, platform.n_xi):
+        raise ShapeError(f"xi must have shape ({n}, {platform.n_xi}) for platform {platform.name!r} "
+                         f"(6 + {platform.n_arm} arm joints), got {xi.shape}")
+    out = [t, xi]
+    for name, a, width in (("f", f, platform.n_rotors), ("contact_force_world", contact, 3)):
+        if a is not None:
+            a = ch.as_array(a, name)
+            if a.shape != (n, width):
+                raise ShapeError(f"{name} must have shape ({n}, {width}), got {a.shape}")
+        out.append(a)
+    for name, a in zip(("xi", "f", "contact_force_world"), out[1:]):
+        if a is not None and not np.all(np.isfinite(a)):
+            raise NonFiniteError(f"{name} must be finite")
+    return out
+
+
+def _positive(name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def frame_indices(t: np.ndarray, fps: float, speed: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+    """(times, indices): one frame every ``speed / fps`` seconds of the run, each showing the last sample at or before its time."""
+    span = float(t[-1] - t[0])
+    n = int(math.floor(span * fps / speed + 1e-9)) + 1
+    times = t[0] + np.arange(n) * (speed / fps)
+    idx = np.clip(np.searchsorted(t, times, side="right") - 1, 0, t.shape[0] - 1)
+    return times, idx
+
+
+# ============================================================================ writers
+class _GifWriter:
+    """Frames quantised to one global palette (the first frame's and the artists' colours), streamed to the file.
+
+    Each frame after the first stores only the box of pixels that changed (Pillow's GIF header
+    and frame encoders, ``PIL.GifImagePlugin.getheader`` / ``getdata``): memory stays at two frames.
+    """
+
+    def __init__(self, path: Path, fps: float, swatch: np.ndarray):
+        from PIL import GifImagePlugin, Image
+
+        self.Image, self.gif = Image, GifImagePlugin
+        self.path, self.swatch = path, swatch
+        self.duration = int(round(1000.0 / fps))
+        self.palette = None
+        self.previous = None
+        self.fp = None
+
+    def add(self, rgba: np.ndarray) -> None:
+        Image = self.Image
+        im = Image.frombuffer("RGBA", (rgba.shape[1], rgba.shape[0]), rgba, "raw", "RGBA", 0, 1).convert("RGB")
+        if self.palette is None:  # first frame plus a strip of every artist colour
+            w = rgba.shape[1]
+            strip = np.broadcast_to(np.resize(self.swatch, (w, 3)), (8, w, 3)).astype(np.uint8)
+            composite = Image.fromarray(np.concatenate([np.asarray(im), strip], axis=0))
+            self.palette = composite.quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+        frame = im.quantize(palette=self.palette, dither=Image.Dither.NONE)
+        index = np.asarray(frame)
+        if self.fp is None:
+            self.fp = open(self.path, "wb")
+            header, _ = self.gif.getheader(frame, None, {"loop": 0, "duration": self.duration})
+            for chunk in header:
+                self.fp.write(chunk)
+            box = (0, 0, index.shape[1], index.shape[0])
+        else:
+            changed = index != self.previous
+            rows, cols = np.flatnonzero(changed.any(axis=1)), np.flatnonzero(changed.any(axis=0))
+            box = (0, 0, 1, 1) if rows.size == 0 else (int(cols[0]), int(rows[0]), int(cols[-1]) + 1, int(rows[-1]) + 1)
+        part = frame if box == (0, 0, index.shape[1], index.shape[0]) else frame.crop(box)
+        for chunk in self.gif.getdata(part, offset=box[0:2], duration=self.duration, disposal=1):
+            self.fp.write(chunk)
+        self.previous = index
+
+    def close(self) -> None:
+        if self.fp is not None:
+            self.fp.write(b";")
+            self.fp.close()
+            self.fp = None
+
+
+class _FfmpegWriter:
+    """Raw RGBA frames piped to ffmpeg (H.264 when available, ffmpeg's MP4 default otherwise)."""
+
+    def __init__(self, path: Path, fps: float, size: tuple[int, int], exe: str):
+        w, h = size
+        cmd = [exe, "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba", "-s", f"{w}x{h}", "-r", f"{fps:g}", "-i", "-",
+               "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", str(path)]
+        self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
+
+    def add(self, rgba: np.ndarray) -> None:
+        self.proc.stdin.write(np.ascontiguousarray(rgba).tobytes())
+
+    def close(self) -> None:
+        _, err = self.proc.communicate()
+        if self.proc.returncode != 0:
+            raise RuntimeError(f"ffmpeg failed ({self.proc.returncode}): {err.decode(errors='replace').strip()}")
+
+
+def _writer_for(path: Path, fps: float, size: tuple[int, int], swatch: np.ndarray):
+    suffix = path.suffix.lower()
+    if suffix == ".gif":
+        return _GifWriter(path, fps, swatch), "gif (Pillow)"
+    if suffix == ".mp4":
+        import matplotlib as mpl
+
+        exe = shutil.which(mpl.rcParams.get("animation.ffmpeg_path", "ffmpeg")) or shutil.which("ffmpeg")
+        if exe is None:
+            raise MissingDependencyError("ffmpeg", "MP4 animations", "apt-get install ffmpeg (or write a .gif, which needs only Pillow)")
+        return _FfmpegWriter(path, fps, size, exe), "mp4 (ffmpeg)"
+    raise InputError(f"animation files end in .gif or .mp4, got {str(path)!r}")
+
+
+# ============================================================================ drawing helpers
+def _circle(n: int = 20) -> np.ndarray:
+    a = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.stack([np.cos(a), np.sin(a)], axis=1)
+
+
+def _disc(centre: np.ndarray, normal: np.ndarray, radius: float, unit: np.ndarray) -> np.ndarray:
+    """Vertices (m, 3) of a circle of ``radius`` about ``centre`` normal to ``normal``."""
+    e1 = np.cross(normal, [1.0, 0.0, 0.0])
+    if np.linalg.norm(e1) < 1e-6:
+        e1 = np.cross(normal, [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(normal, e1)
+    return centre + radius * (unit[:, 0:1] * e1 + unit[:, 1:2] * e2)
+
+
+def _arrows(starts: np.ndarray, vectors: np.ndarray, side: np.ndarray) -> np.ndarray:
+    """Segments (3 m, 2, 3) of m arrows: the shaft and two head strokes in the plane of ``side``."""
+    segs = []
+    for s, v in zip(starts, vectors):
+        length = float(np.linalg.norm(v))
+        e = s + v
+        if length < 1e-9:
+            segs += [[s, s], [s, s], [s, s]]
+            continue
+        u = v / length
+        w = side - (side @ u) * u
+        nw = float(np.linalg.norm(w))
+        w = w / nw if nw > 1e-9 else np.cross(u, [0.0, 0.0, 1.0]) / max(np.linalg.norm(np.cross(u, [0.0, 0.0, 1.0])), 1e-9)
+        h = min(0.3 * length, 0.05)
+        segs += [[s, e], [e, e - h * u + 0.5 * h * w], [e, e - h * u - 0.5 * h * w]]
+    return np.array(segs)
+
+
+def _grid_step(half: float) -> float:
+    """A round grid spacing [m] (1, 2 or 5 x 10^k) giving about four lines across 2 ``half``."""
+    raw = half / 2.0
+    k = math.floor(math.log10(raw))
+    return min((m * 10.0**k for m in (1.0, 2.0, 5.0, 10.0)), key=lambda s: abs(math.log(s / raw)))
+
+
+def _floor_grid(centre: np.ndarray, half: float, step: float) -> np.ndarray:
+    """Segments (m, 2, 3) of a grid every ``step`` on the floor (z = centre z - half) of the cube of half-width ``half``."""
+    lo, hi, z = centre[0:2] - half, centre[0:2] + half, centre[2] - half
+    segs = [[(x, lo[1], z), (x, hi[1], z)] for x in np.arange(math.ceil(lo[0] / step), math.floor(hi[0] / step) + 1) * step]
+    segs += [[(lo[0], y, z), (hi[0], y, z)] for y in np.arange(math.ceil(lo[1] / step), math.floor(hi[1] / step) + 1) * step]
+    return np.array(segs).reshape(-1, 2, 3)
+
+
+def _cog_distance(pose: RobotPose) -> float:
+    """Distance [m] of the CoG from the thrust axis line."""
+    d = pose.com_world - pose.axis_point_world
+    return float(np.linalg.norm(d - (d @ pose.axis_dir_world) * pose.axis_dir_world))
+
+
+# ============================================================================ animation
+def animate(
+    platform: Platform,
+    t,
+    xi,
+    path: str | Path,
+    *,
+    f=None,
+    contact_force_world=None,
+    fps: float = 20.0,
+    speed: float = 1.0,
+    size: tuple[int, int] = (640, 480),
+    view: str = "follow",
+    radius: float | None = None,
+    trail: float | None = None,
+    thrust_scale: float | None = None,
+    force_scale: float | None = None,
+    title: str | None = None,
+    progress: bool = False,
+) -> AnimationInfo:
+    """Animate a run of ``platform`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg).
+
+    Parameters
+    ----------
+    t : (n,) times [s], non-decreasing.
+    xi : (n, 6 + n_arm) thesis coordinates (:mod:`qprr.charts`).
+    f : optional (n, n_rotors) rotor thrusts [N]: arrows along each rotor's axis, ``thrust_scale``
+        metres per newton (default: the hover thrust drawn 0.6 x the robot's size), coloured by
+        f / f_max (green to red).
+    contact_force_world : optional (n, 3) force [N] on the end effector, world axes, drawn at the
+        end effector with ``force_scale`` m/N (default ``thrust_scale``).
+    fps : frames per second of the file; ``speed``: run seconds per video second (2: twice as fast).
+    size : (width, height) in pixels.
+    view : "follow" (a cube of half-width ``radius`` [m] centred on the base, default 1.3 x the
+        robot's size) or "fixed" (the whole run).
+    trail : seconds of base and end-effector trail (None: the whole past; 0: none).
+    title : text above the plot (default: the platform's name).  progress : a progress bar on stderr.
+    """
+    t, xi, f, contact = _check_inputs(platform, t, xi, f, contact_force_world)
+    fps, speed = _positive("fps", fps), _positive("speed", speed)
+    if view not in VIEWS:
+        from ..errors import UnknownNameError
+
+        raise UnknownNameError("view", view, VIEWS)
+    try:
+        width, height = (int(size[0]), int(size[1]))
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"size must be (width, height) in pixels, got {size!r}") from None
+    if not (16 <= width <= 4096 and 16 <= height <= 4096):
+        raise InputError(f"size must be between 16 and 4096 pixels per side, got {size!r}")
+    path = Path(path)
+    L = characteristic_length(platform)
+    radius = 1.3 * L if radius is None else _positive("radius", radius)
+    hover = platform.total_mass * platform.g / platform.n_rotors
+    thrust_scale = 0.6 * L / hover if thrust_scale is None else _positive("thrust_scale", thrust_scale)
+    force_scale = thrust_scale if force_scale is None else _positive("force_scale", force_scale)
+    if trail is not None and not (isinstance(trail, (int, float)) and math.isfinite(trail) and trail >= 0):
+        raise InputError(f"trail must be None or a number of seconds >= 0, got {trail!r}")
+    t0 = time.perf_counter()
+
+    # ---- every frame's geometry first (Pinocchio: microseconds per frame)
+    times, idx = frame_indices(t, fps, speed)
+    data = platform.data()
+    chain = arm_chain(platform)
+    poses = [robot_pose(platform, data, ch.xi_to_q(xi[k]), chain) for k in idx]
+    f_max = platform.thrust_max
+    f_ref = np.where(np.isfinite(f_max), f_max, 2.0 * hover)
+
+    # ---- figure (Agg canvas: no display, no backend switch)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.colors import LinearSegmentedColormap
+    from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import NullLocator
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+    dpi = 100
+    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
+    canvas = FigureCanvasAgg(fig)
+    ax = fig.add_axes((0.0, 0.0, 1.0, 0.88), projection="3d")
+    ax.view_init(elev=22, azim=-58)
+    ax.set_box_aspect((1.0, 1.0, 1.0))
+    if view == "fixed":
+        pts = np.concatenate([np.concatenate([p.rotor_world, p.arm_world]) for p in poses])
+        lo, hi = pts.min(axis=0) - 0.3 * L, pts.max(axis=0) + 0.3 * L
+        centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo).max())
+    else:
+        half = radius
+    step = _grid_step(half)
+    for axis, label in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x", "y", "z")):
+        # no ticks (they are most of a 3-D frame's drawing time): a floor grid every `step` metres instead
+        axis.set_pane_color((0.96, 0.96, 0.97, 1.0))
+        axis.set_major_locator(NullLocator())
+        axis.set_label_text(label)
+        axis.labelpad = -12
+    ax.grid(False)
+    cmap = LinearSegmentedColormap.from_list("thrust", _CMAP)
+    unit = _circle()
+    disc_r = rotor_radius(platform)
+    hub_r = 0.25 * min(math.hypot(*r.position_body[0:2]) for r in platform.rotors) or 0.05
+
+    nothing = [np.zeros((2, 3))]  # placeholders until the first frame sets the geometry
+    hub = Poly3DCollection(nothing, facecolor=_BODY, edgecolor=_BODY, alpha=0.9)
+    discs = Poly3DCollection(nothing, facecolor=_DISC, edgecolor=_DISC, alpha=0.3, linewidths=0.5)
+    booms = Line3DCollection(nothing, colors=_BODY, linewidths=2.0)
+    thrusts = Line3DCollection(nothing, linewidths=2.2)
+    force = Line3DCollection(nothing, colors=_FORCE, linewidths=2.4)
+    floor = Line3DCollection(nothing, colors="#c8c8cc", linewidths=0.6)
+    for artist in (floor, hub, discs, booms, thrusts, force):
+        ax.add_collection3d(artist, autolim=False)
+    (arm_line,) = ax.plot([], [], [], "-o", color=_ARM, lw=3.0, ms=3.5, mfc="#f5f5f5", mec="#1f3a5f", zorder=5)
+    (ee_dot,) = ax.plot([], [], [], "o", color="#c0392b", ms=5)
+    (cog_dot,) = ax.plot([], [], [], "X", color=_COG, ms=8, mec="white", mew=0.6, zorder=6)
+    (axis_line,) = ax.plot([], [], [], "--", color=_AXIS, lw=1.0)
+    (ee_trail,) = ax.plot([], [], [], "-", color=_EE_TRAIL, lw=1.0, alpha=0.8)
+    (base_trail,) = ax.plot([], [], [], "-", color=_BASE_TRAIL, lw=1.0, alpha=0.8)
+    handles = [Line2D([], [], color=_ARM, lw=3, marker="o", ms=3, mfc="#f5f5f5", label="arm (joint origins)"),
+               Line2D([], [], color=_COG, marker="X", lw=0, label="CoG"),
+               Line2D([], [], color=_AXIS, ls="--", label="thrust axis"),
+               Line2D([], [], color=_EE_TRAIL, label="end-effector trail")]
+    if f is not None:
+        handles.append(Line2D([], [], color=cmap(0.5), lw=2, label="thrust (colour: f / f_max)"))
+    if contact is not None:
+        handles.append(Line2D([], [], color=_FORCE, lw=2, label="contact force"))
+    fig.legend(handles=handles, loc="upper right", ncols=2, fontsize=6.5, framealpha=0.8, borderaxespad=0.3)
+    name = platform.name if title is None else str(title)
+    fig.text(0.01, 0.975, name, fontsize=9, va="top")
+    fig.text(0.99, 0.01, f"grid {step:g} m", fontsize=7, ha="right", color="#555555")
+    head = fig.text(0.01, 0.93, "", fontsize=7.5, va="top", family="monospace")
+    foot = fig.text(0.01, 0.02, "", fontsize=7.5, family="monospace", color="#333333")
+
+    if view == "fixed":
+        ax.set_xlim(centre[0] - half, centre[0] + half)
+        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.set_zlim(centre[2] - half, centre[2] + half)
+        floor.set_segments(_floor_grid(centre, half, step))
+    ee_hist = np.array([p.ee_world for p in poses])
+    base_hist = np.array([p.p_base_world for p in poses])
+    keep = None if trail is None else max(1, int(round(trail * fps / speed)) + 1)
+    swatch = np.array([cmap(x)[:3] for x in np.linspace(0, 1, 24)] + [
+        tuple(int(c[i:i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]) * 255
+
+    # the title and the legend never change: draw them once, then only the axes and the two text lines
+    ax.set_visible(False)
+    canvas.draw()
+    background = canvas.copy_from_bbox(fig.bbox)
+    ax.set_visible(True)
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    partial = path.with_name(path.stem + ".partial" + path.suffix)
+    writer, kind = _writer_for(partial, fps, (width, height), swatch)
+    bar = _Progress(len(poses), f"animating {path.name}", progress)
+    try:
+        for k, (pose, i) in enumerate(zip(poses, idx)):
+            p, R = pose.p_base_world, pose.R_base_world
+            if view == "follow":
+                ax.set_xlim(p[0] - radius, p[0] + radius)
+                ax.set_ylim(p[1] - radius, p[1] + radius)
+                ax.set_zlim(p[2] - radius, p[2] + radius)
+                floor.set_segments(_floor_grid(p, radius, step))
+            hub.set_verts([_disc(p, R[:, 2], hub_r, unit)])
+            discs.set_verts([_disc(c, a, disc_r, unit) for c, a in zip(pose.rotor_world, pose.rotor_axis_world)])
+            booms.set_segments([[p, c] for c in pose.rotor_world])
+            a = pose.arm_world
+            arm_line.set_data_3d(a[:, 0], a[:, 1], a[:, 2])
+            ee_dot.set_data_3d([a[-1, 0]], [a[-1, 1]], [a[-1, 2]])
+            c = pose.com_world
+            cog_dot.set_data_3d([c[0]], [c[1]], [c[2]])
+            ends = np.array([pose.axis_point_world - 1.2 * L * pose.axis_dir_world, pose.axis_point_world + 1.5 * L * pose.axis_dir_world])
+            axis_line.set_data_3d(ends[:, 0], ends[:, 1], ends[:, 2])
+            start = 0 if keep is None else max(0, k + 1 - keep)
+            ee_trail.set_data_3d(ee_hist[start:k + 1, 0], ee_hist[start:k + 1, 1], ee_hist[start:k + 1, 2])
+            base_trail.set_data_3d(base_hist[start:k + 1, 0], base_hist[start:k + 1, 1], base_hist[start:k + 1, 2])
+            line = f"t = {times[k]:6.2f} s   CoG to axis {1000 * _cog_distance(pose):5.1f} mm"
+            if f is not None:
+                fk = f[i]
+                thrusts.set_segments(_arrows(pose.rotor_world, fk[:, None] * thrust_scale * pose.rotor_axis_world, R[:, 0]))
+                thrusts.set_color(np.repeat([cmap(x) for x in np.clip(fk / f_ref, 0.0, 1.0)], 3, axis=0))
+                foot.set_text("f [N] " + " ".join(f"{v:.2f}" for v in fk))
+            if contact is not None:
+                fc = contact[i]
+                force.set_segments(_arrows(pose.ee_world[None, :], (force_scale * fc)[None, :], R[:, 2]))
+                line += f"   |F| {np.linalg.norm(fc):.2f} N"
+            head.set_text(line)
+            canvas.restore_region(background)
+            fig.draw_artist(ax)
+            fig.draw_artist(head)
+            fig.draw_artist(foot)
+            writer.add(np.asarray(canvas.buffer_rgba()))
+            bar.update(k + 1)
+        writer.close()
+        partial.replace(path)
+    except BaseException:
+        writer.close()
+        partial.unlink(missing_ok=True)
+        raise
+    finally:
+        bar.close()
+    return AnimationInfo(path, len(poses), fps, float(times[-1] - times[0]), time.perf_counter() - t0, kind)
+
+
+def animate_result(platform: Platform, result, path: str | Path, **options) -> AnimationInfo:
+    """:func:`animate` a run object (``SimResult`` or :class:`~qprr.viz.run.RunLog`): its ``t``, ``xi``, ``f``
+    and, when logged, the force part of ``contact_wrench_world``; ``options`` go to :func:`animate`."""
+    from .run import as_run
+
+    run = as_run(result)
+    if run.xi.shape[1] != platform.n_xi:
+        raise ShapeError(f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); "
+                         f"platform {platform.name!r} has {platform.n_xi}")
+    if run.f is not None and run.f.shape[1] != platform.n_rotors:
+        raise ShapeError(f"the run logs {run.f.shape[1]} rotor thrusts per sample; platform {platform.name!r} has {platform.n_rotors} rotors")
+    contact = None if run.contact_wrench_world is None else run.contact_wrench_world[:, 0:3]
+    return animate(platform, run.t, run.xi, path, f=run.f, contact_force_world=contact, **options)
+
+
+class _Progress:
+    """A text progress bar on stderr (updated every 2 %)."""
+
+    def __init__(self, n: int, label: str, enabled: bool) -> None:
+        self.n, self.label, self.enabled = max(n, 1), label, enabled
+        self.every = max(1, self.n // 50)
+        self.t0 = time.perf_counter()
+
+    def update(self, k: int) -> None:
+        if self.enabled and (k % self.every == 0 or k == self.n):
+            frac = k / self.n
+            sys.stderr.write(f"\r{self.label} [{'#' * int(30 * frac):<30}] {100 * frac:5.1f}% {time.perf_counter() - self.t0:6.1f} s")
+            sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()

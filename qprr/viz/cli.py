@@ -1,0 +1,127 @@
+"""Command-line entry points of :mod:`qprr.viz`: ``qprr view`` and ``qprr animate``, and the call behind ``--animate``.
+
+:func:`register_cli` adds the two subcommands to ``qprr``'s parser (it imports neither viser nor
+matplotlib: they load when a command runs).  :func:`animate_to_file` is what a command with an
+``--animate FILE`` option calls after a run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+
+def animate_to_file(platform, result, path: str | Path, *, progress: bool = True, **options):
+    """Animate ``result`` (a ``SimResult`` or :class:`~qprr.viz.run.RunLog`) of ``platform`` to ``path``
+    (``.gif`` or ``.mp4``) with a progress bar, print where it went and how long it took; returns the
+    :class:`~qprr.viz.animation.AnimationInfo`."""
+    from .animation import animate_result
+
+    info = animate_result(platform, result, path, progress=progress, **options)
+    print(f"animation: {info.path} ({info.frames} frames at {info.fps:g} fps for {info.duration:.1f} s of run, "
+          f"{info.writer}, written in {info.wall_time:.1f} s)")
+    return info
+
+
+def demo_run(platform, duration: float = 30.0, rate: float = 20.0):
+    """A :class:`~qprr.viz.run.RunLog` to look at without a simulator: the IK path of an end effector
+    circling 0.3 m around the neutral end-effector position of a platform hovering 1 m up while its
+    tool pitches by +-0.9 rad (period 10 s), ``rate`` samples per second, hover thrusts logged."""
+    from ..charts import rot_y, xi_to_q
+    from ..kinematics import ee_placement
+    from .ikpath import ik_path
+
+    xi0 = platform.neutral_xi()
+    xi0[2] = 1.0
+    M0 = ee_placement(platform, platform.data(), xi_to_q(xi0))
+    t = np.arange(int(round(duration * rate)) + 1) / rate
+    w = 2.0 * np.pi * t
+    p = M0.translation + np.stack([0.3 * np.cos(w / 15.0) - 0.3, 0.3 * np.sin(w / 15.0), 0.1 * np.sin(w / 10.0)], axis=1)
+    R = np.array([M0.rotation @ rot_y(0.9 * np.sin(a / 10.0)) for a in w])
+    return ik_path(platform, t, p, R, xi0=xi0).run
+
+
+def platform_from_name(name: str):
+    """A platform from a registry name (:data:`qprr.platforms.NAMES`) or a formula (2.1) name for :func:`qprr.build`."""
+    from ..errors import InputError, UnknownNameError
+    from ..nomenclature import build, parse
+    from ..platforms import NAMES, load
+
+    if name in NAMES:
+        return load(name)
+    try:
+        parse(name)
+    except InputError:
+        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR'")) from None
+    return build(name)
+
+
+def _cmd_view(args: argparse.Namespace) -> int:
+    from ..errors import QprrError
+
+    try:
+        from .viewer import Viewer
+
+        platform = platform_from_name(args.platform)
+        viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog, verbose=False)
+    except QprrError as exc:
+        print(f"qprr view: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+    if args.open:
+        import webbrowser
+
+        webbrowser.open(viewer.url)
+    viewer.serve_forever(announce=True)  # the address is printed once Ctrl-C is handled
+    return 0
+
+
+def _cmd_animate(args: argparse.Namespace) -> int:
+    from ..errors import QprrError
+
+    try:
+        from .run import load_run
+
+        platform = platform_from_name(args.platform)
+        if args.run is None:
+            print(f"no run given: animating the demo IK path of {platform.name} ({args.duration:g} s)")
+            run = demo_run(platform, args.duration)
+        else:
+            run = load_run(args.run)
+        animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size),
+                        progress=not args.quiet)
+    except QprrError as exc:
+        print(f"qprr animate: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+def register_cli(sub) -> None:
+    """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
+    p = sub.add_parser("view", help="interactive 3-D viewer in the browser (127.0.0.1): joint sliders, IK target, hover thrusts, run player",
+                       description="Start the viewer (needs: pip install 'qprr[viewer]'); Ctrl-C stops it.")
+    p.add_argument("platform", nargs="?", default="q-prr",
+                   help="q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR")
+    p.add_argument("--port", type=int, default=8080, help="TCP port on 127.0.0.1 (default 8080; 0: any free port)")
+    p.add_argument("--run", default=None, metavar="FILE.npz", help="load a saved run in the player")
+    p.add_argument("--no-hover", action="store_true", help="start with the IK's hover level off")
+    p.add_argument("--no-cog", action="store_true", help="start with the IK's CoG level off")
+    p.add_argument("--open", action="store_true", help="open the page in the default browser")
+    p.set_defaults(func=_cmd_view)
+
+    p = sub.add_parser("animate", help="3-D animation of a saved run (or of a demo IK path) to GIF or MP4, headless",
+                       description="Animate a run saved as .npz (qprr.viz.save_run); without RUN, a 30 s demo IK path.")
+    p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
+    p.add_argument("-o", "--output", default="out/animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg); default out/animation.gif")
+    p.add_argument("--platform", default="q-prr", help="the platform of the run (default q-prr)")
+    p.add_argument("--fps", type=float, default=20.0, help="frames per second (default 20)")
+    p.add_argument("--speed", type=float, default=1.0, help="run seconds per video second (default 1)")
+    p.add_argument("--view", choices=("follow", "fixed"), default="follow", help="camera: follow the base (default) or the whole run")
+    p.add_argument("--size", type=int, nargs=2, default=(640, 480), metavar=("W", "H"), help="pixels (default 640 480)")
+    p.add_argument("--duration", type=float, default=30.0, help="length of the demo IK path [s] (default 30)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_animate)
