@@ -130,6 +130,18 @@ class IDCGains:
         needs), arm (s + 6)^2 (k_P = 36, k_D = 12).  Critically damped error dynamics."""
         return cls.from_groups(n_arm)
 
+    @classmethod
+    def desired_state_default(cls, n_arm: int) -> IDCGains:
+        """Defaults of the desired-state controller: those of :meth:`default` with the arm at (s + 50)^2
+        and the roll/pitch reference filter at 20 rad/s.
+
+        The model is evaluated at the desired state, so its gravity term cancels G(q_d), not G(q): the
+        mismatch dG/dq (q - q_d) acts on the arm as a stiffness of either sign (negative for an arm
+        standing above B, an inverted pendulum), which the arm loop must dominate; measured on the
+        Q-PRR and the hextilt, (s + 6)^2 lets the arm drift by radians, (s + 50)^2 tracks.
+        """
+        return cls.from_groups(n_arm, arm=(2500.0, 100.0, 0.0), filter_omega=20.0)
+
     def characteristic_polynomials(self, names=None) -> dict[str, np.ndarray]:
         """Closed-loop error polynomial per coordinate under exact linearisation: [1, k_D, k_P, k_I] (or [1, k_D, k_P])."""
         names = names or tuple(f"xi{i}" for i in range(self.n_xi))
@@ -358,6 +370,8 @@ class DesiredStateInverseDynamics(InverseDynamicsController):
     name = "dsid"
 
     def __init__(self, platform: Platform, gains: IDCGains | None = None, **kwargs) -> None:
+        if gains is None and isinstance(platform, Platform):
+            gains = IDCGains.desired_state_default(platform.n_arm)
         super().__init__(platform, gains, at="desired", **kwargs)
 
 
