@@ -177,28 +177,37 @@ class Lexicographic:
         self._fresh = set(self._qps)
 
     # ------------------------------------------------------------------ QP
-    def _qp(self, m: int):
-        qp = self._qps.get(m)
+    def _qp(self, m: int, n_in: int):
+        key = (m, n_in)
+        qp = self._qps.get(key)
         if qp is None:
-            qp = proxqp.dense.QP(m, 0, self.n_bounded)
+            qp = proxqp.dense.QP(m, 0, n_in)
             self.settings.apply(qp)
-            self._qps[m] = qp
+            self._qps[key] = qp
             return qp, True
-        if m in self._fresh:
-            self._fresh.discard(m)
+        if key in self._fresh:
+            self._fresh.discard(key)
             return qp, True
         return qp, False
 
     def solve_box_qp(self, level: int, H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, int]:
-        """min 1/2 z^T H z + g^T z s.t. lo <= C z <= up with the checked settings; (z, iterations)."""
+        """min 1/2 z^T H z + g^T z s.t. lo <= C z <= up with the checked settings; (z, iterations).
+
+        Rows of C that are zero to rounding (a bounded variable the free directions do not move)
+        are dropped: they hold at every z when lo <= 0 <= up, and left in they make ProxQP's
+        infeasibility test fire on a feasible problem (observed on the 11-DOF hextilt_flying_arm_5).
+        """
         m = H.shape[0]
-        qp, fresh = self._qp(m)
+        keep = np.abs(C).max(axis=1) > 1e-12 * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
+        if not keep.all():
+            C, lo, up = C[keep], lo[keep], up[keep]
+        qp, fresh = self._qp(m, C.shape[0])
         if fresh:
             qp.init(H, g, None, None, C, lo, up)
         else:
             qp.update(H, g, None, None, C, lo, up)
         warm = self._warm.get(level) if self.warm_start else None
-        if warm is not None and warm[0].shape[0] == m:
+        if warm is not None and warm[0].shape[0] == m and warm[1].shape[0] == C.shape[0]:
             qp.solve(warm[0], None, warm[1])
         else:
             qp.solve()

@@ -13,8 +13,8 @@ with its thrust vertical).  The CoG offset from the thrust axis is reported, nev
 Methods (``METHODS``):
 
 * ``"qp"``    strict task-priority QP IK: 1 end-effector pose (or position), 2 hover (thrust
-  axis vertical; on a fully actuated platform: the base pose, :class:`BasePoseTask`), 3 CoG on
-  the thrust axis, 4 arm posture; joint limits hard at every level (:mod:`qprr.ik.hierarchy`).
+  axis vertical; on a fully actuated platform: the base level, :class:`BaseOrientationTask`), 3 CoG
+  on the thrust axis, 4 arm posture; joint limits hard at every level (:mod:`qprr.ik.hierarchy`).
 * ``"clika"`` closed-loop inverse kinematics (4.38)-(4.41) with the right pseudo-inverse
   (4.36) or the weighted one (4.34), Euler-integrated in thesis coordinates (4.30).
 * ``"dls"``   damped least squares (Levenberg-Marquardt) on the SE(3) error log6, joint limits by
@@ -42,7 +42,7 @@ from ..charts import as_vector
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
 from ..platform import Platform
 from .hierarchy import HierarchySolver
-from .tasks import BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
+from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 METHODS = ("clika", "dls", "qp")
 
@@ -508,21 +508,19 @@ def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=Non
                   t0=t0, init=init, require_hover=opts.hover, unreachable_hint=hint)
 
 
-def default_levels(platform: Platform, target, q_arm_posture, base_target: pin.SE3 | None = None) -> list[list[Task]]:
+def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 0.0) -> list[list[Task]]:
     """The hierarchy of method "qp": end-effector pose (or position) > hover > CoG on the thrust axis > posture.
 
-    On a fully actuated platform level 2 is the base pose ``base_target`` (default: level at
-    the initial guess) instead of hover.  A list you may edit and pass back through the
-    ``levels`` option.
+    On a fully actuated platform level 2 is the base orientation (level, yaw ``base_yaw`` [rad])
+    instead of hover: such a platform may hold a tilted base, but a level one costs the least
+    thrust.  A list you may edit and pass back through the ``levels`` option.
     """
     if isinstance(target, pin.SE3):
         first = PoseTask(platform, target)
     else:
         first = PositionTask(platform, target)
     if platform.fully_actuated:
-        if base_target is None:
-            raise InputError("a fully actuated platform's default hierarchy needs base_target (the base pose of level 2)")
-        second = BasePoseTask(platform, base_target)
+        second = BaseOrientationTask(platform, ch.euler_to_rotation([0.0, 0.0, base_yaw]))
     else:
         second = HoverTask()
     return [[first], [second], [ComTask()], [PostureTask(platform, q_arm_posture)]]
@@ -581,11 +579,7 @@ class IKSolver:
         require_hover = (not platform.fully_actuated) if opts.require_hover is None else opts.require_hover
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(R_d, p_d) if R_d is not None else p_d
-        if opts.levels is not None:
-            levels = opts.levels
-        else:
-            base_target = pin.SE3(ch.euler_to_rotation([0.0, 0.0, xi[5]]), xi[0:3].copy()) if platform.fully_actuated else None
-            levels = default_levels(platform, target, posture, base_target)
+        levels = opts.levels if opts.levels is not None else default_levels(platform, target, posture, float(xi[5]))
         engine = self._engine
         engine.reset()
         lo, hi = engine.lower, engine.upper

@@ -5,7 +5,8 @@ task                    what it asks
 ======================  =====================================================================
 :class:`PoseTask`       a frame (the end effector) at a world placement (6)
 :class:`PositionTask`   a frame at a world position, orientation free (3)
-:class:`BasePoseTask`   the base frame at a placement (6): level 2 of fully actuated platforms
+:class:`BasePoseTask`   the base frame at a placement (6)
+:class:`BaseOrientationTask`  the base frame at an orientation (3): level 2 of fully actuated platforms
 :class:`HoverTask`      the base z axis vertical, roll = pitch = 0 (2)
 :class:`ComTask`        the CoG on the thrust axis (2)
 :class:`PostureTask`    the arm at a preferred configuration (n_arm)
@@ -17,7 +18,7 @@ Write your own by subclassing :class:`Task` and implementing ``linearize``.
 from .base import Task, update_kinematics
 from .com import ComTask
 from .hover import HoverTask
-from .pose import BasePoseTask, PoseTask, PositionTask
+from .pose import BaseOrientationTask, BasePoseTask, PoseTask, PositionTask
 from .posture import PostureTask
 
-__all__ = ["BasePoseTask", "ComTask", "HoverTask", "PoseTask", "PositionTask", "PostureTask", "Task", "update_kinematics"]
+__all__ = ["BaseOrientationTask", "BasePoseTask", "ComTask", "HoverTask", "PoseTask", "PositionTask", "PostureTask", "Task", "update_kinematics"]

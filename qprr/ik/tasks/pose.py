@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pinocchio as pin
 
 from ...charts import as_vector
@@ -39,6 +40,30 @@ class BasePoseTask(PoseTask):
 
     def __init__(self, platform: Platform, target: pin.SE3, weights=None, name: str = "base_pose"):
         super().__init__(platform, target, platform.base_frame, weights, name)
+
+
+class BaseOrientationTask(Task):
+    """Orientation of the base frame B: log3(R_d^T R_b) -> 0 (3), the level-2 task of a fully actuated platform.
+
+    A tilted-rotor platform can hold any attitude whose wrench its rotors produce, but a level base
+    costs the least thrust; its position is left to the levels above (the end effector).
+    J = Jlog3(R_d^T R_b) [0 I 0] (body angular velocity of the free flyer).
+    """
+
+    dim = 3
+
+    def __init__(self, platform: Platform, R_target, weights=None, name: str = "base_orientation"):
+        from ...charts import check_rotation
+
+        self.target = check_rotation(R_target, "BaseOrientationTask R_target").copy()
+        self._sw = sqrt_weights(weights, 3, "BaseOrientationTask weights")
+        self.name = name
+
+    def linearize(self, platform, data, q):
+        Rerr = self.target.T @ data.oMi[1].rotation
+        J = np.zeros((3, platform.nv))
+        J[:, 3:6] = pin.Jlog3(Rerr)
+        return scaled(self._sw, J, -pin.log3(Rerr))
 
 
 class PositionTask(Task):
