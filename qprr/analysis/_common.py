@@ -290,3 +290,30 @@ def affine_span(points: np.ndarray, rel_tol: float = 1e-9) -> tuple[np.ndarray, 
     if r == 3:
         basis = np.eye(3)
     return origin, basis
+
+
+def best_per_cell(coords: np.ndarray, values: np.ndarray, h: float, origin=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For points ``coords`` (n, d) binned in cells of side ``h``: (grid of the largest value per cell
+    (NaN where empty), grid of the index of the point holding it (-1 where empty), grid origin)."""
+    pts = np.asarray(coords, dtype=float)
+    vals = np.asarray(values, dtype=float)
+    lo = pts.min(axis=0) - h if origin is None else np.asarray(origin, dtype=float)
+    shape = tuple(int(x) for x in np.floor((pts.max(axis=0) - lo) / h).astype(np.int64) + 2)
+    idx = np.floor((pts - lo) / h).astype(np.int64)
+    flat = np.ravel_multi_index(tuple(idx.T), shape)
+    key = np.where(np.isnan(vals), -np.inf, vals)
+    order = np.lexsort((-key, flat))
+    fs = flat[order]
+    first = np.ones(fs.size, dtype=bool)
+    first[1:] = fs[1:] != fs[:-1]
+    best = np.full(int(np.prod(shape)), np.nan)
+    arg = np.full(int(np.prod(shape)), -1, dtype=np.int64)
+    best[fs[first]] = vals[order[first]]
+    arg[fs[first]] = order[first]
+    return best.reshape(shape), arg.reshape(shape), lo
+
+
+def default_map_cell(coords: np.ndarray, cells_across: int = 120) -> float:
+    """Cell side [m] for maps over a workspace: its largest extent over ``cells_across``."""
+    ext = float((coords.max(axis=0) - coords.min(axis=0)).max())
+    return max(ext / cells_across, 1e-9)

@@ -83,12 +83,24 @@ def _shifted(a: np.ndarray, axes: list[int], hi: set[int]) -> np.ndarray:
     return a[tuple(sl)]
 
 
-def cell_zonotopes(points_grid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(corner (m, d), generators (m, k, d), growth E (m,)) of the m grid cells (see the module docstring)."""
+def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(corner (m, d), generators (m, k, d), growth E (m,)) of the m grid cells (see the module docstring).
+
+    ``valid``: a boolean grid (the grid's shape): only cells whose 2^k corners are all valid are kept.
+    """
     P = np.asarray(points_grid, dtype=float)
     axes = [a for a in range(P.ndim - 1) if P.shape[a] > 1]
     if not axes:
         raise InputError("the grid has no free axis: its image is a point")
+    if valid is not None:
+        V = np.asarray(valid, dtype=bool)[..., None]
+        keep = np.ones(_shifted(V, axes, set()).shape, dtype=bool)
+        for r in range(len(axes) + 1):
+            for sub in itertools.combinations(axes, r):
+                keep &= _shifted(V, axes, set(sub))
+        c, g, e = cell_zonotopes(P)
+        keep = keep.reshape(-1)
+        return c[keep], g[keep], e[keep]
     d = P.shape[-1]
     corner = _shifted(P, axes, set()).reshape(-1, d)
     gens = np.stack([(_shifted(P, axes, {a}) - _shifted(P, axes, set())).reshape(-1, d) for a in axes], axis=1)
@@ -244,6 +256,8 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
 
 def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
     d = z.centre.shape[1]
+    if z.size == 0:
+        return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
     lo_pt = (z.centre - z.half).min(axis=0)
     hi_pt = (z.centre + z.half).max(axis=0)
     origin, shape = _grid_frame(np.vstack([lo_pt, hi_pt]), h, shift, 0.0)
@@ -263,18 +277,19 @@ def _mirror(points_grid: np.ndarray) -> list[np.ndarray]:
     return [points_grid, m]
 
 
-def _zonotopes_of(points_grid: np.ndarray, revolve: bool) -> Zonotopes:
+def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> Zonotopes:
     grids = _mirror(points_grid) if revolve else [points_grid]
-    parts = [cell_zonotopes(g) for g in grids]
+    parts = [cell_zonotopes(g, valid) for g in grids]
     corner, gens, grow = (np.concatenate([p[i] for p in parts]) for i in range(3))
     if gens.shape[1] > gens.shape[2]:  # redundant: the cells overlap, the union closes itself
         grow = np.zeros_like(grow)
     return prepare(corner, gens, grow)
 
 
-def _coarsen(points_grid: np.ndarray) -> np.ndarray:
-    sl = tuple(slice(None, None, 2) if (a < points_grid.ndim - 1 and points_grid.shape[a] > 2) else slice(None)
-               for a in range(points_grid.ndim))
+def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
+    """Every other value along each axis longer than 2 (the last ``extra_axes`` axes are kept whole)."""
+    n = points_grid.ndim - extra_axes
+    sl = tuple(slice(None, None, 2) if (a < n and points_grid.shape[a] > 2) else slice(None) for a in range(points_grid.ndim))
     return points_grid[sl]
 
 
@@ -284,7 +299,7 @@ def default_cell(z: Zonotopes) -> float:
 
 
 def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 8, seed: int = 0, revolve: bool = False,
-                     return_occupancy: bool = False):
+                     valid=None, return_occupancy: bool = False):
     """Measure of the image of a joint grid (see the module docstring).
 
     Parameters
@@ -294,6 +309,8 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
     cell : side h of the counting cells [m] (default :func:`default_cell`).
     n_shifts : random shifts of the counting grid (seeded by ``seed``), >= 2 for an error bar.
     revolve : count the volume of the solid of revolution of an (s, z) profile (|s| = rho) about z.
+    valid : boolean grid (n_1, ..., n_k): measure the image of the cells whose corners are all
+        valid (a sub-domain of the joint box, e.g. the configurations where the CoG balances).
     return_occupancy : also return (occupancy grid, origin, h) of the first shift (for boundaries and plots).
 
     Returns
@@ -310,7 +327,11 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
         raise InputError("revolve=True needs (s, z) profile points (d = 2)")
     if n_shifts < 2:
         raise InputError(f"n_shifts must be >= 2 (the error bar needs a spread), got {n_shifts!r}")
-    fine = _zonotopes_of(P, revolve)
+    if valid is not None:
+        valid = np.asarray(valid, dtype=bool)
+        if valid.shape != P.shape[:-1]:
+            raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
+    fine = _zonotopes_of(P, revolve, valid)
     if fine.size == 0:
         raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
     h = default_cell(fine) if cell is None else float(cell)
@@ -331,7 +352,7 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
     if Pc.shape == P.shape:  # nothing to coarsen (every free axis has <= 2 values)
         coarse = raw
     else:
-        coarse_z = _zonotopes_of(Pc, revolve)
+        coarse_z = _zonotopes_of(Pc, revolve, None if valid is None else _coarsen(valid, 0))
         coarse = float(np.mean([_count(coarse_z, h, s, revolve)[0] for s in shifts]))
     est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, fine.size)
     return (est, first) if return_occupancy else est
