@@ -1,4 +1,4 @@
-"""Command line: ``qprr check | urdf | simulate | compare``."""
+"""Command line: ``qprr check | urdf | simulate | compare | analyze``."""
 
 from __future__ import annotations
 
@@ -34,6 +34,12 @@ def build_parser() -> argparse.ArgumentParser:
         pass
     else:
         register_cli(sub)
+    try:  # the design maps are registered by qprr.analysis, independently of the simulator
+        from .analysis.cli import register_cli as register_analysis
+    except ImportError:
+        pass
+    else:
+        register_analysis(sub)
     return parser
 
 

@@ -90,7 +90,7 @@ class CoGResult:
 
     def summary(self) -> str:
         lines = [f"CoG regions of {self.platform_name}"]
-        for (v, k), r in self.regions.items():
+        for (v, _k), r in self.regions.items():
             lo, hi = r.extent
             m = str(r.measure) if r.measure is not None else "n/a"
             lines.append(f"  [{v}] {r.label}, payload {r.mass:g} kg: measure {m}; x in [{lo[0]:.4f}, {hi[0]:.4f}], "
@@ -120,7 +120,7 @@ def cog_regions(
     ranges: Mapping[str, tuple[float, float]] | None = None,
     pitch: tuple[float, float] | None = None,
     n_pitch: int = 9,
-    n_shifts: int = 8,
+    n_shifts: int = 4,
     progress=None,
 ) -> CoGResult:
     """CoG regions in B per locked-joint variant and payload mass (Thesis (6.29)-(6.32), Fig. 6.31/6.32/6.47/6.48).
@@ -240,7 +240,7 @@ def balance(
     locked: Mapping[str, float] | None = None,
     ranges: Mapping[str, tuple[float, float]] | None = None,
     tol: float = 1e-6,
-    n_shifts: int = 8,
+    n_shifts: int = 4,
     progress=None,
 ) -> BalanceResult:
     """The slider position that zeroes the CoG offset from the thrust axis, over the other joints.

@@ -298,7 +298,7 @@ def default_cell(z: Zonotopes) -> float:
     return float(max(np.median(2.0 * z.half.max(axis=1)), 1e-12))
 
 
-def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 8, seed: int = 0, revolve: bool = False,
+def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, revolve: bool = False,
                      valid=None, return_occupancy: bool = False):
     """Measure of the image of a joint grid (see the module docstring).
 

@@ -151,7 +151,7 @@ def workspace(
     ranges: Mapping[str, tuple[float, float]] | None = None,
     frame=None,
     hover: bool = True,
-    n_shifts: int = 8,
+    n_shifts: int = 4,
     seed: int = 0,
     progress=None,
 ) -> WorkspaceResult:
