@@ -171,8 +171,7 @@ def singularity(
         p = chain.frame_position(pose, fid)
         det_sys[sl] = system_det(J, p)
         Jt = J[:, rows, :][:, :, free] * w_rows[None, :, None]
-        G = Jt @ Jt.transpose(0, 2, 1) if k <= na else Jt.transpose(0, 2, 1) @ Jt
-        sig2[sl] = np.linalg.eigvalsh(G)[:, ::-1]
+        sig2[sl] = np.linalg.svd(Jt, compute_uv=False) ** 2  # not eigenvalues of J J^T: they lose the small sigma
         if det_task is not None:
             det_task[sl] = np.linalg.det(Jt)
         if progress:
