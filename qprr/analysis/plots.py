@@ -7,6 +7,8 @@ Every ``plot_*`` function draws into an ``ax`` (a new figure if None) and return
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from .capacity import LIMITS, CapacityResult
@@ -308,8 +310,10 @@ def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, red
     best, _, o = best_per_cell(coords, values if reducer == "max" else -values, h)
     if reducer != "max":
         best = -best
-    if best.ndim == 3:  # project a 3-D map onto x-z: best over y
-        best = np.nanmax(best, axis=1) if reducer == "max" else np.nanmin(best, axis=1)
+    if best.ndim == 3:  # project a 3-D map onto x-z: best over y (columns without a sample stay NaN)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            best = np.nanmax(best, axis=1) if reducer == "max" else np.nanmin(best, axis=1)
         o = o[[0, 2]]
     extent = (o[0], o[0] + best.shape[0] * h, o[1], o[1] + best.shape[1] * h)
     im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
@@ -406,8 +410,10 @@ def capacity_figure(result: CapacityResult):
     lim = result.map_limiting.astype(float)
     lim[lim < 0] = np.nan
     if grid.ndim == 3:
-        grid = np.nanmax(grid, axis=1)
-        lim = np.nanmin(lim, axis=1)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # columns without a sample stay NaN
+            grid = np.nanmax(grid, axis=1)
+            lim = np.nanmin(lim, axis=1)
         o = o[[0, 2]]
     extent = (o[0], o[0] + grid.shape[0] * h, o[1], o[1] + grid.shape[1] * h)
     shift = result.origin @ result.basis.T if result.basis.shape[0] == 2 else np.zeros(2)
