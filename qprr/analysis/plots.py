@@ -64,16 +64,16 @@ def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | 
         r = result.regions[i]
         if r.occupancy is None:
             continue
-        grid, o, h = r.occupancy
+        grid, o, h = r.outline if r.outline is not None else r.occupancy
         if r.dim == 2:  # hull coordinates shifted back to B's axes
             _cells_image(ax, grid, o + r.origin @ r.basis.T, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
                          f"[{i}] {r.label}: {r.measure}")
             for ln in r.boundary:
                 loc = ln @ r.basis.T
                 ax.plot(loc[:, 0], loc[:, 1], color=COLOURS[i % len(COLOURS)], lw=0.8)
-        elif r.dim == 3:
-            pts = r.boundary[0]
-            ax.scatter(pts[:, 0], pts[:, 2], s=0.3, color=COLOURS[i % len(COLOURS)], label=f"[{i}] {r.label}: {r.measure}")
+        elif r.dim == 3:  # the x-z projection of the covered cells (any y)
+            proj = grid.any(axis=1)
+            _cells_image(ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45, f"[{i}] {r.label}: {r.measure} (x-z projection)")
     r0 = result.regions[0]
     names = _axis_names(r0.basis) if r0.dim == 2 else ["x_B [m]", "z_B [m]"]
     ax.set_xlabel(names[0])

@@ -38,7 +38,7 @@ from ._common import (
     make_grid,
 )
 from .chain import ArmChain
-from .voxels import MeasureEstimate, estimate_measure
+from .voxels import MeasureEstimate, display_occupancy, estimate_measure
 
 
 @dataclass(frozen=True)
@@ -67,7 +67,10 @@ class WorkspaceRegion:
     ``hover_volume`` the volume swept under hover (yaw about z_B), None if not asked;
     ``boundary``: closed polylines (m, 3) in B of the region's outline (planar sets) or the
     centres (m, 3) of its boundary cells (3-D sets); ``occupancy``: (cells covered, origin, cell
-    side) in ``coords`` (for plots); ``profile``: (rho, z) (n, 2) of the hover workspace.
+    side) in ``coords``: the cells the measure counted (the set :func:`reachable` tests);
+    ``outline``: the same or, for a redundant arm, the finer cells its samples fill without
+    holes (:func:`qprr.analysis.voxels.display_occupancy`), which ``boundary`` follows;
+    ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
     """
 
     label: str
@@ -83,6 +86,7 @@ class WorkspaceRegion:
     occupancy: tuple | None
     profile: np.ndarray
     hover_occupancy: tuple | None
+    outline: tuple | None = None
 
     @property
     def dim(self) -> int:
@@ -219,7 +223,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = None
+    measure = occ = outline = None
     boundary: list = []
     dim = basis.shape[0]
     if dim == 0:
@@ -228,16 +232,24 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
         measure, occ = estimate_measure(coords.reshape(*shape, dim), n_shifts=n_shifts, seed=seed, return_occupancy=True)
-        boundary = _boundary(occ, origin, basis)
+        outline = occ
+        if free > dim:  # redundant: the samples outline the set more finely than the counting cells
+            fine = display_occupancy(coords)
+            outline = fine if fine[2] < occ[2] else occ
+        boundary = _boundary(outline, origin, basis)
     profile = hover_profile(pts, origin, basis)
     hv = hocc = None
     if hover:
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
             hv, hocc = estimate_measure(profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True, return_occupancy=True)
+            if free > 2:
+                fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
+                hocc = fine if fine[2] < hocc[2] else hocc
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
-    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc), why
+    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc,
+                           outline), why
 
 
 def hover_profile(pts: np.ndarray, origin: np.ndarray, basis: np.ndarray) -> np.ndarray:
