@@ -36,7 +36,14 @@ def test_designations_and_unknown_names(capsys):
 
 
 def test_registered_in_the_qprr_command():
-    from qprr.cli import build_parser
+    """``python -m qprr analyze`` (the qprr command line) reaches the maps; run in a child process, whose imports
+    (qprr.cli also tries the simulator's commands) stay out of this test session."""
+    import subprocess
+    import sys
+    from pathlib import Path
 
-    args = build_parser().parse_args(["analyze", "workspace", "--samples", "10"])
-    assert args.map == "workspace" and args.samples == 10
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-m", "qprr", "analyze", "capacity", "--samples", "500"], cwd=root, capture_output=True,
+                         text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(root)})
+    assert out.returncode == 0, out.stderr
+    assert "payload capacity of Q-PRR" in out.stdout
