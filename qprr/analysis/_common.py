@@ -260,11 +260,6 @@ def print_progress(fraction: float, message: str) -> None:
     sys.stderr.flush()
 
 
-def reject_unknown(kwargs: dict, where: str, valid: tuple[str, ...]) -> None:
-    """Raise UnknownNameError for keyword arguments a map does not take."""
-    if kwargs:
-        raise UnknownNameError(f"keyword argument of {where}", sorted(kwargs)[0], valid)
-
 
 def affine_span(points: np.ndarray, rel_tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """(origin (3,), basis (r, 3)): the affine hull of ``points`` (n, 3) [m].
