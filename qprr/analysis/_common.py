@@ -1,0 +1,314 @@
+"""What every map shares: statuses, input checks, joint grids, payload description, progress.
+
+A map samples the arm's joint space on a *grid* (deterministic, reproducible): each free joint
+gets ``n_j`` evenly spaced values across its range, locked joints one value.  The numbers
+``n_j`` are balanced so that a grid step moves the end effector about as far along every
+joint (a joint that swings a long lever gets more values), with ``prod(n_j)`` close to the
+``n_samples`` asked for.  Configurations are produced in chunks so that 1e7 samples never
+sit in memory as one array.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+
+from ..charts import as_vector
+from ..errors import InputError, LimitError, UnknownNameError
+from ..platform import Platform
+
+CHUNK = 16384
+"""Configurations per batch: large enough to amortise numpy's per-call cost, small enough for the cache."""
+
+
+class Status(str, Enum):
+    """Outcome of a map: ``OK`` (every quantity computed), ``EMPTY`` (the set asked for is empty,
+    e.g. no configuration hovers), ``PARTIAL`` (computed, but a part is missing: the reason says which)."""
+
+    OK = "ok"
+    EMPTY = "empty"
+    PARTIAL = "partial"
+
+
+def check_platform(platform) -> Platform:
+    if not isinstance(platform, Platform):
+        raise InputError(f"platform must be a qprr Platform (qprr.load / qprr.build), got {type(platform).__name__}")
+    if platform.n_arm == 0:
+        raise InputError(f"platform {platform.name!r} has no arm joints: there is no arm configuration space to map")
+    return platform
+
+
+def check_int(name: str, value, lo: int = 1) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
+        raise InputError(f"{name} must be an integer >= {lo}, got {value!r}")
+    return int(value)
+
+
+def check_pos(name: str, value, strict: bool = True) -> float:
+    ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or (value <= 0.0 if strict else value < 0.0):
+        raise InputError(f"{name} must be a finite number {'>' if strict else '>='} 0, got {value!r}")
+    return float(value)
+
+
+def check_masses(masses, name: str = "payload_masses") -> np.ndarray:
+    """A non-empty 1-D array of finite payload masses >= 0 [kg]."""
+    try:
+        m = np.atleast_1d(np.asarray(masses, dtype=float))
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be payload masses in kg, got {masses!r}") from exc
+    if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)) or np.any(m < 0.0):
+        raise InputError(f"{name} must be a non-empty list of finite masses >= 0 kg, got {masses!r}")
+    return m
+
+
+@dataclass(frozen=True)
+class Payload:
+    """A point payload held by a frame of the arm (default: the end effector).
+
+    ``offset_frame``: its position in that frame [m] (the thesis's d_cl along link 3 is
+    ``(0, 0, d_cl)`` for the Q-PRR, whose end-effector z axis continues link 3).
+    """
+
+    offset_frame: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    frame: int | None = None
+
+
+def make_payload(platform: Platform, payload_offset, frame=None) -> Payload:
+    off = as_vector(payload_offset, 3, "payload_offset")
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    return Payload(tuple(float(x) for x in off), fid)
+
+
+# ------------------------------------------------------------------------------ joint grid
+@dataclass(frozen=True)
+class JointGrid:
+    """A tensor grid over the arm joints: ``axes[k]`` the values of joint k (one value if locked).
+
+    ``shape`` = (len(axes[0]), ...); ``size`` its product; configurations are in C order
+    (the last joint varies fastest).  ``locked``: names of the joints held at one value.
+    """
+
+    names: tuple[str, ...]
+    axes: tuple[np.ndarray, ...]
+    locked: tuple[str, ...]
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        return tuple(len(a) for a in self.axes)
+
+    @property
+    def size(self) -> int:
+        return int(np.prod(self.shape))
+
+    @property
+    def spacing(self) -> np.ndarray:
+        """Step of each axis (0 for a locked joint)."""
+        return np.array([a[1] - a[0] if len(a) > 1 else 0.0 for a in self.axes])
+
+    def configurations(self, start: int = 0, stop: int | None = None) -> np.ndarray:
+        """The grid points with flat indices [start, stop) as an (m, n_arm) array."""
+        stop = self.size if stop is None else stop
+        idx = np.unravel_index(np.arange(start, stop), self.shape)
+        return np.column_stack([ax[i] for ax, i in zip(self.axes, idx)])
+
+    def chunks(self, chunk: int = CHUNK) -> Iterator[tuple[int, np.ndarray]]:
+        """(start, configurations) batches covering the whole grid."""
+        for start in range(0, self.size, chunk):
+            yield start, self.configurations(start, min(start + chunk, self.size))
+
+
+def joint_ranges(platform: Platform, ranges: Mapping[str, tuple[float, float]] | None = None) -> np.ndarray:
+    """(n_arm, 2) ranges of the arm joints: the joint limits, or ``ranges[name]`` where given.
+
+    A revolute joint without limits gets [-pi, pi]; a prismatic joint without limits needs
+    an explicit range (InputError).  A given range must lie inside the joint limits.
+    """
+    out = np.empty((platform.n_arm, 2))
+    ranges = {} if ranges is None else dict(ranges)
+    unknown = set(ranges) - set(platform.arm_names)
+    if unknown:
+        raise UnknownNameError("arm joint in ranges", sorted(unknown)[0], platform.arm_names)
+    for k, j in enumerate(platform.arm):
+        lo, hi = j.lower, j.upper
+        if j.name in ranges:
+            r = as_vector(ranges[j.name], 2, f"ranges[{j.name!r}]")
+            if not r[0] <= r[1]:
+                raise InputError(f"ranges[{j.name!r}] must be (low, high) with low <= high, got {r.tolist()}")
+            if r[0] < lo - 1e-12 or r[1] > hi + 1e-12:
+                raise LimitError(f"ranges[{j.name!r}] = {r.tolist()} leaves the joint limits [{lo!r}, {hi!r}]")
+            lo, hi = float(r[0]), float(r[1])
+        if not (math.isfinite(lo) and math.isfinite(hi)):
+            if j.kind == "revolute":
+                lo, hi = max(lo, -math.pi), min(hi, math.pi)
+            else:
+                raise InputError(f"prismatic joint {j.name!r} has no limits: give its range, e.g. ranges={{{j.name!r}: (-0.1, 0.1)}}")
+        out[k] = lo, hi
+    return out
+
+
+def check_locked(platform: Platform, locked: Mapping[str, float] | None) -> dict[str, float]:
+    """``locked`` as {arm joint name: value inside the limits}; unknown names list the valid ones."""
+    if locked is None:
+        return {}
+    if not isinstance(locked, Mapping):
+        raise InputError(f"locked must be a mapping {{joint name: value}}, got {locked!r}")
+    out = {}
+    for name, value in locked.items():
+        if name not in platform.arm_names:
+            raise UnknownNameError("arm joint in locked", name, platform.arm_names)
+        k = platform.arm_names.index(name)
+        j = platform.arm[k]
+        v = float(as_vector([value], 1, f"locked[{name!r}]")[0])
+        if not j.lower - 1e-12 <= v <= j.upper + 1e-12:
+            raise LimitError(f"locked[{name!r}] = {v!r} is outside the joint limits [{j.lower!r}, {j.upper!r}]")
+        out[name] = v
+    return out
+
+
+def lever_lengths(platform: Platform, ranges: np.ndarray) -> np.ndarray:
+    """Per joint, an upper bound of |d p_ee / d q_k| over the ranges: 1 for a prismatic joint, the
+    distance from the joint to the farthest point its subtree can place the end effector for a
+    revolute one (sum of the joint-to-joint offsets after it plus the prismatic strokes)."""
+    model = platform.model
+    ee_joint = model.frames[platform.ee_frame].parentJoint
+    chain = []  # joints from the end effector up to the base
+    j = ee_joint
+    while j > 1:
+        chain.append(j)
+        j = model.parents[j]
+    chain = chain[::-1]
+    out = np.zeros(platform.n_arm)
+    for k, jt in enumerate(platform.arm):
+        if jt.kind == "prismatic":
+            out[k] = 1.0 if jt.joint_id in chain else 0.0
+            continue
+        if jt.joint_id not in chain:
+            continue
+        reach = float(np.linalg.norm(model.frames[platform.ee_frame].placement.translation))
+        for jj in chain[chain.index(jt.joint_id) + 1:]:
+            reach += float(np.linalg.norm(model.jointPlacements[jj].translation))
+            kk = jj - 2
+            if platform.arm[kk].kind == "prismatic":
+                reach += float(np.max(np.abs(ranges[kk])))
+        out[k] = reach
+    return out
+
+
+def make_grid(platform: Platform, n_samples: int, locked: Mapping[str, float] | None = None,
+              ranges: Mapping[str, tuple[float, float]] | None = None) -> JointGrid:
+    """The balanced joint grid of about ``n_samples`` configurations (see the module docstring).
+
+    Joint k gets n_k values with n_k proportional to its lever (:func:`lever_lengths`) times its
+    range, odd (every other value is a grid with twice the step and the same ends) and at least
+    3.  Joints that do not move the end effector (after it in the tree) get the same count as
+    the others' geometric mean.
+    """
+    n_samples = check_int("n_samples", n_samples, 2)
+    locked = check_locked(platform, locked)
+    rng = joint_ranges(platform, ranges)
+    free = [k for k, j in enumerate(platform.arm) if j.name not in locked]
+    if not free:
+        axes = tuple(np.array([locked[j.name]]) for j in platform.arm)
+        return JointGrid(platform.arm_names, axes, tuple(locked))
+    lever = lever_lengths(platform, rng)
+    span = np.array([lever[k] * (rng[k, 1] - rng[k, 0]) for k in free])
+    moving = span > 0
+    if not np.any(moving):
+        span = np.ones(len(free))
+    else:
+        span[~moving] = np.exp(np.mean(np.log(span[moving])))
+    # n_k = c span_k with prod n_k = n_samples
+    c = (n_samples / np.prod(span)) ** (1.0 / len(free))
+    counts = np.maximum(3, 2 * np.round((c * span - 1.0) / 2.0) + 1).astype(int)  # odd: halving keeps both ends
+    for k in range(len(free)):  # a joint with a zero range gets one value
+        if rng[free[k], 1] == rng[free[k], 0]:
+            counts[k] = 1
+    axes = []
+    for k, j in enumerate(platform.arm):
+        if j.name in locked:
+            axes.append(np.array([locked[j.name]]))
+        else:
+            i = free.index(k)
+            axes.append(np.linspace(rng[k, 0], rng[k, 1], int(counts[i])))
+    return JointGrid(platform.arm_names, tuple(axes), tuple(locked))
+
+
+# ------------------------------------------------------------------------------ progress
+ProgressFn = Callable[[float, str], None]
+
+
+def check_progress(progress) -> ProgressFn | None:
+    if progress is None or progress is False:
+        return None
+    if progress is True:
+        return print_progress
+    if not callable(progress):
+        raise InputError(f"progress must be None, True or a callable (fraction, message), got {progress!r}")
+    return progress
+
+
+def print_progress(fraction: float, message: str) -> None:
+    """Progress on stderr: ``message  37%`` on one line, a newline when done."""
+    end = "\n" if fraction >= 1.0 else ""
+    sys.stderr.write(f"\r{message} {100.0 * fraction:5.1f}%{end}")
+    sys.stderr.flush()
+
+
+
+def affine_span(points: np.ndarray, rel_tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
+    """(origin (3,), basis (r, 3)): the affine hull of ``points`` (n, 3) [m].
+
+    r = number of singular values of the centred points above ``rel_tol`` times the largest.
+    When the hull is normal to an axis of the frame (a planar arm in the x-z plane of B) the
+    basis is those axes in order (x, z), else the right singular vectors (oriented so their
+    largest entry is positive).
+    """
+    pts = np.asarray(points, dtype=float)
+    step = max(1, pts.shape[0] // 20000)
+    sub = pts[::step]
+    origin = sub.mean(axis=0)
+    _, s, vt = np.linalg.svd(sub - origin, full_matrices=False)
+    r = int(np.sum(s > rel_tol * max(s[0], 1e-300))) if s[0] > 0 else 0
+    basis = vt[:r]
+    if 0 < r < 3:
+        axes = [i for i in range(3) if np.abs(vt[r:, i]).max() < 1e-9]  # axes lying in the hull
+        if len(axes) == r:
+            basis = np.eye(3)[axes]
+    if basis.shape[0] and not np.allclose(basis, np.eye(3)[[int(np.argmax(np.abs(b))) for b in basis]]):
+        basis = basis * np.sign(basis[np.arange(basis.shape[0]), np.argmax(np.abs(basis), axis=1)])[:, None]
+    if r == 3:
+        basis = np.eye(3)
+    return origin, basis
+
+
+def best_per_cell(coords: np.ndarray, values: np.ndarray, h: float, origin=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For points ``coords`` (n, d) binned in cells of side ``h``: (grid of the largest value per cell
+    (NaN where empty), grid of the index of the point holding it (-1 where empty), grid origin)."""
+    pts = np.asarray(coords, dtype=float)
+    vals = np.asarray(values, dtype=float)
+    lo = pts.min(axis=0) - h if origin is None else np.asarray(origin, dtype=float)
+    shape = tuple(int(x) for x in np.floor((pts.max(axis=0) - lo) / h).astype(np.int64) + 2)
+    idx = np.floor((pts - lo) / h).astype(np.int64)
+    flat = np.ravel_multi_index(tuple(idx.T), shape)
+    key = np.where(np.isnan(vals), -np.inf, vals)
+    order = np.lexsort((-key, flat))
+    fs = flat[order]
+    first = np.ones(fs.size, dtype=bool)
+    first[1:] = fs[1:] != fs[:-1]
+    best = np.full(int(np.prod(shape)), np.nan)
+    arg = np.full(int(np.prod(shape)), -1, dtype=np.int64)
+    best[fs[first]] = vals[order[first]]
+    arg[fs[first]] = order[first]
+    return best.reshape(shape), arg.reshape(shape), lo
+
+
+def default_map_cell(coords: np.ndarray, cells_across: int = 120) -> float:
+    """Cell side [m] for maps over a workspace: its largest extent over ``cells_across``."""
+    ext = float((coords.max(axis=0) - coords.min(axis=0)).max())
+    return max(ext / cells_across, 1e-9)

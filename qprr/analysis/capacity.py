@@ -1,0 +1,183 @@
+"""Payload capacity over the workspace, with the limiting factor (Thesis Fig. 6.46 generalised).
+
+Thesis Sec. 6.4.1.1 (Fig. 6.46) distinguishes a transport mission, where the payload depends
+on the thrust alone, and a manipulation mission, where it depends on the joint torques; it
+prints the two holding torques for one configuration (misprinted: docs/thesis-errata.md, Sec.
+6.4.1.1 rows).  Here, for every arm configuration (base level, at rest, point payload at the
+end effector) the largest payload m is the smallest of three limits, each exact and affine in
+m (:class:`qprr.analysis.hover.PayloadLimits`):
+
+* **thrust**: the collective thrust, F_max / g - m_platform, F_max the largest vertical force
+  of the rotors (what a transport mission can lift);
+* **attitude**: the rotors must also produce the torque of the off-axis weight, keeping
+  ``torque_reserve`` [N m] about every axis: the hover wrench leaves the wrench set (shrunk by
+  the reserve) before the collective thrust runs out;
+* **effort**: an arm joint reaches its effort limit (which joint is named).
+
+The limiting factor is "effort" when the joints bind first; otherwise "thrust" when the
+rotors' limit is within ``thrust_tol`` (relative) of the collective one (the off-axis torque
+costs less than that), else "attitude".  Over the workspace, each cell of end-effector
+positions keeps the configuration with the largest capacity (a redundant arm - the Q-PRR's
+slider - chooses the one that balances the CoG).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..platform import Platform
+from ._common import (
+    JointGrid,
+    Status,
+    affine_span,
+    best_per_cell,
+    check_int,
+    check_platform,
+    check_pos,
+    check_progress,
+    default_map_cell,
+    make_grid,
+    make_payload,
+)
+from .chain import ArmChain
+from .hover import check_reserve, payload_limits
+from .wrenchset import wrench_set
+
+LIMITS = ("thrust", "attitude", "effort", "infeasible")
+"""Limiting factors, in the order of the integer codes of :attr:`CapacityResult.limiting`."""
+
+
+@dataclass(frozen=True)
+class CapacityResult:
+    """Largest payload per configuration and over the workspace (see the module docstring).
+
+    Per configuration of ``grid`` (n): ``ee_body`` (n, 3) [m]; ``m_thrust`` (scalar), ``m_attitude``,
+    ``m_effort`` (n,) [kg] the three limits; ``effort_joint`` (n,) the binding joint (-1: none);
+    ``capacity`` (n,) [kg] (clipped at 0: a configuration that cannot hover even empty has
+    capacity 0 and factor "infeasible"); ``limiting`` (n,) codes into :data:`LIMITS`.
+    Over the workspace, in the hull ``origin`` + ``basis`` coordinates with cells of side ``cell``
+    [m]: ``map_capacity`` (grid, NaN outside), ``map_limiting`` (codes, -1 outside),
+    ``map_origin``.  ``best`` = (capacity, q_arm, ee_body) of the best configuration;
+    ``worst_reachable``: the smallest per-cell best capacity over the workspace [kg].
+    """
+
+    platform_name: str
+    grid: JointGrid
+    ee_body: np.ndarray
+    m_thrust: float
+    m_attitude: np.ndarray
+    m_effort: np.ndarray
+    effort_joint: np.ndarray
+    capacity: np.ndarray
+    limiting: np.ndarray
+    joint_names: tuple[str, ...]
+    torque_reserve: np.ndarray
+    origin: np.ndarray
+    basis: np.ndarray
+    cell: float
+    map_capacity: np.ndarray
+    map_limiting: np.ndarray
+    map_origin: np.ndarray
+    best: tuple
+    worst_reachable: float
+    status: Status
+    reason: str
+
+    def fractions(self) -> dict[str, float]:
+        """Share of the configurations limited by each factor."""
+        return {name: float(np.mean(self.limiting == k)) for k, name in enumerate(LIMITS)}
+
+    def map_fractions(self) -> dict[str, float]:
+        """Share of the workspace cells limited by each factor (at their best configuration)."""
+        inside = self.map_limiting >= 0
+        n = max(int(inside.sum()), 1)
+        return {name: float(np.sum(self.map_limiting == k)) / n for k, name in enumerate(LIMITS)}
+
+    def summary(self) -> str:
+        cap, q, ee = self.best
+        fr = self.map_fractions()
+        lines = [f"payload capacity of {self.platform_name} (torque reserve {np.round(self.torque_reserve, 4).tolist()} N m): "
+                 f"collective-thrust limit {self.m_thrust:.4g} kg",
+                 f"  best {cap:.4g} kg at q_arm = {np.round(q, 4).tolist()} (end effector {np.round(ee, 4).tolist()} m in B)",
+                 f"  over the workspace ({int((self.map_limiting >= 0).sum())} cells of {self.cell * 1000:.3g} mm): smallest best "
+                 f"capacity {self.worst_reachable:.4g} kg; limited by " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items())]
+        per = {}
+        for j in self.effort_joint[self.limiting == 2]:
+            per[self.joint_names[j]] = per.get(self.joint_names[j], 0) + 1
+        if per:
+            lines.append("  effort-limited configurations by joint: " + ", ".join(f"{k} {v}" for k, v in per.items()))
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+def capacity(
+    platform: Platform,
+    *,
+    n_samples: int = 200_000,
+    payload_offset=(0.0, 0.0, 0.0),
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    torque_reserve: float = 0.0,
+    thrust_tol: float = 0.01,
+    cell: float | None = None,
+    progress=None,
+) -> CapacityResult:
+    """Payload capacity map (see the module docstring).
+
+    Parameters
+    ----------
+    platform : any platform with finite thrust bounds and arm effort limits.
+    n_samples : joint-grid size.
+    payload_offset : payload centre in the end-effector frame [m].
+    locked, ranges : as in :func:`qprr.analysis.workspace`.
+    torque_reserve : torque [N m] kept available about x, y, z of B (one value or three).
+    thrust_tol : relative gap below which the rotors' limit counts as the collective thrust's.
+    cell : workspace cell side [m] (default: the largest extent / 120).
+    progress : None, True (stderr) or a callable (fraction, message).
+    """
+    check_platform(platform)
+    check_int("n_samples", n_samples, 2)
+    torque_reserve = check_reserve(torque_reserve)
+    thrust_tol = check_pos("thrust_tol", thrust_tol, strict=False)
+    payload = make_payload(platform, payload_offset)
+    progress = check_progress(progress)
+    grid = make_grid(platform, n_samples, locked, ranges)
+    W = wrench_set(platform)
+    chain = ArmChain(platform)
+    eff_lim = np.array(platform.arm_effort_limits)
+    n = grid.size
+    ee = np.empty((n, 3))
+    m_att, m_eff, joint = np.empty(n), np.empty(n), np.empty(n, dtype=np.int64)
+    m_thr = None
+    for start, q in grid.chunks():
+        sl = slice(start, start + len(q))
+        pose = chain.pose(q)
+        st = chain.statics(pose, payload.frame, payload.offset_frame)
+        ee[sl] = chain.frame_position(pose, platform.ee_frame)
+        pl = payload_limits(st, W, eff_lim, platform.g, torque_reserve)
+        m_att[sl], m_eff[sl], joint[sl] = pl.rotors, pl.effort, pl.effort_joint
+        m_thr = pl.collective
+        if progress:
+            progress((start + len(q)) / n, "capacity map")
+    cap = np.minimum(np.minimum(m_att, m_eff), m_thr)
+    lim = np.where(m_eff < m_att, 2, np.where(m_att >= (1.0 - thrust_tol) * m_thr, 0, 1))
+    lim = np.where(cap < 0.0, 3, lim)
+    cap = np.clip(cap, 0.0, None)
+    origin, basis = affine_span(ee)
+    coords = (ee - origin) @ basis.T
+    h = default_map_cell(coords) if cell is None else check_pos("cell", cell)
+    best_map, arg, morigin = best_per_cell(coords, np.where(lim == 3, -1.0, cap), h)
+    map_lim = np.where(arg >= 0, lim[np.clip(arg, 0, None)], -1)
+    best_map = np.where(arg >= 0, cap[np.clip(arg, 0, None)], np.nan)
+    i = int(np.argmax(cap))
+    allq = grid.configurations(i, i + 1)[0]
+    status, reason = Status.OK, ""
+    if np.all(lim == 3):
+        status, reason = Status.EMPTY, "no configuration hovers even without payload"
+    return CapacityResult(platform.name, grid, ee, float(m_thr), m_att, m_eff, joint, cap, lim, platform.arm_names,
+                          torque_reserve, origin, basis, h, best_map, map_lim, morigin, (float(cap[i]), allq, ee[i]),
+                          float(np.nanmin(best_map)), status, reason)

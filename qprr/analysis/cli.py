@@ -1,0 +1,139 @@
+"""``qprr analyze workspace|cog|singularity|hover|capacity|opspace [--platform NAME] [--plot FILE.png]``.
+
+Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a named platform
+(:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
+:func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...).  For the thesis's Q-PRR the figures
+carry the thesis's own numbers where it prints some ((4.46)-(4.48) on the singularity map).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
+DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000,
+                   "opspace": 10_000}
+
+
+def resolve_platform(name: str):
+    """A platform from a registry name (``qprr.load``) or a (2.1) designation (``qprr.build``)."""
+    import qprr
+    from qprr.errors import InputError, UnknownNameError
+    from qprr.platforms import NAMES
+
+    if name in NAMES:
+        return qprr.load(name)
+    try:
+        return qprr.build(name)
+    except InputError:
+        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR', 'QX-PRR'")) from None
+
+
+def _floats(text: str) -> list[float]:
+    return [float(x) for x in text.split(",") if x.strip()]
+
+
+def _thesis_singularity_reference(platform, result):
+    """(4.46)-(4.48) as printed, against theta2, when the platform is the thesis's Q-PRR (else None)."""
+    try:
+        from qprr.thesis import QPRRParams
+        from qprr.thesis import printed as th
+    except ImportError:
+        return None
+    if not isinstance(platform.params, QPRRParams):
+        return None
+    import numpy as np
+
+    t2 = result.grid.axes[platform.arm_names.index("theta2")]
+    return {"(4.46) printed, r0 = -0.04": (t2, np.array([th.sol_4_46(t) for t in t2])),
+            "(4.47) printed, r0 = 0": (t2, np.array([th.sol_4_47(t) for t in t2])),
+            "(4.48) printed, r0 = 0.04": (t2, np.array([th.sol_4_48(t) for t in t2]))}
+
+
+def run(args: argparse.Namespace) -> int:
+    from . import plots
+    from .capacity import capacity
+    from .cog import balance, cog_regions
+    from .hover import hover
+    from .opspace import opspace_map
+    from .singularity import singularity
+    from .workspace import workspace
+
+    platform = resolve_platform(args.platform)
+    n = args.samples or DEFAULT_SAMPLES[args.map]
+    progress = True if args.progress else None
+    t0 = time.perf_counter()
+    fig = None
+    if args.map == "workspace":
+        res = workspace(platform, n_samples=n, progress=progress)
+        print(res.summary())
+        if args.plot:
+            fig = plots.workspace_figure(res)
+    elif args.map == "cog":
+        masses = _floats(args.payload) if args.payload else [0.0, 0.5]
+        res = cog_regions(platform, n_samples=n, payload_masses=masses, progress=progress)
+        bal = balance(platform, n_samples=n, tol=args.tol, progress=progress)
+        print(res.summary())
+        print(bal.summary())
+        if args.plot:
+            fig = plots.cog_figure(res, bal)
+    elif args.map == "singularity":
+        res = singularity(platform, n_samples=n, task=args.task, progress=progress)
+        print(res.summary())
+        if args.plot:
+            fig = plots.singularity_figure(res, _thesis_singularity_reference(platform, res))
+    elif args.map == "hover":
+        masses = _floats(args.payload) if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
+        res = hover(platform, n_samples=n, payload_masses=masses, torque_reserve=args.reserve, progress=progress)
+        print(res.summary())
+        if args.plot:
+            fig = plots.hover_figure(res)
+            if res.wrench_set.rank == 6:
+                stem = args.plot.rsplit(".", 1)
+                path = f"{stem[0]}-wrench-set.{stem[1] if len(stem) > 1 else 'png'}"
+                plots.wrench_set_figure(res).savefig(path, dpi=120)
+                print(f"saved {path}")
+    elif args.map == "capacity":
+        res = capacity(platform, n_samples=n, torque_reserve=args.reserve, progress=progress)
+        print(res.summary())
+        if args.plot:
+            fig = plots.capacity_figure(res)
+    else:
+        res = opspace_map(platform, n_samples=n, progress=progress)
+        print(res.summary())
+        if args.plot:
+            fig = plots.opspace_figure(res)
+    print(f"{args.map} map of {platform.name}: {time.perf_counter() - t0:.2f} s")
+    if fig is not None:
+        fig.savefig(args.plot, dpi=120)
+        print(f"saved {args.plot}")
+    return 0
+
+
+def register_cli(sub) -> None:
+    """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
+    p = sub.add_parser("analyze", help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("map", choices=MAPS, help="which map")
+    p.add_argument("--platform", default="q-prr", help="named platform or (2.1) designation (default: q-prr)")
+    p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")
+    p.add_argument("--samples", type=int, default=None, help="joint-grid size (default depends on the map)")
+    p.add_argument("--payload", default=None, help="payload masses in kg, comma-separated (cog, hover)")
+    p.add_argument("--reserve", type=float, default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
+    p.add_argument("--task", default="pose", choices=("pose", "position"), help="task rows of the singularity map")
+    p.add_argument("--tol", type=float, default=1e-6, help="CoG offset counted as balanced [m] (cog)")
+    p.add_argument("--progress", action="store_true", help="show progress on stderr")
+    p.set_defaults(func=run)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="qprr")
+    register_cli(parser.add_subparsers(dest="command", required=True))
+    args = parser.parse_args(argv)
+    return int(args.func(args) or 0)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,345 @@
+"""Centre-of-gravity regions and the slider position that puts the CoG back on the thrust axis.
+
+Thesis Sec. 3.3.2 (3.75)-(3.81) and Sec. 6.3.3 (6.29)-(6.35): the CoG of the whole system in B,
+p_cm (3.76)-(3.78), moves with the arm; a multirotor hovers with equal thrusts only with p_cm
+on its thrust axis (x_cm = y_cm = 0 for the Q-PRR, (3.79)-(3.81)); the prismatic joint r0 is
+there to bring it back.  The thesis draws the region the CoG sweeps in the (x, z) plane of B
+without and with the slider moving (Fig. 6.31/6.32) and with a payload (Fig. 6.47/6.48).
+
+:func:`cog_regions` maps, for each set of locked joints and each payload mass, the CoG
+positions in B over the joint grid (and, with ``pitch``, the world-aligned offsets
+p_c - p_b = R_b p_cm of (6.29) for base pitches in a range, (6.31)-(6.32)), with the measure of
+each region (:mod:`qprr.analysis.voxels`) and its offset from the thrust axis
+(:func:`qprr.kinematics.cog_offset_body`, batched).
+
+:func:`balance` answers the slider question for any platform.  Moving a prismatic joint
+translates its whole subtree rigidly, so the CoG offset from the thrust axis is affine in the
+slider position r: o(r) = o(r_lo) + (r - r_lo) s.  Over a grid of the other joints, the r*
+minimising |o(r)| is read off directly; the CoG is balanced where the residual |o(r*)| is 0
+(within ``tol``) and r* lies in the joint limits.  The end-effector positions of the balanced
+configurations form a region whose share of the workspace is reported.  Without a prismatic
+joint, the map is |o| over the whole joint grid and the configurations within ``tol`` of the
+axis.  For the Q-PRR, r* = -((m2/2 + m3) d2 s2 + m3 d3 s23 / 2) / (m1 + m2 + m3), the zero of
+(3.80) / (6.33) (tests compare).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..charts import euler_to_rotation_batch
+from ..errors import InputError, UnknownNameError
+from ..platform import Platform
+from ._common import (
+    JointGrid,
+    Status,
+    affine_span,
+    check_int,
+    check_locked,
+    check_masses,
+    check_platform,
+    check_pos,
+    check_progress,
+    make_grid,
+    make_payload,
+)
+from .chain import ArmChain
+from .voxels import MeasureEstimate, estimate_measure
+from .workspace import Ratio, default_variants
+
+
+# ================================================================================ regions
+@dataclass(frozen=True)
+class CoGRegion:
+    """The CoG region for one set of locked joints and one payload mass.
+
+    ``com`` (n, 3) [m]: CoG in B on the joint ``grid`` (with ``pitches``: p_c - p_b in world-aligned
+    axes, n = grid.size * len(pitches)); ``offset`` (n, 2) [m]: distance from the thrust axis in
+    B (:attr:`Platform.thrust_axis_basis` axes; [x_cm, y_cm] for the Q-PRR); ``origin``,
+    ``basis``: the region's affine hull; ``measure``: its length/area/volume (None if the
+    region is lower-dimensional than its hull); ``extent``: (min, max) of ``com`` per axis.
+    """
+
+    label: str
+    locked: dict
+    mass: float
+    grid: JointGrid
+    pitches: np.ndarray
+    com: np.ndarray
+    offset: np.ndarray
+    origin: np.ndarray
+    basis: np.ndarray
+    measure: MeasureEstimate | None
+    occupancy: tuple | None
+    extent: tuple[np.ndarray, np.ndarray]
+
+
+@dataclass(frozen=True)
+class CoGResult:
+    """CoG regions: ``regions[(v, k)]`` for locked-joint variant v (0: none) and payload ``masses[k]``."""
+
+    platform_name: str
+    masses: np.ndarray
+    variants: tuple[dict, ...]
+    regions: dict
+    status: Status
+    reason: str
+
+    def summary(self) -> str:
+        lines = [f"CoG regions of {self.platform_name}"]
+        for (v, _k), r in self.regions.items():
+            lo, hi = r.extent
+            m = str(r.measure) if r.measure is not None else "n/a"
+            lines.append(f"  [{v}] {r.label}, payload {r.mass:g} kg: measure {m}; x in [{lo[0]:.4f}, {hi[0]:.4f}], "
+                         f"z in [{lo[2]:.4f}, {hi[2]:.4f}] m; |offset| <= {np.sqrt((r.offset**2).sum(axis=1)).max():.4f} m")
+        for k in range(len(self.masses)):
+            a, b = self.regions.get((0, k)), self.regions.get((1, k))
+            if a is not None and b is not None and a.measure is not None and b.measure is not None and a.measure.dim == b.measure.dim:
+                g = Ratio.of(a.measure, b.measure)
+                lines.append(f"  payload {self.masses[k]:g} kg: region [0] / [1] = {g.value:.4f} +- {g.error:.2g}")
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+def _label(locked) -> str:
+    return ", ".join(f"{k} locked at {v:g}" for k, v in locked.items()) if locked else "all joints free"
+
+
+def cog_regions(
+    platform: Platform,
+    *,
+    n_samples: int = 200_000,
+    payload_masses=(0.0,),
+    payload_offset=(0.0, 0.0, 0.0),
+    variants: Sequence[Mapping[str, float]] | None = None,
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    pitch: tuple[float, float] | None = None,
+    n_pitch: int = 9,
+    n_shifts: int = 4,
+    progress=None,
+) -> CoGResult:
+    """CoG regions in B per locked-joint variant and payload mass (Thesis (6.29)-(6.32), Fig. 6.31/6.32/6.47/6.48).
+
+    Parameters
+    ----------
+    n_samples : joint-grid size per region.
+    payload_masses : payload masses [kg], a point at ``payload_offset`` [m] in the end-effector frame.
+    variants : locked-joint sets compared with the free arm (default: each prismatic joint locked at 0).
+    locked, ranges : as in :func:`qprr.analysis.workspace`.
+    pitch : (low, high) base pitch [rad]: map p_c - p_b = R_y(theta) p_cm in world-aligned axes,
+        Thesis (6.29) with (6.31), over ``n_pitch`` pitches (default None: the CoG in B).
+    n_shifts : counting shifts of the measure estimator.
+    progress : None, True (stderr) or a callable (fraction, message).
+    """
+    check_platform(platform)
+    check_int("n_samples", n_samples, 8)
+    masses = check_masses(payload_masses)
+    payload = make_payload(platform, payload_offset)
+    base = check_locked(platform, locked)
+    variants = default_variants(platform) if variants is None else [check_locked(platform, v) for v in variants]
+    progress = check_progress(progress)
+    if pitch is None:
+        pitches = np.zeros(1)
+    else:
+        lo, hi = (float(x) for x in pitch)
+        if not (np.isfinite(lo) and np.isfinite(hi) and -np.pi / 2 < lo <= hi < np.pi / 2):
+            raise InputError(f"pitch must be (low, high) inside (-pi/2, pi/2) rad, got {pitch!r}")
+        pitches = np.linspace(lo, hi, 2 * (check_int("n_pitch", n_pitch, 2) // 2) + 1)
+    Rp = euler_to_rotation_batch(np.column_stack([np.zeros_like(pitches), pitches, np.zeros_like(pitches)]))
+    chain = ArmChain(platform)
+    point, _ = platform.thrust_axis
+    B = np.array(platform.thrust_axis_basis)
+    sets = [base] + [{**base, **v} for v in variants]
+    regions, reasons = {}, []
+    for v, lk in enumerate(sets):
+        grid = make_grid(platform, n_samples, lk, ranges)
+        coms = np.empty((len(masses), grid.size, 3))
+        for start, q in grid.chunks():
+            st = chain.statics(chain.pose(q), payload.frame, payload.offset_frame)
+            for k, m in enumerate(masses):
+                coms[k, start:start + len(q)] = st.com_loaded(m)
+            if progress:
+                progress((v + (start + len(q)) / grid.size) / len(sets), "CoG regions")
+        for k, m in enumerate(masses):
+            c = coms[k]
+            off = (c - point) @ B.T
+            if len(pitches) > 1:
+                c = np.einsum("pij,nj->npi", Rp, c).reshape(-1, 3)
+                off = np.repeat(off, len(pitches), axis=0)
+            origin, basis = affine_span(c)
+            coords = (c - origin) @ basis.T
+            shape = tuple(s for s in grid.shape if s > 1) + ((len(pitches),) if len(pitches) > 1 else ())
+            measure = occ = None
+            if basis.shape[0] and len(shape) >= basis.shape[0]:
+                measure, occ = estimate_measure(coords.reshape(*shape, basis.shape[0]), n_shifts=n_shifts, return_occupancy=True)
+            else:
+                reasons.append(f"[{v}] payload {m:g} kg: the CoG region is lower-dimensional than its hull, no measure")
+            regions[(v, k)] = CoGRegion(_label(lk), dict(lk), float(m), grid, pitches, c, off, origin, basis, measure, occ,
+                                        (c.min(axis=0), c.max(axis=0)))
+    return CoGResult(platform.name, masses, tuple(sets), regions, Status.PARTIAL if reasons else Status.OK, "; ".join(reasons))
+
+
+# ================================================================================ balance
+@dataclass(frozen=True)
+class BalanceResult:
+    """Where the CoG can be put on the thrust axis (see the module docstring).
+
+    With a slider: ``grid`` over the other joints (the slider axis has one value), ``r_star``
+    (n,) [m] the slider position minimising the offset (NaN where the offset does not depend on
+    it), ``residual`` (n,) [m] the offset left at r* (across the slider's direction),
+    ``offset_clamped`` (n,) [m] the offset at r* clamped to the limits, ``balanced`` (n,) the
+    configurations with ``offset_clamped <= tol``.  Without a slider (``slider`` None): ``grid``
+    over every joint, ``offset_clamped`` = |o| and ``balanced`` = |o| <= tol.
+    ``ee_body`` (n, 3): end effector at the balanced slider position (or at the grid point).
+    ``fraction_configurations``: share of the grid balanced; ``balanced_measure`` /
+    ``workspace_measure`` (length/area/volume of the end-effector positions that can be reached
+    balanced / of all) and ``fraction_workspace`` (their ratio with its error bar).
+    """
+
+    platform_name: str
+    slider: str | None
+    mass: float
+    tol: float
+    grid: JointGrid
+    r_star: np.ndarray | None
+    residual: np.ndarray | None
+    offset_clamped: np.ndarray
+    balanced: np.ndarray
+    ee_body: np.ndarray
+    fraction_configurations: float
+    balanced_measure: MeasureEstimate | None
+    workspace_measure: MeasureEstimate | None
+    fraction_workspace: Ratio | None
+    status: Status
+    reason: str
+
+    def summary(self) -> str:
+        what = f"slider {self.slider!r}" if self.slider else "no slider: |offset| over the joint grid"
+        lines = [f"CoG balance of {self.platform_name} ({what}, payload {self.mass:g} kg, tol {self.tol:g} m): "
+                 f"{100 * self.fraction_configurations:.2f}% of the {self.grid.size} grid configurations"]
+        if self.fraction_workspace is not None:
+            lines.append(f"  end-effector positions reachable balanced: {self.balanced_measure} of {self.workspace_measure} "
+                         f"= {100 * self.fraction_workspace.value:.2f} +- {100 * self.fraction_workspace.error:.2g}% of the workspace")
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+def balance(
+    platform: Platform,
+    *,
+    slider: str | None = "auto",
+    n_samples: int = 200_000,
+    payload_mass: float = 0.0,
+    payload_offset=(0.0, 0.0, 0.0),
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    tol: float = 1e-6,
+    n_shifts: int = 4,
+    progress=None,
+) -> BalanceResult:
+    """The slider position that zeroes the CoG offset from the thrust axis, over the other joints.
+
+    Parameters
+    ----------
+    slider : name of the prismatic joint used to balance; "auto": the platform's only prismatic
+        joint (an error names them if there are several); None: no slider (map |offset|).
+    n_samples : grid size over the other joints (over all joints without a slider).
+    payload_mass, payload_offset : a point payload [kg] at [m] in the end-effector frame.
+    locked, ranges : as in :func:`qprr.analysis.workspace` (the slider may not be locked).
+    tol : offset [m] that counts as balanced (the thesis's epsilon of (3.79); default 1e-6 m:
+        exactly on the axis up to round-off).
+    """
+    check_platform(platform)
+    check_int("n_samples", n_samples, 8)
+    m = float(check_masses([payload_mass], "payload_mass")[0])
+    payload = make_payload(platform, payload_offset)
+    tol = check_pos("tol", tol)
+    progress = check_progress(progress)
+    base = check_locked(platform, locked)
+    prism = [j.name for j in platform.arm if j.kind == "prismatic" and j.name not in base]
+    if slider == "auto":
+        if len(prism) > 1:
+            raise InputError(f"platform {platform.name!r} has several prismatic joints {prism}: name the slider")
+        slider = prism[0] if prism else None
+    elif slider is not None:
+        if slider not in platform.arm_names:
+            raise UnknownNameError("slider joint", slider, tuple(prism))
+        if slider not in prism:
+            raise InputError(f"slider {slider!r} must be a free prismatic joint (free prismatic joints: {prism})")
+    chain = ArmChain(platform)
+    point, _ = platform.thrust_axis
+    B = np.array(platform.thrust_axis_basis)
+    reason = ""
+    if slider is None:
+        grid = make_grid(platform, n_samples, base, ranges)
+        off = np.empty(grid.size)
+        ee = np.empty((grid.size, 3))
+        for start, q in grid.chunks():
+            pose = chain.pose(q)
+            c = chain.statics(pose, payload.frame, payload.offset_frame).com_loaded(m)
+            off[start:start + len(q)] = np.sqrt((((c - point) @ B.T) ** 2).sum(axis=1))
+            ee[start:start + len(q)] = chain.frame_position(pose, platform.ee_frame)
+        ok = off <= tol
+        r_star = resid = None
+        valid_grid = ok
+        ws_grid = grid
+    else:
+        k = platform.arm_names.index(slider)
+        js = platform.arm[k]
+        lo_r, hi_r = (js.lower, js.upper) if ranges is None or slider not in ranges else ranges[slider]
+        grid = make_grid(platform, n_samples, {**base, slider: float(lo_r)}, ranges)
+        n = grid.size
+        r_star, resid, off, ee = np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3))
+        for start, q in grid.chunks():
+            sl = slice(start, start + len(q))
+            c_lo = chain.statics(chain.pose(q), payload.frame, payload.offset_frame).com_loaded(m)
+            q_hi = q.copy()
+            q_hi[:, k] = hi_r
+            c_hi = chain.statics(chain.pose(q_hi), payload.frame, payload.offset_frame).com_loaded(m)
+            o_lo = (c_lo - point) @ B.T
+            s = ((c_hi - point) @ B.T - o_lo) / (hi_r - lo_r)  # d offset / d r (exact: affine)
+            ss = (s**2).sum(axis=1)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = np.where(ss > 1e-24, -(s * o_lo).sum(axis=1) / ss, np.nan)
+            r = lo_r + t
+            r_star[sl] = r
+            resid[sl] = np.sqrt(((o_lo + np.nan_to_num(t)[:, None] * s) ** 2).sum(axis=1))
+            rc = np.clip(np.nan_to_num(r, nan=lo_r), lo_r, hi_r)
+            off[sl] = np.sqrt(((o_lo + (rc - lo_r)[:, None] * s) ** 2).sum(axis=1))
+            qb = q.copy()
+            qb[:, k] = rc
+            ee[sl] = chain.frame_position(chain.pose(qb), platform.ee_frame)
+            if progress:
+                progress((start + len(q)) / n, "CoG balance")
+        ok = off <= tol
+        valid_grid = ok
+        ws_grid = make_grid(platform, n_samples, base, ranges)
+    frac_cfg = float(ok.mean())
+    bal_m = ws_m = ratio = None
+    # measures of the balanced end-effector set and of the workspace, in the workspace's hull
+    ws_pts = np.empty((ws_grid.size, 3))
+    for start, q in ws_grid.chunks():
+        ws_pts[start:start + len(q)] = chain.frame_position(chain.pose(q), platform.ee_frame)
+    origin, basis = affine_span(ws_pts)
+    dim = basis.shape[0]
+    ws_shape = tuple(s for s in ws_grid.shape if s > 1)
+    bshape = tuple(s for s in grid.shape if s > 1)
+    if dim and len(ws_shape) >= dim and len(bshape) >= dim:
+        ws_m = estimate_measure(((ws_pts - origin) @ basis.T).reshape(*ws_shape, dim), n_shifts=n_shifts)
+        try:
+            bal_m = estimate_measure(((ee - origin) @ basis.T).reshape(*bshape, dim), n_shifts=n_shifts, valid=valid_grid.reshape(bshape))
+            ratio = Ratio.of(bal_m, ws_m)
+        except InputError:
+            reason = ("no configuration balances the CoG within tol" if not ok.any() else
+                      "the balanced configurations cover no full grid cell (a curve or isolated points in the workspace): "
+                      "their share of the workspace is 0 at this tol")
+    else:
+        reason = "the balanced set has fewer free joints than the workspace dimension: no measure (see fraction_configurations)"
+    status = Status.OK if not reason else (Status.EMPTY if not ok.any() else Status.PARTIAL)
+    return BalanceResult(platform.name, slider, m, tol, grid, r_star, resid, off, ok, ee, frac_cfg, bal_m, ws_m, ratio, status, reason)

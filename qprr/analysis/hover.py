@@ -1,0 +1,250 @@
+"""Hover feasibility and thrust margin over the arm's configuration space and a payload-mass range.
+
+At each arm configuration (base level, at rest, a point payload m at the end effector) the
+rotors must produce the base wrench w(m) = w_0 + m w_1 (the base rows of Pinocchio's
+generalised gravity; :class:`qprr.analysis.chain.Statics`) and the arm joints the efforts
+tau(m) = tau_0 + m tau_1.  With the wrench set Z of the rotors
+(:mod:`qprr.analysis.wrenchset`) every question is exact:
+
+* **hover-feasible**: w(m) in Z (an allocation within [f_min, f_max] exists) and
+  |tau(m)| <= the effort limits;
+* **thrusts**: the allocation :class:`qprr.actuation.Allocator` makes when it is exact (the
+  minimum-norm one, f = Omega_P^+ w; unique for four coplanar rotors and for six tilted ones)
+  and each rotor's margin to f_min and f_max;
+* **thrust margin**: the largest s such that *some* allocation keeps every thrust in
+  [f_min + s, f_max - s] (:meth:`WrenchSet.thrust_margin`; for a square rotor matrix, the
+  allocation's own smallest margin);
+* **attitude authority left**: the largest roll, pitch and yaw torque [N m] (and, for a fully
+  actuated platform, the largest force along x, y, z of B) still producible on top of w(m),
+  each in the weaker of its two directions;
+* **payload envelope**: the largest m each configuration can hold, min of the rotor limit
+  (the ray from w_0 along w_1 leaving Z) and the effort limit (each joint affine in m).
+
+Thesis Sec. 6.4.1.1 states the capacity question ("the payload depends on the thrust if the
+mission is transport, on the joint torques if it is manipulation"); none of the thesis's
+anchors maps it.  Maps here are over configurations; :mod:`qprr.analysis.capacity` projects
+them onto the workspace.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..actuation import Allocator
+from ..errors import InputError
+from ..platform import Platform
+from ._common import (
+    JointGrid,
+    Status,
+    check_int,
+    check_masses,
+    check_platform,
+    check_progress,
+    make_grid,
+    make_payload,
+)
+from .chain import ArmChain, Statics
+from .wrenchset import WrenchSet, wrench_set
+
+
+@dataclass(frozen=True)
+class PayloadLimits:
+    """Largest payload [kg] per configuration, by limit (n,) each.
+
+    ``rotors``: the rotors can hold the wrench (with ``torque_reserve`` left about every axis);
+    ``effort``: every arm joint within its effort limit, ``effort_joint`` the index of the joint
+    that binds first (-1 if none); ``collective``: the collective-thrust limit
+    F_max / g - m_platform (a scalar: the transport mission of Thesis Sec. 6.4.1.1).  A value
+    < 0 means even the empty platform breaks that limit there (-inf: w_0 cannot be produced
+    at all).
+    """
+
+    rotors: np.ndarray
+    effort: np.ndarray
+    effort_joint: np.ndarray
+    collective: float
+
+    @property
+    def total(self) -> np.ndarray:
+        return np.minimum(self.rotors, self.effort)
+
+
+def check_reserve(torque_reserve) -> np.ndarray:
+    """``torque_reserve`` as three torques [N m] >= 0 about x, y, z of B (a scalar applies to all three)."""
+    try:
+        r = np.broadcast_to(np.asarray(torque_reserve, dtype=float), (3,)).copy()
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"torque_reserve must be one torque or three (roll, pitch, yaw) in N m, got {torque_reserve!r}") from exc
+    if not np.all(np.isfinite(r)) or np.any(r < 0.0):
+        raise InputError(f"torque_reserve must be finite and >= 0 N m, got {torque_reserve!r}")
+    return r
+
+
+def payload_limits(st: Statics, W: WrenchSet, effort_limits: np.ndarray, g: float, torque_reserve=0.0) -> PayloadLimits:
+    """Per configuration, the payload limits of :class:`PayloadLimits` from the affine statics ``st``."""
+    reserve = check_reserve(torque_reserve)
+    Wr = W.shrunk(reserve) if np.any(reserve > 0.0) else W
+    lo, hi = Wr.ray(st.wrench0, st.wrench1)
+    inside = Wr.contains(st.wrench0)
+    rot = np.where(inside & (lo <= hi), hi, -np.inf)
+    # arm efforts: |a + m b| <= L for m >= 0
+    a, b = st.tau_arm0, st.tau_arm1
+    L = np.broadcast_to(effort_limits, a.shape)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lim = np.where(np.abs(b) > 1e-15, (L - a * np.sign(b)) / np.abs(b), np.where(np.abs(a) <= L, np.inf, -np.inf))
+    lim = np.where(np.abs(a) > L * (1 + 1e-12), -np.inf, lim)
+    eff = lim.min(axis=1) if lim.shape[1] else np.full(a.shape[0], np.inf)
+    joint = np.where(eff < np.inf, lim.argmin(axis=1), -1) if lim.shape[1] else np.full(a.shape[0], -1)
+    collective = Wr.force_max() / g - st.mass
+    return PayloadLimits(rot, eff, joint, float(collective))
+
+
+@dataclass(frozen=True)
+class HoverResult:
+    """Hover feasibility over the joint ``grid`` for each payload mass (see the module docstring).
+
+    Per configuration (n = grid.size): ``ee_body`` (n, 3) [m]; for ``masses[0]``: ``thrusts``
+    (n, n_rotors) [N] of the exact allocation and ``rotor_margin`` (n, n_rotors) [N] (min of
+    f - f_min and f_max - f; negative = out of bounds), ``tau_arm`` (n, n_arm).  Per mass and
+    configuration: ``thrust_margin`` (n_m, n) [N], ``authority`` (n_m, n, 3) [N m] about x, y, z
+    of B (``force_authority`` (n_m, n, 3) [N] for fully actuated platforms, else None),
+    ``rotor_ok``, ``effort_ok``, ``feasible`` (n_m, n).  ``payload``: :class:`PayloadLimits`
+    (the envelope).  ``feasible_fraction`` (n_m,) of the configurations; ``min_thrust_margin``
+    (n_m,) [N] over every configuration and ``worst_q`` (n_m, n_arm) where it occurs.
+    """
+
+    platform_name: str
+    grid: JointGrid
+    masses: np.ndarray
+    ee_body: np.ndarray
+    thrusts: np.ndarray
+    rotor_margin: np.ndarray
+    tau_arm: np.ndarray
+    thrust_margin: np.ndarray
+    authority: np.ndarray
+    force_authority: np.ndarray | None
+    rotor_ok: np.ndarray
+    effort_ok: np.ndarray
+    feasible: np.ndarray
+    payload: PayloadLimits
+    wrench_set: WrenchSet
+    hover_wrench: np.ndarray
+    feasible_fraction: np.ndarray
+    min_thrust_margin: np.ndarray
+    worst_q: np.ndarray
+    status: Status
+    reason: str
+
+    def summary(self) -> str:
+        lines = [f"hover feasibility of {self.platform_name}: {self.grid.size} arm configurations, wrench set of rank "
+                 f"{self.wrench_set.rank} ({self.wrench_set.normals.shape[0]} facets)"]
+        for k, m in enumerate(self.masses):
+            lines.append(f"  payload {m:g} kg: hover-feasible at {100 * self.feasible_fraction[k]:.2f}% of the configurations "
+                         f"(rotors {100 * self.rotor_ok[k].mean():.2f}%, efforts {100 * self.effort_ok[k].mean():.2f}%); "
+                         f"min thrust margin {self.min_thrust_margin[k]:.4g} N at q_arm = {np.round(self.worst_q[k], 4).tolist()}; "
+                         f"min roll/pitch/yaw authority {np.round(self.authority[k].min(axis=0), 4).tolist()} N m")
+        pl = self.payload.total
+        ok = np.isfinite(pl)
+        lines.append(f"  payload envelope (zero reserve): {np.nanmax(np.where(ok, pl, np.nan)):.4g} kg at best, "
+                     f"{np.nanmin(np.where(ok, pl, np.nan)):.4g} kg at worst; collective-thrust limit {self.payload.collective:.4g} kg")
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+def hover(
+    platform: Platform,
+    *,
+    n_samples: int = 100_000,
+    payload_masses=(0.0,),
+    payload_offset=(0.0, 0.0, 0.0),
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    torque_reserve: float = 0.0,
+    progress=None,
+) -> HoverResult:
+    """Hover feasibility, thrusts, margins and attitude authority over the arm's joint grid.
+
+    Parameters
+    ----------
+    platform : any platform whose rotors have finite thrust bounds.
+    n_samples : joint-grid size (balanced grid).
+    payload_masses : payload masses [kg] (>= 0), a point mass at ``payload_offset`` [m] in the
+        end-effector frame.
+    locked, ranges : joints held fixed / narrower ranges (as in :func:`qprr.analysis.workspace`).
+    torque_reserve : torque [N m] to keep available about x, y, z of B in the payload envelope
+        (one value or three; 0: the rotors may saturate exactly).
+    progress : None, True (stderr) or a callable (fraction, message).
+    """
+    check_platform(platform)
+    check_int("n_samples", n_samples, 2)
+    masses = check_masses(payload_masses)
+    torque_reserve = check_reserve(torque_reserve)
+    payload = make_payload(platform, payload_offset)
+    progress = check_progress(progress)
+    grid = make_grid(platform, n_samples, locked, ranges)
+    W = wrench_set(platform)
+    alloc = Allocator(platform)
+    chain = ArmChain(platform)
+    n, nm, nr, na = grid.size, len(masses), platform.n_rotors, platform.n_arm
+    full = W.rank == 6
+    ee = np.empty((n, 3))
+    thrusts = np.empty((n, nr))
+    tau_arm = np.empty((n, na))
+    margin = np.empty((nm, n))
+    auth = np.empty((nm, n, 3))
+    fauth = np.empty((nm, n, 3)) if full else None
+    rot_ok = np.empty((nm, n), dtype=bool)
+    eff_ok = np.empty((nm, n), dtype=bool)
+    w_hover = np.empty((n, 6))
+    lim_rot, lim_eff, lim_joint = np.empty(n), np.empty(n), np.empty(n, dtype=np.int64)
+    collective = None
+    eff_lim = np.array(platform.arm_effort_limits)
+    for start, q in grid.chunks():
+        sl = slice(start, start + len(q))
+        pose = chain.pose(q)
+        st = chain.statics(pose, payload.frame, payload.offset_frame)
+        ee[sl] = chain.frame_position(pose, platform.ee_frame)
+        w0 = st.wrench(masses[0])
+        w_hover[sl] = w0
+        thrusts[sl] = w0[:, alloc.rows] @ alloc.Omega_P_inv.T
+        tau_arm[sl] = st.tau_arm(masses[0])
+        for k, m in enumerate(masses):
+            w = st.wrench(m)
+            rot_ok[k, sl] = W.contains(w)
+            eff_ok[k, sl] = np.all(np.abs(st.tau_arm(m)) <= eff_lim * (1 + 1e-12), axis=1)
+            margin[k, sl] = W.thrust_margin(w) if W.equal_bounds else np.where(rot_ok[k, sl], _alloc_margin(w, alloc, W), -np.inf)
+            a = W.authority(w, (3, 4, 5))
+            auth[k, sl] = a.min(axis=2)
+            if full:
+                fauth[k, sl] = W.authority(w, (0, 1, 2)).min(axis=2)
+        pl = payload_limits(st, W, eff_lim, platform.g, torque_reserve)
+        lim_rot[sl], lim_eff[sl], lim_joint[sl] = pl.rotors, pl.effort, pl.effort_joint
+        collective = pl.collective
+        if progress:
+            progress((start + len(q)) / n, "hover map")
+    rmargin = np.minimum(thrusts - W.thrust_min, W.thrust_max - thrusts)
+    feasible = rot_ok & eff_ok
+    frac = feasible.mean(axis=1)
+    worst = margin.argmin(axis=1)
+    allq = grid.configurations(0, n)
+    status, reason = Status.OK, ""
+    if not feasible.any():
+        status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
+    return HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
+                       PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective)), W, w_hover, frac,
+                       margin[np.arange(nm), worst], allq[worst], status, reason)
+
+
+def _alloc_margin(w: np.ndarray, alloc: Allocator, W: WrenchSet) -> np.ndarray:
+    """Smallest rotor margin of the Allocator's answer (rotor sets with unequal bounds)."""
+    out = np.empty(w.shape[0])
+    tau = np.zeros(alloc.platform.nv)
+    for i in range(w.shape[0]):
+        tau[0:6] = w[i]
+        f = alloc.allocate(tau).f[: alloc.n_rotors]
+        out[i] = np.min(np.minimum(f - W.thrust_min, W.thrust_max - f))
+    return out

@@ -1,0 +1,166 @@
+"""Operational-space model at the end effector (Thesis Sec. 5.4, (5.47)-(5.52)), and its map.
+
+With the joint-space model M(q) a + h(q, v) = tau (Thesis (5.36); h = C v + g) and the
+end-effector twist x_dot = [p_dot; omega] = J v (Pinocchio's LOCAL_WORLD_ALIGNED frame
+Jacobian, the geometric J of (5.48)), a wrench F applied through tau = J^T F (5.47) gives
+
+    Lambda x_ddot + mu + p = F,       Lambda = (J M^-1 J^T)^-1,
+    mu = Lambda (J M^-1 (h - g) - J_dot v),   p = Lambda J M^-1 g,
+
+(Khatib's operational-space model; J_bar = M^-1 J^T Lambda is the dynamically consistent
+inverse, mu = J_bar^T (h - g) - Lambda J_dot v, p = J_bar^T g).  This is (5.51)-(5.52) with
+B_A = Lambda, C_A x_dot = mu, G_A = p.  The printed (5.50)-(5.51) invert J_A, which is 6 x 9
+for the Q-PRR (it has no inverse): they hold only for a square J (docs/thesis-errata.md,
+rows (5.50)-(5.51)); the form above is the one for any number of joints.  The analytic form
+with Euler-angle rates follows from (5.48)-(5.49): Lambda_A = T_A^T Lambda T_A.
+
+For the floating-base platform J has full row rank (the base twist alone spans every
+end-effector twist), so Lambda always exists.  ``fixed_base=True`` uses the arm alone
+(:meth:`Platform.arm_model`), whose J may have a lower rank: Lambda is then taken on the
+row space (pseudo-inverse), and ``rank`` says so.
+
+:func:`opspace_map` evaluates, over a grid of arm configurations (base at rest at the
+origin), the effective mass the end effector shows along x, y, z (1 / (u^T Lambda^-1 u), the
+inertia felt pushing it) and the condition number of Lambda.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+from scipy.linalg import solve_triangular
+
+from ..charts import as_vector
+from ..kinematics import check_q
+from ..platform import Platform
+from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
+
+
+@dataclass(frozen=True)
+class OpSpaceModel:
+    """Operational-space model at one state (see the module docstring).
+
+    ``J`` (6, nv), ``J_dot_v`` (6,): [classical linear acceleration; angular acceleration] at
+    a = 0; ``M`` (nv, nv); ``Lambda``, ``Lambda_inv`` (6, 6) [kg, kg m, kg m^2 blocks];
+    ``J_bar`` (nv, 6); ``mu``, ``p`` (6,) [N, N m]; ``h``, ``g`` (nv,) nonlinear effects and
+    gravity; ``rank`` of J (6 for the floating base).
+    """
+
+    q: np.ndarray
+    v: np.ndarray
+    frame: int
+    J: np.ndarray
+    J_dot_v: np.ndarray
+    M: np.ndarray
+    Lambda: np.ndarray
+    Lambda_inv: np.ndarray
+    J_bar: np.ndarray
+    mu: np.ndarray
+    p: np.ndarray
+    h: np.ndarray
+    g: np.ndarray
+    rank: int
+
+    def acceleration(self, F) -> np.ndarray:
+        """x_ddot = Lambda^-1 (F - mu - p) [m/s^2, rad/s^2] under tau = J^T F alone, (5.52)."""
+        F = as_vector(F, 6, "F")
+        return self.Lambda_inv @ (F - self.mu - self.p)
+
+
+def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, fixed_base: bool = False) -> OpSpaceModel:
+    """The operational-space model of ``frame`` (default: the end effector) at (q, v), Thesis (5.47)-(5.52).
+
+    ``q``, ``v``: Pinocchio configuration and velocity of the platform (``fixed_base``: of the
+    arm model, nq = nv = n_arm, and ``data`` from ``platform.arm_model().createData()``).
+    """
+    model = platform.arm_model() if fixed_base else platform.model
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    if fixed_base:
+        fid = model.getFrameId(platform.model.frames[fid].name)
+        q = as_vector(q, model.nq, "q")
+    else:
+        q = check_q(platform, q)
+    v = np.zeros(model.nv) if v is None else as_vector(v, model.nv, "v")
+    pin.computeAllTerms(model, data, q, v)
+    M = np.triu(data.M) + np.triu(data.M, 1).T
+    h = data.nle.copy()
+    g = pin.computeGeneralizedGravity(model, data, q).copy()
+    pin.forwardKinematics(model, data, q, v, np.zeros(model.nv))
+    pin.updateFramePlacements(model, data)
+    J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+    acc = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+    Jdv = np.concatenate([acc.linear, acc.angular])
+    Minv_JT = np.linalg.solve(M, J.T)
+    Li = J @ Minv_JT
+    Li = 0.5 * (Li + Li.T)
+    rank = int(np.linalg.matrix_rank(Li, tol=1e-10 * max(np.abs(Li).max(), 1e-300)))
+    L = np.linalg.inv(Li) if rank == 6 else np.linalg.pinv(Li, rcond=1e-10, hermitian=True)
+    Jbar = Minv_JT @ L
+    mu = Jbar.T @ (h - g) - L @ Jdv
+    p = Jbar.T @ g
+    return OpSpaceModel(q.copy(), v.copy(), fid, J, Jdv, M, L, Li, Jbar, mu, p, h, g, rank)
+
+
+@dataclass(frozen=True)
+class OpSpaceMap:
+    """Effective end-effector mass over ``grid`` (base at rest at the origin, v = 0).
+
+    ``mass_xyz`` (n, 3) [kg]: 1 / (u^T Lambda^-1 u) for u = x, y, z of the world (= B);
+    ``inertia_xyz`` (n, 3) [kg m^2] the same for rotations; ``condition`` (n,) of Lambda;
+    ``gravity_force`` (n, 3) [N]: the linear part of p.
+    """
+
+    platform_name: str
+    grid: JointGrid
+    ee_body: np.ndarray
+    mass_xyz: np.ndarray
+    inertia_xyz: np.ndarray
+    condition: np.ndarray
+    gravity_force: np.ndarray
+    status: Status
+    reason: str
+
+    def summary(self) -> str:
+        lo, hi = self.mass_xyz.min(axis=0), self.mass_xyz.max(axis=0)
+        return (f"operational space of {self.platform_name} ({self.grid.size} configurations): effective mass along x, y, z in "
+                f"[{lo[0]:.4g}, {hi[0]:.4g}], [{lo[1]:.4g}, {hi[1]:.4g}], [{lo[2]:.4g}, {hi[2]:.4g}] kg; "
+                f"condition number of Lambda in [{self.condition.min():.4g}, {self.condition.max():.4g}]")
+
+
+def opspace_map(platform: Platform, *, n_samples: int = 20_000, locked: Mapping[str, float] | None = None,
+                ranges: Mapping[str, tuple[float, float]] | None = None, frame=None, progress=None) -> OpSpaceMap:
+    """Effective mass and conditioning of the operational-space inertia over the arm's joint grid (one Pinocchio
+    evaluation per configuration: CRBA, the frame Jacobian and a Cholesky solve)."""
+    check_platform(platform)
+    check_int("n_samples", n_samples, 2)
+    progress = check_progress(progress)
+    grid = make_grid(platform, n_samples, locked, ranges)
+    model = platform.model
+    data = platform.data()
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    n = grid.size
+    ee, mass, inert, cond, grav = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3)), np.empty(n), np.empty((n, 3))
+    q = pin.neutral(model)
+    for start, qa in grid.chunks(2048):
+        for i, row in enumerate(qa):
+            q[7:] = row
+            M = pin.crba(model, data, q)
+            M = np.triu(M) + np.triu(M, 1).T
+            J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+            c = np.linalg.cholesky(M)
+            X = solve_triangular(c, J.T, lower=True)  # M = c c^T: J M^-1 J^T = X^T X
+            Li = X.T @ X
+            k = start + i
+            ee[k] = data.oMf[fid].translation
+            d = np.diag(Li)
+            mass[k], inert[k] = 1.0 / d[0:3], 1.0 / d[3:6]
+            w = np.linalg.eigvalsh(Li)
+            cond[k] = w[-1] / w[0]
+            g = pin.computeGeneralizedGravity(model, data, q)
+            grav[k] = np.linalg.solve(Li, X.T @ solve_triangular(c, g, lower=True))[0:3]
+        if progress:
+            progress((start + len(qa)) / n, "operational-space map")
+    return OpSpaceMap(platform.name, grid, ee, mass, inert, cond, grav, Status.OK, "")

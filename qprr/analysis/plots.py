@@ -1,0 +1,464 @@
+"""Figures of the analysis maps (matplotlib; never imported by the maps themselves).
+
+Every ``plot_*`` function draws into an ``ax`` (a new figure if None) and returns it; every
+``*_figure`` function returns a complete :class:`matplotlib.figure.Figure`.  Save with
+``fig.savefig(path)``.  The library never selects a matplotlib backend.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .capacity import LIMITS, CapacityResult
+from .cog import BalanceResult, CoGResult
+from .hover import HoverResult
+from .opspace import OpSpaceMap
+from .singularity import SingularityResult
+from .workspace import WorkspaceResult
+
+AXIS = ("x", "y", "z")
+COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
+
+
+def _plt():
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _new_ax(ax, projection=None):
+    if ax is not None:
+        return ax
+    plt = _plt()
+    fig = plt.figure(figsize=(6, 5))
+    return fig.add_subplot(111, projection=projection)
+
+
+def _axis_names(basis: np.ndarray) -> list[str]:
+    out = []
+    for b in basis:
+        i = int(np.argmax(np.abs(b)))
+        out.append(f"{AXIS[i]}_B [m]" if abs(abs(b[i]) - 1.0) < 1e-9 else "hull axis [m]")
+    return out
+
+
+def _cells_image(ax, grid, origin, h, colour, alpha, label=None):
+    """Fill covered cells of a 2-D occupancy grid."""
+    from matplotlib.colors import ListedColormap
+
+    img = np.where(grid.T, 1.0, np.nan)
+    extent = (origin[0], origin[0] + grid.shape[0] * h, origin[1], origin[1] + grid.shape[1] * h)
+    ax.imshow(img, origin="lower", extent=extent, cmap=ListedColormap([colour]), alpha=alpha, interpolation="nearest")
+    if label:
+        ax.fill([], [], color=colour, alpha=alpha, label=label)
+
+
+# ================================================================================ workspace
+def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | None = None):
+    """Body-frame workspace regions (filled covered cells and outlines) in their hull's axes."""
+    ax = _new_ax(ax)
+    regions = range(len(result.regions)) if regions is None else regions
+    for i in regions:
+        r = result.regions[i]
+        if r.occupancy is None:
+            continue
+        grid, o, h = r.outline if r.outline is not None else r.occupancy
+        if r.dim == 2:  # hull coordinates shifted back to B's axes
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
+                         f"[{i}] {r.label}: {r.measure}")
+            for ln in r.boundary:
+                loc = ln @ r.basis.T
+                ax.plot(loc[:, 0], loc[:, 1], color=COLOURS[i % len(COLOURS)], lw=0.8)
+        elif r.dim == 3:  # the x-z projection of the covered cells (any y)
+            proj = grid.any(axis=1)
+            _cells_image(ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45, f"[{i}] {r.label}: {r.measure} (x-z projection)")
+    r0 = result.regions[0]
+    names = _axis_names(r0.basis) if r0.dim == 2 else ["x_B [m]", "z_B [m]"]
+    ax.set_xlabel(names[0])
+    ax.set_ylabel(names[1] if len(names) > 1 else "")
+    ax.set_aspect("equal")
+    ax.legend(loc="lower left", fontsize=7)
+    ax.set_title(title or f"workspace of {result.frame} in B")
+    return ax
+
+
+def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
+    """Hover workspace (yaw free about z_B): profile (s, z) of each region, s = signed distance to the axis."""
+    ax = _new_ax(ax)
+    regions = range(len(result.regions)) if regions is None else regions
+    for i in regions:
+        r = result.regions[i]
+        if r.hover_occupancy is None:
+            continue
+        grid, o, h = r.hover_occupancy
+        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55, f"[{i}] {r.label}: {r.hover_volume}")
+    ax.axvline(0.0, color="k", lw=0.6, ls="--")
+    ax.set_xlabel("distance to the yaw axis (signed) [m]")
+    ax.set_ylabel("z (world, from the base) [m]")
+    ax.set_aspect("equal")
+    ax.legend(loc="lower left", fontsize=7)
+    ax.set_title("hover workspace: section through the yaw axis")
+    return ax
+
+
+def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: int = 60):
+    """3-D view of the hover workspace of ``region``: its outline turned about z."""
+    ax = _new_ax(ax, projection="3d")
+    r = result.regions[region]
+    if r.hover_occupancy is None:
+        return ax
+    grid, o, h = r.hover_occupancy
+    import contourpy
+
+    x = o[0] + (np.arange(grid.shape[0]) + 0.5) * h
+    y = o[1] + (np.arange(grid.shape[1]) + 0.5) * h
+    lines = contourpy.contour_generator(x, y, grid.T.astype(float)).lines(0.5)
+    phi = np.linspace(0, 2 * np.pi, n_turn)
+    for ln in lines:
+        ln = np.asarray(ln)
+        ln = ln[ln[:, 0] >= 0] if np.any(ln[:, 0] >= 0) else ln
+        s, z = ln[::max(1, len(ln) // 80), 0], ln[::max(1, len(ln) // 80), 1]
+        X = np.outer(np.abs(s), np.cos(phi))
+        Y = np.outer(np.abs(s), np.sin(phi))
+        Z = np.outer(z, np.ones_like(phi))
+        ax.plot_surface(X, Y, Z, alpha=0.25, color=COLOURS[region % len(COLOURS)], linewidth=0)
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_zlabel("z [m]")
+    ax.set_title(f"hover workspace [{region}] {r.label}: {r.hover_volume}", fontsize=8)
+    return ax
+
+
+def workspace_figure(result: WorkspaceResult):
+    """Thesis Fig. 3.14 (a) with / (b) without the locked joints, Fig. 3.15 the gain, and the hover views."""
+    plt = _plt()
+    n = len(result.regions)
+    fig = plt.figure(figsize=(14, 9))
+    ax = fig.add_subplot(2, 3, 1)
+    plot_workspace(result, ax, [0], title=f"(a) {result.regions[0].label}")
+    if n > 1:
+        plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
+        ax3 = fig.add_subplot(2, 3, 3)
+        plot_workspace(result, ax3, [0, 1], title="(c) gained by the free joints")
+        if 1 in result.gain:
+            g, d = result.gain[1], result.difference[1]
+            ax3.text(0.02, 0.98, f"gain x{g.value:.3f} +- {g.error:.2g}\n+{d[0]:.4g} +- {d[1]:.1g} {result.regions[0].measure.unit}",
+                     transform=ax3.transAxes, va="top", fontsize=8)
+    plot_hover_workspace(result, fig.add_subplot(2, 3, 4))
+    plot_hover_solid(result, fig.add_subplot(2, 3, 5, projection="3d"), 0)
+    if n > 1:
+        plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
+    fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3), Fig. 3.14/3.15)")
+    fig.tight_layout()
+    return fig
+
+
+# ================================================================================ CoG
+def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
+    """CoG regions in the (x, z) plane of B (Thesis Fig. 6.31/6.32, 6.47/6.48)."""
+    ax = _new_ax(ax)
+    keys = list(result.regions) if keys is None else keys
+    keys = sorted(keys, key=lambda k: -result.regions[k].mass)  # heavier payloads (larger regions) underneath
+    for c, key in enumerate(keys):
+        r = result.regions[key]
+        colour = COLOURS[c % len(COLOURS)]
+        if r.occupancy is not None and r.basis.shape[0] == 2 and np.allclose(np.abs(r.basis), np.eye(3)[[0, 2]]):
+            grid, o, h = r.occupancy
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, f"[{key[0]}] {r.label}, m = {r.mass:g} kg: {r.measure}")
+        else:
+            step = max(1, len(r.com) // 20000)
+            loc = r.com[::step]
+            ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour,
+                       label=f"[{key[0]}] {r.label}, m = {r.mass:g} kg")
+    ax.axvline(0.0, color="k", lw=0.6, ls="--", label="thrust axis")
+    ax.set_xlabel("x_cm in B [m]")
+    ax.set_ylabel("z_cm in B [m]")
+    ax.legend(fontsize=6, loc="lower left")
+    ax.set_title(title or f"CoG regions of {result.platform_name}")
+    return ax
+
+
+def plot_balance(result: BalanceResult, ax=None, axes=None):
+    """Slider position r* that balances the CoG over two joints (NaN where none within the limits), or |offset|."""
+    ax = _new_ax(ax)
+    g = result.grid
+    free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
+    axes = axes or _two_longest(g, free)
+    sl = _slice_index(g, axes)
+    if result.slider is not None:
+        vals = np.where(result.balanced, result.r_star, np.nan).reshape(g.shape)[sl]
+        label = f"r* of {result.slider} [m] (blank: not balanced)"
+    else:
+        vals = result.offset_clamped.reshape(g.shape)[sl]
+        label = "|CoG offset| [m]"
+    a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
+    im = ax.pcolormesh(a0, a1, vals.T, shading="nearest", cmap="coolwarm")
+    ax.figure.colorbar(im, ax=ax, label=label)
+    ax.set_xlabel(f"{g.names[axes[0]]}")
+    ax.set_ylabel(f"{g.names[axes[1]]}")
+    ax.set_title(f"CoG on the thrust axis: {100 * result.fraction_configurations:.1f}% of the grid", fontsize=9)
+    return ax
+
+
+def plot_balanced_workspace(result: BalanceResult, ax=None):
+    """End-effector positions reachable with the CoG balanced (in the x-z plane of B)."""
+    ax = _new_ax(ax)
+    ok = result.balanced
+    step = max(1, int(ok.sum()) // 40000)
+    ax.scatter(result.ee_body[ok][::step, 0], result.ee_body[ok][::step, 2], s=0.3, color="tab:green", label="CoG balanced")
+    if result.fraction_workspace is not None:
+        ax.text(0.02, 0.98, f"{100 * result.fraction_workspace.value:.2f} +- {100 * result.fraction_workspace.error:.2g}% of the workspace",
+                transform=ax.transAxes, va="top", fontsize=8)
+    ax.set_xlabel("x_B [m]")
+    ax.set_ylabel("z_B [m]")
+    ax.set_aspect("equal")
+    ax.set_title("end-effector positions with the CoG on the thrust axis", fontsize=9)
+    return ax
+
+
+def cog_figure(result: CoGResult, balance: BalanceResult | None = None):
+    """CoG regions per variant and payload (Thesis Fig. 6.31/6.32/6.47/6.48) and the balance map."""
+    plt = _plt()
+    nv = len(result.variants)
+    n = nv + (2 if balance is not None else 0)
+    ncol = 2 if n > 2 else n
+    nrow = (n + ncol - 1) // ncol
+    fig = plt.figure(figsize=(6.5 * ncol, 5.2 * nrow))
+    for v in range(nv):
+        keys = [k for k in result.regions if k[0] == v]
+        plot_cog_regions(result, fig.add_subplot(nrow, ncol, v + 1), keys, title=f"CoG, {result.regions[keys[0]].label}")
+    if balance is not None:
+        plot_balance(balance, fig.add_subplot(nrow, ncol, nv + 1))
+        plot_balanced_workspace(balance, fig.add_subplot(nrow, ncol, nv + 2))
+    fig.suptitle(f"{result.platform_name}: CoG regions (Thesis (3.78), (6.29)-(6.33))")
+    fig.tight_layout()
+    return fig
+
+
+# ================================================================================ singularity
+def _two_longest(g, free):
+    order = sorted(free, key=lambda a: -len(g.axes[a]))
+    return tuple(sorted(order[:2])) if len(order) >= 2 else (order[0], order[0])
+
+
+def _slice_index(g, axes, at=None):
+    idx = []
+    for a in range(len(g.shape)):
+        if a in axes:
+            idx.append(slice(None))
+        else:
+            idx.append(len(g.axes[a]) // 2 if at is None or a not in at else int(np.argmin(np.abs(g.axes[a] - at[a]))))
+    return tuple(idx)
+
+
+def singularity_figure(result: SingularityResult, reference=None, system_axis=None):
+    """(a) det J_t (or manipulability) over two joints with the singular set, (b) distance to it,
+    (c) the thesis's det(J J^T) (4.44) against one joint at three values of another, with
+    ``reference`` curves {label: (x, y)} (e.g. the printed (4.46)-(4.48)) drawn on top."""
+    plt = _plt()
+    g = result.grid
+    free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
+    axes = _two_longest(g, free)
+    sl = _slice_index(g, axes)
+    fig, axs = plt.subplots(1, 3, figsize=(16, 4.6))
+    a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+    if result.det_task is not None:
+        vals, label = result.det_task.reshape(g.shape)[sl], f"det J_t [m^{result.rank}]"
+        lim = np.abs(vals).max()
+        im = axs[0].pcolormesh(a0, a1, vals.T, shading="nearest", cmap="RdBu_r", vmin=-lim, vmax=lim)
+        axs[0].contour(a0, a1, vals.T, levels=[0.0], colors="k", linewidths=1.2)
+    else:
+        vals, label = result.manipulability.reshape(g.shape)[sl], f"manipulability [m^{result.rank}]"
+        im = axs[0].pcolormesh(a0, a1, vals.T, shading="nearest", cmap="viridis")
+        S = result.singular.reshape(g.shape)[sl]
+        if S.any():
+            axs[0].contour(a0, a1, S.T.astype(float), levels=[0.5], colors="w", linewidths=1.0)
+    fig.colorbar(im, ax=axs[0], label=label)
+    axs[0].set_title(f"task {result.task} {list(result.rows)}" + (f" ({others})" if others else ""), fontsize=8)
+    D = result.distance.reshape(g.shape)[sl]
+    im = axs[1].pcolormesh(a0, a1, np.where(np.isfinite(D), D, np.nan).T, shading="nearest", cmap="magma")
+    fig.colorbar(im, ax=axs[1], label="distance to the singular set [rad or m/L]")
+    axs[1].set_title(f"distance to the singular set (L = {result.length:.3g} m)", fontsize=8)
+    for ax in axs[:2]:
+        ax.set_xlabel(g.names[axes[0]])
+        ax.set_ylabel(g.names[axes[1]])
+    # (c): det_system along one joint, at the first / middle / last value of another
+    sa = system_axis if system_axis is not None else axes[0] if len(free) < 3 else free[1]
+    va = next((a for a in free if a != sa), sa)
+    for j, idx in enumerate((0, len(g.axes[va]) // 2, len(g.axes[va]) - 1)):
+        s2 = _slice_index(g, (sa,), {va: g.axes[va][idx]})
+        y = result.det_system.reshape(g.shape)[s2]
+        axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g}")
+    for j, (lab, (x, y)) in enumerate((reference or {}).items()):
+        axs[2].plot(x, y, color=COLOURS[j], ls="--", lw=1.0, label=lab)
+    axs[2].set_xlabel(g.names[sa])
+    axs[2].set_ylabel("det(J J^T), J of (4.12) at zero Euler angles")
+    axs[2].legend(fontsize=7)
+    axs[2].set_title("the system's det(J J^T) (Thesis (4.44)): never 0", fontsize=8)
+    fig.suptitle(f"{result.platform_name}: singularities (Thesis (4.42)-(4.48))")
+    fig.tight_layout()
+    return fig
+
+
+# ================================================================================ hover / capacity
+def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, reducer="max"):
+    from ._common import best_per_cell
+
+    best, _, o = best_per_cell(coords, values if reducer == "max" else -values, h)
+    if reducer != "max":
+        best = -best
+    if best.ndim == 3:  # project a 3-D map onto x-z: best over y (columns without a sample stay NaN)
+        with np.errstate(invalid="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            best = np.nanmax(best, axis=1) if reducer == "max" else np.nanmin(best, axis=1)
+        o = o[[0, 2]]
+    extent = (o[0], o[0] + best.shape[0] * h, o[1], o[1] + best.shape[1] * h)
+    im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+    ax.figure.colorbar(im, ax=ax, label=label)
+    ax.set_aspect("equal")
+    return im
+
+
+def _plane(ee):
+    from ._common import affine_span, default_map_cell
+
+    _, basis = affine_span(ee)
+    coords = ee @ basis.T
+    return coords, basis, default_map_cell(coords, 80)
+
+
+def hover_figure(result: HoverResult, mass_index: int = 0):
+    """Best thrust margin and attitude authority per workspace cell, infeasible cells, feasible share vs payload."""
+    plt = _plt()
+    coords, basis, h = _plane(result.ee_body)
+    names = _axis_names(basis) if basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
+    k = mass_index
+    fig, axs = plt.subplots(2, 3, figsize=(16, 9))
+    _workspace_map(axs[0, 0], coords, result.thrust_margin[k], h, "viridis", "best thrust margin [N]")
+    axs[0, 0].set_title(f"thrust margin (payload {result.masses[k]:g} kg, best configuration per cell)", fontsize=8)
+    for j, axis in enumerate(("roll", "pitch", "yaw")):
+        ax = axs[0, 1] if j == 0 else axs[0, 2] if j == 1 else axs[1, 0]
+        _workspace_map(ax, coords, result.authority[k, :, j], h, "cividis", f"{axis} authority left [N m]")
+        ax.set_title(f"largest {axis} torque still available", fontsize=8)
+    kk = len(result.masses) - 1
+    feas = result.feasible[kk].astype(float)
+    _workspace_map(axs[1, 1], coords, feas, h, "RdYlGn", "hover-feasible (1) / impossible (0)", 0, 1)
+    axs[1, 1].set_title(f"where hovering is possible with {result.masses[kk]:g} kg (some configuration)", fontsize=8)
+    for ax in list(axs[0]) + [axs[1, 0], axs[1, 1]]:
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1] if len(names) > 1 else "")
+    ax = axs[1, 2]
+    ax.plot(result.masses, 100 * result.feasible_fraction, "o-", label="hover-feasible")
+    ax.plot(result.masses, 100 * result.rotor_ok.mean(axis=1), "s--", label="rotors within bounds")
+    ax.plot(result.masses, 100 * result.effort_ok.mean(axis=1), "^--", label="efforts within limits")
+    ax.set_xlabel("payload [kg]")
+    ax.set_ylabel("share of the configurations [%]")
+    ax.legend(fontsize=7)
+    ax.set_title(f"payload envelope; collective limit {result.payload.collective:.3g} kg", fontsize=8)
+    fig.suptitle(f"{result.platform_name}: hover feasibility and thrust margin")
+    fig.tight_layout()
+    return fig
+
+
+def wrench_set_figure(result: HoverResult, index: int | None = None):
+    """2-D sections of the rotors' wrench set through the hover wrench of one configuration (default: the worst)."""
+    from scipy.spatial import HalfspaceIntersection
+
+    plt = _plt()
+    W = result.wrench_set
+    i = int(np.argmin(result.thrust_margin[0])) if index is None else index
+    w0 = result.hover_wrench[i]
+    pairs = [(0, 1), (3, 4), (2, 5)] if W.rank == 6 else [(3, 4), (2, 5), (3, 5)]
+    names = ("f_x [N]", "f_y [N]", "f_z [N]", "tau_x [N m]", "tau_y [N m]", "tau_z [N m]")
+    fig, axs = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5))
+    for ax, (a, b) in zip(axs, pairs):
+        E = np.zeros((2, 6))
+        E[0, a] = E[1, b] = 1.0
+        A = W.normals @ (E @ W.basis.T).T  # facets in the section coordinates (t_a, t_b)
+        off = W.offsets - W.normals @ (W.basis @ w0)
+        hs = np.column_stack([A, -off])
+        try:
+            poly = HalfspaceIntersection(hs, np.zeros(2)).intersections
+        except Exception:  # the hover point is not interior: nothing to draw
+            continue
+        ctr = poly.mean(axis=0)
+        order = np.argsort(np.arctan2(poly[:, 1] - ctr[1], poly[:, 0] - ctr[0]))
+        P = poly[order] + w0[[a, b]]
+        ax.fill(P[:, 0], P[:, 1], alpha=0.3)
+        ax.plot(*w0[[a, b]], "k+", ms=12, label="hover wrench")
+        ax.set_xlabel(names[a])
+        ax.set_ylabel(names[b])
+        ax.legend(fontsize=7)
+    q = result.grid.configurations(i, i + 1)[0]
+    fig.suptitle(f"{result.platform_name}: wrench set (rank {W.rank}) sections at q_arm = {np.round(q, 3).tolist()}", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def capacity_figure(result: CapacityResult):
+    """Thesis Fig. 6.46 generalised: best payload per workspace cell and the factor that limits it."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    plt = _plt()
+    fig, axs = plt.subplots(1, 2, figsize=(13, 5))
+    h = result.cell
+    grid = result.map_capacity
+    o = result.map_origin
+    lim = result.map_limiting.astype(float)
+    lim[lim < 0] = np.nan
+    if grid.ndim == 3:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)  # columns without a sample stay NaN
+            grid = np.nanmax(grid, axis=1)
+            lim = np.nanmin(lim, axis=1)
+        o = o[[0, 2]]
+    extent = (o[0], o[0] + grid.shape[0] * h, o[1], o[1] + grid.shape[1] * h)
+    shift = result.origin @ result.basis.T if result.basis.shape[0] == 2 else np.zeros(2)
+    extent = (extent[0] + shift[0], extent[1] + shift[0], extent[2] + shift[1], extent[3] + shift[1])
+    im = axs[0].imshow(grid.T, origin="lower", extent=extent, cmap="viridis", interpolation="nearest")
+    fig.colorbar(im, ax=axs[0], label="largest payload [kg]")
+    axs[0].set_title(f"payload capacity (reserve {np.round(result.torque_reserve, 3).tolist()} N m); collective {result.m_thrust:.3g} kg",
+                     fontsize=8)
+    cmap = ListedColormap(["tab:blue", "tab:orange", "tab:red", "0.3"])
+    im = axs[1].imshow(lim.T, origin="lower", extent=extent, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
+                       interpolation="nearest")
+    fr = result.map_fractions()
+    for k, name in enumerate(LIMITS):
+        axs[1].fill([], [], color=cmap(k), label=f"{name} ({100 * fr[name]:.1f}%)")
+    axs[1].legend(fontsize=7, loc="lower left")
+    axs[1].set_title("limiting factor", fontsize=8)
+    names = _axis_names(result.basis) if result.basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
+    for ax in axs:
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1] if len(names) > 1 else "")
+        ax.set_aspect("equal")
+    fig.suptitle(f"{result.platform_name}: payload capacity over the workspace (Thesis Fig. 6.46 generalised)")
+    fig.tight_layout()
+    return fig
+
+
+def opspace_figure(result: OpSpaceMap):
+    """Effective end-effector mass along x and z, and the conditioning of Lambda, over two joints (others at mid-range)."""
+    plt = _plt()
+    g = result.grid
+    free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
+    axes = _two_longest(g, free)
+    sl = _slice_index(g, axes)
+    a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
+    fig, axs = plt.subplots(1, 3, figsize=(16, 4.6))
+    panels = [(result.mass_xyz[:, 0], "effective mass along x [kg]", "plasma"),
+              (result.mass_xyz[:, 2], "effective mass along z [kg]", "plasma"),
+              (np.log10(result.condition), "log10 cond(Lambda)", "viridis")]
+    for ax, (vals, label, cmap) in zip(axs, panels):
+        im = ax.pcolormesh(a0, a1, vals.reshape(g.shape)[sl].T, shading="nearest", cmap=cmap)
+        fig.colorbar(im, ax=ax, label=label)
+        ax.set_xlabel(g.names[axes[0]])
+        ax.set_ylabel(g.names[axes[1]])
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+    fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
+                 + (f", {others}" if others else ""))
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,210 @@
+"""Singularities of the arm over its joint space: det(J J^T), manipulability, condition number, distance.
+
+Thesis Sec. 4.4.3 studies det(J^gamma) = det(J J^T) (4.42)-(4.45) of the whole system's 6 x 9
+Jacobian (4.12) at zero Euler angles and finds it never vanishes ((4.46)-(4.48): at least 6.02
+for r0 in {-0.04, 0, 0.04} m): the base's six coordinates alone span every end-effector twist,
+so the *system* is never singular.  What a designer needs is where the *arm* loses mobility,
+which the thesis does not map.  :func:`singularity` computes over the joint grid:
+
+* ``det_system``: the thesis's det(J J^T) with the 6 x (6 + n) Jacobian at zero Euler angles
+  (Thesis (4.44); J = [[I, -hat(p_eb), J_v], [0, I, J_w]] in B);
+* the arm's task Jacobian J_t (rows of the arm Jacobian in B, (4.26) for the Q-PRR): ``task``
+  "pose" (all six rows, the angular ones times a length ``length`` so that every singular
+  value is in metres) or "position"; rows that vanish at every configuration (y, omega_x,
+  omega_z of a planar arm) are dropped.  Its singular values sigma_1 >= ... >= sigma_r (r the
+  generic rank), the manipulability w = prod sigma_i (Yoshikawa: sqrt(det(J_t J_t^T)) for a
+  full-row-rank J_t), the condition number sigma_1 / sigma_r;
+* the singular set: where the rank drops.  When J_t is square (the Q-PRR's rows x, z, omega_y
+  against r0, theta2, theta3: det = -L d2 s2, (4.28)) the set is the zero level of det J_t,
+  found exactly where det changes sign between grid neighbours; otherwise the configurations
+  with sigma_r / sigma_1 < ``tol``;
+* the distance from every configuration to the singular set in joint space (revolute joints in
+  rad, prismatic joints in metres divided by ``length``), by an exact Euclidean distance
+  transform of the grid.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import ndimage
+
+from ..errors import UnknownNameError
+from ..platform import Platform
+from ._common import (
+    JointGrid,
+    Status,
+    check_int,
+    check_platform,
+    check_pos,
+    check_progress,
+    joint_ranges,
+    lever_lengths,
+    make_grid,
+)
+from .chain import ArmChain
+
+TASKS = ("pose", "position")
+
+
+@dataclass(frozen=True)
+class SingularityResult:
+    """Singularity measures over ``grid`` (n configurations; see the module docstring).
+
+    ``rows``: the task rows kept (names of [v_x, v_y, v_z, w_x, w_y, w_z] in B); ``length`` [m]:
+    scale of the angular rows and of the prismatic joints in distances; ``rank``: generic rank of
+    J_t; ``sigma`` (n, r) [m]; ``manipulability`` (n,) [m^r]; ``condition`` (n,); ``det_task``
+    (n,) [m^r] signed det J_t (square J_t only, else None); ``det_system`` (n,) the thesis's
+    det(J J^T) (4.44) [mixed units, as printed]; ``singular`` (n,) grid points next to the
+    singular set; ``distance`` (n,) to it (inf if the set is empty).
+    """
+
+    platform_name: str
+    task: str
+    grid: JointGrid
+    rows: tuple[str, ...]
+    length: float
+    rank: int
+    sigma: np.ndarray
+    manipulability: np.ndarray
+    condition: np.ndarray
+    det_task: np.ndarray | None
+    det_system: np.ndarray
+    singular: np.ndarray
+    distance: np.ndarray
+    status: Status
+    reason: str
+
+    def summary(self) -> str:
+        g = self.grid
+        i = int(np.argmin(self.det_system))
+        lines = [f"singularities of {self.platform_name}: task {self.task!r} rows {list(self.rows)}, generic rank {self.rank}, "
+                 f"length scale {self.length:.4g} m, {g.size} configurations",
+                 f"  manipulability in [{self.manipulability.min():.4g}, {self.manipulability.max():.4g}] m^{self.rank}; "
+                 f"condition number median {np.median(self.condition):.4g}",
+                 f"  singular set: {100 * self.singular.mean():.2f}% of the grid points next to it; "
+                 f"median distance {np.median(self.distance):.4g} (rad or m/length)",
+                 f"  thesis det(J J^T) (4.44): min {self.det_system[i]:.6g} at q_arm = "
+                 f"{np.round(g.configurations(i, i + 1)[0], 4).tolist()}, max {self.det_system.max():.6g}"]
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+ROW_NAMES = ("v_x", "v_y", "v_z", "w_x", "w_y", "w_z")
+
+
+def system_det(J_arm: np.ndarray, p_eb: np.ndarray) -> np.ndarray:
+    """det(J J^T) of the 6 x (6 + n) system Jacobian at zero Euler angles, Thesis (4.42)-(4.44).
+
+    J = [[I, -hat(p_eb), J_v], [0, I, J_w]] with the arm Jacobian ``J_arm`` (m, 6, n) and the
+    end effector ``p_eb`` (m, 3) in B (= world at zero Euler angles, base at the origin).
+    """
+    m = J_arm.shape[0]
+    H = np.zeros((m, 3, 3))
+    H[:, 0, 1], H[:, 0, 2], H[:, 1, 2] = -p_eb[:, 2], p_eb[:, 1], -p_eb[:, 0]
+    H[:, 1, 0], H[:, 2, 0], H[:, 2, 1] = p_eb[:, 2], -p_eb[:, 1], p_eb[:, 0]
+    A = J_arm @ J_arm.transpose(0, 2, 1)
+    A[:, 0:3, 0:3] += np.eye(3) + H @ H.transpose(0, 2, 1)
+    A[:, 0:3, 3:6] -= H
+    A[:, 3:6, 0:3] -= H.transpose(0, 2, 1)
+    A[:, 3:6, 3:6] += np.eye(3)
+    return np.linalg.det(A)
+
+
+def singularity(
+    platform: Platform,
+    *,
+    n_samples: int = 200_000,
+    task: str = "pose",
+    length: float | None = None,
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    frame=None,
+    tol: float = 1e-3,
+    progress=None,
+) -> SingularityResult:
+    """Singularity maps of ``frame`` (default: the end effector) over the arm's joint grid.
+
+    Parameters
+    ----------
+    task : "pose" (six rows, angular ones scaled by ``length``) or "position".
+    length : [m] (default: the arm's reach, the largest revolute lever of
+        :func:`qprr.analysis._common.lever_lengths`; 1 m for an arm without revolute joints).
+    locked, ranges : as in :func:`qprr.analysis.workspace`.
+    tol : sigma_r / sigma_1 below which a configuration counts as singular (non-square J_t).
+    progress : None, True (stderr) or a callable (fraction, message).
+    """
+    check_platform(platform)
+    check_int("n_samples", n_samples, 8)
+    if task not in TASKS:
+        raise UnknownNameError("singularity task", task, TASKS)
+    tol = check_pos("tol", tol)
+    progress = check_progress(progress)
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    grid = make_grid(platform, n_samples, locked, ranges)
+    if length is None:
+        levers = lever_lengths(platform, joint_ranges(platform, ranges))
+        rev = [levers[i] for i, j in enumerate(platform.arm) if j.kind == "revolute"]
+        length = float(max(rev)) if rev and max(rev) > 0 else 1.0
+    length = check_pos("length", length)
+    chain = ArmChain(platform)
+    free = [a for a in range(platform.n_arm) if grid.shape[a] > 1]  # locked joints are no columns of J_t
+    n, na = grid.size, len(free)
+    rows_all = list(range(6)) if task == "pose" else [0, 1, 2]
+    # rows that vanish everywhere: probe a few hundred configurations spread over the grid
+    probe = grid.configurations(0, n)[:: max(1, n // 512)]
+    Jp = chain.jacobian(chain.pose(probe), fid)[:, :, free]
+    scale = np.abs(Jp).max()
+    rows = [r for r in rows_all if np.abs(Jp[:, r, :]).max() > 1e-12 * max(scale, 1e-300)]
+    w_rows = np.array([1.0 if r < 3 else length for r in rows])
+    k = len(rows)
+    sig2 = np.empty((n, min(k, na)))
+    det_task = np.empty(n) if k == na else None
+    det_sys = np.empty(n)
+    for start, q in grid.chunks():
+        sl = slice(start, start + len(q))
+        pose = chain.pose(q)
+        J = chain.jacobian(pose, fid)
+        p = chain.frame_position(pose, fid)
+        det_sys[sl] = system_det(J, p)
+        Jt = J[:, rows, :][:, :, free] * w_rows[None, :, None]
+        sig2[sl] = np.linalg.svd(Jt, compute_uv=False) ** 2  # not eigenvalues of J J^T: they lose the small sigma
+        if det_task is not None:
+            det_task[sl] = np.linalg.det(Jt)
+        if progress:
+            progress((start + len(q)) / n, "singularity map")
+    sigma = np.sqrt(np.clip(sig2, 0.0, None))
+    rank = int(np.max(np.sum(sigma > 1e-9 * np.maximum(sigma[:, :1], 1e-300), axis=1)))
+    sig_r = sigma[:, :rank]
+    manip = np.prod(sig_r, axis=1)
+    with np.errstate(divide="ignore"):
+        cond = np.where(sig_r[:, -1] > 0, sig_r[:, 0] / sig_r[:, -1], np.inf)
+    shape = grid.shape
+    free_axes = [a for a in range(len(shape)) if shape[a] > 1]
+    sq_shape = tuple(shape[a] for a in free_axes)
+    if det_task is not None and rank == k:
+        D = det_task.reshape(sq_shape)
+        sing = np.abs(D) <= 1e-12 * np.abs(D).max()
+        for ax in range(D.ndim):  # a sign change between neighbours: both sides are next to the zero set
+            a = np.take(D, range(D.shape[ax] - 1), axis=ax)
+            b = np.take(D, range(1, D.shape[ax]), axis=ax)
+            ch = (a * b) < 0
+            sing |= np.pad(ch, [(0, 1) if i == ax else (0, 0) for i in range(D.ndim)])
+            sing |= np.pad(ch, [(1, 0) if i == ax else (0, 0) for i in range(D.ndim)])
+    else:
+        sing = (sig_r[:, -1] <= tol * sig_r[:, 0]).reshape(sq_shape)
+    spacing = []
+    for a in free_axes:
+        step = grid.axes[a][1] - grid.axes[a][0]
+        spacing.append(step / length if platform.arm[a].kind == "prismatic" else step)
+    if sing.any():
+        dist = ndimage.distance_transform_edt(~sing, sampling=spacing).reshape(-1)
+        status, reason = Status.OK, ""
+    else:
+        dist = np.full(n, np.inf)
+        status, reason = Status.OK, "no singular configuration on the grid (distance = inf)"
+    return SingularityResult(platform.name, task, grid, tuple(ROW_NAMES[r] for r in rows), length, rank, sig_r, manip, cond,
+                             det_task, det_sys, sing.reshape(-1), dist, status, reason)

@@ -1,0 +1,305 @@
+"""Workspace of the end effector: in the base frame B and, under hover, about the base (Thesis (3.1)-(3.3)).
+
+Thesis Sec. 3.2.1.3: the reachable set is the image W_eb = W_e(q_e) (3.2) of the joint box
+q_im <= q_i <= q_iM (3.1).  (3.3) writes the whole workspace as W_e = W_b U W_eb: the base
+positions W_b are unbounded, so what characterises a design is W_eb.  Two forms here:
+
+* **body frame**: the end-effector positions in B over the joint box (the base held still);
+* **under hover** (world axes, about the base position): a multirotor hovers level and may turn
+  about the vertical freely, so W_eb^hover is the body-frame set swept by a full turn of yaw
+  about z_B: the solid of revolution of the profile (rho = |p_xy|, z) (Thesis (3.68),
+  (3.82)).  Its volume is the number a designer compares.
+
+Each region is computed with every joint free and with chosen joints locked (the thesis's
+Fig. 3.14/3.15: with and without the slider r0); the gain of the free joints is reported as a
+ratio and a difference, with error bars.  Measures come from :mod:`qprr.analysis.voxels`
+(cell counting over the linearised images of the joint-grid cells, error bar from the
+convergence in the grid size).  A planar arm (all joints moving the end effector in one
+plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+from ..platform import Platform
+from ._common import (
+    JointGrid,
+    Status,
+    affine_span,
+    check_int,
+    check_locked,
+    check_platform,
+    check_progress,
+    make_grid,
+)
+from .chain import ArmChain
+from .voxels import MeasureEstimate, display_occupancy, estimate_measure
+
+
+@dataclass(frozen=True)
+class Ratio:
+    """a / b with its error bar (first-order propagation of the two error bars)."""
+
+    value: float
+    error: float
+
+    @staticmethod
+    def of(a: MeasureEstimate, b: MeasureEstimate) -> Ratio:
+        if b.measure <= 0.0:
+            return Ratio(float("inf"), float("nan"))
+        r = a.measure / b.measure
+        rel = np.hypot(a.error / a.measure if a.measure else 0.0, b.error / b.measure)
+        return Ratio(float(r), float(r * rel))
+
+
+@dataclass(frozen=True)
+class WorkspaceRegion:
+    """The workspace for one set of locked joints.
+
+    ``points_body`` (n, 3) end-effector positions in B [m] on the joint ``grid`` (C order);
+    ``origin``, ``basis`` (dim, 3): the affine hull of the set in B (a planar arm: basis (x_B,
+    z_B)); ``coords`` (n, dim) the points in that basis; ``measure`` its length/area/volume in B;
+    ``hover_volume`` the volume swept under hover (yaw about z_B), None if not asked;
+    ``boundary``: closed polylines (m, 3) in B of the region's outline (planar sets) or the
+    centres (m, 3) of its boundary cells (3-D sets); ``occupancy``: (cells covered, origin, cell
+    side) in ``coords``: the cells the measure counted (the set :func:`reachable` tests);
+    ``outline``: the same or, for a redundant arm, the finer cells its samples fill without
+    holes (:func:`qprr.analysis.voxels.display_occupancy`), which ``boundary`` follows;
+    ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
+    """
+
+    label: str
+    locked: dict
+    grid: JointGrid
+    points_body: np.ndarray
+    origin: np.ndarray
+    basis: np.ndarray
+    coords: np.ndarray
+    measure: MeasureEstimate | None
+    hover_volume: MeasureEstimate | None
+    boundary: list
+    occupancy: tuple | None
+    profile: np.ndarray
+    hover_occupancy: tuple | None
+    outline: tuple | None = None
+
+    @property
+    def dim(self) -> int:
+        return int(self.basis.shape[0])
+
+
+@dataclass(frozen=True)
+class WorkspaceResult:
+    """Workspace of ``frame`` of ``platform_name`` (see the module docstring).
+
+    ``regions[0]`` has every joint free (apart from ``locked``); the others lock the joints of
+    each variant.  ``gain[i]`` (i >= 1): regions[0] over regions[i] in B (``Ratio``) and
+    ``gain_hover[i]`` under hover; ``difference[i]`` = measure(regions[0]) - measure(regions[i])
+    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.
+    """
+
+    platform_name: str
+    frame: str
+    regions: tuple[WorkspaceRegion, ...]
+    gain: dict = field(default_factory=dict)
+    gain_hover: dict = field(default_factory=dict)
+    difference: dict = field(default_factory=dict)
+    status: Status = Status.OK
+    reason: str = ""
+
+    def summary(self) -> str:
+        """A few lines with the measures and the gains."""
+        lines = [f"workspace of {self.frame!r} on {self.platform_name}"]
+        for i, r in enumerate(self.regions):
+            m = str(r.measure) if r.measure is not None else "n/a"
+            hv = f"; under hover (yaw free) {r.hover_volume}" if r.hover_volume is not None else ""
+            lines.append(f"  [{i}] {r.label}: {r.grid.size} configurations, in B {m}{hv}")
+        for i in self.gain:
+            g, d = self.gain[i], self.difference[i]
+            lines.append(f"  gain of [0] over [{i}] in B: x{g.value:.4f} +- {g.error:.2g} (+{d[0]:.5g} +- {d[1]:.2g} "
+                         f"{self.regions[0].measure.unit})")
+            if i in self.gain_hover:
+                gh = self.gain_hover[i]
+                lines.append(f"  gain of [0] over [{i}] under hover: x{gh.value:.4f} +- {gh.error:.2g}")
+        if self.reason:
+            lines.append(f"  status {self.status.value}: {self.reason}")
+        return "\n".join(lines)
+
+
+def default_variants(platform: Platform) -> list[dict[str, float]]:
+    """One variant per prismatic joint, locked at 0 (or the limit nearest 0): "without the slider"."""
+    out = []
+    for j in platform.arm:
+        if j.kind == "prismatic":
+            out.append({j.name: float(np.clip(0.0, j.lower, j.upper))})
+    return out
+
+
+def _label(locked: Mapping[str, float]) -> str:
+    if not locked:
+        return "all joints free"
+    return ", ".join(f"{k} locked at {v:g}" for k, v in locked.items())
+
+
+def workspace(
+    platform: Platform,
+    *,
+    n_samples: int = 1_000_000,
+    variants: Sequence[Mapping[str, float]] | None = None,
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    frame=None,
+    hover: bool = True,
+    n_shifts: int = 4,
+    seed: int = 0,
+    progress=None,
+) -> WorkspaceResult:
+    """The workspace of ``frame`` (default: the end effector), with every joint free and per variant.
+
+    Parameters
+    ----------
+    platform : the platform (any serial arm of prismatic/revolute joints).
+    n_samples : joint-grid size per region (balanced grid, :func:`qprr.analysis._common.make_grid`).
+    variants : sets of joints to lock, ``[{name: value}, ...]`` [m or rad]; default: each
+        prismatic joint locked at 0 (the workspace "without the slider").
+    locked : joints locked in every region.
+    ranges : {name: (low, high)} narrower joint ranges than the limits (needed for a prismatic
+        joint without limits).
+    frame : the frame whose origin is mapped (name or id; default the end effector).
+    hover : also compute the volume swept under hover (yaw free about z_B).
+    n_shifts, seed : counting-grid shifts of the measure estimator (:mod:`qprr.analysis.voxels`).
+    progress : None, True (stderr) or a callable (fraction, message).
+
+    Returns
+    -------
+    WorkspaceResult
+    """
+    check_platform(platform)
+    n_samples = check_int("n_samples", n_samples, 8)
+    check_int("n_shifts", n_shifts, 2)
+    base_locked = check_locked(platform, locked)
+    if variants is None:
+        variants = default_variants(platform)
+    variants = [check_locked(platform, v) for v in variants]
+    progress = check_progress(progress)
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    chain = ArmChain(platform)
+    sets = [dict(base_locked)] + [{**base_locked, **v} for v in variants]
+    regions, reasons = [], []
+    for i, lk in enumerate(sets):
+        grid = make_grid(platform, n_samples, lk, ranges)
+        pts = np.empty((grid.size, 3))
+        for start, q in grid.chunks():
+            pts[start:start + len(q)] = chain.frame_position(chain.pose(q), fid)
+            if progress:
+                progress((i + (start + len(q)) / grid.size * 0.3) / len(sets), f"workspace [{i}] {_label(lk)}")
+        region, why = _region(pts, grid, lk, hover, n_shifts, seed)
+        if why:
+            reasons.append(f"[{i}] {why}")
+        regions.append(region)
+        if progress:
+            progress((i + 1) / len(sets), f"workspace [{i}] {_label(lk)}")
+    gain, gain_hover, diff = {}, {}, {}
+    r0 = regions[0]
+    for i, r in enumerate(regions[1:], start=1):
+        if r0.measure is not None and r.measure is not None and r0.measure.dim == r.measure.dim:
+            gain[i] = Ratio.of(r0.measure, r.measure)
+            diff[i] = (r0.measure.measure - r.measure.measure, float(np.hypot(r0.measure.error, r.measure.error)))
+        if r0.hover_volume is not None and r.hover_volume is not None:
+            gain_hover[i] = Ratio.of(r0.hover_volume, r.hover_volume)
+    status = Status.PARTIAL if reasons else Status.OK
+    return WorkspaceResult(platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status,
+                           "; ".join(reasons))
+
+
+def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int):
+    origin, basis = affine_span(pts)
+    coords = (pts - origin) @ basis.T if basis.shape[0] else np.zeros((pts.shape[0], 0))
+    free = sum(1 for n in grid.shape if n > 1)
+    shape = tuple(n for n in grid.shape if n > 1)
+    why = ""
+    measure = occ = outline = None
+    boundary: list = []
+    dim = basis.shape[0]
+    if dim == 0:
+        why = "the frame does not move (a point)"
+    elif free < dim:
+        why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
+    else:
+        measure, occ = estimate_measure(coords.reshape(*shape, dim), n_shifts=n_shifts, seed=seed, return_occupancy=True)
+        outline = occ
+        if free > dim:  # redundant: the samples outline the set more finely than the counting cells
+            fine = display_occupancy(coords)
+            outline = fine if fine[2] < occ[2] else occ
+        boundary = _boundary(outline, origin, basis)
+    profile = hover_profile(pts, origin, basis)
+    hv = hocc = None
+    if hover:
+        pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
+        if pdim == 2 and free >= 2:
+            hv, hocc = estimate_measure(profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True, return_occupancy=True)
+            if free > 2:
+                fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
+                hocc = fine if fine[2] < hocc[2] else hocc
+        elif not why:
+            why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
+    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc,
+                           outline), why
+
+
+def hover_profile(pts: np.ndarray, origin: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """(n, 2) profile (s, z) of points in B turning about z_B: |s| = rho = |p_xy|.
+
+    For a planar set whose plane contains the z_B axis (the Q-PRR's x-z plane) s is the signed
+    in-plane horizontal coordinate, so the profile has no fold where the arm crosses the axis;
+    otherwise s = rho.
+    """
+    if basis.shape[0] == 2:
+        normal = np.cross(basis[0], basis[1])
+        normal /= np.linalg.norm(normal)
+        if abs(normal[2]) < 1e-12 and abs(float(origin @ normal)) < 1e-12:  # the plane contains the z axis
+            u = np.array([normal[1], -normal[0], 0.0])
+            return np.column_stack([pts @ u, pts[:, 2]])
+    return np.column_stack([np.hypot(pts[:, 0], pts[:, 1]), pts[:, 2]])
+
+
+def _boundary(occ, origin: np.ndarray, basis: np.ndarray) -> list:
+    """Outline of the covered cells: closed polylines in B (2-D sets), boundary-cell centres (3-D), ends (1-D)."""
+    grid, o, h = occ
+    d = basis.shape[0]
+    if d == 2:
+        import contourpy
+
+        x = o[0] + (np.arange(grid.shape[0]) + 0.5) * h
+        y = o[1] + (np.arange(grid.shape[1]) + 0.5) * h
+        gen = contourpy.contour_generator(x, y, grid.T.astype(float), line_type=contourpy.LineType.Separate)
+        lines = gen.lines(0.5)
+        return [origin + np.asarray(ln) @ basis for ln in lines if len(ln) > 2]
+    from .voxels import boundary_cells
+
+    cells = np.argwhere(boundary_cells(grid))
+    centres = o + (cells + 0.5) * h
+    if d == 1:
+        return [origin + np.array([centres.min(axis=0), centres.max(axis=0)]) @ basis]
+    return [origin + centres @ basis]
+
+
+def reachable(result: WorkspaceResult, points_body, region: int = 0) -> np.ndarray:
+    """Which of ``points_body`` (m, 3) [m, B] lie in the covered cells of ``region`` (and in its hull, to 1e-9 m)."""
+    r = result.regions[region]
+    if r.occupancy is None:
+        raise InputError(f"region {region} has no measure (its reason: {result.reason})")
+    P = np.atleast_2d(np.asarray(points_body, dtype=float))
+    local = (P - r.origin) @ r.basis.T
+    off_hull = np.linalg.norm(P - (r.origin + local @ r.basis), axis=1) > 1e-9
+    grid, o, h = r.occupancy
+    idx = np.floor((local - o) / h).astype(np.int64)
+    ok = np.all((idx >= 0) & (idx < np.array(grid.shape)), axis=1) & ~off_hull
+    out = np.zeros(P.shape[0], dtype=bool)
+    out[ok] = grid[tuple(idx[ok].T)]
+    return out

@@ -1,0 +1,106 @@
+"""Payload capacity map: the transport limit of Sec. 6.4.1.1, the corrected holding torques, Pinocchio, limiting factors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import qprr
+from qprr.analysis import LIMITS, capacity
+from qprr.errors import InputError
+
+
+@pytest.fixture(scope="module")
+def qp():
+    return qprr.load("q-prr")
+
+
+@pytest.fixture(scope="module")
+def cap(qp):
+    return capacity(qp, n_samples=20_000)
+
+
+def test_transport_limit_is_the_collective_thrust(qp, cap):
+    """Thesis Sec. 6.4.1.1, transport: the thrust alone carries the system, 4 f_max >= (m_G + m_c) g."""
+    assert abs(cap.m_thrust - (4 * qp.params.thrust_max / qp.params.g - qp.params.total_mass)) < 1e-12
+    i = int(np.argmax(cap.capacity))
+    assert abs(cap.capacity[i] - cap.m_thrust) < 1e-9 and LIMITS[cap.limiting[i]] == "thrust"  # arm straight up: CoG on the axis
+
+
+def test_manipulation_limit_is_the_corrected_holding_torque(qp):
+    """Arm horizontal (theta2 = pi/2, theta3 = 0): tau_theta2 = g [(m2/2 + m3 + m_c) d2 + (m3/2 + m_c) d3] reaches 5 N m.
+
+    The corrected form of the holding torque printed in Sec. 6.4.1.1 (docs/thesis-errata.md); solved for m_c.
+    """
+    p = qp.params
+    m1, m2, m3 = (k.mass for k in p.links)
+    r = capacity(qp, n_samples=20_000, ranges={"theta2": (np.pi / 2, np.pi / 2), "theta3": (0.0, 0.0)})
+    g, d2, d3 = p.g, p.d2, p.d3
+    m_c = (p.effort_limits[1] / g - (m2 / 2 + m3) * d2 - m3 / 2 * d3) / (d2 + d3)
+    np.testing.assert_allclose(r.m_effort, m_c, rtol=1e-12)
+    assert np.all(r.effort_joint == 1)
+
+
+def test_limits_agree_with_pinocchio_at_the_capacity(qp, cap):
+    q = cap.grid.configurations()
+    for i in np.random.default_rng(3).choice(len(q), 20, replace=False):
+        m = cap.capacity[i]
+        model = pin.Model(qp.model)
+        f = qp.model.frames[qp.ee_frame]
+        model.inertias[f.parentJoint] = model.inertias[f.parentJoint] + pin.Inertia(m, f.placement.translation, np.zeros((3, 3)))
+        qq = pin.neutral(qp.model)
+        qq[7:] = q[i]
+        gg = pin.computeGeneralizedGravity(model, model.createData(), qq)
+        thrust = np.linalg.solve(qp.rotor_matrix[2:6], gg[2:6])  # four coplanar rotors: the allocation is unique
+        what = LIMITS[cap.limiting[i]]
+        if what in ("thrust", "attitude"):
+            assert abs(thrust.max() - qp.params.thrust_max) < 1e-8 or abs(thrust.min()) < 1e-8
+        elif what == "effort":
+            k = cap.effort_joint[i]
+            assert abs(abs(gg[6 + k]) - qp.params.effort_limits[k]) < 1e-9
+        assert np.all(thrust <= qp.params.thrust_max + 1e-8) and np.all(np.abs(gg[6:]) <= np.array(qp.params.effort_limits) + 1e-9)
+
+
+def test_torque_reserve_lowers_the_capacity_and_keeps_authority(qp):
+    from qprr.analysis import hover
+
+    r0 = capacity(qp, n_samples=5000)
+    r1 = capacity(qp, n_samples=5000, torque_reserve=0.5)
+    assert np.all(r1.capacity <= r0.capacity + 1e-12)
+    # at the reserved capacity every axis keeps at least 0.5 N m in both directions
+    i = np.random.default_rng(0).choice(len(r1.capacity), 10, replace=False)
+    q = r1.grid.configurations()
+    for k in i:
+        rng = {n: (q[k][j], q[k][j]) for j, n in enumerate(qp.arm_names)}
+        h = hover(qp, n_samples=2, ranges=rng, payload_masses=[r1.capacity[k]])
+        if LIMITS[r1.limiting[k]] in ("attitude", "thrust"):
+            assert h.authority[0, 0].min() >= 0.5 - 1e-9
+
+
+def test_workspace_map_keeps_the_best_configuration_per_cell(cap):
+    best = cap.map_capacity
+    inside = ~np.isnan(best)
+    assert inside.sum() > 500
+    # every configuration's capacity is at most the best of its cell
+    coords = (cap.ee_body - cap.origin) @ cap.basis.T
+    idx = np.floor((coords - cap.map_origin) / cap.cell).astype(int)
+    assert np.all(cap.capacity <= best[tuple(idx.T)] + 1e-12)
+    fr = cap.map_fractions()
+    assert abs(sum(fr.values()) - 1.0) < 1e-12
+
+
+@pytest.mark.parametrize("name", ["borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR"])
+def test_capacity_any_platform(name):
+    p = qprr.build(name) if name.isupper() else qprr.load(name)
+    r = capacity(p, n_samples=5000)
+    assert r.status.value == "ok"
+    assert np.all(r.capacity <= r.m_thrust + 1e-9)
+    assert np.all((r.limiting >= 0) & (r.limiting < len(LIMITS)))
+
+
+def test_capacity_input_errors(qp):
+    with pytest.raises(InputError, match="thrust_tol"):
+        capacity(qp, n_samples=100, thrust_tol=-1.0)
+    with pytest.raises(InputError, match="payload_offset"):
+        capacity(qp, n_samples=100, payload_offset=[0.0, 0.0])
