@@ -90,5 +90,5 @@ def write_urdf(path: Path | str = URDF_PATH, params: QPRRParams | None = None) -
     return path
 
 
-if __name__ == "__main__":  # python -m qprr.urdf  regenerates the committed file
+if __name__ == "__main__":  # python -m qprr.thesis.urdf  regenerates the committed file
     print(write_urdf())
