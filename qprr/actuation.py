@@ -134,7 +134,7 @@ class Allocator:
         self._lvl2 = [k for k, i in enumerate(self.rows) if i == 5]
         self._W = np.array([weight_force if self.rows[k] < 3 else weight_torque for k in self._lvl1])
         self._scale = float(f_max.max())
-        self._lex = Lexicographic(n, None, settings=settings, regularization=0.0, rank_tol=1e-9, warm_start=True)
+        self._lex = Lexicographic(n, None, settings=settings, regularization=0.0, rank_tol=1e-9, warm_start=True, exact_fallback=True)
         self._write = FloatWriter(self.n_rotors + self.n_arm)
         self._tau_write = FloatWriter(platform.nv)
         self.qp_calls = 0

@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from qprr import charts as co
-from qprr.errors import EulerSingularityError, NonFiniteError, ShapeError
+from qprr.errors import EulerSingularityError, InputError, NonFiniteError, ShapeError
 
 angle = st.floats(-np.pi + 1e-6, np.pi - 1e-6)
 pitch = st.floats(-1.5, 1.5)
@@ -154,3 +154,133 @@ def _ff_model():
 
         _MODEL = qprr.load().model
     return _MODEL
+
+
+# ======================================================== the chart for any number of arm joints
+N_ARMS = (0, 2, 3, 5)
+_MODELS: dict = {}
+
+
+def free_flyer_model(n_arm: int) -> pin.Model:
+    """A free-flyer model with ``n_arm`` arm joints: hector (0), borinot (2), the Q-PRR (3), hextilt (5)."""
+    if n_arm not in _MODELS:
+        import qprr
+        import qprr.thesis
+
+        _MODELS[n_arm] = {0: lambda: qprr.platforms.multirotor_model("hector"),
+                          2: lambda: qprr.load("borinot_flying_arm_2").model,
+                          3: lambda: qprr.thesis.load().model,
+                          5: lambda: qprr.load("hextilt_flying_arm_5").model}[n_arm]()
+        assert _MODELS[n_arm].nv == 6 + n_arm
+    return _MODELS[n_arm]
+
+
+@st.composite
+def chart_state(draw, max_pitch: float = 1.5):
+    """(n_arm, xi, xi_dot) for n_arm in N_ARMS (arm values within +-1, any sign)."""
+    n = draw(st.sampled_from(N_ARMS))
+    xi = np.array([draw(real), draw(real), draw(real), draw(angle), draw(st.floats(-max_pitch, max_pitch)), draw(angle)]
+                  + [draw(st.floats(-1.0, 1.0)) for _ in range(n)])
+    w = np.array([draw(st.floats(-5.0, 5.0)) for _ in range(6 + n)])
+    return n, xi, w
+
+
+@SETTINGS
+@given(chart_state())
+def test_any_arm_round_trip(state):
+    n, xi, w = state
+    q, v = co.xi_to_qv(xi, w)
+    assert q.shape == (7 + n,) and v.shape == (6 + n,)
+    xi2, w2 = co.qv_to_xi(q, v)
+    np.testing.assert_allclose(xi2, xi, atol=1e-9)
+    np.testing.assert_allclose(w2, w, atol=1e-9 * (1 + np.abs(w).max()) / np.cos(xi[4]) ** 2)
+
+
+@SETTINGS
+@given(chart_state())
+def test_any_arm_rate_map_is_the_tangent_map_on_the_manifold(state):
+    """S(xi) xi_dot = pin.difference(q(xi - h xi_dot), q(xi + h xi_dot)) / 2h on the model with n_arm joints."""
+    n, xi, w = state
+    h = 1e-6
+    dq = pin.difference(free_flyer_model(n), co.xi_to_q(xi - h * w), co.xi_to_q(xi + h * w)) / (2 * h)
+    np.testing.assert_allclose(dq, co.rate_map(xi) @ w, atol=1e-6 * (1 + np.abs(w).max()))
+    # and a = S xi_ddot + S_dot xi_dot is the derivative of v along xi(t) = xi + t w + t^2/2 w2
+    w2 = np.cos(np.arange(6 + n)) * 2.0
+    vp = co.xi_dot_to_v(xi + h * w + 0.5 * h * h * w2, w + h * w2)
+    vm = co.xi_dot_to_v(xi - h * w + 0.5 * h * h * w2, w - h * w2)
+    np.testing.assert_allclose((vp - vm) / (2 * h), co.xi_ddot_to_a(xi, w, w2), atol=1e-6 * (1 + np.abs(w).max()) ** 2)
+
+
+@SETTINGS
+@given(chart_state(max_pitch=1.3), st.lists(st.floats(-10.0, 10.0), min_size=11, max_size=11))
+def test_any_arm_force_map_by_virtual_power(state, forces):
+    """u = S^T tau: u . xi_dot is the power of a world force at B, a body torque and arm efforts, with omega_body
+    from central differences of R (independent of T)."""
+    n, xi, w = state
+    f_world, tau_body, efforts = np.array(forces[0:3]), np.array(forces[3:6]), np.array(forces[6:6 + n])
+    R = co.euler_to_rotation(xi[3:6])
+    tau = np.r_[R.T @ f_world, tau_body, efforts]  # Pinocchio's generalised force of that load
+    h = 1e-6
+    Rp, Rm = co.euler_to_rotation(xi[3:6] + h * w[3:6]), co.euler_to_rotation(xi[3:6] - h * w[3:6])
+    omega_body = pin.log3(Rm.T @ Rp) / (2 * h)
+    power = f_world @ w[0:3] + tau_body @ omega_body + efforts @ w[6:]
+    u = co.force_to_xi(xi, tau)
+    assert u @ w == pytest.approx(power, abs=1e-6 * (1 + np.abs(forces).max()) * (1 + np.abs(w).max()))
+    np.testing.assert_allclose(u[0:3], f_world, atol=1e-12 * (1 + np.abs(forces).max()))  # x, y, z are world coordinates
+    np.testing.assert_allclose(co.force_from_xi(xi, u), tau, atol=1e-9 * (1 + np.abs(forces).max()) / np.cos(xi[4]))
+
+
+@SETTINGS
+@given(chart_state(max_pitch=1.3), st.integers(0, 2**32 - 1))
+def test_state_matches_the_array_functions(state, seed):
+    """The hot-loop State gives the array functions' answers, from (q, v) and from (xi, xi_dot)."""
+    n, xi, w = state
+    rng = np.random.default_rng(seed)
+    q, v = co.xi_to_qv(xi, w)
+    s = co.State(n)
+    s.update(0.5, q, v)
+    np.testing.assert_allclose(s.xi, xi, atol=1e-9)
+    np.testing.assert_allclose(s.xi_dot, co.v_to_xi_dot(xi, v), atol=1e-9 * (1 + np.abs(w).max()))
+    np.testing.assert_allclose(s.R, co.euler_to_rotation(xi[3:6]), atol=1e-14)
+    assert s.arm == pytest.approx(list(xi[6:]), abs=0)
+    tau, u, xdd = rng.normal(size=6 + n), rng.normal(size=6 + n), rng.normal(size=6 + n)
+    np.testing.assert_allclose(s.force_to_xi(tau), co.force_to_xi(xi, tau), atol=1e-12)
+    np.testing.assert_allclose(s.force_from_xi(u), co.force_from_xi(xi, u), atol=1e-10 / np.cos(xi[4]))
+    np.testing.assert_allclose(s.accel_to_v(xdd), co.xi_ddot_to_a(xi, s.xi_dot, xdd), atol=1e-9 * (1 + np.abs(w).max()) ** 2)
+    f3 = rng.normal(size=3)
+    np.testing.assert_allclose(s.lin_to_world(f3), s.R @ f3, atol=1e-14)
+    np.testing.assert_allclose(s.lin_to_body(f3), s.R.T @ f3, atol=1e-14)
+    np.testing.assert_allclose(s.euler_accel_to_omega_dot(*f3), co.euler_rate_matrix(xi[3:6]) @ f3, atol=1e-14)
+    s.set_applied(tau)
+    np.testing.assert_allclose(s.u_applied, co.force_to_xi(xi, tau), atol=1e-12)
+    t = co.State(n)
+    t.update_xi(0.5, xi, w)
+    np.testing.assert_allclose(t.q, q, atol=1e-15)
+    np.testing.assert_allclose(t.v, v, atol=1e-13 * (1 + np.abs(w).max()))
+    t.update_xi(0.5, xi, w, reuse=True)
+    np.testing.assert_allclose(t.q, q, atol=1e-15)
+
+
+@pytest.mark.parametrize("n", N_ARMS)
+def test_batch_functions_match_the_state(n):
+    """The *_batch maps over a logged run (rows) equal the State maps row by row."""
+    rng = np.random.default_rng(20 + n)
+    m = 50
+    xi = np.column_stack([rng.uniform(-3, 3, (m, 3)), rng.uniform(-3, 3, m), rng.uniform(-1.4, 1.4, m), rng.uniform(-3, 3, m),
+                          rng.uniform(-1, 1, (m, n))])
+    tau, u, p = rng.normal(size=(m, 6 + n)), rng.normal(size=(m, 6 + n)), rng.normal(size=(m, 3))
+    R = co.euler_to_rotation_batch(xi[:, 3:6])
+    s = co.State(n)
+    for k in range(m):
+        s.update_xi(0.0, xi[k], np.zeros(6 + n))
+        np.testing.assert_allclose(R[k], s.R, atol=1e-15)
+        np.testing.assert_allclose(co.force_to_xi_batch(R, xi, tau)[k], s.force_to_xi(tau[k]), atol=1e-13)
+        np.testing.assert_allclose(co.force_from_xi_batch(R, xi, u)[k], s.force_from_xi(u[k]), atol=1e-12 / np.cos(xi[k, 4]))
+        np.testing.assert_allclose(co.to_body_batch(R, p, xi[:, 0:3])[k], s.lin_to_body(p[k] - xi[k, 0:3]), atol=1e-14)
+
+
+def test_state_rejects_bad_sizes():
+    with pytest.raises(InputError, match="n_arm"):
+        co.State(-1)
+    with pytest.raises(ShapeError, match="u_applied"):
+        co.State(2).u_applied = np.zeros(9)

@@ -22,11 +22,12 @@ import numpy as np
 from proxsuite import proxqp
 
 from ..errors import InputError, SolverError, UnknownNameError
-from ..optim import Lexicographic, QPSettings, right_singular
+from ..optim import Lexicographic, QPSettings, polish_box_qp, right_singular
 from ..platform import Platform
 
 ELIMINATIONS = ("nullspace", "equality")
 _SOLVED = proxqp.QPSolverOutput.PROXQP_SOLVED
+_MAX_ITER = proxqp.QPSolverOutput.PROXQP_MAX_ITER_REACHED
 
 
 @dataclass(frozen=True)
@@ -148,10 +149,15 @@ class HierarchySolver:
             qp.init(H, g, A, b, C, np.minimum(lo_arm, d_arm), np.maximum(up_arm, d_arm))
             qp.solve()
             info = qp.results.info
-            if info.status != _SOLVED:
+            # exact on ProxQP's active set, as the "nullspace" levels; it also certifies (KKT checked
+            # exactly) an answer whose residuals met eps_abs while the duality gap would not close
+            # (MAX_ITER with 8 equality rows, primal and dual residuals ~1e-12: seen on a seeded target)
+            polished = polish_box_qp(H, g, C, np.minimum(lo_arm, d_arm), np.maximum(up_arm, d_arm), qp.results.x, A, b)
+            residuals_met = max(info.pri_res, info.dua_res) <= self.settings.eps_abs
+            if info.status != _SOLVED and not (info.status == _MAX_ITER and residuals_met and polished is not None):
                 raise SolverError(f"ProxQP did not solve level {k + 1} (n = {nv}, n_eq = {n_eq}): status {info.status.name}, "
                                   f"primal residual {info.pri_res:.3g}, dual residual {info.dua_res:.3g}")
-            dv = qp.results.x.copy()
+            dv = qp.results.x.copy() if polished is None else polished
             first = dv if first is None else first
             iters += info.iter
             stack = np.vstack([stack, J])
