@@ -311,8 +311,9 @@ def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
     sign is released, a violated one added (a few active-set steps), until a KKT point is
     found (returned) or the steps run out (None: keep ``z``).  Same active set, same bits.
     (The first guess uses positions only: ProxQP's multipliers of inactive bounds are
-    +-1e-17 noise that changes from run to run.)  The solution is exact also along directions where the objective is nearly flat (a damping
-    of 1e-7), where ProxQP's answer can be off by 1e-7 within its tolerance.
+    +-1e-17 noise that changes from run to run.)  The solution is exact also along directions
+    where the objective is nearly flat (a damping of 1e-7), where ProxQP's answer can be off by
+    1e-7 within its tolerance.
     """
     n = H.shape[0]
     n_eq = 0 if Aeq is None else Aeq.shape[0]
@@ -322,6 +323,15 @@ def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
     Cz = C @ z
     at_lo = fin_lo & (Cz - lo <= 1e-6 * scale)
     at_up = fin_up & (up - Cz <= 1e-6 * scale) & ~at_lo
+    if n_eq == 0 and not at_lo.any() and not at_up.any():  # the usual case: no bound active, one linear solve
+        try:
+            zp = np.linalg.solve(H, -g)
+        except np.linalg.LinAlgError:
+            zp = None
+        if zp is not None:
+            Czp = C @ zp
+            if not (np.any(Czp < lo - ftol) or np.any(Czp > up + ftol)):
+                return zp
     seen: set[bytes] = set()
     for _ in range(2 * C.shape[0] + 2):
         key = np.concatenate([at_lo, at_up]).tobytes()
