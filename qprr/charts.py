@@ -359,6 +359,9 @@ class FloatWriter:
         self.n = int(n)
         self._pack = struct.Struct(f"={self.n}d").pack_into
 
+    def __reduce__(self):  # the bound pack_into cannot be pickled: rebuild it (copies and pickles of its owners work)
+        return (FloatWriter, (self.n,))
+
     def __call__(self, arr: np.ndarray, values) -> np.ndarray:
         if arr.dtype is _F8 and len(values) == self.n:
             try:

@@ -158,6 +158,7 @@ def build(
     base_name: str = "base",
     ee_name: str = "end_effector",
     platform_name: str | None = None,
+    allow_nonphysical: bool = False,
 ) -> Platform:
     """A platform of one multirotor and one serial arm from a (2.1) name (see the module docstring).
 
@@ -175,6 +176,8 @@ def build(
         propeller's drag ratio), ``f_min``, ``f_max = thrust_to_weight m g / n`` and ``tilt`` [rad]
         (alternating tilts about the rotor arms: ``tilt > 0`` on a HEX is fully actuated).
     g : gravity [m/s^2].  joint_names, link_names, base_name, ee_name : URDF names.
+    allow_nonphysical : skip the inertia checks (as :func:`qprr.platform.from_urdf`), e.g. to
+        rebuild a printed table that no rigid body has.
     """
     d = parse(name)
     _check_buildable(d)
@@ -233,5 +236,6 @@ def build(
     text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
     prov = {"design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
             "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)"}
-    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov)
+    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov,
+                     allow_nonphysical=allow_nonphysical)
 

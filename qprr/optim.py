@@ -16,8 +16,11 @@ bounds leave); the others by proxsuite's dense ProxQP.
 proxsuite's defaults can call a feasible QP infeasible or an inaccurate optimum solved
 (eps_abs 1e-5, eps_rel 1e-4, no duality-gap test).  :class:`QPSettings` sets the absolute
 tolerance, eps_rel = 0, the infeasibility thresholds and the duality-gap check explicitly, and
-every status is tested: anything but PROXQP_SOLVED, after one cold retry, raises
-:class:`~qprr.errors.SolverError`.  A solver object owns its QPs and warm starts (no module-level
+every status is tested.  Even so ProxQP calls some levels infeasible (never true: z = 0 meets
+their bounds) or runs out of iterations at degenerate vertices, where more bounds are active
+than there are free directions; such a level is solved exactly by :func:`active_set_qp` (always
+for an infeasibility verdict, for an iteration limit when ``exact_fallback`` is set).  Any other
+failure, after one cold retry, raises :class:`~qprr.errors.SolverError`.  A solver object owns its QPs and warm starts (no module-level
 state): two threads with two solvers are independent.
 """
 
@@ -38,6 +41,8 @@ except ImportError:  # pragma: no cover
     _dgesdd = None
 
 _SOLVED = proxqp.QPSolverOutput.PROXQP_SOLVED
+_INFEASIBLE = (proxqp.QPSolverOutput.PROXQP_PRIMAL_INFEASIBLE, proxqp.QPSolverOutput.PROXQP_DUAL_INFEASIBLE)
+_MAX_ITER = proxqp.QPSolverOutput.PROXQP_MAX_ITER_REACHED
 
 
 def right_singular(B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -125,13 +130,20 @@ class Lexicographic:
     rank_tol : singular values below it (absolute) count as zero when a kernel is computed.
     warm_start : reuse each level's last primal-dual solution as the next initial guess
         (:meth:`reset` forgets them).
+    polish : replace each ProxQP answer by the exact optimum on its active set
+        (:func:`polish_box_qp`): results to machine precision and the same from run to run
+        (ProxQP's own vary in the last digits it does not guarantee); about doubles the cost
+        of a level.
+    exact_fallback : when ProxQP stops at its iteration limit on a level, solve that level
+        exactly with :func:`active_set_qp` instead of raising (an infeasibility verdict on a
+        level, always a false positive since z = 0 is feasible, takes that path in any case).
 
     The object owns its ProxQP instances; it can be deep-copied or pickled (the copy builds its
     own QPs on first use).
     """
 
     def __init__(self, n: int, bounded=None, *, settings: QPSettings | None = None, regularization: float = 0.0,
-                 rank_tol: float = 1e-9, warm_start: bool = True) -> None:
+                 rank_tol: float = 1e-9, warm_start: bool = True, exact_fallback: bool = False, polish: bool = True) -> None:
         if not (isinstance(n, (int, np.integer)) and n >= 1):
             raise InputError(f"n must be an integer >= 1, got {n!r}")
         if not (np.isfinite(regularization) and regularization >= 0):
@@ -149,6 +161,8 @@ class Lexicographic:
         self.regularization = float(regularization)
         self.rank_tol = float(rank_tol)
         self.warm_start = bool(warm_start)
+        self.exact_fallback = bool(exact_fallback)
+        self.polish = bool(polish)
         self._C_full = np.eye(n)[self.bounded]
         self._qps: dict[int, object] = {}
         self._warm: dict[int, tuple] = {}
@@ -172,9 +186,14 @@ class Lexicographic:
         return new
 
     def reset(self) -> None:
-        """Forget the warm starts and preconditioners (results then depend on the inputs only)."""
+        """Forget the warm starts and the QP objects (results then depend on the inputs only).
+
+        Re-initialising a ProxQP object is not enough: results then still differ in the last bits
+        (~1e-14) with what it solved before, so the objects themselves are dropped and rebuilt.
+        """
         self._warm.clear()
-        self._fresh = set(self._qps)
+        self._qps.clear()
+        self._fresh.clear()
 
     # ------------------------------------------------------------------ QP
     def _qp(self, m: int, n_in: int):
@@ -216,6 +235,17 @@ class Lexicographic:
             qp.init(H, g, None, None, C, lo, up)
             qp.solve()
             res = qp.results
+        retry = res.info.status in _INFEASIBLE or (self.exact_fallback and res.info.status == _MAX_ITER)
+        if retry and np.all(lo <= 0.0) and np.all(up >= 0.0):
+            # z = 0 meets every bound and the objective is bounded below (as at every level of
+            # :meth:`solve`): an infeasibility verdict is a false positive of ProxQP's test, seen at
+            # degenerate vertices (more active bounds than free directions, e.g. 6 bounds on 4
+            # variables at level 3 of an octorotor allocation), where it may also run out of
+            # iterations.  These QPs are tiny: solve them exactly.
+            z = active_set_qp(H, g, C, lo, up)
+            if z is not None:
+                self._warm.pop(level, None)
+                return z, int(res.info.iter)
         if res.info.status != _SOLVED:
             raise SolverError(
                 f"ProxQP did not solve level {level + 1} ({m} variables, {C.shape[0]} bounds): status {res.info.status.name}, "
@@ -223,21 +253,27 @@ class Lexicographic:
         z = res.x.copy()
         if self.warm_start:
             self._warm[level] = (z, res.z.copy())
-        return z, int(res.info.iter)
+        polished = polish_box_qp(H, g, C, lo, up, z) if self.polish else None
+        return (z if polished is None else polished), int(res.info.iter)
 
     # ------------------------------------------------------------------ solve
     def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None) -> LexResult:
         """Solve ``levels`` (sequence of (A_k, b_k)) under ``lower <= x[bounded] <= upper``.
 
-        ``x0`` (default 0) is the point the regularisation of level 1 pulls towards; it must
-        satisfy the bounds.  ``damping`` (one value per level) is added to the regularisation of
+        ``x0`` (default 0, clipped to the bounds) is the point the regularisation of level 1 pulls
+        towards; it must satisfy the bounds (each level keeps its bounds feasible by never
+        tightening them past the current point).  ``damping`` (one value per level) is added to the regularisation of
         each level (damped least squares: it shortens steps, it never moves a point where every
         level's gradient vanishes).
         """
         n, tol, b_idx = self.n, self.rank_tol, self.bounded
         lo = np.asarray(lower, dtype=float)
         up = np.asarray(upper, dtype=float)
-        x = np.zeros(n) if x0 is None else np.array(x0, dtype=float)
+        if x0 is None:  # 0, moved into the bounds (a positive lower bound, e.g. a rotor's f_min > 0, excludes 0)
+            x = np.zeros(n)
+            x[b_idx] = np.clip(0.0, lo, up)
+        else:
+            x = np.array(x0, dtype=float)
         iters = 0
         x_levels = []
         Z = None  # basis of the free directions (None: the whole space)
@@ -270,6 +306,144 @@ class Lexicographic:
                 Z = N if Z is None else Z @ N
         residuals = tuple(float(np.linalg.norm(A @ x - b)) for A, b in levels)
         return LexResult(x, residuals, iters, tuple(x_levels))
+
+
+def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, z: np.ndarray,
+                  Aeq: np.ndarray | None = None, beq: np.ndarray | None = None) -> np.ndarray | None:
+    """The exact optimum of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq) from an approximate ``z``.
+
+    ProxQP stops within its tolerance, at a point that also depends in its last digits on
+    memory alignment (the same QP on fresh objects returned answers 1e-9 apart, proxsuite
+    0.8), and the IK's stopping tests turned that into configurations 1e-7 apart from run to
+    run.  Here the bounds active at ``z`` (within 1e-6 of the bound scale) are taken as
+    equalities and the KKT system is solved directly; a bound whose multiplier has the wrong
+    sign is released, a violated one added (a few active-set steps), until a KKT point is
+    found (returned) or the steps run out (None: keep ``z``).  Same active set, same bits.
+    (The first guess uses positions only: ProxQP's multipliers of inactive bounds are
+    +-1e-17 noise that changes from run to run.)  The solution is exact also along directions
+    where the objective is nearly flat (a damping of 1e-7), where ProxQP's answer can be off by
+    1e-7 within its tolerance.
+    """
+    n = H.shape[0]
+    n_eq = 0 if Aeq is None else Aeq.shape[0]
+    fin_lo, fin_up = np.isfinite(lo), np.isfinite(up)
+    scale = 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
+    ftol = 1e-10 * scale  # bounds nearly implied by the equalities make K ill-conditioned (cond 1e11 seen)
+    Cz = C @ z
+    at_lo = fin_lo & (Cz - lo <= 1e-6 * scale)
+    at_up = fin_up & (up - Cz <= 1e-6 * scale) & ~at_lo
+    if n_eq == 0 and not at_lo.any() and not at_up.any():  # the usual case: no bound active, one linear solve
+        try:
+            zp = np.linalg.solve(H, -g)
+        except np.linalg.LinAlgError:
+            zp = None
+        if zp is not None:
+            Czp = C @ zp
+            if not (np.any(Czp < lo - ftol) or np.any(Czp > up + ftol)):
+                return zp
+    seen: set[bytes] = set()
+    for _ in range(2 * C.shape[0] + 2):
+        key = np.concatenate([at_lo, at_up]).tobytes()
+        cycling = key in seen  # a degenerate vertex: a bound with a ~0 multiplier is dropped and re-added
+        seen.add(key)
+        il, iu = np.flatnonzero(at_lo), np.flatnonzero(at_up)
+        A = np.vstack([C[il], C[iu]] + ([Aeq] if n_eq else []))
+        b = np.concatenate([lo[il], up[iu]] + ([beq] if n_eq else []))
+        k = A.shape[0]
+        K = np.zeros((n + k, n + k))
+        K[:n, :n] = H
+        K[:n, n:] = A.T
+        K[n:, :n] = A
+        rhs = np.concatenate([-g, b])
+        try:
+            sol = np.linalg.solve(K, rhs)
+        except np.linalg.LinAlgError:  # dependent active bounds, or a flat direction left free: minimum norm
+            sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
+        zp, mu = sol[:n], -sol[n:]  # H zp + g = A^T mu; mu >= 0 on lower bounds, <= 0 on upper ones
+        gscale = 1.0 + float(np.abs(g).max(initial=0.0)) + float(np.abs(H).max(initial=0.0)) * (1.0 + float(np.abs(zp).max(initial=0.0)))
+        if (float(np.abs(H @ zp + g - A.T @ mu).max(initial=0.0)) > 1e-10 * gscale
+                or float(np.abs(A @ zp - b).max(initial=0.0)) > ftol):
+            return None  # not solved accurately: keep ProxQP's answer
+        wrong = np.concatenate([-mu[: il.size], mu[il.size: il.size + iu.size]])  # > 0: the bound pulls the wrong way
+        Czp = C @ zp
+        viol_lo = fin_lo & (lo - Czp > ftol)
+        viol_up = fin_up & (Czp - up > ftol)
+        release = wrong > (1e-9 if cycling else 1e-12) * gscale
+        if not release.any() and not viol_lo.any() and not viol_up.any():
+            return zp
+        if release.any():  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
+            j = int(np.argmax(wrong))
+            if j < il.size:
+                at_lo[il[j]] = False
+            else:
+                at_up[iu[j - il.size]] = False
+        elif not cycling:  # add every violated bound
+            at_lo |= viol_lo
+            at_up |= viol_up & ~at_lo
+        else:  # add the most violated one only
+            gap = np.maximum(np.where(viol_lo, lo - Czp, -np.inf), np.where(viol_up, Czp - up, -np.inf))
+            i = int(np.argmax(gap))
+            if viol_lo[i]:
+                at_lo[i] = True
+            else:
+                at_up[i] = True
+    return None
+
+
+def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray,
+                  max_iter: int = 1000) -> np.ndarray | None:
+    """argmin 1/2 z^T H z + g^T z s.t. lo <= C z <= up, from the feasible point z = 0 (None if not solved).
+
+    Primal active-set method for convex QPs (Nocedal and Wright, *Numerical Optimization*,
+    2nd ed., Algorithm 16.3), started with an empty working set so that the constraints it adds
+    (one per blocking step) stay linearly independent.  ``H`` may be semi-definite when the
+    objective is bounded below (a least-squares level: g in the range of H); each equality-
+    constrained step is then the minimum-norm one.  Exact and finite on the tiny, degenerate
+    QPs (more active bounds than variables) where ProxQP can fail.  Requires lo <= 0 <= up.
+    """
+    n = H.shape[0]
+    fin_lo, fin_up = np.isfinite(lo), np.isfinite(up)
+    A = np.vstack([C[fin_lo], -C[fin_up]])  # constraints A z >= b
+    b = np.concatenate([lo[fin_lo], -up[fin_up]])
+    if np.any(b > 0.0):
+        return None
+    scale = 1.0 + float(np.abs(H).max(initial=0.0)) + float(np.abs(g).max(initial=0.0))
+    z = np.zeros(n)
+    W: list[int] = []
+    for _ in range(max_iter):
+        grad = H @ z + g
+        AW = A[W]
+        k = len(W)
+        if k < n:
+            K = np.block([[H, AW.T], [AW, np.zeros((k, k))]])
+            p = np.linalg.lstsq(K, np.concatenate([-grad, np.zeros(k)]), rcond=1e-13)[0][:n]
+        else:  # the working set fixes z
+            p = np.zeros(n)
+        # stationary on the working set: no step, or one that decreases the objective by rounding only
+        # (the minimum-norm step of a semi-definite H carries rounding noise of |H| eps)
+        decrease = -float(grad @ p + 0.5 * (p @ (H @ p)))
+        if (float(np.abs(p).max(initial=0.0)) <= 1e-11 * (1.0 + float(np.abs(z).max(initial=0.0)))
+                or decrease <= 1e-14 * scale * (1.0 + float(np.abs(z).max(initial=0.0)))):
+            if k == 0:
+                return z
+            lam = np.linalg.lstsq(AW.T, grad, rcond=1e-13)[0]  # grad = A_W^T lam at a stationary point
+            j = int(np.argmin(lam))
+            if lam[j] >= -1e-12 * scale:
+                return z
+            W.pop(j)
+            continue
+        alpha, block = 1.0, None
+        Ap = A @ p
+        for i in np.flatnonzero(Ap < -1e-12 * np.linalg.norm(A, axis=1) * np.linalg.norm(p)):
+            if i in W:
+                continue
+            t = (b[i] - A[i] @ z) / Ap[i]
+            if t < alpha:
+                alpha, block = max(t, 0.0), int(i)
+        z = z + alpha * p
+        if block is not None:
+            W.append(block)
+    return None
 
 
 def _clamped_1d(B: np.ndarray, r: np.ndarray, reg: float, c: np.ndarray, lo: np.ndarray, up: np.ndarray) -> np.ndarray:

@@ -1,0 +1,163 @@
+"""qprr.ik.IKSolver on five platforms: the Q-PRR ("+" and "x"), borinot_flying_arm_2, hextilt_flying_arm_5 (fully
+actuated) and a HEX-RRR from the nomenclature.  Reachable seeded targets are reached (checked with Pinocchio's
+forward kinematics, not the solver's own numbers), joint limits always hold, position-only targets work, and the
+result depends on the inputs only: not on what was solved before, nor on the thread (issue 16 item 9)."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import qprr
+import qprr.thesis
+from qprr import charts as ch
+from qprr import kinematics as kin
+from qprr.ik import IKSolver, tasks
+
+NAMES = ("q-prr+", "q-prr-x", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
+TOL = 1e-6
+N_TARGETS = 12
+
+
+def make(name: str):
+    if name == "q-prr+":
+        return qprr.thesis.load()
+    if name == "q-prr-x":
+        return qprr.thesis.load(layout="x")
+    if name == "HEX-RRR":
+        return qprr.build("HEX-RRR")
+    return qprr.load(name)
+
+
+def options(name: str, method: str):
+    if method == "clika" and name.startswith("q-prr"):
+        # the thesis's remedy (4.34): weight the slider so that CLIKA keeps it in its +-4 cm (W = I sends it out)
+        return {"weights": (1, 1, 1, 1, 1, 1, 1e4, 1, 1)}
+    return None
+
+
+@pytest.fixture(scope="module", params=NAMES)
+def case(request):
+    """(name, platform, data, targets): FK of seeded level configurations (reachable by every method)."""
+    p = make(request.param)
+    data = p.data()
+    rng = np.random.default_rng(2024)
+    targets = []
+    for _ in range(N_TARGETS):
+        xi = p.neutral_xi()
+        xi[0:3] = rng.uniform(-2.0, 2.0, 3)
+        xi[5] = rng.uniform(-math.pi, math.pi)
+        xi[6:] = rng.uniform(p.arm_lower, p.arm_upper)
+        targets.append(kin.ee_placement(p, data, ch.xi_to_q(xi)))
+    return request.param, p, data, targets
+
+
+def check(p, data, res, target, position_only=False):
+    """Independent verdict with Pinocchio's forward kinematics at the returned q."""
+    pin.framesForwardKinematics(p.model, data, res.q)
+    M = data.oMf[p.ee_frame]
+    p_d = target if position_only else target.translation
+    assert np.linalg.norm(M.translation - p_d) < TOL
+    if not position_only:
+        assert np.linalg.norm(pin.log3(target.rotation.T @ M.rotation)) < TOL
+    assert np.all(res.q[7:] >= p.arm_lower) and np.all(res.q[7:] <= p.arm_upper)
+    np.testing.assert_allclose(np.linalg.norm(res.q[3:7]), 1.0, atol=1e-12)
+
+
+# LEAD: on hextilt_flying_arm_5, method "qp" fails these two tests (core behaviour, assertions kept): 11/12 pose
+# targets (one stops at max_iterations with 1.6e-6 m / 2.2e-5 rad) and 0/12 position-only targets (max_iterations
+# at 1.4e-5 m: the CoG and posture levels, unsatisfiable there, make the steps cycle).  QPOptions(regularization=1e-4)
+# reaches 12/12 position-only targets.
+@pytest.mark.parametrize("method", ["qp", "dls", "clika"])
+def test_reachable_targets_are_reached(case, method):
+    name, p, data, targets = case
+    solver = IKSolver(p, method, options(name, method))
+    for M in targets:
+        res = solver.solve(data, M)
+        assert res.success, (res.status, res.reason)
+        check(p, data, res, M)
+        if method != "clika" and not p.fully_actuated:  # hover methods: the multirotor can hold this pose
+            assert res.hover_feasible and abs(res.roll) < TOL and abs(res.pitch) < TOL
+
+
+@pytest.mark.parametrize("method", ["qp", "dls"])
+def test_position_only_targets(case, method):
+    name, p, data, targets = case
+    solver = IKSolver(p, method)
+    for M in targets:
+        res = solver.solve(data, M.translation)
+        assert res.success, (res.status, res.reason)
+        assert res.orientation_error == 0.0
+        check(p, data, res, M.translation, position_only=True)
+
+
+@pytest.mark.parametrize("method", ["qp", "dls", "clika"])
+def test_joint_limits_never_violated(case, method):
+    """Any target (reachable or far away, tilted), any iteration budget: the arm stays inside its limits."""
+    name, p, data, targets = case
+    rng = np.random.default_rng(7)
+    for k, M in enumerate(targets[:6]):
+        far = pin.SE3(pin.exp3(rng.normal(0, 1.0, 3)) @ M.rotation, M.translation + rng.normal(0, 1.5, 3))
+        for max_iter in (1, 3, 40):
+            opts = dict(options(name, method) or {}, max_iter=max_iter)
+            res = IKSolver(p, method, opts).solve(data, far if k % 2 else M)
+            assert res.q is not None
+            assert np.all(res.q[7:] >= p.arm_lower) and np.all(res.q[7:] <= p.arm_upper), res.q[7:]
+            assert res.within_limits or not res.success
+
+
+@pytest.mark.parametrize("method", ["qp", "dls", "clika"])
+def test_result_does_not_depend_on_call_history_or_thread(case, method):
+    """The same targets give bit-identical configurations solved in order, in reverse after other targets, and
+    split over two threads with two solvers (each with its own pin.Data)."""
+    name, p, data, targets = case
+    opts = options(name, method)
+    solver = IKSolver(p, method, opts)
+    first = [solver.solve(data, M).q for M in targets]
+    solver.solve(data, pin.SE3(targets[0].rotation, targets[0].translation + 5.0))  # something else in between
+    again = [solver.solve(data, M).q for M in reversed(targets)][::-1]
+    out: dict[int, np.ndarray] = {}
+    errors: list[BaseException] = []
+
+    def work(idx):
+        try:
+            s, d = IKSolver(p, method, opts), p.data()
+            for i in idx:
+                out[i] = s.solve(d, targets[i]).q
+        except BaseException as exc:  # pragma: no cover - reported below
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work, args=(range(k, len(targets), 2),)) for k in (0, 1)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    for i, q in enumerate(first):
+        np.testing.assert_array_equal(q, again[i])
+        np.testing.assert_array_equal(q, out[i])
+
+
+def test_fully_actuated_platform_holds_a_tilted_base():
+    """On hextilt_flying_arm_5 the base may hold any attitude: with the base pose task of a tilted base on level 2,
+    the end effector reaches its target and the base keeps roll 0.25 rad, pitch -0.2 rad (a success: no hover asked)."""
+    p = make("hextilt_flying_arm_5")
+    data = p.data()
+    xi = p.neutral_xi()
+    xi[0:3] = (0.3, -0.2, 1.0)
+    xi[3:5] = (0.25, -0.2)
+    xi[6:] = 0.3
+    M = kin.ee_placement(p, data, ch.xi_to_q(xi))
+    base = pin.SE3(ch.euler_to_rotation(xi[3:6]), xi[0:3])
+    levels = [[tasks.PoseTask(p, M)], [tasks.BasePoseTask(p, base)], [tasks.PostureTask(p, np.zeros(p.n_arm))]]
+    start = xi.copy()
+    start[6:] = 0.0
+    res = IKSolver(p, "qp", {"levels": levels}).solve(data, M, xi0=start)
+    assert res.success, res.reason
+    check(p, data, res, M)
+    assert res.roll == pytest.approx(0.25, abs=1e-7) and res.pitch == pytest.approx(-0.2, abs=1e-7)
+    assert not res.hover_feasible
