@@ -160,11 +160,11 @@ def rotation_to_euler(R) -> np.ndarray:
 
 
 def unit_quaternion(quat_xyzw, name: str = "q[3:7]") -> np.ndarray:
-    """A quaternion (x, y, z, w) of norm 1 (within 1e-6), else InputError naming ``name``."""
+    """A quaternion (x, y, z, w) of norm 1 (within 1e-6), else ShapeError naming ``name`` (off the unit sphere)."""
     qa = as_vector(quat_xyzw, 4, name)
     norm = float(np.linalg.norm(qa))
     if not abs(norm - 1.0) < 1e-6:
-        raise InputError(f"{name} must be a unit quaternion (x, y, z, w), got {qa.tolist()} of norm {norm!r}")
+        raise ShapeError(f"{name} must be a unit quaternion (x, y, z, w), got {qa.tolist()} of norm {norm!r}")
     return qa
 
 

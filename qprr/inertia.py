@@ -46,22 +46,25 @@ def nearest_physical_moments(moments) -> np.ndarray:
 
 def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bool = True, allow_massless: bool = False) -> None:
     """Raise :class:`NonPhysicalError` unless (mass [kg], com [m], inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg m^2])
-    can be a rigid body: finite values, mass > 0, a symmetric positive-definite rotational inertia whose principal
+    can be a rigid body: finite values, mass > 0, a symmetric positive semi-definite rotational inertia (a point
+    mass or a thin rod has a zero principal moment) whose principal
     moments satisfy the triangle inequalities I_k <= I_i + I_j (``check_triangle``), i.e. no negative second moment
     of mass.  ``inertia`` may also be a 3x3 matrix.  ``allow_massless``: mass 0 with a zero inertia is accepted
     (a frame-only link of a URDF)."""
     I3 = np.asarray(inertia)
     if I3.shape == (3, 3):
-        if not (I3.dtype.kind in "iuf" and np.all(np.isfinite(I3))) or not np.allclose(
-                I3, I3.T, rtol=0.0, atol=1e-12 * max(1e-300, float(np.abs(I3).max()))):
-            raise NonPhysicalError(f"{body}: inertia must be a finite symmetric 3x3 matrix, got {I3.tolist()}")
+        if not (I3.dtype.kind in "iuf" and np.all(np.isfinite(I3))):
+            raise NonPhysicalError(f"{body}: inertia must be a finite 3x3 matrix, got {I3.tolist()}")
+        if not np.allclose(I3, I3.T, rtol=0.0, atol=1e-12 * max(1e-300, float(np.abs(I3).max()))):
+            raise NonPhysicalError(f"{body}: inertia must be symmetric, got {I3.tolist()}")
         inertia = (float(I3[0, 0]), float(I3[1, 1]), float(I3[2, 2]), float(I3[0, 1]), float(I3[0, 2]), float(I3[1, 2]))
     if allow_massless and _finite([mass]) and mass == 0.0:
         if all(float(x) == 0.0 for x in inertia):
             return
         raise NonPhysicalError(f"{body}: a massless body cannot have a rotational inertia, got {tuple(inertia)!r}")
     if not (_finite([mass]) and mass > 0.0):
-        raise NonPhysicalError(f"{body}: mass must be a positive finite number of kg, got {mass!r}")
+        bound = ">= 0 kg (0 only with a zero inertia)" if allow_massless else "> 0 kg"
+        raise NonPhysicalError(f"{body}: mass must be finite and {bound}, got {mass!r}")
     com = [float(c) for c in com] if _finite(list(np.ravel(com))) else com
     if len(com) != 3 or not _finite(com):
         raise NonPhysicalError(f"{body}: centre of mass must be 3 finite coordinates in m, got {com!r}")
@@ -72,9 +75,9 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
     moments = np.array([ixx, iyy, izz]) if diagonal else np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
     names = ("I_xx", "I_yy", "I_zz") if diagonal else ("I_1", "I_2", "I_3")
     axes = ("x", "y", "z") if diagonal else ("principal axis 1", "principal axis 2", "principal axis 3")
-    if moments.min() <= 0.0:
+    if moments.min() < -TRIANGLE_RTOL * max(float(np.abs(moments).max()), 1e-300):
         k = int(np.argmin(moments))
-        raise NonPhysicalError(f"{body}: rotational inertia must be positive definite, got {names[k]} = {moments[k]:.6g} kg m^2 "
+        raise NonPhysicalError(f"{body}: rotational inertia is not positive semi-definite, {names[k]} = {moments[k]:.6g} kg m^2 "
                                f"(inertia {tuple(inertia)!r})")
     if not check_triangle:
         return

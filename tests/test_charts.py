@@ -115,12 +115,12 @@ def test_near_singularity_still_converts():
 
 # The old test_bad_inputs_name_the_argument, split so that each assertion runs on its own.
 def test_bad_xi_shape_names_the_argument():
-    # LEAD: fails under the generic chart.  xi of any length >= 6 is a valid thesis chart (6 + n_arm
-    # entries), so xi_to_q(np.zeros(8)) is the configuration of a platform with 2 arm joints and raises
-    # nothing; the Q-PRR's 9 can only be checked where the platform is known (kinematics.check_q,
-    # charts.as_xi(xi, n=9)).  Assertion kept as it was.
+    # xi of any length >= 6 is a thesis chart (6 + n_arm entries): the Q-PRR's 9 is checked where the
+    # platform is known (charts.as_xi with n, as kinematics and dynamics call it); too short is refused anywhere
     with pytest.raises(ShapeError, match=r"xi must have shape \(9,\)"):
-        co.xi_to_q(np.zeros(8))
+        co.as_xi(np.zeros(8), "xi", 9)
+    with pytest.raises(ShapeError, match=r"xi must have shape"):
+        co.xi_to_q(np.zeros(5))
 
 
 def test_non_finite_rates_name_the_argument():
@@ -129,9 +129,6 @@ def test_non_finite_rates_name_the_argument():
 
 
 def test_non_unit_quaternion_is_rejected():
-    # LEAD: fails under the new charts.unit_quaternion, which raises InputError("q[3:7] must be a unit
-    # quaternion ...") (a wrong value, not a wrong shape); the old q_to_xi raised ShapeError.  InputError
-    # is the parent of ShapeError, so `except ShapeError` callers no longer catch it.  Assertion kept.
     q = co.xi_to_q(np.zeros(9))
     q[3:7] *= 2.0
     with pytest.raises(ShapeError, match="unit quaternion"):

@@ -20,7 +20,8 @@ from hypothesis import strategies as st
 import qprr
 import qprr.thesis
 from qprr.errors import InputError, NonPhysicalError, UnknownNameError
-from qprr.platform import check_inertia, from_model, from_urdf
+from qprr.inertia import check_rigid_body
+from qprr.platform import from_model, from_urdf
 from qprr.thesis.urdf import URDF_PATH, build_urdf
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)
@@ -53,7 +54,7 @@ def test_every_point_cloud_is_a_rigid_body(n, seed):
     c = m @ x / m.sum()
     d = x - c
     I = sum(mk * ((dk @ dk) * np.eye(3) - np.outer(dk, dk)) for mk, dk in zip(m, d))
-    check_inertia(float(m.sum()), I, "cloud", c)
+    check_rigid_body("cloud", float(m.sum()), c, I)
     np.testing.assert_allclose(pin.Inertia(float(m.sum()), c, I).inertia, I, atol=1e-15)  # Pinocchio takes it as given
 
 
@@ -65,7 +66,7 @@ def test_moments_breaking_the_triangle_inequality_are_refused(a, b, excess, seed
     R = pin.exp3(np.random.default_rng(seed).normal(size=3))
     I = R @ np.diag([a, b, c]) @ R.T
     with pytest.raises(NonPhysicalError, match="triangle inequality"):
-        check_inertia(1.0, I, "rod")
+        check_rigid_body("rod", 1.0, (0.0, 0.0, 0.0), I)
 
 
 @pytest.mark.parametrize(
@@ -82,7 +83,7 @@ def test_moments_breaking_the_triangle_inequality_are_refused(a, b, excess, seed
 )
 def test_bad_inertials_name_the_body(mass, inertia, match):
     with pytest.raises(NonPhysicalError, match=match) as exc:
-        check_inertia(mass, inertia, "link7")
+        check_rigid_body("link7", mass, (0.0, 0.0, 0.0), inertia, allow_massless=True)
     assert "link7" in str(exc.value)
     assert isinstance(exc.value, ValueError)
 
