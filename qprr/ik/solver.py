@@ -587,6 +587,7 @@ class IKSolver:
         fid = platform.ee_frame
         status, it, step, ready = "max_iterations", 0, None, False
         lower_prev, flat = math.inf, 0
+        e1_prev, rest_scale = math.inf, 1.0
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
@@ -607,10 +608,20 @@ class IKSolver:
                 if flat >= 3:
                     status, ready = "converged", True
                     break
+                # level 1 converges quadratically on its own; the lower levels' part of the step
+                # moves along level 1's kernel at first order only, and its second-order effect can
+                # hold level 1 off its target: when level 1 stops halving its error, that part is
+                # halved until it does again (doubled back, up to full, when level 1 progresses)
+                e1 = step.errors[0]
+                if not pose_ok and e1 > 0.5 * e1_prev:
+                    rest_scale *= 0.5
+                elif rest_scale < 1.0:
+                    rest_scale = min(1.0, 2.0 * rest_scale)
+                e1_prev = e1
                 dv = step.dv
-                if largest > opts.max_step:
+                if largest > opts.max_step or rest_scale < 1.0:
                     d1 = step.dv_first
-                    rest = dv - d1
+                    rest = (dv - d1) * rest_scale
                     m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
                     dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (
                         rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
