@@ -1,4 +1,4 @@
-"""Command line: ``qprr check | urdf | simulate | compare``."""
+"""Command line: ``qprr check | urdf | simulate | compare | wheeled``."""
 
 from __future__ import annotations
 
@@ -34,6 +34,12 @@ def build_parser() -> argparse.ArgumentParser:
         pass
     else:
         register_cli(sub)
+    try:  # wheeled robots are registered by qprr.wheeled when it is present
+        from .wheeled.cli import register_cli as register_wheeled
+    except ImportError:
+        pass
+    else:
+        register_wheeled(sub)
     return parser
 
 

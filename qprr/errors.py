@@ -51,3 +51,8 @@ class DivergenceError(QprrError, RuntimeError):
 
 class SolverError(QprrError, RuntimeError):
     """A numerical solver (QP, linear system) failed to return a trustworthy answer."""
+
+
+class KinematicSingularityError(InputError):
+    """A kinematic model is singular at the given configuration (its B(q) is undefined there,
+    e.g. the rear-driven tricycle at psi = +-pi/2)."""
