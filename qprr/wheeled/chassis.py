@@ -108,6 +108,18 @@ class AckermannSteering:
 
 
 @dataclass(frozen=True)
+class NamedSteering:
+    """Each centred steerable wheel has its own steering coordinate, under the given names (e.g. the
+    tricycle's front wheel is steered by ``psi``)."""
+
+    names: tuple[str, ...]
+    description: str = "one steering coordinate per steerable wheel"
+
+    def __call__(self, sigma, m=math) -> tuple:
+        return tuple(sigma)
+
+
+@dataclass(frozen=True)
 class SynchroSteering:
     """All centred steerable wheels turned together by one belt: every wheel gets the angle sigma[0]."""
 
@@ -434,5 +446,5 @@ def generic_steering(n: int) -> np.ndarray:
     return 0.37 + 0.22 * np.arange(n, dtype=float)
 
 
-__all__ = ["ICR", "AckermannSteering", "ICRStatus", "Mobility", "MobilityStatus", "SynchroSteering", "WheeledRobot",
+__all__ = ["ICR", "AckermannSteering", "ICRStatus", "Mobility", "MobilityStatus", "NamedSteering", "SynchroSteering", "WheeledRobot",
            "admissible_types", "generic_steering", "kernel", "rank", "rotation", "wheel_at"]

@@ -202,7 +202,7 @@ def _types_demo() -> Demo:
         for a, robot in zip(ax[0], TYPE_EXAMPLES.values()):
             sig = np.array([0.5, -0.4][: robot.n_steering])
             plots.plot_icr(a, robot, sig, extent=1.2)
-            a.set_title(f"computed type {robot.mobility().type}: {robot.name}\nICR {robot.icr(sig).status.value}", fontsize=8)
+            a.set_title(f"computed type {robot.mobility().type}\n{robot.name}\nICR {robot.icr(sig).status.value}", fontsize=8)
         return plots.save(fig, path)
 
     return Demo("types", lines, plot)

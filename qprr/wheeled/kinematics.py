@@ -61,14 +61,14 @@ class KinematicModel(ABC):
 
     # ------------------------------------------------------------ the model
     def A(self, q, m=math):
-        """Pfaffian matrix A(q) (n x k) of the constraints A^T(q) q_dot = 0."""
+        """Pfaffian matrix A(q) (n x k) of the constraints A^T(q) q_dot = 0 (Lecture: "forme pfaffienne")."""
         if self.robot is None:  # pragma: no cover - every model of the package has a robot or overrides A
             raise NotImplementedError
         return self.robot.pfaffian(q if is_symbolic(m) else self.check_q(q), m)
 
     @abstractmethod
     def B(self, q, m=math):
-        """B(q) (n x n_inputs), a basis of ker A^T(q): q_dot = B(q) u."""
+        """B(q) (n x n_inputs), a basis of ker A^T(q): q_dot = B(q) u (Lecture: Im B(q) = ker A^T(q))."""
 
     @abstractmethod
     def flow(self, q, u, h: float) -> np.ndarray:

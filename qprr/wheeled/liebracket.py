@@ -144,6 +144,10 @@ def _annihilator(basis, q, points) -> tuple:
 def frobenius(model: KinematicModel, *, max_depth: int | None = None, n_points: int = 3, seed: int = 0) -> FrobeniusResult:
     """Lie-bracket (Frobenius) test of ``model``'s constraints (see the module docstring).
 
+    Lecture: "Contraintes non holonômes", Théorème de Frobenius: the Lie brackets of the
+    columns of B(q) (A^T(q) B(q) = 0) over the configuration space give the number of
+    integrable constraints.
+
     Brackets of increasing depth are added while they raise the generic rank of the
     distribution (``max_depth`` levels at most, default n).  Needs sympy:
     ``pip install "qprr[symbolic]"``.

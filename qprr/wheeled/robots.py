@@ -31,7 +31,7 @@ import numpy as np
 
 from ..errors import InputError, KinematicSingularityError, UnknownNameError
 from ._backend import exact, is_symbolic, matrix
-from .chassis import AckermannSteering, Mobility, SynchroSteering, WheeledRobot, wheel_at
+from .chassis import AckermannSteering, Mobility, NamedSteering, SynchroSteering, WheeledRobot, wheel_at
 from .kinematics import KinematicModel, check_duration
 from .sim import WheeledSimResult, heading_quadrature, se2_flow, simulate, sinc
 from .wheels import CentredSteerableWheel, FixedWheel, OffCentredSteerableWheel, SwedishWheel
@@ -156,7 +156,7 @@ class Unicycle(KinematicModel):
 def _tricycle_wheels(D: float, L: float, r: float, name: str):
     rear = (wheel_at(FixedWheel, 0.0, -L, r, name="rear right"), wheel_at(FixedWheel, 0.0, L, r, name="rear left")) if L > 0 \
         else (wheel_at(FixedWheel, 0.0, 0.0, r, name="rear"),)
-    return WheeledRobot(name, rear + (wheel_at(CentredSteerableWheel, D, 0.0, r, name="psi"),))
+    return WheeledRobot(name, rear + (wheel_at(CentredSteerableWheel, D, 0.0, r, name="front"),), steering=NamedSteering(("psi",)))
 
 
 class FrontTricycle(KinematicModel):
@@ -332,7 +332,8 @@ class Bicycle(RearTricycle):
     def __init__(self, D: float = 1.0, r: float = 0.35):
         super().__init__(D=D, L=0.0, r=r)
         self.robot = WheeledRobot("bicycle", (wheel_at(FixedWheel, 0.0, 0.0, self.r, name="rear"),
-                                              wheel_at(CentredSteerableWheel, self.D, 0.0, self.r, name="psi")))
+                                              wheel_at(CentredSteerableWheel, self.D, 0.0, self.r, name="front")),
+                                  steering=NamedSteering(("psi",)))
 
 
 # ============================================================================ omnidirectional
