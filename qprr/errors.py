@@ -68,3 +68,8 @@ class MissingDependencyError(QprrError, ImportError):
 
 class PortInUseError(QprrError, OSError):
     """A network port the caller asked for is already taken (e.g. by another ``qprr view``)."""
+
+
+class KinematicSingularityError(InputError):
+    """A kinematic model is singular at the given configuration (its B(q) is undefined there,
+    e.g. the rear-driven tricycle at psi = +-pi/2)."""

@@ -28,6 +28,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 import pytest
+from qprr.control.payload_idc import PayloadIDC
+from qprr.coordinates import xi_to_qv
+from qprr.integrators import ORDERS
 
 import qprr
 from qprr import interaction as it
@@ -35,9 +38,6 @@ from qprr import model as qm
 from qprr.control import CogStabilizer, make_controller
 from qprr.control.base import Controller
 from qprr.control.impedance import ImpedanceController
-from qprr.control.payload_idc import PayloadIDC
-from qprr.coordinates import xi_to_qv
-from qprr.integrators import ORDERS
 from qprr.sim import BaseDrag, PayloadChange, PayloadSchedule, Pulse, WhiteNoise, simulate
 from qprr.trajectory import Hold, TrajectorySample
 

@@ -78,10 +78,11 @@ def test_plot_writes_png(tmp_path):
 def test_wrist_sensor_compensation_needs_a_filter():
     """Cancelling the one-step-late contact reading unfiltered makes the stiff contact chatter (limit cycle);
     the 50 rad/s sensor filter of the scenarios removes it."""
+    from qprr.control.payload_idc import LayeredIDC
+
     from qprr import interaction as it
     from qprr import model as qm
     from qprr import sim
-    from qprr.control.payload_idc import LayeredIDC
     from qprr.trajectory import MultiPhase, Phase
 
     robot = qprr.load()

@@ -9,9 +9,6 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-import qprr
-from qprr.errors import InputError, NonPhysicalError, UnknownNameError
 from qprr.params import (
     _TABLE_3_2_INERTIA,
     LINK2_INERTIA_PHYSICAL,
@@ -22,6 +19,9 @@ from qprr.params import (
     second_moments,
     thesis_params,
 )
+
+import qprr
+from qprr.errors import InputError, NonPhysicalError, UnknownNameError
 
 
 def _bodies(p):

@@ -14,14 +14,14 @@ import dataclasses
 
 import numpy as np
 import pytest
-
-from qprr import interaction_scenarios as scn
-from qprr.control import make_controller
 from qprr.control.idc import DesiredStateInverseDynamics, IDCGains
 from qprr.control.payload_idc import LayeredIDC
 from qprr.coordinates import xi_to_q
 from qprr.interaction import PushedMass
 from qprr.model import com_world, ee_pose_xi
+
+from qprr import interaction_scenarios as scn
+from qprr.control import make_controller
 from qprr.scenarios import run
 from qprr.sim import simulate
 from qprr.trajectory import Hold, MultiPhase, Phase, Spiral

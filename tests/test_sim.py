@@ -5,13 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
+from qprr.control.bsg import cog_betas
+from qprr.coordinates import xi_to_qv
+from qprr.model import com_body, dynamics_xi
 
 import qprr
 from qprr.control.base import Controller
-from qprr.control.bsg import cog_betas
-from qprr.coordinates import xi_to_qv
 from qprr.errors import DivergenceError, InputError, UnknownNameError
-from qprr.model import com_body, dynamics_xi
 from qprr.scenarios import run
 from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
 from qprr.trajectory import Hold
