@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from qprr.charts import wrap_angle
 from qprr.errors import InputError
 from qprr.wheeled import control as ctl
 from qprr.wheeled.robots import Car, Unicycle
@@ -44,7 +45,7 @@ def test_polar_posture_regulation_reaches_the_goal(start):
     goal = np.array([0.5, -0.3, 0.4])
     r = simulate(Unicycle(), start, ctl.PosturePolar(goal), 30.0, 0.02)
     assert np.linalg.norm(r.q[-1, :2] - goal[:2]) < 1e-6
-    assert abs(ctl.wrap(r.q[-1, 2] - goal[2])) < 1e-6
+    assert abs(wrap_angle(r.q[-1, 2] - goal[2])) < 1e-6
 
 
 def test_car_tracking_by_dynamic_feedback_linearisation():

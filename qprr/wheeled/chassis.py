@@ -23,7 +23,7 @@ from enum import Enum
 
 import numpy as np
 
-from ..charts import as_vector, rot_z
+from ..charts import as_vector, rot_z, wrap_angle
 from ..errors import InputError
 from ._backend import is_symbolic, matrix
 from .wheels import Wheel, WheelKind
@@ -69,11 +69,11 @@ def wheel_at(kind: type, x: float, y: float, r: float, heading: float = 0.0, **k
     chosen so that the wheel rolls along ``heading`` (rad, robot frame; 0 = along x_R) for a
     zero steering angle: beta = pi/2 + heading - alpha.  A wheel at the origin gets
     alpha = pi/2 (the lecture's Remark 2).  E.g. the lecture's Example 1 right wheel
-    (alpha = -pi/2, beta = pi) is ``wheel_at(FixedWheel, 0, -L, r)``.
+    (alpha = -pi/2, beta = pi, returned as -pi) is ``wheel_at(FixedWheel, 0, -L, r)``.
     """
     ell = math.hypot(x, y)
     alpha = math.atan2(y, x) if ell > 0.0 else math.pi / 2
-    beta = math.remainder(math.pi / 2 + heading - alpha, 2 * math.pi)
+    beta = float(wrap_angle(math.pi / 2 + heading - alpha))
     if kind.__name__ in ("CentredSteerableWheel", "OffCentredSteerableWheel"):
         return kind(alpha=alpha, ell=ell, r=r, beta0=beta, **kw)
     return kind(alpha=alpha, beta=beta, ell=ell, r=r, **kw)

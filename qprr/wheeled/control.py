@@ -32,13 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_vector
+from ..charts import as_vector, wrap_angle
 from ..errors import InputError
-
-
-def wrap(a: float) -> float:
-    """Angle in (-pi, pi] (IEEE remainder)."""
-    return math.remainder(a, 2 * math.pi)
 
 
 def _gain(name: str, value: float) -> float:
@@ -118,7 +113,7 @@ class KanayamaTracking:
         xr, yr, thr, vr, wr = reference_posture(self.reference, t)
         c, s = math.cos(th), math.sin(th)
         ex, ey = c * (xr - x) + s * (yr - y), -s * (xr - x) + c * (yr - y)
-        et = wrap(thr - th)
+        et = wrap_angle(thr - th)
         return np.array([vr * math.cos(et) + self.kx * ex, wr + vr * (self.ky * ey + self.kt * math.sin(et))])
 
 
@@ -168,12 +163,12 @@ class PosturePolar:
         xg, yg, thg = self.goal
         c, s = math.cos(thg), math.sin(thg)
         xl, yl = c * (x - xg) + s * (y - yg), -s * (x - xg) + c * (y - yg)  # robot in the goal frame
-        thl = wrap(th - thg)
+        thl = wrap_angle(th - thg)
         rho = math.hypot(xl, yl)
         if rho < self.tol:
             return np.array([0.0, -self.k2 * thl])
-        gamma = wrap(math.atan2(yl, xl) - thl + math.pi)
-        delta = wrap(gamma + thl)
+        gamma = wrap_angle(math.atan2(yl, xl) - thl + math.pi)
+        delta = wrap_angle(gamma + thl)
         sc = math.sin(gamma) * math.cos(gamma) / gamma if abs(gamma) > 1e-9 else 1.0
         return np.array([self.k1 * rho * math.cos(gamma), self.k2 * gamma + self.k1 * sc * (gamma + self.k3 * delta)])
 
@@ -295,4 +290,4 @@ class SinusoidalParking:
 
 
 __all__ = ["CarTracking", "Circle", "KanayamaTracking", "Lemniscate", "PointTracking", "PosturePolar", "SinusoidalParking",
-           "reference_posture", "wrap"]
+           "reference_posture"]
