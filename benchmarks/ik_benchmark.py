@@ -1,4 +1,4 @@
-"""Inverse kinematics of the Q-PRR: every qprr.ik method and the peers, on the same targets.
+"""Inverse kinematics of the Q-PRR: every method of qprr.thesis.igm.solve and the peers, on the same targets.
 
     python benchmarks/ik_benchmark.py [--n 200] [--n-unreachable 50] [--seed 0] [--reps 5]
                                       [--no-peers] [--png out/ik_benchmark.png]
@@ -50,11 +50,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-import qprr
-from qprr import coordinates as co
-from qprr import ik
-from qprr import model as qm
-from qprr.urdf import build_urdf
+import qprr.thesis
+from qprr import charts as co
+from qprr import kinematics as qm
+from qprr.ik import pose_errors
+from qprr.thesis import igm
+from qprr.thesis.urdf import build_urdf
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
 from machine import machine_lines
@@ -119,10 +120,19 @@ class Method:
 
 def qprr_methods(robot, data):
     def make(method, options=None):
-        opts = ik.make_options(method, options)
+        if method == "igm":
+            opts = igm.make_options(method, options, igm.OPTIONS)
+
+            def run(M):
+                r = igm.solve(robot, data, M, method, options=opts)
+                return Outcome(r.xi, r.success, r.iterations)
+
+            return run
+        options = dict(options or {})
+        solver = igm.solver(robot, method, options, init=options.pop("init", "igm"))  # built once: its QPs are reused
 
         def run(M):
-            r = ik.solve(robot, data, M, method, options=opts)
+            r = solver.solve(data, M)
             return Outcome(r.xi, r.success, r.iterations)
 
         return run
@@ -200,7 +210,7 @@ def peer_methods(robot, urdf_path: str):
     out = []
 
     def h0_of(M):
-        return ik.default_guess(robot, M.translation, M.rotation)[HOVER_COLS]
+        return igm.default_guess(robot.params, M.translation, M.rotation)[HOVER_COLS]
 
     # --- pink: differential IK (one QP per step on proxqp), iterated with full steps
     m = Method("pink FrameTask (proxqp)", "hover chain, 7 dof", guess, peer=True)
@@ -218,7 +228,7 @@ def peer_methods(robot, urdf_path: str):
             task = FrameTask("end_effector", position_cost=1.0, orientation_cost=1.0)
             task.set_target(M)
             for it in range(100):  # noqa: B007 (the count is reported)
-                pe, oe = ik.pose_errors(conf.get_transform_frame_to_world("end_effector"), M.translation, M.rotation)
+                pe, oe = pose_errors(conf.get_transform_frame_to_world("end_effector"), M.translation, M.rotation)
                 if pe < TOL and oe < TOL:
                     break
                 v = pink.solve_ik(conf, [task], 1.0, solver="proxqp", limits=limits)
@@ -482,7 +492,7 @@ def main(argv=None) -> int:
 
     print("# Q-PRR inverse kinematics benchmark\n")
     print_machine()
-    robot = qprr.load()
+    robot = qprr.thesis.load()
     data = robot.data()
     reach, unreach = make_targets(robot, data, args.n, args.n_unreachable, args.seed)
     print(f"{len(reach)} reachable targets (FK of random in-limit hover configurations), {len(unreach)} unreachable "

@@ -46,6 +46,8 @@ def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_
 
 
 # ================================================================================ allocation
+_WRENCH_NAMES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
+
 ALLOCATION_SETTINGS = QPSettings(eps_abs=1e-10, eps_primal_inf=1e-12, eps_dual_inf=1e-12, max_iter=10000)
 """proxsuite settings of the allocation QPs: thrusts to 1e-10 N in the scaled problem."""
 
@@ -190,9 +192,19 @@ class Allocator:
             lost = float(np.linalg.norm(residual[0:6]))
             if lost > 1e-9:
                 reasons.append(f"base wrench {np.round(residual[0:6], 12).tolist()} outside what the rotors can produce "
-                               f"(rank {self.platform.wrench_rank} of 6)")
+                               f"(rank {self.platform.wrench_rank} of 6{self._unproducible()})")
         status = "saturated" if (rot or arm) else "exact"
         return AllocationResult(f, tau_d.copy(), achieved, residual, rot, arm, status, "; ".join(reasons) or "all producible components met")
+
+    def _unproducible(self) -> str:
+        """Names the base-wrench components (in B) no rotor acts on, for the reasons of :meth:`allocate`."""
+        if not self.aligned:
+            return ""
+        missing = [name for i, name in enumerate(_WRENCH_NAMES) if i not in self.rows]
+        if not missing:
+            return ""
+        lateral = ", the body-lateral force: every thrust is along z_B" if missing == ["f_x", "f_y"] else ""
+        return f"; no rotor acts on {', '.join(missing)}{lateral}"
 
     def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
         """In-loop allocation without validation: writes f into ``f_out`` and, if given, N f into ``tau_out``.

@@ -15,7 +15,7 @@ tool transform ^nT_f close it as in (3.30).  :func:`chain` evaluates it with num
 :func:`build_model` turns the same table into a fixed-base Pinocchio model (kinematics
 only: its bodies are massless) so that Pinocchio's Jacobians can be compared too.
 
-The thesis's own table, transforms and their misprints are in :mod:`qprr.thesis`
+The thesis's own table, transforms and their misprints are in :mod:`qprr.thesis.printed`
 (``table_3_4``, ``mdh_3_28``, ``T_b0_3_49``...); this module only implements the
 convention.
 """
@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .coordinates import as_vector, rot_x, rot_z
+from .charts import as_vector, rot_x, rot_z
 from .errors import InputError, ShapeError
 
 SIGMAS = (0, 1)
@@ -94,7 +94,7 @@ def kk_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
     """Rot(x, alpha) Trans(x, d) Rot(z, theta) Trans(z, r) (4x4), Thesis (3.27).
 
     Evaluated as the product of the four elementary transforms, which is what (3.27)
-    states; :func:`qprr.thesis.mdh_3_28` is the closed form printed as (3.28).
+    states; :func:`qprr.thesis.printed.mdh_3_28` is the closed form printed as (3.28).
     """
     return (
         _homogeneous(R=rot_x(alpha))
@@ -137,7 +137,7 @@ def chain(rows: Sequence[MDHRow], q, base=None, tool=None, *,
     ``q`` holds one value per joint row, in table order [m or rad]; ``base`` = ^bT_0 and
     ``tool`` = ^nT_f are constant 4x4 transforms (identity when None).  ``transform(alpha,
     d, theta, r)`` gives one link transform: (3.27) by default; pass another closed form
-    (e.g. :func:`qprr.thesis.mdh_3_28`) to see what it does to the chain.
+    (e.g. :func:`qprr.thesis.printed.mdh_3_28`) to see what it does to the chain.
     """
     rows = _check_rows(rows)
     q = as_vector(q, n_joints(rows), "q")

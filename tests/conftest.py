@@ -1,22 +1,28 @@
-"""Shared fixtures: the default robot and a seeded generator of in-limit states."""
+"""Shared fixtures: the default Q-PRR platform and a seeded generator of in-limit states."""
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-import qprr
-from qprr import model as qm
+import qprr.thesis
+from qprr.platform import Platform
+
+_PACKAGE = Path(qprr.__file__).resolve().parent
 
 
 @pytest.fixture(scope="session")
-def robot() -> qm.Robot:
-    return qprr.load()
+def robot() -> Platform:
+    """The thesis's Q-PRR ("+" layout, default parameters)."""
+    return qprr.thesis.load()
 
 
 @pytest.fixture(scope="session")
-def cad_robot() -> qm.Robot:
-    return qprr.load("cad")
+def cad_robot() -> Platform:
+    return qprr.thesis.load("cad")
 
 
 @pytest.fixture()
@@ -24,7 +30,7 @@ def data(robot):
     return robot.data()
 
 
-def random_xi(rng: np.random.Generator, robot: qm.Robot, max_pitch: float = 1.3) -> np.ndarray:
+def random_xi(rng: np.random.Generator, robot: Platform, max_pitch: float = 1.3) -> np.ndarray:
     """A random state with the arm inside its limits and |pitch| <= max_pitch."""
     xi = np.empty(9)
     xi[0:3] = rng.uniform(-5.0, 5.0, 3)
@@ -33,3 +39,27 @@ def random_xi(rng: np.random.Generator, robot: qm.Robot, max_pitch: float = 1.3)
     xi[5] = rng.uniform(-np.pi, np.pi)
     xi[6:9] = rng.uniform(robot.params.lower_limits, robot.params.upper_limits)
     return xi
+
+
+def _foreign_qprr_modules() -> list[str]:
+    """qprr modules imported from another checkout (e.g. an editable install resolving a module this tree lacks)."""
+    out = []
+    for name, mod in list(sys.modules.items()):
+        path = getattr(mod, "__file__", None)
+        if (name == "qprr" or name.startswith("qprr.")) and path and _PACKAGE not in Path(path).resolve().parents:
+            out.append(f"{name} ({path})")
+    return sorted(out)
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus, config):
+    foreign = _foreign_qprr_modules()
+    if foreign:
+        terminalreporter.section("qprr modules from outside this tree", sep="!", red=True)
+        terminalreporter.line("these tests ran code of another checkout, not of " + str(_PACKAGE) + ":")
+        for line in foreign:
+            terminalreporter.line("  " + line)
+
+
+def pytest_sessionfinish(session, exitstatus):
+    if _foreign_qprr_modules() and session.exitstatus == 0:
+        session.exitstatus = 1

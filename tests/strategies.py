@@ -7,7 +7,7 @@ import math
 import numpy as np
 from hypothesis import strategies as st
 
-from qprr.params import QPRRParams, thesis_params
+from qprr.thesis.params import QPRRParams, thesis_params
 
 ANGLE = st.floats(-math.pi, math.pi)
 PITCH = st.floats(-1.39, 1.39)  # away from the ZYX singularity theta = +-pi/2
@@ -22,6 +22,16 @@ def xi_strategy(params: QPRRParams | None = None):
     return st.tuples(POSITION, POSITION, POSITION, ANGLE, PITCH, ANGLE, *arm).map(np.array)
 
 
-def rates_strategy():
-    """xi_dot (or any 9-vector of rates) in [-3, 3]."""
-    return st.lists(RATE, min_size=9, max_size=9).map(np.array)
+def rates_strategy(n: int = 9):
+    """xi_dot (or any n-vector of rates, default 9) in [-3, 3]."""
+    return st.lists(RATE, min_size=n, max_size=n).map(np.array)
+
+
+def platform_xi_strategy(platform, max_pitch: float = 1.39):
+    """xi of any platform (6 + n_arm): position in [-5, 5]^3 m, |pitch| <= max_pitch, arm inside its limits
+    (a joint without limits in [-pi, pi] or [-1, 1] m)."""
+    arm = []
+    for j in platform.arm:
+        span = math.pi if j.kind == "revolute" else 1.0
+        arm.append(st.floats(max(j.lower, -span), min(j.upper, span)))
+    return st.tuples(POSITION, POSITION, POSITION, ANGLE, st.floats(-max_pitch, max_pitch), ANGLE, *arm).map(np.array)

@@ -7,9 +7,17 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from qprr.actuation import allocation_inverse, rotor_matrix
-from qprr.allocation import Allocator
+from qprr.actuation import Allocator
 from qprr.errors import InputError, ShapeError
+
+
+def allocation_inverse(robot):
+    """Omega_z^-1 (4x4), rotor thrusts of [f_bz, tau_x, tau_y, tau_z]: the allocator's exact path (Thesis (A.1) corrected)."""
+    return Allocator(robot).Omega_P_inv
+
+
+def rotor_matrix(robot):
+    return robot.rotor_matrix
 
 wrench = st.tuples(st.floats(-20, 120), st.floats(-8, 8), st.floats(-8, 8), st.floats(-3, 3))
 
@@ -134,4 +142,4 @@ def test_bad_input(robot):
     with pytest.raises(InputError):
         Allocator(robot, thrust_bounds=(5.0, 1.0))
     with pytest.raises(InputError):
-        Allocator(robot, weight_thrust=-1.0)
+        Allocator(robot, weight_force=-1.0)

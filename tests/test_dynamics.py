@@ -1,5 +1,5 @@
-"""Pinocchio's coupled dynamics in thesis coordinates (qprr.model.dynamics_xi) against the
-independent sympy Lagrange model (qprr.symbolic), Thesis (5.25)-(5.39).
+"""Pinocchio's coupled dynamics in thesis coordinates (qprr.dynamics.dynamics_xi) against the
+independent sympy Lagrange model (qprr.thesis.symbolic), Thesis (5.25)-(5.39).
 
 The arbiter when the two disagree is the Lagrange equation evaluated by finite
 differences of Pinocchio's energy functions (test_lagrange_equations_from_pinocchio_energies).
@@ -15,10 +15,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from qprr import coordinates as co
-from qprr import model as qm
-from qprr import symbolic as sy
+import qprr.thesis
+from qprr import charts as co
+from qprr import dynamics as dyn
 from qprr.errors import EulerSingularityError, NonFiniteError, ShapeError
+from qprr.thesis import symbolic as sy
 
 from .strategies import rates_strategy, xi_strategy
 
@@ -28,7 +29,7 @@ REL = 1e-9
 @pytest.fixture(scope="module", params=["thesis", "cad"])
 def pair(request):
     """(robot, data, symbolic model) of one parameter variant."""
-    robot = qm.load(request.param)
+    robot = qprr.thesis.load(request.param)
     return robot, robot.data(), sy.symbolic_model(robot.params)
 
 
@@ -41,7 +42,7 @@ def _rel(a, b) -> float:
 @given(xi=xi_strategy(), w=rates_strategy())
 def test_B_C_G_match_symbolic_model(pair, xi, w):
     robot, data, sm = pair
-    B, C, G = qm.dynamics_xi(robot, data, xi, w)
+    B, C, G = dyn.dynamics_xi(robot, data, xi, w)
     Bs, Cs, Gs = sm.dynamics(xi, w)
     assert _rel(B, Bs) <= REL
     assert _rel(G, Gs) <= REL
@@ -71,7 +72,7 @@ def test_aba_forward_dynamics_matches_5_39(pair, xi, w, u):
     """ABA on the Lie group vs xi_ddot = B^-1 (u - C xi_dot - G) of the symbolic model, Thesis (5.39)."""
     robot, data, sm = pair
     u = np.array(u)
-    a_pin = qm.forward_dynamics_xi(robot, data, xi, w, u)
+    a_pin = dyn.forward_dynamics_xi(robot, data, xi, w, u)
     a_sym = sm.forward_dynamics(xi, w, u)
     # relative to B^-1 times the size of the force terms (B^-1 amplifies with 1/cos(theta))
     B, C, G = sm.dynamics(xi, w)
@@ -85,8 +86,8 @@ def test_energies_match(pair, xi, w):
     """Kinetic (Thesis (5.13)) and potential (5.29) energies: Pinocchio vs the symbolic expressions."""
     robot, data, sm = pair
     q, v = co.xi_to_qv(xi, w)
-    T = qm.kinetic_energy(robot, data, q, v)
-    U = qm.potential_energy(robot, data, q)
+    T = dyn.kinetic_energy(robot, data, q, v)
+    U = dyn.potential_energy(robot, data, q)
     assert T == pytest.approx(sm.kinetic_energy(xi, w), rel=1e-12, abs=1e-12)
     assert U == pytest.approx(sm.potential_energy(xi), rel=1e-12, abs=1e-10)
 
@@ -94,11 +95,11 @@ def test_energies_match(pair, xi, w):
 # ------------------------------------------------------------- physics of Pinocchio's B, C, G
 def _pin_T(robot, data, xi, w) -> float:
     q, v = co.xi_to_qv(xi, w)
-    return qm.kinetic_energy(robot, data, q, v)
+    return dyn.kinetic_energy(robot, data, q, v)
 
 
 def _pin_U(robot, data, xi) -> float:
-    return qm.potential_energy(robot, data, co.xi_to_q(xi))
+    return dyn.potential_energy(robot, data, co.xi_to_q(xi))
 
 
 def _grad(f, x, h):
@@ -117,7 +118,7 @@ def test_lagrange_equations_from_pinocchio_energies(pair, xi, w):
     C xi_dot = d/dt(dT/dxi_dot) - dT/dxi and G = dU/dxi, evaluated by finite differences of
     Pinocchio's computeKineticEnergy / computePotentialEnergy through xi -> (q, v)."""
     robot, data, sm = pair
-    B, C, G = qm.dynamics_xi(robot, data, xi, w)
+    B, C, G = dyn.dynamics_xi(robot, data, xi, w)
 
     def momentum(x):  # dT/dxi_dot: central difference, exact for a quadratic T at any step
         return _grad(lambda v: _pin_T(robot, data, x, v), w, 1.0)
@@ -137,11 +138,11 @@ def test_lagrange_equations_from_pinocchio_energies(pair, xi, w):
 def test_pinocchio_bdot_minus_2c_skew_and_B_spd(pair, xi, w):
     """Hypothesis 7 for Pinocchio's B, C: B SPD; B_dot - 2C skew with B_dot by central difference along xi_dot."""
     robot, data, _ = pair
-    B, C, _ = qm.dynamics_xi(robot, data, xi, w)
+    B, C, _ = dyn.dynamics_xi(robot, data, xi, w)
     np.testing.assert_allclose(B, B.T, rtol=0, atol=1e-15 * np.linalg.norm(B))
     assert np.linalg.eigvalsh(B)[0] > 0.0
     h = 1e-6
-    B_dot = (qm.dynamics_xi(robot, data, xi + h * w, w)[0] - qm.dynamics_xi(robot, data, xi - h * w, w)[0]) / (2 * h)
+    B_dot = (dyn.dynamics_xi(robot, data, xi + h * w, w)[0] - dyn.dynamics_xi(robot, data, xi - h * w, w)[0]) / (2 * h)
     N = B_dot - 2 * C
     assert np.linalg.norm(N + N.T) <= 1e-7 * np.linalg.norm(B) * max(np.linalg.norm(w), 1e-3)
 
@@ -152,21 +153,21 @@ def test_euler_singularity_raises(pair):
     xi = np.zeros(9)
     xi[4] = math.pi / 2
     with pytest.raises(EulerSingularityError, match="theta"):
-        qm.dynamics_xi(robot, data, xi, np.zeros(9))
+        dyn.dynamics_xi(robot, data, xi, np.zeros(9))
     with pytest.raises(EulerSingularityError, match="theta"):
-        qm.forward_dynamics_xi(robot, data, xi, np.zeros(9), np.zeros(9))
+        dyn.forward_dynamics_xi(robot, data, xi, np.zeros(9), np.zeros(9))
 
 
 def test_bad_shapes_and_nan_name_the_argument(pair):
     robot, data, _ = pair
     z = np.zeros(9)
     with pytest.raises(ShapeError, match="xi"):
-        qm.dynamics_xi(robot, data, np.zeros(10), z)
+        dyn.dynamics_xi(robot, data, np.zeros(10), z)
     with pytest.raises(ShapeError, match="xi_dot"):
-        qm.dynamics_xi(robot, data, z, np.zeros((3, 3)))
+        dyn.dynamics_xi(robot, data, z, np.zeros((3, 3)))
     with pytest.raises(NonFiniteError, match="xi_dot"):
-        qm.dynamics_xi(robot, data, z, np.r_[np.inf, np.zeros(8)])
+        dyn.dynamics_xi(robot, data, z, np.r_[np.inf, np.zeros(8)])
     with pytest.raises(NonFiniteError, match="xi"):
-        qm.dynamics_xi(robot, data, np.r_[np.nan, np.zeros(8)], z)
+        dyn.dynamics_xi(robot, data, np.r_[np.nan, np.zeros(8)], z)
     with pytest.raises(ShapeError, match="u"):
-        qm.forward_dynamics_xi(robot, data, z, z, np.zeros(4))
+        dyn.forward_dynamics_xi(robot, data, z, z, np.zeros(4))

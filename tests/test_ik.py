@@ -1,4 +1,4 @@
-"""Inverse kinematics (qprr.ik, qprr.tasks): every method against Pinocchio's forward
+"""Inverse kinematics (qprr.ik, qprr.thesis.igm): every method against Pinocchio's forward
 kinematics, the thesis steps and their errata, the strict priority of the QP hierarchy,
 joint limits, unreachable targets and bad input."""
 
@@ -14,13 +14,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import qprr
-from qprr import coordinates as co
-from qprr import ik, tasks
-from qprr import model as qm
+import qprr.ik
+import qprr.thesis
+from qprr import charts as co
+from qprr import kinematics as kin
 from qprr.errors import InputError, LimitError, NonFiniteError, ShapeError, UnknownNameError
+from qprr.ik import tasks
+from qprr.thesis import igm
 
 POS_TOL = ORI_TOL = 1e-6
-_ROBOT = qprr.load()  # for the hypothesis tests (no function-scoped fixtures there)
+_ROBOT = qprr.thesis.load()  # for the hypothesis tests (no function-scoped fixtures there)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -34,7 +37,7 @@ def random_hover_xi(rng, robot, box=3.0):
 
 
 def target_of(robot, data, xi) -> pin.SE3:
-    return qm.ee_placement(robot, data, co.xi_to_q(xi))
+    return kin.ee_placement(robot, data, co.xi_to_q(xi))
 
 
 def tilted(M: pin.SE3, angle: float) -> pin.SE3:
@@ -46,7 +49,7 @@ def tilted(M: pin.SE3, angle: float) -> pin.SE3:
 
 
 def fk_errors(robot, data, q, M_d):
-    M = qm.ee_placement(robot, data, q)
+    M = kin.ee_placement(robot, data, q)
     return np.linalg.norm(M.translation - M_d.translation), np.linalg.norm(pin.log3(M_d.rotation.T @ M.rotation))
 
 
@@ -67,7 +70,7 @@ def assert_valid_solution(robot, data, res, M_d, hover=True):
     assert abs(pos - res.position_error) < 1e-12 and abs(ori - res.orientation_error) < 1e-12
     robot.check_arm_limits(res.q[7:10])
     np.testing.assert_allclose(co.xi_to_q(res.xi), res.q, atol=1e-12)
-    c_b = qm.com_body(robot, data, res.q)
+    c_b = kin.com_body(robot, data, res.q)
     assert abs(c_b[0] - res.x_cm) < 1e-12 and abs(c_b[1] - res.y_cm) < 1e-12
     if hover:
         assert res.hover_feasible and abs(res.xi[3]) < 1e-6 and abs(res.xi[4]) < 1e-6
@@ -75,7 +78,7 @@ def assert_valid_solution(robot, data, res, M_d, hover=True):
 
 @pytest.fixture(scope="module")
 def rob():
-    return qprr.load()
+    return qprr.thesis.load()
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +107,7 @@ def hover_targets(rob, dat):
 def test_methods_reach_reachable_hover_targets(rob, dat, hover_targets, method, options):
     n = 8 if method == "clika" else len(hover_targets)  # CLIKA takes ~60 Euler steps
     for M_d in hover_targets[:n]:
-        res = ik.solve(rob, dat, M_d, method, options=options)
+        res = igm.solve(rob, dat, M_d, method, options=options)
         assert_valid_solution(rob, dat, res, M_d)
         assert res.method == method and res.iterations >= 0 and res.wall_time > 0
 
@@ -113,7 +116,7 @@ def test_igm_levenberg_marquardt_converges_from_a_far_guess(rob, dat, hover_targ
     """Algorithm 4 on (3.72) from a guess metres away with a bent arm: a few iterations."""
     for M_d in hover_targets[:10]:
         xi0 = np.r_[M_d.translation + [3.0, -2.0, 4.0], 0.0, 0.0, 1.0, 0.03, 1.5, -1.0]
-        res = ik.solve(rob, dat, M_d, "igm", xi0=xi0)
+        res = igm.solve(rob, dat, M_d, "igm", xi0=xi0)
         assert_valid_solution(rob, dat, res, M_d)
         assert 1 <= res.iterations <= 10 and res.initial_guess == "xi0 (given)"
 
@@ -123,13 +126,13 @@ def test_igm_is_exact_and_puts_r0_at_the_cog_optimum(rob, dat, hover_targets):
     the base compensates (3.71) so that the end effector stays on the target."""
     lo, hi = rob.params.r0_limits
     for M_d in hover_targets:
-        res = ik.solve(rob, dat, M_d, "igm")
+        res = igm.solve(rob, dat, M_d, "igm")
         assert res.position_error < 1e-9 and res.orientation_error < 1e-12
         xs = []
         for r0 in np.linspace(lo, hi, 41):
             q = res.q.copy()
             q[7] = r0
-            xs.append(abs(qm.com_body(rob, dat, q)[0]))
+            xs.append(abs(kin.com_body(rob, dat, q)[0]))
         assert abs(res.x_cm) <= min(xs) + 1e-12
         if min(xs) > 0:  # unbalanceable with this theta2: r0 saturated (Algorithm 5)
             assert res.xi[6] in (lo, hi) or abs(res.x_cm) < 1e-12
@@ -138,8 +141,8 @@ def test_igm_is_exact_and_puts_r0_at_the_cog_optimum(rob, dat, hover_targets):
 def test_balanced_igm_centres_the_cog_when_possible(rob, dat, hover_targets):
     n_balanced = 0
     for M_d in hover_targets:
-        lm = ik.solve(rob, dat, M_d, "igm")
-        bal = ik.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
+        lm = igm.solve(rob, dat, M_d, "igm")
+        bal = igm.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
         assert abs(bal.x_cm) <= abs(lm.x_cm) + 1e-12
         n_balanced += abs(bal.x_cm) < 1e-12
     assert n_balanced >= 0.8 * len(hover_targets)
@@ -151,13 +154,13 @@ def test_igm_cog_closed_form_matches_pinocchio_for_cad_parameters(cad_robot):
     rng = np.random.default_rng(3)
     for _ in range(10):
         M_d = target_of(cad_robot, data, random_hover_xi(rng, cad_robot))
-        res = ik.solve(cad_robot, data, M_d, "igm")
+        res = igm.solve(cad_robot, data, M_d, "igm")
         assert res.success, res.reason
-        K = ik.arm_constants(cad_robot.params)
+        K = igm.arm_constants(cad_robot.params)
         r0, t2, t3 = res.xi[6:9]
         x_cm = (K.M_s * r0 + K.k0 + K.a_s * math.sin(t2) + K.a_c * math.cos(t2) + K.b_s * math.sin(t2 + t3)
                 + K.b_c * math.cos(t2 + t3)) / K.m_G
-        c_b = qm.com_body(cad_robot, data, res.q)
+        c_b = kin.com_body(cad_robot, data, res.q)
         assert abs(x_cm - c_b[0]) < 1e-12 and abs(K.y0 / K.m_G - c_b[1]) < 1e-12
 
 
@@ -202,7 +205,7 @@ def test_3_69_3_70_paired_branches(rob):
         if abs(math.sin(t23)) < 1e-3:
             continue
         R = co.rot_z(psi) @ co.rot_y(t23)
-        p, t = ik.hover_angles_from_zyz(*zyz_3_64(R))
+        p, t = igm.hover_angles_from_zyz(*zyz_3_64(R))
         np.testing.assert_allclose(co.rot_z(p) @ co.rot_y(t), R, atol=1e-12)
     psi, t23 = 0.4, -0.7  # sin t23 < 0: the second branch
     phi_e, theta_e, _ = zyz_3_64(co.rot_z(psi) @ co.rot_y(t23))
@@ -218,7 +221,7 @@ def test_3_71_3_72_reduced_system_corrected(rob, dat):
     p = rob.params
     xi = np.array([0.3, -0.2, 1.0, 0.0, 0.0, 0.4, 0.03, 0.5, -1.4])  # s23 < 0
     x_b, y_b, z_b, _, _, psi, r0, t2, t3 = xi
-    p_e = qm.ee_placement(rob, dat, co.xi_to_q(xi)).translation
+    p_e = kin.ee_placement(rob, dat, co.xi_to_q(xi)).translation
     xp, yp = x_b + math.cos(psi) * r0, y_b + math.sin(psi) * r0  # (3.71), second line read as y_b'
     h = p.d2 * math.sin(t2) + p.d3 * math.sin(t2 + t3)
     corrected = [xp + math.cos(psi) * h, yp + math.sin(psi) * h, z_b + p.d0 + p.d1 + p.d2 * math.cos(t2) + p.d3 * math.cos(t2 + t3)]
@@ -232,19 +235,19 @@ def test_3_71_3_72_reduced_system_corrected(rob, dat):
 def test_algorithm_5_printed_moves_the_end_effector(rob, dat):
     """Algorithm 5 as printed shifts |x_b| by the excess of r0 with the sign of x_b; the
     corrected form saturates r0 and re-applies (3.71), which keeps the end effector fixed."""
-    K = ik.arm_constants(rob.params)
+    K = igm.arm_constants(rob.params)
     xi = np.array([-0.5, 0.3, 1.0, 0.0, 0.0, math.pi / 2, 0.0, 0.9, 0.2])
     psi, t2, t3 = xi[5], xi[7], xi[8]
     r0_free = 0.07  # beyond r0_max = 0.04
     xp, yp = xi[0] + math.cos(psi) * r0_free, xi[1] + math.sin(psi) * r0_free  # EE fixed by these
-    M_d = qm.ee_placement(rob, dat, co.xi_to_q(np.r_[xi[0:6], 0.0, t2, t3]))
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(np.r_[xi[0:6], 0.0, t2, t3]))
     target = M_d.translation + np.array([math.cos(psi), math.sin(psi), 0.0]) * r0_free
-    x_b, y_b, r0 = ik.prismatic_check(xp, yp, psi, r0_free, *rob.params.r0_limits)
+    x_b, y_b, r0 = igm.prismatic_check(xp, yp, psi, r0_free, *rob.params.r0_limits)
     assert r0 == K.upper[0]
-    good = qm.ee_placement(rob, dat, co.xi_to_q([x_b, y_b, xi[2], 0, 0, psi, r0, t2, t3])).translation
+    good = kin.ee_placement(rob, dat, co.xi_to_q([x_b, y_b, xi[2], 0, 0, psi, r0, t2, t3])).translation
     np.testing.assert_allclose(good, target, atol=1e-12)
-    x_bad = ik.prismatic_check_printed(xp - math.cos(psi) * r0_free, r0_free, K.upper[0])
-    bad = qm.ee_placement(rob, dat, co.xi_to_q([x_bad, yp - math.sin(psi) * r0_free, xi[2], 0, 0, psi, K.upper[0], t2, t3])).translation
+    x_bad = igm.prismatic_check_printed(xp - math.cos(psi) * r0_free, r0_free, K.upper[0])
+    bad = kin.ee_placement(rob, dat, co.xi_to_q([x_bad, yp - math.sin(psi) * r0_free, xi[2], 0, 0, psi, K.upper[0], t2, t3])).translation
     assert np.linalg.norm(bad - target) > 0.02
 
 
@@ -256,7 +259,7 @@ def test_3_78_cog_height_misprint(rob, dat):
     mG = p.total_mass
     for r0, t2, t3 in [(0.01, 0.7, -0.3), (-0.03, 0.0, 0.9)]:  # the two misprints cancel near cos t2 = 0.37
         q = co.xi_to_q([0.0, 0.0, 0.0, 0.0, 0.0, 0.0, r0, t2, t3])
-        c = qm.com_body(rob, dat, q)
+        c = kin.com_body(rob, dat, q)
         x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * p.d2 * math.sin(t2) + m3 * p.d3 * math.sin(t2 + t3) / 2) / mG
         z_printed = ((m1 + m2 + m3) * (p.d0 + p.d1) + (m2 + m3) * p.d2 * math.cos(t2) / 2 + m3 * p.d3 * math.cos(t2 + t3) / 2) / mG
         z_fixed = (m1 * (p.d0 + p.d1 / 2) + (m2 + m3) * (p.d0 + p.d1) + (m2 / 2 + m3) * p.d2 * math.cos(t2)
@@ -268,7 +271,7 @@ def test_3_78_cog_height_misprint(rob, dat):
 def test_3_81_minimising_the_signed_cog_offset_is_wrong(rob):
     """(3.81) minimises F = x_cm itself; F is affine in r0, so that always picks r0_min.
     The criterion that centres the CoG is min |F| (the text's x_cm < eps)."""
-    K = ik.arm_constants(rob.params)
+    K = igm.arm_constants(rob.params)
     t2, t3 = -0.3, 0.1  # F < 0 at r0 = 0: |F| is smallest at some r0 > 0
     F = lambda r0: (K.M_s * r0 + K.a_s * math.sin(t2) + K.b_s * math.sin(t2 + t3)) / K.m_G  # noqa: E731
     grid = np.linspace(K.lower[0], K.upper[0], 801)
@@ -297,13 +300,13 @@ def test_clika_thesis_example(rob, dat):
     leaves its +-0.04 m range (reported as a failure with the reason); weighting r0 by
     (4.34) keeps it inside."""
     M_d = thesis_example_target()
-    res = ik.solve(rob, dat, M_d, "clika", xi0=np.zeros(9))
+    res = igm.solve(rob, dat, M_d, "clika", xi0=np.zeros(9))
     pos, ori = fk_errors(rob, dat, res.q, M_d)
     assert pos < POS_TOL and ori < ORI_TOL
     assert not res.success and res.status == "limits" and "out of limits" in res.reason
     assert abs(res.xi[6]) > rob.params.r0_limits[1] and not res.within_limits
     w = (1, 1, 1, 1, 1, 1, 1e6, 1, 1)
-    res_w = ik.solve(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w})
+    res_w = igm.solve(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w})
     assert_valid_solution(rob, dat, res_w, M_d, hover=False)
 
 
@@ -312,7 +315,7 @@ def test_clika_step_is_the_printed_weighted_pseudo_inverse(rob, dat):
     = J^T (J J^T)^-1 (4.36) for W = I."""
     rng = np.random.default_rng(8)
     xi = np.r_[rng.uniform(-1, 1, 3), 0.2, -0.1, 0.5, 0.01, 0.7, -0.4]
-    J = qm.jacobian_xi(rob, dat, xi)
+    J = kin.jacobian_xi(rob, dat, xi)
     for w in (np.ones(9), rng.uniform(0.5, 5.0, 9)):
         printed = np.diag(1 / w) @ J.T @ np.linalg.inv(J @ np.diag(1 / w) @ J.T)
         ours = np.diag(1 / np.sqrt(w)) @ np.linalg.pinv(J / np.sqrt(w), rcond=1e-10)
@@ -322,7 +325,7 @@ def test_clika_step_is_the_printed_weighted_pseudo_inverse(rob, dat):
 # ------------------------------------------------------------------ the QP hierarchy
 def _lin_step(rob, dat, q, levels, elimination="nullspace", eps_abs=1e-9):
     tasks.update_kinematics(rob, dat, q)
-    eng = tasks.HierarchySolver(rob, elimination=elimination, eps_abs=eps_abs, max_qp_iter=100000)
+    eng = qprr.ik.HierarchySolver(rob, elimination=elimination, eps_abs=eps_abs, max_qp_iter=100000)
     eng.reset()
     return eng.solve(rob, dat, q, levels)
 
@@ -339,9 +342,9 @@ def test_lower_levels_never_degrade_higher_ones(seed):
     xi[3:5] = rng.uniform(-0.3, 0.3, 2)
     xi[6] = rng.choice([rob.params.r0_limits[0], rob.params.r0_limits[1], 0.0])  # often on a limit
     q = co.xi_to_q(xi)
-    M_d = qm.ee_placement(rob, dat, co.xi_to_q(xi + rng.normal(0, 0.05, 9)))
-    full = ik.default_levels(rob, M_d, rng.uniform(rob.params.lower_limits, rob.params.upper_limits))
-    for elimination in tasks.ELIMINATIONS:  # exact by construction / equalities met to eps_abs
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(xi + rng.normal(0, 0.05, 9)))
+    full = qprr.ik.default_levels(rob, M_d, rng.uniform(rob.params.lower_limits, rob.params.upper_limits))
+    for elimination in qprr.ik.ELIMINATIONS:  # exact by construction / equalities met to eps_abs
         r1 = [_lin_step(rob, dat, q, full[:k], elimination).residuals[0] for k in (1, 2, 4)]
         assert max(r1) - min(r1) < 1e-8 * (1 + min(r1))
         r2 = [_lin_step(rob, dat, q, full[:k], elimination).residuals[1] for k in (2, 4)]
@@ -356,8 +359,8 @@ def test_nullspace_and_equality_eliminations_agree(rob, dat):
         xi = random_hover_xi(rng, rob)
         xi[3:5] = rng.uniform(-0.3, 0.3, 2)
         q = co.xi_to_q(xi)
-        M_d = qm.ee_placement(rob, dat, co.xi_to_q(xi + rng.normal(0, 0.05, 9)))
-        levels = ik.default_levels(rob, M_d, rng.uniform(rob.params.lower_limits, rob.params.upper_limits))
+        M_d = kin.ee_placement(rob, dat, co.xi_to_q(xi + rng.normal(0, 0.05, 9)))
+        levels = qprr.ik.default_levels(rob, M_d, rng.uniform(rob.params.lower_limits, rob.params.upper_limits))
         a = _lin_step(rob, dat, q, levels, "nullspace", eps_abs=1e-12)
         b = _lin_step(rob, dat, q, levels, "equality", eps_abs=1e-12)
         np.testing.assert_allclose(a.residuals, b.residuals, atol=1e-7)
@@ -380,7 +383,7 @@ def test_qp_never_violates_joint_limits(seed, tilt, cold):
         xi0[0:3] = M_d.translation + rng.normal(0, 0.2, 3)
     lo, hi = rob.params.lower_limits, rob.params.upper_limits
     for max_iter in (1, 2, 3, 50):
-        res = ik.solve(rob, dat, M_d, "qp", xi0=xi0, options={"max_iter": max_iter})
+        res = igm.solve(rob, dat, M_d, "qp", xi0=xi0, options={"max_iter": max_iter})
         assert np.all(res.q[7:10] >= lo) and np.all(res.q[7:10] <= hi), res.q[7:10]
         assert res.within_limits
 
@@ -389,11 +392,11 @@ def test_qp_result_respects_the_hierarchy(rob, dat, hover_targets):
     """On reachable targets the QP IK ends with pose and hover exact, the CoG on the thrust
     axis whenever the slider range allows it, and never a worse |x_cm| than the thesis IGM."""
     for M_d in hover_targets:
-        qp = ik.solve(rob, dat, M_d, "qp", options={"init": "guess"})
+        qp = igm.solve(rob, dat, M_d, "qp", options={"init": "guess"})
         assert_valid_solution(rob, dat, qp, M_d)
-        igm = ik.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
-        if abs(igm.x_cm) < 1e-12:  # balanceable; the CoG level settles to ~ |dx_cm/dq| step_tol
-            assert abs(qp.x_cm) < 0.1 * ik.QPOptions().step_tol
+        igm_res = igm.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
+        if abs(igm_res.x_cm) < 1e-12:  # balanceable; the CoG level settles to ~ |dx_cm/dq| step_tol
+            assert abs(qp.x_cm) < 0.1 * qprr.ik.QPOptions().step_tol
 
 
 def test_user_tasks_extend_the_hierarchy(rob, dat, hover_targets):
@@ -408,14 +411,14 @@ def test_user_tasks_extend_the_hierarchy(rob, dat, hover_targets):
             J[0, 7] = 1.0
             return J, np.array([0.2 - q[8]])
 
-    M_d = next(M for M in hover_targets if abs(ik.solve(rob, dat, M, "igm", options={"theta2": "balance"}).xi[6]) < 0.02)
+    M_d = next(M for M in hover_targets if abs(igm.solve(rob, dat, M, "igm", options={"theta2": "balance"}).xi[6]) < 0.02)
     levels = ((tasks.PoseTask(rob, M_d),), (Theta2Task(),), (tasks.HoverTask(),))
-    res = ik.solve(rob, dat, M_d, "qp", options={"levels": levels, "require_hover": False})
-    assert res.success and abs(res.xi[7] - 0.2) < 0.1 * ik.QPOptions().step_tol
+    res = igm.solve(rob, dat, M_d, "qp", options={"levels": levels, "require_hover": False})
+    assert res.success and abs(res.xi[7] - 0.2) < 0.1 * qprr.ik.QPOptions().step_tol
     assert res.hover_feasible  # 9 dof - 6 (pose) - 1 (theta2) leave room for hover (rank 1 here)
     levels = ((tasks.PoseTask(rob, M_d),), (tasks.HoverTask(),), (tasks.ComTask((0.001, 0.0)),))
-    res = ik.solve(rob, dat, M_d, "qp", options={"levels": levels})
-    assert res.success and abs(res.x_cm - 0.001) < 0.1 * ik.QPOptions().step_tol
+    res = igm.solve(rob, dat, M_d, "qp", options={"levels": levels})
+    assert res.success and abs(res.x_cm - 0.001) < 0.1 * qprr.ik.QPOptions().step_tol
 
 
 @pytest.mark.parametrize("task_factory", ["pose", "hover", "com", "posture"])
@@ -425,7 +428,7 @@ def test_task_jacobians_by_finite_differences(rob, dat, task_factory):
     xi = random_hover_xi(rng, rob)
     xi[3:5] = [0.2, -0.3]
     q = co.xi_to_q(xi)
-    M_d = qm.ee_placement(rob, dat, co.xi_to_q(xi + 0.1))
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(xi + 0.1))
     task = {
         "pose": lambda: tasks.PoseTask(rob, M_d),
         "hover": tasks.HoverTask,
@@ -450,10 +453,10 @@ def test_a_failing_qp_raises_solver_error(rob, dat):
     """The ProxQP status is checked: a QP stopped before convergence is an error, not a step."""
     xi = np.array([0.0, 0.0, 1.0, 0.2, -0.1, 0.3, 0.04, 1.2, 0.5])  # r0 on its upper limit
     q = co.xi_to_q(xi)
-    M_d = qm.ee_placement(rob, dat, co.xi_to_q(xi + 0.3))
-    levels = ik.default_levels(rob, M_d, [-0.04, -1.0, 1.0])
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(xi + 0.3))
+    levels = qprr.ik.default_levels(rob, M_d, [-0.04, -1.0, 1.0])
     tasks.update_kinematics(rob, dat, q)
-    eng = tasks.HierarchySolver(rob, max_qp_iter=1, eps_abs=1e-14)
+    eng = qprr.ik.HierarchySolver(rob, max_qp_iter=1, eps_abs=1e-14)
     eng.reset()
     with pytest.raises(qprr.SolverError, match="ProxQP did not solve level"):
         eng.solve(rob, dat, q, levels)
@@ -467,7 +470,7 @@ def test_a_failing_qp_raises_solver_error(rob, dat):
 def test_unreachable_in_hover_fails_with_a_reason(rob, dat, hover_targets, method, options):
     for angle in (1e-3, 0.3):
         M_d = tilted(hover_targets[1], angle)
-        res = ik.solve(rob, dat, M_d, method, options=options)
+        res = igm.solve(rob, dat, M_d, method, options=options)
         assert not res.success
         assert res.reason and "hover" in res.reason
         assert res.status in ("unreachable", "not_hover_feasible", "stalled", "max_iterations")
@@ -476,26 +479,26 @@ def test_unreachable_in_hover_fails_with_a_reason(rob, dat, hover_targets, metho
 def test_qp_reaches_the_pose_of_an_unreachable_target_by_tilting(rob, dat, hover_targets):
     """Level 1 is kept; level 2 (hover) is what gives: the best-effort solution is tilted."""
     M_d = tilted(hover_targets[2], 0.3)
-    res = ik.solve(rob, dat, M_d, "qp")
+    res = igm.solve(rob, dat, M_d, "qp")
     assert res.status == "not_hover_feasible"
     assert res.position_error < POS_TOL and res.orientation_error < ORI_TOL
     assert max(abs(res.roll), abs(res.pitch)) > 0.05
-    relaxed = ik.solve(rob, dat, M_d, "qp", options={"require_hover": False})
+    relaxed = igm.solve(rob, dat, M_d, "qp", options={"require_hover": False})
     assert relaxed.success and not relaxed.hover_feasible
 
 
 def test_targets_outside_the_joint_range_fail_cleanly(rob, dat):
     """A Q-PRR whose revolute joints only reach +-0.5 rad cannot point its end effector
     sideways: theta2 + theta3 = pi/2 is outside [-1, 1]."""
-    narrow = qprr.load(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
+    narrow = qprr.thesis.load(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
     data = narrow.data()
     M_d = pin.SE3(co.rot_y(math.pi / 2), np.array([0.0, 0.0, 1.0]))
-    res = ik.solve(narrow, data, M_d, "igm")
+    res = igm.solve(narrow, data, M_d, "igm")
     assert not res.success and res.status == "limits" and "theta2 + theta3" in res.reason
-    res = ik.solve(narrow, data, M_d, "dls")  # hover only: the orientation cannot be reached
+    res = igm.solve(narrow, data, M_d, "dls")  # hover only: the orientation cannot be reached
     assert not res.success and "orientation error" in res.reason
     assert res.within_limits and res.orientation_error > 0.1
-    res = ik.solve(narrow, data, M_d, "qp")  # level 1 is reached by tilting the base, level 2 gives
+    res = igm.solve(narrow, data, M_d, "qp")  # level 1 is reached by tilting the base, level 2 gives
     assert not res.success and res.status == "not_hover_feasible" and "hover" in res.reason
     assert res.within_limits and res.orientation_error < ORI_TOL
 
@@ -503,39 +506,39 @@ def test_targets_outside_the_joint_range_fail_cleanly(rob, dat):
 def test_out_of_limit_requests_raise(rob, dat, hover_targets):
     M_d = hover_targets[0]
     with pytest.raises(LimitError, match="r0"):
-        ik.solve(rob, dat, M_d, "qp", xi0=[0, 0, 0, 0, 0, 0, 0.1, 0, 0])
+        igm.solve(rob, dat, M_d, "qp", xi0=[0, 0, 0, 0, 0, 0, 0.1, 0, 0])
     with pytest.raises(LimitError, match="theta2"):
-        ik.solve(rob, dat, M_d, "qp", options={"posture": (0.0, 3.0, 0.0)})
+        igm.solve(rob, dat, M_d, "qp", options={"posture": (0.0, 3.0, 0.0)})
     with pytest.raises(InputError, match="roll and pitch"):
-        ik.solve(rob, dat, M_d, "dls", xi0=[0, 0, 0, 0.1, 0, 0, 0, 0, 0])
+        igm.solve(rob, dat, M_d, "dls", xi0=[0, 0, 0, 0.1, 0, 0, 0, 0, 0])
 
 
 def test_bad_input_raises_with_names(rob, dat, hover_targets):
     M_d = hover_targets[0]
     with pytest.raises(UnknownNameError, match="'qp'"):
-        ik.solve(rob, dat, M_d, "newton")
+        igm.solve(rob, dat, M_d, "newton")
     with pytest.raises(UnknownNameError, match="max_iter"):
-        ik.solve(rob, dat, M_d, "qp", options={"max_iters": 3})
+        igm.solve(rob, dat, M_d, "qp", options={"max_iters": 3})
     with pytest.raises(InputError, match="dt"):
-        ik.solve(rob, dat, M_d, "clika", options={"dt": -1.0})
+        igm.solve(rob, dat, M_d, "clika", options={"dt": -1.0})
     with pytest.raises(NonFiniteError):
-        ik.solve(rob, dat, (np.array([0.0, np.nan, 0.0]), np.eye(3)), "igm")
+        igm.solve(rob, dat, (np.array([0.0, np.nan, 0.0]), np.eye(3)), "igm")
     with pytest.raises(ShapeError):
-        ik.solve(rob, dat, (np.zeros(2), np.eye(3)), "igm")
+        igm.solve(rob, dat, (np.zeros(2), np.eye(3)), "igm")
     with pytest.raises(InputError, match="rotation"):
-        ik.solve(rob, dat, (np.zeros(3), 1.01 * np.eye(3)), "igm")
+        igm.solve(rob, dat, (np.zeros(3), 1.01 * np.eye(3)), "igm")
     with pytest.raises(InputError, match="rotation"):
-        ik.solve(rob, dat, (np.zeros(3), np.diag([1.0, 1.0, -1.0])), "igm")
+        igm.solve(rob, dat, (np.zeros(3), np.diag([1.0, 1.0, -1.0])), "igm")
     with pytest.raises(InputError, match="SE3"):
-        ik.solve(rob, dat, np.eye(4), "igm")
+        igm.solve(rob, dat, np.eye(4), "igm")
     with pytest.raises(ShapeError, match="xi0"):
-        ik.solve(rob, dat, M_d, "qp", xi0=np.zeros(8))
+        igm.solve(rob, dat, M_d, "qp", xi0=np.zeros(8))
 
 
 def test_target_forms_are_equivalent(rob, dat, hover_targets):
     M_d = hover_targets[3]
-    a = ik.solve(rob, dat, M_d, "qp")
-    b = ik.solve(rob, dat, (M_d.translation, M_d.rotation), "qp")
+    a = igm.solve(rob, dat, M_d, "qp")
+    b = igm.solve(rob, dat, (M_d.translation, M_d.rotation), "qp")
     np.testing.assert_array_equal(a.q, b.q)
 
 
@@ -552,7 +555,7 @@ def test_benchmark_targets_and_results_are_deterministic_for_a_seed(rob, dat):
     b = bench.make_targets(rob, dat, 5, 3, seed=7)
     for Ma, Mb in zip(a[0] + a[1], b[0] + b[1]):
         np.testing.assert_array_equal(Ma.homogeneous, Mb.homogeneous)
-        np.testing.assert_array_equal(ik.solve(rob, dat, Ma, "qp").q, ik.solve(rob, dat, Mb, "qp").q)
+        np.testing.assert_array_equal(igm.solve(rob, dat, Ma, "qp").q, igm.solve(rob, dat, Mb, "qp").q)
     c = bench.make_targets(rob, dat, 5, 3, seed=8)
     assert not np.array_equal(a[0][0].homogeneous, c[0][0].homogeneous)
 
@@ -560,9 +563,9 @@ def test_benchmark_targets_and_results_are_deterministic_for_a_seed(rob, dat):
 def test_results_are_deterministic(rob, dat, hover_targets):
     """Same inputs, same answers to the last bit, whatever was solved in between."""
     for method, opts in (("qp", {"init": "guess"}), ("dls", None), ("igm", None)):
-        first = [ik.solve(rob, dat, M, method, options=opts).q for M in hover_targets[:6]]
-        ik.solve(rob, dat, tilted(hover_targets[7], 0.2), method, options=opts)
-        again = [ik.solve(rob, dat, M, method, options=opts).q for M in reversed(hover_targets[:6])][::-1]
+        first = [igm.solve(rob, dat, M, method, options=opts).q for M in hover_targets[:6]]
+        igm.solve(rob, dat, tilted(hover_targets[7], 0.2), method, options=opts)
+        again = [igm.solve(rob, dat, M, method, options=opts).q for M in reversed(hover_targets[:6])][::-1]
         for x, y in zip(first, again):
             np.testing.assert_array_equal(x, y)
 

@@ -16,12 +16,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from qprr import mdh
-from qprr import model as qm
-from qprr import thesis as th
-from qprr.checks import fixed_base_arm, mdh_frame_errors, urdf_arm_frames
-from qprr.coordinates import rot_y, rot_z
+from qprr.charts import rot_y, rot_z
 from qprr.errors import InputError, ShapeError
-from qprr.params import thesis_params
+from qprr.thesis import ARM_JOINTS, EE_FRAME
+from qprr.thesis import printed as th
+from qprr.thesis.checks import fixed_base_arm, mdh_frame_errors, urdf_arm_frames
+from qprr.thesis.params import thesis_params
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 P = thesis_params()
@@ -128,12 +128,12 @@ def test_corrected_table_3_4_is_the_urdf_frame_by_frame(urdf_arm, q):
     # and the Pinocchio model built from the table has the URDF's frame Jacobians, joint by joint
     m = mdh.build_model(rows, base=th.T_b0_3_49(), tool=th.T_4eb_3_51())
     dm = m.createData()
-    for j, name in enumerate(qm.ARM_JOINTS, start=1):
+    for j, name in enumerate(ARM_JOINTS, start=1):
         Jm = pin.computeFrameJacobian(m, dm, q, m.getFrameId(mdh.frame_name(j)), pin.LOCAL_WORLD_ALIGNED)
         Ju = pin.computeFrameJacobian(model, data, q, model.getFrameId(name), pin.LOCAL_WORLD_ALIGNED)
         np.testing.assert_allclose(Jm, Ju, atol=1e-15)
     Jm = pin.computeFrameJacobian(m, dm, q, m.getFrameId(mdh.TOOL_FRAME), pin.LOCAL_WORLD_ALIGNED)
-    Ju = pin.computeFrameJacobian(model, data, q, model.getFrameId(qm.EE_FRAME), pin.LOCAL_WORLD_ALIGNED)
+    Ju = pin.computeFrameJacobian(model, data, q, model.getFrameId(EE_FRAME), pin.LOCAL_WORLD_ALIGNED)
     np.testing.assert_allclose(Jm, Ju, atol=1e-15)
 
 

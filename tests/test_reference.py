@@ -6,9 +6,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from qprr import coordinates as co
+from qprr import charts as co
 from qprr.errors import UnknownNameError
-from qprr.reference import load_reference
+from qprr.platforms import multirotor_model as load_reference
 
 
 @pytest.mark.parametrize("name", ["hector", "iris"])

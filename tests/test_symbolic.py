@@ -15,9 +15,9 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 
-from qprr import symbolic as sy
 from qprr.errors import EulerSingularityError, InputError, NonFiniteError, ShapeError
-from qprr.params import Link, cad_params, thesis_params
+from qprr.thesis import symbolic as sy
+from qprr.thesis.params import Link, cad_params, thesis_params
 
 from .strategies import rates_strategy, xi_strategy
 
@@ -255,6 +255,6 @@ def test_unwritable_cache_falls_back_to_fresh_derivation(tmp_path, monkeypatch):
 
 
 def test_import_without_sympy_gives_install_command():
-    code = "import sys; sys.modules['sympy'] = None\ntry:\n import qprr.symbolic\nexcept ImportError as e:\n print(e)"
+    code = "import sys; sys.modules['sympy'] = None\ntry:\n import qprr.thesis.symbolic\nexcept ImportError as e:\n print(e)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert 'pip install "qprr[test]"' in out.stdout, out.stdout + out.stderr

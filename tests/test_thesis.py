@@ -1,4 +1,4 @@
-"""The thesis's printed closed forms (qprr.thesis) against the Pinocchio model.
+"""The thesis's printed closed forms (qprr.thesis.printed) against the Pinocchio model.
 
 For every erratum of docs/thesis-errata.md there is a test that shows the printed form
 wrong on a concrete counter-example AND the corrected form right against the model;
@@ -8,7 +8,6 @@ the printed forms that are right are checked over random states.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pinocchio as pin
@@ -16,16 +15,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import qprr
+import qprr.thesis
 from qprr import actuation as act
-from qprr import coordinates as co
-from qprr import model as qm
-from qprr import thesis as th
-from qprr.checks import body_rate_fd, christoffel, doolittle, fixed_base_arm
-from qprr.control import CogStabilizer, make_controller
+from qprr import charts as co
+from qprr import dynamics as dyn
+from qprr import kinematics as kin
 from qprr.errors import InputError, ShapeError
-from qprr.params import thesis_params
-from qprr.payload import Payload, com_with_payload
+from qprr.thesis import printed as th
+from qprr.thesis.checks import body_rate_fd, christoffel, doolittle, fixed_base_arm, ned_configuration
+from qprr.thesis.params import thesis_params
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 
@@ -61,10 +59,26 @@ def arm_fixed_down(robot):
     return fixed_base_arm(robot, co.rot_y(np.pi / 2))
 
 
-def ned(robot):
+def ned_model(robot):
+    """A copy of the Pinocchio model with gravity +g e3 (the NED convention of (3.42))."""
     model = pin.Model(robot.model)
     model.gravity = pin.Motion(np.array([0.0, 0.0, P.g]), np.zeros(3))
-    return replace(robot, model=model)
+    return model
+
+
+def test_ned_configuration_is_the_ned_world(robot):
+    """What the z-up model computes at ned_configuration(q) is what a model with gravity +g e3 computes
+    at q: potential energy and the whole generalised gravity (base rows in B, arm rows)."""
+    model = ned_model(robot)
+    dn, rng = model.createData(), np.random.default_rng(3)
+    for _ in range(10):
+        xi = np.concatenate([rng.uniform(-2, 2, 3), rng.uniform(-1.2, 1.2, 3), rng.uniform(P.lower_limits, P.upper_limits)])
+        q = co.xi_to_q(xi)
+        q_up = ned_configuration(q)
+        np.testing.assert_allclose(q_up[7:], q[7:], atol=0)
+        assert dyn.potential_energy(robot, robot.data(), q_up) == pytest.approx(pin.computePotentialEnergy(model, dn, q), abs=1e-12)
+        np.testing.assert_allclose(dyn.generalized_gravity(robot, robot.data(), q_up), pin.computeGeneralizedGravity(model, dn, q),
+                                   atol=1e-12)
 
 
 # ================================================================== (3.4), (3.8), (3.25)
@@ -107,7 +121,7 @@ def test_T_3_25_is_not_the_world_frame_rate_that_3_15_announces():
 
 # ================================================================== allocation (3.36), (3.37), (A.1)
 def test_allocation_3_36_yaw_row_needs_c_over_b(robot):
-    Om = act.rotor_matrix(robot, "plus")
+    Om = robot.rotor_matrix
     np.testing.assert_allclose(Om[0:2], 0.0, atol=1e-15)
     printed = th.allocation_3_36(L, C_D)
     np.testing.assert_allclose(printed[0:3], Om[2:5], atol=1e-15)  # thrust, roll and pitch rows are right
@@ -118,13 +132,13 @@ def test_allocation_3_36_yaw_row_needs_c_over_b(robot):
 
 def test_allocation_3_36_corrected_for_other_rotor_parameters():
     other = P.with_changes(arm_length=0.31, thrust_factor=2.0e-5, drag_factor=9.0e-7)
-    Om = act.rotor_matrix(qprr.load(other), "plus")
+    Om = qprr.thesis.load(other).rotor_matrix
     np.testing.assert_allclose(th.allocation_3_36_corrected(0.31, 2.0e-5, 9.0e-7), Om[2:6], atol=1e-15)
 
 
 def test_allocation_3_37_row3_contradicts_3_34(robot):
     w2 = np.array([1.0e5, 0.0, 0.0, 0.0])  # only rotor 1 (on -x_B) spins
-    true = B_F * act.rotor_matrix(robot, "plus")[2:6] @ w2
+    true = B_F * robot.rotor_matrix[2:6] @ w2
     assert true[2] == pytest.approx(B_F * L * 1.0e5)  # (3.34): tau_theta = bl(w1^2 - w3^2) > 0
     printed = th.allocation_3_37(B_F, L, C_D) @ w2
     assert printed[2] == pytest.approx(-B_F * L * 1.0e5)
@@ -134,7 +148,7 @@ def test_allocation_3_37_row3_contradicts_3_34(robot):
 def test_det_3_37_is_that_of_the_printed_matrix_not_of_the_true_one(robot):
     printed_matrix = th.allocation_3_37(B_F, L, C_D)
     assert np.linalg.det(printed_matrix) == pytest.approx(th.det_3_37(B_F, L, C_D), rel=1e-12)
-    true = np.linalg.det(B_F * act.rotor_matrix(robot, "plus")[2:6])
+    true = np.linalg.det(B_F * robot.rotor_matrix[2:6])
     assert true == pytest.approx(th.det_3_37_corrected(B_F, L, C_D), rel=1e-12)
     assert true == pytest.approx(-8 * C_D * L**2 * B_F**3, rel=1e-12)
 
@@ -145,19 +159,19 @@ def test_rotor_inverse_A1_has_the_wrong_tau_theta_sign(robot):
     achieved = th.allocation_3_36(L, C_D) @ f
     np.testing.assert_allclose(achieved, [0, 0, -1, 0], atol=1e-12)  # the printed inverse pitches the wrong way
     f_ok = th.rotor_inverse_A1_corrected(L, B_F, C_D) @ u
-    np.testing.assert_allclose(act.rotor_matrix(robot, "plus")[2:6] @ f_ok, u, atol=1e-12)
-    np.testing.assert_allclose(th.rotor_inverse_A1_corrected(L, B_F, C_D), act.allocation_inverse(robot), atol=1e-12)
+    np.testing.assert_allclose(robot.rotor_matrix[2:6] @ f_ok, u, atol=1e-12)
+    np.testing.assert_allclose(th.rotor_inverse_A1_corrected(L, B_F, C_D), act.Allocator(robot).Omega_P_inv, atol=1e-12)
 
 
 # ================================================================== (3.42)-(3.44)
 def test_potential_3_42_is_the_ned_potential(robot):
-    rn, rng = ned(robot), np.random.default_rng(42)
+    rng = np.random.default_rng(42)
     for _ in range(10):
         xi = np.concatenate([np.zeros(3), rng.uniform(-1.2, 1.2, 3), rng.uniform(P.lower_limits, P.upper_limits)])
         R, q = co.euler_to_rotation(xi[3:6]), co.xi_to_q(xi)
         U = th.potential_3_42(R, xi[6:9], P)
-        assert U == pytest.approx(qm.potential_energy(rn, rn.data(), q), abs=1e-12)
-        assert -U == pytest.approx(qm.potential_energy(robot, robot.data(), q), abs=1e-12)  # z up: opposite sign
+        assert U == pytest.approx(dyn.potential_energy(robot, robot.data(), ned_configuration(q)), abs=1e-12)
+        assert -U == pytest.approx(dyn.potential_energy(robot, robot.data(), q), abs=1e-12)  # z up: opposite sign
 
 
 def test_arm_torque_3_43_sign_is_that_of_ned(robot, data):
@@ -165,22 +179,21 @@ def test_arm_torque_3_43_sign_is_that_of_ned(robot, data):
     # i.e. a positive torque about y_B in our z-up frames
     xi = np.array([0, 0, 0, 0, 0, 0, 0.0, np.pi / 2, 0.0])
     q = co.xi_to_q(xi)
-    model_tau = qm.arm_gravity_torque_body(robot, data, q)
+    model_tau = kin.arm_gravity_torque_body(robot, data, q)
     x_c = th.arm_com_3_44(xi[6:9], P)[0]
     assert model_tau[1] == pytest.approx(P.arm_mass * P.g * x_c) and model_tau[1] > 0.4
     printed = th.arm_torque_3_43(np.eye(3), xi[6:9], P)
     assert printed[1] == pytest.approx(-model_tau[1])
     np.testing.assert_allclose(th.arm_torque_3_43_corrected(np.eye(3), xi[6:9], P), model_tau, atol=1e-12)
-    rn = ned(robot)
-    np.testing.assert_allclose(printed, qm.arm_gravity_torque_body(rn, rn.data(), q), atol=1e-12)
+    np.testing.assert_allclose(printed, kin.arm_gravity_torque_body(robot, robot.data(), ned_configuration(q)), atol=1e-12)
 
 
 @SETTINGS
 @given(_xi)
 def test_arm_torque_3_43_over_random_states(robot, xi):
     data, q, R = robot.data(), co.xi_to_q(xi), co.euler_to_rotation(xi[3:6])
-    np.testing.assert_allclose(th.arm_torque_3_43_corrected(R, xi[6:9], P), qm.arm_gravity_torque_body(robot, data, q), atol=1e-12)
-    np.testing.assert_allclose(th.arm_com_3_44(xi[6:9], P), qm.arm_com(robot, data, q)[2], atol=1e-14)
+    np.testing.assert_allclose(th.arm_torque_3_43_corrected(R, xi[6:9], P), kin.arm_gravity_torque_body(robot, data, q), atol=1e-12)
+    np.testing.assert_allclose(th.arm_com_3_44(xi[6:9], P), kin.arm_com(robot, data, q)[2], atol=1e-14)
 
 
 # ================================================================== geometric model (3.58)-(3.68)
@@ -190,8 +203,8 @@ def test_direct_geometric_model_3_58_3_62_3_65(robot, xi):
     data, q = robot.data(), co.xi_to_q(xi)
     R_e = th.R_e_3_62(*xi[3:6], xi[7], xi[8])
     zyz_defined = np.hypot(R_e[0, 2], R_e[1, 2]) > 1e-6  # (3.64) assumes r13, r23 not both 0
-    np.testing.assert_allclose(th.T_eb_3_58(xi[6:9], D), qm.ee_placement_body(robot, data, q).homogeneous, atol=1e-14)
-    M = qm.ee_placement(robot, data, q)
+    np.testing.assert_allclose(th.T_eb_3_58(xi[6:9], D), kin.ee_placement_body(robot, data, q).homogeneous, atol=1e-14)
+    M = kin.ee_placement(robot, data, q)
     np.testing.assert_allclose(th.R_e_3_62(*xi[3:6], xi[7], xi[8]), M.rotation, atol=1e-14)
     chi = th.fk_3_65(xi, D)
     np.testing.assert_allclose(chi[0:3], M.translation, atol=1e-13)
@@ -202,7 +215,7 @@ def test_direct_geometric_model_3_58_3_62_3_65(robot, xi):
 
 def test_p_e_3_61_y_row_misprint(robot, data):
     xi = np.array([0, 0, 0, 0, 0, np.pi / 2, 0.0, np.pi / 2, 0.0])  # yaw 90 deg, arm bent forward
-    p = qm.ee_placement(robot, data, co.xi_to_q(xi)).translation
+    p = kin.ee_placement(robot, data, co.xi_to_q(xi)).translation
     x_eb = P.d2 + P.d3  # theta2 = pi/2: the arm points along x_B, which is world y after the yaw
     np.testing.assert_allclose(p[0:2], [0.0, x_eb], atol=1e-14)
     assert th.p_e_3_61(xi, D)[1] == pytest.approx(0.0, abs=1e-14)  # printed c_theta c_psi x_eb = 0
@@ -211,7 +224,7 @@ def test_p_e_3_61_y_row_misprint(robot, data):
 
 def test_euler_3_64_is_a_zyz_extraction(robot, data):
     xi = np.array([0, 0, 0, 0.2, -0.3, 0.7, 0.0, 0.5, 0.4])
-    R = qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation
+    R = kin.ee_placement(robot, data, co.xi_to_q(xi)).rotation
     ang = th.euler_3_64(R)
     np.testing.assert_allclose(th.zyz_to_rotation(ang), R, atol=1e-14)
     assert 0.0 <= ang[1] <= np.pi
@@ -221,7 +234,7 @@ def test_euler_3_64_is_a_zyz_extraction(robot, data):
 def test_hover_fk_3_68_angle_lines_misprint(robot, data):
     psi, q_arm = 0.5, np.array([0.01, 0.2, 0.1])  # s23 > 0
     xi = np.array([0.1, -0.2, 1.0, 0.0, 0.0, psi, *q_arm])
-    M = qm.ee_placement(robot, data, co.xi_to_q(xi))
+    M = kin.ee_placement(robot, data, co.xi_to_q(xi))
     printed = th.hover_fk_3_68(*xi[0:3], psi, q_arm, D)
     np.testing.assert_allclose(printed[0:3], M.translation, atol=1e-14)  # lines 1-3 are right
     true = th.euler_3_64(M.rotation)
@@ -234,7 +247,7 @@ def test_hover_fk_3_68_angle_lines_misprint(robot, data):
 def test_hover_fk_3_68_theta_line_misprint_for_negative_s23(robot, data):
     psi, q_arm = -1.0, np.array([0.0, -0.6, 0.2])  # s23 < 0
     xi = np.array([0.0, 0.0, 0.0, 0.0, 0.0, psi, *q_arm])
-    true = th.euler_3_64(qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation)
+    true = th.euler_3_64(kin.ee_placement(robot, data, co.xi_to_q(xi)).rotation)
     np.testing.assert_allclose(true, [psi + np.pi, 0.4, np.pi], atol=1e-12)
     assert th.hover_fk_3_68(0, 0, 0, psi, q_arm, D)[4] == pytest.approx(-0.4)  # atan2(s23, c23), outside [0, pi]
     np.testing.assert_allclose(wrap(th.hover_fk_3_68_corrected(0, 0, 0, psi, q_arm, D)[3:6] - true), 0, atol=1e-12)
@@ -255,14 +268,14 @@ def test_hover_fk_3_68_corrected_is_3_65_at_zero_tilt(z, psi, q_arm):
 @given(_arm)
 def test_com_3_78_x_y_and_3_80(robot, q_arm):
     data = robot.data()
-    c = qm.com_body(robot, data, co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
+    c = kin.com_body(robot, data, co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
     np.testing.assert_allclose(th.com_3_78(q_arm, P)[0:2], c[0:2], atol=1e-15)
     assert th.x_cm_3_80(q_arm, P) == pytest.approx(c[0], abs=1e-15)
     np.testing.assert_allclose(th.com_3_78_corrected(q_arm, P), c, atol=1e-15)
 
 
 def test_com_3_78_z_misprint(robot, data):
-    c = qm.com_body(robot, data, co.xi_to_q(np.zeros(9)))  # arm straight up
+    c = kin.com_body(robot, data, co.xi_to_q(np.zeros(9)))  # arm straight up
     mG, d0, d1, d2, d3 = P.total_mass, *D
     true = (M1 * (d0 + d1 / 2) + M2 * (d0 + d1 + d2 / 2) + M3 * (d0 + d1 + d2 + d3 / 2)) / mG
     assert c[2] == pytest.approx(true, abs=1e-15)
@@ -274,11 +287,13 @@ def test_com_3_78_z_misprint(robot, data):
 
 def test_payload_centre_3_76(robot, data):
     q_arm, d_cl = np.array([0.02, 0.8, 0.4]), 0.03
-    M = qm.ee_placement_body(robot, data, co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
+    M = kin.ee_placement_body(robot, data, co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
     np.testing.assert_allclose(th.payload_com_3_76(q_arm, D, d_cl), M.act(np.array([0.0, 0.0, d_cl])), atol=1e-15)
 
 
 def test_com_3_78_payload_term_misprint(robot, data):
+    from qprr.payload import Payload, com_with_payload
+
     q_arm, m_l, d_cl = np.array([0.02, 0.8, 0.4]), 0.1, 0.03
     model = com_with_payload(robot, data, q_arm, Payload(m_l, com_ee=(0.0, 0.0, d_cl)))
     printed = th.com_3_78(q_arm, P, m_l=m_l, d_cl=d_cl)
@@ -295,6 +310,8 @@ def test_com_3_78_payload_term_misprint(robot, data):
 @SETTINGS
 @given(_arm, st.floats(0.0, 2.0), st.floats(-0.05, 0.2))
 def test_com_3_78_corrected_with_any_payload_is_pinocchio(robot, q_arm, m_l, d_cl):
+    from qprr.payload import Payload, com_with_payload
+
     model = com_with_payload(robot, robot.data(), q_arm, Payload(m_l, com_ee=(0.0, 0.0, d_cl)))
     np.testing.assert_allclose(th.com_3_78_corrected(q_arm, P, m_l=m_l, d_cl=d_cl), model, atol=1e-15)
 
@@ -323,7 +340,7 @@ def _arm_jacobian_fd(q_arm, h=1e-6):
 def test_arm_jacobian_4_26_4_27_4_28(robot, q_arm):
     data = robot.data()
     J = th.J_eb_4_26(q_arm, D)
-    Jm = qm.arm_jacobian_body(robot, data, q_arm)
+    Jm = kin.arm_jacobian_body(robot, data, q_arm)
     np.testing.assert_allclose(J, Jm, atol=1e-14)
     np.testing.assert_allclose(J, _arm_jacobian_fd(q_arm), atol=1e-8)
     np.testing.assert_allclose(th.J_4_27(q_arm, D), Jm[[0, 2, 4]], atol=1e-14)
@@ -331,8 +348,8 @@ def test_arm_jacobian_4_26_4_27_4_28(robot, q_arm):
 
 
 def _pose_fd(robot, data, xi, xid, h=1e-6):
-    pp, Rp = qm.ee_pose_xi(robot, data, xi + h * xid)
-    pm, Rm = qm.ee_pose_xi(robot, data, xi - h * xid)
+    pp, Rp = kin.ee_pose_xi(robot, data, xi + h * xid)
+    pm, Rm = kin.ee_pose_xi(robot, data, xi - h * xid)
     return np.concatenate([(pp - pm) / (2 * h), pin.log3(Rp @ Rm.T) / (2 * h)])
 
 
@@ -350,19 +367,19 @@ def test_J_e_4_12_lower_block_misprint(robot, data):
 @given(_xi, _rates9)
 def test_J_e_4_12_corrected_is_the_model_jacobian(robot, xi, xid):
     data = robot.data()
-    J = qm.jacobian_xi(robot, data, xi)
+    J = kin.jacobian_xi(robot, data, xi)
     np.testing.assert_allclose(th.J_e_4_12_corrected(xi, D), J, atol=1e-13)
     np.testing.assert_allclose(J @ xid, _pose_fd(robot, data, xi, xid), atol=1e-7)
 
 
 def _det_zero_euler(robot, data, q_arm):
-    J = qm.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
+    J = kin.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
     return np.linalg.det(J @ J.T)
 
 
 @pytest.mark.parametrize("d3", [0.10, 0.02, 0.40])
 def test_det_JJt_4_44_is_exact_and_independent_of_d3_and_theta3(d3):
-    robot = qprr.load(P.with_changes(d3=d3))
+    robot = qprr.thesis.load(P.with_changes(d3=d3))
     data, rng = robot.data(), np.random.default_rng(444)
     for _ in range(10):
         q_arm = rng.uniform([-0.04, -np.pi, -np.pi], [0.04, np.pi, np.pi])
@@ -387,7 +404,7 @@ def test_jacobian_never_loses_rank_at_zero_euler_angles():
 
 
 def _model_lu(robot, data, q_arm):
-    J = qm.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
+    J = kin.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
     A = J @ J.T
     return A, *doolittle(A)
 
@@ -467,7 +484,7 @@ def test_det_4_45_basis_needs_r0_s2(robot, data):
 @SETTINGS
 @given(_xi)
 def test_inertia_blocks_5_2_2(robot, xi):
-    B = qm.dynamics_xi(robot, robot.data(), xi, np.zeros(9))[0]
+    B = dyn.dynamics_xi(robot, robot.data(), xi, np.zeros(9))[0]
     printed, corrected = th.B_blocks_5_2_2(xi, P), th.B_blocks_5_2_2_corrected(xi, P)
     np.testing.assert_allclose(printed.B11, B[0:3, 0:3], atol=1e-13)
     np.testing.assert_allclose(printed.B12, B[0:3, 3:6], atol=1e-13)
@@ -477,7 +494,7 @@ def test_inertia_blocks_5_2_2(robot, xi):
 
 def test_inertia_blocks_5_2_2_misprints(robot, data):
     xi = np.array([0, 0, 0, 0.5, -0.4, 0.9, 0.02, 0.7, -0.5])
-    B = qm.dynamics_xi(robot, data, xi, np.zeros(9))[0]
+    B = dyn.dynamics_xi(robot, data, xi, np.zeros(9))[0]
     printed = th.B_blocks_5_2_2(xi, P)
     assert np.abs(printed.B22 - B[3:6, 3:6]).max() > 1e-3  # Q = R_b^T T where T belongs
     assert np.abs(printed.B23 - B[3:6, 6:9]).max() > 1e-2  # sign of the mass term, Q, J_p^T for J_o
@@ -496,7 +513,7 @@ def test_inertia_blocks_5_2_2_at_level_attitude():
 
 def test_multirotor_kinetic_energy_5_15(robot):
     model = pin.Model(robot.model)
-    for j in robot.arm_joint_ids:
+    for j in (joint.joint_id for joint in robot.arm):
         model.inertias[j] = pin.Inertia.Zero()
     data = model.createData()
     euler, rates = np.array([0.7, -0.5, 1.1]), np.array([0.3, -1.2, 2.0])
@@ -510,7 +527,7 @@ def test_multirotor_kinetic_energy_5_15(robot):
 @SETTINGS
 @given(_xi)
 def test_potential_5_29(robot, xi):
-    assert th.potential_5_29(xi, P) == pytest.approx(qm.potential_energy(robot, robot.data(), co.xi_to_q(xi)), abs=1e-11)
+    assert th.potential_5_29(xi, P) == pytest.approx(dyn.potential_energy(robot, robot.data(), co.xi_to_q(xi)), abs=1e-11)
 
 
 # ================================================================== input map (5.40)-(5.46)
@@ -537,7 +554,7 @@ def test_R_Q_corrected_is_the_model_input_map(xi, xid, w):
 
 
 def test_N_5_46(robot):
-    N = act.actuation_matrix(robot, "plus")
+    N = robot.actuation_matrix
     assert abs(th.N_5_46(L, C_D)[5, 0] - N[5, 0]) == pytest.approx(P.kappa - C_D)
     np.testing.assert_allclose(th.N_5_46_corrected(L, B_F, C_D), N, atol=1e-15)
 
@@ -671,12 +688,12 @@ def test_arm_u3_5_5_3_with_velocities_and_s23_nonzero(arm_fixed_down):
 def test_cog_6_29_position_and_rate(robot, xi, xid):
     data = robot.data()
     q, v = co.xi_to_qv(xi, xid)
-    p_cm = qm.com_body(robot, data, q)
+    p_cm = kin.com_body(robot, data, q)
     R = co.euler_to_rotation(xi[3:6])
-    np.testing.assert_allclose(th.p_c_6_29(xi[0:3], R, p_cm), qm.com_world(robot, data, q), atol=1e-14)
+    np.testing.assert_allclose(th.p_c_6_29(xi[0:3], R, p_cm), kin.com_world(robot, data, q), atol=1e-14)
     pin.centerOfMass(robot.model, data, q, v)
     vcom = data.vcom[0].copy()
-    p_cm_dot = qm.com_jacobian_body(robot, data, q) @ v
+    p_cm_dot = kin.com_jacobian_body(robot, data, q) @ v
     np.testing.assert_allclose(th.p_c_dot_6_29(xid[0:3], R, v[3:6], p_cm, p_cm_dot), vcom, atol=1e-13)
 
 
@@ -685,7 +702,7 @@ def test_cog_6_29_rate_needs_the_body_rate(robot, data):
     xid = np.array([0, 0, 0, 0, 0, 1.0, 0, 0, 0])  # pure yaw rate
     q, v = co.xi_to_qv(xi, xid)
     pin.centerOfMass(robot.model, data, q, v)
-    p_cm, R = qm.com_body(robot, data, q), co.euler_to_rotation(xi[3:6])
+    p_cm, R = kin.com_body(robot, data, q), co.euler_to_rotation(xi[3:6])
     np.testing.assert_allclose(th.p_c_dot_6_29(np.zeros(3), R, v[3:6], p_cm, np.zeros(3)), data.vcom[0], atol=1e-15)
     world = th.p_c_dot_6_29(np.zeros(3), R, R @ v[3:6], p_cm, np.zeros(3))  # omega_b read as a world rate
     assert np.linalg.norm(world - data.vcom[0]) > 1e-3
@@ -694,7 +711,7 @@ def test_cog_6_29_rate_needs_the_body_rate(robot, data):
 @SETTINGS
 @given(_arm)
 def test_com_6_30_z_misprint(robot, q_arm):
-    c = qm.com_body(robot, robot.data(), co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
+    c = kin.com_body(robot, robot.data(), co.xi_to_q(np.concatenate([np.zeros(6), q_arm])))
     printed = th.com_6_30(q_arm, P)
     np.testing.assert_allclose(printed[0:2], c[0:2], atol=1e-15)
     assert printed[2] - c[2] == pytest.approx(M1 * P.d1 / (2 * P.total_mass), abs=1e-15)  # m1 (d0 + d1) for m1 (d0 + d1/2)
@@ -704,45 +721,48 @@ def test_com_6_30_z_misprint(robot, q_arm):
 def test_cog_6_31_6_32_pitch_moves_the_cog_in_world_axes_only(robot, data):
     xi = np.array([0.5, -0.2, 1.0, 0.0, 0.25, 0.0, 0.02, -0.7, 0.4])  # phi = psi = 0
     q = co.xi_to_q(xi)
-    p_cm = qm.com_body(robot, data, q)
-    offset = qm.com_world(robot, data, q) - xi[0:3]
+    p_cm = kin.com_body(robot, data, q)
+    offset = kin.com_world(robot, data, q) - xi[0:3]
     np.testing.assert_allclose(th.p_cm_prime_6_31(0.25, p_cm), offset, atol=1e-15)
     np.testing.assert_allclose(th.nabla_p_cm_6_32(0.25, p_cm), offset - p_cm, atol=1e-15)
     level = xi.copy()
     level[4] = 0.0
-    np.testing.assert_allclose(qm.com_body(robot, data, co.xi_to_q(level)), p_cm, atol=1e-15)  # in B nothing moved
+    np.testing.assert_allclose(kin.com_body(robot, data, co.xi_to_q(level)), p_cm, atol=1e-15)  # in B nothing moved
     rolled = xi.copy()
     rolled[3] = 0.3
     q = co.xi_to_q(rolled)
-    assert np.abs(th.p_cm_prime_6_31(0.25, p_cm) - (qm.com_world(robot, data, q) - xi[0:3])).max() > 1e-3
+    assert np.abs(th.p_cm_prime_6_31(0.25, p_cm) - (kin.com_world(robot, data, q) - xi[0:3])).max() > 1e-3
 
 
 @SETTINGS
 @given(_tilt, _angle, _arm)
 def test_theta_e_6_34_is_the_end_effector_pitch_at_zero_roll(robot, theta, psi, q_arm):
     xi = np.array([0.0, 0.0, 0.0, 0.0, theta, psi, *q_arm])
-    R_e = qm.ee_placement(robot, robot.data(), co.xi_to_q(xi)).rotation
+    R_e = kin.ee_placement(robot, robot.data(), co.xi_to_q(xi)).rotation
     np.testing.assert_allclose(R_e, co.rot_z(psi) @ co.rot_y(th.theta_e_6_34(theta, q_arm[1], q_arm[2])), atol=1e-14)
 
 
 def test_theta_e_6_34_is_not_the_zyz_angle_and_needs_zero_roll(robot, data):
     xi = np.array([0.0, 0.0, 0.0, 0.0, 0.1, 0.3, 0.0, -0.2, -0.3])  # theta + theta2 + theta3 = -0.4
-    R_e = qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation
+    R_e = kin.ee_placement(robot, data, co.xi_to_q(xi)).rotation
     assert th.euler_3_64(R_e)[1] == pytest.approx(0.4)  # the ZYZ theta_e of (3.64) is |theta_e|
     xi[3] = 0.2
-    R_e = qm.ee_placement(robot, data, co.xi_to_q(xi)).rotation
+    R_e = kin.ee_placement(robot, data, co.xi_to_q(xi)).rotation
     assert np.abs(R_e - co.rot_z(0.3) @ co.rot_y(-0.4)).max() > 0.1
 
 
 def test_bsg_6_35_references_put_the_cog_on_the_thrust_axis_in_the_model(robot, data):
+    from qprr.control import make_controller
+    from qprr.thesis.bsg import CogStabilizer
+
     bsg = CogStabilizer(robot, make_controller("mfc", robot))
     for theta, theta2_d, theta_e_d, psi in [(0.1, -0.3, 0.2, 0.5), (-0.2, 0.4, -0.1, -2.0), (0.0, 0.2, 0.0, 1.0)]:
         bsg.theta_e_d = theta_e_d
         r0_d, theta3_d = bsg.joint_references(theta, theta2_d)
         assert P.r0_limits[0] < r0_d < P.r0_limits[1]  # not clamped
         q = co.xi_to_q(np.array([0.3, 0.1, 2.0, 0.0, theta, psi, r0_d, theta2_d, theta3_d]))
-        assert qm.com_body(robot, data, q)[0] == pytest.approx(0.0, abs=1e-15)
-        R_e = qm.ee_placement(robot, data, q).rotation
+        assert kin.com_body(robot, data, q)[0] == pytest.approx(0.0, abs=1e-15)
+        R_e = kin.ee_placement(robot, data, q).rotation
         np.testing.assert_allclose(R_e, co.rot_z(psi) @ co.rot_y(theta_e_d), atol=1e-15)
 
 

@@ -6,8 +6,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-import qprr
-from qprr.urdf import URDF_PATH, build_urdf
+import qprr.thesis
+from qprr.thesis.urdf import URDF_PATH, build_urdf
 
 
 def test_committed_urdf_equals_generated():
@@ -41,5 +41,5 @@ def test_cad_variant_adds_rail_and_moves_coms(cad_robot, robot):
 
 
 def test_model_is_not_shared_between_loads():
-    a, b = qprr.load(), qprr.load()
+    a, b = qprr.thesis.load(), qprr.thesis.load()
     assert a.model is not b.model

@@ -111,20 +111,20 @@ class HierarchySolver:
         q_arm = q[self.iq]
         lo_arm = self.lower - q_arm
         up_arm = self.upper - q_arm
+        # Levenberg-Marquardt damping of the lower levels, proportional to their gradient
+        # ||J_k^T e_k||: iterated full steps of an unsatisfiable lower level whose projection is
+        # ill-conditioned would otherwise cycle between huge steps (measured on the 11-DOF
+        # hextilt_flying_arm_5); it fades as the task is met.  Both eliminations use it (the same QPs).
+        damping = [0.0] + [self.lower_damping * float(np.linalg.norm(J.T @ e)) for J, e in lin[1:]]
         if self.elimination == "nullspace":
-            # Levenberg-Marquardt damping of the lower levels, proportional to their gradient
-            # ||J_k^T e_k||: iterated full steps of an unsatisfiable lower level whose projection is
-            # ill-conditioned would otherwise cycle between huge steps (measured on the 11-DOF
-            # hextilt_flying_arm_5); it fades as the task is met.
-            damping = [0.0] + [self.lower_damping * float(np.linalg.norm(J.T @ e)) for J, e in lin[1:]]
             res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
             dv, iters, first = res.x, res.iterations, res.x_levels[0]
         else:
-            dv, iters, first = self._solve_equality(lin, lo_arm, up_arm)
+            dv, iters, first = self._solve_equality(lin, lo_arm, up_arm, damping)
         return HierarchyStep(dv, lin, iters, first)
 
-    def _solve_equality(self, lin, lo_arm, up_arm):
-        nv, reg = self.nv, self.regularization
+    def _solve_equality(self, lin, lo_arm, up_arm, damping):
+        nv = self.nv
         C = np.eye(nv)[self.iv]
         stack = np.zeros((0, nv))
         A = None  # orthonormal rows spanning the stacked earlier Jacobians
@@ -134,6 +134,7 @@ class HierarchySolver:
         for k, (J, e) in enumerate(lin):
             if A is not None and A.shape[0] == nv:
                 break  # the earlier levels fix dv completely
+            reg = self.regularization + damping[k]
             H = J.T @ J
             H.flat[:: nv + 1] += reg
             g = -J.T @ e - reg * dv  # damping of the increment dv - dv_{k-1}*, as in "nullspace"

@@ -241,7 +241,8 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         except InputError:
             raise InputError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position (3,), got {target!r}") from None
         if p.shape != (3,):
-            raise ShapeError(f"a position target must have shape (3,), got {p.shape}")
+            raise ShapeError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position of shape (3,), "
+                             f"got an array of shape {p.shape}")
         if not np.all(np.isfinite(p)):
             raise NonFiniteError(f"target must be finite, got p = {p.tolist()}")
         return p, None

@@ -1,6 +1,6 @@
 """``qprr check``: every checked thesis equation against the running Pinocchio model.
 
-Each :class:`Check` evaluates one printed closed form of :mod:`qprr.thesis` (and, for a
+Each :class:`Check` evaluates one printed closed form of :mod:`qprr.thesis.printed` (and, for a
 misprint, its corrected form) against the model at seeded random states and returns an
 :class:`Evidence` (max error of the printed form, of the corrected form, and the
 counter-example).  The verdict rule:
@@ -20,17 +20,19 @@ import importlib
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from . import actuation as act
-from . import coordinates as co
-from . import mdh
-from . import model as mdl
-from . import thesis as th
-from .model import Robot
+from .. import charts as ch
+from .. import dynamics as dyn
+from .. import kinematics as kin
+from .. import mdh
+from ..actuation import Allocator, input_map_matrix
+from ..platform import Platform
+from . import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
+from . import printed as th
 
 SEED = 20210101
 N_STATES = 12
@@ -80,9 +82,9 @@ class CheckResult:
 
 @dataclass
 class Context:
-    """The model and the seeded random states every check uses."""
+    """The Q-PRR platform and the seeded random states every check uses."""
 
-    robot: Robot
+    platform: Platform
     data: pin.Data
     rng: np.random.Generator
     states: list = field(default_factory=list)
@@ -90,11 +92,11 @@ class Context:
 
     @property
     def params(self):
-        return self.robot.params
+        return params_of(self.platform)
 
     @property
     def d(self):
-        return th.link_lengths(self.robot.params)
+        return th.link_lengths(self.params)
 
     def random_xi(self, rng: np.random.Generator | None = None, max_tilt: float = 1.3) -> np.ndarray:
         """A random xi: position in [-2, 2]^3 m, |phi|, |theta| < max_tilt, any psi, arm inside its limits."""
@@ -110,9 +112,11 @@ class Context:
         )
 
 
-def make_context(robot: Robot | None = None, seed: int = SEED, n_states: int = N_STATES) -> Context:
-    robot = robot if robot is not None else mdl.load("thesis")
-    ctx = Context(robot, robot.data(), np.random.default_rng(seed))
+def make_context(platform: Platform | None = None, seed: int = SEED, n_states: int = N_STATES) -> Context:
+    """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load`)."""
+    platform = platform if platform is not None else load("thesis")
+    params_of(platform)  # a Q-PRR, or InputError
+    ctx = Context(platform, platform.data(), np.random.default_rng(seed))
     ctx.states = [(ctx.random_xi(), ctx.rng.normal(size=9)) for _ in range(n_states)]
     return ctx
 
@@ -127,12 +131,12 @@ def _wrap(a) -> np.ndarray:
 
 
 def _R(xi) -> np.ndarray:
-    """R_b from Pinocchio's own RPY routine (independent of qprr.coordinates)."""
+    """R_b from Pinocchio's own RPY routine (independent of qprr.charts)."""
     return pin.rpy.rpyToMatrix(float(xi[3]), float(xi[4]), float(xi[5]))
 
 
 def _q(xi) -> np.ndarray:
-    return co.xi_to_q(xi)
+    return ch.xi_to_q(xi)
 
 
 def body_rate_fd(euler, euler_dot, h: float = 1e-6) -> np.ndarray:
@@ -142,19 +146,38 @@ def body_rate_fd(euler, euler_dot, h: float = 1e-6) -> np.ndarray:
     return pin.log3(Rm.T @ Rp) / (2 * h)
 
 
-def _with_gravity(robot: Robot, gravity_world) -> Robot:
-    """A copy of ``robot`` whose model has another gravity vector (the original is untouched)."""
-    model = pin.Model(robot.model)
-    model.gravity = pin.Motion(np.asarray(gravity_world, dtype=float), np.zeros(3))
-    return replace(robot, model=model)
+def _plus(ctx: Context) -> Platform:
+    """The context's Q-PRR with the "+" rotor layout of Thesis (3.34)-(3.36) (the printed allocation rows use it)."""
+    if ctx.platform.rotors == rotor_set(ctx.params, "plus"):
+        return ctx.platform
+    if "plus" not in ctx.cache:
+        ctx.cache["plus"] = load(ctx.params, layout="plus")
+    return ctx.cache["plus"]
 
 
-def fixed_base_arm(robot: Robot, base_rotation=None) -> tuple[pin.Model, pin.Data]:
+_TURN_X = pin.SE3(ch.rot_x(np.pi), np.zeros(3))
+
+
+def ned_configuration(q) -> np.ndarray:
+    """The configuration at which our z-up model (gravity -g e3) feels what ``q`` feels in an NED world (gravity +g e3).
+
+    Thesis (3.42)-(3.43) take gravity along +e3.  Turning the whole robot by pi about the world
+    x axis (p_b -> Rx(pi) p_b, R_b -> Rx(pi) R_b) keeps every body-frame quantity and every
+    joint value and turns the gravity seen in B, R_b^T (-g e3), into R_b^T (+g e3); centres of
+    mass map as c -> Rx(pi) c, so e3 . c changes sign.  Potential energies and gravity wrenches
+    of the NED world at ``q`` are therefore those of the z-up model at the returned configuration.
+    """
+    q = np.array(q, dtype=float)
+    q[0:7] = pin.SE3ToXYZQUAT(_TURN_X * pin.XYZQUATToSE3(q[0:7]))
+    return q
+
+
+def fixed_base_arm(platform: Platform, base_rotation=None) -> tuple[pin.Model, pin.Data]:
     """The arm with the free-flyer locked at the origin with orientation ``base_rotation`` (Sec. 5.5 model)."""
-    q_ref = pin.neutral(robot.model)
+    q_ref = pin.neutral(platform.model)
     if base_rotation is not None:
         q_ref[3:7] = pin.Quaternion(np.asarray(base_rotation, dtype=float)).coeffs()
-    model = pin.buildReducedModel(robot.model, [robot.model.getJointId("root_joint")], q_ref)
+    model = pin.buildReducedModel(platform.model, [1], q_ref)  # joint 1: the free flyer
     return model, model.createData()
 
 
@@ -219,7 +242,7 @@ def _c_3_25(ctx: Context) -> Evidence:
 
 def _c_3_36(ctx: Context) -> Evidence:
     p = ctx.params
-    Om = act.rotor_matrix(ctx.robot, "plus")
+    Om = _plus(ctx).rotor_matrix
     ep = max(_maxabs(Om[2:6] - th.allocation_3_36(p.arm_length, p.drag_factor)), _maxabs(Om[0:2]))
     ec = max(_maxabs(Om[2:6] - th.allocation_3_36_corrected(p.arm_length, p.thrust_factor, p.drag_factor)), _maxabs(Om[0:2]))
     return Evidence(ep, ec, f"yaw row printed c = {p.drag_factor:g} N m s^2, the force map needs c/b = {p.kappa:g} m "
@@ -228,7 +251,7 @@ def _c_3_36(ctx: Context) -> Evidence:
 
 def _c_3_37(ctx: Context) -> Evidence:
     p = ctx.params
-    model_w2 = p.thrust_factor * act.rotor_matrix(ctx.robot, "plus")[2:6]  # u = Omega_z (b w^2)
+    model_w2 = p.thrust_factor * _plus(ctx).rotor_matrix[2:6]  # u = Omega_z (b w^2)
     P = th.allocation_3_37(p.thrust_factor, p.arm_length, p.drag_factor)
     scale = _maxabs(model_w2)
     ep = _maxabs(P - model_w2) / scale
@@ -240,7 +263,7 @@ def _c_3_37(ctx: Context) -> Evidence:
 def _c_det_3_37(ctx: Context) -> Evidence:
     p = ctx.params
     b, l, c = p.thrust_factor, p.arm_length, p.drag_factor
-    true = np.linalg.det(b * act.rotor_matrix(ctx.robot, "plus")[2:6])
+    true = np.linalg.det(b * _plus(ctx).rotor_matrix[2:6])
     ep = abs(th.det_3_37(b, l, c) - true) / abs(true)
     ec = abs(th.det_3_37_corrected(b, l, c) - true) / abs(true)
     selfc = abs(np.linalg.det(th.allocation_3_37(b, l, c)) - th.det_3_37(b, l, c)) / abs(true)
@@ -251,7 +274,7 @@ def _c_det_3_37(ctx: Context) -> Evidence:
 def _c_A1(ctx: Context) -> Evidence:
     p = ctx.params
     l, b, c = p.arm_length, p.thrust_factor, p.drag_factor
-    model_inv = act.allocation_inverse(ctx.robot, "plus")
+    model_inv = Allocator(_plus(ctx)).Omega_P_inv  # inv(Omega[2:6]): the exact path of the four-rotor allocation
     ep = _maxabs(th.rotor_inverse_A1(l, p.kappa) - model_inv)
     ec = _maxabs(th.rotor_inverse_A1_corrected(l, b, c) - model_inv)
     selfc = _maxabs(th.rotor_inverse_A1(l, c) @ th.allocation_3_36(l, c) - np.eye(4))
@@ -260,35 +283,30 @@ def _c_A1(ctx: Context) -> Evidence:
 
 
 def _arm_states(ctx: Context):
-    return [(co.euler_to_rotation(xi[3:6]), xi[6:9], xi) for xi, _ in ctx.states]
+    return [(ch.euler_to_rotation(xi[3:6]), xi[6:9], xi) for xi, _ in ctx.states]
 
 
 def _c_3_42(ctx: Context) -> Evidence:
-    g = ctx.params.g
-    ned, up = _with_gravity(ctx.robot, [0, 0, g]), ctx.robot
-    dn, du = ned.data(), up.data()
+    up, du = ctx.platform, ctx.data
     ep = ec = 0.0
     for R, q_arm, xi in _arm_states(ctx):
         x0 = xi.copy()
         x0[0:3] = 0.0  # (3.42) has no p_b term: base at the origin (the multirotor then has U = 0)
         q = _q(x0)
         printed = th.potential_3_42(R, q_arm, ctx.params)
-        ep = max(ep, abs(printed - mdl.potential_energy(ned, dn, q)))
-        ec = max(ec, abs(-printed - mdl.potential_energy(up, du, q)))
+        ep = max(ep, abs(printed - dyn.potential_energy(up, du, ned_configuration(q))))
+        ec = max(ec, abs(-printed - dyn.potential_energy(up, du, q)))
     return Evidence(ep, ec, "vs Pinocchio potential energy with gravity +g e3 (NED, as (3.42) implies), base at the origin; "
                     "in the z-up world of (5.27)-(5.29) the sign is opposite: U = -U_(3.42) there")
 
 
 def _c_3_43(ctx: Context) -> Evidence:
-    g = ctx.params.g
-    ned = _with_gravity(ctx.robot, [0, 0, g])
-    dn = ned.data()
     ep = ec = flip = 0.0
     for R, q_arm, xi in _arm_states(ctx):
         q = _q(xi)
         printed = th.arm_torque_3_43(R, q_arm, ctx.params)
-        ep = max(ep, _maxabs(printed - mdl.arm_gravity_torque_body(ned, dn, q)))
-        model_up = mdl.arm_gravity_torque_body(ctx.robot, ctx.data, q)
+        ep = max(ep, _maxabs(printed - kin.arm_gravity_torque_body(ctx.platform, ctx.data, ned_configuration(q))))
+        model_up = kin.arm_gravity_torque_body(ctx.platform, ctx.data, q)
         ec = max(ec, _maxabs(th.arm_torque_3_43_corrected(R, q_arm, ctx.params) - model_up))
         flip = max(flip, _maxabs(printed - model_up))
     return Evidence(ep, ec, f"vs RNEA torque of the arm on B with gravity +g e3 (NED of (3.42)); in our z-up model the printed "
@@ -296,12 +314,12 @@ def _c_3_43(ctx: Context) -> Evidence:
 
 
 def _c_3_44(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.arm_com_3_44(xi[6:9], ctx.params) - mdl.arm_com(ctx.robot, ctx.data, _q(xi))[2]) for xi, _ in ctx.states)
+    err = max(_maxabs(th.arm_com_3_44(xi[6:9], ctx.params) - kin.arm_com(ctx.platform, ctx.data, _q(xi))[2]) for xi, _ in ctx.states)
     return Evidence(err, None, "arm CoM in B vs Pinocchio subtree CoM (Hypothesis 1 link CoMs of (3.78))")
 
 
 def _c_3_58(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.T_eb_3_58(xi[6:9], ctx.d) - mdl.ee_placement_body(ctx.robot, ctx.data, _q(xi)).homogeneous) for xi, _ in ctx.states)
+    err = max(_maxabs(th.T_eb_3_58(xi[6:9], ctx.d) - kin.ee_placement_body(ctx.platform, ctx.data, _q(xi)).homogeneous) for xi, _ in ctx.states)
     return Evidence(err, None, "^bT_eb vs Pinocchio end-effector placement relative to B")
 
 
@@ -309,7 +327,7 @@ def _c_3_61(ctx: Context) -> Evidence:
     ep = ec = 0.0
     worst = None
     for xi, _ in ctx.states:
-        p = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).translation
+        p = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).translation
         e = _maxabs(th.p_e_3_61(xi, ctx.d) - p)
         ec = max(ec, _maxabs(th.p_e_3_61_corrected(xi, ctx.d) - p))
         if e > ep:
@@ -319,14 +337,14 @@ def _c_3_61(ctx: Context) -> Evidence:
 
 
 def _c_3_62(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.R_e_3_62(*xi[3:6], xi[7], xi[8]) - mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation) for xi, _ in ctx.states)
+    err = max(_maxabs(th.R_e_3_62(*xi[3:6], xi[7], xi[8]) - kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation) for xi, _ in ctx.states)
     return Evidence(err, None, "R_e entries vs Pinocchio end-effector rotation")
 
 
 def _c_3_64(ctx: Context) -> Evidence:
     ep = zyx = 0.0
     for xi, _ in ctx.states:
-        R = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation
+        R = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation
         if np.hypot(R[0, 2], R[1, 2]) < 1e-6:  # (3.64) assumes r13, r23 not both zero
             continue
         ang = th.euler_3_64(R)
@@ -339,7 +357,7 @@ def _c_3_64(ctx: Context) -> Evidence:
 def _c_3_65(ctx: Context) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
-        M = mdl.ee_placement(ctx.robot, ctx.data, _q(xi))
+        M = kin.ee_placement(ctx.platform, ctx.data, _q(xi))
         chi = th.fk_3_65(xi, ctx.d)
         err = max(err, _maxabs(chi[0:3] - M.translation))
         if np.hypot(M.rotation[0, 2], M.rotation[1, 2]) > 1e-6:  # ZYZ angles defined
@@ -362,7 +380,7 @@ def _hover_states(ctx: Context):
 def _c_3_68_pos(ctx: Context) -> Evidence:
     err = 0.0
     for xi in _hover_states(ctx):
-        p = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).translation
+        p = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).translation
         err = max(err, _maxabs(th.hover_fk_3_68(*xi[0:3], xi[5], xi[6:9], ctx.d)[0:3] - p))
     return Evidence(err, None, "lines 1-3 at phi = theta = 0 vs Pinocchio")
 
@@ -371,7 +389,7 @@ def _c_3_68_ang(ctx: Context) -> Evidence:
     ep = ec = 0.0
     worst = None
     for xi in _hover_states(ctx):
-        R = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation
+        R = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation
         ref = th.euler_3_64(R)
         printed = th.hover_fk_3_68(*xi[0:3], xi[5], xi[6:9], ctx.d)[3:6]
         e = _maxabs(_wrap(printed - ref))
@@ -384,14 +402,14 @@ def _c_3_68_ang(ctx: Context) -> Evidence:
 
 
 def _c_3_78_xy(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.com_3_78(xi[6:9], ctx.params)[0:2] - mdl.com_body(ctx.robot, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
+    err = max(_maxabs(th.com_3_78(xi[6:9], ctx.params)[0:2] - kin.com_body(ctx.platform, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
     return Evidence(err, None, "x_cm, y_cm in B vs Pinocchio centre of mass")
 
 
 def _c_3_78_z(ctx: Context) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
-        z = mdl.com_body(ctx.robot, ctx.data, _q(xi))[2]
+        z = kin.com_body(ctx.platform, ctx.data, _q(xi))[2]
         ep = max(ep, abs(th.com_3_78(xi[6:9], ctx.params)[2] - z))
         ec = max(ec, abs(th.com_3_78_corrected(xi[6:9], ctx.params)[2] - z))
     m1, m2, m3 = (k.mass for k in ctx.params.links)
@@ -400,7 +418,7 @@ def _c_3_78_z(ctx: Context) -> Evidence:
 
 
 def _c_3_80(ctx: Context) -> Evidence:
-    err = max(abs(th.x_cm_3_80(xi[6:9], ctx.params) - mdl.com_body(ctx.robot, ctx.data, _q(xi))[0]) for xi, _ in ctx.states)
+    err = max(abs(th.x_cm_3_80(xi[6:9], ctx.params) - kin.com_body(ctx.platform, ctx.data, _q(xi))[0]) for xi, _ in ctx.states)
     return Evidence(err, None, "F(r0, theta2, theta3) vs Pinocchio x_cm")
 
 
@@ -408,7 +426,7 @@ def _c_3_80(ctx: Context) -> Evidence:
 def _urdf_arm(ctx: Context):
     """The URDF arm with its base locked at the origin (frames in B), cached per context."""
     if "urdf_arm" not in ctx.cache:
-        ctx.cache["urdf_arm"] = fixed_base_arm(ctx.robot)
+        ctx.cache["urdf_arm"] = fixed_base_arm(ctx.platform)
     return ctx.cache["urdf_arm"]
 
 
@@ -421,12 +439,12 @@ def urdf_arm_frames(model: pin.Model, data: pin.Data, q_arm) -> tuple[list[np.nd
     pin.computeJointJacobians(model, data, q_arm)
     pin.updateFramePlacements(model, data)
     placements, axes = [], []
-    for name in mdl.ARM_JOINTS:
+    for name in ARM_JOINTS:
         jid = model.getJointId(name)
         placements.append(data.oMi[jid].homogeneous.copy())
         col = pin.getJointJacobian(model, data, jid, pin.WORLD)[:, model.joints[jid].idx_v]
         axes.append(col[3:6].copy() if np.linalg.norm(col[3:6]) > 0.5 else col[0:3].copy())
-    return placements, axes, data.oMf[model.getFrameId(mdl.EE_FRAME)].homogeneous.copy()
+    return placements, axes, data.oMf[model.getFrameId(EE_FRAME)].homogeneous.copy()
 
 
 def mdh_frame_errors(frames, model: pin.Model, data: pin.Data, q_arm) -> dict[str, float]:
@@ -481,7 +499,7 @@ def _c_3_27(ctx: Context) -> Evidence:
     model = mdh.build_model(rows, base=th.T_b0_3_49(), tool=th.T_4eb_3_51())
     data = model.createData()
     urdf, udata = _urdf_arm(ctx)
-    tool, ee = model.getFrameId(mdh.TOOL_FRAME), urdf.getFrameId(mdl.EE_FRAME)
+    tool, ee = model.getFrameId(mdh.TOOL_FRAME), urdf.getFrameId(EE_FRAME)
     e_pin = 0.0
     for q in _arm_qs(ctx):
         frames = _mdh_chain(rows)(q)
@@ -582,7 +600,7 @@ PAYLOAD_MASS, PAYLOAD_OFFSET = 0.1, 0.03
 
 def _payload(ctx: Context):
     if "payload" not in ctx.cache:
-        from .payload import Payload, com_with_payload
+        from ..payload import Payload, com_with_payload
 
         load = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
         ctx.cache["payload"] = (load, com_with_payload)
@@ -592,7 +610,7 @@ def _payload(ctx: Context):
 def _c_3_76(ctx: Context) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
-        M = mdl.ee_placement_body(ctx.robot, ctx.data, _q(xi))
+        M = kin.ee_placement_body(ctx.platform, ctx.data, _q(xi))
         err = max(err, _maxabs(th.payload_com_3_76(xi[6:9], ctx.d, PAYLOAD_OFFSET) - M.act(np.array([0.0, 0.0, PAYLOAD_OFFSET]))))
     return Evidence(err, None, f"p_cl at d_cl = {PAYLOAD_OFFSET} m beyond the end effector along link 3 vs Pinocchio "
                     "(end-effector placement in B applied to (0, 0, d_cl))")
@@ -604,7 +622,7 @@ def _c_3_78_payload(ctx: Context) -> Evidence:
     ep = ec = ez = 0.0
     worst = None
     for xi, _ in ctx.states:
-        ref = com_with_payload(ctx.robot, ctx.data, xi[6:9], load)
+        ref = com_with_payload(ctx.platform, ctx.data, xi[6:9], load)
         printed = th.com_3_78(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl)
         e = abs(printed[0] - ref[0])
         ez = max(ez, abs(printed[2] - ref[2]))
@@ -634,18 +652,18 @@ def _c_4_26(ctx: Context) -> Evidence:
     e_model = e_fd = 0.0
     for xi, _ in ctx.states:
         J = th.J_eb_4_26(xi[6:9], ctx.d)
-        e_model = max(e_model, _maxabs(J - mdl.arm_jacobian_body(ctx.robot, ctx.data, xi[6:9])))
+        e_model = max(e_model, _maxabs(J - kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])))
         e_fd = max(e_fd, _maxabs(J - _ee_body_fd(ctx, xi[6:9])))
     return Evidence(max(e_model, e_fd), None, f"vs Pinocchio arm Jacobian ({e_model:.1g}) and central differences of (3.58) on SE(3) ({e_fd:.1g})")
 
 
 def _c_4_27(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.J_4_27(xi[6:9], ctx.d) - mdl.arm_jacobian_body(ctx.robot, ctx.data, xi[6:9])[[0, 2, 4]]) for xi, _ in ctx.states)
+    err = max(_maxabs(th.J_4_27(xi[6:9], ctx.d) - kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]) for xi, _ in ctx.states)
     return Evidence(err, None, "rows (x, z, omega_y) of the Pinocchio arm Jacobian")
 
 
 def _c_4_28(ctx: Context) -> Evidence:
-    err = max(abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(mdl.arm_jacobian_body(ctx.robot, ctx.data, xi[6:9])[[0, 2, 4]]))
+    err = max(abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]))
               for xi, _ in ctx.states)
     return Evidence(err, None, "det of the reduced Pinocchio arm Jacobian")
 
@@ -653,38 +671,38 @@ def _c_4_28(ctx: Context) -> Evidence:
 def _c_4_12(ctx: Context) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
-        J = mdl.jacobian_xi(ctx.robot, ctx.data, xi)
+        J = kin.jacobian_xi(ctx.platform, ctx.data, xi)
         ep = max(ep, _maxabs(th.J_e_4_12(xi, ctx.d) - J))
         ec = max(ec, _maxabs(th.J_e_4_12_corrected(xi, ctx.d) - J))
     return Evidence(ep, ec, "lower middle block printed T(phi_b) (body rate) where omega_e (world) needs R_b T(phi_b)")
 
 
 def _pose_fd(ctx: Context, xi, xid, h: float = 1e-6) -> np.ndarray:
-    pp, Rp = mdl.ee_pose_xi(ctx.robot, ctx.data, xi + h * xid)
-    pm, Rm = mdl.ee_pose_xi(ctx.robot, ctx.data, xi - h * xid)
+    pp, Rp = kin.ee_pose_xi(ctx.platform, ctx.data, xi + h * xid)
+    pm, Rm = kin.ee_pose_xi(ctx.platform, ctx.data, xi - h * xid)
     return np.concatenate([(pp - pm) / (2 * h), pin.log3(Rp @ Rm.T) / (2 * h)])
 
 
 def _c_4_13(ctx: Context) -> Evidence:
-    err = max(_maxabs(mdl.jacobian_xi(ctx.robot, ctx.data, xi) @ xid - _pose_fd(ctx, xi, xid)) for xi, xid in ctx.states)
+    err = max(_maxabs(kin.jacobian_xi(ctx.platform, ctx.data, xi) @ xid - _pose_fd(ctx, xi, xid)) for xi, xid in ctx.states)
     return Evidence(err, None, "model J_e xi_dot vs central differences of the world pose (log3 for the rotation)")
 
 
-def _zero_euler_det(robot: Robot, data: pin.Data, q_arm) -> float:
-    J = mdl.jacobian_xi(robot, data, np.concatenate([np.zeros(6), q_arm]))
+def _zero_euler_det(platform: Platform, data: pin.Data, q_arm) -> float:
+    J = kin.jacobian_xi(platform, data, np.concatenate([np.zeros(6), q_arm]))
     return float(np.linalg.det(J @ J.T))
 
 
 def _c_4_44(ctx: Context) -> Evidence:
     rng = np.random.default_rng(SEED + 44)
     p = ctx.params
-    other = mdl.load(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
+    other = load(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
     do = other.data()
     err = 0.0
     for _ in range(N_STATES):
         q_arm = rng.uniform([-0.04, -np.pi, -np.pi], [0.04, np.pi, np.pi])
         ref = th.det_JJt_4_44(q_arm[0], q_arm[1], ctx.d)
-        err = max(err, abs(ref - _zero_euler_det(ctx.robot, ctx.data, q_arm)), abs(ref - _zero_euler_det(other, do, q_arm)))
+        err = max(err, abs(ref - _zero_euler_det(ctx.platform, ctx.data, q_arm)), abs(ref - _zero_euler_det(other, do, q_arm)))
     return Evidence(err, None, "vs det(J J^T) of the 6x9 model Jacobian (4.13) at zero Euler angles, for d3 = 0.10 and 0.25 m "
                     "and random theta3: the true determinant depends on neither")
 
@@ -693,7 +711,7 @@ def _sol_check(fn, r0):
     def run(ctx: Context) -> Evidence:
         grid = np.linspace(-np.pi, np.pi, 73)
         e44 = max(abs(fn(t) - th.det_JJt_4_44(r0, t, ctx.d)) for t in grid)
-        emod = max(abs(fn(t) - _zero_euler_det(ctx.robot, ctx.data, np.array([r0, t, 0.3]))) for t in grid)
+        emod = max(abs(fn(t) - _zero_euler_det(ctx.platform, ctx.data, np.array([r0, t, 0.3]))) for t in grid)
         lo = min(fn(t) for t in grid)
         return Evidence(max(e44, emod), None, f"printed 4-digit numbers vs (4.44) ({e44:.1g}) and vs the model det(J J^T) "
                         f"({emod:.1g}) with d0 + d1 = 0.095, d2 = 0.18, theta2 on a grid; min over theta2 = {lo:.4f} (never 0)")
@@ -718,7 +736,7 @@ def _lu_samples(ctx: Context):
     if "lu" not in ctx.cache:
         out = []
         for q in _arm_qs(ctx):
-            J = mdl.jacobian_xi(ctx.robot, ctx.data, np.concatenate([np.zeros(6), q]))
+            J = kin.jacobian_xi(ctx.platform, ctx.data, np.concatenate([np.zeros(6), q]))
             A = J @ J.T
             out.append((q, A, *doolittle(A)))
         ctx.cache["lu"] = out
@@ -774,7 +792,7 @@ def _c_4_45(ctx: Context) -> Evidence:
     for _ in range(6 * N_STATES):
         q = np.array([rng.uniform(*p.r0_limits), rng.uniform(-np.pi, np.pi), rng.uniform(*p.theta3_limits)])
         pts.append(q)
-        dets.append(_zero_euler_det(ctx.robot, ctx.data, q))
+        dets.append(_zero_euler_det(ctx.platform, ctx.data, q))
     dets = np.array(dets)
     Bp = np.array([th.basis_4_45(q[0], q[1]) for q in pts])
     lam, *_ = np.linalg.lstsq(Bp, dets, rcond=None)  # the best constants the printed basis allows
@@ -795,7 +813,7 @@ def _block_check(*names: str):
         ep = ec = 0.0
         worst = ""
         for xi, xid in ctx.states:
-            B = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)[0]
+            B = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)[0]
             P, Cc = th.B_blocks_5_2_2(xi, ctx.params), th.B_blocks_5_2_2_corrected(xi, ctx.params)
             for n in names:
                 i, j = _BLOCK_SLICES[n]
@@ -811,8 +829,8 @@ def _block_check(*names: str):
 
 
 def _c_5_15(ctx: Context) -> Evidence:
-    model = pin.Model(ctx.robot.model)
-    for j in ctx.robot.arm_joint_ids:  # keep the multirotor only
+    model = pin.Model(ctx.platform.model)
+    for j in (joint.joint_id for joint in ctx.platform.arm):  # keep the multirotor only
         model.inertias[j] = pin.Inertia.Zero()
     data = model.createData()
     ep = ec = 0.0
@@ -829,26 +847,27 @@ def _c_5_15(ctx: Context) -> Evidence:
 def _c_5_25(ctx: Context) -> Evidence:
     err = 0.0
     for xi, xid in ctx.states:
-        B = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)[0]
-        q, v = co.xi_to_qv(xi, xid)
-        err = max(err, abs(0.5 * xid @ B @ xid - mdl.kinetic_energy(ctx.robot, ctx.data, q, v)))
+        B = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)[0]
+        q, v = ch.xi_to_qv(xi, xid)
+        err = max(err, abs(0.5 * xid @ B @ xid - dyn.kinetic_energy(ctx.platform, ctx.data, q, v)))
     return Evidence(err, None, "model: 1/2 xi_dot^T B xi_dot vs Pinocchio kinetic energy")
 
 
 def _c_5_29(ctx: Context) -> Evidence:
-    err = max(abs(th.potential_5_29(xi, ctx.params) - mdl.potential_energy(ctx.robot, ctx.data, _q(xi))) for xi, _ in ctx.states)
+    err = max(abs(th.potential_5_29(xi, ctx.params) - dyn.potential_energy(ctx.platform, ctx.data, _q(xi))) for xi, _ in ctx.states)
     return Evidence(err, None, "vs Pinocchio potential energy (gravity -g e3, z up)")
 
 
 def _c_5_35(ctx: Context) -> Evidence:
     h = 1e-6
     err = skew = 0.0
+    pf, data = ctx.platform, ctx.data
     for xi, xid in ctx.states[:4]:
-        B, C, _ = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)
+        B, C, _ = dyn.dynamics_xi(pf, data, xi, xid)
         dB = np.zeros((9, 9, 9))  # dB[:, :, k] = dB/dxi_k
         for k in range(9):
             e = np.eye(9)[k] * h
-            dB[:, :, k] = (mdl.dynamics_xi(ctx.robot, ctx.data, xi + e, xid)[0] - mdl.dynamics_xi(ctx.robot, ctx.data, xi - e, xid)[0]) / (2 * h)
+            dB[:, :, k] = (dyn.dynamics_xi(pf, data, xi + e, xid)[0] - dyn.dynamics_xi(pf, data, xi - e, xid)[0]) / (2 * h)
         C_fd = 0.5 * (np.einsum("ijk,k->ij", dB, xid) + np.einsum("ikj,k->ij", dB, xid) - np.einsum("jki,k->ij", dB, xid))
         err = max(err, _maxabs(C - C_fd))
         Bdot = np.einsum("ijk,k->ij", dB, xid)
@@ -862,10 +881,10 @@ def _c_5_37(ctx: Context) -> Evidence:
     h = 1e-6
     err = 0.0
     for xi, xid in ctx.states:
-        G = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)[2]
+        G = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)[2]
 
         def U(x):
-            return mdl.potential_energy(ctx.robot, ctx.data, _q(x))
+            return dyn.potential_energy(ctx.platform, ctx.data, _q(x))
 
         fd = np.array([(U(xi + h * e) - U(xi - h * e)) / (2 * h) for e in np.eye(9)])
         err = max(err, _maxabs(G - fd))
@@ -877,8 +896,8 @@ def _c_5_39(ctx: Context) -> Evidence:
     rng = np.random.default_rng(SEED + 39)
     for xi, xid in ctx.states:
         u = rng.normal(size=9)
-        B, C, G = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)
-        err = max(err, _maxabs(mdl.forward_dynamics_xi(ctx.robot, ctx.data, xi, xid, u) - np.linalg.solve(B, u - C @ xid - G)))
+        B, C, G = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)
+        err = max(err, _maxabs(dyn.forward_dynamics_xi(ctx.platform, ctx.data, xi, xid, u) - np.linalg.solve(B, u - C @ xid - G)))
     return Evidence(err, None, "model: ABA on the Lie group (converted to xi_ddot) vs B^-1 (u - C xi_dot - G)")
 
 
@@ -897,7 +916,7 @@ def _rq_check(fn):
     def run(ctx: Context) -> Evidence:
         ep = _virtual_power_error(fn, ctx)
         ec = max(_virtual_power_error(th.R_Q_corrected, ctx),
-                 max(_maxabs(th.R_Q_corrected(xi) - act.input_map_matrix(xi)) for xi, _ in ctx.states))
+                 max(_maxabs(th.R_Q_corrected(xi) - input_map_matrix(xi)) for xi, _ in ctx.states))
         return Evidence(ep, ec, "u^T xi_dot vs the power f_world . p_dot + tau_body . omega_body + mu . q_arm_dot "
                         "(omega_body by differences of R_b); the corrected middle block is T^T")
 
@@ -906,14 +925,14 @@ def _rq_check(fn):
 
 def _c_5_46(ctx: Context) -> Evidence:
     p = ctx.params
-    N = act.actuation_matrix(ctx.robot, "plus")
+    N = _plus(ctx).actuation_matrix
     ep = _maxabs(th.N_5_46(p.arm_length, p.drag_factor) - N)
     ec = _maxabs(th.N_5_46_corrected(p.arm_length, p.thrust_factor, p.drag_factor) - N)
     return Evidence(ep, ec, "vs the model's N (rotor frames of the URDF); same yaw-row c vs c/b issue as (3.36)")
 
 
 def _c_5_54(ctx: Context) -> Evidence:
-    model, data = fixed_base_arm(ctx.robot)
+    model, data = fixed_base_arm(ctx.platform)
     err = max(_maxabs(th.arm_B_5_54(q, ctx.params) - _mass_matrix(model, data, q)) for q, _, _ in _arm_samples(ctx))
     return Evidence(err, None, "vs CRBA of the arm with the base locked")
 
@@ -922,7 +941,7 @@ _ARM_B_NAMES = [f"b{i}{j}" for i in range(1, 4) for j in range(1, 4)]
 
 
 def _c_5_5_B(ctx: Context) -> Evidence:
-    model, data = fixed_base_arm(ctx.robot)
+    model, data = fixed_base_arm(ctx.platform)
     ep = ec = 0.0
     errs = []
     for q, _, _ in _arm_samples(ctx):
@@ -938,7 +957,7 @@ def _c_5_5_B(ctx: Context) -> Evidence:
 
 
 def _c_5_5_C(ctx: Context) -> Evidence:
-    model, data = fixed_base_arm(ctx.robot)
+    model, data = fixed_base_arm(ctx.platform)
     ep = ec = 0.0
     errs = []
     for q, qd, _ in _arm_samples(ctx):
@@ -953,9 +972,9 @@ def _c_5_5_C(ctx: Context) -> Evidence:
 
 
 def _c_5_5_G(ctx: Context) -> Evidence:
-    down_x = co.rot_y(np.pi / 2)  # x_B points down: gravity in B is +g x_B
-    model, data = fixed_base_arm(ctx.robot, down_x)
-    lm, ld = fixed_base_arm(ctx.robot)
+    down_x = ch.rot_y(np.pi / 2)  # x_B points down: gravity in B is +g x_B
+    model, data = fixed_base_arm(ctx.platform, down_x)
+    lm, ld = fixed_base_arm(ctx.platform)
     ep = level = 0.0
     for q, _, _ in _arm_samples(ctx):
         ep = max(ep, _maxabs(th.arm_G_5_5(q, ctx.params) - pin.computeGeneralizedGravity(model, data, q)))
@@ -966,7 +985,7 @@ def _c_5_5_G(ctx: Context) -> Evidence:
 
 def _u_check(i: int, what: str):
     def run(ctx: Context) -> Evidence:
-        model, data = fixed_base_arm(ctx.robot, co.rot_y(np.pi / 2))
+        model, data = fixed_base_arm(ctx.platform, ch.rot_y(np.pi / 2))
         ep = ec = 0.0
         for q, qd, qdd in _arm_samples(ctx):
             tau = pin.rnea(model, data, q, qd, qdd)[i]
@@ -981,14 +1000,14 @@ def _c_conversion(ctx: Context) -> Evidence:
     err = 0.0
     rng = np.random.default_rng(SEED + 9)
     for xi, xid in ctx.states:
-        q, v = co.xi_to_qv(xi, xid)
-        xi2, xid2 = co.qv_to_xi(q, v)
+        q, v = ch.xi_to_qv(xi, xid)
+        xi2, xid2 = ch.qv_to_xi(q, v)
         xidd = rng.normal(size=9)
-        a = co.xi_ddot_to_a(xi, xid, xidd)
-        err = max(err, _maxabs(_wrap(xi2 - xi)), _maxabs(xid2 - xid), _maxabs(co.a_to_xi_ddot(xi, xid, a) - xidd))
+        a = ch.xi_ddot_to_a(xi, xid, xidd)
+        err = max(err, _maxabs(_wrap(xi2 - xi)), _maxabs(xid2 - xid), _maxabs(ch.a_to_xi_ddot(xi, xid, a) - xidd))
         # v is the tangent of q(xi(t)): pin.difference of q at xi -+ h xi_dot over 2h
         h = 1e-6
-        v_fd = pin.difference(ctx.robot.model, co.xi_to_q(xi - h * xid), co.xi_to_q(xi + h * xid)) / (2 * h)
+        v_fd = pin.difference(ctx.platform.model, ch.xi_to_q(xi - h * xid), ch.xi_to_q(xi + h * xid)) / (2 * h)
         err = max(err, _maxabs(v_fd - v))
     return Evidence(err, None, "xi -> (q, v) -> xi round trip, accelerations, and v = pin.difference of q(xi(t))")
 
@@ -1002,14 +1021,14 @@ def _symbolic_errors(ctx: Context) -> dict:
     except ImportError as exc:
         raise _Skip('skipped (pip install "qprr[test]")') from exc
     try:
-        symbolic = importlib.import_module("qprr.symbolic")
+        symbolic = importlib.import_module("qprr.thesis.symbolic")
     except ImportError as exc:
-        raise _Skip(f"skipped (qprr.symbolic not available: {exc})") from exc
+        raise _Skip(f"skipped (qprr.thesis.symbolic not available: {exc})") from exc
     sm = symbolic.symbolic_model(ctx.params)
     err = {"B": 0.0, "C": 0.0, "G": 0.0}
     for xi, xid in ctx.states[:3]:
         sym = [np.asarray(x, dtype=float) for x in sm.dynamics(xi, xid)]
-        pin_ = mdl.dynamics_xi(ctx.robot, ctx.data, xi, xid)
+        pin_ = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)
         for name, a, b in zip("BCG", sym, pin_):
             err[name] = max(err[name], _maxabs(a - b))
     ctx.cache["symbolic"] = err
@@ -1018,7 +1037,7 @@ def _symbolic_errors(ctx: Context) -> dict:
 
 def _symbolic_check(name: str):
     def run(ctx: Context) -> Evidence:
-        return Evidence(_symbolic_errors(ctx)[name], None, f"{name} of the Lagrange model derived symbolically (qprr.symbolic, "
+        return Evidence(_symbolic_errors(ctx)[name], None, f"{name} of the Lagrange model derived symbolically (qprr.thesis.symbolic, "
                         "sympy, no Pinocchio) vs CRBA/RNEA in xi coordinates")
 
     return run
@@ -1041,7 +1060,7 @@ def _c_6_29(ctx: Context) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
         q = _q(xi)
-        err = max(err, _maxabs(th.p_c_6_29(xi[0:3], _R(xi), mdl.com_body(ctx.robot, ctx.data, q)) - mdl.com_world(ctx.robot, ctx.data, q)))
+        err = max(err, _maxabs(th.p_c_6_29(xi[0:3], _R(xi), kin.com_body(ctx.platform, ctx.data, q)) - kin.com_world(ctx.platform, ctx.data, q)))
     return Evidence(err, None, "p_b + R_b p_cm (p_cm: Pinocchio CoM in B) vs Pinocchio CoM in the world frame")
 
 
@@ -1049,12 +1068,12 @@ def _c_6_29_rate(ctx: Context) -> Evidence:
     h = 1e-6
     ep = e_world = 0.0
     for xi, xid in ctx.states:
-        q, v = co.xi_to_qv(xi, xid)
-        pin.centerOfMass(ctx.robot.model, ctx.data, q, v)
+        q, v = ch.xi_to_qv(xi, xid)
+        pin.centerOfMass(ctx.platform.model, ctx.data, q, v)
         vcom = ctx.data.vcom[0].copy()
-        p_cm = mdl.com_body(ctx.robot, ctx.data, q)
+        p_cm = kin.com_body(ctx.platform, ctx.data, q)
         darm = np.concatenate([np.zeros(6), xid[6:9]]) * h
-        p_cm_dot = (mdl.com_body(ctx.robot, ctx.data, _q(xi + darm)) - mdl.com_body(ctx.robot, ctx.data, _q(xi - darm))) / (2 * h)
+        p_cm_dot = (kin.com_body(ctx.platform, ctx.data, _q(xi + darm)) - kin.com_body(ctx.platform, ctx.data, _q(xi - darm))) / (2 * h)
         omega_body, R = v[3:6], _R(xi)
         ep = max(ep, _maxabs(th.p_c_dot_6_29(xid[0:3], R, omega_body, p_cm, p_cm_dot) - vcom))
         e_world = max(e_world, _maxabs(th.p_c_dot_6_29(xid[0:3], R, R @ omega_body, p_cm, p_cm_dot) - vcom))
@@ -1064,14 +1083,14 @@ def _c_6_29_rate(ctx: Context) -> Evidence:
 
 
 def _c_6_30_xy(ctx: Context) -> Evidence:
-    err = max(_maxabs(th.com_6_30(xi[6:9], ctx.params)[0:2] - mdl.com_body(ctx.robot, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
+    err = max(_maxabs(th.com_6_30(xi[6:9], ctx.params)[0:2] - kin.com_body(ctx.platform, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
     return Evidence(err, None, "x_cm, y_cm in B vs Pinocchio centre of mass")
 
 
 def _c_6_30_z(ctx: Context) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
-        z = mdl.com_body(ctx.robot, ctx.data, _q(xi))[2]
+        z = kin.com_body(ctx.platform, ctx.data, _q(xi))[2]
         ep = max(ep, abs(th.com_6_30(xi[6:9], ctx.params)[2] - z))
         ec = max(ec, abs(th.com_3_78_corrected(xi[6:9], ctx.params)[2] - z))
     m1 = ctx.params.links[0].mass
@@ -1083,7 +1102,7 @@ def _pitch_only_offsets(ctx: Context, phi: float = 0.0, psi: float = 0.0):
     """(theta, p_cm in B, p_c - p_b in the world) from Pinocchio at roll ``phi``, yaw ``psi``."""
     for xi in _level_states(ctx, phi, psi):
         q = _q(xi)
-        yield xi[4], mdl.com_body(ctx.robot, ctx.data, q), mdl.com_world(ctx.robot, ctx.data, q) - xi[0:3]
+        yield xi[4], kin.com_body(ctx.platform, ctx.data, q), kin.com_world(ctx.platform, ctx.data, q) - xi[0:3]
 
 
 def _c_6_31(ctx: Context) -> Evidence:
@@ -1100,8 +1119,8 @@ def _c_6_32(ctx: Context) -> Evidence:
 
 def _ee_pitch_error(ctx: Context, xi, theta_e: float) -> float:
     """|R_e - Rz(psi) Ry(theta_e)| with R_e from Pinocchio."""
-    R_e = mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation
-    return _maxabs(R_e - co.rot_z(xi[5]) @ co.rot_y(theta_e))
+    R_e = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation
+    return _maxabs(R_e - ch.rot_z(xi[5]) @ ch.rot_y(theta_e))
 
 
 def _c_6_34(ctx: Context) -> Evidence:
@@ -1109,7 +1128,7 @@ def _c_6_34(ctx: Context) -> Evidence:
     for xi in _level_states(ctx):
         te = th.theta_e_6_34(xi[4], xi[7], xi[8])
         ep = max(ep, _ee_pitch_error(ctx, xi, te))
-        zyz = th.euler_3_64(mdl.ee_placement(ctx.robot, ctx.data, _q(xi)).rotation)[1]
+        zyz = th.euler_3_64(kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation)[1]
         e_zyz = max(e_zyz, abs(float(_wrap(zyz - te))))
     for xi in _level_states(ctx, phi=0.2):
         e_roll = max(e_roll, _ee_pitch_error(ctx, xi, th.theta_e_6_34(xi[4], xi[7], xi[8])))
@@ -1118,9 +1137,10 @@ def _c_6_34(ctx: Context) -> Evidence:
 
 
 def _c_6_35(ctx: Context) -> Evidence:
-    from .control import CogStabilizer, make_controller
+    from ..control import make_controller
+    from .bsg import CogStabilizer
 
-    bsg = CogStabilizer(ctx.robot, make_controller("mfc", ctx.robot))
+    bsg = CogStabilizer(ctx.platform, make_controller("mfc", ctx.platform))
     rng = np.random.default_rng(SEED + 35)
     p = ctx.params
     err = e_roll = 0.0
@@ -1130,12 +1150,12 @@ def _c_6_35(ctx: Context) -> Evidence:
         bsg.theta_e_d = theta_e_d
         r0_d, theta3_d = bsg.joint_references(theta, theta2_d)
         if not (p.r0_limits[0] < r0_d < p.r0_limits[1] and p.theta3_limits[0] < theta3_d < p.theta3_limits[1]):
-            clamped += 1  # clamped references cannot reach x_cm = 0 (documented in qprr.control.bsg)
+            clamped += 1  # clamped references cannot reach x_cm = 0 (documented in qprr.thesis.bsg)
             continue
         n += 1
         for phi in (0.0, 0.2):
             xi = np.array([0.0, 0.0, 0.0, phi, theta, psi, r0_d, theta2_d, theta3_d])
-            e = max(abs(mdl.com_body(ctx.robot, ctx.data, _q(xi))[0]), _ee_pitch_error(ctx, xi, theta_e_d))
+            e = max(abs(kin.com_body(ctx.platform, ctx.data, _q(xi))[0]), _ee_pitch_error(ctx, xi, theta_e_d))
             if phi == 0.0:
                 err = max(err, e)
             else:
@@ -1262,9 +1282,9 @@ def evaluate(check: Check, ctx: Context) -> CheckResult:
     return CheckResult(check.equation, check.quantity, ev.printed_error, ev.corrected_error, tol, verdict, status, ev.detail)
 
 
-def run_checks(robot: Robot | None = None, on_result: Callable[[CheckResult], None] | None = None) -> list[CheckResult]:
-    """Evaluate every check of :data:`CHECKS` (calling ``on_result`` after each) and return the results."""
-    ctx = make_context(robot)
+def run_checks(platform: Platform | None = None, on_result: Callable[[CheckResult], None] | None = None) -> list[CheckResult]:
+    """Evaluate every check of :data:`CHECKS` on ``platform`` (default: the thesis's Q-PRR), calling ``on_result`` after each."""
+    ctx = make_context(platform)
     results = []
     for check in CHECKS:
         r = evaluate(check, ctx)

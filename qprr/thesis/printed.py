@@ -1,6 +1,6 @@
 """The thesis's closed forms, implemented AS PRINTED, each named by its equation number.
 
-These functions exist to be compared with the Pinocchio model (see :mod:`qprr.checks`,
+These functions exist to be compared with the Pinocchio model (see :mod:`qprr.thesis.checks`,
 ``tests/test_thesis.py`` and ``docs/thesis-errata.md``); the library itself never
 uses them.  Where a printed formula is wrong, a ``*_corrected`` function gives the form
 that matches the model and the physics, and the errata file explains the difference.
@@ -9,7 +9,7 @@ Conventions of the printed formulas (the ones of the thesis, not always ours):
 
 * ``d = (d0, d1, d2, d3)`` link lengths [m]; ``q_arm = (r0, theta2, theta3)``.
 * ``xi = [x, y, z, phi, theta, psi, r0, theta2, theta3]``, ZYX Euler angles (3.4).
-* Masses and inertias are read from a :class:`~qprr.params.QPRRParams` where a formula
+* Masses and inertias are read from a :class:`~qprr.thesis.params.QPRRParams` where a formula
   needs many of them; ``I_x3`` etc. are the principal moments (Ixx, Iyy, Izz) of
   Table 3.2 in the link frame (y parallel to the joint axis, as in the URDF).
 * The modified Denavit-Hartenberg convention of (3.27)-(3.30) is implemented once, in
@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .coordinates import as_vector, rot_y, rot_z
-from .errors import InputError
-from .mdh import MDHRow, kk_transform
+from ..charts import as_vector, rot_y, rot_z
+from ..errors import InputError
+from ..mdh import MDHRow, kk_transform
 from .params import QPRRParams
 
 E3 = np.array([0.0, 0.0, 1.0])
