@@ -45,6 +45,16 @@ def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_
     return ee_jacobian_world(platform, data, q, frame).T @ h
 
 
+def generalized_wrench_xi(platform: Platform, data: pin.Data, xi, wrench_world, frame=None) -> np.ndarray:
+    """u_e(h) (6 + n_arm,) of Thesis (6.58): u_e = S(xi)^T J_e(q)^T h, thesis coordinates.
+
+    h = [f; mu] in world axes at the frame origin (default: the end effector).  The Q-PRR's
+    printed block form (6.59) and its correction are in :mod:`qprr.thesis.interaction`.
+    """
+    xi = ch.as_xi(xi, "xi", platform.n_xi)
+    return ch.force_to_xi(xi, generalized_force_from_wrench(platform, data, ch.xi_to_q(xi), wrench_world, frame))
+
+
 # ================================================================================ allocation
 _WRENCH_NAMES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
 
