@@ -90,6 +90,7 @@ def test_table_6_2_attitude_pids_are_unstable_under_exact_linearisation():
         assert np.roots([1.0, d.kd[i], d.kp[i], d.ki[i]]).real.max() < 0
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_table_6_2_gains_lose_the_attitude_in_the_static_mission(robot):
     """With the printed attitude gains the pitch error grows exponentially until the vehicle tumbles."""
     from qprr.errors import DivergenceError

@@ -53,6 +53,7 @@ def static_runs(robot):
     return {name: run(name, platform=robot) for name in ("static-idc", "static-dsid", "static-mfc")}
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("name", ["static-idc", "static-dsid", "static-mfc"])
 def test_static_mission_switches_stay_within_actuator_slew(static_runs, robot, name):
     res = static_runs[name]
@@ -104,6 +105,7 @@ def _hover_offset_decay(robot, gains):
     return np.log(late / early) / 2.0, crossings / 2.0 / 3.0
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_dsid_chatter_was_the_printed_velocity_gain(robot, static_runs):
     """(A.3)'s K_D = 18 puts the position loop's crossover at sqrt((K_D^2 + sqrt(K_D^4 + 4 K_P^2)) / 2) = 18 rad/s
     (2.9 Hz), beyond the thrust-direction cascade: a 1 mm offset rings at ~3 Hz and decays at only ~0.2 /s.

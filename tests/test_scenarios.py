@@ -32,6 +32,7 @@ NOT_LIKE_FOR_LIKE = {
 }
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("ctrl", ["idc", "dsid", "mfc"])
 def test_static_mission_rmse_against_table_6_3(comparison, ctrl):
     assert comparison.status[ctrl] == "ok"
@@ -40,6 +41,7 @@ def test_static_mission_rmse_against_table_6_3(comparison, ctrl):
         assert comparison.rmse[ctrl][var] <= factor * TABLE_6_3[ctrl][i], (ctrl, var)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_idc_arm_error_is_the_zero_order_hold(robot):
     """The IDC arm errors above Table 6.3 halve with the control period: discretisation, not the law."""
     a = run("static-idc", platform=robot).rmse()
@@ -49,6 +51,7 @@ def test_idc_arm_error_is_the_zero_order_hold(robot):
     assert b["theta2"] <= TABLE_6_3["idc"][7]
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_compare_table_has_the_shape_of_table_6_3(comparison):
     text = comparison.table()
     lines = text.splitlines()
@@ -57,6 +60,7 @@ def test_compare_table_has_the_shape_of_table_6_3(comparison):
     assert "2.2012e-03" in text and "14min" in text and "25min" in text and "11min" in text
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_dynamic_bsg_keeps_the_cog_on_the_thrust_axis(robot):
     dyn = run("dynamic-bsg", platform=robot)
     static = run("static-mfc", platform=robot)
@@ -69,6 +73,7 @@ def test_dynamic_bsg_keeps_the_cog_on_the_thrust_axis(robot):
     assert dyn.xi[-1, 7] == pytest.approx(-0.5, abs=5e-3)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("name, bound", [("spiral", 0.1), ("noise", 0.1), ("pulses", 0.3)])
 def test_disturbed_and_spiral_scenarios_fly(robot, name, bound):
     res = run(name, platform=robot)
@@ -85,6 +90,7 @@ def test_noise_scenario_is_reproducible(robot):
     assert not np.array_equal(a.xi, c.xi)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_printed_transition_law_saturates_the_rotors(robot):
     """With (6.16) as printed the climb asks for 1.55 g of deceleration: thrust hits 0 and z overshoots."""
     res = run("static-idc", platform=robot, law="thesis")
