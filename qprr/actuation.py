@@ -15,6 +15,7 @@ thrusts closest to the unconstrained ones.  The base wrench the rotors cannot pr
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,6 +44,16 @@ def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_
     """Pinocchio generalised force J^T h of a wrench h = [f; mu] (world axes, applied at the frame origin; default: end effector)."""
     h = as_vector(wrench_world, 6, "wrench_world")
     return ee_jacobian_world(platform, data, q, frame).T @ h
+
+
+def generalized_wrench_xi(platform: Platform, data: pin.Data, xi, wrench_world, frame=None) -> np.ndarray:
+    """u_e(h) (6 + n_arm,) of Thesis (6.58): u_e = S(xi)^T J_e(q)^T h, thesis coordinates.
+
+    h = [f; mu] in world axes at the frame origin (default: the end effector).  The Q-PRR's
+    printed block form (6.59) and its correction are in :mod:`qprr.thesis.interaction`.
+    """
+    xi = ch.as_xi(xi, "xi", platform.n_xi)
+    return ch.force_to_xi(xi, generalized_force_from_wrench(platform, data, ch.xi_to_q(xi), wrench_world, frame))
 
 
 # ================================================================================ allocation
@@ -152,7 +163,8 @@ class Allocator:
         """Prioritised allocation of the producible wrench rows ``w`` (bounds active)."""
         self.qp_calls += 1
         if not np.all(np.isfinite(w)):
-            raise DivergenceError(f"the controller asked for a non-finite rotor wrench {w.tolist()}")
+            bad = ", ".join(f"{_WRENCH_NAMES[i]} = {v!r}" for i, v in zip(self.rows, w.tolist()) if not math.isfinite(v))
+            raise DivergenceError(f"the controller asked for a non-finite rotor wrench ({bad}, body axes at B): {w.tolist()}")
         s = self._scale
         OP = self.Omega[self.rows] * s  # x = f / s
         A1 = self._W[:, None] * OP[self._lvl1]
@@ -229,10 +241,13 @@ class Allocator:
         if self.clip_arm:
             lim = self._lim
             for k, a in enumerate(arm):
-                if a > lim[k] or a < -lim[k]:
+                if not -lim[k] <= a <= lim[k]:  # beyond the limit, or NaN
+                    self._check_arm_finite(arm)
                     arm = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
                     flags |= 2
                     break
+        elif arm and not math.isfinite(sum(arm)):
+            self._check_arm_finite(arm)
         self._write(f_out, fl + arm)
         if tau_out is not None:
             if flags or not self.square:
@@ -243,6 +258,12 @@ class Allocator:
                     td[i] = 0.0
                 self._tau_write(tau_out, td)
         return flags
+
+    def _check_arm_finite(self, arm: list[float]) -> None:
+        """DivergenceError naming the first arm joint asked for a non-finite effort."""
+        for name, a in zip(self.platform.arm_names, arm):
+            if not math.isfinite(a):
+                raise DivergenceError(f"the controller asked for a non-finite effort on arm joint {name!r}: {a!r}")
 
     def hover_thrusts(self, data: pin.Data | None = None, q=None) -> np.ndarray:
         """Rotor thrusts that hold the platform still at ``q`` (default: level at the origin, arm at 0).

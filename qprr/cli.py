@@ -220,12 +220,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--law", default=None, choices=("septic", "quintic", "thesis"),
                    help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))")
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="any scenario option (listed above), repeatable")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
 
     p = sub.add_parser("compare", help="IDC vs desired-state ID (thesis: MPC) vs MFC: RMSE table shaped like Table 6.3")
     p.add_argument("--duration", type=float, default=30.0, help="seconds (default 30)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 
     p = sub.add_parser("check", help="check the model against the thesis's closed forms (table of verdicts)")

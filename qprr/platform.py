@@ -153,8 +153,8 @@ class Platform:
         object.__setattr__(self, "arm", tuple(self.arm))
         object.__setattr__(self, "rotors", tuple(self.rotors))
         gvec = model.gravity.linear
-        if not (abs(gvec[0]) == 0.0 and abs(gvec[1]) == 0.0 and gvec[2] < 0.0):
-            raise InputError(f"model.gravity must point along -z of the world frame, got {gvec.tolist()} m/s^2")
+        if not (abs(gvec[0]) == 0.0 and abs(gvec[1]) == 0.0 and gvec[2] <= 0.0):  # zero: free flight
+            raise InputError(f"model.gravity must point along -z of the world frame (or be zero), got {gvec.tolist()} m/s^2")
 
     # -------------------------------------------------------------- sizes and names
     @property
@@ -486,13 +486,13 @@ def from_urdf(
 
     The URDF's inertials are checked first (:func:`check_urdf_inertials`: Pinocchio's parser
     drops a malformed one silently), then the model is built with a free-flyer root and gravity
-    -g e3.  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
+    -g e3 (g >= 0; 0 for free flight).  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
     to the last frame of the last arm joint of a serial arm.
     """
     text, source = _urdf_text(urdf)
-    if not (isinstance(g, (int, float)) and math.isfinite(g) and g > 0.0):
-        raise InputError(f"g must be a positive number of m/s^2, got {g!r}")
+    if not (isinstance(g, (int, float)) and math.isfinite(g) and g >= 0.0):  # g = 0: free flight (conservation tests)
+        raise InputError(f"g must be a finite number >= 0 m/s^2, got {g!r}")
     if not allow_nonphysical:
         check_urdf_inertials(text, source)
     model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())

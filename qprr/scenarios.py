@@ -66,6 +66,8 @@ class Scenario:
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         values = {k: o.default for k, o in self.options.items()}
         values.update(options)
+        if "law" in values and values["law"] not in LAWS:  # checked here: a trajectory may not use it (the spiral)
+            raise UnknownNameError("transition law", values["law"], LAWS)
         return self.runner(platform=platform, controller=controller or self.controllers[0], progress=progress, **values)
 
 

@@ -28,17 +28,20 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 import pytest
-from qprr.control.payload_idc import PayloadIDC
-from qprr.coordinates import xi_to_qv
-from qprr.integrators import ORDERS
 
-import qprr
-from qprr import interaction as it
-from qprr import model as qm
-from qprr.control import CogStabilizer, make_controller
+import qprr.thesis
+from qprr import kinematics as qm
+from qprr import sim as it
+from qprr.charts import xi_to_qv
+from qprr.control import PayloadIDC
 from qprr.control.base import Controller
 from qprr.control.impedance import ImpedanceController
+from qprr.platform import Platform
 from qprr.sim import BaseDrag, PayloadChange, PayloadSchedule, Pulse, WhiteNoise, simulate
+from qprr.sim.integrators import ORDERS
+from qprr.thesis import gains
+from qprr.thesis.bsg import CogStabilizer
+from qprr.thesis.scenarios import flight_controller
 from qprr.trajectory import Hold, TrajectorySample
 
 REFERENCE_DIVISOR = 256
@@ -70,8 +73,8 @@ class _Ramp:
         return TrajectorySample(t, self.xi0 + t[:, None] * self.rate, np.tile(self.rate, (n, 1)), np.zeros((n, 9)))
 
 
-ROBOT = qprr.load()
-FREE = qprr.load(qprr.thesis_params().with_changes(g=0.0))
+ROBOT = qprr.thesis.load()
+FREE = qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
 _M, _G = ROBOT.params.total_mass, ROBOT.params.g
 
 # free tumbling with the arm moving (as tests/test_sim.py)
@@ -122,7 +125,7 @@ def _hooked_object():
     obj = it.PushedMass(ROBOT, mass=mass, origin=p0 + np.r_[pen, 0.0, 0.0], direction=(-1.0, 0.0, 0.0), velocity=V,
                         stiffness=k, damping=5.0, friction=mu)
     rate = np.r_[-V, np.zeros(8)]
-    return ROBOT, make_controller("idc", ROBOT), _Ramp(xi0, rate), dict(xi0=xi0, xi_dot0=rate, external_wrench=obj,
+    return ROBOT, flight_controller("idc", ROBOT), _Ramp(xi0, rate), dict(xi0=xi0, xi_dot0=rate, external_wrench=obj,
                                                                           joint_stops=False)
 
 
@@ -131,7 +134,8 @@ def _impedance():
     ee = it.PrescribedWrench(np.r_[0.05, 0.01, 0.05, 0.0, 0.0, 0.0], 0.1, 0.4)
     gamma = np.zeros(9)
     gamma[[0, 1, 2, 5]] = hb
-    ctrl = ImpedanceController(ROBOT, ee_sensor=ee.measured, base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4))
+    ctrl = ImpedanceController(ROBOT, gains.impedance(), gains.impedance_filters(), ee_sensor=ee.measured,
+                               base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4))
     return _closed(ctrl, external_wrench=ee, disturbance=Pulse(0.1, 0.4, tuple(gamma)))
 
 
@@ -139,7 +143,7 @@ def _payload_idc():
     # starts at rest on its reference carrying 0.1 kg it does not know of, released at 0.2 s (off the 8 ms grid:
     # the release acts at the tick 0.208 s)
     sched = PayloadSchedule((PayloadChange(0.0, 0.1), PayloadChange(0.2, 0.0)))
-    return _closed(PayloadIDC(ROBOT, payload="estimate"), xi0=XI_REF, xi_dot0=np.zeros(9), payload=sched)
+    return _closed(PayloadIDC(ROBOT, gains.payload(), payload="estimate"), xi0=XI_REF, xi_dot0=np.zeros(9), payload=sched)
 
 
 @dataclass(frozen=True)
@@ -162,16 +166,16 @@ CASES: dict[str, Case] = {
     "hook: payload change": Case(lambda: _open(payload=PayloadSchedule((PayloadChange(0.0, 0.1), PayloadChange(0.1, 0.0))))),
     "hook: noise (6.27)": Case(lambda: _open(disturbance=WhiteNoise((0.3,) * 7 + (0.01, 0.01)))),
     "hook: contact model (idc)": Case(_hooked_object),
-    "closed loop: idc": Case(lambda: _closed(make_controller("idc", ROBOT)), start=_CL),
-    "closed loop: dsid": Case(lambda: _closed(make_controller("dsid", ROBOT)), control_period=4e-3, start=_CL),
-    "closed loop: mfc": Case(lambda: _closed(make_controller("mfc", ROBOT)), start=_CL),
-    "closed loop: bsg + mfc": Case(lambda: _closed(CogStabilizer(ROBOT, make_controller("mfc", ROBOT))), start=_CL),
+    "closed loop: idc": Case(lambda: _closed(flight_controller("idc", ROBOT)), start=_CL),
+    "closed loop: dsid": Case(lambda: _closed(flight_controller("dsid", ROBOT)), control_period=4e-3, start=_CL),
+    "closed loop: mfc": Case(lambda: _closed(flight_controller("mfc", ROBOT)), start=_CL),
+    "closed loop: bsg + mfc": Case(lambda: _closed(CogStabilizer(ROBOT, flight_controller("mfc", ROBOT))), start=_CL),
     "closed loop: payload-idc": Case(_payload_idc, start={"euler": 8, "midpoint": 2, "rk4": 1}),
     "closed loop: impedance": Case(_impedance, start={"euler": 4, "midpoint": 4, "rk4": 2}),
 }
 
 
-def final_state(case: Case, integrator: str, substeps: int) -> tuple[qm.Robot, np.ndarray, np.ndarray, np.ndarray]:
+def final_state(case: Case, integrator: str, substeps: int) -> tuple[Platform, np.ndarray, np.ndarray, np.ndarray]:
     """(robot, q, v, z) at the last control tick of ``case`` run with dt = T_c / substeps."""
     robot, ctrl, traj, kw = case.build()
     T = case.control_period

@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
-from qprr import coordinates as co
-from qprr import interaction_scenarios as scn
+from qprr import charts as co
 from qprr.control.impedance import ImpedanceFilter, ImpedanceGains, analytic_wrench
-from qprr.control.payload_idc import LayeredGains
 from qprr.errors import InputError
+from qprr.thesis import gains
+from qprr.thesis import scenarios as scn
+from qprr.thesis.gains import NAMES
 
 SEED = 66
 
@@ -69,21 +70,21 @@ def test_analytic_wrench_virtual_power():
 
 def test_printed_gain_tables_are_unstable_under_exact_linearisation():
     """Routh-Hurwitz on e''' + k_D e'' + k_P e' + k_I e: (6.56) attitude PI (Table 6.5) and (6.79) arm PI (Table 6.7)."""
-    t65, t67 = LayeredGains.table_6_5(), LayeredGains.table_6_7()
-    assert t65.unstable_axes() == ["phi", "theta", "psi"]
-    assert t67.unstable_axes() == ["r0", "theta2", "theta3"]
-    for gains, axis in ((t65, "theta"), (t67, "theta2")):
-        assert np.roots(gains.characteristic_polynomials()[axis]).real.max() > 0.0
-    for gains in (LayeredGains.payload_default(), LayeredGains.impedance_default()):
-        assert gains.unstable_axes() == []
-        assert all(np.roots(c).real.max() < 0 for c in gains.characteristic_polynomials().values())
+    t65, t67 = gains.table_6_5(), gains.table_6_7()
+    assert t65.unstable_axes(NAMES) == ["phi", "theta", "psi"]
+    assert t67.unstable_axes(NAMES) == ["r0", "theta2", "theta3"]
+    for g, axis in ((t65, "theta"), (t67, "theta2")):
+        assert np.roots(g.characteristic_polynomials(NAMES)[axis]).real.max() > 0.0
+    for g in (gains.payload(), gains.impedance()):
+        assert g.unstable_axes(NAMES) == []
+        assert all(np.roots(c).real.max() < 0 for c in g.characteristic_polynomials(NAMES).values())
 
 
 def test_table_6_7_slider_stiffness_exceeds_the_stroke():
     """K_P^q = 0.08 N/m: 0.05 N along x_B deflects the slider reference by 0.625 m, 15 x the 0.04 m stroke."""
-    k = ImpedanceGains.table_6_7().K_arm[0]
+    k = gains.impedance_table_6_7().K_arm[0]
     assert 0.05 / k == pytest.approx(0.625)
-    assert 0.05 / ImpedanceGains.default().K_arm[0] == pytest.approx(0.02)
+    assert 0.05 / gains.impedance_filters().K_arm[0] == pytest.approx(0.02)
 
 
 FAST = ImpedanceGains(M_base=(0.5,) * 4, D_base=(3.0,) * 4, K_base=(5.0,) * 4,
@@ -102,4 +103,4 @@ def test_closed_loop_deflection_equals_h_over_K():
     assert np.all(np.abs(meas[1:4]) < 1e-5)  # y, z, psi: no base compliance there
     assert meas[4:7] == pytest.approx(pred[4:7], rel=1e-4)  # measured 2e-6
     assert meas[4] > 0.0  # the slider yields along the +x force
-    assert res.info["saturated_steps"] == 0
+    assert res.metrics["saturated_steps"] == 0

@@ -10,12 +10,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import qprr
+import qprr.thesis
 from qprr import actuation as act
-from qprr import coordinates as co
-from qprr import interaction as it
-from qprr import model as qm
+from qprr import charts as co
+from qprr import kinematics as qm
+from qprr import sim as it
 from qprr.errors import InputError
+from qprr.thesis import interaction as ti
 
 from .conftest import random_xi
 
@@ -35,10 +36,10 @@ def test_u_e_is_S_T_J_T_h_and_its_block_form(robot, seed):
     data = robot.data()
     xi = random_xi(rng, robot)
     h = rng.normal(size=6)
-    u = it.generalized_wrench_xi(robot, data, xi, h)
+    u = act.generalized_wrench_xi(robot, data, xi, h)
     tau = act.generalized_force_from_wrench(robot, data, co.xi_to_q(xi), h)
     assert np.allclose(u, co.rate_map(xi).T @ tau, atol=1e-12)
-    assert np.allclose(u, it.generalized_wrench_blocks(xi, h, _d(robot)), atol=1e-12)
+    assert np.allclose(u, ti.generalized_wrench_blocks(xi, h, _d(robot)), atol=1e-12)
 
 
 def test_u_e_virtual_power(robot, data):
@@ -52,7 +53,7 @@ def test_u_e_virtual_power(robot, data):
         Mm = qm.ee_placement(robot, data, co.xi_to_q(xi - eps * xd))
         pdot = (Mp.translation - Mm.translation) / (2 * eps)
         omega = pin.log3(Mp.rotation @ Mm.rotation.T) / (2 * eps)  # world angular velocity
-        assert it.generalized_wrench_xi(robot, data, xi, h) @ xd == pytest.approx(h[0:3] @ pdot + h[3:6] @ omega, rel=1e-6, abs=1e-8)
+        assert act.generalized_wrench_xi(robot, data, xi, h) @ xd == pytest.approx(h[0:3] @ pdot + h[3:6] @ omega, rel=1e-6, abs=1e-8)
 
 
 def test_6_59_printed_holds_level_only(robot, data):
@@ -61,8 +62,8 @@ def test_6_59_printed_holds_level_only(robot, data):
     xi = random_xi(rng, robot)
     level = xi.copy()
     level[3:6] = 0.0
-    assert np.allclose(it.generalized_wrench_6_59(level, h, _d(robot)), it.generalized_wrench_xi(robot, data, level, h), atol=1e-12)
-    err = np.abs(it.generalized_wrench_6_59(xi, h, _d(robot)) - it.generalized_wrench_xi(robot, data, xi, h)).max()
+    assert np.allclose(ti.generalized_wrench_6_59(level, h, _d(robot)), act.generalized_wrench_xi(robot, data, level, h), atol=1e-12)
+    err = np.abs(ti.generalized_wrench_6_59(xi, h, _d(robot)) - act.generalized_wrench_xi(robot, data, xi, h)).max()
     assert err > 1e-2
 
 
@@ -136,7 +137,7 @@ def test_pushed_mass_coulomb_stick_and_slip(robot):
 
 @pytest.fixture(scope="module")
 def free_robot():
-    return qprr.load(qprr.thesis_params().with_changes(g=0.0))
+    return qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
 
 
 def _push_run(robot, integrator, duration=0.045, dt=1e-3):
@@ -220,12 +221,12 @@ def _locked_arm_check(robot, q_arm, theta, T1, T3, F):
     m = robot.model
     qref = pin.neutral(m)
     qref[7:10] = q_arm
-    red = pin.buildReducedModel(m, [int(j) for j in robot.arm_joint_ids], qref)
+    red = pin.buildReducedModel(m, [m.getJointId(n) for n in robot.arm_names], qref)
     d = red.createData()
     q = np.zeros(7)
     q[2] = 1.0
     q[3:7] = pin.Quaternion(co.rot_y(theta)).coeffs()
-    tau = act.rotor_matrix(robot) @ np.array([T1, 0.0, T3, 0.0])
+    tau = robot.rotor_matrix @ np.array([T1, 0.0, T3, 0.0])
     ee = red.getFrameId("end_effector")
     J = pin.computeFrameJacobian(red, d, q, ee, pin.LOCAL_WORLD_ALIGNED)
     tau = tau + J.T @ np.array([-F, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -240,32 +241,32 @@ def _locked_arm_check(robot, q_arm, theta, T1, T3, F):
 
 def test_push_model_corrected_matches_locked_arm_pinocchio():
     """Corrected (6.66) = full rigid-body dynamics with the arm locked, at rest (products Ixy = Iyz = 0 so pitch decouples)."""
-    p0 = qprr.load().params
+    p0 = qprr.thesis.load().params
     I = p0.multirotor_inertia
-    robot = qprr.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
+    robot = qprr.thesis.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
     rng = np.random.default_rng(SEED)
     for _ in range(5):
         qa = rng.uniform(robot.params.lower_limits, robot.params.upper_limits)
         theta, T1, T3, F = rng.uniform(-0.4, 0.4), rng.uniform(5, 12), rng.uniform(5, 12), rng.uniform(0, 3)
         xdd, thdd, M, Iyy, contact_b, com_b = _locked_arm_check(robot, qa, theta, T1, T3, F)
-        model = it.push_model(theta, T1, T3, F, M, Iyy, robot.params.arm_length, contact_b, com_b)
+        model = ti.push_model(theta, T1, T3, F, M, Iyy, robot.params.arm_length, contact_b, com_b)
         assert model.x_ddot == pytest.approx(xdd, rel=1e-12, abs=1e-12)
         assert model.theta_ddot == pytest.approx(thdd, rel=1e-10, abs=1e-10)
 
 
 def test_push_model_6_66_printed_rotor_sign():
     """Printed rotor term L/(2 I)(T3 - T1) has the opposite sign of (3.36)'s l (f1 - f3) (no contact, CoG on the thrust axis)."""
-    p0 = qprr.load().params
+    p0 = qprr.thesis.load().params
     I = p0.multirotor_inertia
-    robot = qprr.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
+    robot = qprr.thesis.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
     _, thdd, M, Iyy, contact_b, com_b = _locked_arm_check(robot, (0.0, 0.0, 0.0), 0.0, 9.0, 8.0, 0.0)
-    printed = it.push_model_6_66(0.0, 9.0, 8.0, 0.0, M, Iyy, 2 * robot.params.arm_length, 0.0)
+    printed = ti.push_model_6_66(0.0, 9.0, 8.0, 0.0, M, Iyy, 2 * robot.params.arm_length, 0.0)
     # arm straight up: the CoG is on z_B (x_cm = 0), so the thrust has no moment about it
     assert abs(com_b[0]) < 1e-15
-    assert thdd == pytest.approx(it.push_model(0.0, 9.0, 8.0, 0.0, M, Iyy, robot.params.arm_length, contact_b, com_b).theta_ddot, rel=1e-10)
+    assert thdd == pytest.approx(ti.push_model(0.0, 9.0, 8.0, 0.0, M, Iyy, robot.params.arm_length, contact_b, com_b).theta_ddot, rel=1e-10)
     assert printed.theta_ddot == pytest.approx(-thdd, rel=1e-10)
     # the printed contact moment F p_cb^T e3 / I_yy matches at theta = 0 if p_cb is read with z down
     xdd, thdd_c, M, Iyy, contact_b, com_b = _locked_arm_check(robot, (0.0, math.pi / 2, 0.0), 0.0, 0.0, 0.0, 2.0)
-    printed_c = it.push_model_6_66(0.0, 0.0, 0.0, 2.0, M, Iyy, 0.45, -(contact_b - com_b)[2])
+    printed_c = ti.push_model_6_66(0.0, 0.0, 0.0, 2.0, M, Iyy, 0.45, -(contact_b - com_b)[2])
     assert printed_c.theta_ddot == pytest.approx(thdd_c, rel=1e-10)
     assert printed_c.x_ddot == pytest.approx(xdd, rel=1e-12)

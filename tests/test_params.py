@@ -9,7 +9,10 @@ import pinocchio as pin
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from qprr.params import (
+
+import qprr.thesis
+from qprr.errors import InputError, NonPhysicalError, UnknownNameError
+from qprr.thesis.params import (
     _TABLE_3_2_INERTIA,
     LINK2_INERTIA_PHYSICAL,
     Link,
@@ -19,9 +22,6 @@ from qprr.params import (
     second_moments,
     thesis_params,
 )
-
-import qprr
-from qprr.errors import InputError, NonPhysicalError, UnknownNameError
 
 
 def _bodies(p):
@@ -71,7 +71,7 @@ def test_printed_table_3_2_is_an_explicit_nonphysical_opt_in():
     assert printed.links[1].inertia[:3] == _TABLE_3_2_INERTIA["link2"]
     assert printed.nonphysical == ("link2",) and "nonphysical" in printed.variant
     assert printed != thesis_params()
-    robot = qprr.load(printed)  # Pinocchio accepts it (it does not check); its link-2 inertia is the printed one
+    robot = qprr.thesis.load(printed)  # Pinocchio accepts it (it does not check); its link-2 inertia is the printed one
     assert robot.model.inertias[robot.model.getJointId("theta2")].inertia[1, 1] == pytest.approx(5.013e-5, rel=1e-12)
     with pytest.raises(NonPhysicalError, match=r"link2: .*I_yy <= I_xx \+ I_zz: 5\.013e-05 > 4\.5507e-05 by 4\.623e-06"):
         printed.with_changes(nonphysical=())
@@ -151,7 +151,7 @@ def test_link_objects_in_a_parameter_set_are_checked():
 def test_an_independent_engine_loads_the_default_urdf_and_refuses_the_printed_table():
     """MuJoCo checks A + B >= C on every body's principal moments when it compiles a model."""
     mujoco = pytest.importorskip("mujoco")
-    from qprr.urdf import URDF_PATH, build_urdf
+    from qprr.thesis.urdf import URDF_PATH, build_urdf
 
     assert mujoco.MjModel.from_xml_path(str(URDF_PATH)).nbody == 4
     with pytest.raises(ValueError, match=r"A \+ B >= C"):

@@ -7,13 +7,14 @@ import pytest
 
 from qprr.cli import build_parser, main
 from qprr.errors import UnknownNameError
-from qprr.scenarios import SCENARIOS, TABLE_6_3, compare, get_scenario, run
-from qprr.trajectory import XI_NAMES
+from qprr.scenarios import SCENARIOS, get_scenario, run
+from qprr.thesis.missions import NAMES as XI_NAMES
+from qprr.thesis.scenarios import TABLE_6_3, compare
 
 
 @pytest.fixture(scope="module")
 def comparison(robot):
-    return compare(robot=robot)
+    return compare(platform=robot)
 
 
 # Where ours may exceed Table 6.3, and why (the comparison is not like for like there):
@@ -31,6 +32,7 @@ NOT_LIKE_FOR_LIKE = {
 }
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("ctrl", ["idc", "dsid", "mfc"])
 def test_static_mission_rmse_against_table_6_3(comparison, ctrl):
     assert comparison.status[ctrl] == "ok"
@@ -39,15 +41,17 @@ def test_static_mission_rmse_against_table_6_3(comparison, ctrl):
         assert comparison.rmse[ctrl][var] <= factor * TABLE_6_3[ctrl][i], (ctrl, var)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_idc_arm_error_is_the_zero_order_hold(robot):
     """The IDC arm errors above Table 6.3 halve with the control period: discretisation, not the law."""
-    a = run("static-idc", robot=robot).rmse()
-    b = run("static-idc", robot=robot, dt=5e-4).rmse()
+    a = run("static-idc", platform=robot).rmse()
+    b = run("static-idc", platform=robot, dt=5e-4).rmse()
     for var in ("theta2", "theta3"):
         assert a[var] / b[var] == pytest.approx(2.0, rel=0.1)
     assert b["theta2"] <= TABLE_6_3["idc"][7]
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_compare_table_has_the_shape_of_table_6_3(comparison):
     text = comparison.table()
     lines = text.splitlines()
@@ -56,9 +60,10 @@ def test_compare_table_has_the_shape_of_table_6_3(comparison):
     assert "2.2012e-03" in text and "14min" in text and "25min" in text and "11min" in text
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_dynamic_bsg_keeps_the_cog_on_the_thrust_axis(robot):
-    dyn = run("dynamic-bsg", robot=robot)
-    static = run("static-mfc", robot=robot)
+    dyn = run("dynamic-bsg", platform=robot)
+    static = run("static-mfc", platform=robot)
     assert dyn.status == "ok"
     assert np.abs(dyn.x_cm[:, 0]).max() < 5e-4  # measured 0.17 mm (r0 clamped at its 4 cm stroke)
     assert np.abs(static.x_cm[:, 0]).max() > 5e-3  # without the BSG the arm moves the CoG 8.9 mm
@@ -68,37 +73,39 @@ def test_dynamic_bsg_keeps_the_cog_on_the_thrust_axis(robot):
     assert dyn.xi[-1, 7] == pytest.approx(-0.5, abs=5e-3)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("name, bound", [("spiral", 0.1), ("noise", 0.1), ("pulses", 0.3)])
 def test_disturbed_and_spiral_scenarios_fly(robot, name, bound):
-    res = run(name, robot=robot)
+    res = run(name, platform=robot)
     assert res.status == "ok"
     e = res.rmse()
     assert max(e["x"], e["y"], e["z"]) < bound
 
 
 def test_noise_scenario_is_reproducible(robot):
-    a = run("noise", robot=robot, duration=2.0, seed=3)
-    b = run("noise", robot=robot, duration=2.0, seed=3)
-    c = run("noise", robot=robot, duration=2.0, seed=4)
+    a = run("noise", platform=robot, duration=2.0, seed=3)
+    b = run("noise", platform=robot, duration=2.0, seed=3)
+    c = run("noise", platform=robot, duration=2.0, seed=4)
     np.testing.assert_array_equal(a.xi, b.xi)
     assert not np.array_equal(a.xi, c.xi)
 
 
+@pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 def test_printed_transition_law_saturates_the_rotors(robot):
     """With (6.16) as printed the climb asks for 1.55 g of deceleration: thrust hits 0 and z overshoots."""
-    res = run("static-idc", robot=robot, law="thesis")
+    res = run("static-idc", platform=robot, law="thesis")
     assert res.saturation_fraction() > 0.01
     assert res.f.min() == 0.0
-    assert res.rmse()["z"] > 100 * run("static-idc", robot=robot, duration=8.0).rmse()["z"]
+    assert res.rmse()["z"] > 100 * run("static-idc", platform=robot, duration=8.0).rmse()["z"]
 
 
 def test_unknown_names_list_the_valid_ones(robot, capsys):
     with pytest.raises(UnknownNameError, match="'static-idc'.*'dynamic-bsg'"):
         get_scenario("hover")
     with pytest.raises(UnknownNameError, match="'idc', 'dsid', 'mfc'"):
-        run("spiral", "lqr", robot=robot)
+        run("spiral", "lqr", platform=robot)
     with pytest.raises(UnknownNameError, match="quintic"):
-        run("spiral", robot=robot, law="cubic")
+        run("spiral", platform=robot, law="cubic")
     assert main(["simulate", "hover"]) == 2
     assert "static-idc" in capsys.readouterr().err
 

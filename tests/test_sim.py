@@ -5,15 +5,17 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 import pytest
-from qprr.control.bsg import cog_betas
-from qprr.coordinates import xi_to_qv
-from qprr.model import com_body, dynamics_xi
 
 import qprr
+import qprr.thesis
+from qprr.charts import xi_to_qv
 from qprr.control.base import Controller
+from qprr.dynamics import dynamics_xi
 from qprr.errors import DivergenceError, InputError, UnknownNameError
+from qprr.kinematics import com_body
 from qprr.scenarios import run
 from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
+from qprr.thesis.bsg import cog_betas
 from qprr.trajectory import Hold
 
 
@@ -66,7 +68,7 @@ def test_hover_at_a_cog_balanced_pose(robot):
 # ------------------------------------------------------------------------------ conservation
 @pytest.fixture(scope="module")
 def free_robot():
-    return qprr.load(qprr.thesis_params().with_changes(g=0.0))
+    return qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
 
 
 XI0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]
@@ -105,7 +107,7 @@ def test_free_flight_conserves_energy_and_momentum(free_robot, integrator, e_tol
 def test_joint_stop_impulse_is_internal_and_plastic(free_robot):
     """At the stops: joints put back on their limits, outward rates removed, centroidal momentum unchanged
     (the impulses are joint reactions), kinetic energy lost, inward rates left alone."""
-    from qprr.sim import _apply_joint_stops
+    from qprr.sim.stops import apply_joint_stops as _apply_joint_stops
 
     m, d = free_robot.model, free_robot.model.createData()
     p = free_robot.params
@@ -245,9 +247,9 @@ def test_far_from_the_origin_the_dynamics_do_not_change(robot):
 
 def test_midpoint_and_rk4_agree_in_closed_loop(robot):
     """On the static mission (first 16 s) the default integrator matches RK4 to well under a millimetre."""
-    a = run("static-idc", robot=robot, duration=16.0)
-    b = run("static-idc", robot=robot, duration=16.0, integrator="rk4")
-    e = run("static-idc", robot=robot, duration=16.0, integrator="euler")
+    a = run("static-idc", platform=robot, duration=16.0)
+    b = run("static-idc", platform=robot, duration=16.0, integrator="rk4")
+    e = run("static-idc", platform=robot, duration=16.0, integrator="euler")
     assert np.abs(a.xi - b.xi)[:, 0:3].max() < 1e-5  # measured 1.1e-6 m
     assert np.abs(a.xi - b.xi)[:, 3:9].max() < 1e-5
     assert np.abs(e.xi - b.xi)[:, 0:3].max() > 1e-3  # semi-implicit Euler: 1.9 mm off
@@ -387,7 +389,7 @@ def test_state_disturbance_drag_is_evaluated_at_every_stage(free_robot):
 
 # ------------------------------------------------------------------------------ results, disturbances
 def test_result_save_load_and_rmse(robot, tmp_path):
-    res = run("static-idc", robot=robot, duration=3.0)
+    res = run("static-idc", platform=robot, duration=3.0)
     path = res.save(tmp_path / "r.npz")
     back = SimResult.load(path)
     for name in ("t", "xi", "xi_d", "u", "f", "arm_effort", "x_cm", "unallocated", "flags", "u_ext"):
@@ -402,12 +404,12 @@ def test_result_save_load_and_rmse(robot, tmp_path):
 
 def test_noise_is_seeded_and_bounded_and_pulses_are_timed():
     t = np.arange(1000) * 1e-3
-    a = WhiteNoise(0.3).values(t, np.random.default_rng(5))
-    b = WhiteNoise(0.3).values(t, np.random.default_rng(5))
-    c = WhiteNoise(0.3).values(t, np.random.default_rng(6))
+    a = WhiteNoise(0.3).values(t, np.random.default_rng(5), 9)
+    b = WhiteNoise(0.3).values(t, np.random.default_rng(5), 9)
+    c = WhiteNoise(0.3).values(t, np.random.default_rng(6), 9)
     np.testing.assert_array_equal(a, b)
     assert not np.array_equal(a, c) and np.abs(a).max() <= 0.3 and np.abs(a).max() > 0.29
-    held = WhiteNoise(0.3, sample_time=0.1).values(t, np.random.default_rng(5))
+    held = WhiteNoise(0.3, sample_time=0.1).values(t, np.random.default_rng(5), 9)
     assert len(np.unique(held[:, 0])) == 10
     p = Pulse(0.2, 0.4, (0, 0, 5.0, 0, 0, 0, 0, 0, 0)).values(t)
     assert p[199, 2] == 0 and p[200, 2] == 5.0 and p[399, 2] == 5.0 and p[400, 2] == 0
