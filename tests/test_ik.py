@@ -65,7 +65,7 @@ def zyz_3_64(R):
 def assert_valid_solution(robot, data, res, M_d, hover=True):
     assert res.success, res.reason
     assert res.reason == ""
-    pos, ori = fk_errors(robot, data, res.q, M_d)  # independent check with qprr.model
+    pos, ori = fk_errors(robot, data, res.q, M_d)  # independent check by Pinocchio FK
     assert pos < POS_TOL and ori < ORI_TOL
     assert abs(pos - res.position_error) < 1e-12 and abs(ori - res.orientation_error) < 1e-12
     robot.check_arm_limits(res.q[7:10])

@@ -35,7 +35,7 @@ RANK_TOL = 1e-9
 def rotation(theta, m=math):
     """Lecture: R(theta), the elementary rotation about z of the "Manœuvrabilité : préliminaires" slide.
 
-    Numeric: :func:`qprr.coordinates.rot_z`; symbolic: the same matrix in sympy.
+    Numeric: :func:`qprr.charts.rot_z`; symbolic: the same matrix in sympy.
     """
     if not is_symbolic(m):
         return rot_z(float(theta))
