@@ -90,14 +90,14 @@ def _link2(**changes) -> tuple:
 
 
 @pytest.mark.parametrize("changes, pattern", [
-    (dict(multirotor_mass=-1.0), r"multirotor: mass must be a positive"),
+    (dict(multirotor_mass=-1.0), r"multirotor: mass must be finite and > 0 kg, got -1.0"),
     (dict(multirotor_mass=float("nan")), r"multirotor: mass"),
     (dict(multirotor_inertia=(1e-2, 1e-2, 3e-2, 0.0, 0.0, 0.0)), r"multirotor: .*I_zz <= I_xx \+ I_yy"),
-    (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 2e-2, 0.0, 0.0)), r"multirotor: rotational inertia must be positive definite"),
+    (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 2e-2, 0.0, 0.0)), r"multirotor: rotational inertia is not positive semi-definite, I_1 = -0.01"),
     (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 0.0, 0.0)), r"multirotor: inertia must be 6 finite"),
     (dict(links=_link2(mass=0.0)), r"link2: mass"),
     (dict(links=_link2(com=(0.0, math.inf, 0.0))), r"link2: centre of mass"),
-    (dict(links=_link2(inertia=(-1e-5, 5e-5, 5e-5, 0.0, 0.0, 0.0))), r"link2: rotational inertia must be positive definite, got I_xx"),
+    (dict(links=_link2(inertia=(-1e-5, 5e-5, 5e-5, 0.0, 0.0, 0.0))), r"link2: rotational inertia is not positive semi-definite, I_xx = -1e-05"),
     (dict(links=_link2(length=0.0)), r"link2: length"),
     (dict(d2=0.0), r"d2 must be a positive"),
     (dict(d0=-0.01), r"d0 must be a finite number >= 0"),
