@@ -123,7 +123,7 @@ def test_ik_path_reaches_every_target_hovering_with_the_cog_on_the_axis(qprr_pla
         np.testing.assert_allclose(M.translation, p[k], atol=1e-8)
         assert np.linalg.norm(pin.log3(R[k].T @ M.rotation)) < 1e-8
         assert abs(run.xi[k, 3]) < 1e-9 and abs(run.xi[k, 4]) < 1e-9  # hover: level base
-        assert np.abs(run.x_cm[k]).max() < 1e-6  # CoG on the thrust axis
+        assert np.abs(path.x_cm[k]).max() < 1e-6  # CoG on the thrust axis
         assert run.f[k].sum() == pytest.approx(mg, rel=1e-12)
         np.testing.assert_allclose(run.f[k], mg / 4.0, rtol=1e-6)  # CoG on the axis: equal thrusts
 

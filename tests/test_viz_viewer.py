@@ -19,7 +19,7 @@ import pytest
 import qprr
 from qprr import kinematics
 from qprr.charts import rot_y, xi_to_q
-from qprr.viz import RunLog, save_run
+from qprr.viz import RunLog
 
 viewer_mod = pytest.importorskip("qprr.viz.viewer", reason="the viewer needs the 'viewer' extra: pip install 'qprr[viewer]'",
                                  exc_type=ImportError)
@@ -81,7 +81,7 @@ def test_player_shows_the_logged_samples(viewer, platform, tmp_path):
     xi = np.tile(platform.neutral_xi(), (11, 1))
     xi[:, 8] = np.linspace(-0.5, 0.5, 11)
     f = np.tile([8.0, 9.0, 8.0, 9.0], (11, 1))
-    viewer.load_run(save_run(RunLog(t, xi, f=f, platform=platform.name), tmp_path / "r.npz"))
+    viewer.load_run(RunLog(t, xi, f=f, platform=platform.name))
     viewer.show_time(0.55)  # the sample at 0.5 s
     np.testing.assert_array_equal(viewer.xi, xi[5])
     assert viewer.run_time == 0.5

@@ -6,7 +6,7 @@
 * :func:`animate` / :func:`animate_result`: a run (or an IK solution path, :func:`ik_path`) to
   GIF or MP4 with matplotlib, no display needed (:mod:`qprr.viz.animation`);
 * :func:`visual_model`: the platform's visual ``GeometryModel`` (URDF shapes and meshes, or primitives);
-* :class:`RunLog`, :func:`save_run`, :func:`load_run`: a logged run and its ``.npz`` file;
+* :class:`RunLog`, :func:`load_run`: a run as the viewers read it, from a result file (:meth:`qprr.sim.SimResult.save`);
 * the browser viewer (``qprr view``, :class:`qprr.viz.viewer.Viewer`): joint sliders (FK), a
   draggable end-effector target solved by the task-priority IK, CoG and thrust-axis markers,
   hover thrusts and margins, a player for saved runs.  It needs the ``viewer`` extra
@@ -18,7 +18,7 @@ from .animation import AnimationInfo, animate, animate_result
 from .geometry import primitive_visual_model, visual_model
 from .ikpath import IKPath, ik_levels, ik_path, ik_solve
 from .plots import figure_path, new_figure, plot_result
-from .run import RunLog, load_run, save_run
+from .run import RunLog, load_run
 from .scene import HoverReport, RobotPose, hover_report, robot_pose
 
 __all__ = [
@@ -39,6 +39,5 @@ __all__ = [
     "plot_result",
     "primitive_visual_model",
     "robot_pose",
-    "save_run",
     "visual_model",
 ]

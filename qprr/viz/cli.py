@@ -114,7 +114,7 @@ def register_cli(sub) -> None:
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("animate", help="3-D animation of a saved run (or of a demo IK path) to GIF or MP4, headless",
-                       description="Animate a run saved as .npz (qprr.viz.save_run); without RUN, a 30 s demo IK path.")
+                       description="Animate a result file (qprr simulate ... --save RUN.npz); without RUN, a 30 s demo IK path.")
     p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
     p.add_argument("-o", "--output", default="out/animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg); default out/animation.gif")
     p.add_argument("--platform", default="q-prr", help="the platform of the run (default q-prr)")

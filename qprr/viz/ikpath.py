@@ -56,12 +56,14 @@ def ik_solve(platform: Platform, data: pin.Data, target, xi0=None, *, hover: boo
 
 @dataclass(frozen=True)
 class IKPath:
-    """An IK solution path: ``run`` (a :class:`RunLog`: xi, hover thrusts f, x_cm) and each sample's IK outcome.
+    """An IK solution path: ``run`` (a :class:`RunLog`: xi, hover thrusts f), ``x_cm`` (n, 2) [m] the CoG offset from
+    the thrust axis in B, and each sample's IK outcome.
 
     ``success`` (n,) bool, ``status`` (n,) the :class:`~qprr.ik.IKResult` statuses; ``position_error`` (n,) [m].
     """
 
     run: RunLog
+    x_cm: np.ndarray
     success: np.ndarray
     status: tuple[str, ...]
     position_error: np.ndarray
@@ -80,7 +82,7 @@ def ik_path(platform: Platform, t, p_world, R_world=None, *, hover: bool = True,
         solve starts from the previous answer.
 
     ``f`` of the run holds the hover thrusts of every sample (:func:`qprr.viz.scene.hover_report`,
-    also when a bound is violated), ``x_cm`` the CoG offset from the thrust axis.
+    also when a bound is violated); ``x_cm`` of the path the CoG offset from the thrust axis.
     """
     t = ch.as_array(t, "t")
     p = ch.as_array(p_world, "p_world")
@@ -112,4 +114,4 @@ def ik_path(platform: Platform, t, p_world, R_world=None, *, hover: bool = True,
         ok[k], err[k] = res.success, res.position_error
         status.append(res.status)
         prev = res.xi
-    return IKPath(RunLog(t, xi, f=f, x_cm=x_cm, platform=platform.name), ok, tuple(status), err)
+    return IKPath(RunLog(t, xi, f=f, platform=platform.name), x_cm, ok, tuple(status), err)

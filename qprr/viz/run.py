@@ -1,17 +1,20 @@
-"""A logged run as the viewers read it: arrays named as the simulator's result, and their ``.npz`` file.
+"""A run as the viewers read it: :class:`RunLog`, and :func:`load_run` for result files.
 
 :class:`RunLog` holds what a picture of a run needs, under the attribute names of the
-simulator's ``SimResult``: ``t`` (n,) [s], ``xi`` (n, 6 + n_arm) thesis coordinates, ``f``
-(n, n_rotors) rotor thrusts [N], ``arm_effort`` (n, n_arm) [N or N m], ``x_cm`` (n, 2) CoG
-offset from the thrust axis in B [m], ``contact_wrench_world`` (n, 6) the end-effector contact
-wrench [force N; moment N m] in world axes, and ``platform`` (the platform's name).  Only ``t``
-and ``xi`` are required.  :func:`save_run` writes any object with these attributes (a
-``SimResult`` too) to ``.npz``; :func:`load_run` reads it back.
+simulator's :class:`~qprr.sim.SimResult`: ``t`` (n,) [s], ``xi`` (n, 6 + n_arm) thesis
+coordinates, ``f`` (n, n_rotors) rotor thrusts [N], ``arm_effort`` (n, n_arm) [N or N m],
+``contact_wrench_world`` (n, 6) the end-effector contact wrench [force N; moment N m] in world
+axes, and ``platform`` (the platform's name).  Only ``t`` and ``xi`` are required; a path with
+no simulator behind it (an IK path, :mod:`qprr.viz.ikpath`) is a RunLog too.
+
+Runs on disk are result files of the simulator (:meth:`SimResult.save
+<qprr.sim.SimResult.save>`, ``qprr simulate ... --save FILE.npz``): one file format in the
+project.  :func:`load_run` reads one as a RunLog (a ``contact_wrench_world`` series, when
+logged, is drawn).
 """
 
 from __future__ import annotations
 
-import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -20,7 +23,7 @@ import numpy as np
 from ..charts import as_array
 from ..errors import InputError, NonFiniteError, ShapeError
 
-ARRAYS = ("t", "xi", "f", "arm_effort", "x_cm", "contact_wrench_world")
+ARRAYS = ("t", "xi", "f", "arm_effort", "contact_wrench_world")
 """Array attributes of a run, in file order (``t`` and ``xi`` required)."""
 
 
@@ -32,7 +35,6 @@ class RunLog:
     xi: np.ndarray
     f: np.ndarray | None = None
     arm_effort: np.ndarray | None = None
-    x_cm: np.ndarray | None = None
     contact_wrench_world: np.ndarray | None = None
     platform: str = ""
 
@@ -43,7 +45,7 @@ class RunLog:
         if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
             raise InputError("t must be finite and non-decreasing [s]")
         n = t.shape[0]
-        widths = {"f": None, "arm_effort": None, "x_cm": 2, "contact_wrench_world": 6}
+        widths = {"f": None, "arm_effort": None, "contact_wrench_world": 6}
         xi = as_array(self.xi, "xi")
         if xi.ndim != 2 or xi.shape[0] != n or xi.shape[1] < 6:
             raise ShapeError(f"xi must have shape ({n}, 6 + n_arm) like t, got {xi.shape}")
@@ -71,48 +73,24 @@ class RunLog:
 
 
 def as_run(result) -> RunLog:
-    """A :class:`RunLog` of any object with the attributes ``t`` and ``xi`` (and optionally the others of :data:`ARRAYS`)."""
+    """A :class:`RunLog` of a :class:`~qprr.sim.SimResult` or of any object with the attributes ``t`` and ``xi``
+    (and optionally ``f``, ``arm_effort``, ``contact_wrench_world`` or a ``series`` dict holding the latter)."""
     if isinstance(result, RunLog):
         return result
     missing = [k for k in ("t", "xi") if getattr(result, k, None) is None]
     if missing:
         raise InputError(f"a run needs the attributes t and xi; {type(result).__name__} lacks {', '.join(missing)}")
+    arrays = {k: getattr(result, k, None) for k in ARRAYS}
+    series = getattr(result, "series", None)
+    if arrays["contact_wrench_world"] is None and isinstance(series, dict):
+        arrays["contact_wrench_world"] = series.get("contact_wrench_world")
     name = getattr(result, "platform", "")
     name = name if isinstance(name, str) else getattr(name, "name", "")
-    return RunLog(**{k: getattr(result, k, None) for k in ARRAYS}, platform=name)
-
-
-def save_run(result, path: str | Path) -> Path:
-    """Write a run (any object with :data:`ARRAYS` attributes, e.g. a ``SimResult``) to ``path`` (``.npz``)."""
-    run = as_run(result)
-    path = Path(path)
-    if path.suffix != ".npz":
-        raise InputError(f"run files end in .npz, got {str(path)!r}")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    arrays = {k: getattr(run, k) for k in ARRAYS if getattr(run, k) is not None}
-    np.savez_compressed(path, **arrays, platform=np.asarray(run.platform))
-    return path
+    return RunLog(**arrays, platform=name)
 
 
 def load_run(path: str | Path) -> RunLog:
-    """Read a run written by :func:`save_run` (or any ``.npz`` with arrays ``t`` and ``xi``).
+    """The run of a result file (:meth:`qprr.sim.SimResult.load`: validated, errors name the file) as a :class:`RunLog`."""
+    from ..sim.result import SimResult
 
-    Raises :class:`~qprr.errors.InputError` naming the file when it does not exist, is not a
-    ``.npz`` archive or lacks ``t``/``xi``; arrays of the wrong shape raise ShapeError.
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"run file {str(path)!r} does not exist (write one with qprr.viz.save_run or `qprr simulate ... --save FILE.npz`)")
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            files = set(z.files)
-            missing = [k for k in ("t", "xi") if k not in files]
-            if missing:
-                raise InputError(f"run file {str(path)!r} lacks the array(s) {', '.join(missing)}; it holds {sorted(files)}")
-            arrays = {k: z[k] for k in ARRAYS if k in files}
-            name = str(z["platform"]) if "platform" in files else ""
-    except (zipfile.BadZipFile, ValueError, OSError) as exc:
-        if isinstance(exc, InputError):
-            raise
-        raise InputError(f"run file {str(path)!r} is not a .npz archive of arrays ({exc})") from exc
-    return RunLog(**arrays, platform=name)
+    return as_run(SimResult.load(path))

@@ -12,7 +12,7 @@
   posture; the hover and CoG levels are switches), with the IK outcome;
 * the centre of gravity, the thrust axis and, as arrows, the rotor thrusts that hold the
   configuration still with their margins to the thrust bounds (:func:`qprr.viz.hover_report`);
-* a player for a saved run (``.npz`` of :func:`qprr.viz.save_run`): time slider, play/pause,
+* a player for a saved run (a result file of :meth:`qprr.sim.SimResult.save`): time slider, play/pause,
   speed, the logged thrusts and contact force, the end-effector trail.
 
 The same operations are methods (:meth:`Viewer.set_xi`, :meth:`Viewer.set_joint`,
@@ -26,6 +26,7 @@ import contextlib
 import io
 import logging
 import math
+import os
 import socket
 import sys
 import threading
@@ -51,7 +52,7 @@ from ..kinematics import cog_offset_body
 from ..platform import Platform
 from .geometry import characteristic_length, visual_model
 from .ikpath import ik_solve
-from .run import RunLog, load_run
+from .run import RunLog, as_run, load_run
 from .scene import HoverReport, RobotPose, arm_chain, hover_report, robot_pose
 
 HOST = "127.0.0.1"
@@ -350,8 +351,8 @@ class Viewer:
 
     # ------------------------------------------------------------------ player
     def load_run(self, run) -> RunLog:
-        """Load a run in the player: a :class:`RunLog` or the path of a ``.npz`` (:func:`qprr.viz.load_run`)."""
-        run = run if isinstance(run, RunLog) else load_run(run)
+        """Load a run in the player: a :class:`RunLog`, a ``SimResult`` or the path of a result file (:func:`qprr.viz.load_run`)."""
+        run = load_run(run) if isinstance(run, (str, os.PathLike)) else as_run(run)
         if run.xi.shape[1] != self.platform.n_xi:
             raise ShapeError(f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); "
                              f"{self.platform.name!r} has {self.platform.n_xi}")
