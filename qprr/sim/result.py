@@ -51,6 +51,8 @@ class SimResult:
     * ``status`` (:class:`Status`) and ``reason``; ``series``: extra named arrays (e.g. the
       contact force, the payload mass estimate; time series have m rows); ``metrics``: extra
       named numbers (e.g. the recovery time of a payload drop).  Both are saved.
+    * ``arm_kinds``: "prismatic" or "revolute" per arm joint (the units of the figures; empty in
+      files written before it existed).
     """
 
     scenario: str
@@ -78,6 +80,7 @@ class SimResult:
     names: tuple[str, ...] = ()
     series: dict[str, np.ndarray] = field(default_factory=dict)
     metrics: dict[str, float] = field(default_factory=dict)
+    arm_kinds: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.control_period is None:
@@ -119,7 +122,7 @@ class SimResult:
                     integrator=self.integrator, control_period=self.control_period, wall_time=self.wall_time,
                     status=self.status.value, reason=self.reason, seed=self.seed, platform=self.platform,
                     names=list(self.names), metrics={k: float(v) for k, v in self.metrics.items()},
-                    series=sorted(self.series))
+                    series=sorted(self.series), arm_kinds=list(self.arm_kinds))
         arrays = {k: getattr(self, k) for k in ARRAYS}
         extras = {f"series_{k}": np.asarray(v) for k, v in self.series.items()}
         try:
@@ -159,7 +162,8 @@ class SimResult:
                    integrator=str(meta["integrator"]), wall_time=float(meta["wall_time"]), status=meta["status"],
                    reason=str(meta["reason"]), seed=meta["seed"], control_period=float(meta["control_period"]),
                    platform=str(meta.get("platform", "")), names=tuple(meta.get("names", ())), series=series,
-                   metrics={k: float(v) for k, v in meta.get("metrics", {}).items()})
+                   metrics={k: float(v) for k, v in meta.get("metrics", {}).items()},
+                   arm_kinds=tuple(str(k) for k in meta.get("arm_kinds", ())))
 
 
 def _validate(arrays: dict, meta: dict, source: str) -> None:
