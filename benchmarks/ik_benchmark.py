@@ -1,7 +1,7 @@
 """Inverse kinematics of the Q-PRR: every qprr.ik method and the peers, on the same targets.
 
     python benchmarks/ik_benchmark.py [--n 200] [--n-unreachable 50] [--seed 0] [--reps 5]
-                                      [--no-peers] [--png out/ik_benchmark.png]
+                                      [--no-peers] [--png ik_benchmark.png]
 
 Targets (seeded): ``--n`` reachable ones, the end-effector pose (forward kinematics) of
 random hover configurations (roll = pitch = 0, base in a 6 m box, yaw and arm uniform in
@@ -512,7 +512,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--reps", type=int, default=5, help="timed runs per target (fast methods)")
     ap.add_argument("--no-peers", action="store_true", help="skip pink, rtb and ikpy")
-    ap.add_argument("--png", default="out/ik_benchmark.png")
+    ap.add_argument("--png", default="ik_benchmark.png", help="figure file (its folder must exist)")
     args = ap.parse_args(argv)
     png = Path(args.png)
     if png.suffix.lower() != ".png" or not png.parent.is_dir():

@@ -180,9 +180,11 @@ def _summary(res) -> str:
     import numpy as np
 
     e = res.rmse()
+    kinds = ("m",) * 3 + ("rad",) * 3 + tuple("m" if k == "prismatic" else "rad" if k == "revolute" else "m or rad"
+                                               for k in (res.arm_kinds or ("",) * res.n_arm))
     lines = [f"scenario {res.scenario}, platform {res.platform}, controller {res.controller}: {res.status} ({res.reason}); "
              f"{res.n} steps of {res.control_period * 1e3:g} ms in {res.wall_time:.3f} s",
-             "RMSE (6.26): " + ", ".join(f"{k} {v:.3e}" for k, v in e.items()),
+             "RMSE (6.26): " + ", ".join(f"{k} {v:.3e} {u}" for (k, v), u in zip(e.items(), kinds)),
              f"rotor saturation on {100 * res.saturation_fraction():.2f} % of the steps; "
              f"max |CoG offset in B| = {1e3 * float(np.max(np.hypot(res.x_cm[:, 0], res.x_cm[:, 1]))):.2f} mm"]
     return "\n".join(lines)

@@ -15,8 +15,8 @@ references from (6.17), Fig. 6.8), ``arm`` (joints, Fig. 6.9), ``errors_position
 6.11), ``torques`` (u_tau, Fig. 6.12), ``arm_efforts`` (u_mu, Fig. 6.12), ``rotors`` (thrusts and
 their bounds), ``path`` (3-D, Fig. 6.13-6.14), ``cog`` (x_cm, y_cm in B, Fig. 6.42-6.43) and
 ``disturbance`` (u_ext of (6.27)-(6.28)).  The forces are the applied ones, S^T N f (what the
-rotors and joints produced after the allocation); where the controller asked for more (a bound
-was active), the commanded value is drawn dotted.  Your own panels are :class:`Panel` objects.
+rotors and joints produced after the allocation); where the controller asked for something else (a
+bound was active, or a force the rotors cannot produce), the commanded value is drawn dotted.  Your own panels are :class:`Panel` objects.
 
 One style for every figure of the project: SI units on every axis, angles in degrees, the
 prismatic joints in metres and the revolute ones in degrees (two labelled axes when an arm has
@@ -75,7 +75,7 @@ def figure_path(path: str | Path) -> Path:
     return path
 
 
-def save_figure(fig, path: str | Path, dpi: int = 110) -> Path:
+def save_figure(fig, path: str | Path, dpi: int = 90) -> Path:
     """Save ``fig`` to ``path`` (checked by :func:`figure_path`) and return the path."""
     path = figure_path(path)
     fig.savefig(path, dpi=dpi)
@@ -279,7 +279,7 @@ def _force_panel(ax, res, idx, ylabel: str, labels) -> None:
         _draw_signals(a, t, vals, [labels[i] + (f" [{unit}]" if len(groups) > 1 else "") for i in group],
                       colors=[colors[i] for i in group], commanded=commanded, lw=1.2)
         if any(c is not None for c in commanded):
-            a.plot([], [], color="0.3", label="commanded (bound active)", **COMMANDED_STYLE)
+            a.plot([], [], color="0.3", label="commanded (where not produced)", **COMMANDED_STYLE)
         a.set_ylabel(f"{ylabel} [{unit}]" if len(groups) == 1 else f"{'forces' if unit == 'N' else 'torques'} [{unit}]")
         robust_limits(a, vals, min_span=1e-3, t=t)
         axes.append(a)
@@ -515,7 +515,7 @@ def _events(ax, events, label: bool) -> None:
 
 def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, ax=None, title: str | None = None,
                 figures: Mapping[str, str] | None = None, thrust_bounds: tuple[float, float] | None = None,
-                events: Sequence[tuple[float, str]] = (), ncols: int | None = None, dpi: int = 110):
+                events: Sequence[tuple[float, str]] = (), ncols: int | None = None, dpi: int = 90):
     """Draw ``panels`` of ``res``; save to ``path`` (.png, .pdf, .svg) or return the Figure, or draw into ``ax``.
 
     Parameters
