@@ -28,9 +28,15 @@ def package_version(dist: str) -> str:
 def machine_lines(extra: tuple[str, ...] = ()) -> list[str]:
     """Platform, CPU, cores, load average, Python and the versions of the core packages (+ ``extra``)."""
     load = f"{os.getloadavg()[0]:.2f}" if hasattr(os, "getloadavg") else "?"
-    packages = ("numpy", "pin", "proxsuite", "qprr", *extra)
+    packages = ("numpy", "pin", "proxsuite", *extra)
+    try:  # the qprr that runs (a source tree may differ from the installed distribution)
+        import qprr
+
+        ours = f"qprr {qprr.__version__} ({os.path.dirname(qprr.__file__)})"
+    except ImportError:
+        ours = "qprr not importable"
     return [
         f"{platform.platform()}, Python {platform.python_version()}",
         f"CPU: {cpu_name()} ({os.cpu_count()} logical cores), load average {load}",
-        ", ".join(f"{p} {package_version(p)}" for p in packages),
+        ", ".join(f"{p} {package_version(p)}" for p in packages) + f", {ours}",
     ]

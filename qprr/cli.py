@@ -27,8 +27,20 @@ def _fail(prog: str, message: str) -> int:
     return 2
 
 
+def _writable(folder: Path) -> str:
+    """"" if a file can be created in ``folder`` (tried with a temporary file, removed at once), else why not."""
+    import tempfile
+
+    try:
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".qprr-write-test-"):
+            pass
+    except OSError as exc:
+        return exc.strerror or str(exc)
+    return ""
+
+
 def _output_path(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
-    """Check an output path before a run: known suffix, existing folder (nothing is created)."""
+    """Check an output path before a run: known suffix, existing and writable folder (nothing is created)."""
     if path is None:
         return None
     p = Path(path)
@@ -36,6 +48,31 @@ def _output_path(path: str | None, suffixes: tuple[str, ...], what: str) -> Path
         raise ValueError(f"--{what} {path!r}: the file must end in {' or '.join(suffixes)}")
     if not p.parent.is_dir():
         raise ValueError(f"--{what} {path!r}: folder {str(p.parent)!r} does not exist")
+    if p.is_dir():
+        raise ValueError(f"--{what} {path!r} is a folder, not a file")
+    why = _writable(p.parent)
+    if why:
+        raise ValueError(f"--{what} {path!r}: cannot write in folder {str(p.parent)!r} ({why})")
+    return p
+
+
+def _cache_dir(path: str | None) -> Path | None:
+    """Check ``--cache-dir``: an existing writable folder, or a new one whose parent folder exists (then made)."""
+    if path is None:
+        return None
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise ValueError(f"--cache-dir {path!r} is a file, not a folder")
+    if not p.exists():
+        if not p.parent.is_dir():
+            raise ValueError(f"--cache-dir {path!r}: folder {str(p.parent)!r} does not exist")
+        try:
+            p.mkdir()
+        except OSError as exc:
+            raise ValueError(f"--cache-dir {path!r}: cannot create it ({exc.strerror or exc})") from None
+    why = _writable(p)
+    if why:
+        raise ValueError(f"--cache-dir {path!r}: cannot write in it ({why})")
     return p
 
 
@@ -143,9 +180,11 @@ def _summary(res) -> str:
     import numpy as np
 
     e = res.rmse()
+    kinds = ("m",) * 3 + ("rad",) * 3 + tuple("m" if k == "prismatic" else "rad" if k == "revolute" else "m or rad"
+                                               for k in (res.arm_kinds or ("",) * res.n_arm))
     lines = [f"scenario {res.scenario}, platform {res.platform}, controller {res.controller}: {res.status} ({res.reason}); "
              f"{res.n} steps of {res.control_period * 1e3:g} ms in {res.wall_time:.3f} s",
-             "RMSE (6.26): " + ", ".join(f"{k} {v:.3e}" for k, v in e.items()),
+             "RMSE (6.26): " + ", ".join(f"{k} {v:.3e} {u}" for (k, v), u in zip(e.items(), kinds)),
              f"rotor saturation on {100 * res.saturation_fraction():.2f} % of the steps; "
              f"max |CoG offset in B| = {1e3 * float(np.max(np.hypot(res.x_cm[:, 0], res.x_cm[:, 1]))):.2f} mm"]
     return "\n".join(lines)
@@ -154,8 +193,8 @@ def _summary(res) -> str:
 def _cmd_compare(args: argparse.Namespace) -> int:
     from .thesis.scenarios import compare
 
-    if not (args.duration > 0):
-        return _fail("qprr compare", f"--duration must be > 0 s, got {args.duration!r}")
+    if not 0 < args.duration < float("inf"):
+        return _fail("qprr compare", f"--duration must be a finite number > 0 s, got {args.duration!r}")
     t0 = time.perf_counter()
     cmp = compare(duration=args.duration, progress=not args.quiet and sys.stderr.isatty())
     print("RMSE (6.26) on the static-manipulator mission (Sec. 6.3.1.4), ours vs Thesis Table 6.3;")
@@ -166,6 +205,14 @@ def _cmd_compare(args: argparse.Namespace) -> int:
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
+    import os
+
+    try:
+        cache = _cache_dir(args.cache_dir)
+    except ValueError as exc:
+        return _fail("qprr check", str(exc))
+    if cache is not None:  # read by qprr.thesis.symbolic when it derives (or reloads) the sympy model
+        os.environ["QPRR_CACHE_DIR"] = str(cache)
     from .thesis.checks import main as check_main
 
     return check_main(verbose=args.verbose)
@@ -228,8 +275,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 
-    p = sub.add_parser("check", help="check the model against the thesis's closed forms (table of verdicts)")
+    p = sub.add_parser("check", help="check the model against the thesis's closed forms (table of verdicts)",
+                       description="Check the model against the thesis's closed forms; prints a table of verdicts, "
+                       "exit code 0 iff all hold.  The sympy Lagrange model (test extra) is derived once per parameter "
+                       "set and its generated code cached in $QPRR_CACHE_DIR, else $XDG_CACHE_HOME/qprr, else "
+                       "~/.cache/qprr (about 50 kB per parameter set; safe to delete).")
     p.add_argument("-v", "--verbose", action="store_true", help="print the evidence behind each verdict")
+    p.add_argument("--cache-dir", default=None, metavar="DIR",
+                   help="folder of the sympy model's cache (default: $QPRR_CACHE_DIR or ~/.cache/qprr); made if its parent exists")
     p.set_defaults(func=_cmd_check)
 
     p = sub.add_parser("urdf", help="regenerate urdf/qprr.urdf from the thesis parameters")
@@ -250,11 +303,11 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         dt = getattr(args, "dt", None)
-        if dt is not None and not dt > 0:
-            return _fail(f"qprr {args.command}", f"--dt must be > 0 s, got {dt!r}")
+        if dt is not None and not 0 < dt < float("inf"):
+            return _fail(f"qprr {args.command}", f"--dt must be a finite number > 0 s, got {dt!r}")
         duration = getattr(args, "duration", None)
-        if args.command == "simulate" and duration is not None and not duration > 0:
-            return _fail("qprr simulate", f"--duration must be > 0 s, got {duration!r}")
+        if args.command == "simulate" and duration is not None and not 0 < duration < float("inf"):
+            return _fail("qprr simulate", f"--duration must be a finite number > 0 s, got {duration!r}")
         return int(args.func(args) or 0)
     except QprrError as exc:
         return _fail(f"qprr {args.command}", f"{type(exc).__name__}: {exc}")

@@ -42,7 +42,9 @@ class Scenario:
     ``controllers``: valid controller names (the first is the default); ``options``: the settable
     parameters with their defaults; ``platforms``: the platforms it runs on (None: any);
     ``plot``: ``(result, path) -> path`` drawing its figure; ``source``: the thesis section it
-    reproduces ("" if none); ``summary``: extra report lines of a result.
+    reproduces ("" if none); ``summary``: extra report lines of a result; ``figures``: the
+    thesis figure number of each panel of :func:`qprr.viz.plot_result` it reproduces (panel
+    name -> "6.7"; the panel titles carry them).
     """
 
     name: str
@@ -54,6 +56,7 @@ class Scenario:
     plot: Callable | None = None
     source: str = ""
     summary: Callable[[SimResult], list[str]] | None = None
+    figures: Mapping[str, str] = field(default_factory=dict)
 
     def run(self, platform: Platform | None = None, controller: str | None = None, progress: bool = False, **options) -> SimResult:
         """Run with ``options`` (unknown names raise :class:`UnknownNameError` listing the valid ones)."""

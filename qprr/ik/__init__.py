@@ -3,12 +3,14 @@
     solver = qprr.ik.IKSolver(platform, method="qp")   # build once (owns its QPs)
     result = solver.solve(data, target)                # solve many
 
-or ``qprr.ik.solve(platform, data, target, method="qp")``.  See :mod:`qprr.ik.solver` for the
+or ``qprr.ik.solve(platform, data, target, method="qp")``; :func:`balance_prismatic` gives the value of a
+prismatic joint that puts the CoG on the thrust axis (closed form).  See :mod:`qprr.ik.solver` for the
 problem and the methods, :mod:`qprr.ik.tasks` for the tasks (write your own), and
 :mod:`qprr.thesis.igm` for the thesis's analytic IGM of the Q-PRR.
 """
 
 from . import tasks
+from .balance import BalanceResult, balance_prismatic
 from .hierarchy import ELIMINATIONS, HierarchySolver, HierarchyStep
 from .solver import (
     METHODS,
@@ -27,6 +29,7 @@ from .solver import (
 )
 
 __all__ = [
+    "BalanceResult",
     "ELIMINATIONS",
     "METHODS",
     "OPTIONS",
@@ -37,6 +40,7 @@ __all__ = [
     "IKResult",
     "IKSolver",
     "QPOptions",
+    "balance_prismatic",
     "default_guess",
     "default_levels",
     "make_options",

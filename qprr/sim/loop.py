@@ -414,7 +414,7 @@ def _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, 
         integrator=integrator, t=t[:m].copy(), xi=xi, xi_dot=xid_log[:m], xi_d=xi_d[:m], xi_dot_d=xi_dot_d[:m],
         u=u_log[:m], f=f_log[:m, 0:nr].copy(), arm_effort=f_log[:m, nr:].copy(), x_cm=x_cm, unallocated=unalloc,
         flags=flags[:m], u_ext=u_ext[:m], wall_time=wall, status=status, reason=reason, seed=seed, control_period=period,
-        platform=platform.name, names=platform.xi_names,
+        platform=platform.name, names=platform.xi_names, arm_kinds=tuple(j.kind for j in platform.arm),
     )
 
 

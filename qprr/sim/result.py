@@ -53,6 +53,8 @@ class SimResult:
     * ``status`` (:class:`Status`) and ``reason``; ``series``: extra named arrays (e.g. the
       contact force, the payload mass estimate; time series have m rows); ``metrics``: extra
       named numbers (e.g. the recovery time of a payload drop).  Both are saved.
+    * ``arm_kinds``: "prismatic" or "revolute" per arm joint (the units of the figures; empty in
+      files written before it existed).
     """
 
     scenario: str
@@ -80,6 +82,7 @@ class SimResult:
     names: tuple[str, ...] = ()
     series: dict[str, np.ndarray] = field(default_factory=dict)
     metrics: dict[str, float] = field(default_factory=dict)
+    arm_kinds: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.control_period is None:
@@ -130,7 +133,7 @@ class SimResult:
                     integrator=self.integrator, control_period=self.control_period, wall_time=self.wall_time,
                     status=self.status.value, reason=self.reason, seed=None if self.seed is None else int(self.seed), platform=self.platform,
                     names=list(self.names), metrics={k: float(v) for k, v in self.metrics.items()},
-                    series=sorted(self.series))
+                    series=sorted(self.series), arm_kinds=list(self.arm_kinds))
         arrays = {k: getattr(self, k) for k in ARRAYS}
         extras = {f"series_{k}": np.asarray(v) for k, v in self.series.items()}
         try:
@@ -183,7 +186,7 @@ class SimResult:
                    integrator=meta["integrator"], wall_time=float(meta["wall_time"]), status=meta["status"],
                    reason=meta["reason"], seed=meta["seed"], control_period=float(meta["control_period"]),
                    platform=meta["platform"], names=tuple(meta["names"]), series=series,
-                   metrics={k: float(v) for k, v in meta["metrics"].items()})
+                   metrics={k: float(v) for k, v in meta["metrics"].items()}, arm_kinds=tuple(meta["arm_kinds"]))
 
 
 _READ_ERRORS = (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error)
@@ -213,7 +216,7 @@ def _is_number(v) -> bool:
 
 def _check_meta(meta: dict, source: str) -> dict:
     """The metadata's entries with their types checked (InputError naming the entry); optional ones filled in."""
-    meta = {"platform": "", "names": [], "metrics": {}, "series": [], **meta}
+    meta = {"platform": "", "names": [], "metrics": {}, "series": [], "arm_kinds": [], **meta}
     missing = [k for k in ("scenario", "controller", "integrator", "dt", "control_period", "wall_time", "status", "reason", "seed")
                if k not in meta]
     if missing:
@@ -229,8 +232,9 @@ def _check_meta(meta: dict, source: str) -> dict:
         raise InputError(f"{source}: unknown status {meta['status']!r}; valid: {[s.value for s in Status]}")
     if meta["seed"] is not None and not (isinstance(meta["seed"], int) and not isinstance(meta["seed"], bool)):
         raise InputError(f"{source}: metadata seed must be an integer or null, got {meta['seed']!r}")
-    if not (isinstance(meta["names"], list) and all(isinstance(n, str) for n in meta["names"])):
-        raise InputError(f"{source}: metadata names must be a list of strings, got {meta['names']!r}")
+    for key in ("names", "arm_kinds"):
+        if not (isinstance(meta[key], list) and all(isinstance(n, str) for n in meta[key])):
+            raise InputError(f"{source}: metadata {key} must be a list of strings, got {meta[key]!r}")
     m = meta["metrics"]
     if not (isinstance(m, dict) and all(_is_number(v) for v in m.values())):
         raise InputError(f"{source}: metadata metrics must map names to numbers, got {m!r}")

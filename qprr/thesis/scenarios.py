@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -52,7 +52,8 @@ from ..sim import (
     simulate,
 )
 from ..trajectory import Hold, MultiPhase, Phase, Spiral
-from ..viz import figure_path, new_figure, plot_result
+from ..viz import plot_result
+from ..viz.plots import DEG, REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains, load, params_of
 from .bsg import CogStabilizer
 from .missions import NAMES, dynamic_mission, static_mission
@@ -123,6 +124,7 @@ def _reordered(first: str) -> tuple[str, ...]:
 
 
 def _plot_flight(result: SimResult, path) -> Path:
+    """The Chapter 6.3 page of a flight scenario (its panels titled with the thesis's figure numbers, :data:`FIGURES`)."""
     return plot_result(result, path, thrust_bounds=(0.0, 20.0))
 
 
@@ -131,9 +133,9 @@ FLIGHT_SCENARIOS = (
              _reordered("idc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.1.4, Table 6.3 IDC, Fig. 6.7-6.13"),
     Scenario("static-dsid", "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
              _flight("static-dsid", lambda law: static_mission(law=law)), _reordered("dsid"), _FLIGHT, ("q-prr",), _plot_flight,
-             "Annex A.2, Table 6.3 MPC"),
+             "Annex A.2, Table 6.3 MPC, Fig. 6.19-6.21"),
     Scenario("static-mfc", "static manipulator mission, model-free control (iPID)", _flight("static-mfc", lambda law: static_mission(law=law)),
-             _reordered("mfc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.3.2, Table 6.3 MFC"),
+             _reordered("mfc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.3.2, Table 6.3 MFC, Fig. 6.19-6.21"),
     Scenario("spiral", "climb then spiral (6.25) from t_f = 5 s, IDC", _flight("spiral", lambda law: Spiral()), _reordered("idc"), _FLIGHT,
              ("q-prr",), _plot_flight, "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18"),
     Scenario("noise", "static mission with white noise on the generalised forces, IDC",
@@ -344,7 +346,7 @@ def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: boo
     res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
                    scenario="push-thrust")
     _contact_series(res, obj)
-    res.metrics["object_mass"] = float(object_mass)
+    res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
     return res
 
 
@@ -362,7 +364,7 @@ def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: 
     res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
                    scenario="push-prismatic")
     _contact_series(res, obj)
-    res.metrics["object_mass"] = float(object_mass)
+    res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
     return res
 
 
@@ -438,95 +440,120 @@ def impedance_steady_state(result: SimResult, at: float) -> dict[str, np.ndarray
     return {"measured": result.xi[k, idx] - set_point[idx], "filter": filt, "predicted": predicted, "t": result.t[k]}
 
 
-# ============================================================================ figures (Sec. 6.4)
-_LABELS = ("x", "y", "z", r"$\phi$", r"$\theta$", r"$\psi$", r"$r_0$", r"$\theta_2$", r"$\theta_3$")
+# ============================================================================ figures
+FIGURES = {
+    "static-idc": {"position": "6.7", "attitude": "6.8", "arm": "6.9", "errors_position": "6.10", "errors_angle": "6.10",
+                   "thrust": "6.11", "torques": "6.12", "arm_efforts": "6.12", "path": "6.13"},
+    "static-dsid": {"position": "6.19", "errors_position": "6.20", "errors_angle": "6.21"},
+    "static-mfc": {"position": "6.19", "errors_position": "6.20", "errors_angle": "6.21"},
+    "spiral": {"path": "6.14", "position": "6.15", "attitude": "6.16", "arm": "6.17", "errors_position": "6.18",
+               "errors_angle": "6.18"},
+    "noise": {"disturbance": "6.23", "position": "6.24", "attitude": "6.25", "arm": "6.26", "thrust": "6.27a",
+              "torques": "6.27b", "arm_efforts": "6.27c"},
+    "pulses": {"thrust": "6.28a", "torques": "6.28b", "arm_efforts": "6.28c", "position": "6.29", "attitude": "6.29",
+               "arm": "6.29"},
+    "dynamic-bsg": {"position": "6.37", "attitude": "6.38", "arm": "6.39", "thrust": "6.40a", "torques": "6.40b",
+                    "arm_efforts": "6.40c", "errors_position": "6.41", "errors_angle": "6.41", "cog": "6.42-6.43"},
+    "payload-drop": {"attitude": "6.49", "arm": "6.50", "thrust": "6.51a", "torques": "6.51b", "arm_efforts": "6.51c"},
+    "push-thrust": {"attitude": "6.54", "arm": "6.55", "thrust": "6.56", "torques": "6.57", "arm_efforts": "6.58"},
+    "push-prismatic": {"attitude": "6.60", "arm": "6.61", "thrust": "6.62", "torques": "6.63", "arm_efforts": "6.64"},
+    "impedance": {"attitude": "6.66", "arm": "6.67", "thrust": "6.68", "torques": "6.69", "arm_efforts": "6.70"},
+}
+"""Thesis figure number of each panel of :func:`qprr.viz.plot_result`, per scenario (the thesis's own
+captions: Sec. 6.3.1.4 Fig. 6.7-6.21, Sec. 6.3.2 Fig. 6.23-6.29, Sec. 6.3.3.3 Fig. 6.37-6.43, Sec. 6.4
+Fig. 6.49-6.70).  Fig. 6.19-6.21 and 6.42-6.43 compare several runs: one run gives one of their curves."""
+
+_SEC_6_4_PANELS = ("position", "attitude", "arm", "thrust", "torques", "arm_efforts")
 
 
-def _figure(result: SimResult, path, extra_title: str, extra: Callable) -> Path:
-    path = figure_path(path)
-    u = applied_generalized_forces(result)
-    t = result.t
-    fig = new_figure((11, 9))
-    ax = fig.subplots(3, 2, sharex=True)
-    for i, c in zip((3, 4, 5), ("C0", "C1", "C2")):
-        ax[0, 0].plot(t, result.xi[:, i], c, lw=1.2, label=_LABELS[i])
-        ax[0, 0].plot(t, result.xi_d[:, i], c + "--", lw=0.8)
-    ax[0, 0].set_title("attitude (solid measured, dashed desired) [rad]")
-    for i, c in zip((6, 7, 8), ("C0", "C1", "C2")):
-        ax[0, 1].plot(t, result.xi[:, i], c, lw=1.2, label=_LABELS[i])
-        ax[0, 1].plot(t, result.xi_d[:, i], c + "--", lw=0.8)
-    ax[0, 1].set_title("arm joints [m, rad]")
-    for i, n in zip(range(3), (r"$u_{f_b,x}$", r"$u_{f_b,y}$", r"$u_{f_b,z}$")):
-        ax[1, 0].plot(t, u[:, i], lw=1.0, label=n)
-    ax[1, 0].set_title("thrust force, world axes [N]")
-    for i, n in zip(range(3, 6), (r"$u_{\tau_\phi}$", r"$u_{\tau_\theta}$", r"$u_{\tau_\psi}$")):
-        ax[1, 1].plot(t, u[:, i], lw=1.0, label=n)
-    ax[1, 1].set_title("attitude torques [N m]")
-    for i, n in zip(range(6, 9), (r"$u_{\mu,r_0}$ [N]", r"$u_{\mu,\theta_2}$ [N m]", r"$u_{\mu,\theta_3}$ [N m]")):
-        ax[2, 0].plot(t, u[:, i], lw=1.0, label=n)
-    ax[2, 0].set_title("slider force and joint torques")
-    extra(ax, t)
-    ax[2, 1].set_title(extra_title)
-    for a in ax.flat:
-        a.grid(alpha=0.3)
-        a.legend(fontsize=7, loc="best")
-    ax[2, 0].set_xlabel("t [s]")
-    ax[2, 1].set_xlabel("t [s]")
-    fig.suptitle(f"{result.scenario} / {result.controller}")
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    return path
+def _payload_panel(ax, result: SimResult) -> None:
+    s, t = result.series, result.t
+    if "mass_estimate" in s:
+        ax.plot(t, s["mass_estimate"], color="C3", lw=1.4, label="estimate [kg]", zorder=2)
+    ax.plot(t, s["payload_mass"], label="carried mass [kg]", **REFERENCE_STYLE)
+    ax.set_ylabel("payload mass [kg]")
+    robust_limits(ax, [s["payload_mass"], s.get("mass_estimate")], min_span=0.01, t=t)
+    e = np.linalg.norm((result.xi_d - result.xi)[:, 0:3], axis=1)
+    ax2 = ax.twinx()
+    ax2.semilogy(t, np.maximum(1e3 * e, 1e-6), color="C0", lw=0.9, label="$|p_d - p|$ [mm]")
+    ax2.set_ylabel("position error of B [mm]")
+    time_axis(ax, result)
+    legend(ax, ax2)
+
+
+def _contact_panel(ax, result: SimResult) -> None:
+    c = contact_history(result)
+    u = applied_forces(result)
+    ax.plot(c.t, c.force, color="C3", lw=1.3, label="contact force [N]", zorder=3)
+    ax.plot(result.t, u[:, 0], color="C0", lw=1.0, label="$u_{f_b,x}$ [N]", zorder=2)
+    ax.set_ylabel("force [N]")
+    robust_limits(ax, [c.force, u[:, 0]], min_span=0.01, t=c.t)
+    ax2 = ax.twinx()
+    unit, scale = length_unit([c.position - c.position[0]])
+    ax2.plot(c.t, scale * (c.position - c.position[0]), color="C2", lw=1.2, ls="--", label=f"object displacement [{unit}]")
+    ax2.set_ylabel(f"object displacement [{unit}]")
+    time_axis(ax, result)
+    legend(ax, ax2)
+
+
+def _deflection_panel(ax, result: SimResult) -> None:
+    s, t = result.series, result.t
+    x0 = result.xi[0]
+    raw = [result.xi[:, 0] - x0[0], result.xi[:, 6] - x0[6]]
+    unit, scale = length_unit(raw)
+    for k, (y, lab) in enumerate(zip(raw, ("$x - x_d$", "$r_0 - r_{0d}$"))):
+        ax.plot(t, scale * y, color=f"C{k}", lw=1.3, label=f"{lab} [{unit}]", zorder=2)
+    if "impedance_t" in s:
+        ax.plot(s["impedance_t"], scale * s["impedance_delta_eta"][:, 0], color="C0", ls=":", lw=1.2, label=r"filter $\Delta x$")
+        ax.plot(s["impedance_t"], scale * s["impedance_delta_q"][:, 0], color="C1", ls=":", lw=1.2, label=r"filter $\Delta r_0$")
+    ax.set_ylabel(f"lengths [{unit}]")
+    robust_limits(ax, [scale * y for y in raw], min_span=1e-3, t=t)
+    ax2 = ax.twinx()
+    ax2.plot(t, DEG * (result.xi[:, 7] - x0[7]), color="C2", lw=1.3, label=r"$\theta_2 - \theta_{2d}$ [deg]")
+    if "impedance_t" in s:
+        ax2.plot(s["impedance_t"], DEG * s["impedance_delta_q"][:, 1], color="C2", ls=":", lw=1.2, label=r"filter $\Delta\theta_2$")
+    ax2.set_ylabel("angles [deg]")
+    robust_limits(ax2, [DEG * (result.xi[:, 7] - x0[7])], min_span=1e-3, t=t)
+    time_axis(ax, result)
+    legend(ax, ax2)
+
+
+def _interaction_panel(ax, result: SimResult) -> None:
+    s, t = result.series, result.t
+    w, hb = s["ee_wrench"], s["base_wrench"]
+    for k, (y, lab) in enumerate(((hb[:, 0], "$h_{b,x}$ on the base"), (w[:, 0], "$h_{q,x}$ at the end effector"),
+                                  (w[:, 1], "$h_{q,y}$"), (w[:, 2], "$h_{q,z}$"))):
+        ax.plot(t, y, color=f"C{k}", lw=1.2, label=lab)
+    ax.set_ylabel("interaction force [N]")
+    robust_limits(ax, [hb[:, 0], w[:, 0:3]], min_span=0.01, mark=False)
+    time_axis(ax, result)
+    legend(ax)
+
+
+PAYLOAD_PANEL = Panel("payload", "payload mass and position error", _payload_panel)
+CONTACT_PANEL = Panel("contact", "contact force and object motion", _contact_panel)
+DEFLECTION_PANEL = Panel("deflection", "compliant deflections (dotted: impedance filter)", _deflection_panel)
+INTERACTION_PANEL = Panel("interaction", "interaction forces (world x, y, z)", _interaction_panel)
 
 
 def plot_payload_drop(result: SimResult, path) -> Path:
-    """Attitude, joints, forces, torques and the payload mass (true and estimated) of ``payload-drop``."""
-    def extra(ax, t):
-        ax[2, 1].plot(t, result.series["payload_mass"], "k", lw=1.2, label="carried mass")
-        if "mass_estimate" in result.series:
-            ax[2, 1].plot(t, result.series["mass_estimate"], "C3", lw=1.0, label="estimate")
-        e = result.xi_d - result.xi
-        ax2 = ax[2, 1].twinx()
-        ax2.plot(t, np.linalg.norm(e[:, 0:3], axis=1), "C0", lw=0.8, label="|p_d - p| [m]")
-        ax2.set_yscale("log")
-        ax2.legend(fontsize=7, loc="center right")
-        for a in ax.flat:
-            a.axvline(result.metrics["release_time"], color="k", lw=0.6, ls=":")
-
-    return _figure(result, path, "payload mass [kg] (release dotted)", extra)
+    """The Sec. 6.4.2.3 figures of ``payload-drop`` (Fig. 6.49-6.51) with the payload mass (true, estimated) and the release."""
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (PAYLOAD_PANEL, "rotors", "cog"), thrust_bounds=(0.0, 20.0),
+                       events=((result.metrics["release_time"], "release"),))
 
 
 def plot_push(result: SimResult, path) -> Path:
-    """Attitude, joints, forces, torques and the contact force / object motion of a push scenario."""
-    c = contact_history(result)
-
-    def extra(ax, t):
-        ax[2, 1].plot(c.t, c.force, "C3", lw=1.2, label="contact force [N]")
-        ax[1, 0].plot(c.t, c.wrench[:, 0], "k--", lw=1.0, label="interaction $h_x$ [N]")
-        ax2 = ax[2, 1].twinx()
-        ax2.plot(c.t, c.position, "C0", lw=1.0, label="object position [m]")
-        ax2.legend(fontsize=7, loc="center right")
-
-    return _figure(result, path, "object: contact force and position", extra)
+    """The Sec. 6.4.3 figures of a push scenario (Fig. 6.54-6.58 or 6.60-6.64) with the contact force and the object's motion."""
+    m = result.metrics
+    events = tuple((m[k], k.replace("_", " ")) for k in ("push_start", "push_end") if k in m)
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (CONTACT_PANEL, "rotors", "cog"), thrust_bounds=(0.0, 20.0),
+                       events=events)
 
 
 def plot_impedance(result: SimResult, path) -> Path:
-    """Attitude, joints, forces, torques and the impedance deflections of the ``impedance`` scenario."""
-    s = result.series
-
-    def extra(ax, t):
-        w = s["ee_wrench"]
-        hb = s["base_wrench"]
-        ax[1, 0].plot(t, w[:, 0] + hb[:, 0], "k--", lw=1.0, label="interaction x [N]")
-        set_point = result.xi[0]
-        ax[2, 1].plot(t, result.xi[:, 0] - set_point[0], "C0", lw=1.2, label="x - x_d [m]")
-        ax[2, 1].plot(t, result.xi[:, 6] - set_point[6], "C1", lw=1.2, label="r0 - r0_d [m]")
-        ax[2, 1].plot(t, result.xi[:, 7] - set_point[7], "C2", lw=1.2, label=r"$\theta_2 - \theta_{2d}$ [rad]")
-        if "impedance_t" in s:
-            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_eta"][:, 0], "C0:", lw=1.0, label="filter $\\Delta x$")
-            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_q"][:, 0], "C1:", lw=1.0, label="filter $\\Delta r_0$")
-            ax[2, 1].plot(s["impedance_t"], s["impedance_delta_q"][:, 1], "C2:", lw=1.0, label="filter $\\Delta\\theta_2$")
-
-    return _figure(result, path, "compliant deflections (dotted: impedance filter)", extra)
+    """The Sec. 6.4.3.4 figures of ``impedance`` (Fig. 6.66-6.70) with the interaction forces and the compliant deflections."""
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (INTERACTION_PANEL, DEFLECTION_PANEL, "rotors"),
+                       thrust_bounds=(0.0, 20.0), events=((result.metrics["t_off"], "forces off"),))
 
 
 def summary(result: SimResult) -> list[str]:
@@ -566,27 +593,28 @@ INTERACTION_SCENARIOS = (
              {"mass": Option(0.1, "payload mass [kg]"), "release_time": Option(18.0, "release time [s]"),
               "duration": Option(25.0, "run length [s]"), "mission": Option("thesis", "thesis (the flight of Sec. 6.3.1.4) or hover"),
               "noise": Option(0.0, "white-noise amplitude on x, y, z [N] (6.27)"), "seed": Option(SEED, "noise seed")},
-             ("q-prr",), plot_payload_drop, "Sec. 6.4.2.3, Fig. 6.49-6.53", summary),
+             ("q-prr",), plot_payload_drop, "Sec. 6.4.2.3, Fig. 6.49-6.51", summary),
     Scenario("push-thrust", "push a 0.5 kg object 0.5 m with the thrust, arm locked", _interaction(push_thrust), PUSH_CONTROLLERS,
              {"distance": Option(0.5, "push distance [m]"), "duration": Option(12.0, "run length [s]"),
               "object_mass": Option(0.5, "object mass [kg]"), "friction": Option(0.3, "Coulomb friction coefficient"),
               "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"), "damping": Option(20.0, "contact damping [N s/m]"),
               "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_push, "Sec. 6.4.3.1, (6.65)-(6.67)", summary),
+             ("q-prr",), plot_push, "Sec. 6.4.3.1, (6.65)-(6.67), Fig. 6.52-6.58", summary),
     Scenario("push-prismatic", "push a 0.2 kg object with the slider while hovering", _interaction(push_prismatic), PUSH_CONTROLLERS,
              {"duration": Option(10.0, "run length [s]"), "object_mass": Option(0.2, "object mass [kg]"),
               "friction": Option(0.3, "Coulomb friction coefficient"), "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"),
               "damping": Option(20.0, "contact damping [N s/m]"), "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_push, "Sec. 6.4.3.2", summary),
+             ("q-prr",), plot_push, "Sec. 6.4.3.2, Fig. 6.59-6.64", summary),
     Scenario("impedance", "interaction forces on a hovering Q-PRR under impedance control", _interaction(impedance),
              IMPEDANCE_CONTROLLERS,
              {"t_on": Option(0.0, "forces on [s]"), "t_off": Option(18.0, "forces off [s]"), "duration": Option(25.0, "run length [s]"),
               "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_impedance, "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7", summary),
+             ("q-prr",), plot_impedance, "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7, Fig. 6.65-6.70", summary),
 )
 
-SCENARIOS = FLIGHT_SCENARIOS + INTERACTION_SCENARIOS
-"""The thesis's scenarios (registered in :data:`qprr.scenarios.SCENARIOS`)."""
+SCENARIOS = tuple(replace(s, figures=FIGURES[s.name]) if s.name in FIGURES else s
+                  for s in FLIGHT_SCENARIOS + INTERACTION_SCENARIOS)
+"""The thesis's scenarios (registered in :data:`qprr.scenarios.SCENARIOS`), with their figure numbers (:data:`FIGURES`)."""
 
 
 # ============================================================================ Table 6.3

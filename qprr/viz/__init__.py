@@ -1,7 +1,9 @@
 """See the robot and its runs: figures, visual geometry, headless 3-D animation, an interactive browser viewer (Thesis Annex A).
 
-* :func:`plot_result`: the 3 x 3 page of a run (Chapter 6 figures); :func:`new_figure`,
-  :func:`figure_path` for your own (matplotlib Figures, no pyplot, no backend chosen);
+* :func:`plot_result`: any panels of a run (Chapter 6 figures, titled with the thesis's figure
+  numbers of its scenario), on a page saved to a file, as a returned Figure or into your Axes
+  (:mod:`qprr.viz.plots`); :func:`new_figure`, :func:`figure_path` for your own (matplotlib
+  Figures, no pyplot, no backend chosen);
 
 * :func:`animate` / :func:`animate_result`: a run (or an IK solution path, :func:`ik_path`) to
   GIF or MP4 with matplotlib, no display needed (:mod:`qprr.viz.animation`);

@@ -1,35 +1,72 @@
-"""Figures of a simulation, laid out like the thesis's Chapter 6 plots (matplotlib, PNG files).
+"""Figures of a simulation, panel by panel, in the style of the thesis's Chapter 6 (matplotlib Figures, no pyplot).
 
-:func:`plot_result` draws one 3 x 3 page: positions of B vs desired (Fig. 6.7), attitude vs
-the (6.17) references (Fig. 6.8), arm joints (Fig. 6.9), tracking errors (Fig. 6.10, 6.18),
-u_fb (Fig. 6.11), u_tau and u_mu (Fig. 6.12), rotor thrusts with their bounds, the 3-D path
-(Fig. 6.13, 6.14) and the CoG offset in B (Fig. 6.42-6.43).  Plotting stays out of the
-simulator: it reads a :class:`qprr.sim.SimResult`.  Figures are ``matplotlib.figure.Figure``
-objects saved directly (no pyplot, no backend selected: the library never calls
-``matplotlib.use``).
+:func:`plot_result` draws any choice of panels of a :class:`qprr.sim.SimResult`, either on a new
+page (saved to a file, or returned as a ``matplotlib.figure.Figure``) or into Axes you pass
+(one panel per Axes), so that each thesis figure can be reproduced on its own::
+
+    plot_result(res, "out/run.png")                              # the default page
+    plot_result(res, "out/x.png", panels=("position", "cog"))     # two panels
+    fig = plot_result(res, panels="path")                         # a Figure, not saved
+    plot_result(res, panels="cog", ax=my_axes)                    # into your own Axes
+
+Panels (:data:`PANELS`): ``position`` (B vs its reference, Fig. 6.7), ``attitude`` (roll/pitch
+references from (6.17), Fig. 6.8), ``arm`` (joints, Fig. 6.9), ``errors_position`` and
+``errors_angle`` (reference - measured, Fig. 6.10, 6.18), ``thrust`` (u_fb, world axes, Fig.
+6.11), ``torques`` (u_tau, Fig. 6.12), ``arm_efforts`` (u_mu, Fig. 6.12), ``rotors`` (thrusts and
+their bounds), ``path`` (3-D, Fig. 6.13-6.14), ``cog`` (x_cm, y_cm in B, Fig. 6.42-6.43) and
+``disturbance`` (u_ext of (6.27)-(6.28)).  The forces are the applied ones, S^T N f (what the
+rotors and joints produced after the allocation); where the controller asked for something else (a
+bound was active, or a force the rotors cannot produce), the commanded value is drawn dotted.  Your own panels are :class:`Panel` objects.
+
+One style for every figure of the project: SI units on every axis, angles in degrees, the
+prismatic joints in metres and the revolute ones in degrees (two labelled axes when an arm has
+both), references dashed in black *above* the measured curves, axis limits that ignore spikes
+of a few milliseconds (a clipped spike is marked by a red triangle at the edge, with its peak in
+the legend), and a 3-D path with equal axes (millimetres about the start point when the motion
+is small).  Figure numbers in the titles come from the scenario that made the result
+(:attr:`qprr.scenarios.Scenario.figures`): a custom run carries none.
+
+Plotting stays out of the simulator: it reads a :class:`~qprr.sim.SimResult`.  The library never
+selects a matplotlib backend and never imports pyplot.
 """
 
 from __future__ import annotations
 
+import math
+import re
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError, MissingDependencyError
+from ..charts import euler_to_rotation_batch, force_to_xi_batch
+from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..sim import SimResult
 
+DEG = 180.0 / math.pi
+REFERENCE_STYLE = {"color": "k", "ls": (0, (4, 2)), "lw": 0.9, "zorder": 4}
+"""References: thin black dashes drawn above the measured curves."""
+COMMANDED_STYLE = {"ls": ":", "lw": 1.0, "zorder": 3}
+ROBUST_FRACTION = 0.002
+"""Axis limits span the [0.2 %, 99.8 %] quantiles of the data (plus a margin): a spike shorter than
+0.2 % of the run (60 ms of a 30 s run) does not set the scale; it is marked where it is clipped."""
+SMALL_PATH = 0.05
+"""[m] below this extent the 3-D path is drawn in millimetres about its start point."""
 
+
+# ============================================================================ files, figures
 def new_figure(figsize=(16, 12)):
     """A matplotlib Figure not attached to pyplot (saved with ``fig.savefig``; no display, no backend choice)."""
     try:
         from matplotlib.figure import Figure
     except ImportError as exc:  # pragma: no cover - runtime dependency
         raise MissingDependencyError("matplotlib", "figures", "pip install matplotlib") from exc
-    return Figure(figsize=figsize)
+    return Figure(figsize=figsize, layout="constrained")
 
 
 def figure_path(path: str | Path) -> Path:
-    """``path`` as a PNG path whose folder exists (a missing folder is an error naming it, not created)."""
+    """``path`` as a figure path (.png, .pdf, .svg) whose folder exists (a missing folder is an error naming it, not created)."""
     path = Path(path)
     if path.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise InputError(f"figure files end in .png, .pdf or .svg, got {str(path)!r}")
@@ -38,97 +75,540 @@ def figure_path(path: str | Path) -> Path:
     return path
 
 
-def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, thrust_bounds=None) -> Path:
-    """Save a 3 x 3 figure of ``res`` to ``path`` (PNG) and return the path.  ``thrust_bounds`` (f_min, f_max) [N] drawn dotted."""
+def save_figure(fig, path: str | Path, dpi: int = 90) -> Path:
+    """Save ``fig`` to ``path`` (checked by :func:`figure_path`) and return the path."""
     path = figure_path(path)
-    names = res.names
-    t = res.t
-    fig = new_figure((16, 12))
-    colors = ("tab:blue", "tab:orange", "tab:green")
-
-    def tracks(ax, idx, ylabel, scale=1.0):
-        for c, i in zip(colors, idx):
-            ax.plot(t, scale * res.xi[:, i], color=c, label=names[i])
-            ax.plot(t, scale * res.xi_d[:, i], color=c, ls="--", lw=1, label=f"{names[i]} desired")
-        ax.set_ylabel(ylabel)
-        ax.legend(fontsize=7, ncol=2)
-        ax.grid(alpha=0.3)
-
-    ax = fig.add_subplot(3, 3, 1)
-    tracks(ax, (0, 1, 2), "position of B [m]")
-    ax.set_title("positions (Fig. 6.7)")
-    ax = fig.add_subplot(3, 3, 2)
-    tracks(ax, (3, 4, 5), "attitude [deg]", 180 / np.pi)
-    ax.set_title("attitude; roll/pitch references from (6.17)")
-    ax = fig.add_subplot(3, 3, 3)
-    for k in range(res.n_arm):
-        i = 6 + k
-        ax.plot(t, res.xi[:, i], color=f"C{k}", label=names[i])
-        ax.plot(t, res.xi_d[:, i], color=f"C{k}", ls="--", lw=1)
-    ax.set_ylabel("arm joints [m or rad]")
-    ax.set_title("arm joints (Fig. 6.9), dashed: desired")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-
-    ax = fig.add_subplot(3, 3, 4)
-    e = np.abs(res.xi_d - res.xi)
-    for i, name in enumerate(names):
-        ax.semilogy(t, np.maximum(e[:, i], 1e-12), lw=0.8, label=name)
-    ax.set_ylim(1e-9, None)
-    ax.set_ylabel("|error| [m, rad]")
-    ax.set_title("tracking errors (Fig. 6.10, 6.18)")
-    ax.legend(fontsize=6, ncol=3)
-    ax.grid(alpha=0.3)
-    ax = fig.add_subplot(3, 3, 5)
-    for c, i, lab in zip(colors, (0, 1, 2), ("u_fb,x", "u_fb,y", "u_fb,z")):
-        ax.plot(t, res.u[:, i], color=c, label=lab)
-    ax.set_ylabel("[N]")
-    ax.set_title("thrust vector u_fb (Fig. 6.11)")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    ax = fig.add_subplot(3, 3, 6)
-    for i in range(3, len(names)):
-        lab = f"u_tau,{names[i]}" if i < 6 else f"u_mu,{names[i]}"
-        ax.plot(t, res.u[:, i], lw=0.9, label=lab)
-    ax.set_ylabel("[N m, N]")
-    ax.set_title("u_tau and u_mu (Fig. 6.12)")
-    ax.legend(fontsize=6, ncol=2)
-    ax.grid(alpha=0.3)
-
-    ax = fig.add_subplot(3, 3, 7)
-    for i in range(res.f.shape[1]):
-        ax.plot(t, res.f[:, i], lw=0.9, label=f"f{i + 1}")
-    for b in thrust_bounds or ():
-        ax.axhline(b, color="k", ls=":", lw=0.8)
-    sat = (res.flags & 1) != 0
-    if sat.any():
-        ax.plot(t[sat], np.full(sat.sum(), float(res.f.max())), "r|", ms=4, label="saturated")
-    ax.set_ylabel("rotor thrust [N]")
-    ax.set_title("rotor thrusts (allocation, bounds dotted)")
-    ax.legend(fontsize=7, ncol=3)
-    ax.grid(alpha=0.3)
-    ax = fig.add_subplot(3, 3, 8, projection="3d")
-    ax.plot(res.xi[:, 0], res.xi[:, 1], res.xi[:, 2], label="flown")
-    ax.plot(res.xi_d[:, 0], res.xi_d[:, 1], res.xi_d[:, 2], ls="--", lw=1, label="desired")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
-    ax.set_zlabel("z [m]")
-    ax.set_title("3-D path (Fig. 6.13)")
-    ax.legend(fontsize=7)
-    ax = fig.add_subplot(3, 3, 9)
-    ax.plot(t, 1e3 * res.x_cm[:, 0], label="x_cm")
-    ax.plot(t, 1e3 * res.x_cm[:, 1], label="y_cm")
-    ax.set_ylabel("CoG offset in B [mm]")
-    ax.set_xlabel("t [s]")
-    ax.set_title("x_cm (Fig. 6.42-6.43)")
-    ax.legend(fontsize=7)
-    ax.grid(alpha=0.3)
-    for k in (1, 2, 3, 4, 5, 6, 7):
-        fig.axes[k - 1].set_xlabel("t [s]")
-    rmse = res.rmse()
-    sub = ", ".join(f"{k} {v:.1e}" for k, v in rmse.items())
-    fig.suptitle((title or f"{res.scenario} / {res.controller} ({res.status}): {res.n} steps in {res.wall_time:.2f} s")
-                 + f"\nRMSE (6.26): {sub}", fontsize=10)
-    fig.tight_layout(rect=(0, 0, 1, 0.95))
-    fig.savefig(path, dpi=90)
+    fig.savefig(path, dpi=dpi)
     return path
+
+
+# ============================================================================ labels and units
+_GREEK = {"phi", "theta", "psi", "alpha", "beta", "gamma", "delta", "eta", "mu", "tau", "omega", "rho", "sigma", "chi", "zeta"}
+
+
+def pretty(name: str) -> str:
+    """A coordinate name as mathtext: ``theta2`` -> $\\theta_2$, ``r0`` -> $r_0$, ``phi`` -> $\\phi$, ``x`` -> $x$."""
+    m = re.fullmatch(r"([A-Za-z]+)_?(\d*)", name)
+    if m is None:
+        return name
+    base, sub = m.groups()
+    if base in _GREEK:
+        base = "\\" + base
+    elif len(base) > 1:
+        return name  # a long name (a URDF joint): plain text
+    return f"${base}_{{{sub}}}$" if sub else f"${base}$"
+
+
+def coordinate_kinds(res: SimResult) -> tuple[str, ...]:
+    """Kind of each entry of xi: "length" (x, y, z, prismatic joints), "angle" (Euler angles, revolute joints) or "unknown"."""
+    kinds = ["length"] * 3 + ["angle"] * 3
+    arm = tuple(getattr(res, "arm_kinds", ()) or ())
+    for k in range(res.n_arm):
+        kind = arm[k] if k < len(arm) else ""
+        kinds.append("length" if kind == "prismatic" else "angle" if kind == "revolute" else "unknown")
+    return tuple(kinds)
+
+
+_UNIT = {"length": ("m", 1.0), "angle": ("deg", DEG), "unknown": ("m or rad", 1.0)}
+_FORCE_UNIT = {"length": "N", "angle": "N m", "unknown": "N or N m"}
+
+
+# ============================================================================ style helpers
+def time_axis(ax, res: SimResult) -> None:
+    """The common time axis: label, limits of the run, light grid."""
+    ax.set_xlabel("t [s]")
+    if res.n > 1:
+        ax.set_xlim(float(res.t[0]), float(res.t[-1]))
+    ax.grid(alpha=0.3)
+
+
+def robust_limits(ax, arrays: Sequence[np.ndarray], *, min_span: float, t=None, fraction: float = ROBUST_FRACTION,
+                  mark: bool = True) -> tuple[float, float]:
+    """Set the y limits of ``ax`` from the quantiles of ``arrays`` so that short spikes do not set the scale.
+
+    The limits span the [``fraction``, 1 - ``fraction``] quantiles of all values, widened by 8 %
+    and to at least ``min_span`` (a flat curve stays flat instead of showing rounding noise).
+    Values outside are clipped by the axes; with ``mark`` and ``t`` their peaks are marked by red
+    triangles at the edge.  Returns the limits.
+    """
+    vals = [np.asarray(a, dtype=float) for a in arrays if a is not None and np.size(a)]
+    flat = np.concatenate([v.ravel() for v in vals]) if vals else np.zeros(1)
+    flat = flat[np.isfinite(flat)]
+    if flat.size == 0:
+        flat = np.zeros(1)
+    lo, hi = np.quantile(flat, [fraction, 1.0 - fraction]) if flat.size > 50 else (flat.min(), flat.max())
+    true_lo, true_hi = float(flat.min()), float(flat.max())
+    span = hi - lo
+    pad = 0.08 * span
+    lo, hi = lo - pad, hi + pad
+    # keep what is barely outside the quantile range: only clip real outliers (> 25 % of the span beyond)
+    if true_hi <= hi + 0.25 * max(span, min_span):
+        hi = max(hi, true_hi + pad)
+    if true_lo >= lo - 0.25 * max(span, min_span):
+        lo = min(lo, true_lo - pad)
+    if hi - lo < min_span:
+        mid = 0.5 * (hi + lo)
+        lo, hi = mid - 0.5 * min_span, mid + 0.5 * min_span
+    ax.set_ylim(lo, hi)
+    if mark and t is not None:
+        clipped = []
+        for v in vals:
+            v2 = v.reshape(v.shape[0], -1) if v.ndim > 1 else v[:, None]
+            for col in v2.T:
+                for side, bad in (("top", col > hi), ("bottom", col < lo)):
+                    if bad.any():
+                        clipped.append((side, np.asarray(t)[bad], col[bad]))
+        if clipped:
+            peak = 0.0
+            for side, tt, vv in clipped:
+                y = hi if side == "top" else lo
+                ax.plot(tt, np.full(tt.shape, y), "v" if side == "top" else "^", color="tab:red", ms=5, clip_on=False,
+                        zorder=5)
+                peak = max(peak, float(np.max(np.abs(vv))))
+            ax.plot([], [], "v", color="tab:red", ms=5, label=f"clipped spike (peak |{peak:.3g}|)")
+    return lo, hi
+
+
+def legend(ax, *others, **kwargs) -> None:
+    """One legend for ``ax`` and its twin axes ``others`` (small font, semi-transparent frame)."""
+    handles, labels = [], []
+    for a in (ax, *others):
+        h, lab = a.get_legend_handles_labels()
+        handles += h
+        labels += lab
+    if handles:
+        opts = {"fontsize": 7.5, "framealpha": 0.85, "loc": "best", "ncol": 2 if len(handles) > 4 else 1,
+                "handlelength": 1.8}
+        opts.update(kwargs)
+        top = (ax, *others)[-1]  # a twin axis is drawn above its host: a legend on the host would be hidden
+        leg = top.legend(handles, labels, **opts)
+        leg.set_zorder(10)
+
+
+def _draw_signals(ax, t, values, labels, *, colors, refs=None, commanded=None, lw=1.4, ref_label="reference"):
+    """Measured curves (solid, colored), commanded curves (dotted) and references (black dashed, on top)."""
+    for k, (y, lab) in enumerate(zip(values, labels)):
+        ax.plot(t, y, color=colors[k], lw=lw, label=lab, zorder=2)
+        if commanded is not None and commanded[k] is not None:
+            ax.plot(t, commanded[k], color=colors[k], **COMMANDED_STYLE)
+    for r in refs or ():
+        if r is not None:
+            ax.plot(t, r, label=ref_label, **REFERENCE_STYLE)
+            ref_label = None
+
+
+def length_unit(arrays) -> tuple[str, float]:
+    """("mm", 1e3) when every value is below 0.1 m in magnitude, else ("m", 1)."""
+    peak = max((float(np.max(np.abs(a))) for a in arrays if a is not None and np.size(a)), default=0.0)
+    return ("mm", 1e3) if peak < 0.1 else ("m", 1.0)
+
+
+def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
+    """Coordinates ``idx`` of xi (measured vs reference, or reference - measured): lengths on the left axis
+    (m, or mm when small), angles in degrees (on a labelled twin axis when both kinds are present)."""
+    t = res.t
+    kinds = coordinate_kinds(res)
+    lengths = [i for i in idx if kinds[i] != "angle"]
+    angles = [i for i in idx if kinds[i] == "angle"]
+    groups = [g for g in (lengths, angles) if g]
+    two = len(groups) == 2
+    colors = {i: f"C{k}" for k, i in enumerate(idx)}
+    axes = []
+    ref_label = "reference"
+    for g, group in enumerate(groups):
+        a = ax if g == 0 else ax.twinx()
+        kind = kinds[group[0]]
+        if errors:
+            e = res.xi_d[:, group] - res.xi[:, group]
+            if kind == "angle":
+                e = (e + math.pi) % (2 * math.pi) - math.pi
+            raw, raw_refs = [e[:, j] for j in range(len(group))], []
+        else:
+            raw, raw_refs = [res.xi[:, i] for i in group], [res.xi_d[:, i] for i in group]
+        if kind == "angle":
+            unit, scale = "deg", DEG
+        elif kind == "length":
+            unit, scale = length_unit(raw + raw_refs)
+        else:
+            unit, scale = "m or rad", 1.0
+        vals, refs = [scale * v for v in raw], [scale * r for r in raw_refs]
+        tag = f" [{unit}]" if two else ""
+        _draw_signals(a, t, vals, [pretty(res.names[i]) + tag for i in group], colors=[colors[i] for i in group], refs=refs,
+                      lw=1.1 if errors else 1.4, ref_label=ref_label)
+        ref_label = None if refs else ref_label
+        if errors:
+            a.axhline(0.0, color="0.4", lw=0.6, zorder=1)
+        if two:
+            a.set_ylabel(f"{'lengths' if g == 0 else 'angles'}{' (ref. - meas.)' if errors else ''} [{unit}]")
+        else:
+            a.set_ylabel(f"{what} [{unit}]")
+        if errors:  # errors: down to a micrometre or a thousandth of a degree
+            span = {"deg": 1e-3, "mm": 1e-3}.get(unit, 1e-6)
+        else:  # values: a flat curve shows as flat, not as rounding noise
+            span = {"deg": 1.0, "mm": 1.0, "m": 0.01}.get(unit, 1e-3)
+        robust_limits(a, vals + refs, min_span=span, t=t)
+        axes.append(a)
+    time_axis(ax, res)
+    legend(ax, *axes[1:])
+
+
+def applied_forces(res: SimResult) -> np.ndarray:
+    """u applied = S^T N f (thesis coordinates, (m, n_xi)): the controller's u minus what the allocation could not produce."""
+    R = euler_to_rotation_batch(res.xi[:, 3:6])
+    return res.u - force_to_xi_batch(R, res.xi, res.unallocated)
+
+
+def _force_panel(ax, res, idx, ylabel: str, labels) -> None:
+    """Applied generalised forces ``idx`` (commanded dotted where they differ), forces left, torques on a twin axis."""
+    t = res.t
+    u_app = applied_forces(res)
+    kinds = coordinate_kinds(res)
+    by_unit = {}
+    for i in idx:
+        unit = "N" if i < 3 else "N m" if i < 6 else _FORCE_UNIT[kinds[i]]
+        by_unit.setdefault(unit, []).append(i)
+    groups = list(by_unit.items())
+    colors = {i: f"C{k}" for k, i in enumerate(idx)}
+    axes = []
+    for g, (unit, group) in enumerate(groups[:2]):
+        a = ax if g == 0 else ax.twinx()
+        vals = [u_app[:, i] for i in group]
+        gap = [np.max(np.abs(res.u[:, i] - u_app[:, i])) if res.n else 0.0 for i in group]
+        scale = max([np.max(np.abs(v)) for v in vals] + [1e-9])
+        commanded = [res.u[:, i] if d > 0.005 * scale else None for i, d in zip(group, gap)]  # visible gaps only
+        _draw_signals(a, t, vals, [labels[i] + (f" [{unit}]" if len(groups) > 1 else "") for i in group],
+                      colors=[colors[i] for i in group], commanded=commanded, lw=1.2)
+        if any(c is not None for c in commanded):
+            a.plot([], [], color="0.3", label="commanded (where not produced)", **COMMANDED_STYLE)
+        a.set_ylabel(f"{ylabel} [{unit}]" if len(groups) == 1 else f"{'forces' if unit == 'N' else 'torques'} [{unit}]")
+        robust_limits(a, vals, min_span=1e-3, t=t)
+        axes.append(a)
+    time_axis(ax, res)
+    legend(ax, *axes[1:])
+
+
+def _u_labels(res: SimResult) -> list[str]:
+    names = res.names
+    out = [r"$u_{f_b,x}$", r"$u_{f_b,y}$", r"$u_{f_b,z}$", r"$u_{\tau,\phi}$", r"$u_{\tau,\theta}$", r"$u_{\tau,\psi}$"]
+    for n in names[6:]:
+        p = pretty(n)
+        out.append(f"$u_{{\\mu,{p.strip('$')}}}$" if p.startswith("$") else f"u_mu,{n}")
+    return out
+
+
+# ============================================================================ the panels
+@dataclass(frozen=True)
+class Panel:
+    """One panel: ``title`` (without figure number), ``draw(ax, res)``, ``projection`` ("3d" or None).
+
+    ``name`` is the key of :attr:`qprr.scenarios.Scenario.figures` giving its figure number.
+    """
+
+    name: str
+    title: str
+    draw: Callable
+    projection: str | None = None
+
+
+def _position(ax, res):
+    _coordinate_panel(ax, res, [0, 1, 2], what="position of B")
+
+
+def _attitude(ax, res):
+    _coordinate_panel(ax, res, [3, 4, 5], what="attitude")
+
+
+def _arm(ax, res):
+    _coordinate_panel(ax, res, list(range(6, 6 + res.n_arm)), what="arm joints")
+
+
+def _errors_position(ax, res):
+    kinds = coordinate_kinds(res)
+    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] != "angle"], what="reference - measured",
+                      errors=True)
+
+
+def _errors_angle(ax, res):
+    kinds = coordinate_kinds(res)
+    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] == "angle"], what="reference - measured",
+                      errors=True)
+
+
+def _thrust(ax, res):
+    _force_panel(ax, res, [0, 1, 2], "thrust force, world axes", _u_labels(res))
+
+
+def _torques(ax, res):
+    _force_panel(ax, res, [3, 4, 5], "Euler torques", _u_labels(res))
+
+
+def _arm_efforts(ax, res):
+    _force_panel(ax, res, list(range(6, 6 + res.n_arm)), "arm efforts", _u_labels(res))
+
+
+def _rotors(ax, res, thrust_bounds=None):
+    t = res.t
+    nr = res.f.shape[1]
+    cols = [f"C{i % 10}" for i in range(nr)]
+    _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
+    sat = (res.flags & 1) != 0
+    lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
+    if thrust_bounds:
+        shown = [b for b in thrust_bounds if lo <= b <= hi]
+        for b in shown:
+            ax.axhline(b, color="0.3", ls=":", lw=1.0, zorder=1)
+        off = [f"{b:g}" for b in thrust_bounds if b not in shown]
+        ax.plot([], [], color="0.3", ls=":", lw=1.0,
+                label="bounds" + (f" ({', '.join(off)} N: off scale)" if off else ""))
+    if sat.any():
+        ax.plot(t[sat], np.full(int(sat.sum()), hi), "|", color="tab:red", ms=6, clip_on=False, label="a bound active")
+    ax.set_ylabel("rotor thrust [N]")
+    time_axis(ax, res)
+    legend(ax)
+
+
+def _cog(ax, res):
+    t = res.t
+    vals = [1e3 * res.x_cm[:, 0], 1e3 * res.x_cm[:, 1]]
+    _draw_signals(ax, t, vals, [r"$x_{cm}$", r"$y_{cm}$"], colors=["C0", "C1"])
+    ax.axhline(0.0, color="0.4", lw=0.6, zorder=1)
+    robust_limits(ax, vals, min_span=0.1, t=t)
+    ax.set_ylabel("CoM in B [mm]")
+    time_axis(ax, res)
+    legend(ax)
+
+
+def _disturbance(ax, res):
+    """u_ext, forces [N] left, torques [N m] on a twin axis; white noise (a new value every step) is shown
+    over its first 0.05 s, where its samples can be seen (over the whole run it fills the panel)."""
+    idx = [i for i in range(res.u_ext.shape[1]) if np.any(res.u_ext[:, i] != 0.0)] or [0, 1, 2]
+    t = res.t
+    u = res.u_ext
+    changes = np.mean(np.diff(u[:, idx], axis=0) != 0.0) if res.n > 1 else 0.0
+    window = changes > 0.5  # changes at most steps: noise
+    sel = t <= t[0] + 0.05 if window else slice(None)
+    kinds = coordinate_kinds(res)
+    by_unit = {}
+    for i in idx:
+        by_unit.setdefault(("N" if i < 3 else "N m") if i < 6 else _FORCE_UNIT[kinds[i]], []).append(i)
+    axes = []
+    groups = list(by_unit.items())[:2]
+    for g, (unit, group) in enumerate(groups):
+        a = ax if g == 0 else ax.twinx()
+        for i in group:
+            a.step(t[sel], u[sel, i], where="post", color=f"C{idx.index(i) % 10}", lw=0.9,
+                   label=f"{pretty(res.names[i])}" + (f" [{unit}]" if len(groups) > 1 else ""))
+        a.set_ylabel(f"{'forces' if unit == 'N' else 'torques' if unit == 'N m' else 'disturbance'} [{unit}]")
+        robust_limits(a, [u[sel][:, group]], min_span=1e-3, mark=False)
+        axes.append(a)
+    time_axis(ax, res)
+    if window:
+        ax.set_xlim(float(t[0]), float(t[sel][-1]))
+        ax.set_xlabel("t [s] (first 0.05 s: a new value every step)")
+    legend(ax, *axes[1:], ncol=3 if len(idx) > 4 else 1)
+
+
+def _path(ax, res):
+    p, pd = res.xi[:, 0:3], res.xi_d[:, 0:3]
+    both = np.vstack([p, pd])
+    lo, hi = both.min(axis=0), both.max(axis=0)
+    extent = float(np.max(hi - lo))
+    if extent < SMALL_PATH:
+        origin, scale, unit = p[0].copy(), 1e3, "mm"
+    else:
+        origin, scale, unit = np.zeros(3), 1.0, "m"
+    P, Pd = scale * (p - origin), scale * (pd - origin)
+    ax.plot(P[:, 0], P[:, 1], P[:, 2], color="C0", lw=1.6, label="flown", zorder=2)
+    ax.plot(Pd[:, 0], Pd[:, 1], Pd[:, 2], label="reference", **REFERENCE_STYLE)
+    ax.scatter(*P[0], color="C2", s=18, label="start", depthshade=False)
+    ax.scatter(*P[-1], color="C3", s=18, label="end", depthshade=False)
+    allp = np.vstack([P, Pd])
+    mid = 0.5 * (allp.min(axis=0) + allp.max(axis=0))
+    half = 0.5 * max(float(np.max(allp.max(axis=0) - allp.min(axis=0))), 1e-3 if unit == "mm" else 1e-3)
+    half *= 1.05
+    for setter, m in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), mid):
+        setter(m - half, m + half)
+    ax.set_box_aspect((1, 1, 1))
+    if unit == "mm":
+        ax.set_xlabel("x - x0 [mm]")
+        ax.set_ylabel("y - y0 [mm]")
+        ax.set_zlabel("z - z0 [mm]")
+        ax.text2D(1.0, 1.0, f"about the start\n(x0, y0, z0) =\n({origin[0]:.3f}, {origin[1]:.3f}, {origin[2]:.3f}) m",
+                  transform=ax.transAxes, fontsize=7.5, ha="right", va="top")
+    else:
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.set_zlabel("z [m]")
+    for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.get_major_formatter().set_useOffset(False)
+    ax.tick_params(labelsize=7.5)
+    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.85)
+
+
+PANELS: dict[str, Panel] = {
+    "position": Panel("position", "position of B", _position),
+    "attitude": Panel("attitude", "attitude (roll, pitch references from (6.17))", _attitude),
+    "arm": Panel("arm", "arm joints", _arm),
+    "errors_position": Panel("errors_position", "tracking errors, lengths", _errors_position),
+    "errors_angle": Panel("errors_angle", "tracking errors, angles", _errors_angle),
+    "thrust": Panel("thrust", "thrust force $u_{f_b}$", _thrust),
+    "torques": Panel("torques", r"torques $u_\tau$", _torques),
+    "arm_efforts": Panel("arm_efforts", r"arm efforts $u_\mu$", _arm_efforts),
+    "rotors": Panel("rotors", "rotor thrusts (allocation)", _rotors),
+    "path": Panel("path", "3-D path of B", _path, "3d"),
+    "cog": Panel("cog", "CoM offset in B", _cog),
+    "disturbance": Panel("disturbance", "disturbance $u_{ext}$", _disturbance),
+}
+"""Every panel by name (see the module docstring)."""
+
+DEFAULT_PANELS = ("position", "attitude", "arm", "errors_position", "errors_angle", "thrust", "torques", "arm_efforts",
+                  "rotors", "path", "cog", "disturbance")
+"""The panels of the full page (``disturbance`` only when the run had one)."""
+
+
+def _panel(spec) -> Panel:
+    if isinstance(spec, Panel):
+        return spec
+    if isinstance(spec, str):
+        if spec not in PANELS:
+            raise UnknownNameError("panel", spec, tuple(PANELS))
+        return PANELS[spec]
+    raise InputError(f"a panel is a name ({', '.join(PANELS)}) or a qprr.viz.plots.Panel, got {spec!r}")
+
+
+def scenario_figures(res: SimResult) -> dict[str, str]:
+    """Figure numbers per panel of the scenario that made ``res`` (:attr:`Scenario.figures`; {} for a custom run)."""
+    try:
+        from ..scenarios import SCENARIOS
+
+        sc = SCENARIOS[res.scenario]
+    except (KeyError, ImportError):
+        return {}
+    return dict(getattr(sc, "figures", {}) or {})
+
+
+def scenario_source(res: SimResult) -> str:
+    """The thesis section a scenario's result reproduces ("" for a custom run)."""
+    try:
+        from ..scenarios import SCENARIOS
+
+        return SCENARIOS[res.scenario].source
+    except (KeyError, ImportError):
+        return ""
+
+
+def _title(panel: Panel, figures: Mapping[str, str]) -> str:
+    fig = figures.get(panel.name)
+    return f"{panel.title} (Fig. {fig})" if fig else panel.title
+
+
+def _events(ax, events, label: bool) -> None:
+    """Vertical dash-dot lines at the event times; with ``label``, their names written at the top of ``ax``."""
+    from matplotlib.transforms import blended_transform_factory
+
+    tr = blended_transform_factory(ax.transData, ax.transAxes)
+    for te, name in events:
+        ax.axvline(te, color="0.35", lw=0.8, ls="-.", zorder=1)
+        if label:
+            ax.text(te, 0.98, f" {name}", transform=tr, fontsize=7.5, color="0.25", rotation=90, va="top", ha="right")
+
+
+def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, ax=None, title: str | None = None,
+                figures: Mapping[str, str] | None = None, thrust_bounds: tuple[float, float] | None = None,
+                events: Sequence[tuple[float, str]] = (), ncols: int | None = None, dpi: int = 90):
+    """Draw ``panels`` of ``res``; save to ``path`` (.png, .pdf, .svg) or return the Figure, or draw into ``ax``.
+
+    Parameters
+    ----------
+    res : a :class:`~qprr.sim.SimResult`.
+    path : file to write (its folder must exist); None: return the ``matplotlib.figure.Figure``.
+    panels : a panel name, a :class:`Panel`, or a sequence of them (default :data:`DEFAULT_PANELS`).
+    ax : an Axes (one panel) or a sequence of Axes (one per panel) to draw into; the panels are then
+        drawn on your figure and nothing is saved (``path`` must be None).  The ``path`` panel needs
+        an Axes with ``projection="3d"``.
+    title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
+    figures : figure numbers per panel name (default: those of the scenario that made ``res``; pass
+        ``{}`` for none).
+    thrust_bounds : (f_min, f_max) [N] drawn on the ``rotors`` panel.
+    events : (time [s], label) pairs drawn as vertical lines on the time panels (a release, a contact).
+    ncols : columns of the page (default 3, or fewer panels).
+
+    Returns
+    -------
+    The ``path`` when given; with ``ax``, the Axes' Figure; else a new Figure.
+    """
+    if not isinstance(res, SimResult):
+        raise InputError(f"plot_result needs a qprr SimResult, got {type(res).__name__}")
+    explicit = panels is not None
+    if panels is None:
+        panels = DEFAULT_PANELS
+    specs = [panels] if isinstance(panels, (str, Panel)) else list(panels)
+    if not specs:
+        raise InputError("panels must name at least one panel")
+    chosen = [_panel(s) for s in specs]
+    if not explicit and not np.any(res.u_ext):
+        chosen = [p for p in chosen if p.name != "disturbance"]
+    figures = scenario_figures(res) if figures is None else dict(figures)
+
+    events = tuple((float(te), str(name)) for te, name in events)
+    labelled = []
+
+    def draw(p: Panel, a) -> None:
+        if p.name == "rotors" and p.draw is _rotors:
+            _rotors(a, res, thrust_bounds)
+        else:
+            p.draw(a, res)
+        a.set_title(_title(p, figures), fontsize=10)
+        if events and p.projection is None:
+            _events(a, events, label=not labelled)
+            labelled.append(p.name)
+
+    if ax is not None:
+        if path is not None:
+            raise InputError("plot_result: give either ax (draw into your Axes) or path (save a new figure), not both")
+        axes = list(ax) if isinstance(ax, (list, tuple, np.ndarray)) else [ax]
+        axes = list(np.ravel(axes))
+        if len(axes) != len(chosen):
+            raise InputError(f"plot_result: {len(chosen)} panel(s) for {len(axes)} Axes")
+        for p, a in zip(chosen, axes):
+            if (p.projection == "3d") != (getattr(a, "name", "") == "3d"):
+                need = "an Axes with projection='3d'" if p.projection == "3d" else "a 2-D Axes"
+                raise InputError(f"panel {p.name!r} needs {need}")
+            draw(p, a)
+        return axes[0].figure
+
+    n = len(chosen)
+    ncols = min(3, n) if ncols is None else int(ncols)
+    if ncols < 1:
+        raise InputError(f"ncols must be >= 1, got {ncols!r}")
+    nrows = math.ceil(n / ncols)
+    fig = new_figure((5.4 * ncols, 3.7 * nrows + (0.6 if n > 1 else 0.3)))
+    for k, p in enumerate(chosen):
+        a = fig.add_subplot(nrows, ncols, k + 1, projection=p.projection)
+        draw(p, a)
+    if title is None:
+        title = default_title(res)
+    if title:
+        fig.suptitle(title, fontsize=10.5 if n > 1 else 9)
+    if path is None:
+        return fig
+    return save_figure(fig, path, dpi)
+
+
+def default_title(res: SimResult) -> str:
+    """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in degrees)."""
+    src = scenario_source(res)
+    on = f" on {res.platform}" if res.platform else ""
+    head = f"{res.scenario} / {res.controller}{on} ({res.status}, {res.n} steps of {1e3 * res.control_period:g} ms)"
+    if src:
+        head += f" - thesis {src}"
+    kinds = coordinate_kinds(res)
+    parts = []
+    for (name, v), kind in zip(res.rmse().items(), kinds):
+        unit, scale = _UNIT[kind]
+        parts.append(f"{name} {scale * v:.2g} {unit}")
+    return head + "\nRMSE (6.26): " + ", ".join(parts)
+
+
+__all__ = ["DEFAULT_PANELS", "PANELS", "Panel", "applied_forces", "coordinate_kinds", "default_title", "figure_path", "legend",
+           "new_figure", "plot_result", "pretty", "robust_limits", "save_figure", "scenario_figures", "time_axis"]

@@ -1,0 +1,95 @@
+"""Every bad invocation of the command line ends in one line on stderr and exit code 2, before any run.
+
+The invocations of issue 10 (item 5) and their neighbours, through ``qprr.cli.main([...])``.
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from qprr.cli import build_parser, main
+
+BAD = [
+    (["simulate", "static-idc", "--integrator", "rk5"], "rk5"),
+    (["simulate", "static-idc", "--law", "foo"], "foo"),
+    (["simulate", "static-idc", "--duration", "-1"], "--duration"),
+    (["simulate", "static-idc", "--duration", "nan"], "--duration"),
+    (["simulate", "static-idc", "--duration", "inf"], "--duration"),
+    (["simulate", "static-idc", "--save", "/proc/x.npz"], "/proc"),
+    (["simulate", "static-idc", "--plot", "/nonexistent/dir/x.png"], "/nonexistent/dir"),
+    (["simulate", "static-idc", "--save", "/nonexistent/dir/x.npz"], "/nonexistent/dir"),
+    (["simulate", "static-idc", "--animate", "/nonexistent/dir/x.gif"], "/nonexistent/dir"),
+    (["simulate", "static-idc", "--plot", "x.txt"], ".png"),
+    (["simulate", "static-idc", "--animate", "out.avi"], ".gif"),
+    (["simulate", "nosuch"], "nosuch"),
+    (["simulate", "static-idc", "--controller", "foo"], "foo"),
+    (["simulate", "static-idc", "--dt", "0"], "--dt"),
+    (["simulate", "static-idc", "--dt", "abc"], "abc"),
+    (["simulate", "static-idc", "--dt", "0.003", "--duration", "0.001"], "0.001"),
+    (["simulate", "static-idc", "--seed", "1.5"], "1.5"),
+    (["simulate", "static-idc", "--set", "foo=1"], "foo"),
+    (["simulate", "static-idc", "--set", "duration=abc"], "abc"),
+    (["simulate", "static-idc", "--set", "noequals"], "NAME=VALUE"),
+    (["simulate", "static-idc", "--set", "law=foo"], "foo"),
+    (["simulate", "static-idc", "--platform", "nosuch"], "nosuch"),
+    (["simulate", "static-idc", "--platform", "borinot_flying_arm_2"], "borinot_flying_arm_2"),
+    (["simulate", "static-idc", "--layout", "y"], "'y'"),
+    (["simulate", "hover-reach", "--platform", "HEX-RQ"], "HEX-RQ"),
+    (["simulate", "hover-reach", "--set", "z=nan"], "finite"),
+    (["simulate", "hover-reach", "--set", "reach_fraction=5"], "limits|not in"),
+    (["simulate", "payload-drop", "--set", "mass=-1"], "mass"),
+    (["simulate", "payload-drop", "--set", "release_time=-5"], "time"),
+    (["simulate", "payload-drop", "--set", "mission=foo"], "foo"),
+    (["simulate", "push-thrust", "--set", "object_mass=0"], "mass"),
+    (["simulate", "impedance", "--set", "t_off=-1"], "t_off|t_on"),
+    (["compare", "--duration", "0"], "--duration"),
+    (["urdf", "-o", "/nonexistent/x.urdf"], "/nonexistent"),
+    (["check", "--cache-dir", "/nonexistent/a/b"], "/nonexistent/a"),
+    (["check", "--cache-dir", "/proc/version"], "not a folder|file"),
+    (["animate", "nosuch.npz"], "nosuch.npz"),
+    ([], "command"),
+    (["frobnicate"], "frobnicate"),
+]
+
+
+@pytest.mark.parametrize("argv, names", BAD, ids=[" ".join(a) or "(none)" for a, _ in BAD])
+def test_bad_invocation_is_one_line_and_exit_code_2(argv, names, capsys):
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own errors (through the one-line error of qprr.cli._Parser)
+        code = exc.code
+    out, err = capsys.readouterr()
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert code == 2, (code, err)
+    assert len(lines) == 1, err
+    assert "Traceback" not in err and re.search(names, lines[0]), lines[0]
+    assert out == ""  # nothing ran: no summary, no figure
+
+
+def test_the_issue_lists_at_least_twenty():
+    assert len(BAD) >= 20
+
+
+def test_help_has_no_raw_markup(capsys):
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    texts = [parser.format_help()] + [p.format_help() for p in sub.choices.values()]
+    for text in texts:
+        for mark in ("``", ":func:", ":class:", ":mod:", ":data:", ":meth:", "=====", ".. "):
+            assert mark not in text, (mark, text[:200])
+
+
+def test_cache_dir_is_documented_in_help():
+    parser = build_parser()
+    sub = next(a for a in parser._actions if a.dest == "command")
+    text = sub.choices["check"].format_help()
+    assert "--cache-dir" in text and "QPRR_CACHE_DIR" in text and "~/.cache/qprr" in text
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["--version"])
+    assert exc.value.code == 0
+    assert re.fullmatch(r"qprr \d+\.\d+\.\d+\n", capsys.readouterr().out)
