@@ -22,7 +22,7 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message}\n")
 
 
-def _fail(prog: str, message: str) -> int:
+def fail(prog: str, message: str) -> int:
     print(f"{prog}: error: {message}", file=sys.stderr)
     return 2
 
@@ -39,8 +39,11 @@ def _writable(folder: Path) -> str:
     return ""
 
 
-def _output_path(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
-    """Check an output path before a run: known suffix, existing and writable folder (nothing is created)."""
+def output_path(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
+    """Check an output path before a run: known suffix, existing and writable folder (nothing is created).
+
+    Shared by every command group (``simulate``, ``analyze``, ``wheeled``, ``animate``...); raises
+    ValueError with a one-line message naming the option ``--what`` and the path."""
     if path is None:
         return None
     p = Path(path)
@@ -102,38 +105,38 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     prog = "qprr simulate"
     if args.scenario not in SCENARIOS:
-        return _fail(prog, f"unknown scenario {args.scenario!r}; valid: {', '.join(SCENARIOS)}")
+        return fail(prog, f"unknown scenario {args.scenario!r}; valid: {', '.join(SCENARIOS)}")
     sc = SCENARIOS[args.scenario]
     options = {}
     for key in ("duration", "dt", "integrator", "seed", "law"):
         value = getattr(args, key)
         if value is not None:
             if key not in sc.options:
-                return _fail(prog, f"--{key} does not apply to scenario {sc.name!r}; its options: {', '.join(sc.options) or 'none'}")
+                return fail(prog, f"--{key} does not apply to scenario {sc.name!r}; its options: {', '.join(sc.options) or 'none'}")
             options[key] = value
     for item in args.set or ():
         if "=" not in item:
-            return _fail(prog, f"--set {item!r}: expected NAME=VALUE")
+            return fail(prog, f"--set {item!r}: expected NAME=VALUE")
         key, value = item.split("=", 1)
         if key not in sc.options:
-            return _fail(prog, f"--set {key!r}: not an option of scenario {sc.name!r}; valid: {', '.join(sc.options) or 'none'}")
+            return fail(prog, f"--set {key!r}: not an option of scenario {sc.name!r}; valid: {', '.join(sc.options) or 'none'}")
         try:
             options[key] = _convert(value, sc.options[key].default)
         except ValueError as exc:
-            return _fail(prog, f"--set {key}={value}: {exc}")
+            return fail(prog, f"--set {key}={value}: {exc}")
     if args.controller is not None and args.controller not in sc.controllers:
-        return _fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controllers)}")
+        return fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controllers)}")
     try:
-        plot_path = _output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
-        save_path = _output_path(args.save, (".npz",), "save")
-        anim_path = _output_path(getattr(args, "animate", None), (".gif", ".mp4"), "animate")
+        plot_path = output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+        save_path = output_path(args.save, (".npz",), "save")
+        anim_path = output_path(getattr(args, "animate", None), (".gif", ".mp4"), "animate")
     except ValueError as exc:
-        return _fail(prog, str(exc))
+        return fail(prog, str(exc))
     platform = None
     if args.platform is not None or args.layout is not None:
         name = args.platform or "q-prr"
         if sc.platforms is not None and name not in sc.platforms:
-            return _fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}")
+            return fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}")
         try:
             if name == "q-prr":
                 platform = load_platform("q-prr", layout=args.layout or "plus")
@@ -144,7 +147,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             else:
                 platform = load_platform(name) if name in NAMES else __import__("qprr").build(name)
         except QprrError as exc:
-            return _fail(prog, f"--platform {name!r}: {exc}")
+            return fail(prog, f"--platform {name!r}: {exc}")
     progress = not args.quiet and sys.stderr.isatty()
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
@@ -152,7 +155,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     except QprrError as err:
         res = getattr(err, "result", None)
         if res is None:
-            return _fail(prog, f"{type(err).__name__}: {err}")
+            return fail(prog, f"{type(err).__name__}: {err}")
         print(f"{prog}: {type(err).__name__}: {err}", file=sys.stderr)
         code = 1
     print(_summary(res))
@@ -194,7 +197,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     from .thesis.scenarios import compare
 
     if not 0 < args.duration < float("inf"):
-        return _fail("qprr compare", f"--duration must be a finite number > 0 s, got {args.duration!r}")
+        return fail("qprr compare", f"--duration must be a finite number > 0 s, got {args.duration!r}")
     t0 = time.perf_counter()
     cmp = compare(duration=args.duration, progress=not args.quiet and sys.stderr.isatty())
     print("RMSE (6.26) on the static-manipulator mission (Sec. 6.3.1.4), ours vs Thesis Table 6.3;")
@@ -210,7 +213,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
     try:
         cache = _cache_dir(args.cache_dir)
     except ValueError as exc:
-        return _fail("qprr check", str(exc))
+        return fail("qprr check", str(exc))
     if cache is not None:  # read by qprr.thesis.symbolic when it derives (or reloads) the sympy model
         os.environ["QPRR_CACHE_DIR"] = str(cache)
     from .thesis.checks import main as check_main
@@ -222,9 +225,9 @@ def _cmd_urdf(args: argparse.Namespace) -> int:
     from .thesis.urdf import URDF_PATH, write_urdf
 
     try:
-        out = _output_path(args.output, (".urdf",), "output") if args.output else URDF_PATH
+        out = output_path(args.output, (".urdf",), "output") if args.output else URDF_PATH
     except ValueError as exc:
-        return _fail("qprr urdf", str(exc))
+        return fail("qprr urdf", str(exc))
     print(write_urdf(out))
     return 0
 
@@ -304,13 +307,13 @@ def main(argv: list[str] | None = None) -> int:
     try:
         dt = getattr(args, "dt", None)
         if dt is not None and not 0 < dt < float("inf"):
-            return _fail(f"qprr {args.command}", f"--dt must be a finite number > 0 s, got {dt!r}")
+            return fail(f"qprr {args.command}", f"--dt must be a finite number > 0 s, got {dt!r}")
         duration = getattr(args, "duration", None)
         if args.command == "simulate" and duration is not None and not 0 < duration < float("inf"):
-            return _fail("qprr simulate", f"--duration must be a finite number > 0 s, got {duration!r}")
+            return fail("qprr simulate", f"--duration must be a finite number > 0 s, got {duration!r}")
         return int(args.func(args) or 0)
     except QprrError as exc:
-        return _fail(f"qprr {args.command}", f"{type(exc).__name__}: {exc}")
+        return fail(f"qprr {args.command}", f"{type(exc).__name__}: {exc}")
 
 
 if __name__ == "__main__":

@@ -37,7 +37,8 @@ def figure(tmp_path: Path, name: str) -> None:
 
 
 def test_every_example_is_tested():
-    tested = {"pose_and_cog.py", "ik_hover.py", "custom_mission.py", "allocation.py", "hover_analysis.py", "other_platforms.py"}
+    tested = {"pose_and_cog.py", "ik_hover.py", "custom_mission.py", "allocation.py", "hover_analysis.py", "other_platforms.py",
+              "platforms_tour.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -90,3 +91,17 @@ def test_other_platforms(tmp_path):
     for m in re.finditer(r"RMSE x ([\d.e+-]+) m, z ([\d.e+-]+) m", out):
         assert float(m.group(1)) < 1e-2 and float(m.group(2)) < 1e-2
     figure(tmp_path, "x_cm_three_platforms.png")
+
+
+def test_platforms_tour(tmp_path):
+    """Five platforms: the QP IK reaches a reachable pose (the pose of a level configuration), the allocator holds the
+    IK configuration, a hover-and-reach flight tracks its reference."""
+    out = run_example("platforms_tour.py", tmp_path)
+    labels = ("Q-PRR +", "Q-PRR X", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
+    errors = [float(e) for e in re.findall(r"IK converged: position error ([\d.e+-]+) m", out)]
+    assert len(errors) == len(labels) and max(errors) < 1e-6, out
+    rmse = [float(e) for e in re.findall(r"hover-and-reach: ok, position RMSE ([\d.e+-]+) m", out)]
+    assert len(rmse) == len(labels) and max(rmse) < 1e-3, out
+    for label in labels:
+        assert re.search(rf"^{re.escape(label)} +Platform\(", out, re.M), label
+        figure(tmp_path, f"tour-{label.replace(' ', '').replace('+', 'plus').lower()}.png")

@@ -449,6 +449,41 @@ def test_task_jacobians_by_finite_differences(rob, dat, task_factory):
     np.testing.assert_allclose(J, J_fd, atol=1e-7)
 
 
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(phi=st.floats(-math.pi, math.pi), theta=st.floats(-1.5, 1.5), psi=st.floats(-math.pi, math.pi))
+def test_hover_error_is_the_tilt_angle(rob, dat, phi, theta, psi):
+    """|e| of the hover task = the angle between z_B and the vertical (pi upside down, never 0 there), along w_xy."""
+    xi = rob.neutral_xi()
+    xi[3:6] = phi, theta, psi
+    q = co.xi_to_q(xi)
+    tasks.update_kinematics(rob, dat, q)
+    _, e = tasks.HoverTask().linearize(rob, dat, q)
+    z_b = dat.oMi[1].rotation[:, 2]
+    tilt = math.acos(min(1.0, max(-1.0, z_b[2])))
+    assert abs(np.linalg.norm(e) - tilt) < 1e-12
+    if 1e-4 < tilt < math.pi - 1e-4:
+        np.testing.assert_allclose(e, -tilt * z_b[0:2] / np.linalg.norm(z_b[0:2]), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["q-prr", "HEX-RRR"])
+def test_qp_ik_from_upside_down_ends_in_hover(name):
+    """Started with the rotors pushing down (roll 3.0 rad), the QP IK turns the base upright: the hover error
+    vanishes only at z_B = e3 (the horizontal part of z_B alone also vanishes at z_B = -e3).  The way round from
+    upside down is long (65 iterations on the Q-PRR): 100 allowed."""
+    p = qprr.load(name) if name == "q-prr" else qprr.build(name)
+    data = p.data()
+    xi = p.neutral_xi()
+    xi[0:3] = 1.0, -0.5, 2.0
+    xi[5] = 0.3
+    xi[6:] = 0.5 * p.arm_upper
+    target = kin.ee_placement(p, data, co.xi_to_q(xi))
+    start = p.neutral_xi()
+    start[3] = 3.0
+    res = qprr.ik.IKSolver(p, "qp", {"max_iter": 100}).solve(data, target, xi0=start)
+    assert res.success and res.hover_feasible, res.reason
+    assert abs(res.roll) < 1e-6 and abs(res.pitch) < 1e-6 and res.position_error < 1e-6
+
+
 def test_a_failing_qp_raises_solver_error(rob, dat):
     """The ProxQP status is checked: a QP stopped before convergence is an error, not a step."""
     xi = np.array([0.0, 0.0, 1.0, 0.2, -0.1, 0.3, 0.04, 1.2, 0.5])  # r0 on its upper limit

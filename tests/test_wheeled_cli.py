@@ -21,24 +21,26 @@ def test_help_lists_every_robot_and_exercise(capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["wheeled", "hovercraft"], "unknown robot or exercise 'hovercraft'; valid: fixed-wheel"),
-    (["wheeled", "types", "--plot", "out.jpg"], "--plot must name a .png file"),
+    (["wheeled", "types", "--plot", "out.jpg"], "--plot 'out.jpg': the file must end in .png or .pdf or .svg"),
+    (["wheeled", "types", "--plot", "no-such-folder/t.png"], "folder 'no-such-folder' does not exist"),
 ])
 def test_bad_arguments_give_one_line_and_exit_code_2(capsys, argv, message):
     assert main(argv) == 2
-    err = capsys.readouterr().err
+    out, err = capsys.readouterr()
     assert message in err and err.count("\n") == 1
+    assert out == ""  # refused before the run
 
 
 def test_a_directory_as_plot_path_is_refused(capsys, tmp_path):
     d = tmp_path / "fig.png"
     d.mkdir()
     assert main(["wheeled", "types", "--plot", str(d)]) == 2
-    assert "is a directory" in capsys.readouterr().err
+    assert "is a folder, not a file" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("name", ["types", "ackermann", "bicycle-exercise"])
 def test_runs_print_checks_and_save_a_png(capsys, tmp_path, name):
-    path = tmp_path / "sub" / f"{name}.png"
+    path = tmp_path / f"{name}.png"
     assert main(["wheeled", name, "--plot", str(path)]) == 0
     out = capsys.readouterr().out
     assert f"figure {path}" in out

@@ -53,6 +53,7 @@ def _thesis_singularity_reference(platform, result):
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..cli import fail, output_path
     from . import plots
     from .capacity import capacity
     from .cog import balance, cog_regions
@@ -61,6 +62,10 @@ def run(args: argparse.Namespace) -> int:
     from .singularity import singularity
     from .workspace import workspace
 
+    try:
+        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+    except ValueError as exc:
+        return fail("qprr analyze", str(exc))
     platform = resolve_platform(args.platform)
     n = args.samples or DEFAULT_SAMPLES[args.map]
     progress = True if args.progress else None
@@ -115,7 +120,10 @@ def run(args: argparse.Namespace) -> int:
 def register_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
     p = sub.add_parser("analyze", help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
-                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+                       description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
+                                   "singularities, hover feasibility and thrust margins, payload capacity, operational-space inertia. "
+                                   "--platform takes a named platform (q-prr, borinot_flying_arm_2, hextilt_flying_arm_5) or a "
+                                   "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR.")
     p.add_argument("map", choices=MAPS, help="which map")
     p.add_argument("--platform", default="q-prr", help="named platform or (2.1) designation (default: q-prr)")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")

@@ -11,6 +11,7 @@ import warnings
 
 import numpy as np
 
+from ..viz.plots import new_figure
 from .capacity import LIMITS, CapacityResult
 from .cog import BalanceResult, CoGResult
 from .hover import HoverResult
@@ -22,17 +23,10 @@ AXIS = ("x", "y", "z")
 COLOURS = ("tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple")
 
 
-def _plt():
-    import matplotlib.pyplot as plt
-
-    return plt
-
-
 def _new_ax(ax, projection=None):
     if ax is not None:
         return ax
-    plt = _plt()
-    fig = plt.figure(figsize=(6, 5))
+    fig = new_figure((6, 5))
     return fig.add_subplot(111, projection=projection)
 
 
@@ -133,9 +127,8 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
 
 def workspace_figure(result: WorkspaceResult):
     """Thesis Fig. 3.14 (a) with / (b) without the locked joints, Fig. 3.15 the gain, and the hover views."""
-    plt = _plt()
     n = len(result.regions)
-    fig = plt.figure(figsize=(14, 9))
+    fig = new_figure((14, 9))
     ax = fig.add_subplot(2, 3, 1)
     plot_workspace(result, ax, [0], title=f"(a) {result.regions[0].label}")
     if n > 1:
@@ -151,7 +144,6 @@ def workspace_figure(result: WorkspaceResult):
     if n > 1:
         plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
     fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3), Fig. 3.14/3.15)")
-    fig.tight_layout()
     return fig
 
 
@@ -220,12 +212,11 @@ def plot_balanced_workspace(result: BalanceResult, ax=None):
 
 def cog_figure(result: CoGResult, balance: BalanceResult | None = None):
     """CoG regions per variant and payload (Thesis Fig. 6.31/6.32/6.47/6.48) and the balance map."""
-    plt = _plt()
     nv = len(result.variants)
     n = nv + (2 if balance is not None else 0)
     ncol = 2 if n > 2 else n
     nrow = (n + ncol - 1) // ncol
-    fig = plt.figure(figsize=(6.5 * ncol, 5.2 * nrow))
+    fig = new_figure((6.5 * ncol, 5.2 * nrow))
     for v in range(nv):
         keys = [k for k in result.regions if k[0] == v]
         plot_cog_regions(result, fig.add_subplot(nrow, ncol, v + 1), keys, title=f"CoG, {result.regions[keys[0]].label}")
@@ -233,7 +224,6 @@ def cog_figure(result: CoGResult, balance: BalanceResult | None = None):
         plot_balance(balance, fig.add_subplot(nrow, ncol, nv + 1))
         plot_balanced_workspace(balance, fig.add_subplot(nrow, ncol, nv + 2))
     fig.suptitle(f"{result.platform_name}: CoG regions (Thesis (3.78), (6.29)-(6.33))")
-    fig.tight_layout()
     return fig
 
 
@@ -257,12 +247,12 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     """(a) det J_t (or manipulability) over two joints with the singular set, (b) distance to it,
     (c) the thesis's det(J J^T) (4.44) against one joint at three values of another, with
     ``reference`` curves {label: (x, y)} (e.g. the printed (4.46)-(4.48)) drawn on top."""
-    plt = _plt()
     g = result.grid
     free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
     axes = _two_longest(g, free)
     sl = _slice_index(g, axes)
-    fig, axs = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig = new_figure((16, 4.6))
+    axs = fig.subplots(1, 3)
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
     others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
     if result.det_task is not None:
@@ -299,7 +289,6 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     axs[2].legend(fontsize=7)
     axs[2].set_title("the system's det(J J^T) (Thesis (4.44)): never 0", fontsize=8)
     fig.suptitle(f"{result.platform_name}: singularities (Thesis (4.42)-(4.48))")
-    fig.tight_layout()
     return fig
 
 
@@ -332,11 +321,11 @@ def _plane(ee):
 
 def hover_figure(result: HoverResult, mass_index: int = 0):
     """Best thrust margin and attitude authority per workspace cell, infeasible cells, feasible share vs payload."""
-    plt = _plt()
     coords, basis, h = _plane(result.ee_body)
     names = _axis_names(basis) if basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
     k = mass_index
-    fig, axs = plt.subplots(2, 3, figsize=(16, 9))
+    fig = new_figure((16, 9))
+    axs = fig.subplots(2, 3)
     _workspace_map(axs[0, 0], coords, result.thrust_margin[k], h, "viridis", "best thrust margin [N]")
     axs[0, 0].set_title(f"thrust margin (payload {result.masses[k]:g} kg, best configuration per cell)", fontsize=8)
     for j, axis in enumerate(("roll", "pitch", "yaw")):
@@ -359,21 +348,19 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
     ax.legend(fontsize=7)
     ax.set_title(f"payload envelope; collective limit {result.payload.collective:.3g} kg", fontsize=8)
     fig.suptitle(f"{result.platform_name}: hover feasibility and thrust margin")
-    fig.tight_layout()
     return fig
 
 
 def wrench_set_figure(result: HoverResult, index: int | None = None):
     """2-D sections of the rotors' wrench set through the hover wrench of one configuration (default: the worst)."""
     from scipy.spatial import HalfspaceIntersection
-
-    plt = _plt()
     W = result.wrench_set
     i = int(np.argmin(result.thrust_margin[0])) if index is None else index
     w0 = result.hover_wrench[i]
     pairs = [(0, 1), (3, 4), (2, 5)] if W.rank == 6 else [(3, 4), (2, 5), (3, 5)]
     names = ("f_x [N]", "f_y [N]", "f_z [N]", "tau_x [N m]", "tau_y [N m]", "tau_z [N m]")
-    fig, axs = plt.subplots(1, len(pairs), figsize=(5 * len(pairs), 4.5))
+    fig = new_figure((5 * len(pairs), 4.5))
+    axs = fig.subplots(1, len(pairs))
     for ax, (a, b) in zip(axs, pairs):
         E = np.zeros((2, 6))
         E[0, a] = E[1, b] = 1.0
@@ -394,16 +381,14 @@ def wrench_set_figure(result: HoverResult, index: int | None = None):
         ax.legend(fontsize=7)
     q = result.grid.configurations(i, i + 1)[0]
     fig.suptitle(f"{result.platform_name}: wrench set (rank {W.rank}) sections at q_arm = {np.round(q, 3).tolist()}", fontsize=9)
-    fig.tight_layout()
     return fig
 
 
 def capacity_figure(result: CapacityResult):
     """Thesis Fig. 6.46 generalised: best payload per workspace cell and the factor that limits it."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
-
-    plt = _plt()
-    fig, axs = plt.subplots(1, 2, figsize=(13, 5))
+    fig = new_figure((13, 5))
+    axs = fig.subplots(1, 2)
     h = result.cell
     grid = result.map_capacity
     o = result.map_origin
@@ -436,19 +421,18 @@ def capacity_figure(result: CapacityResult):
         ax.set_ylabel(names[1] if len(names) > 1 else "")
         ax.set_aspect("equal")
     fig.suptitle(f"{result.platform_name}: payload capacity over the workspace (Thesis Fig. 6.46 generalised)")
-    fig.tight_layout()
     return fig
 
 
 def opspace_figure(result: OpSpaceMap):
     """Effective end-effector mass along x and z, and the conditioning of Lambda, over two joints (others at mid-range)."""
-    plt = _plt()
     g = result.grid
     free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
     axes = _two_longest(g, free)
     sl = _slice_index(g, axes)
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
-    fig, axs = plt.subplots(1, 3, figsize=(16, 4.6))
+    fig = new_figure((16, 4.6))
+    axs = fig.subplots(1, 3)
     panels = [(result.mass_xyz[:, 0], "effective mass along x [kg]", "plasma"),
               (result.mass_xyz[:, 2], "effective mass along z [kg]", "plasma"),
               (np.log10(result.condition), "log10 cond(Lambda)", "viridis")]
@@ -460,5 +444,4 @@ def opspace_figure(result: OpSpaceMap):
     others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
     fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
                  + (f", {others}" if others else ""))
-    fig.tight_layout()
     return fig

@@ -586,7 +586,7 @@ class IKSolver:
         lo, hi = engine.lower, engine.upper
         fid = platform.ee_frame
         status, it, step, ready = "max_iterations", 0, None, False
-        lower_prev, flat = math.inf, 0
+        lower_prev, flat = None, 0
         e1_prev, rest_scale = math.inf, 1.0
         try:
             while it < opts.max_iter:
@@ -601,9 +601,11 @@ class IKSolver:
                     status, ready = ("converged" if pose_ok else "stalled"), True
                     break
                 # the lower levels may converge only linearly (damped, unsatisfiable): once the
-                # pose holds, stop when their errors no longer decrease
-                lower = sum(x * x for x in step.errors[1:])
-                flat = flat + 1 if (pose_ok and lower > (1.0 - 1e-9) * lower_prev) else 0
+                # pose holds, stop when their errors no longer decrease, compared in priority order
+                # (the first level that moved decides: a posture error rising while the hover error
+                # falls is progress)
+                lower = step.errors[1:]
+                flat = flat + 1 if (pose_ok and not _lexicographic_progress(lower, lower_prev)) else 0
                 lower_prev = lower
                 if flat >= 3:
                     status, ready = "converged", True
@@ -636,6 +638,17 @@ class IKSolver:
         return finish(platform, data, "qp", q, None, p_d, R_d, opts, status=status, reason="", iterations=it, t0=t0,
                       init=init, require_hover=require_hover, kinematics_ready=ready,
                       level_errors=_level_errors(platform, data, q, levels, ready, step), unreachable_hint=self.unreachable_hint)
+
+
+def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
+    """Whether ``errors`` (one norm per level, highest priority first) improve on ``previous``: the first level
+    whose error changed by more than ``rtol`` (relative) decreased."""
+    if previous is None:
+        return True
+    for e, e0 in zip(errors, previous):
+        if abs(e - e0) > rtol * max(e, e0):
+            return e < e0
+    return False
 
 
 def _level_errors(platform, data, q, levels, ready, step) -> tuple[float, ...]:

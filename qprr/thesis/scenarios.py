@@ -612,8 +612,9 @@ INTERACTION_SCENARIOS = (
              ("q-prr",), plot_impedance, "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7, Fig. 6.65-6.70", summary),
 )
 
-SCENARIOS = tuple(replace(s, figures=FIGURES[s.name]) if s.name in FIGURES else s
-                  for s in FLIGHT_SCENARIOS + INTERACTION_SCENARIOS)
+FLIGHT_SCENARIOS, INTERACTION_SCENARIOS = (tuple(replace(s, figures=FIGURES[s.name]) if s.name in FIGURES else s for s in group)
+                                           for group in (FLIGHT_SCENARIOS, INTERACTION_SCENARIOS))
+SCENARIOS = FLIGHT_SCENARIOS + INTERACTION_SCENARIOS
 """The thesis's scenarios (registered in :data:`qprr.scenarios.SCENARIOS`), with their figure numbers (:data:`FIGURES`)."""
 
 

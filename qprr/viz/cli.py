@@ -81,8 +81,13 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
+    from ..cli import fail, output_path
     from ..errors import QprrError
 
+    try:
+        output_path(args.output, (".gif", ".mp4"), "output")
+    except ValueError as exc:
+        return fail("qprr animate", str(exc))
     try:
         from .run import load_run
 
@@ -114,9 +119,9 @@ def register_cli(sub) -> None:
     p.set_defaults(func=_cmd_view)
 
     p = sub.add_parser("animate", help="3-D animation of a saved run (or of a demo IK path) to GIF or MP4, headless",
-                       description="Animate a result file (qprr simulate ... --save RUN.npz); without RUN, a 30 s demo IK path.")
+                       description="Animate a result file (written by qprr simulate NAME --save RUN.npz); without RUN, a 30 s demo IK path.")
     p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
-    p.add_argument("-o", "--output", default="out/animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg); default out/animation.gif")
+    p.add_argument("-o", "--output", default="animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg), folder must exist; default animation.gif")
     p.add_argument("--platform", default="q-prr", help="the platform of the run (default q-prr)")
     p.add_argument("--fps", type=float, default=20.0, help="frames per second (default 20)")
     p.add_argument("--speed", type=float, default=1.0, help="run seconds per video second (default 1)")

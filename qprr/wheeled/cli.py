@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from ..errors import QprrError
 
@@ -16,14 +15,12 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     if args.name not in names:
         print(f"qprr wheeled: error: unknown robot or exercise {args.name!r}; valid: {', '.join(names)}", file=sys.stderr)
         return 2
-    if args.plot is not None:
-        p = Path(args.plot)
-        if p.suffix.lower() != ".png":
-            print(f"qprr wheeled: error: --plot must name a .png file, got {args.plot!r}", file=sys.stderr)
-            return 2
-        if p.exists() and p.is_dir():
-            print(f"qprr wheeled: error: --plot {args.plot!r} is a directory", file=sys.stderr)
-            return 2
+    from ..cli import fail, output_path
+
+    try:
+        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+    except ValueError as exc:
+        return fail("qprr wheeled", str(exc))
     try:
         demo = run(args.name)
     except ImportError as err:
@@ -37,8 +34,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
         try:
             print(f"figure {demo.plot(args.plot)}")
         except OSError as err:
-            print(f"qprr wheeled: error: cannot write {args.plot!r}: {err.strerror or err}", file=sys.stderr)
-            return 2
+            return fail("qprr wheeled", f"cannot write {args.plot!r}: {err.strerror or err}")
     return 0 if demo.ok else 1
 
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..charts import rot_z
+from ..viz.plots import figure_path, new_figure
 from .chassis import ICRStatus, WheeledRobot
 from .kinematics import KinematicModel
 from .sim import WheeledSimResult
@@ -168,22 +169,15 @@ def plot_residual(ax, result: WheeledSimResult, *, label: str | None = None) -> 
 
 
 def figure(nrows: int = 1, ncols: int = 1, *, size=(5.0, 4.0)):
-    """A new figure and its axes (pyplot imported here only)."""
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(nrows, ncols, figsize=(size[0] * ncols, size[1] * nrows), squeeze=False)
-    return fig, axes
+    """A new figure (not attached to pyplot, :func:`qprr.viz.new_figure`) and its (nrows, ncols) axes."""
+    fig = new_figure((size[0] * ncols, size[1] * nrows))
+    return fig, fig.subplots(nrows, ncols, squeeze=False)
 
 
 def save(fig, path: str | Path, *, dpi: int = 80) -> Path:
-    """Write ``fig`` to ``path`` (directories created) and close it."""
-    import matplotlib.pyplot as plt
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.tight_layout()
+    """Write ``fig`` to ``path`` (.png, .pdf or .svg in an existing folder, :func:`qprr.viz.figure_path`)."""
+    path = figure_path(path)
     fig.savefig(path, dpi=dpi)
-    plt.close(fig)
     return path
 
 

@@ -2,17 +2,23 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from .base import Task
 
 
 class HoverTask(Task):
-    """Hover feasibility: the base z axis vertical, i.e. roll = pitch = 0.
+    """Hover feasibility: the base z axis vertical and up, i.e. roll = pitch = 0.
 
-    A multirotor whose rotors all push along z_B holds still only with z_B along gravity.  The
-    task drives the horizontal components of z_B = R_b e3 (world) to zero; unlike the Euler
-    angles it has no singularity.  d(R_b e3)/dt = -R_b hat(e3) omega_body.
+    A multirotor whose rotors all push along z_B holds still only with z_B = e3 (world).  The
+    error is the tilt as a rotation vector restricted to the horizontal: with w = R_b e3,
+    s = |w_xy| and the tilt angle a = atan2(s, w_z) in [0, pi], e = (a / s) w_xy.  Near hover it
+    is w_xy (the horizontal components of z_B), it has no Euler singularity, and unlike w_xy alone
+    it does not vanish upside down (z_B = -e3, where |e| = pi is its maximum), so the iteration
+    never settles with the rotors pushing down.  Its Jacobian follows from
+    dw/dt = -R_b hat(e3) omega_body (columns 3, 4 of the base angular velocity).
     """
 
     dim = 2
@@ -22,8 +28,21 @@ class HoverTask(Task):
 
     def linearize(self, platform, data, q):
         R = data.oMi[1].rotation
-        J = np.zeros((2, platform.nv))
-        # -R hat(e3) = [-r_y, r_x, 0] (columns of R)
-        J[:, 3] = -R[0:2, 1]
-        J[:, 4] = R[0:2, 0]
-        return J, -R[0:2, 2]
+        # dw = -R hat(e3) omega_body = -R[:, 1] omega_x + R[:, 0] omega_y
+        J_w = np.zeros((3, platform.nv))
+        J_w[:, 3] = -R[:, 1]
+        J_w[:, 4] = R[:, 0]
+        w_xy, wz = R[0:2, 2], R[2, 2]
+        s = math.hypot(w_xy[0], w_xy[1])
+        if s > 1e-4:
+            a = math.atan2(s, wz)
+            g = a / s
+            c = (wz * s - a) / s**3  # d(a/s)/ds / s
+        elif wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3
+            g, c = 1.0 + s * s / 6.0, -2.0 / 3.0 - 0.2 * s * s
+        else:  # within 1e-4 rad of upside down: the tilt direction is undefined; tilt about body x (|e| = pi)
+            u = R[0:2, 1] / max(math.hypot(R[0, 1], R[1, 1]), 1e-300)
+            return J_w[0:2], -math.pi * u
+        # e = g(s, wz) w_xy: de = g dw_xy + w_xy (c s ds - dwz) with s ds = w_xy . dw_xy (dg/dwz = -1 on |w| = 1)
+        J = g * J_w[0:2] + np.outer(w_xy, c * (w_xy @ J_w[0:2]) - J_w[2])
+        return J, -g * w_xy
