@@ -4,10 +4,11 @@ Level k of ``levels = [(A_1, b_1), ..., (A_K, b_K)]`` solves
 
     min_x  ||A_k x - b_k||^2 + eps ||x - x_{k-1}*||^2
     s.t.   A_j x = A_j x_j*   for every level j < k   (their optimum is kept)
+           E x = E x0                                (optional, hard at every level)
            lower <= x[bounded] <= upper              (hard at every level)
 
 by null-space elimination: x = x_{k-1}* + Z z with Z an orthonormal basis of the kernel of the
-stacked earlier matrices, so each level is a small QP in the free directions z with the bounds
+stacked earlier matrices (and E), so each level is a small QP in the free directions z with the bounds
 as inequalities (the minimisers of a least-squares objective over a convex set all share the
 same A_k x, so keeping that value keeps the level's optimum).  A level with a single free
 direction is solved in closed form (the unconstrained minimiser clamped to the interval the
@@ -65,6 +66,7 @@ def null_space(B: np.ndarray, tol: float) -> np.ndarray:
 class QPSettings:
     """ProxQP settings that make ``PROXQP_SOLVED`` mean solved (see the module docstring).
 
+    ``eps_duality_gap``: absolute duality-gap tolerance (None: ``eps_abs``; the relative one is 0).
     ``default_rho``, ``default_mu_in``, ``default_mu_eq``: proximal parameters (None keeps
     proxsuite's); small well-scaled problems converge in fewer iterations with a small rho and
     a stiff inequality penalty.
@@ -78,10 +80,13 @@ class QPSettings:
     default_rho: float | None = None
     default_mu_in: float | None = None
     default_mu_eq: float | None = None
+    eps_duality_gap: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("eps_abs", "eps_primal_inf", "eps_dual_inf"):
+        for name in ("eps_abs", "eps_primal_inf", "eps_dual_inf", "eps_duality_gap"):
             v = getattr(self, name)
+            if name == "eps_duality_gap" and v is None:
+                continue
             if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise InputError(f"QP setting {name} must be a finite number > 0, got {v!r}")
         if not (isinstance(self.max_iter, int) and self.max_iter >= 1):
@@ -94,7 +99,7 @@ class QPSettings:
         s.eps_primal_inf = self.eps_primal_inf
         s.eps_dual_inf = self.eps_dual_inf
         s.check_duality_gap = self.check_duality_gap
-        s.eps_duality_gap_abs = self.eps_abs
+        s.eps_duality_gap_abs = self.eps_abs if self.eps_duality_gap is None else self.eps_duality_gap
         s.eps_duality_gap_rel = 0.0
         s.max_iter = self.max_iter
         if self.default_rho is not None:
@@ -257,14 +262,18 @@ class Lexicographic:
         return (z if polished is None else polished), int(res.info.iter)
 
     # ------------------------------------------------------------------ solve
-    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None) -> LexResult:
+    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None,
+              equality=None) -> LexResult:
         """Solve ``levels`` (sequence of (A_k, b_k)) under ``lower <= x[bounded] <= upper``.
 
         ``x0`` (default 0, clipped to the bounds) is the point the regularisation of level 1 pulls
         towards; it must satisfy the bounds (each level keeps its bounds feasible by never
         tightening them past the current point).  ``damping`` (one value per level) is added to the regularisation of
         each level (damped least squares: it shortens steps, it never moves a point where every
-        level's gradient vanishes).
+        level's gradient vanishes).  ``equality`` (a matrix E with n columns, optional): a hard
+        constraint E x = E x0 above every level, e.g. a Pfaffian constraint E dz = 0 with x0 = 0;
+        every level is restricted to x0 + ker E (singular values of E below ``rank_tol`` count
+        as zero), so it holds to rounding, as the earlier levels' optima do.
         """
         n, tol, b_idx = self.n, self.rank_tol, self.bounded
         lo = np.asarray(lower, dtype=float)
@@ -277,6 +286,12 @@ class Lexicographic:
         iters = 0
         x_levels = []
         Z = None  # basis of the free directions (None: the whole space)
+        if equality is not None:
+            E = np.asarray(equality, dtype=float)
+            if E.ndim != 2 or E.shape[1] != n:
+                raise InputError(f"equality must be a matrix with {n} columns, got shape {E.shape}")
+            if E.shape[0]:
+                Z = null_space(E, tol)
         for k, (A, b) in enumerate(levels):
             reg = self.regularization
             if Z is not None and Z.shape[1] == 0:

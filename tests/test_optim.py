@@ -1,5 +1,6 @@
 """The lexicographic engine's exact pieces (qprr.optim): the active-set QP and the KKT polish, against the KKT
-conditions; bounds that exclude 0; the degenerate vertex ProxQP called infeasible (octorotor allocation)."""
+conditions; bounds that exclude 0; the degenerate vertex ProxQP called infeasible (octorotor allocation); the
+hard equality (a Pfaffian constraint) against the closed form; the duality-gap setting."""
 
 from __future__ import annotations
 
@@ -7,8 +8,10 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from proxsuite import proxqp
 
-from qprr.optim import Lexicographic, active_set_qp, polish_box_qp
+from qprr.errors import InputError
+from qprr.optim import Lexicographic, QPSettings, active_set_qp, polish_box_qp
 
 SETTINGS = settings(max_examples=80, deadline=None, derandomize=True)
 
@@ -104,3 +107,36 @@ def test_degenerate_vertex_from_an_octorotor_allocation():
     lex = Lexicographic(8, warm_start=False)  # eight thrusts; level 3 has four free directions
     out, _ = lex.solve_box_qp(2, H, g, C, lo, up)
     assert_kkt(H, g, C, lo, up, out)
+
+
+def test_equality_restricts_every_level_to_its_kernel():
+    """``equality=E``: levels (J, e) then (I, 0) under E x = 0 with the bounds inactive give the damped least-squares
+    minimiser on ker E, x = N M^T (M M^T + reg I)^-1 e with M = J N, N an orthonormal basis of ker E (already the
+    smallest x with its J x, so level 2 keeps it); E x = 0 to rounding.  The same as E as a first level (E, 0)."""
+    rng = np.random.default_rng(2)
+    n, reg = 6, 1e-3
+    lex = Lexicographic(n, regularization=reg)
+    lo, up = -np.full(n, 1e3), np.full(n, 1e3)
+    for _ in range(10):
+        J, e, E = rng.normal(size=(3, n)), rng.normal(size=3), rng.normal(size=(2, n))
+        x = lex.solve([(J, e), (np.eye(n), np.zeros(n))], lo, up, equality=E).x
+        N = np.linalg.svd(E)[2][2:].T
+        M = J @ N
+        ref = N @ M.T @ np.linalg.solve(M @ M.T + reg * np.eye(3), e)
+        assert np.allclose(x, ref, atol=1e-13, rtol=0)
+        assert np.abs(E @ x).max() <= 1e-15 * (1 + np.abs(x).max()) * n
+        first = lex.solve([(E, np.zeros(2)), (J, e), (np.eye(n), np.zeros(n))], lo, up).x
+        assert np.allclose(first, x, atol=1e-13, rtol=0)
+    with pytest.raises(InputError, match="equality must be a matrix with 6 columns"):
+        lex.solve([(J, e)], lo, up, equality=np.ones((2, 5)))
+    assert np.array_equal(lex.solve([(J, e)], lo, up, equality=np.zeros((0, n))).x, lex.solve([(J, e)], lo, up).x)
+
+
+def test_qp_settings_duality_gap():
+    qp = proxqp.dense.QP(2, 0, 0)
+    QPSettings(eps_abs=1e-8).apply(qp)
+    assert qp.settings.eps_duality_gap_abs == 1e-8 and qp.settings.eps_duality_gap_rel == 0.0
+    QPSettings(eps_abs=1e-8, eps_duality_gap=1e-6).apply(qp)
+    assert qp.settings.eps_duality_gap_abs == 1e-6
+    with pytest.raises(InputError, match="eps_duality_gap"):
+        QPSettings(eps_duality_gap=0.0)

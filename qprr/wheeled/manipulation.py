@@ -9,12 +9,13 @@ z = [q_base, q_arm] (q_base: the wheeled model's coordinates, e.g. [x, y, theta,
 car) and the IK step dz = [dq_base, v_arm].
 
 :func:`solve_ik` is a strict task-priority IK (levels solved in order, each keeping the
-optimum of those above) on proxsuite's dense ProxQP, where **every level** carries
+optimum of those above) on the project's lexicographic engine :class:`qprr.optim.Lexicographic`
+(null-space elimination on proxsuite's dense ProxQP), where **every level** carries
 
-* the Pfaffian constraint of the base as an equality, A^T(q_base) dq_base = 0 (the base can
-  only move along B(q_base): Lecture "forme pfaffienne", "q_dot in ker A^T(q)"), imposed by
-  equality rows of each QP (default) or by restricting each level's unknowns to its kernel
-  (``elimination="nullspace"``),
+* the Pfaffian constraint of the base, A^T(q_base) dq_base = 0 (the base can only move along
+  B(q_base): Lecture "forme pfaffienne", "q_dot in ker A^T(q)"), as the engine's hard
+  ``equality``: every level's unknowns are restricted to the kernel of E = [A^T, 0], so each
+  step meets it to rounding,
 * the joint limits of the arm and the steering limits, and a trust region on the step,
 
 and the levels are: 1. the end-effector position; 2. for a steered base, the steering angle
@@ -24,7 +25,8 @@ gives the drive).  A Levenberg damping in every level keeps each QP strictly con
 After each QP the base moves by the exact flow of the inputs u = B^+ dq_base
 (:mod:`qprr.wheeled.sim`), so the base path is a motion the wheels can roll along.
 ``respect_constraint=False`` drops the equality and moves the base by dq_base directly: the
-IK that ignores the constraint, whose violation ``slip`` measures.
+IK that ignores the constraint, whose violation ``slip`` measures.  :func:`step_problem` builds
+the levels, the constraint and the bounds of one step; :func:`step_solver` the engine.
 """
 
 from __future__ import annotations
@@ -37,15 +39,12 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-from proxsuite import proxqp
 
 from ..charts import as_vector
 from ..errors import InputError, LimitError, SolverError, UnknownNameError
+from ..optim import Lexicographic, QPSettings
 from .kinematics import KinematicModel
 from .robots import FrontTricycle, RearTricycle
-
-_SOLVED = proxqp.QPSolverOutput.PROXQP_SOLVED
-_CLOSEST = proxqp.QPSolverOutput.PROXQP_SOLVED_CLOSEST_PRIMAL_FEASIBLE
 
 
 # ============================================================================ arms
@@ -193,10 +192,6 @@ class MobileManipulator:
 
 
 # ============================================================================ IK
-ELIMINATIONS = ("nullspace", "equality")
-"""How each level keeps the Pfaffian constraint and the earlier optima (see :class:`_Lexicographic`)."""
-
-
 class IKStatus(str, Enum):
     CONVERGED = "converged"
     STALLED = "stalled"
@@ -210,13 +205,24 @@ class MobileIKOptions:
 
     ``tol``: end-effector position error for convergence; ``max_iter``; ``stall_iter``:
     iterations without a relative error decrease of 1e-9 before "stalled"; trust region per
-    iteration: ``step_xy``, ``step_theta``, ``step_steer``, ``step_arm``; ``lookahead_gain``:
-    ``respect_constraint``; ProxQP: ``eps_abs`` (eps_rel = 0),
-    ``eps_duality_gap`` (absolute, checked), ``max_qp_iter``; ``regularization``: Levenberg
-    damping of every level, which also picks the smallest step among a level's minimisers (to
-    ~eps_abs / regularization = 1e-6 along the directions no task sees); ``rank_tol``:
-    rank of the stacked earlier levels; ``elimination``: "equality" (default) or
-    "nullspace", see :class:`_Lexicographic`.
+    iteration: ``step_xy``, ``step_theta``, ``step_steer``, ``step_arm``;
+    ``respect_constraint``: impose the Pfaffian constraint (False: the IK that ignores it).
+    The QP engine is :class:`qprr.optim.Lexicographic` (:func:`step_solver`): ``eps_abs``,
+    ``eps_duality_gap`` (absolute, checked) and ``max_qp_iter`` are its
+    :class:`~qprr.optim.QPSettings` (eps_rel = 0, infeasibility thresholds 1e-14);
+    ``regularization``: its Levenberg damping of every level, which also picks the smallest
+    step among a level's minimisers; ``polish``: each QP answer replaced by the exact optimum on
+    its active set (residuals compared by :func:`lookahead_steering` exact, not to eps_abs);
+    ``exact_fallback``: a level where ProxQP stops at ``max_qp_iter`` is solved exactly by
+    :func:`qprr.optim.active_set_qp` instead of ending the run with "solver_error" (ProxQP
+    0.8 stalls at degenerate vertices, e.g. 2 free directions and 5 bounds, two of them rows
+    of rounding size active at 0, met in ``benchmarks/wheeled_ik_benchmark.py``);
+    ``rank_tol``: its kernel tolerance, **absolute** (as everywhere in :mod:`qprr.optim`):
+    singular values of the Pfaffian matrix and of each level's Jacobian restricted to the free
+    directions below it count as zero.  (The rows are O(1): unit no-slip rows with lever arms of
+    ~0.5 m, end-effector Jacobians in m/m and m/rad, largest singular values 1.1-1.8 on the car
+    scenarios, so this differs from a tolerance relative to the largest singular value by that
+    factor only.)
     """
 
     tol: float = 1e-6
@@ -232,21 +238,28 @@ class MobileIKOptions:
     max_qp_iter: int = 1000
     regularization: float = 1e-3
     rank_tol: float = 1e-9
-    elimination: str = "equality"
+    polish: bool = True
+    exact_fallback: bool = True
 
     def __post_init__(self):
+        for f in ("respect_constraint", "polish", "exact_fallback"):
+            if not isinstance(getattr(self, f), bool):
+                raise InputError(f"option {f} must be True or False, got {getattr(self, f)!r}")
         for f in ("tol", "step_xy", "step_theta", "step_steer", "step_arm", "eps_abs", "eps_duality_gap", "rank_tol"):
             v = getattr(self, f)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise InputError(f"option {f} must be finite and > 0, got {v!r}")
         if not (math.isfinite(self.regularization) and self.regularization >= 0):
             raise InputError(f"option regularization must be finite and >= 0, got {self.regularization!r}")
-        if self.elimination not in ELIMINATIONS:
-            raise UnknownNameError("elimination", self.elimination, ELIMINATIONS)
         for f in ("max_iter", "stall_iter", "max_qp_iter"):
             v = getattr(self, f)
             if not (isinstance(v, int) and v >= 1):
                 raise InputError(f"option {f} must be an integer >= 1, got {v!r}")
+
+    def qp_settings(self) -> QPSettings:
+        """The :class:`~qprr.optim.QPSettings` of these options."""
+        return QPSettings(eps_abs=self.eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, eps_duality_gap=self.eps_duality_gap,
+                          max_iter=self.max_qp_iter)
 
 
 def make_options(options=None) -> MobileIKOptions:
@@ -270,13 +283,13 @@ class MobileIKResult:
 
     ``path`` (iterations+1, n_base + nq_arm): z at every iteration; ``ee_error`` [m] per
     iterate (Pinocchio FK); ``qp_residual`` [m or rad per iteration]: max |A^T dq_base| of
-    each QP solution (<= eps_abs when the constraint is imposed; the violation otherwise);
-    ``applied_residual``: the same for the motion actually applied (B u: round-off when the
-    constraint is respected); ``slip`` [m]: sum over iterations of |A^T dq_base| of the
-    applied motion (the sideways skid of the constrained wheels; 0 up to round-off when the
-    constraint is respected); ``base_travel`` [m]: path length of (x, y); ``base_inputs``
-    (iterations, n_inputs): the inputs u of each base step (its exact flow over 1 s; empty when
-    the constraint is ignored).
+    each QP solution (round-off when the constraint is imposed: every step lies in ker A^T by
+    construction; the violation otherwise); ``applied_residual``: the same for the motion
+    actually applied (B u: round-off when the constraint is respected); ``slip`` [m]: sum over
+    iterations of |A^T dq_base| of the applied motion (the sideways skid of the constrained
+    wheels; 0 up to round-off when the constraint is respected); ``base_travel`` [m]: path
+    length of (x, y); ``base_inputs`` (iterations, n_inputs): the inputs u of each base step
+    (its exact flow over 1 s; empty when the constraint is ignored).
     """
 
     success: bool
@@ -297,161 +310,47 @@ class MobileIKResult:
     base_inputs: np.ndarray
 
 
-class _Lexicographic:
-    """Levels solved in order on ProxQP (dense), each keeping the optima of the earlier ones.
+def step_solver(robot: MobileManipulator, options=None) -> Lexicographic:
+    """The engine of one IK step: :class:`qprr.optim.Lexicographic` over dz (``robot.nz``), every
+    coordinate bounded (trust region, limits), with ``options``' settings, damping and rank tolerance.
 
-    Level k: min ||J_k dz - e_k||^2 + eps ||dz - dz_{k-1}*||^2 subject to the Pfaffian equality
-    E dz = 0 (when imposed), J_j dz = J_j dz_j* for j < k, and lo <= dz <= up.  Two equivalent
-    forms (as in :mod:`qprr.tasks`):
-
-    * ``"equality"`` (default): the literal form, E and the earlier optima as equality
-      constraints of a QP in dz (rows compressed to an orthonormal basis);
-    * ``"nullspace"``: dz = dz_{k-1}* + Z_k w with Z_k an orthonormal basis of the kernel of
-      [E; J_1; ...; J_{k-1}]: the constraint and the earlier optima hold by construction, each
-      QP has only the bounds (C = Z_k) as constraints.
-
-    Measured with ``benchmarks/wheeled_ik_benchmark.py`` (seeded random problems, 900 per arm
-    and form): no ProxQP failure in either form.  With a damping of 1e-8 instead of 1e-3, and
-    a third level "smallest step" (J = I), ProxQP 0.8 failed on a few per cent of the runs:
-    feasible, nearly determined QPs (6 equalities in 7 unknowns with active bounds, or one
-    unknown between nearly coinciding bounds) declared PRIMAL_INFEASIBLE or stopped at the
-    iteration limit with a ~1e-9 duality gap.  Such runs end as "solver_error", never as a
-    silently wrong step.
-
-    dz_{k-1}* is feasible for level k, so every QP is feasible and strictly convex: an
-    infeasibility verdict can only be a false positive, the detection thresholds sit far below
-    eps_abs; the duality gap is checked; the returned point is checked against the equalities
-    and bounds; any other outcome raises SolverError.
+    It owns its QPs and warm starts: :func:`solve_ik` builds one per call (results depend on the
+    inputs only).  A level it cannot solve raises :class:`~qprr.errors.SolverError`.
     """
-
-    def __init__(self, nz: int, opts: MobileIKOptions):
-        self.nz = nz
-        self.opts = opts
-
-    def _qp(self, n: int, n_eq: int, n_in: int) -> proxqp.dense.QP:
-        qp = proxqp.dense.QP(n, n_eq, n_in)
-        s = qp.settings
-        s.eps_abs = self.opts.eps_abs
-        s.eps_rel = 0.0
-        s.eps_primal_inf = 1e-14
-        s.eps_dual_inf = 1e-14
-        s.check_duality_gap = True
-        s.eps_duality_gap_abs = self.opts.eps_duality_gap
-        s.eps_duality_gap_rel = 0.0
-        s.max_iter = self.opts.max_qp_iter
-        # A feasible QP that ProxQP would call infeasible is solved as its closest feasible problem
-        # (SOLVED_CLOSEST_PRIMAL_FEASIBLE), accepted only when the primal residual shows that the
-        # closest problem is the problem itself.
-        s.primal_infeasibility_solving = True
-        s.verbose = False
-        return qp
-
-    def _run(self, level: int, H, g, Aeq, beq, C, lo, up) -> np.ndarray:
-        qp = self._qp(H.shape[0], 0 if Aeq is None else Aeq.shape[0], C.shape[0])
-        qp.init(H, g, Aeq, beq, C, lo, up)
-        qp.solve()
-        info = qp.results.info
-        x = qp.results.x.copy()
-        Cx = C @ x
-        viol = max(float(np.max(np.abs(Aeq @ x - beq))) if Aeq is not None else 0.0,
-                   float(np.max(lo - Cx)), float(np.max(Cx - up)), 0.0)
-        ok = info.status == _SOLVED or (info.status == _CLOSEST and info.pri_res <= self.opts.eps_abs
-                                        and info.dua_res <= self.opts.eps_abs)
-        if not ok or viol > 10 * self.opts.eps_abs:
-            raise SolverError(f"ProxQP did not solve level {level + 1}: status {info.status.name}, primal residual "
-                              f"{info.pri_res:.3g}, dual residual {info.dua_res:.3g}, duality gap {info.duality_gap:.3g}, "
-                              f"constraint violation {viol:.3g}")
-        return x
-
-    def _rank_rows(self, M) -> np.ndarray:
-        """Orthonormal rows spanning the row space of M."""
-        _, s, Vt = np.linalg.svd(M)
-        return Vt[: int(np.count_nonzero(s > self.opts.rank_tol * max(1.0, s[0])))]
-
-    def _kernel(self, M) -> np.ndarray:
-        _, s, Vt = np.linalg.svd(M)
-        return Vt[int(np.count_nonzero(s > self.opts.rank_tol * max(1.0, s[0]))):].T.copy()
-
-    def solve(self, levels, E, lo, up) -> np.ndarray:
-        if self.opts.elimination == "equality":
-            return self._solve_equality(levels, E, lo, up)
-        return self._solve_nullspace(levels, E, lo, up)
-
-    def _solve_nullspace(self, levels, E, lo, up) -> np.ndarray:
-        nz, reg = self.nz, self.opts.regularization
-        dz = np.zeros(nz)
-        Z = np.eye(nz) if E is None or not E.size else self._kernel(E)
-        for k, (J, e) in enumerate(levels):
-            m = Z.shape[1]
-            if m == 0:
-                break  # the constraint and the earlier levels fix dz
-            JZ = J @ Z
-            H = JZ.T @ JZ
-            H.flat[:: m + 1] += reg
-            # w = 0 (the earlier optimum) must stay feasible: a bound it meets only to eps_abs moves onto it.
-            # Rows of Z that vanish (coordinates this level cannot move) are dropped: 0 <= up, lo <= 0 hold.
-            rows = np.flatnonzero(np.max(np.abs(Z), axis=1) > self.opts.rank_tol)
-            w = self._run(k, H, JZ.T @ (J @ dz - e), None, None, Z[rows], np.minimum(lo - dz, 0.0)[rows],
-                          np.maximum(up - dz, 0.0)[rows])
-            dz = dz + Z @ w
-            N = self._kernel(JZ) if JZ.size else np.eye(m)
-            Z = Z @ N
-        return dz
-
-    def _solve_equality(self, levels, E, lo, up) -> np.ndarray:
-        nz, reg = self.nz, self.opts.regularization
-        dz = np.zeros(nz)
-        stack = np.zeros((0, nz))
-        C = np.eye(nz)
-        for k, (J, e) in enumerate(levels):
-            H = J.T @ J
-            H.flat[:: nz + 1] += reg
-            g = -J.T @ e - reg * dz
-            rows = [E] if E is not None and E.size else []
-            if stack.shape[0]:
-                rows.append(stack)
-            Aeq = beq = None
-            if rows:  # compress (redundant equality rows stall ProxQP)
-                Aeq = self._rank_rows(np.vstack(rows))
-                if Aeq.shape[0] == nz:
-                    break  # the earlier levels and the constraint fix dz
-                beq = Aeq @ dz if k else np.zeros(Aeq.shape[0])
-            dz = self._run(k, H, g, Aeq, beq, C, np.minimum(lo, dz), np.maximum(up, dz))
-            stack = np.vstack([stack, J])
-        return dz
+    opts = make_options(options)
+    return Lexicographic(robot.nz, settings=opts.qp_settings(), regularization=opts.regularization, rank_tol=opts.rank_tol,
+                         polish=opts.polish, exact_fallback=opts.exact_fallback)
 
 
-def _bounded_least_squares(M, e, lo, up, eps_abs: float) -> np.ndarray:
-    """argmin ||M x - e||^2 (+ 1e-12 ||x||^2) s.t. lo <= x <= up, on ProxQP (status checked)."""
-    n = M.shape[1]
-    qp = proxqp.dense.QP(n, 0, n)
-    s = qp.settings
-    s.eps_abs, s.eps_rel = eps_abs, 0.0
-    s.eps_primal_inf = s.eps_dual_inf = 1e-14
-    s.verbose = False
-    H = M.T @ M
-    H.flat[:: n + 1] += 1e-12
-    qp.init(H, -M.T @ e, None, None, np.eye(n), lo, up)
-    qp.solve()
-    if qp.results.info.status != _SOLVED:
-        raise SolverError(f"ProxQP did not solve the steering lookahead: status {qp.results.info.status.name}")
-    return qp.results.x.copy()
+def lookahead_solver(robot: MobileManipulator, options=None) -> Lexicographic:
+    """The engine of :func:`lookahead_steering`: bounded least squares (one level) over (drive input, arm rates),
+    with ``options``' QP settings and a damping of 1e-12 (the smallest minimiser; the residual it compares is
+    unaffected)."""
+    opts = make_options(options)
+    return Lexicographic(1 + robot.nv_arm, settings=opts.qp_settings(), regularization=1e-12, rank_tol=opts.rank_tol,
+                         polish=opts.polish, exact_fallback=opts.exact_fallback)
 
 
 def lookahead_steering(robot: MobileManipulator, z, J: np.ndarray, e: np.ndarray, lo: np.ndarray, up: np.ndarray,
-                       n_candidates: int = 13, eps_abs: float = 1e-9) -> float:
+                       n_candidates: int = 13, *, solver: Lexicographic | None = None) -> float:
     """Steering angle under which the end-effector task would progress most (one-step lookahead).
 
     The end-effector position does not depend on the steering angle psi, so its task cannot
     steer (its Jacobian has a zero column there): psi acts only through the heading rate it
     gives the drive input.  For each candidate psi_c on a grid of [-psi_max, psi_max], the
     level-1 problem is solved with the base's drive column of B evaluated at psi_c (bounded
-    least squares in the drive input and the arm rates, same trust region and limits); the
-    candidate leaving the smallest residual is returned (ties: the one closest to the current
-    psi).  Reversing with the wheels turned the other way is found this way when driving
-    forwards cannot help (the arm at a limit).
+    least squares in the drive input and the arm rates, same trust region and limits, on
+    ``solver``, default :func:`lookahead_solver`); the candidate leaving the smallest residual
+    is returned (ties: the one closest to the current psi).  Reversing with the wheels turned
+    the other way is found this way when driving forwards cannot help (the arm at a limit).
+    Raises :class:`~qprr.errors.SolverError` if a QP fails.
     """
     base, nb = robot.base, robot.n_base
+    if solver is None:
+        solver = lookahead_solver(robot)
+    elif not (isinstance(solver, Lexicographic) and solver.n == 1 + robot.nv_arm):
+        raise InputError(f"solver must be a qprr.optim.Lexicographic over {1 + robot.nv_arm} variables "
+                         f"(drive input and arm rates), got {solver!r}")
     psi_max = float(robot.upper[3])
     cands = np.unique(np.concatenate([np.linspace(-psi_max, psi_max, n_candidates), [np.clip(z[3], -psi_max, psi_max)]]))
     arm = slice(nb, robot.nz)
@@ -463,19 +362,67 @@ def lookahead_steering(robot: MobileManipulator, z, J: np.ndarray, e: np.ndarray
         M = np.column_stack([col, J[:, arm]])
         scale = max(abs(b[0]), abs(b[1])) or 1.0
         lim = min(lo[0:2].min(), -1e-12) / scale, max(up[0:2].max(), 1e-12) / scale
-        x = _bounded_least_squares(M, e, np.concatenate([[lim[0]], lo[arm]]), np.concatenate([[lim[1]], up[arm]]), eps_abs)
-        res.append(float(np.linalg.norm(M @ x - e)))
+        r = solver.solve([(M, e)], np.concatenate([[lim[0]], lo[arm]]), np.concatenate([[lim[1]], up[arm]]))
+        res.append(r.residuals[0])
     res = np.array(res)
     best = res.min()
     ok = np.flatnonzero(res <= best * (1 + 1e-9) + 1e-15)
     return float(cands[ok[np.argmin(np.abs(cands[ok] - z[3]))]])
 
 
+@dataclass(frozen=True)
+class StepProblem:
+    """One linearised step of :func:`solve_ik` at z: ``levels`` [(J_k, e_k)] in priority order (the
+    end-effector position [m]; for a steered base under the constraint, the steering angle [rad]);
+    ``equality`` E (n_constraints, nz): the Pfaffian constraint E dz = A^T(q_base) dq_base = 0 (None
+    when ignored); ``lower``, ``upper`` (nz,): the bounds on dz (trust region, joint and steering
+    limits; they contain 0)."""
+
+    levels: list
+    equality: np.ndarray | None
+    lower: np.ndarray
+    upper: np.ndarray
+
+
+def step_problem(robot: MobileManipulator, z, target, options=None, *, lookahead: Lexicographic | None = None) -> StepProblem:
+    """The strict-priority problem :func:`solve_ik` solves at z for the world position ``target`` [m].
+
+    ``lookahead``: the solver of :func:`lookahead_steering` (default :func:`lookahead_solver`).
+    """
+    opts = make_options(options)
+    p_t = as_vector(target, 3, "target (world position)")
+    z = robot.check_z(z)
+    base, nb, nz = robot.base, robot.n_base, robot.nz
+    step = np.full(nz, opts.step_arm)
+    step[0:2], step[2] = opts.step_xy, opts.step_theta
+    step[3:nb] = opts.step_steer
+    J = robot.ee_jacobian(z)
+    e = p_t - robot.ee_position(z)
+    cur = robot._config_as_tangent(z)
+    lo = np.minimum(np.maximum(-step, robot.lower - cur), 0.0)
+    up = np.maximum(np.minimum(step, robot.upper - cur), 0.0)
+    levels = [(J, e)]
+    E = None
+    if opts.respect_constraint:
+        if isinstance(base, (RearTricycle, FrontTricycle)) and nb == 4:  # steered: level 2 chooses the steering angle
+            Js = np.zeros((1, nz))
+            Js[0, 3] = 1.0
+            psi = lookahead_steering(robot, z, J, e, lo, up, solver=lookahead or lookahead_solver(robot, opts))
+            levels.append((Js, np.array([psi - z[3]])))
+        A = base.A(z[0:nb])
+        if A.size:
+            E = np.zeros((A.shape[1], nz))
+            E[:, 0:nb] = A.T
+    return StepProblem(levels, E, lo, up)
+
+
 def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResult:
     """Move the end effector to ``target`` (world position [m]) from z0 (see the module docstring).
 
-    Returns a :class:`MobileIKResult`; raises on bad input (shape, non-finite, z0 outside the
-    limits, unknown option).  A ProxQP failure ends the run with status "solver_error".
+    Each iteration solves :func:`step_problem` on :func:`step_solver` (both solvers are built
+    once per call).  Returns a :class:`MobileIKResult`; raises on bad input (shape, non-finite,
+    z0 outside the limits, unknown option).  A QP failure ends the run with status
+    "solver_error" and the engine's message as reason.
     """
     if not isinstance(robot, MobileManipulator):
         raise InputError(f"robot must be a MobileManipulator, got {type(robot).__name__}")
@@ -484,13 +431,8 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
     z = robot.check_z(z0, "z0").copy()
     if not robot.within_limits(z):
         raise LimitError(f"z0 {z.tolist()} is outside the limits (steering and arm joints)")
-    base = robot.base
-    nb, nz = robot.n_base, robot.nz
-    steered = isinstance(base, (RearTricycle, FrontTricycle)) and nb == 4
-    step = np.full(nz, opts.step_arm)
-    step[0:2], step[2] = opts.step_xy, opts.step_theta
-    step[3:nb] = opts.step_steer
-    solver = _Lexicographic(nz, opts)
+    base, nb = robot.base, robot.n_base
+    solver, lookahead = step_solver(robot, opts), lookahead_solver(robot, opts)
     t0 = time.perf_counter()
     path, errs, qp_res, app_res, inputs = [z.copy()], [], [], [], []
     slip = 0.0
@@ -503,26 +445,13 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
         if errs[-1] <= opts.tol:
             status, reason, it = IKStatus.CONVERGED, f"end-effector error {errs[-1]:.2g} m <= {opts.tol:g} m", it - 1
             break
-        J = robot.ee_jacobian(z)
-        cur = robot._config_as_tangent(z)
-        lo = np.maximum(-step, robot.lower - cur)
-        up = np.minimum(step, robot.upper - cur)
-        lo, up = np.minimum(lo, 0.0), np.maximum(up, 0.0)
-        levels = [(J, p_t - p)]
-        if steered and opts.respect_constraint:
-            Js = np.zeros((1, nz))
-            Js[0, 3] = 1.0
-            levels.append((Js, np.array([lookahead_steering(robot, z, J, p_t - p, lo, up, eps_abs=opts.eps_abs) - z[3]])))
-        A = base.A(z[0:nb])
-        E = None
-        if opts.respect_constraint and A.size:
-            E = np.zeros((A.shape[1], nz))
-            E[:, 0:nb] = A.T
         try:
-            dz = solver.solve(levels, E, lo, up)
+            prob = step_problem(robot, z, p_t, opts, lookahead=lookahead)
+            dz = solver.solve(prob.levels, prob.lower, prob.upper, equality=prob.equality).x
         except SolverError as err:
             status, reason, it = IKStatus.SOLVER_ERROR, str(err), it - 1
             break
+        A = base.A(z[0:nb])
         dq_base = dz[0:nb]
         r_qp = float(np.max(np.abs(A.T @ dq_base))) if A.size else 0.0
         if opts.respect_constraint:
@@ -598,5 +527,6 @@ def base_kernel_check(robot: MobileManipulator, z) -> float:
 
 
 
-__all__ = ["IKStatus", "MobileIKOptions", "MobileIKResult", "MobileManipulator", "Scenario", "car_scenario", "make_options",
-           "lookahead_steering", "qprr_arm", "solve_ik", "three_r_arm"]
+__all__ = ["IKStatus", "MobileIKOptions", "MobileIKResult", "MobileManipulator", "Scenario", "StepProblem", "car_scenario",
+           "lookahead_solver", "lookahead_steering", "make_options", "qprr_arm", "solve_ik", "step_problem", "step_solver",
+           "three_r_arm"]
