@@ -303,11 +303,12 @@ PUSH_CONTROLLERS = ("layered-idc-ft", "layered-idc", "idc")
 SENSOR_FILTER = 50.0
 """Bandwidth [rad/s] of the first-order filter on the wrist-sensor reading (see :class:`LayeredIDC`)."""
 
-PUSH_STIFFNESS = 500.0  # TEMPORARY 500 for the port comparison; 300 below k*
-"""Contact stiffness [N/m] of the push scenarios.  Cancelling the contact force F through the thrust
-needs a pitch F / (m g); pitching about the CoM moves the end effector, h = 8.3 cm above it, into
-the object: a loop of gain k h / (m g), unstable above k* = m g / h = 417 N/m (the 500 N/m first
-chosen bounced, then opened, once the object stuck; docs/notes-spikes.md)."""
+PUSH_STIFFNESS = 300.0
+"""Contact stiffness [N/m] of the push scenarios (not a thesis value).  Cancelling the contact force F
+through the thrust needs a pitch F / (m g); pitching about the CoM moves the end effector, h = 8.3 cm
+above it, into the object: a loop of gain k h / (m g), unstable above k* = m g / h = 417 N/m.  The
+500 N/m first chosen (gain 1.2) bounced, then opened, once the object stuck; 300 N/m (gain 0.72)
+holds a steady force (docs/notes-spikes.md, tests/test_phase_switches.py)."""
 
 
 def _push_controller(name: str, platform, contact):
