@@ -11,7 +11,7 @@ problem and the methods, :mod:`qprr.ik.tasks` for the tasks (write your own), an
 
 from . import tasks
 from .balance import BalanceResult, balance_prismatic
-from .hierarchy import ELIMINATIONS, HierarchySolver, HierarchyStep
+from .hierarchy import HierarchySolver, HierarchyStep
 from .solver import (
     METHODS,
     OPTIONS,
@@ -30,7 +30,6 @@ from .solver import (
 
 __all__ = [
     "BalanceResult",
-    "ELIMINATIONS",
     "METHODS",
     "OPTIONS",
     "ClikaOptions",

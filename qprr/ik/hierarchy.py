@@ -6,11 +6,10 @@ Level k is the QP
     s.t.    J_j dv = J_j dv_j*   for every level j < k   (their optimum is kept)
             lower - q_arm <= dv_arm <= upper - q_arm     (joint limits, hard, every level)
 
-solved by :class:`qprr.optim.Lexicographic` (``"nullspace"``: the free directions of the earlier
-levels as unknowns, the default) or literally with the earlier levels as equality constraints
-(``"equality"``, a cross-check).  The minimisers of a least-squares objective over a convex set
-all share the same J_k dv, so both forms keep the earlier optimum exactly; a test checks they
-agree.
+solved by :class:`qprr.optim.Lexicographic` (the free directions of the earlier levels as unknowns:
+the earlier optima hold by construction).  The minimisers of a least-squares objective over a
+convex set all share the same J_k dv, so keeping J_j dv fixed keeps level j's optimum; a test checks
+every level's KKT conditions, equalities included, independently of the elimination.
 """
 
 from __future__ import annotations
@@ -19,26 +18,27 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from proxsuite import proxqp
 
-from ..errors import InputError, SolverError, UnknownNameError
-from ..optim import Lexicographic, QPSettings, polish_box_qp, right_singular
+from ..errors import InputError
+from ..optim import Lexicographic, QPSettings
 from ..platform import Platform
-
-ELIMINATIONS = ("nullspace", "equality")
-_SOLVED = proxqp.QPSolverOutput.PROXQP_SOLVED
-_MAX_ITER = proxqp.QPSolverOutput.PROXQP_MAX_ITER_REACHED
 
 
 @dataclass(frozen=True)
 class HierarchyStep:
     """One solve of the hierarchy: the step dv, the linearised levels (J_k, e_k), ProxQP iterations,
-    and ``dv_first``, the step of level 1 alone (its optimum closest to 0)."""
+    ``dv_levels[k]`` the optimum of levels 1..k (``dv_first`` = ``dv_levels[0]``, the step of level 1
+    alone), ``damping[k]`` the damping each level's QP added to the regularisation."""
 
     dv: np.ndarray
     linearized: list
     qp_iterations: int
-    dv_first: np.ndarray | None = None
+    dv_levels: tuple = ()
+    damping: tuple = ()
+
+    @property
+    def dv_first(self) -> np.ndarray | None:
+        return self.dv_levels[0] if self.dv_levels else None
 
     @property
     def residuals(self) -> tuple[float, ...]:
@@ -64,9 +64,7 @@ class HierarchySolver:
     """
 
     def __init__(self, platform: Platform, *, eps_abs: float = 1e-9, regularization: float = 1e-7, rank_tol: float = 1e-9,
-                 elimination: str = "nullspace", max_qp_iter: int = 1000, lower_damping: float = 1.0) -> None:
-        if elimination not in ELIMINATIONS:
-            raise UnknownNameError("elimination", elimination, ELIMINATIONS)
+                 max_qp_iter: int = 1000, lower_damping: float = 1.0) -> None:
         if not isinstance(max_qp_iter, int) or max_qp_iter < 1:
             raise InputError(f"max_qp_iter must be an integer >= 1, got {max_qp_iter!r}")
         # Each level is feasible by construction (the previous optimum satisfies all its
@@ -78,7 +76,6 @@ class HierarchySolver:
                                    default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6)
         self.platform = platform
         self.nv = platform.nv
-        self.elimination = elimination
         self.regularization = float(regularization)
         self.lower_damping = float(lower_damping)
         self.rank_tol = float(rank_tol)
@@ -115,52 +112,7 @@ class HierarchySolver:
         # Levenberg-Marquardt damping of the lower levels, proportional to their gradient
         # ||J_k^T e_k||: iterated full steps of an unsatisfiable lower level whose projection is
         # ill-conditioned would otherwise cycle between huge steps (measured on the 11-DOF
-        # hextilt_flying_arm_5); it fades as the task is met.  Both eliminations use it (the same QPs).
+        # hextilt_flying_arm_5); it fades as the task is met.
         damping = [0.0] + [self.lower_damping * float(np.linalg.norm(J.T @ e)) for J, e in lin[1:]]
-        if self.elimination == "nullspace":
-            res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
-            dv, iters, first = res.x, res.iterations, res.x_levels[0]
-        else:
-            dv, iters, first = self._solve_equality(lin, lo_arm, up_arm, damping)
-        return HierarchyStep(dv, lin, iters, first)
-
-    def _solve_equality(self, lin, lo_arm, up_arm, damping):
-        nv = self.nv
-        C = np.eye(nv)[self.iv]
-        stack = np.zeros((0, nv))
-        A = None  # orthonormal rows spanning the stacked earlier Jacobians
-        dv = np.zeros(nv)
-        iters = 0
-        first = None
-        for k, (J, e) in enumerate(lin):
-            if A is not None and A.shape[0] == nv:
-                break  # the earlier levels fix dv completely
-            reg = self.regularization + damping[k]
-            H = J.T @ J
-            H.flat[:: nv + 1] += reg
-            g = -J.T @ e - reg * dv  # damping of the increment dv - dv_{k-1}*, as in "nullspace"
-            # J_j dv = J_j dv_j* for all j < k  <=>  A dv = A dv_{k-1}*, with A the rank-revealing
-            # compression of the stack (redundant rows stall ProxQP).
-            b = None if A is None else A @ dv
-            n_eq = 0 if A is None else A.shape[0]
-            d_arm = dv[self.iv]  # keep the earlier optimum feasible despite ProxQP's eps_abs slack
-            qp = proxqp.dense.QP(nv, n_eq, C.shape[0])
-            self.settings.apply(qp)
-            qp.init(H, g, A, b, C, np.minimum(lo_arm, d_arm), np.maximum(up_arm, d_arm))
-            qp.solve()
-            info = qp.results.info
-            # exact on ProxQP's active set, as the "nullspace" levels; it also certifies (KKT checked
-            # exactly) an answer whose residuals met eps_abs while the duality gap would not close
-            # (MAX_ITER with 8 equality rows, primal and dual residuals ~1e-12: seen on a seeded target)
-            polished = polish_box_qp(H, g, C, np.minimum(lo_arm, d_arm), np.maximum(up_arm, d_arm), qp.results.x, A, b)
-            residuals_met = max(info.pri_res, info.dua_res) <= self.settings.eps_abs
-            if info.status != _SOLVED and not (info.status == _MAX_ITER and residuals_met and polished is not None):
-                raise SolverError(f"ProxQP did not solve level {k + 1} (n = {nv}, n_eq = {n_eq}): status {info.status.name}, "
-                                  f"primal residual {info.pri_res:.3g}, dual residual {info.dua_res:.3g}")
-            dv = qp.results.x.copy() if polished is None else polished
-            first = dv if first is None else first
-            iters += info.iter
-            stack = np.vstack([stack, J])
-            s, Vt = right_singular(stack)
-            A = Vt[: int(np.count_nonzero(s > self.rank_tol))]
-        return dv, iters, first
+        res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
+        return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping))

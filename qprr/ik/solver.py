@@ -124,8 +124,8 @@ class QPOptions(Tolerances):
     guess).  ``levels``: your own sequence of sequences of :class:`qprr.ik.tasks.Task` instead of
     :func:`default_levels`.  ``require_hover``: success needs roll = pitch = 0 (within
     ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when the pose is
-    reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``,
-    ``elimination``: of :class:`qprr.ik.hierarchy.HierarchySolver`."""
+    reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``: of
+    :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
     require_hover: bool | None = None
     posture: tuple | None = None
@@ -136,12 +136,9 @@ class QPOptions(Tolerances):
     eps_abs: float = 1e-9
     regularization: float = 1e-7
     rank_tol: float = 1e-9
-    elimination: str = "nullspace"
 
     def __post_init__(self):
         self._check_tolerances()
-        if self.elimination not in ("nullspace", "equality"):
-            raise UnknownNameError("elimination", self.elimination, ("nullspace", "equality"))
         _check_int("max_iter", self.max_iter)
         for name in ("step_tol", "max_step", "eps_abs", "rank_tol"):
             _check_pos(name, getattr(self, name))
@@ -548,8 +545,7 @@ class IKSolver:
         self._engine = None
         if method == "qp":
             o = self.options
-            self._engine = HierarchySolver(platform, eps_abs=o.eps_abs, regularization=o.regularization, rank_tol=o.rank_tol,
-                                           elimination=o.elimination)
+            self._engine = HierarchySolver(platform, eps_abs=o.eps_abs, regularization=o.regularization, rank_tol=o.rank_tol)
 
     def _guess(self, data, p_d, R_d, hover: bool):
         if self.initial_guess is not None:
