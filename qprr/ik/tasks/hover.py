@@ -34,15 +34,15 @@ class HoverTask(Task):
         J_w[:, 4] = R[:, 0]
         w_xy, wz = R[0:2, 2], R[2, 2]
         s = math.hypot(w_xy[0], w_xy[1])
-        if s > 1e-4:
+        if s > 1e-4 or (wz < 0.0 and s > 1e-6):
             a = math.atan2(s, wz)
             g = a / s
             c = (wz * s - a) / s**3  # d(a/s)/ds / s
-        elif wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3
+        elif wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3 - s^2/5
             g, c = 1.0 + s * s / 6.0, -2.0 / 3.0 - 0.2 * s * s
-        else:  # within 1e-4 rad of upside down: the tilt direction is undefined; tilt about body x (|e| = pi)
+        else:  # within 1e-6 rad of upside down the tilt direction is undefined: tilt about body x, |e| = the angle
             u = R[0:2, 1] / max(math.hypot(R[0, 1], R[1, 1]), 1e-300)
-            return J_w[0:2], -math.pi * u
+            return J_w[0:2], -math.atan2(s, wz) * u
         # e = g(s, wz) w_xy: de = g dw_xy + w_xy (c s ds - dwz) with s ds = w_xy . dw_xy (dg/dwz = -1 on |w| = 1)
         J = g * J_w[0:2] + np.outer(w_xy, c * (w_xy @ J_w[0:2]) - J_w[2])
         return J, -g * w_xy
