@@ -207,6 +207,8 @@ def simulate(
     state = State(n_arm)
     state.update(0.0, q, v)
     ref = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
+    if getattr(controller, "uses_preview", False):  # a planning controller sees the trajectory ahead
+        controller.set_preview(trajectory)
     controller.reset(state, ref, period)
     tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
     plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist)
