@@ -196,9 +196,9 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     """
     if not isinstance(desc, Mapping):
         raise InputError(f"a rotor description must be a mapping, got {type(desc).__name__}")
-    unknown = set(desc) - {"defaults", "rotor"}
+    unknown = set(desc) - {"defaults", "rotor", "motor"}  # "motor": the actuator stage's data (qprr.sim.actuators)
     if unknown:
-        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("defaults", "rotor"))
+        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("defaults", "rotor", "motor"))
     defaults = dict(desc.get("defaults", {}))
     bad = set(defaults) - _DEFAULT_KEYS
     if bad:

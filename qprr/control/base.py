@@ -71,6 +71,11 @@ class Controller(ABC):
         """Called once before the run with the initial state and the control period ``dt`` [s]."""
         self.dt = dt
 
+    def report(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+        """(metrics, series) the controller measured about itself during the run, copied into the
+        :class:`~qprr.sim.SimResult` by the simulator (e.g. an MPC's solve times); default none."""
+        return {}, {}
+
     @abstractmethod
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """Desired generalised force (6 + n_arm,): u in thesis coordinates (or tau if ``output == "pinocchio"``)."""

@@ -681,6 +681,18 @@ class MPCController(Controller):
                         gap=np.array(L["gap"]), thrust_margin=np.array(L["thrust_margin"]), fallback=tuple(L["fallback"]),
                         u=np.array(L["u"]).reshape(-1, self.nu))
 
+    def report(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+        """Metrics ``mpc_*`` of :meth:`MPCStats.summary` (times in s, margins in N, counts) and the per-solve series
+        ``mpc_t``, ``mpc_solve_time``, ``mpc_solve_cpu``, ``mpc_iterations``, ``mpc_thrust_margin`` (copied into the result)."""
+        st = self.stats()
+        metrics = {f"mpc_{k}": v for k, v in st.summary().items()}
+        metrics["mpc_min_plan_thrust_margin_N"] = metrics.pop("mpc_min_thrust_margin_N")
+        metrics["mpc_max_plan_bound_violation_N"] = float(self.max_bound_violation)
+        metrics["mpc_fallbacks"] = float(self.fallback_count)
+        series = {"mpc_t": st.t, "mpc_solve_time": st.solve_time, "mpc_solve_cpu": st.solve_cpu,
+                  "mpc_iterations": st.iterations.astype(float), "mpc_thrust_margin": st.thrust_margin}
+        return metrics, series
+
     def _write_tilt(self, ref: Reference) -> None:
         """Write the feedforward tilt (6.17) of the current reference acceleration into ``ref`` (the logged reference)."""
         a = ref.xi_ddot

@@ -36,3 +36,21 @@ def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_ph
     phases = (Phase("z", 0.0, 5.0, z), Phase("x", 5.0, 10.0, x), Phase("y", 10.0, 15.0, y),
               Phase("theta2", *arm_phase, float(theta2_d)))
     return MultiPhase(phases, name="dynamic-mission", law=law, names=NAMES)
+
+
+def aggressive_reach(climb: float = 2.0, forward: float = 0.6, *, start: float = 0.5, duration: float = 1.0,
+                     arm=(0.03, 0.6, -0.3), z0: float = 2.0, law: str = "quintic") -> MultiPhase:
+    """Not in the thesis: a fast reach of the Q-PRR that asks the rotors for more than they have (rotor-bound tests).
+
+    From hover at z = ``z0`` [m] with the arm straight, during [start, start + duration] [s]
+    the base climbs ``climb`` [m] and moves ``forward`` [m] along x while the arm goes to
+    ``arm`` = (r0 [m], theta2, theta3 [rad]), all with the same transition law (6.16).  With the
+    quintic the peak vertical acceleration is 5.77 climb / duration^2: the default 2 m in 1 s
+    asks for 11.5 m/s^2 up, then down (more than g: not feasible with thrust >= 0, and the
+    Q-PRR's 20 N rotors are near their top during the acceleration).
+    """
+    r0, t2, t3 = as_vector(arm, 3, "arm")
+    t1, t2_ = start, start + duration
+    phases = (Phase("z", t1, t2_, z0 + climb), Phase("x", t1, t2_, forward), Phase("r0", t1, t2_, float(r0)),
+              Phase("theta2", t1, t2_, float(t2)), Phase("theta3", t1, t2_, float(t3)))
+    return MultiPhase(phases, xi0=(0.0, 0.0, z0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), name="aggressive-reach", law=law, names=NAMES)
