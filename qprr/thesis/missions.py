@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 from ..charts import as_vector
-from ..trajectory import DEFAULT_LAW, MultiPhase, Phase
+from ..errors import InputError, UnknownNameError
+from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
+
+PATHS = ("xy", "line")
+"""Horizontal paths of the missions: x then y (Fig. 6.13), or the line y = a x + b (Sec. 6.3.1.2)."""
 
 NAMES = ("x", "y", "z", "phi", "theta", "psi", "r0", "theta2", "theta3")
 """The Q-PRR's thesis coordinates (its arm joints' names)."""
@@ -13,14 +17,23 @@ STATIC_TARGET = (3.0, 6.0, 10.0, 0.0, 0.04, 0.2, 0.6)
 
 
 def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10.0), y_phase=(10.0, 15.0),
-                   arm_phase=(15.0, 25.0), law: str = DEFAULT_LAW) -> MultiPhase:
+                   arm_phase=(15.0, 25.0), law: str = DEFAULT_LAW, path: str = "xy") -> MultiPhase:
     """The mission of Thesis Sec. 6.3.1.4 / 6.3.3.3: climb in z 0-5 s, x 5-10 s, y 10-15 s, arm 15-25 s.
 
     ``target`` = [x, y, z, psi, r0, theta2, theta3] (default [3, 6, 10, 0, 0.04, 0.2, 0.6]).
-    The arm starts straight (r0 = theta2 = theta3 = 0); yaw is held at ``psi``.
+    The arm starts straight (r0 = theta2 = theta3 = 0); yaw is held at ``psi``.  ``path``: "xy" (x then y, the
+    half rectangle of Fig. 6.13) or "line" (the option y = a x + b of Sec. 6.3.1.2: x and y together from the start
+    of ``x_phase`` to the end of ``y_phase``, a = y / x, b = 0; :func:`qprr.trajectory.line_phases`).
     """
     x, y, z, psi, r0, t2, t3 = as_vector(target, 7, "target")
-    phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
+    if path == "xy":
+        phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
+    elif path == "line":
+        if x == 0.0:
+            raise InputError("path='line' needs a target x != 0 (y = a x + b with a = y / x)")
+        phases = [Phase("z", *z_phase, z), *line_phases(y / x, 0.0, 0.0, x, x_phase[0], y_phase[1])]
+    else:
+        raise UnknownNameError("path", path, PATHS)
     phases += [Phase(c, *arm_phase, val) for c, val in (("r0", r0), ("theta2", t2), ("theta3", t3)) if val != 0.0]
     xi0 = (0.0, 0.0, 0.0, 0.0, 0.0, psi, 0.0, 0.0, 0.0)
     return MultiPhase(tuple(phases), xi0, name="static-mission", law=law, names=NAMES)
