@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .coordinates import as_vector, rot_y, rot_z
-from .errors import InputError
-from .mdh import MDHRow, kk_transform
+from ..charts import as_vector, rot_y, rot_z
+from ..errors import InputError
+from ..mdh import MDHRow, kk_transform
 from .params import QPRRParams
 
 E3 = np.array([0.0, 0.0, 1.0])
