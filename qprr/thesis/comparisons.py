@@ -387,16 +387,17 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
     if plot_dir is not None:
         fig = new_figure((8, 4.5))
         ax = fig.subplots()
+        styles = (("o", "-"), ("s", "--"), ("^", "-."), ("D", ":"))
         for k, c in enumerate(ctrls):
             Ts = [1e3 * T for T, s, _ in table[c] if s == "ok"]
             vs = [v for _, s, v in table[c] if s == "ok"]
-            ax.plot(Ts, vs, "o-", color=f"C{k}", label=c)
+            ax.plot(Ts, vs, marker=styles[k][0], ls=styles[k][1], color=f"C{k}", label=c, ms=5 + 2 * (len(ctrls) - k))
             bad = [1e3 * T for T, s, _ in table[c] if s != "ok"]
-            if bad:
-                ax.plot(bad, [1.0] * len(bad), "x", color=f"C{k}", ms=10)
+            if bad:  # diverged: a cross above the plot, one row per controller
+                ax.plot(bad, [2.0 * 1.6**k] * len(bad), "x", color=f"C{k}", ms=10, mew=2)
         ax.set_yscale("log")
         ax.set_xlabel("motor time constant T [ms]")
-        ax.set_ylabel("max position RMSE [m] (x at 1 m: diverged)")
+        ax.set_ylabel("max position RMSE [m] (crosses above 1 m: diverged)")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         ax.set_title("static mission with a first-order motor lag", fontsize=10)
