@@ -80,6 +80,16 @@ def test_start_at_the_command_is_steady():
     np.testing.assert_allclose(res.series["rotor_speed"], np.sqrt(8.0 / B), rtol=1e-14)
 
 
+def test_start_hovering_holds_the_initial_configuration():
+    """initial="hover": the rotors start at the speeds whose thrusts b w^2 carry the weight (CoG on the thrust axis: m g / 4
+    each), whatever the controller's first command."""
+    act = rotor_dynamics("q-prr", initial="hover")
+    res = simulate(PLATFORM, _Thrusts(PLATFORM, np.zeros(4)), Hold(), 0.003, actuators=act, joint_stops=False,
+                   xi0=np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0])
+    np.testing.assert_allclose(res.f[0], PLATFORM.total_mass * PLATFORM.g / 4, rtol=1e-12)
+    assert res.series["rotor_speed"][1, 0] < res.series["rotor_speed"][0, 0]  # then they spin down to the zero command
+
+
 def test_validation():
     with pytest.raises(InputError, match="time_constant"):
         RotorDynamics((B,) * 4, 0.0, 0.0, 800.0)

@@ -13,7 +13,8 @@ The rotor speeds are extra states of the plant, integrated with the robot's (q, 
 integrator (like an :class:`~qprr.sim.environment.Environment` state), so the integrators keep
 their orders (tests/test_actuators.py measures them with the stage on).  The applied base wrench
 Omega f(w) then varies inside a control period.  A run starts with the rotors at the speeds of
-the first command (``initial="command"``, steady state) or at given speeds.
+the first command (``initial="command"``), at the hover speeds of the initial configuration
+(``initial="hover"``: a vehicle already flying) or at given speeds.
 
 Where the numbers come from: the rotor descriptions of the named platforms carry a ``[motor]``
 table (``qprr/data/*.rotors.toml``: borinot's upstream Gazebo model gives b = 4.511e-6 N s^2,
@@ -52,7 +53,8 @@ class RotorDynamics:
     thrust_factor : b_i [N s^2] (> 0): f_i = b_i w_i^2.
     time_constant : T_i [s] (> 0) of dw/dt = (w_c - w) / T.
     w_min, w_max : speed limits [rad/s], 0 <= w_min < w_max (finite).
-    initial : "command" (the rotors start at the first commanded speeds) or the initial speeds (n,) [rad/s].
+    initial : "command" (the rotors start at the first commanded speeds), "hover" (at the speeds whose thrusts hold the
+        initial configuration still: the allocation of its generalised gravity) or the initial speeds (n,) [rad/s].
     """
 
     thrust_factor: tuple[float, ...]
@@ -79,8 +81,8 @@ class RotorDynamics:
         for name, a in fields.items():
             object.__setattr__(self, name, tuple(float(x) for x in a))
         if isinstance(self.initial, str):
-            if self.initial != "command":
-                raise InputError(f"initial must be 'command' or the initial rotor speeds, got {self.initial!r}")
+            if self.initial not in ("command", "hover"):
+                raise InputError(f"initial must be 'command', 'hover' or the initial rotor speeds, got {self.initial!r}")
         else:
             w0 = _per_rotor(self.initial, n, "initial")
             if np.any(w0 < np.array(self.w_min)) or np.any(w0 > np.array(self.w_max)):
@@ -148,19 +150,23 @@ class _BoundRotors:
 
     def command(self, f_command: np.ndarray) -> np.ndarray:
         """Hold the speed command of the allocated thrusts (a control tick); returns it."""
-        np.clip(np.sqrt(np.maximum(f_command, 0.0) / self.b), self.w_min, self.w_max, out=self.w_cmd)
+        self.w_cmd[:] = self.speeds_of(f_command)
         return self.w_cmd
 
     def thrust(self, w: np.ndarray) -> np.ndarray:
         return self.b * w * w
 
+    def speeds_of(self, f: np.ndarray) -> np.ndarray:
+        """Speeds [rad/s] that produce the thrusts ``f`` (saturated to the speed limits)."""
+        return np.clip(np.sqrt(np.maximum(np.asarray(f, dtype=float), 0.0) / self.b), self.w_min, self.w_max)
+
     def rate(self, w: np.ndarray) -> np.ndarray:
         """dw/dt = (w_c - w) / T."""
         return (self.w_cmd - w) * self.inv_T
 
-    def initial(self) -> np.ndarray | None:
-        """Initial speeds, or None for "start at the first command"."""
-        return None if isinstance(self.spec.initial, str) else np.array(self.spec.initial)
+    def initial(self) -> np.ndarray | str:
+        """Initial speeds (n,), or the rule "command" / "hover" the simulator applies at the first tick."""
+        return self.spec.initial if isinstance(self.spec.initial, str) else np.array(self.spec.initial)
 
 
 MOTOR_KEYS = ("thrust_factor", "time_constant", "w_min", "w_max")

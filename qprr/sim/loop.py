@@ -282,7 +282,12 @@ def simulate(
                 fc_log[k] = fc
                 w_c = rotors.command(fc)
                 if k == 0:
-                    z = np.concatenate([z[:n_env], w_c if w_start is None else w_start])
+                    if isinstance(w_start, str):  # "command": at the first command; "hover": thrusts that hold q0 still
+                        w0 = w_c.copy() if w_start == "command" else rotors.speeds_of(
+                            alloc.allocate(pin.computeGeneralizedGravity(model, data, q)).f[0:nr])
+                    else:
+                        w0 = w_start
+                    z = np.concatenate([z[:n_env], w0])
                 w = z[n_env:]
                 w_log[k] = w
                 f_log[k, 0:nr] = rotors.thrust(w)

@@ -88,7 +88,7 @@ def realistic(platform: Platform | None = None, *, motors: bool = True, drag: bo
         parts.append(AerodynamicDrag(DRAG_LINEAR, DRAG_QUADRATIC, DRAG_ANGULAR, wind(mean_wind, w20, gust)))
     if friction:
         parts.append(ViscousFriction((0.0,) * 6 + FRICTION_ARM))
-    act = rotor_dynamics(platform, time_constant=time_constant) if motors else None
+    act = rotor_dynamics(platform, time_constant=time_constant, initial="hover") if motors else None
     return Realistic(act, Disturbances(tuple(parts)) if parts else None)
 
 
