@@ -117,10 +117,10 @@ class Allocator:
         if not np.all(np.isfinite(f_max)):
             raise InputError(f"platform {platform.name!r} has rotors without a finite f_max: allocation needs thrust bounds")
         Omega = np.array(platform.rotor_matrix)
-        point, axis = platform.thrust_axis
-        radial = [np.linalg.norm(np.cross(np.array(r.position_body) - point, axis)) for r in platform.rotors]
-        l_mean = float(np.mean(radial))
-        if weight_torque is None:
+        if weight_torque is None:  # (only then is the thrust axis needed: a rotor set may have none, e.g. opposed thrusters)
+            point, axis = platform.thrust_axis
+            radial = [np.linalg.norm(np.cross(np.array(r.position_body) - point, axis)) for r in platform.rotors]
+            l_mean = float(np.mean(radial))
             weight_torque = 10.0 / l_mean if l_mean > 0 else 10.0
         if not (weight_force > 0 and weight_torque > 0):
             raise InputError(f"allocation weights must be > 0, got {(weight_force, weight_torque)!r}")
@@ -281,3 +281,52 @@ class Allocator:
         if np.any(f < self.f_min - 1e-12) or np.any(f > self.f_max + 1e-12):
             raise InputError(f"platform {p.name!r} cannot hover at this configuration within its thrust bounds: f = {f.tolist()} N")
         return f
+
+
+class IdealAllocator(Allocator):
+    """Exact allocation on :func:`qprr.rotors.ideal_wrench_set` (an idealised, fully actuated vehicle): every desired
+    base wrench is applied as is, within the set's bounds.
+
+    Per axis the force w_f goes to its +e or -e thruster (f = max(+-w_f, 0)) and the couple w_m to the two
+    thrusters of its sign (f = max(+-w_m, 0) / 2 each), so N f = tau_d exactly; beyond a thruster's bound the
+    thrust is clipped (flag 1).  For the thesis's point-to-point test (Sec. 6.3.1.1), which drives the model
+    with u directly.
+    """
+
+    def __init__(self, platform: Platform, *, clip_arm: bool = True) -> None:
+        from .rotors import rotor_matrix
+
+        ideal = ideal_pattern()
+        if platform.n_rotors != 18 or not np.allclose(platform.rotor_matrix, rotor_matrix(ideal), rtol=0, atol=1e-15):
+            raise InputError(f"IdealAllocator needs a platform with qprr.rotors.ideal_wrench_set rotors, got {platform!r}")
+        super().__init__(platform, weight_torque=1.0, clip_arm=clip_arm)
+
+    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+        f = np.zeros(18)
+        for k in range(3):
+            wf, wm = float(tau_d[k]), float(tau_d[3 + k])
+            f[6 * k + (0 if wf >= 0.0 else 1)] = abs(wf)
+            j = 6 * k + (2 if wm >= 0.0 else 4)
+            f[j] = f[j + 1] = 0.5 * abs(wm)
+        flags = 0
+        if np.any(f > self.f_max):
+            f = np.minimum(f, self.f_max)
+            flags = 1
+        arm = tau_d[6:].copy()
+        if self.clip_arm and np.any(np.abs(arm) > self.effort_limits):
+            arm = np.clip(arm, -self.effort_limits, self.effort_limits)
+            flags |= 2
+        f_out[:18] = f
+        f_out[18:] = arm
+        if tau_out is not None:
+            tau_out[0:6] = self.Omega @ f
+            tau_out[6:] = arm
+        return flags
+
+
+def ideal_pattern():
+    """The rotor pattern :class:`IdealAllocator` expects (unit bounds; only the columns are compared)."""
+    from .rotors import ideal_wrench_set
+
+    return ideal_wrench_set(1.0, 1.0)
+

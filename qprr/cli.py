@@ -194,17 +194,28 @@ def _summary(res) -> str:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from .thesis.scenarios import compare
+    from .thesis.comparisons import COMPARISONS, run_comparisons
 
     if not 0 < args.duration < float("inf"):
         return fail("qprr compare", f"--duration must be a finite number > 0 s, got {args.duration!r}")
+    names = args.names or ["table"]
+    bad = [n for n in names if n not in COMPARISONS and n != "all"]
+    if bad:
+        return fail("qprr compare", f"unknown comparison {bad[0]!r}; valid: {', '.join(COMPARISONS)}, all")
+    if args.plot is not None and not Path(args.plot).is_dir():
+        return fail("qprr compare", f"--plot {args.plot!r}: folder does not exist")
     t0 = time.perf_counter()
-    cmp = compare(duration=args.duration, progress=not args.quiet and sys.stderr.isatty())
-    print("RMSE (6.26) on the static-manipulator mission (Sec. 6.3.1.4), ours vs Thesis Table 6.3;")
-    print("thesis columns: IDC, MPC (= our dsid), MFC; times: our wall time vs the thesis's T_x")
-    print(cmp.table())
+    ok = True
+    duration = None if args.duration == 30.0 else args.duration
+    for rep in run_comparisons(names, duration=duration, plot_dir=args.plot, progress=not args.quiet and sys.stderr.isatty()):
+        print(f"== {rep.name}")
+        for line in rep.lines:
+            print(line)
+        for fig in rep.figures:
+            print(f"figure {fig}")
+        ok &= rep.ok
     print(f"total {time.perf_counter() - t0:.2f} s")
-    return 0 if all(s == "ok" for s in cmp.status.values()) else 1
+    return 0 if ok else 1
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -273,8 +284,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
 
-    p = sub.add_parser("compare", help="IDC vs desired-state ID (thesis: MPC) vs MFC: RMSE table shaped like Table 6.3")
-    p.add_argument("--duration", type=float, default=30.0, help="seconds (default 30)")
+    p = sub.add_parser("compare", help="the Chapter 6 comparisons: Table 6.3 (default), overlays, noise, sweeps, decoupled, mpc, ...",
+                       description="Print (and with --plot draw) the Chapter 6 comparisons: table (Table 6.3, default), overlay "
+                       "(Figs. 6.19-6.21), noise (Fig. 6.23), sweeps (Figs. 6.42-6.45), decoupled (coupled vs decoupled, "
+                       "Sec. 6.2.2), mpc (receding-horizon MPC vs IDC), realistic (motor lag, wind, friction), lag (motor time "
+                       "constants), or all.")
+    p.add_argument("names", nargs="*", metavar="NAME", help="comparisons to run (default: table)")
+    p.add_argument("--plot", default=None, metavar="DIR", help="save the figures into this existing folder")
+    p.add_argument("--duration", type=float, default=30.0, help="mission seconds (default 30)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 

@@ -72,6 +72,26 @@ def load(name: str = "q-prr", **kwargs) -> Platform:
     return from_urdf(urdf, rotors, ee_frame=ee, g=kwargs.get("g", 9.81), name=name, provenance=prov)
 
 
+def rotor_dynamics(name: str = "q-prr", **overrides):
+    """The actuator stage (:class:`qprr.sim.actuators.RotorDynamics`) of the platform called ``name``.
+
+    ``q-prr``: :func:`qprr.thesis.realistic.rotor_dynamics` (b of the thesis parameters, a chosen
+    time constant); the others: the ``[motor]`` table of their rotor description, where it exists
+    (borinot_flying_arm_2; hextilt_flying_arm_5 has none: pass ``thrust_factor`` and ``time_constant``).
+    ``overrides``: thrust_factor, time_constant, w_min, w_max, initial.
+    """
+    from .sim.actuators import rotor_dynamics_from_mapping
+
+    if name == "q-prr":
+        from .thesis.realistic import rotor_dynamics as thesis_rotor_dynamics
+
+        return thesis_rotor_dynamics(**overrides)
+    if name not in _EXAMPLE_ROBOTS:
+        raise UnknownNameError("platform", name, NAMES)
+    desc = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
+    return rotor_dynamics_from_mapping(desc, load(name).rotors, **overrides)
+
+
 def multirotor_model(name: str = "hector") -> pin.Model:
     """A free-flyer Pinocchio model of an example-robot-data multirotor without arm (``"hector"`` or ``"iris"``)."""
     if name not in _BARE_MULTIROTORS:

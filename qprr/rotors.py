@@ -155,6 +155,29 @@ def quadrotor(arm_length: float, layout: str = "plus", **kwargs) -> tuple[Rotor,
     return ring(4, arm_length, start_angle=starts[layout], **kwargs)
 
 
+def ideal_wrench_set(force_max: float, torque_max: float, *, name: str = "ideal") -> tuple[Rotor, ...]:
+    """Eighteen virtual thrusters at B that produce any base wrench with |F_e| <= ``force_max`` [N] and |M_e| <=
+    ``torque_max`` [N m] on each axis e: an idealised, fully actuated vehicle (the thesis's point-to-point test
+    applies u as is, Sec. 6.3.1.1; :class:`qprr.actuation.IdealAllocator` allocates it exactly).
+
+    Per axis e, in this order: a force pair along +e and -e (kappa = 0; columns [e; 0], [-e; 0]); a positive
+    couple, thrusters along +e (spin +1) and -e (spin -1) with kappa = 1 m (columns [e; e], [-e; e]: equal thrusts
+    f give the couple 2 f e); a negative couple, along +e (spin -1) and -e (spin +1) (columns [e; -e], [-e; -e]).
+    """
+    if not (math.isfinite(force_max) and force_max > 0 and math.isfinite(torque_max) and torque_max > 0):
+        raise InputError(f"force_max and torque_max must be finite and > 0, got {force_max!r}, {torque_max!r}")
+    out = []
+    o = (0.0, 0.0, 0.0)
+    for k, e in enumerate(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))):
+        ax = "xyz"[k]
+        neg = tuple(-c for c in e)
+        half = 0.5 * torque_max
+        out += [Rotor(o, e, 1, 0.0, 0.0, force_max, f"{name}_f{ax}+"), Rotor(o, neg, 1, 0.0, 0.0, force_max, f"{name}_f{ax}-"),
+                Rotor(o, e, 1, 1.0, 0.0, half, f"{name}_m{ax}+a"), Rotor(o, neg, -1, 1.0, 0.0, half, f"{name}_m{ax}+b"),
+                Rotor(o, e, -1, 1.0, 0.0, half, f"{name}_m{ax}-a"), Rotor(o, neg, 1, 1.0, 0.0, half, f"{name}_m{ax}-b")]
+    return tuple(out)
+
+
 LAYOUTS = ("plus", "x")
 """Ring layouts of :func:`layout_rotors`: rotor 1 on an axis of B ("plus") or between two ("x")."""
 
@@ -196,9 +219,9 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     """
     if not isinstance(desc, Mapping):
         raise InputError(f"a rotor description must be a mapping, got {type(desc).__name__}")
-    unknown = set(desc) - {"defaults", "rotor"}
+    unknown = set(desc) - {"defaults", "rotor", "motor"}  # "motor": the actuator stage's data (qprr.sim.actuators)
     if unknown:
-        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("defaults", "rotor"))
+        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("defaults", "rotor", "motor"))
     defaults = dict(desc.get("defaults", {}))
     bad = set(defaults) - _DEFAULT_KEYS
     if bad:

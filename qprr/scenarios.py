@@ -102,17 +102,19 @@ def _hover_reach(platform, controller, progress, duration, dt, integrator, seed,
 
 GENERIC = (
     Scenario("hover-reach", "any platform: climb to z, then move every arm joint towards its upper limit", _hover_reach,
-             ("idc", "dsid", "mfc"),
+             ("idc", "dsid", "mfc", "decoupled", "mpc"),
              {**_COMMON, "z": Option(2.0, "hover height [m]"),
               "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits")}),
 )
 
 
 def _registry() -> dict[str, Scenario]:
+    from .thesis.control_scenarios import SCENARIOS as CONTROL
     from .thesis.scenarios import SCENARIOS as THESIS
 
     out = {s.name: s for s in GENERIC}
     out.update({s.name: s for s in THESIS})
+    out.update({s.name: s for s in CONTROL})  # point-to-point, Annex A, aggressive reach, realistic (issue 13)
     return out
 
 

@@ -1,7 +1,8 @@
 """Reference trajectories in thesis coordinates xi = [x, y, z, phi, theta, psi, q_arm] (any platform).
 
 * :func:`transition` is the law of Thesis (6.16) with its first four time derivatives.
-* :class:`MultiPhase` chains such transitions per coordinate (the missions of Thesis
+* :class:`MultiPhase` chains such transitions per coordinate (:func:`line_phases`: the path
+  option y = a x + b of Sec. 6.3.1.2; the missions of Thesis
   Sec. 6.3.1.4 and 6.3.3.3 are built in :mod:`qprr.thesis.missions`); :func:`hover_and_reach`
   is a mission for any platform.
 * :class:`Spiral` is the spiral of Thesis (6.25) after a vertical climb; :class:`Hold` a constant.
@@ -224,6 +225,22 @@ class MultiPhase:
     def final(self) -> np.ndarray:
         """xi at the end of the last phase."""
         return self.sample([max(p.t2 for p in self.phases)]).xi[0]
+
+
+def line_phases(a: float, b: float, x_start: float, x_end: float, t1: float, t2: float, coordinates=("x", "y")) -> tuple[Phase, Phase]:
+    """The path option y = a x + b of Thesis Sec. 6.3.1.2 (the "(6.16)" phases): x and y move together on a line.
+
+    Two :class:`Phase` objects, x from ``x_start`` to ``x_end`` and y from a x_start + b to a x_end + b, over the
+    same [t1, t2] with the same law: since both follow start + (end - start) s(t), y(t) = a x(t) + b at every t
+    (the horizontal path is the straight segment, instead of the x-then-y "half rectangle" of Fig. 6.13).  The
+    trajectory's initial y must be a x_start + b (:class:`MultiPhase` starts y there when ``xi0`` says so).
+    ``coordinates``: the names (or indices) of the two coordinates (default x, y).
+    """
+    for name, v in (("a", a), ("b", b), ("x_start", x_start), ("x_end", x_end)):
+        if not (isinstance(v, (int, float)) and np.isfinite(v)):
+            raise InputError(f"{name} must be a finite number, got {v!r}")
+    cx, cy = coordinates
+    return Phase(cx, t1, t2, float(x_end)), Phase(cy, t1, t2, float(a * x_end + b))
 
 
 def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0, 3.0), reach=(3.0, 6.0), psi: float = 0.0,

@@ -14,17 +14,26 @@ name             controller                                              thesis
 ``layered-idc``  :class:`LayeredIDC`                                     Sec. 6.4.2, (6.53)-(6.57), (6.76)
 ``payload-idc``  :class:`PayloadIDC` (estimated payload mass)            (6.53)-(6.57)
 ``impedance``    :class:`ImpedanceController`                            Sec. 6.4.3.3, (6.71)-(6.81)
+``decoupled``    :class:`DecoupledController` (multirotor + fixed-base   Sec. 6.2.2, Fig. 6.2, (5.53)
+                 arm controllers, coupling as a disturbance)
+``mpc``          :class:`qprr.control.mpc.MPCController` (receding        not in the thesis (its "MPC" is
+                 horizon, thrust bounds; needs crocoddyl)                ``dsid``)
 ===============  ======================================================  ================================
 
 The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
-:mod:`qprr.thesis.bsg`; a receding-horizon MPC on crocoddyl in :mod:`qprr.control.mpc` (extra ``mpc``).
+:mod:`qprr.thesis.bsg`.  ``mpc`` is registered only when crocoddyl can be imported (the
+``mpc`` extra, docs/mpc.md); otherwise :func:`make_controller` raises
+:class:`~qprr.errors.MissingDependencyError` with the install command.
 """
 
 from __future__ import annotations
 
-from ..errors import UnknownNameError
+from importlib.util import find_spec
+
+from ..errors import MissingDependencyError, UnknownNameError
 from ..platform import Platform
 from .base import Controller, Reference
+from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
@@ -43,13 +52,37 @@ CONTROLLERS = {
     "layered-idc": LayeredIDC,
     "payload-idc": PayloadIDC,
     "impedance": ImpedanceController,
+    "decoupled": DecoupledController,
 }
-"""Controller classes by name."""
+"""Controller classes (or factories) by name: ``CONTROLLERS[name](platform, **kwargs)``."""
+
+MPC_INSTALL = "pip install --no-deps crocoddyl==3.2.1 libcrocoddyl==3.2.1"
+"""Install command of the ``mpc`` extra that keeps example-robot-data and pin (docs/mpc.md)."""
+
+OPTIONAL = {"mpc": ("crocoddyl", "the receding-horizon MPC (controller 'mpc')", MPC_INSTALL)}
+"""Controllers that need an optional dependency: name -> (package, purpose, install command)."""
+
+
+def _mpc(platform: Platform, **kwargs) -> Controller:
+    """:class:`qprr.control.mpc.MPCController` (imported on first use: crocoddyl takes ~0.8 s to import)."""
+    from .mpc import MPCController
+
+    return MPCController(platform, **kwargs)
+
+
+if find_spec("crocoddyl") is not None:  # registered only when the optional dependency is installed
+    CONTROLLERS["mpc"] = _mpc
 
 
 def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
-    """A new controller by name (see :data:`CONTROLLERS`); keyword arguments go to its constructor."""
+    """A new controller by name (see :data:`CONTROLLERS`); keyword arguments go to its constructor.
+
+    An optional controller whose dependency is missing raises :class:`~qprr.errors.MissingDependencyError`
+    with the install command.
+    """
     if name not in CONTROLLERS:
+        if name in OPTIONAL:
+            raise MissingDependencyError(*OPTIONAL[name])
         raise UnknownNameError("controller", name, tuple(CONTROLLERS))
     return CONTROLLERS[name](platform, **kwargs)
 
@@ -58,6 +91,7 @@ __all__ = [
     "CONTROLLERS",
     "CommandFilter",
     "Controller",
+    "DecoupledController",
     "DesiredStateInverseDynamics",
     "IDCGains",
     "ImpedanceController",
@@ -73,6 +107,7 @@ __all__ = [
     "TiltReference",
     "analytic_wrench",
     "ipid",
+    "lock_arm",
     "make_controller",
     "tilt_6_17",
 ]

@@ -58,9 +58,23 @@ class Controller(ABC):
     tau = S^-T u at the measured state (a controller that computes tau anyway saves two
     coordinate changes per step; the simulator still logs u)."""
 
+    uses_preview: bool = False
+    """Set True to be handed the run's whole reference trajectory before it starts (:meth:`set_preview`):
+    a controller that plans over a horizon (e.g. :mod:`qprr.control.mpc`).  Others see only ``ref``."""
+
+    def set_preview(self, trajectory) -> None:
+        """Called by the simulator before :meth:`reset` when ``uses_preview`` is True, with the trajectory
+        (an object with ``sample(t)``, thesis coordinates) the run follows (default: keep it as ``self.trajectory``)."""
+        self.trajectory = trajectory
+
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         """Called once before the run with the initial state and the control period ``dt`` [s]."""
         self.dt = dt
+
+    def report(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
+        """(metrics, series) the controller measured about itself during the run, copied into the
+        :class:`~qprr.sim.SimResult` by the simulator (e.g. an MPC's solve times); default none."""
+        return {}, {}
 
     @abstractmethod
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:

@@ -11,9 +11,12 @@ module                           what
 :mod:`qprr.sim.contact`          pushed object, compliant wall, prescribed wrench
 :mod:`qprr.sim.payload`          payload changes during a run
 :mod:`qprr.sim.stops`            mechanical stops of the arm joints
+:mod:`qprr.sim.actuators`        motor lag, speed limits, thrust b w^2 (the optional actuator stage)
+:mod:`qprr.sim.wind`             wind (mean, gusts, Dryden), drag D and friction F_v of (5.36)
 ===============================  ==================================================================
 """
 
+from .actuators import RotorDynamics
 from .contact import CompliantWall, ContactHistory, PrescribedWrench, PushedMass
 from .disturbances import BaseDrag, Disturbance, Disturbances, Pulse, StateDisturbance, WhiteNoise
 from .environment import Environment
@@ -21,27 +24,34 @@ from .integrators import ORDERS, STEPPERS
 from .loop import INTEGRATORS, Limits, simulate
 from .payload import PayloadChange, PayloadSchedule
 from .result import FORMAT_VERSION, SimResult, Status
+from .wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
 
 __all__ = [
     "FORMAT_VERSION",
     "INTEGRATORS",
     "ORDERS",
     "STEPPERS",
+    "AerodynamicDrag",
     "BaseDrag",
     "CompliantWall",
     "ContactHistory",
     "Disturbance",
     "Disturbances",
+    "Dryden",
     "Environment",
+    "Gust",
     "Limits",
     "PayloadChange",
     "PayloadSchedule",
     "PrescribedWrench",
     "Pulse",
     "PushedMass",
+    "RotorDynamics",
     "SimResult",
     "StateDisturbance",
     "Status",
+    "ViscousFriction",
     "WhiteNoise",
+    "Wind",
     "simulate",
 ]

@@ -19,6 +19,15 @@ drives the plant; at each control tick t_k:
    :class:`~qprr.sim.environment.Environment` (contact model with its own state, e.g. a pushed
    object) is integrated together with the robot by the same integrator.
 
+Optional actuator stage (``actuators=``, :mod:`qprr.sim.actuators`, off by default): the
+allocated thrusts of step 3 are then speed *commands* of rotors with a first-order motor lag;
+the rotor speeds are extra states integrated with the robot (and an environment's state) by
+the same integrator, and the base wrench Omega f(w) is evaluated at every stage.  The logged
+``f`` is then the thrust the rotors produce at the tick (b w^2); ``series`` hold
+``thrust_command`` and ``rotor_speed``.  State-dependent disturbances with a
+``realize(t_ticks, rng, period)`` method (wind: :mod:`qprr.sim.wind`) are realized once per
+run from the run's seed.
+
 Integrators (``integrator=``, :mod:`qprr.sim.integrators`, all on the Lie group): ``"midpoint"``
 (default: explicit midpoint, two ABA per step, second order), ``"rk4"`` (Runge-Kutta 4 in the
 tangent chart at q_k, fourth order: the accuracy reference), ``"euler"`` (semi-implicit, first
@@ -50,6 +59,7 @@ from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError, UnknownNameError
 from ..platform import Platform
 from . import disturbances as dist
+from .actuators import RotorDynamics
 from .environment import Environment
 from .integrators import STEPPERS, make_stepper
 from .payload import PayloadSchedule, PlantPayload
@@ -104,6 +114,7 @@ def simulate(
     external_wrench: Environment | Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
     payload: PayloadSchedule | None = None,
     allocator: Allocator | None = None,
+    actuators: RotorDynamics | None = None,
     seed: int | None = 0,
     limits: Limits = Limits(),
     joint_stops: bool = True,
@@ -128,7 +139,9 @@ def simulate(
     external_wrench : an :class:`~qprr.sim.environment.Environment` (contact model) or a callable
         ``(t, q, v) -> h`` (6,), the world wrench at the end effector, evaluated at every stage.
     payload : a :class:`~qprr.sim.payload.PayloadSchedule` (the plant's model is a copy).
-    allocator : default ``Allocator(platform)``.  seed : seeds the noise.
+    allocator : default ``Allocator(platform)``.  seed : seeds the noise (and the wind turbulence).
+    actuators : a :class:`~qprr.sim.actuators.RotorDynamics` (motor lag, speed limits, thrust b w^2)
+        between allocation and plant; None (default): thrusts applied as allocated.
     joint_stops : the arm joints end at mechanical stops at their limits
         (:func:`qprr.sim.stops.apply_joint_stops`; flag bit 4); the initial state and every arm
         reference must then lie inside the limits.
@@ -178,6 +191,8 @@ def simulate(
         raise ShapeError(f"disturbance values must have shape ({n}, {nxi}), got {u_ext.shape}")
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
+    # state-dependent disturbances drawn once per run (wind turbulence), after the timed ones (same seed, same draws)
+    state_dist = [d.realize(t, rng, period) if hasattr(d, "realize") else d for d in state_dist]
     ext_rows = np.any(u_ext != 0.0, axis=1)
     has_ext = bool(ext_rows.any())
     # per-tick disturbance rows as float lists (None where zero): no array indexing in the loop
@@ -207,12 +222,25 @@ def simulate(
     state = State(n_arm)
     state.update(0.0, q, v)
     ref = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
+    if getattr(controller, "uses_preview", False):  # a planning controller sees the trajectory ahead
+        controller.set_preview(trajectory)
     controller.reset(state, ref, period)
     tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
-    plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist)
+    if actuators is not None and not isinstance(actuators, RotorDynamics):
+        raise InputError(f"actuators must be a qprr.sim.RotorDynamics or None, got {type(actuators).__name__}")
+    rotors = actuators.bind(platform.n_rotors) if actuators is not None else None
+    if rotors is not None and dt > min(actuators.time_constant):  # explicit schemes: stable for dt < 2 T (Euler, midpoint)
+        raise InputError(f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
+                         "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt")
+    plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist, rotors, platform.rotor_matrix)
     env, z = plant.env, plant.z0
     rhs, first_stage = plant.rhs, plant.first_stage
-    settle = env.settle if (env is not None and z is not None) else None
+    settle = plant.settle if (env is not None and plant.n_env) else None
+    if rotors is not None:
+        nr, n_env = platform.n_rotors, plant.n_env
+        w_log, fc_log = np.zeros((n, nr)), np.zeros((n, nr))
+        Omega_r = np.array(platform.rotor_matrix)
+        w_start = rotors.initial()
     stepper = make_stepper(integrator, model, dt)
     steps = [j * dt for j in range(substeps)]  # step start times within a control period
     plain = plant.plain  # ABA alone: no state-dependent input
@@ -249,8 +277,25 @@ def simulate(
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
                 flags[k] = fl
+            if rotors is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
+                fc = f_log[k, 0:nr]
+                fc_log[k] = fc
+                w_c = rotors.command(fc)
+                if k == 0:
+                    if isinstance(w_start, str):  # "command": at the first command; "hover": thrusts that hold q0 still
+                        w0 = w_c.copy() if w_start == "command" else rotors.speeds_of(
+                            alloc.allocate(pin.computeGeneralizedGravity(model, data, q)).f[0:nr])
+                    else:
+                        w0 = w_start
+                    z = np.concatenate([z[:n_env], w0])
+                w = z[n_env:]
+                w_log[k] = w
+                f_log[k, 0:nr] = rotors.thrust(w)
+                tau[0:6] = Omega_r @ f_log[k, 0:nr] if wants_applied else 0.0
             if wants_applied:
                 set_applied(tau)
+                if rotors is not None:
+                    tau[0:6] = 0.0
             if has_ext:
                 ue = u_ext_rows[k]
                 if ue is not None:
@@ -287,12 +332,26 @@ def simulate(
         err.result = _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
                              com_log, N, flags, u_ext, time.perf_counter() - t_start, seed, m, status, reason, pin_out=pin_out,
                              period=period)
+        _extras(err.result, m, state_dist, (w_log, fc_log) if rotors is not None else None)
         raise err from None
     finally:
         if progress:
             bar.close()
-    return _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
-                   com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out, period)
+    res = _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
+                  com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out, period)
+    _extras(res, m, state_dist, (w_log, fc_log) if rotors is not None else None)
+    return res
+
+
+def _extras(res: SimResult, m: int, state_dist, rotor_logs) -> None:
+    """Series of the optional stages: rotor speeds and thrust commands, what realized disturbances report (the wind)."""
+    if rotor_logs is not None:
+        res.series["rotor_speed"] = rotor_logs[0][:m].copy()
+        res.series["thrust_command"] = rotor_logs[1][:m].copy()
+    for d in state_dist:
+        report = getattr(d, "report", None)
+        if callable(report):
+            res.series.update({k: v[:m] for k, v in report().items()})
 
 
 def _check_sample(sample, n: int, nxi: int) -> None:
@@ -327,10 +386,12 @@ class _Plant:
     the end-effector wrench J_e^T h (Jacobian and wrench at the stage's q, v and environment
     state z) and the state-dependent disturbances.  Without them the right-hand side is ABA
     alone.  With an :class:`Environment` that has a state, ``rhs(t, q, v, z)`` returns
-    (a, z_dot) (the form :mod:`qprr.sim.integrators` expects).
+    (a, z_dot) (the form :mod:`qprr.sim.integrators` expects).  With the actuator stage the
+    rotor speeds w are appended to z (z = [z_env, w]): the base wrench Omega b w^2 is added to
+    ``tau`` at every stage and dw/dt = (w_c - w) / T is part of z_dot.
     """
 
-    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist) -> None:
+    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist, rotors=None, Omega=None) -> None:
         self.model, self.data, self.tau, self.ee = model, data, tau, ee_frame
         self.state_dist = tuple(state_dist)
         self.env = external_wrench if isinstance(external_wrench, Environment) else None
@@ -344,18 +405,39 @@ class _Plant:
             if not np.all(np.isfinite(z0)):
                 raise NonFiniteError(f"environment initial state must be finite, got {z0.tolist()}")
             self.z0 = z0 if z0.size else None
+        self.n_env = 0 if self.z0 is None else self.z0.shape[0]
+        self.rotors, self.Omega = rotors, (None if Omega is None else np.array(Omega))
         aba = pin.aba
-        self.plain = self.env is None and self.fn is None and not self.state_dist
-        if self.plain:
+        self.plain = self.env is None and self.fn is None and not self.state_dist and rotors is None
+        if rotors is not None:  # rotor speeds appended to z (the first command sets them at tick 0)
+            self.z0 = np.concatenate([self.z0 if self.z0 is not None else np.zeros(0), np.zeros(rotors.n)])
+            self.rhs = self._rhs_rotors
+        elif self.plain:
             self.rhs = lambda t, q, v: aba(model, data, q, v, tau)  # LOCAL convention (the default)
         elif self.z0 is None:
             self.rhs = self._rhs
         else:
             self.rhs = self._rhs_z
 
-    def _force(self, t: float, q, v, z) -> tuple[np.ndarray, np.ndarray | None]:
-        """(tau + J_e^T h + state disturbances, z_dot) at one stage."""
-        tau = self.tau.copy()
+    def settle(self, t: float, z_before, z_after):
+        """The environment's discrete events on its part of z (the rotor speeds have none)."""
+        if self.rotors is None:
+            return self.env.settle(t, z_before, z_after)
+        ne = self.n_env
+        return np.concatenate([self.env.settle(t, z_before[:ne], z_after[:ne]), z_after[ne:]])
+
+    def _rhs_rotors(self, t: float, q, v, z):
+        ne = self.n_env
+        w = z[ne:]
+        base = self.tau.copy()
+        base[0:6] += self.Omega @ self.rotors.thrust(w)
+        tau, zd = self._force(t, q, v, z[:ne] if ne else None, base)
+        wd = self.rotors.rate(w)
+        return pin.aba(self.model, self.data, q, v, tau), (wd if not ne else np.concatenate([np.asarray(zd, dtype=float), wd]))
+
+    def _force(self, t: float, q, v, z, tau=None) -> tuple[np.ndarray, np.ndarray | None]:
+        """(tau + J_e^T h + state disturbances, z_dot) at one stage (``tau``: the held force, default a copy of the buffer)."""
+        tau = self.tau.copy() if tau is None else tau
         zd = None
         for d in self.state_dist:
             tau += np.asarray(d.generalized_force(t, q, v), dtype=float)
@@ -384,10 +466,12 @@ class _Plant:
     def first_stage(self, t: float, q, v, z):
         """The right-hand side at a control tick (the stepper's ``first``); an Environment observes the tick."""
         if self.env is None:
-            return self.rhs(t, q, v)
+            return self.rhs(t, q, v) if z is None else self.rhs(t, q, v, z)
         self.env.on_tick(t)
         out = self.rhs(t, q, v) if z is None else self.rhs(t, q, v, z)
         p, R, twist, h = self._last
+        if self.rotors is not None:  # the environment sees its own part of z
+            z = z[:self.n_env] if self.n_env else None
         self.env.observe(t, p, R, twist, z if z is not None else _NO_STATE, h)
         return out
 
@@ -409,13 +493,17 @@ def _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, 
     if wall is None:
         wall = time.perf_counter() - t_start
     nr = platform.n_rotors
-    return SimResult(
+    res = SimResult(
         scenario=scenario, controller=getattr(controller, "name", type(controller).__name__), dt=dt,
         integrator=integrator, t=t[:m].copy(), xi=xi, xi_dot=xid_log[:m], xi_d=xi_d[:m], xi_dot_d=xi_dot_d[:m],
         u=u_log[:m], f=f_log[:m, 0:nr].copy(), arm_effort=f_log[:m, nr:].copy(), x_cm=x_cm, unallocated=unalloc,
         flags=flags[:m], u_ext=u_ext[:m], wall_time=wall, status=status, reason=reason, seed=seed, control_period=period,
         platform=platform.name, names=platform.xi_names, arm_kinds=tuple(j.kind for j in platform.arm),
     )
+    metrics, series = controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
+    res.metrics.update(metrics)
+    res.series.update(series)
+    return res
 
 
 _BASE_V = ("v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z")

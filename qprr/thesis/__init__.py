@@ -10,7 +10,10 @@ manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers refer to 
   (``qprr check``) tests every one against the model; :mod:`qprr.thesis.symbolic` is the
   independent sympy Lagrangian;
 * the thesis's own algorithms: the analytic IGM (Alg. 3-5, :mod:`qprr.thesis.igm`), the CoG
-  stabiliser BSG (:mod:`qprr.thesis.bsg`), the chapter-6 missions, gain tables and scenarios.
+  stabiliser BSG (:mod:`qprr.thesis.bsg`), the chapter-6 missions, gain tables and scenarios;
+* beyond the thesis, on the Q-PRR: :mod:`qprr.thesis.control_scenarios` (point-to-point, Annex A,
+  aggressive reach, realistic), :mod:`qprr.thesis.realistic` (its motor, drag, friction and wind
+  values), :mod:`qprr.thesis.comparisons` (``qprr compare``).
 
 The library (everything outside this package) never imports from here, except the registry of
 named platforms (``qprr.load("q-prr")``) which calls :func:`load`.

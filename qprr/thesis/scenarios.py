@@ -36,7 +36,15 @@ import numpy as np
 
 from .. import kinematics as kin
 from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
-from ..control import DesiredStateInverseDynamics, InverseDynamicsController, LayeredIDC, ModelFreeController, PayloadIDC
+from ..control import (
+    DecoupledController,
+    DesiredStateInverseDynamics,
+    InverseDynamicsController,
+    LayeredIDC,
+    ModelFreeController,
+    PayloadIDC,
+    make_controller,
+)
 from ..control.impedance import ImpedanceController
 from ..errors import QprrError, UnknownNameError
 from ..scenarios import _COMMON, Option, Scenario
@@ -86,14 +94,19 @@ hundredths of a radian with the Table 6.2 arm gains."""
 
 
 def flight_controller(name: str, platform):
-    """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`)."""
+    """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`), the decoupled scheme of Sec. 6.2.2
+    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl)."""
     if name == "idc":
         return InverseDynamicsController(platform, gains.idc())
     if name == "dsid":
         return DesiredStateInverseDynamics(platform, gains.desired_state())
     if name == "mfc":
         return ModelFreeController(platform, gains.mfc())
-    raise UnknownNameError("controller", name, tuple(THESIS_NAMES))
+    if name == "decoupled":
+        return DecoupledController(platform, gains.idc())
+    if name == "mpc":
+        return make_controller("mpc", platform)
+    raise UnknownNameError("controller", name, _FLIGHT_CONTROLLERS)
 
 
 def _q_prr(platform):
@@ -116,11 +129,16 @@ def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = 
 
 
 _FLIGHT = {**_COMMON, "duration": Option(30.0, "run length [s]")}
-_FLIGHT_CONTROLLERS = ("idc", "dsid", "mfc")
+_FLIGHT_CONTROLLERS = ("idc", "dsid", "mfc", "decoupled", "mpc")
+"""Controllers of the Sec. 6.3 flight scenarios: the thesis's three, the decoupled scheme (Sec. 6.2.2) and the MPC."""
 
 
 def _reordered(first: str) -> tuple[str, ...]:
     return (first, *[c for c in _FLIGHT_CONTROLLERS if c != first])
+
+
+_BSG_CONTROLLERS = ("mfc", "idc", "dsid", "decoupled")
+"""Controllers under the CoG stabiliser (the MPC has its own CoG cost and previews the trajectory, not the BSG's references)."""
 
 
 def _plot_flight(result: SimResult, path) -> Path:
@@ -145,7 +163,7 @@ FLIGHT_SCENARIOS = (
              _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)), _reordered("idc"), _FLIGHT,
              ("q-prr",), _plot_flight, "Sec. 6.3.2.2, (6.28), Fig. 6.28-6.29"),
     Scenario("dynamic-bsg", "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
-             _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True), _reordered("mfc"), _FLIGHT, ("q-prr",),
+             _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True), _BSG_CONTROLLERS, _FLIGHT, ("q-prr",),
              _plot_flight, "Sec. 6.3.3.3, Fig. 6.37-6.45"),
 )
 
@@ -226,7 +244,7 @@ def contact_history(result: SimResult):
 
 
 # ============================================================================ payload-drop
-PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc")
+PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc", "decoupled", "mpc")
 
 
 def payload_drop(platform=None, controller: str = "payload-idc", progress: bool = False, *, mass: float = 0.1,
@@ -238,7 +256,8 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     during ``arm_phase``; ``mission="hover"``: start hovering at (0, 0, 1) m with the arm already
     at ``arm_target`` (short runs for tests).  Controllers: "payload-idc" (mass estimated,
     default), "payload-idc-known" (known mass, told of the release), "payload-idc-none",
-    "idc" (Sec. 6.3.1, nominal model).  ``noise`` > 0 adds the white noise of Thesis (6.27),
+    "idc" (Sec. 6.3.1, nominal model), "decoupled" (Sec. 6.2.2, nominal model) and "mpc" (receding horizon,
+    nominal model: the payload is a disturbance to all three).  ``noise`` > 0 adds the white noise of Thesis (6.27),
     uniform in [-noise, noise] N, on the three forces (seeded by ``seed``).  The result's
     ``series`` hold ``payload_mass`` and ``mass_estimate``; its ``metrics`` the ``release_time``,
     the ``recovery_time`` (:class:`Recovery`) and ``mass_estimate_error``.
@@ -267,6 +286,8 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
         "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
         "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
         "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+        "decoupled": lambda: DecoupledController(platform, gains.idc()),
+        "mpc": lambda: make_controller("mpc", platform),
     }
     if controller not in builders:
         raise UnknownNameError("controller", controller, PAYLOAD_CONTROLLERS)

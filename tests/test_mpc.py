@@ -1,0 +1,409 @@
+"""Receding-horizon MPC (qprr.control.mpc): actuation, derivatives, LQR agreement, thrust bounds, fallback, selection.
+
+The checks that need crocoddyl skip without it (``pytest.importorskip``); the install message
+is checked without it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib
+import sys
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+import qprr
+from qprr.actuation import Allocator
+from qprr.charts import State, xi_to_qv
+from qprr.control import make_controller
+from qprr.control.base import Reference
+from qprr.errors import InputError, MissingDependencyError, UnknownNameError
+from qprr.kinematics import cog_offset_body, com_body
+from qprr.sim import simulate
+from qprr.trajectory import Hold
+
+
+def test_missing_crocoddyl_gives_the_install_command(monkeypatch):
+    saved = sys.modules.pop("qprr.control.mpc", None)
+    monkeypatch.setitem(sys.modules, "crocoddyl", None)  # import crocoddyl now raises ImportError
+    try:
+        with pytest.raises(MissingDependencyError, match=r"pip install --no-deps crocoddyl==3\.2\.1") as info:
+            importlib.import_module("qprr.control.mpc")
+        assert isinstance(info.value, ImportError)
+    finally:
+        sys.modules.pop("qprr.control.mpc", None)
+        if saved is not None:
+            sys.modules["qprr.control.mpc"] = saved
+
+
+def test_make_controller_without_crocoddyl_names_the_install_command(monkeypatch):
+    import qprr.control as control
+
+    monkeypatch.delitem(control.CONTROLLERS, "mpc", raising=False)
+    with pytest.raises(MissingDependencyError, match="crocoddyl.*pip install --no-deps"):
+        make_controller("mpc", qprr.load())
+
+
+crocoddyl = pytest.importorskip("crocoddyl")
+mpc = pytest.importorskip("qprr.control.mpc")
+
+
+@pytest.fixture(scope="module")
+def platform():
+    return qprr.load()
+
+
+def _state(q, v, t=0.0) -> State:
+    s = State(len(q) - 7)
+    s.update(t, np.asarray(q, dtype=float), np.asarray(v, dtype=float))
+    return s
+
+
+def _with_f_max(platform, f_max: float):
+    return platform.replace(rotors=tuple(dataclasses.replace(r, f_max=f_max) for r in platform.rotors))
+
+
+# ---------------------------------------------------------------------------- actuation
+@pytest.mark.parametrize("name, layout", [("q-prr", "plus"), ("q-prr", "x"), ("borinot_flying_arm_2", None),
+                                          ("hextilt_flying_arm_5", None)])
+def test_crocoddyl_thrusters_give_the_platform_actuation_matrix(name, layout):
+    """crocoddyl's ActuationModelFloatingBaseThrusters from the rotor set = N of Thesis (5.44)-(5.46), for any rotor set."""
+    pf = qprr.load(name, layout=layout) if layout else qprr.load(name)
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2))
+    np.testing.assert_allclose(ctrl.W, pf.actuation_matrix, rtol=0, atol=1e-15)
+    assert pf.model.names[1] != "root_joint" or ctrl.model is pf.model  # the platform's model is never renamed
+
+
+# --------------------------------------------------------------------------- derivatives
+def test_node_derivatives_match_finite_differences_on_the_manifold(platform):
+    """Fx, Fu (semi-implicit Euler of ABA) and Lx, Lu of one node against central differences (every residual active)."""
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"))
+    iam, dam = ctrl._nodes[0]
+    st = ctrl.state
+    rng = np.random.default_rng(3)
+    xi = np.array([0.3, -0.2, 1.0, 0.2, -0.3, 0.5, 0.02, 2.2, -0.4])  # theta2 past its limit: the barrier is active
+    q, v = xi_to_qv(xi, rng.normal(size=9))
+    x = np.concatenate([q, v])
+    x_ref = st.integrate(x, 0.2 * rng.normal(size=18))
+    pin.framesForwardKinematics(ctrl.model, ctrl._data, x_ref[:10])
+    M_ref = ctrl._data.oMf[ctrl.ee_frame] * pin.exp6(pin.Motion(0.1 * rng.normal(size=6)))
+    dam.set_reference(x_ref, M_ref, np.array([7.0, 9.0, 8.0, 10.0, 1.0, 0.1, -0.05]))
+    u = np.array([6.0, 11.0, 9.0, 8.0, -2.0, 0.3, 0.01])
+    d = iam.createData()
+    iam.calc(d, x, u)
+    iam.calcDiff(d, x, u)
+    xn, eps = np.array(d.xnext), 1e-6
+
+    def node(xx, uu):
+        dd = iam.createData()
+        iam.calc(dd, xx, uu)
+        return np.array(dd.xnext), dd.cost
+
+    Fx, Lx = np.zeros((18, 18)), np.zeros(18)
+    for i in range(18):
+        e = np.zeros(18)
+        e[i] = eps
+        (xp, cp), (xm, cm) = node(st.integrate(x, e), u), node(st.integrate(x, -e), u)
+        Fx[:, i] = (st.diff(xn, xp) - st.diff(xn, xm)) / (2 * eps)
+        Lx[i] = (cp - cm) / (2 * eps)
+    Fu, Lu = np.zeros((18, 7)), np.zeros(7)
+    for i in range(7):
+        e = np.zeros(7)
+        e[i] = eps
+        (xp, cp), (xm, cm) = node(x, u + e), node(x, u - e)
+        Fu[:, i] = (st.diff(xn, xp) - st.diff(xn, xm)) / (2 * eps)
+        Lu[i] = (cp - cm) / (2 * eps)
+    for name, analytic, numeric in (("Fx", d.Fx, Fx), ("Fu", d.Fu, Fu), ("Lx", d.Lx, Lx), ("Lu", d.Lu, Lu)):
+        err = np.max(np.abs(np.array(analytic) - numeric)) / max(1.0, np.max(np.abs(numeric)))
+        assert err < 1e-6, f"{name}: relative error {err:.2e}"
+
+
+@pytest.mark.parametrize("name", ["q-prr", "hextilt_flying_arm_5"])
+def test_cog_residual_is_the_offset_from_the_thrust_axis_and_ignores_the_base_pose(name):
+    """r_cog = kinematics.cog_offset_body ([x_cm, y_cm] of Thesis (3.78) on the Q-PRR); its base-pose Jacobian columns vanish."""
+    pf = qprr.load(name)
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2))
+    iam, dam = ctrl._nodes[0]
+    xi = pf.neutral_xi()
+    xi[0:6] = [1.0, 2.0, 3.0, 0.3, -0.2, 1.1]
+    xi[6:] = 0.5 * (np.clip(pf.arm_lower, -1, 1) + np.clip(pf.arm_upper, -1, 1)) + 0.1
+    q, v = xi_to_qv(xi, np.zeros(pf.n_xi))
+    d = iam.createData()
+    iam.calcDiff(d, np.concatenate([q, v]), np.zeros(ctrl.nu))
+    nv = pf.nv
+    np.testing.assert_allclose(dam._Rx[2 * nv + 6:2 * nv + 8, 0:6], 0.0, atol=1e-12)
+    data = pf.data()
+    r, _ = dam._residual_x(q, v, com_body(pf, data, q))  # (the node's kinematics are at q after calcDiff)
+    np.testing.assert_allclose(r[2 * nv + 6:2 * nv + 8], cog_offset_body(pf, data, q), rtol=0, atol=1e-15)
+    assert np.linalg.norm(cog_offset_body(pf, data, q)) > 1e-3  # not trivially zero
+
+
+# -------------------------------------------------------------------------- LQR agreement
+def _lqr_first_control(ctrl, platform, x_eq: np.ndarray, u_eq: np.ndarray, dx0: np.ndarray) -> np.ndarray:
+    """u_0 of the finite-horizon LQR of the MPC's problem linearised at the equilibrium (x_eq, u_eq).
+
+    Built independently of the controller's node models: the documented semi-implicit Euler step
+    of ABA, the documented residuals written here with pinocchio and qprr.kinematics, all
+    linearised by central differences on the manifold; weights read from ``ctrl.weights`` as documented.
+    """
+    model, h, N, w = platform.model, ctrl.h, ctrl.settings.horizon, ctrl.weights
+    data, W, nq, nv, nu = model.createData(), platform.actuation_matrix, model.nq, model.nv, ctrl.nu
+    ee = platform.ee_frame
+    kdata = platform.data()
+
+    def step(x, u):
+        q, v = x[:nq], x[nq:]
+        a = pin.aba(model, data, q, v, W @ u)
+        v1 = v + h * a
+        return np.concatenate([pin.integrate(model, q, h * v1), v1])
+
+    def plus(x, dx):
+        return np.concatenate([pin.integrate(model, x[:nq], dx[:nv]), x[nq:] + dx[nv:]])
+
+    def minus(x1, x0):
+        return np.concatenate([pin.difference(model, x0[:nq], x1[:nq]), x1[nq:] - x0[nq:]])
+
+    pin.framesForwardKinematics(model, data, x_eq[:nq])
+    M_eq_inv = data.oMf[ee].inverse()
+
+    def residual(x):  # state, end effector, CoG: zero at the equilibrium
+        pin.framesForwardKinematics(model, data, x[:nq])
+        return np.concatenate([minus(x, x_eq), pin.log6(M_eq_inv * data.oMf[ee]).vector, cog_offset_body(platform, kdata, x[:nq])])
+
+    eps = 1e-6
+    A, B, Jr = np.zeros((2 * nv, 2 * nv)), np.zeros((2 * nv, nu)), np.zeros((2 * nv + 8, 2 * nv))
+    x1 = step(x_eq, u_eq)
+    for i in range(2 * nv):
+        e = np.zeros(2 * nv)
+        e[i] = eps
+        A[:, i] = (minus(step(plus(x_eq, e), u_eq), x1) - minus(step(plus(x_eq, -e), u_eq), x1)) / (2 * eps)
+        Jr[:, i] = (residual(plus(x_eq, e)) - residual(plus(x_eq, -e))) / (2 * eps)
+    for i in range(nu):
+        e = np.zeros(nu)
+        e[i] = eps
+        B[:, i] = (minus(step(x_eq, u_eq + e), x1) - minus(step(x_eq, u_eq - e), x1)) / (2 * eps)
+    n_arm = nv - 6
+    w_state = np.array([w.position] * 3 + [w.tilt, w.tilt, w.yaw] + [w.arm] * n_arm
+                       + [w.linear_velocity] * 3 + [w.angular_velocity] * 3 + [w.arm_velocity] * n_arm)
+    w_res = np.concatenate([w_state, [w.ee_position] * 3 + [w.ee_orientation] * 3, [w.cog] * 2])
+    Q = Jr.T @ (w_res[:, None] * Jr)
+    M = pin.crba(model, data, platform.neutral_q())
+    s = np.r_[np.ones(platform.n_rotors), 1.0 / np.diag(M)[6:]]
+    R = np.diag(np.r_[[w.thrust] * platform.n_rotors, [w.arm_acceleration] * n_arm] * s**2)
+    P = w.terminal_factor * Q
+    for _ in range(N):
+        K = np.linalg.solve(h * R + B.T @ P @ B, B.T @ P @ A)
+        P = h * Q + A.T @ P @ (A - B @ K)
+        P = 0.5 * (P + P.T)
+    return u_eq - K @ dx0
+
+
+def test_mpc_first_control_agrees_with_lqr_when_no_bound_is_active(platform):
+    """Hover at xi = 0 (arm straight up: every residual is zero there) from small offsets dx = s d.
+
+    Unconstrained and quadratic to second order, the MPC's optimal first control equals the
+    finite-horizon LQR's, u_eq - K_0 dx, up to O(|dx|^2): the relative difference falls
+    linearly with s (halving s halves it) and is below 1 % here.
+    """
+    settings = mpc.MPCSettings(horizon=15, integrator="euler", first_max_iter=200, th_stop=1e-16)
+    ctrl = mpc.MPCController(platform, Hold(), settings=settings)
+    x_eq = np.concatenate([platform.neutral_q(), np.zeros(9)])
+    u_eq = np.r_[Allocator(platform).hover_thrusts(), 0.0, 0.0, 0.0]
+    np.testing.assert_allclose(platform.actuation_matrix @ u_eq,
+                               pin.computeGeneralizedGravity(platform.model, platform.data(), x_eq[:10]), atol=1e-12)
+    d = np.array([0.5, -0.4, 0.3, 0.2, -0.3, 0.6, 0.01, 0.3, -0.2, 0.2, 0.1, -0.3, 0.5, -0.4, 0.3, 0.05, 0.5, -0.5])
+    errors = []
+    for scale in (2e-3, 1e-3):
+        dx = scale * d
+        x0 = ctrl.state.integrate(x_eq, dx)
+        ctrl.reset(_state(x0[:10], x0[10:]), Reference(), 1e-2)
+        ctrl.step(0.0, _state(x0[:10], x0[10:]), Reference())
+        st = ctrl.stats()
+        assert st.status[0] == "converged"
+        assert st.thrust_margin[0] > 1.0  # no bound active
+        u_mpc = ctrl._u
+        u_lqr = _lqr_first_control(ctrl, platform, x_eq, u_eq, dx)
+        errors.append(np.linalg.norm(u_mpc - u_lqr) / np.linalg.norm(u_lqr - u_eq))
+    assert errors[1] < 1e-2
+    assert 1.6 < errors[0] / errors[1] < 2.4, errors  # O(|dx|) relative: the difference is second order
+
+
+def test_mpc_tracks_like_the_exact_inverse_dynamics_at_hover(platform):
+    """Near hover with no bound active the MPC's first control, like the ID reference u_ref = W^+ RNEA(x_ref, a_ref),
+    gives the reference acceleration when the state is on the reference: u_0 = u_ref to the solver tolerance."""
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=10, th_stop=1e-14, first_max_iter=100))
+    xi = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    ctrl.set_preview(Hold(tuple(xi)))
+    q, v = xi_to_qv(xi, np.zeros(9))
+    s = _state(q, v)
+    ctrl.reset(s, Reference(xi.copy()), 1e-2)
+    ctrl.step(0.0, s, Reference(xi.copy()))
+    _, _, u_ref = ctrl.reference(xi, np.zeros(9), np.zeros(9))
+    np.testing.assert_allclose(ctrl._u, u_ref, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(platform.actuation_matrix @ u_ref, pin.computeGeneralizedGravity(platform.model, platform.data(), q),
+                               atol=1e-10)
+
+
+# ---------------------------------------------------------------------------- thrust bounds
+def test_planned_thrusts_never_leave_the_bounds_and_the_allocator_applies_them(platform):
+    """A 1 m step up and sideways with f_max = 11 N (hover 8.6 N): the bound is active, never exceeded.
+
+    At every solve the whole plan lies in [f_min, f_max]; the applied thrusts are the planned
+    u_0 (allocator exact path, no saturation flag).
+    """
+    pf = _with_f_max(platform, 11.0)
+    target = Hold((1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+    ctrl = mpc.MPCController(pf, settings=mpc.MPCSettings(horizon=20))
+    res = simulate(pf, ctrl, target, 0.6, xi0=np.zeros(9))
+    assert ctrl.trajectory is target  # handed over by the simulator (uses_preview)
+    st = ctrl.stats()
+    assert set(st.status) <= {"converged", "iteration-limit"}
+    assert np.all(st.thrust_margin >= 0.0)
+    assert ctrl.max_bound_violation <= 0.0
+    assert np.min(st.thrust_margin) < 1e-6  # the bound was active in some plan
+    planned = ctrl.planned_thrusts
+    assert planned.shape == (20, 4) and np.all((planned >= 0.0) & (planned <= 11.0))
+    assert not np.any(res.flags & 1)
+    solve_steps = np.round(st.t / 1e-3).astype(int)
+    np.testing.assert_allclose(res.f[solve_steps], st.u[:, 0:4], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(res.arm_effort[solve_steps], st.u[:, 4:7], rtol=0, atol=1e-12)
+
+
+def test_zero_order_hold_between_solves(platform):
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=50.0, horizon=5))
+    q = platform.neutral_q()
+    q[2] = 0.1
+    s = _state(q, np.zeros(9))
+    ctrl.reset(s, Reference(), 1e-3)
+    outs = [ctrl.step(k * 1e-3, s, Reference()).copy() for k in range(45)]
+    assert len(ctrl.stats().t) == 3  # solves at 0, 20, 40 ms
+    for k in range(45):
+        np.testing.assert_array_equal(outs[k], outs[20 * (k // 20)])
+
+
+# -------------------------------------------------------------------------------- fallback
+class _FailingSolver:
+    """The controller's solver with ``solve`` replaced by an injected failure (other attributes delegate)."""
+
+    def __init__(self, inner, mode):
+        self._inner, self._mode = inner, mode
+
+    def solve(self, *args):
+        if self._mode == "raise":
+            raise RuntimeError("injected failure")
+        return self._inner.solve(*args)
+
+    def __getattr__(self, name):
+        return getattr(self._inner, name)
+
+
+def test_failed_solves_fall_back_to_the_previous_plan_then_hover(platform):
+    N = 6
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=N))
+    q = platform.neutral_q()
+    q[0] = 0.05
+    q[8] = 0.2
+    s = _state(q, np.zeros(9))
+    ctrl.reset(s, Reference(), 1e-2)
+    ctrl.step(0.0, s, Reference())
+    plan = np.array(ctrl.solver.us)
+    ctrl.solver = _FailingSolver(ctrl.solver, "raise")
+    applied = [ctrl.step(0.01 * k, s, Reference()).copy() for k in range(1, N + 2)]
+    st = ctrl.stats()
+    assert st.status[1:] == ("failed",) * (N + 1)
+    assert st.fallback[1:] == ("previous-plan",) * (N - 1) + ("hover",) * 2
+    assert ctrl.fallback_count == N + 1
+    assert ctrl.events[0][2] == "solver raised RuntimeError: injected failure"
+    for k in range(1, N):  # the last accepted plan, advanced to the current time
+        np.testing.assert_array_equal(st.u[k], plan[k])
+        np.testing.assert_allclose(applied[k - 1], ctrl.W @ plan[k], atol=1e-14)
+    g = pin.rnea(ctrl.model, ctrl.model.createData(), q, np.zeros(9), np.zeros(9))
+    np.testing.assert_allclose(ctrl.W @ st.u[N], g, atol=1e-9)  # hover: W u = g(q) (level, reachable)
+
+
+def test_a_nan_measurement_is_a_failed_solve_not_a_crash(platform):
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=5))
+    q = platform.neutral_q()
+    s = _state(q, np.zeros(9))
+    ctrl.reset(s, Reference(), 1e-2)
+    ctrl.step(0.0, s, Reference())
+    plan = np.array(ctrl.solver.us)
+    s_nan = _state(q, np.zeros(9))
+    s_nan.v = s_nan.v.copy()
+    s_nan.v[4] = np.nan
+    ctrl.step(0.01, s_nan, Reference())
+    st = ctrl.stats()
+    assert st.status[1] == "failed" and st.fallback[1] == "previous-plan"
+    np.testing.assert_array_equal(st.u[1], plan[1])
+
+
+# ------------------------------------------------------------------------------ validation
+def test_bad_platform_and_settings_are_rejected(platform):
+    with pytest.raises(InputError, match="qprr Platform"):
+        mpc.MPCController(object(), Hold())
+    unbounded = platform.replace(rotors=tuple(dataclasses.replace(r, f_max=float("inf")) for r in platform.rotors))
+    with pytest.raises(InputError, match="finite f_max"):
+        mpc.MPCController(unbounded, Hold())
+    with pytest.raises(InputError, match="sample"):
+        mpc.MPCController(platform, object())
+    with pytest.raises(UnknownNameError, match="integrator"):
+        mpc.MPCSettings(integrator="midpoint")
+    with pytest.raises(InputError, match="horizon"):
+        mpc.MPCSettings(horizon=0)
+    with pytest.raises(InputError, match="cog"):
+        mpc.MPCWeights(cog=-1.0)
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=300.0, horizon=2))
+    with pytest.raises(InputError, match="whole number of simulator steps"):
+        ctrl.reset(State(), Reference(), 1e-3)
+    with pytest.raises(InputError, match="before step"):
+        mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2)).step(0.0, State(), Reference())
+
+
+def test_mpc_is_selectable_by_name_and_runs_on_another_platform():
+    """make_controller("mpc", platform) on the coplanar hexarotor borinot (6 rotors, 2 arm joints): a short hover-reach."""
+    from qprr.scenarios import run
+
+    pf = qprr.load("borinot_flying_arm_2")
+    ctrl = make_controller("mpc", pf, settings=mpc.MPCSettings(horizon=10))
+    assert isinstance(ctrl, mpc.MPCController) and ctrl.nu == 6 + 2
+    res = run("hover-reach", "mpc", platform=pf, duration=0.3)
+    assert res.status == "ok" and res.controller == "mpc"
+    assert np.all(res.f <= pf.thrust_max + 1e-9) and np.all(res.f >= pf.thrust_min - 1e-9)
+
+
+# --------------------------------------------------------------------------- aggressive reach
+def test_aggressive_reach_peak_acceleration_is_the_quintic_one():
+    """5.77 climb / T^2 at the quintic's inflection t1 + T (1/2 - sqrt(3)/6), (6.16) with the quintic law."""
+    from qprr.thesis.missions import aggressive_reach
+
+    traj = aggressive_reach(climb=2.0, duration=1.0, start=0.5)
+    t_peak = 0.5 + (0.5 - np.sqrt(3.0) / 6.0)
+    a = traj.sample(np.array([t_peak])).xi_ddot[0, 2]
+    assert a == pytest.approx(2.0 * 10.0 * np.sqrt(3.0) / 3.0, rel=1e-12)  # 60 s (1 - s)(1 - 2 s) at the peak = 10 sqrt(3) / 3
+
+
+@pytest.mark.slow
+def test_aggressive_reach_idc_saturates_where_the_mpc_plans_inside_the_bounds(platform):
+    """Climb 2 m and 0.6 m forward in 1 s with the arm out (scenario aggressive-reach): the IDC asks the rotors beyond
+    [0, 20] N (the allocator clips, the arm is thrown against its stops); every MPC plan stays inside, the allocator
+    never clips and the reach is tracked to centimetres."""
+    from qprr.scenarios import run
+
+    try:
+        idc = run("aggressive-reach", "idc", duration=3.0)
+    except qprr.QprrError as err:  # it may lose the arm altogether
+        idc = err.result
+    assert idc.saturation_fraction() > 0.01
+    assert np.any(idc.flags & 4)
+    res = run("aggressive-reach", "mpc", duration=3.0)
+    assert res.status == "ok"
+    m = res.metrics
+    assert m["mpc_failed"] == 0 and m["mpc_min_plan_thrust_margin_N"] >= 0.0 and m["mpc_max_plan_bound_violation_N"] <= 0.0
+    assert m["mpc_min_plan_thrust_margin_N"] < 1e-6  # a bound is active in some plan
+    assert not np.any(res.flags & 1)  # the allocator never clipped a rotor
+    e = res.rmse()
+    assert max(e["x"], e["y"], e["z"]) < 0.05
+    assert e["r0"] < 0.01 and max(e["theta2"], e["theta3"]) < 0.02
+    assert min(idc.rmse()["theta2"], idc.rmse()["theta3"]) > 0.2
