@@ -14,6 +14,8 @@ name             controller                                              thesis
 ``layered-idc``  :class:`LayeredIDC`                                     Sec. 6.4.2, (6.53)-(6.57), (6.76)
 ``payload-idc``  :class:`PayloadIDC` (estimated payload mass)            (6.53)-(6.57)
 ``impedance``    :class:`ImpedanceController`                            Sec. 6.4.3.3, (6.71)-(6.81)
+``opspace-       :class:`OperationalSpaceImpedance` (end-effector        (6.72)-(6.73)
+impedance``      impedance as a task on the inverse-dynamics core)
 ===============  ======================================================  ================================
 
 The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
@@ -35,6 +37,7 @@ from .inverse_dynamics import (
     PayloadIDC,
 )
 from .mfc import MFCGains, ModelFreeController, ipid
+from .opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance
 
 CONTROLLERS = {
     "idc": InverseDynamicsController,
@@ -43,6 +46,7 @@ CONTROLLERS = {
     "layered-idc": LayeredIDC,
     "payload-idc": PayloadIDC,
     "impedance": ImpedanceController,
+    "opspace-impedance": OperationalSpaceImpedance,
 }
 """Controller classes by name."""
 
@@ -59,6 +63,7 @@ __all__ = [
     "CommandFilter",
     "Controller",
     "DesiredStateInverseDynamics",
+    "EndEffectorImpedance",
     "IDCGains",
     "ImpedanceController",
     "ImpedanceFilter",
@@ -67,6 +72,7 @@ __all__ = [
     "LayeredIDC",
     "MFCGains",
     "ModelFreeController",
+    "OperationalSpaceImpedance",
     "PayloadIDC",
     "Reference",
     "SingleTiltReference",
