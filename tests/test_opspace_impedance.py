@@ -174,7 +174,7 @@ def _fit(hist, axis, t_on):
 
 def test_natural_frequency_and_damping_converge_at_first_order_in_the_control_period():
     """Fully actuated hexarotor, force step along x: the fitted (omega_n, zeta) approach the impedance's (4 rad/s, 0.3)
-    with the control period (zero-order hold): errors at 1 ms within 1 % and 5 %, halved at 0.5 ms (order 1)."""
+    with the control period (zero-order hold): errors at 1 ms 6e-5 and 2.8e-3 (relative), halved at 0.5 ms (order 1)."""
     p = qprr.load("hextilt_flying_arm_5")
     imp = EndEffectorImpedance.from_frequency(4.0, 0.3, 1.0)
     errs = []
@@ -184,7 +184,7 @@ def test_natural_frequency_and_damping_converge_at_first_order_in_the_control_pe
         errs.append((abs(w - 4.0) / 4.0, abs(z - 0.3) / 0.3))
         assert abs(y_inf - 0.5 / 16.0) < 1e-3 * 0.5 / 16.0
     (ew1, ez1), (ew2, ez2) = errs
-    assert ew1 < 0.01 and ez1 < 0.05
+    assert ew1 < 2e-4 and ez1 < 5e-3
     assert 1.6 < ew1 / ew2 < 2.5 and 1.6 < ez1 / ez2 < 2.5
 
 
@@ -284,3 +284,27 @@ def test_ee_impedance_scenario_and_figure(tmp_path):
     assert np.abs(d["e"] - d["predicted"]).max() < 2e-3 * np.abs(d["predicted"]).max()
     assert plot_ee_impedance(res, tmp_path / "ee.png").stat().st_size > 10_000
     assert any("K^-1 h" in line for line in scenarios.get_scenario("ee-impedance").summary(res))
+
+
+def test_printed_6_73_is_an_end_effector_acceleration_and_damps_the_velocity():
+    """(6.73) as printed, y = T_A^-1 M_d^-1 (M_d chi_ddot_d + K_D chi_dot + K_P chi_tilde - M_d J_A_dot xi_dot - h_A), has the
+    6 rows of chi_e, while (6.72) multiplies y by the 9 x 9 B of the Q-PRR: the inverse of J_A (Siciliano-Villani's
+    y = J_A^-1 M_d^-1 (...); for a 6 x 9 J_A a generalised one, the task of OperationalSpaceImpedance) is missing.  Its
+    damping acts on chi_dot, not on the error rate: at zero error with the reference moving at v it asks for
+    M_d^-1 K_D v instead of the reference's acceleration (0 here); the law here uses e_dot (a* = 0 there: see
+    test_fully_actuated_law_is_khatibs_with_the_operational_space_model for a*)."""
+    from qprr.dynamics import dynamics_xi
+
+    p = qprr.load("q-prr")
+    xi = _hover(p)
+    B, _, _ = dynamics_xi(p, p.data(), xi, np.zeros(p.n_xi))
+    phi_e = np.array([0.1, -0.2, 0.3])
+    T_A = np.eye(6)
+    T_A[3:6, 3:6] = ch.euler_rate_matrix(phi_e)
+    M_d, K_D = 0.5 * np.eye(6), 2.0 * np.eye(6)  # the K_P chi_tilde term vanishes at zero error
+    v = np.array([0.1, 0.0, -0.05, 0.0, 0.0, 0.0])  # reference rate, error and its rate zero, no wrench
+    y_printed = np.linalg.solve(T_A, np.linalg.solve(M_d, K_D @ v))
+    assert y_printed.shape == (6,) and B.shape == (9, 9)
+    with pytest.raises(ValueError):
+        B @ y_printed
+    assert np.allclose(y_printed[0:3], [0.4, 0.0, -0.2])  # M_d^-1 K_D v: 0.4 m/s^2 where the reference does not accelerate

@@ -207,14 +207,17 @@ def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=
 
 
 def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, v: np.ndarray, a0: np.ndarray, S: np.ndarray,
-                     rows: tuple[int, ...], cols: tuple[int, ...], xi=None, xi_dot=None) -> OpSpaceModelXi:
+                     rows: tuple[int, ...], cols: tuple[int, ...], xi=None, xi_dot=None, *,
+                     operational: bool = True) -> OpSpaceModelXi:
     """:func:`opspace_model_xi` from a checked Pinocchio state: v = S xi_dot and a0 = S_dot xi_dot given (no input checks;
-    for control loops that hold them already, e.g. :class:`qprr.charts.State`)."""
+    for control loops that hold them already, e.g. :class:`qprr.charts.State`).  ``operational=False`` stops after the
+    kinematics and the mass matrices (``n``, ``G``, ``Lambda``, ``Lambda_inv``, ``J_bar``, ``mu``, ``p`` None, ``rank`` -1)."""
     M = pin.crba(model, data, q)
     M = np.triu(M) + np.triu(M, 1).T
     B = S.T @ M @ S
-    n = S.T @ pin.rnea(model, data, q, v, a0)  # C xi_dot + G
-    G = S.T @ pin.computeGeneralizedGravity(model, data, q)
+    if operational:
+        n = S.T @ pin.rnea(model, data, q, v, a0)  # C xi_dot + G
+        G = S.T @ pin.computeGeneralizedGravity(model, data, q)
     Jv = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
     pin.forwardKinematics(model, data, q, v, a0)
     pin.updateFramePlacement(model, data, fid)
@@ -223,6 +226,9 @@ def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, 
     J = Jv @ S
     twist = Jv @ v
     drift = np.concatenate([acc.linear, acc.angular])
+    if not operational:
+        return OpSpaceModelXi(xi, xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B,
+                              None, None, Jv, M, None, None, None, None, None, -1)
     c = list(cols)
     Jc = J[np.ix_(r, c)]
     X = np.linalg.solve(B[np.ix_(c, c)], Jc.T)

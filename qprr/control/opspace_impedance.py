@@ -315,7 +315,8 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         if self._step_t != t:  # first call of this step: the model, the reference and a*
             S = ch.rate_map(state.xi)
             a0 = np.array(state.accel_to_v_list(self._zeros))  # S_dot xi_dot: the acceleration at xi_ddot = 0
-            m = self._terms(P.model, self._tdata, P.ee_frame, state.q, state.v, a0, S, (0, 1, 2), self.coordinates)
+            m = self._terms(P.model, self._tdata, P.ee_frame, state.q, state.v, a0, S, (0, 1, 2), self.coordinates,
+                            operational=False)
             p_r, v_r, a_r = self._ref
             e = m.position - p_r
             e_dot = m.velocity[0:3] - v_r
@@ -325,38 +326,39 @@ class OperationalSpaceImpedance(InverseDynamicsController):
                 a_star = a_r + self._M_inv @ (self._h[0:3] - spring)
             else:  # M_d = Lambda of the free system: Lambda^-1 = J M^-1 J^T
                 a_star = a_r - (Jv @ np.linalg.solve(m.M, Jv.T)) @ spring
-            self._step = (S, a0, m, a_star)
+            # realised acceleration (module docstring, step 3): a_real = a + S_c da - E_l (tau(a) + ff + M S_c da)_l / m,
+            # so A da = rhs with A = J (I - E_l M_l / m) S_c, the same at both calls of the step
+            c = list(self.coordinates)
+            Sd = S[:, c]
+            lost = self._lost
+            if lost:
+                Ml = m.M[lost]
+                mass = np.diag(Ml[:, lost])
+                Ad = Jv @ Sd - Jv[:, lost] @ ((Ml / mass[:, None]) @ Sd)
+            else:
+                mass, Ad = None, Jv @ Sd
+            if self._W is None:
+                X = np.linalg.solve(m.B[np.ix_(c, c)], Ad.T)  # B_cc^-1 A^T: the inertia-weighted (dynamically consistent) inverse
+            else:
+                X = self._W[:, None] * Ad.T
+            w, V = np.linalg.eigh(0.5 * ((Ad @ X) + (Ad @ X).T))
+            w = np.maximum(w, 0.0)
+            den = w * w + self._eps2
+            gain = np.divide(w, den, out=np.zeros_like(w), where=den > 1e-300)
+            self._step = (a0, m, a_star, Sd @ (X @ ((V * gain) @ V.T)), mass)
             self._step_t = t
             self.log.append(np.concatenate([[t], m.position, p_r, e, self._h[0:3], a_star]))
-        S, a0, m, a_star = self._step
+        a0, m, a_star, G, mass = self._step
         Jv = m.J_v[0:3]
-        # realised acceleration (module docstring, step 3): a_real = a + da - E_l (tau(a) + ff + M da)_l / m
         a = np.asarray(a)
-        c = list(self.coordinates)
-        Sd = S[:, c]
-        if self._lost:
+        rhs = a_star - m.drift[0:3] - Jv @ (a - a0)
+        if mass is not None:
             lost = self._lost
             tau = pin.rnea(P.model, self._tdata, state.q, state.v, a)
             if ff is not None:
                 tau = tau + np.asarray(ff)
-            Ml = m.M[lost]
-            mass = np.diag(Ml[:, lost])
-            Proj = -Ml / mass[:, None]  # rows l of the map da -> change of the lost accelerations
-            Ad = Jv @ Sd + Jv[:, lost] @ (Proj @ Sd)
-            shift = Jv[:, lost] @ (-tau[lost] / mass)
-        else:
-            Ad, shift = Jv @ Sd, 0.0
-        rhs = a_star - m.drift[0:3] - Jv @ (a - a0) - shift
-        if self._W is None:
-            X = np.linalg.solve(m.B[np.ix_(c, c)], Ad.T)  # B_cc^-1 A^T: the inertia-weighted (dynamically consistent) inverse
-        else:
-            X = self._W[:, None] * Ad.T
-        w, V = np.linalg.eigh(0.5 * ((Ad @ X) + (Ad @ X).T))
-        w = np.maximum(w, 0.0)
-        den = w * w + self._eps2
-        gain = np.divide(w, den, out=np.zeros_like(w), where=den > 1e-300)
-        d_alpha = X @ (V @ (gain * (V.T @ rhs)))
-        return (Sd @ d_alpha).tolist()
+            rhs += Jv[:, lost] @ (tau[lost] / mass)
+        return (G @ rhs).tolist()
 
     def history(self) -> dict[str, np.ndarray]:
         """Per control step: ``t``; ``p_e``, ``p_r``, ``e`` = p_e - p_r [m]; ``h`` the measured force [N] (zeros
