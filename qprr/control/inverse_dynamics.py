@@ -25,6 +25,8 @@ layered IDC (Sec. 6.4.2)        ``tilt="single"``, ``realizable=False``, a paylo
                                 measured wrench cancelled ((6.76)) - :class:`LayeredIDC`
 payload IDC ((6.53)-(6.57))     the model carries the estimated/known payload - :class:`PayloadIDC`
 impedance (Sec. 6.4.3.3)        impedance-filtered references - :class:`qprr.control.impedance.ImpedanceController`
+end-effector impedance          an end-effector acceleration task (:meth:`task_accelerations`) and the
+((6.72)-(6.73))                 measured wrench cancelled - :class:`qprr.control.opspace_impedance.OperationalSpaceImpedance`
 ==============================  =============================================================
 
 * ``realizable`` (default True): (6.19)-(6.22) assume the whole u_fb is applied, but coplanar
