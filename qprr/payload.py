@@ -205,9 +205,11 @@ class HoldingEffort:
 
 
 def max_total_thrust(platform: Platform) -> float:
-    """Largest force [N] the rotors produce along the thrust axis (all at f_max)."""
-    axis = platform.thrust_axis[1]
-    return float(sum(r.f_max * float(np.dot(r.axis_body, axis)) for r in platform.rotors))
+    """Largest force [N] the rotors produce along the thrust axis with no force across it (all at f_max for rotors along
+    one axis): the collective-thrust limit of :meth:`qprr.analysis.WrenchSet.force_max`."""
+    from .analysis.wrenchset import wrench_set
+
+    return wrench_set(platform).force_max(platform.thrust_axis[1])
 
 
 def holding_efforts(platform: Platform, q_arm, payload: Payload | float) -> HoldingEffort:
@@ -260,41 +262,49 @@ def payload_capacity(platform: Platform, mission: str = "manipulation", q_arm=No
       holding, dynamic efforts excluded), at ``q_arm``, over ``configurations`` (an array of
       q_arm rows) or, if both are None, over a grid of ``n_grid`` values of each revolute joint
       inside its limits (prismatic joints at 0; the worst case).  Each effort is affine in m_c,
-      u_j = a_j + m_c b_j (a, b from Pinocchio's G), so m_max = min over configurations of
-      (limit_j - a_j sgn(b_j)) / |b_j|.
+      u_j = a_j + m_c b_j, so m_max = min over configurations of (limit_j - a_j sgn(b_j)) / |b_j|.
+
+    The numbers come from the capacity map's implementation (:func:`qprr.analysis.hover.payload_limits` on the
+    batched statics of :class:`qprr.analysis.ArmChain`, equal to Pinocchio's generalised gravity to round-off);
+    the map (:func:`qprr.analysis.capacity`) adds the attitude authority and the best configuration per workspace cell.
     """
+    from .analysis.chain import ArmChain
+    from .analysis.hover import payload_limits
+    from .analysis.wrenchset import wrench_set
+
     if mission not in MISSIONS:
         raise UnknownNameError("mission", mission, MISSIONS)
     if not (isinstance(thrust_reserve, (int, float)) and 0.0 <= thrust_reserve < 1.0):
         raise InputError(f"thrust_reserve must be in [0, 1), got {thrust_reserve!r}")
-    m_thrust = max_total_thrust(platform) * (1.0 - thrust_reserve) / platform.g - platform.total_mass
-    per = {"thrust": m_thrust}
+    offset = as_vector(com_ee, 3, "com_ee")
+    if mission == "transport":  # the thrust alone: one configuration gives it
+        rows = platform.neutral_q()[7:].reshape(1, -1) if q_arm is None else platform.check_arm_limits(q_arm).reshape(1, -1)
+    else:
+        rows = np.array(_configurations(platform, q_arm, configurations, n_grid), dtype=float).reshape(-1, platform.n_arm)
+    W = wrench_set(platform)
+    chain = ArmChain(platform)
+    names = platform.arm_names
+    limits = np.array(platform.arm_effort_limits, dtype=float)
+    best_m = np.full(platform.n_arm, math.inf)
+    best_q = [None] * platform.n_arm
+    m_thrust = None
+    for start in range(0, rows.shape[0], 16384):
+        chunk = rows[start:start + 16384]
+        pl = payload_limits(chain.statics(chain.pose(chunk), platform.ee_frame, offset), W, limits, platform.g)
+        # collective thrust F_max / g - m, F_max reduced by the reserve
+        m_thrust = (pl.collective + platform.total_mass) * (1.0 - thrust_reserve) - platform.total_mass
+        lim = pl.effort_per_joint
+        k = lim.argmin(axis=0)
+        for i in range(platform.n_arm):
+            if lim[k[i], i] < best_m[i]:
+                best_m[i], best_q[i] = float(lim[k[i], i]), chunk[k[i]].copy()
+    per = {"thrust": float(m_thrust)}
     if mission == "transport":
         best, where = "thrust", None
     else:
-        grid = _configurations(platform, q_arm, configurations, n_grid)
-        unit = PayloadModel(platform, com_ee)
-        unit.set_mass(1.0)
-        d0, d1 = platform.model.createData(), unit.model.createData()
-        q = pin.neutral(platform.model)
-        names = platform.arm_names
-        limits = platform.arm_effort_limits
-        best_m = {n: (math.inf, None) for n in names}
-        for qa in grid:
-            q[7:] = qa
-            a = pin.computeGeneralizedGravity(platform.model, d0, q)[6:].copy()
-            b = pin.computeGeneralizedGravity(unit.model, d1, q)[6:] - a
-            for i, n in enumerate(names):
-                lim = limits[i]
-                if abs(b[i]) < 1e-12:
-                    m = math.inf if abs(a[i]) <= lim else -math.inf
-                else:
-                    m = (lim - a[i] * math.copysign(1.0, b[i])) / abs(b[i])
-                if m < best_m[n][0]:
-                    best_m[n] = (m, np.array(qa))
-        per.update({n: v[0] for n, v in best_m.items()})
+        per.update({n: best_m[i] for i, n in enumerate(names)})
         best = min(per, key=per.get)
-        where = None if best == "thrust" else best_m[best][1]
+        where = None if best == "thrust" else best_q[names.index(best)]
     m_max = per[best]
     if m_max < 0.0:
         return PayloadCapacity(mission, 0.0, best, where, per, "none", f"{best} is exceeded without payload (bound {m_max:.4f} kg)")

@@ -10,6 +10,9 @@ generic            what
 =================  ===========================================================================
 ``hover-reach``    any platform: climb to 2 m, then move the arm to a reach posture; inverse
                    dynamics (or any controller of :mod:`qprr.control`)
+``ee-impedance``   any platform: the end effector under operational-space impedance (Thesis
+                   (6.72)-(6.73)) pressed into a compliant wall or pushed by a force step
+                   (:mod:`qprr.impedance_scenario`)
 =================  ===========================================================================
 
 The thesis's scenarios are listed by ``qprr simulate --help`` and :mod:`qprr.thesis.scenarios`.
@@ -100,11 +103,45 @@ def _hover_reach(platform, controller, progress, duration, dt, integrator, seed,
                     scenario="hover-reach")
 
 
+def _ee_impedance(platform, controller, progress, **options):
+    from .impedance_scenario import run_ee_impedance
+
+    return run_ee_impedance(platform, controller, progress, **options)
+
+
+def _ee_impedance_plot(result, path):
+    from .impedance_scenario import plot_ee_impedance
+
+    return plot_ee_impedance(result, path)
+
+
+def _ee_impedance_summary(result):
+    from .impedance_scenario import summary
+
+    return summary(result)
+
+
 GENERIC = (
     Scenario("hover-reach", "any platform: climb to z, then move every arm joint towards its upper limit", _hover_reach,
              ("idc", "dsid", "mfc", "decoupled", "mpc"),
              {**_COMMON, "z": Option(2.0, "hover height [m]"),
               "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits")}),
+    Scenario("ee-impedance", "any platform: end-effector impedance (6.72)-(6.73) against a compliant wall or a force step",
+             _ee_impedance, ("opspace-impedance", "idc"),
+             {"contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
+              "duration": Option(10.0, "run length [s]"), "dt": Option(1e-3, "integration step [s]"),
+              "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"), "seed": Option(0, "seed"),
+              "z": Option(2.0, "hover height [m]"),
+              "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
+              "omega_n": Option(4.0, "impedance natural frequency [rad/s] (every axis)"),
+              "zeta": Option(1.0, "impedance damping ratio"), "mass": Option(1.0, "impedance mass M_d [kg]"),
+              "gap": Option(0.05, "wall: distance from the end effector to the wall at the start [m]"),
+              "penetration": Option(0.05, "wall: how far the reference ends inside the wall [m]"),
+              "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"), "wall_damping": Option(20.0, "wall damping [N s/m]"),
+              "force": Option((0.5, 0.0, 0.3), "wrench: force on the end effector [N], world x, y, z"),
+              "t_on": Option(1.0, "wall: approach starts; wrench: force on [s]"),
+              "t_off": Option(6.0, "wall: retreat starts; wrench: force off [s]")},
+             None, _ee_impedance_plot, "Sec. 6.4.3.3, (6.71)-(6.73)", _ee_impedance_summary),
 )
 
 

@@ -104,3 +104,36 @@ def test_capacity_input_errors(qp):
         capacity(qp, n_samples=100, thrust_tol=-1.0)
     with pytest.raises(InputError, match="payload_offset"):
         capacity(qp, n_samples=100, payload_offset=[0.0, 0.0])
+
+
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5"])
+def test_payload_capacity_is_the_maps_implementation(name):
+    """qprr.payload.payload_capacity reads the map's limits (one implementation): at given configurations its per-joint
+    bounds equal (L - a sgn b) / |b| from Pinocchio's generalised gravity with and without 1 kg at the end effector,
+    its thrust bound the map's collective limit, and at the capacity the binding joint is exactly at its effort limit."""
+    from qprr import payload as pl
+
+    p = qprr.load(name)
+    rng = np.random.default_rng(11)
+    rows = rng.uniform(p.arm_lower, p.arm_upper, size=(40, p.n_arm))
+    off = (0.01, -0.02, 0.03)
+    r = pl.payload_capacity(p, "manipulation", configurations=rows, com_ee=off)
+    loaded = pl.with_payload(p, pl.Payload(1.0, off))
+    d0, d1 = p.model.createData(), loaded.model.createData()
+    q = p.neutral_q()
+    ref = np.full(p.n_arm, np.inf)
+    for row in rows:
+        q[7:] = row
+        a = pin.computeGeneralizedGravity(p.model, d0, q)[6:].copy()
+        b = pin.computeGeneralizedGravity(loaded.model, d1, q)[6:] - a
+        for j in range(p.n_arm):
+            if abs(b[j]) > 1e-12:
+                ref[j] = min(ref[j], (p.arm_effort_limits[j] - a[j] * np.sign(b[j])) / abs(b[j]))
+    got = np.array([r.per_limit[n] for n in p.arm_names])
+    fin = np.isfinite(ref)
+    assert np.array_equal(fin, np.isfinite(got)) and np.allclose(got[fin], ref[fin], rtol=1e-12)
+    assert abs(r.per_limit["thrust"] - capacity(p, n_samples=200).m_thrust) < 1e-12
+    if r.limiting != "thrust":
+        h = pl.holding_efforts(p, r.q_arm, pl.Payload(r.max_mass, off))
+        j = p.arm_names.index(r.limiting)
+        assert abs(abs(h.arm_effort[j]) - p.arm_effort_limits[j]) < 1e-10 * p.arm_effort_limits[j]

@@ -155,3 +155,48 @@ def test_opspace_input_errors():
         opspace_model(p, p.data(), np.zeros(3))
     with pytest.raises(InputError, match="F"):
         opspace_model(p, p.data(), p.neutral_q()).acceleration([1.0, 2.0])
+
+
+# ------------------------------------------------------------------------ thesis coordinates, locked coordinates
+@pytest.mark.parametrize("name", PLATFORMS)
+def test_opspace_model_xi_equals_the_pinocchio_coordinates_one(name):
+    """Lambda, mu, p do not depend on the coordinates: in thesis coordinates (B = S^T M S, n = C xi_dot + G) they equal
+    opspace_model's at the same state; J = J_v S and the twist J xi_dot = J_v v."""
+    from qprr import charts as ch
+    from qprr.analysis import opspace_model_xi
+
+    p = by_name(name)
+    q, v, rng = random_state(p, 7)
+    xi, xi_dot = ch.qv_to_xi(q, v)
+    m0 = opspace_model(p, p.data(), q, v)
+    m = opspace_model_xi(p, p.data(), xi, xi_dot)
+    scale = np.abs(m0.Lambda).max()
+    assert np.abs(m.Lambda - m0.Lambda).max() < 1e-12 * scale
+    assert np.abs(m.mu - m0.mu).max() < 1e-11 * max(1.0, np.abs(m0.mu).max())
+    assert np.abs(m.p - m0.p).max() < 1e-11 * max(1.0, np.abs(m0.p).max())
+    assert np.allclose(m.J, m0.J @ ch.rate_map(xi), atol=1e-13)
+    assert np.allclose(m.velocity, m0.J @ v, atol=1e-13)
+    assert np.allclose(m.J_v, m0.J, atol=1e-13) and np.allclose(m.M, m0.M, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", PLATFORMS)
+def test_locking_coordinates_makes_the_end_effector_heavier(name):
+    """Roll and pitch locked (the attitude loop's coordinates): J_c J_bar_c = I and Lambda_c - Lambda is positive
+    semi-definite (a constraint never makes the end effector lighter); rank and input errors."""
+    from qprr import charts as ch
+    from qprr.analysis import opspace_model_xi
+    from qprr.errors import UnknownNameError
+
+    p = by_name(name)
+    q, v, _ = random_state(p, 8)
+    xi, xi_dot = ch.qv_to_xi(q, v)
+    free = opspace_model_xi(p, p.data(), xi, xi_dot, rows="position")
+    cols = [i for i in range(p.n_xi) if i not in (3, 4)]
+    lk = opspace_model_xi(p, p.data(), xi, xi_dot, rows="position", coordinates=cols)
+    assert lk.rank == 3 and np.allclose(lk.J_c @ lk.J_bar, np.eye(3), atol=1e-10)
+    w = np.linalg.eigvalsh(lk.Lambda - free.Lambda)
+    assert w.min() > -1e-12 * np.abs(lk.Lambda).max()
+    with pytest.raises(UnknownNameError):
+        opspace_model_xi(p, p.data(), xi, rows="wrist")
+    with pytest.raises(InputError, match="coordinates"):
+        opspace_model_xi(p, p.data(), xi, coordinates=[0, 0, 1])

@@ -13,7 +13,8 @@ map (module)                           what
 :func:`hover` (hover)                  thrusts, thrust margin, attitude authority, hover feasibility,
                                        payload envelope; the rotors' wrench set (wrenchset)
 :func:`opspace_model`, :func:`opspace_map` (opspace)
-                                       Lambda, mu, p at the end effector (Thesis (5.47)-(5.52))
+                                       Lambda, mu, p at the end effector (Thesis (5.47)-(5.52));
+                                       :func:`opspace_model_xi` in thesis coordinates, some locked
 :func:`capacity` (capacity)            largest payload over the workspace and its limiting factor
                                        (Thesis Fig. 6.46 generalised)
 =====================================  ==================================================================
@@ -30,7 +31,7 @@ from .capacity import LIMITS, CapacityResult, capacity
 from .chain import ArmChain, Statics
 from .cog import BalanceResult, CoGResult, balance, cog_regions
 from .hover import HoverResult, PayloadLimits, hover
-from .opspace import OpSpaceMap, OpSpaceModel, opspace_map, opspace_model
+from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
 from .singularity import SingularityResult, singularity
 from .voxels import MeasureEstimate, estimate_measure
 from .workspace import WorkspaceResult, reachable, workspace
@@ -47,6 +48,7 @@ __all__ = [
     "MeasureEstimate",
     "OpSpaceMap",
     "OpSpaceModel",
+    "OpSpaceModelXi",
     "PayloadLimits",
     "SingularityResult",
     "Statics",
@@ -61,6 +63,7 @@ __all__ = [
     "make_grid",
     "opspace_map",
     "opspace_model",
+    "opspace_model_xi",
     "reachable",
     "singularity",
     "workspace",

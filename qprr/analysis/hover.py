@@ -56,16 +56,18 @@ class PayloadLimits:
 
     ``rotors``: the rotors can hold the wrench (with ``torque_reserve`` left about every axis);
     ``effort``: every arm joint within its effort limit, ``effort_joint`` the index of the joint
-    that binds first (-1 if none); ``collective``: the collective-thrust limit
+    that binds first (-1 if none), ``effort_per_joint`` (n, n_arm) the limit of each joint
+    (:func:`effort_payload_limits`); ``collective``: the collective-thrust limit
     F_max / g - m_platform (a scalar: the transport mission of Thesis Sec. 6.4.1.1).  A value
     < 0 means even the empty platform breaks that limit there (-inf: w_0 cannot be produced
-    at all).
+    at all).  :func:`qprr.payload.payload_capacity` reads its numbers from here.
     """
 
     rotors: np.ndarray
     effort: np.ndarray
     effort_joint: np.ndarray
     collective: float
+    effort_per_joint: np.ndarray | None = None
 
     @property
     def total(self) -> np.ndarray:
@@ -90,16 +92,25 @@ def payload_limits(st: Statics, W: WrenchSet, effort_limits: np.ndarray, g: floa
     lo, hi = Wr.ray(st.wrench0, st.wrench1)
     inside = Wr.contains(st.wrench0)
     rot = np.where(inside & (lo <= hi), hi, -np.inf)
-    # arm efforts: |a + m b| <= L for m >= 0
-    a, b = st.tau_arm0, st.tau_arm1
+    lim = effort_payload_limits(st.tau_arm0, st.tau_arm1, effort_limits)
+    eff = lim.min(axis=1) if lim.shape[1] else np.full(lim.shape[0], np.inf)
+    joint = np.where(eff < np.inf, lim.argmin(axis=1), -1) if lim.shape[1] else np.full(lim.shape[0], -1)
+    collective = Wr.force_max() / g - st.mass
+    return PayloadLimits(rot, eff, joint, float(collective), lim)
+
+
+def effort_payload_limits(tau0: np.ndarray, tau1: np.ndarray, effort_limits) -> np.ndarray:
+    """Largest payload m >= 0 [kg] each arm joint holds, |tau0 + m tau1| <= L (n, n_arm) [kg].
+
+    Holding efforts are affine in m (:class:`~qprr.analysis.chain.Statics`), so the bound is
+    (L - tau0 sgn(tau1)) / |tau1|; +inf where the payload does not load the joint and it holds,
+    -inf where even the empty arm exceeds L.
+    """
+    a, b = tau0, tau1
     L = np.broadcast_to(effort_limits, a.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
         lim = np.where(np.abs(b) > 1e-15, (L - a * np.sign(b)) / np.abs(b), np.where(np.abs(a) <= L, np.inf, -np.inf))
-    lim = np.where(np.abs(a) > L * (1 + 1e-12), -np.inf, lim)
-    eff = lim.min(axis=1) if lim.shape[1] else np.full(a.shape[0], np.inf)
-    joint = np.where(eff < np.inf, lim.argmin(axis=1), -1) if lim.shape[1] else np.full(a.shape[0], -1)
-    collective = Wr.force_max() / g - st.mass
-    return PayloadLimits(rot, eff, joint, float(collective))
+    return np.where(np.abs(a) > L * (1 + 1e-12), -np.inf, lim)
 
 
 @dataclass(frozen=True)
@@ -201,6 +212,7 @@ def hover(
     eff_ok = np.empty((nm, n), dtype=bool)
     w_hover = np.empty((n, 6))
     lim_rot, lim_eff, lim_joint = np.empty(n), np.empty(n), np.empty(n, dtype=np.int64)
+    lim_per = np.empty((n, na))
     collective = None
     eff_lim = np.array(platform.arm_effort_limits)
     for start, q in grid.chunks():
@@ -222,7 +234,7 @@ def hover(
             if full:
                 fauth[k, sl] = W.authority(w, (0, 1, 2)).min(axis=2)
         pl = payload_limits(st, W, eff_lim, platform.g, torque_reserve)
-        lim_rot[sl], lim_eff[sl], lim_joint[sl] = pl.rotors, pl.effort, pl.effort_joint
+        lim_rot[sl], lim_eff[sl], lim_joint[sl], lim_per[sl] = pl.rotors, pl.effort, pl.effort_joint, pl.effort_per_joint
         collective = pl.collective
         if progress:
             progress((start + len(q)) / n, "hover map")
@@ -235,7 +247,7 @@ def hover(
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
     return HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
-                       PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective)), W, w_hover, frac,
+                       PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
                        margin[np.arange(nm), worst], allq[worst], status, reason)
 
 

@@ -14,6 +14,14 @@ for the Q-PRR (it has no inverse): they hold only for a square J (docs/thesis-er
 rows (5.50)-(5.51)); the form above is the one for any number of joints.  The analytic form
 with Euler-angle rates follows from (5.48)-(5.49): Lambda_A = T_A^T Lambda T_A.
 
+In thesis coordinates (:func:`opspace_model_xi`: xi_dot, B = S^T M S, n = C xi_dot + G of
+(5.36)) the same model reads Lambda^-1 = J_xi B^-1 J_xi^T, mu = J_bar^T (n - G) - Lambda J_xi_dot xi_dot,
+p = J_bar^T G (Lambda, mu, p do not depend on the coordinates).  There some coordinates may be
+*locked* (zero acceleration, their constraint forces workless): ``coordinates`` lists the free
+ones and the model is that of the system moving along them only, Lambda_c^-1 = J_c B_cc^-1 J_c^T.
+The operational-space impedance controller (:mod:`qprr.control.opspace_impedance`) uses it
+with roll and pitch locked (they belong to the attitude loop of an under-actuated platform).
+
 For the floating-base platform J has full row rank (the base twist alone spans every
 end-effector twist), so Lambda always exists.  ``fixed_base=True`` uses the arm alone
 (:meth:`Platform.arm_model`), whose J may have a lower rank: Lambda is then taken on the
@@ -33,7 +41,9 @@ import numpy as np
 import pinocchio as pin
 from scipy.linalg import solve_triangular
 
+from .. import charts as ch
 from ..charts import as_vector
+from ..errors import InputError
 from ..kinematics import check_q
 from ..platform import Platform
 from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
@@ -102,6 +112,135 @@ def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, 
     mu = Jbar.T @ (h - g) - L @ Jdv
     p = Jbar.T @ g
     return OpSpaceModel(q.copy(), v.copy(), fid, J, Jdv, M, L, Li, Jbar, mu, p, h, g, rank)
+
+
+ROWS = {"pose": (0, 1, 2, 3, 4, 5), "position": (0, 1, 2), "orientation": (3, 4, 5)}
+"""Named row sets of the end-effector twist [p_dot; omega] (world axes)."""
+
+
+@dataclass(frozen=True)
+class OpSpaceModelXi:
+    """Operational-space model in thesis coordinates, some coordinates possibly locked (see the module docstring).
+
+    ``position`` (3,) [m] and ``velocity`` (6,) = [p_dot; omega] [m/s, rad/s] of the frame (world
+    axes); ``J`` (6, 6 + n) the thesis Jacobian of the twist, [p_dot; omega] = J xi_dot (Thesis
+    (4.11)-(4.13)); ``drift`` (6,) = J_dot xi_dot, the classical end-effector acceleration at
+    xi_ddot = 0 [m/s^2, rad/s^2]; ``B`` (6 + n, 6 + n), ``n`` = C xi_dot + G and ``G`` (6 + n,) of
+    (5.36); ``J_v`` (6, nv) and ``M`` (nv, nv) the same in Pinocchio's coordinates (J = J_v S,
+    B = S^T M S).  On the ``rows`` (r of the twist) and the free ``coordinates`` (indices into xi):
+    ``Lambda``, ``Lambda_inv`` (r, r); ``J_bar`` (n_c, r) the dynamically consistent inverse of
+    J_c = J[rows][:, coordinates]; ``mu``, ``p`` (r,); ``rank`` of J_c.
+    """
+
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    frame: int
+    rows: tuple[int, ...]
+    coordinates: tuple[int, ...]
+    position: np.ndarray
+    velocity: np.ndarray
+    J: np.ndarray
+    drift: np.ndarray
+    B: np.ndarray
+    n: np.ndarray
+    G: np.ndarray
+    J_v: np.ndarray
+    M: np.ndarray
+    Lambda: np.ndarray
+    Lambda_inv: np.ndarray
+    J_bar: np.ndarray
+    mu: np.ndarray
+    p: np.ndarray
+    rank: int
+
+    @property
+    def J_c(self) -> np.ndarray:
+        """J_c (r, n_c): the ``rows`` of ``J``, columns of the free coordinates."""
+        return self.J[np.ix_(self.rows, self.coordinates)]
+
+    def acceleration(self, F) -> np.ndarray:
+        """End-effector acceleration (rows) under u_c = J_c^T F alone on the free coordinates: Lambda^-1 (F - mu - p)."""
+        F = as_vector(F, len(self.rows), "F")
+        return self.Lambda_inv @ (F - self.mu - self.p)
+
+
+def _check_selection(values, n: int, name: str, names=None) -> tuple[int, ...]:
+    if isinstance(values, str) and names is not None:
+        if values not in names:
+            from ..errors import UnknownNameError
+
+            raise UnknownNameError(name, values, tuple(names))
+        return names[values]
+    try:
+        idx = tuple(int(i) for i in values)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be indices in [0, {n}), got {values!r}") from exc
+    if not idx or len(set(idx)) != len(idx) or min(idx) < 0 or max(idx) >= n or any(i != v for i, v in zip(idx, values)):
+        raise InputError(f"{name} must be distinct indices in [0, {n}), got {values!r}")
+    return idx
+
+
+def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=None, *, rows="pose",
+                     coordinates=None) -> OpSpaceModelXi:
+    """The operational-space model of ``frame`` (default: end effector) in thesis coordinates, Thesis (5.47)-(5.52).
+
+    Parameters
+    ----------
+    xi, xi_dot : thesis coordinates and rates (6 + n_arm,) [m, rad, m/s, rad/s].
+    rows : "pose", "position", "orientation" or indices into the twist [p_dot; omega] (world axes).
+    coordinates : the free coordinates (indices into xi; default: all); the others are locked.
+
+    Returns :class:`OpSpaceModelXi`; ``position`` (3,) and ``velocity`` (6,) of the frame (world).
+    With every coordinate free and ``rows="pose"``, Lambda, mu, p equal those of
+    :func:`opspace_model` at the same state (tests/test_analysis_opspace.py).
+    """
+    n_xi = platform.n_xi
+    xi = ch.as_xi(xi, "xi", n_xi)
+    w = np.zeros(n_xi) if xi_dot is None else as_vector(xi_dot, n_xi, "xi_dot")
+    ch._check_pitch(xi[4], "opspace_model_xi")
+    rows = _check_selection(rows, 6, "rows", ROWS)
+    cols = tuple(range(n_xi)) if coordinates is None else _check_selection(coordinates, n_xi, "coordinates")
+    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
+    S = ch.rate_map(xi)
+    a0 = ch.rate_map_dot(xi, w) @ w  # Pinocchio acceleration at xi_ddot = 0
+    return opspace_terms_xi(platform.model, data, fid, ch.xi_to_q(xi), S @ w, a0, S, rows, cols, xi.copy(), w.copy())
+
+
+def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, v: np.ndarray, a0: np.ndarray, S: np.ndarray,
+                     rows: tuple[int, ...], cols: tuple[int, ...], xi=None, xi_dot=None, *,
+                     operational: bool = True) -> OpSpaceModelXi:
+    """:func:`opspace_model_xi` from a checked Pinocchio state: v = S xi_dot and a0 = S_dot xi_dot given (no input checks;
+    for control loops that hold them already, e.g. :class:`qprr.charts.State`).  ``operational=False`` stops after the
+    kinematics and the mass matrices (``n``, ``G``, ``Lambda``, ``Lambda_inv``, ``J_bar``, ``mu``, ``p`` None, ``rank`` -1)."""
+    M = pin.crba(model, data, q)
+    M = np.triu(M) + np.triu(M, 1).T
+    B = S.T @ M @ S
+    if operational:
+        n = S.T @ pin.rnea(model, data, q, v, a0)  # C xi_dot + G
+        G = S.T @ pin.computeGeneralizedGravity(model, data, q)
+    Jv = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
+    pin.forwardKinematics(model, data, q, v, a0)
+    pin.updateFramePlacement(model, data, fid)
+    acc = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
+    r = list(rows)
+    J = Jv @ S
+    twist = Jv @ v
+    drift = np.concatenate([acc.linear, acc.angular])
+    if not operational:
+        return OpSpaceModelXi(xi, xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B,
+                              None, None, Jv, M, None, None, None, None, None, -1)
+    c = list(cols)
+    Jc = J[np.ix_(r, c)]
+    X = np.linalg.solve(B[np.ix_(c, c)], Jc.T)
+    Li = Jc @ X
+    Li = 0.5 * (Li + Li.T)
+    rank = int(np.linalg.matrix_rank(Li, tol=1e-10 * max(np.abs(Li).max(), 1e-300)))
+    L = np.linalg.inv(Li) if rank == len(r) else np.linalg.pinv(Li, rcond=1e-10, hermitian=True)
+    Jbar = X @ L
+    mu = Jbar.T @ (n - G)[c] - L @ drift[r]
+    p = Jbar.T @ G[c]
+    return OpSpaceModelXi(xi, xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B, n, G,
+                          Jv, M, L, Li, Jbar, mu, p, rank)
 
 
 @dataclass(frozen=True)

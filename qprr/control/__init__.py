@@ -18,6 +18,8 @@ name             controller                                              thesis
                  arm controllers, coupling as a disturbance)
 ``mpc``          :class:`qprr.control.mpc.MPCController` (receding        not in the thesis (its "MPC" is
                  horizon, thrust bounds; needs crocoddyl)                ``dsid``)
+``opspace-       :class:`OperationalSpaceImpedance` (end-effector        (6.72)-(6.73)
+impedance``      impedance as a task on the inverse-dynamics core)
 ===============  ======================================================  ================================
 
 The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
@@ -44,6 +46,7 @@ from .inverse_dynamics import (
     PayloadIDC,
 )
 from .mfc import MFCGains, ModelFreeController, ipid
+from .opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance
 
 CONTROLLERS = {
     "idc": InverseDynamicsController,
@@ -53,6 +56,7 @@ CONTROLLERS = {
     "payload-idc": PayloadIDC,
     "impedance": ImpedanceController,
     "decoupled": DecoupledController,
+    "opspace-impedance": OperationalSpaceImpedance,
 }
 """Controller classes (or factories) by name: ``CONTROLLERS[name](platform, **kwargs)``."""
 
@@ -93,6 +97,7 @@ __all__ = [
     "Controller",
     "DecoupledController",
     "DesiredStateInverseDynamics",
+    "EndEffectorImpedance",
     "IDCGains",
     "ImpedanceController",
     "ImpedanceFilter",
@@ -101,6 +106,7 @@ __all__ = [
     "LayeredIDC",
     "MFCGains",
     "ModelFreeController",
+    "OperationalSpaceImpedance",
     "PayloadIDC",
     "Reference",
     "SingleTiltReference",

@@ -25,6 +25,8 @@ layered IDC (Sec. 6.4.2)        ``tilt="single"``, ``realizable=False``, a paylo
                                 measured wrench cancelled ((6.76)) - :class:`LayeredIDC`
 payload IDC ((6.53)-(6.57))     the model carries the estimated/known payload - :class:`PayloadIDC`
 impedance (Sec. 6.4.3.3)        impedance-filtered references - :class:`qprr.control.impedance.ImpedanceController`
+end-effector impedance          an end-effector acceleration task (:meth:`task_accelerations`) and the
+((6.72)-(6.73))                 measured wrench cancelled - :class:`qprr.control.opspace_impedance.OperationalSpaceImpedance`
 ==============================  =============================================================
 
 * ``realizable`` (default True): (6.19)-(6.22) assume the whole u_fb is applied, but coplanar
@@ -210,6 +212,7 @@ class InverseDynamicsController(Controller):
         cls = type(self)
         self._refs_hook = cls.update_references is not InverseDynamicsController.update_references
         self._ff_hook = cls.feedforward is not InverseDynamicsController.feedforward
+        self._task_hook = cls.task_accelerations is not InverseDynamicsController.task_accelerations
         self.dt = 1e-3
         self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
 
@@ -283,6 +286,19 @@ class InverseDynamicsController(Controller):
         """Generalised force (thesis coordinates) added to the model's output (default: none)."""
         return None
 
+    def task_accelerations(self, t: float, state: State, ref: Reference, a: list[float], ff: list[float] | None) -> list[float] | None:
+        """A change of the accelerations the loops have set (default: None, no change); the operational-space
+        impedance adds its end-effector task here.
+
+        ``a``: Pinocchio's acceleration the inverse dynamics would realise (nv floats), before the base
+        directions the rotors cannot push along are left to the dynamics; ``ff``: the feedforward in
+        Pinocchio coordinates (nv floats) or None.  Returns the change (nv floats) or None.  With a tilt
+        strategy it is called twice per step: before (6.17), whose thrust direction then includes the
+        change, with the roll/pitch accelerations not set yet, and after them (a correction (6.17) does
+        not see); without, once.
+        """
+        return None
+
     def _mass_rows_of(self, ms: State, model, data, q) -> list:
         """Rows of M for the unproducible base directions; at the desired state reused while its arm joints are unchanged.
 
@@ -310,7 +326,12 @@ class InverseDynamicsController(Controller):
         abuf = self._abuf
         write = self._write
         ff = self.feedforward(t, state) if self._ff_hook else None
+        ffv = None if ff is None else ms.force_from_xi(ff).tolist()
         tilt = self.tilt
+        if self._task_hook and tilt is not None:  # first pass, seen by (6.17): roll/pitch accelerations not set yet
+            da = self.task_accelerations(t, state, ref, a, ffv)
+            if da is not None:
+                a = [ai + di for ai, di in zip(a, da)]
         if tilt is not None:
             write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
             t0 = _rnea(model, data, q, v, abuf).tolist()
@@ -333,6 +354,13 @@ class InverseDynamicsController(Controller):
             d3, d4, d5 = a3, cf * a4, -sf * a4  # T(phi, theta) [a3, a4, 0]
         else:
             d3 = d4 = d5 = 0.0
+        if self._task_hook:  # (second pass with) the roll/pitch accelerations
+            da = self.task_accelerations(t, state, ref, [a[0], a[1], a[2], a[3] + d3, a[4] + d4, a[5] + d5, *a[6:]], ffv)
+            if da is not None:
+                a = [ai + di for ai, di in zip(a, da)]
+                if tilt is not None:
+                    write(abuf, a)
+                    t0 = _rnea(model, data, q, v, abuf).tolist()
         if self._lost:
             # base accelerations along the unproducible directions chosen so that the applied
             # wrench has no component there: (tau0 + M delta)[lost] = 0, with M[lost, lost] = m I
@@ -341,6 +369,8 @@ class InverseDynamicsController(Controller):
                 write(abuf, a)
                 t0 = _rnea(model, data, q, v, abuf).tolist()
             rows = self._mass_rows_of(ms, model, data, q)
+            if ffv is not None:  # the feedforward is applied too: its unproducible part is left to the dynamics as well
+                t0 = [ti + fi for ti, fi in zip(t0, ffv)]
             for i, row in zip(self._lost, rows):
                 a[i] -= (t0[i] + row[3] * d3 + row[4] * d4 + row[5] * d5) / row[i]
         a[3] += d3
@@ -350,7 +380,7 @@ class InverseDynamicsController(Controller):
         tau = _rnea(model, data, q, v, abuf)
         if self.output == "pinocchio":
             if ff is not None:
-                tau = tau + ms.force_from_xi(ff)
+                tau = tau + np.array(ffv)
             return tau
         u = ms.force_to_xi_list(tau)
         if ff is not None:
