@@ -79,6 +79,39 @@ def _cache_dir(path: str | None) -> Path | None:
     return p
 
 
+PLATFORM_HELP = ("q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR; "
+                 "your own: --urdf FILE.urdf --rotors FILE.toml")
+
+
+def add_platform_options(p: argparse.ArgumentParser, *, name_option: bool = True) -> None:
+    """``--platform NAME`` (unless the command takes the name as a positional argument), ``--layout plus|x``
+    and a user's own platform: ``--urdf FILE --rotors FILE.toml [--ee-frame NAME]``; read back by
+    :func:`platform_from_args`."""
+    if name_option:
+        p.add_argument("--platform", default=None, help=PLATFORM_HELP)
+    p.add_argument("--layout", default=None, choices=("plus", "x"), help="rotor layout of the Q-PRR or of a built platform")
+    p.add_argument("--urdf", default=None, metavar="FILE.urdf", help="your own platform: its URDF (docs/platforms.md); with --rotors")
+    p.add_argument("--rotors", default=None, metavar="FILE.toml", help="the rotor description of --urdf")
+    p.add_argument("--ee-frame", default=None, metavar="NAME", help="end-effector frame of --urdf (default: the last frame of the arm)")
+
+
+def platform_from_args(args: argparse.Namespace):
+    """The platform named by the options of :func:`add_platform_options` (:func:`qprr.platforms.resolve`);
+    raises :class:`~qprr.errors.QprrError` with the option names in its message."""
+    from .errors import InputError
+    from .platforms import resolve
+
+    layout = args.layout
+
+    if args.urdf is None and (args.rotors is not None or args.ee_frame is not None):
+        raise InputError("--rotors and --ee-frame describe your own platform: give its --urdf too")
+    if args.urdf is not None and args.rotors is None:
+        raise InputError(f"--urdf {args.urdf!r} needs --rotors FILE.toml (the URDF format has no rotors; docs/platforms.md)")
+    if args.urdf is not None and (args.platform is not None or layout is not None):
+        raise InputError("--urdf names your own platform: leave out --platform and --layout")
+    return resolve(args.platform, layout=layout, urdf=args.urdf, rotors=args.rotors, ee_frame=args.ee_frame)
+
+
 def _convert(value: str, default):
     """A ``--set`` value converted to the type of the option's default."""
     if isinstance(default, bool):
@@ -98,8 +131,6 @@ def _convert(value: str, default):
 
 # ------------------------------------------------------------------------------ simulate
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .platforms import NAMES
-    from .platforms import load as load_platform
     from .scenarios import SCENARIOS
     from .viz import plot_result
 
@@ -133,21 +164,14 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail(prog, str(exc))
     platform = None
-    if args.platform is not None or args.layout is not None:
-        name = args.platform or "q-prr"
+    if any(x is not None for x in (args.platform, args.layout, args.urdf, args.rotors, args.ee_frame)):
+        name = args.platform or ("q-prr" if args.urdf is None else args.urdf)
         if sc.platforms is not None and name not in sc.platforms:
             return fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}")
         try:
-            if name == "q-prr":
-                platform = load_platform("q-prr", layout=args.layout or "plus")
-            elif args.layout is not None:
-                from .nomenclature import build
-
-                platform = build(name, layout=args.layout)
-            else:
-                platform = load_platform(name) if name in NAMES else __import__("qprr").build(name)
+            platform = platform_from_args(args)
         except QprrError as exc:
-            return fail(prog, f"--platform {name!r}: {exc}")
+            return fail(prog, f"--platform {name!r}: {exc}" if args.platform and not args.urdf else str(exc))
     progress = not args.quiet and sys.stderr.isatty()
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
@@ -267,9 +291,7 @@ def build_parser() -> argparse.ArgumentParser:
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenario", help="a scenario name (listed above)")
     p.add_argument("--controller", default=None, help="override the scenario's controller (see the list above)")
-    p.add_argument("--platform", default=None, help="q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name "
-                   "such as HEX-RRR (generic scenarios only)")
-    p.add_argument("--layout", default=None, choices=("plus", "x"), help="rotor layout of the Q-PRR or of a built platform")
+    add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save a figure of the run (the folder must exist)")
     p.add_argument("--save", default=None, metavar="FILE.npz", help="save the logged run (the folder must exist)")
     p.add_argument("--animate", default=None, metavar="FILE.gif", help="save a 3-D animation (.gif, or .mp4 with ffmpeg)")

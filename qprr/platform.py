@@ -94,7 +94,61 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
             raise NonPhysicalError(f"{source}: link {name!r} has a non-numeric mass or inertia ({exc})") from exc
         I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
                       [vals["ixz"], vals["iyz"], vals["izz"]]])
-        check_rigid_body(name, mass, (0.0, 0.0, 0.0), I, allow_massless=True)
+        check_rigid_body(f"{source}: link {name!r}", mass, (0.0, 0.0, 0.0), I, allow_massless=True)
+    with_inertial = {link.get("name") for link in root.iter("link") if link.find("inertial") is not None}
+    for joint in root.iter("joint"):
+        child = joint.find("child")
+        if joint.get("type") != "fixed" and child is not None and child.get("link") not in with_inertial:
+            raise NonPhysicalError(f"{source}: link {child.get('link')!r}, moved by joint {joint.get('name')!r}, has no <inertial> "
+                                   "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
+                                   '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
+                                   "for a link that is massless on purpose")
+
+
+_ARM_JOINT_TYPES = ("revolute", "prismatic", "fixed")
+
+
+def check_urdf_joints(xml_text: str, source: str = "URDF") -> None:
+    """Check that a URDF describes one multirotor body (the root link) carrying a serial arm of 1-DOF joints.
+
+    One root link; every joint ``revolute``, ``prismatic`` (both with ``<limit lower upper>``) or
+    ``fixed``.  A ``floating`` joint, a ``planar`` or a ``continuous`` one raises :class:`InputError`
+    naming the joint and saying what to write instead (qprr adds the free-flyer joint itself).
+    """
+    try:
+        root = ET.fromstring(xml_text)
+    except ET.ParseError as exc:
+        raise InputError(f"{source} is not valid XML: {exc}") from exc
+    if root.tag != "robot":
+        raise InputError(f"{source}: the root element is <{root.tag}>, not <robot>: not a URDF")
+    links = [link.get("name") for link in root.findall("link")]
+    children = set()
+    children_all = {c.get("link") for c in root.findall("joint/child")}
+    for joint in root.findall("joint"):
+        name, kind = joint.get("name"), joint.get("type")
+        child = joint.find("child")
+        if child is not None:
+            children.add(child.get("link"))
+        if kind in ("floating", "planar"):
+            parent = joint.find("parent")
+            parent = parent.get("link") if parent is not None else None
+            if parent is not None and parent not in children_all:  # a "world" link holding the body
+                raise InputError(f"{source}: joint {name!r} is {kind}: qprr adds the multirotor's free-flyer joint itself; remove "
+                                 f"link {parent!r} and joint {name!r} so that the multirotor body is the URDF's root link")
+            raise InputError(f"{source}: joint {name!r} is {kind}: not supported as an arm joint (1-DOF revolute or prismatic only)")
+        if kind == "continuous":
+            raise InputError(f"{source}: joint {name!r} is continuous (unbounded): not supported as an arm joint yet; make it "
+                             'type="revolute" with <limit lower="..." upper="..." effort="..." velocity="..."/>')
+        if kind not in _ARM_JOINT_TYPES:
+            raise UnknownNameError(f"type of joint {name!r} in {source}", kind, _ARM_JOINT_TYPES)
+        if kind != "fixed":
+            limit = joint.find("limit")
+            if limit is None or limit.get("lower") is None or limit.get("upper") is None:
+                raise InputError(f"{source}: {kind} joint {name!r} needs <limit lower=\"...\" upper=\"...\" effort=\"...\" "
+                                 f'velocity="..."/> ({"rad" if kind == "revolute" else "m"}, N{" m" if kind == "revolute" else ""})')
+    roots = [link for link in links if link not in children]
+    if len(roots) != 1:
+        raise InputError(f"{source}: a URDF has exactly one root link (the multirotor body), found {len(roots)}: {roots}")
 
 
 def check_model_inertias(model: pin.Model) -> None:
@@ -341,15 +395,17 @@ class Platform:
 
 
 # ============================================================================== loading
-def frame_id(model: pin.Model, name: str | int) -> int:
-    """Frame id of ``name`` in ``model`` (or a valid id); :class:`UnknownNameError` lists the frames."""
+def frame_id(model: pin.Model, name: str | int, what: str = "frame") -> int:
+    """Frame id of ``name`` in ``model`` (or a valid id); :class:`UnknownNameError` lists the frames.
+
+    ``what`` names the argument in the error (e.g. ``"ee_frame"``)."""
     if isinstance(name, (int, np.integer)) and not isinstance(name, bool):
         if 0 <= name < model.nframes:
             return int(name)
-        raise UnknownNameError("frame id", name, tuple(str(i) for i in range(model.nframes)))
+        raise UnknownNameError(f"{what} (a frame id)", name, tuple(str(i) for i in range(model.nframes)))
     if isinstance(name, str) and model.existFrame(name):
         return model.getFrameId(name)
-    raise UnknownNameError("frame", name, tuple(f.name for f in model.frames))
+    raise UnknownNameError(what, name, tuple(f.name for f in model.frames))
 
 
 def _arm_joints(model: pin.Model) -> tuple[ArmJoint, ...]:
@@ -412,14 +468,18 @@ def from_model(
     provenance: Mapping[str, str] | None = None,
     allow_nonphysical: bool = False,
     urdf: str | None = None,
+    rotor_source: str | None = None,
 ) -> Platform:
     """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
 
     ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
-    entries may name frames of ``model`` (see :func:`qprr.rotors.rotors_from_mapping`).
+    entries may name frames of ``model`` fixed to the base (see :func:`qprr.rotors.rotors_from_mapping`).
     ``allow_nonphysical=True`` skips the inertia checks (to study a printed, non-physical table:
     the provenance then says so); the mass matrix must still be positive definite.  ``urdf``: the
     URDF text ``model`` was read from, kept on the platform for its visual geometry.
+    ``rotor_source``: the file the rotor description was read from, named in its errors.
+    The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
+    :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams).
     """
     model = pin.Model(model)
     if allow_nonphysical:
@@ -428,17 +488,43 @@ def from_model(
         check_model_inertias(model)
     arm = _arm_joints(model)
     base = _base_frame(model)
-    if isinstance(rotors, Mapping):
-        frames = {}
-        data = model.createData()
-        pin.framesForwardKinematics(model, data, pin.neutral(model))
-        oMb = data.oMf[base]
-        for i, f in enumerate(model.frames):
-            bMf = oMb.actInv(data.oMf[i])
-            frames[f.name] = (tuple(bMf.translation), tuple(bMf.rotation[:, 2]))
-        rotors = rotors_from_mapping(rotors, frames)
-    ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame)
-    extra = tuple(frame_id(model, f) for f in ee_frames)
+    try:
+        if isinstance(rotors, Mapping):
+            frames, moving, at_b = {}, {}, []
+            data = model.createData()
+            pin.framesForwardKinematics(model, data, pin.neutral(model))
+            oMb = data.oMf[base]
+            for i, f in enumerate(model.frames):
+                if f.parentJoint > 1:  # on an arm link: not a place for a rotor
+                    moving[f.name] = model.names[f.parentJoint]
+                if f.parentJoint != 1:  # the world ("universe") or an arm link
+                    continue
+                bMf = oMb.actInv(data.oMf[i])
+                frames[f.name] = (tuple(bMf.translation), tuple(bMf.rotation[:, 2]))
+                if bMf.isIdentity(1e-12):
+                    at_b.append(f.name)
+            written_in = rotors.get("base_link")
+            if isinstance(written_in, str) and written_in not in at_b:
+                where = (f"it moves with arm joint {moving[written_in]!r}" if written_in in moving else
+                         f"it is not a frame of {model.name!r}" if written_in not in frames else "it is not at B")
+                raise InputError(f"base_link = {written_in!r}, but rotor positions are written in B, the frame of the URDF's root "
+                                 f"link {model.frames[base].name!r} (where qprr puts the free-flyer joint), and {where}; "
+                                 f"frames at B: {at_b} (is the multirotor body the root of your URDF?)")
+            for k, entry in enumerate(rotors.get("rotor") or ()):
+                if isinstance(entry, Mapping) and entry.get("frame") in moving:
+                    raise InputError(f"rotor {k + 1}: frame {entry['frame']!r} moves with arm joint {moving[entry['frame']]!r}; "
+                                     f"rotors sit on the multirotor body, the URDF's root link {model.frames[base].name!r} "
+                                     "(is the body the root of your URDF?)")
+            rotors = rotors_from_mapping(rotors, frames)
+        elif isinstance(rotors, (str, Path)):
+            raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
+        rotors = tuple(rotors)
+    except (InputError, UnknownNameError) as exc:
+        if rotor_source is not None:
+            exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
+        raise
+    ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
+    extra = tuple(frame_id(model, f, "ee_frames entry") for f in ee_frames)
     platform = Platform(
         name=name or model.name or "platform",
         model=model,
@@ -452,7 +538,19 @@ def from_model(
         urdf=urdf,
     )
     _check_mass_matrix(platform)
+    _check_lift(platform, rotor_source)
     return platform
+
+
+def _check_lift(platform: Platform, rotor_source: str | None) -> None:
+    """The rotors' largest total thrust along z_B (sum f_max a_z over a_z > 0) must reach m g (a necessary condition)."""
+    lift = sum(r.f_max * r.axis_body[2] for r in platform.rotors if r.axis_body[2] > 0.0)
+    weight = platform.total_mass * platform.g
+    if lift < weight:
+        rot = f"rotor file {rotor_source!r}" if rotor_source else "the rotor set"
+        raise NonPhysicalError(f"platform {platform.name!r} cannot lift itself: its rotors push at most {lift:.6g} N along z_B "
+                               f"({rot}), its weight m g is {weight:.6g} N (m = {platform.total_mass:.6g} kg, g = {platform.g:.6g} m/s^2); "
+                               "URDF masses are in kg, thrust bounds in N")
 
 
 def _check_mass_matrix(platform: Platform) -> None:
@@ -493,17 +591,27 @@ def from_urdf(
     text, source = _urdf_text(urdf)
     if not (isinstance(g, (int, float)) and math.isfinite(g) and g >= 0.0):  # g = 0: free flight (conservation tests)
         raise InputError(f"g must be a finite number >= 0 m/s^2, got {g!r}")
+    check_urdf_joints(text, source)
     if not allow_nonphysical:
         check_urdf_inertials(text, source)
-    model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    try:
+        model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
+    except ValueError as exc:  # urdfdom prints its reason on stderr
+        raise InputError(f"{source}: Pinocchio's URDF parser rejected it ({exc})") from exc
     model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
-    if isinstance(rotors, (str, Path)) and str(rotors).endswith(".toml"):
+    rotor_source = None
+    if isinstance(rotors, (str, Path)):
         from .rotors import read_rotor_file
 
+        rotor_source = str(rotors)
+        if Path(rotors).suffix.lower() != ".toml":
+            raise InputError(f"rotors: a rotor description file must be a .toml file, got {rotor_source!r}")
         rotors = read_rotor_file(rotors)
     prov = {"model": source, **(provenance or {})}
+    if rotor_source is not None:
+        prov.setdefault("rotors", rotor_source)
     return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
-                      allow_nonphysical=allow_nonphysical, urdf=text)
+                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source)
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pinocchio as pin
 
-from .errors import QprrError, UnknownNameError
+from .errors import InputError, QprrError, UnknownNameError
 from .platform import Platform, from_urdf
 from .rotors import read_rotor_file
 
@@ -90,6 +90,42 @@ def rotor_dynamics(name: str = "q-prr", **overrides):
         raise UnknownNameError("platform", name, NAMES)
     desc = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
     return rotor_dynamics_from_mapping(desc, load(name).rotors, **overrides)
+
+
+def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | Path | None = None,
+            rotors: str | Path | None = None, ee_frame: str | None = None) -> Platform:
+    """The platform a command line names: one of :data:`NAMES`, a (2.1) name, or a user's URDF.
+
+    ``urdf`` with ``rotors`` (a TOML rotor file) and an optional ``ee_frame``: :func:`qprr.from_urdf`
+    (then ``name`` and ``layout`` must be None).  Otherwise ``name`` (default ``"q-prr"``):
+    :func:`load` for a name of :data:`NAMES`, :func:`qprr.build` for a name of formula (2.1) such
+    as ``"HEX-RRR"``; ``layout`` ("plus" or "x") for the Q-PRR or a built platform.  An unknown
+    name raises :class:`UnknownNameError` listing the valid ones.
+    """
+    from .nomenclature import build, parse
+
+    if urdf is not None:
+        if name is not None or layout is not None:
+            raise InputError(f"give a platform name ({name!r}) or a URDF ({str(urdf)!r}), not both"
+                             if name is not None else f"layout {layout!r} applies to named platforms, not to a URDF")
+        if rotors is None:
+            raise InputError(f"the URDF {str(urdf)!r} needs its rotor description: a TOML file (docs/platforms.md)")
+        return from_urdf(urdf, rotors if isinstance(rotors, Path) else Path(rotors), ee_frame=ee_frame)
+    if rotors is not None or ee_frame is not None:
+        raise InputError("a rotor file and an end-effector frame go with a URDF (urdf=...); named platforms have their own")
+    name = "q-prr" if name is None else name
+    if name == "q-prr":
+        return load("q-prr", layout=layout or "plus")
+    if name in NAMES:
+        if layout is not None:
+            raise InputError(f"layout {layout!r} applies to q-prr and to (2.1) names, not to {name!r}")
+        return load(name)
+    try:
+        parse(name)
+    except InputError:
+        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR'",
+                                                  "or a URDF with its rotor file (--urdf FILE --rotors FILE.toml)")) from None
+    return build(name, layout=layout)
 
 
 def multirotor_model(name: str = "hector") -> pin.Model:

@@ -195,6 +195,16 @@ def layout_rotors(n: int, arm_length: float, layout: str = "plus", **kwargs) -> 
 # ------------------------------------------------------------------ rotor descriptions (files)
 _ROTOR_KEYS = {"position", "axis", "quaternion_xyzw", "spin", "kappa", "f_min", "f_max", "name", "frame"}
 _DEFAULT_KEYS = {"kappa", "f_min", "f_max"}
+_MAX_ROTOR_DISTANCE = 10.0  # [m] from B: the largest multirotors span a few metres; beyond, positions are not in metres
+_AXIS_NORM_TOL = 1e-3  # a written axis is unit to this (rounded decimals), then normalised
+
+
+def _listed3(value, what: str) -> tuple[float, float, float]:
+    """A description's 3-vector: a list of 3 finite numbers (not a string, not a table)."""
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence) or len(value) != 3 or not all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value):
+        raise InputError(f"{what} must be a list of 3 finite numbers, e.g. [0.2, 0.0, 0.05], got {value!r}")
+    return (float(value[0]), float(value[1]), float(value[2]))
 
 
 def _quat_axis(qxyzw) -> tuple[float, float, float]:
@@ -208,33 +218,44 @@ def _quat_axis(qxyzw) -> tuple[float, float, float]:
 
 
 def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | None = None) -> tuple[Rotor, ...]:
-    """Rotors from a description: ``{"defaults": {kappa, f_min, f_max}, "rotor": [{...}, ...]}``.
+    """Rotors from a description: ``{"base_link": name, "defaults": {kappa, f_min, f_max}, "rotor": [{...}, ...]}``.
 
     Each rotor entry has ``spin`` (+1/-1 or "cw"/"ccw", cw = +1), either ``position`` [m] with
-    ``axis`` (default [0, 0, 1]) or ``quaternion_xyzw`` (the rotor frame's orientation in B, the
+    ``axis`` (a unit vector, default [0, 0, 1]) or ``quaternion_xyzw`` (the rotor frame's orientation in B, the
     thrust along its z), or ``frame``: the name of a frame of the platform's URDF whose placement
     gives the position and the axis (its z) - resolved by the caller through ``frame_positions``
     (name -> (position, axis)).  ``kappa``, ``f_min``, ``f_max`` per rotor or in ``defaults``.
-    Unknown keys raise :class:`~qprr.errors.UnknownNameError`.
+    The optional ``base_link`` (a string) names the link the positions are written in; the caller
+    (:func:`qprr.platform.from_model`) checks that it is the platform's base B.
+    Unknown keys raise :class:`~qprr.errors.UnknownNameError`; a position farther than 10 m from B
+    or an axis whose norm is not 1 (to 1e-3) raises :class:`~qprr.errors.InputError` (units, typos).
     """
     if not isinstance(desc, Mapping):
         raise InputError(f"a rotor description must be a mapping, got {type(desc).__name__}")
-    unknown = set(desc) - {"defaults", "rotor", "motor"}  # "motor": the actuator stage's data (qprr.sim.actuators)
+    unknown = set(desc) - {"base_link", "defaults", "rotor", "motor"}  # "motor": the actuator stage's data (qprr.sim.actuators)
     if unknown:
-        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("defaults", "rotor", "motor"))
-    defaults = dict(desc.get("defaults", {}))
+        raise UnknownNameError("rotor description key", sorted(unknown)[0], ("base_link", "defaults", "rotor", "motor"))
+    if not isinstance(desc.get("base_link", ""), str):
+        raise InputError(f"base_link must be the name of a link (a string), got {desc['base_link']!r}")
+    defaults = desc.get("defaults", {})
+    if not isinstance(defaults, Mapping):
+        raise InputError(f"'defaults' must be a table of {sorted(_DEFAULT_KEYS)}, got {defaults!r}")
+    defaults = dict(defaults)
     bad = set(defaults) - _DEFAULT_KEYS
     if bad:
         raise UnknownNameError("rotor default", sorted(bad)[0], tuple(sorted(_DEFAULT_KEYS)))
     entries = desc.get("rotor")
-    if not entries:
-        raise InputError("a rotor description needs a non-empty list 'rotor'")
+    if not entries or isinstance(entries, Mapping) or not all(isinstance(e, Mapping) for e in entries):
+        raise InputError("a rotor description needs a non-empty list 'rotor' of tables (in TOML: one [[rotor]] per rotor), "
+                         f"got {entries!r}")
     out = []
     for i, entry in enumerate(entries):
         bad = set(entry) - _ROTOR_KEYS
         if bad:
             raise UnknownNameError(f"key of rotor {i + 1}", sorted(bad)[0], tuple(sorted(_ROTOR_KEYS)))
         e = {**defaults, **entry}
+        if "spin" not in e:
+            raise InputError(f"rotor {i + 1} needs 'spin': \"cw\" (+1: reaction torque along +axis) or \"ccw\" (-1)")
         spin = e.get("spin")
         if isinstance(spin, str):
             if spin.lower() not in ("cw", "ccw"):
@@ -248,10 +269,25 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
         else:
             if "position" not in e:
                 raise InputError(f"rotor {i + 1} needs 'position' (or 'frame')")
-            pos = e["position"]
+            pos = _listed3(e["position"], f"rotor {i + 1} position [m]")
+            distance = math.hypot(*pos)
+            if distance > _MAX_ROTOR_DISTANCE:
+                raise InputError(f"rotor {i + 1} position {list(pos)} is {distance:.4g} m from B: positions are in metres "
+                                 "(millimetres divided by 1000), in the frame of the URDF's root link")
             if "quaternion_xyzw" in e and "axis" in e:
                 raise InputError(f"rotor {i + 1}: give 'axis' or 'quaternion_xyzw', not both")
-            axis = _quat_axis(e["quaternion_xyzw"]) if "quaternion_xyzw" in e else e.get("axis", (0.0, 0.0, 1.0))
+            if "quaternion_xyzw" in e:
+                q = e["quaternion_xyzw"]
+                if isinstance(q, (str, bytes, Mapping)) or not isinstance(q, Sequence) or len(q) != 4:
+                    raise InputError(f"rotor {i + 1} quaternion_xyzw must be a list of 4 numbers [x, y, z, w], got {q!r}")
+                axis = _quat_axis(q)
+            else:
+                axis = _listed3(e.get("axis", (0.0, 0.0, 1.0)), f"rotor {i + 1} axis")
+                norm = math.hypot(*axis)
+                if abs(norm - 1.0) > _AXIS_NORM_TOL:
+                    unit = [round(x / norm, 6) for x in axis] if norm > 0 else "a non-zero vector"
+                    raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction "
+                                     f"in B (here {unit})")
         out.append(Rotor(tuple(pos), tuple(axis), spin, e.get("kappa", 0.0), e.get("f_min", 0.0), e.get("f_max", math.inf),
                          str(e.get("name", e.get("frame", f"rotor_{i + 1}")))))
     return tuple(out)

@@ -1,7 +1,9 @@
-"""The Python blocks of the user guide (docs/guide.md) and of the README's "Your first hour" run as written.
+"""The Python blocks of the user guide (docs/guide.md), of the own-platform tutorial (docs/platforms.md) and of the
+README's "Your first hour" run as written.
 
 Each document's blocks run in order in one fresh interpreter (as a reader pastes them into one
-session), headless (MPLBACKEND=Agg), in a temporary folder.
+session), headless (MPLBACKEND=Agg), in a temporary folder that sees the repository's examples/
+(docs/platforms.md loads examples/my_platform/ as a reader in the repository root would).
 """
 
 from __future__ import annotations
@@ -27,13 +29,14 @@ def first_hour(readme: str) -> str:
     return readme[start:end if end > 0 else None]
 
 
-@pytest.mark.parametrize("doc", ["docs/guide.md", "README.md"])
+@pytest.mark.parametrize("doc", ["docs/guide.md", "docs/platforms.md", "README.md"])
 def test_blocks_run(doc, tmp_path):
     text = (ROOT / doc).read_text()
     if doc == "README.md":
         text = first_hour(text)
     blocks = python_blocks(text)
     assert len(blocks) >= 3, doc
+    (tmp_path / "examples").symlink_to(ROOT / "examples", target_is_directory=True)
     script = tmp_path / "blocks.py"
     script.write_text("\n\n".join(blocks))
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))

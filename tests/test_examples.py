@@ -38,7 +38,7 @@ def figure(tmp_path: Path, name: str) -> None:
 
 def test_every_example_is_tested():
     tested = {"pose_and_cog.py", "ik_hover.py", "custom_mission.py", "allocation.py", "hover_analysis.py", "other_platforms.py",
-              "platforms_tour.py"}
+              "platforms_tour.py", "own_platform.py"}
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 
@@ -105,3 +105,19 @@ def test_platforms_tour(tmp_path):
     for label in labels:
         assert re.search(rf"^{re.escape(label)} +Platform\(", out, re.M), label
         figure(tmp_path, f"tour-{label.replace(' ', '').replace('+', 'plus').lower()}.png")
+
+
+def test_own_platform(tmp_path):
+    """A user's own URDF and rotor file (examples/my_platform): the mass is the sum of the URDF's link masses, the IK
+    reaches the pose (checked by an independent forward kinematics), the hover thrusts carry m g, the flight reaches
+    the IK target."""
+    out = run_example("own_platform.py", tmp_path)
+    assert "Platform('quad_rrr', 4 rotors, arm RRR, 1.500 kg, under-actuated)" in out  # 1.20 + 0.08 + 0.10 + 0.07 + 0.05 kg
+    assert "IK converged" in out
+    assert number(r"IK position error ([\d.e+-]+) m", out) < 1e-6
+    assert number(r"orientation error ([\d.e+-]+) rad", out) < 1e-6
+    assert abs(number(r"sum ([\d.]+) N = m g", out) - 1.5 * 9.81) < 1e-9 * 1.5 * 9.81
+    assert number(r"relative difference ([\d.e+-]+)\)", out) < 1e-9
+    assert re.search(r"^flight ok:", out, re.M), out
+    assert number(r"end effector ([\d.]+) mm from the target", out) < 1.0
+    figure(tmp_path, "own_platform.png")

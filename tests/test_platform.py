@@ -144,7 +144,7 @@ def test_massless_arm_link_makes_a_singular_mass_matrix_and_is_refused():
 
 # --------------------------------------------------------------------------------- names
 def test_unknown_end_effector_frame_lists_the_frames():
-    with pytest.raises(UnknownNameError, match="unknown frame 'gripper'; valid: .*'end_effector'") as exc:
+    with pytest.raises(UnknownNameError, match="unknown ee_frame 'gripper'; valid: .*'end_effector'") as exc:
         _load(TEXT, ee_frame="gripper", allow_nonphysical=True)
     assert isinstance(exc.value, KeyError)
     assert "'link3'" in str(exc.value) and "'rotor_plus_1'" in str(exc.value)

@@ -137,7 +137,7 @@ spin = "cw"
 
 @pytest.mark.parametrize("text, error, match", [
     ("[defaults\nkappa = 1", InputError, "not valid TOML"),
-    (GOOD + "\n[extra]\na = 1\n", UnknownNameError, "rotor description key 'extra'; valid: 'defaults', 'rotor'"),
+    (GOOD + "\n[extra]\na = 1\n", UnknownNameError, "rotor description key 'extra'; valid: 'base_link', 'defaults', 'rotor'"),
     (GOOD.replace("kappa = 0.02", "kappa = 0.02\ndrag = 1"), UnknownNameError, "rotor default 'drag'"),
     (GOOD.replace('spin = "cw"', 'spin = "cw"\ncolour = "red"'), UnknownNameError, "key of rotor 1 'colour'"),
     (GOOD.replace('spin = "cw"', 'spin = "left"'), UnknownNameError, "spin of rotor 1 'left'"),
@@ -149,6 +149,13 @@ spin = "cw"
     (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be finite and >= 0"),
     (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, "3 finite numbers"),
     ("[defaults]\nkappa = 0.02\n", InputError, "non-empty list 'rotor'"),
+    # a new user's mistakes: each names the rotor and says what to write
+    (GOOD.replace('spin = "cw"\n', ""), InputError, "rotor 1 needs 'spin': \"cw\""),
+    (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 2]'), InputError, r"axis \[0.0, 0.0, 2.0\] has norm 2: .*\[0.0, 0.0, 1.0\]"),
+    (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [200.0, 0.0, 0.0]"), InputError, "200 m from B: positions are in metres"),
+    (GOOD.replace("position = [0.2, 0.0, 0.0]", 'position = "0.2, 0, 0"'), InputError, "position .* list of 3 finite numbers"),
+    (GOOD.replace("[[rotor]]", "[rotor]"), InputError, r"one \[\[rotor\]\] per rotor"),
+    (GOOD.replace("[defaults]", 'base_link = 3\n[defaults]'), InputError, "base_link must be the name of a link"),
 ])
 def test_rotor_file_errors_name_the_entry(tmp_path, text, error, match):
     path = _write(tmp_path, text)

@@ -2,7 +2,8 @@
 
 Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a named platform
 (:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
-:func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...).  For the thesis's Q-PRR the figures
+:func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...); ``--urdf FILE --rotors FILE.toml
+[--ee-frame NAME]`` a user's own platform.  For the thesis's Q-PRR the figures
 carry the thesis's own numbers where it prints some ((4.46)-(4.48) on the singularity map).
 """
 
@@ -18,17 +19,10 @@ DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_00
 
 
 def resolve_platform(name: str):
-    """A platform from a registry name (``qprr.load``) or a (2.1) designation (``qprr.build``)."""
-    import qprr
-    from qprr.errors import InputError, UnknownNameError
-    from qprr.platforms import NAMES
+    """A platform from a registry name (``qprr.load``) or a (2.1) designation (``qprr.build``): :func:`qprr.platforms.resolve`."""
+    from qprr.platforms import resolve
 
-    if name in NAMES:
-        return qprr.load(name)
-    try:
-        return qprr.build(name)
-    except InputError:
-        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR', 'QX-PRR'")) from None
+    return resolve(name)
 
 
 def _floats(text: str) -> list[float]:
@@ -53,7 +47,7 @@ def _thesis_singularity_reference(platform, result):
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cli import fail, output_path
+    from ..cli import fail, output_path, platform_from_args
     from . import plots
     from .capacity import capacity
     from .cog import balance, cog_regions
@@ -66,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
         output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
     except ValueError as exc:
         return fail("qprr analyze", str(exc))
-    platform = resolve_platform(args.platform)
+    platform = platform_from_args(args)
     n = args.samples or DEFAULT_SAMPLES[args.map]
     progress = True if args.progress else None
     t0 = time.perf_counter()
@@ -119,13 +113,16 @@ def run(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
+    from ..cli import add_platform_options
+
     p = sub.add_parser("analyze", help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
                        description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
                                    "singularities, hover feasibility and thrust margins, payload capacity, operational-space inertia. "
                                    "--platform takes a named platform (q-prr, borinot_flying_arm_2, hextilt_flying_arm_5) or a "
-                                   "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR.")
+                                   "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR; --urdf FILE --rotors "
+                                   "FILE.toml your own platform (docs/platforms.md).")
     p.add_argument("map", choices=MAPS, help="which map")
-    p.add_argument("--platform", default="q-prr", help="named platform or (2.1) designation (default: q-prr)")
+    add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")
     p.add_argument("--samples", type=int, default=None, help="joint-grid size (default depends on the map)")
     p.add_argument("--payload", default=None, help="payload masses in kg, comma-separated (cog, hover)")

@@ -45,27 +45,33 @@ def demo_run(platform, duration: float = 30.0, rate: float = 20.0):
 
 
 def platform_from_name(name: str):
-    """A platform from a registry name (:data:`qprr.platforms.NAMES`) or a formula (2.1) name for :func:`qprr.build`."""
-    from ..errors import InputError, UnknownNameError
-    from ..nomenclature import build, parse
-    from ..platforms import NAMES, load
+    """A platform from a registry name (:data:`qprr.platforms.NAMES`) or a formula (2.1) name: :func:`qprr.platforms.resolve`."""
+    from ..platforms import resolve
 
-    if name in NAMES:
-        return load(name)
-    try:
-        parse(name)
-    except InputError:
-        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR'")) from None
-    return build(name)
+    return resolve(name)
+
+
+def check_run_platform(run, platform, path) -> None:
+    """A run file drawn on another platform than the one it was recorded on is refused (InputError naming both)."""
+    from ..errors import InputError
+
+    if run.platform and run.platform != platform.name:
+        raise InputError(f"run {str(path)!r} was recorded on platform {run.platform!r}, not on {platform.name!r}: name its platform "
+                         "(--platform NAME [--layout plus|x], or --urdf FILE --rotors FILE.toml for your own)")
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
+    from ..cli import platform_from_args
     from ..errors import QprrError
 
     try:
         from .viewer import Viewer
 
-        platform = platform_from_name(args.platform)
+        platform = platform_from_args(args)
+        if args.run is not None:
+            from .run import load_run
+
+            check_run_platform(load_run(args.run), platform, args.run)
         viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog, verbose=False)
     except QprrError as exc:
         print(f"qprr view: {exc}", file=sys.stderr)
@@ -81,7 +87,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from ..cli import fail, output_path
+    from ..cli import fail, output_path, platform_from_args
     from ..errors import QprrError
 
     try:
@@ -91,12 +97,13 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     try:
         from .run import load_run
 
-        platform = platform_from_name(args.platform)
+        platform = platform_from_args(args)
         if args.run is None:
             print(f"no run given: animating the demo IK path of {platform.name} ({args.duration:g} s)")
             run = demo_run(platform, args.duration)
         else:
             run = load_run(args.run)
+            check_run_platform(run, platform, args.run)
         animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size),
                         progress=not args.quiet)
     except QprrError as exc:
@@ -107,10 +114,12 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
+    from ..cli import PLATFORM_HELP, add_platform_options
+
     p = sub.add_parser("view", help="interactive 3-D viewer in the browser (127.0.0.1): joint sliders, IK target, hover thrusts, run player",
                        description="Start the viewer (needs: pip install 'qprr[viewer]'); Ctrl-C stops it.")
-    p.add_argument("platform", nargs="?", default="q-prr",
-                   help="q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR")
+    p.add_argument("platform", nargs="?", default=None, help=PLATFORM_HELP)
+    add_platform_options(p, name_option=False)
     p.add_argument("--port", type=int, default=8080, help="TCP port on 127.0.0.1 (default 8080; 0: any free port)")
     p.add_argument("--run", default=None, metavar="FILE.npz", help="load a saved run in the player")
     p.add_argument("--no-hover", action="store_true", help="start with the IK's hover level off")
@@ -122,7 +131,7 @@ def register_cli(sub) -> None:
                        description="Animate a result file (written by qprr simulate NAME --save RUN.npz); without RUN, a 30 s demo IK path.")
     p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
     p.add_argument("-o", "--output", default="animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg), folder must exist; default animation.gif")
-    p.add_argument("--platform", default="q-prr", help="the platform of the run (default q-prr)")
+    add_platform_options(p)
     p.add_argument("--fps", type=float, default=20.0, help="frames per second (default 20)")
     p.add_argument("--speed", type=float, default=1.0, help="run seconds per video second (default 1)")
     p.add_argument("--view", choices=("follow", "fixed"), default="follow", help="camera: follow the base (default) or the whole run")
