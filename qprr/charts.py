@@ -52,7 +52,7 @@ def _preview(x) -> str:
     """A short printable form of a bad value for error messages."""
     try:
         text = repr(x.tolist() if isinstance(x, np.ndarray) else x)
-    except Exception:  # noqa: BLE001 - any repr failure: fall back on the type
+    except Exception:
         text = f"<{type(x).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
 

@@ -31,9 +31,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from . import urdfgen as ug
+from .charts import as_name, as_real, as_vector
 from .errors import InputError, QprrError
 from .platform import Platform, from_urdf
-from .charts import as_name, as_real, as_vector
 from .rotors import LAYOUTS, Rotor, layout_rotors
 
 UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
