@@ -146,9 +146,9 @@ spin = "cw"
     (GOOD.replace('spin = "cw"', 'spin = "cw"\nquaternion_xyzw = [0, 0, 0, 0]'), InputError, "non-zero"),
     (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 0]'), InputError, "non-zero vector"),
     (GOOD.replace("f_max = 10.0", "f_max = 10.0\nf_min = 12.0"), InputError, "f_min < f_max"),
-    (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be finite and >= 0"),
-    (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, "3 finite numbers"),
-    ("[defaults]\nkappa = 0.02\n", InputError, "non-empty list 'rotor'"),
+    (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be >= 0 m, got -0.02"),
+    (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, r"position_body must have shape \(3,\)"),
+    ("[defaults]\nkappa = 0.02\n", InputError, r"has no \[\[rotor\]\] tables"),
 ])
 def test_rotor_file_errors_name_the_entry(tmp_path, text, error, match):
     path = _write(tmp_path, text)
@@ -165,7 +165,7 @@ def test_good_rotor_file_and_missing_file(tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"spin": 0}, "spin must be"), ({"f_min": -1.0}, "f_min < f_max"), ({"f_max": float("nan")}, "real number"),
+    ({"spin": 0}, "spin must be"), ({"f_min": -1.0}, "f_min must be >= 0"), ({"f_max": float("nan")}, "f_max must be a number, got nan"),
     ({"axis_body": (0.0, 0.0, 0.0)}, "non-zero"), ({"position_body": (0.0, float("inf"), 0.0)}, "finite"),
 ])
 def test_bad_rotor_fields(kwargs, match):
