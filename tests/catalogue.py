@@ -71,6 +71,7 @@ NOT_FED: dict[str, str] = {
     "qprr.cli.*": "the command line: tests/test_cli_errors.py runs bad invocations in child processes",
     "qprr.*.cli.*": "the command line: tests/test_cli_errors.py runs bad invocations in child processes",
     "*.main": "a command-line entry point (reads sys.argv, exits the interpreter)",
+    "qprr.ik.tasks.base.Task*": "abstract base class (its subclasses are fed)",
     "qprr.viz.viewer.*": "starts a web server (viser): tests/test_viz_viewer.py",
     "qprr.viz.browser.*": "drives a browser: tests/test_viz_viewer.py",
 }
@@ -380,6 +381,17 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platform.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
     ("qprr.platform.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
     ("qprr.rotors.*", "n", S(4, "count")),
+    ("qprr.ik.tasks.pose.*Pose*", "target", Spec("obj", lambda c: c.target_pose())),
+    ("qprr.ik.tasks.pose.BaseOrientationTask", "R_target", Spec("rot", lambda c: _rot())),
+    ("qprr.ik.tasks.*", "name", S("t", "label")),
+    ("qprr.ik.tasks.*", "q_arm_ref", V(lambda c: c.q_arm())),
+    ("qprr.ik.tasks.*", "weights", S(None, "skip")),
+    ("qprr.ik.*", "q_arm_posture", V(lambda c: c.q_arm())),
+    ("qprr.ik.*", "M", Spec("obj", lambda c: c.target_pose())),
+    ("qprr.ik.*", "p_d", F(lambda c: c.target())),
+    ("qprr.ik.*", "R_d", Spec("rot", lambda c: _rot())),
+    ("qprr.ik.hierarchy.HierarchySolver.solve", "levels", Spec("obj", lambda c: importlib.import_module("qprr.ik").default_levels(
+        c.platform, c.target(), c.q_arm()))),
     ("qprr.nomenclature.LinkSpec", "kind", S("R", "name")),
     ("qprr.nomenclature.build", "*_name", S("x", "xmlname")),
     ("qprr.urdfgen.num", "name", S("x", "skip")),
@@ -514,6 +526,8 @@ def bad_values(kind: str, valid, ctx: Ctx, length_known: bool = True) -> list[tu
         out += [("fraction", 2.5), ("string", "3")]
     elif kind == "name":
         out += [("unknown name", "no-such-name"), ("None", None), ("number", 3)]
+    elif kind == "label":
+        out += [("empty name", ""), ("None", None), ("number", 3)]
     elif kind == "xmlname":
         out += [("quote in name", 'a"b'), ("empty name", ""), ("None", None), ("number", 3)]
     elif kind == "text":
@@ -569,6 +583,12 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.rotors.Rotor", "f_max", "inf"): "f_max = inf: a rotor without an upper thrust bound (the default)",
     ("qprr.platform.from_*", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
     ("qprr.platform.Platform", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
+    ("qprr.ik.tasks.*.linearize", "*", "*"): HOT + "IKSolver.solve (linearize runs in every iteration on a configuration the "
+    "solver validated; its output is checked: qprr.ik.tasks.base.check_linearized)",
+    ("qprr.ik.tasks.base.update_kinematics", "*", "*"): HOT + "IKSolver.solve (once per iteration, before the tasks)",
+    ("qprr.ik.hierarchy.HierarchySolver.solve", "*", "*"): HOT + "IKSolver.solve (one hierarchical step per iteration)",
+    ("qprr.ik.solver.pose_errors", "R_d", "None"): "R_d None: a position target (orientation error 0 by definition)",
+    ("qprr.ik.solver.default_guess", "R_world", "None"): "R_world None: a position target (the orientation is free)",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
 }

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .base import Task
+from .base import Task, task_name
 
 
 class HoverTask(Task):
@@ -18,7 +18,7 @@ class HoverTask(Task):
     dim = 2
 
     def __init__(self, name: str = "hover"):
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         R = data.oMi[1].rotation
