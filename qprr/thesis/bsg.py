@@ -24,7 +24,7 @@ import math
 import numpy as np
 
 from ..charts import State
-from ..control.base import Controller, Reference
+from ..control.base import Controller, Reference, check_reset
 from ..control.filters import CommandFilter
 from ..errors import InputError, UnknownNameError
 from ..platform import Platform
@@ -73,7 +73,7 @@ class CogStabilizer(Controller):
         self._started = False
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt
+        self.dt = dt = check_reset(self, state, ref, dt)
         self.filter = CommandFilter(2, self.filter_omega)
         self._started = False
         self.inner.reset(state, ref, dt)
