@@ -185,10 +185,12 @@ def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
     return path
 
 
-def real_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
-    """Decorator: every parameter annotated ``float`` goes through :func:`as_real` (finite unless listed in
-    ``allow_inf``), every parameter annotated ``int`` through :func:`as_int`, before ``fn`` runs.
+def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
+    """Decorator: the arguments of ``fn`` converted by their annotation before it runs.
 
+    ``float`` goes through :func:`as_real` (finite unless the parameter is listed in ``allow_inf``),
+    ``int`` through :func:`as_int`, a plain class name of the defining module (``QPRRParams``,
+    ``Platform``, ``WheeledRobot``...) is an ``isinstance`` check; other annotations are left alone.
     For closed forms with scalar arguments (the printed thesis formulas, the lecture's): a NaN, a
     string or a complex number in gets an error naming the argument instead of a NaN out.
     """
@@ -202,6 +204,8 @@ def real_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
                 checks[p.name] = (lambda v, n=p.name, inf=p.name in allow_inf: as_real(v, n, allow_inf=inf))
             elif ann == "int":
                 checks[p.name] = (lambda v, n=p.name: as_int(v, n))
+            elif ann.isidentifier() and ann[:1].isupper():
+                checks[p.name] = _instance_check(f, p.name, ann, p.default is None)
         if not checks:
             return f
 
@@ -216,6 +220,31 @@ def real_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
         return checked
 
     return wrap if fn is None else wrap(fn)
+
+
+def checked_module(namespace: dict, *, skip: tuple[str, ...] = ()) -> None:
+    """:func:`checked_args` on every public function defined in a module (call it at the end of the module with
+    ``globals()``): closed-form modules check their arguments without a decorator on each formula."""
+    module = namespace["__name__"]
+    for name, obj in list(namespace.items()):
+        if (inspect.isfunction(obj) and obj.__module__ == module and not name.startswith("_") and name not in skip):
+            namespace[name] = checked_args(obj)
+
+
+def _instance_check(f, name: str, cls_name: str, none_ok: bool):
+    """A check that an argument is an instance of the class named ``cls_name`` in ``f``'s module (resolved at the first call)."""
+    cache: list = []
+
+    def check(v):
+        if not cache:
+            cls = f.__globals__.get(cls_name)
+            cache.append(cls if isinstance(cls, type) else None)
+        cls = cache[0]
+        if cls is not None and not isinstance(v, cls) and not (none_ok and v is None):
+            raise InputError(f"{name} must be a {cls_name}, got {type(v).__name__} {_preview(v)}")
+        return v
+
+    return check
 
 
 def xi_names(n_arm: int, arm_names=None) -> tuple[str, ...]:

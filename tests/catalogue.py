@@ -389,6 +389,32 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platform.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
     ("qprr.platform.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
     ("qprr.rotors.*", "n", S(4, "count")),
+    ("qprr.thesis.*", "d", F(lambda c: np.array([0.04, 0.055, 0.18, 0.1]))),
+    ("qprr.thesis.*", "angles", F(lambda c: np.array([0.1, 0.2, 0.3]))),
+    ("qprr.thesis.*", "euler_rates", F(lambda c: np.array([0.1, 0.2, 0.3]))),
+    ("qprr.thesis.*", "q_arm_ddot", V(lambda c: np.full(c.n_arm, 0.1))),
+    ("qprr.thesis.*", "p_b*", F(lambda c: np.array([0.1, 0.2, 0.3]))),
+    ("qprr.thesis.*", "p_cm*", F(lambda c: np.array([0.01, 0.0, 0.1]))),
+    ("qprr.thesis.*", "omega_b", F(lambda c: np.array([0.1, 0.0, 0.1]))),
+    ("qprr.thesis.*", "lambdas", F(lambda c: np.array([0.1, 0.2, 0.3, 0.4]))),
+    ("qprr.thesis.*", "factors", Spec("obj", lambda c: importlib.import_module("qprr.thesis.printed").lu_factors_4_42(
+        c.q_arm(), (0.04, 0.055, 0.18, 0.1)))),
+    ("qprr.thesis.*", "B??", Spec("mat", lambda c: np.eye(3))),
+    ("qprr.thesis.interaction.*", "h", F(lambda c: np.array([0.1, 0.0, 0.2, 0.0, 0.01, 0.0]))),
+    ("qprr.thesis.interaction.*", "contact_b", F(lambda c: np.array([0.3, 0.0, 0.1]))),
+    ("qprr.thesis.payload.*", "I*", Spec("mat", lambda c: np.eye(3) * 1e-3)),
+    ("qprr.thesis.payload.*", "m*", S(0.3, "pos")),
+    ("qprr.thesis.payload.*", "m_c*", S(0.3, "nonneg")),
+    ("qprr.thesis.printed.mdh_3_28*", "d", S(0.1)),
+    ("qprr.thesis.printed.det_JJt_4_45", "lambdas", F(lambda c: np.linspace(0.1, 0.8, 8))),
+    ("qprr.trajectory.*", "t", Spec("vec", lambda c: np.linspace(0.0, 1.0, 5))),
+    ("qprr.trajectory.transition", "t?", S(0.2)),
+    ("qprr.trajectory.transition", "t2", S(0.8)),
+    ("qprr.trajectory.Phase", "coordinate", S("z", "skip")),
+    ("qprr.trajectory.Phase", "t1", S(0.1)),
+    ("qprr.trajectory.Phase", "t2", S(0.5)),
+    ("qprr.trajectory.Phase", "value", S(1.0)),
+    ("qprr.trajectory.MultiPhase*", "phases", Spec("obj", lambda c: (importlib.import_module("qprr.trajectory").Phase("z", 0.1, 0.5, 1.0),))),
     ("qprr.sim.integrators.make_stepper", "method", S("midpoint", "name")),
     ("qprr.sim.disturbances.*", "gamma", F(lambda c: np.ones(c.n_xi))),
     ("qprr.sim.disturbances.*", "t", Spec("vec", lambda c: np.linspace(0.0, 0.1, 11))),
@@ -493,7 +519,7 @@ def _rot() -> np.ndarray:
 
 
 def spec_for(target: Target, param: inspect.Parameter) -> Spec | None:
-    hits = [(pattern.count("*") + name.count("*"), -len(pattern), k, spec) for k, (pattern, name, spec) in enumerate(QUALIFIED)
+    hits = [(sum(x.count(w) for x in (pattern, name) for w in "*?"), -len(pattern) - len(name), k, spec) for k, (pattern, name, spec) in enumerate(QUALIFIED)
             if fnmatch.fnmatchcase(param.name, name) and fnmatch.fnmatchcase(target.qualname, pattern)]
     if hits:
         return min(hits, key=lambda h: h[:3])[3]  # the most specific pattern
@@ -652,6 +678,11 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.sim.disturbances.*", "t", "wrong length"): "any number of sample times (the grid of the run)",
     ("qprr.sim.disturbances.*", "t", "empty"): "no sample times: no values (an empty array of shape (0, n_xi))",
     ("qprr.sim.disturbances.check_values_args", "rng", "None"): "rng None: a disturbance without randomness (Pulse)",
+    ("qprr.trajectory.Spiral", "arm", "wrong length"): "any number of arm joints",
+    ("qprr.trajectory.Spiral", "arm", "empty"): "a platform without an arm",
+    ("qprr.trajectory.*", "t", "wrong length"): "any number of sample times",
+    ("qprr.trajectory.*", "t", "empty"): "no sample times: an empty sample",
+    ("qprr.trajectory.transition", "t", "2-D"): "transition is elementwise over times of any shape",
     ("qprr.sim.loop.Limits", "*", "inf"): "an infinite bound switches that runaway check off",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
