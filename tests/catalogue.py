@@ -389,6 +389,12 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platform.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
     ("qprr.platform.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
     ("qprr.rotors.*", "n", S(4, "count")),
+    ("qprr.thesis.urdf.write_urdf", "path", Spec("path_out", lambda c: c.tmp / "q.urdf")),
+    ("qprr.thesis.igm.solve_igm", "target", Spec("obj", lambda c: c.target_pose())),
+    ("qprr.thesis.igm.*", "x_b*", S(0.01)),
+    ("qprr.thesis.igm.*", "y_b*", S(0.0)),
+    ("qprr.thesis.igm.*", "r0_min", S(-0.04)),
+    ("qprr.thesis.igm.*", "r0_max", S(0.04)),
     ("qprr.thesis.*", "d", F(lambda c: np.array([0.04, 0.055, 0.18, 0.1]))),
     ("qprr.thesis.*", "angles", F(lambda c: np.array([0.1, 0.2, 0.3]))),
     ("qprr.thesis.*", "euler_rates", F(lambda c: np.array([0.1, 0.2, 0.3]))),
@@ -506,6 +512,8 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
 INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.sim.result.SimResult": lambda c: c.sim_result(),
     "qprr.platform.Platform": lambda c: c.platform,
+    "qprr.thesis.params.QPRRParams": lambda c: importlib.import_module("qprr.thesis.params").thesis_params(),
+    "qprr.thesis.params.Link": lambda c: importlib.import_module("qprr.thesis.params").thesis_params().links[0],
 }
 
 

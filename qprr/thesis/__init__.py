@@ -38,6 +38,8 @@ def rotor_set(params: QPRRParams, layout: str = "plus") -> tuple[Rotor, ...]:
     kappa = c/b, bounds [thrust_min, thrust_max] from the parameters; names ``rotor_<layout>_<i>``
     as the URDF frames.
     """
+    if not isinstance(params, QPRRParams):
+        raise InputError(f"params must be a QPRRParams, got {type(params).__name__}")
     return tuple(
         Rotor(r.position, (0.0, 0.0, 1.0), r.spin, params.kappa, params.thrust_min, params.thrust_max, f"rotor_{layout}_{i}")
         for i, r in enumerate(params.rotors(layout), start=1)
@@ -125,6 +127,8 @@ def _check_agrees(platform: Platform, params: QPRRParams) -> None:
 
 def params_of(platform: Platform) -> QPRRParams:
     """The thesis parameters of a Q-PRR platform; InputError for any other platform."""
+    if not isinstance(platform, Platform):
+        raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
     if not isinstance(platform.params, QPRRParams):
         raise InputError(f"platform {platform.name!r} is not the thesis's Q-PRR (its params are {type(platform.params).__name__})")
     return platform.params

@@ -152,6 +152,8 @@ def check_params(p: QPRRParams) -> None:
     (d1, d2, d3, every link length, the rotor arm l; d0 >= 0: the rail may sit at B's height; the rail's
     length >= 0); lower <= upper joint limits; positive effort and velocity limits; positive rotor
     factors b and c; f_min <= f_max with f_max > 0."""
+    if not isinstance(p, QPRRParams):
+        raise InputError(f"p must be a QPRRParams, got {type(p).__name__}")
     if not isinstance(p.nonphysical, tuple):
         raise InputError(f"nonphysical must be a tuple of body names, got {p.nonphysical!r}")
     if not (_finite([p.g]) and p.g >= 0.0):
