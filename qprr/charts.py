@@ -104,6 +104,15 @@ def as_matrix(x, shape: tuple, name: str) -> np.ndarray:
     return a
 
 
+def as_interval(x, name: str, *, lo: float | None = None, unit: str = "s") -> tuple[float, float]:
+    """``x`` as an interval (a, b) of two finite numbers with a < b (and a >= ``lo`` when given), e.g. a phase's times."""
+    a, b = as_vector(x, 2, name).tolist()
+    if not a < b or (lo is not None and a < lo):
+        floor = f" and {lo!r} <= a" if lo is not None else ""
+        raise InputError(f"{name} must be an interval (a, b) with a < b{floor} [{unit}], got {(a, b)!r}")
+    return a, b
+
+
 def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     """A thesis-coordinate vector: 1-D, finite, 6 + n_arm entries (``n`` checked when given)."""
     a = as_array(xi, name)

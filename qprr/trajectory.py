@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .charts import as_array, as_int, as_real, as_vector, as_xi, xi_names
+from .charts import as_array, as_int, as_interval, as_real, as_vector, as_xi, xi_names
 from .errors import InputError, ShapeError, UnknownNameError
 
 
@@ -244,10 +244,7 @@ def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0
 
     p = as_vector(p_hover, 3, "p_hover")
     q0 = check_platform(platform).neutral_q()[7:]
-    climb, reach = as_vector(climb, 2, "climb"), as_vector(reach, 2, "reach")
-    for name, (a, b) in (("climb", climb), ("reach", reach)):
-        if not 0.0 <= a < b:
-            raise InputError(f"{name} must be a time interval (t1, t2) with 0 <= t1 < t2 [s], got {(a, b)!r}")
+    climb, reach = as_interval(climb, "climb", lo=0.0), as_interval(reach, "reach", lo=0.0)
     psi = as_real(psi, "psi", unit="rad")
     if q_arm is None:
         hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q0 + 1.0)

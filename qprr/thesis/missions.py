@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..charts import as_vector
+from ..charts import as_interval, as_vector, checked_module
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase
 
 NAMES = ("x", "y", "z", "phi", "theta", "psi", "r0", "theta2", "theta3")
@@ -20,6 +20,8 @@ def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10
     The arm starts straight (r0 = theta2 = theta3 = 0); yaw is held at ``psi``.
     """
     x, y, z, psi, r0, t2, t3 = as_vector(target, 7, "target")
+    z_phase, x_phase, y_phase, arm_phase = (as_interval(v, n, lo=0.0) for v, n in ((z_phase, "z_phase"), (x_phase, "x_phase"),
+                                                                                   (y_phase, "y_phase"), (arm_phase, "arm_phase")))
     phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
     phases += [Phase(c, *arm_phase, val) for c, val in (("r0", r0), ("theta2", t2), ("theta3", t3)) if val != 0.0]
     xi0 = (0.0, 0.0, 0.0, 0.0, 0.0, psi, 0.0, 0.0, 0.0)
@@ -33,6 +35,10 @@ def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_ph
     r0 and theta3 references are left at 0: the CoG stabiliser (BSG) computes them.
     """
     x, y, z = as_vector(p_target, 3, "p_target")
+    arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
     phases = (Phase("z", 0.0, 5.0, z), Phase("x", 5.0, 10.0, x), Phase("y", 10.0, 15.0, y),
               Phase("theta2", *arm_phase, float(theta2_d)))
     return MultiPhase(phases, name="dynamic-mission", law=law, names=NAMES)
+
+
+checked_module(globals())
