@@ -391,6 +391,8 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platform.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
     ("qprr.platform.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
     ("qprr.rotors.*", "n", S(4, "count")),
+    ("qprr.analysis.*", "n_samples", S(64, "count", always=True)),
+    ("qprr.analysis.opspace.opspace_map", "n_samples", S(8, "count", always=True)),
     ("qprr.mdh.*", "rows", Spec("obj", lambda c: importlib.import_module("qprr.thesis.printed").table_3_4((0.04, 0.055, 0.18, 0.1)))),
     ("qprr.mdh.*", "q", V(lambda c: c.q_arm())),
     ("qprr.mdh.MDHRow", "sigma", S(0, "int")),
@@ -700,6 +702,9 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.trajectory.*", "t", "wrong length"): "any number of sample times",
     ("qprr.trajectory.*", "t", "empty"): "no sample times: an empty sample",
     ("qprr.trajectory.transition", "t", "2-D"): "transition is elementwise over times of any shape",
+    ("qprr.analysis.cog.balance", "slider", "None"): "slider None: no slider (the balance of the other joints)",
+    ("qprr.analysis.chain.ArmChain.*", "q_arm", "2-D"): "a batch of configurations, one per row",
+    ("qprr.analysis.*", "payload_masses", "wrong length"): "any number of payload masses",
     ("qprr.sim.loop.Limits", "*", "inf"): "an infinite bound switches that runaway check off",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
@@ -887,6 +892,10 @@ def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool
                 continue
             if isinstance(target.obj, type) and is_record(target.obj, returned):
                 report.not_fed[target.qualname] = "result record (returned by the API, not an entry point)"
+                continue
+            if target.owner is not None and is_record(target.owner, returned) and \
+                    f"{target.owner.__module__}.{target.owner.__qualname__}" not in INSTANCES:
+                report.not_fed[target.qualname] = "method of a result record without an instance builder (INSTANCES)"
                 continue
             pl = plan(target)
             if isinstance(pl, str):

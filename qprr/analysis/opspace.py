@@ -34,6 +34,7 @@ import pinocchio as pin
 from scipy.linalg import solve_triangular
 
 from ..charts import as_vector
+from ..errors import InputError
 from ..kinematics import check_q
 from ..platform import Platform
 from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
@@ -76,7 +77,13 @@ def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, 
     ``q``, ``v``: Pinocchio configuration and velocity of the platform (``fixed_base``: of the
     arm model, nq = nv = n_arm, and ``data`` from ``platform.arm_model().createData()``).
     """
+    check_platform(platform)
+    if not isinstance(data, pin.Data):
+        raise InputError(f"data must be a pinocchio.Data, got {type(data).__name__}")
     model = platform.arm_model() if fixed_base else platform.model
+    if len(data.oMf) != model.nframes:
+        raise InputError(f"data was made for another model ({len(data.oMf)} frames, this one has {model.nframes}): use "
+                         f"{'platform.arm_model().createData()' if fixed_base else 'platform.data()'}")
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     if fixed_base:
         fid = model.getFrameId(platform.model.frames[fid].name)
