@@ -15,12 +15,17 @@ from pathlib import Path
 
 import numpy as np
 
+from ..charts import as_vector
 from ..errors import InputError, MissingDependencyError
 from ..sim import SimResult
 
 
 def new_figure(figsize=(16, 12)):
     """A matplotlib Figure not attached to pyplot (saved with ``fig.savefig``; no display, no backend choice)."""
+    w, h = as_vector(figsize, 2, "figsize").tolist()
+    if not (w > 0 and h > 0):
+        raise InputError(f"figsize must be (width, height) > 0 in inches, got {(w, h)!r}")
+    figsize = (w, h)
     try:
         from matplotlib.figure import Figure
     except ImportError as exc:  # pragma: no cover - runtime dependency
@@ -30,6 +35,8 @@ def new_figure(figsize=(16, 12)):
 
 def figure_path(path: str | Path) -> Path:
     """``path`` as a PNG path whose folder exists (a missing folder is an error naming it, not created)."""
+    if not isinstance(path, (str, Path)) or str(path) == "":
+        raise InputError(f"path must be a figure file path (.png, .pdf or .svg), got {path!r}")
     path = Path(path)
     if path.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise InputError(f"figure files end in .png, .pdf or .svg, got {str(path)!r}")
@@ -40,6 +47,8 @@ def figure_path(path: str | Path) -> Path:
 
 def plot_result(res: SimResult, path: str | Path, *, title: str | None = None, thrust_bounds=None) -> Path:
     """Save a 3 x 3 figure of ``res`` to ``path`` (PNG) and return the path.  ``thrust_bounds`` (f_min, f_max) [N] drawn dotted."""
+    if not isinstance(res, SimResult):
+        raise InputError(f"res must be a qprr.sim.SimResult, got {type(res).__name__}")
     path = figure_path(path)
     names = res.names
     t = res.t
