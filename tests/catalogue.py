@@ -95,7 +95,7 @@ def walk(package: str = "qprr") -> list[Target]:
     seen: set[int] = set()
     out: list[Target] = []
     modules = [pkg] + [importlib.import_module(m.name) for m in pkgutil.walk_packages(pkg.__path__, package + ".")
-                       if m.name not in SKIP_MODULES and not m.name.endswith(".__main__")]
+                       if m.name not in SKIP_MODULES and not m.name.rsplit(".", 1)[1].startswith("_")]
     for mod in modules:
         for name in public_names(mod):
             obj = getattr(mod, name, None)
@@ -717,6 +717,12 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.analysis.*", "payload_masses", "wrong length"): "any number of payload masses",
     ("qprr.viz.animation.frame_indices", "t", "wrong length"): "any number of samples",
     ("qprr.viz.run.RunLog", "xi", "wrong shape"): "xi of (n, 8): a platform with two arm joints",
+    ("qprr.wheeled.wheels.*Wheel.*", "s", "*"): "dual numeric/symbolic (backend m): s may be a sympy expression",
+    ("qprr.wheeled.robots.*.[AB]", "q", "*"): "dual numeric/symbolic (backend m): q may hold sympy symbols; simulate and the "
+    "controllers check q",
+    ("qprr.wheeled.robots.*.singularity", "q", "*"): "dual numeric/symbolic: q may hold sympy symbols",
+    ("qprr.wheeled.sim.sinc", "*", "*"): HOT + "se2_flow (every integration step)",
+    ("qprr.wheeled.robots.Omnidirectional", "robot", "*"): "robot None: the default three-wheel layout",
     ("qprr.sim.loop.Limits", "*", "inf"): "an infinite bound switches that runaway check off",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",

@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import rot_z
+from ..charts import as_int, as_vector, rot_z
+from ..errors import InputError
 from .chassis import ICRStatus, WheeledRobot
 from .kinematics import KinematicModel
 from .sim import WheeledSimResult
@@ -170,6 +171,11 @@ def plot_residual(ax, result: WheeledSimResult, *, label: str | None = None) -> 
 def figure(nrows: int = 1, ncols: int = 1, *, size=(5.0, 4.0)):
     """A new figure and its axes (pyplot imported here only)."""
     import matplotlib.pyplot as plt
+
+    nrows, ncols = as_int(nrows, "nrows", lo=1), as_int(ncols, "ncols", lo=1)
+    size = as_vector(size, 2, "size")
+    if not size.min() > 0.0:
+        raise InputError(f"size must be (width, height) > 0 in inches, got {size.tolist()}")
 
     fig, axes = plt.subplots(nrows, ncols, figsize=(size[0] * ncols, size[1] * nrows), squeeze=False)
     return fig, axes
