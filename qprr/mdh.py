@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .charts import as_array, as_vector, checked_module, rot_x, rot_z
+from .charts import as_array, as_real, as_vector, checked_module, rot_x, rot_z
 from .errors import InputError, ShapeError
 
 SIGMAS = (0, 1)
@@ -68,6 +68,7 @@ class MDHRow:
 
     def parameters(self, q: float = 0.0) -> tuple[float, float, float, float]:
         """(alpha, d, theta, r) at joint value ``q`` (ignored when ``joint`` is False), Thesis Remark 1."""
+        q = as_real(q, "q")
         theta, r = self.theta, self.r
         if self.joint:
             if self.sigma == 0:

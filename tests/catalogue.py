@@ -407,6 +407,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.mdh.*", "q", V(lambda c: c.q_arm())),
     ("qprr.mdh.MDHRow", "sigma", S(0, "int")),
     ("qprr.mdh.MDHRow.*", "q", S(0.1)),
+    ("qprr.thesis.scenarios.*", "duration", S(0.05, "pos", always=True)),
     ("qprr.mdh.frame_name", "j", S(2, "int")),
     ("qprr.thesis.bsg.CogStabilizer", "inner", Spec("obj", lambda c: c.controller())),
     ("qprr.thesis.urdf.write_urdf", "path", Spec("path_out", lambda c: c.tmp / "q.urdf")),
@@ -723,6 +724,8 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.wheeled.robots.*.singularity", "q", "*"): "dual numeric/symbolic: q may hold sympy symbols",
     ("qprr.wheeled.sim.sinc", "*", "*"): HOT + "se2_flow (every integration step)",
     ("qprr.wheeled.robots.Omnidirectional", "robot", "*"): "robot None: the default three-wheel layout",
+    ("qprr.urdfgen.xml_name", "x", "*"): "a converter: its error names the argument it is told (its name parameter)",
+    ("qprr.control.impedance.ImpedanceGains.arm", "n_arm", "zero"): "n_arm = 0: a platform without an arm (empty filters)",
     ("qprr.sim.loop.Limits", "*", "inf"): "an infinite bound switches that runaway check off",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
@@ -865,7 +868,8 @@ def instance_of(cls: type, ctx: Ctx):
     return fn(*args, **kwargs)
 
 
-RECORDS = {"ArmJoint": "a joint record that from_model reads off the Pinocchio model"}
+RECORDS = {"ArmJoint": "a joint record that from_model reads off the Pinocchio model",
+           "Evidence": "what a check of qprr.thesis.checks returns (the numbers it measured)"}
 
 
 def is_record(cls: type, returned: set[str]) -> bool:

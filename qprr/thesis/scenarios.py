@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import kinematics as kin
-from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
+from ..charts import as_interval, as_vector, checked_module, euler_to_rotation_batch, force_to_xi_batch
 from ..control import DesiredStateInverseDynamics, InverseDynamicsController, LayeredIDC, ModelFreeController, PayloadIDC
 from ..control.impedance import ImpedanceController
 from ..errors import QprrError, UnknownNameError
@@ -336,6 +336,7 @@ def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: boo
     and slides on when the robot decelerates, the contact opening.
     """
     platform = _q_prr(platform)
+    push = as_interval(push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
     trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
     obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
@@ -353,6 +354,7 @@ def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: 
                    damping: float = 20.0, seed: int = SEED) -> SimResult:
     """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2)."""
     platform = _q_prr(platform)
+    push = as_interval(push, "push", lo=0.0)
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
@@ -382,6 +384,7 @@ def impedance(platform=None, controller: str = "impedance", progress: bool = Fal
     table-6.7" (printed impedance gains: the slider reference saturates), "idc" (no compliance).
     """
     platform = _q_prr(platform)
+    arm = tuple(params_of(platform).lower_limits * 0.0 + platform.check_arm_limits(arm, "arm"))
     hb = as_vector(h_b, 4, "h_b").copy()
     hq = np.concatenate([as_vector(h_q, 3, "h_q"), np.zeros(3)])
     ee = PrescribedWrench(hq, t_on, t_off)
@@ -654,3 +657,6 @@ def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: floa
                 raise
         rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, str(res.status), res.reason
     return Comparison(rmse, wall, status, reason)
+
+
+checked_module(globals())  # scenario options (annotated floats and ints) are checked before a run starts

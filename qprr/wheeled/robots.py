@@ -176,7 +176,7 @@ class FrontTricycle(KinematicModel):
     input_units = ("m/s", "rad/s")
 
     def __init__(self, D: float = 0.3, L: float = 0.15, r: float = 0.05):
-        self.D, self.L, self.r = _positive("D", D), float(L), _positive("r", r)
+        self.D, self.L, self.r = _positive("D", D), as_real(L, "L", nonnegative=True, unit="m"), _positive("r", r)
         if not (math.isfinite(self.L) and self.L >= 0):
             raise InputError(f"L (half rear track) must be >= 0, got {L!r}")
         self.robot = _tricycle_wheels(self.D, self.L, self.r, self.name)
@@ -224,7 +224,7 @@ class RearTricycle(KinematicModel):
     COS_TOL = 1e-9
 
     def __init__(self, D: float = 0.3, L: float = 0.15, r: float = 0.05):
-        self.D, self.L, self.r = _positive("D", D), float(L), _positive("r", r)
+        self.D, self.L, self.r = _positive("D", D), as_real(L, "L", nonnegative=True, unit="m"), _positive("r", r)
         if not (math.isfinite(self.L) and self.L >= 0):
             raise InputError(f"L (half rear track) must be >= 0, got {L!r}")
         self.robot = _tricycle_wheels(self.D, self.L, self.r, self.name)
