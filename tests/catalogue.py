@@ -76,6 +76,11 @@ NOT_FED: dict[str, str] = {
     "qprr.thesis.symbolic.SymbolicModel*": "the sympy model takes seconds to derive (tests/test_symbolic.py)",
     "qprr.thesis.symbolic.symbolic_model": "the sympy model takes seconds to derive (tests/test_symbolic.py)",
     "qprr.sim.environment.Environment*": "abstract base class (its subclasses are fed)",
+    "qprr.sim.disturbances.Disturbance*": "a Protocol (its implementations are fed)",
+    "qprr.sim.disturbances.StateDisturbance*": "a Protocol (its implementations are fed)",
+    "qprr.wheeled.kinematics.KinematicModel*": "abstract base class (its subclasses are fed)",
+    "qprr.wheeled.wheels.Wheel.*": "abstract base class (its subclasses are fed)",
+    "qprr.thesis.checks.run_checks": "runs every check of `qprr check` (seconds): tests/test_checks.py",
     "qprr.viz.viewer.*": "starts a web server (viser): tests/test_viz_viewer.py",
     "qprr.viz.browser.*": "drives a browser: tests/test_viz_viewer.py",
 }
@@ -520,8 +525,12 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.charts.as_real", "x", S(0.5)),
     ("qprr.charts.as_int", "x", S(3, "int")),
     ("qprr.charts.as_name", "x", S("a", "name")),
+    ("qprr.charts.as_interval", "x", F(lambda c: np.array([0.0, 1.0]))),
+    ("qprr.charts.as_file", "x", Spec("path_in", lambda c: c.result_file())),
+    ("qprr.charts.as_output_path", "x", Spec("path_out", lambda c: c.tmp / "out.npz")),
     ("qprr.charts.as_*", "x", F(lambda c: np.ones(3))),
     ("qprr.charts.as_*", "name", Spec("skip", lambda c: "x")),
+    ("qprr.charts.as_*", "what", Spec("skip", lambda c: "file")),
     ("qprr.charts.as_name", "valid", Spec("skip", lambda c: ("a", "b"))),
     ("qprr.charts.as_vector", "n", S(3, "skip")),
     ("qprr.charts.as_matrix", "shape", Spec("skip", lambda c: (3,))),
@@ -549,7 +558,8 @@ def _rot() -> np.ndarray:
 
 
 def spec_for(target: Target, param: inspect.Parameter) -> Spec | None:
-    hits = [(sum(x.count(w) for x in (pattern, name) for w in "*?"), -len(pattern) - len(name), k, spec) for k, (pattern, name, spec) in enumerate(QUALIFIED)
+    hits = [(sum(x.count(w) for x in (pattern, name) for w in "*?"), -len(pattern) - len(name), k, spec)
+            for k, (pattern, name, spec) in enumerate(QUALIFIED)
             if fnmatch.fnmatchcase(param.name, name) and fnmatch.fnmatchcase(target.qualname, pattern)]
     if hits:
         return min(hits, key=lambda h: h[:3])[3]  # the most specific pattern
@@ -665,13 +675,13 @@ def _with(a: np.ndarray, x: float) -> np.ndarray:
 # ============================================================================ outcomes
 HOT = "hot-loop form on plain floats, unvalidated by design (runs every simulated millisecond); the validated forms are "
 ALLOWED: dict[tuple[str, str, str], str] = {
+    ("qprr.charts.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
     ("qprr.charts.as_array", "x", "*"): "as_array converts any shape; NaN and inf pass unless finite=True is asked",
     ("qprr.charts.wrap_angle", "a", "NaN entry"): "elementwise on any array: NaN stays NaN (logs of diverged runs), like numpy's ufuncs",
     ("qprr.charts.wrap_angle", "a", "inf entry"): "elementwise on any array: inf maps to NaN, like numpy's remainder",
     ("qprr.charts.wrap_angle", "a", "2-D"): "elementwise on an array of any shape",
     ("qprr.charts.wrap_angle", "a", "empty"): "elementwise on an array of any shape (empty in, empty out)",
     ("qprr.charts.State.*", "*", "*"): HOT + "the array functions of qprr.charts (tests check them against each other)",
-    ("qprr.charts.FloatWriter.*", "*", "*"): HOT + "numpy's assignment (FloatWriter falls back on it for any other input)",
     ("qprr.actuation.Allocator.allocate_into", "*", "*"): HOT + "Allocator.allocate",
     ("qprr.kinematics.com_jacobian_body_from", "*", "*"): "the second half of com_jacobian_body for a caller whose data already holds "
     "the CoM and its Jacobian (hot path); without the platform it cannot check data or the width of Jc",
@@ -685,7 +695,6 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.ik.solver.pose_errors", "R_d", "None"): "R_d None: a position target (orientation error 0 by definition)",
     ("qprr.ik.solver.default_guess", "R_world", "None"): "R_world None: a position target (the orientation is free)",
     ("qprr.control.*.step", "*", "*"): HOT + "the simulator's per-tick call: reset checks the state and reference once per run",
-    ("qprr.thesis.bsg.CogStabilizer.step", "*", "*"): HOT + "the simulator's per-tick call (reset checks once per run)",
     ("qprr.thesis.bsg.CogStabilizer.joint_references", "*", "*"): HOT + "CogStabilizer.step's per-tick part",
     ("qprr.control.*.update_references", "*", "*"): HOT + "the controller's per-tick hook (reset checks once per run)",
     ("qprr.control.*.feedforward", "*", "*"): HOT + "the controller's per-tick hook (reset checks once per run)",
@@ -701,7 +710,6 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.sim.disturbances.*.generalized_force", "*", "*"): HOT + "simulate (a state disturbance runs at every integration stage)",
     ("qprr.sim.integrators.*", "*", "*"): HOT + "simulate (one integration step; make_stepper checks the method and dt)",
     ("qprr.sim.contact.*", "*", "*"): HOT + "simulate (an Environment's hooks run at every stage; their constructors check the settings)",
-    ("qprr.sim.stops.apply_joint_stops", "*", "*"): HOT + "simulate (a joint-stop impact inside a step)",
     ("qprr.sim.disturbances.Pulse", "gamma", "wrong length"): "gamma's length is checked against the platform when the simulator "
     "samples the pulse (Pulse.values with n_xi)",
     ("qprr.sim.disturbances.split", "disturbance", "None"): "None: no disturbance",
@@ -726,7 +734,6 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.wheeled.robots.Omnidirectional", "robot", "*"): "robot None: the default three-wheel layout",
     ("qprr.urdfgen.xml_name", "x", "*"): "a converter: its error names the argument it is told (its name parameter)",
     ("qprr.control.impedance.ImpedanceGains.arm", "n_arm", "zero"): "n_arm = 0: a platform without an arm (empty filters)",
-    ("qprr.sim.loop.Limits", "*", "inf"): "an infinite bound switches that runaway check off",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
 }

@@ -38,7 +38,7 @@ from .. import kinematics as kin
 from ..charts import as_interval, as_vector, checked_module, euler_to_rotation_batch, force_to_xi_batch
 from ..control import DesiredStateInverseDynamics, InverseDynamicsController, LayeredIDC, ModelFreeController, PayloadIDC
 from ..control.impedance import ImpedanceController
-from ..errors import QprrError, UnknownNameError
+from ..errors import InputError, QprrError, UnknownNameError
 from ..scenarios import _COMMON, Option, Scenario
 from ..sim import (
     Disturbances,
@@ -246,6 +246,9 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     if mission not in missions:
         raise UnknownNameError("mission", mission, missions)
     r0, t2, t3 = platform.check_arm_limits(arm_target, "arm_target")
+    if not 0.0 < release_time < duration:
+        raise InputError(f"release_time must lie inside the run, 0 < release_time < duration = {duration!r} s, got {release_time!r}")
+    arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
     if mission == "thesis":
         phases = (Phase("z", 0.0, 5.0, 10.0), Phase("x", 5.0, 10.0, 3.0), Phase("y", 10.0, 15.0, 6.0))
         phases += tuple(Phase(c, *arm_phase, v) for c, v in (("r0", r0), ("theta2", t2), ("theta3", t3)) if v != 0.0)
