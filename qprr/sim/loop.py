@@ -328,7 +328,7 @@ def _check_arm_references(platform: Platform, t: np.ndarray, xi_d: np.ndarray) -
     if bad.any():
         k, j = np.argwhere(bad)[0]
         joint = platform.arm[j]
-        raise LimitError(f"trajectory: the reference of arm joint {joint.name!r} is {arm[k, j]!r} at t = {t[k]:.3f} s, outside its "
+        raise LimitError(f"trajectory: the reference of arm joint {joint.name!r} is {float(arm[k, j])!r} at t = {t[k]:.3f} s, outside its "
                          f"limits [{joint.lower!r}, {joint.upper!r}] (the joint would sit on its stop); "
                          "keep references inside the limits or pass joint_stops=False")
 
