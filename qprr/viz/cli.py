@@ -68,7 +68,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
         platform = platform_from_name(args.platform)
         viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog, verbose=False)
     except QprrError as exc:
-        print(f"qprr view: {exc}", file=sys.stderr)
+        print(f"qprr view: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130
@@ -95,7 +95,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size),
                         progress=not args.quiet)
     except QprrError as exc:
-        print(f"qprr animate: {exc}", file=sys.stderr)
+        print(f"qprr animate: error: {exc}", file=sys.stderr)
         return 2
     return 0
 
