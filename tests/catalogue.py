@@ -899,9 +899,29 @@ def returned_types(targets: list[Target]) -> set[str]:
     return out
 
 
+@dataclass
+class _Hooks:
+    """For the audit's child processes: skip the first ``start_at`` cases; ``on_start(index)`` before each case (a crash
+    inside it is then known), ``on_outcome(index, outcome)`` after it."""
+
+    start_at: int = 0
+    on_start: Callable[[int], None] | None = None
+    on_outcome: Callable[[int, Outcome], None] | None = None
+    index: int = 0
+
+    def begin(self) -> bool:
+        """Whether the next case is to run (and announce it)."""
+        self.index += 1
+        if self.index <= self.start_at:
+            return False
+        if self.on_start is not None:
+            self.on_start(self.index)
+        return True
+
+
 def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool] | None = None, timeout: float = TIMEOUT,
-        progress: Callable[[str], None] | None = None) -> Report:
-    """Feed every target its bad values; see the module docstring."""
+        progress: Callable[[str], None] | None = None, hooks: _Hooks | None = None) -> Report:
+    """Feed every target its bad values; see the module docstring.  ``hooks``: see :class:`_Hooks` (audit only)."""
     t_start = time.perf_counter()
     targets = walk() if targets is None else targets
     returned = returned_types(targets)
@@ -932,7 +952,7 @@ def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool
                 continue
             if progress:
                 progress(target.qualname)
-            _feed(pl, ctx, report, errors, timeout)
+            _feed(pl, ctx, report, errors, timeout, hooks or _Hooks())
     report.seconds = time.perf_counter() - t_start
     return report
 
@@ -952,15 +972,18 @@ def _call(pl: Plan, ctx: Ctx, override, timeout: float):
         return fn(*args, **kwargs)
 
 
-def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float) -> None:
+def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float, hooks: _Hooks) -> None:
     qual = pl.target.qualname
+    record = hooks.begin()  # a skipped baseline still runs (it decides whether the bad values are fed), unrecorded
     try:
         _call(pl, ctx, None, timeout)
     except _Timeout:
-        report.baseline_failed[qual] = f"valid call still running after {timeout} s"
+        if record:
+            report.baseline_failed[qual] = f"valid call still running after {timeout} s"
         return
     except (Exception, SystemExit) as exc:
-        report.baseline_failed[qual] = f"{type(exc).__name__}: {str(exc)[:200]}"
+        if record:
+            report.baseline_failed[qual] = f"{type(exc).__name__}: {str(exc)[:200]}"
         return
     for p, spec in pl.params:
         try:
@@ -971,6 +994,8 @@ def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float) -> None:
         for label, value in bad_values(spec.kind, valid, ctx, not (spec.sized and not knows)):
             if value is None and p.default is None:
                 continue  # None is the documented default there
+            if not hooks.begin():
+                continue
             try:
                 _call(pl, ctx, (p.name, value), timeout)
             except _Timeout:
@@ -984,3 +1009,5 @@ def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float) -> None:
                 if why is not None:
                     verdict, detail = "allowed", why
             report.outcomes.append(Outcome(qual, p.name, label, verdict, detail))
+            if hooks.on_outcome is not None:
+                hooks.on_outcome(hooks.index, report.outcomes[-1])
