@@ -223,7 +223,8 @@ def test_result_files_keep_series_and_metrics_and_refuse_bad_content(tmp_path):
 
     cases = [
         (write("cols.npz", xi=np.zeros((res.n, 8))), r"xi_dot must have shape \(\d+, 8\)"),
-        (write("rows.npz", u=res.u[:-1]), "u has \\d+ rows, t has"),
+        (write("rows.npz", u=res.u[:-1]), r"u must be a 2-D array of \d+ rows like t, got shape"),
+        (write("flags.npz", flags=np.array(3)), r"flags must be a 1-D array"),
         (write("dt.npz", dt="fast"), "metadata dt must be a number >= 0, got 'fast'"),
         (write("version.npz", format_version=1), "format version 1"),
         (write("dtype.npz", xi=res.xi.astype(complex)), "xi must be float"),
@@ -243,6 +244,17 @@ def test_result_files_keep_series_and_metrics_and_refuse_bad_content(tmp_path):
 def test_nonphysical_parameters_are_refused_naming_them(field, value):
     with pytest.raises(NonPhysicalError, match=field if field != "multirotor_mass" else "multirotor: mass"):
         qprr.thesis.thesis_params().with_changes(**{field: value})
+
+
+def test_a_link_length_is_the_joint_offset_it_names():
+    """Link.length was never read: now it must equal its d_i (with_changes keeps them together)."""
+    from dataclasses import replace
+
+    p = qprr.thesis.thesis_params()
+    assert p.with_changes(d2=0.2).links[1].length == 0.2
+    links = (p.links[0], replace(p.links[1], length=0.5), p.links[2])
+    with pytest.raises(InputError, match=r"link2\.length = 0\.5 m contradicts d2 = 0\.18 m"):
+        p.with_changes(links=links)
 
 
 def test_a_non_numeric_urdf_mass_is_refused():

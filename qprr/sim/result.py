@@ -173,10 +173,11 @@ def _validate(arrays: dict, meta: dict, source: str) -> None:
         raise ShapeError(f"{source}: xi must have shape ({m}, 6 + n_arm), got {arrays['xi'].shape}")
     for k in ARRAYS:
         a = arrays[k]
-        if a.shape[0] != m:
-            raise ShapeError(f"{source}: {k} has {a.shape[0]} rows, t has {m}")
-        if k != "flags" and a.dtype.kind != "f":
-            raise InputError(f"{source}: {k} must be float, got dtype {a.dtype}")
+        want = 1 if k in ("t", "flags") else 2
+        if a.ndim != want or a.shape[0] != m:
+            raise ShapeError(f"{source}: {k} must be a {want}-D array of {m} rows like t, got shape {a.shape}")
+        if (k != "flags" and a.dtype.kind != "f") or (k == "flags" and a.dtype.kind not in "iu"):
+            raise InputError(f"{source}: {k} must be {'float' if k != 'flags' else 'integer'}, got dtype {a.dtype}")
     for k in ("xi_dot", "xi_d", "xi_dot_d", "u", "u_ext"):
         if arrays[k].shape != (m, n_xi):
             raise ShapeError(f"{source}: {k} must have shape ({m}, {n_xi}), got {arrays[k].shape}")
@@ -186,3 +187,14 @@ def _validate(arrays: dict, meta: dict, source: str) -> None:
             raise InputError(f"{source}: metadata {key} must be a number >= 0, got {v!r}")
     if meta.get("status") not in {s.value for s in Status}:
         raise InputError(f"{source}: unknown status {meta.get('status')!r}; valid: {[s.value for s in Status]}")
+    for key in ("scenario", "controller", "integrator", "reason"):
+        if not isinstance(meta.get(key), str):
+            raise InputError(f"{source}: metadata {key} must be a string, got {meta.get(key)!r}")
+    if meta.get("seed") is not None and not (isinstance(meta["seed"], int) and not isinstance(meta["seed"], bool)):
+        raise InputError(f"{source}: metadata seed must be an integer or null, got {meta['seed']!r}")
+    metrics = meta.get("metrics", {})
+    if not isinstance(metrics, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in metrics.values()):
+        raise InputError(f"{source}: metadata metrics must map names to numbers, got {metrics!r}")
+    names = meta.get("names", [])
+    if not isinstance(names, list) or (names and len(names) != n_xi) or not all(isinstance(x, str) for x in names):
+        raise InputError(f"{source}: metadata names must be the {n_xi} names of xi, got {names!r}")
