@@ -35,6 +35,7 @@ import importlib
 import inspect
 import io
 import math
+import os
 import pkgutil
 import signal
 import tempfile
@@ -94,13 +95,23 @@ def public_names(mod) -> list[str]:
     return [k for k, v in vars(mod).items() if not k.startswith("_") and getattr(v, "__module__", None) == mod.__name__]
 
 
+MISSING: list[str] = []
+"""Modules :func:`walk` could not import (an optional dependency is not installed)."""
+
+
 def walk(package: str = "qprr") -> list[Target]:
     """Every public callable of every module of ``package`` (each object once, under its first name)."""
     pkg = importlib.import_module(package)
     seen: set[int] = set()
     out: list[Target] = []
-    modules = [pkg] + [importlib.import_module(m.name) for m in pkgutil.walk_packages(pkg.__path__, package + ".")
-                       if m.name not in SKIP_MODULES and not m.name.rsplit(".", 1)[1].startswith("_")]
+    modules = [pkg]
+    for m in pkgutil.walk_packages(pkg.__path__, package + ".", onerror=lambda name: None):
+        if m.name in SKIP_MODULES or m.name.rsplit(".", 1)[1].startswith("_"):
+            continue
+        try:
+            modules.append(importlib.import_module(m.name))
+        except ImportError:  # an optional dependency (qprr.errors.MissingDependencyError is one): nothing to feed
+            MISSING.append(m.name)
     for mod in modules:
         for name in public_names(mod):
             obj = getattr(mod, name, None)
@@ -415,7 +426,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.thesis.scenarios.*", "duration", S(0.05, "pos", always=True)),
     ("qprr.mdh.frame_name", "j", S(2, "int")),
     ("qprr.thesis.bsg.CogStabilizer", "inner", Spec("obj", lambda c: c.controller())),
-    ("qprr.thesis.urdf.write_urdf", "path", Spec("path_out", lambda c: c.tmp / "q.urdf")),
+    ("qprr.thesis.urdf.write_urdf", "path", Spec("path_out", lambda c: c.tmp / "q.urdf", always=True)),
     ("qprr.thesis.igm.solve_igm", "target", Spec("obj", lambda c: c.target_pose())),
     ("qprr.thesis.igm.*", "x_b*", S(0.01)),
     ("qprr.thesis.igm.*", "y_b*", S(0.0)),
@@ -930,30 +941,41 @@ def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool
     except ImportError:
         errors = None
     report = Report()
+    hooks = hooks or _Hooks()
+    cwd = os.getcwd()
     with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
-        ctx = Ctx(Path(tmp))
-        for target in targets:
-            if include is not None and not include(target):
-                continue
-            why = next((w for pat, w in NOT_FED.items() if fnmatch.fnmatchcase(target.qualname, pat)), None)
-            if why is not None:
-                report.not_fed[target.qualname] = why
-                continue
-            if isinstance(target.obj, type) and is_record(target.obj, returned):
-                report.not_fed[target.qualname] = "result record (returned by the API, not an entry point)"
-                continue
-            if target.owner is not None and is_record(target.owner, returned) and \
-                    f"{target.owner.__module__}.{target.owner.__qualname__}" not in INSTANCES:
-                report.not_fed[target.qualname] = "method of a result record without an instance builder (INSTANCES)"
-                continue
-            pl = plan(target)
-            if isinstance(pl, str):
-                report.not_fed[target.qualname] = pl
-                continue
-            if progress:
-                progress(target.qualname)
-            _feed(pl, ctx, report, errors, timeout, hooks or _Hooks())
+        os.chdir(tmp)  # a default relative output path lands in the temporary folder
+        try:
+            report = _run_all(targets, include, timeout, progress, hooks, returned, errors, Ctx(Path(tmp)), report)
+        finally:
+            os.chdir(cwd)
     report.seconds = time.perf_counter() - t_start
+    return report
+
+
+def _run_all(targets, include, timeout, progress, hooks, returned, errors, ctx, report) -> Report:
+    """The loop of :func:`run` over the targets (in the temporary working folder)."""
+    for target in targets:
+        if include is not None and not include(target):
+            continue
+        why = next((w for pat, w in NOT_FED.items() if fnmatch.fnmatchcase(target.qualname, pat)), None)
+        if why is not None:
+            report.not_fed[target.qualname] = why
+            continue
+        if isinstance(target.obj, type) and is_record(target.obj, returned):
+            report.not_fed[target.qualname] = "result record (returned by the API, not an entry point)"
+            continue
+        if target.owner is not None and is_record(target.owner, returned) and \
+                f"{target.owner.__module__}.{target.owner.__qualname__}" not in INSTANCES:
+            report.not_fed[target.qualname] = "method of a result record without an instance builder (INSTANCES)"
+            continue
+        pl = plan(target)
+        if isinstance(pl, str):
+            report.not_fed[target.qualname] = pl
+            continue
+        if progress:
+            progress(target.qualname)
+        _feed(pl, ctx, report, errors, timeout, hooks)
     return report
 
 

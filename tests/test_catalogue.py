@@ -35,6 +35,7 @@ def test_the_catalogue_covers_the_api(report):
     print(f"\n{len(report.outcomes)} bad calls on {len(fed)} callables in {report.seconds:.1f} s: {report.counts()}")
     print(f"not fed ({len(report.not_fed)}): {sorted(set(report.not_fed.values()))}")
     print(f"no valid call from the table ({len(report.baseline_failed)}): {sorted(report.baseline_failed)}")
+    print(f"modules not imported (optional dependency missing): {catalogue.MISSING}")
     assert len(fed) >= 400 and len(report.outcomes) >= 5000
     for core in ("qprr.charts.", "qprr.kinematics.", "qprr.dynamics.", "qprr.actuation.", "qprr.ik.", "qprr.payload.",
                  "qprr.platform.", "qprr.rotors.", "qprr.trajectory.", "qprr.sim.loop.", "qprr.sim.result."):
