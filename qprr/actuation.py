@@ -22,11 +22,11 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as ch
-from .charts import FloatWriter, as_vector
+from .charts import FloatWriter, as_real, as_vector
 from .errors import DivergenceError, InputError
 from .kinematics import ee_jacobian_world
 from .optim import Lexicographic, QPSettings
-from .platform import Platform
+from .platform import Platform, check_model_data, check_platform
 
 
 def input_map_matrix(xi) -> np.ndarray:
@@ -36,12 +36,13 @@ def input_map_matrix(xi) -> np.ndarray:
 
 def input_map(platform: Platform, xi, f) -> np.ndarray:
     """u = R_Q N f: generalised forces in thesis coordinates of the actuator vector ``f``, Thesis (5.43)."""
-    f = as_vector(f, platform.n_actuators, "f")
+    f = as_vector(f, check_platform(platform).n_actuators, "f")
     return input_map_matrix(ch.as_xi(xi, "xi", platform.n_xi)) @ (platform.actuation_matrix @ f)
 
 
 def generalized_force_from_wrench(platform: Platform, data: pin.Data, q, wrench_world, frame=None) -> np.ndarray:
     """Pinocchio generalised force J^T h of a wrench h = [f; mu] (world axes, applied at the frame origin; default: end effector)."""
+    check_model_data(platform, data)
     h = as_vector(wrench_world, 6, "wrench_world")
     return ee_jacobian_world(platform, data, q, frame).T @ h
 
@@ -104,16 +105,18 @@ class Allocator:
 
     def __init__(self, platform: Platform, *, thrust_bounds: tuple[float, float] | None = None, weight_force: float = 1.0,
                  weight_torque: float | None = None, clip_arm: bool = True, settings: QPSettings = ALLOCATION_SETTINGS) -> None:
-        if not isinstance(platform, Platform):
-            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        check_platform(platform)
         n = platform.n_rotors
         if thrust_bounds is None:
             f_min, f_max = platform.thrust_min.copy(), platform.thrust_max.copy()
         else:
-            lo, hi = thrust_bounds
-            if not (np.isfinite(lo) and np.isfinite(hi) and 0.0 <= lo < hi):
-                raise InputError(f"thrust_bounds must satisfy 0 <= min < max, got {thrust_bounds!r}")
+            lo, hi = as_vector(thrust_bounds, 2, "thrust_bounds").tolist()
+            if not 0.0 <= lo < hi:
+                raise InputError(f"thrust_bounds must satisfy 0 <= min < max [N], got {thrust_bounds!r}")
             f_min, f_max = np.full(n, float(lo)), np.full(n, float(hi))
+        weight_force = as_real(weight_force, "weight_force", positive=True)
+        if weight_torque is not None:
+            weight_torque = as_real(weight_torque, "weight_torque", positive=True)
         if not np.all(np.isfinite(f_max)):
             raise InputError(f"platform {platform.name!r} has rotors without a finite f_max: allocation needs thrust bounds")
         Omega = np.array(platform.rotor_matrix)
@@ -122,8 +125,8 @@ class Allocator:
             radial = [np.linalg.norm(np.cross(np.array(r.position_body) - point, axis)) for r in platform.rotors]
             l_mean = float(np.mean(radial))
             weight_torque = 10.0 / l_mean if l_mean > 0 else 10.0
-        if not (weight_force > 0 and weight_torque > 0):
-            raise InputError(f"allocation weights must be > 0, got {(weight_force, weight_torque)!r}")
+        if not isinstance(settings, QPSettings):
+            raise InputError(f"settings must be a qprr.optim.QPSettings, got {type(settings).__name__}")
         self.platform = platform
         self.n_rotors, self.n_arm = n, platform.n_arm
         self.f_min, self.f_max = f_min, f_max

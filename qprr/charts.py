@@ -20,15 +20,19 @@ batch functions over logged runs (``*_batch``).  Tests check the three against e
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
+import os
 import struct
 from math import atan2, cos, hypot, sin
+from pathlib import Path
 from types import MethodType
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import DivergenceError, EulerSingularityError, InputError, NonFiniteError, ShapeError
+from .errors import DivergenceError, EulerSingularityError, InputError, NonFiniteError, ShapeError, UnknownNameError
 
 EULER_TOL = 1e-6
 """|cos(theta)| below which ZYX Euler angles are treated as singular."""
@@ -38,15 +42,46 @@ _TWO_PI = 2.0 * math.pi
 
 
 # ============================================================================ validation
-def as_array(x, name: str) -> np.ndarray:
-    """``x`` as a float array; refuses complex, object, string and boolean data, naming ``name``."""
+# The one set of argument converters of qprr: each names the argument (and the value where it is
+# printable) in the error it raises, and refuses what numpy would silently coerce: complex (the
+# imaginary part dropped), object, string and boolean data, None, ragged sequences.
+_REAL_KINDS = "iuf"
+
+
+def _preview(x) -> str:
+    """A short printable form of a bad value for error messages."""
     try:
-        a = np.asarray(x)
-    except Exception as exc:  # ragged sequences and the like
-        raise InputError(f"{name} must be an array of real numbers, got {x!r}") from exc
-    if a.dtype.kind not in "iuf":
-        raise InputError(f"{name} must be real numbers, got dtype {a.dtype} ({np.asarray(x, dtype=object).ravel()[:4].tolist()}...)")
-    return a.astype(float, copy=False)
+        text = repr(x.tolist() if isinstance(x, np.ndarray) else x)
+    except Exception:
+        text = f"<{type(x).__name__}>"
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def as_array(x, name: str, *, finite: bool = False, ndim: int | None = None) -> np.ndarray:
+    """``x`` as a float array; refuses None, complex, object, string and boolean data, naming ``name``.
+
+    ``finite``: also refuse NaN and inf (:class:`NonFiniteError`); ``ndim``: the number of
+    dimensions required (:class:`ShapeError`).
+    """
+    if x is None:
+        raise InputError(f"{name} must be an array of real numbers, got None")
+    if isinstance(x, np.ndarray):
+        a = x
+    else:
+        try:
+            a = np.asarray(x)
+        except Exception as exc:  # ragged sequences and the like
+            raise InputError(f"{name} must be an array of real numbers, got {_preview(x)}") from exc
+    if a.dtype.kind not in _REAL_KINDS:
+        what = {"c": "complex numbers", "b": "booleans", "O": "Python objects", "U": "strings", "S": "bytes"}.get(a.dtype.kind, f"dtype {a.dtype}")
+        raise InputError(f"{name} must be real numbers, got {what} (dtype {a.dtype}): {_preview(a.ravel()[:4])}")
+    if ndim is not None and a.ndim != ndim:
+        raise ShapeError(f"{name} must be a {ndim}-D array, got shape {a.shape}")
+    if a.dtype != np.float64:
+        a = a.astype(float)
+    if finite and not np.isfinite(a.sum()) and not np.all(np.isfinite(a)):
+        raise NonFiniteError(f"{name} must be finite, got {_preview(a)}")
+    return a
 
 
 def as_vector(x, n: int, name: str) -> np.ndarray:
@@ -60,6 +95,24 @@ def as_vector(x, n: int, name: str) -> np.ndarray:
     return a
 
 
+def as_matrix(x, shape: tuple, name: str) -> np.ndarray:
+    """``x`` as a finite float array of ``shape`` (an entry None matches any size, e.g. ``(None, 3)``)."""
+    a = as_array(x, name, finite=True)
+    if a.ndim != len(shape) or any(s is not None and s != k for s, k in zip(shape, a.shape)):
+        want = "(" + ", ".join("m" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+        raise ShapeError(f"{name} must have shape {want}, got shape {a.shape}")
+    return a
+
+
+def as_interval(x, name: str, *, lo: float | None = None, unit: str = "s") -> tuple[float, float]:
+    """``x`` as an interval (a, b) of two finite numbers with a < b (and a >= ``lo`` when given), e.g. a phase's times."""
+    a, b = as_vector(x, 2, name).tolist()
+    if not a < b or (lo is not None and a < lo):
+        floor = f" and {lo!r} <= a" if lo is not None else ""
+        raise InputError(f"{name} must be an interval (a, b) with a < b{floor} [{unit}], got {(a, b)!r}")
+    return a, b
+
+
 def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     """A thesis-coordinate vector: 1-D, finite, 6 + n_arm entries (``n`` checked when given)."""
     a = as_array(xi, name)
@@ -69,14 +122,153 @@ def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     return as_vector(a, a.shape[0], name)
 
 
+def as_real(x, name: str, *, positive: bool = False, nonnegative: bool = False, allow_inf: bool = False,
+            lo: float | None = None, hi: float | None = None, unit: str = "") -> float:
+    """``x`` as a Python float: a real number (not a bool, a string, a complex or None), finite unless
+    ``allow_inf``, > 0 if ``positive``, >= 0 if ``nonnegative``, in [lo, hi] when given; else an
+    :class:`InputError` naming ``name`` and the value (``unit`` completes the message, e.g. "s")."""
+    if isinstance(x, float):
+        v = x
+    elif isinstance(x, (int, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_)):
+        v = float(x)
+    elif isinstance(x, np.ndarray) and x.shape == () and x.dtype.kind in _REAL_KINDS:
+        v = float(x)
+    else:
+        raise InputError(f"{name} must be a real number{' of ' + unit if unit else ''}, got {_preview(x)}")
+    if not math.isfinite(v):
+        if math.isnan(v) or not allow_inf:
+            raise NonFiniteError(f"{name} must be {'a number' if allow_inf else 'finite'}, got {v!r}")
+    if (positive and not v > 0.0) or (nonnegative and not v >= 0.0) or (lo is not None and v < lo) or (hi is not None and v > hi):
+        bound = " and ".join(b for b in (("> 0" if positive else ""), (">= 0" if nonnegative else ""),
+                                         (f">= {lo!r}" if lo is not None else ""), (f"<= {hi!r}" if hi is not None else "")) if b)
+        raise InputError(f"{name} must be {bound}{' ' + unit if unit else ''}, got {v!r}")
+    return v
+
+
+def as_int(x, name: str, *, lo: int | None = None, hi: int | None = None) -> int:
+    """``x`` as a Python int (an int or numpy integer, not a bool or a float), in [lo, hi] when given."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, np.integer)):
+        raise InputError(f"{name} must be an integer, got {_preview(x)}")
+    v = int(x)
+    if (lo is not None and v < lo) or (hi is not None and v > hi):
+        bound = " and ".join(b for b in ((f">= {lo}" if lo is not None else ""), (f"<= {hi}" if hi is not None else "")) if b)
+        raise InputError(f"{name} must be an integer {bound}, got {v!r}")
+    return v
+
+
+def as_name(x, name: str, valid, kind: str | None = None) -> str:
+    """``x`` if it is one of the strings ``valid``, else :class:`UnknownNameError` listing them (``kind`` names
+    the thing in the message, default ``name``)."""
+    valid = tuple(valid)
+    if not isinstance(x, str) or x not in valid:
+        raise UnknownNameError(f"{kind or name} ({name})" if kind else name, x, valid)
+    return x
+
+
+def as_file(x, name: str, *, what: str = "file") -> Path:
+    """``x`` (a str or a path) as the Path of an existing regular file, else an :class:`InputError` naming ``name`` and the path."""
+    if not isinstance(x, (str, os.PathLike)) or isinstance(x, bytes) or str(x) == "":
+        raise InputError(f"{name} must be the path of a {what}, got {_preview(x)}")
+    path = Path(x)
+    if not path.is_file():
+        state = "is a directory" if path.is_dir() else "does not exist"
+        raise InputError(f"{name}: {what} {str(path)!r} {state}")
+    return path
+
+
+def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
+    """``x`` as the Path of a file to write: not a directory, its parent a directory or creatable (not under a file),
+    its suffix one of ``suffixes`` when given.  Checked before the work that produces the file."""
+    if not isinstance(x, (str, os.PathLike)) or isinstance(x, bytes) or str(x) == "":
+        raise InputError(f"{name} must be a file path to write, got {_preview(x)}")
+    path = Path(x)
+    if path.is_dir():
+        raise InputError(f"{name}: {str(path)!r} is a directory, not a file path")
+    if suffixes and path.suffix.lower() not in suffixes:
+        raise InputError(f"{name}: {str(path)!r} must end in {' or '.join(suffixes)}")
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"{name}: cannot write {str(path)!r}: {str(parent)!r} is a file, not a directory")
+    return path
+
+
+def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
+    """Decorator: the arguments of ``fn`` converted by their annotation before it runs.
+
+    ``float`` goes through :func:`as_real` (finite unless the parameter is listed in ``allow_inf``),
+    ``int`` through :func:`as_int`, a plain class name of the defining module (``QPRRParams``,
+    ``Platform``, ``WheeledRobot``...) is an ``isinstance`` check; other annotations are left alone.
+    For closed forms with scalar arguments (the printed thesis formulas, the lecture's): a NaN, a
+    string or a complex number in gets an error naming the argument instead of a NaN out.
+    """
+    def wrap(f):
+        sig = inspect.signature(f)
+        names = list(sig.parameters)
+        checks = {}
+        for p in sig.parameters.values():
+            ann = p.annotation if isinstance(p.annotation, str) else getattr(p.annotation, "__name__", "")
+            if ann == "float":
+                checks[p.name] = (lambda v, n=p.name, inf=p.name in allow_inf: as_real(v, n, allow_inf=inf))
+            elif ann == "int":
+                checks[p.name] = (lambda v, n=p.name: as_int(v, n))
+            elif ann.isidentifier() and ann[:1].isupper():
+                checks[p.name] = _instance_check(f, p.name, ann, p.default is None)
+        if not checks:
+            return f
+
+        @functools.wraps(f)
+        def checked(*args, **kwargs):
+            if args:
+                args = tuple(checks[n](a) if n in checks else a for n, a in zip(names, args)) + args[len(names):]
+            for k in kwargs.keys() & checks.keys():
+                kwargs[k] = checks[k](kwargs[k])
+            return f(*args, **kwargs)
+
+        return checked
+
+    return wrap if fn is None else wrap(fn)
+
+
+def checked_module(namespace: dict, *, skip: tuple[str, ...] = ()) -> None:
+    """:func:`checked_args` on every public function defined in a module (call it at the end of the module with
+    ``globals()``): closed-form modules check their arguments without a decorator on each formula."""
+    module = namespace["__name__"]
+    for name, obj in list(namespace.items()):
+        if (inspect.isfunction(obj) and obj.__module__ == module and not name.startswith("_") and name not in skip):
+            namespace[name] = checked_args(obj)
+
+
+def _instance_check(f, name: str, cls_name: str, none_ok: bool):
+    """A check that an argument is an instance of the class named ``cls_name`` in ``f``'s module (resolved at the first call)."""
+    cache: list = []
+
+    def check(v):
+        if not cache:
+            cls = f.__globals__.get(cls_name)
+            cache.append(cls if isinstance(cls, type) else None)
+        cls = cache[0]
+        if cls is not None and not isinstance(v, cls) and not (none_ok and v is None):
+            raise InputError(f"{name} must be a {cls_name}, got {type(v).__name__} {_preview(v)}")
+        return v
+
+    return check
+
+
 def xi_names(n_arm: int, arm_names=None) -> tuple[str, ...]:
     """Names of the thesis coordinates: x, y, z, phi, theta, psi, then the arm joints (default q1..qn)."""
+    n_arm = as_int(n_arm, "n_arm", lo=0)
     arm = tuple(arm_names) if arm_names is not None else tuple(f"q{i + 1}" for i in range(n_arm))
+    if len(arm) != n_arm:
+        raise ShapeError(f"arm_names must hold n_arm = {n_arm} names, got {len(arm)}")
     return ("x", "y", "z", "phi", "theta", "psi", *arm)
 
 
 def wrap_angle(a):
-    """Angle(s) wrapped to [-pi, pi) [rad] (floats or arrays)."""
+    """Angle(s) wrapped to [-pi, pi) [rad] (a real number or an array of any shape, elementwise: NaN stays NaN)."""
+    if not isinstance(a, float):
+        a = as_array(a, "angle a") if not isinstance(a, (int, np.integer, np.floating)) or isinstance(a, bool) else float(a)
     return (a + _PI) % _TWO_PI - _PI
 
 
@@ -85,16 +277,22 @@ _EX, _EY, _EZ = (pin.skew(np.eye(3)[i]) for i in range(3))
 
 
 def rot_x(a: float) -> np.ndarray:
+    """Rotation by ``a`` [rad] about x."""
+    a = as_real(a, "angle a")
     c, s = cos(a), sin(a)
     return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
 
 
 def rot_y(a: float) -> np.ndarray:
+    """Rotation by ``a`` [rad] about y."""
+    a = as_real(a, "angle a")
     c, s = cos(a), sin(a)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
 
 
 def rot_z(a: float) -> np.ndarray:
+    """Rotation by ``a`` [rad] about z."""
+    a = as_real(a, "angle a")
     c, s = cos(a), sin(a)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
@@ -118,7 +316,9 @@ def euler_to_rotation(euler_zyx) -> np.ndarray:
 
 def euler_to_rotation_batch(euler: np.ndarray) -> np.ndarray:
     """R = Rz(psi) Ry(theta) Rx(phi) for rows [phi, theta, psi] (m, 3): shape (m, 3, 3) (Thesis (3.4))."""
-    e = np.asarray(euler, dtype=float)
+    e = as_array(euler, "euler", ndim=2)  # NaN rows pass: logs of diverged runs
+    if e.shape[1] != 3:
+        raise ShapeError(f"euler must have shape (m, 3), got shape {e.shape}")
     entries = _rotation_entries(np.sin(e[:, 0]), np.cos(e[:, 0]), np.sin(e[:, 1]), np.cos(e[:, 1]),
                                 np.sin(e[:, 2]), np.cos(e[:, 2]))
     return np.stack(entries, axis=-1).reshape(-1, 3, 3)
@@ -134,11 +334,8 @@ def _check_pitch(theta: float, what: str) -> None:
 
 def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
     """``R`` as a 3x3 rotation matrix (finite, R^T R = I within ``tol``, det = +1), else InputError."""
-    R = as_array(R, name)
-    if R.shape != (3, 3):
-        raise ShapeError(f"{name} must have shape (3, 3), got {R.shape}")
-    if not np.all(np.isfinite(R)):
-        raise NonFiniteError(f"{name} must be finite")
+    tol = as_real(tol, "tol", positive=True)
+    R = as_matrix(R, (3, 3), name)
     err = float(np.abs(R.T @ R - np.eye(3)).max())
     if not err <= tol or not np.linalg.det(R) > 0.0:
         raise InputError(f"{name} must be a rotation matrix (R^T R = I, det R = +1): |R^T R - I| = {err:.3g}, "
@@ -159,7 +356,7 @@ def rotation_to_euler(R) -> np.ndarray:
     return np.array([atan2(R[2, 1], R[2, 2]), theta, atan2(R[1, 0], R[0, 0])])
 
 
-def unit_quaternion(quat_xyzw, name: str = "q[3:7]") -> np.ndarray:
+def unit_quaternion(quat_xyzw, name: str = "quat_xyzw") -> np.ndarray:
     """A quaternion (x, y, z, w) of norm 1 (within 1e-6), else ShapeError naming ``name`` (off the unit sphere)."""
     qa = as_vector(quat_xyzw, 4, name)
     norm = float(np.linalg.norm(qa))
@@ -243,7 +440,7 @@ def q_to_xi(q) -> np.ndarray:
     if q.ndim != 1 or q.shape[0] < 7:
         raise ShapeError(f"q must have shape (7 + n_arm,), got shape {q.shape}")
     q = as_vector(q, q.shape[0], "q")
-    qa = unit_quaternion(q[3:7])
+    qa = unit_quaternion(q[3:7], "q[3:7]")
     R = pin.Quaternion(qa[3], qa[0], qa[1], qa[2]).toRotationMatrix()
     return np.concatenate([q[0:3], rotation_to_euler(R), q[7:]])
 
@@ -308,8 +505,23 @@ def force_from_xi(xi, u) -> np.ndarray:
 
 
 # -------------------------------------------------------------------- batch forms (logs)
+def _batch(R, xi, name: str, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(R (m, 3, 3), xi (m, 6 + n), values (m, 6 + n)) of the batch functions, checked (NaN rows pass: logs of diverged runs)."""
+    xi = as_array(xi, "xi", ndim=2)
+    if xi.shape[1] < 6:
+        raise ShapeError(f"xi must have shape (m, 6 + n_arm), got shape {xi.shape}")
+    R = as_array(R, "R")
+    if R.shape != (xi.shape[0], 3, 3):
+        raise ShapeError(f"R must have shape ({xi.shape[0]}, 3, 3) (one rotation per row of xi), got shape {R.shape}")
+    values = as_array(values, name)
+    if values.shape != xi.shape:
+        raise ShapeError(f"{name} must have the shape of xi {xi.shape}, got shape {values.shape}")
+    return R, xi, values
+
+
 def force_from_xi_batch(R: np.ndarray, xi: np.ndarray, u: np.ndarray) -> np.ndarray:
     """tau = S^-T u row by row (m, 6 + n): R^T u_p, T^-T u_tau, u_arm (``R`` (m, 3, 3) of the rows of ``xi``)."""
+    R, xi, u = _batch(R, xi, "u", u)
     tau = np.empty_like(u)
     tau[:, 0:3] = np.einsum("nji,nj->ni", R, u[:, 0:3])
     sf, cf = np.sin(xi[:, 3]), np.cos(xi[:, 3])
@@ -325,6 +537,7 @@ def force_from_xi_batch(R: np.ndarray, xi: np.ndarray, u: np.ndarray) -> np.ndar
 
 def force_to_xi_batch(R: np.ndarray, xi: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """u = S^T tau row by row (m, 6 + n): R tau_lin, T^T tau_ang, tau_arm."""
+    R, xi, tau = _batch(R, xi, "tau", tau)
     u = np.empty_like(tau)
     u[:, 0:3] = np.einsum("nij,nj->ni", R, tau[:, 0:3])
     sf, cf = np.sin(xi[:, 3]), np.cos(xi[:, 3])
@@ -339,6 +552,16 @@ def force_to_xi_batch(R: np.ndarray, xi: np.ndarray, tau: np.ndarray) -> np.ndar
 
 def to_body_batch(R: np.ndarray, p_world: np.ndarray, origin_world: np.ndarray) -> np.ndarray:
     """R^T (p - origin) row by row: world points (m, 3) in the body frames (m, 3, 3) at ``origin_world`` (m, 3)."""
+    p_world = as_array(p_world, "p_world", ndim=2)
+    m = p_world.shape[0]
+    if p_world.shape[1] != 3:
+        raise ShapeError(f"p_world must have shape (m, 3), got shape {p_world.shape}")
+    R = as_array(R, "R")
+    if R.shape != (m, 3, 3):
+        raise ShapeError(f"R must have shape ({m}, 3, 3) (one rotation per point), got shape {R.shape}")
+    origin_world = as_array(origin_world, "origin_world")
+    if origin_world.shape != (m, 3):
+        raise ShapeError(f"origin_world must have shape ({m}, 3), got shape {origin_world.shape}")
     return np.einsum("nji,nj->ni", R, p_world - origin_world)
 
 
@@ -356,7 +579,7 @@ class FloatWriter:
     __slots__ = ("n", "_pack")
 
     def __init__(self, n: int) -> None:
-        self.n = int(n)
+        self.n = as_int(n, "n", lo=0)
         self._pack = struct.Struct(f"={self.n}d").pack_into
 
     def __reduce__(self):  # the bound pack_into cannot be pickled: rebuild it (copies and pickles of its owners work)

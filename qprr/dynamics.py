@@ -13,11 +13,12 @@ import pinocchio as pin
 from . import charts as ch
 from .charts import as_vector
 from .kinematics import check_q
-from .platform import Platform
+from .platform import Platform, check_model_data
 
 
 def mass_matrix(platform: Platform, data: pin.Data, q) -> np.ndarray:
     """M(q) (nv x nv), symmetric (CRBA fills the upper triangle)."""
+    check_model_data(platform, data)
     M = pin.crba(platform.model, data, check_q(platform, q))
     return np.triu(M) + np.triu(M, 1).T
 
@@ -33,6 +34,7 @@ def dynamics_xi(platform: Platform, data: pin.Data, xi, xi_dot) -> tuple[np.ndar
     D = d(S^T y)/dxi |_(y = M S w) + S^T d(M a)/dq|_(a = S w) S + S^T M d(S w)/dxi, w = xi_dot.
     Raises EulerSingularityError at theta = +-pi/2 (B is singular there).
     """
+    check_model_data(platform, data)
     xi = ch.as_xi(xi, "xi", platform.n_xi)
     w = as_vector(xi_dot, platform.n_xi, "xi_dot")
     ch._check_pitch(xi[4], "dynamics_xi")
@@ -68,6 +70,7 @@ def forward_dynamics_xi(platform: Platform, data: pin.Data, xi, xi_dot, u) -> np
     ``u`` are generalised forces in thesis coordinates (e.g. from
     :func:`qprr.actuation.input_map`); tau = S^-T u is applied in Pinocchio's coordinates.
     """
+    check_model_data(platform, data)
     xi = ch.as_xi(xi, "xi", platform.n_xi)
     xi_dot = as_vector(xi_dot, platform.n_xi, "xi_dot")
     u = as_vector(u, platform.n_xi, "u")
@@ -80,14 +83,17 @@ def forward_dynamics_xi(platform: Platform, data: pin.Data, xi, xi_dot, u) -> np
 
 def kinetic_energy(platform: Platform, data: pin.Data, q, v) -> float:
     """Kinetic energy [J], Thesis (5.13)."""
+    check_model_data(platform, data)
     return float(pin.computeKineticEnergy(platform.model, data, check_q(platform, q), as_vector(v, platform.nv, "v")))
 
 
 def potential_energy(platform: Platform, data: pin.Data, q) -> float:
     """Gravitational potential energy [J] with U = m g z (world z up), Thesis (5.29)."""
+    check_model_data(platform, data)
     return float(pin.computePotentialEnergy(platform.model, data, check_q(platform, q)))
 
 
 def generalized_gravity(platform: Platform, data: pin.Data, q) -> np.ndarray:
     """g(q) (nv,): the generalised force that holds the platform still at q (Pinocchio coordinates)."""
+    check_model_data(platform, data)
     return pin.computeGeneralizedGravity(platform.model, data, check_q(platform, q)).copy()

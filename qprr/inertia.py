@@ -13,7 +13,8 @@ import math
 
 import numpy as np
 
-from .errors import NonPhysicalError
+from .charts import as_array, as_vector
+from .errors import InputError, NonPhysicalError
 
 TRIANGLE_RTOL = 1e-12
 """Relative tolerance (of the largest principal moment) of the triangle inequalities: a body on the boundary
@@ -24,12 +25,20 @@ def _finite(values) -> bool:
     return all(isinstance(x, (int, float, np.floating, np.integer)) and math.isfinite(x) for x in values)
 
 
+def _physical(convert, *args):
+    """``convert(*args)`` (a qprr.charts converter) with its errors as :class:`NonPhysicalError` (a body that cannot exist)."""
+    try:
+        return convert(*args)
+    except InputError as exc:
+        raise NonPhysicalError(str(exc)) from None
+
+
 def second_moments(moments) -> np.ndarray:
     """Second moments of mass Sigma_k = (I_i + I_j - I_k) / 2 [kg m^2] along the axes of the moments (I_1, I_2, I_3).
 
     Sigma_k = integral of x_k^2 dm: a body exists iff all three are >= 0, i.e. iff the moments satisfy the
     triangle inequalities I_k <= I_i + I_j."""
-    I = np.asarray(moments, dtype=float)
+    I = as_vector(moments, 3, "moments")
     return 0.5 * (I.sum() - 2.0 * I)
 
 
@@ -51,13 +60,14 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
     moments satisfy the triangle inequalities I_k <= I_i + I_j (``check_triangle``), i.e. no negative second moment
     of mass.  ``inertia`` may also be a 3x3 matrix.  ``allow_massless``: mass 0 with a zero inertia is accepted
     (a frame-only link of a URDF)."""
-    I3 = np.asarray(inertia)
+    I3 = _physical(as_array, inertia, f"{body} inertia")
     if I3.shape == (3, 3):
-        if not (I3.dtype.kind in "iuf" and np.all(np.isfinite(I3))):
+        if not np.all(np.isfinite(I3)):
             raise NonPhysicalError(f"{body}: inertia must be a finite 3x3 matrix, got {I3.tolist()}")
         if not np.allclose(I3, I3.T, rtol=0.0, atol=1e-12 * max(1e-300, float(np.abs(I3).max()))):
             raise NonPhysicalError(f"{body}: inertia must be symmetric, got {I3.tolist()}")
         inertia = (float(I3[0, 0]), float(I3[1, 1]), float(I3[2, 2]), float(I3[0, 1]), float(I3[0, 2]), float(I3[1, 2]))
+    inertia = tuple(_physical(as_vector, inertia, 6, f"{body} inertia (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) [kg m^2]").tolist())
     if allow_massless and _finite([mass]) and mass == 0.0:
         if all(float(x) == 0.0 for x in inertia):
             return
@@ -65,12 +75,8 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
     if not (_finite([mass]) and mass > 0.0):
         bound = ">= 0 kg (0 only with a zero inertia)" if allow_massless else "> 0 kg"
         raise NonPhysicalError(f"{body}: mass must be finite and {bound}, got {mass!r}")
-    com = [float(c) for c in com] if _finite(list(np.ravel(com))) else com
-    if len(com) != 3 or not _finite(com):
-        raise NonPhysicalError(f"{body}: centre of mass must be 3 finite coordinates in m, got {com!r}")
-    if len(inertia) != 6 or not _finite(inertia):
-        raise NonPhysicalError(f"{body}: inertia must be 6 finite values (Ixx, Iyy, Izz, Ixy, Ixz, Iyz) in kg m^2, got {inertia!r}")
-    ixx, iyy, izz, ixy, ixz, iyz = (float(x) for x in inertia)
+    _physical(as_vector, com, 3, f"{body} com (centre of mass, m)")
+    ixx, iyy, izz, ixy, ixz, iyz = inertia
     diagonal = ixy == 0.0 and ixz == 0.0 and iyz == 0.0
     moments = np.array([ixx, iyy, izz]) if diagonal else np.linalg.eigvalsh(np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]]))
     names = ("I_xx", "I_yy", "I_zz") if diagonal else ("I_1", "I_2", "I_3")

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .charts import as_vector, rot_x, rot_z
+from .charts import as_array, as_real, as_vector, checked_module, rot_x, rot_z
 from .errors import InputError, ShapeError
 
 SIGMAS = (0, 1)
@@ -68,6 +68,7 @@ class MDHRow:
 
     def parameters(self, q: float = 0.0) -> tuple[float, float, float, float]:
         """(alpha, d, theta, r) at joint value ``q`` (ignored when ``joint`` is False), Thesis Remark 1."""
+        q = as_real(q, "q")
         theta, r = self.theta, self.r
         if self.joint:
             if self.sigma == 0:
@@ -105,6 +106,8 @@ def kk_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
 
 
 def _check_rows(rows: Sequence[MDHRow]) -> tuple[MDHRow, ...]:
+    if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+        raise InputError(f"rows must be a non-empty sequence of MDHRow, got {rows!r}")
     rows = tuple(rows)
     if not rows or not all(isinstance(row, MDHRow) for row in rows):
         raise InputError(f"rows must be a non-empty sequence of MDHRow, got {rows!r}")
@@ -114,7 +117,7 @@ def _check_rows(rows: Sequence[MDHRow]) -> tuple[MDHRow, ...]:
 def _check_transform(T, name: str) -> np.ndarray:
     if T is None:
         return np.eye(4)
-    T = np.asarray(T, dtype=float)
+    T = as_array(T, name)
     if T.shape != (4, 4):
         raise ShapeError(f"{name} must be a 4x4 homogeneous transform, got shape {T.shape}")
     if not np.all(np.isfinite(T)):
@@ -190,3 +193,6 @@ def build_model(rows: Sequence[MDHRow], base=None, tool=None) -> pin.Model:
             parent_frame = model.addFrame(pin.Frame(frame_name(j), parent_joint, parent_frame, placement, pin.FrameType.OP_FRAME))
     model.addFrame(pin.Frame(TOOL_FRAME, parent_joint, parent_frame, placement * tool_T, pin.FrameType.OP_FRAME))
     return model
+
+
+checked_module(globals())

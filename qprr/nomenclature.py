@@ -31,9 +31,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from . import urdfgen as ug
+from .charts import as_name, as_real, as_vector
 from .errors import InputError, QprrError
 from .platform import Platform, from_urdf
-from .rotors import Rotor, layout_rotors
+from .rotors import LAYOUTS, Rotor, layout_rotors
 
 UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
 """Multirotor codes of Table 2.3 that :func:`build` makes, and their rotor counts."""
@@ -126,6 +127,22 @@ class LinkSpec:
     inertia: tuple[float, float, float, float, float, float] | None = None
     com: tuple[float, float, float] | None = None
 
+    def __post_init__(self) -> None:
+        as_name(self.kind, "kind", tuple(JOINTS), "joint letter")
+        for name in ("length", "mass", "radius"):
+            object.__setattr__(self, name, as_real(getattr(self, name), f"link {name}", positive=True))
+        for name in ("lower", "upper"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, as_real(getattr(self, name), f"link {name}"))
+        for name in ("effort", "velocity"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, as_real(getattr(self, name), f"link {name}", positive=True))
+        if self.lower is not None and self.upper is not None and not self.lower <= self.upper:
+            raise InputError(f"link lower limit {self.lower!r} is above its upper limit {self.upper!r}")
+        for name, n in (("axis", 3), ("inertia", 6), ("com", 3)):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, tuple(as_vector(getattr(self, name), n, f"link {name}").tolist()))
+
 
 _JOINT_DEFAULTS = {"P": (-0.05, 0.05, 20.0, 0.5), "R": (-2.0 * math.pi / 3.0, 2.0 * math.pi / 3.0, 5.0, 6.0)}
 _UAV_DEFAULTS = {4: (1.5, 0.225), 6: (2.5, 0.3), 8: (3.5, 0.35)}  # (body mass [kg], arm length l [m])
@@ -182,7 +199,29 @@ def build(
     d = parse(name)
     _check_buildable(d)
     n_rot = UAV_ROTORS[d.uav]
+    if layout is not None:
+        as_name(layout, "layout", LAYOUTS, "rotor layout")
     layout = layout or d.layout or "plus"
+    body_height = as_real(body_height, "body_height", positive=True, unit="m")
+    mount_xyz = tuple(as_vector(mount_xyz, 3, "mount_xyz").tolist())
+    kappa = as_real(kappa, "kappa", nonnegative=True, unit="m")
+    thrust_to_weight = as_real(thrust_to_weight, "thrust_to_weight", positive=True)
+    f_min = as_real(f_min, "f_min", nonnegative=True, unit="N")
+    tilt = as_real(tilt, "tilt", unit="rad")
+    g = as_real(g, "g", positive=True, unit="m/s^2")
+    if body_mass is not None:
+        body_mass = as_real(body_mass, "body_mass", positive=True, unit="kg")
+    if arm_length is not None:
+        arm_length = as_real(arm_length, "arm_length", positive=True, unit="m")
+    if body_inertia is not None:
+        body_inertia = tuple(as_vector(body_inertia, 6, "body_inertia").tolist())
+    if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
+        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
+    base_name, ee_name = ug.xml_name(base_name, "base_name"), ug.xml_name(ee_name, "ee_name")
+    if platform_name is not None:
+        ug.xml_name(platform_name, "platform_name")
+    if links is not None and (isinstance(links, str) or not all(isinstance(k, LinkSpec) for k in links)):
+        raise InputError(f"links must be a sequence of LinkSpec, got {links!r:.80}")
     if d.layout is not None and layout != d.layout:
         raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
     if arm_direction not in ("up", "down"):

@@ -28,10 +28,11 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as co
-from .charts import as_vector
+from .charts import as_int, as_real, as_vector
 from .dynamics import dynamics_xi
 from .errors import InputError, UnknownNameError
-from .platform import Platform
+from .kinematics import check_q
+from .platform import Platform, check_model_data, check_platform
 
 APPROACHES = ("link3", "body")
 """Known-mass models: "link3" = point mass folded into link 3 (Thesis (6.40)); "body" = rigid
@@ -56,18 +57,17 @@ class Payload:
     inertia: tuple[float, float, float, float, float, float] = (0.0,) * 6
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.mass) and self.mass >= 0.0):
-            raise InputError(f"payload mass must be a finite number >= 0 kg, got {self.mass!r}")
-        as_vector(self.com_ee, 3, "com_ee")
-        as_vector(self.inertia, 6, "inertia")
+        object.__setattr__(self, "mass", as_real(self.mass, "payload mass", nonnegative=True, unit="kg"))
+        object.__setattr__(self, "com_ee", tuple(as_vector(self.com_ee, 3, "com_ee").tolist()))
+        object.__setattr__(self, "inertia", tuple(as_vector(self.inertia, 6, "inertia").tolist()))
         if np.any(np.linalg.eigvalsh(self.inertia_matrix()) < -1e-15):
             raise InputError(f"payload inertia must be positive semi-definite, got {self.inertia!r}")
 
     @classmethod
     def sphere(cls, mass: float, radius: float, com_ee=(0.0, 0.0, 0.0)) -> Payload:
         """Solid homogeneous sphere: I_xx = I_yy = I_zz = 2/5 m R^2 (the result stated after Thesis (6.43))."""
-        if not (np.isfinite(radius) and radius >= 0.0):
-            raise InputError(f"sphere radius must be a finite number >= 0 m, got {radius!r}")
+        radius = as_real(radius, "sphere radius", nonnegative=True, unit="m")
+        mass = as_real(mass, "payload mass", nonnegative=True, unit="kg")
         i = 0.4 * mass * radius * radius
         return cls(mass, tuple(float(x) for x in as_vector(com_ee, 3, "com_ee")), (i, i, i, 0.0, 0.0, 0.0))
 
@@ -91,14 +91,14 @@ def _check_approach(approach: str) -> None:
 def _as_payload(payload: Payload | float) -> Payload:
     if isinstance(payload, Payload):
         return payload
-    try:
-        return Payload(float(payload))
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"payload must be a Payload or a mass in kg, got {payload!r}") from exc
+    if isinstance(payload, (bool, str)) or payload is None or not isinstance(payload, (int, float, np.number)):
+        raise InputError(f"payload must be a Payload or a mass in kg, got {payload!r}")
+    return Payload(as_real(payload, "payload (mass)", nonnegative=True, unit="kg"))
 
 
 def payload_joint_inertia(platform: Platform, payload: Payload | float, approach: str = "body") -> tuple[int, pin.Inertia]:
     """(joint id, spatial inertia of the payload expressed in that joint's frame): what is added to link 3."""
+    check_platform(platform)
     payload = _as_payload(payload)
     frame = platform.model.frames[platform.ee_frame]
     return int(frame.parentJoint), frame.placement.act(payload.spatial_inertia_ee(approach))
@@ -125,7 +125,7 @@ class PayloadModel:
     """
 
     def __init__(self, platform: Platform, com_ee=(0.0, 0.0, 0.0)) -> None:
-        self.platform = platform
+        self.platform = check_platform(platform)
         self.model = pin.Model(platform.model)
         self.data = self.model.createData()
         frame = platform.model.frames[platform.ee_frame]
@@ -136,8 +136,8 @@ class PayloadModel:
         self.mass = 0.0
 
     def set_mass(self, mass: float) -> None:
-        """Point mass ``mass`` [kg] at ``com_ee`` (the controller's model of an unknown payload, (6.44))."""
-        self.mass = float(mass)
+        """Point mass ``mass`` [kg] (>= 0) at ``com_ee`` (the controller's model of an unknown payload, (6.44))."""
+        self.mass = as_real(mass, "mass", nonnegative=True, unit="kg")
         self.model.inertias[self.joint] = self.nominal + pin.Inertia(self.mass, self.com_joint, np.zeros((3, 3)))
 
     def set(self, payload: Payload | float, approach: str = "body") -> None:
@@ -164,6 +164,12 @@ def combine_inertias(a: RigidInertia, b: RigidInertia) -> RigidInertia:
     I = I_a + I_b + mu (|delta|^2 I3 - delta delta^T), mu = m_a m_b / m, delta = c_b - c_a.
     This is the corrected form of (6.40b) and (6.41b) (see :func:`link3_inertia_6_40`).
     """
+    for name, body in (("a", a), ("b", b)):
+        if not isinstance(body, RigidInertia):
+            raise InputError(f"{name} must be a RigidInertia, got {type(body).__name__}")
+        as_real(body.mass, f"{name}.mass", nonnegative=True, unit="kg")
+        as_vector(body.com, 3, f"{name}.com")
+        co.as_matrix(body.inertia, (3, 3), f"{name}.inertia")
     m = a.mass + b.mass
     if m <= 0.0:
         raise InputError(f"combined mass must be > 0, got {a.mass!r} + {b.mass!r}")
@@ -176,6 +182,7 @@ def combine_inertias(a: RigidInertia, b: RigidInertia) -> RigidInertia:
 
 def com_with_payload(platform: Platform, data: pin.Data, q_arm, payload: Payload | float) -> np.ndarray:
     """System CoM in B with the payload (corrected (6.42)), from the Pinocchio model copy of :func:`with_payload`."""
+    check_model_data(platform, data)
     q_arm = as_vector(q_arm, platform.n_arm, "q_arm")
     loaded = with_payload(platform, payload)
     q = pin.neutral(loaded.model)
@@ -209,12 +216,12 @@ def max_total_thrust(platform: Platform) -> float:
     one axis): the collective-thrust limit of :meth:`qprr.analysis.WrenchSet.force_max`."""
     from .analysis.wrenchset import wrench_set
 
-    return wrench_set(platform).force_max(platform.thrust_axis[1])
+    return wrench_set(check_platform(platform)).force_max(platform.thrust_axis[1])
 
 
 def holding_efforts(platform: Platform, q_arm, payload: Payload | float) -> HoldingEffort:
     """Thrust and arm efforts that hold the platform level and at rest with ``payload``, from Pinocchio's G."""
-    q_arm = platform.check_arm_limits(q_arm)
+    q_arm = check_platform(platform).check_arm_limits(q_arm)
     payload = _as_payload(payload)
     q = pin.neutral(platform.model)
     q[7:] = q_arm
@@ -272,9 +279,11 @@ def payload_capacity(platform: Platform, mission: str = "manipulation", q_arm=No
     from .analysis.hover import payload_limits
     from .analysis.wrenchset import wrench_set
 
+    check_platform(platform)
     if mission not in MISSIONS:
         raise UnknownNameError("mission", mission, MISSIONS)
-    if not (isinstance(thrust_reserve, (int, float)) and 0.0 <= thrust_reserve < 1.0):
+    thrust_reserve = as_real(thrust_reserve, "thrust_reserve", nonnegative=True)
+    if not thrust_reserve < 1.0:
         raise InputError(f"thrust_reserve must be in [0, 1), got {thrust_reserve!r}")
     offset = as_vector(com_ee, 3, "com_ee")
     if mission == "transport":  # the thrust alone: one configuration gives it
@@ -321,8 +330,7 @@ def _configurations(platform: Platform, q_arm, configurations, n_grid: int) -> l
         for k, row in enumerate(rows):
             platform.check_arm_limits(row, f"configurations[{k}]")
         return [tuple(r) for r in rows]
-    if not (isinstance(n_grid, int) and n_grid >= 2):
-        raise InputError(f"n_grid must be an integer >= 2, got {n_grid!r}")
+    n_grid = as_int(n_grid, "n_grid", lo=2)
     axes = []
     for joint in platform.arm:
         if joint.kind == "revolute":
@@ -347,6 +355,8 @@ class PayloadTerms:
 
 def payload_terms_xi(platform: Platform, data: pin.Data, xi, xi_dot, payload: Payload | float, approach: str = "body") -> PayloadTerms:
     """B_c, C_c, G_c of Thesis (6.50) as (loaded model) - (nominal model), each from :func:`qprr.dynamics.dynamics_xi`."""
+    _check_approach(approach)
+    payload = _as_payload(payload)
     B, C, G = dynamics_xi(platform, data, xi, xi_dot)
     loaded = with_payload(platform, payload, approach)
     Bl, Cl, Gl = dynamics_xi(loaded, loaded.model.createData(), xi, xi_dot)
@@ -358,6 +368,7 @@ def payload_point_jacobian_xi(platform: Platform, data: pin.Data, xi, com_ee=(0.
 
     J_P = J_lin - (R_e c)^ J_ang at the point c = ``com_ee`` of the end-effector frame; J_O = J_ang.
     """
+    check_model_data(platform, data)
     xi = co.as_xi(xi, "xi", platform.n_xi)
     q = co.xi_to_q(xi)
     J = pin.computeFrameJacobian(platform.model, data, q, platform.ee_frame, pin.LOCAL_WORLD_ALIGNED) @ co.rate_map(xi)
@@ -412,8 +423,12 @@ class MassEstimator:
 
     def __init__(self, platform: Platform, *, time_constant: float = 0.05, com_ee=(0.0, 0.0, 0.0), initial: float = 0.0,
                  min_mass: float = 0.0, max_mass: float = math.inf, prior_weight: float = 1e-3) -> None:
-        if not (np.isfinite(time_constant) and time_constant > 0.0):
-            raise InputError(f"time_constant must be > 0 s, got {time_constant!r}")
+        check_platform(platform)
+        time_constant = as_real(time_constant, "time_constant", positive=True, unit="s")
+        initial = as_real(initial, "initial", nonnegative=True, unit="kg")
+        min_mass = as_real(min_mass, "min_mass", nonnegative=True, unit="kg")
+        max_mass = as_real(max_mass, "max_mass", nonnegative=True, allow_inf=True, unit="kg")
+        prior_weight = as_real(prior_weight, "prior_weight", positive=True)
         if not (min_mass <= initial <= max_mass):
             raise InputError(f"need min_mass <= initial <= max_mass, got {min_mass!r}, {initial!r}, {max_mass!r}")
         self.platform = platform
@@ -440,19 +455,23 @@ class MassEstimator:
 
     def regressor(self, q, v, a) -> tuple[np.ndarray, np.ndarray]:
         """(RNEA_nominal(q, v, a), Y(q, v, a)) in Pinocchio coordinates."""
+        nv = self.platform.nv
+        q, v, a = check_q(self.platform, q), as_vector(v, nv, "v"), as_vector(a, nv, "a")
         tn = pin.rnea(self._nominal, self._dn, q, v, a).copy()
         return tn, pin.rnea(self._unit, self._du, q, v, a) - tn
 
     def update(self, q_prev, v_prev, tau_prev, v_now, dt: float) -> float:
         """Add the step (q_prev, v_prev) -> v_now under the applied Pinocchio force ``tau_prev``; return the estimate."""
-        if not (dt > 0.0):
-            raise InputError(f"dt must be > 0 s, got {dt!r}")
+        dt = as_real(dt, "dt", positive=True, unit="s")
+        nv = self.platform.nv
+        v_prev, v_now, tau_prev = as_vector(v_prev, nv, "v_prev"), as_vector(v_now, nv, "v_now"), as_vector(tau_prev, nv, "tau_prev")
+        q_prev = check_q(self.platform, q_prev, "q_prev")
         if dt != self._last_dt:
             self._lam = math.exp(-dt / self.time_constant)
             self._last_dt = dt
-        a = (np.asarray(v_now) - np.asarray(v_prev)) / dt
+        a = (v_now - v_prev) / dt
         tn, Y = self.regressor(q_prev, v_prev, a)
-        r = np.asarray(tau_prev) - tn
+        r = tau_prev - tn
         lam = self._lam
         self._P = lam * self._P + float(Y @ Y)
         self._b = lam * self._b + float(Y @ r)

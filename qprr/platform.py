@@ -74,10 +74,12 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
 
     Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.inertia.check_rigid_body`.
     """
+    if not isinstance(xml_text, str):
+        raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
     try:
         root = ET.fromstring(xml_text)
     except ET.ParseError as exc:
-        raise InputError(f"{source} is not valid XML: {exc}") from exc
+        raise InputError(f"{source} (xml_text) is not valid XML: {exc}") from exc
     for link in root.iter("link"):
         inertial = link.find("inertial")
         if inertial is None:
@@ -153,6 +155,8 @@ def check_urdf_joints(xml_text: str, source: str = "URDF") -> None:
 
 def check_model_inertias(model: pin.Model) -> None:
     """:func:`qprr.inertia.check_rigid_body` on every body of a Pinocchio model (after fixed links are merged)."""
+    if not isinstance(model, pin.Model):
+        raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
     for j in range(1, model.njoints):
         Y = model.inertias[j]
         check_rigid_body(model.names[j], float(Y.mass), Y.lever, Y.inertia, allow_massless=True)
@@ -188,6 +192,10 @@ class Platform:
         if model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer" or model.parents[1] != 0:
             raise InputError("a platform's model needs a free-flyer root joint (load the URDF with pin.JointModelFreeFlyer())")
         n_arm = model.njoints - 2
+        if not isinstance(self.arm, (tuple, list)) or not all(isinstance(j, ArmJoint) for j in self.arm):
+            raise InputError(f"arm must be a tuple of ArmJoint, got {_short(self.arm)}")
+        if not isinstance(self.rotors, (tuple, list)):
+            raise InputError(f"rotors must be a tuple of qprr.rotors.Rotor, got {_short(self.rotors)}")
         if len(self.arm) != n_arm:
             raise InputError(f"the model has {n_arm} joints after the free flyer, the arm lists {len(self.arm)}")
         for k, j in enumerate(self.arm):
@@ -384,6 +392,8 @@ class Platform:
 
     def with_model(self, model: pin.Model) -> Platform:
         """The same platform on another model of the same structure (e.g. with a payload inertia)."""
+        if not isinstance(model, pin.Model):
+            raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
         if model.nq != self.model.nq or model.nv != self.model.nv or model.nframes != self.model.nframes:
             raise ShapeError(f"model of another structure: nq {model.nq}, nv {model.nv}, nframes {model.nframes}")
         return dataclasses.replace(self, model=model)
@@ -394,11 +404,44 @@ class Platform:
                 f"{'fully actuated' if self.fully_actuated else 'under-actuated'})")
 
 
+# ============================================================================== argument checks
+def check_platform(platform, name: str = "platform") -> Platform:
+    """``platform`` if it is a :class:`Platform`, else an :class:`InputError` naming ``name``."""
+    if not isinstance(platform, Platform):
+        raise InputError(f"{name} must be a qprr Platform (qprr.load, qprr.build, qprr.from_urdf), got {type(platform).__name__} "
+                         f"{_short(platform)}")
+    return platform
+
+
+def check_data(platform: Platform, data, name: str = "data") -> pin.Data:
+    """``data`` if it is a ``pin.Data`` of ``platform``'s model (from :meth:`Platform.data`), else a qprr error naming ``name``."""
+    check_platform(platform)
+    if not isinstance(data, pin.Data):
+        raise InputError(f"{name} must be a pinocchio.Data from platform.data(), got {type(data).__name__} {_short(data)}")
+    if len(data.oMf) != platform.model.nframes:
+        raise ShapeError(f"{name} was made for another model ({len(data.oMf)} frames; platform {platform.name!r} has "
+                         f"{platform.model.nframes}): use platform.data()")
+    return data
+
+
+def check_model_data(platform, data, name: str = "data") -> tuple[Platform, pin.Data]:
+    """(platform, data) checked by :func:`check_platform` and :func:`check_data`: the first line of algorithms on (platform, data, ...)."""
+    check_platform(platform)
+    return platform, check_data(platform, data, name)
+
+
+def _short(x) -> str:
+    text = repr(x)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
 # ============================================================================== loading
 def frame_id(model: pin.Model, name: str | int, what: str = "frame") -> int:
     """Frame id of ``name`` in ``model`` (or a valid id); :class:`UnknownNameError` lists the frames.
 
     ``what`` names the argument in the error (e.g. ``"ee_frame"``)."""
+    if not isinstance(model, pin.Model):
+        raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
     if isinstance(name, (int, np.integer)) and not isinstance(name, bool):
         if 0 <= name < model.nframes:
             return int(name)
@@ -481,6 +524,11 @@ def from_model(
     The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
     :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams).
     """
+    if not isinstance(model, pin.Model):
+        raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
+    if not (isinstance(rotors, Mapping) or (isinstance(rotors, Sequence) and not isinstance(rotors, str))):
+        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor or a rotor description mapping, got {type(rotors).__name__} "
+                         f"{_short(rotors)}")
     model = pin.Model(model)
     if allow_nonphysical:
         provenance = {**(provenance or {}), "WARNING": "inertia checks skipped (allow_nonphysical=True): not a physical body set"}
@@ -601,12 +649,13 @@ def from_urdf(
     model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
     rotor_source = None
     if isinstance(rotors, (str, Path)):
+        from .charts import as_file
         from .rotors import read_rotor_file
 
         rotor_source = str(rotors)
         if Path(rotors).suffix.lower() != ".toml":
             raise InputError(f"rotors: a rotor description file must be a .toml file, got {rotor_source!r}")
-        rotors = read_rotor_file(rotors)
+        rotors = read_rotor_file(as_file(rotors, "rotors", what="rotor description file"))
     prov = {"model": source, **(provenance or {})}
     if rotor_source is not None:
         prov.setdefault("rotors", rotor_source)
@@ -615,11 +664,14 @@ def from_urdf(
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:
+    from .charts import as_file
+
     if isinstance(urdf, Path) or (isinstance(urdf, str) and not urdf.lstrip().startswith("<")):
-        path = Path(urdf)
-        if not path.is_file():
-            raise InputError(f"URDF file {str(path)!r} does not exist")
-        return path.read_text(), str(path)
+        path = as_file(urdf, "urdf", what="URDF file")
+        try:
+            return path.read_text(), str(path)
+        except UnicodeDecodeError as exc:
+            raise InputError(f"urdf: URDF file {str(path)!r} is not text (XML): {exc}") from None
     if isinstance(urdf, str):
         return urdf, "URDF text"
-    raise InputError(f"urdf must be a path or the URDF XML text, got {type(urdf).__name__}")
+    raise InputError(f"urdf must be a path or the URDF XML text, got {type(urdf).__name__} {_short(urdf)}")

@@ -24,17 +24,13 @@ from pathlib import Path
 
 import numpy as np
 
+from .charts import as_file, as_int, as_real, as_vector
 from .errors import InputError, UnknownNameError
 
 
 def _finite3(value, name: str) -> tuple[float, float, float]:
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be 3 real numbers, got {value!r}") from exc
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise InputError(f"{name} must be 3 finite numbers, got {value!r}")
-    return (float(a[0]), float(a[1]), float(a[2]))
+    x, y, z = as_vector(value, 3, name).tolist()
+    return (x, y, z)
 
 
 @dataclass(frozen=True)
@@ -72,13 +68,11 @@ class Rotor:
         if self.spin not in (1, -1):
             raise InputError(f"{label} spin must be +1 or -1, got {self.spin!r}")
         object.__setattr__(self, "spin", int(self.spin))
-        for field_name in ("kappa", "f_min", "f_max"):
-            v = getattr(self, field_name)
-            if not isinstance(v, (int, float, np.floating)) or isinstance(v, bool) or math.isnan(v):
-                raise InputError(f"{label} {field_name} must be a real number, got {v!r}")
-            object.__setattr__(self, field_name, float(v))
-        if not (math.isfinite(self.kappa) and self.kappa >= 0.0):
-            raise InputError(f"{label} kappa must be finite and >= 0 m, got {self.kappa!r}")
+        object.__setattr__(self, "kappa", as_real(self.kappa, f"{label} kappa", nonnegative=True, unit="m"))
+        object.__setattr__(self, "f_min", as_real(self.f_min, f"{label} f_min", nonnegative=True, unit="N"))
+        object.__setattr__(self, "f_max", as_real(self.f_max, f"{label} f_max", positive=True, allow_inf=True, unit="N"))
+        if not isinstance(self.name, str):
+            raise InputError(f"{label} name must be a string, got {self.name!r}")
         if not (math.isfinite(self.f_min) and 0.0 <= self.f_min < self.f_max):
             raise InputError(f"{label} thrust bounds must satisfy 0 <= f_min < f_max, got f_min = {self.f_min!r}, "
                              f"f_max = {self.f_max!r}")
@@ -92,6 +86,8 @@ class Rotor:
 
 def rotor_matrix(rotors: Sequence[Rotor]) -> np.ndarray:
     """Omega (6 x n): [f_B; tau_B] = Omega f for the thrusts f of ``rotors`` (Thesis (3.31), (3.36))."""
+    if not isinstance(rotors, (tuple, list)) or not all(isinstance(r, Rotor) for r in rotors):
+        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
     if len(rotors) == 0:
         raise InputError("a multirotor needs at least one rotor, got none")
     return np.column_stack([r.wrench_column() for r in rotors])
@@ -126,10 +122,11 @@ def ring(
     the base produces a 4-D wrench set (thrust along z_B and three torques); with alternating
     tilts and n >= 6 a 6-D one.
     """
-    if not (isinstance(n, (int, np.integer)) and n >= 1):
-        raise InputError(f"number of rotors n must be an integer >= 1, got {n!r}")
-    if not (math.isfinite(radius) and radius >= 0.0):
-        raise InputError(f"radius must be finite and >= 0 m, got {radius!r}")
+    n = as_int(n, "number of rotors n", lo=1)
+    radius = as_real(radius, "radius", nonnegative=True, unit="m")
+    start_angle = as_real(start_angle, "start_angle", unit="rad")
+    height = as_real(height, "height", unit="m")
+    tilt = as_real(tilt, "tilt", unit="rad")
     spins = tuple((1, -1)[i % 2] for i in range(n)) if spins is None else tuple(spins)
     tilt_signs = tuple((1, -1)[i % 2] for i in range(n)) if tilt_signs is None else tuple(tilt_signs)
     if len(spins) != n or len(tilt_signs) != n:
@@ -152,7 +149,7 @@ def quadrotor(arm_length: float, layout: str = "plus", **kwargs) -> tuple[Rotor,
     starts = {"plus": math.pi, "x": 1.25 * math.pi}
     if layout not in starts:
         raise UnknownNameError("quadrotor layout", layout, tuple(starts))
-    return ring(4, arm_length, start_angle=starts[layout], **kwargs)
+    return ring(4, as_real(arm_length, "arm_length", positive=True, unit="m"), start_angle=starts[layout], **kwargs)
 
 
 def ideal_wrench_set(force_max: float, torque_max: float, *, name: str = "ideal") -> tuple[Rotor, ...]:
@@ -164,8 +161,8 @@ def ideal_wrench_set(force_max: float, torque_max: float, *, name: str = "ideal"
     couple, thrusters along +e (spin +1) and -e (spin -1) with kappa = 1 m (columns [e; e], [-e; e]: equal thrusts
     f give the couple 2 f e); a negative couple, along +e (spin -1) and -e (spin +1) (columns [e; -e], [-e; -e]).
     """
-    if not (math.isfinite(force_max) and force_max > 0 and math.isfinite(torque_max) and torque_max > 0):
-        raise InputError(f"force_max and torque_max must be finite and > 0, got {force_max!r}, {torque_max!r}")
+    force_max = as_real(force_max, "force_max", positive=True, unit="N")
+    torque_max = as_real(torque_max, "torque_max", positive=True, unit="N m")
     out = []
     o = (0.0, 0.0, 0.0)
     for k, e in enumerate(((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))):
@@ -186,6 +183,8 @@ def layout_rotors(n: int, arm_length: float, layout: str = "plus", **kwargs) -> 
     """Rotors of an n-rotor ring in the "plus" or "x" layout (quadrotors: :func:`quadrotor`)."""
     if layout not in LAYOUTS:
         raise UnknownNameError("rotor layout", layout, LAYOUTS)
+    n = as_int(n, "number of rotors n", lo=1)
+    arm_length = as_real(arm_length, "arm_length", positive=True, unit="m")
     if n == 4:
         return quadrotor(arm_length, layout, **kwargs)
     start = 0.0 if layout == "plus" else math.pi / n
@@ -245,11 +244,13 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     if bad:
         raise UnknownNameError("rotor default", sorted(bad)[0], tuple(sorted(_DEFAULT_KEYS)))
     entries = desc.get("rotor")
-    if not entries or isinstance(entries, Mapping) or not all(isinstance(e, Mapping) for e in entries):
+    if not entries or isinstance(entries, Mapping) or not isinstance(entries, (list, tuple)):
         raise InputError("a rotor description needs a non-empty list 'rotor' of tables (in TOML: one [[rotor]] per rotor), "
                          f"got {entries!r}")
     out = []
     for i, entry in enumerate(entries):
+        if not isinstance(entry, Mapping):
+            raise InputError(f"rotor {i + 1} of the description must be a table (mapping), got {entry!r}")
         bad = set(entry) - _ROTOR_KEYS
         if bad:
             raise UnknownNameError(f"key of rotor {i + 1}", sorted(bad)[0], tuple(sorted(_ROTOR_KEYS)))
@@ -295,7 +296,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
 
 def read_rotor_file(path: str | Path) -> dict:
     """Parse a TOML rotor description (see :func:`rotors_from_mapping`) into a dict."""
-    path = Path(path)
+    path = as_file(path, "path", what="rotor description file")
     try:
         import tomllib
     except ModuleNotFoundError:  # Python 3.10
@@ -305,10 +306,11 @@ def read_rotor_file(path: str | Path) -> dict:
             from .errors import MissingDependencyError
 
             raise MissingDependencyError("tomli", "reading TOML rotor files on Python 3.10", "pip install tomli") from exc
-    if not path.is_file():
-        raise InputError(f"rotor description file {str(path)!r} does not exist")
     with path.open("rb") as fh:
         try:
-            return tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(f"rotor description file {str(path)!r} is not valid TOML: {exc}") from exc
+            desc = tomllib.load(fh)
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(f"path: rotor description file {str(path)!r} is not valid TOML: {exc}") from exc
+    if not isinstance(desc.get("rotor"), list) or not desc["rotor"]:
+        raise InputError(f"path: rotor description file {str(path)!r} has no [[rotor]] tables")
+    return desc

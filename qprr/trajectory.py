@@ -37,8 +37,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .charts import as_array, as_vector, xi_names
-from .errors import InputError, UnknownNameError
+from .charts import as_array, as_int, as_interval, as_real, as_vector, as_xi, xi_names
+from .errors import InputError, ShapeError, UnknownNameError
 
 
 @dataclass(frozen=True)
@@ -105,6 +105,11 @@ DEFAULT_LAW = "septic"
 _LAW_FUNCTIONS = {"septic": _septic, "quintic": _quintic, "thesis": _sigmoid}
 
 
+def _times(t) -> np.ndarray:
+    """Sample times ``t`` [s] (a number or any array of finite numbers)."""
+    return as_array(t, "t", finite=True)
+
+
 def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, order: int = 3,
                law: str = DEFAULT_LAW) -> list[np.ndarray]:
     """Smooth transition of Thesis (6.16) from ``start`` (t <= t1) to ``end`` (t >= t2).
@@ -122,13 +127,14 @@ def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, or
 
     Returns [sigma, sigma_dot, sigma_ddot, sigma_dddot, ...][: order + 1] shaped like ``t``.
     """
-    if not (np.isfinite(t1) and np.isfinite(t2) and t2 > t1):
-        raise InputError(f"transition needs finite t1 < t2, got t1 = {t1!r}, t2 = {t2!r}")
-    if order not in (0, 1, 2, 3, 4):
-        raise InputError(f"order must be 0..4, got {order!r}")
+    t1, t2 = as_real(t1, "t1", unit="s"), as_real(t2, "t2", unit="s")
+    start, end = as_real(start, "start"), as_real(end, "end")
+    if not t2 > t1:
+        raise InputError(f"transition needs t1 < t2, got t1 = {t1!r}, t2 = {t2!r}")
+    order = as_int(order, "order", lo=0, hi=4)
     if law not in LAWS:
         raise UnknownNameError("transition law", law, LAWS)
-    t = np.asarray(t, dtype=float)
+    t = _times(t)
     T = t2 - t1
     tau = (t - t1) / T
     inside = (tau > 0.0) & (tau < 1.0)
@@ -153,8 +159,7 @@ class Phase:
         if not isinstance(self.coordinate, (str, int)) or isinstance(self.coordinate, bool):
             raise InputError(f"phase coordinate must be a name or an index of xi, got {self.coordinate!r}")
         for name in ("t1", "t2", "value"):
-            if not isinstance(getattr(self, name), (int, float)) or isinstance(getattr(self, name), bool):
-                raise InputError(f"phase {self.coordinate!r}: {name} must be a number, got {getattr(self, name)!r}")
+            object.__setattr__(self, name, as_real(getattr(self, name), f"phase {self.coordinate!r}: {name}"))
         if not (np.isfinite(self.t1) and np.isfinite(self.t2) and self.t2 > self.t1 >= 0.0):
             raise InputError(f"phase {self.coordinate!r}: need 0 <= t1 < t2, got t1 = {self.t1!r}, t2 = {self.t2!r}")
         if not np.isfinite(self.value):
@@ -176,9 +181,9 @@ class MultiPhase:
     names: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
-        xi0 = as_array(self.xi0, "xi0")
-        if xi0.ndim != 1 or xi0.shape[0] < 6 or not np.all(np.isfinite(xi0)):
-            raise InputError(f"xi0 must be 6 + n_arm finite values, got {self.xi0!r}")
+        xi0 = as_xi(self.xi0, "xi0")
+        if not isinstance(self.phases, (tuple, list)):
+            raise InputError(f"phases must be a tuple of Phase, got {type(self.phases).__name__}")
         names = tuple(self.names) if self.names is not None else xi_names(xi0.shape[0] - 6)
         if len(names) != xi0.shape[0]:
             raise InputError(f"names has {len(names)} entries for xi0 of {xi0.shape[0]}")
@@ -206,7 +211,9 @@ class MultiPhase:
         return int(coordinate)
 
     def sample(self, t) -> TrajectorySample:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = np.atleast_1d(_times(t))
+        if t.ndim != 1:
+            raise ShapeError(f"t must be a number or a 1-D array of times, got shape {t.shape}")
         n = t.shape[0]
         m = len(self.names)
         xi = np.tile(np.asarray(self.xi0, dtype=float), (n, 1))
@@ -250,8 +257,12 @@ def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0
     ``q_arm`` (default: 60 % of the way from the neutral posture to the upper limit of each joint)
     must lie inside the joint limits; the arm starts at its neutral posture; yaw held at ``psi``.
     """
+    from .platform import check_platform
+
     p = as_vector(p_hover, 3, "p_hover")
-    q0 = platform.neutral_q()[7:]
+    q0 = check_platform(platform).neutral_q()[7:]
+    climb, reach = as_interval(climb, "climb", lo=0.0), as_interval(reach, "reach", lo=0.0)
+    psi = as_real(psi, "psi", unit="rad")
     if q_arm is None:
         hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q0 + 1.0)
         q_arm = q0 + 0.6 * (hi - q0)
@@ -290,11 +301,15 @@ class Spiral:
     name: str = field(default="spiral", compare=False)
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.blend) and self.blend >= 0.0):
-            raise InputError(f"spiral blend must be a duration >= 0 s, got {self.blend!r}")
+        for name, kw in (("z", {}), ("climb_time", {"positive": True}), ("t_f", {"nonnegative": True}), ("rate", {}),
+                         ("period", {"positive": True}), ("blend", {"nonnegative": True})):
+            object.__setattr__(self, name, as_real(getattr(self, name), f"spiral {name}", **kw))
+        object.__setattr__(self, "arm", tuple(as_array(self.arm, "spiral arm", finite=True, ndim=1).tolist()))
 
     def sample(self, t) -> TrajectorySample:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = np.atleast_1d(_times(t))
+        if t.ndim != 1:
+            raise ShapeError(f"t must be a number or a 1-D array of times, got shape {t.shape}")
         n = t.shape[0]
         m = 6 + len(self.arm)
         xi = np.zeros((n, m))
@@ -330,10 +345,13 @@ class Hold:
     xi: tuple[float, ...] = (0.0,) * 9
     name: str = field(default="hold", compare=False)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "xi", tuple(as_xi(self.xi, "xi").tolist()))
+
     def sample(self, t) -> TrajectorySample:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        x = as_array(self.xi, "xi")
-        if x.ndim != 1 or x.shape[0] < 6 or not np.all(np.isfinite(x)):
-            raise InputError(f"Hold xi must be 6 + n_arm finite values, got {self.xi!r}")
+        t = np.atleast_1d(_times(t))
+        if t.ndim != 1:
+            raise ShapeError(f"t must be a number or a 1-D array of times, got shape {t.shape}")
+        x = np.array(self.xi)
         n = t.shape[0]
         return TrajectorySample(t, np.tile(x, (n, 1)), np.zeros((n, x.shape[0])), np.zeros((n, x.shape[0])))

@@ -185,9 +185,19 @@ def test_user_model_is_never_modified():
 
 # ------------------------------------------------------ the thesis loader: URDF and parameters agree
 def test_thesis_loader_refuses_parameters_that_contradict_the_urdf():
-    """issue 16 item 3: d3 = 0.5 m with the committed URDF (d3 = 0.10 m) is an error, not a silent mix."""
-    with pytest.raises(InputError, match="end effector"):
+    """issue 16 item 3: a parameter the URDF contradicts is an error naming it and both values, not a silent mix."""
+    with pytest.raises(InputError, match=r"params\.d3 = 0\.5 m contradicts .*qprr\.urdf, which has 0\.1\b"):
         qprr.thesis.load(P.with_changes(d3=0.5), urdf_path=URDF_PATH)
+    link2 = P.links[1]
+    heavier = (P.links[0], type(link2)(link2.name, 0.5, link2.length, link2.com, link2.inertia), P.links[2])
+    with pytest.raises(InputError, match=r"params\.links\[1\]\.mass \(link2\) = 0\.5 kg contradicts .* which has 0\.2773"):
+        qprr.thesis.load(P.with_changes(links=heavier), urdf_path=URDF_PATH)
+    with pytest.raises(InputError, match=r"params\.theta2_limits\[1\] = 1\.0 contradicts"):
+        qprr.thesis.load(P.with_changes(theta2_limits=(P.theta2_limits[0], 1.0)), urdf_path=URDF_PATH)
+    with pytest.raises(InputError, match=r"params\.arm_length \(rotor rotor_plus_1 at x, y\) = 0\.3 m contradicts .* which has 0\.225"):
+        qprr.thesis.load(P.with_changes(arm_length=0.3), urdf_path=URDF_PATH)
+    # parameters the URDF does not hold (rotor factors, thrust bound, g) are the parameters' own
+    assert qprr.thesis.load(P.with_changes(thrust_max=25.0), urdf_path=URDF_PATH).thrust_max.tolist() == [25.0] * 4
 
 
 def test_thesis_loader_refuses_an_unrelated_robot():

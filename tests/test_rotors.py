@@ -172,7 +172,7 @@ def test_good_rotor_file_and_missing_file(tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    ({"spin": 0}, "spin must be"), ({"f_min": -1.0}, "f_min < f_max"), ({"f_max": float("nan")}, "real number"),
+    ({"spin": 0}, "spin must be"), ({"f_min": -1.0}, "f_min must be >= 0"), ({"f_max": float("nan")}, "f_max must be a number, got nan"),
     ({"axis_body": (0.0, 0.0, 0.0)}, "non-zero"), ({"position_body": (0.0, float("inf"), 0.0)}, "finite"),
 ])
 def test_bad_rotor_fields(kwargs, match):

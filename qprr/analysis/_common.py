@@ -18,9 +18,10 @@ from enum import Enum
 
 import numpy as np
 
-from ..charts import as_vector
+from ..charts import as_array, as_int, as_real, as_vector
 from ..errors import InputError, LimitError, UnknownNameError
 from ..platform import Platform
+from ..platform import check_platform as _check_platform
 
 CHUNK = 16384
 """Configurations per batch: large enough to amortise numpy's per-call cost, small enough for the cache."""
@@ -36,32 +37,26 @@ class Status(str, Enum):
 
 
 def check_platform(platform) -> Platform:
-    if not isinstance(platform, Platform):
-        raise InputError(f"platform must be a qprr Platform (qprr.load / qprr.build), got {type(platform).__name__}")
+    """:func:`qprr.platform.check_platform`, and the platform must have an arm (the maps are over its configurations)."""
+    _check_platform(platform)
     if platform.n_arm == 0:
         raise InputError(f"platform {platform.name!r} has no arm joints: there is no arm configuration space to map")
     return platform
 
 
 def check_int(name: str, value, lo: int = 1) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < lo:
-        raise InputError(f"{name} must be an integer >= {lo}, got {value!r}")
-    return int(value)
+    """:func:`qprr.charts.as_int` with the argument order of this package."""
+    return as_int(value, name, lo=lo)
 
 
 def check_pos(name: str, value, strict: bool = True) -> float:
-    ok = isinstance(value, (int, float, np.floating)) and not isinstance(value, bool) and math.isfinite(value)
-    if not ok or (value <= 0.0 if strict else value < 0.0):
-        raise InputError(f"{name} must be a finite number {'>' if strict else '>='} 0, got {value!r}")
-    return float(value)
+    """:func:`qprr.charts.as_real` (> 0, or >= 0 when not ``strict``) with the argument order of this package."""
+    return as_real(value, name, positive=strict, nonnegative=not strict)
 
 
 def check_masses(masses, name: str = "payload_masses") -> np.ndarray:
     """A non-empty 1-D array of finite payload masses >= 0 [kg]."""
-    try:
-        m = np.atleast_1d(np.asarray(masses, dtype=float))
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be payload masses in kg, got {masses!r}") from exc
+    m = np.atleast_1d(as_array(masses, name))
     if m.ndim != 1 or m.size == 0 or not np.all(np.isfinite(m)) or np.any(m < 0.0):
         raise InputError(f"{name} must be a non-empty list of finite masses >= 0 kg, got {masses!r}")
     return m
@@ -80,6 +75,7 @@ class Payload:
 
 
 def make_payload(platform: Platform, payload_offset, frame=None) -> Payload:
+    _check_platform(platform)
     off = as_vector(payload_offset, 3, "payload_offset")
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     return Payload(tuple(float(x) for x in off), fid)
@@ -129,6 +125,7 @@ def joint_ranges(platform: Platform, ranges: Mapping[str, tuple[float, float]] |
     A revolute joint without limits gets [-pi, pi]; a prismatic joint without limits needs
     an explicit range (InputError).  A given range must lie inside the joint limits.
     """
+    _check_platform(platform)
     out = np.empty((platform.n_arm, 2))
     ranges = {} if ranges is None else dict(ranges)
     unknown = set(ranges) - set(platform.arm_names)
@@ -154,6 +151,7 @@ def joint_ranges(platform: Platform, ranges: Mapping[str, tuple[float, float]] |
 
 def check_locked(platform: Platform, locked: Mapping[str, float] | None) -> dict[str, float]:
     """``locked`` as {arm joint name: value inside the limits}; unknown names list the valid ones."""
+    _check_platform(platform)
     if locked is None:
         return {}
     if not isinstance(locked, Mapping):
@@ -175,6 +173,7 @@ def lever_lengths(platform: Platform, ranges: np.ndarray) -> np.ndarray:
     """Per joint, an upper bound of |d p_ee / d q_k| over the ranges: 1 for a prismatic joint, the
     distance from the joint to the farthest point its subtree can place the end effector for a
     revolute one (sum of the joint-to-joint offsets after it plus the prismatic strokes)."""
+    _check_platform(platform)
     model = platform.model
     ee_joint = model.frames[platform.ee_frame].parentJoint
     chain = []  # joints from the end effector up to the base
@@ -209,6 +208,7 @@ def make_grid(platform: Platform, n_samples: int, locked: Mapping[str, float] | 
     3.  Joints that do not move the end effector (after it in the tree) get the same count as
     the others' geometric mean.
     """
+    _check_platform(platform)
     n_samples = check_int("n_samples", n_samples, 2)
     locked = check_locked(platform, locked)
     rng = joint_ranges(platform, ranges)

@@ -139,6 +139,8 @@ def cog_regions(
     check_platform(platform)
     check_int("n_samples", n_samples, 8)
     masses = check_masses(payload_masses)
+    check_int("n_shifts", n_shifts, 2)
+    check_int("n_pitch", n_pitch, 2)
     payload = make_payload(platform, payload_offset)
     base = check_locked(platform, locked)
     variants = default_variants(platform) if variants is None else [check_locked(platform, v) for v in variants]
@@ -257,6 +259,7 @@ def balance(
     """
     check_platform(platform)
     check_int("n_samples", n_samples, 8)
+    check_int("n_shifts", n_shifts, 2)
     m = float(check_masses([payload_mass], "payload_mass")[0])
     payload = make_payload(platform, payload_offset)
     tol = check_pos("tol", tol)

@@ -86,7 +86,13 @@ def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, 
     ``q``, ``v``: Pinocchio configuration and velocity of the platform (``fixed_base``: of the
     arm model, nq = nv = n_arm, and ``data`` from ``platform.arm_model().createData()``).
     """
+    check_platform(platform)
+    if not isinstance(data, pin.Data):
+        raise InputError(f"data must be a pinocchio.Data, got {type(data).__name__}")
     model = platform.arm_model() if fixed_base else platform.model
+    if len(data.oMf) != model.nframes:
+        raise InputError(f"data was made for another model ({len(data.oMf)} frames, this one has {model.nframes}): use "
+                         f"{'platform.arm_model().createData()' if fixed_base else 'platform.data()'}")
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     if fixed_base:
         fid = model.getFrameId(platform.model.frames[fid].name)

@@ -133,6 +133,7 @@ class WorkspaceResult:
 
 def default_variants(platform: Platform) -> list[dict[str, float]]:
     """One variant per prismatic joint, locked at 0 (or the limit nearest 0): "without the slider"."""
+    check_platform(platform)
     out = []
     for j in platform.arm:
         if j.kind == "prismatic":
@@ -182,6 +183,7 @@ def workspace(
     check_platform(platform)
     n_samples = check_int("n_samples", n_samples, 8)
     check_int("n_shifts", n_shifts, 2)
+    check_int("seed", seed, 0)
     base_locked = check_locked(platform, locked)
     if variants is None:
         variants = default_variants(platform)

@@ -31,8 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..charts import as_array
 from ..errors import InputError
-from ..platform import Platform
+from ..platform import Platform, check_platform
 
 AXES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
 """Names of the base-wrench components (at B, in B axes)."""
@@ -213,6 +214,9 @@ def wrench_set(platform: Platform, thrust_min=None, thrust_max=None) -> WrenchSe
 
     Raises InputError when a rotor has no finite f_max (the set is unbounded).
     """
+    check_platform(platform)
+    thrust_min = None if thrust_min is None else as_array(thrust_min, "thrust_min", finite=True)
+    thrust_max = None if thrust_max is None else as_array(thrust_max, "thrust_max", finite=True)
     fmin = np.array(platform.thrust_min if thrust_min is None else np.broadcast_to(thrust_min, (platform.n_rotors,)), dtype=float)
     fmax = np.array(platform.thrust_max if thrust_max is None else np.broadcast_to(thrust_max, (platform.n_rotors,)), dtype=float)
     if not np.all(np.isfinite(fmax)):

@@ -29,7 +29,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..charts import State
+from ..charts import State, as_int, as_real, as_vector, as_xi
+from ..errors import InputError
 
 
 class Reference:
@@ -41,10 +42,29 @@ class Reference:
 
     __slots__ = ("xi", "xi_dot", "xi_ddot")
 
-    def __init__(self, xi=None, xi_dot=None, xi_ddot=None, n_xi: int = 9) -> None:
-        self.xi = np.zeros(n_xi) if xi is None else xi
-        self.xi_dot = np.zeros(n_xi) if xi_dot is None else xi_dot
-        self.xi_ddot = np.zeros(n_xi) if xi_ddot is None else xi_ddot
+    def __init__(self, xi=None, xi_dot=None, xi_ddot=None, n_xi: int | None = None) -> None:
+        if n_xi is None:
+            n_xi = as_xi(xi, "xi").shape[0] if xi is not None else 9
+        n_xi = as_int(n_xi, "n_xi", lo=6)
+        # float arrays are kept as given (the simulator's rows of its log), others converted
+        self.xi = np.zeros(n_xi) if xi is None else as_vector(xi, n_xi, "xi")
+        self.xi_dot = np.zeros(n_xi) if xi_dot is None else as_vector(xi_dot, n_xi, "xi_dot")
+        self.xi_ddot = np.zeros(n_xi) if xi_ddot is None else as_vector(xi_ddot, n_xi, "xi_ddot")
+
+
+def check_reset(controller, state, ref, dt) -> float:
+    """The arguments of :meth:`Controller.reset` checked (a :class:`State` and a :class:`Reference` of the controller's
+    platform size, a control period dt > 0 [s]); returns dt as a float.  ``reset`` runs once per run: the per-step
+    calls (``step``) take the simulator's own State and Reference unchecked."""
+    if not isinstance(state, State):
+        raise InputError(f"state must be a qprr.charts.State, got {type(state).__name__}")
+    if not isinstance(ref, Reference):
+        raise InputError(f"ref must be a qprr.control.Reference, got {type(ref).__name__}")
+    platform = getattr(controller, "platform", None)
+    if platform is not None and (state.n_arm != platform.n_arm or np.shape(ref.xi) != (platform.n_xi,)):
+        raise InputError(f"state and ref must be of the controller's platform ({platform.n_xi} thesis coordinates), "
+                         f"got a state of {6 + state.n_arm} and a reference of shape {np.shape(ref.xi)}")
+    return as_real(dt, "dt", positive=True, unit="s")
 
 
 class Controller(ABC):
@@ -69,7 +89,7 @@ class Controller(ABC):
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         """Called once before the run with the initial state and the control period ``dt`` [s]."""
-        self.dt = dt
+        self.dt = check_reset(self, state, ref, dt)
 
     def report(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
         """(metrics, series) the controller measured about itself during the run, copied into the

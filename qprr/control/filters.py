@@ -10,11 +10,21 @@
 
 from __future__ import annotations
 
+import math
 from math import asin, atan, cos, sin, sqrt
 from typing import TYPE_CHECKING
 
+from ..charts import as_int, as_real
+
 if TYPE_CHECKING:
     from .base import Reference
+
+def _filter_args(omega, max_tilt, uz_min) -> tuple[float, float, float]:
+    """(omega [rad/s] > 0, max_tilt in (0, pi/2) [rad], uz_min >= 0 [N]) of the tilt references, checked."""
+    omega = as_real(omega, "omega", positive=True, unit="rad/s")
+    max_tilt = as_real(max_tilt, "max_tilt", positive=True, hi=0.5 * math.pi, unit="rad")
+    return omega, max_tilt, as_real(uz_min, "uz_min", nonnegative=True, unit="N")
+
 
 class CommandFilter:
     """Second-order critically damped filter giving a reference with consistent derivatives.
@@ -32,7 +42,8 @@ class CommandFilter:
     __slots__ = ("omega", "x", "xd", "xdd", "_init")
 
     def __init__(self, n: int, omega: float) -> None:
-        self.omega = float(omega)
+        n = as_int(n, "n", lo=0)
+        self.omega = as_real(omega, "omega", positive=True, unit="rad/s")
         self.x = [0.0] * n
         self.xd = [0.0] * n
         self.xdd = [0.0] * n
@@ -107,8 +118,8 @@ class TiltReference:
     __slots__ = ("omega", "omega_ff", "max_tilt", "uz_min", "x", "xd", "xdd", "_s", "_k", "_ff", "_n", "_raw")
 
     def __init__(self, omega: float, max_tilt: float, uz_min: float, omega_ff: float = 700.0) -> None:
-        self.omega, self.max_tilt, self.uz_min = float(omega), float(max_tilt), float(uz_min)
-        self.omega_ff = float(omega_ff)
+        self.omega, self.max_tilt, self.uz_min = _filter_args(omega, max_tilt, uz_min)
+        self.omega_ff = as_real(omega_ff, "omega_ff", positive=True, unit="rad/s")
         self.reset()
 
     def reset(self) -> None:
@@ -187,8 +198,8 @@ class SingleTiltReference:
     __slots__ = ("filter", "max_tilt", "uz_min", "_raw", "_started")
 
     def __init__(self, omega: float, max_tilt: float, uz_min: float) -> None:
+        omega, self.max_tilt, self.uz_min = _filter_args(omega, max_tilt, uz_min)
         self.filter = CommandFilter(2, omega)
-        self.max_tilt, self.uz_min = float(max_tilt), float(uz_min)
         self.reset()
 
     def reset(self) -> None:

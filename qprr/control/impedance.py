@@ -27,16 +27,15 @@ position and arm rows.  alpha comes from (6.77) (attitude PD), (6.78) (position)
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.linalg import expm
 
-from ..charts import State, as_vector, euler_rate_matrix, euler_to_rotation
+from ..charts import State, as_array, as_int, as_real, as_vector, euler_rate_matrix, euler_to_rotation
 from ..errors import InputError
-from ..platform import Platform
+from ..platform import Platform, check_platform
 from .base import Reference
 from .inverse_dynamics import IDCGains, LayeredIDC
 
@@ -60,13 +59,14 @@ class ImpedanceGains:
 
     def __post_init__(self) -> None:
         for name in ("M_base", "D_base", "K_base", "M_arm", "D_arm", "K_arm"):
-            v = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
+            v = np.atleast_1d(as_array(getattr(self, name), f"impedance {name}"))
             if (name.endswith("base") and v.shape != (4,)) or v.ndim != 1 or not np.all(np.isfinite(v) & (v > 0.0)):
                 raise InputError(f"impedance {name} must be {'4' if name.endswith('base') else 'n_arm (or 1)'} finite numbers > 0, "
                                  f"got {getattr(self, name)!r}")
 
     def arm(self, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M, D, K) of the arm filter for ``n_arm`` joints."""
+        n_arm = as_int(n_arm, "n_arm", lo=0)
         out = []
         for name in ("M_arm", "D_arm", "K_arm"):
             v = np.atleast_1d(np.asarray(getattr(self, name), dtype=float))
@@ -84,9 +84,9 @@ class ImpedanceFilter:
     """
 
     def __init__(self, M, D, K) -> None:
-        self.M = np.asarray(M, dtype=float)
-        self.D = np.asarray(D, dtype=float)
-        self.K = np.asarray(K, dtype=float)
+        self.M = as_array(M, "M", finite=True, ndim=1)
+        self.D = as_array(D, "D", finite=True, ndim=1)
+        self.K = as_array(K, "K", finite=True, ndim=1)
         n = self.M.shape[0]
         if self.M.shape != (n,) or self.D.shape != (n,) or self.K.shape != (n,) or not np.all((self.M > 0) & (self.D > 0) & (self.K > 0)):
             raise InputError(f"M, D, K must be positive vectors of one length, got {M!r}, {D!r}, {K!r}")
@@ -154,13 +154,12 @@ class ImpedanceController(LayeredIDC):
                  ee_sensor: Callable[[float], np.ndarray] | None = None,
                  base_sensor: Callable[[float], np.ndarray] | None = None,
                  compensate: bool = True, limit_margin: float = 1e-3) -> None:
+        check_platform(platform)
         self.impedance = ImpedanceGains() if impedance is None else impedance
         if not isinstance(self.impedance, ImpedanceGains):
             raise InputError(f"impedance must be an ImpedanceGains, got {type(self.impedance).__name__}")
         self.impedance.arm(platform.n_arm)  # sizes checked now
-        if not (isinstance(limit_margin, (int, float)) and math.isfinite(limit_margin) and limit_margin >= 0.0):
-            raise InputError(f"limit_margin must be a number >= 0, got {limit_margin!r}")
-        self.limit_margin = float(limit_margin)
+        self.limit_margin = as_real(limit_margin, "limit_margin", nonnegative=True)
         super().__init__(platform, gains, ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
         self.name = "impedance"
 

@@ -58,11 +58,11 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import FloatWriter, State, as_array, as_vector
+from ..charts import FloatWriter, State, as_array, as_real, as_vector
 from ..errors import InputError, UnknownNameError
 from ..payload import MassEstimator, PayloadModel
-from ..platform import Platform
-from .base import Controller, Reference
+from ..platform import Platform, check_platform
+from .base import Controller, Reference, check_reset
 from .filters import SingleTiltReference, TiltReference
 
 _PI = math.pi
@@ -96,14 +96,15 @@ class IDCGains:
     max_tilt: float = 0.8
 
     def __post_init__(self) -> None:
-        n = len(self.kp) if hasattr(self.kp, "__len__") else -1
+        n = len(self.kp) if hasattr(self.kp, "__len__") and not isinstance(self.kp, str) else -1
         if n < 6:
             raise InputError(f"kp must have 6 + n_arm entries, got {self.kp!r}")
         for name in ("kp", "kd", "ki"):
             object.__setattr__(self, name, _gain_vector(getattr(self, name), n, name))
-        if not (isinstance(self.filter_omega, (int, float)) and self.filter_omega > 0
-                and isinstance(self.max_tilt, (int, float)) and 0 < self.max_tilt < math.pi / 2):
-            raise InputError(f"need filter_omega > 0 and 0 < max_tilt < pi/2, got {self.filter_omega!r}, {self.max_tilt!r}")
+        object.__setattr__(self, "filter_omega", as_real(self.filter_omega, "filter_omega", positive=True, unit="rad/s"))
+        object.__setattr__(self, "max_tilt", as_real(self.max_tilt, "max_tilt", positive=True, unit="rad"))
+        if not self.max_tilt < math.pi / 2:
+            raise InputError(f"max_tilt must be < pi/2 rad, got {self.max_tilt!r}")
 
     @property
     def n_xi(self) -> int:
@@ -178,8 +179,7 @@ class InverseDynamicsController(Controller):
 
     def __init__(self, platform: Platform, gains: IDCGains | None = None, *, at: str = "measured", realizable: bool = True,
                  tilt: str | None = None, output: str | None = None, name: str | None = None) -> None:
-        if not isinstance(platform, Platform):
-            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        check_platform(platform)
         if at not in MODEL_STATES:
             raise UnknownNameError("model state", at, MODEL_STATES)
         tilt = tilt or ("none" if platform.fully_actuated else "split")
@@ -217,7 +217,7 @@ class InverseDynamicsController(Controller):
         self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt
+        self.dt = dt = check_reset(self, state, ref, dt)
         n = self.platform.n_xi
         self.integral = [0.0] * n
         g = self.gains
@@ -425,9 +425,12 @@ class LayeredIDC(InverseDynamicsController):
                  ee_sensor: Callable[[float], np.ndarray] | None = None,
                  base_sensor: Callable[[float], np.ndarray] | None = None, compensate: bool = True,
                  sensor_filter: float | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
-        if sensor_filter is not None and not (isinstance(sensor_filter, (int, float)) and math.isfinite(sensor_filter)
-                                              and sensor_filter > 0.0):
-            raise InputError(f"sensor_filter must be None or a bandwidth > 0 rad/s, got {sensor_filter!r}")
+        check_platform(platform)
+        if sensor_filter is not None:
+            sensor_filter = as_real(sensor_filter, "sensor_filter", positive=True, unit="rad/s")
+        for label, sensor in (("ee_sensor", ee_sensor), ("base_sensor", base_sensor)):
+            if sensor is not None and not callable(sensor):
+                raise InputError(f"{label} must be None or a callable t -> wrench, got {sensor!r}")
         self.sensor_filter = sensor_filter
         self.ee_sensor = ee_sensor
         self.base_sensor = base_sensor
@@ -492,8 +495,11 @@ class PayloadIDC(LayeredIDC):
 
     def __init__(self, platform: Platform, gains: IDCGains | None = None, *, payload: str = "estimate",
                  known_mass: float = 0.0, estimator: MassEstimator | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
+        check_platform(platform)
         if payload not in PAYLOAD_MODES:
             raise UnknownNameError("payload mode", payload, PAYLOAD_MODES)
+        if estimator is not None and not isinstance(estimator, MassEstimator):
+            raise InputError(f"estimator must be a qprr.payload.MassEstimator, got {type(estimator).__name__}")
         self.mode = payload
         self.known_mass = _mass(known_mass, "known_mass")
         self.estimator = estimator if estimator is not None else (MassEstimator(platform, com_ee=com_ee) if payload == "estimate" else None)
@@ -537,6 +543,4 @@ class PayloadIDC(LayeredIDC):
 
 
 def _mass(m, name: str) -> float:
-    if not (isinstance(m, (int, float)) and math.isfinite(m) and m >= 0.0):
-        raise InputError(f"{name} must be a number >= 0 kg, got {m!r}")
-    return float(m)
+    return as_real(m, name, nonnegative=True, unit="kg")

@@ -30,10 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import State, rate_map
+from ..charts import State, as_array, as_int, as_real, rate_map
 from ..errors import InputError
-from ..platform import Platform
-from .base import Controller, Reference
+from ..platform import Platform, check_platform
+from .base import Controller, Reference, check_reset
 from .filters import TiltReference
 
 _PI = math.pi
@@ -80,13 +80,15 @@ class MFCGains:
     max_tilt: float = 0.8
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.alpha_scale, (int, float)) and self.alpha_scale > 0 and self.filter_omega > 0
-                and 0 < self.max_tilt < math.pi / 2):
-            raise InputError("need alpha_scale > 0, filter_omega > 0, 0 < max_tilt < pi/2")
+        object.__setattr__(self, "alpha_scale", as_real(self.alpha_scale, "alpha_scale", positive=True))
+        object.__setattr__(self, "filter_omega", as_real(self.filter_omega, "filter_omega", positive=True, unit="rad/s"))
+        object.__setattr__(self, "max_tilt", as_real(self.max_tilt, "max_tilt", positive=True, unit="rad"))
+        if not self.max_tilt < math.pi / 2:
+            raise InputError(f"max_tilt must be < pi/2 rad, got {self.max_tilt!r}")
         for name in ("kp", "ki", "kd", "alpha", "f_filter"):
             v = getattr(self, name)
             if v is not None:
-                a = np.asarray(v, dtype=float)
+                a = as_array(v, name)
                 if a.ndim != 1 or a.shape[0] < 6 or not np.all(np.isfinite(a)) or np.any(a < 0) or (name == "alpha" and np.any(a <= 0)):
                     raise InputError(f"{name} must be 6 + n_arm finite values {'> 0' if name == 'alpha' else '>= 0'}, got {v!r}")
                 object.__setattr__(self, name, tuple(float(x) for x in a))
@@ -94,6 +96,8 @@ class MFCGains:
     def resolved(self, n_xi: int) -> MFCGains:
         """The gains with every per-coordinate vector of length ``n_xi`` (defaults filled in, sizes checked)."""
         from dataclasses import replace
+
+        n_xi = as_int(n_xi, "n_xi", lo=6)
 
         def fill(v, default, name):
             if v is None:
@@ -115,9 +119,7 @@ class ModelFreeController(Controller):
     uses_applied_force = True
 
     def __init__(self, platform: Platform, gains: MFCGains | None = None) -> None:
-        if not isinstance(platform, Platform):
-            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
-        self.platform = platform
+        self.platform = check_platform(platform)
         gains = MFCGains() if gains is None else gains
         if not isinstance(gains, MFCGains):
             raise InputError(f"gains must be an MFCGains, got {type(gains).__name__}")
@@ -136,7 +138,7 @@ class ModelFreeController(Controller):
         return [self.gains.alpha_scale * float(v) for v in d]
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt
+        self.dt = dt = check_reset(self, state, ref, dt)
         g = self.gains
         self.alpha = list(g.alpha) if g.alpha is not None else self._alpha_from_inertia(state)
         n = self.platform.n_xi

@@ -19,9 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..charts import as_int, as_real
 from ..optim import Lexicographic, QPSettings
-from ..platform import Platform
+from ..platform import Platform, check_platform
+from .tasks.base import check_linearized
 
 
 @dataclass(frozen=True)
@@ -65,8 +66,12 @@ class HierarchySolver:
 
     def __init__(self, platform: Platform, *, eps_abs: float = 1e-9, regularization: float = 1e-7, rank_tol: float = 1e-9,
                  max_qp_iter: int = 1000, lower_damping: float = 1.0) -> None:
-        if not isinstance(max_qp_iter, int) or max_qp_iter < 1:
-            raise InputError(f"max_qp_iter must be an integer >= 1, got {max_qp_iter!r}")
+        check_platform(platform)
+        max_qp_iter = as_int(max_qp_iter, "max_qp_iter", lo=1)
+        eps_abs = as_real(eps_abs, "eps_abs", positive=True)
+        regularization = as_real(regularization, "regularization", nonnegative=True)
+        rank_tol = as_real(rank_tol, "rank_tol", positive=True)
+        lower_damping = as_real(lower_damping, "lower_damping", nonnegative=True)
         # Each level is feasible by construction (the previous optimum satisfies all its
         # constraints) and strictly convex: an infeasibility verdict could only be a false positive,
         # so the detection thresholds sit far below eps_abs.  A small primal proximal step and a
@@ -96,16 +101,13 @@ class HierarchySolver:
         Call :func:`qprr.ik.tasks.update_kinematics` at q first.  Raises SolverError if a QP fails.
         """
         lin = []
+        nv = self.nv
         for tasks in levels:
             if len(tasks) == 1:
-                lin.append(tasks[0].linearize(platform, data, q))
+                lin.append(check_linearized(tasks[0], tasks[0].linearize(platform, data, q), nv))
             else:
-                Js, es = zip(*(t.linearize(platform, data, q) for t in tasks))
+                Js, es = zip(*(check_linearized(t, t.linearize(platform, data, q), nv) for t in tasks))
                 lin.append((np.vstack(Js), np.concatenate(es)))
-        for k, (J, e) in enumerate(lin):
-            if J.shape != (e.shape[0], self.nv) or e.ndim != 1:
-                raise InputError(f"level {k + 1}: a task returned J of shape {J.shape} and e of shape {e.shape}; "
-                                 f"J must be (dim, {self.nv}) and e (dim,)")
         q_arm = q[self.iq]
         lo_arm = self.lower - q_arm
         up_arm = self.upper - q_arm

@@ -40,23 +40,24 @@ import pinocchio as pin
 from .. import charts as ch
 from ..charts import as_vector
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
-from ..platform import Platform
+from ..platform import Platform, check_data, check_model_data, check_platform
 from .hierarchy import HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 METHODS = ("clika", "dls", "qp")
 
+__all__ = ["METHODS", "OPTIONS", "ClikaOptions", "DLSOptions", "IKResult", "IKSolver", "QPOptions", "default_guess", "default_levels",
+           "make_options", "parse_target", "pose_errors", "solve"]
+"""The public API; the other names (finish, solve_clika, ...) are the methods' parts, shared with qprr.thesis.igm."""
+
 
 # ============================================================================ options
 def _check_pos(name: str, value, strict: bool = True) -> None:
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and (value > 0 if strict else value >= 0)
-    if not ok:
-        raise InputError(f"option {name} must be a finite number {'>' if strict else '>='} 0, got {value!r}")
+    ch.as_real(value, f"option {name}", positive=strict, nonnegative=not strict)
 
 
 def _check_int(name: str, value) -> None:
-    if not (isinstance(value, int) and not isinstance(value, bool) and value >= 1):
-        raise InputError(f"option {name} must be an integer >= 1, got {value!r}")
+    ch.as_int(value, f"option {name}", lo=1)
 
 
 def _check_bool(name: str, value) -> None:
@@ -70,6 +71,9 @@ class Tolerances:
     orientation_tol: float = 1e-6  # [rad] success threshold on ||log3(R_d^T R_e)||
     hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
 
+    def __post_init__(self):
+        self._check_tolerances()
+
     def _check_tolerances(self) -> None:
         for name in ("position_tol", "orientation_tol", "hover_tol"):
             _check_pos(name, getattr(self, name))
@@ -79,13 +83,17 @@ class Tolerances:
 class ClikaOptions(Tolerances):
     """CLIKA (4.41): xi_dot = J^+ K e, xi <- xi + dt xi_dot.  ``gains``: diag K (thesis example
     values); ``weights``: diag W of (4.34) in xi order (None: W = I, the right pseudo-inverse
-    (4.36)); ``hover``: keep roll = pitch = 0 (drop their columns of J; the thesis uses all)."""
+    (4.36)); ``hover``: keep roll = pitch = 0 (drop their columns of J; the thesis uses all).
+    ``require_hover``: success needs roll = pitch = 0 within ``hover_tol`` (default: for
+    under-actuated platforms, as every method: the iteration may tilt the base, a multirotor
+    cannot hold the pose so)."""
 
     gains: tuple = (40.0, 35.0, 10.0, 15.0, 12.0, 10.0)
     dt: float = 0.02
     weights: tuple | None = None
     hover: bool = False
     max_iter: int = 2000
+    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
@@ -99,23 +107,29 @@ class ClikaOptions(Tolerances):
         _check_pos("dt", self.dt)
         _check_int("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
+        if self.require_hover is not None:
+            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
 class DLSOptions(Tolerances):
     """Levenberg-Marquardt on f = log6(M_d^-1 M_e): (J^T J + lambda I) dv = -J^T f, lambda adapted
     (/3 on success, x4 on failure); arm joints held on their limits by an active set; ``hover``
-    restricts dv to the directions that keep roll = pitch = 0."""
+    restricts dv to the directions that keep roll = pitch = 0.  ``require_hover``: as
+    :class:`ClikaOptions` (default: for under-actuated platforms)."""
 
     hover: bool = True
     damping: float = 1e-3
     max_iter: int = 100
+    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
         _check_pos("damping", self.damping)
         _check_int("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
+        if self.require_hover is not None:
+            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -259,13 +273,26 @@ def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[fl
     The angle comes from sin = |skew(N)| / 2 and cos = (tr N - 1) / 2 with N = R_d^T R,
     accurate near 0 and pi (scalar code: cheaper than numpy on 3x3 matrices).
     """
+    if not isinstance(M, pin.SE3):
+        raise InputError(f"M must be a pinocchio.SE3, got {type(M).__name__}")
+    if not (isinstance(p_d, np.ndarray) and p_d.shape == (3,) and p_d.dtype.kind == "f"):
+        p_d = as_vector(p_d, 3, "p_d")
+    if R_d is not None and not (isinstance(R_d, np.ndarray) and R_d.shape == (3, 3) and R_d.dtype.kind == "f"):
+        R_d = ch.as_matrix(R_d, (3, 3), "R_d")
     x, y, z = M.translation.tolist()
     px, py, pz = p_d.tolist()
+    if not math.isfinite(px + py + pz):
+        raise NonFiniteError(f"p_d must be finite, got {[px, py, pz]}")
     pos = math.sqrt((x - px) ** 2 + (y - py) ** 2 + (z - pz) ** 2)
     if R_d is None:
         return pos, 0.0
     (a, b, c), (d, e, f), (g, h, i) = M.rotation.tolist()
     (A, B, C), (D, E, F), (G, H, I) = R_d.tolist()
+    # R_d a rotation: unit orthogonal columns (R_d^T R_d = I), right-handed (third column = first x second)
+    dev = (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
+           + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))  # a sum: NaN propagates
+    if not dev < 1e-9:
+        raise InputError(f"R_d must be a rotation matrix (R^T R = I, det = +1): deviation {dev:.3g}")
     n21_12 = (C * b + F * e + I * h) - (B * c + E * f + H * i)
     n02_20 = (A * c + D * f + G * i) - (C * a + F * d + I * g)
     n10_01 = (B * a + E * d + H * g) - (A * b + D * e + G * h)
@@ -284,6 +311,10 @@ def default_guess(platform: Platform, data: pin.Data, p_world, R_world) -> np.nd
     """Initial guess xi0: level base, arm at its neutral posture, placed so that the end effector
     is at ``p_world`` with the yaw that best aligns its orientation with ``R_world`` (keeps the
     current yaw convention of a position target: yaw 0)."""
+    check_model_data(platform, data)
+    p_world = as_vector(p_world, 3, "p_world")
+    if R_world is not None:
+        R_world = ch.check_rotation(R_world, "R_world", 1e-9)
     q0 = platform.neutral_q()
     pin.framesForwardKinematics(platform.model, data, q0)
     bMe = data.oMi[1].actInv(data.oMf[platform.ee_frame])
@@ -429,13 +460,8 @@ def solve_clika(platform, data, p_d, R_d, xi, init, opts: ClikaOptions, t0, hint
     q = ch.xi_to_q(xi)
     if status == "max_iterations":
         reason = f"CLIKA did not converge in {opts.max_iter} iterations"
-    if status == "converged" and not opts.hover:
-        roll, pitch = float(xi[3]), float(xi[4])
-        if max(abs(roll), abs(pitch)) > opts.hover_tol:
-            # the pose is reached but the base is tilted: say so (success still needs only the pose)
-            pass
     return finish(platform, data, "clika", q, None, p_d, R_d, opts, status=status, reason=reason, iterations=it,
-                  t0=t0, init=init, require_hover=opts.hover, unreachable_hint=hint)
+                  t0=t0, init=init, require_hover=_require_hover(platform, opts), unreachable_hint=hint)
 
 
 def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=None) -> IKResult:
@@ -503,7 +529,12 @@ def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=Non
             status = "stalled"
             break
     return finish(platform, data, "dls", q, None, p_d, R_d, opts, status=status, reason="", iterations=it,
-                  t0=t0, init=init, require_hover=opts.hover, unreachable_hint=hint)
+                  t0=t0, init=init, require_hover=_require_hover(platform, opts), unreachable_hint=hint)
+
+
+def _require_hover(platform: Platform, opts) -> bool:
+    """The success definition's hover clause: the option if given, else hover needed for an under-actuated platform."""
+    return (not platform.fully_actuated) if opts.require_hover is None else bool(opts.require_hover)
 
 
 def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 0.0) -> list[list[Task]]:
@@ -513,6 +544,11 @@ def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 
     instead of hover: such a platform may hold a tilted base, but a level one costs the least
     thrust.  A list you may edit and pass back through the ``levels`` option.
     """
+    check_platform(platform)
+    base_yaw = ch.as_real(base_yaw, "base_yaw", unit="rad")
+    q_arm_posture = platform.check_arm_limits(q_arm_posture, "q_arm_posture")
+    if not isinstance(target, pin.SE3):
+        target = as_vector(target, 3, "target")
     if isinstance(target, pin.SE3):
         first = PoseTask(platform, target)
     else:
@@ -535,8 +571,11 @@ class IKSolver:
 
     def __init__(self, platform: Platform, method: str = "qp", options=None, *, initial_guess: Callable | None = None,
                  unreachable_hint: Callable | None = None) -> None:
-        if not isinstance(platform, Platform):
-            raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
+        check_platform(platform)
+        if initial_guess is not None and not callable(initial_guess):
+            raise InputError(f"initial_guess must be a callable (platform, data, p_world, R_world) -> (xi0, label), got {initial_guess!r}")
+        if unreachable_hint is not None and not callable(unreachable_hint):
+            raise InputError(f"unreachable_hint must be a callable R_world -> str, got {unreachable_hint!r}")
         self.platform = platform
         self.method = method
         self.options = make_options(method, options)
@@ -556,6 +595,7 @@ class IKSolver:
     def solve(self, data: pin.Data, target, xi0=None) -> IKResult:
         """Configuration reaching ``target`` from ``xi0`` (default: the initial guess); see the module docstring."""
         t0 = time.perf_counter()
+        check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
         hover = getattr(opts, "hover", False)
@@ -573,7 +613,7 @@ class IKSolver:
         platform, opts = self.platform, self.options
         model = platform.model
         q = ch.xi_to_q(xi)
-        require_hover = (not platform.fully_actuated) if opts.require_hover is None else opts.require_hover
+        require_hover = _require_hover(platform, opts)
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(R_d, p_d) if R_d is not None else p_d
         levels = opts.levels if opts.levels is not None else default_levels(platform, target, posture, float(xi[5]))

@@ -19,8 +19,17 @@ from typing import Protocol
 
 import numpy as np
 
-from ..charts import as_array
+from ..charts import as_array, as_int, as_real
 from ..errors import InputError, ShapeError
+
+
+def check_values_args(t, rng, n_xi) -> tuple[np.ndarray, int]:
+    """(t, n_xi) of a :meth:`Disturbance.values` call checked: t a 1-D finite array of times [s], rng a numpy Generator
+    (or None where unused), n_xi >= 6."""
+    t = as_array(t, "t", finite=True, ndim=1)
+    if rng is not None and not isinstance(rng, np.random.Generator):
+        raise InputError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {type(rng).__name__}")
+    return t, as_int(n_xi, "n_xi", lo=6)
 
 
 class Disturbance(Protocol):
@@ -95,6 +104,9 @@ class WhiteNoise:
             raise InputError(f"sample_time must be > 0 s, got {self.sample_time!r}")
 
     def values(self, t: np.ndarray, rng: np.random.Generator, n_xi: int) -> np.ndarray:
+        t, n_xi = check_values_args(t, rng, n_xi)
+        if rng is None:
+            raise InputError("rng must be a numpy.random.Generator for noise, got None")
         comps = _components(self.components, n_xi)
         amp = np.asarray(self.amplitude, dtype=float)
         if amp.ndim == 1 and amp.shape[0] != len(comps):
@@ -125,10 +137,17 @@ class Pulse:
         g = as_array(self.gamma, "gamma")
         if g.ndim != 1 or g.shape[0] < 6 or not np.all(np.isfinite(g)):
             raise InputError(f"gamma must be 6 + n_arm finite values, got {self.gamma!r}")
-        if not (np.isfinite(self.t1) and np.isfinite(self.t2) and self.t2 > self.t1):
+        object.__setattr__(self, "t1", as_real(self.t1, "t1", unit="s"))
+        object.__setattr__(self, "t2", as_real(self.t2, "t2", unit="s"))
+        if not self.t2 > self.t1:
             raise InputError(f"pulse needs t1 < t2, got t1 = {self.t1!r}, t2 = {self.t2!r}")
 
     def values(self, t: np.ndarray, rng: np.random.Generator | None = None, n_xi: int | None = None) -> np.ndarray:
+        t = as_array(t, "t", finite=True, ndim=1)
+        if rng is not None and not isinstance(rng, np.random.Generator):
+            raise InputError(f"rng must be None or a numpy.random.Generator, got {type(rng).__name__}")
+        if n_xi is not None:
+            n_xi = as_int(n_xi, "n_xi", lo=6)
         gamma = np.asarray(self.gamma, dtype=float)
         if n_xi is not None and gamma.shape[0] != n_xi:
             raise ShapeError(f"pulse gamma has {gamma.shape[0]} entries, the platform's xi has {n_xi}")
@@ -142,7 +161,16 @@ class Disturbances:
 
     parts: tuple
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.parts, (tuple, list)) or not self.parts:
+            raise InputError(f"parts must be a non-empty tuple of disturbances, got {self.parts!r:.80}")
+        for p in self.parts:
+            if not (hasattr(p, "generalized_force") or hasattr(p, "values")):
+                raise InputError(f"parts: a disturbance needs values(t, rng, n_xi) or generalized_force(t, q, v), got {type(p).__name__}")
+        object.__setattr__(self, "parts", tuple(self.parts))
+
     def values(self, t: np.ndarray, rng: np.random.Generator, n_xi: int) -> np.ndarray:
+        t, n_xi = check_values_args(t, rng, n_xi)
         out = np.zeros((t.shape[0], n_xi))
         for p in self.parts:
             if not hasattr(p, "generalized_force"):

@@ -98,6 +98,10 @@ class Limits:
     angular_velocity: float = 100.0  # rad/s
     joint_velocity: float = 100.0  # m/s or rad/s
 
+    def __post_init__(self) -> None:
+        for name in ("position", "linear_velocity", "angular_velocity", "joint_velocity"):
+            object.__setattr__(self, name, ch.as_real(getattr(self, name), f"limits {name}", positive=True, allow_inf=True))
+
 
 def simulate(
     platform: Platform,
@@ -170,6 +174,12 @@ def simulate(
         raise InputError(f"controller must be a qprr.control Controller, got {type(controller).__name__}")
     if not hasattr(trajectory, "sample"):
         raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory), got {type(trajectory).__name__}")
+    if payload is not None and not isinstance(payload, PayloadSchedule):
+        raise InputError(f"payload must be None or a qprr.sim.PayloadSchedule, got {type(payload).__name__} {payload!r:.60}")
+    if seed is not None:
+        seed = ch.as_int(seed, "seed", lo=0)
+    if not isinstance(limits, Limits):
+        raise InputError(f"limits must be a qprr.sim.Limits, got {type(limits).__name__}")
     nxi, n_arm = platform.n_xi, platform.n_arm
     n = int(round(duration / period))
     t = np.arange(n) * period
@@ -246,6 +256,7 @@ def simulate(
     plain = plant.plain  # ABA alone: no state-dependent input
     bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
     bounds = (limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity)
+    q_bound, v_bound = limits.position ** 2, min(bounds[1:]) ** 2  # |any entry| beyond its bound => the sum of squares beyond these
     POSITION = pin.KinematicLevel.POSITION
     wants_applied = bool(getattr(controller, "uses_applied_force", False))
     pin_out = getattr(controller, "output", "xi") == "pinocchio"
@@ -274,6 +285,8 @@ def simulate(
                 u = step(tk, state, ref)
                 u_log[k] = u
                 tau_d = force_from_xi(u, tau_d_buf)
+            if not tau_d.dot(tau_d) < _HUGE:  # NaN, inf or absurd controller output (a dot product: ~0.3 us)
+                raise _bad_output(platform, controller, tk, u_log[k], pin_out)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
                 flags[k] = fl
@@ -318,10 +331,11 @@ def simulate(
                             q, v = apply_joint_stops(model, data, q, v, lo, hi)
                             flags[k] |= 4
                             break
-            if not k & 15:
+            # every tick: two dot products bound every state entry (NaN fails them); the named check only on failure
+            if not (q.dot(q) < q_bound and v.dot(v) < v_bound):
                 _check(platform, tk + period, q, v, bounds)
-                if progress and k % bar.every == 0:
-                    bar.update(k)
+            if progress and k % bar.every == 0:
+                bar.update(k)
         _check(platform, n * period, q, v, bounds)
         m = n
     except QprrError as err:
@@ -373,7 +387,7 @@ def _check_arm_references(platform: Platform, t: np.ndarray, xi_d: np.ndarray) -
     if bad.any():
         k, j = np.argwhere(bad)[0]
         joint = platform.arm[j]
-        raise LimitError(f"trajectory: the reference of arm joint {joint.name!r} is {arm[k, j]!r} at t = {t[k]:.3f} s, outside its "
+        raise LimitError(f"trajectory: the reference of arm joint {joint.name!r} is {float(arm[k, j])!r} at t = {t[k]:.3f} s, outside its "
                          f"limits [{joint.lower!r}, {joint.upper!r}] (the joint would sit on its stop); "
                          "keep references inside the limits or pass joint_stops=False")
 
@@ -529,9 +543,26 @@ def _check(platform: Platform, t: float, q: np.ndarray, v: np.ndarray, bounds) -
             raise DivergenceError(f"diverged at t = {t:.3f} s: velocity {label} = {x!r} (bound {bound})")
 
 
+_HUGE = 1e300
+"""Bound on the squared norm of a controller's output: beyond it (or NaN) the run stops naming the entry."""
+
+
+def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out: bool) -> DivergenceError:
+    """DivergenceError naming the first non-finite (or absurd) entry of a controller's output at time ``t``."""
+    names = platform.xi_names
+    k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
+    what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
+    label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
+    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {getattr(controller, 'name', type(controller).__name__)!r} "
+                           f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)")
+
+
+_BASE_F = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
+
+
 def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) -> QprrError:
     """The error to report: the runaway state if the state has diverged (the root cause), else ``err`` with the time."""
-    if isinstance(err, DivergenceError) and str(err).startswith(("t =", "diverged at")):
+    if isinstance(err, DivergenceError) and str(err).startswith("diverged at"):
         return err
     try:
         _check(platform, t, q, v, bounds)
@@ -549,4 +580,4 @@ def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) ->
 
 def check_sample(sample, n: int, nxi: int = 9) -> None:
     """Public form of the trajectory sample check (shape (n, 6 + n_arm), finite)."""
-    _check_sample(sample, n, nxi)
+    _check_sample(sample, ch.as_int(n, "n", lo=0), ch.as_int(nxi, "nxi", lo=6))

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector
+from ..charts import as_real, as_vector
 from ..errors import InputError
-from ..platform import Platform
+from ..platform import Platform, check_platform
 
 
 @dataclass(frozen=True)
@@ -51,6 +51,8 @@ class PayloadSchedule:
             raise InputError(f"payload changes must be in time order, got times {times}")
 
     def mass_at(self, t: float) -> float:
+        """The payload mass [kg] at time ``t`` [s] (the last change at or before t; 0 before the first)."""
+        t = as_real(t, "t", unit="s")
         m = 0.0
         for c in self.changes:
             if c.time <= t:
@@ -62,6 +64,9 @@ class PlantPayload:
     """Owns a copy of the model and sets the end effector's parent-joint inertia to nominal + payload."""
 
     def __init__(self, platform: Platform, schedule: PayloadSchedule) -> None:
+        check_platform(platform)
+        if not isinstance(schedule, PayloadSchedule):
+            raise InputError(f"schedule must be a qprr.sim.PayloadSchedule, got {type(schedule).__name__}")
         self.model = pin.Model(platform.model)
         frame = self.model.frames[platform.ee_frame]
         self.joint = frame.parentJoint
@@ -75,6 +80,8 @@ class PlantPayload:
         return self.next < len(self.changes)
 
     def apply_until(self, t: float) -> bool:
+        """Apply every change at or before ``t`` [s] (the simulator calls it at its ticks while changes are pending)."""
+        t = as_real(t, "t", unit="s")
         changed = False
         while self.next < len(self.changes) and self.changes[self.next].time <= t + 1e-12:
             c = self.changes[self.next]

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import wrap_angle, xi_names
+from ..charts import as_real, wrap_angle, xi_names
 from ..errors import InputError, ShapeError
 
 FORMAT_VERSION = 2
@@ -101,7 +101,7 @@ class SimResult:
 
     def rmse(self, start: float = 0.0) -> dict[str, float]:
         """Thesis (6.26): sqrt(mean((xi_d - xi)^2)) per variable over t >= ``start``; Euler-angle errors wrapped to [-pi, pi)."""
-        sel = self.t >= start
+        sel = self.t >= as_real(start, "start", unit="s")
         e = self.xi_d[sel] - self.xi[sel]
         e[:, ANGLES] = wrap_angle(e[:, ANGLES])
         return {name: float(np.sqrt(np.mean(e[:, i] ** 2))) for i, name in enumerate(self.names)}
@@ -115,6 +115,8 @@ class SimResult:
         """Write every array, the extras and the metadata to a ``.npz`` file (format :data:`FORMAT_VERSION`).
 
         The parent folder must exist (it is not created: a typo would otherwise make one)."""
+        if not isinstance(path, (str, Path)) or str(path) == "":
+            raise InputError(f"path must be a file path ending in .npz, got {path!r}")
         path = Path(path)
         if path.suffix != ".npz":
             raise InputError(f"result files end in .npz, got {str(path)!r}")

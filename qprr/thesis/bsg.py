@@ -23,22 +23,23 @@ import math
 
 import numpy as np
 
-from ..charts import State
-from ..control.base import Controller, Reference
+from ..charts import State, as_real, checked_module
+from ..control.base import Controller, Reference, check_reset
 from ..control.filters import CommandFilter
 from ..errors import InputError, UnknownNameError
 from ..platform import Platform
 from . import params_of
+from .params import QPRRParams
 
 
-def cog_betas(params) -> tuple[float, float, float]:
+def cog_betas(params: QPRRParams) -> tuple[float, float, float]:
     """(beta1, beta2, beta3) of Thesis (6.33) from the link masses and lengths."""
     m1, m2, m3 = (link.mass for link in params.links)
     mG = params.total_mass
     return (m1 + m2 + m3) / mG, params.d2 * (0.5 * m2 + m3) / mG, 0.5 * m3 * params.d3 / mG
 
 
-def x_cm_thesis(params, r0: float, theta2: float, theta3: float) -> float:
+def x_cm_thesis(params: QPRRParams, r0: float, theta2: float, theta3: float) -> float:
     """x_cm of Thesis (6.33) [m] (CoG offset along x_B; valid under Hypothesis 1)."""
     b1, b2, b3 = cog_betas(params)
     return b1 * r0 + b2 * math.sin(theta2) + b3 * math.sin(theta2 + theta3)
@@ -55,8 +56,8 @@ class CogStabilizer(Controller):
             raise UnknownNameError("BSG pitch source", pitch, ("measured", "desired"))
         if not isinstance(inner, Controller):
             raise InputError(f"inner must be a Controller, got {type(inner).__name__}")
-        if not math.isfinite(theta_e_d):
-            raise InputError(f"theta_e_d must be finite, got {theta_e_d!r}")
+        theta_e_d = as_real(theta_e_d, "theta_e_d", unit="rad")
+        filter_omega = as_real(filter_omega, "filter_omega", positive=True, unit="rad/s")
         params = params_of(platform)
         self.platform = platform
         self.inner = inner
@@ -73,7 +74,7 @@ class CogStabilizer(Controller):
         self._started = False
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt
+        self.dt = dt = check_reset(self, state, ref, dt)
         self.filter = CommandFilter(2, self.filter_omega)
         self._started = False
         self.inner.reset(state, ref, dt)
@@ -99,3 +100,6 @@ class CogStabilizer(Controller):
         ref.xi_dot[6], ref.xi_dot[8] = f.xd
         ref.xi_ddot[6], ref.xi_ddot[8] = f.xdd
         return self.inner.step(t, state, ref)
+
+
+checked_module(globals())

@@ -30,7 +30,9 @@ from .. import dynamics as dyn
 from .. import kinematics as kin
 from .. import mdh
 from ..actuation import Allocator, input_map_matrix
-from ..platform import Platform
+from ..charts import as_array, as_int, as_vector, check_rotation, unit_quaternion
+from ..errors import InputError, ShapeError
+from ..platform import Platform, check_platform
 from . import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
 from . import printed as th
 
@@ -114,6 +116,8 @@ class Context:
 
 def make_context(platform: Platform | None = None, seed: int = SEED, n_states: int = N_STATES) -> Context:
     """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load`)."""
+    seed = as_int(seed, "seed", lo=0)
+    n_states = as_int(n_states, "n_states", lo=1)
     platform = platform if platform is not None else load("thesis")
     params_of(platform)  # a Q-PRR, or InputError
     ctx = Context(platform, platform.data(), np.random.default_rng(seed))
@@ -167,6 +171,10 @@ def ned_configuration(q) -> np.ndarray:
     mass map as c -> Rx(pi) c, so e3 . c changes sign.  Potential energies and gravity wrenches
     of the NED world at ``q`` are therefore those of the z-up model at the returned configuration.
     """
+    q = as_array(q, "q", finite=True, ndim=1)
+    if q.shape[0] < 7:
+        raise ShapeError(f"q must be a configuration (7 + n_arm,), got shape {q.shape}")
+    unit_quaternion(q[3:7], "q[3:7]")
     q = np.array(q, dtype=float)
     q[0:7] = pin.SE3ToXYZQUAT(_TURN_X * pin.XYZQUATToSE3(q[0:7]))
     return q
@@ -174,6 +182,9 @@ def ned_configuration(q) -> np.ndarray:
 
 def fixed_base_arm(platform: Platform, base_rotation=None) -> tuple[pin.Model, pin.Data]:
     """The arm with the free-flyer locked at the origin with orientation ``base_rotation`` (Sec. 5.5 model)."""
+    check_platform(platform)
+    if base_rotation is not None:
+        base_rotation = check_rotation(base_rotation, "base_rotation", 1e-9)
     q_ref = pin.neutral(platform.model)
     if base_rotation is not None:
         q_ref[3:7] = pin.Quaternion(np.asarray(base_rotation, dtype=float)).coeffs()
@@ -186,6 +197,13 @@ def christoffel(model: pin.Model, data: pin.Data, q, v) -> np.ndarray:
 
     dM/dq_k from RNEA derivatives: d(M e_j)/dq = dtau/dq(q, 0, e_j) - dg/dq.
     """
+    if not isinstance(model, pin.Model) or not isinstance(data, pin.Data):
+        raise InputError(f"model and data must be a pinocchio.Model and its Data, got {type(model).__name__}, {type(data).__name__}")
+    if model.nq != model.nv:
+        raise InputError(f"christoffel needs a model with nq = nv (a fixed-base arm), got nq = {model.nq}, nv = {model.nv}")
+    if len(data.oMf) != model.nframes:
+        raise ShapeError("data was made for another model: use model.createData()")
+    q, v = as_vector(q, model.nq, "q"), as_vector(v, model.nv, "v")
     n = model.nv
     dg = pin.computeGeneralizedGravityDerivatives(model, data, q).copy()
     dM = np.zeros((n, n, n))  # dM[i, j, k] = dM_ij / dq_k

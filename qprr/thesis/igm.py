@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ..charts import as_vector, check_rotation, checked_module
 from ..errors import InputError, UnknownNameError
 from ..ik.solver import (
     OPTIONS as _GENERIC_OPTIONS,
@@ -36,7 +37,7 @@ from ..ik.solver import (
     parse_target,
     prepare_xi0,
 )
-from ..platform import Platform
+from ..platform import Platform, check_data
 from . import params_of
 from .params import QPRRParams
 
@@ -66,6 +67,7 @@ class IGMOptions(Tolerances):
 
 def hover_yaw(R_world) -> float:
     """Yaw psi of the hover configuration whose end effector has orientation R (y_e = Rz(psi) e_y)."""
+    R_world = check_rotation(R_world, "R_world", 1e-6)
     return math.atan2(-R_world[0, 1], R_world[1, 1])
 
 
@@ -73,12 +75,14 @@ def default_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
     """Initial guess xi0: hovering (roll = pitch = 0) below the target by the arm reach
     d0 + d1 + d2 + d3, yaw of the target's y axis, arm at zero (straight up)."""
     p = params
+    p_world = as_vector(p_world, 3, "p_world")
     reach = p.d0 + p.d1 + p.d2 + p.d3
     return np.array([p_world[0], p_world[1], p_world[2] - reach, 0.0, 0.0, hover_yaw(R_world), 0.0, 0.0, 0.0])
 
 
 def hover_tilt(R_world) -> float:
     """Angle [rad] by which the end-effector y axis leaves the horizontal plane (0 iff reachable in hover)."""
+    R_world = check_rotation(R_world, "R_world", 1e-6)
     return math.asin(min(1.0, abs(float(R_world[2, 1]))))
 
 
@@ -289,6 +293,7 @@ def solve_igm(platform: Platform, data: pin.Data, target, xi0=None, options=None
     """Thesis Algorithm 3 (corrected) with Algorithm 4 and 5 for the Q-PRR: see the module docstring."""
     t0 = time.perf_counter()
     params = params_of(platform)
+    check_data(platform, data)
     opts = make_options("igm", options, OPTIONS)
     p_d, R_d = parse_target(target)
     if R_d is None:
@@ -355,3 +360,6 @@ def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=No
         options = dict(options)
         init = options.pop("init")
     return solver(platform, method, options, init=init).solve(data, target, xi0)
+
+
+checked_module(globals())  # the closed forms refuse NaN, strings, complex, a non-QPRRParams, in their annotated arguments

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector
+from ..charts import as_vector, checked_module
 from .printed import T_3_25, J_eb_4_26, rotation_3_4
 
 
@@ -86,3 +86,6 @@ def push_model(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy
     st, ct = math.sin(theta), math.cos(theta)
     moment = l * (T1 - T3) + x_cm * (T1 + T3) - F_oj * (ct * c[2] - st * c[0])
     return PushState((st * (T1 + T3) - F_oj) / M_G, moment / I_yy)
+
+
+checked_module(globals())  # every formula refuses NaN, strings, complex, wrong types in its annotated arguments

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..charts import as_vector
+from ..charts import as_interval, as_vector, checked_module
 from ..errors import InputError, UnknownNameError
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
 
@@ -26,6 +26,8 @@ def static_mission(target=STATIC_TARGET, *, z_phase=(0.0, 5.0), x_phase=(5.0, 10
     of ``x_phase`` to the end of ``y_phase``, a = y / x, b = 0; :func:`qprr.trajectory.line_phases`).
     """
     x, y, z, psi, r0, t2, t3 = as_vector(target, 7, "target")
+    z_phase, x_phase, y_phase, arm_phase = (as_interval(v, n, lo=0.0) for v, n in ((z_phase, "z_phase"), (x_phase, "x_phase"),
+                                                                                   (y_phase, "y_phase"), (arm_phase, "arm_phase")))
     if path == "xy":
         phases = [Phase("z", *z_phase, z), Phase("x", *x_phase, x), Phase("y", *y_phase, y)]
     elif path == "line":
@@ -46,6 +48,7 @@ def dynamic_mission(p_target=(3.0, 6.0, 10.0), theta2_d: float = -0.5, *, arm_ph
     r0 and theta3 references are left at 0: the CoG stabiliser (BSG) computes them.
     """
     x, y, z = as_vector(p_target, 3, "p_target")
+    arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
     phases = (Phase("z", 0.0, 5.0, z), Phase("x", 5.0, 10.0, x), Phase("y", 10.0, 15.0, y),
               Phase("theta2", *arm_phase, float(theta2_d)))
     return MultiPhase(phases, name="dynamic-mission", law=law, names=NAMES)
@@ -67,3 +70,6 @@ def aggressive_reach(climb: float = 2.0, forward: float = 0.6, *, start: float =
     phases = (Phase("z", t1, t2_, z0 + climb), Phase("x", t1, t2_, forward), Phase("r0", t1, t2_, float(r0)),
               Phase("theta2", t1, t2_, float(t2)), Phase("theta3", t1, t2_, float(t3)))
     return MultiPhase(phases, xi0=(0.0, 0.0, z0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), name="aggressive-reach", law=law, names=NAMES)
+
+
+checked_module(globals())

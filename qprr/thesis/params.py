@@ -137,10 +137,15 @@ class QPRRParams:
         return self.total_mass * self.g / 4.0
 
     def with_changes(self, **changes) -> QPRRParams:
-        """A copy with some fields replaced (the original stays untouched)."""
+        """A copy with some fields replaced (the original stays untouched).
+
+        A new d1, d2 or d3 also sets the length of its link (the same quantity) unless ``links`` is given."""
         unknown = set(changes) - set(self.__dataclass_fields__)
         if unknown:
             raise InputError(f"unknown parameter field(s) {sorted(unknown)}; valid: {sorted(self.__dataclass_fields__)}")
+        if "links" not in changes and changes.keys() & {"d1", "d2", "d3"}:
+            changes["links"] = tuple(replace(link, length=changes.get(d, link.length))
+                                     for link, d in zip(self.links, ("d1", "d2", "d3")))
         return replace(self, **changes)
 
 
@@ -152,6 +157,8 @@ def check_params(p: QPRRParams) -> None:
     (d1, d2, d3, every link length, the rotor arm l; d0 >= 0: the rail may sit at B's height; the rail's
     length >= 0); lower <= upper joint limits; positive effort and velocity limits; positive rotor
     factors b and c; f_min <= f_max with f_max > 0."""
+    if not isinstance(p, QPRRParams):
+        raise InputError(f"p must be a QPRRParams, got {type(p).__name__}")
     if not isinstance(p.nonphysical, tuple):
         raise InputError(f"nonphysical must be a tuple of body names, got {p.nonphysical!r}")
     if not (_finite([p.g]) and p.g >= 0.0):
@@ -163,15 +170,19 @@ def check_params(p: QPRRParams) -> None:
     bodies = list(p.links) + ([p.rail] if p.rail is not None else [])
     for link in bodies:
         check_rigid_body(link.name, link.mass, link.com, link.inertia, check_triangle=link.name not in p.nonphysical)
-    for link in p.links:
-        if not (_finite([link.length]) and link.length > 0.0):
-            raise NonPhysicalError(f"{link.name}: length must be a positive finite number of m, got {link.length!r}")
-    if p.rail is not None and not (_finite([p.rail.length]) and p.rail.length >= 0.0):
-        raise NonPhysicalError(f"{p.rail.name}: length must be a finite number >= 0 m, got {p.rail.length!r}")
     for name in ("d1", "d2", "d3", "arm_length", "thrust_factor", "drag_factor", "thrust_max"):
         value = getattr(p, name)
         if not (_finite([value]) and value > 0.0):
             raise NonPhysicalError(f"{name} must be a positive finite number, got {value!r}")
+    for link in p.links:
+        if not (_finite([link.length]) and link.length > 0.0):
+            raise NonPhysicalError(f"{link.name}: length must be a positive finite number of m, got {link.length!r}")
+    for link, d_name in zip(p.links, ("d1", "d2", "d3")):  # the model reads d1..d3: a link length that differs is a trap
+        if _finite([getattr(p, d_name)]) and link.length != getattr(p, d_name):
+            raise InputError(f"{link.name}.length = {link.length!r} m contradicts {d_name} = {getattr(p, d_name)!r} m (the joint "
+                             f"offsets d1, d2, d3 are the link lengths; change both)")
+    if p.rail is not None and not (_finite([p.rail.length]) and p.rail.length >= 0.0):
+        raise NonPhysicalError(f"{p.rail.name}: length must be a finite number >= 0 m, got {p.rail.length!r}")
     if not (_finite([p.d0]) and p.d0 >= 0.0):
         raise NonPhysicalError(f"d0 must be a finite number >= 0 m, got {p.d0!r}")
     if not (_finite([p.thrust_min]) and p.thrust_min <= p.thrust_max):

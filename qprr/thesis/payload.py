@@ -12,10 +12,16 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector, rot_y
+from ..charts import as_int, as_matrix, as_real, as_vector, checked_module, rot_y
 from ..errors import InputError
 from .params import QPRRParams
 from .printed import T_3_25, com_3_78_corrected, rotation_3_4
+
+
+def _masses(**masses: float) -> None:
+    """Masses [kg] of these formulas: link masses > 0, payload masses (m_cl, m_c) >= 0."""
+    for name, m in masses.items():
+        as_real(m, name, **({"nonnegative": True} if name in ("m_cl", "m_c") else {"positive": True}), unit="kg")
 
 
 def link3_inertia_6_40(m3: float, I3, m_cl: float, x_cm: float, z_cm: float) -> tuple[float, np.ndarray]:
@@ -27,6 +33,8 @@ def link3_inertia_6_40(m3: float, I3, m_cl: float, x_cm: float, z_cm: float) -> 
     m3 m_cl / m3' about the combined CoM (:func:`combine_inertias`); and only the axis normal
     to the x-z plane (y, the joint axis) has x_cm^2 + z_cm^2 as squared distance.
     """
+    _masses(m3=m3, m_cl=m_cl)
+    I3 = as_matrix(I3, (3, 3), "I3")
     m3p = m3 + m_cl
     return m3p, np.asarray(I3, dtype=float) + m3p * (x_cm**2 + z_cm**2) * np.eye(3)
 
@@ -39,6 +47,9 @@ def system_inertia_6_41(m: float, I, m_cl: float, I_cl, x_cm: float, z_cm: float
     reduced mass m m_cl / (m + m_cl), and the xx, zz entries need z_cm^2 and x_cm^2 alone, with
     a product term -m_cl x_cm z_cm off the diagonal (:func:`combine_inertias`).
     """
+    _masses(m=m, m_cl=m_cl)
+    I = as_matrix(I, (3, 3), "I")
+    I_cl = as_matrix(I_cl, (3, 3), "I_cl")
     return m + m_cl, np.asarray(I, dtype=float) + np.asarray(I_cl, dtype=float) + m_cl * (x_cm**2 + z_cm**2) * np.eye(3)
 
 
@@ -49,6 +60,9 @@ def sphere_inertia_6_43(mass: float, radius: float, n: int = 64, corrected: bool
     3/5 m R^2, not the 2/5 m R^2 stated after it.  ``corrected=True`` integrates
     rho (r sin theta)^2 dV (distance to the z AXIS), which gives 2/5 m R^2.
     """
+    _masses(mass=mass)
+    as_real(radius, "radius", nonnegative=True, unit="m")
+    as_int(n, "n", lo=2)
     if not (mass >= 0.0 and radius > 0.0):
         raise InputError(f"need mass >= 0 and radius > 0, got {mass!r}, {radius!r}")
     x, w = np.polynomial.legendre.leggauss(n)
@@ -71,6 +85,7 @@ def com_6_42(q_arm, params: QPRRParams, m_cl: float) -> np.ndarray:
     1's CoM is at d0 + d1/2.  Corrected forms: :func:`com_6_42_corrected` (closed form) and
     :func:`com_with_payload` (Pinocchio).
     """
+    _masses(m_cl=m_cl)
     r0, t2, t3 = as_vector(q_arm, 3, "q_arm")
     m1, m2, m3 = (link.mass for link in params.links)
     d0, d1, d2, d3 = params.d0, params.d1, params.d2, params.d3
@@ -83,6 +98,7 @@ def com_6_42(q_arm, params: QPRRParams, m_cl: float) -> np.ndarray:
 
 def com_6_42_corrected(q_arm, params: QPRRParams, m_cl: float) -> np.ndarray:
     """(6.42) corrected: [m_G p_cm (3.78 corrected) + m_cl p_eb (3.58)] / (m_G + m_cl), payload at the end effector."""
+    _masses(m_cl=m_cl)
     r0, t2, t3 = as_vector(q_arm, 3, "q_arm")
     d0, d1, d2, d3 = params.d0, params.d1, params.d2, params.d3
     p_eb = np.array([r0 + d2 * math.sin(t2) + d3 * math.sin(t2 + t3), 0.0, d0 + d1 + d2 * math.cos(t2) + d3 * math.cos(t2 + t3)])
@@ -96,6 +112,7 @@ def holding_torques_6_4_1(params: QPRRParams, m_cl: float) -> tuple[float, float
     Dimensionally inconsistent: each sum adds kg m to kg, so the value is not a torque (it
     does not scale linearly with the length unit).  Corrected: :func:`holding_torques_corrected`.
     """
+    _masses(m_cl=m_cl)
     _, m2, m3 = (link.mass for link in params.links)
     g = params.g
     return (params.d2 * m2 / 2 + m3 + m_cl) * g, (params.d3 * m3 / 2 + m_cl) * g
@@ -111,6 +128,7 @@ def holding_torques_corrected(q_arm, params: QPRRParams, m_cl: float) -> np.ndar
     The printed tau_theta2 read as (m2/2 + m3 + m_cl) d2 g is the case link 2 horizontal,
     link 3 vertical (s23 = 0).
     """
+    _masses(m_cl=m_cl)
     _, t2, t3 = as_vector(q_arm, 3, "q_arm")
     _, m2, m3 = (link.mass for link in params.links)
     g, d2, d3 = params.g, params.d2, params.d3
@@ -125,6 +143,8 @@ def G_c_6_52(xi, m_c: float, d, g: float) -> np.ndarray:
     where d3 belongs in the s23 terms of rows 5-6 and a spurious 1/2 in row 9.  With gravity
     along -z (5.29) the correct vector is m_c g d z_e / d xi (:func:`payload_terms_closed_form`).
     """
+    _masses(m_c=m_c)
+    as_real(g, "g", positive=True, unit="m/s^2")
     xi = as_vector(xi, 9, "xi")
     d0, d1, d2, d3 = as_vector(d, 4, "d")
     _, _, _, f, t, s, r0, t2, t3 = xi
@@ -157,6 +177,8 @@ def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:
     B23c = T^T (m_c p_c^ j_Pc + R_c I_c R_c^T j_Oc); B11c, B13c, B33c as printed.  Model-based
     form: :func:`payload_terms_closed_form`.
     """
+    _masses(m_c=m_c)
+    I_c = as_matrix(I_c, (3, 3), "I_c")
     xi = as_vector(xi, 9, "xi")
     d0, d1, d2, d3 = as_vector(d, 4, "d")
     Ic = np.asarray(I_c, dtype=float).reshape(3, 3)
@@ -189,3 +211,4 @@ def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:
     return np.block([[B11, B12, B13], [B12.T, B22, B23], [B13.T, B23.T, B33]])
 
 
+checked_module(globals())  # every formula refuses NaN, strings, complex, wrong types in its annotated arguments

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_vector, rot_y, rot_z
+from ..charts import as_vector, check_rotation, checked_module, rot_y, rot_z
 from ..errors import InputError
 from ..mdh import MDHRow, kk_transform
 from .params import QPRRParams
@@ -71,12 +71,14 @@ def euler_3_8(R) -> np.ndarray:
 
     Misprint: the roll and yaw formulas are swapped (see :func:`euler_3_8_corrected`).
     """
+    R = check_rotation(R, "R", 1e-6)
     R = np.asarray(R, dtype=float)
     return np.array([np.arctan2(R[1, 0], R[0, 0]), np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2])), np.arctan2(R[2, 1], R[2, 2])])
 
 
 def euler_3_8_corrected(R) -> np.ndarray:
     """(3.8) with roll and yaw swapped back: phi = atan2(r32, r33), psi = atan2(r21, r11)."""
+    R = check_rotation(R, "R", 1e-6)
     R = np.asarray(R, dtype=float)
     return np.array([np.arctan2(R[2, 1], R[2, 2]), np.arctan2(-R[2, 0], np.hypot(R[2, 1], R[2, 2])), np.arctan2(R[1, 0], R[0, 0])])
 
@@ -139,6 +141,7 @@ def table_3_4_corrected(d) -> tuple[MDHRow, ...]:
 
 
 def _rot4(R) -> np.ndarray:
+    R = check_rotation(R, "R", 1e-6)
     T = np.eye(4)
     T[0:3, 0:3] = R
     return T
@@ -293,6 +296,7 @@ def arm_com_3_44(q_arm, params: QPRRParams) -> np.ndarray:
 
 def potential_3_42(R_b, q_arm, params: QPRRParams) -> float:
     """U = -sum m_i g e3^T R_b xi_ci, Thesis (3.42): correct in an NED world (gravity +g e3), base at the origin."""
+    R_b = check_rotation(R_b, "R_b", 1e-6)
     R_b = np.asarray(R_b, dtype=float)
     m = _link_masses(params)
     coms = link_coms_3_78(q_arm, link_lengths(params))
@@ -305,12 +309,14 @@ def arm_torque_3_43(R_b, q_arm, params: QPRRParams) -> np.ndarray:
     Correct under the NED convention of (3.42) (gravity +g e3); with our z-up world
     (gravity -g e3) the sign is opposite: :func:`arm_torque_3_43_corrected`.
     """
+    R_b = check_rotation(R_b, "R_b", 1e-6)
     R_b = np.asarray(R_b, dtype=float)
     return params.arm_mass * params.g * np.cross(arm_com_3_44(q_arm, params), R_b.T @ E3)
 
 
 def arm_torque_3_43_corrected(R_b, q_arm, params: QPRRParams) -> np.ndarray:
     """(3.43) in the z-up world of (5.27)-(5.29): tau_arm = -m_G g xi_c x R_b^T e3."""
+    R_b = check_rotation(R_b, "R_b", 1e-6)
     return -arm_torque_3_43(R_b, q_arm, params)
 
 
@@ -373,6 +379,7 @@ def euler_3_64(R) -> np.ndarray:
 
     theta_e = atan2(sqrt(r13^2 + r23^2), r33) lies in [0, pi]; undefined when r13 = r23 = 0.
     """
+    R = check_rotation(R, "R", 1e-6)
     R = np.asarray(R, dtype=float)
     return np.array([np.arctan2(R[1, 2], R[0, 2]), np.arctan2(np.hypot(R[0, 2], R[1, 2]), R[2, 2]), np.arctan2(R[2, 1], -R[2, 0])])
 
@@ -646,8 +653,15 @@ def lu_factors_4_42_corrected(q_arm, d) -> dict[str, float]:
     return f
 
 
+def _factors(factors) -> dict:
+    if not isinstance(factors, dict):
+        raise InputError(f"factors must be the dict of lu_factors_4_42, got {type(factors).__name__}")
+    return factors
+
+
 def lu_matrices_4_42(factors: dict[str, float]) -> tuple[np.ndarray, np.ndarray]:
     """(J_L, J_U) (6x6) assembled from a_ij, b_ij with the sparsity pattern printed in (4.42)."""
+    factors = _factors(factors)
     L, U = np.eye(6), np.zeros((6, 6))
     for name in LU_L_NAMES:
         L[int(name[1]) - 1, int(name[2]) - 1] = factors[name]
@@ -658,6 +672,7 @@ def lu_matrices_4_42(factors: dict[str, float]) -> tuple[np.ndarray, np.ndarray]
 
 def det_4_43(factors: dict[str, float]) -> float:
     """det(J^gamma) = det(J_U) = b11 b22 b33 b44 b55 b66, Thesis (4.43) (the text says det(J_U) = 1 where it means det(J_L))."""
+    factors = _factors(factors)
     return float(np.prod([factors[f"b{i}{i}"] for i in range(1, 7)]))
 
 
@@ -1025,6 +1040,7 @@ def arm_u_5_5_corrected(q_arm, q_arm_dot, q_arm_ddot, params: QPRRParams) -> np.
 # ------------------------------------------------------------ CoG motion, (6.29)-(6.35)
 def p_c_6_29(p_b, R_b, p_cm) -> np.ndarray:
     """p_c = p_b + R_b p_cm: the system CoG in the world frame from its position p_cm in B [m], Thesis (6.29)."""
+    R_b = check_rotation(R_b, "R_b", 1e-6)
     return as_vector(p_b, 3, "p_b") + np.asarray(R_b, dtype=float) @ as_vector(p_cm, 3, "p_cm")
 
 
@@ -1034,6 +1050,7 @@ def p_c_dot_6_29(p_b_dot, R_b, omega_b, p_cm, p_cm_dot) -> np.ndarray:
     Holds with omega_b the BODY-frame rate T(phi_b) phi_b_dot of (3.25) (R_b_dot = R_b hat(omega_b));
     read as a world-frame rate (as (4.7) uses omega_b) it is wrong.
     """
+    R_b = check_rotation(R_b, "R_b", 1e-6)
     R_b = np.asarray(R_b, dtype=float)
     w, p = as_vector(omega_b, 3, "omega_b"), as_vector(p_cm, 3, "p_cm")
     return as_vector(p_b_dot, 3, "p_b_dot") + R_b @ (np.cross(w, p) + as_vector(p_cm_dot, 3, "p_cm_dot"))
@@ -1085,3 +1102,4 @@ def ipid_thesis_printed(F_est: float, y_ddot_ref: float, e: float, e_int: float,
     return (F_est - y_ddot_ref - kp * e - ki * e_int - kd * e_dot) / alpha
 
 
+checked_module(globals())  # every formula refuses NaN, strings, complex, wrong types in its annotated arguments

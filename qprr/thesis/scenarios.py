@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import kinematics as kin
-from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
+from ..charts import as_interval, as_vector, checked_module, euler_to_rotation_batch, force_to_xi_batch
 from ..control import (
     DecoupledController,
     DesiredStateInverseDynamics,
@@ -46,7 +46,7 @@ from ..control import (
     make_controller,
 )
 from ..control.impedance import ImpedanceController
-from ..errors import QprrError, UnknownNameError
+from ..errors import InputError, QprrError, UnknownNameError
 from ..scenarios import _COMMON, Option, Scenario
 from ..sim import (
     Disturbances,
@@ -267,6 +267,9 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     if mission not in missions:
         raise UnknownNameError("mission", mission, missions)
     r0, t2, t3 = platform.check_arm_limits(arm_target, "arm_target")
+    if not 0.0 < release_time < duration:
+        raise InputError(f"release_time must lie inside the run, 0 < release_time < duration = {duration!r} s, got {release_time!r}")
+    arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
     if mission == "thesis":
         phases = (Phase("z", 0.0, 5.0, 10.0), Phase("x", 5.0, 10.0, 3.0), Phase("y", 10.0, 15.0, 6.0))
         phases += tuple(Phase(c, *arm_phase, v) for c, v in (("r0", r0), ("theta2", t2), ("theta3", t3)) if v != 0.0)
@@ -360,6 +363,7 @@ def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: boo
     and slides on when the robot decelerates, the contact opening.
     """
     platform = _q_prr(platform)
+    push = as_interval(push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
     trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
     obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
@@ -377,6 +381,7 @@ def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: 
                    damping: float = 20.0, seed: int = SEED) -> SimResult:
     """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2)."""
     platform = _q_prr(platform)
+    push = as_interval(push, "push", lo=0.0)
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
@@ -406,6 +411,7 @@ def impedance(platform=None, controller: str = "impedance", progress: bool = Fal
     table-6.7" (printed impedance gains: the slider reference saturates), "idc" (no compliance).
     """
     platform = _q_prr(platform)
+    arm = tuple(params_of(platform).lower_limits * 0.0 + platform.check_arm_limits(arm, "arm"))
     hb = as_vector(h_b, 4, "h_b").copy()
     hq = np.concatenate([as_vector(h_q, 3, "h_q"), np.zeros(3)])
     ee = PrescribedWrench(hq, t_on, t_off)
@@ -705,3 +711,6 @@ def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: floa
                 raise
         rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, str(res.status), res.reason
     return Comparison(rmse, wall, status, reason)
+
+
+checked_module(globals())  # scenario options (annotated floats and ints) are checked before a run starts

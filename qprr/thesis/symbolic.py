@@ -46,7 +46,7 @@ except ImportError as exc:  # pragma: no cover - exercised only without the test
         'qprr.thesis.symbolic needs sympy, which is in the test extra: pip install "qprr[test]"'
     ) from exc
 
-from ..charts import EULER_TOL, as_vector
+from ..charts import EULER_TOL, as_vector, checked_module
 from ..errors import EulerSingularityError, InputError
 from .params import QPRRParams, thesis_params
 
@@ -480,3 +480,6 @@ def inertia_matrix_blocks(params: QPRRParams, xi) -> np.ndarray:
     B33 = sum(m J_p^T J_p + J_o^T R_ci I_ci R_ci^T J_o)              (no leading minus).
     """
     return _inertia_blocks(params, xi, printed=False)
+
+
+checked_module(globals())

@@ -76,6 +76,10 @@ def build_urdf(params: QPRRParams | None = None, *, layout: str = "plus", visual
     propeller discs; ``visuals=False`` writes the inertial tree alone (the same dynamics).
     """
     p = params if params is not None else thesis_params()
+    if not isinstance(p, QPRRParams):
+        from ..errors import InputError
+
+        raise InputError(f"params must be None or a QPRRParams, got {type(p).__name__}")
     if layout not in LAYOUTS:
         from ..errors import UnknownNameError
 
@@ -112,9 +116,12 @@ def build_urdf(params: QPRRParams | None = None, *, layout: str = "plus", visual
 
 def write_urdf(path: Path | str = URDF_PATH, params: QPRRParams | None = None, *, layout: str = "plus") -> Path:
     """Write the generated URDF to ``path`` and return it."""
-    path = Path(path)
+    from ..charts import as_output_path
+
+    path = as_output_path(path, "path", suffixes=(".urdf",))
+    text = build_urdf(params, layout=layout)
     path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(build_urdf(params, layout=layout))
+    path.write_text(text)
     return path
 
 

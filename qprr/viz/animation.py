@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import charts as ch
+from ..charts import as_array, as_real
 from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError
 from ..platform import Platform
 from .geometry import characteristic_length, rotor_radius
@@ -82,13 +83,15 @@ def _check_inputs(platform: Platform, t, xi, f, contact):
 
 
 def _positive(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-        raise InputError(f"{name} must be a finite number > 0, got {value!r}")
-    return float(value)
+    return as_real(value, name, positive=True)
 
 
 def frame_indices(t: np.ndarray, fps: float, speed: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """(times, indices): one frame every ``speed / fps`` seconds of the run, each showing the last sample at or before its time."""
+    t = as_array(t, "t", finite=True, ndim=1)
+    if t.shape[0] == 0:
+        raise InputError("t must hold at least one sample time")
+    fps, speed = _positive("fps", fps), _positive("speed", speed)
     span = float(t[-1] - t[0])
     n = int(math.floor(span * fps / speed + 1e-9)) + 1
     times = t[0] + np.arange(n) * (speed / fps)

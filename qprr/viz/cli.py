@@ -74,7 +74,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
             check_run_platform(load_run(args.run), platform, args.run)
         viewer = Viewer(platform, port=args.port, run=args.run, hover=not args.no_hover, cog=not args.no_cog, verbose=False)
     except QprrError as exc:
-        print(f"qprr view: {exc}", file=sys.stderr)
+        print(f"qprr view: error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         return 130
@@ -107,7 +107,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size),
                         progress=not args.quiet)
     except QprrError as exc:
-        print(f"qprr animate: {exc}", file=sys.stderr)
+        print(f"qprr animate: error: {exc}", file=sys.stderr)
         return 2
     return 0
 

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from ..platform import Platform
+from ..platform import Platform, check_platform
 
 _HUB = np.array([0.25, 0.27, 0.32, 1.0])
 _BOOM = np.array([0.35, 0.35, 0.38, 1.0])
@@ -31,6 +31,7 @@ _EE = np.array([0.85, 0.15, 0.15, 1.0])
 
 def rotor_radius(platform: Platform) -> float:
     """Radius [m] of the propeller discs drawn on ``platform``: 0.45 x the closest rotor spacing (0.127 m at most, a 10-inch propeller)."""
+    check_platform(platform)
     p = np.array([r.position_body for r in platform.rotors])
     if len(p) < 2:
         return 0.127
@@ -41,6 +42,7 @@ def rotor_radius(platform: Platform) -> float:
 
 def characteristic_length(platform: Platform) -> float:
     """Size [m] of the platform at its neutral configuration: the largest distance of a rotor or of the end effector from B."""
+    check_platform(platform)
     data = platform.data()
     pin.framesForwardKinematics(platform.model, data, platform.neutral_q())
     ee = np.linalg.norm(data.oMf[platform.ee_frame].translation)
@@ -88,7 +90,7 @@ def _along(axis: np.ndarray) -> np.ndarray:
 
 def primitive_visual_model(platform: Platform) -> pin.GeometryModel:
     """Primitive shapes drawn from the kinematic tree and the rotor set (any platform)."""
-    model = platform.model
+    model = check_platform(platform).model
     size = characteristic_length(platform)
     geom = pin.GeometryModel()
 

@@ -18,17 +18,22 @@ import pinocchio as pin
 
 from .. import charts as ch
 from ..actuation import Allocator
+from ..charts import as_vector, as_xi
 from ..errors import InputError, ShapeError
 from ..ik import IKResult, IKSolver, QPOptions
 from ..ik.tasks import ComTask, HoverTask, PoseTask, PositionTask, PostureTask
 from ..kinematics import cog_offset_body
-from ..platform import Platform
+from ..platform import Platform, check_model_data, check_platform
 from .run import RunLog
 from .scene import hover_report
 
 
 def ik_levels(platform: Platform, target, q_arm_posture, *, hover: bool = True, cog: bool = True) -> list[list]:
     """Levels: end-effector pose (``target`` a ``pin.SE3``) or position ((3,) world) > [hover] > [CoG on the thrust axis] > posture."""
+    check_platform(platform)
+    if not isinstance(target, pin.SE3):
+        target = as_vector(target, 3, "target")
+    q_arm_posture = platform.check_arm_limits(q_arm_posture, "q_arm_posture")
     first = PoseTask(platform, target) if isinstance(target, pin.SE3) else PositionTask(platform, target)
     levels = [[first]]
     if hover:
@@ -46,6 +51,11 @@ def ik_solve(platform: Platform, data: pin.Data, target, xi0=None, *, hover: boo
     ``posture``: q_arm of the posture level (default: that of ``xi0``, else the neutral arm).
     Success requires hover only when the hover level is on.
     """
+    check_model_data(platform, data)
+    if xi0 is not None:
+        xi0 = as_xi(xi0, "xi0", platform.n_xi)
+    if not isinstance(target, pin.SE3):
+        target = as_vector(target, 3, "target")
     if posture is None:
         posture = platform.neutral_q()[7:] if xi0 is None else np.clip(np.asarray(xi0, dtype=float)[6:], platform.arm_lower,
                                                                             platform.arm_upper)
@@ -84,6 +94,8 @@ def ik_path(platform: Platform, t, p_world, R_world=None, *, hover: bool = True,
     ``f`` of the run holds the hover thrusts of every sample (:func:`qprr.viz.scene.hover_report`,
     also when a bound is violated); ``x_cm`` of the path the CoG offset from the thrust axis.
     """
+    check_platform(platform)
+    p_world = ch.as_matrix(p_world, (None, 3), "p_world")
     t = ch.as_array(t, "t")
     p = ch.as_array(p_world, "p_world")
     n = t.shape[0] if t.ndim == 1 else -1

@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import euler_to_rotation_batch, force_to_xi_batch
+from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..sim import SimResult
 
@@ -58,6 +58,10 @@ SMALL_PATH = 0.05
 # ============================================================================ files, figures
 def new_figure(figsize=(16, 12)):
     """A matplotlib Figure not attached to pyplot (saved with ``fig.savefig``; no display, no backend choice)."""
+    w, h = as_vector(figsize, 2, "figsize").tolist()
+    if not (w > 0 and h > 0):
+        raise InputError(f"figsize must be (width, height) > 0 in inches, got {(w, h)!r}")
+    figsize = (w, h)
     try:
         from matplotlib.figure import Figure
     except ImportError as exc:  # pragma: no cover - runtime dependency
@@ -67,6 +71,8 @@ def new_figure(figsize=(16, 12)):
 
 def figure_path(path: str | Path) -> Path:
     """``path`` as a figure path (.png, .pdf, .svg) whose folder exists (a missing folder is an error naming it, not created)."""
+    if not isinstance(path, (str, Path)) or str(path) == "":
+        raise InputError(f"path must be a figure file path (.png, .pdf or .svg), got {path!r}")
     path = Path(path)
     if path.suffix.lower() not in (".png", ".pdf", ".svg"):
         raise InputError(f"figure files end in .png, .pdf or .svg, got {str(path)!r}")

@@ -39,6 +39,8 @@ class RunLog:
     platform: str = ""
 
     def __post_init__(self) -> None:
+        if not isinstance(self.platform, str):
+            raise InputError(f"platform must be the platform's name (a string), got {type(self.platform).__name__}")
         t = as_array(self.t, "t")
         if t.ndim != 1 or t.shape[0] < 1:
             raise ShapeError(f"t must have shape (n,) with n >= 1, got {t.shape}")

@@ -15,7 +15,9 @@ import pinocchio as pin
 
 from ..actuation import Allocator
 from ..dynamics import generalized_gravity
-from ..platform import Platform
+from ..errors import InputError
+from ..kinematics import check_q
+from ..platform import Platform, check_model_data, check_platform
 
 
 @dataclass(frozen=True)
@@ -42,12 +44,15 @@ class RobotPose:
 
 def arm_chain(platform: Platform) -> list[int]:
     """Joint ids of the arm joints from the base to the end effector's joint, in order."""
+    check_platform(platform)
     model = platform.model
     return [j for j in model.supports[model.frames[platform.ee_frame].parentJoint] if j >= 2]
 
 
 def robot_pose(platform: Platform, data: pin.Data, q: np.ndarray, chain: list[int] | None = None) -> RobotPose:
     """:class:`RobotPose` at the Pinocchio configuration ``q`` (writes ``data``; ``chain`` from :func:`arm_chain`)."""
+    check_model_data(platform, data)
+    q = check_q(platform, q)
     model = platform.model
     chain = arm_chain(platform) if chain is None else chain
     pin.forwardKinematics(model, data, q)
@@ -104,6 +109,8 @@ def hover_report(allocator: Allocator, data: pin.Data, q: np.ndarray) -> HoverRe
     At rest the generalised force N f must equal g(q) (Thesis (5.44)-(5.46)); its base rows
     Omega f = g(q)[0:6] are solved exactly on the rows the rotors produce.
     """
+    if not isinstance(allocator, Allocator):
+        raise InputError(f"allocator must be a qprr.actuation.Allocator, got {type(allocator).__name__}")
     p = allocator.platform
     w = generalized_gravity(p, data, q)[0:6]
     f = allocator.Omega_P_inv @ w[allocator.rows]

@@ -23,7 +23,7 @@ from enum import Enum
 
 import numpy as np
 
-from ..charts import as_vector, rot_z, wrap_angle
+from ..charts import as_real, as_vector, rot_z, wrap_angle
 from ..errors import InputError
 from ._backend import is_symbolic, matrix
 from .wheels import Wheel, WheelKind
@@ -95,6 +95,10 @@ class AckermannSteering:
     L: float
     names: tuple[str, ...] = ("psi",)
     description: str = "Ackermann linkage driven by the virtual central wheel's angle psi"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "D", as_real(self.D, "D (wheelbase)", positive=True, unit="m"))
+        object.__setattr__(self, "L", as_real(self.L, "L (half front track)", positive=True, unit="m"))
 
     def __call__(self, sigma, m=math) -> tuple:
         psi = sigma[0]

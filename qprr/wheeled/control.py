@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_vector, wrap_angle
+from ..charts import as_real, as_vector, wrap_angle
 from ..errors import InputError
 
 
@@ -55,7 +55,11 @@ class Lemniscate:
     w: float = 0.25
     center: tuple[float, float] = (0.0, 0.0)
 
+    def __post_init__(self) -> None:
+        _check_path(self, "a")
+
     def derivatives(self, t: float) -> tuple[np.ndarray, ...]:
+        t = as_real(t, "t", unit="s")
         a, w = self.a, self.w
         s, c = math.sin(w * t), math.cos(w * t)
         s2, c2 = math.sin(2 * w * t), math.cos(2 * w * t)
@@ -74,11 +78,22 @@ class Circle:
     w: float = 0.3
     center: tuple[float, float] = (0.0, 0.0)
 
+    def __post_init__(self) -> None:
+        _check_path(self, "R")
+
     def derivatives(self, t: float) -> tuple[np.ndarray, ...]:
+        t = as_real(t, "t", unit="s")
         R, w = self.R, self.w
         s, c = math.sin(w * t), math.cos(w * t)
         return (np.array([self.center[0] + R * c, self.center[1] + R * s]), np.array([-R * w * s, R * w * c]),
                 np.array([-R * w * w * c, -R * w * w * s]), np.array([R * w**3 * s, -R * w**3 * c]))
+
+
+def _check_path(path, size: str) -> None:
+    """The size (> 0 [m]), the rate w (finite [rad/s]) and the centre (2 numbers [m]) of a reference path."""
+    object.__setattr__(path, size, as_real(getattr(path, size), size, positive=True, unit="m"))
+    object.__setattr__(path, "w", as_real(path.w, "w", unit="rad/s"))
+    object.__setattr__(path, "center", tuple(as_vector(path.center, 2, "center").tolist()))
 
 
 def reference_posture(ref, t: float) -> tuple[float, float, float, float, float]:

@@ -40,7 +40,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector
+from ..charts import as_real, as_vector
 from ..errors import InputError, LimitError, SolverError, UnknownNameError
 from ..optim import Lexicographic, QPSettings
 from .kinematics import KinematicModel
@@ -68,9 +68,7 @@ def three_r_arm(l1: float = 0.25, l2: float = 0.35, l3: float = 0.3) -> pin.Mode
     Shoulder at height l1 above the base, upper arm l2, forearm l3 [m]; links are thin rods of
     1 kg/m.  Limits: yaw +-pi, shoulder +-pi/2, elbow +-2.6 rad.
     """
-    for name, v in (("l1", l1), ("l2", l2), ("l3", l3)):
-        if not (math.isfinite(float(v)) and float(v) > 0):
-            raise InputError(f"{name} must be a positive length in metres, got {v!r}")
+    l1, l2, l3 = (as_real(v, name, positive=True, unit="m") for name, v in (("l1", l1), ("l2", l2), ("l3", l3)))
     m = pin.Model()
     m.name = "3R arm"
     j1 = m.addJoint(0, pin.JointModelRZ(), pin.SE3.Identity(), "yaw")
@@ -247,10 +245,8 @@ class MobileIKOptions:
                 raise InputError(f"option {f} must be True or False, got {getattr(self, f)!r}")
         for f in ("tol", "step_xy", "step_theta", "step_steer", "step_arm", "eps_abs", "eps_duality_gap", "rank_tol"):
             v = getattr(self, f)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
-                raise InputError(f"option {f} must be finite and > 0, got {v!r}")
-        if not (math.isfinite(self.regularization) and self.regularization >= 0):
-            raise InputError(f"option regularization must be finite and >= 0, got {self.regularization!r}")
+            as_real(v, f"option {f}", positive=True)
+        as_real(self.regularization, "option regularization", nonnegative=True)
         for f in ("max_iter", "stall_iter", "max_qp_iter"):
             v = getattr(self, f)
             if not (isinstance(v, int) and v >= 1):

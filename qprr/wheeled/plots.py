@@ -13,7 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import rot_z
+from ..charts import as_int, as_vector, rot_z
+from ..errors import InputError
 from ..viz.plots import figure_path, new_figure
 from .chassis import ICRStatus, WheeledRobot
 from .kinematics import KinematicModel
@@ -170,6 +171,10 @@ def plot_residual(ax, result: WheeledSimResult, *, label: str | None = None) -> 
 
 def figure(nrows: int = 1, ncols: int = 1, *, size=(5.0, 4.0)):
     """A new figure (not attached to pyplot, :func:`qprr.viz.new_figure`) and its (nrows, ncols) axes."""
+    nrows, ncols = as_int(nrows, "nrows", lo=1), as_int(ncols, "ncols", lo=1)
+    size = as_vector(size, 2, "size")
+    if not size.min() > 0.0:
+        raise InputError(f"size must be (width, height) > 0 in inches, got {size.tolist()}")
     fig = new_figure((size[0] * ncols, size[1] * nrows))
     return fig, fig.subplots(nrows, ncols, squeeze=False)
 

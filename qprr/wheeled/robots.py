@@ -29,6 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..charts import as_real, checked_args
 from ..errors import InputError, KinematicSingularityError, UnknownNameError
 from ._backend import exact, is_symbolic, matrix
 from .chassis import AckermannSteering, Mobility, NamedSteering, SynchroSteering, WheeledRobot, wheel_at
@@ -38,13 +39,7 @@ from .wheels import CentredSteerableWheel, FixedWheel, OffCentredSteerableWheel,
 
 
 def _positive(name: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{name} must be a positive length in metres, got {value!r}") from None
-    if not (math.isfinite(v) and v > 0.0):
-        raise InputError(f"{name} must be finite and > 0, got {value!r}")
-    return v
+    return as_real(value, name, positive=True, unit="m")
 
 
 def _cos_sin(q, m):
@@ -91,6 +86,7 @@ class FixedWheelModel(KinematicModel):
 
 
 # ============================================================================ unicycle
+@checked_args
 def differential_drive(phi_dot_d: float, phi_dot_g: float, r: float, L: float) -> tuple[float, float]:
     """(v, omega) of a differential-drive robot from its wheel rates [rad/s].
 
@@ -102,11 +98,13 @@ def differential_drive(phi_dot_d: float, phi_dot_g: float, r: float, L: float) -
     return r * (phi_dot_g - phi_dot_d) / 2.0, -r * (phi_dot_g + phi_dot_d) / (2.0 * L)
 
 
+@checked_args
 def differential_drive_inverse(v: float, omega: float, r: float, L: float) -> tuple[float, float]:
     """(phi_dot_d, phi_dot_g) giving (v, omega), inverse of :func:`differential_drive` (same convention)."""
     return -(v + L * omega) / r, (v - L * omega) / r
 
 
+@checked_args
 def icr_offset(phi_dot_d: float, phi_dot_g: float, L: float) -> float:
     """rho, the signed distance from the axle centre to the ICR along y_R (left positive) [m].
 
@@ -178,7 +176,7 @@ class FrontTricycle(KinematicModel):
     input_units = ("m/s", "rad/s")
 
     def __init__(self, D: float = 0.3, L: float = 0.15, r: float = 0.05):
-        self.D, self.L, self.r = _positive("D", D), float(L), _positive("r", r)
+        self.D, self.L, self.r = _positive("D", D), as_real(L, "L", nonnegative=True, unit="m"), _positive("r", r)
         if not (math.isfinite(self.L) and self.L >= 0):
             raise InputError(f"L (half rear track) must be >= 0, got {L!r}")
         self.robot = _tricycle_wheels(self.D, self.L, self.r, self.name)
@@ -226,7 +224,7 @@ class RearTricycle(KinematicModel):
     COS_TOL = 1e-9
 
     def __init__(self, D: float = 0.3, L: float = 0.15, r: float = 0.05):
-        self.D, self.L, self.r = _positive("D", D), float(L), _positive("r", r)
+        self.D, self.L, self.r = _positive("D", D), as_real(L, "L", nonnegative=True, unit="m"), _positive("r", r)
         if not (math.isfinite(self.L) and self.L >= 0):
             raise InputError(f"L (half rear track) must be >= 0, got {L!r}")
         self.robot = _tricycle_wheels(self.D, self.L, self.r, self.name)
@@ -313,6 +311,7 @@ class Car(RearTricycle):
         ), steering=AckermannSteering(self.D, self.L))
         self.virtual = RearTricycle(self.D, Lr, self.r)
 
+    @checked_args
     def front_angles(self, psi: float) -> tuple[float, float]:
         """(psi_left, psi_right) of the front wheels for the virtual wheel's angle psi [rad]."""
         return self.robot.steering_angles([psi])

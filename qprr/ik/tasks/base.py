@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...charts import as_vector
-from ...errors import InputError
+from ...errors import InputError, NonFiniteError, ShapeError
 from ...platform import Platform
 
 
@@ -41,6 +41,31 @@ class Task(ABC):
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, dim={self.dim})"
+
+
+def task_name(name) -> str:
+    """A task's name (a non-empty string: errors and level reports use it)."""
+    if not isinstance(name, str) or not name:
+        raise InputError(f"a task name must be a non-empty string, got {name!r}")
+    return name
+
+
+def check_linearized(task, out, nv: int) -> tuple[np.ndarray, np.ndarray]:
+    """The (J, e) a task's ``linearize`` returned, checked: J (dim, nv), e (dim,) (``dim`` when the task declares one),
+    finite; else :class:`ShapeError` / :class:`NonFiniteError` naming the task (a custom task must not be broadcast)."""
+    try:
+        J, e = out
+    except (TypeError, ValueError):
+        raise ShapeError(f"task {task!r}: linearize must return a pair (J, e), got {type(out).__name__}") from None
+    if not (isinstance(J, np.ndarray) and isinstance(e, np.ndarray)) or J.dtype.kind != "f" or e.dtype.kind != "f":
+        raise ShapeError(f"task {task!r}: linearize must return float arrays (J, e), got {type(J).__name__}, {type(e).__name__}")
+    dim = getattr(task, "dim", 0)
+    if e.ndim != 1 or J.shape != (e.shape[0], nv) or (dim and e.shape[0] != dim):
+        want = f"({dim}, {nv}) and ({dim},)" if dim else f"(dim, {nv}) and (dim,)"
+        raise ShapeError(f"task {task!r}: linearize returned J of shape {J.shape} and e of shape {e.shape}; they must be {want}")
+    if not (np.isfinite(e.sum()) and np.isfinite(J.sum())):
+        raise NonFiniteError(f"task {task!r}: linearize returned a non-finite J or e (e = {e.tolist()})")
+    return J, e
 
 
 def sqrt_weights(weights, n: int, name: str) -> np.ndarray | None:

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 from ...charts import as_vector
 from ...kinematics import com_jacobian_body_from
-from .base import Task, scaled, sqrt_weights
+from .base import Task, scaled, sqrt_weights, task_name
 
 
 class ComTask(Task):
@@ -19,9 +17,9 @@ class ComTask(Task):
     dim = 2
 
     def __init__(self, target_xy=(0.0, 0.0), weights=None, name: str = "com"):
-        self.target = np.zeros(2) if tuple(target_xy) == (0.0, 0.0) else as_vector(target_xy, 2, "ComTask target_xy")
+        self.target = as_vector(target_xy, 2, "ComTask target_xy").copy()
         self._sw = sqrt_weights(weights, 2, "ComTask weights")
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         point, E = platform.thrust_axis[0], platform.thrust_axis_basis

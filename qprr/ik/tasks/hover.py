@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from .base import Task
+from .base import Task, task_name
 
 
 class HoverTask(Task):
@@ -24,7 +24,7 @@ class HoverTask(Task):
     dim = 2
 
     def __init__(self, name: str = "hover"):
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         R = data.oMi[1].rotation

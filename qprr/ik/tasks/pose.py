@@ -7,8 +7,8 @@ import pinocchio as pin
 
 from ...charts import as_vector
 from ...errors import InputError
-from ...platform import Platform
-from .base import Task, scaled, sqrt_weights
+from ...platform import Platform, check_platform
+from .base import Task, scaled, sqrt_weights, task_name
 
 
 class PoseTask(Task):
@@ -21,13 +21,16 @@ class PoseTask(Task):
     dim = 6
 
     def __init__(self, platform: Platform, target: pin.SE3, frame=None, weights=None, name: str = "pose"):
+        check_platform(platform)
         if not isinstance(target, pin.SE3):
             raise InputError(f"PoseTask target must be a pinocchio.SE3, got {type(target).__name__}")
+        if not (np.all(np.isfinite(target.translation)) and np.all(np.isfinite(target.rotation))):
+            raise InputError(f"PoseTask target must be finite, got {target}")
         self.frame = platform.ee_frame if frame is None else platform.frame_id(frame)
         self.target = target
         self._target_inv = target.inverse()
         self._sw = sqrt_weights(weights, 6, "PoseTask weights")
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL)
@@ -39,7 +42,7 @@ class BasePoseTask(PoseTask):
     """Pose of the base frame B: the level-2 task of a fully actuated platform (it may hold any attitude)."""
 
     def __init__(self, platform: Platform, target: pin.SE3, weights=None, name: str = "base_pose"):
-        super().__init__(platform, target, platform.base_frame, weights, name)
+        super().__init__(platform, target, check_platform(platform).base_frame, weights, name)
 
 
 class BaseOrientationTask(Task):
@@ -55,9 +58,10 @@ class BaseOrientationTask(Task):
     def __init__(self, platform: Platform, R_target, weights=None, name: str = "base_orientation"):
         from ...charts import check_rotation
 
+        check_platform(platform)
         self.target = check_rotation(R_target, "BaseOrientationTask R_target").copy()
         self._sw = sqrt_weights(weights, 3, "BaseOrientationTask weights")
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         Rerr = self.target.T @ data.oMi[1].rotation
@@ -75,10 +79,10 @@ class PositionTask(Task):
     dim = 3
 
     def __init__(self, platform: Platform, p_world, frame=None, weights=None, name: str = "position"):
-        self.frame = platform.ee_frame if frame is None else platform.frame_id(frame)
+        self.frame = check_platform(platform).ee_frame if frame is None else platform.frame_id(frame)
         self.target = as_vector(p_world, 3, "PositionTask p_world").copy()
         self._sw = sqrt_weights(weights, 3, "PositionTask weights")
-        self.name = name
+        self.name = task_name(name)
 
     def linearize(self, platform, data, q):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL_WORLD_ALIGNED)[0:3]

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...charts import as_vector
-from .base import Task, scaled, sqrt_weights
+from ...platform import check_platform
+from .base import Task, scaled, sqrt_weights, task_name
 
 
 class PostureTask(Task):
@@ -14,11 +15,11 @@ class PostureTask(Task):
     dim = 0
 
     def __init__(self, platform, q_arm_ref, weights=None, name: str = "posture"):
-        self.ref = platform.check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"),
+        self.ref = check_platform(platform).check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"),
                                              "PostureTask q_arm_ref").copy()
         self.dim = platform.n_arm
         self._sw = sqrt_weights(weights, platform.n_arm, "PostureTask weights")
-        self.name = name
+        self.name = task_name(name)
         self._J = np.zeros((platform.n_arm, platform.nv))
         self._J[:, 6:] = np.eye(platform.n_arm)
 
