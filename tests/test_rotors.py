@@ -146,7 +146,7 @@ spin = "cw"
     (GOOD.replace('spin = "cw"', 'spin = "cw"\nquaternion_xyzw = [0, 0, 0, 0]'), InputError, "non-zero"),
     (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 0]'), InputError, "non-zero vector"),
     (GOOD.replace("f_max = 10.0", "f_max = 10.0\nf_min = 12.0"), InputError, "f_min < f_max"),
-    (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be finite and >= 0"),
+    (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be >= 0 m, got -0.02"),
     (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, "3 finite numbers"),
     ("[defaults]\nkappa = 0.02\n", InputError, "non-empty list 'rotor'"),
     # a new user's mistakes: each names the rotor and says what to write
