@@ -47,3 +47,52 @@ def test_registered_in_the_qprr_command():
                          text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(root)})
     assert out.returncode == 0, out.stderr
     assert "payload capacity of Q-PRR" in out.stdout
+
+
+def _thesis_gaps(text: str) -> list[float]:
+    import re
+
+    return [float(g) for g in re.findall(r"thesis \(4\.4[678]\), det\(J J\^T\) printed for r0 = \S+ m: max \|printed - model\| (\S+)", text)]
+
+
+def test_printed_singularity_curves_only_for_the_q_prr(capsys):
+    """The thesis's (4.46)-(4.48) lines come from qprr.thesis.maps through the provider hook: on the Q-PRR
+    (either layout) within their 4-digit rounding of (4.44); on any other platform no thesis line at all."""
+    for argv in (["--samples", "3000"], ["--samples", "3000", "--layout", "x"]):
+        assert main(["analyze", "singularity", *argv]) == 0
+        gaps = _thesis_gaps(capsys.readouterr().out)
+        assert len(gaps) == 3 and max(gaps) < 2e-4, gaps
+    for name in ("HEX-RRR", "borinot_flying_arm_2", "QX-PRR"):
+        assert main(["analyze", "singularity", "--platform", name, "--samples", "2000"]) == 0
+        assert "thesis" not in capsys.readouterr().out
+
+
+def test_map_reference_hook():
+    import qprr
+    from qprr.analysis import singularity, workspace
+    from qprr.analysis.cli import REFERENCE_PROVIDERS, map_reference
+
+    assert REFERENCE_PROVIDERS == ("qprr.thesis.maps",)
+    qp = qprr.load("q-prr")
+    sing = singularity(qp, n_samples=2000)
+    ref = map_reference("singularity", qp, sing)
+    assert sorted(ref.curves) == ["(4.46) printed, r0 = -0.04", "(4.47) printed, r0 = 0", "(4.48) printed, r0 = 0.04"]
+    for x, y in ref.curves.values():  # against theta2, never singular (>= 6.02, Sec. 4.4.3)
+        assert x.shape == y.shape and y.min() > 6.0
+    assert map_reference("workspace", qp, workspace(qp, n_samples=2000)) is None
+    hexa = qprr.build("HEX-RRR")
+    assert map_reference("singularity", hexa, singularity(hexa, n_samples=2000)) is None
+
+
+def test_workspace_figure_draws_only_meaningful_panels():
+    """Two regions (the Q-PRR's slider free and locked): 2 x 3 panels; one region (no prismatic joint): 1 x 3;
+    every cell of the grid holds a panel with data (no blank slot)."""
+    import qprr
+    from qprr.analysis import plots, workspace
+
+    for platform, grid in ((qprr.load("q-prr"), (2, 3)), (qprr.build("HEX-RRR"), (1, 3))):
+        fig = plots.workspace_figure(workspace(platform, n_samples=3000))
+        assert {ax.get_subplotspec().get_geometry()[:2] for ax in fig.axes} == {grid}
+        assert len(fig.axes) == grid[0] * grid[1]
+        for ax in fig.axes:
+            assert ax.has_data(), (platform.name, ax.get_title())

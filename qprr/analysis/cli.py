@@ -3,15 +3,19 @@
 Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a named platform
 (:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
 :func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...); ``--urdf FILE --rotors FILE.toml
-[--ee-frame NAME]`` a user's own platform.  For the thesis's Q-PRR the figures
-carry the thesis's own numbers where it prints some ((4.46)-(4.48) on the singularity map).
+[--ee-frame NAME]`` a user's own platform.  Published numbers for a platform (the thesis's
+(4.46)-(4.48) on the Q-PRR's singularity map) come from the modules of
+:data:`REFERENCE_PROVIDERS`, looked up by name: the maps never import them.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 import time
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
 DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000,
@@ -29,21 +33,40 @@ def _floats(text: str) -> list[float]:
     return [float(x) for x in text.split(",") if x.strip()]
 
 
-def _thesis_singularity_reference(platform, result):
-    """(4.46)-(4.48) as printed, against theta2, when the platform is the thesis's Q-PRR (else None)."""
-    try:
-        from qprr.thesis import QPRRParams
-        from qprr.thesis import printed as th
-    except ImportError:
-        return None
-    if not isinstance(platform.params, QPRRParams):
-        return None
-    import numpy as np
+REFERENCE_PROVIDERS = ("qprr.thesis.maps",)
+"""Modules with a function ``analysis_reference(map_name, platform, result) -> MapReference | None`` giving
+published numbers for a platform's map; looked up by name, as :func:`qprr.cli.build_parser` finds the
+command groups of other packages (a missing module is skipped)."""
 
-    t2 = result.grid.axes[platform.arm_names.index("theta2")]
-    return {"(4.46) printed, r0 = -0.04": (t2, np.array([th.sol_4_46(t) for t in t2])),
-            "(4.47) printed, r0 = 0": (t2, np.array([th.sol_4_47(t) for t in t2])),
-            "(4.48) printed, r0 = 0.04": (t2, np.array([th.sol_4_48(t) for t in t2]))}
+
+@dataclass(frozen=True)
+class MapReference:
+    """Published numbers for one map of one platform: ``curves`` {label: (x, y)} drawn dashed on the map's
+    figure (the singularity map's det(J J^T) panel), ``lines`` printed after the map's summary."""
+
+    curves: Mapping = field(default_factory=dict)
+    lines: tuple[str, ...] = ()
+
+
+def map_reference(map_name: str, platform, result) -> MapReference | None:
+    """The first reference a module of :data:`REFERENCE_PROVIDERS` gives for this map and platform, or None."""
+    from ..errors import UnknownNameError
+    from ..platform import check_platform
+
+    if map_name not in MAPS:
+        raise UnknownNameError("map", map_name, MAPS)
+    check_platform(platform)
+    for name in REFERENCE_PROVIDERS:
+        try:
+            module = importlib.import_module(name)
+        except ModuleNotFoundError as exc:
+            if exc.name is not None and name.startswith(exc.name):
+                continue
+            raise
+        ref = module.analysis_reference(map_name, platform, result)
+        if ref is not None:
+            return ref
+    return None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -81,8 +104,11 @@ def run(args: argparse.Namespace) -> int:
     elif args.map == "singularity":
         res = singularity(platform, n_samples=n, task=args.task, progress=progress)
         print(res.summary())
+        ref = map_reference(args.map, platform, res)
+        if ref is not None:
+            print("\n".join(ref.lines))
         if args.plot:
-            fig = plots.singularity_figure(res, _thesis_singularity_reference(platform, res))
+            fig = plots.singularity_figure(res, ref.curves if ref is not None else None)
     elif args.map == "hover":
         masses = _floats(args.payload) if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
         res = hover(platform, n_samples=n, payload_masses=masses, torque_reserve=args.reserve, progress=progress)

@@ -121,28 +121,38 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
+    ax.set_box_aspect(None, zoom=0.88)  # room for the z label inside the panel
     ax.set_title(f"hover workspace [{region}] {r.label}: {r.hover_volume}", fontsize=8)
     return ax
 
 
 def workspace_figure(result: WorkspaceResult):
-    """Thesis Fig. 3.14 (a) with / (b) without the locked joints, Fig. 3.15 the gain, and the hover views."""
+    """Thesis Fig. 3.14 (a) with / (b) without the locked joints, Fig. 3.15 the gain, and the hover views.
+
+    With locked joints (the slider of the Q-PRR): two rows of three panels, the regions in B and
+    their difference above, the hover section and both solids below.  Without (a platform with
+    no prismatic joint: one region): one row, the region in B, its hover section and its solid.
+    """
     n = len(result.regions)
+    if n == 1:
+        fig = new_figure((16, 5.8))
+        plot_workspace(result, fig.add_subplot(1, 3, 1), [0], title=f"(a) {result.regions[0].label}, in B")
+        plot_hover_workspace(result, fig.add_subplot(1, 3, 2))
+        plot_hover_solid(result, fig.add_subplot(1, 3, 3, projection="3d"), 0)
+        fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3))")
+        return fig
     fig = new_figure((14, 9))
-    ax = fig.add_subplot(2, 3, 1)
-    plot_workspace(result, ax, [0], title=f"(a) {result.regions[0].label}")
-    if n > 1:
-        plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
-        ax3 = fig.add_subplot(2, 3, 3)
-        plot_workspace(result, ax3, [0, 1], title="(c) gained by the free joints")
-        if 1 in result.gain:
-            g, d = result.gain[1], result.difference[1]
-            ax3.text(0.02, 0.98, f"gain x{g.value:.3f} +- {g.error:.2g}\n+{d[0]:.4g} +- {d[1]:.1g} {result.regions[0].measure.unit}",
-                     transform=ax3.transAxes, va="top", fontsize=8)
+    plot_workspace(result, fig.add_subplot(2, 3, 1), [0], title=f"(a) {result.regions[0].label}")
+    plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
+    ax3 = fig.add_subplot(2, 3, 3)
+    plot_workspace(result, ax3, [0, 1], title="(c) gained by the free joints")
+    if 1 in result.gain:
+        g, d = result.gain[1], result.difference[1]
+        ax3.text(0.02, 0.98, f"gain x{g.value:.3f} +- {g.error:.2g}\n+{d[0]:.4g} +- {d[1]:.1g} {result.regions[0].measure.unit}",
+                 transform=ax3.transAxes, va="top", fontsize=8)
     plot_hover_workspace(result, fig.add_subplot(2, 3, 4))
     plot_hover_solid(result, fig.add_subplot(2, 3, 5, projection="3d"), 0)
-    if n > 1:
-        plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
+    plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
     fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3), Fig. 3.14/3.15)")
     return fig
 
@@ -245,8 +255,9 @@ def _slice_index(g, axes, at=None):
 
 def singularity_figure(result: SingularityResult, reference=None, system_axis=None):
     """(a) det J_t (or manipulability) over two joints with the singular set, (b) distance to it,
-    (c) the thesis's det(J J^T) (4.44) against one joint at three values of another, with
-    ``reference`` curves {label: (x, y)} (e.g. the printed (4.46)-(4.48)) drawn on top."""
+    (c) the system's det(J J^T) (the measure of Thesis (4.44)) against one joint at three values of
+    another, with ``reference`` curves {label: (x, y)} (e.g. the printed (4.46)-(4.48) for the Q-PRR,
+    :func:`qprr.analysis.cli.map_reference`) drawn dashed on top."""
     g = result.grid
     free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
     axes = _two_longest(g, free)
@@ -285,10 +296,10 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     for j, (lab, (x, y)) in enumerate((reference or {}).items()):
         axs[2].plot(x, y, color=COLOURS[j], ls="--", lw=1.0, label=lab)
     axs[2].set_xlabel(g.names[sa])
-    axs[2].set_ylabel("det(J J^T), J of (4.12) at zero Euler angles")
+    axs[2].set_ylabel("det(J J^T), J = [base | arm] at zero Euler angles")
     axs[2].legend(fontsize=7)
-    axs[2].set_title("the system's det(J J^T) (Thesis (4.44)): never 0", fontsize=8)
-    fig.suptitle(f"{result.platform_name}: singularities (Thesis (4.42)-(4.48))")
+    axs[2].set_title("the system's det(J J^T) (Thesis (4.44))" + (": never 0" if result.det_system.min() > 0 else ""), fontsize=8)
+    fig.suptitle(f"{result.platform_name}: singularities (Thesis (4.42)-(4.45))")
     return fig
 
 

@@ -86,7 +86,7 @@ class SingularityResult:
                  f"condition number median {np.median(self.condition):.4g}",
                  f"  singular set: {100 * self.singular.mean():.2f}% of the grid points next to it; "
                  f"median distance {np.median(self.distance):.4g} (rad or m/length)",
-                 f"  thesis det(J J^T) (4.44): min {self.det_system[i]:.6g} at q_arm = "
+                 f"  system det(J J^T) (base + arm Jacobian at zero Euler angles): min {self.det_system[i]:.6g} at q_arm = "
                  f"{np.round(g.configurations(i, i + 1)[0], 4).tolist()}, max {self.det_system.max():.6g}"]
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
