@@ -53,7 +53,7 @@ def robots_dir() -> Path:
 def load(name: str = "q-prr", **kwargs) -> Platform:
     """The platform called ``name`` (see the module table); keyword arguments go to its loader.
 
-    ``q-prr`` takes those of :func:`qprr.thesis.load` (``variant``, ``layout``, ``params``); the
+    ``q-prr`` takes those of :func:`qprr.thesis.load` (``params``, ``layout``, ``urdf_path``); the
     example-robot-data platforms take ``g`` (default 9.81 m/s^2).
     """
     if name == "q-prr":

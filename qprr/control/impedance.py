@@ -22,7 +22,7 @@ Control law (6.76): u = B alpha + C xi_dot + G - u_e(h), i.e. the inverse dynami
 (it cancels u_e in (6.58) exactly when the measurement is exact); (6.80) and (6.81) are its
 position and arm rows.  alpha comes from (6.77) (attitude PD), (6.78) (position) and (6.79)
 (arm PI) around the impedance-filtered references; gains of :mod:`qprr.thesis.gains`
-(``table_6_7`` printed, ``impedance_default`` made stable) or any :class:`IDCGains`.
+(``table_6_7()`` printed, ``impedance()`` made stable) or any :class:`IDCGains`.
 """
 
 from __future__ import annotations
