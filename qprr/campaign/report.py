@@ -9,9 +9,9 @@
   parameter is binned by quantiles).  Figures go through :func:`qprr.viz.new_figure` (no pyplot).
 * :func:`report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
 
-Derived column: ``rmse_position`` = sqrt(rmse_x^2 + rmse_y^2 + rmse_z^2), the RMSE (6.26) of
-the position error norm [m].  Statistics of a metric skip its NaN values (runs that did not
-complete); ``inf`` (e.g. a payload that never recovers) counts in medians and percentiles.
+Statistics of a metric are taken over the completed runs (status ``ok``), skipping NaN;
+``inf`` (e.g. a payload that never recovers) counts in medians and percentiles.  The success
+rate is the mean of the ``success`` column (completed and within the specification's bounds).
 """
 
 from __future__ import annotations
@@ -26,23 +26,15 @@ from ..errors import InputError, UnknownNameError
 from ..viz import figure_path, new_figure
 from .store import Results, read_results
 
-DERIVED = {"rmse_position": ("rmse_x", "rmse_y", "rmse_z")}
-"""Columns computed from others: name -> the RMSE columns whose root-sum-square it is."""
-
 UNITS = {"rmse_x": "m", "rmse_y": "m", "rmse_z": "m", "rmse_position": "m", "rmse_r0": "m", "x_cm_max": "m",
          "saturation": "fraction of ticks", "recovery_time": "s", "wall_time": "s", "t_end": "s"}
 
 
 def column(results: Results, name: str) -> np.ndarray:
-    """A column of the table, or a derived one (:data:`DERIVED`)."""
+    """A column of the table (:class:`UnknownNameError` lists them)."""
     t = results.table
-    if name in DERIVED:
-        parts = DERIVED[name]
-        if not all(p in t.dtype.names for p in parts):
-            raise UnknownNameError("results column", name, t.dtype.names)
-        return np.sqrt(sum(np.asarray(t[p], dtype=float) ** 2 for p in parts))
     if name not in t.dtype.names:
-        raise UnknownNameError("results column", name, (*t.dtype.names, *DERIVED))
+        raise UnknownNameError("results column", name, t.dtype.names)
     return t[name]
 
 
@@ -63,7 +55,7 @@ def default_groups(results: Results) -> tuple[str, ...]:
 def default_metrics(results: Results) -> tuple[str, ...]:
     out = []
     names = results.table.dtype.names
-    if all(p in names for p in DERIVED["rmse_position"]):
+    if "rmse_position" in names:
         out.append("rmse_position")
     for m in ("x_cm_max", "saturation", "recovery_time"):
         if m in names and np.any(np.isfinite(np.asarray(results.table[m], dtype=float))):
@@ -95,7 +87,7 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
         idx = np.array(groups[g])
         ok = status[idx] == "ok"
         row = dict(zip(by, g))
-        row.update(n=int(idx.size), ok=int(ok.sum()), success=float(ok.mean()))
+        row.update(n=int(idx.size), ok=int(ok.sum()), completed=float(ok.mean()), success=float(_success(results)[idx].mean()))
         reasons = {}
         for r in results.table["reason"][idx][~ok]:
             reasons[str(r).split(":")[0]] = reasons.get(str(r).split(":")[0], 0) + 1
@@ -122,13 +114,13 @@ def _num(x: float) -> str:
 
 def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90")) -> str:
     """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics."""
-    head = [*summary.groups, "n", "success"]
+    head = [*summary.groups, "n", "completed", "success"]
     for m in summary.metrics:
         head += [f"{m} {s}" for s in stats]
     lines = []
     for row in summary.rows:
         cells = [str(row[g]) if not isinstance(row[g], float) else _num(row[g]) for g in summary.groups]
-        cells += [str(row["n"]), f"{100 * row['success']:.0f} %"]
+        cells += [str(row["n"]), f"{100 * row['completed']:.0f} %", f"{100 * row['success']:.0f} %"]
         for m in summary.metrics:
             cells += [_num(row[m][s]) if row[m] else "-" for s in stats]
         lines.append(cells)
@@ -145,6 +137,11 @@ def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90
 # ------------------------------------------------------------------------------ figures
 def _ok(results: Results) -> np.ndarray:
     return results.table["status"] == "ok"
+
+
+def _success(results: Results) -> np.ndarray:
+    t = results.table
+    return (np.asarray(t["success"]) == 1) if "success" in t.dtype.names else _ok(results)
 
 
 def _order(values) -> list:
@@ -167,7 +164,7 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
         sel = (keys == g) & ok & np.isfinite(y)
         data.append(y[sel])
         n = int((keys == g).sum())
-        labels.append(f"{g}\n{int(((keys == g) & ok).sum())}/{n} ok")
+        labels.append(f"{g}\n{int(((keys == g) & ok).sum())}/{n} completed")
     fig = new_figure((max(5.0, 1.6 * len(groups) + 2), 4.5))
     ax = fig.subplots()
     ax.boxplot([d if d.size else np.array([np.nan]) for d in data], showfliers=True)
@@ -180,7 +177,7 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
     ax.set_ylabel(_label(metric))
     ax.set_xlabel(by)
     ax.grid(alpha=0.3, axis="y")
-    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (successful runs)")
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (completed runs)")
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
@@ -196,6 +193,7 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
         raise InputError(f"heat maps need swept (grid) parameters: {x!r} has {len(xv)} values, {y!r} {len(yv)}")
     panels = _order(column(results, by)) if by else [None]
     ok = _ok(results)
+    won = _success(results)
     vals = None if metric == "success" else np.asarray(column(results, metric), dtype=float)
     fig = new_figure((4.2 * len(panels) + 1.2, 4.0))
     axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
@@ -209,7 +207,7 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
                 if not sel.any():
                     continue
                 if vals is None:
-                    Z[i, j] = ok[sel].mean()
+                    Z[i, j] = won[sel].mean()
                 else:
                     z = vals[sel & ok]
                     z = z[~np.isnan(z)]
@@ -244,7 +242,7 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
     """Success rate against ``x``, one curve per ``by`` value (a parameter with many values is binned by quantiles)."""
     path = figure_path(path)
     xs = np.asarray(column(results, x), dtype=float)
-    ok = _ok(results)
+    ok = _success(results)
     values = np.unique(xs)
     if values.size > bins:
         edges = np.unique(np.quantile(xs, np.linspace(0, 1, bins + 1)))
@@ -287,8 +285,11 @@ def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=N
     res = path_or_results if isinstance(path_or_results, Results) else read_results(path_or_results)
     summ = summarize(res, by, metrics)
     text = format_table(summ, markdown=markdown)
+    bounds = res.spec.get("success") or {}
+    crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
     head = (f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}, "
-            f"{int(_ok(res).sum())} ok ({100 * _ok(res).mean():.1f} %)" if len(res) else "no runs")
+            f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
+            f"({100 * _success(res).mean():.1f} %){crit}" if len(res) else "no runs")
     text = head + "\n" + text
     figures: list[Path] = []
     if out is None or not len(res):

@@ -14,7 +14,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ..errors import InputError
+from ..errors import InputError, UnknownNameError
 from .backends import Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec
@@ -114,6 +114,9 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
         raise InputError(f"limit must be an integer >= 0, got {limit!r}")
     names = xi_names_of(spec)
     columns = columns_of(spec, names)
+    for k in spec.success:
+        if k not in columns or k in ("status", "reason", "success"):
+            raise UnknownNameError("metric of [success]", k, metric_columns(spec.metrics, names, spec.extras)[2:-1])
     meta = {"name": spec.name, "fingerprint": spec.fingerprint, "spec": spec.to_dict(), "params": list(param_columns(spec)),
             "metrics": list(metric_columns(spec.metrics, names, spec.extras)), "names": list(names), "n_runs": spec.n_runs}
     payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts

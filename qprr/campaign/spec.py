@@ -15,7 +15,8 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   ``seed`` (overrides the derived seed); any other name is a scenario option (or a parameter of
   the callable);
 * ``metrics`` kept per run (:mod:`qprr.campaign.metrics`) and ``extras`` (names of
-  ``SimResult.metrics`` entries to keep as columns).
+  ``SimResult.metrics`` entries to keep as columns); ``success``: upper bounds on metric
+  columns (e.g. ``rmse_position = 0.5``) that a completed run must meet to count as a success.
 
 Reproducibility: run ``i`` draws its random parameters from ``SeedSequence(seed, spawn_key=(i, 0))``
 and gets the simulation seed ``SeedSequence(seed, spawn_key=(i, 1))``: the table depends on the
@@ -61,7 +62,7 @@ METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
 
 _SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "options", "grid", "random", "metrics", "extras",
-              "description")
+              "success", "description")
 
 
 def _number(x, what: str) -> float:
@@ -197,6 +198,7 @@ class CampaignSpec:
     random: Mapping[str, Distribution] = field(default_factory=dict)
     metrics: tuple[str, ...] = METRICS
     extras: tuple[str, ...] = ()
+    success: Mapping[str, float] = field(default_factory=dict)
     description: str = ""
     base_dir: str = "."
 
@@ -218,6 +220,9 @@ class CampaignSpec:
         for m in self.metrics:
             if m not in METRICS:
                 raise UnknownNameError("metric", m, METRICS)
+        if not isinstance(self.success, Mapping):
+            raise InputError(f"[success] must be a table metric = upper bound, got {self.success!r}")
+        object.__setattr__(self, "success", {k: _number(v, f"success bound of {k!r}") for k, v in self.success.items()})
         seen: dict[str, str] = {}
         for where in ("options", "grid", "random"):
             for k in getattr(self, where):
@@ -317,7 +322,7 @@ class CampaignSpec:
         out["scenario" if self.scenario is not None else "callable"] = self.scenario if self.scenario is not None else self.callable
         out.update(platform=self.platform, seed=self.seed, samples=self.samples, options=dict(self.options),
                    grid={k: list(v) for k, v in self.grid.items()}, random={k: d.to_dict() for k, d in self.random.items()},
-                   metrics=list(self.metrics), extras=list(self.extras))
+                   metrics=list(self.metrics), extras=list(self.extras), success=dict(self.success))
         if self.description:
             out["description"] = self.description
         return out

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import inspect
 import math
 import sys
 import time
@@ -112,8 +113,14 @@ def build_context(payload: Payload) -> Context:
             return sc.run(platform=platform, controller=run.params.get("controller"), **extra, **options)
     else:
         fn = _load_callable(spec, payload.source)
+        try:
+            takes_platform = len(inspect.signature(fn).parameters) >= 3
+        except (TypeError, ValueError):
+            takes_platform = False
 
         def target(run: Run) -> SimResult:
+            if takes_platform:  # (params, seed, platform): the platform built once per worker
+                return fn(dict(run.params), run.seed, platform)
             return fn(dict(run.params), run.seed)
 
     return Context(spec, platform.xi_names, target)
@@ -137,7 +144,8 @@ def execute(ctx: Context, run: Run) -> dict[str, object]:
     wall = time.perf_counter() - t0
     row: dict[str, object] = {"run": run.index, "seed": run.seed}
     row.update(params_row(spec, run.params))
-    row.update(metrics_of(result, spec.metrics, ctx.names, spec.extras, status=status, reason=reason, wall_time=wall))
+    row.update(metrics_of(result, spec.metrics, ctx.names, spec.extras, status=status, reason=reason, wall_time=wall,
+                          success=spec.success))
     return row
 
 
