@@ -88,6 +88,8 @@ class ResultStore:
                                  f"this one {meta.get('fingerprint')!r}): choose another output or start afresh (--fresh)")
             if list(old.get("columns", [])) != list(columns):
                 raise InputError(f"{str(self.path)!r} has other columns than this campaign's: choose another output or --fresh")
+            if not self.parquet:
+                _drop_cut_line(self.path)
             table = read_results(self.path).table
             self.rows_before = len(table)
             self.done = {int(r) for r, s in zip(table["run"], table["status"]) if s != "error"}
@@ -149,6 +151,14 @@ class ResultStore:
 
 def _plain(v):
     return v.item() if isinstance(v, np.generic) else v
+
+
+def _drop_cut_line(path: Path) -> None:
+    """Remove a last line cut short by a crash (no final newline): its run is done again."""
+    with path.open("rb+") as fh:
+        data = fh.read()
+        if data and not data.endswith(b"\n"):
+            fh.truncate(data.rfind(b"\n") + 1)
 
 
 def _remove(path: Path) -> None:
