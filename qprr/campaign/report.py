@@ -3,7 +3,8 @@
 * :func:`summarize`: per group (default: the controller and the grid parameters) the number of
   runs, the success rate and, over the successful runs, median / mean / 90th percentile / max of
   each metric; :func:`format_table` prints it as text or Markdown.
-* :func:`box_plot` (a metric per controller, or per any column), :func:`heat_map` (a metric's
+* :func:`box_plot` (a metric per controller, or per any column), :func:`metric_curve` (a
+  metric's median against a swept parameter, per controller), :func:`heat_map` (a metric's
   median or the success rate over two swept parameters, one panel per controller),
   :func:`success_curve` (success rate against a parameter, one curve per controller; a random
   parameter is binned by quantiles).  Figures go through :func:`qprr.viz.new_figure` (no pyplot).
@@ -270,6 +271,53 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
     return path
 
 
+def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
+                 log: bool | None = None) -> Path:
+    """Median of ``metric`` against the swept parameter ``x`` (band: 25th-75th percentile), one curve per ``by`` value.
+
+    Completed runs only; ``inf`` values (e.g. never recovered) are drawn at the top edge as crosses."""
+    path = figure_path(path)
+    xs = np.asarray(column(results, x), dtype=float)
+    ys = np.asarray(column(results, metric), dtype=float)
+    ok = _ok(results)
+    values = np.unique(xs)
+    if values.size > 40:
+        raise InputError(f"metric curves need a swept (grid) parameter: {x!r} has {values.size} values")
+    fig = new_figure((6.5, 4.2))
+    ax = fig.subplots()
+    panels = _order(column(results, by)) if by else [None]
+    finite_all = ys[ok & np.isfinite(ys)]
+    if log is None:
+        log = finite_all.size > 0 and finite_all.min() > 0 and finite_all.max() / finite_all.min() > 100
+    top = finite_all.max() * (3.0 if log else 1.1) if finite_all.size else 1.0
+    for p in panels:
+        sel_p = ok if p is None else ok & (column(results, by) == p)
+        med, lo, hi, infs = [], [], [], []
+        for v in values:
+            z = ys[sel_p & (xs == v)]
+            infs.append(bool(np.any(np.isposinf(z))))
+            z = z[~np.isnan(z)]
+            med.append(np.median(z) if z.size else np.nan)
+            lo.append(np.percentile(z, 25) if z.size else np.nan)
+            hi.append(np.percentile(z, 75) if z.size else np.nan)
+        med, lo, hi = (np.where(np.isposinf(a), np.nan, a) for a in (np.array(med), np.array(lo), np.array(hi)))
+        line, = ax.plot(values, med, "o-", label=str(p) if p is not None else None)
+        ax.fill_between(values, lo, hi, color=line.get_color(), alpha=0.15)
+        if any(infs):
+            ax.plot(values[np.array(infs)], np.full(int(np.sum(infs)), top), "x", color=line.get_color(), ms=8)
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(f"median {_label(metric)}")
+    ax.grid(alpha=0.3)
+    if by:
+        ax.legend(title=by, fontsize=8)
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
 def _numeric(results: Results, name: str) -> bool:
     return results.table[name].dtype.kind in "fiu"
 
@@ -307,11 +355,15 @@ def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=N
     for x in ([curve] if curve else varying):
         figures.append(success_curve(res, x, out / f"{stem}-success-{x}.png", by=by_ctrl))
     grid = [p for p in res.params if p in res.spec.get("grid", {}) and p != "controller" and _numeric(res, p)]
+    if grid:
+        for m in summ.metrics:
+            figures.append(metric_curve(res, grid[0], m, out / f"{stem}-curve-{m}.png", by=by_ctrl))
     hm = tuple(heatmap) if heatmap else (tuple(grid[:2]) if len(grid) >= 2 else None)
     if hm:
-        figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-success.png", by=by_ctrl))
+        hb = None if "controller" in hm else by_ctrl
+        figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-success.png", by=hb))
         if summ.metrics:
-            figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-{summ.metrics[0]}.png", metric=summ.metrics[0], by=by_ctrl))
+            figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-{summ.metrics[0]}.png", metric=summ.metrics[0], by=hb))
     md = [f"# {stem}", "", head, "", format_table(summ, markdown=True), ""]
     md += [f"![{p.stem}]({p.name})" for p in figures]
     (out / "summary.md").write_text("\n".join(md) + "\n")
