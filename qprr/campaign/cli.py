@@ -50,7 +50,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
     try:
         text, figures = report(args.results, args.out, by=args.by, metrics=args.metric, heatmap=args.heatmap, curve=args.curve,
-                               markdown=args.markdown)
+                               scatter=args.scatter, markdown=args.markdown)
     except (QprrError, KeyError, ValueError) as exc:
         return _fail("qprr campaign report", f"{type(exc).__name__}: {exc}")
     print(text)
@@ -101,6 +101,8 @@ def register_cli(sub) -> None:
                    "recovery_time when present)")
     r.add_argument("--heatmap", nargs=2, default=None, metavar=("X", "Y"), help="two swept parameters for the heat maps")
     r.add_argument("--curve", default=None, metavar="X", help="parameter of the success-rate curve (default: every numeric one)")
+    r.add_argument("--scatter", nargs=2, action="append", default=None, metavar=("X", "METRIC"),
+                   help="a scatter plot of METRIC against parameter X, coloured by the first group column (repeatable)")
     r.add_argument("--markdown", action="store_true", help="print the table as Markdown")
     r.set_defaults(func=_cmd_report)
 

@@ -7,7 +7,8 @@
   metric's median against a swept parameter, per controller), :func:`heat_map` (a metric's
   median or the success rate over two swept parameters, one panel per controller),
   :func:`success_curve` (success rate against a parameter, one curve per controller; a random
-  parameter is binned by quantiles).  Figures go through :func:`qprr.viz.new_figure` (no pyplot).
+  parameter is binned by quantiles), :func:`scatter_plot` (a metric against any parameter).
+  Figures go through :func:`qprr.viz.new_figure` (no pyplot).
 * :func:`report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
 
 Statistics of a metric are taken over the completed runs (status ``ok``), skipping NaN;
@@ -28,7 +29,9 @@ from ..viz import figure_path, new_figure
 from .store import Results, read_results
 
 UNITS = {"rmse_x": "m", "rmse_y": "m", "rmse_z": "m", "rmse_position": "m", "rmse_r0": "m", "x_cm_max": "m",
-         "saturation": "fraction of ticks", "recovery_time": "s", "wall_time": "s", "t_end": "s"}
+         "saturation": "fraction of ticks", "recovery_time": "s", "wall_time": "s", "t_end": "s", "mass": "kg",
+         "model.payload": "kg", "recovery_peak_position": "m", "recovery_peak_angle": "rad", "mass_estimate_error": "kg",
+         "x": "m", "y": "m", "z": "m", "theta2_d": "rad", "noise": "x (6.27) amplitude"}
 
 
 def column(results: Results, name: str) -> np.ndarray:
@@ -96,9 +99,9 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
         for m in metrics:
             x = values[m][idx][ok]
             x = x[~np.isnan(x)]
-            if x.size:
-                row[m] = {"median": float(np.median(x)), "mean": float(np.mean(x)), "p90": float(np.percentile(x, 90)),
-                          "max": float(np.max(x))}
+            if x.size:  # order statistics without interpolation: inf (never recovered) stays inf
+                row[m] = {"median": float(np.median(x) if np.all(np.isfinite(x)) else np.percentile(x, 50, method="nearest")),
+                          "mean": float(np.mean(x)), "p90": float(np.percentile(x, 90, method="nearest")), "max": float(np.max(x))}
             else:
                 row[m] = None
         rows.append(row)
@@ -290,21 +293,26 @@ def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "
     if log is None:
         log = finite_all.size > 0 and finite_all.min() > 0 and finite_all.max() / finite_all.min() > 100
     top = finite_all.max() * (3.0 if log else 1.1) if finite_all.size else 1.0
-    for p in panels:
+    any_inf = False
+    for k, p in enumerate(panels):
         sel_p = ok if p is None else ok & (column(results, by) == p)
         med, lo, hi, infs = [], [], [], []
         for v in values:
             z = ys[sel_p & (xs == v)]
             infs.append(bool(np.any(np.isposinf(z))))
             z = z[~np.isnan(z)]
-            med.append(np.median(z) if z.size else np.nan)
-            lo.append(np.percentile(z, 25) if z.size else np.nan)
-            hi.append(np.percentile(z, 75) if z.size else np.nan)
+            med.append(np.percentile(z, 50, method="nearest") if z.size else np.nan)
+            lo.append(np.percentile(z, 25, method="nearest") if z.size else np.nan)
+            hi.append(np.percentile(z, 75, method="nearest") if z.size else np.nan)
         med, lo, hi = (np.where(np.isposinf(a), np.nan, a) for a in (np.array(med), np.array(lo), np.array(hi)))
         line, = ax.plot(values, med, "o-", label=str(p) if p is not None else None)
         ax.fill_between(values, lo, hi, color=line.get_color(), alpha=0.15)
-        if any(infs):
-            ax.plot(values[np.array(infs)], np.full(int(np.sum(infs)), top), "x", color=line.get_color(), ms=8)
+        if any(infs):  # a cross per curve at the top edge, staggered so that curves do not hide each other
+            any_inf = True
+            y_inf = top * (1.25**k if log else 1.0 + 0.04 * k)
+            ax.plot(values[np.array(infs)], np.full(int(np.sum(infs)), y_inf), "x", color=line.get_color(), ms=8)
+    if any_inf:
+        ax.plot([], [], "kx", label="inf (e.g. never recovered)")
     if log:
         ax.set_yscale("log")
     ax.set_xlabel(_label(x))
@@ -318,17 +326,48 @@ def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "
     return path
 
 
+def scatter_plot(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
+                 log: bool | None = None) -> Path:
+    """``metric`` against any parameter ``x`` (e.g. a random one), one colour per ``by`` value; completed runs."""
+    path = figure_path(path)
+    xs = np.asarray(column(results, x), dtype=float)
+    ys = np.asarray(column(results, metric), dtype=float)
+    ok = _ok(results) & np.isfinite(ys)
+    fig = new_figure((6.5, 4.2))
+    ax = fig.subplots()
+    panels = _order(column(results, by)) if by else [None]
+    for p in panels:
+        sel = ok if p is None else ok & (column(results, by) == p)
+        ax.plot(xs[sel], ys[sel], "o", ms=4, alpha=0.7, label=f"{by} = {p}" if p is not None else None)
+    y = ys[ok]
+    if log is None:
+        log = y.size > 0 and y.min() > 0 and y.max() / y.min() > 100
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(_label(metric))
+    ax.grid(alpha=0.3)
+    if by:
+        ax.legend(fontsize=8)
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
 def _numeric(results: Results, name: str) -> bool:
     return results.table[name].dtype.kind in "fiu"
 
 
-def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None,
+def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None,
            markdown: bool = False) -> tuple[str, list[Path]]:
     """Summary text (and, with ``out``, ``summary.md`` and the figures in that folder); returns (text, figure paths).
 
     Figures: a box plot per metric (per controller, if there is one); a success-rate curve per
-    numeric parameter that varies (or ``curve``); a heat map of the success rate and of the
-    first metric over ``heatmap`` = (x, y), default the first two numeric grid parameters.
+    numeric parameter that varies (or ``curve``); a metric curve per metric against the first
+    numeric grid parameter; a heat map of the success rate and of the first metric over
+    ``heatmap`` = (x, y), default the first two numeric grid parameters; ``scatter`` = (x,
+    metric) pairs: scatter plots coloured by ``by`` (the first group column).
     """
     res = path_or_results if isinstance(path_or_results, Results) else read_results(path_or_results)
     summ = summarize(res, by, metrics)
@@ -364,6 +403,9 @@ def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=N
         figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-success.png", by=hb))
         if summ.metrics:
             figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-{summ.metrics[0]}.png", metric=summ.metrics[0], by=hb))
+    colour = summ.groups[0] if summ.groups else None
+    for x, m in scatter or ():
+        figures.append(scatter_plot(res, x, m, out / f"{stem}-scatter-{m}-{x}.png", by=colour))
     md = [f"# {stem}", "", head, "", format_table(summ, markdown=True), ""]
     md += [f"![{p.stem}]({p.name})" for p in figures]
     (out / "summary.md").write_text("\n".join(md) + "\n")
