@@ -78,6 +78,16 @@ def test_runs_enumerate_the_grid_last_name_fastest_with_seeded_draws():
     assert [bigger.run(i) for i in range(8)] == runs  # adding runs leaves the earlier ones as they were
 
 
+def test_paired_samples_share_draws_and_seeds_across_grid_points():
+    spec = CampaignSpec.from_mapping({**SMALL, "paired": True})
+    runs = list(spec.runs())
+    for k in range(2):
+        same = [r for r in runs if r.index % 2 == k]
+        assert len({r.seed for r in same}) == 1 and len({r.params["model.mass"] for r in same}) == 1
+    assert runs[0].seed != runs[1].seed
+    assert spec.fingerprint != CampaignSpec.from_mapping(SMALL).fingerprint
+
+
 def test_an_explicit_seed_parameter_is_the_run_seed():
     spec = CampaignSpec.from_mapping({**SMALL, "grid": {"seed": [4, 5]}, "random": {}})
     assert [r.seed for r in spec.runs()] == [4, 4, 5, 5]

@@ -8,7 +8,9 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   ``"path/to/file.py:function"`` (a relative path is taken from the specification's folder);
 * ``options``: fixed parameters of every run; ``grid``: lists of values, every combination is
   run (the last name varies fastest); ``random``: :class:`Distribution` s, drawn anew for each
-  run; ``samples``: runs per grid point (each with its own draws and seed);
+  run; ``samples``: runs per grid point (each with its own draws and seed); ``paired = true``:
+  the k-th sample of every grid point gets the same draws and seed (common random numbers:
+  controllers or gains are compared on identical missions, errors and noise);
 * parameter names: ``controller``; ``model.mass``, ``model.arm_mass``, ``model.inertia``,
   ``model.kappa``, ``model.f_max``, ``model.payload`` (:class:`qprr.sim.mismatch.ModelError`:
   the plant is a perturbed copy of the platform, the controller keeps the nominal model);
@@ -19,7 +21,8 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   columns (e.g. ``rmse_position = 0.5``) that a completed run must meet to count as a success.
 
 Reproducibility: run ``i`` draws its random parameters from ``SeedSequence(seed, spawn_key=(i, 0))``
-and gets the simulation seed ``SeedSequence(seed, spawn_key=(i, 1))``: the table depends on the
+and gets the simulation seed ``SeedSequence(seed, spawn_key=(i, 1))`` (``i`` modulo ``samples``
+when paired): the table depends on the
 specification only, never on the number of workers or the order in which runs finish, and
 adding runs does not change the earlier ones.
 
@@ -61,8 +64,8 @@ METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
 
-_SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "options", "grid", "random", "metrics", "extras",
-              "success", "description")
+_SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "paired", "options", "grid", "random", "metrics",
+              "extras", "success", "description")
 
 
 def _number(x, what: str) -> float:
@@ -199,6 +202,7 @@ class CampaignSpec:
     metrics: tuple[str, ...] = METRICS
     extras: tuple[str, ...] = ()
     success: Mapping[str, float] = field(default_factory=dict)
+    paired: bool = False
     description: str = ""
     base_dir: str = "."
 
@@ -211,6 +215,8 @@ class CampaignSpec:
             raise InputError(f"seed must be an integer >= 0, got {self.seed!r}")
         if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
             raise InputError(f"samples must be an integer >= 1, got {self.samples!r}")
+        if not isinstance(self.paired, bool):
+            raise InputError(f"paired must be true or false, got {self.paired!r}")
         object.__setattr__(self, "options", dict(self.options))
         object.__setattr__(self, "grid", {k: _grid_values(k, v) for k, v in self.grid.items()})
         rnd = {k: v if isinstance(v, Distribution) else Distribution.from_mapping(v, k) for k, v in self.random.items()}
@@ -302,10 +308,11 @@ class CampaignSpec:
             point, j = divmod(point, len(self.grid[k]))
             chosen[k] = self.grid[k][j]
         params: dict[str, object] = {**dict(self.options), **{k: chosen[k] for k in self.grid}}
-        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(index, 0)))
+        key = index % self.samples if self.paired else index  # paired: the k-th sample of every grid point alike
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(key, 0)))
         for k, d in self.random.items():
             params[k] = d.sample(rng)
-        derived = int(np.random.SeedSequence(self.seed, spawn_key=(index, 1)).generate_state(1, dtype=np.uint32)[0])
+        derived = int(np.random.SeedSequence(self.seed, spawn_key=(key, 1)).generate_state(1, dtype=np.uint32)[0])
         seed = params["seed"] if "seed" in params else derived
         if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
             raise InputError(f"run {index}: seed must be an integer, got {seed!r}")
@@ -323,6 +330,8 @@ class CampaignSpec:
         out.update(platform=self.platform, seed=self.seed, samples=self.samples, options=dict(self.options),
                    grid={k: list(v) for k, v in self.grid.items()}, random={k: d.to_dict() for k, d in self.random.items()},
                    metrics=list(self.metrics), extras=list(self.extras), success=dict(self.success))
+        if self.paired:
+            out["paired"] = True
         if self.description:
             out["description"] = self.description
         return out
