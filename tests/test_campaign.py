@@ -173,6 +173,22 @@ def test_same_table_on_a_dask_local_cluster(tmp_path):
     _same_tables(a.results.table, b.results.table)
 
 
+@pytest.mark.slow
+def test_same_table_on_a_running_scheduler_and_locally_for_a_larger_campaign(tmp_path):
+    """40 runs of 2 s with random model errors: local processes, and a client on a scheduler address (--scheduler)."""
+    distributed = pytest.importorskip("distributed")
+    import logging
+
+    spec = CampaignSpec.from_mapping({**SMALL, "samples": 10, "options": {"duration": 2.0},
+                                      "random": {**SMALL["random"], "model.kappa": {"dist": "normal", "mean": 1.0, "std": 0.05}}})
+    a = run_campaign(spec, tmp_path / "a.csv", backend="local", workers=2, progress=False)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
+                                  silence_logs=logging.ERROR) as cluster:
+        b = run_campaign(spec, tmp_path / "b.csv", backend="dask", scheduler=cluster.scheduler_address, progress=False)
+    assert a.executed == b.executed == 40
+    _same_tables(a.results.table, b.results.table)
+
+
 def test_interrupted_campaign_resumes_with_only_the_missing_runs(tmp_path):
     spec = CampaignSpec.from_mapping(SMALL)
     out = tmp_path / "r.csv"
