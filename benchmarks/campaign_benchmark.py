@@ -28,9 +28,9 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
 sys.path.insert(1, str(Path(__file__).resolve().parent.parent))  # this checkout's qprr (the workers inherit sys.path)
 
-from machine import machine_lines  # noqa: E402
+from machine import machine_lines
 
-from qprr.campaign import CampaignSpec, make_backend, run_campaign  # noqa: E402
+from qprr.campaign import CampaignSpec, make_backend, run_campaign
 
 
 def spec(name: str, runs: int, duration: float) -> CampaignSpec:

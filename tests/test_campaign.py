@@ -208,6 +208,16 @@ def test_interrupted_campaign_resumes_with_only_the_missing_runs(tmp_path):
     assert run_campaign(other, out, backend="inline", fresh=True, progress=False).executed == 8
 
 
+def test_one_writer_per_results_file(tmp_path):
+    from qprr.campaign.store import ResultStore
+
+    first = ResultStore(tmp_path / "r.csv", ("run", "status"), {"fingerprint": "a"})
+    with pytest.raises(InputError, match="another campaign is writing"):
+        ResultStore(tmp_path / "r.csv", ("run", "status"), {"fingerprint": "a"})
+    first.close()
+    ResultStore(tmp_path / "r.csv", ("run", "status"), {"fingerprint": "a"}).close()  # free again
+
+
 def test_failures_and_bugs_are_rows_with_their_reason(tmp_path):
     (tmp_path / "user.py").write_text(USER_FILE)
     spec = CampaignSpec.from_mapping({"name": "fail", "callable": "user.py:target", "grid": {"kind": ["fly", "raise", "none"],

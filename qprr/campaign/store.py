@@ -9,6 +9,7 @@
   and pandas read the folder as one table.
 * ``RESULTS.meta.json`` beside it: the specification, its fingerprint, the parameter and metric
   columns.  Resuming checks the fingerprint: results of another specification are never mixed.
+  ``RESULTS.lock``: a second campaign writing to the same file is refused while the first runs.
 
 Rows are keyed by ``run``: when a run appears twice (a row of status ``error`` - a worker that
 died - is re-run on resume), the last row wins.  :func:`read_results` returns a
@@ -74,6 +75,15 @@ class ResultStore:
 
     def __init__(self, path: str | Path, columns: tuple[str, ...], meta: dict, *, fresh: bool = False) -> None:
         self.path = check_output(path)
+        self._lock = _lock(self.path)  # one writer per results file (released when this process ends, even by a crash)
+        try:
+            self._open(columns, meta, fresh)
+        except BaseException:
+            if self._lock is not None:
+                self._lock.close()
+            raise
+
+    def _open(self, columns, meta: dict, fresh: bool) -> None:
         self.columns = tuple(columns)
         self.meta = dict(meta, columns=list(columns), format_version=META_VERSION)
         self.parquet = self.path.suffix == ".parquet"
@@ -141,12 +151,30 @@ class ResultStore:
         if self._file is not None:
             self._file.close()
             self._file = None
+        if self._lock is not None:
+            self._lock.close()
+            self._lock = None
 
     def __enter__(self) -> ResultStore:
         return self
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _lock(path: Path):
+    """An exclusive advisory lock on ``<stem>.lock`` beside the results (POSIX; elsewhere no lock)."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - Windows
+        return None
+    fh = path.with_name(path.stem + ".lock").open("a")
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError as exc:
+        fh.close()
+        raise InputError(f"another campaign is writing to {str(path)!r} (lock {fh.name!r}): wait for it or choose another output") from exc
+    return fh
 
 
 def _plain(v):
