@@ -287,6 +287,19 @@ def test_flight_target_with_defaults_is_the_static_idc_scenario():
     np.testing.assert_array_equal(a.u, b.u)
 
 
+def test_flight_target_parameters_reach_the_run():
+    base = flight({"duration": 0.5}, 3)
+    noisy = flight({"duration": 0.5, "noise": 1.0}, 3)
+    assert np.abs(base.u_ext).max() == 0  # (6.27) noise of the noise scenario: +-0.3 on x..r0, +-0.01 on theta2, theta3
+    assert 0.29 < np.abs(noisy.u_ext[:, :7]).max() <= 0.3 and 0.0095 < np.abs(noisy.u_ext[:, 7:]).max() <= 0.01
+    heavy = flight({"duration": 0.5, "model.mass": 1.1}, 3)
+    assert heavy.xi[-1, 2] < base.xi[-1, 2]  # a heavier plant climbs less under the nominal model's thrust
+    fast = flight({"duration": 0.5, "bandwidth.position": 2.0}, 3)
+    assert not np.array_equal(fast.u, base.u)
+    with pytest.raises(UnknownNameError, match="bandwidth.position"):
+        flight({"bandwith.position": 2.0}, 3)
+
+
 @pytest.mark.parametrize("s", [0.5, 2.0])
 def test_bandwidth_factor_scales_every_loop_pole(s):
     g = gains.idc()
