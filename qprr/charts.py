@@ -582,7 +582,8 @@ class FloatWriter:
         self.n = as_int(n, "n", lo=0)
         self._pack = struct.Struct(f"={self.n}d").pack_into
 
-    def __reduce__(self):  # the bound pack_into cannot be pickled: rebuild it (copies and pickles of its owners work)
+    def __reduce__(self):
+        """Pickle as ``FloatWriter(n)``: the bound ``struct.Struct`` method is rebuilt, not serialised."""
         return (FloatWriter, (self.n,))
 
     def __call__(self, arr: np.ndarray, values) -> np.ndarray:
@@ -771,6 +772,16 @@ class State:
         self._qv = None
         self._wq, self._wv = FloatWriter(n + 1), FloatWriter(n)
         self.sf, self.cf, self.st, self.ct = 0.0, 1.0, 0.0, 1.0
+
+    def __getstate__(self) -> dict:
+        """Pickle the values, not the compiled methods (rebuilt for ``n_arm`` by :meth:`__setstate__`)."""
+        return {k: getattr(self, k) for k in self.__slots__ if k not in _HOT_NAMES and hasattr(self, k)}
+
+    def __setstate__(self, state: dict) -> None:
+        for name, fn in _hot_methods(state["n_arm"]).items():
+            setattr(self, name, MethodType(fn, self))
+        for k, v in state.items():
+            setattr(self, k, v)
 
     @property
     def R(self) -> np.ndarray:

@@ -20,6 +20,7 @@ The thesis's scenarios are listed by ``qprr simulate --help`` and :mod:`qprr.the
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -61,8 +62,18 @@ class Scenario:
     summary: Callable[[SimResult], list[str]] | None = None
     figures: Mapping[str, str] = field(default_factory=dict)
 
-    def run(self, platform: Platform | None = None, controller: str | None = None, progress: bool = False, **options) -> SimResult:
-        """Run with ``options`` (unknown names raise :class:`UnknownNameError` listing the valid ones)."""
+    @property
+    def takes_plant(self) -> bool:
+        """Whether the runner can fly a plant other than the controller's model (a ``plant`` argument)."""
+        return "plant" in inspect.signature(self.runner).parameters
+
+    def run(self, platform: Platform | None = None, controller: str | None = None, progress: bool = False,
+            plant: Platform | None = None, **options) -> SimResult:
+        """Run with ``options`` (unknown names raise :class:`UnknownNameError` listing the valid ones).
+
+        ``plant``: fly another robot than the controller's model ``platform`` (model errors,
+        :func:`qprr.sim.mismatch.perturbed`); only scenarios whose runner takes ``plant`` do
+        (:attr:`takes_plant`)."""
         for key in options:
             if key not in self.options:
                 raise UnknownNameError(f"option of scenario {self.name!r}", key, tuple(self.options))
@@ -74,6 +85,11 @@ class Scenario:
         values.update(options)
         if "law" in values and values["law"] not in LAWS:  # checked here: a trajectory may not use it (the spiral)
             raise UnknownNameError("transition law", values["law"], LAWS)
+        if plant is not None:
+            if not self.takes_plant:
+                raise InputError(f"scenario {self.name!r} flies its model: it takes no plant (model errors); "
+                                 f"scenarios that do: {', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}")
+            values["plant"] = plant
         return self.runner(platform=platform, controller=controller or self.controllers[0], progress=progress, **values)
 
 
@@ -88,7 +104,7 @@ _COMMON = {
 """Options every flight scenario takes."""
 
 
-def _hover_reach(platform, controller, progress, duration, dt, integrator, seed, law, z, reach_fraction):
+def _hover_reach(platform, controller, progress, duration, dt, integrator, seed, law, z, reach_fraction, plant=None):
     from .platforms import load
 
     platform = load() if platform is None else platform
@@ -100,7 +116,7 @@ def _hover_reach(platform, controller, progress, duration, dt, integrator, seed,
     trajectory = hover_and_reach(platform, (0.0, 0.0, z), q_arm, law=law)
     ctrl = make_controller(controller, platform)
     return simulate(platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, progress=progress,
-                    scenario="hover-reach")
+                    scenario="hover-reach", plant=plant)
 
 
 def _ee_impedance(platform, controller, progress, **options):

@@ -216,6 +216,16 @@ class InverseDynamicsController(Controller):
         self.dt = 1e-3
         self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
 
+    def __getstate__(self) -> dict:
+        """Pickle without the bound ``struct`` method (rebuilt by :meth:`__setstate__`): controllers go to worker processes."""
+        state = self.__dict__.copy()
+        del state["_pack"]
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._pack = struct.Struct(f"={self.platform.n_arm}d").pack
+
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         self.dt = dt = check_reset(self, state, ref, dt)
         n = self.platform.n_xi

@@ -62,6 +62,7 @@ from . import disturbances as dist
 from .actuators import RotorDynamics
 from .environment import Environment
 from .integrators import STEPPERS, make_stepper
+from .mismatch import PlantActuators, check_plant
 from .payload import PayloadSchedule, PlantPayload
 from .result import SimResult, Status
 from .stops import apply_joint_stops
@@ -124,6 +125,7 @@ def simulate(
     joint_stops: bool = True,
     progress: bool = False,
     scenario: str = "custom",
+    plant: Platform | None = None,
 ) -> SimResult:
     """Run ``controller`` on ``platform`` along ``trajectory`` for ``duration`` seconds.
 
@@ -149,6 +151,10 @@ def simulate(
     joint_stops : the arm joints end at mechanical stops at their limits
         (:func:`qprr.sim.stops.apply_joint_stops`; flag bit 4); the initial state and every arm
         reference must then lie inside the limits.
+    plant : the robot simulated when it differs from ``platform``, the model the controller and
+        the allocation know (model errors, :func:`qprr.sim.mismatch.perturbed`): same structure,
+        other inertias and rotor constants; its rotors produce the commanded thrusts within their
+        own bounds (:class:`qprr.sim.mismatch.PlantActuators`).  Default: ``platform``.
 
     Returns a :class:`~qprr.sim.result.SimResult`; raises :class:`~qprr.errors.DivergenceError`
     (with ``.result``) on NaN or runaway states.  See the module docstring for the step.
@@ -208,14 +214,15 @@ def simulate(
     # per-tick disturbance rows as float lists (None where zero): no array indexing in the loop
     u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if has_ext else None
 
-    plant_payload = PlantPayload(platform, payload or PayloadSchedule())
+    robot = platform if plant is None else check_plant(platform, plant)  # what is integrated
+    plant_payload = PlantPayload(robot, payload or PayloadSchedule())
     model = plant_payload.model  # the plant: a copy, never platform.model
     data = model.createData()
     plant_payload.apply_until(0.0)
     alloc = allocator if allocator is not None else Allocator(platform)
     if not isinstance(alloc, Allocator) or alloc.platform.nv != platform.nv or alloc.n_rotors != platform.n_rotors:
         raise InputError("allocator must be a qprr.actuation.Allocator of this platform")
-    N = np.array(platform.actuation_matrix)
+    N = np.array(robot.actuation_matrix)
     n_act = platform.n_actuators
 
     # logs (the world CoM is logged raw; x_cm in B and the unallocated force
@@ -263,7 +270,7 @@ def simulate(
     payload_pending = plant_payload.pending
     b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
     add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
-    allocate = alloc.allocate_into
+    allocate = alloc.allocate_into if robot is platform else PlantActuators(alloc, robot).allocate_into
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     arm_range = range(n_arm)
     t_start = time.perf_counter()

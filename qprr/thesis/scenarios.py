@@ -27,6 +27,7 @@ order-5 polynomial the text names and ``law="thesis"`` the rational formula prin
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -116,14 +117,14 @@ def _q_prr(platform):
 
 
 def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = None, bsg: bool = False):
-    def runner(platform, controller, progress, duration, dt, integrator, seed, law):
+    def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None):
         platform = _q_prr(platform)
         ctrl = flight_controller(controller, platform)
         if bsg:
             ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
         dist = disturbance() if disturbance is not None else None
         return simulate(platform, ctrl, trajectory(law), duration, dt=dt, integrator=integrator, disturbance=dist, seed=seed,
-                        progress=progress, scenario=scenario)
+                        progress=progress, scenario=scenario, plant=plant)
 
     return runner
 
@@ -249,7 +250,7 @@ PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "
 
 def payload_drop(platform=None, controller: str = "payload-idc", progress: bool = False, *, mass: float = 0.1,
                  release_time: float = 18.0, duration: float = 25.0, mission: str = "thesis", arm_target=(-0.04, 0.3, 0.5),
-                 arm_phase=(15.0, 17.0), noise: float = 0.0, seed: int = SEED) -> SimResult:
+                 arm_phase=(15.0, 17.0), noise: float = 0.0, seed: int = SEED, plant=None) -> SimResult:
     """Carry ``mass`` at the end effector and release it at ``release_time`` (Thesis Sec. 6.4.2.3).
 
     ``mission="thesis"``: climb/x/y flight of Sec. 6.3.1.4 to (3, 6, 10) m, arm to ``arm_target``
@@ -260,7 +261,8 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     nominal model: the payload is a disturbance to all three).  ``noise`` > 0 adds the white noise of Thesis (6.27),
     uniform in [-noise, noise] N, on the three forces (seeded by ``seed``).  The result's
     ``series`` hold ``payload_mass`` and ``mass_estimate``; its ``metrics`` the ``release_time``,
-    the ``recovery_time`` (:class:`Recovery`) and ``mass_estimate_error``.
+    the ``recovery_time`` (:class:`Recovery`) and ``mass_estimate_error``.  ``plant``: the robot
+    flown when it differs from the controllers' model ``platform`` (:func:`qprr.sim.simulate`).
     """
     platform = _q_prr(platform)
     missions = ("thesis", "hover")
@@ -298,7 +300,7 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
     disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
     res = simulate(platform, ctrl, trajectory, duration, dt=DT, payload=schedule, disturbance=disturbance, seed=seed,
-                   progress=progress, scenario="payload-drop")
+                   progress=progress, scenario="payload-drop", plant=plant)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
     if getattr(ctrl, "mode", None) == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
@@ -307,7 +309,7 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
         res.metrics["mass_estimate_error"] = (float(np.max(np.abs(res.series["mass_estimate"][before] - mass)))
                                               if before.any() else math.nan)
     res.metrics["release_time"] = float(release_time)
-    rec = recovery(res, release_time, platform.total_mass, platform.g)
+    rec = recovery(res, release_time, (platform if plant is None else plant).total_mass, platform.g)  # the real robot's weight
     res.metrics.update({"recovery_time": rec.time, "recovery_peak_position": rec.peak_position,
                         "recovery_peak_angle": rec.peak_angle, "recovery_peak_thrust": rec.peak_thrust})
     return res
@@ -609,6 +611,7 @@ def summary(result: SimResult) -> list[str]:
 
 
 def _interaction(fn: Callable) -> Callable:
+    @functools.wraps(fn)  # its signature tells Scenario.takes_plant
     def runner(platform, controller, progress, **options):
         return fn(platform, controller, progress, **options)
 

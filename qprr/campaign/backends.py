@@ -1,0 +1,182 @@
+"""Execution backends on existing engines: a local process pool (default) or Dask distributed.
+
+Both expose the same three calls the campaign loop uses - :meth:`Backend.submit`,
+:meth:`Backend.as_completed`, :meth:`Backend.close` - so a campaign has one code path:
+
+* :class:`LocalBackend`: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
+  start method (no fork of a process holding Pinocchio objects), one process per core by
+  default;
+* :class:`DaskBackend`: a :class:`dask.distributed.Client` on a running scheduler
+  (``tcp://host:port``, the workers must have qprr installed) or on a
+  :class:`dask.distributed.LocalCluster` started here, listening on the loopback interface
+  only, one single-threaded worker process per core (extra ``qprr[dask]``);
+* :class:`InlineBackend`: runs each task in the calling process as it is submitted
+  (debugging, tests).
+
+Tasks are module-level functions with plain-data arguments (:func:`qprr.campaign.worker.run_one`).
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import logging
+import multiprocessing
+import os
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Iterable, Iterator
+
+from ..errors import InputError, MissingDependencyError, UnknownNameError
+
+BACKENDS = ("local", "dask", "inline")
+
+
+def default_workers() -> int:
+    """One worker per core this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def _workers(n) -> int:
+    if n is None:
+        return default_workers()
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise InputError(f"workers must be an integer >= 1, got {n!r}")
+    return n
+
+
+class Backend(ABC):
+    """Where the runs execute (module docstring)."""
+
+    name = "backend"
+    workers = 1
+
+    @abstractmethod
+    def submit(self, fn: Callable, *args, key: str | None = None):
+        """Schedule ``fn(*args)``; returns a future (``.result()``, ``.cancel()``)."""
+
+    @abstractmethod
+    def as_completed(self, futures: Iterable) -> Iterator:
+        """The futures in the order they finish."""
+
+    @abstractmethod
+    def close(self) -> None:
+        """Release the workers (pending tasks are cancelled)."""
+
+    def describe(self) -> str:
+        return f"{self.name}, {self.workers} worker{'s' if self.workers != 1 else ''}"
+
+    def __enter__(self) -> Backend:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class LocalBackend(Backend):
+    """A pool of ``workers`` spawned processes on this machine (default: one per core)."""
+
+    name = "local"
+
+    def __init__(self, workers: int | None = None) -> None:
+        self.workers = _workers(workers)
+        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"))
+
+    def submit(self, fn, *args, key=None):
+        return self._pool.submit(fn, *args)
+
+    def as_completed(self, futures):
+        return cf.as_completed(futures)
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class InlineBackend(Backend):
+    """Runs every task at once in this process (a finished future per task)."""
+
+    name = "inline"
+
+    def submit(self, fn, *args, key=None):
+        fut: cf.Future = cf.Future()
+        try:
+            fut.set_result(fn(*args))
+        except Exception as exc:  # the loop reports it like a failed remote task
+            fut.set_exception(exc)
+        return fut
+
+    def as_completed(self, futures):
+        return iter(list(futures))
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+
+def _dask():
+    try:
+        import distributed
+    except ImportError as exc:
+        raise MissingDependencyError("dask.distributed", "running campaigns on Dask", "pip install 'qprr[dask]' "
+                                     "(or pip install 'dask[distributed]')") from exc
+    return distributed
+
+
+class DaskBackend(Backend):
+    """A Dask client: on ``scheduler`` ("tcp://host:port") or on a new loopback-only LocalCluster of ``workers`` processes."""
+
+    name = "dask"
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
+        distributed = _dask()
+        self._cluster = None
+        if scheduler is not None:
+            if not isinstance(scheduler, str) or "://" not in scheduler:
+                raise InputError(f"scheduler must be an address such as tcp://10.0.0.5:8786, got {scheduler!r}")
+            if workers is not None:
+                raise InputError("workers applies to a LocalCluster; a running scheduler has its own workers")
+            try:
+                self._client = distributed.Client(scheduler, timeout="20s")
+            except OSError as exc:
+                raise InputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
+            self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
+            self.address = scheduler
+        else:
+            self.workers = _workers(workers)
+            self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                                     host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
+            self._client = distributed.Client(self._cluster)
+            self.address = self._cluster.scheduler_address
+        self._as_completed = distributed.as_completed
+
+    def submit(self, fn, *args, key=None):
+        return self._client.submit(fn, *args, key=key, pure=False)
+
+    def as_completed(self, futures):
+        return iter(self._as_completed(list(futures)))
+
+    def describe(self) -> str:
+        where = "LocalCluster" if self._cluster is not None else "scheduler"
+        return f"dask ({where} {self.address}), {self.workers} worker{'s' if self.workers != 1 else ''}"
+
+    def close(self) -> None:
+        self._client.close()
+        if self._cluster is not None:
+            self._cluster.close()
+
+
+def make_backend(name: str = "local", workers: int | None = None, scheduler: str | None = None) -> Backend:
+    """A backend by name: "local" (default), "dask" (``scheduler`` address or a LocalCluster) or "inline"."""
+    if scheduler is not None and name != "dask":
+        name = "dask" if name == "local" else name
+        if name != "dask":
+            raise InputError(f"a scheduler address needs the dask backend, not {name!r}")
+    if name == "local":
+        return LocalBackend(workers)
+    if name == "dask":
+        return DaskBackend(workers, scheduler)
+    if name == "inline":
+        if workers not in (None, 1):
+            raise InputError(f"the inline backend runs in this process: workers must be 1, got {workers!r}")
+        return InlineBackend()
+    raise UnknownNameError("campaign backend", name, BACKENDS)

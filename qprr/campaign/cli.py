@@ -1,0 +1,112 @@
+"""``qprr campaign run SPEC`` / ``qprr campaign report RESULTS`` / ``qprr campaign show SPEC``.
+
+Registered in :func:`qprr.cli.build_parser` through :func:`register_cli`.  Exit codes: 0 done
+(every run saved, whatever their status), 1 interrupted, 2 bad arguments or specification.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+from ..errors import QprrError
+
+
+def _fail(prog: str, message: str) -> int:
+    print(f"{prog}: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    from .report import report
+    from .runner import run_campaign
+    from .spec import CampaignSpec
+
+    prog = "qprr campaign run"
+    try:
+        spec = CampaignSpec.load(args.spec)
+        output = args.output or f"{spec.name}.csv"
+        t0 = time.perf_counter()
+        done = run_campaign(spec, output, backend=args.backend, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
+                            limit=args.limit, progress=not args.quiet)
+    except (QprrError, KeyError, ValueError) as exc:
+        return _fail(prog, f"{type(exc).__name__}: {exc}")
+    wall = time.perf_counter() - t0
+    res = done.results
+    ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
+    print(f"{spec.name}: {done.executed} runs now ({done.skipped} resumed), {len(res)}/{spec.n_runs} saved in {done.path}; "
+          f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.backend}")
+    if args.report:
+        text, figures = report(res, args.report)
+        print(text)
+        for f in figures:
+            print(f"figure {f}")
+    return 1 if done.interrupted else 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from .report import report
+
+    try:
+        text, figures = report(args.results, args.out, by=args.by, metrics=args.metric, heatmap=args.heatmap, curve=args.curve,
+                               scatter=args.scatter, markdown=args.markdown)
+    except (QprrError, KeyError, ValueError) as exc:
+        return _fail("qprr campaign report", f"{type(exc).__name__}: {exc}")
+    print(text)
+    for f in figures:
+        print(f"figure {f}")
+    return 0
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    from .spec import CampaignSpec
+
+    try:
+        spec = CampaignSpec.load(args.spec)
+    except (QprrError, KeyError, ValueError) as exc:
+        return _fail("qprr campaign show", f"{type(exc).__name__}: {exc}")
+    target = f"scenario {spec.scenario}" if spec.scenario else f"callable {spec.callable}"
+    print(f"{spec.name}: {target} on {spec.platform}; {spec.n_points} grid points x {spec.samples} samples = {spec.n_runs} runs; "
+          f"seed {spec.seed}; fingerprint {spec.fingerprint}")
+    for run in (spec.run(i) for i in range(min(args.first, spec.n_runs))):
+        print(f"  run {run.index}: seed {run.seed}, " + ", ".join(f"{k}={v!r}" for k, v in run.params.items()))
+    return 0
+
+
+def register_cli(sub) -> None:
+    """Add ``campaign run | report | show`` to the ``qprr`` command line."""
+    p = sub.add_parser("campaign", help="Monte-Carlo campaigns: many seeded runs, locally or on Dask, with robustness tables",
+                       description="Monte-Carlo campaigns (qprr.campaign): run a specification, report its results.")
+    csub = p.add_subparsers(dest="campaign_command", required=True, parser_class=type(p))
+
+    r = csub.add_parser("run", help="run a campaign specification (.toml/.json); resumes an interrupted one")
+    r.add_argument("spec", help="campaign specification (.toml or .json), e.g. examples/campaigns/quickstart.toml")
+    r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
+    r.add_argument("--backend", default="local", choices=("local", "dask", "inline"),
+                   help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)")
+    r.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
+    r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
+    r.add_argument("--limit", type=int, default=None, help="run at most this many of the missing runs")
+    r.add_argument("--report", default=None, metavar="DIR", help="then write the report (summary.md + figures) into DIR")
+    r.add_argument("--quiet", action="store_true", help="no progress line")
+    r.set_defaults(func=_cmd_run)
+
+    r = csub.add_parser("report", help="summary table and figures of a campaign's results")
+    r.add_argument("results", help="results file (.csv or .parquet) with its .meta.json beside it")
+    r.add_argument("--out", default=None, metavar="DIR", help="write summary.md and the figures (PNG) into DIR")
+    r.add_argument("--by", nargs="+", default=None, help="group columns (default: controller and the grid parameters)")
+    r.add_argument("--metric", nargs="+", default=None, help="metric columns (default: rmse_position, x_cm_max, saturation, "
+                   "recovery_time when present)")
+    r.add_argument("--heatmap", nargs=2, default=None, metavar=("X", "Y"), help="two swept parameters for the heat maps")
+    r.add_argument("--curve", default=None, metavar="X", help="parameter of the success-rate curve (default: every numeric one)")
+    r.add_argument("--scatter", nargs=2, action="append", default=None, metavar=("X", "METRIC"),
+                   help="a scatter plot of METRIC against parameter X, coloured by the first group column (repeatable)")
+    r.add_argument("--markdown", action="store_true", help="print the table as Markdown")
+    r.set_defaults(func=_cmd_report)
+
+    r = csub.add_parser("show", help="print a specification's size, fingerprint and first runs")
+    r.add_argument("spec", help="campaign specification (.toml or .json)")
+    r.add_argument("--first", type=int, default=5, help="runs to list (default 5)")
+    r.set_defaults(func=_cmd_show)

@@ -1,0 +1,412 @@
+"""Summaries and figures of a campaign's table (:class:`qprr.campaign.store.Results`).
+
+* :func:`summarize`: per group (default: the controller and the grid parameters) the number of
+  runs, the success rate and, over the successful runs, median / mean / 90th percentile / max of
+  each metric; :func:`format_table` prints it as text or Markdown.
+* :func:`box_plot` (a metric per controller, or per any column), :func:`metric_curve` (a
+  metric's median against a swept parameter, per controller), :func:`heat_map` (a metric's
+  median or the success rate over two swept parameters, one panel per controller),
+  :func:`success_curve` (success rate against a parameter, one curve per controller; a random
+  parameter is binned by quantiles), :func:`scatter_plot` (a metric against any parameter).
+  Figures go through :func:`qprr.viz.new_figure` (no pyplot).
+* :func:`report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
+
+Statistics of a metric are taken over the completed runs (status ``ok``), skipping NaN;
+``inf`` (e.g. a payload that never recovers) counts in medians and percentiles.  The success
+rate is the mean of the ``success`` column (completed and within the specification's bounds).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, UnknownNameError
+from ..viz import figure_path, new_figure
+from .store import Results, read_results
+
+UNITS = {"rmse_x": "m", "rmse_y": "m", "rmse_z": "m", "rmse_position": "m", "rmse_r0": "m", "x_cm_max": "m",
+         "saturation": "fraction of ticks", "recovery_time": "s", "wall_time": "s", "t_end": "s", "mass": "kg",
+         "model.payload": "kg", "recovery_peak_position": "m", "recovery_peak_angle": "rad", "mass_estimate_error": "kg",
+         "x": "m", "y": "m", "z": "m", "theta2_d": "rad", "noise": "x (6.27) amplitude"}
+
+
+def column(results: Results, name: str) -> np.ndarray:
+    """A column of the table (:class:`UnknownNameError` lists them)."""
+    t = results.table
+    if name not in t.dtype.names:
+        raise UnknownNameError("results column", name, t.dtype.names)
+    return t[name]
+
+
+def _label(name: str) -> str:
+    u = UNITS.get(name)
+    if u is None and name.startswith("rmse_"):
+        u = "rad"
+    return f"{name} [{u}]" if u else name
+
+
+def default_groups(results: Results) -> tuple[str, ...]:
+    """The controller and the grid parameters (random ones are what a group averages over)."""
+    grid = list(results.spec.get("grid", {}))
+    out = [c for c in results.params if c == "controller" or c in grid]
+    return tuple(dict.fromkeys(out))
+
+
+def default_metrics(results: Results) -> tuple[str, ...]:
+    out = []
+    names = results.table.dtype.names
+    if "rmse_position" in names:
+        out.append("rmse_position")
+    for m in ("x_cm_max", "saturation", "recovery_time"):
+        if m in names and np.any(np.isfinite(np.asarray(results.table[m], dtype=float))):
+            out.append(m)
+    return tuple(out)
+
+
+@dataclass
+class Summary:
+    """Per-group statistics: ``groups`` (column names), ``rows`` (one dict per group), ``metrics``."""
+
+    groups: tuple[str, ...]
+    metrics: tuple[str, ...]
+    rows: list[dict]
+
+
+def summarize(results: Results, by=None, metrics=None) -> Summary:
+    """Statistics of ``metrics`` per group of the ``by`` columns (defaults: :func:`default_groups`, :func:`default_metrics`)."""
+    by = default_groups(results) if by is None else tuple(by)
+    metrics = default_metrics(results) if metrics is None else tuple(metrics)
+    keys = [column(results, b) for b in by]
+    values = {m: np.asarray(column(results, m), dtype=float) for m in metrics}
+    status = results.table["status"] if len(results) else np.array([], dtype=str)
+    groups: dict[tuple, list[int]] = {}
+    for i in range(len(results)):
+        groups.setdefault(tuple(k[i].item() if hasattr(k[i], "item") else k[i] for k in keys), []).append(i)
+    rows = []
+    for g in sorted(groups, key=lambda x: tuple((0, v) if isinstance(v, (int, float)) else (1, str(v)) for v in x)):
+        idx = np.array(groups[g])
+        ok = status[idx] == "ok"
+        row = dict(zip(by, g))
+        row.update(n=int(idx.size), ok=int(ok.sum()), completed=float(ok.mean()), success=float(_success(results)[idx].mean()))
+        reasons = {}
+        for r in results.table["reason"][idx][~ok]:
+            reasons[str(r).split(":")[0]] = reasons.get(str(r).split(":")[0], 0) + 1
+        row["failures"] = ", ".join(f"{k} x{v}" for k, v in sorted(reasons.items(), key=lambda kv: -kv[1]))
+        for m in metrics:
+            x = values[m][idx][ok]
+            x = x[~np.isnan(x)]
+            if x.size:  # order statistics without interpolation: inf (never recovered) stays inf
+                row[m] = {"median": float(np.median(x) if np.all(np.isfinite(x)) else np.percentile(x, 50, method="nearest")),
+                          "mean": float(np.mean(x)), "p90": float(np.percentile(x, 90, method="nearest")), "max": float(np.max(x))}
+            else:
+                row[m] = None
+        rows.append(row)
+    return Summary(by, metrics, rows)
+
+
+def _num(x: float) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return "-"
+    if math.isinf(x):
+        return "inf"
+    return f"{x:.3g}" if abs(x) >= 1e-3 or x == 0 else f"{x:.2e}"
+
+
+def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90")) -> str:
+    """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics."""
+    head = [*summary.groups, "n", "completed", "success"]
+    for m in summary.metrics:
+        head += [f"{m} {s}" for s in stats]
+    lines = []
+    for row in summary.rows:
+        cells = [str(row[g]) if not isinstance(row[g], float) else _num(row[g]) for g in summary.groups]
+        cells += [str(row["n"]), f"{100 * row['completed']:.0f} %", f"{100 * row['success']:.0f} %"]
+        for m in summary.metrics:
+            cells += [_num(row[m][s]) if row[m] else "-" for s in stats]
+        lines.append(cells)
+    if markdown:
+        out = ["| " + " | ".join(head) + " |", "|" + "|".join("---" for _ in head) + "|"]
+        out += ["| " + " | ".join(c) + " |" for c in lines]
+        return "\n".join(out)
+    widths = [max(len(h), *(len(c[i]) for c in lines)) if lines else len(h) for i, h in enumerate(head)]
+    out = ["  ".join(h.rjust(w) for h, w in zip(head, widths)), "  ".join("-" * w for w in widths)]
+    out += ["  ".join(c.rjust(w) for c, w in zip(cells, widths)) for cells in lines]
+    return "\n".join(out)
+
+
+# ------------------------------------------------------------------------------ figures
+def _ok(results: Results) -> np.ndarray:
+    return results.table["status"] == "ok"
+
+
+def _success(results: Results) -> np.ndarray:
+    t = results.table
+    return (np.asarray(t["success"]) == 1) if "success" in t.dtype.names else _ok(results)
+
+
+def _order(values) -> list:
+    u = list(dict.fromkeys(v.item() if hasattr(v, "item") else v for v in values))
+    try:
+        return sorted(u)
+    except TypeError:
+        return u
+
+
+def box_plot(results: Results, metric: str, path, by: str = "controller", title: str | None = None, log: bool | None = None) -> Path:
+    """Box plot of ``metric`` over the successful runs, one box per value of ``by`` (n and success rate under each)."""
+    path = figure_path(path)
+    y = np.asarray(column(results, metric), dtype=float)
+    keys = column(results, by)
+    ok = _ok(results)
+    groups = _order(keys)
+    data, labels = [], []
+    for g in groups:
+        sel = (keys == g) & ok & np.isfinite(y)
+        data.append(y[sel])
+        n = int((keys == g).sum())
+        labels.append(f"{g}\n{int(((keys == g) & ok).sum())}/{n} completed")
+    fig = new_figure((max(5.0, 1.6 * len(groups) + 2), 4.5))
+    ax = fig.subplots()
+    ax.boxplot([d if d.size else np.array([np.nan]) for d in data], showfliers=True)
+    ax.set_xticks(range(1, len(groups) + 1), labels)
+    finite = np.concatenate([d for d in data if d.size]) if any(d.size for d in data) else np.array([])
+    if log is None:
+        log = finite.size > 0 and finite.min() > 0 and finite.max() / finite.min() > 100
+    if log:
+        ax.set_yscale("log")
+    ax.set_ylabel(_label(metric))
+    ax.set_xlabel(by)
+    ax.grid(alpha=0.3, axis="y")
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (completed runs)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
+def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by: str | None = "controller",
+             title: str | None = None) -> Path:
+    """Median of ``metric`` (or the success rate, ``metric="success"``) over the grid of ``x`` and ``y``, one panel per ``by`` value."""
+    path = figure_path(path)
+    xs, ys = column(results, x), column(results, y)
+    xv, yv = _order(xs), _order(ys)
+    if len(xv) > 40 or len(yv) > 40:
+        raise InputError(f"heat maps need swept (grid) parameters: {x!r} has {len(xv)} values, {y!r} {len(yv)}")
+    panels = _order(column(results, by)) if by else [None]
+    ok = _ok(results)
+    won = _success(results)
+    vals = None if metric == "success" else np.asarray(column(results, metric), dtype=float)
+    fig = new_figure((4.2 * len(panels) + 1.2, 4.0))
+    axes = np.atleast_1d(fig.subplots(1, len(panels), squeeze=False)[0])
+    grids = []
+    for p in panels:
+        sel_p = np.ones(len(results), bool) if p is None else column(results, by) == p
+        Z = np.full((len(yv), len(xv)), np.nan)
+        for i, yy in enumerate(yv):
+            for j, xx in enumerate(xv):
+                sel = sel_p & (xs == xx) & (ys == yy)
+                if not sel.any():
+                    continue
+                if vals is None:
+                    Z[i, j] = won[sel].mean()
+                else:
+                    z = vals[sel & ok]
+                    z = z[~np.isnan(z)]
+                    Z[i, j] = np.median(z) if z.size else np.nan
+        grids.append(Z)
+    finite = np.concatenate([Z[np.isfinite(Z)] for Z in grids]) if grids else np.array([])
+    vmin, vmax = (0.0, 1.0) if vals is None else ((finite.min(), finite.max()) if finite.size else (0.0, 1.0))
+    use_log = vals is not None and finite.size and finite.min() > 0 and vmax / vmin > 100
+    from matplotlib.colors import LogNorm, Normalize
+
+    norm = LogNorm(vmin, vmax) if use_log else Normalize(vmin, vmax)
+    im = None
+    for ax, p, Z in zip(axes, panels, grids):
+        im = ax.imshow(Z, origin="lower", aspect="auto", cmap="viridis" if vals is not None else "RdYlGn", norm=norm)
+        ax.set_xticks(range(len(xv)), [_num(v) if isinstance(v, float) else str(v) for v in xv], rotation=45)
+        ax.set_yticks(range(len(yv)), [_num(v) if isinstance(v, float) else str(v) for v in yv])
+        ax.set_xlabel(x)
+        ax.set_ylabel(y)
+        ax.set_title(str(p) if p is not None else "")
+        for i in range(len(yv)):
+            for j in range(len(xv)):
+                if np.isfinite(Z[i, j]):
+                    ax.text(j, i, f"{100 * Z[i, j]:.0f}%" if vals is None else _num(Z[i, j]), ha="center", va="center", fontsize=7,
+                            color="w" if norm(Z[i, j]) < 0.5 else "k")
+    fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric)}")
+    fig.suptitle(title or f"{results.spec.get('name', '')}: {'success rate' if vals is None else 'median ' + metric} over {x} x {y}")
+    fig.savefig(path, dpi=90, bbox_inches="tight")
+    return path
+
+
+def success_curve(results: Results, x: str, path, by: str | None = "controller", bins: int = 8, title: str | None = None) -> Path:
+    """Success rate against ``x``, one curve per ``by`` value (a parameter with many values is binned by quantiles)."""
+    path = figure_path(path)
+    xs = np.asarray(column(results, x), dtype=float)
+    ok = _success(results)
+    values = np.unique(xs)
+    if values.size > bins:
+        edges = np.unique(np.quantile(xs, np.linspace(0, 1, bins + 1)))
+        idx = np.clip(np.searchsorted(edges, xs, side="right") - 1, 0, edges.size - 2)
+        centers = np.array([xs[idx == k].mean() if np.any(idx == k) else np.nan for k in range(edges.size - 1)])
+    else:
+        idx = np.searchsorted(values, xs)
+        centers = values
+    fig = new_figure((6.5, 4.2))
+    ax = fig.subplots()
+    panels = _order(column(results, by)) if by else [None]
+    for p in panels:
+        sel_p = np.ones(len(results), bool) if p is None else column(results, by) == p
+        rate = [ok[sel_p & (idx == k)].mean() if np.any(sel_p & (idx == k)) else np.nan for k in range(centers.size)]
+        ax.plot(centers, rate, "o-", label=str(p) if p is not None else None)
+    ax.set_ylim(-0.03, 1.03)
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel("success rate")
+    ax.grid(alpha=0.3)
+    if by:
+        ax.legend(title=by)
+    ax.set_title(title or f"{results.spec.get('name', '')}: success rate against {x}")
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
+def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
+                 log: bool | None = None) -> Path:
+    """Median of ``metric`` against the swept parameter ``x`` (band: 25th-75th percentile), one curve per ``by`` value.
+
+    Completed runs only; ``inf`` values (e.g. never recovered) are drawn at the top edge as crosses."""
+    path = figure_path(path)
+    xs = np.asarray(column(results, x), dtype=float)
+    ys = np.asarray(column(results, metric), dtype=float)
+    ok = _ok(results)
+    values = np.unique(xs)
+    if values.size > 40:
+        raise InputError(f"metric curves need a swept (grid) parameter: {x!r} has {values.size} values")
+    fig = new_figure((6.5, 4.2))
+    ax = fig.subplots()
+    panels = _order(column(results, by)) if by else [None]
+    finite_all = ys[ok & np.isfinite(ys)]
+    if log is None:
+        log = finite_all.size > 0 and finite_all.min() > 0 and finite_all.max() / finite_all.min() > 100
+    top = finite_all.max() * (3.0 if log else 1.1) if finite_all.size else 1.0
+    any_inf = False
+    for k, p in enumerate(panels):
+        sel_p = ok if p is None else ok & (column(results, by) == p)
+        med, lo, hi, infs = [], [], [], []
+        for v in values:
+            z = ys[sel_p & (xs == v)]
+            infs.append(bool(np.any(np.isposinf(z))))
+            z = z[~np.isnan(z)]
+            med.append(np.percentile(z, 50, method="nearest") if z.size else np.nan)
+            lo.append(np.percentile(z, 25, method="nearest") if z.size else np.nan)
+            hi.append(np.percentile(z, 75, method="nearest") if z.size else np.nan)
+        med, lo, hi = (np.where(np.isposinf(a), np.nan, a) for a in (np.array(med), np.array(lo), np.array(hi)))
+        line, = ax.plot(values, med, "o-", label=str(p) if p is not None else None)
+        ax.fill_between(values, lo, hi, color=line.get_color(), alpha=0.15)
+        if any(infs):  # a cross per curve at the top edge, staggered so that curves do not hide each other
+            any_inf = True
+            y_inf = top * (1.25**k if log else 1.0 + 0.04 * k)
+            ax.plot(values[np.array(infs)], np.full(int(np.sum(infs)), y_inf), "x", color=line.get_color(), ms=8)
+    if any_inf:
+        ax.plot([], [], "kx", label="inf (e.g. never recovered)")
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(f"median {_label(metric)}")
+    ax.grid(alpha=0.3)
+    if by:
+        ax.legend(title=by, fontsize=8)
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
+def scatter_plot(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
+                 log: bool | None = None) -> Path:
+    """``metric`` against any parameter ``x`` (e.g. a random one), one colour per ``by`` value; completed runs."""
+    path = figure_path(path)
+    xs = np.asarray(column(results, x), dtype=float)
+    ys = np.asarray(column(results, metric), dtype=float)
+    ok = _ok(results) & np.isfinite(ys)
+    fig = new_figure((6.5, 4.2))
+    ax = fig.subplots()
+    panels = _order(column(results, by)) if by else [None]
+    for p in panels:
+        sel = ok if p is None else ok & (column(results, by) == p)
+        ax.plot(xs[sel], ys[sel], "o", ms=4, alpha=0.7, label=f"{by} = {p}" if p is not None else None)
+    y = ys[ok]
+    if log is None:
+        log = y.size > 0 and y.min() > 0 and y.max() / y.min() > 100
+    if log:
+        ax.set_yscale("log")
+    ax.set_xlabel(_label(x))
+    ax.set_ylabel(_label(metric))
+    ax.grid(alpha=0.3)
+    if by:
+        ax.legend(fontsize=8)
+    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
+    fig.tight_layout()
+    fig.savefig(path, dpi=90)
+    return path
+
+
+def _numeric(results: Results, name: str) -> bool:
+    return results.table[name].dtype.kind in "fiu"
+
+
+def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None,
+           markdown: bool = False) -> tuple[str, list[Path]]:
+    """Summary text (and, with ``out``, ``summary.md`` and the figures in that folder); returns (text, figure paths).
+
+    Figures: a box plot per metric (per controller, if there is one); a success-rate curve per
+    numeric parameter that varies (or ``curve``); a metric curve per metric against the first
+    numeric grid parameter; a heat map of the success rate and of the first metric over
+    ``heatmap`` = (x, y), default the first two numeric grid parameters; ``scatter`` = (x,
+    metric) pairs: scatter plots coloured by ``by`` (the first group column).
+    """
+    res = path_or_results if isinstance(path_or_results, Results) else read_results(path_or_results)
+    summ = summarize(res, by, metrics)
+    text = format_table(summ, markdown=markdown)
+    bounds = res.spec.get("success") or {}
+    crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
+    head = (f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}, "
+            f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
+            f"({100 * _success(res).mean():.1f} %){crit}" if len(res) else "no runs")
+    text = head + "\n" + text
+    figures: list[Path] = []
+    if out is None or not len(res):
+        return text, figures
+    out = Path(out)
+    if not out.parent.is_dir():
+        raise InputError(f"cannot write the report into {str(out)!r}: folder {str(out.parent)!r} does not exist")
+    out.mkdir(exist_ok=True)
+    stem = res.spec.get("name", "campaign")
+    by_ctrl = "controller" if "controller" in res.params else None
+    for m in summ.metrics:
+        if by_ctrl:
+            figures.append(box_plot(res, m, out / f"{stem}-box-{m}.png", by=by_ctrl))
+    varying = [p for p in res.params if p != "controller" and _numeric(res, p) and np.unique(res.table[p]).size > 1]
+    for x in ([curve] if curve else varying):
+        figures.append(success_curve(res, x, out / f"{stem}-success-{x}.png", by=by_ctrl))
+    grid = [p for p in res.params if p in res.spec.get("grid", {}) and p != "controller" and _numeric(res, p)]
+    if grid:
+        for m in summ.metrics:
+            figures.append(metric_curve(res, grid[0], m, out / f"{stem}-curve-{m}.png", by=by_ctrl))
+    hm = tuple(heatmap) if heatmap else (tuple(grid[:2]) if len(grid) >= 2 else None)
+    if hm:
+        hb = None if "controller" in hm else by_ctrl
+        figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-success.png", by=hb))
+        if summ.metrics:
+            figures.append(heat_map(res, hm[0], hm[1], out / f"{stem}-heat-{summ.metrics[0]}.png", metric=summ.metrics[0], by=hb))
+    colour = summ.groups[0] if summ.groups else None
+    for x, m in scatter or ():
+        figures.append(scatter_plot(res, x, m, out / f"{stem}-scatter-{m}-{x}.png", by=colour))
+    md = [f"# {stem}", "", head, "", format_table(summ, markdown=True), ""]
+    md += [f"![{p.stem}]({p.name})" for p in figures]
+    (out / "summary.md").write_text("\n".join(md) + "\n")
+    return text, figures

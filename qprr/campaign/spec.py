@@ -1,0 +1,395 @@
+"""A campaign specification: what to run, over which parameters, with which seeds (TOML / JSON / dict).
+
+A :class:`CampaignSpec` names a *target* and the parameters of its runs:
+
+* ``scenario``: a registered scenario (:data:`qprr.scenarios.SCENARIOS`), run as
+  ``run(name, controller, platform=..., plant=..., **options)``; or ``callable``: a function
+  ``(params, seed) -> SimResult`` given as ``"package.module:function"`` or
+  ``"path/to/file.py:function"`` (a relative path is taken from the specification's folder);
+* ``options``: fixed parameters of every run; ``grid``: lists of values, every combination is
+  run (the last name varies fastest); ``random``: :class:`Distribution` s, drawn anew for each
+  run; ``samples``: runs per grid point (each with its own draws and seed); ``paired = true``:
+  the k-th sample of every grid point gets the same draws and seed (common random numbers:
+  controllers or gains are compared on identical missions, errors and noise);
+* parameter names: ``controller``; ``model.mass``, ``model.arm_mass``, ``model.inertia``,
+  ``model.kappa``, ``model.f_max``, ``model.payload`` (:class:`qprr.sim.mismatch.ModelError`:
+  the plant is a perturbed copy of the platform, the controller keeps the nominal model);
+  ``seed`` (overrides the derived seed); any other name is a scenario option (or a parameter of
+  the callable);
+* ``metrics`` kept per run (:mod:`qprr.campaign.metrics`) and ``extras`` (names of
+  ``SimResult.metrics`` entries to keep as columns); ``success``: upper bounds on metric
+  columns (e.g. ``rmse_position = 0.5``) that a completed run must meet to count as a success.
+
+Reproducibility: run ``i`` draws its random parameters from ``SeedSequence(seed, spawn_key=(i, 0))``
+and gets the simulation seed ``SeedSequence(seed, spawn_key=(i, 1))`` (``i`` modulo ``samples``
+when paired): the table depends on the
+specification only, never on the number of workers or the order in which runs finish, and
+adding runs does not change the earlier ones.
+
+Example (TOML)::
+
+    name = "idc-payload"
+    scenario = "static-idc"
+    seed = 7
+    samples = 3
+    [options]
+    duration = 30.0
+    [grid]
+    controller = ["idc", "dsid", "mfc"]
+    "model.payload" = [0.0, 0.1, 0.2]
+    [random]
+    "model.mass" = { dist = "uniform", low = 0.9, high = 1.1 }
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError, MissingDependencyError, UnknownNameError
+from ..sim.mismatch import ModelError
+
+MODEL_PREFIX = "model."
+MODEL_PARAMS = tuple(MODEL_PREFIX + f.name for f in fields(ModelError))
+"""Parameters that perturb the plant (:class:`qprr.sim.mismatch.ModelError` fields)."""
+
+METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
+"""Metric groups a specification may keep (:func:`qprr.campaign.metrics.metrics_of`); default: all."""
+
+DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
+
+_SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "paired", "options", "grid", "random", "metrics",
+              "extras", "success", "description")
+
+
+def _number(x, what: str) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+        raise InputError(f"{what} must be a finite number, got {x!r}")
+    return float(x)
+
+
+@dataclass(frozen=True)
+class Distribution:
+    """A random parameter.
+
+    ``kind``: "uniform" (``low``, ``high``), "loguniform" (``low`` > 0, ``high``), "normal"
+    (``mean``, ``std``, optionally clipped to [``low``, ``high``]), "choice" (``values``,
+    equally likely) or "integers" (``low`` to ``high`` inclusive).
+    """
+
+    kind: str
+    low: float | None = None
+    high: float | None = None
+    mean: float | None = None
+    std: float | None = None
+    values: tuple = ()
+
+    def __post_init__(self) -> None:
+        k = self.kind
+        if k not in DISTRIBUTIONS:
+            raise UnknownNameError("distribution", k, DISTRIBUTIONS)
+        if k in ("uniform", "loguniform", "integers"):
+            if self.low is None or self.high is None:
+                raise InputError(f"a {k} distribution needs low and high, got low={self.low!r}, high={self.high!r}")
+            lo, hi = _number(self.low, f"{k} low"), _number(self.high, f"{k} high")
+            if not lo <= hi:
+                raise InputError(f"{k} distribution: low must be <= high, got low={lo!r}, high={hi!r}")
+            if k == "loguniform" and lo <= 0:
+                raise InputError(f"loguniform distribution: low must be > 0, got {lo!r}")
+            if k == "integers" and (lo != int(lo) or hi != int(hi)):
+                raise InputError(f"integers distribution: low and high must be integers, got {lo!r}, {hi!r}")
+        if k == "normal":
+            if self.mean is None or self.std is None:
+                raise InputError(f"a normal distribution needs mean and std, got mean={self.mean!r}, std={self.std!r}")
+            _number(self.mean, "normal mean")
+            if not _number(self.std, "normal std") >= 0:
+                raise InputError(f"normal distribution: std must be >= 0, got {self.std!r}")
+            if self.low is not None and self.high is not None and not _number(self.low, "low") <= _number(self.high, "high"):
+                raise InputError(f"normal distribution: low must be <= high, got {self.low!r}, {self.high!r}")
+        if k == "choice":
+            if not self.values:
+                raise InputError("a choice distribution needs a non-empty list of values")
+            object.__setattr__(self, "values", tuple(self.values))
+
+    @classmethod
+    def from_mapping(cls, d: Mapping, name: str) -> Distribution:
+        """``{dist = "uniform", low = 0.9, high = 1.1}`` (TOML) or the same dict."""
+        if not isinstance(d, Mapping):
+            raise InputError(f"random parameter {name!r} must be a table such as {{dist = \"uniform\", low = 0, high = 1}}, got {d!r}")
+        d = dict(d)
+        if "dist" not in d:
+            raise InputError(f"random parameter {name!r} needs dist = one of {', '.join(DISTRIBUTIONS)}")
+        kind = d.pop("dist")
+        allowed = {"low", "high", "mean", "std", "values"}
+        for key in d:
+            if key not in allowed:
+                raise UnknownNameError(f"field of random parameter {name!r}", key, sorted(allowed))
+        if "values" in d:
+            d["values"] = tuple(d["values"])
+        return cls(kind, **d)
+
+    def to_dict(self) -> dict:
+        out = {"dist": self.kind}
+        for key in ("low", "high", "mean", "std"):
+            if getattr(self, key) is not None:
+                out[key] = getattr(self, key)
+        if self.values:
+            out["values"] = list(self.values)
+        return out
+
+    def sample(self, rng: np.random.Generator):
+        """One draw (a Python float, int or choice value)."""
+        k = self.kind
+        if k == "uniform":
+            return float(rng.uniform(self.low, self.high))
+        if k == "loguniform":
+            return float(math.exp(rng.uniform(math.log(self.low), math.log(self.high))))
+        if k == "normal":
+            x = float(rng.normal(self.mean, self.std))
+            lo = -math.inf if self.low is None else self.low
+            hi = math.inf if self.high is None else self.high
+            return min(max(x, lo), hi)
+        if k == "integers":
+            return int(rng.integers(int(self.low), int(self.high), endpoint=True))
+        return self.values[int(rng.integers(len(self.values)))]
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a campaign: its index, its parameters (name -> value) and its simulation seed."""
+
+    index: int
+    params: Mapping[str, object]
+    seed: int
+
+
+def _grid_values(name: str, value) -> tuple:
+    if isinstance(value, Mapping):
+        keys = set(value)
+        if keys != {"start", "stop", "num"}:
+            raise InputError(f"grid parameter {name!r}: a list of values or {{start, stop, num}}, got keys {sorted(keys)}")
+        num = value["num"]
+        if isinstance(num, bool) or not isinstance(num, int) or num < 1:
+            raise InputError(f"grid parameter {name!r}: num must be an integer >= 1, got {num!r}")
+        return tuple(float(x) for x in np.linspace(_number(value["start"], "start"), _number(value["stop"], "stop"), num))
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+        raise InputError(f"grid parameter {name!r} must be a list of values, got {value!r}")
+    values = tuple(value)
+    if not values:
+        raise InputError(f"grid parameter {name!r} has no values")
+    return values
+
+
+@dataclass(frozen=True)
+class CampaignSpec:
+    """A campaign: a target, fixed/grid/random parameters, seeds and metrics (module docstring)."""
+
+    name: str
+    scenario: str | None = None
+    callable: str | None = None
+    platform: str = "q-prr"
+    seed: int = 0
+    samples: int = 1
+    options: Mapping[str, object] = field(default_factory=dict)
+    grid: Mapping[str, tuple] = field(default_factory=dict)
+    random: Mapping[str, Distribution] = field(default_factory=dict)
+    metrics: tuple[str, ...] = METRICS
+    extras: tuple[str, ...] = ()
+    success: Mapping[str, float] = field(default_factory=dict)
+    paired: bool = False
+    description: str = ""
+    base_dir: str = "."
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.name, str) or not self.name or any(c in self.name for c in "/\\"):
+            raise InputError(f"campaign name must be a non-empty string without slashes, got {self.name!r}")
+        if (self.scenario is None) == (self.callable is None):
+            raise InputError("a campaign needs exactly one target: scenario = NAME or callable = \"module:function\"")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise InputError(f"seed must be an integer >= 0, got {self.seed!r}")
+        if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
+            raise InputError(f"samples must be an integer >= 1, got {self.samples!r}")
+        if not isinstance(self.paired, bool):
+            raise InputError(f"paired must be true or false, got {self.paired!r}")
+        object.__setattr__(self, "options", dict(self.options))
+        object.__setattr__(self, "grid", {k: _grid_values(k, v) for k, v in self.grid.items()})
+        rnd = {k: v if isinstance(v, Distribution) else Distribution.from_mapping(v, k) for k, v in self.random.items()}
+        object.__setattr__(self, "random", rnd)
+        object.__setattr__(self, "metrics", tuple(self.metrics))
+        object.__setattr__(self, "extras", tuple(self.extras))
+        for m in self.metrics:
+            if m not in METRICS:
+                raise UnknownNameError("metric", m, METRICS)
+        if not isinstance(self.success, Mapping):
+            raise InputError(f"[success] must be a table metric = upper bound, got {self.success!r}")
+        object.__setattr__(self, "success", {k: _number(v, f"success bound of {k!r}") for k, v in self.success.items()})
+        seen: dict[str, str] = {}
+        for where in ("options", "grid", "random"):
+            for k in getattr(self, where):
+                if not isinstance(k, str) or not k:
+                    raise InputError(f"parameter names must be non-empty strings, got {k!r} in [{where}]")
+                if k in seen:
+                    raise InputError(f"parameter {k!r} is given twice: in [{seen[k]}] and in [{where}]")
+                seen[k] = where
+                if k.startswith(MODEL_PREFIX) and k not in MODEL_PARAMS:
+                    raise UnknownNameError("model-error parameter", k, MODEL_PARAMS)
+        if self.scenario is not None:
+            self._check_scenario()
+        elif not isinstance(self.callable, str) or ":" not in self.callable:
+            raise InputError(f"callable must be \"package.module:function\" or \"file.py:function\", got {self.callable!r}")
+        # every model-error combination must be valid (fails here, not in a worker)
+        for k, values in self.grid.items():
+            if k.startswith(MODEL_PREFIX):
+                for v in values:
+                    ModelError(**{k[len(MODEL_PREFIX):]: v})
+
+    def _check_scenario(self) -> None:
+        from ..scenarios import SCENARIOS
+
+        sc = SCENARIOS[self.scenario]  # UnknownNameError lists the scenarios
+        if self.platform != "q-prr" and sc.platforms is not None and self.platform not in sc.platforms:
+            raise InputError(f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform {self.platform!r}")
+        for k in self.parameter_names:
+            if k in ("controller", "seed") or k.startswith(MODEL_PREFIX):
+                continue
+            if k not in sc.options:
+                raise UnknownNameError(f"option of scenario {sc.name!r}", k, ("controller", "seed", *MODEL_PARAMS, *sc.options))
+        if any(k.startswith(MODEL_PREFIX) for k in self.parameter_names) and not sc.takes_plant:
+            raise InputError(f"scenario {sc.name!r} cannot fly a perturbed plant: model.* parameters need one of "
+                             f"{', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}")
+        if "seed" in self.parameter_names and "seed" not in sc.options:
+            raise InputError(f"scenario {sc.name!r} takes no seed")
+        for c in self._values("controller"):
+            if c not in sc.controllers:
+                raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controllers)
+
+    def _values(self, name: str) -> tuple:
+        if name in self.options:
+            return (self.options[name],)
+        if name in self.grid:
+            return self.grid[name]
+        if name in self.random and self.random[name].kind == "choice":
+            return self.random[name].values
+        return ()
+
+    # ------------------------------------------------------------------ parameters and runs
+    @property
+    def parameter_names(self) -> tuple[str, ...]:
+        """Every parameter given (fixed, grid, random)."""
+        return (*self.options, *self.grid, *self.random)
+
+    @property
+    def varying(self) -> tuple[str, ...]:
+        """The parameters that change between runs (grid then random), the columns of the results table."""
+        return (*self.grid, *self.random)
+
+    @property
+    def n_points(self) -> int:
+        return math.prod(len(v) for v in self.grid.values())
+
+    @property
+    def n_runs(self) -> int:
+        return self.n_points * self.samples
+
+    def run(self, index: int) -> Run:
+        """Run ``index`` (0 <= index < n_runs): grid point ``index // samples``, its random draws and seed."""
+        if isinstance(index, bool) or not isinstance(index, (int, np.integer)) or not 0 <= index < self.n_runs:
+            raise InputError(f"run index must be an integer in [0, {self.n_runs}), got {index!r}")
+        index = int(index)
+        point = index // self.samples
+        chosen = {}
+        for k in reversed(list(self.grid)):  # the last grid name varies fastest
+            point, j = divmod(point, len(self.grid[k]))
+            chosen[k] = self.grid[k][j]
+        params: dict[str, object] = {**dict(self.options), **{k: chosen[k] for k in self.grid}}
+        key = index % self.samples if self.paired else index  # paired: the k-th sample of every grid point alike
+        rng = np.random.default_rng(np.random.SeedSequence(self.seed, spawn_key=(key, 0)))
+        for k, d in self.random.items():
+            params[k] = d.sample(rng)
+        derived = int(np.random.SeedSequence(self.seed, spawn_key=(key, 1)).generate_state(1, dtype=np.uint32)[0])
+        seed = params["seed"] if "seed" in params else derived
+        if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
+            raise InputError(f"run {index}: seed must be an integer, got {seed!r}")
+        return Run(index, params, int(seed))
+
+    def runs(self) -> Iterator[Run]:
+        """Every run, in index order."""
+        return (self.run(i) for i in range(self.n_runs))
+
+    # ------------------------------------------------------------------ I/O
+    def to_dict(self) -> dict:
+        """The specification as plain data (TOML/JSON-able); :meth:`from_mapping` reads it back."""
+        out = {"name": self.name}
+        out["scenario" if self.scenario is not None else "callable"] = self.scenario if self.scenario is not None else self.callable
+        out.update(platform=self.platform, seed=self.seed, samples=self.samples, options=dict(self.options),
+                   grid={k: list(v) for k, v in self.grid.items()}, random={k: d.to_dict() for k, d in self.random.items()},
+                   metrics=list(self.metrics), extras=list(self.extras), success=dict(self.success))
+        if self.paired:
+            out["paired"] = True
+        if self.description:
+            out["description"] = self.description
+        return out
+
+    @property
+    def fingerprint(self) -> str:
+        """SHA-256 (16 hex digits) of :meth:`to_dict`: results files remember the specification they belong to."""
+        return hashlib.sha256(json.dumps(self.to_dict(), sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+    @classmethod
+    def from_mapping(cls, d: Mapping, base_dir: str | Path = ".") -> CampaignSpec:
+        """From a dict (what TOML/JSON give); unknown keys raise :class:`UnknownNameError`."""
+        if not isinstance(d, Mapping):
+            raise InputError(f"a campaign specification is a table, got {type(d).__name__}")
+        for k in d:
+            if k not in _SPEC_KEYS:
+                raise UnknownNameError("campaign specification key", k, _SPEC_KEYS)
+        if "name" not in d:
+            raise InputError("a campaign specification needs a name")
+        kw = dict(d)
+        for key in ("options", "grid", "random"):
+            if key in kw and not isinstance(kw[key], Mapping):
+                raise InputError(f"[{key}] must be a table of parameters, got {kw[key]!r}")
+        for key in ("metrics", "extras"):
+            if key in kw and (isinstance(kw[key], str) or not isinstance(kw[key], (list, tuple))):
+                raise InputError(f"{key} must be a list of names, got {kw[key]!r}")
+        return cls(**kw, base_dir=str(base_dir))
+
+    @classmethod
+    def load(cls, path: str | Path) -> CampaignSpec:
+        """Read a ``.toml`` or ``.json`` specification."""
+        path = Path(path)
+        if not path.is_file():
+            raise InputError(f"campaign specification {str(path)!r} does not exist")
+        text = path.read_text()
+        if path.suffix == ".toml":
+            try:
+                import tomllib
+            except ImportError:  # Python 3.10
+                try:
+                    import tomli as tomllib
+                except ImportError as exc:
+                    raise MissingDependencyError("tomli", "reading TOML campaign specifications on Python 3.10", "pip install tomli") from exc
+            try:
+                data = tomllib.loads(text)
+            except tomllib.TOMLDecodeError as exc:
+                raise InputError(f"{str(path)!r}: invalid TOML: {exc}") from exc
+        elif path.suffix == ".json":
+            try:
+                data = json.loads(text)
+            except json.JSONDecodeError as exc:
+                raise InputError(f"{str(path)!r}: invalid JSON: {exc}") from exc
+        else:
+            raise InputError(f"campaign specifications end in .toml or .json, got {str(path)!r}")
+        return cls.from_mapping(data, base_dir=path.resolve().parent)
+
+
+def model_error(params: Mapping[str, object]) -> ModelError | None:
+    """The :class:`ModelError` of a run's ``model.*`` parameters (None if it has none)."""
+    kw = {k[len(MODEL_PREFIX):]: v for k, v in params.items() if k.startswith(MODEL_PREFIX)}
+    return ModelError(**kw) if kw else None
