@@ -53,6 +53,7 @@ def generalized_wrench_xi(platform: Platform, data: pin.Data, xi, wrench_world, 
     h = [f; mu] in world axes at the frame origin (default: the end effector).  The Q-PRR's
     printed block form (6.59) and its correction are in :mod:`qprr.thesis.interaction`.
     """
+    check_model_data(platform, data)
     xi = ch.as_xi(xi, "xi", platform.n_xi)
     return ch.force_to_xi(xi, generalized_force_from_wrench(platform, data, ch.xi_to_q(xi), wrench_world, frame))
 
@@ -300,6 +301,7 @@ class IdealAllocator(Allocator):
         from .rotors import rotor_matrix
 
         ideal = ideal_pattern()
+        check_platform(platform)
         if platform.n_rotors != 18 or not np.allclose(platform.rotor_matrix, rotor_matrix(ideal), rtol=0, atol=1e-15):
             raise InputError(f"IdealAllocator needs a platform with qprr.rotors.ideal_wrench_set rotors, got {platform!r}")
         super().__init__(platform, weight_torque=1.0, clip_arm=clip_arm)

@@ -636,9 +636,10 @@ def from_urdf(
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
     to the last frame of the last arm joint of a serial arm.
     """
+    from .charts import as_real
+
     text, source = _urdf_text(urdf)
-    if not (isinstance(g, (int, float)) and math.isfinite(g) and g >= 0.0):  # g = 0: free flight (conservation tests)
-        raise InputError(f"g must be a finite number >= 0 m/s^2, got {g!r}")
+    g = as_real(g, "g", nonnegative=True, unit="m/s^2")  # g = 0: free flight (conservation tests)
     check_urdf_joints(text, source)
     if not allow_nonphysical:
         check_urdf_inertials(text, source)

@@ -112,7 +112,9 @@ def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | P
             raise InputError(f"the URDF {str(urdf)!r} needs its rotor description: a TOML file (docs/platforms.md)")
         return from_urdf(urdf, rotors if isinstance(rotors, Path) else Path(rotors), ee_frame=ee_frame)
     if rotors is not None or ee_frame is not None:
-        raise InputError("a rotor file and an end-effector frame go with a URDF (urdf=...); named platforms have their own")
+        given = ", ".join(f"{k} = {v!r}" for k, v in (("rotors", rotors), ("ee_frame", ee_frame)) if v is not None)
+        raise InputError(f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...); named platforms "
+                         f"have their own: got {given}")
     name = "q-prr" if name is None else name
     if name == "q-prr":
         return load("q-prr", layout=layout or "plus")

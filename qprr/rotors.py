@@ -311,4 +311,6 @@ def read_rotor_file(path: str | Path) -> dict:
             desc = tomllib.load(fh)
         except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
             raise InputError(f"rotor description file {str(path)!r} is not valid TOML: {exc}") from exc
+    if not desc:
+        raise InputError(f"rotor description file {str(path)!r} is empty: it needs one [[rotor]] table per rotor")
     return desc  # its content is checked by rotors_from_mapping (errors prefixed with the file by from_urdf)

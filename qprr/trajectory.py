@@ -243,9 +243,7 @@ def line_phases(a: float, b: float, x_start: float, x_end: float, t1: float, t2:
     trajectory's initial y must be a x_start + b (:class:`MultiPhase` starts y there when ``xi0`` says so).
     ``coordinates``: the names (or indices) of the two coordinates (default x, y).
     """
-    for name, v in (("a", a), ("b", b), ("x_start", x_start), ("x_end", x_end)):
-        if not (isinstance(v, (int, float)) and np.isfinite(v)):
-            raise InputError(f"{name} must be a finite number, got {v!r}")
+    a, b, x_start, x_end = (as_real(v, name) for name, v in (("a", a), ("b", b), ("x_start", x_start), ("x_end", x_end)))
     cx, cy = coordinates
     return Phase(cx, t1, t2, float(x_end)), Phase(cy, t1, t2, float(a * x_end + b))
 

@@ -84,6 +84,8 @@ NOT_FED: dict[str, str] = {
     "qprr.thesis.checks.run_checks": "runs every check of `qprr check` (seconds): tests/test_checks.py",
     "qprr.viz.viewer.*": "starts a web server (viser): tests/test_viz_viewer.py",
     "qprr.viz.browser.*": "drives a browser: tests/test_viz_viewer.py",
+    "qprr.campaign.backends.Backend*": "abstract base class (its subclasses are fed)",
+    "qprr.campaign.backends.DaskBackend*": "starts a Dask cluster of worker processes: tests/test_campaign.py",
 }
 """Callables the catalogue does not call (pattern -> where they are tested instead)."""
 
@@ -267,6 +269,33 @@ class Ctx:
             return next(plats.robots_dir().glob("*.toml")) if hasattr(plats, "robots_dir") and list(plats.robots_dir().glob("*.toml")) \
                 else next((Path(importlib.import_module("qprr").__file__).parent / "data").glob("*.toml"))
         return self.once("rotors_toml", make)
+
+    def ideal_platform(self):
+        """The platform with qprr.rotors.ideal_wrench_set thrusters (what IdealAllocator allocates on)."""
+        def make():
+            ideal = importlib.import_module("qprr.rotors").ideal_wrench_set(40.0, 5.0)
+            return self.platform.replace(rotors=ideal, name="ideal")
+        return self.once("ideal_platform", make)
+
+    def campaign_spec(self):
+        """A one-run campaign of a 0.02 s hover-reach."""
+        return self.once("campaign_spec", lambda: importlib.import_module("qprr.campaign.spec").CampaignSpec(
+            name="catalogue", scenario="hover-reach", options={"duration": 0.02}))
+
+    def campaign_spec_file(self) -> Path:
+        return self.once("campaign_spec_file", lambda: self.file(
+            "campaign.toml", b'name = "catalogue"\nscenario = "hover-reach"\n[options]\nduration = 0.02\n'))
+
+    def campaign_results_file(self) -> Path:
+        def make():
+            runner = importlib.import_module("qprr.campaign.runner")
+            return runner.run_campaign(self.campaign_spec(), self.tmp / "campaign.csv", backend="inline", progress=False).path
+        return self.once("campaign_results_file", make)
+
+    def fresh_path(self, name: str) -> Path:
+        """A new file path at each call (objects that lock their file)."""
+        self._cache["fresh"] = self._cache.get("fresh", 0) + 1
+        return self.tmp / f"{self._cache['fresh']}-{name}"
 
     def urdf_path(self) -> Path:
         root = Path(importlib.import_module("qprr").__file__).resolve().parent.parent
@@ -452,6 +481,9 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.thesis.printed.det_JJt_4_45", "lambdas", F(lambda c: np.linspace(0.1, 0.8, 8))),
     ("qprr.trajectory.*", "t", Spec("vec", lambda c: np.linspace(0.0, 1.0, 5))),
     ("qprr.trajectory.transition", "t?", S(0.2)),
+    ("qprr.trajectory.line_phases", "a", S(0.5)),
+    ("qprr.trajectory.line_phases", "t1", S(0.1)),
+    ("qprr.trajectory.line_phases", "t2", S(0.5)),
     ("qprr.trajectory.transition", "t2", S(0.8)),
     ("qprr.trajectory.Phase", "coordinate", S("z", "skip")),
     ("qprr.trajectory.Phase", "t1", S(0.1)),
@@ -548,6 +580,57 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.charts.xi_names", "n_arm", S(3, "int")),
     ("qprr.charts.FloatWriter", "n", S(3, "int")),
     ("qprr.charts.State.lin_to_*", "f_*", F(lambda c: np.ones(3))),
+    ("qprr.actuation.IdealAllocator", "platform", Spec("platform", lambda c: c.ideal_platform())),
+    ("qprr.actuation.IdealAllocator.allocate_into", "f_out", V(lambda c: np.zeros(18 + c.n_arm))),
+    ("qprr.sim.actuators.*", "thrust_factor", F(lambda c: np.full(4, 1e-5))),
+    ("qprr.sim.actuators.*", "time_constant", F(lambda c: np.full(4, 0.005))),
+    ("qprr.sim.actuators.RotorDynamics", "w_min", F(lambda c: np.zeros(4))),
+    ("qprr.sim.actuators.RotorDynamics", "w_max", F(lambda c: np.full(4, 1400.0))),
+    ("qprr.sim.actuators.RotorDynamics.*", "w*", F(lambda c: np.full(4, 600.0))),
+    ("qprr.sim.actuators.RotorDynamics.*", "f_command", F(lambda c: np.full(4, 8.0))),
+    ("qprr.sim.actuators.RotorDynamics.*", "t", Spec("vec", lambda c: np.linspace(0.0, 0.02, 5))),
+    ("qprr.sim.actuators.RotorDynamics.bind", "n_rotors", S(4, "count")),
+    ("qprr.sim.wind.Dryden", "sigma", F(lambda c: np.array([1.0, 1.0, 0.5]))),
+    ("qprr.sim.wind.Dryden", "length", F(lambda c: np.array([50.0, 50.0, 10.0]))),
+    ("qprr.sim.wind.Dryden", "airspeed", S(2.0, "pos")),
+    ("qprr.sim.wind.Dryden.*", "period", S(0.01, "pos")),
+    ("qprr.sim.wind.Dryden.sample", "n", S(5, "count")),
+    ("qprr.sim.wind.Dryden.*", "omega", Spec("vec", lambda c: np.linspace(0.1, 1.0, 4))),
+    ("qprr.sim.wind.Dryden.*", "lag", Spec("vec", lambda c: np.linspace(0.0, 1.0, 4))),
+    ("qprr.sim.wind.Dryden.*", "f", Spec("vec", lambda c: np.linspace(0.1, 1.0, 4))),
+    ("qprr.sim.wind.Gust", "start", S(0.1)),
+    ("qprr.sim.wind.Gust", "duration", S(0.5, "pos")),
+    ("qprr.sim.wind.Gust", "amplitude", F(lambda c: np.array([0.0, 2.0, 0.0]))),
+    ("qprr.sim.wind.Gust.velocity", "t", Spec("vec", lambda c: np.linspace(0.0, 1.0, 5))),
+    ("qprr.sim.wind.ViscousFriction", "coefficients", V(lambda c: np.full(c.n_xi, 0.01))),
+    ("qprr.campaign.*", "spec", Spec("obj", lambda c: c.campaign_spec())),
+    ("qprr.campaign.*", "params", Spec("obj", lambda c: {"model.mass": 1.05, "duration": 0.02, "dt": 0.002})),
+    ("qprr.campaign.*", "groups", Spec("obj", lambda c: ("rmse", "saturation"))),
+    ("qprr.campaign.*", "names", Spec("obj", lambda c: c.platform.xi_names)),
+    ("qprr.campaign.*", "result", Spec("obj", lambda c: c.sim_result())),
+    ("qprr.campaign.*", "seed", S(3, "int")),
+    ("qprr.campaign.runner.run_campaign", "output", Spec("path_out", lambda c: c.tmp / "campaign-run.csv")),
+    ("qprr.campaign.runner.run_campaign", "backend", S("inline", "name", always=True)),
+    ("qprr.campaign.runner.run_campaign", "progress", S(False, "skip", always=True)),
+    ("qprr.campaign.spec.CampaignSpec", "name", S("catalogue", "label")),
+    ("qprr.campaign.spec.CampaignSpec", "scenario", S("hover-reach", "name", always=True)),
+    ("qprr.campaign.spec.CampaignSpec", "options", Spec("obj", lambda c: {"duration": 0.02}, always=True)),
+    ("qprr.campaign.spec.CampaignSpec.load", "path", Spec("path_in", lambda c: c.campaign_spec_file())),
+    ("qprr.campaign.spec.CampaignSpec.run", "index", S(0, "int")),
+    ("qprr.campaign.spec.Distribution", "kind", S("uniform", "name")),
+    ("qprr.campaign.spec.Distribution", "low", S(0.5, "real", always=True)),
+    ("qprr.campaign.spec.Distribution", "high", S(1.5, "real", always=True)),
+    ("qprr.campaign.store.read_results", "path", Spec("path_in", lambda c: c.campaign_results_file())),
+    ("qprr.campaign.store.check_output", "path", Spec("path_out", lambda c: c.tmp / "out.csv")),
+    ("qprr.campaign.store.ResultStore", "path", Spec("path_out", lambda c: c.fresh_path("store.csv"))),
+    ("qprr.campaign.store.ResultStore", "columns", Spec("obj", lambda c: ("run", "status"))),
+    ("qprr.campaign.store.ResultStore", "meta", Spec("obj", lambda c: {"fingerprint": "catalogue"})),
+    ("qprr.campaign.store.ResultStore.append", "row", Spec("obj", lambda c: {"run": 0, "status": "ok"})),
+    ("qprr.campaign.targets.scale_bandwidth", "gains", Spec("obj", lambda c: importlib.import_module("qprr.thesis.gains").idc())),
+    ("qprr.campaign.targets.scale_bandwidth", "group", S("position", "name")),
+    ("qprr.campaign.targets.scale_bandwidth", "s", S(2.0, "pos")),
+    ("qprr.campaign.targets.scale_bandwidth", "n_xi", S(9, "count")),
+    ("qprr.campaign.worker.load_platform", "name", S("q-prr", "name")),
 ]
 
 INSTANCES: dict[str, Callable[[Ctx], object]] = {
@@ -556,6 +639,11 @@ INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.thesis.params.QPRRParams": lambda c: importlib.import_module("qprr.thesis.params").thesis_params(),
     "qprr.mdh.MDHRow": lambda c: importlib.import_module("qprr.mdh").MDHRow(0, 0.1, 0.2, 0.3, 0.4),
     "qprr.thesis.params.Link": lambda c: importlib.import_module("qprr.thesis.params").thesis_params().links[0],
+    "qprr.actuation.IdealAllocator": lambda c: importlib.import_module("qprr.actuation").IdealAllocator(c.ideal_platform()),
+    "qprr.campaign.spec.CampaignSpec": lambda c: c.campaign_spec(),
+    "qprr.campaign.spec.Distribution": lambda c: importlib.import_module("qprr.campaign.spec").Distribution("uniform", 0.5, 1.5),
+    "qprr.campaign.store.ResultStore": lambda c: importlib.import_module("qprr.campaign.store").ResultStore(
+        c.fresh_path("store.csv"), ("run", "status"), {"fingerprint": "catalogue"}),
 }
 
 
@@ -597,7 +685,7 @@ def spec_for(target: Target, param: inspect.Parameter) -> Spec | None:
 
 
 FREE_TEXT = {"name", "label", "title", "description", "color", "help", "message", "source", "scenario", "detail", "reason",
-             "provenance", "prefix", "suffix", "unit", "text"}
+             "provenance", "prefix", "suffix", "unit", "text", "what"}
 
 
 # ============================================================================ bad values
@@ -693,7 +781,7 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.charts.wrap_angle", "a", "2-D"): "elementwise on an array of any shape",
     ("qprr.charts.wrap_angle", "a", "empty"): "elementwise on an array of any shape (empty in, empty out)",
     ("qprr.charts.State.*", "*", "*"): HOT + "the array functions of qprr.charts (tests check them against each other)",
-    ("qprr.actuation.Allocator.allocate_into", "*", "*"): HOT + "Allocator.allocate",
+    ("qprr.actuation.*Allocator.allocate_into", "*", "*"): HOT + "Allocator.allocate",
     ("qprr.kinematics.com_jacobian_body_from", "*", "*"): "the second half of com_jacobian_body for a caller whose data already holds "
     "the CoM and its Jacobian (hot path); without the platform it cannot check data or the width of Jc",
     ("qprr.rotors.Rotor", "f_max", "inf"): "f_max = inf: a rotor without an upper thrust bound (the default)",
@@ -719,6 +807,24 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     "values update gives it)",
     ("qprr.control.impedance.ImpedanceFilter.step", "*", "*"): HOT + "ImpedanceFilter's constructor and reset (step runs every tick)",
     ("qprr.sim.disturbances.*.generalized_force", "*", "*"): HOT + "simulate (a state disturbance runs at every integration stage)",
+    ("qprr.sim.wind.*.generalized_force", "*", "*"): HOT + "simulate (a state disturbance runs at every integration stage; the "
+    "constructors check the coefficients and the wind)",
+    ("qprr.control.decoupled.DecoupledController.arm_accelerations", "*", "*"): HOT + "DecoupledController.step's per-tick arm "
+    "law (reset checks the state and reference once per run)",
+    ("qprr.control.mpc.MPCController.set_preview", "trajectory", "None"): "None: no preview (the current reference is "
+    "extrapolated over the horizon, as documented)",
+    ("qprr.platform.from_urdf", "g", "zero"): "g = 0: free flight (momentum and energy conservation tests fly without gravity)",
+    ("qprr.campaign.metrics.metrics_of", "wall_time", "NaN"): "NaN (the default): not measured, the result's own wall time is used",
+    ("qprr.campaign.spec.CampaignSpec", "base_dir", "unknown name"): "base_dir is any folder name: a relative callable file is "
+    "read from it when the runs start (a remote worker need not have it: the file travels as text)",
+    ("qprr.sim.actuators.RotorDynamics", "initial", "number"): "one initial speed [rad/s] for every rotor (one value or one per "
+    "rotor, as every per-rotor field)",
+    ("qprr.sim.actuators.RotorDynamics.step_response", "t", "wrong length"): "any number of sample times",
+    ("qprr.sim.actuators.RotorDynamics.step_response", "t", "empty"): "no sample times: an empty response",
+    ("qprr.sim.wind.*", "*", "wrong length"): "any number of sample times, lags or frequencies",
+    ("qprr.sim.wind.*", "*", "empty"): "no sample times, lags or frequencies: an empty result",
+    ("qprr.campaign.metrics.metrics_of", "result", "None"): "None: a run that raised before simulating (its row gets the "
+    "status and reason given, NaN metrics)",
     ("qprr.sim.integrators.*", "*", "*"): HOT + "simulate (one integration step; make_stepper checks the method and dt)",
     ("qprr.sim.contact.*", "*", "*"): HOT + "simulate (an Environment's hooks run at every stage; their constructors check the settings)",
     ("qprr.sim.disturbances.Pulse", "gamma", "wrong length"): "gamma's length is checked against the platform when the simulator "

@@ -45,7 +45,7 @@ from .. import charts as ch
 from ..charts import as_vector
 from ..errors import InputError
 from ..kinematics import check_q
-from ..platform import Platform
+from ..platform import Platform, check_data
 from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
 
 
@@ -200,6 +200,7 @@ def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=
     With every coordinate free and ``rows="pose"``, Lambda, mu, p equal those of
     :func:`opspace_model` at the same state (tests/test_analysis_opspace.py).
     """
+    check_data(check_platform(platform), data)
     n_xi = platform.n_xi
     xi = ch.as_xi(xi, "xi", n_xi)
     w = np.zeros(n_xi) if xi_dot is None else as_vector(xi_dot, n_xi, "xi_dot")

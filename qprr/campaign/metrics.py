@@ -31,6 +31,8 @@ import math
 
 import numpy as np
 
+from ..charts import as_name, as_real
+from ..errors import InputError
 from ..sim import SimResult, Status
 
 STATUSES = ("ok", "diverged", "failed", "error")
@@ -42,6 +44,13 @@ POSITION = ("x", "y", "z")
 
 def metric_columns(groups, names, extras=()) -> tuple[str, ...]:
     """Column names of the metric ``groups`` (see :data:`qprr.campaign.spec.METRICS`) for xi ``names``, then ``extras``."""
+    from .spec import METRICS
+
+    for arg, values in (("groups", groups), ("names", names), ("extras", extras)):
+        if isinstance(values, str) or not isinstance(values, (list, tuple)) or not all(isinstance(v, str) and v for v in values):
+            raise InputError(f"{arg} must be a list of names, got {values!r}")
+    for g in groups:
+        as_name(g, "groups", METRICS, kind="metric group")
     out = list(BASE_COLUMNS)
     for g in groups:
         if g == "rmse":
@@ -60,6 +69,10 @@ def metrics_of(result: SimResult | None, groups, names, extras=(), *, status: st
     ``result`` may be None (the run raised before simulating); ``status``/``reason`` override
     the result's (e.g. ``error`` with the exception text); ``success``: {metric: upper bound}.
     """
+    if result is not None and not isinstance(result, SimResult):
+        raise InputError(f"result must be a SimResult or None (a run that raised before simulating), got {type(result).__name__}")
+    if not (isinstance(wall_time, float) and math.isnan(wall_time)):  # NaN: not measured
+        wall_time = as_real(wall_time, "wall_time", nonnegative=True, unit="s")
     row: dict[str, object] = {c: math.nan for c in metric_columns(groups, names, extras)}
     row["success"] = 0
     if result is None:

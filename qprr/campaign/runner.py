@@ -14,11 +14,12 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from ..charts import as_int, as_name
 from ..errors import InputError, UnknownNameError
-from .backends import Backend, make_backend
+from .backends import BACKENDS, Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec
-from .store import Results, ResultStore, read_results
+from .store import Results, ResultStore, check_output, read_results
 from .worker import make_payload, nan_row, param_columns, run_one, xi_names_of
 
 
@@ -110,8 +111,13 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     """
     if not isinstance(spec, CampaignSpec):
         raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
-    if limit is not None and (isinstance(limit, bool) or not isinstance(limit, int) or limit < 0):
-        raise InputError(f"limit must be an integer >= 0, got {limit!r}")
+    if limit is not None:
+        limit = as_int(limit, "limit", lo=0)
+    output = check_output(output, "output")  # before any run
+    if isinstance(backend, str):
+        as_name(backend, "backend", BACKENDS, kind="campaign backend")
+    elif not isinstance(backend, Backend):
+        raise InputError(f"backend must be one of {', '.join(BACKENDS)} or a Backend, got {type(backend).__name__}")
     names = xi_names_of(spec)
     columns = columns_of(spec, names)
     for k in spec.success:
@@ -163,3 +169,6 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
         print(f"campaign {spec.name}: interrupted after {executed} runs; run the same command again to resume", file=bar.stream)
     return CampaignRun(store.path, executed, skipped, failed, wall, backend if isinstance(backend, str) else backend.name,
                        read_results(store.path), interrupted)
+
+
+__all__ = ["CampaignRun", "run_campaign"]

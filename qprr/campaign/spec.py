@@ -52,6 +52,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..charts import as_file
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..sim.mismatch import ModelError
 
@@ -145,6 +146,8 @@ class Distribution:
 
     def sample(self, rng: np.random.Generator):
         """One draw (a Python float, int or choice value)."""
+        if not isinstance(rng, np.random.Generator):
+            raise InputError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {type(rng).__name__}")
         k = self.kind
         if k == "uniform":
             return float(rng.uniform(self.low, self.high))
@@ -186,6 +189,22 @@ def _grid_values(name: str, value) -> tuple:
     return values
 
 
+def _check_platform_name(name) -> None:
+    """A campaign's platform: "q-prr", a stored platform (:data:`qprr.platforms.NAMES`) or a (2.1) designation."""
+    from ..errors import QprrError
+    from ..nomenclature import parse
+    from ..platforms import NAMES
+
+    if not isinstance(name, str):
+        raise InputError(f"platform must be a platform name (q-prr, {', '.join(NAMES)} or a designation such as HEX-RRR), got {name!r}")
+    if name == "q-prr" or name in NAMES:
+        return
+    try:
+        parse(name)
+    except QprrError as exc:
+        raise InputError(f"platform {name!r} is neither q-prr, {', '.join(NAMES)} nor a designation: {exc}") from exc
+
+
 @dataclass(frozen=True)
 class CampaignSpec:
     """A campaign: a target, fixed/grid/random parameters, seeds and metrics (module docstring)."""
@@ -217,6 +236,16 @@ class CampaignSpec:
             raise InputError(f"samples must be an integer >= 1, got {self.samples!r}")
         if not isinstance(self.paired, bool):
             raise InputError(f"paired must be true or false, got {self.paired!r}")
+        _check_platform_name(self.platform)
+        if not isinstance(self.base_dir, (str, Path)):
+            raise InputError(f"base_dir must be a folder (a string), got {self.base_dir!r}")
+        object.__setattr__(self, "base_dir", str(self.base_dir))
+        for where in ("options", "grid", "random", "success"):
+            if not isinstance(getattr(self, where), Mapping):
+                raise InputError(f"{where} must be a table (mapping) of parameter = value, got {getattr(self, where)!r}")
+        for where in ("metrics", "extras"):
+            if isinstance(getattr(self, where), str) or not isinstance(getattr(self, where), (list, tuple)):
+                raise InputError(f"{where} must be a list of names, got {getattr(self, where)!r}")
         object.__setattr__(self, "options", dict(self.options))
         object.__setattr__(self, "grid", {k: _grid_values(k, v) for k, v in self.grid.items()})
         rnd = {k: v if isinstance(v, Distribution) else Distribution.from_mapping(v, k) for k, v in self.random.items()}
@@ -363,10 +392,11 @@ class CampaignSpec:
     @classmethod
     def load(cls, path: str | Path) -> CampaignSpec:
         """Read a ``.toml`` or ``.json`` specification."""
-        path = Path(path)
-        if not path.is_file():
-            raise InputError(f"campaign specification {str(path)!r} does not exist")
-        text = path.read_text()
+        path = as_file(path, "path", what="campaign specification")
+        try:
+            text = path.read_text()
+        except UnicodeDecodeError as exc:
+            raise InputError(f"{str(path)!r} is not a text file (a .toml or .json specification): {exc}") from exc
         if path.suffix == ".toml":
             try:
                 import tomllib
@@ -386,10 +416,14 @@ class CampaignSpec:
                 raise InputError(f"{str(path)!r}: invalid JSON: {exc}") from exc
         else:
             raise InputError(f"campaign specifications end in .toml or .json, got {str(path)!r}")
+        if not data:
+            raise InputError(f"{str(path)!r} is empty: a campaign specification needs a name and a target (scenario or callable)")
         return cls.from_mapping(data, base_dir=path.resolve().parent)
 
 
 def model_error(params: Mapping[str, object]) -> ModelError | None:
     """The :class:`ModelError` of a run's ``model.*`` parameters (None if it has none)."""
+    if not isinstance(params, Mapping):
+        raise InputError(f"params must be a mapping of parameter name -> value, got {type(params).__name__}")
     kw = {k[len(MODEL_PREFIX):]: v for k, v in params.items() if k.startswith(MODEL_PREFIX)}
     return ModelError(**kw) if kw else None

@@ -20,19 +20,22 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..charts import as_file, as_output_path
 from ..errors import InputError, MissingDependencyError
 
 FORMATS = (".csv", ".parquet")
 META_VERSION = 1
 
 
-def meta_path(path: str | Path) -> Path:
+def _meta_path(path: str | Path) -> Path:
     p = Path(path)
     return p.with_name(p.stem + ".meta.json")
 
@@ -46,10 +49,14 @@ def _require_pyarrow():
     return pa, pq
 
 
-def check_output(path: str | Path) -> Path:
-    p = Path(path)
+def check_output(path: str | Path, name: str = "path") -> Path:
+    """``path`` as the results file to write (``name`` in the errors): .csv or .parquet, in an existing folder."""
+    if isinstance(path, (str, os.PathLike)) and Path(path).suffix == ".parquet" and Path(path).is_dir():
+        p = Path(path)  # the folder of a Parquet table being resumed
+    else:
+        p = as_output_path(path, name, suffixes=FORMATS)
     if p.suffix not in FORMATS:
-        raise InputError(f"campaign results end in .csv or .parquet, got {str(p)!r}")
+        raise InputError(f"{name}: campaign results end in .csv or .parquet, got {str(p)!r}")
     if not p.parent.is_dir():
         raise InputError(f"cannot write {str(p)!r}: folder {str(p.parent)!r} does not exist")
     if p.suffix == ".parquet":
@@ -74,6 +81,11 @@ class ResultStore:
     """
 
     def __init__(self, path: str | Path, columns: tuple[str, ...], meta: dict, *, fresh: bool = False) -> None:
+        if isinstance(columns, str) or not isinstance(columns, (list, tuple)) or not columns or \
+                not all(isinstance(c, str) and c for c in columns):
+            raise InputError(f"columns must be a non-empty sequence of column names, got {columns!r}")
+        if not isinstance(meta, Mapping):
+            raise InputError(f"meta must be a mapping (the .meta.json content), got {type(meta).__name__}")
         self.path = check_output(path)
         self._lock = _lock(self.path)  # one writer per results file (released when this process ends, even by a crash)
         try:
@@ -89,7 +101,7 @@ class ResultStore:
         self.parquet = self.path.suffix == ".parquet"
         self.done: set[int] = set()
         self.rows_before = 0
-        mp = meta_path(self.path)
+        mp = _meta_path(self.path)
         exists = self.path.exists()
         if exists and not fresh:
             old = _read_meta(self.path)
@@ -123,6 +135,8 @@ class ResultStore:
 
     def append(self, row: dict) -> None:
         """Save one finished run (CSV: written and flushed now; Parquet: with its batch)."""
+        if not isinstance(row, Mapping):
+            raise InputError(f"row must be a mapping column -> value, got {type(row).__name__}")
         missing = [c for c in self.columns if c not in row]
         if missing:
             raise InputError(f"result row lacks the columns {missing}")
@@ -199,7 +213,7 @@ def _remove(path: Path) -> None:
 
 
 def _read_meta(path: Path) -> dict:
-    mp = meta_path(path)
+    mp = _meta_path(path)
     if not mp.is_file():
         raise InputError(f"{str(path)!r} has no {mp.name} beside it: not campaign results of qprr (or the file was moved alone)")
     try:
@@ -258,9 +272,12 @@ def _column_array(values: list) -> np.ndarray:
 
 def read_results(path: str | Path) -> Results:
     """Read a campaign's results (``.csv`` or ``.parquet``) with its ``.meta.json``; last row per run wins."""
-    path = Path(path)
-    if not path.exists():
-        raise InputError(f"campaign results {str(path)!r} do not exist")
+    if isinstance(path, (str, os.PathLike)) and Path(path).suffix == ".parquet":
+        path = Path(path)  # a folder of parts
+        if not path.is_dir():
+            raise InputError(f"path: campaign results {str(path)!r} do not exist")
+    else:
+        path = as_file(path, "path", what="campaign results file")
     meta = _read_meta(path)
     columns = list(meta["columns"])
     rows: dict[int, list] = {}

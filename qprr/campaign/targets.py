@@ -17,7 +17,9 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 
+from ..charts import as_int, as_name, as_real
 from ..errors import InputError, UnknownNameError
+from ..platform import check_platform
 from ..sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
 from ..sim.mismatch import perturbed
 from .spec import MODEL_PREFIX, model_error
@@ -40,8 +42,12 @@ def scale_bandwidth(gains, group: str, s: float, n_xi: int):
     roots multiplied by ``s`` (same damping, same stability: Routh-Hurwitz is scale-free).
     Works on :class:`~qprr.control.IDCGains` and :class:`~qprr.control.MFCGains` (explicit vectors).
     """
-    if not (isinstance(s, (int, float)) and s > 0):
-        raise InputError(f"bandwidth.{group} must be a factor > 0, got {s!r}")
+    group = as_name(group, "group", tuple(_GROUPS), kind="bandwidth group")
+    s = as_real(s, f"bandwidth.{group}", positive=True)
+    n_xi = as_int(n_xi, "n_xi", lo=6)
+    if not all(len(getattr(gains, k, ())) == n_xi for k in ("kp", "kd", "ki")) or not dataclasses.is_dataclass(gains):
+        raise InputError(f"gains must be IDCGains or MFCGains with explicit vectors kp, kd, ki of n_xi = {n_xi} entries, "
+                         f"got {type(gains).__name__}")
     idx = _GROUPS[group] if _GROUPS[group] is not None else tuple(range(6, n_xi))
     changes = {}
     for name, power in (("kp", 2), ("kd", 1), ("ki", 3)):
@@ -71,11 +77,14 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
     from ..thesis.missions import dynamic_mission, static_mission
     from ..thesis.scenarios import NOISE_AMPLITUDE, PULSES, flight_controller
 
+    if not isinstance(params, Mapping):
+        raise InputError(f"params must be a mapping of parameter name -> value (qprr.campaign.targets.FLIGHT_DEFAULTS), "
+                         f"got {type(params).__name__}")
     for k in params:
         if k not in FLIGHT_DEFAULTS and not k.startswith(MODEL_PREFIX):
             raise UnknownNameError("parameter of qprr.campaign.targets.flight", k, tuple(FLIGHT_DEFAULTS))
     p = {**FLIGHT_DEFAULTS, **{k: v for k, v in params.items() if not k.startswith(MODEL_PREFIX)}}
-    platform = load() if platform is None else platform
+    platform = load() if platform is None else check_platform(platform)
     ts = float(p["time_scale"])
     if not ts > 0:
         raise InputError(f"time_scale must be > 0, got {ts!r}")

@@ -33,6 +33,8 @@ def load_platform(name: str):
     from ..nomenclature import build
     from ..platforms import NAMES, load
 
+    if not isinstance(name, str):
+        raise InputError(f"platform name must be a string (q-prr, {', '.join(NAMES)} or a designation such as HEX-RRR), got {name!r}")
     return load(name) if (name == "q-prr" or name in NAMES) else build(name)
 
 
@@ -53,6 +55,8 @@ class Payload:
 
 def make_payload(spec: CampaignSpec) -> Payload:
     """The task payload of ``spec``; a ``file.py:function`` callable travels as source text (remote workers need no copy)."""
+    if not isinstance(spec, CampaignSpec):
+        raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
     source = None
     if spec.callable is not None:
         target, _ = spec.callable.rsplit(":", 1)
@@ -192,3 +196,7 @@ def nan_row(spec: CampaignSpec, names, run: Run, status: str, reason: str) -> di
     row.update(params_row(spec, run.params))
     row.update(metrics_of(None, spec.metrics, names, spec.extras, status=status, reason=reason, wall_time=math.nan))
     return row
+
+
+# the worker's entry points (the other functions are the runner's helpers on a validated specification)
+__all__ = ["Context", "Payload", "build_context", "execute", "load_platform", "make_payload", "run_one"]

@@ -99,12 +99,12 @@ from enum import Enum
 import numpy as np
 import pinocchio as pin
 
-from ..charts import State, xi_ddot_to_a, xi_to_qv
+from ..charts import State, as_int, as_real, as_vector, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..kinematics import com_jacobian_body_from
 from ..platform import Platform
 from . import MPC_INSTALL as INSTALL  # the extra's install command (docs/mpc.md, "Installing")
-from .base import Controller, Reference
+from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
 
 try:
@@ -133,10 +133,7 @@ class Fallback(str, Enum):
 # ================================================================================ settings
 def _positive(obj, names: tuple[str, ...], allow_zero: bool) -> None:
     for name in names:
-        value = getattr(obj, name)
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and (value >= 0 if allow_zero else value > 0)):
-            bound = ">= 0" if allow_zero else "> 0"
-            raise InputError(f"{type(obj).__name__}.{name} must be a finite number {bound}, got {value!r}")
+        as_real(getattr(obj, name), f"{type(obj).__name__}.{name}", positive=not allow_zero, nonnegative=allow_zero)
 
 
 @dataclass(frozen=True)
@@ -199,12 +196,10 @@ class MPCSettings:
     def __post_init__(self) -> None:
         _positive(self, ("rate", "th_stop", "feasibility_tol", "max_tilt", "init_reg"), allow_zero=False)
         _positive(self, ("bound_margin",), allow_zero=True)
-        if not 0.0 <= self.joint_limit_margin < 0.5:
+        if not as_real(self.joint_limit_margin, "MPCSettings.joint_limit_margin", nonnegative=True) < 0.5:
             raise InputError(f"MPCSettings.joint_limit_margin must be in [0, 0.5), got {self.joint_limit_margin!r}")
         for name in ("horizon", "max_iter", "first_max_iter"):
-            v = getattr(self, name)
-            if not (isinstance(v, int) and v >= 1):
-                raise InputError(f"MPCSettings.{name} must be an integer >= 1, got {v!r}")
+            as_int(getattr(self, name), f"MPCSettings.{name}", lo=1)
         if self.integrator not in INTEGRATORS:
             raise UnknownNameError("integrator", self.integrator, INTEGRATORS)
         if not self.max_tilt < math.pi / 2:
@@ -266,6 +261,8 @@ class LieState(crocoddyl.StateAbstract):
     """
 
     def __init__(self, model: pin.Model) -> None:
+        if not isinstance(model, pin.Model):
+            raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__}")
         crocoddyl.StateAbstract.__init__(self, model.nq + model.nv, 2 * model.nv)
         self.model = model
         self._nq, self._nv = model.nq, model.nv
@@ -597,6 +594,11 @@ class MPCController(Controller):
         Roll and pitch: the feedforward tilt (6.17) of the reference acceleration; u_ref = W^+
         RNEA(q_ref, v_ref, a_ref) clipped to the bounds (module docstring).
         """
+        n = self.platform.n_xi
+        return self._reference(as_vector(xi, n, "xi"), as_vector(xi_dot, n, "xi_dot"), as_vector(xi_ddot, n, "xi_ddot"))
+
+    def _reference(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
+        """:meth:`reference` on vectors of the right size (the per-node path of :meth:`_references`)."""
         xi = np.array(xi, dtype=float)
         xi_dot = np.array(xi_dot, dtype=float)
         xi_ddot = np.array(xi_ddot, dtype=float)
@@ -621,11 +623,11 @@ class MPCController(Controller):
         times = np.array([t + k * self.h for k in ks])
         if self.trajectory is not None:
             s = self.trajectory.sample(times)
-            return [self.reference(s.xi[i], s.xi_dot[i], s.xi_ddot[i]) for i in range(len(ks))]
+            return [self._reference(s.xi[i], s.xi_dot[i], s.xi_ddot[i]) for i in range(len(ks))]
         out = []
         for tk in times:  # second-order extrapolation of the current reference
             d = tk - t
-            out.append(self.reference(ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot,
+            out.append(self._reference(ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot,
                                           ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
         return out
 
@@ -642,6 +644,7 @@ class MPCController(Controller):
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         """Prepare a run: MPC period = round(h / dt) simulator steps; the first step solves cold."""
+        dt = check_reset(self, state, ref, dt)
         m = round(self.h / dt)
         if m < 1 or abs(m * dt - self.h) > 1e-9 * self.h:
             raise InputError(f"the MPC period 1/rate = {self.h!r} s must be a whole number of simulator steps dt = {dt!r} s")

@@ -289,6 +289,13 @@ class OperationalSpaceImpedance(InverseDynamicsController):
 
     def reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(p_r, p_dot_r, p_ddot_r) (3,) each, world: the end effector at the trajectory's (xi_d, xi_dot_d, xi_ddot_d)."""
+        if not isinstance(ref, Reference) or np.shape(ref.xi) != (self.platform.n_xi,):
+            raise InputError(f"ref must be a qprr.control.Reference of the platform's {self.platform.n_xi} thesis coordinates, "
+                             f"got {type(ref).__name__}")
+        return self._reference(ref)
+
+    def _reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`reference` unchecked (every control tick, on the simulator's own reference)."""
         model, data, fid, rs = self.platform.model, self._rdata, self.platform.ee_frame, self._rstate
         rs.update_xi(0.0, ref.xi, ref.xi_dot, arrays=False, reuse=True)
         pin.forwardKinematics(model, data, rs.q, rs.v, rs.accel_to_v(ref.xi_ddot))
@@ -299,7 +306,7 @@ class OperationalSpaceImpedance(InverseDynamicsController):
 
     def update_references(self, t: float, state: State, ref: Reference) -> None:
         """Keep the end-effector reference of the trajectory's xi_d before (6.17) overwrites its roll and pitch."""
-        self._ref = self.reference(ref)
+        self._ref = self._reference(ref)
 
     def feedforward(self, t: float, state: State) -> list[float] | None:
         """-u_e(h) = -S^T J^T h with a wrist sensor (the J^T h_e of (6.72), h read here for the step); None without."""

@@ -30,15 +30,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..charts import as_array, as_int, as_vector
 from ..errors import InputError, ShapeError
 
 
 def _per_rotor(value, n: int, name: str) -> np.ndarray:
-    a = np.asarray(value, dtype=float)
+    a = as_array(value, name)
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape != (n,):
-        raise ShapeError(f"{name} must be one value or {n} values (one per rotor), got shape {a.shape}")
+        raise ShapeError(f"{name} must be one value or {n} values (one per rotor, as thrust_factor), got shape {a.shape}")
     if not np.all(np.isfinite(a)):
         raise InputError(f"{name} must be finite, got {a.tolist()}")
     return a
@@ -64,7 +65,7 @@ class RotorDynamics:
     initial: str | tuple[float, ...] = "command"
 
     def __post_init__(self) -> None:
-        b = np.atleast_1d(np.asarray(self.thrust_factor, dtype=float))
+        b = np.atleast_1d(as_array(self.thrust_factor, "thrust_factor", finite=True))
         n = b.shape[0]
         if b.ndim != 1 or n == 0:
             raise ShapeError(f"thrust_factor must be one value per rotor, got {self.thrust_factor!r}")
@@ -116,24 +117,24 @@ class RotorDynamics:
 
     def thrust(self, w) -> np.ndarray:
         """f = b w^2 [N] of rotor speeds ``w`` [rad/s]."""
-        w = np.asarray(w, dtype=float)
+        w = as_vector(w, self.n_rotors, "w")
         return np.asarray(self.thrust_factor) * w * w
 
     def speed_command(self, f_command) -> np.ndarray:
         """w_c = sqrt(f_c / b) saturated to [w_min, w_max] [rad/s] (negative commands give w_min)."""
-        f = np.maximum(np.asarray(f_command, dtype=float), 0.0)
+        f = np.maximum(as_vector(f_command, self.n_rotors, "f_command"), 0.0)
         return np.clip(np.sqrt(f / np.asarray(self.thrust_factor)), self.w_min, self.w_max)
 
     def step_response(self, t, w0, w_command) -> np.ndarray:
         """Exact speed of the lag from ``w0`` under a constant command: w_c + (w0 - w_c) exp(-t / T) (rows: times)."""
-        t = np.asarray(t, dtype=float)[:, None]
-        w_c = np.clip(np.asarray(w_command, dtype=float), self.w_min, self.w_max)
-        return w_c + (np.asarray(w0, dtype=float) - w_c) * np.exp(-t / np.asarray(self.time_constant))
+        t = as_array(t, "t", finite=True, ndim=1)[:, None]
+        w_c = np.clip(as_vector(w_command, self.n_rotors, "w_command"), self.w_min, self.w_max)
+        return w_c + (as_vector(w0, self.n_rotors, "w0") - w_c) * np.exp(-t / np.asarray(self.time_constant))
 
     def bind(self, n_rotors: int) -> _BoundRotors:
         """The runtime object the simulator integrates (checks the number of rotors)."""
-        if n_rotors != self.n_rotors:
-            raise ShapeError(f"RotorDynamics has {self.n_rotors} rotors, the platform {n_rotors}")
+        if as_int(n_rotors, "n_rotors") != self.n_rotors:
+            raise ShapeError(f"RotorDynamics has {self.n_rotors} rotors, the platform {n_rotors} (n_rotors)")
         return _BoundRotors(self)
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_real, wrap_angle, xi_names
+from ..charts import as_file, as_real, wrap_angle, xi_names
 from ..errors import InputError, ShapeError
 
 FORMAT_VERSION = 2
@@ -151,10 +151,8 @@ class SimResult:
         A missing, foreign, truncated or corrupted file, another format version or an array of the
         wrong shape or type raises :class:`~qprr.errors.InputError` (:class:`~qprr.errors.ShapeError`
         for shapes) naming the file and what is wrong."""
-        path = Path(path)
+        path = as_file(path, "path", what="result file")
         source = repr(str(path))
-        if not path.is_file():
-            raise InputError(f"result file {source} does not exist")
         try:
             z = np.load(path, allow_pickle=False)
         except _READ_ERRORS as exc:

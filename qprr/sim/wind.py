@@ -53,7 +53,7 @@ import pinocchio as pin
 from scipy.linalg import expm, solve_continuous_lyapunov
 
 from .. import charts as ch
-from ..charts import as_vector
+from ..charts import as_array, as_int, as_real, as_vector
 from ..errors import InputError, ShapeError
 
 FT = 0.3048
@@ -68,10 +68,24 @@ def _positive3(x, name: str) -> tuple[float, float, float]:
 
 
 def _nonneg3(x, name: str) -> tuple[float, float, float]:
-    a = as_vector(np.broadcast_to(np.asarray(x, dtype=float), (3,)) if np.ndim(x) == 0 else x, 3, name)
+    a = as_vector(np.full(3, as_real(x, name)) if np.ndim(x) == 0 else x, 3, name)
     if np.any(a < 0.0):
         raise InputError(f"{name} must be >= 0, got {a.tolist()}")
     return tuple(float(v) for v in a)
+
+
+def _samples(x, name: str) -> np.ndarray:
+    """``x`` (a number or a 1-D array of finite numbers: times, lags, frequencies) as a 1-D float array."""
+    a = np.atleast_1d(as_array(x, name, finite=True))
+    if a.ndim != 1:
+        raise ShapeError(f"{name} must be a number or a 1-D array, got shape {a.shape}")
+    return a
+
+
+def _check_rng(rng) -> np.random.Generator:
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(f"rng must be a numpy.random.Generator (np.random.default_rng(seed)), got {type(rng).__name__}")
+    return rng
 
 
 # ================================================================================ Dryden
@@ -112,7 +126,7 @@ class Dryden:
     # ------------------------------------------------------------------ the model
     def psd(self, omega) -> np.ndarray:
         """One-sided PSDs Phi_u, Phi_v, Phi_w (3, m) [(m/s)^2 / (rad/s)] at ``omega`` [rad/s] (module docstring)."""
-        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        w = _samples(omega, "omega")
         V = self.airspeed
         out = np.empty((3, w.shape[0]))
         for i, (s, L) in enumerate(zip(self.sigma, self.length)):
@@ -122,7 +136,7 @@ class Dryden:
 
     def autocorrelation(self, lag) -> np.ndarray:
         """R_u, R_v, R_w (3, m) [(m/s)^2] at time lags ``lag`` [s]: sigma^2 e^(-V|tau|/L), sigma^2 (1 - V|tau|/(2L)) e^(-V|tau|/L)."""
-        tau = np.abs(np.atleast_1d(np.asarray(lag, dtype=float)))
+        tau = np.abs(_samples(lag, "lag"))
         V = self.airspeed
         out = np.empty((3, tau.shape[0]))
         for i, (s, L) in enumerate(zip(self.sigma, self.length)):
@@ -158,8 +172,7 @@ class Dryden:
     def discretization(self, period: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(A_d, L_d, C, P): x_{k+1} = A_d x_k + L_d n_k (n_k standard normal (5,)), [u, v, w]_k = C x_k, exact at
         sampling ``period`` [s]; P the stationary covariance (the initial state is drawn from N(0, P))."""
-        if not (math.isfinite(period) and period > 0.0):
-            raise InputError(f"sampling period must be > 0 s, got {period!r}")
+        period = as_real(period, "period", positive=True, unit="s")  # the sampling period
         A, B, C = self.shaping_filter()
         n = A.shape[0]
         Q = B @ B.T
@@ -175,8 +188,8 @@ class Dryden:
 
     def sample(self, n: int, period: float, rng: np.random.Generator) -> np.ndarray:
         """``n`` samples (n, 3) [m/s] of [u, v, w] at ``period`` [s], stationary from the first (exact discretisation)."""
-        if not (isinstance(n, (int, np.integer)) and n >= 1):
-            raise InputError(f"number of samples must be an integer >= 1, got {n!r}")
+        n = as_int(n, "n", lo=1)  # the number of samples
+        _check_rng(rng)
         Ad, Ld, C, P = self.discretization(period)
         x = _psd_sqrt(P) @ rng.standard_normal(5)
         drive = rng.standard_normal((n, 5)) @ Ld.T
@@ -192,7 +205,7 @@ class Dryden:
         :meth:`sample` estimates; it tends to 2 pi Phi(2 pi f) as T_s -> 0)."""
         Ad, Ld, C, _ = self.discretization(period)
         Qd = Ld @ Ld.T
-        f = np.atleast_1d(np.asarray(f, dtype=float))
+        f = _samples(f, "f")
         out = np.empty((3, f.shape[0]))
         eye = np.eye(Ad.shape[0])
         for k, fk in enumerate(f):
@@ -221,11 +234,11 @@ class Gust:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "amplitude", tuple(float(v) for v in as_vector(self.amplitude, 3, "gust amplitude")))
-        if not (math.isfinite(self.start) and math.isfinite(self.duration) and self.duration > 0.0):
-            raise InputError(f"gust needs a finite start and a duration > 0 s, got {self.start!r}, {self.duration!r}")
+        object.__setattr__(self, "start", as_real(self.start, "gust start", unit="s"))
+        object.__setattr__(self, "duration", as_real(self.duration, "gust duration", positive=True, unit="s"))
 
     def velocity(self, t) -> np.ndarray:
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = _samples(t, "t")
         s = (t - self.start) / self.duration
         on = (s >= 0.0) & (s <= 1.0)
         shape = np.where(on, 0.5 * (1.0 - np.cos(2.0 * math.pi * s)), 0.0)
@@ -261,7 +274,7 @@ class Wind:
 
     def deterministic(self, t) -> np.ndarray:
         """Mean wind + gusts at times ``t`` (m, 3) [m/s]."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = _samples(t, "t")
         out = np.tile(np.asarray(self.mean), (t.shape[0], 1))
         for g in self.gusts:
             out += g.velocity(t)
@@ -269,7 +282,8 @@ class Wind:
 
     def sample(self, t, rng: np.random.Generator) -> np.ndarray:
         """A realisation (m, 3) [m/s] at the evenly spaced times ``t`` (turbulence sampled at their spacing)."""
-        t = np.atleast_1d(np.asarray(t, dtype=float))
+        t = _samples(t, "t")
+        _check_rng(rng)
         out = self.deterministic(t)
         if self.turbulence is not None:
             period = float(t[1] - t[0]) if t.shape[0] > 1 else 1.0
@@ -312,6 +326,7 @@ class AerodynamicDrag:
 
     def wind_velocity(self, t: float) -> np.ndarray:
         """w(t) [m/s] without turbulence (mean + gusts): the drag's wind before the simulator realizes it."""
+        t = as_real(t, "t", unit="s")
         return np.zeros(3) if self.wind is None else self.wind.deterministic([t])[0]
 
     def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -358,7 +373,7 @@ class ViscousFriction:
     coefficients: tuple[float, ...]
 
     def __post_init__(self) -> None:
-        c = np.atleast_1d(np.asarray(self.coefficients, dtype=float))
+        c = np.atleast_1d(as_array(self.coefficients, "friction coefficients"))
         if c.ndim != 1 or c.shape[0] < 6 or not np.all(np.isfinite(c)) or np.any(c < 0.0):
             raise InputError(f"friction coefficients must be 6 + n_arm finite values >= 0, got {self.coefficients!r}")
         object.__setattr__(self, "coefficients", tuple(float(x) for x in c))

@@ -31,8 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from ..actuation import IdealAllocator
+from ..charts import as_vector
 from ..control import IDCGains, InverseDynamicsController
-from ..errors import InputError, UnknownNameError
+from ..errors import UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..sim import SimResult, simulate
@@ -126,9 +127,7 @@ def point_to_point(platform=None, controller: str = "idc", progress: bool = Fals
     platform = _q_prr(platform)
     if controller != "idc":
         raise UnknownNameError("controller", controller, ("idc",))
-    target = tuple(float(v) for v in np.asarray(target, dtype=float))
-    if len(target) != 3:
-        raise InputError(f"target must be p_b = (x, y, z) [m], got {target!r}")
+    target = tuple(as_vector(target, 3, "target").tolist())  # p_b = (x, y, z) [m]
     allocator = None
     if actuation == "ideal":
         platform = platform.replace(rotors=ideal_wrench_set(IDEAL_FORCE_MAX, IDEAL_TORQUE_MAX), name=f"{platform.name}, ideal actuation")

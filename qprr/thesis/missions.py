@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from ..charts import as_interval, as_vector, checked_module
+from ..charts import as_interval, as_real, as_vector, checked_module
 from ..errors import InputError, UnknownNameError
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
 
@@ -66,6 +66,7 @@ def aggressive_reach(climb: float = 2.0, forward: float = 0.6, *, start: float =
     Q-PRR's 20 N rotors are near their top during the acceleration).
     """
     r0, t2, t3 = as_vector(arm, 3, "arm")
+    duration = as_real(duration, "duration", positive=True, unit="s")
     t1, t2_ = start, start + duration
     phases = (Phase("z", t1, t2_, z0 + climb), Phase("x", t1, t2_, forward), Phase("r0", t1, t2_, float(r0)),
               Phase("theta2", t1, t2_, float(t2)), Phase("theta3", t1, t2_, float(t3)))

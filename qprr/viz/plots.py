@@ -40,7 +40,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_vector, euler_to_rotation_batch, force_to_xi_batch
+from ..charts import as_int, as_vector, euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..sim import SimResult
 
@@ -105,8 +105,16 @@ def pretty(name: str) -> str:
     return f"${base}_{{{sub}}}$" if sub else f"${base}$"
 
 
+def _check_res(res) -> SimResult:
+    """``res`` if it is a :class:`~qprr.sim.SimResult`, else an :class:`InputError` naming it."""
+    if not isinstance(res, SimResult):
+        raise InputError(f"res must be a qprr SimResult (qprr.sim.simulate, SimResult.load), got {type(res).__name__}")
+    return res
+
+
 def coordinate_kinds(res: SimResult) -> tuple[str, ...]:
     """Kind of each entry of xi: "length" (x, y, z, prismatic joints), "angle" (Euler angles, revolute joints) or "unknown"."""
+    _check_res(res)
     kinds = ["length"] * 3 + ["angle"] * 3
     arm = tuple(getattr(res, "arm_kinds", ()) or ())
     for k in range(res.n_arm):
@@ -260,6 +268,7 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
 
 def applied_forces(res: SimResult) -> np.ndarray:
     """u applied = S^T N f (thesis coordinates, (m, n_xi)): the controller's u minus what the allocation could not produce."""
+    _check_res(res)
     R = euler_to_rotation_batch(res.xi[:, 3:6])
     return res.u - force_to_xi_batch(R, res.xi, res.unallocated)
 
@@ -484,6 +493,7 @@ def _panel(spec) -> Panel:
 
 def scenario_figures(res: SimResult) -> dict[str, str]:
     """Figure numbers per panel of the scenario that made ``res`` (:attr:`Scenario.figures`; {} for a custom run)."""
+    _check_res(res)
     try:
         from ..scenarios import SCENARIOS
 
@@ -495,6 +505,7 @@ def scenario_figures(res: SimResult) -> dict[str, str]:
 
 def scenario_source(res: SimResult) -> str:
     """The thesis section a scenario's result reproduces ("" for a custom run)."""
+    _check_res(res)
     try:
         from ..scenarios import SCENARIOS
 
@@ -543,8 +554,8 @@ def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, 
     -------
     The ``path`` when given; with ``ax``, the Axes' Figure; else a new Figure.
     """
-    if not isinstance(res, SimResult):
-        raise InputError(f"plot_result needs a qprr SimResult, got {type(res).__name__}")
+    _check_res(res)
+    dpi = as_int(dpi, "dpi", lo=1)
     explicit = panels is not None
     if panels is None:
         panels = DEFAULT_PANELS
@@ -603,6 +614,7 @@ def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, 
 
 def default_title(res: SimResult) -> str:
     """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in degrees)."""
+    _check_res(res)
     src = scenario_source(res)
     on = f" on {res.platform}" if res.platform else ""
     head = f"{res.scenario} / {res.controller}{on} ({res.status}, {res.n} steps of {1e3 * res.control_period:g} ms)"
