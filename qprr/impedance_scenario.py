@@ -194,6 +194,5 @@ def plot_ee_impedance(result: SimResult, path) -> Path:
             a.axvline(x, color="k", lw=0.6, ls=":")
     law = " (Thesis (6.72)-(6.73))" if result.controller.startswith("opspace") else " (no impedance law; dashed: what it would do)"
     fig.suptitle(f"{result.scenario} on {result.platform}: {result.controller}{law}")
-    fig.tight_layout()
     fig.savefig(path, dpi=80)
     return path

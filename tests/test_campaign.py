@@ -11,10 +11,11 @@ import pytest
 from qprr.campaign import CampaignSpec, Distribution, make_backend, run_campaign
 from qprr.campaign.metrics import metrics_of
 from qprr.campaign.report import report, summarize
-from qprr.campaign.targets import flight, scale_bandwidth
+from qprr.campaign.targets import scale_bandwidth
 from qprr.errors import InputError, MissingDependencyError, UnknownNameError
 from qprr.scenarios import run
 from qprr.thesis import gains
+from qprr.thesis.flight import flight
 
 SMALL = {
     "name": "small", "scenario": "static-idc", "seed": 11, "samples": 2,

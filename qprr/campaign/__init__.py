@@ -10,8 +10,10 @@ module                          what
 :mod:`qprr.campaign.store`      results appended to CSV / Parquet as they arrive; resume; read
 :mod:`qprr.campaign.runner`     :func:`run_campaign`: the one loop, with a progress line
 :mod:`qprr.campaign.report`     summary statistics per group, box plots, heat maps, success curves
-:mod:`qprr.campaign.targets`    :func:`~qprr.campaign.targets.flight`: a flight with its mission,
-                                gains and disturbances exposed as parameters
+:mod:`qprr.campaign.targets`    :func:`~qprr.campaign.targets.scale_bandwidth`: one factor on a
+                                loop's bandwidth (the thesis's flight as a target with its
+                                mission, gains and disturbances as parameters:
+                                :func:`qprr.thesis.flight.flight`)
 :mod:`qprr.campaign.cli`        ``qprr campaign run SPEC`` / ``qprr campaign report RESULTS``
 ==============================  ==================================================================
 

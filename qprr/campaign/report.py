@@ -182,7 +182,6 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
     ax.set_xlabel(by)
     ax.grid(alpha=0.3, axis="y")
     ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (completed runs)")
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
 
@@ -269,7 +268,6 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
     if by:
         ax.legend(title=by)
     ax.set_title(title or f"{results.spec.get('name', '')}: success rate against {x}")
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
 
@@ -321,7 +319,6 @@ def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "
     if by:
         ax.legend(title=by, fontsize=8)
     ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
 
@@ -350,7 +347,6 @@ def scatter_plot(results: Results, x: str, metric: str, path, by: str | None = "
     if by:
         ax.legend(fontsize=8)
     ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
 

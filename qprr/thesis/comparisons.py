@@ -168,7 +168,6 @@ def compare_noise(runs: _Runs, plot_dir: Path | None) -> Report:
         ax[2, 1].set_xlabel("t [s]")
         fig.suptitle("Fig. 6.23: white noise u_ext of (6.27) (seeded, uniform; +-0.3 on seven forces, +-0.01 N m on the revolute joints)",
                      fontsize=10)
-        fig.tight_layout()
         p = figure_path(_dir(plot_dir, "fig-6.23-noise.png"))
         fig.savefig(p, dpi=80)
         _save(rep, p)
@@ -230,7 +229,6 @@ def compare_sweeps(runs: _Runs, plot_dir: Path | None) -> Report:
             a.legend(fontsize=7)
             a.set_xlabel("t [s]")
         fig.suptitle("Figs. 6.42-6.45: CoG stabiliser (BSG + MFC) on the dynamic mission", fontsize=10)
-        fig.tight_layout()
         p = figure_path(_dir(plot_dir, "fig-6.42-6.45-sweeps.png"))
         fig.savefig(p, dpi=80)
         _save(rep, p)
@@ -326,7 +324,6 @@ def _plot_reach(idc: SimResult, mpc: SimResult, platform, path) -> Path:
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
         a.set_xlabel("t [s]")
-    fig.tight_layout()
     path = figure_path(path)
     fig.savefig(path, dpi=80)
     return path
@@ -401,7 +398,6 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8)
         ax.set_title("static mission with a first-order motor lag", fontsize=10)
-        fig.tight_layout()
         p = figure_path(_dir(plot_dir, "motor-lag.png"))
         fig.savefig(p, dpi=80)
         _save(rep, p)

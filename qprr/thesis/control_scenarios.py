@@ -158,7 +158,6 @@ def plot_point_to_point(result: SimResult, path) -> Path:
         a.grid(alpha=0.3)
         a.legend(fontsize=8)
     fig.suptitle(f"point-to-point regulation (Sec. 6.3.1.1, Fig. 6.4): IDC K_P = 30 I, K_D = 18 I; {result.platform}", fontsize=10)
-    fig.tight_layout()
     fig.savefig(path, dpi=90)
     return path
 
@@ -243,7 +242,6 @@ def plot_realistic(result: SimResult, path) -> Path:
     for a in ax:
         a.grid(alpha=0.3)
     fig.suptitle(f"{result.scenario} / {result.controller}: wind (mean + Dryden + gust) and rotor speeds", fontsize=10)
-    fig.tight_layout()
     fig.savefig(p2, dpi=80)
     return out
 

@@ -79,7 +79,6 @@ def plot_overlay(results: Mapping[str, SimResult], path, *, rows: Sequence[str] 
         a.set_xlabel("t [s]")
     if title:
         fig.suptitle(title, fontsize=10)
-    fig.tight_layout()
     path = figure_path(path)
     fig.savefig(path, dpi=80)
     return path
@@ -106,7 +105,6 @@ def plot_rmse_bars(table: Mapping[str, Mapping[str, float]], path, *, title: str
     ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     if title:
         ax.set_title(title, fontsize=10)
-    fig.tight_layout()
     path = figure_path(path)
     fig.savefig(path, dpi=80)
     return path
