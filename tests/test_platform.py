@@ -100,12 +100,13 @@ def test_bad_urdf_mass_is_refused_not_dropped(value, match):
 
 
 def test_urdf_with_a_non_physical_link_is_refused_unless_asked():
-    i2 = P.links[1].inertia  # Table 3.2's link 2: 2.274e-5 + 2.2767e-5 < 5.013e-5 kg m^2
-    if i2[0] + i2[2] >= i2[1]:
-        pytest.skip("the thesis parameters now carry a physical link 2 (issue 8)")
+    printed = qprr.thesis.thesis_params(table_3_2="printed-nonphysical")
+    i2 = printed.links[1].inertia  # Table 3.2's link 2 as printed: 2.274e-5 + 2.2767e-5 < 5.013e-5 kg m^2
+    assert i2[0] + i2[2] < i2[1]
+    text = build_urdf(printed)
     with pytest.raises(NonPhysicalError, match="link2.*triangle inequality"):
-        _load(TEXT)
-    platform = _load(TEXT, allow_nonphysical=True)
+        _load(text)
+    platform = _load(text, allow_nonphysical=True)
     assert "WARNING" in platform.provenance
 
 
