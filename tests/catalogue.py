@@ -41,6 +41,7 @@ import signal
 import tempfile
 import time
 import types
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -1096,7 +1097,9 @@ def knows_size(pl: Plan) -> bool:
 def _call(pl: Plan, ctx: Ctx, override, timeout: float):
     instance = instance_of(pl.target.owner, ctx) if pl.target.owner is not None else None
     fn, args, kwargs = _bound(pl, ctx, instance, override)
-    with _time_limit(timeout):
+    with _time_limit(timeout), warnings.catch_warnings():
+        if override is not None:  # numpy's warnings on the bad value itself (NaN, complex: a ComplexWarning is one)
+            warnings.simplefilter("ignore", RuntimeWarning)
         return fn(*args, **kwargs)
 
 
