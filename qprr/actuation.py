@@ -63,6 +63,9 @@ def generalized_wrench_xi(platform: Platform, data: pin.Data, xi, wrench_world, 
 # ================================================================================ allocation
 _WRENCH_NAMES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
 
+DEMAND_BOUND = 1e150
+"""Bound on the norm of a demanded generalised force in the simulator's screened allocation (beyond it, or NaN: refused)."""
+
 ALLOCATION_SETTINGS = QPSettings(eps_abs=1e-10, eps_primal_inf=1e-12, eps_dual_inf=1e-12, max_iter=10000)
 """proxsuite settings of the allocation QPs: thrusts to 1e-10 N in the scaled problem."""
 
@@ -163,15 +166,20 @@ class Allocator:
     def _bind_fast_path(self) -> None:
         """Replace :meth:`allocate_into` on this instance by its form compiled for this allocator (see ``_FAST_PATH``).
 
-        Subclasses that override :meth:`allocate_into` keep their own.
+        Subclasses that override :meth:`allocate_into` keep their own.  The simulator's form
+        ``_screened_into`` first screens ``tau_d``: if its norm is NaN, inf or >= ``DEMAND_BOUND`` it writes
+        nothing and returns -1 (the loop then names the controller's bad entry); else it is
+        :meth:`allocate_into`.
         """
         if type(self).allocate_into is Allocator.allocate_into:
             self.allocate_into = MethodType(_compile_fast_path(self), self)
+            self._screened_into = MethodType(_compile_fast_path(self, screened=True), self)
 
     def __getstate__(self) -> dict:
         """Pickle the values, not the compiled :meth:`allocate_into` (rebuilt by :meth:`__setstate__`)."""
         state = self.__dict__.copy()
         state.pop("allocate_into", None)
+        state.pop("_screened_into", None)
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -321,7 +329,7 @@ class Allocator:
 _FAST_PATH = """
 def allocate_into(self, tau_d, f_out, tau_out=None):
     {T}, = tau_d.tolist()
-    f = _P.dot(tau_d[_rows])
+{GUARD}    f = _P.dot(tau_d[_rows])
     {F}, = f.tolist()
     flags = 0
     if not ({INSIDE}):
@@ -359,8 +367,8 @@ _ARM_FINITE = """    if not isfinite({SUM}):
 """
 
 
-def _compile_fast_path(alloc: Allocator):
-    """:meth:`Allocator.allocate_into` compiled for ``alloc`` (the template ``_FAST_PATH``)."""
+def _compile_fast_path(alloc: Allocator, screened: bool = False):
+    """:meth:`Allocator.allocate_into` compiled for ``alloc`` (the template ``_FAST_PATH``); ``screened``: -1 on a bad ``tau_d``."""
     n, m = alloc.n_rotors, alloc.n_arm
     nv = 6 + m
     fs = [f"f{i}" for i in range(n)]
@@ -373,9 +381,12 @@ def _compile_fast_path(alloc: Allocator):
     else:
         arm_src = _ARM_FINITE.format(SUM=" + ".join(["0.0", *arm]), A0=", ".join(arm))
     tau = ", ".join("0.0" if i in alloc._zero_rows else f"t{i}" for i in range(nv))
-    src = _FAST_PATH.format(T=", ".join(f"t{i}" for i in range(nv)), F=", ".join(fs), A="".join(f", {a}" for a in arm),
+    ts = ", ".join(f"t{i}" for i in range(nv))
+    guard = f"    if not hypot({ts}) < _bound:\n        return -1\n" if screened else ""
+    src = _FAST_PATH.format(T=ts, GUARD=guard, F=", ".join(fs), A="".join(f", {a}" for a in arm),
                             INSIDE=inside, ARM=arm_src, GENERAL="flags" if alloc.square else "True", A0=", ".join(arm), TAU=tau)
-    ns = {"np": np, "isfinite": math.isfinite, "_P": alloc.Omega_P_inv, "_rows": alloc._rows, "_F8": np.dtype(np.float64),
+    ns = {"np": np, "isfinite": math.isfinite, "hypot": math.hypot, "_bound": DEMAND_BOUND, "_P": alloc.Omega_P_inv, "_rows": alloc._rows,
+          "_F8": np.dtype(np.float64),
           "_pack_f": struct.Struct(f"={n + m}d").pack_into, "_pack_tau": struct.Struct(f"={nv}d").pack_into,
           "_struct_error": struct.error}
     ns.update({f"_lo{i}": x for i, x in enumerate(alloc._lo)})

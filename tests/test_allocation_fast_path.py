@@ -48,7 +48,7 @@ def _run(alloc_into, tau, n_act, nv):
     f, t = np.full(n_act, -7.0), np.full(nv, -7.0)
     try:
         flags = alloc_into(tau, f, t)
-    except Exception as err:  # noqa: BLE001 - the two forms must raise the same error
+    except Exception as err:  # the two forms must raise the same error
         return ("error", type(err), str(err))
     return flags, f, t
 
@@ -115,3 +115,21 @@ def test_copies_rebuild_the_compiled_method_for_themselves():
         assert other.allocate_into(tau, f1) == alloc.allocate_into(tau, f2) == 3
         np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-7 * p.thrust_max.max())
         assert other.qp_calls == calls + 1  # the copy's own counter: its method is bound to it
+
+
+@settings(max_examples=40, deadline=None)
+@given(scale=st.floats(-2.0, 2.0), bad_at=st.integers(0, 8), bad=st.sampled_from([np.nan, np.inf, -np.inf, 1e151, -3e200]))
+def test_screened_form_refuses_exactly_the_bad_demands(scale, bad_at, bad):
+    """The simulator's ``_screened_into``: -1 and nothing written when the norm of tau_d is NaN, inf or
+    >= DEMAND_BOUND (even on a row no rotor produces), else allocate_into's answer."""
+    alloc = Allocator(qprr.thesis.load())
+    p = alloc.platform
+    tau = p.actuation_matrix @ np.concatenate([alloc.hover_thrusts() * (1.0 + 0.2 * scale), scale * p.arm_effort_limits])
+    f1, t1, f2, t2 = (np.zeros(n) for n in (p.n_actuators, p.nv, p.n_actuators, p.nv))
+    assert alloc._screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2) >= 0
+    np.testing.assert_array_equal(f1, f2)
+    np.testing.assert_array_equal(t1, t2)
+    tau[bad_at] = bad
+    f1[:], t1[:] = -7.0, -7.0
+    assert alloc._screened_into(tau, f1, t1) == -1
+    assert np.all(f1 == -7.0) and np.all(t1 == -7.0)
