@@ -16,7 +16,9 @@ thrusts closest to the unconstrained ones.  The base wrench the rotors cannot pr
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass
+from types import MethodType
 
 import numpy as np
 import pinocchio as pin
@@ -60,6 +62,9 @@ def generalized_wrench_xi(platform: Platform, data: pin.Data, xi, wrench_world, 
 
 # ================================================================================ allocation
 _WRENCH_NAMES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
+
+DEMAND_BOUND = 1e150
+"""Bound on the norm of a demanded generalised force in the simulator's screened allocation (beyond it, or NaN: refused)."""
 
 ALLOCATION_SETTINGS = QPSettings(eps_abs=1e-10, eps_primal_inf=1e-12, eps_dual_inf=1e-12, max_iter=10000)
 """proxsuite settings of the allocation QPs: thrusts to 1e-10 N in the scaled problem."""
@@ -156,6 +161,30 @@ class Allocator:
         self._uniform = bool(np.all(f_min == f_min[0]) and np.all(f_max == f_max[0]))
         self._zero_rows = [i for i in range(6) if i not in self.rows]
         self.qp_calls = 0
+        self._bind_fast_path()
+
+    def _bind_fast_path(self) -> None:
+        """Replace :meth:`allocate_into` on this instance by its form compiled for this allocator (see ``_FAST_PATH``).
+
+        Subclasses that override :meth:`allocate_into` keep their own.  The simulator's form
+        ``_screened_into`` first screens ``tau_d``: if its norm is NaN, inf or >= ``DEMAND_BOUND`` it writes
+        nothing and returns -1 (the loop then names the controller's bad entry); else it is
+        :meth:`allocate_into`.
+        """
+        if type(self).allocate_into is Allocator.allocate_into:
+            self.allocate_into = MethodType(_compile_fast_path(self), self)
+            self._screened_into = MethodType(_compile_fast_path(self, screened=True), self)
+
+    def __getstate__(self) -> dict:
+        """Pickle the values, not the compiled :meth:`allocate_into` (rebuilt by :meth:`__setstate__`)."""
+        state = self.__dict__.copy()
+        state.pop("allocate_into", None)
+        state.pop("_screened_into", None)
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        self._bind_fast_path()
 
     @property
     def weights(self) -> np.ndarray:
@@ -227,6 +256,9 @@ class Allocator:
 
         ``tau_d`` (nv,) float64; ``f_out`` (n_rotors + n_arm,) and ``tau_out`` (nv,) float64 arrays.
         Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.
+
+        This generic form is the reference; each instance runs the same steps compiled for its
+        rotor count, arm joints, bounds and zero rows (``_FAST_PATH``; tests compare the two).
         """
         f = self.Omega_P_inv.dot(tau_d[self._rows])
         fl = f.tolist()
@@ -285,6 +317,84 @@ class Allocator:
         if np.any(f < self.f_min - 1e-12) or np.any(f > self.f_max + 1e-12):
             raise InputError(f"platform {p.name!r} cannot hover at this configuration within its thrust bounds: f = {f.tolist()} N")
         return f
+
+
+# The fast path of Allocator.allocate_into, compiled per allocator from this template (as State's hot
+# methods in qprr.charts): fixed-length unpacking of plain floats, chained comparisons with the bounds
+# (bound as globals _lo<i>, _hi<i>, _am<k> = -limit, _ap<k> = +limit), one buffer write.  Placeholders:
+# {T} "t0, ..., t<nv-1>" (tau_d), {F} "f0, ..., f<n-1>" (rotor thrusts), {A} the arm efforts, {INSIDE}
+# the rotor bound test, {ARM} the arm test, {TAU} the exact N f (zero rows zeroed).  The steps and
+# errors are those of the generic method: NaN fails every bound test, so a NaN wrench reaches
+# _solve_qp (which names it) and a NaN arm effort _check_arm_finite.
+_FAST_PATH = """
+def allocate_into(self, tau_d, f_out, tau_out=None):
+    {T}, = tau_d.tolist()
+{GUARD}    f = _P.dot(tau_d[_rows])
+    {F}, = f.tolist()
+    flags = 0
+    if not ({INSIDE}):
+        f = self._solve_qp(tau_d[self.rows], f)
+        {F}, = f.tolist()
+        flags = 1
+{ARM}
+    if f_out.dtype is _F8:
+        try:
+            _pack_f(f_out, 0, {F}{A})
+        except (TypeError, _struct_error):
+            f_out[:] = ({F}{A})
+    else:
+        f_out[:] = ({F}{A})
+    if tau_out is not None:
+        if {GENERAL}:
+            tau_out[0:6] = self.Omega @ f
+            tau_out[6:] = [{A0}]
+        elif tau_out.dtype is _F8:
+            try:
+                _pack_tau(tau_out, 0, {TAU})
+            except (TypeError, _struct_error):
+                tau_out[:] = ({TAU},)
+        else:
+            tau_out[:] = ({TAU},)
+    return flags
+"""
+_ARM_CLIP = """    if not ({TEST}):
+        self._check_arm_finite([{A0}])
+        {A0}, = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
+        flags |= 2
+"""
+_ARM_FINITE = """    if not isfinite({SUM}):
+        self._check_arm_finite([{A0}])
+"""
+
+
+def _compile_fast_path(alloc: Allocator, screened: bool = False):
+    """:meth:`Allocator.allocate_into` compiled for ``alloc`` (the template ``_FAST_PATH``); ``screened``: -1 on a bad ``tau_d``."""
+    n, m = alloc.n_rotors, alloc.n_arm
+    nv = 6 + m
+    fs = [f"f{i}" for i in range(n)]
+    arm = [f"t{6 + k}" for k in range(m)]
+    inside = " and ".join(f"_lo{i} <= f{i} <= _hi{i}" for i in range(n))
+    if not m:
+        arm_src = ""
+    elif alloc.clip_arm:
+        arm_src = _ARM_CLIP.format(TEST=" and ".join(f"_am{k} <= t{6 + k} <= _ap{k}" for k in range(m)), A0=", ".join(arm))
+    else:
+        arm_src = _ARM_FINITE.format(SUM=" + ".join(["0.0", *arm]), A0=", ".join(arm))
+    tau = ", ".join("0.0" if i in alloc._zero_rows else f"t{i}" for i in range(nv))
+    ts = ", ".join(f"t{i}" for i in range(nv))
+    guard = f"    if not hypot({ts}) < _bound:\n        return -1\n" if screened else ""
+    src = _FAST_PATH.format(T=ts, GUARD=guard, F=", ".join(fs), A="".join(f", {a}" for a in arm),
+                            INSIDE=inside, ARM=arm_src, GENERAL="flags" if alloc.square else "True", A0=", ".join(arm), TAU=tau)
+    ns = {"np": np, "isfinite": math.isfinite, "hypot": math.hypot, "_bound": DEMAND_BOUND, "_P": alloc.Omega_P_inv, "_rows": alloc._rows,
+          "_F8": np.dtype(np.float64),
+          "_pack_f": struct.Struct(f"={n + m}d").pack_into, "_pack_tau": struct.Struct(f"={nv}d").pack_into,
+          "_struct_error": struct.error}
+    ns.update({f"_lo{i}": x for i, x in enumerate(alloc._lo)})
+    ns.update({f"_hi{i}": x for i, x in enumerate(alloc._hi)})
+    ns.update({f"_am{k}": -x for k, x in enumerate(alloc._lim)})
+    ns.update({f"_ap{k}": x for k, x in enumerate(alloc._lim)})
+    exec(compile(src, f"<qprr.actuation.Allocator fast path, {n} rotors, {m} arm joints>", "exec"), ns)
+    return ns["allocate_into"]
 
 
 class IdealAllocator(Allocator):

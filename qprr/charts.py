@@ -602,13 +602,15 @@ class FloatWriter:
 # ", d0, d1, ..." (arm rates or accelerations or efforts); fixed-length unpacking of plain floats
 # costs half of star-unpacking, and these run several times per millisecond of simulated time.
 _HOT_METHODS = """
-def update(self, t, q, v):
+def update(self, t, q, v, v_bound=None):
     self.t = t
     self.q = q
     self.v = v
     x, y, z, qx, qy, qz, qw{Q} = q.tolist()
     self._v = vl = v.tolist()
     vx, vy, vz, wx_, wy_, wz_{D} = vl
+    if v_bound is not None and not hypot(vx, vy, vz, wx_, wy_, wz_{D}) < v_bound:
+        return False
     xx, yy, zz = qx * qx, qy * qy, qz * qz
     xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
     r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
@@ -631,6 +633,7 @@ def update(self, t, q, v):
     self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
                      wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d{D}]
     self._wv(self.xi_dot, xd)
+    return True
 
 
 def _from_xi(self, t, xi, xd, arrays, reuse):
@@ -741,7 +744,9 @@ class State:
     Methods (compiled for ``n_arm`` from one template, see ``_HOT_METHODS``; tests check them
     against the array functions of this module):
 
-    * ``update(t, q, v)``: fill every field from (q, v); DivergenceError at the Euler singularity or on NaN;
+    * ``update(t, q, v, v_bound=None)``: fill every field from (q, v); DivergenceError at the Euler singularity or on NaN;
+      returns True, or False with only ``t``, ``q``, ``v`` set when the norm of v is NaN or not below ``v_bound``
+      (the simulator's per-tick velocity screen);
     * ``accel_to_v_list(xi_ddot)``: Pinocchio's a = S xi_ddot + S_dot xi_dot as a list of floats;
     * ``force_to_xi_list(tau)``: u = S^T tau (Thesis (5.40)-(5.43), R_Q = S^T) as a list;
     * ``force_from_xi(u, out=None)``: tau = S^-T u (into ``out`` if given, a float64 array);

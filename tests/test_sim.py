@@ -281,6 +281,22 @@ def test_runaway_names_the_state(free_robot):
     assert err.value.result.status == "diverged"
 
 
+def test_velocity_runaway_is_reported_at_the_tick_it_happened(free_robot):
+    """No gravity, constant thrust: v_z grows by (f / M_eff) per second; the velocity bound stops the run at the end
+    of the first tick whose v_z is beyond it, and the logged ticks stop there (the named check is screened by the
+    next tick's State.update, the report is the same as a check at the end of the tick)."""
+    m = free_robot.params.total_mass
+    push = OpenLoop(np.r_[0, 0, 2.0 * m, 0, 0, 0, 0, 0, 0])  # about 2 m/s^2 up
+    with pytest.raises(DivergenceError, match=r"diverged at t = (\d\.\d{3}) s: velocity v_z = ") as err:
+        simulate(free_robot, push, Hold(), 3.0, limits=Limits(linear_velocity=1.0), integrator="midpoint")
+    t_report = float(err.value.args[0].split("t = ")[1].split(" s")[0])
+    res = err.value.result
+    assert res.status == "diverged" and t_report == pytest.approx(res.n * 1e-3, abs=1e-9)
+    assert 0.45 < t_report < 0.55  # 1 m/s at about 0.5 s
+    vz_last = res.xi_dot[res.n - 1, 2]  # the last logged tick starts below the bound (world z = body z: level hold)
+    assert 0.99 < vz_last < 1.0
+
+
 # ------------------------------------------------------------------------------ hooks
 def test_payload_changes_the_plant_copy_only(robot):
     """Hover with a 0.2 kg payload needs (m + m_p) g; at m g the system sinks at m_p g / (m + m_p)."""

@@ -53,7 +53,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..actuation import Allocator
+from ..actuation import DEMAND_BOUND, Allocator
 from ..charts import State, as_vector
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError, UnknownNameError
@@ -271,7 +271,9 @@ def simulate(
     payload_pending = plant_payload.pending
     b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
     add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
-    allocate = alloc.allocate_into if robot is platform else PlantActuators(alloc, robot).allocate_into
+    # the allocator's screened form checks tau_d itself (returns -1 on NaN, inf or |tau_d| >= _HUGE)
+    screened = getattr(alloc, "_screened_into", None) if robot is platform else None
+    allocate = screened or (alloc.allocate_into if robot is platform else PlantActuators(alloc, robot).allocate_into)
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     arm_range = range(n_arm)
     t_start = time.perf_counter()
@@ -284,7 +286,12 @@ def simulate(
                 plant_payload.apply_until(tk)
                 payload_pending = plant_payload.pending
             state.xi, state.xi_dot = xi_log[k], xid_log[k]  # the state writes its xi straight into the log
-            update(tk, q, v)
+            if not update(tk, q, v, v_bound):  # |v| NaN or >= v_bound at the end of the previous tick: named check there
+                if k:
+                    k -= 1  # the state diverged during the previous tick: report it there (time, logged ticks)
+                    _check(platform, tk, q, v, bounds)
+                    k += 1
+                update(tk, q, v)  # no entry beyond its own bound: go on
             ref.xi, ref.xi_dot, ref.xi_ddot = xi_d[k], xi_dot_d[k], xi_ddot_d[k]
             if pin_out:
                 tau_d = step(tk, state, ref)
@@ -293,10 +300,12 @@ def simulate(
                 u = step(tk, state, ref)
                 u_log[k] = u
                 tau_d = force_from_xi(u, tau_d_buf)
-            if not hypot(*tau_d.tolist()) < _HUGE:  # NaN, inf or absurd controller output
+            if screened is None and not hypot(*tau_d.tolist()) < _HUGE:  # NaN, inf or absurd controller output
                 raise _bad_output(platform, controller, tk, u_log[k], pin_out)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
+                if fl < 0:  # the screened allocator refused tau_d: NaN, inf or absurd controller output
+                    raise _bad_output(platform, controller, tk, u_log[k], pin_out)
                 flags[k] = fl
             if rotors is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
                 fc = f_log[k, 0:nr]
@@ -339,9 +348,10 @@ def simulate(
                             q, v = apply_joint_stops(model, data, q, v, lo, hi)
                             flags[k] |= 4
                             break
-            # every tick: the norm of v bounds every velocity (NaN fails it); q, which only integrates v, every 16
-            # ticks (a finite v keeps q finite; the position bound is a slow drift); the named check only on failure
-            if not (hypot(*v.tolist()) < v_bound and (k & 15 or hypot(*q.tolist()) < q_bound)):
+            # every tick: the norm of v bounds every velocity (NaN fails it), screened by the next tick's update (and the
+            # final check); q, which only integrates v, every 16 ticks (a finite v keeps q finite; the position bound is
+            # a slow drift); the named check only on failure
+            if not (k & 15 or hypot(*q.tolist()) < q_bound):
                 _check(platform, tk + period, q, v, bounds)
             if progress and k % bar.every == 0:
                 bar.update(k)
@@ -552,7 +562,7 @@ def _check(platform: Platform, t: float, q: np.ndarray, v: np.ndarray, bounds) -
             raise DivergenceError(f"diverged at t = {t:.3f} s: velocity {label} = {x!r} (bound {bound})")
 
 
-_HUGE = 1e150
+_HUGE = DEMAND_BOUND
 """Bound on the norm of a controller's output: beyond it (or NaN) the run stops naming the entry."""
 
 
