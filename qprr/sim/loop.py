@@ -271,7 +271,7 @@ def simulate(
     payload_pending = plant_payload.pending
     b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
     add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
-    # the allocator's screened form checks tau_d itself (returns -1 on NaN, inf or |tau_d| >= _HUGE)
+    # the allocator's screened form checks tau_d itself (returns -1 on NaN, inf or |tau_d| >= DEMAND_BOUND)
     screened = getattr(alloc, "_screened_into", None) if robot is platform else None
     allocate = screened or (alloc.allocate_into if robot is platform else PlantActuators(alloc, robot).allocate_into)
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
@@ -300,7 +300,7 @@ def simulate(
                 u = step(tk, state, ref)
                 u_log[k] = u
                 tau_d = force_from_xi(u, tau_d_buf)
-            if screened is None and not hypot(*tau_d.tolist()) < _HUGE:  # NaN, inf or absurd controller output
+            if screened is None and not hypot(*tau_d.tolist()) < DEMAND_BOUND:  # NaN, inf or absurd controller output
                 raise _bad_output(platform, controller, tk, u_log[k], pin_out)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
@@ -560,10 +560,6 @@ def _check(platform: Platform, t: float, q: np.ndarray, v: np.ndarray, bounds) -
         if not abs(x) < bound:
             label = _BASE_V[i] if i < 6 else f"{names[i]}_dot"
             raise DivergenceError(f"diverged at t = {t:.3f} s: velocity {label} = {x!r} (bound {bound})")
-
-
-_HUGE = DEMAND_BOUND
-"""Bound on the norm of a controller's output: beyond it (or NaN) the run stops naming the entry."""
 
 
 def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out: bool) -> DivergenceError:

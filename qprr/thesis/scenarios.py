@@ -368,14 +368,8 @@ def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: boo
     push = as_interval(push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
     trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
-    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
-                     friction=friction)
-    ctrl = _push_controller(controller, platform, obj)
-    res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
-                   scenario="push-thrust")
-    _contact_series(res, obj)
-    res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
-    return res
+    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
+                 seed)
 
 
 def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: bool = False, *, push=(2.0, 7.0),
@@ -387,11 +381,18 @@ def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: 
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
+    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
+                 seed)
+
+
+def _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
+          seed) -> SimResult:
+    """The pushing flight of Thesis Sec. 6.4.3 from ``xi0`` along ``trajectory`` (named after it), the object at the end effector."""
     obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
                      friction=friction)
     ctrl = _push_controller(controller, platform, obj)
     res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
-                   scenario="push-prismatic")
+                   scenario=trajectory.name)
     _contact_series(res, obj)
     res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
     return res
