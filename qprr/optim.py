@@ -217,12 +217,15 @@ class Lexicographic:
     def solve_box_qp(self, level: int, H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, int]:
         """min 1/2 z^T H z + g^T z s.t. lo <= C z <= up with the checked settings; (z, iterations).
 
-        Rows of C that are zero to rounding (a bounded variable the free directions do not move)
-        are dropped: they hold at every z when lo <= 0 <= up, and left in they make ProxQP's
-        infeasibility test fire on a feasible problem (observed on the 11-DOF hextilt_flying_arm_5).
+        Rows of C that are zero to the rank tolerance (a bounded variable the free directions do
+        not move; the free directions themselves are only known to ``rank_tol``) are dropped: they
+        hold at every z when lo <= 0 <= up, and left in they make ProxQP's infeasibility test fire
+        on a feasible problem (observed on the 11-DOF hextilt_flying_arm_5) and the exact
+        active-set fallback cycle between collinear near-zero rows (a 3R arm on a unicycle, rows
+        of 1e-11 at a joint limit).
         """
         m = H.shape[0]
-        keep = np.abs(C).max(axis=1) > 1e-12 * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
+        keep = np.abs(C).max(axis=1) > self.rank_tol * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
         if not keep.all():
             C, lo, up = C[keep], lo[keep], up[keep]
         qp, fresh = self._qp(m, C.shape[0])

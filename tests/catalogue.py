@@ -48,6 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
+from qprr.errors import MissingDependencyError
+
 TIMEOUT = 2.0
 """Seconds a single call may run (a bad value that is not checked may start a long computation)."""
 
@@ -113,7 +115,7 @@ def walk(package: str = "qprr") -> list[Target]:
             continue
         try:
             modules.append(importlib.import_module(m.name))
-        except ImportError:  # an optional dependency (qprr.errors.MissingDependencyError is one): nothing to feed
+        except MissingDependencyError:  # an optional dependency is absent: nothing to feed (any other error fails)
             MISSING.append(m.name)
     for mod in modules:
         for name in public_names(mod):

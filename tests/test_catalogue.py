@@ -48,6 +48,8 @@ def test_allowed_entries_are_explained_and_in_use(report):
     used = {(o.target, o.param, o.label) for o in report.outcomes if o.verdict == "allowed"}
     for (pattern, param, label), why in catalogue.ALLOWED.items():
         assert why.strip(), f"allow-list entry {(pattern, param, label)} has no reason"
+        if any(pattern.startswith(module + ".") for module in catalogue.MISSING):
+            continue  # its module needs an optional dependency that is not installed: no case can use it here
         assert any(fnmatch.fnmatchcase(t, pattern) and fnmatch.fnmatchcase(p, param) and fnmatch.fnmatchcase(lb, label)
                    for t, p, lb in used), f"stale allow-list entry {(pattern, param, label)}: no case uses it"
 

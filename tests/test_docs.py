@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import importlib
 import io
@@ -25,6 +26,8 @@ import sys
 from pathlib import Path
 
 import pytest
+
+from qprr.errors import MissingDependencyError
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "docs").glob("*.md")) + ["README.md"]
@@ -96,9 +99,12 @@ def resolve(dotted: str) -> str:
             if exc.name is not None and (name == exc.name or name.startswith(exc.name + ".")):
                 continue
             raise
-        except ImportError as exc:  # an optional dependency of the module (MissingDependencyError)
-            path = ROOT / Path(*parts[:i]).with_suffix(".py")
-            return "" if path.is_file() and i == len(parts) else f"{name}: {exc}"
+        except MissingDependencyError as exc:  # an optional dependency is absent: read the module's source instead
+            for j in range(i, 0, -1):
+                path = ROOT / Path(*parts[:j]).with_suffix(".py")
+                if path.is_file():
+                    return defined_in_source(path, parts[j:], ".".join(parts[:j]))
+            return f"{name}: {exc}"
         path = Path(getattr(obj, "__file__", "") or "").resolve()
         if not path.is_relative_to(ROOT):
             return f"{name} is not in this repository ({path})"
@@ -108,6 +114,25 @@ def resolve(dotted: str) -> str:
             obj = getattr(obj, attr)
         return ""
     return f"no module {parts[0]!r}"
+
+
+def defined_in_source(path: Path, attrs: list[str], module: str) -> str:
+    """"" if the attribute chain ``attrs`` (a class, then a method...) is defined in the source file ``path``, else why
+    not: the check of a module that cannot be imported here because an optional dependency is absent."""
+    body = ast.parse(path.read_text()).body
+    for k, attr in enumerate(attrs):
+        found = None
+        for node in body:
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and node.name == attr:
+                found = node
+            elif isinstance(node, (ast.Assign, ast.AnnAssign)):
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                if any(isinstance(t, ast.Name) and t.id == attr for t in targets):
+                    found = node
+        if found is None:
+            return f"{'.'.join([module, *attrs[:k]])} defines no {attr!r} (read from {path.relative_to(ROOT)})"
+        body = getattr(found, "body", [])
+    return ""
 
 
 def dotted_names(text: str) -> set[str]:
