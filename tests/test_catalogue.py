@@ -41,7 +41,6 @@ def test_the_catalogue_covers_the_api(report):
                  "qprr.platform.", "qprr.rotors.", "qprr.trajectory.", "qprr.sim.loop.", "qprr.sim.result."):
         unbuilt = [k for k in report.baseline_failed if k.startswith(core)]
         assert not unbuilt, f"the catalogue cannot call these core functions with valid arguments: {unbuilt}"
-    assert report.seconds < 40.0
 
 
 def test_allowed_entries_are_explained_and_in_use(report):
