@@ -169,13 +169,14 @@ def G_c_6_52(xi, m_c: float, d, g: float) -> np.ndarray:
 def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:
     """B_c as printed in Thesis (6.51), point payload at the end effector with inertia I_c (payload axes = link 3).
 
-    Read with the thesis's T(phi) of (3.25) (omega_body = T phi_dot), Q = R_b^T T (5.15) and
-    R_c^b = Ry(theta2 + theta3).  Misprints: B12c has (R_b p_c)^ T where R_b p_c^ T belongs;
-    B22c ends in R_b where T belongs (the printed block is not even symmetric) and uses Q
-    where T belongs; B23c carries an extra R_b (and Q for T).  ``corrected=True`` (body-frame
-    p_c, as in (5.2.2) corrected): B12c = -m_c R_b p_c^ T, B22c = T^T (m_c p_c^T^ p_c^ + R_c I_c R_c^T) T,
-    B23c = T^T (m_c p_c^ j_Pc + R_c I_c R_c^T j_Oc); B11c, B13c, B33c as printed.  Model-based
-    form: :func:`payload_terms_closed_form`.
+    Read as (6.51) itself implies: Q = R_b^T T(phi_b) maps the Euler rates to the body rate, so the
+    T(phi_b) of (6.51) is the world-frame map T_w = R_b T (omega_world = T_w phi_dot, with T of
+    (3.25), omega_body = T phi_dot) and Q is (3.25)'s T; R_c^b = Ry(theta2 + theta3).  Then B12c
+    (-m_c (R_b p_c)^ T_w = -m_c R_b p_c^ Q) and B23c hold exactly; B22c alone is misprinted: its
+    first term ends in R_b where T_w belongs (the printed block is not even symmetric).
+    ``corrected=True`` (body-frame p_c, T of (3.25)): B12c = -m_c R_b p_c^ T, B22c = T^T (m_c p_c^T^
+    p_c^ + R_c I_c R_c^T) T, B23c = T^T (m_c p_c^ j_Pc + R_c I_c R_c^T j_Oc); B11c, B13c, B33c as
+    printed.  Model-based form: :func:`payload_terms_closed_form`.
     """
     _masses(m_c=m_c)
     I_c = as_matrix(I_c, (3, 3), "I_c")
@@ -184,8 +185,8 @@ def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:
     Ic = np.asarray(I_c, dtype=float).reshape(3, 3)
     f, t, s, r0, t2, t3 = xi[3:9]
     Rb = rotation_3_4(f, t, s)
-    T = T_3_25(f, t)
-    Q = Rb.T @ T
+    T = T_3_25(f, t)  # body rate map (3.25); (6.51)'s T(phi_b) is the world one, R_b T, and its Q = R_b^T T_w is T
+    Tw, Q = Rb @ T, T
     s2, c2, s23, c23 = math.sin(t2), math.cos(t2), math.sin(t2 + t3), math.cos(t2 + t3)
     p_c = np.array([r0 + d2 * s2 + d3 * s23, 0.0, d0 + d1 + d2 * c2 + d3 * c23])
     p1 = np.array([r0, 0.0, d0 + d1])
@@ -205,9 +206,9 @@ def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:
         B22 = T.T @ (m_c * ph.T @ ph + Icb) @ T
         B23 = T.T @ (m_c * ph @ jP + Icb @ jO)
     else:
-        B12 = -m_c * hat @ T
-        B22 = m_c * T.T @ hat.T @ hat @ Rb + Q.T @ Icb @ Q
-        B23 = Q.T @ Icb @ jO - m_c * T.T @ hat.T @ Rb @ jP
+        B12 = -m_c * hat @ Tw
+        B22 = m_c * Tw.T @ hat.T @ hat @ Rb + Q.T @ Icb @ Q
+        B23 = Q.T @ Icb @ jO - m_c * Tw.T @ hat.T @ Rb @ jP
     return np.block([[B11, B12, B13], [B12.T, B22, B23], [B13.T, B23.T, B33]])
 
 

@@ -27,6 +27,7 @@ import numpy as np
 from ..charts import as_vector, check_rotation, checked_module, rot_y, rot_z
 from ..errors import InputError
 from ..mdh import MDHRow, kk_transform
+from ..mdh import chain as chain_frames
 from .params import QPRRParams
 
 E3 = np.array([0.0, 0.0, 1.0])
@@ -518,6 +519,22 @@ def x_cm_3_80(q_arm, params: QPRRParams) -> float:
 
 
 # =========================================================================== chapter 4
+def v_ee_4_24(q_arm, q_arm_dot, d, corrected: bool = False) -> np.ndarray:
+    """^eb v_4: velocity of the end effector relative to B, in the end-effector axes eb, Thesis (4.24).
+
+    As printed, the theta2_dot coefficient of the first row is d2 s3 + d3; ``corrected=True`` gives
+    d2 c3 + d3 (the third row's d2 s3 theta2_dot is right): R_eb^T of the velocity of (3.58)'s origin,
+    since cos(theta2 + theta3 - theta2) = c3 is the projection of link 2's velocity d2 theta2_dot on
+    the first eb axis.
+    """
+    r0d, t2d, t3d = as_vector(q_arm_dot, 3, "q_arm_dot")
+    _, t2, t3 = _arm(q_arm)
+    _, _, d2, d3 = _lengths(d)
+    s3, c3, s23, c23 = np.sin(t3), np.cos(t3), np.sin(t2 + t3), np.cos(t2 + t3)
+    link2 = d2 * c3 if corrected else d2 * s3
+    return np.array([c23 * r0d + (link2 + d3) * t2d + d3 * t3d, 0.0, s23 * r0d + d2 * s3 * t2d])
+
+
 def J_eb_4_26(q_arm, d) -> np.ndarray:
     """J_eb (6x3): [p_eb_dot; omega_eb] (in B) = J_eb q_arm_dot, Thesis (4.26)."""
     _, t2, t3 = _arm(q_arm)
@@ -746,6 +763,36 @@ def link_jacobians_5_20(q_arm, d) -> tuple[np.ndarray, np.ndarray]:
     Jo = np.zeros((3, 3, 3))
     Jo[1, 1, 1] = 1.0
     Jo[2, 1, 1] = Jo[2, 1, 2] = 1.0
+    return Jp, Jo
+
+
+def link_jacobians_5_20_frames(q_arm, d, index: str = "printed") -> tuple[np.ndarray, np.ndarray]:
+    """(J_p^(ci), J_o^(ci)) built column by column from the thesis's own MDH frames, Thesis (5.20)-(5.21).
+
+    The frames are those of Table 3.4 (corrected) after ^bT_0 (3.49); link centres of mass (3.78).
+    ``index="printed"``: column j from z_{j-1} and p_{j-1}, as (5.20)-(5.21) print them (the index of
+    the classical Denavit-Hartenberg convention); ``index="mdh"``: from z_j and p_j, the axis and origin
+    of joint j in the modified (Khalil-Kleinfinger) frames of Sec. 3.2.2.3, which the thesis uses.
+    With the printed index, joint 2's column is about z_1 = x_B, the slider axis.  Shapes as
+    :func:`link_jacobians_5_20`: (3, 3, 3), [link, row, joint].
+    """
+    if index not in ("printed", "mdh"):
+        raise InputError(f"index must be 'printed' (z_(j-1), p_(j-1)) or 'mdh' (z_j, p_j), got {index!r}")
+    q = np.asarray(_arm(q_arm), dtype=float)
+    base = T_b0_3_49()
+    frames = [base, *chain_frames(table_3_4_corrected(d), q, base)]
+    coms = link_coms_3_78(q, d)
+    prismatic = (True, False, False)
+    Jp, Jo = np.zeros((3, 3, 3)), np.zeros((3, 3, 3))
+    for i in range(3):  # link i + 1 moves with joints 1 .. i + 1
+        for j in range(i + 1):
+            F = frames[j] if index == "printed" else frames[j + 1]
+            z, p = F[:3, 2], F[:3, 3]
+            if prismatic[j]:
+                Jp[i, :, j] = z
+            else:
+                Jp[i, :, j] = np.cross(z, coms[i] - p)
+                Jo[i, :, j] = z
     return Jp, Jo
 
 
