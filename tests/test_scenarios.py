@@ -17,28 +17,44 @@ def comparison(robot):
     return compare(platform=robot)
 
 
-# Where ours may exceed Table 6.3, and why (the comparison is not like for like there):
-#  * idc theta2, theta3: our controller is digital (1 kHz zero-order hold); the errors halve
-#    with dt (test below), the thesis's Simulink controller ran in continuous time;
-#  * mfc x, y, r0, theta2, theta3: our position loop must tilt the vehicle (underactuated
-#    cascade through (6.17)), plus alpha / F-estimator settings the thesis does not print (see
-#    MFCGains).  x and y scale with the reference's peak acceleration: the missions' septic law
-#    (jerk-continuous, docs/notes-spikes.md) peaks 7.51 / 5.77 = 1.30 times higher than the
-#    quintic, and the MFC's x, y errors grew by that factor (1.48e-3 -> 1.93e-3, 2.97e-3 -> 3.87e-3).
-# (dsid needs no allowance since its position K_D is critically damped: x, y 3-6 times below the thesis.)
-NOT_LIKE_FOR_LIKE = {
-    ("idc", "theta2"): 2.0, ("idc", "theta3"): 7.0,
-    ("mfc", "x"): 4.0, ("mfc", "y"): 5.0, ("mfc", "r0"): 2.5, ("mfc", "theta2"): 25.0, ("mfc", "theta3"): 25.0,
+# Every cell of Table 6.3 where ours departs from the printed value by more than 2x, either way, with the band of
+# the ratio ours / printed it must stay in and the cause (docs/control.md, section "Table 6.3 cell by cell").  A cell
+# not listed must be within [0.5, 2].  Causes:
+EXACT = "the plant is the model the controller inverts; the thesis flew a SimMechanics prototype from its CAD (Annex A)"
+YAW = "yaw is held constant and decoupled in the exact model: nothing excites it"
+ZOH = "digital controller (1 kHz zero-order hold): halves with dt (test below); the thesis's ran in continuous time"
+KD = "desired-state ID: position K_D = 2 sqrt(30) (critical damping) instead of the printed 18 (3 Hz roll/pitch ringing)"
+ARM = "desired-state ID: arm loops at w = 50 rad/s (w <= 25 diverges: G(xi_d) acts as a negative stiffness)"
+CASCADE = "MFC position loop through the thrust direction (6.17); septic reference peaks 1.30x the printed quintic's"
+MFC_ARM = "MFC: alpha = 3 (B^-1)_ii and the F estimator's filter, which the thesis does not print (naive 1/B_ii diverges)"
+DEPARTURES = {
+    ("idc", "z"): (0.05, 0.5, EXACT), ("idc", "phi"): (0.05, 0.5, EXACT), ("idc", "theta"): (0.01, 0.3, EXACT),
+    ("idc", "psi"): (1e-7, 1e-4, YAW), ("idc", "theta3"): (2.0, 7.0, ZOH),
+    ("dsid", "x"): (0.1, 0.5, KD), ("dsid", "y"): (0.07, 0.5, KD), ("dsid", "z"): (0.01, 0.1, EXACT),
+    ("dsid", "phi"): (0.002, 0.03, KD), ("dsid", "theta"): (0.002, 0.03, KD), ("dsid", "psi"): (0.01, 0.1, YAW),
+    ("dsid", "r0"): (1e-4, 2e-3, ARM), ("dsid", "theta2"): (5e-4, 1e-2, ARM), ("dsid", "theta3"): (3e-3, 0.05, ARM),
+    ("mfc", "x"): (2.0, 4.0, CASCADE), ("mfc", "y"): (2.0, 5.0, CASCADE), ("mfc", "z"): (0.03, 0.3, EXACT),
+    ("mfc", "phi"): (0.015, 0.2, EXACT), ("mfc", "theta"): (0.03, 0.3, EXACT), ("mfc", "psi"): (0.004, 0.04, YAW),
+    ("mfc", "theta2"): (6.0, 25.0, MFC_ARM), ("mfc", "theta3"): (7.0, 25.0, MFC_ARM),
 }
 
 
 @pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
 @pytest.mark.parametrize("ctrl", ["idc", "dsid", "mfc"])
 def test_static_mission_rmse_against_table_6_3(comparison, ctrl):
+    """Both directions: a cell far above or far below the printed value fails unless it is listed with its cause."""
     assert comparison.status[ctrl] == "ok"
     for i, var in enumerate(XI_NAMES):
-        factor = NOT_LIKE_FOR_LIKE.get((ctrl, var), 1.0)
-        assert comparison.rmse[ctrl][var] <= factor * TABLE_6_3[ctrl][i], (ctrl, var)
+        lo, hi, why = DEPARTURES.get((ctrl, var), (0.5, 2.0, "within 2x of the printed value"))
+        ratio = comparison.rmse[ctrl][var] / TABLE_6_3[ctrl][i]
+        assert lo <= ratio <= hi, f"{ctrl} {var}: ours / Table 6.3 = {ratio:.3g}, outside [{lo}, {hi}] ({why})"
+
+
+def test_every_listed_departure_is_one():
+    """A band inside [0.5, 2] would hide nothing: each listed cell departs by more than 2x."""
+    for (ctrl, var), (lo, hi, why) in DEPARTURES.items():
+        assert hi <= 0.5 or lo >= 2.0 or (lo < 0.5 and hi > 2.0), (ctrl, var)
+        assert why and ctrl in TABLE_6_3 and var in XI_NAMES
 
 
 @pytest.mark.slow  # 30 s thesis missions (issue 9: marked slow, run by .ci/run)
