@@ -37,7 +37,11 @@ import pinocchio as pin
 
 from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
 from .inertia import check_rigid_body
-from .rotors import Rotor, rotor_matrix, rotors_from_mapping
+from .plausibility import DEFAULT as _PLAUSIBLE
+from .plausibility import check_plausibility_setting
+from .plausibility import check_rotors as _check_rotor_ranges
+from .plausibility import check_urdf as _check_urdf_ranges
+from .rotors import ActuationSummary, Rotor, actuation_summary, check_rotor_set, rotor_matrix, rotors_from_mapping
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -105,6 +109,115 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
                                    "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
                                    '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
                                    "for a link that is massless on purpose")
+
+
+def _attr_numbers(el: ET.Element, attr: str, count: int, where: str, *, required: bool = False) -> list[float] | None:
+    """The ``count`` finite numbers of attribute ``attr`` of ``el`` (None when absent and not ``required``)."""
+    text = el.get(attr)
+    tag = f"<{el.tag} {attr}>"
+    if text is None:
+        if required:
+            raise InputError(f"{where}: {tag} is missing")
+        return None
+    parts = text.split()
+    try:
+        vals = [float(x) for x in parts]
+    except ValueError:
+        vals = []
+    if len(parts) != count or len(vals) != count or not all(math.isfinite(v) for v in vals):
+        want = "a finite number" if count == 1 else f"{count} finite numbers separated by spaces"
+        raise InputError(f"{where}: {tag} = {text!r} must be {want}")
+    return vals
+
+
+def _check_origin(el: ET.Element | None, where: str) -> None:
+    origin = el.find("origin") if el is not None else None
+    if origin is not None:
+        _attr_numbers(origin, "xyz", 3, where)
+        _attr_numbers(origin, "rpy", 3, where)
+
+
+def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[str | None, str | None]:
+    """(parent, child) of one <joint> after checking its name, links, origin, axis and limit attributes."""
+    name, kind = joint.get("name"), joint.get("type")
+    where = f"{source}: joint {name!r}"
+    ends = []
+    for tag in ("parent", "child"):
+        el = joint.find(tag)
+        if el is None or el.get("link") is None:
+            raise InputError(f'{where}: <{tag} link="..."/> is missing')
+        if el.get("link") not in links:
+            raise UnknownNameError(f"<{tag} link> of joint {name!r} in {source}", el.get("link"), tuple(sorted(links)))
+        ends.append(el.get("link"))
+    if ends[0] == ends[1]:
+        raise InputError(f"{where}: <parent link> and <child link> are both {ends[0]!r}")
+    _check_origin(joint, where)
+    if kind in ("revolute", "prismatic", "continuous"):
+        axis_el = joint.find("axis")
+        if axis_el is not None:
+            axis = _attr_numbers(axis_el, "xyz", 3, where)
+            if axis is not None and not math.hypot(*axis) > 1e-9:
+                raise InputError(f"{where}: <axis xyz> = {axis_el.get('xyz')!r} is the zero vector; give the unit direction of "
+                                 f'the joint axis in the joint frame, e.g. "0 0 1"')
+        limit = joint.find("limit")
+        if limit is not None:
+            for attr in ("lower", "upper"):
+                _attr_numbers(limit, attr, 1, where)
+            for attr in ("effort", "velocity"):
+                v = _attr_numbers(limit, attr, 1, where, required=True)
+                if v[0] < 0.0:
+                    raise InputError(f"{where}: <limit {attr}> = {v[0]!r} must be >= 0 (the largest |{attr}|)")
+    return ends[0], ends[1]
+
+
+def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
+    """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
+    duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
+    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>`` or ``<limit>``, a zero joint axis, a missing
+    ``effort`` or ``velocity``, a root link (the multirotor body) without ``<inertial>``.  Raises
+    :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
+    if not isinstance(xml_text, str):
+        raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
+    try:
+        root = ET.fromstring(xml_text)
+    except ET.ParseError as exc:
+        raise InputError(f"{source} is not valid XML: {exc}") from exc
+    if root.tag != "robot":
+        raise InputError(f"{source}: the root element is <{root.tag}>, not <robot>: not a URDF")
+    for tag in ("link", "joint"):
+        seen: dict[str, int] = {}
+        for k, el in enumerate(root.findall(tag)):
+            name = el.get("name")
+            if not name:
+                raise InputError(f'{source}: <{tag}> number {k + 1} has no name="..."')
+            if name in seen:
+                raise InputError(f"{source}: two <{tag}> elements are named {name!r} (numbers {seen[name] + 1} and {k + 1}); "
+                                 f"{tag} names must be unique")
+            seen[name] = k
+    links = {el.get("name") for el in root.findall("link")}
+    parent_of: dict[str, str] = {}
+    for joint in root.findall("joint"):
+        parent, child = _check_urdf_joint_xml(joint, links, source)
+        if child in parent_of:
+            raise InputError(f"{source}: link {child!r} has two parents: it is the <child> of joints {parent_of[child]!r} and "
+                             f"{joint.get('name')!r} (a URDF is a tree: each link has at most one parent joint)")
+        parent_of[child] = joint.get("name")
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        where = f"{source}: link {link.get('name')!r}"
+        _check_origin(inertial, where)
+        if inertial is not None and inertial.find("mass") is not None:
+            _attr_numbers(inertial.find("mass"), "value", 1, where, required=True)
+        if inertial is not None and inertial.find("inertia") is not None:
+            for attr in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+                _attr_numbers(inertial.find("inertia"), attr, 1, where, required=True)
+    roots = [name for name in (el.get("name") for el in root.findall("link")) if name not in parent_of]
+    if len(roots) == 1 and next(el for el in root.findall("link") if el.get("name") == roots[0]).find("inertial") is None:
+        raise NonPhysicalError(f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
+                               "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
+                               'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+                               "</inertial> when the body's mass sits on links fixed to it")
+    return root
 
 
 _ARM_JOINT_TYPES = ("revolute", "prismatic", "fixed")
@@ -351,6 +464,18 @@ class Platform:
         """True when the rotors span every base force and torque (e.g. a tilted hexarotor)."""
         return self.wrench_rank == 6
 
+    def actuation_summary(self) -> ActuationSummary:
+        """What the rotor set can do for this platform at its neutral configuration (:func:`qprr.rotors.actuation_summary`):
+        wrench rank and directions, fully vs under-actuated, the attitude map's rank and condition number, the hover
+        thrusts and their margin to the bounds.  Loading refuses a set that cannot hover and control attitude
+        (:func:`qprr.rotors.check_rotor_set`); this reports on any set, e.g. one given by :meth:`replace`."""
+        return actuation_summary(self.rotors, self.total_mass * self.g, self.com_neutral_body)
+
+    @cached_property
+    def com_neutral_body(self) -> np.ndarray:
+        """Centre of mass of the whole system [m] in B at :meth:`neutral_q`."""
+        return _readonly(np.array(pin.centerOfMass(self.model, self.model.createData(), self.neutral_q())))
+
     @cached_property
     def thrust_axis(self) -> tuple[np.ndarray, np.ndarray]:
         """(point_body, direction_body): the line of action of equal rotor thrusts, in B.
@@ -512,6 +637,7 @@ def from_model(
     allow_nonphysical: bool = False,
     urdf: str | None = None,
     rotor_source: str | None = None,
+    plausibility=_PLAUSIBLE,
 ) -> Platform:
     """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
 
@@ -522,8 +648,11 @@ def from_model(
     URDF text ``model`` was read from, kept on the platform for its visual geometry.
     ``rotor_source``: the file the rotor description was read from, named in its errors.
     The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
-    :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams).
+    :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams), and to hover and control
+    attitude (:func:`qprr.rotors.check_rotor_set`), else :class:`~qprr.errors.ActuationError`.
+    ``plausibility``: the ranges of the rotor values (:class:`qprr.plausibility.Plausibility`, None: no range check).
     """
+    plausibility = check_plausibility_setting(plausibility)
     if not isinstance(model, pin.Model):
         raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
     if not (isinstance(rotors, Mapping) or (isinstance(rotors, Sequence) and not isinstance(rotors, str))):
@@ -567,10 +696,13 @@ def from_model(
         elif isinstance(rotors, (str, Path)):
             raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
         rotors = tuple(rotors)
+        if not all(isinstance(r, Rotor) for r in rotors):
+            raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
     except (InputError, UnknownNameError) as exc:
         if rotor_source is not None:
             exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
         raise
+    _check_rotor_ranges(rotors, plausibility, f"rotor file {rotor_source!r}" if rotor_source else "rotors")
     ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
     extra = tuple(frame_id(model, f, "ee_frames entry") for f in ee_frames)
     platform = Platform(
@@ -587,6 +719,9 @@ def from_model(
     )
     _check_mass_matrix(platform)
     _check_lift(platform, rotor_source)
+    if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body,
+                        f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}")
     return platform
 
 
@@ -627,6 +762,7 @@ def from_urdf(
     params: object = None,
     provenance: Mapping[str, str] | None = None,
     allow_nonphysical: bool = False,
+    plausibility=_PLAUSIBLE,
 ) -> Platform:
     """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
 
@@ -634,12 +770,16 @@ def from_urdf(
     drops a malformed one silently), then the model is built with a free-flyer root and gravity
     -g e3 (g >= 0; 0 for free flight).  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
-    to the last frame of the last arm joint of a serial arm.
+    to the last frame of the last arm joint of a serial arm.  The XML is checked first
+    (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
+    ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).
     """
     from .charts import as_real
 
     text, source = _urdf_text(urdf)
     g = as_real(g, "g", nonnegative=True, unit="m/s^2")  # g = 0: free flight (conservation tests)
+    plausibility = check_plausibility_setting(plausibility)
+    _check_urdf_ranges(check_urdf_structure(text, source), plausibility, source)
     check_urdf_joints(text, source)
     if not allow_nonphysical:
         check_urdf_inertials(text, source)
@@ -661,7 +801,7 @@ def from_urdf(
     if rotor_source is not None:
         prov.setdefault("rotors", rotor_source)
     return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
-                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source)
+                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source, plausibility=plausibility)
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:
