@@ -77,6 +77,8 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
     """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
 
     Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.inertia.check_rigid_body`.
+    The root link (the multirotor body) and every link a joint moves need an ``<inertial>`` (explicit zeros for a
+    massless one).
     """
     if not isinstance(xml_text, str):
         raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
@@ -102,6 +104,13 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
                       [vals["ixz"], vals["iyz"], vals["izz"]]])
         check_rigid_body(f"{source}: link {name!r}", mass, (0.0, 0.0, 0.0), I, allow_massless=True)
     with_inertial = {link.get("name") for link in root.iter("link") if link.find("inertial") is not None}
+    children = {c.get("link") for c in root.iter("child")}
+    roots = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
+    if len(roots) == 1 and roots[0] not in with_inertial:
+        raise NonPhysicalError(f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
+                               "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
+                               'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+                               "</inertial> when the body's mass sits on links fixed to it")
     for joint in root.iter("joint"):
         child = joint.find("child")
         if joint.get("type") != "fixed" and child is not None and child.get("link") not in with_inertial:
@@ -174,7 +183,7 @@ def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
     """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
     duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
     or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>`` or ``<limit>``, a zero joint axis, a missing
-    ``effort`` or ``velocity``, a root link (the multirotor body) without ``<inertial>``.  Raises
+    ``effort`` or ``velocity``.  Raises
     :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
     if not isinstance(xml_text, str):
         raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
@@ -205,18 +214,7 @@ def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
     for link in root.findall("link"):
         inertial = link.find("inertial")
         where = f"{source}: link {link.get('name')!r}"
-        _check_origin(inertial, where)
-        if inertial is not None and inertial.find("mass") is not None:
-            _attr_numbers(inertial.find("mass"), "value", 1, where, required=True)
-        if inertial is not None and inertial.find("inertia") is not None:
-            for attr in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
-                _attr_numbers(inertial.find("inertia"), attr, 1, where, required=True)
-    roots = [name for name in (el.get("name") for el in root.findall("link")) if name not in parent_of]
-    if len(roots) == 1 and next(el for el in root.findall("link") if el.get("name") == roots[0]).find("inertial") is None:
-        raise NonPhysicalError(f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
-                               "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
-                               'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
-                               "</inertial> when the body's mass sits on links fixed to it")
+        _check_origin(inertial, where)  # mass and inertia values: check_urdf_inertials
     return root
 
 
