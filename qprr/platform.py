@@ -723,9 +723,27 @@ def from_model(
     return platform
 
 
+def max_lift(platform: Platform) -> float:
+    """The rotors' largest total thrust along z_B [N]: sum of f_max a_z over the rotors with a_z > 0 (a bound of what can
+    be lifted; :meth:`Platform.actuation_summary` gives the exact hover margin)."""
+    return float(sum(r.f_max * r.axis_body[2] for r in check_platform(platform).rotors if r.axis_body[2] > 0.0))
+
+
+def check_flight(platform: Platform, source: str | None = None) -> None:
+    """The load-time checks of a platform's physics, for a platform made another way (a payload, another model): the
+    inertias (:func:`check_model_inertias`), the mass matrix, the lift (sum f_max a_z >= m g) and the rotor set's
+    hover and attitude authority (:func:`qprr.rotors.check_rotor_set`).  ``source`` names what is checked in errors."""
+    check_model_inertias(check_platform(platform).model)
+    _check_mass_matrix(platform)
+    _check_lift(platform, None)
+    if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body,
+                        source or f"platform {platform.name!r}")
+
+
 def _check_lift(platform: Platform, rotor_source: str | None) -> None:
     """The rotors' largest total thrust along z_B (sum f_max a_z over a_z > 0) must reach m g (a necessary condition)."""
-    lift = sum(r.f_max * r.axis_body[2] for r in platform.rotors if r.axis_body[2] > 0.0)
+    lift = max_lift(platform)
     weight = platform.total_mass * platform.g
     if lift < weight:
         rot = f"rotor file {rotor_source!r}" if rotor_source else "the rotor set"
