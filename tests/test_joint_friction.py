@@ -136,25 +136,25 @@ def test_damping_dissipates_the_energy_it_should_at_first_order():
 
 
 def test_the_controller_compensates_the_nominal_friction():
-    """The IDC's tau with the URDF's friction minus the same controller on the frictionless model is -tau_f(v)."""
-    from qprr.charts import State
+    """The IDC's tau with the URDF's friction minus the same controller on the frictionless model is -tau_f at the reference
+    arm rates, whatever the measured rates (a feedforward: the measured rates would chatter through the stiff tanh)."""
+    from qprr.charts import State, xi_dot_to_v, xi_to_q
     from qprr.control import InverseDynamicsController
     from qprr.control.base import Reference
 
     p, bare = _hextilt(), _hextilt(damping=False, friction=False)
-    xi, xi_dot = np.r_[0.0, 0.0, 1.0, np.zeros(3), 0.2, -0.1, 0.3, 0.0, 0.1], np.r_[np.zeros(6), QD0 * 0.01]
-    taus = []
-    for plat in (p, bare):
-        c = InverseDynamicsController(plat)
-        s = State(plat.n_arm)
-        from qprr.charts import xi_dot_to_v, xi_to_q
-
-        s.update(0.0, xi_to_q(xi), xi_dot_to_v(xi, xi_dot))
-        ref = Reference(xi, xi_dot, np.zeros(plat.n_xi))
-        c.reset(s, ref, 1e-3)
-        taus.append(np.asarray(c.step(0.0, s, ref)))
+    xi, xi_dot_ref = np.r_[0.0, 0.0, 1.0, np.zeros(3), 0.2, -0.1, 0.3, 0.0, 0.1], np.r_[np.zeros(6), QD0 * 0.01]
     jf = JointFriction.from_model(p.model)
-    np.testing.assert_allclose(taus[0] - taus[1], -jf.generalized_force(xi_dot_to_v(xi, xi_dot)), atol=1e-12)
+    for xi_dot in (xi_dot_ref, xi_dot_ref + np.r_[0.1 * np.ones(6), 0.5 * np.ones(5)]):
+        taus = []
+        for plat in (p, bare):
+            c = InverseDynamicsController(plat)
+            s = State(plat.n_arm)
+            s.update(0.0, xi_to_q(xi), xi_dot_to_v(xi, xi_dot))
+            ref = Reference(xi, xi_dot_ref, np.zeros(plat.n_xi))
+            c.reset(s, ref, 1e-3)
+            taus.append(np.asarray(c.step(0.0, s, ref)))
+        np.testing.assert_allclose(taus[0] - taus[1], -jf.generalized_force(xi_dot_ref), atol=1e-12)
 
 
 # ------------------------------------------------------------------------------------------------- MuJoCo

@@ -204,6 +204,7 @@ class InverseDynamicsController(Controller):
         self.model = platform.model
         self.data = platform.model.createData()
         self._friction = JointFriction.from_model(platform.model)  # nominal joint friction of the URDF (None: none)
+        self._zero6 = [0.0] * 6
         # base directions the rotors cannot produce (coplanar rotors: the body-lateral force)
         Omega = platform.rotor_matrix
         self._lost = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12] if self.realizable else []
@@ -390,8 +391,8 @@ class InverseDynamicsController(Controller):
         a[5] += d5
         write(abuf, a)
         tau = _rnea(model, data, q, v, abuf)
-        if self._friction is not None:  # the URDF's joint friction (F_v of (5.36) and Coulomb), compensated at the model state
-            tau = tau - self._friction.generalized_force(v)
+        if self._friction is not None:  # the URDF's joint friction (F_v of (5.36), Coulomb): feedforward at the reference arm rates
+            tau = tau - self._friction.generalized_force(self._zero6 + rd[6:])
         if self.output == "pinocchio":
             if ff is not None:
                 tau = tau + np.array(ffv)
