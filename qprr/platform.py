@@ -521,6 +521,16 @@ class Platform:
             raise ShapeError(f"model of another structure: nq {model.nq}, nv {model.nv}, nframes {model.nframes}")
         return dataclasses.replace(self, model=model)
 
+    def without_joint_friction(self) -> Platform:
+        """The same platform with the URDF's joint ``<dynamics damping friction>`` set to zero (a model copy): the plant
+        (:mod:`qprr.joint_friction`) and the controllers then see frictionless joints.  ``self`` when it has none."""
+        if not (np.any(self.model.damping) or np.any(self.model.friction)):
+            return self
+        model = pin.Model(self.model)
+        model.damping[:] = 0.0
+        model.friction[:] = 0.0
+        return dataclasses.replace(self, model=model)
+
     def __repr__(self) -> str:
         kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.arm)
         return (f"Platform({self.name!r}, {self.n_rotors} rotors, arm {kinds or '-'}, {self.total_mass:.3f} kg, "
@@ -718,9 +728,25 @@ def from_model(
     _check_mass_matrix(platform)
     _check_lift(platform, rotor_source)
     if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
-        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body,
-                        f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}")
+        source = f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}"
+        _check_thrust_to_weight(platform, plausibility, source)
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
     return platform
+
+
+def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> None:
+    """sum f_max a_z / (m g) within ``plausibility.thrust_to_weight_max`` (thrusts in grams-force give ~100x)."""
+    if plausibility is None:
+        return
+    ratio = max_lift(platform) / (platform.total_mass * platform.g)
+    if ratio > plausibility.thrust_to_weight_max:
+        from .errors import PlausibilityError
+
+        raise PlausibilityError(f"{source}: the rotors' thrust-to-weight ratio sum(f_max) / (m g) = {ratio:.4g} is outside the "
+                                f"plausible range for an aerial robot (<= {plausibility.thrust_to_weight_max:g}; racing drones reach "
+                                f"10-15): thrust bounds in grams-force? (f_max of rotor 1 = {platform.rotors[0].f_max:g} gf = "
+                                f"{platform.rotors[0].f_max * 9.80665e-3:.4g} N), or masses too small (m = {platform.total_mass:.6g} kg). "
+                                "If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, thrust_to_weight_max=...)")
 
 
 def max_lift(platform: Platform) -> float:
@@ -747,9 +773,13 @@ def _check_lift(platform: Platform, rotor_source: str | None) -> None:
     weight = platform.total_mass * platform.g
     if lift < weight:
         rot = f"rotor file {rotor_source!r}" if rotor_source else "the rotor set"
+        model = platform.model
+        j = max(range(1, model.njoints), key=lambda k: model.inertias[k].mass)
+        links = [f.name for f in model.frames if f.parentJoint == j and f.type == pin.FrameType.BODY]
         raise NonPhysicalError(f"platform {platform.name!r} cannot lift itself: its rotors push at most {lift:.6g} N along z_B "
                                f"({rot}), its weight m g is {weight:.6g} N (m = {platform.total_mass:.6g} kg, g = {platform.g:.6g} m/s^2); "
-                               "URDF masses are in kg, thrust bounds in N")
+                               f"the heaviest body: link {' + '.join(map(repr, links))} ({model.inertias[j].mass:.6g} kg); "
+                               "URDF masses are in kg (grams / 1000), thrust bounds in N")
 
 
 def _check_mass_matrix(platform: Platform) -> None:

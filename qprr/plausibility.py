@@ -27,6 +27,7 @@ class Plausibility:
     rotor_distance_max : rotor centre to B [m] (the largest multirotors span a few metres).
     kappa_max : drag/thrust ratio c/b of a rotor [m] (propellers: 0.005-0.06 m).
     rotor_thrust_max : f_max of one rotor [N] (heavy-lift rotors give a few hundred N).
+    thrust_to_weight_max : sum of the rotors' f_max along z_B over the weight m g (racing drones reach 10-15).
     length_max : joint origin offsets and inertial origins of a URDF [m].
     link_mass_max : mass of one URDF link [kg].
     gyration_radius_max : sqrt(I_max / m) of a link or payload [m] (its size; kg mm^2 gives 1000x).
@@ -41,6 +42,7 @@ class Plausibility:
     rotor_distance_max: float = 10.0
     kappa_max: float = 0.1
     rotor_thrust_max: float = 1000.0
+    thrust_to_weight_max: float = 20.0
     length_max: float = 10.0
     link_mass_max: float = 200.0
     gyration_radius_max: float = 5.0
