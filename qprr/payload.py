@@ -33,9 +33,9 @@ from .dynamics import dynamics_xi
 from .errors import InputError, NonPhysicalError, PlausibilityError, UnknownNameError
 from .inertia import check_rigid_body
 from .kinematics import check_q
+from .platform import Platform, check_flight, check_model_data, check_platform, max_lift
 from .plausibility import DEFAULT as PLAUSIBLE
 from .plausibility import check_plausibility_setting
-from .platform import Platform, check_flight, check_model_data, check_platform, max_lift
 
 APPROACHES = ("link3", "body")
 """Known-mass models: "link3" = point mass folded into link 3 (Thesis (6.40)); "body" = rigid

@@ -633,6 +633,48 @@ def _base_frame(model: pin.Model) -> int:
     raise InputError("no body frame on the free-flyer joint with identity placement (the URDF root link)")
 
 
+def _resolve_rotors(model: pin.Model, base: int, rotors, rotor_source: str | None) -> tuple[Rotor, ...]:
+    """The rotor tuple of :func:`from_model`: a mapping's frames resolved on ``model`` (errors prefixed with the file)."""
+    try:
+        if isinstance(rotors, Mapping):
+            frames, moving, at_b = {}, {}, []
+            data = model.createData()
+            pin.framesForwardKinematics(model, data, pin.neutral(model))
+            oMb = data.oMf[base]
+            for i, f in enumerate(model.frames):
+                if f.parentJoint > 1:  # on an arm link: not a place for a rotor
+                    moving[f.name] = model.names[f.parentJoint]
+                if f.parentJoint != 1:  # the world ("universe") or an arm link
+                    continue
+                bMf = oMb.actInv(data.oMf[i])
+                frames[f.name] = (tuple(bMf.translation), tuple(bMf.rotation[:, 2]))
+                if bMf.isIdentity(1e-12):
+                    at_b.append(f.name)
+            written_in = rotors.get("base_link")
+            if isinstance(written_in, str) and written_in not in at_b:
+                where = (f"it moves with arm joint {moving[written_in]!r}" if written_in in moving else
+                         f"it is not a frame of {model.name!r}" if written_in not in frames else "it is not at B")
+                raise InputError(f"base_link = {written_in!r}, but rotor positions are written in B, the frame of the URDF's root "
+                                 f"link {model.frames[base].name!r} (where qprr puts the free-flyer joint), and {where}; "
+                                 f"frames at B: {at_b} (is the multirotor body the root of your URDF?)")
+            for k, entry in enumerate(rotors.get("rotor") or ()):
+                if isinstance(entry, Mapping) and entry.get("frame") in moving:
+                    raise InputError(f"rotor {k + 1}: frame {entry['frame']!r} moves with arm joint {moving[entry['frame']]!r}; "
+                                     f"rotors sit on the multirotor body, the URDF's root link {model.frames[base].name!r} "
+                                     "(is the body the root of your URDF?)")
+            rotors = rotors_from_mapping(rotors, frames)
+        elif isinstance(rotors, (str, Path)):
+            raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
+        rotors = tuple(rotors)
+        if not all(isinstance(r, Rotor) for r in rotors):
+            raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
+    except (InputError, UnknownNameError) as exc:
+        if rotor_source is not None:
+            exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
+        raise
+    return rotors
+
+
 def from_model(
     model: pin.Model,
     rotors,
@@ -673,43 +715,7 @@ def from_model(
         check_model_inertias(model)
     arm = _arm_joints(model)
     base = _base_frame(model)
-    try:
-        if isinstance(rotors, Mapping):
-            frames, moving, at_b = {}, {}, []
-            data = model.createData()
-            pin.framesForwardKinematics(model, data, pin.neutral(model))
-            oMb = data.oMf[base]
-            for i, f in enumerate(model.frames):
-                if f.parentJoint > 1:  # on an arm link: not a place for a rotor
-                    moving[f.name] = model.names[f.parentJoint]
-                if f.parentJoint != 1:  # the world ("universe") or an arm link
-                    continue
-                bMf = oMb.actInv(data.oMf[i])
-                frames[f.name] = (tuple(bMf.translation), tuple(bMf.rotation[:, 2]))
-                if bMf.isIdentity(1e-12):
-                    at_b.append(f.name)
-            written_in = rotors.get("base_link")
-            if isinstance(written_in, str) and written_in not in at_b:
-                where = (f"it moves with arm joint {moving[written_in]!r}" if written_in in moving else
-                         f"it is not a frame of {model.name!r}" if written_in not in frames else "it is not at B")
-                raise InputError(f"base_link = {written_in!r}, but rotor positions are written in B, the frame of the URDF's root "
-                                 f"link {model.frames[base].name!r} (where qprr puts the free-flyer joint), and {where}; "
-                                 f"frames at B: {at_b} (is the multirotor body the root of your URDF?)")
-            for k, entry in enumerate(rotors.get("rotor") or ()):
-                if isinstance(entry, Mapping) and entry.get("frame") in moving:
-                    raise InputError(f"rotor {k + 1}: frame {entry['frame']!r} moves with arm joint {moving[entry['frame']]!r}; "
-                                     f"rotors sit on the multirotor body, the URDF's root link {model.frames[base].name!r} "
-                                     "(is the body the root of your URDF?)")
-            rotors = rotors_from_mapping(rotors, frames)
-        elif isinstance(rotors, (str, Path)):
-            raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
-        rotors = tuple(rotors)
-        if not all(isinstance(r, Rotor) for r in rotors):
-            raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
-    except (InputError, UnknownNameError) as exc:
-        if rotor_source is not None:
-            exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
-        raise
+    rotors = _resolve_rotors(model, base, rotors, rotor_source)
     _check_rotor_ranges(rotors, plausibility, f"rotor file {rotor_source!r}" if rotor_source else "rotors")
     ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
     extra = tuple(frame_id(model, f, "ee_frames entry") for f in ee_frames)

@@ -116,21 +116,27 @@ def _urdf_variants(text: str) -> Iterator[tuple[str, str, str]]:
                 yield f"root link {name!r} without <inertial>", name, ET.tostring(t, encoding="unicode")
 
 
+def _mm(m: re.Match) -> str:
+    return "position = [" + ", ".join(f"{1000 * float(x):g}" for x in m.group(1).split(",")) + "]"
+
+
 def _rotor_variants(text: str) -> Iterator[tuple[str, str, str]]:
     n = text.count("[[rotor]]")
-    yield "kappa in millimetres", "kappa", re.sub(r"^kappa = ([\d.]+)", lambda m: f"kappa = {1000 * float(m.group(1)):g}", text, 1, re.M)
-    yield "f_max in grams-force", "grams-force", re.sub(r"^f_max = ([\d.]+)", lambda m: f"f_max = {float(m.group(1)) * 1000 / 9.80665:.6g}", text, 1, re.M)
+    kappa_mm = re.sub(r"^kappa = ([\d.]+)", lambda m: f"kappa = {1000 * float(m.group(1)):g}", text, count=1, flags=re.M)
+    yield "kappa in millimetres", "kappa", kappa_mm
+    gf = re.sub(r"^f_max = ([\d.]+)", lambda m: f"f_max = {float(m.group(1)) * 1000 / 9.80665:.6g}", text, count=1, flags=re.M)
+    yield "f_max in grams-force", "grams-force", gf
     yield "every rotor spins cw", "same spin", text.replace('"ccw"', '"cw"')
-    yield "every kappa zero", "kappa is 0", re.sub(r"^kappa = [\d.]+", "kappa = 0.0", text, 1, re.M)
+    yield "every kappa zero", "kappa is 0", re.sub(r"^kappa = [\d.]+", "kappa = 0.0", text, count=1, flags=re.M)
     head, *rotors = text.split("[[rotor]]")
     yield "a single rotor", "rotor", head + "[[rotor]]" + rotors[0]
     yield "three rotors", "rotor", head + "[[rotor]]" + "[[rotor]]".join(rotors[:3])
     yield "the rotor table pasted twice", "written twice", text + "\n" + "[[rotor]]" + "[[rotor]]".join(rotors)
-    yield "rotors at the centre", "rotor", re.sub(r"position = \[[^\]]*\]", lambda m, c=iter(range(n)): f"position = [0.0, 0.0, {0.03 * (next(c) + 1):g}]", text)
+    heights = iter(range(1, n + 1))
+    yield "rotors at the centre", "rotor", re.sub(r"position = \[[^\]]*\]", lambda m: f"position = [0.0, 0.0, {0.03 * next(heights):g}]", text)
     yield "rotors on one line", "one line", re.sub(r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]",
                                                    lambda m: f"position = [{m.group(1)}, 0.0, {m.group(3)}]", text)
-    yield "positions in millimetres", "rotor 1", re.sub(r"position = \[([-\d., ]+)\]",
-                                                       lambda m: "position = [" + ", ".join(f"{1000 * float(x):g}" for x in m.group(1).split(",")) + "]", text)
+    yield "positions in millimetres", "rotor 1", re.sub(r"position = \[([-\d., ]+)\]", _mm, text)
 
 
 def variants() -> list[Variant]:
@@ -152,7 +158,7 @@ def judge_file(variant: Variant, load: Callable) -> FileOutcome:
             msg = str(exc)
             named = variant.element in msg and (not variant.label.startswith("rotor file") or "bad.rotors.toml" in msg)
             return FileOutcome(variant.label, "good" if named else "unclear", f"{type(exc).__name__}: {msg[:300]}")
-        except Exception as exc:  # noqa: BLE001 - the catalogue records every other exception as a crash
+        except Exception as exc:
             return FileOutcome(variant.label, "crash", f"{type(exc).__name__}: {exc}"[:300])
     return FileOutcome(variant.label, "silent", "loaded")
 

@@ -57,12 +57,12 @@ from ..actuation import DEMAND_BOUND, Allocator
 from ..charts import State, as_vector
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError, UnknownNameError
+from ..joint_friction import JointFriction
 from ..platform import Platform
 from . import disturbances as dist
 from .actuators import RotorDynamics
 from .environment import Environment
 from .integrators import STEPPERS, make_stepper
-from ..joint_friction import JointFriction
 from .mismatch import PlantActuators, check_plant
 from .payload import PayloadSchedule, PlantPayload
 from .result import SimResult, Status
