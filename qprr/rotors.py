@@ -390,6 +390,12 @@ def actuation_summary(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0
     The hover wrench is the one the rotors must apply with the collective thrust axis d vertical (a vehicle hovers
     with d up): m g [d; c x d].  The hover margin is the optimum of the linear programme max s subject to
     Omega f = hover wrench, f_min + s <= f <= f_max - s, s <= m g (scipy's HiGHS)."""
+    return _summary(rotors, weight, com_body, optimal_margin=True)
+
+
+def _summary(rotors: Sequence[Rotor], weight: float, com_body, optimal_margin: bool) -> ActuationSummary:
+    """The summary; ``optimal_margin=False``: when the least-norm hover thrusts are strictly inside their bounds, their
+    smallest distance to a bound (a lower bound of the optimum, enough to say the set hovers) instead of the LP."""
     from scipy.optimize import linprog
 
     Omega = rotor_matrix(rotors)
@@ -415,9 +421,12 @@ def actuation_summary(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0
     exact = np.linalg.norm(Omega @ f_ls - w) <= 1e-9 * max(weight, 1.0)
     f_ls = f_ls if exact else np.full(n, math.nan)
     margin = -math.inf
-    if exact:
-        lo = np.array([r.f_min for r in rotors])
-        hi = np.array([r.f_max for r in rotors])
+    lo = np.array([r.f_min for r in rotors])
+    hi = np.array([r.f_max for r in rotors])
+    fast = min(float(np.min(f_ls - lo)), float(np.min(hi - f_ls)), max(weight, 1e-9)) if exact else -math.inf
+    if exact and not optimal_margin and fast > 0.0:
+        margin = fast
+    elif exact:
         fin = np.isfinite(hi)
         # variables [f (n), s]; maximise s
         A_ub = np.vstack([np.hstack([-np.eye(n), np.ones((n, 1))]), np.hstack([np.eye(n)[fin], np.ones((int(fin.sum()), 1))])])
@@ -439,6 +448,8 @@ def duplicate_rotors(rotors: Sequence[Rotor]) -> list[tuple[int, int]]:
     """Index pairs (i, j), i < j, of rotors that are one rotor written twice: centres closer than
     :data:`DUPLICATE_DISTANCE`, the same axis, spin and kappa (virtual thrusters at one point with other axes, spins or
     kappa, as :func:`ideal_wrench_set`'s, are not duplicates)."""
+    if not isinstance(rotors, (tuple, list)) or not rotors or not all(isinstance(r, Rotor) for r in rotors):
+        raise InputError(f"rotors must be a non-empty sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
     out = []
     for i, a in enumerate(rotors):
         for j in range(i + 1, len(rotors)):
@@ -469,9 +480,9 @@ def _why_no_attitude(rotors: Sequence[Rotor], d: np.ndarray) -> str:
     return "; ".join(reasons) if reasons else "the rotor axes and positions are degenerate"
 
 
-def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set") -> ActuationSummary:
-    """The :class:`ActuationSummary` of a rotor set that can hover and control its attitude, else an
-    :class:`~qprr.errors.ActuationError` naming ``source`` (the rotor file) and the rotors.
+def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set") -> None:
+    """Nothing for a rotor set that can hover and control its attitude, else an :class:`~qprr.errors.ActuationError`
+    naming ``source`` (the rotor file) and the rotors (:func:`actuation_summary` reports the numbers).
 
     Refused: a rotor written twice (:func:`duplicate_rotors`); an attitude map [d^T Omega_F; Omega_tau] of rank < 4
     (every flight controller needs collective thrust and three independent torques: same spins, zero kappa, rotors on
@@ -481,13 +492,13 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
 
     from .errors import ActuationError, ActuationWarning
 
-    names = [r.name or f"rotor_{k + 1}" for k, r in enumerate(rotors)]
     dup = duplicate_rotors(rotors)
+    names = [r.name or f"rotor_{k + 1}" for k, r in enumerate(rotors)]
     if dup:
         pairs = ", ".join(f"{names[i]!r} (rotor {i + 1}) and {names[j]!r} (rotor {j + 1})" for i, j in dup)
         raise ActuationError(f"{source}: {pairs} are the same rotor written twice (same position, axis, spin and kappa); "
                              "was a rotor table pasted twice? Remove the copies (coaxial pairs sit at different heights)")
-    summary = actuation_summary(rotors, weight, com_body)
+    summary = _summary(rotors, as_real(weight, "weight", nonnegative=True, unit="N"), com_body, optimal_margin=False)
     listed = ", ".join(names)
     if not summary.can_control_attitude:
         raise ActuationError(
@@ -505,4 +516,3 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
         warnings.warn(f"{source}: the rotors' attitude map is badly conditioned (condition {summary.condition:.3g} > "
                       f"{CONDITION_WARN:g}): one of thrust, roll, pitch, yaw is far weaker than the others", ActuationWarning,
                       stacklevel=3)
-    return summary

@@ -118,8 +118,10 @@ def _rotate_z(rotor: Rotor, angle: float) -> Rotor:
 def test_rotating_a_valid_set_about_z_keeps_it_valid_with_the_same_numbers(rotors, angle, weight):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ActuationWarning)
-        a = check_rotor_set(rotors, weight)
-        b = check_rotor_set(tuple(_rotate_z(r, angle) for r in rotors), weight)
+        turned = tuple(_rotate_z(r, angle) for r in rotors)
+        check_rotor_set(rotors, weight)
+        check_rotor_set(turned, weight)
+        a, b = actuation_summary(rotors, weight), actuation_summary(turned, weight)
     assert a.rank == b.rank and a.attitude_rank == b.attitude_rank == 4
     assert b.condition == pytest.approx(a.condition, rel=1e-8)
     assert b.hover_margin == pytest.approx(a.hover_margin, rel=1e-7, abs=1e-9 * weight)
@@ -139,5 +141,6 @@ def test_virtual_thrusters_at_one_point_are_not_duplicates():
     """The ideal wrench set puts 18 thrusters at B with different axes, spins or kappa: a legitimate, fully actuated set."""
     from qprr.rotors import ideal_wrench_set
 
-    s = check_rotor_set(ideal_wrench_set(40.0, 5.0), 30.0)
+    check_rotor_set(ideal_wrench_set(40.0, 5.0), 30.0)
+    s = actuation_summary(ideal_wrench_set(40.0, 5.0), 30.0)
     assert s.fully_actuated and s.can_hover
