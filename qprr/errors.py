@@ -73,3 +73,19 @@ class PortInUseError(QprrError, OSError):
 class KinematicSingularityError(InputError):
     """A kinematic model is singular at the given configuration (its B(q) is undefined there,
     e.g. the rear-driven tricycle at psi = +-pi/2)."""
+
+
+class ActuationError(InputError):
+    """A rotor set cannot control the vehicle: it cannot hover with thrusts inside their bounds, or it lacks one of
+    the wrench directions every flight controller needs (collective thrust and three independent torques), or two
+    rotors are the same rotor; the message names the rotor file and the rotors."""
+
+
+class PlausibilityError(InputError):
+    """A physical input lies outside the documented plausibility range for aerial robots (docs/platforms.md), most
+    often a unit slip (millimetres for metres, degrees for radians, grams for kilograms); the message names the input,
+    the likely slip and the ``plausibility=`` setting that accepts the value on purpose."""
+
+
+class ActuationWarning(UserWarning):
+    """A rotor set that can fly but is badly conditioned (one wrench direction far weaker than the others)."""

@@ -30,9 +30,12 @@ import pinocchio as pin
 from . import charts as co
 from .charts import as_int, as_real, as_vector
 from .dynamics import dynamics_xi
-from .errors import InputError, UnknownNameError
+from .errors import InputError, NonPhysicalError, PlausibilityError, UnknownNameError
+from .inertia import check_rigid_body
 from .kinematics import check_q
-from .platform import Platform, check_model_data, check_platform
+from .platform import Platform, check_flight, check_model_data, check_platform, max_lift
+from .plausibility import DEFAULT as PLAUSIBLE
+from .plausibility import check_plausibility_setting
 
 APPROACHES = ("link3", "body")
 """Known-mass models: "link3" = point mass folded into link 3 (Thesis (6.40)); "body" = rigid
@@ -104,17 +107,53 @@ def payload_joint_inertia(platform: Platform, payload: Payload | float, approach
     return int(frame.parentJoint), frame.placement.act(payload.spatial_inertia_ee(approach))
 
 
-def with_payload(platform: Platform, payload: Payload | float, approach: str = "body") -> Platform:
+def with_payload(platform: Platform, payload: Payload | float, approach: str = "body", *, plausibility=PLAUSIBLE) -> Platform:
     """A copy of ``platform`` carrying ``payload`` (known-mass model, Thesis (6.40) or (6.41)).
 
     The copy's model has ``inertias[j] = nominal + payload`` for the end effector's parent joint j
     (``pin.Inertia`` addition: mass, CoM and parallel-axis term at once); ``platform.model`` is
-    untouched.  ``platform.params`` is kept as is.
+    untouched.  ``platform.params`` is kept as is.  The checks of a loaded platform apply to the copy
+    (:func:`qprr.platform.check_flight`: inertias, lift, hover and attitude authority) and to the payload (a rigid body,
+    com and size within ``plausibility``, :class:`qprr.plausibility.Plausibility`, None: no range check): a payload the
+    rotors cannot lift raises :class:`~qprr.errors.NonPhysicalError` suggesting grams.
     """
+    plausibility = check_plausibility_setting(plausibility)
+    out = _loaded(platform, payload, approach)
+    payload = _as_payload(payload)
+    _check_payload(platform, payload, plausibility)
+    check_flight(out, f"platform {platform.name!r} with a {payload.mass:g} kg payload")
+    return out
+
+
+def _loaded(platform: Platform, payload: Payload | float, approach: str = "body") -> Platform:
+    """The platform with the payload's inertia added, unchecked (the analyses that report whether it can be held)."""
     j, I = payload_joint_inertia(platform, payload, approach)
     model = pin.Model(platform.model)
     model.inertias[j] = model.inertias[j] + I
     return platform.with_model(model)
+
+
+def _check_payload(platform: Platform, payload: Payload, plausibility) -> None:
+    """The payload's own body (:func:`qprr.inertia.check_rigid_body`), its plausibility and the lift with it."""
+    check_rigid_body("payload", payload.mass, payload.com_ee, payload.inertia, allow_massless=True)
+    if plausibility is not None:
+        d = float(np.linalg.norm(payload.com_ee))
+        if d > plausibility.length_max:
+            raise PlausibilityError(f"payload com_ee is {d:g} m from the end effector, outside the plausible range (<= "
+                                    f"{plausibility.length_max:g} m): millimetres? {d:g} mm = {d / 1000:g} m. If you mean it, pass "
+                                    "plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, length_max=...)")
+        radius = math.sqrt(max(payload.inertia[:3]) / payload.mass) if payload.mass > 0.0 else 0.0
+        if radius > plausibility.gyration_radius_max:
+            raise PlausibilityError(f"payload inertia {payload.inertia!r} with mass {payload.mass:g} kg has a radius of gyration "
+                                    f"of {radius:g} m (> {plausibility.gyration_radius_max:g} m): kg mm^2 or g mm^2? If you mean it, "
+                                    "pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, gyration_radius_max=...)")
+    lift, g = max_lift(platform), platform.g
+    weight = (platform.total_mass + payload.mass) * g
+    if weight > lift:
+        raise NonPhysicalError(f"payload mass {payload.mass:g} kg: platform {platform.name!r} ({platform.total_mass:.4g} kg) with it "
+                               f"weighs {weight:.6g} N, its rotors push at most {lift:.6g} N along z_B, so at most "
+                               f"{max(lift / g - platform.total_mass, 0.0) if g > 0 else math.inf:.4g} kg can be carried; a mass "
+                               f"in grams? {payload.mass:g} g = {payload.mass / 1000:g} kg")
 
 
 class PayloadModel:
@@ -184,7 +223,7 @@ def com_with_payload(platform: Platform, data: pin.Data, q_arm, payload: Payload
     """System CoM in B with the payload (corrected (6.42)), from the Pinocchio model copy of :func:`with_payload`."""
     check_model_data(platform, data)
     q_arm = as_vector(q_arm, platform.n_arm, "q_arm")
-    loaded = with_payload(platform, payload)
+    loaded = _loaded(platform, payload)
     q = pin.neutral(loaded.model)
     q[7:] = q_arm
     return pin.centerOfMass(loaded.model, loaded.model.createData(), q, False).copy()
@@ -226,7 +265,7 @@ def holding_efforts(platform: Platform, q_arm, payload: Payload | float) -> Hold
     q = pin.neutral(platform.model)
     q[7:] = q_arm
     g0 = pin.computeGeneralizedGravity(platform.model, platform.model.createData(), q).copy()
-    loaded = with_payload(platform, payload)
+    loaded = _loaded(platform, payload)
     g1 = pin.computeGeneralizedGravity(loaded.model, loaded.model.createData(), q).copy()
     thrust = float(g1[2])
     reasons = []
@@ -358,7 +397,7 @@ def payload_terms_xi(platform: Platform, data: pin.Data, xi, xi_dot, payload: Pa
     _check_approach(approach)
     payload = _as_payload(payload)
     B, C, G = dynamics_xi(platform, data, xi, xi_dot)
-    loaded = with_payload(platform, payload, approach)
+    loaded = _loaded(platform, payload, approach)
     Bl, Cl, Gl = dynamics_xi(loaded, loaded.model.createData(), xi, xi_dot)
     return PayloadTerms(Bl - B, Cl - C, Gl - G)
 

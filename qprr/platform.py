@@ -37,7 +37,11 @@ import pinocchio as pin
 
 from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
 from .inertia import check_rigid_body
-from .rotors import Rotor, rotor_matrix, rotors_from_mapping
+from .plausibility import DEFAULT as _PLAUSIBLE
+from .plausibility import check_plausibility_setting
+from .plausibility import check_rotors as _check_rotor_ranges
+from .plausibility import check_urdf as _check_urdf_ranges
+from .rotors import ActuationSummary, Rotor, actuation_summary, check_rotor_set, rotor_matrix, rotors_from_mapping
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -73,6 +77,8 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
     """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
 
     Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.inertia.check_rigid_body`.
+    The root link (the multirotor body) and every link a joint moves need an ``<inertial>`` (explicit zeros for a
+    massless one).
     """
     if not isinstance(xml_text, str):
         raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
@@ -98,6 +104,13 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
                       [vals["ixz"], vals["iyz"], vals["izz"]]])
         check_rigid_body(f"{source}: link {name!r}", mass, (0.0, 0.0, 0.0), I, allow_massless=True)
     with_inertial = {link.get("name") for link in root.iter("link") if link.find("inertial") is not None}
+    children = {c.get("link") for c in root.iter("child")}
+    roots = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
+    if len(roots) == 1 and roots[0] not in with_inertial:
+        raise NonPhysicalError(f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
+                               "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
+                               'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+                               "</inertial> when the body's mass sits on links fixed to it")
     for joint in root.iter("joint"):
         child = joint.find("child")
         if joint.get("type") != "fixed" and child is not None and child.get("link") not in with_inertial:
@@ -105,6 +118,104 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
                                    "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
                                    '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
                                    "for a link that is massless on purpose")
+
+
+def _attr_numbers(el: ET.Element, attr: str, count: int, where: str, *, required: bool = False) -> list[float] | None:
+    """The ``count`` finite numbers of attribute ``attr`` of ``el`` (None when absent and not ``required``)."""
+    text = el.get(attr)
+    tag = f"<{el.tag} {attr}>"
+    if text is None:
+        if required:
+            raise InputError(f"{where}: {tag} is missing")
+        return None
+    parts = text.split()
+    try:
+        vals = [float(x) for x in parts]
+    except ValueError:
+        vals = []
+    if len(parts) != count or len(vals) != count or not all(math.isfinite(v) for v in vals):
+        want = "a finite number" if count == 1 else f"{count} finite numbers separated by spaces"
+        raise InputError(f"{where}: {tag} = {text!r} must be {want}")
+    return vals
+
+
+def _check_origin(el: ET.Element | None, where: str) -> None:
+    origin = el.find("origin") if el is not None else None
+    if origin is not None:
+        _attr_numbers(origin, "xyz", 3, where)
+        _attr_numbers(origin, "rpy", 3, where)
+
+
+def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[str | None, str | None]:
+    """(parent, child) of one <joint> after checking its name, links, origin, axis and limit attributes."""
+    name, kind = joint.get("name"), joint.get("type")
+    where = f"{source}: joint {name!r}"
+    ends = []
+    for tag in ("parent", "child"):
+        el = joint.find(tag)
+        if el is None or el.get("link") is None:
+            raise InputError(f'{where}: <{tag} link="..."/> is missing')
+        if el.get("link") not in links:
+            raise UnknownNameError(f"<{tag} link> of joint {name!r} in {source}", el.get("link"), tuple(sorted(links)))
+        ends.append(el.get("link"))
+    if ends[0] == ends[1]:
+        raise InputError(f"{where}: <parent link> and <child link> are both {ends[0]!r}")
+    _check_origin(joint, where)
+    if kind in ("revolute", "prismatic", "continuous"):
+        axis_el = joint.find("axis")
+        if axis_el is not None:
+            axis = _attr_numbers(axis_el, "xyz", 3, where)
+            if axis is not None and not math.hypot(*axis) > 1e-9:
+                raise InputError(f"{where}: <axis xyz> = {axis_el.get('xyz')!r} is the zero vector; give the unit direction of "
+                                 f'the joint axis in the joint frame, e.g. "0 0 1"')
+        limit = joint.find("limit")
+        if limit is not None:
+            for attr in ("lower", "upper"):
+                _attr_numbers(limit, attr, 1, where)
+            for attr in ("effort", "velocity"):
+                v = _attr_numbers(limit, attr, 1, where, required=True)
+                if v[0] < 0.0:
+                    raise InputError(f"{where}: <limit {attr}> = {v[0]!r} must be >= 0 (the largest |{attr}|)")
+    return ends[0], ends[1]
+
+
+def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
+    """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
+    duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
+    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>`` or ``<limit>``, a zero joint axis, a missing
+    ``effort`` or ``velocity``.  Raises
+    :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
+    if not isinstance(xml_text, str):
+        raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
+    try:
+        root = ET.fromstring(xml_text)
+    except ET.ParseError as exc:
+        raise InputError(f"{source} is not valid XML: {exc}") from exc
+    if root.tag != "robot":
+        raise InputError(f"{source}: the root element is <{root.tag}>, not <robot>: not a URDF")
+    for tag in ("link", "joint"):
+        seen: dict[str, int] = {}
+        for k, el in enumerate(root.findall(tag)):
+            name = el.get("name")
+            if not name:
+                raise InputError(f'{source}: <{tag}> number {k + 1} has no name="..."')
+            if name in seen:
+                raise InputError(f"{source}: two <{tag}> elements are named {name!r} (numbers {seen[name] + 1} and {k + 1}); "
+                                 f"{tag} names must be unique")
+            seen[name] = k
+    links = {el.get("name") for el in root.findall("link")}
+    parent_of: dict[str, str] = {}
+    for joint in root.findall("joint"):
+        parent, child = _check_urdf_joint_xml(joint, links, source)
+        if child in parent_of:
+            raise InputError(f"{source}: link {child!r} has two parents: it is the <child> of joints {parent_of[child]!r} and "
+                             f"{joint.get('name')!r} (a URDF is a tree: each link has at most one parent joint)")
+        parent_of[child] = joint.get("name")
+    for link in root.findall("link"):
+        inertial = link.find("inertial")
+        where = f"{source}: link {link.get('name')!r}"
+        _check_origin(inertial, where)  # mass and inertia values: check_urdf_inertials
+    return root
 
 
 _ARM_JOINT_TYPES = ("revolute", "prismatic", "fixed")
@@ -351,6 +462,18 @@ class Platform:
         """True when the rotors span every base force and torque (e.g. a tilted hexarotor)."""
         return self.wrench_rank == 6
 
+    def actuation_summary(self) -> ActuationSummary:
+        """What the rotor set can do for this platform at its neutral configuration (:func:`qprr.rotors.actuation_summary`):
+        wrench rank and directions, fully vs under-actuated, the attitude map's rank and condition number, the hover
+        thrusts and their margin to the bounds.  Loading refuses a set that cannot hover and control attitude
+        (:func:`qprr.rotors.check_rotor_set`); this reports on any set, e.g. one given by :meth:`replace`."""
+        return actuation_summary(self.rotors, self.total_mass * self.g, self.com_neutral_body)
+
+    @cached_property
+    def com_neutral_body(self) -> np.ndarray:
+        """Centre of mass of the whole system [m] in B at :meth:`neutral_q`."""
+        return _readonly(np.array(pin.centerOfMass(self.model, self.model.createData(), self.neutral_q())))
+
     @cached_property
     def thrust_axis(self) -> tuple[np.ndarray, np.ndarray]:
         """(point_body, direction_body): the line of action of equal rotor thrusts, in B.
@@ -396,6 +519,16 @@ class Platform:
             raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
         if model.nq != self.model.nq or model.nv != self.model.nv or model.nframes != self.model.nframes:
             raise ShapeError(f"model of another structure: nq {model.nq}, nv {model.nv}, nframes {model.nframes}")
+        return dataclasses.replace(self, model=model)
+
+    def without_joint_friction(self) -> Platform:
+        """The same platform with the URDF's joint ``<dynamics damping friction>`` set to zero (a model copy): the plant
+        (:mod:`qprr.joint_friction`) and the controllers then see frictionless joints.  ``self`` when it has none."""
+        if not (np.any(self.model.damping) or np.any(self.model.friction)):
+            return self
+        model = pin.Model(self.model)
+        model.damping[:] = 0.0
+        model.friction[:] = 0.0
         return dataclasses.replace(self, model=model)
 
     def __repr__(self) -> str:
@@ -500,42 +633,8 @@ def _base_frame(model: pin.Model) -> int:
     raise InputError("no body frame on the free-flyer joint with identity placement (the URDF root link)")
 
 
-def from_model(
-    model: pin.Model,
-    rotors,
-    *,
-    ee_frame: str | int | None = None,
-    ee_frames: Sequence[str | int] = (),
-    name: str | None = None,
-    params: object = None,
-    provenance: Mapping[str, str] | None = None,
-    allow_nonphysical: bool = False,
-    urdf: str | None = None,
-    rotor_source: str | None = None,
-) -> Platform:
-    """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
-
-    ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
-    entries may name frames of ``model`` fixed to the base (see :func:`qprr.rotors.rotors_from_mapping`).
-    ``allow_nonphysical=True`` skips the inertia checks (to study a printed, non-physical table:
-    the provenance then says so); the mass matrix must still be positive definite.  ``urdf``: the
-    URDF text ``model`` was read from, kept on the platform for its visual geometry.
-    ``rotor_source``: the file the rotor description was read from, named in its errors.
-    The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
-    :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams).
-    """
-    if not isinstance(model, pin.Model):
-        raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
-    if not (isinstance(rotors, Mapping) or (isinstance(rotors, Sequence) and not isinstance(rotors, str))):
-        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor or a rotor description mapping, got {type(rotors).__name__} "
-                         f"{_short(rotors)}")
-    model = pin.Model(model)
-    if allow_nonphysical:
-        provenance = {**(provenance or {}), "WARNING": "inertia checks skipped (allow_nonphysical=True): not a physical body set"}
-    else:
-        check_model_inertias(model)
-    arm = _arm_joints(model)
-    base = _base_frame(model)
+def _resolve_rotors(model: pin.Model, base: int, rotors, rotor_source: str | None) -> tuple[Rotor, ...]:
+    """The rotor tuple of :func:`from_model`: a mapping's frames resolved on ``model`` (errors prefixed with the file)."""
     try:
         if isinstance(rotors, Mapping):
             frames, moving, at_b = {}, {}, []
@@ -567,10 +666,57 @@ def from_model(
         elif isinstance(rotors, (str, Path)):
             raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
         rotors = tuple(rotors)
+        if not all(isinstance(r, Rotor) for r in rotors):
+            raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
     except (InputError, UnknownNameError) as exc:
         if rotor_source is not None:
             exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
         raise
+    return rotors
+
+
+def from_model(
+    model: pin.Model,
+    rotors,
+    *,
+    ee_frame: str | int | None = None,
+    ee_frames: Sequence[str | int] = (),
+    name: str | None = None,
+    params: object = None,
+    provenance: Mapping[str, str] | None = None,
+    allow_nonphysical: bool = False,
+    urdf: str | None = None,
+    rotor_source: str | None = None,
+    plausibility=_PLAUSIBLE,
+) -> Platform:
+    """A :class:`Platform` on an existing free-flyer Pinocchio model (the model is copied, never modified).
+
+    ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, or a rotor description mapping whose
+    entries may name frames of ``model`` fixed to the base (see :func:`qprr.rotors.rotors_from_mapping`).
+    ``allow_nonphysical=True`` skips the inertia checks (to study a printed, non-physical table:
+    the provenance then says so); the mass matrix must still be positive definite.  ``urdf``: the
+    URDF text ``model`` was read from, kept on the platform for its visual geometry.
+    ``rotor_source``: the file the rotor description was read from, named in its errors.
+    The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
+    :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams), and to hover and control
+    attitude (:func:`qprr.rotors.check_rotor_set`), else :class:`~qprr.errors.ActuationError`.
+    ``plausibility``: the ranges of the rotor values (:class:`qprr.plausibility.Plausibility`, None: no range check).
+    """
+    plausibility = check_plausibility_setting(plausibility)
+    if not isinstance(model, pin.Model):
+        raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
+    if not (isinstance(rotors, Mapping) or (isinstance(rotors, Sequence) and not isinstance(rotors, str))):
+        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor or a rotor description mapping, got {type(rotors).__name__} "
+                         f"{_short(rotors)}")
+    model = pin.Model(model)
+    if allow_nonphysical:
+        provenance = {**(provenance or {}), "WARNING": "inertia checks skipped (allow_nonphysical=True): not a physical body set"}
+    else:
+        check_model_inertias(model)
+    arm = _arm_joints(model)
+    base = _base_frame(model)
+    rotors = _resolve_rotors(model, base, rotors, rotor_source)
+    _check_rotor_ranges(rotors, plausibility, f"rotor file {rotor_source!r}" if rotor_source else "rotors")
     ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
     extra = tuple(frame_id(model, f, "ee_frames entry") for f in ee_frames)
     platform = Platform(
@@ -587,18 +733,59 @@ def from_model(
     )
     _check_mass_matrix(platform)
     _check_lift(platform, rotor_source)
+    if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
+        source = f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}"
+        _check_thrust_to_weight(platform, plausibility, source)
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
     return platform
+
+
+def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> None:
+    """sum f_max a_z / (m g) within ``plausibility.thrust_to_weight_max`` (thrusts in grams-force give ~100x)."""
+    if plausibility is None:
+        return
+    ratio = max_lift(platform) / (platform.total_mass * platform.g)
+    if ratio > plausibility.thrust_to_weight_max:
+        from .errors import PlausibilityError
+
+        raise PlausibilityError(f"{source}: the rotors' thrust-to-weight ratio sum(f_max) / (m g) = {ratio:.4g} is outside the "
+                                f"plausible range for an aerial robot (<= {plausibility.thrust_to_weight_max:g}; racing drones reach "
+                                f"10-15): thrust bounds in grams-force? (f_max of rotor 1 = {platform.rotors[0].f_max:g} gf = "
+                                f"{platform.rotors[0].f_max * 9.80665e-3:.4g} N), or masses too small (m = {platform.total_mass:.6g} kg). "
+                                "If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, thrust_to_weight_max=...)")
+
+
+def max_lift(platform: Platform) -> float:
+    """The rotors' largest total thrust along z_B [N]: sum of f_max a_z over the rotors with a_z > 0 (a bound of what can
+    be lifted; :meth:`Platform.actuation_summary` gives the exact hover margin)."""
+    return float(sum(r.f_max * r.axis_body[2] for r in check_platform(platform).rotors if r.axis_body[2] > 0.0))
+
+
+def check_flight(platform: Platform, source: str | None = None) -> None:
+    """The load-time checks of a platform's physics, for a platform made another way (a payload, another model): the
+    inertias (:func:`check_model_inertias`), the mass matrix, the lift (sum f_max a_z >= m g) and the rotor set's
+    hover and attitude authority (:func:`qprr.rotors.check_rotor_set`).  ``source`` names what is checked in errors."""
+    check_model_inertias(check_platform(platform).model)
+    _check_mass_matrix(platform)
+    _check_lift(platform, None)
+    if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body,
+                        source or f"platform {platform.name!r}")
 
 
 def _check_lift(platform: Platform, rotor_source: str | None) -> None:
     """The rotors' largest total thrust along z_B (sum f_max a_z over a_z > 0) must reach m g (a necessary condition)."""
-    lift = sum(r.f_max * r.axis_body[2] for r in platform.rotors if r.axis_body[2] > 0.0)
+    lift = max_lift(platform)
     weight = platform.total_mass * platform.g
     if lift < weight:
         rot = f"rotor file {rotor_source!r}" if rotor_source else "the rotor set"
+        model = platform.model
+        j = max(range(1, model.njoints), key=lambda k: model.inertias[k].mass)
+        links = [f.name for f in model.frames if f.parentJoint == j and f.type == pin.FrameType.BODY]
         raise NonPhysicalError(f"platform {platform.name!r} cannot lift itself: its rotors push at most {lift:.6g} N along z_B "
                                f"({rot}), its weight m g is {weight:.6g} N (m = {platform.total_mass:.6g} kg, g = {platform.g:.6g} m/s^2); "
-                               "URDF masses are in kg, thrust bounds in N")
+                               f"the heaviest body: link {' + '.join(map(repr, links))} ({model.inertias[j].mass:.6g} kg); "
+                               "URDF masses are in kg (grams / 1000), thrust bounds in N")
 
 
 def _check_mass_matrix(platform: Platform) -> None:
@@ -627,6 +814,7 @@ def from_urdf(
     params: object = None,
     provenance: Mapping[str, str] | None = None,
     allow_nonphysical: bool = False,
+    plausibility=_PLAUSIBLE,
 ) -> Platform:
     """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
 
@@ -634,12 +822,16 @@ def from_urdf(
     drops a malformed one silently), then the model is built with a free-flyer root and gravity
     -g e3 (g >= 0; 0 for free flight).  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
-    to the last frame of the last arm joint of a serial arm.
+    to the last frame of the last arm joint of a serial arm.  The XML is checked first
+    (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
+    ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).
     """
     from .charts import as_real
 
     text, source = _urdf_text(urdf)
     g = as_real(g, "g", nonnegative=True, unit="m/s^2")  # g = 0: free flight (conservation tests)
+    plausibility = check_plausibility_setting(plausibility)
+    _check_urdf_ranges(check_urdf_structure(text, source), plausibility, source)
     check_urdf_joints(text, source)
     if not allow_nonphysical:
         check_urdf_inertials(text, source)
@@ -661,7 +853,7 @@ def from_urdf(
     if rotor_source is not None:
         prov.setdefault("rotors", rotor_source)
     return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
-                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source)
+                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source, plausibility=plausibility)
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

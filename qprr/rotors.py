@@ -314,3 +314,205 @@ def read_rotor_file(path: str | Path) -> dict:
     if not desc:
         raise InputError(f"rotor description file {str(path)!r} is empty: it needs one [[rotor]] table per rotor")
     return desc  # its content is checked by rotors_from_mapping (errors prefixed with the file by from_urdf)
+
+
+# ------------------------------------------------------------------ what a rotor set can do
+WRENCH_NAMES = ("F_x", "F_y", "F_z", "tau_x", "tau_y", "tau_z")
+"""The base wrench components [f_B; tau_B] of a column of Omega, in B."""
+
+RANK_RTOL = 1e-9
+"""A singular value of the (length-scaled) wrench map below RANK_RTOL x the largest is zero (a direction the rotors
+cannot produce)."""
+
+CONDITION_WARN = 1e3
+"""Condition number of the length-scaled attitude map [thrust; tau] above which loading warns (one direction is more
+than a thousand times weaker than the strongest)."""
+
+DUPLICATE_DISTANCE = 1e-3
+"""Two rotors closer than this [m] with the same axis, spin and kappa are one rotor written twice."""
+
+
+@dataclass(frozen=True)
+class ActuationSummary:
+    """What a rotor set can do for a vehicle of weight m g with its CoG at ``com_body`` (B) (:func:`actuation_summary`).
+
+    rank : dimension of the base wrench set Omega f (4: coplanar parallel rotors, 6: fully actuated).
+    directions : the axes of B's wrench (:data:`WRENCH_NAMES`) the set can produce on their own (each e_k in the
+        range of Omega); an under-actuated quadrotor: ("F_z", "tau_x", "tau_y", "tau_z").
+    range_basis : (6, rank) orthonormal basis of the producible wrenches (in the length-scaled space of ``length``).
+    fully_actuated : rank == 6 (any force and torque at a level attitude).
+    thrust_axis_body : d, the unit direction of the collective thrust (sum of the rotor axes, z_B if they cancel).
+    attitude_rank : rank of [d^T Omega_F; Omega_tau] (4 rows): 4 is what every flight controller needs
+        (collective thrust plus three independent torques).
+    condition : sigma_max / sigma_min of that 4-row map with the torques divided by ``length`` (inf if rank < 4).
+    length : the length [m] torques are divided by (the largest rotor distance to B, or kappa if larger; 1 if both 0).
+    hover_wrench : [f; tau] (6,) the rotors apply at hover with d vertical: m g [d; c x d].
+    hover_thrusts : (n,) the least-norm thrusts that give ``hover_wrench`` [N] (NaN if no thrusts give it).
+    hover_margin : the largest s [N] such that some thrusts give ``hover_wrench`` with f_min + s <= f <= f_max - s
+        (a linear programme; <= 0: the set cannot hover with every thrust strictly inside its bounds; capped at m g).
+    can_hover, can_control_attitude : hover_margin > 0; attitude_rank == 4.
+    """
+
+    rank: int
+    directions: tuple[str, ...]
+    range_basis: np.ndarray
+    fully_actuated: bool
+    thrust_axis_body: np.ndarray
+    attitude_rank: int
+    condition: float
+    length: float
+    hover_wrench: np.ndarray
+    hover_thrusts: np.ndarray
+    hover_margin: float
+
+    @property
+    def can_hover(self) -> bool:
+        return self.hover_margin > 0.0
+
+    @property
+    def can_control_attitude(self) -> bool:
+        return self.attitude_rank == 4
+
+    def __str__(self) -> str:
+        kind = "fully actuated" if self.fully_actuated else "under-actuated"
+        f = ", ".join(f"{x:.4g}" for x in self.hover_thrusts)
+        return (f"rank {self.rank} ({kind}); wrench directions {', '.join(self.directions) or 'none'}; attitude map rank "
+                f"{self.attitude_rank}/4, condition {self.condition:.4g}; hover thrusts [{f}] N, margin {self.hover_margin:.4g} N")
+
+
+def _rank(s: np.ndarray) -> int:
+    return int(np.sum(s > RANK_RTOL * s[0])) if s.size and s[0] > 0.0 else 0
+
+
+def actuation_summary(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0)) -> ActuationSummary:
+    """:class:`ActuationSummary` of ``rotors`` carrying a weight m g = ``weight`` [N] with its CoG at ``com_body`` [m] in B.
+
+    The hover wrench is the one the rotors must apply with the collective thrust axis d vertical (a vehicle hovers
+    with d up): m g [d; c x d].  The hover margin is the optimum of the linear programme max s subject to
+    Omega f = hover wrench, f_min + s <= f <= f_max - s, s <= m g (scipy's HiGHS)."""
+    return _summary(rotors, weight, com_body, optimal_margin=True)
+
+
+def _summary(rotors: Sequence[Rotor], weight: float, com_body, optimal_margin: bool) -> ActuationSummary:
+    """The summary; ``optimal_margin=False``: when the least-norm hover thrusts are strictly inside their bounds, their
+    smallest distance to a bound (a lower bound of the optimum, enough to say the set hovers) instead of the LP."""
+    from scipy.optimize import linprog
+
+    Omega = rotor_matrix(rotors)
+    weight = as_real(weight, "weight", nonnegative=True, unit="N")
+    c = as_vector(com_body, 3, "com_body")
+    n = Omega.shape[1]
+    length = max([math.hypot(*r.position_body) for r in rotors] + [r.kappa for r in rotors])
+    length = length if length > 0.0 else 1.0
+    scaled = Omega.copy()
+    scaled[3:6] /= length
+    U, s, _ = np.linalg.svd(scaled)
+    rank = _rank(s)
+    basis = U[:, :rank]
+    directions = tuple(WRENCH_NAMES[k] for k in range(6) if np.linalg.norm(basis.T[:, k]) > 1.0 - 1e-9)
+    F = Omega[0:3].sum(axis=1)
+    d = F / np.linalg.norm(F) if np.linalg.norm(F) > 1e-9 else np.array([0.0, 0.0, 1.0])
+    att = np.vstack([d @ Omega[0:3], scaled[3:6]])
+    sa = np.linalg.svd(att, compute_uv=False)
+    att_rank = _rank(sa)
+    condition = float(sa[0] / sa[3]) if att_rank == 4 else math.inf
+    w = weight * np.concatenate([d, np.cross(c, d)])
+    f_ls, *_ = np.linalg.lstsq(Omega, w, rcond=None)
+    exact = np.linalg.norm(Omega @ f_ls - w) <= 1e-9 * max(weight, 1.0)
+    f_ls = f_ls if exact else np.full(n, math.nan)
+    margin = -math.inf
+    lo = np.array([r.f_min for r in rotors])
+    hi = np.array([r.f_max for r in rotors])
+    fast = min(float(np.min(f_ls - lo)), float(np.min(hi - f_ls)), max(weight, 1e-9)) if exact else -math.inf
+    if exact and not optimal_margin and fast > 0.0:
+        margin = fast
+    elif exact:
+        fin = np.isfinite(hi)
+        # variables [f (n), s]; maximise s
+        A_ub = np.vstack([np.hstack([-np.eye(n), np.ones((n, 1))]), np.hstack([np.eye(n)[fin], np.ones((int(fin.sum()), 1))])])
+        b_ub = np.concatenate([-lo, hi[fin]])
+        res = linprog(np.r_[np.zeros(n), -1.0], A_ub=A_ub, b_ub=b_ub, A_eq=np.hstack([Omega, np.zeros((6, 1))]), b_eq=w,
+                      bounds=[(None, None)] * n + [(None, max(weight, 1e-9))], method="highs")
+        margin = float(-res.fun) if res.status == 0 else -math.inf
+    return ActuationSummary(rank, directions, _ro(basis), rank == 6, _ro(d), att_rank, condition, float(length), _ro(w),
+                            _ro(np.asarray(f_ls, dtype=float)), margin)
+
+
+def _ro(a: np.ndarray) -> np.ndarray:
+    a = np.array(a, dtype=float)
+    a.setflags(write=False)
+    return a
+
+
+def duplicate_rotors(rotors: Sequence[Rotor]) -> list[tuple[int, int]]:
+    """Index pairs (i, j), i < j, of rotors that are one rotor written twice: centres closer than
+    :data:`DUPLICATE_DISTANCE`, the same axis, spin and kappa (virtual thrusters at one point with other axes, spins or
+    kappa, as :func:`ideal_wrench_set`'s, are not duplicates)."""
+    if not isinstance(rotors, (tuple, list)) or not rotors or not all(isinstance(r, Rotor) for r in rotors):
+        raise InputError(f"rotors must be a non-empty sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
+    out = []
+    for i, a in enumerate(rotors):
+        for j in range(i + 1, len(rotors)):
+            b = rotors[j]
+            if (math.dist(a.position_body, b.position_body) < DUPLICATE_DISTANCE and np.dot(a.axis_body, b.axis_body) > 1.0 - 1e-9
+                    and a.spin == b.spin and abs(a.kappa - b.kappa) <= 1e-12):
+                out.append((i, j))
+    return out
+
+
+def _why_no_attitude(rotors: Sequence[Rotor], d: np.ndarray) -> str:
+    """The likely reason a rotor set lacks an attitude direction (for the error message)."""
+    parallel = all(float(np.dot(r.axis_body, d)) > 1.0 - 1e-9 for r in rotors)
+    p = np.array([r.position_body for r in rotors])
+    p_perp = p - np.outer(p @ d, d)
+    reasons = []
+    if len(rotors) < 4:
+        reasons.append(f"{len(rotors)} rotor(s) produce at most {len(rotors)} independent wrench components; a multirotor needs 4")
+    if parallel and len({r.spin for r in rotors}) == 1:
+        reasons.append("every rotor has the same spin: the drag torques only add up, give half of them the other spin "
+                       "(\"cw\" / \"ccw\")")
+    if parallel and all(r.kappa == 0.0 for r in rotors):
+        reasons.append("every drag/thrust ratio kappa is 0: parallel rotors then give no yaw torque (propellers: 0.005-0.06 m)")
+    if np.all(np.linalg.norm(p_perp, axis=1) < DUPLICATE_DISTANCE):
+        reasons.append("every rotor sits on the thrust axis through B (rotors at the centre): no roll or pitch torque")
+    elif np.linalg.matrix_rank(p_perp - p_perp.mean(axis=0), tol=DUPLICATE_DISTANCE) <= 1:
+        reasons.append("the rotors lie on one line: no torque about that line")
+    return "; ".join(reasons) if reasons else "the rotor axes and positions are degenerate"
+
+
+def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set") -> None:
+    """Nothing for a rotor set that can hover and control its attitude, else an :class:`~qprr.errors.ActuationError`
+    naming ``source`` (the rotor file) and the rotors (:func:`actuation_summary` reports the numbers).
+
+    Refused: a rotor written twice (:func:`duplicate_rotors`); an attitude map [d^T Omega_F; Omega_tau] of rank < 4
+    (every flight controller needs collective thrust and three independent torques: same spins, zero kappa, rotors on
+    a line or at the centre, fewer than four rotors); no hover thrusts strictly inside the bounds.  Warned about
+    (:class:`~qprr.errors.ActuationWarning`): a condition number above :data:`CONDITION_WARN`."""
+    import warnings
+
+    from .errors import ActuationError, ActuationWarning
+
+    dup = duplicate_rotors(rotors)
+    names = [r.name or f"rotor_{k + 1}" for k, r in enumerate(rotors)]
+    if dup:
+        pairs = ", ".join(f"{names[i]!r} (rotor {i + 1}) and {names[j]!r} (rotor {j + 1})" for i, j in dup)
+        raise ActuationError(f"{source}: {pairs} are the same rotor written twice (same position, axis, spin and kappa); "
+                             "was a rotor table pasted twice? Remove the copies (coaxial pairs sit at different heights)")
+    summary = _summary(rotors, as_real(weight, "weight", nonnegative=True, unit="N"), com_body, optimal_margin=False)
+    listed = ", ".join(names)
+    if not summary.can_control_attitude:
+        raise ActuationError(
+            f"{source}: the rotors [{listed}] span {summary.attitude_rank} of the 4 directions (collective thrust, roll, "
+            f"pitch and yaw torque) every flight controller needs (wrench rank {summary.rank}, directions "
+            f"{', '.join(summary.directions) or 'none'}): {_why_no_attitude(rotors, summary.thrust_axis_body)}")
+    if not summary.can_hover:
+        why = ("no thrusts give the hover wrench m g [d; c x d] (CoG outside what the rotors can balance)"
+               if np.isnan(summary.hover_thrusts).any() else
+               f"the best hover thrusts keep a margin of {summary.hover_margin:.4g} N to their bounds [f_min, f_max]")
+        raise ActuationError(f"{source}: the rotors [{listed}] cannot hover the vehicle (weight {weight:.6g} N, CoG "
+                             f"{np.round(np.asarray(com_body, dtype=float), 6).tolist()} m in B at the neutral configuration): "
+                             f"{why}; check the positions (frame B, metres), the thrust bounds and the spins")
+    if summary.condition > CONDITION_WARN:
+        warnings.warn(f"{source}: the rotors' attitude map is badly conditioned (condition {summary.condition:.3g} > "
+                      f"{CONDITION_WARN:g}): one of thrust, roll, pitch, yaw is far weaker than the others", ActuationWarning,
+                      stacklevel=3)

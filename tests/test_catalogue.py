@@ -61,3 +61,34 @@ def test_the_judge_needs_the_argument_name():
     assert catalogue.judge(ValueError("xi bad"), "xi", None, __import__("qprr.errors").errors)[0] == "unclear"
     err = UnknownNameError("integrator", "rk5", ("euler", "rk4"))
     assert catalogue.judge(err, "method", "rk5", __import__("qprr.errors").errors)[0] == "good"
+
+
+# ----------------------------------------------------------------------------------- files (issue 22)
+def test_every_bad_urdf_and_rotor_file_ends_in_a_qprr_error_naming_the_element():
+    """Generated bad variants of the example URDF and rotor file (tests/catalogue_files.py): each joint's origin, axis
+    and limits, each link's name, mass and inertial, the tree, each rotor value and the rotor set."""
+    from collections import Counter
+
+    from tests import catalogue_files
+
+    outcomes = catalogue_files.run_files()
+    bad = [o for o in outcomes if o.verdict != "good"]
+    assert len(outcomes) >= 90, len(outcomes)
+    assert not bad, f"{len(bad)} of {len(outcomes)} bad files not refused naming the element ({Counter(o.verdict for o in outcomes)}):\n" + \
+        "\n".join(f"{o.verdict:8s} {o.label}: {o.detail}" for o in bad)
+
+
+def test_the_near_mistakes_that_are_legitimate_load(tmp_path):
+    import warnings
+
+    import qprr
+    from tests import catalogue_files
+
+    for k, v in enumerate(catalogue_files.valid_variants()):
+        path = tmp_path / f"ok{k}.rotors.toml"
+        path.write_text(v.rotors)
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            p = qprr.from_urdf(v.urdf, path, ee_frame=catalogue_files.EE)
+        assert p.total_mass == pytest.approx(1.5, rel=1e-12), v.label
+        assert p.actuation_summary().can_hover

@@ -60,6 +60,7 @@ import pinocchio as pin
 
 from ..charts import FloatWriter, State, as_array, as_real, as_vector
 from ..errors import InputError, UnknownNameError
+from ..joint_friction import JointFriction
 from ..payload import MassEstimator, PayloadModel
 from ..platform import Platform, check_platform
 from .base import Controller, Reference, check_reset
@@ -202,6 +203,8 @@ class InverseDynamicsController(Controller):
             self.name = name
         self.model = platform.model
         self.data = platform.model.createData()
+        self._friction = JointFriction.from_model(platform.model)  # nominal joint friction of the URDF (None: none)
+        self._zero6 = [0.0] * 6
         # base directions the rotors cannot produce (coplanar rotors: the body-lateral force)
         Omega = platform.rotor_matrix
         self._lost = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12] if self.realizable else []
@@ -388,6 +391,8 @@ class InverseDynamicsController(Controller):
         a[5] += d5
         write(abuf, a)
         tau = _rnea(model, data, q, v, abuf)
+        if self._friction is not None:  # the URDF's joint friction (F_v of (5.36), Coulomb): feedforward at the reference arm rates
+            tau = tau - self._friction.generalized_force(self._zero6 + rd[6:])
         if self.output == "pinocchio":
             if ff is not None:
                 tau = tau + np.array(ffv)

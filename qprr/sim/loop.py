@@ -57,6 +57,7 @@ from ..actuation import DEMAND_BOUND, Allocator
 from ..charts import State, as_vector
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError, UnknownNameError
+from ..joint_friction import JointFriction
 from ..platform import Platform
 from . import disturbances as dist
 from .actuators import RotorDynamics
@@ -249,7 +250,7 @@ def simulate(
     if rotors is not None and dt > min(actuators.time_constant):  # explicit schemes: stable for dt < 2 T (Euler, midpoint)
         raise InputError(f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
                          "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt")
-    plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist, rotors, platform.rotor_matrix)
+    plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist, rotors, platform.rotor_matrix, dt)
     env, z = plant.env, plant.z0
     rhs, first_stage = plant.rhs, plant.first_stage
     settle = plant.settle if (env is not None and plant.n_env) else None
@@ -424,7 +425,7 @@ class _Plant:
     ``tau`` at every stage and dw/dt = (w_c - w) / T is part of z_dot.
     """
 
-    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist, rotors=None, Omega=None) -> None:
+    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist, rotors=None, Omega=None, step=0.0) -> None:
         self.model, self.data, self.tau, self.ee = model, data, tau, ee_frame
         self.state_dist = tuple(state_dist)
         self.env = external_wrench if isinstance(external_wrench, Environment) else None
@@ -441,7 +442,8 @@ class _Plant:
         self.n_env = 0 if self.z0 is None else self.z0.shape[0]
         self.rotors, self.Omega = rotors, (None if Omega is None else np.array(Omega))
         aba = pin.aba
-        self.plain = self.env is None and self.fn is None and not self.state_dist and rotors is None
+        self.friction = JointFriction.from_model(model, step)  # the URDF's <dynamics damping friction> (None: none)
+        self.plain = self.env is None and self.fn is None and not self.state_dist and rotors is None and self.friction is None
         if rotors is not None:  # rotor speeds appended to z (the first command sets them at tick 0)
             self.z0 = np.concatenate([self.z0 if self.z0 is not None else np.zeros(0), np.zeros(rotors.n)])
             self.rhs = self._rhs_rotors
@@ -474,6 +476,8 @@ class _Plant:
         zd = None
         for d in self.state_dist:
             tau += np.asarray(d.generalized_force(t, q, v), dtype=float)
+        if self.friction is not None:
+            self.friction.apply(self.model, v, tau)  # implicit in v: writes h K(v) into the plant model's armature
         if self.env is not None or self.fn is not None:
             J = pin.computeFrameJacobian(self.model, self.data, q, self.ee, pin.LOCAL_WORLD_ALIGNED)
             if self.env is not None:

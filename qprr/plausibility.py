@@ -1,0 +1,187 @@
+"""Plausibility ranges of the physical inputs of an aerial manipulator, and the unit slips they catch.
+
+A value can be valid for the type checks (finite, positive) and still be in the wrong unit: a
+drag/thrust ratio of 16 (millimetres), an arm offset of 300 (millimetres), revolute limits of +-150
+(degrees), a link of 1500 (grams).  :class:`Plausibility` holds one range per physical input of a
+rotor file, a URDF and a payload (the table of docs/platforms.md); the checks raise
+:class:`~qprr.errors.PlausibilityError` naming the input, the value, the likely slip and the way to
+accept the value on purpose: ``plausibility=Plausibility(...)`` (``dataclasses.replace`` of
+:data:`DEFAULT`) passed to :func:`qprr.from_urdf`, :func:`qprr.from_model` or
+:func:`qprr.payload.with_payload`.  ``plausibility=None`` keeps the type and physics checks only.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass, fields
+
+from .errors import InputError, PlausibilityError
+
+
+@dataclass(frozen=True)
+class Plausibility:
+    """Upper bounds of the physical inputs of an aerial manipulator (all SI; docs/platforms.md, "Plausibility ranges").
+
+    rotor_distance_max : rotor centre to B [m] (the largest multirotors span a few metres).
+    kappa_max : drag/thrust ratio c/b of a rotor [m] (propellers: 0.005-0.06 m).
+    rotor_thrust_max : f_max of one rotor [N] (heavy-lift rotors give a few hundred N).
+    thrust_to_weight_max : sum of the rotors' f_max along z_B over the weight m g (racing drones reach 10-15).
+    length_max : joint origin offsets and inertial origins of a URDF [m].
+    link_mass_max : mass of one URDF link [kg].
+    gyration_radius_max : sqrt(I_max / m) of a link or payload [m] (its size; kg mm^2 gives 1000x).
+    revolute_limit_max : |lower|, |upper| of a revolute joint [rad] (one turn and a bit: degrees give > 7).
+    prismatic_limit_max : |lower|, |upper| of a prismatic joint [m].
+    revolute_effort_max : effort bound of a revolute joint [N m].
+    prismatic_effort_max : effort bound of a prismatic joint [N].
+    joint_damping_max : <dynamics damping> [N m s/rad or N s/m].
+    joint_friction_max : <dynamics friction> [N m or N].
+    """
+
+    rotor_distance_max: float = 10.0
+    kappa_max: float = 0.1
+    rotor_thrust_max: float = 1000.0
+    thrust_to_weight_max: float = 20.0
+    length_max: float = 10.0
+    link_mass_max: float = 200.0
+    gyration_radius_max: float = 5.0
+    revolute_limit_max: float = 7.0
+    prismatic_limit_max: float = 10.0
+    revolute_effort_max: float = 1000.0
+    prismatic_effort_max: float = 10000.0
+    joint_damping_max: float = 100.0
+    joint_friction_max: float = 1000.0
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not v > 0.0:
+                raise InputError(f"Plausibility.{f.name} must be a number > 0 (math.inf: no bound), got {v!r}")
+
+
+DEFAULT = Plausibility()
+"""The ranges of the table in docs/platforms.md."""
+
+
+def check_plausibility_setting(plausibility) -> Plausibility | None:
+    """``plausibility`` if it is a :class:`Plausibility` or None (checks off), else an :class:`InputError`."""
+    if plausibility is not None and not isinstance(plausibility, Plausibility):
+        raise InputError(f"plausibility must be a qprr.plausibility.Plausibility (or None: no range checks), got "
+                         f"{type(plausibility).__name__} {plausibility!r:.60}")
+    return plausibility
+
+
+def _refuse(what: str, value: float, field_name: str, bound: float, slip: str) -> None:
+    raise PlausibilityError(f"{what} = {value!r} is outside the plausible range for an aerial robot (<= {bound:g}): {slip}. "
+                            f"If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, "
+                            f"{field_name}=...) ")
+
+
+def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: str = "the rotor set") -> None:
+    """Rotor positions, drag/thrust ratios and thrust bounds within ``plausibility`` (None: no check)."""
+    if plausibility is None:
+        return
+    P = plausibility
+    for k, r in enumerate(rotors):
+        label = f"{source}: rotor {k + 1} ({r.name!r})"
+        d = math.hypot(*r.position_body)
+        if d > P.rotor_distance_max:
+            _refuse(f"{label} distance to B [m]", d, "rotor_distance_max", P.rotor_distance_max,
+                    f"positions in millimetres? {d:g} mm = {d / 1000:g} m")
+        if r.kappa > P.kappa_max:
+            _refuse(f"{label} kappa [m]", r.kappa, "kappa_max", P.kappa_max,
+                    f"a drag/thrust ratio in millimetres? {r.kappa:g} mm = {r.kappa / 1000:g} m (propellers: 0.005-0.06 m)")
+        if math.isfinite(r.f_max) and r.f_max > P.rotor_thrust_max:
+            _refuse(f"{label} f_max [N]", r.f_max, "rotor_thrust_max", P.rotor_thrust_max,
+                    f"a thrust in grams-force? {r.f_max:g} gf = {r.f_max * 9.80665e-3:.4g} N")
+
+
+# ------------------------------------------------------------------------- URDF
+def _floats(text: str | None) -> list[float]:
+    try:
+        return [float(x) for x in (text or "").split()]
+    except ValueError:
+        return []
+
+
+def _check_joint(joint: ET.Element, P: Plausibility, source: str) -> None:
+    name, kind = joint.get("name"), joint.get("type")
+    origin = joint.find("origin")
+    if origin is not None:
+        xyz = _floats(origin.get("xyz"))
+        d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
+        if d > P.length_max:
+            _refuse(f"{source}: joint {name!r} <origin xyz> length [m]", d, "length_max", P.length_max,
+                    f"lengths in millimetres? {d:g} mm = {d / 1000:g} m")
+    limit = joint.find("limit")
+    if limit is not None and kind in ("revolute", "prismatic"):
+        for attr in ("lower", "upper"):
+            v = _floats(limit.get(attr))
+            if not v:
+                continue
+            v = v[0]
+            if kind == "revolute" and abs(v) > P.revolute_limit_max:
+                _refuse(f"{source}: revolute joint {name!r} <limit {attr}> [rad]", v, "revolute_limit_max", P.revolute_limit_max,
+                        f"degrees? {v:g} deg = {math.radians(v):.6g} rad")
+            if kind == "prismatic" and abs(v) > P.prismatic_limit_max:
+                _refuse(f"{source}: prismatic joint {name!r} <limit {attr}> [m]", v, "prismatic_limit_max", P.prismatic_limit_max,
+                        f"millimetres? {v:g} mm = {v / 1000:g} m")
+        eff = _floats(limit.get("effort"))
+        bound, field_name = ((P.revolute_effort_max, "revolute_effort_max") if kind == "revolute" else
+                             (P.prismatic_effort_max, "prismatic_effort_max"))
+        if eff and eff[0] > bound:
+            unit = "N m" if kind == "revolute" else "N"
+            _refuse(f"{source}: joint {name!r} <limit effort> [{unit}]", eff[0], field_name, bound,
+                    f"N mm or kg cm? {eff[0]:g} N mm = {eff[0] / 1000:g} N m" if kind == "revolute" else
+                    f"grams-force? {eff[0]:g} gf = {eff[0] * 9.80665e-3:.4g} N")
+    dyn = joint.find("dynamics")
+    if dyn is not None:
+        for attr, bound, field_name in (("damping", P.joint_damping_max, "joint_damping_max"),
+                                        ("friction", P.joint_friction_max, "joint_friction_max")):
+            v = _floats(dyn.get(attr))
+            if v and abs(v[0]) > bound:
+                _refuse(f"{source}: joint {name!r} <dynamics {attr}>", v[0], field_name, bound,
+                        "per-millimetre or per-degree units? URDF dynamics are in SI per radian or per metre")
+
+
+def _check_link(link: ET.Element, P: Plausibility, source: str) -> None:
+    inertial = link.find("inertial")
+    if inertial is None:
+        return
+    name = link.get("name")
+    mass_el = inertial.find("mass")
+    mass = _floats(mass_el.get("value")) if mass_el is not None else []
+    m = mass[0] if mass else 0.0
+    if m > P.link_mass_max:
+        _refuse(f"{source}: link {name!r} <mass value> [kg]", m, "link_mass_max", P.link_mass_max,
+                f"grams? {m:g} g = {m / 1000:g} kg")
+    origin = inertial.find("origin")
+    xyz = _floats(origin.get("xyz")) if origin is not None else []
+    d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
+    if d > P.length_max:
+        _refuse(f"{source}: link {name!r} <inertial><origin xyz> length [m]", d, "length_max", P.length_max,
+                f"millimetres? {d:g} mm = {d / 1000:g} m")
+    inertia = inertial.find("inertia")
+    if inertia is not None and m > 0.0:
+        moments = [v for k in ("ixx", "iyy", "izz") for v in _floats(inertia.get(k))[:1]]
+        if moments and max(moments) > 0.0:
+            radius = math.sqrt(max(moments) / m)
+            if radius > P.gyration_radius_max:
+                _refuse(f"{source}: link {name!r} radius of gyration sqrt(I_max / m) [m]", radius, "gyration_radius_max",
+                        P.gyration_radius_max, f"an inertia in kg mm^2 or g mm^2? (I_max = {max(moments):g}, m = {m:g}: "
+                        f"in kg mm^2 the radius would be {radius / 1000:g} m)")
+
+
+def check_urdf(root: ET.Element, plausibility: Plausibility | None, source: str = "URDF") -> None:
+    """Every joint origin, limit, effort, dynamics and every link mass, CoM and inertia of a parsed URDF within
+    ``plausibility`` (None: no check)."""
+    if plausibility is None:
+        return
+    for joint in root.findall("joint"):
+        _check_joint(joint, plausibility, source)
+    for link in root.findall("link"):
+        _check_link(link, plausibility, source)
+
+
+__all__ = ["DEFAULT", "Plausibility", "check_plausibility_setting", "check_rotors", "check_urdf"]
