@@ -126,7 +126,7 @@ def real(*, positive: bool = False, nonnegative: bool = False, lo: float | None 
         try:
             value = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"value must be a real number{' of ' + unit if unit else ''}, got {text!r}") from None
+            raise argparse.ArgumentTypeError(f"value must be a real number, got {text!r}") from None
         try:
             return as_real(value, "value", positive=positive, nonnegative=nonnegative, lo=lo, hi=hi, unit=unit)
         except InputError as exc:

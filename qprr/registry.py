@@ -24,7 +24,8 @@ registry                    name -> value
 :data:`COMPARISONS`         comparison name -> ``(names, *, duration, plot_dir, progress) -> reports``
 :data:`CHECKS`              check-suite name -> ``(verbose) -> exit code`` (``qprr check`` runs them all)
 :data:`MAP_REFERENCES`      provider name -> ``(map_name, platform, result) -> MapReference | None``
-:data:`COMMANDS`            command-group name -> ``register_cli(subparsers)`` (``qprr`` front end)
+:data:`COMMANDS`            command-group name -> ``register_cli(subparsers)`` (``qprr`` front end), from the
+                            entry points ``qprr.commands`` (the thesis: ``qprr urdf``)
 ==========================  ==================================================================
 """
 
@@ -38,6 +39,8 @@ from .errors import InputError, UnknownNameError
 
 PLUGIN_GROUP = "qprr.plugins"
 """Entry-point group of the plug-ins: each entry names a function ``register() -> None``."""
+COMMAND_GROUP = "qprr.commands"
+"""Entry-point group of the plug-ins' command groups (:data:`COMMANDS`): each entry names ``register_cli(subparsers)``."""
 
 T = TypeVar("T")
 
@@ -66,10 +69,17 @@ class Registry(Mapping[str, T], Generic[T]):
     (:func:`load_plugins`); a name still unknown raises :class:`~qprr.errors.UnknownNameError`
     listing the valid ones."""
 
-    def __init__(self, kind: str) -> None:
+    def __init__(self, kind: str, group: str | None = None) -> None:
         self.kind = kind
+        self.group = group
+        """An entry-point group whose entries are this registry's values (name -> the object it names), or None."""
         self._entries: dict[str, T] = {}
         self._sources: list[Callable[[], Iterable[tuple[str, T]]]] = []
+        if group is not None:
+            self._sources.append(self._entry_points)
+
+    def _entry_points(self) -> Iterable[tuple[str, T]]:
+        return [(ep.name, ep.load()) for ep in metadata.entry_points(group=self.group) if ep.name not in self._entries]
 
     def register(self, name: str, value: T) -> T:
         """Add ``value`` under ``name``; another value under a taken name raises InputError."""
@@ -140,9 +150,10 @@ CHECKS: Registry[Callable[[bool], int]] = Registry("check suite")
 """Check-suite name -> ``run(verbose) -> exit code`` (0: every check holds); ``qprr check`` runs them all."""
 MAP_REFERENCES: Registry[Callable[..., object]] = Registry("map reference")
 """Provider name -> ``(map_name, platform, result) -> MapReference | None``: published numbers for a design map."""
-COMMANDS: Registry[Callable[..., None]] = Registry("command group")
-"""Command-group name -> ``register_cli(subparsers)`` adding a plug-in's commands to the ``qprr`` front end."""
+COMMANDS: Registry[Callable[..., None]] = Registry("command group", COMMAND_GROUP)
+"""Command-group name -> ``register_cli(subparsers)`` adding a plug-in's commands to the ``qprr`` front end: the
+entry points of :data:`COMMAND_GROUP` (read on first use; the front end's modules are not plug-in code)."""
 
 
-__all__ = ["CHECKS", "COMMANDS", "COMPARISONS", "GAIN_TABLES", "MAP_REFERENCES", "PARAMETER_SETS", "PLUGIN_GROUP", "SCENARIOS",
+__all__ = ["CHECKS", "COMMAND_GROUP", "COMMANDS", "COMPARISONS", "GAIN_TABLES", "MAP_REFERENCES", "PARAMETER_SETS", "PLUGIN_GROUP", "SCENARIOS",
            "Registry", "load_plugins"]

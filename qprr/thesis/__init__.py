@@ -17,10 +17,11 @@ manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers refer to 
 
 The library (everything outside this package) never imports from here.  The thesis is a plug-in:
 :func:`register` (the ``qprr.plugins`` entry point ``thesis`` of the distribution's metadata) puts
-its platform, rotor dynamics, parameter sets, gain tables, scenarios, comparisons, checks, design-map
-references and the ``qprr urdf`` command into the core's registries (:mod:`qprr.registry`), which
-call it the first time they miss a name.  It imports none of the modules it registers: each entry
-imports its module when used.
+its platform, rotor dynamics, parameter sets, gain tables, scenarios, comparisons, checks and
+design-map references into the core's registries (:mod:`qprr.registry`), which call it the first
+time they miss a name; it imports none of the modules it registers (each entry imports its module
+when used).  Its front end, ``qprr urdf`` (:mod:`qprr.thesis.cli`), is the entry point ``thesis`` of
+the group ``qprr.commands`` (:data:`qprr.registry.COMMANDS`).
 """
 
 from __future__ import annotations
@@ -69,16 +70,10 @@ def _map_reference(map_name, platform, result):
     return analysis_reference(map_name, platform, result)
 
 
-def _register_cli(sub) -> None:
-    from .cli import register_cli
-
-    register_cli(sub)
-
-
 def register() -> None:
     """Register the thesis into the core's registries (the ``qprr.plugins`` entry point; called once, by the registries)."""
     from ..platforms import PLATFORMS, ROTOR_DYNAMICS
-    from ..registry import CHECKS, COMMANDS, COMPARISONS, GAIN_TABLES, MAP_REFERENCES, PARAMETER_SETS, SCENARIOS
+    from ..registry import CHECKS, COMPARISONS, GAIN_TABLES, MAP_REFERENCES, PARAMETER_SETS, SCENARIOS
     from .params import VARIANTS
 
     PLATFORMS.register("q-prr", load)
@@ -90,7 +85,6 @@ def register() -> None:
     COMPARISONS.register_source(_comparisons)
     CHECKS.register("thesis", _check)
     MAP_REFERENCES.register("thesis", _map_reference)
-    COMMANDS.register("thesis", _register_cli)
 
 
 __all__ = ["ARM_JOINTS", "EE_FRAME", "LAYOUTS", "QPRRParams", "cad_params", "load", "params_of", "register", "rotor_set", "thesis_params"]
