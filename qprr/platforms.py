@@ -39,13 +39,13 @@ _BARE_MULTIROTORS = {
     "hector": "hector_description/robots/quadrotor_base.urdf",
     "iris": "iris_description/robots/iris_simple.urdf",
 }
-PLATFORMS: Registry = Registry("platform")
-"""Platform name -> loader ``(**options) -> Platform``; the core registers the example-robot-data ones below."""
-ROTOR_DYNAMICS: Registry = Registry("rotor-dynamics set")
-"""Platform name -> ``(**overrides) -> RotorDynamics`` (:class:`qprr.sim.actuators.RotorDynamics`)."""
-NAMES = PLATFORMS
 DEFAULT_PLATFORM = "q-prr"
 """The platform :func:`load` and :func:`resolve` give without a name: the thesis's Q-PRR (by name, through :data:`PLATFORMS`)."""
+PLATFORMS: Registry = Registry("platform", default=DEFAULT_PLATFORM)
+"""Platform name -> loader ``(**options) -> Platform``; the core registers the example-robot-data ones below."""
+ROTOR_DYNAMICS: Registry = Registry("rotor-dynamics set", default=DEFAULT_PLATFORM)
+"""Platform name -> ``(**overrides) -> RotorDynamics`` (:class:`qprr.sim.actuators.RotorDynamics`)."""
+NAMES = PLATFORMS
 """Names accepted by :func:`load`: the keys of :data:`PLATFORMS` (``name in NAMES``, ``", ".join(NAMES)``)."""
 
 

@@ -69,10 +69,12 @@ class Registry(Mapping[str, T], Generic[T]):
     (:func:`load_plugins`); a name still unknown raises :class:`~qprr.errors.UnknownNameError`
     listing the valid ones."""
 
-    def __init__(self, kind: str, group: str | None = None) -> None:
+    def __init__(self, kind: str, group: str | None = None, *, default: str | None = None) -> None:
         self.kind = kind
         self.group = group
         """An entry-point group whose entries are this registry's values (name -> the object it names), or None."""
+        self.default = default
+        """The name a caller gets without naming one (listed first), or None."""
         self._entries: dict[str, T] = {}
         self._sources: list[Callable[[], Iterable[tuple[str, T]]]] = []
         if group is not None:
@@ -122,16 +124,21 @@ class Registry(Mapping[str, T], Generic[T]):
 
     def __iter__(self) -> Iterator[str]:
         self._complete()
-        return iter(tuple(self._entries))
+        return iter(self._names())
 
     def __len__(self) -> int:
         self._complete()
         return len(self._entries)
 
+    def _names(self) -> tuple[str, ...]:
+        """The names in registration order, :attr:`default` first."""
+        first = (self.default,) if self.default in self._entries else ()
+        return (*first, *(n for n in self._entries if n != self.default))
+
     def _valid(self) -> tuple[str, ...]:
         if _LOADED:
-            return tuple(self._entries)
-        return (*self._entries, f"(no plug-in found in the entry points {PLUGIN_GROUP!r}: is qprr installed, e.g. pip install -e .?)")
+            return self._names()
+        return (*self._names(), f"(no plug-in found in the entry points {PLUGIN_GROUP!r}: is qprr installed, e.g. pip install -e .?)")
 
     def __repr__(self) -> str:
         return f"Registry({self.kind!r}: {', '.join(self._entries) or 'empty'})"
