@@ -26,7 +26,7 @@ import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .control import CONTROLLERS, make_controller
+from .control import make_controller
 from .errors import InputError, UnknownNameError
 from .platform import Platform
 from .registry import SCENARIOS
@@ -180,4 +180,4 @@ def run(name: str, controller: str | None = None, *, platform: Platform | None =
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
 
 
-__all__ = ["CONTROLLERS", "GENERIC", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
+__all__ = ["COMMON_OPTIONS", "GENERIC", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
