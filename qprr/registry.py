@@ -56,7 +56,11 @@ def load_plugins() -> tuple[str, ...]:
         if ep.name in _LOADED:
             continue
         _LOADED[ep.name] = ep.value  # marked first: a plug-in's register() may read a registry
-        ep.load()()
+        try:
+            ep.load()()
+        except BaseException:
+            del _LOADED[ep.name]  # a broken plug-in fails again at the next lookup, never reads as a missing name
+            raise
     return tuple(_LOADED)
 
 
