@@ -46,20 +46,28 @@ T = TypeVar("T")
 
 _LOADED: dict[str, str] = {}
 """Plug-ins loaded so far: entry-point name -> its ``module:function``."""
+_PENDING: list | None = None
+"""Entry points of :data:`PLUGIN_GROUP` not loaded yet (None: the installed metadata not read yet; it is read once)."""
 
 
 def load_plugins() -> tuple[str, ...]:
     """Load every plug-in of :data:`PLUGIN_GROUP` not loaded yet (each once); return the names of those loaded.
 
-    An import error inside a plug-in propagates: a broken plug-in is a failure, not a missing name."""
-    for ep in metadata.entry_points(group=PLUGIN_GROUP):
+    The installed metadata is read on the first call only.  An import error inside a plug-in propagates
+    and the plug-in stays pending: a broken plug-in fails at every lookup, it never reads as a missing name."""
+    global _PENDING
+    if _PENDING is None:
+        _PENDING = list(metadata.entry_points(group=PLUGIN_GROUP))
+    while _PENDING:
+        ep = _PENDING.pop(0)
         if ep.name in _LOADED:
             continue
         _LOADED[ep.name] = ep.value  # marked first: a plug-in's register() may read a registry
         try:
             ep.load()()
         except BaseException:
-            del _LOADED[ep.name]  # a broken plug-in fails again at the next lookup, never reads as a missing name
+            del _LOADED[ep.name]
+            _PENDING.insert(0, ep)
             raise
     return tuple(_LOADED)
 

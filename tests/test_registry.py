@@ -64,11 +64,13 @@ def test_plugins_load_lazily_once_and_failures_fail(monkeypatch):
     eps = [_EntryPoint("good-test-plugin", good)]
     monkeypatch.setattr(metadata, "entry_points", lambda group: eps if group == registry.PLUGIN_GROUP else [])
     monkeypatch.setattr(registry, "_LOADED", {})
+    monkeypatch.setattr(registry, "_PENDING", None)
     r.register("core", 1)
     assert r["core"] == 1 and seen == []  # a known name loads no plug-in
     assert r["from-plugin"] == 42 and seen == ["good"]  # an unknown one does, once
     assert list(r) == ["core", "from-plugin"] and seen == ["good"]
     eps.append(_EntryPoint("broken-test-plugin", broken))
+    monkeypatch.setattr(registry, "_PENDING", None)  # as in a new session where the broken plug-in is installed
     for _ in range(2):  # a broken plug-in raises at every lookup that loads it: never a silent missing name
         with pytest.raises(ModuleNotFoundError, match="qprr.nonexistent"):
             r["nope"]
@@ -77,6 +79,7 @@ def test_plugins_load_lazily_once_and_failures_fail(monkeypatch):
 def test_without_any_plugin_the_error_says_so(monkeypatch):
     monkeypatch.setattr(metadata, "entry_points", lambda group: [])
     monkeypatch.setattr(registry, "_LOADED", {})
+    monkeypatch.setattr(registry, "_PENDING", None)
     r = Registry("platform")
     with pytest.raises(UnknownNameError, match="no plug-in found.*pip install -e"):
         r["q-prr"]
