@@ -20,6 +20,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 PKG = ROOT / "qprr"
 
@@ -155,3 +157,22 @@ def test_the_thesis_arrives_by_registration():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["Q-PRR", "(thesis,", "plus)", "True", "True"], out.stdout
+
+
+def test_the_public_face_is_the_workflow():
+    """``import qprr`` gives the workflow (issue 20 item 5); the five heavier names load on first access, then are the
+    objects of their modules."""
+    code = ("import sys, qprr\n"
+            "before = {m for m in ('qprr.sim', 'qprr.control', 'qprr.ik', 'qprr.actuation') if m in sys.modules}\n"
+            "import qprr.sim, qprr.control, qprr.ik, qprr.actuation\n"
+            "same = [qprr.simulate is qprr.sim.simulate, qprr.SimResult is qprr.sim.SimResult, qprr.IKSolver is qprr.ik.IKSolver,\n"
+            "        qprr.Allocator is qprr.actuation.Allocator, qprr.make_controller is qprr.control.make_controller]\n"
+            "print(sorted(before), all(same), sorted(qprr.__all__))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == ("[] True ['Allocator', 'IKSolver', 'Platform', 'QprrError', 'SimResult', 'build', 'from_urdf', "
+                                  "'load', 'make_controller', 'simulate']"), out.stdout
+    import qprr
+
+    with pytest.raises(AttributeError, match="no attribute 'simulat'"):
+        qprr.simulat  # noqa: B018 - a typo is an AttributeError, not a lazy lookup
