@@ -53,7 +53,7 @@ BAD = [
     (["frobnicate"], "frobnicate"),
 ]
 NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli_common: charts.as_real/as_int)
-    (["simulate", "static-idc", "--duration", "1e12"], "--duration"),  # logs that cannot fit in memory
+    (["simulate", "static-idc", "--duration", "1e12"], "duration"),  # logs that cannot fit in memory (the simulator's bound or MemoryError)
     (["simulate", "static-idc", "--duration", "1e400"], "--duration.*finite"),
     (["simulate", "static-idc", "--seed", "-1"], "--seed"),
     (["simulate", "static-idc", "--seed", "abc"], "--seed.*abc"),
