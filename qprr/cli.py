@@ -1,5 +1,9 @@
-"""Command line: ``qprr simulate | compare | check | urdf`` (and the commands other modules register).
+"""Command line: ``qprr simulate | compare | check`` and the command groups of :mod:`qprr.viz`,
+:mod:`qprr.analysis`, :mod:`qprr.campaign`, :mod:`qprr.wheeled` and of plug-ins (:data:`qprr.registry.COMMANDS`:
+the thesis adds ``qprr urdf``).
 
+``compare`` runs the comparisons of :data:`qprr.registry.COMPARISONS` and ``check`` the suites of
+:data:`qprr.registry.CHECKS`; this module imports no plug-in (the thesis's arrive through the registries).
 Errors in the arguments end in one line on stderr and exit code 2; a run that diverges prints
 its error and exit code 1; otherwise 0.
 """
@@ -11,122 +15,14 @@ import sys
 import time
 from pathlib import Path
 
-from . import __version__
+from .analysis import cli as analysis_cli
+from .campaign import cli as campaign_cli
+from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
 from .errors import QprrError
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse with one-line errors (exit code 2) and no raw markup in the help."""
-
-    def error(self, message: str):
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
-def fail(prog: str, message: str) -> int:
-    print(f"{prog}: error: {message}", file=sys.stderr)
-    return 2
-
-
-def _writable(folder: Path) -> str:
-    """"" if a file can be created in ``folder`` (tried with a temporary file, removed at once), else why not."""
-    import tempfile
-
-    try:
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".qprr-write-test-"):
-            pass
-    except OSError as exc:
-        return exc.strerror or str(exc)
-    return ""
-
-
-def output_path(path: str | None, suffixes: tuple[str, ...], what: str) -> Path | None:
-    """Check an output path before a run: known suffix, existing and writable folder (nothing is created).
-
-    Shared by every command group (``simulate``, ``analyze``, ``wheeled``, ``animate``...); raises
-    ValueError with a one-line message naming the option ``--what`` and the path."""
-    if path is None:
-        return None
-    p = Path(path)
-    if p.suffix.lower() not in suffixes:
-        raise ValueError(f"--{what} {path!r}: the file must end in {' or '.join(suffixes)}")
-    if not p.parent.is_dir():
-        raise ValueError(f"--{what} {path!r}: folder {str(p.parent)!r} does not exist")
-    if p.is_dir():
-        raise ValueError(f"--{what} {path!r} is a folder, not a file")
-    why = _writable(p.parent)
-    if why:
-        raise ValueError(f"--{what} {path!r}: cannot write in folder {str(p.parent)!r} ({why})")
-    return p
-
-
-def _cache_dir(path: str | None) -> Path | None:
-    """Check ``--cache-dir``: an existing writable folder, or a new one whose parent folder exists (then made)."""
-    if path is None:
-        return None
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise ValueError(f"--cache-dir {path!r} is a file, not a folder")
-    if not p.exists():
-        if not p.parent.is_dir():
-            raise ValueError(f"--cache-dir {path!r}: folder {str(p.parent)!r} does not exist")
-        try:
-            p.mkdir()
-        except OSError as exc:
-            raise ValueError(f"--cache-dir {path!r}: cannot create it ({exc.strerror or exc})") from None
-    why = _writable(p)
-    if why:
-        raise ValueError(f"--cache-dir {path!r}: cannot write in it ({why})")
-    return p
-
-
-PLATFORM_HELP = ("q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR; "
-                 "your own: --urdf FILE.urdf --rotors FILE.toml")
-
-
-def add_platform_options(p: argparse.ArgumentParser, *, name_option: bool = True) -> None:
-    """``--platform NAME`` (unless the command takes the name as a positional argument), ``--layout plus|x``
-    and a user's own platform: ``--urdf FILE --rotors FILE.toml [--ee-frame NAME]``; read back by
-    :func:`platform_from_args`."""
-    if name_option:
-        p.add_argument("--platform", default=None, help=PLATFORM_HELP)
-    p.add_argument("--layout", default=None, choices=("plus", "x"), help="rotor layout of the Q-PRR or of a built platform")
-    p.add_argument("--urdf", default=None, metavar="FILE.urdf", help="your own platform: its URDF (docs/platforms.md); with --rotors")
-    p.add_argument("--rotors", default=None, metavar="FILE.toml", help="the rotor description of --urdf")
-    p.add_argument("--ee-frame", default=None, metavar="NAME", help="end-effector frame of --urdf (default: the last frame of the arm)")
-
-
-def platform_from_args(args: argparse.Namespace):
-    """The platform named by the options of :func:`add_platform_options` (:func:`qprr.platforms.resolve`);
-    raises :class:`~qprr.errors.QprrError` with the option names in its message."""
-    from .errors import InputError
-    from .platforms import resolve
-
-    layout = args.layout
-
-    if args.urdf is None and (args.rotors is not None or args.ee_frame is not None):
-        raise InputError("--rotors and --ee-frame describe your own platform: give its --urdf too")
-    if args.urdf is not None and args.rotors is None:
-        raise InputError(f"--urdf {args.urdf!r} needs --rotors FILE.toml (the URDF format has no rotors; docs/platforms.md)")
-    if args.urdf is not None and (args.platform is not None or layout is not None):
-        raise InputError("--urdf names your own platform: leave out --platform and --layout")
-    return resolve(args.platform, layout=layout, urdf=args.urdf, rotors=args.rotors, ee_frame=args.ee_frame)
-
-
-def _convert(value: str, default):
-    """A ``--set`` value converted to the type of the option's default."""
-    if isinstance(default, bool):
-        if value.lower() in ("1", "true", "yes", "on"):
-            return True
-        if value.lower() in ("0", "false", "no", "off"):
-            return False
-        raise ValueError(f"expected true or false, got {value!r}")
-    if isinstance(default, int):
-        return int(value)
-    if isinstance(default, float):
-        return float(value)
-    if isinstance(default, tuple):
-        return tuple(float(x) for x in value.split(","))
-    return value
+from .registry import CHECKS, COMMANDS, COMPARISONS
+from .version import __version__
+from .viz import cli as viz_cli
+from .wheeled import cli as wheeled_cli
 
 
 # ------------------------------------------------------------------------------ simulate
@@ -152,7 +48,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         if key not in sc.options:
             return fail(prog, f"--set {key!r}: not an option of scenario {sc.name!r}; valid: {', '.join(sc.options) or 'none'}")
         try:
-            options[key] = _convert(value, sc.options[key].default)
+            options[key] = option_value(value, sc.options[key].default, key)
         except ValueError as exc:
             return fail(prog, f"--set {key}={value}: {exc}")
     if args.controller is not None and args.controller not in sc.controllers:
@@ -198,9 +94,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _animate(res, platform, path: Path) -> None:
     from .platforms import load as load_platform
-    from .viz.cli import animate_to_file
 
-    print(f"animation {animate_to_file(platform or load_platform(), res, path)}")
+    print(f"animation {viz_cli.animate_to_file(platform or load_platform(), res, path)}")
 
 
 def _summary(res) -> str:
@@ -218,20 +113,25 @@ def _summary(res) -> str:
 
 
 def _cmd_compare(args: argparse.Namespace) -> int:
-    from .thesis.comparisons import COMPARISONS, run_comparisons
-
-    if not 0 < args.duration < float("inf"):
-        return fail("qprr compare", f"--duration must be a finite number > 0 s, got {args.duration!r}")
-    names = args.names or ["table"]
+    if not COMPARISONS:
+        return fail("qprr compare", "no comparison is registered (qprr.registry.COMPARISONS is empty: no plug-in provides one)")
+    names = args.names or [next(iter(COMPARISONS))]
     bad = [n for n in names if n not in COMPARISONS and n != "all"]
     if bad:
         return fail("qprr compare", f"unknown comparison {bad[0]!r}; valid: {', '.join(COMPARISONS)}, all")
     if args.plot is not None and not Path(args.plot).is_dir():
         return fail("qprr compare", f"--plot {args.plot!r}: folder does not exist")
+    names = list(COMPARISONS) if "all" in names else names
+    batches: dict = {}  # runner -> its names, in the order asked (one runner shares its runs between them)
+    for n in names:
+        batches.setdefault(COMPARISONS[n], []).append(n)
     t0 = time.perf_counter()
     ok = True
     duration = None if args.duration == 30.0 else args.duration
-    for rep in run_comparisons(names, duration=duration, plot_dir=args.plot, progress=not args.quiet and sys.stderr.isatty()):
+    progress = not args.quiet and sys.stderr.isatty()
+    reports = [rep for runner, batch in batches.items()
+               for rep in runner(batch, duration=duration, plot_dir=args.plot, progress=progress)]
+    for rep in reports:
         print(f"== {rep.name}")
         for line in rep.lines:
             print(line)
@@ -246,25 +146,14 @@ def _cmd_check(args: argparse.Namespace) -> int:
     import os
 
     try:
-        cache = _cache_dir(args.cache_dir)
+        cache = cache_dir(args.cache_dir)
     except ValueError as exc:
         return fail("qprr check", str(exc))
-    if cache is not None:  # read by qprr.thesis.symbolic when it derives (or reloads) the sympy model
+    if cache is not None:  # read by the suites that cache derived models (the thesis's sympy model)
         os.environ["QPRR_CACHE_DIR"] = str(cache)
-    from .thesis.checks import main as check_main
-
-    return check_main(verbose=args.verbose)
-
-
-def _cmd_urdf(args: argparse.Namespace) -> int:
-    from .thesis.urdf import URDF_PATH, write_urdf
-
-    try:
-        out = output_path(args.output, (".urdf",), "output") if args.output else URDF_PATH
-    except ValueError as exc:
-        return fail("qprr urdf", str(exc))
-    print(write_urdf(out))
-    return 0
+    if not CHECKS:
+        return fail("qprr check", "no check suite is registered (qprr.registry.CHECKS is empty: no plug-in provides one)")
+    return max(run(args.verbose) for run in CHECKS.values())
 
 
 def _scenario_help() -> str:
@@ -282,9 +171,9 @@ def _scenario_help() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog="qprr", description="qprr: aerial manipulators on Pinocchio (the thesis's Q-PRR as flagship).")
+    parser = Parser(prog="qprr", description="qprr: aerial manipulators on Pinocchio (the thesis's Q-PRR as flagship).")
     parser.add_argument("--version", action="version", version=f"qprr {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
     p = sub.add_parser("simulate", help="run a named scenario (prints RMSE; optional figure, .npz, animation)",
                        description="Run a named scenario.\n\nscenarios:\n" + _scenario_help(),
@@ -295,11 +184,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save a figure of the run (the folder must exist)")
     p.add_argument("--save", default=None, metavar="FILE.npz", help="save the logged run (the folder must exist)")
     p.add_argument("--animate", default=None, metavar="FILE.gif", help="save a 3-D animation (.gif, or .mp4 with ffmpeg)")
-    p.add_argument("--duration", type=float, default=None, help="seconds (default: the scenario's)")
-    p.add_argument("--dt", type=float, default=None, help="integration step [s] (default 1e-3)")
+    p.add_argument("--duration", type=real(positive=True, unit="s"), default=None, help="seconds (default: the scenario's)")
+    p.add_argument("--dt", type=real(positive=True, unit="s"), default=None, help="integration step [s] (default 1e-3)")
     p.add_argument("--integrator", default=None, choices=("midpoint", "rk4", "euler"),
                    help="midpoint (default, 2nd order), rk4 (4th) or euler (semi-implicit, 1st)")
-    p.add_argument("--seed", type=int, default=None, help="noise seed (default 0)")
+    p.add_argument("--seed", type=integer(lo=0), default=None, help="noise seed (default 0)")
     p.add_argument("--law", default=None, choices=("septic", "quintic", "thesis"),
                    help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))")
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="any scenario option (listed above), repeatable")
@@ -313,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
                        "constants), or all.")
     p.add_argument("names", nargs="*", metavar="NAME", help="comparisons to run (default: table)")
     p.add_argument("--plot", default=None, metavar="DIR", help="save the figures into this existing folder")
-    p.add_argument("--duration", type=float, default=30.0, help="mission seconds (default 30)")
+    p.add_argument("--duration", type=real(positive=True, unit="s"), default=30.0, help="mission seconds (default 30)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 
@@ -327,32 +216,24 @@ def build_parser() -> argparse.ArgumentParser:
                    help="folder of the sympy model's cache (default: $QPRR_CACHE_DIR or ~/.cache/qprr); made if its parent exists")
     p.set_defaults(func=_cmd_check)
 
-    p = sub.add_parser("urdf", help="regenerate urdf/qprr.urdf from the thesis parameters")
-    p.add_argument("-o", "--output", default=None, help="output path (default: the packaged urdf/qprr.urdf)")
-    p.set_defaults(func=_cmd_urdf)
-
-    for module in ("qprr.viz.cli", "qprr.wheeled.cli", "qprr.analysis.cli", "qprr.campaign.cli"):  # command groups of other packages
-        try:
-            mod = __import__(module, fromlist=["register_cli"])
-        except ImportError:
-            continue
-        mod.register_cli(sub)
+    for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
+        register_cli(sub)
+    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli):  # they import their optional packages when a command runs
+        group.register_cli(sub)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    prog = f"qprr {args.command}"
     try:
-        dt = getattr(args, "dt", None)
-        if dt is not None and not 0 < dt < float("inf"):
-            return fail(f"qprr {args.command}", f"--dt must be a finite number > 0 s, got {dt!r}")
-        duration = getattr(args, "duration", None)
-        if args.command == "simulate" and duration is not None and not 0 < duration < float("inf"):
-            return fail("qprr simulate", f"--duration must be a finite number > 0 s, got {duration!r}")
         return int(args.func(args) or 0)
     except QprrError as exc:
-        return fail(f"qprr {args.command}", f"{type(exc).__name__}: {exc}")
+        return fail(prog, f"{type(exc).__name__}: {exc}")
+    except MemoryError as exc:  # numpy's ArrayMemoryError names the size: say which options set it
+        sized = [f"--{k}" for k in ("duration", "dt", "samples") if getattr(args, k, None) is not None]
+        return fail(prog, f"MemoryError: {exc}" + (f" (set by {', '.join(sized)}: ask for less)" if sized else ""))
 
 
 if __name__ == "__main__":

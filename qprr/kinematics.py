@@ -134,13 +134,6 @@ def com_jacobian_body_from(data: pin.Data, Jc: np.ndarray) -> np.ndarray:
     return J
 
 
-def cog_offset_jacobian(platform: Platform, data: pin.Data, Jc_body: np.ndarray) -> np.ndarray:
-    """2 x nv Jacobian of :func:`cog_offset_body` from the body-frame CoM Jacobian."""
-    check_model_data(platform, data)
-    Jc_body = ch.as_matrix(Jc_body, (3, platform.nv), "Jc_body")
-    return platform.thrust_axis_basis @ Jc_body
-
-
 def arm_gravity_torque_body(platform: Platform, data: pin.Data, q) -> np.ndarray:
     """Torque about B, in B, that the arm's weight exerts on the multirotor [N m], Thesis (3.43).
 

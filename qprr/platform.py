@@ -399,10 +399,6 @@ class Platform:
         """Largest |effort| per arm joint [N or N m]."""
         return _readonly(np.array([j.effort for j in self.arm]))
 
-    @cached_property
-    def arm_velocity_limits(self) -> np.ndarray:
-        return _readonly(np.array([j.velocity for j in self.arm]))
-
     def check_arm_limits(self, q_arm, name: str = "q_arm") -> np.ndarray:
         """Return ``q_arm`` (n_arm,) if finite and inside the joint limits, else raise :class:`LimitError`."""
         from .charts import as_vector

@@ -1,12 +1,16 @@
-"""Named platforms: the thesis's Q-PRR and real aerial manipulators from example-robot-data.
+"""Named platforms: a registry (:data:`PLATFORMS`) of loaders, filled by the core and by plug-ins.
 
 =========================  ==========================================================================
 name                       what
 =========================  ==========================================================================
-``q-prr``                  the thesis's Q-PRR ("+" layout; ``layout="x"`` for "X"), :mod:`qprr.thesis`
+``q-prr``                  the thesis's Q-PRR ("+" layout; ``layout="x"`` for "X"), registered by the
+                           thesis plug-in (:mod:`qprr.thesis`, :func:`qprr.thesis.register`)
 ``borinot_flying_arm_2``   example-robot-data: a coplanar hexarotor (2.9 kg) with a 2-DOF arm (HEX-RR)
 ``hextilt_flying_arm_5``   example-robot-data: a tilted, fully actuated hexarotor with a 5-DOF arm
 =========================  ==========================================================================
+
+The core never imports the thesis: ``load("q-prr")`` finds the Q-PRR in :data:`PLATFORMS`, where the
+thesis plug-in puts it when the registry first misses a name (:mod:`qprr.registry`).
 
 The URDFs of the last two carry no rotors: their rotor descriptions (``qprr/data/*.rotors.toml``)
 come from the upstream models the URDFs were made from, cited in each file.  Note that
@@ -22,6 +26,7 @@ import pinocchio as pin
 
 from .errors import InputError, QprrError, UnknownNameError
 from .platform import Platform, from_urdf
+from .registry import Registry
 from .rotors import read_rotor_file
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
@@ -34,8 +39,14 @@ _BARE_MULTIROTORS = {
     "hector": "hector_description/robots/quadrotor_base.urdf",
     "iris": "iris_description/robots/iris_simple.urdf",
 }
-NAMES = ("q-prr", *_EXAMPLE_ROBOTS)
-"""Names accepted by :func:`load`."""
+DEFAULT_PLATFORM = "q-prr"
+"""The platform :func:`load` and :func:`resolve` give without a name: the thesis's Q-PRR (by name, through :data:`PLATFORMS`)."""
+PLATFORMS: Registry = Registry("platform", default=DEFAULT_PLATFORM)
+"""Platform name -> loader ``(**options) -> Platform``; the core registers the example-robot-data ones below."""
+ROTOR_DYNAMICS: Registry = Registry("rotor-dynamics set", default=DEFAULT_PLATFORM)
+"""Platform name -> ``(**overrides) -> RotorDynamics`` (:class:`qprr.sim.actuators.RotorDynamics`)."""
+NAMES = PLATFORMS
+"""Names accepted by :func:`load`: the keys of :data:`PLATFORMS` (``name in NAMES``, ``", ".join(NAMES)``)."""
 
 
 def robots_dir() -> Path:
@@ -50,46 +61,60 @@ def robots_dir() -> Path:
     return path
 
 
-def load(name: str = "q-prr", **kwargs) -> Platform:
-    """The platform called ``name`` (see the module table); keyword arguments go to its loader.
+def load(name: str = DEFAULT_PLATFORM, **kwargs) -> Platform:
+    """The platform called ``name`` (see the module table; :data:`PLATFORMS`); keyword arguments go to its loader.
 
-    ``q-prr`` takes those of :func:`qprr.thesis.load` (``params``, ``layout``, ``urdf_path``); the
-    example-robot-data platforms take ``g`` (default 9.81 m/s^2).
+    ``load()`` is ``load("q-prr")`` (:data:`DEFAULT_PLATFORM`), looked up in the registry like any
+    name: the Q-PRR comes from the thesis plug-in.  ``q-prr`` takes the options of
+    :func:`qprr.thesis.load` (``params``, ``layout``, ``urdf_path``); the example-robot-data
+    platforms take ``g`` (default 9.81 m/s^2).
     """
-    if name == "q-prr":
-        from .thesis import load as load_thesis
-
-        return load_thesis(**kwargs)
-    if name not in _EXAMPLE_ROBOTS:
-        raise UnknownNameError("platform", name, NAMES)
-    unknown = set(kwargs) - {"g"}
-    if unknown:
-        raise UnknownNameError(f"option of platform {name!r}", sorted(unknown)[0], ("g",))
-    rel, ee = _EXAMPLE_ROBOTS[name]
-    urdf = robots_dir() / rel
-    rotors = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
-    prov = {"model": f"example-robot-data {rel}", "rotors": f"qprr/data/{name}.rotors.toml (sources cited in the file)"}
-    return from_urdf(urdf, rotors, ee_frame=ee, g=kwargs.get("g", 9.81), name=name, provenance=prov)
+    return PLATFORMS[name](**kwargs)
 
 
-def rotor_dynamics(name: str = "q-prr", **overrides):
-    """The actuator stage (:class:`qprr.sim.actuators.RotorDynamics`) of the platform called ``name``.
+def _example_robot(name: str):
+    """The loader of the example-robot-data platform ``name`` (its URDF and the rotor file of qprr/data)."""
+
+    def loader(**kwargs) -> Platform:
+        unknown = set(kwargs) - {"g"}
+        if unknown:
+            raise UnknownNameError(f"option of platform {name!r}", sorted(unknown)[0], ("g",))
+        rel, ee = _EXAMPLE_ROBOTS[name]
+        urdf = robots_dir() / rel
+        rotors = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
+        prov = {"model": f"example-robot-data {rel}", "rotors": f"qprr/data/{name}.rotors.toml (sources cited in the file)"}
+        return from_urdf(urdf, rotors, ee_frame=ee, g=kwargs.get("g", 9.81), name=name, provenance=prov)
+
+    return loader
+
+
+def _example_rotor_dynamics(name: str):
+    """The actuator stage of ``name`` from the ``[motor]`` table of its rotor description."""
+
+    def rotor_dynamics(**overrides):
+        from .sim.actuators import rotor_dynamics_from_mapping
+
+        desc = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
+        return rotor_dynamics_from_mapping(desc, load(name).rotors, **overrides)
+
+    return rotor_dynamics
+
+
+for _name in _EXAMPLE_ROBOTS:
+    PLATFORMS.register(_name, _example_robot(_name))
+    ROTOR_DYNAMICS.register(_name, _example_rotor_dynamics(_name))
+del _name
+
+
+def rotor_dynamics(name: str = DEFAULT_PLATFORM, **overrides):
+    """The actuator stage (:class:`qprr.sim.actuators.RotorDynamics`) of the platform called ``name`` (:data:`ROTOR_DYNAMICS`).
 
     ``q-prr``: :func:`qprr.thesis.realistic.rotor_dynamics` (b of the thesis parameters, a chosen
     time constant); the others: the ``[motor]`` table of their rotor description, where it exists
     (borinot_flying_arm_2; hextilt_flying_arm_5 has none: pass ``thrust_factor`` and ``time_constant``).
     ``overrides``: thrust_factor, time_constant, w_min, w_max, initial.
     """
-    from .sim.actuators import rotor_dynamics_from_mapping
-
-    if name == "q-prr":
-        from .thesis.realistic import rotor_dynamics as thesis_rotor_dynamics
-
-        return thesis_rotor_dynamics(**overrides)
-    if name not in _EXAMPLE_ROBOTS:
-        raise UnknownNameError("platform", name, NAMES)
-    desc = read_rotor_file(DATA_DIR / f"{name}.rotors.toml")
-    return rotor_dynamics_from_mapping(desc, load(name).rotors, **overrides)
+    return ROTOR_DYNAMICS[name](**overrides)
 
 
 def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | Path | None = None,
@@ -115,7 +140,7 @@ def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | P
         given = ", ".join(f"{k} = {v!r}" for k, v in (("rotors", rotors), ("ee_frame", ee_frame)) if v is not None)
         raise InputError(f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...); named platforms "
                          f"have their own: got {given}")
-    name = "q-prr" if name is None else name
+    name = DEFAULT_PLATFORM if name is None else name
     if name == "q-prr":
         return load("q-prr", layout=layout or "plus")
     if name in NAMES:

@@ -2,8 +2,10 @@
 
 A :class:`Scenario` bundles what a run needs (trajectory, controller, disturbances, contact
 models) behind ``scenario.run(platform=None, controller=None, progress=False, **options)``.
-:data:`SCENARIOS` holds the generic ones (any platform) and the thesis's Chapter 6 ones
-(:mod:`qprr.thesis.scenarios`, on the Q-PRR); :func:`run` runs one by name.
+:data:`SCENARIOS` (the registry :data:`qprr.registry.SCENARIOS`) holds the generic ones (any
+platform), registered here, and those of plug-ins: the thesis's Chapter 6 ones
+(:mod:`qprr.thesis.scenarios`, on the Q-PRR) arrive with the thesis plug-in the first time the
+registry is listed or misses a name.  :func:`run` runs one by name.
 
 =================  ===========================================================================
 generic            what
@@ -24,9 +26,10 @@ import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .control import CONTROLLERS, make_controller
+from .control import make_controller
 from .errors import InputError, UnknownNameError
 from .platform import Platform
+from .registry import SCENARIOS
 from .sim import SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 
@@ -94,7 +97,7 @@ class Scenario:
 
 
 # ------------------------------------------------------------------------- generic scenarios
-_COMMON = {
+COMMON_OPTIONS = {
     "duration": Option(10.0, "run length [s]"),
     "dt": Option(1e-3, "integration step [s]"),
     "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
@@ -140,7 +143,7 @@ def _ee_impedance_summary(result):
 GENERIC = (
     Scenario("hover-reach", "any platform: climb to z, then move every arm joint towards its upper limit", _hover_reach,
              ("idc", "dsid", "mfc", "decoupled", "mpc"),
-             {**_COMMON, "z": Option(2.0, "hover height [m]"),
+             {**COMMON_OPTIONS, "z": Option(2.0, "hover height [m]"),
               "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits")}),
     Scenario("ee-impedance", "any platform: end-effector impedance (6.72)-(6.73) against a compliant wall or a force step",
              _ee_impedance, ("opspace-impedance", "idc"),
@@ -161,42 +164,9 @@ GENERIC = (
 )
 
 
-def _registry() -> dict[str, Scenario]:
-    from .thesis.control_scenarios import SCENARIOS as CONTROL
-    from .thesis.scenarios import SCENARIOS as THESIS
-
-    out = {s.name: s for s in GENERIC}
-    out.update({s.name: s for s in THESIS})
-    out.update({s.name: s for s in CONTROL})  # point-to-point, Annex A, aggressive reach, realistic (issue 13)
-    return out
-
-
-class _Registry(Mapping):
-    """Scenarios by name (built on first use: the thesis's scenarios import the controllers)."""
-
-    def __init__(self) -> None:
-        self._d: dict[str, Scenario] | None = None
-
-    def _get(self) -> dict[str, Scenario]:
-        if self._d is None:
-            self._d = _registry()
-        return self._d
-
-    def __getitem__(self, key: str) -> Scenario:
-        d = self._get()
-        if key not in d:
-            raise UnknownNameError("scenario", key, tuple(d))
-        return d[key]
-
-    def __iter__(self):
-        return iter(self._get())
-
-    def __len__(self) -> int:
-        return len(self._get())
-
-
-SCENARIOS = _Registry()
-"""Every scenario by name: the generic ones and the thesis's (:mod:`qprr.thesis.scenarios`)."""
+for _scenario in GENERIC:
+    SCENARIOS.register(_scenario.name, _scenario)
+del _scenario
 
 
 def get_scenario(name: str) -> Scenario:
@@ -210,4 +180,4 @@ def run(name: str, controller: str | None = None, *, platform: Platform | None =
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
 
 
-__all__ = ["CONTROLLERS", "GENERIC", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
+__all__ = ["COMMON_OPTIONS", "GENERIC", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]

@@ -48,8 +48,6 @@ from pathlib import Path
 
 import numpy as np
 
-from qprr.errors import MissingDependencyError
-
 TIMEOUT = 2.0
 """Seconds a single call may run (a bad value that is not checked may start a long computation)."""
 
@@ -104,6 +102,14 @@ MISSING: list[str] = []
 """Modules :func:`walk` could not import (an optional dependency is not installed)."""
 
 
+def _optional_missing(exc: ImportError) -> bool:
+    """An import error that says an optional package is missing (not a bug of qprr: that must fail)."""
+    from qprr.errors import MissingDependencyError
+
+    return isinstance(exc, MissingDependencyError) or (isinstance(exc, ModuleNotFoundError) and exc.name is not None
+                                                       and exc.name.split(".")[0] != "qprr")
+
+
 def walk(package: str = "qprr") -> list[Target]:
     """Every public callable of every module of ``package`` (each object once, under its first name)."""
     pkg = importlib.import_module(package)
@@ -115,7 +121,9 @@ def walk(package: str = "qprr") -> list[Target]:
             continue
         try:
             modules.append(importlib.import_module(m.name))
-        except MissingDependencyError:  # an optional dependency is absent: nothing to feed (any other error fails)
+        except ImportError as exc:  # only an optional dependency (MissingDependencyError names it): nothing to feed
+            if not _optional_missing(exc):
+                raise
             MISSING.append(m.name)
     for mod in modules:
         for name in public_names(mod):
@@ -1045,10 +1053,7 @@ def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool
     t_start = time.perf_counter()
     targets = walk() if targets is None else targets
     returned = returned_types(targets)
-    try:
-        errors = importlib.import_module("qprr.errors")
-    except ImportError:
-        errors = None
+    errors = importlib.import_module("qprr.errors")
     report = Report()
     hooks = hooks or _Hooks()
     cwd = os.getcwd()

@@ -70,9 +70,10 @@ def test_printed_singularity_curves_only_for_the_q_prr(capsys):
 def test_map_reference_hook():
     import qprr
     from qprr.analysis import singularity, workspace
-    from qprr.analysis.cli import REFERENCE_PROVIDERS, map_reference
+    from qprr.analysis.cli import map_reference
+    from qprr.registry import MAP_REFERENCES
 
-    assert REFERENCE_PROVIDERS == ("qprr.thesis.maps",)
+    assert list(MAP_REFERENCES) == ["thesis"]  # the thesis plug-in's provider (qprr.thesis.maps), by registration
     qp = qprr.load("q-prr")
     sing = singularity(qp, n_samples=2000)
     ref = map_reference("singularity", qp, sing)

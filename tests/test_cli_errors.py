@@ -52,6 +52,34 @@ BAD = [
     ([], "command"),
     (["frobnicate"], "frobnicate"),
 ]
+NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli_common: charts.as_real/as_int)
+    (["simulate", "static-idc", "--duration", "1e12"], "duration"),  # logs that cannot fit in memory (the simulator's bound or MemoryError)
+    (["simulate", "static-idc", "--duration", "1e400"], "--duration.*finite"),
+    (["simulate", "static-idc", "--seed", "-1"], "--seed"),
+    (["simulate", "static-idc", "--seed", "abc"], "--seed.*abc"),
+    (["simulate", "hover-reach", "--set", "seed=1.5"], "seed.*1.5"),
+    (["simulate", "hover-reach", "--set", "z=1e400"], "z.*finite"),
+    (["simulate", "hover-reach", "--set", "z=abc"], "z.*abc"),
+    (["compare", "--duration", "abc"], "--duration.*abc"),
+    (["compare", "--duration", "inf"], "--duration.*finite"),
+    (["analyze", "cog", "--payload", "abc"], "--payload.*abc"),
+    (["analyze", "cog", "--payload", "0,-1"], "--payload.*-1"),
+    (["analyze", "hover", "--payload", "nan"], "--payload.*finite"),
+    (["analyze", "workspace", "--samples", "0"], "--samples"),
+    (["analyze", "workspace", "--samples", "1.5"], "--samples.*1.5"),
+    (["analyze", "hover", "--reserve", "-1"], "--reserve"),
+    (["analyze", "cog", "--tol", "nan"], "--tol"),
+    (["view", "--port", "70000"], "--port"),
+    (["view", "--port", "http"], "--port.*http"),
+    (["animate", "--fps", "0"], "--fps"),
+    (["animate", "--speed", "-2"], "--speed"),
+    (["animate", "--size", "0", "480"], "--size"),
+    (["animate", "--duration", "abc"], "--duration.*abc"),
+    (["campaign", "run", "spec.toml", "--workers", "0"], "--workers"),
+    (["campaign", "run", "spec.toml", "--limit", "-1"], "--limit"),
+    (["campaign", "show", "spec.toml", "--first", "x"], "--first.*x"),
+]
+BAD += NUMBERS
 
 
 @pytest.mark.parametrize("argv, names", BAD, ids=[" ".join(a) or "(none)" for a, _ in BAD])
@@ -93,3 +121,40 @@ def test_version(capsys):
         main(["--version"])
     assert exc.value.code == 0
     assert re.fullmatch(r"qprr \d+\.\d+\.\d+\n", capsys.readouterr().out)
+
+
+def test_no_numeric_option_bypasses_the_converters():
+    """No ``add_argument(..., type=float|int)`` anywhere: argparse's own conversion lets nan, inf and negative counts
+    through and names no bound; every numeric option goes through qprr.cli_common.real/integer/reals."""
+    import ast
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1] / "qprr"
+    bare = []
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "add_argument":
+                for kw in node.keywords:
+                    if kw.arg == "type" and isinstance(kw.value, ast.Name) and kw.value.id in ("float", "int"):
+                        bare.append(f"{path.relative_to(root.parent)}:{node.lineno}")
+    assert bare == [], bare
+
+
+def test_the_converters_are_the_charts_checks():
+    """The CLI's messages are those of qprr.charts.as_real / as_int (one set of rules for Python and the command line)."""
+    import argparse
+
+    from qprr.charts import as_int, as_real
+    from qprr.cli_common import integer, real, reals
+    from qprr.errors import InputError
+
+    cases = [(real(**kw), text, lambda t, kw=kw: as_real(float(t), "value", **kw))
+             for text, kw in (("-1", dict(positive=True)), ("nan", {}), ("inf", dict(nonnegative=True)), ("5", dict(lo=0.0, hi=1.0)))]
+    cases.append((integer(lo=1), "0", lambda t: as_int(int(t), "value", lo=1)))
+    for convert, text, check in cases:
+        with pytest.raises(argparse.ArgumentTypeError) as cli_err:
+            convert(text)
+        with pytest.raises(InputError) as py_err:
+            check(text)
+        assert str(cli_err.value) == str(py_err.value)
+    assert real(positive=True)("1e-3") == 1e-3 and integer(lo=0, hi=9)("7") == 7 and reals(nonnegative=True)("0, 0.5,") == [0.0, 0.5]

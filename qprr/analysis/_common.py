@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import Enum
 
 import numpy as np
@@ -22,6 +22,19 @@ from ..charts import as_array, as_int, as_real, as_vector
 from ..errors import InputError, LimitError, UnknownNameError
 from ..platform import Platform
 from ..platform import check_platform as _check_platform
+
+
+@dataclass(frozen=True)
+class MapReference:
+    """Published numbers for one map of one platform: ``curves`` {label: (x, y)} drawn dashed on the map's
+    figure (the singularity map's det(J J^T) panel), ``lines`` printed after the map's summary.
+
+    Given by the providers of :data:`qprr.registry.MAP_REFERENCES` (the thesis plug-in's
+    :func:`qprr.thesis.maps.analysis_reference`); :func:`qprr.analysis.cli.map_reference` asks them."""
+
+    curves: Mapping = field(default_factory=dict)
+    lines: tuple[str, ...] = ()
+
 
 CHUNK = 16384
 """Configurations per batch: large enough to amortise numpy's per-call cost, small enough for the cache."""

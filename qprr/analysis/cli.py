@@ -4,18 +4,17 @@ Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a
 (:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
 :func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...); ``--urdf FILE --rotors FILE.toml
 [--ee-frame NAME]`` a user's own platform.  Published numbers for a platform (the thesis's
-(4.46)-(4.48) on the Q-PRR's singularity map) come from the modules of
-:data:`REFERENCE_PROVIDERS`, looked up by name: the maps never import them.
+(4.46)-(4.48) on the Q-PRR's singularity map) come from the providers of the registry
+:data:`qprr.registry.MAP_REFERENCES`, filled by plug-ins: the maps never import them.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 import time
-from collections.abc import Mapping
-from dataclasses import dataclass, field
+
+from ._common import MapReference
 
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
 DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000,
@@ -29,48 +28,24 @@ def resolve_platform(name: str):
     return resolve(name)
 
 
-def _floats(text: str) -> list[float]:
-    return [float(x) for x in text.split(",") if x.strip()]
-
-
-REFERENCE_PROVIDERS = ("qprr.thesis.maps",)
-"""Modules with a function ``analysis_reference(map_name, platform, result) -> MapReference | None`` giving
-published numbers for a platform's map; looked up by name, as :func:`qprr.cli.build_parser` finds the
-command groups of other packages (a missing module is skipped)."""
-
-
-@dataclass(frozen=True)
-class MapReference:
-    """Published numbers for one map of one platform: ``curves`` {label: (x, y)} drawn dashed on the map's
-    figure (the singularity map's det(J J^T) panel), ``lines`` printed after the map's summary."""
-
-    curves: Mapping = field(default_factory=dict)
-    lines: tuple[str, ...] = ()
-
-
 def map_reference(map_name: str, platform, result) -> MapReference | None:
-    """The first reference a module of :data:`REFERENCE_PROVIDERS` gives for this map and platform, or None."""
+    """The first reference a provider of :data:`qprr.registry.MAP_REFERENCES` gives for this map and platform, or None."""
     from ..errors import UnknownNameError
     from ..platform import check_platform
+    from ..registry import MAP_REFERENCES
 
     if map_name not in MAPS:
         raise UnknownNameError("map", map_name, MAPS)
     check_platform(platform)
-    for name in REFERENCE_PROVIDERS:
-        try:
-            module = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name is not None and name.startswith(exc.name):
-                continue
-            raise
-        ref = module.analysis_reference(map_name, platform, result)
+    for provider in MAP_REFERENCES.values():
+        ref = provider(map_name, platform, result)
         if ref is not None:
             return ref
     return None
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cli import fail, output_path, platform_from_args
+    from ..cli_common import fail, output_path, platform_from_args
     from . import plots
     from .capacity import capacity
     from .cog import balance, cog_regions
@@ -94,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
         if args.plot:
             fig = plots.workspace_figure(res)
     elif args.map == "cog":
-        masses = _floats(args.payload) if args.payload else [0.0, 0.5]
+        masses = args.payload if args.payload else [0.0, 0.5]
         res = cog_regions(platform, n_samples=n, payload_masses=masses, progress=progress)
         bal = balance(platform, n_samples=n, tol=args.tol, progress=progress)
         print(res.summary())
@@ -110,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
         if args.plot:
             fig = plots.singularity_figure(res, ref.curves if ref is not None else None)
     elif args.map == "hover":
-        masses = _floats(args.payload) if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
+        masses = args.payload if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
         res = hover(platform, n_samples=n, payload_masses=masses, torque_reserve=args.reserve, progress=progress)
         print(res.summary())
         if args.plot:
@@ -139,7 +114,7 @@ def run(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
-    from ..cli import add_platform_options
+    from ..cli_common import add_platform_options, integer, real, reals
 
     p = sub.add_parser("analyze", help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
                        description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
@@ -150,11 +125,11 @@ def register_cli(sub) -> None:
     p.add_argument("map", choices=MAPS, help="which map")
     add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")
-    p.add_argument("--samples", type=int, default=None, help="joint-grid size (default depends on the map)")
-    p.add_argument("--payload", default=None, help="payload masses in kg, comma-separated (cog, hover)")
-    p.add_argument("--reserve", type=float, default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
+    p.add_argument("--samples", type=integer(lo=1), default=None, help="joint-grid size (default depends on the map)")
+    p.add_argument("--payload", type=reals(nonnegative=True, unit="kg"), default=None, help="payload masses in kg, comma-separated (cog, hover)")
+    p.add_argument("--reserve", type=real(nonnegative=True, unit="N m"), default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
     p.add_argument("--task", default="pose", choices=("pose", "position"), help="task rows of the singularity map")
-    p.add_argument("--tol", type=float, default=1e-6, help="CoG offset counted as balanced [m] (cog)")
+    p.add_argument("--tol", type=real(nonnegative=True, unit="m"), default=1e-6, help="CoG offset counted as balanced [m] (cog)")
     p.add_argument("--progress", action="store_true", help="show progress on stderr")
     p.set_defaults(func=run)
 

@@ -364,7 +364,7 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
 
 def wrench_set_figure(result: HoverResult, index: int | None = None):
     """2-D sections of the rotors' wrench set through the hover wrench of one configuration (default: the worst)."""
-    from scipy.spatial import HalfspaceIntersection
+    from scipy.spatial import HalfspaceIntersection, QhullError
     W = result.wrench_set
     i = int(np.argmin(result.thrust_margin[0])) if index is None else index
     w0 = result.hover_wrench[i]
@@ -380,7 +380,7 @@ def wrench_set_figure(result: HoverResult, index: int | None = None):
         hs = np.column_stack([A, -off])
         try:
             poly = HalfspaceIntersection(hs, np.zeros(2)).intersections
-        except Exception:  # the hover point is not interior: nothing to draw
+        except QhullError:  # the hover point is not interior: nothing to draw
             continue
         ctr = poly.mean(axis=0)
         order = np.argsort(np.arctan2(poly[:, 1] - ctr[1], poly[:, 0] - ctr[0]))

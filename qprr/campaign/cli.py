@@ -7,15 +7,11 @@ Registered in :func:`qprr.cli.build_parser` through :func:`register_cli`.  Exit 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 
+from ..cli_common import fail as _fail
+from ..cli_common import integer
 from ..errors import QprrError
-
-
-def _fail(prog: str, message: str) -> int:
-    print(f"{prog}: error: {message}", file=sys.stderr)
-    return 2
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -85,10 +81,10 @@ def register_cli(sub) -> None:
     r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
     r.add_argument("--backend", default="local", choices=("local", "dask", "inline"),
                    help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)")
-    r.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
     r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
     r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
-    r.add_argument("--limit", type=int, default=None, help="run at most this many of the missing runs")
+    r.add_argument("--limit", type=integer(lo=0), default=None, help="run at most this many of the missing runs")
     r.add_argument("--report", default=None, metavar="DIR", help="then write the report (summary.md + figures) into DIR")
     r.add_argument("--quiet", action="store_true", help="no progress line")
     r.set_defaults(func=_cmd_run)
@@ -108,5 +104,5 @@ def register_cli(sub) -> None:
 
     r = csub.add_parser("show", help="print a specification's size, fingerprint and first runs")
     r.add_argument("spec", help="campaign specification (.toml or .json)")
-    r.add_argument("--first", type=int, default=5, help="runs to list (default 5)")
+    r.add_argument("--first", type=integer(lo=0), default=5, help="runs to list (default 5)")
     r.set_defaults(func=_cmd_show)

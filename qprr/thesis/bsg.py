@@ -28,8 +28,8 @@ from ..control.base import Controller, Reference, check_reset
 from ..control.filters import CommandFilter
 from ..errors import InputError, UnknownNameError
 from ..platform import Platform
-from . import params_of
 from .params import QPRRParams
+from .robot import params_of
 
 
 def cog_betas(params: QPRRParams) -> tuple[float, float, float]:

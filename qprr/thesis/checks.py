@@ -33,8 +33,8 @@ from ..actuation import Allocator, input_map_matrix
 from ..charts import as_array, as_int, as_vector, check_rotation, unit_quaternion
 from ..errors import InputError, ShapeError
 from ..platform import Platform, check_platform
-from . import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
 from . import printed as th
+from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
 
 SEED = 20210101
 N_STATES = 12

@@ -39,11 +39,11 @@ from ..scenarios import SCENARIOS
 from ..sim import SimResult, simulate
 from ..viz import figure_path, new_figure
 from ..viz.compare import plot_overlay, plot_rmse_bars
-from . import load
 from .bsg import CogStabilizer
 from .control_scenarios import thrust_margins
 from .missions import NAMES, dynamic_mission, static_mission
 from .realistic import rotor_dynamics
+from .robot import load
 from .scenarios import NOISE_AMPLITUDE, TABLE_6_3, THESIS_NAMES, THESIS_RUN_TIME_S, flight_controller
 
 NAMES_ALL = ("table", "overlay", "noise", "sweeps", "decoupled", "mpc", "realistic", "lag")

@@ -39,9 +39,9 @@ from ..scenarios import Option, Scenario
 from ..sim import SimResult, simulate
 from ..trajectory import Hold, Spiral
 from ..viz import plot_result
-from . import load, params_of
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
+from .robot import load, params_of
 from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, _flight, _plot_flight, flight_controller
 
 POINT_TARGET = (5.0, 5.0, 10.0)

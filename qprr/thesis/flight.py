@@ -20,9 +20,9 @@ from ..errors import InputError, UnknownNameError
 from ..platform import check_platform
 from ..sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
 from ..sim.mismatch import perturbed
-from . import load
 from .bsg import CogStabilizer
 from .missions import dynamic_mission, static_mission
+from .robot import load
 from .scenarios import NOISE_AMPLITUDE, PULSES, flight_controller
 
 __all__ = ["FLIGHT_DEFAULTS", "flight"]

@@ -38,8 +38,8 @@ from ..ik.solver import (
     prepare_xi0,
 )
 from ..platform import Platform, check_data
-from . import params_of
 from .params import QPRRParams
+from .robot import params_of
 
 TWO_PI = 2.0 * math.pi
 METHODS = ("igm", "clika", "dls", "qp")

@@ -1,7 +1,7 @@
 """The thesis's printed numbers on the design maps of :mod:`qprr.analysis`, for the Q-PRR only.
 
-``qprr analyze`` asks each module of :data:`qprr.analysis.cli.REFERENCE_PROVIDERS` (this one) for
-:func:`analysis_reference`; the analysis itself never imports the printed forms.  Today one map
+``qprr analyze`` asks each provider of :data:`qprr.registry.MAP_REFERENCES` (the thesis plug-in registers
+:func:`analysis_reference`); the analysis itself never imports the printed forms.  Today one map
 has printed numbers to compare with: the singularity map, whose system det(J J^T) (4.44) the
 thesis evaluates at r0 = -0.04, 0, 0.04 m as (4.46)-(4.48).
 """
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..analysis.cli import MapReference
+from ..analysis._common import MapReference
 from ..analysis.singularity import SingularityResult
 from ..errors import InputError
 from ..platform import Platform

@@ -41,7 +41,7 @@ from ..platform import Platform, check_platform
 from ..sim.actuators import RotorDynamics
 from ..sim.disturbances import Disturbances
 from ..sim.wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
-from . import load, params_of
+from .robot import load, params_of
 
 TIME_CONSTANT = 0.005
 """Motor time constant of the Q-PRR [s] (chosen, see the module table)."""

@@ -48,7 +48,7 @@ from ..control import (
 )
 from ..control.impedance import ImpedanceController
 from ..errors import InputError, QprrError, UnknownNameError
-from ..scenarios import _COMMON, Option, Scenario
+from ..scenarios import COMMON_OPTIONS, Option, Scenario
 from ..sim import (
     Disturbances,
     PayloadChange,
@@ -63,9 +63,10 @@ from ..sim import (
 from ..trajectory import Hold, MultiPhase, Phase, Spiral
 from ..viz import plot_result
 from ..viz.plots import DEG, REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
-from . import gains, load, params_of
+from . import gains
 from .bsg import CogStabilizer
 from .missions import NAMES, dynamic_mission, static_mission
+from .robot import load, params_of
 
 SEED = 0
 DT = 1e-3
@@ -129,7 +130,7 @@ def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = 
     return runner
 
 
-_FLIGHT = {**_COMMON, "duration": Option(30.0, "run length [s]")}
+_FLIGHT = {**COMMON_OPTIONS, "duration": Option(30.0, "run length [s]")}
 _FLIGHT_CONTROLLERS = ("idc", "dsid", "mfc", "decoupled", "mpc")
 """Controllers of the Sec. 6.3 flight scenarios: the thesis's three, the decoupled scheme (Sec. 6.2.2) and the MPC."""
 

@@ -140,10 +140,10 @@ def viewer_screenshot(path: str, platform_name: str = "q-prr", *, width: int = 1
     """Start a viewer of ``platform_name`` on a free port, solve an end-effector target, and save the page as a PNG."""
     import numpy as np
 
-    from .cli import platform_from_name
+    from ..platforms import resolve
     from .viewer import Viewer
 
-    platform = platform_from_name(platform_name)
+    platform = resolve(platform_name)
     with Viewer(platform, port=0, verbose=False) as viewer, HeadlessChromium(viewer.url, width=width, height=height) as browser:
         deadline = time.monotonic() + 30.0
         while viewer.clients() == 0 and time.monotonic() < deadline:

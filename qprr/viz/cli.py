@@ -44,13 +44,6 @@ def demo_run(platform, duration: float = 30.0, rate: float = 20.0):
     return ik_path(platform, t, p, R, xi0=xi0).run
 
 
-def platform_from_name(name: str):
-    """A platform from a registry name (:data:`qprr.platforms.NAMES`) or a formula (2.1) name: :func:`qprr.platforms.resolve`."""
-    from ..platforms import resolve
-
-    return resolve(name)
-
-
 def check_run_platform(run, platform, path) -> None:
     """A run file drawn on another platform than the one it was recorded on is refused (InputError naming both)."""
     from ..errors import InputError
@@ -61,7 +54,7 @@ def check_run_platform(run, platform, path) -> None:
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
-    from ..cli import platform_from_args
+    from ..cli_common import platform_from_args
     from ..errors import QprrError
 
     try:
@@ -87,7 +80,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from ..cli import fail, output_path, platform_from_args
+    from ..cli_common import fail, output_path, platform_from_args
     from ..errors import QprrError
 
     try:
@@ -114,13 +107,13 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
-    from ..cli import PLATFORM_HELP, add_platform_options
+    from ..cli_common import PLATFORM_HELP, add_platform_options, integer, real
 
     p = sub.add_parser("view", help="interactive 3-D viewer in the browser (127.0.0.1): joint sliders, IK target, hover thrusts, run player",
                        description="Start the viewer (needs: pip install 'qprr[viewer]'); Ctrl-C stops it.")
     p.add_argument("platform", nargs="?", default=None, help=PLATFORM_HELP)
     add_platform_options(p, name_option=False)
-    p.add_argument("--port", type=int, default=8080, help="TCP port on 127.0.0.1 (default 8080; 0: any free port)")
+    p.add_argument("--port", type=integer(lo=0, hi=65535), default=8080, help="TCP port on 127.0.0.1 (default 8080; 0: any free port)")
     p.add_argument("--run", default=None, metavar="FILE.npz", help="load a saved run in the player")
     p.add_argument("--no-hover", action="store_true", help="start with the IK's hover level off")
     p.add_argument("--no-cog", action="store_true", help="start with the IK's CoG level off")
@@ -132,10 +125,10 @@ def register_cli(sub) -> None:
     p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
     p.add_argument("-o", "--output", default="animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg), folder must exist; default animation.gif")
     add_platform_options(p)
-    p.add_argument("--fps", type=float, default=20.0, help="frames per second (default 20)")
-    p.add_argument("--speed", type=float, default=1.0, help="run seconds per video second (default 1)")
+    p.add_argument("--fps", type=real(positive=True), default=20.0, help="frames per second (default 20)")
+    p.add_argument("--speed", type=real(positive=True), default=1.0, help="run seconds per video second (default 1)")
     p.add_argument("--view", choices=("follow", "fixed"), default="follow", help="camera: follow the base (default) or the whole run")
-    p.add_argument("--size", type=int, nargs=2, default=(640, 480), metavar=("W", "H"), help="pixels (default 640 480)")
-    p.add_argument("--duration", type=float, default=30.0, help="length of the demo IK path [s] (default 30)")
+    p.add_argument("--size", type=integer(lo=1), nargs=2, default=(640, 480), metavar=("W", "H"), help="pixels (default 640 480)")
+    p.add_argument("--duration", type=real(positive=True, unit="s"), default=30.0, help="length of the demo IK path [s] (default 30)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_animate)

@@ -42,6 +42,7 @@ import numpy as np
 
 from ..charts import as_int, as_vector, euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
+from ..registry import SCENARIOS
 from ..sim import SimResult
 
 DEG = 180.0 / math.pi
@@ -64,7 +65,9 @@ def new_figure(figsize=(16, 12)):
     figsize = (w, h)
     try:
         from matplotlib.figure import Figure
-    except ImportError as exc:  # pragma: no cover - runtime dependency
+    except ModuleNotFoundError as exc:  # pragma: no cover - runtime dependency
+        if exc.name != "matplotlib":
+            raise
         raise MissingDependencyError("matplotlib", "figures", "pip install matplotlib") from exc
     return Figure(figsize=figsize, layout="constrained")
 
@@ -492,26 +495,20 @@ def _panel(spec) -> Panel:
 
 
 def scenario_figures(res: SimResult) -> dict[str, str]:
-    """Figure numbers per panel of the scenario that made ``res`` (:attr:`Scenario.figures`; {} for a custom run)."""
-    _check_res(res)
-    try:
-        from ..scenarios import SCENARIOS
+    """Figure numbers per panel of the scenario that made ``res`` (:attr:`Scenario.figures`; {} for a custom run).
 
-        sc = SCENARIOS[res.scenario]
-    except (KeyError, ImportError):
+    Read from the scenario registry (:data:`qprr.registry.SCENARIOS`), which this module reads without
+    importing :mod:`qprr.scenarios` (that module runs plots: importing it here would close a cycle)."""
+    _check_res(res)
+    if res.scenario not in SCENARIOS:
         return {}
-    return dict(getattr(sc, "figures", {}) or {})
+    return dict(SCENARIOS[res.scenario].figures)
 
 
 def scenario_source(res: SimResult) -> str:
-    """The thesis section a scenario's result reproduces ("" for a custom run)."""
+    """The thesis section a scenario's result reproduces ("" for a custom run; :func:`scenario_figures`)."""
     _check_res(res)
-    try:
-        from ..scenarios import SCENARIOS
-
-        return SCENARIOS[res.scenario].source
-    except (KeyError, ImportError):
-        return ""
+    return SCENARIOS[res.scenario].source if res.scenario in SCENARIOS else ""
 
 
 def _title(panel: Panel, figures: Mapping[str, str]) -> str:

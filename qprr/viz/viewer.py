@@ -41,7 +41,9 @@ from ..errors import MissingDependencyError, PortInUseError
 try:
     import viser
     from pinocchio.visualize import ViserVisualizer
-except ImportError as exc:  # pragma: no cover - exercised only without the extra
+except ModuleNotFoundError as exc:  # pragma: no cover - exercised only without the extra
+    if exc.name != "viser":
+        raise
     raise MissingDependencyError("viser", "the browser viewer (qprr view)", "pip install 'qprr[viewer]'") from exc
 
 from .. import charts as ch

@@ -13,15 +13,17 @@ from fractions import Fraction
 
 import numpy as np
 
+from ..errors import MissingDependencyError
+
 SYMPY_INSTALL = 'pip install "qprr[symbolic]"'
 
 
 def sympy_module():
-    """The sympy module, or ImportError with the install command."""
+    """The sympy module, or :class:`~qprr.errors.MissingDependencyError` (an ImportError) with the install command."""
     try:
         import sympy
     except ImportError as exc:
-        raise ImportError(f"symbolic wheeled-robot analysis (Lie brackets, symbolic A and B) needs sympy: {SYMPY_INSTALL}") from exc
+        raise MissingDependencyError("sympy", "symbolic wheeled-robot analysis (Lie brackets, symbolic A and B)", SYMPY_INSTALL) from exc
     return sympy
 
 

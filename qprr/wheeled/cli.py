@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..errors import QprrError
+from ..errors import MissingDependencyError, QprrError
 
 
 def _cmd_wheeled(args: argparse.Namespace) -> int:
@@ -15,7 +15,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     if args.name not in names:
         print(f"qprr wheeled: error: unknown robot or exercise {args.name!r}; valid: {', '.join(names)}", file=sys.stderr)
         return 2
-    from ..cli import fail, output_path
+    from ..cli_common import fail, output_path
 
     try:
         output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
@@ -23,7 +23,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
         return fail("qprr wheeled", str(exc))
     try:
         demo = run(args.name)
-    except ImportError as err:
+    except MissingDependencyError as err:
         print(f"qprr wheeled: error: {err}", file=sys.stderr)
         return 2
     except QprrError as err:

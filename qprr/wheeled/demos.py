@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import UnknownNameError
+from ..errors import MissingDependencyError, UnknownNameError
 from . import control as ctl
 from . import plots
 from .chassis import admissible_types
@@ -49,13 +49,11 @@ def _fmt(v) -> str:
 
 
 def _frobenius_lines(model) -> list[str]:
-    try:
-        from .liebracket import frobenius
-    except ImportError as exc:  # pragma: no cover
-        return [f"Lie brackets: {exc}"]
+    from .liebracket import frobenius
+
     try:
         r = frobenius(model)
-    except ImportError as exc:  # pragma: no cover - sympy missing
+    except MissingDependencyError as exc:  # pragma: no cover - sympy missing: the line says how to install it
         return [f"Lie brackets: {exc}"]
     forms = "; ".join(str(list(f)) for f in r.integrable_forms) or "none"
     return [f"Lie brackets (Frobenius): dim of the distribution by bracket depth {list(r.growth)} of n = {r.n}: "

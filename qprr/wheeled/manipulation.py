@@ -516,13 +516,6 @@ def car_scenario(arm: str = "qprr") -> Scenario:
                     f"car + {arm} arm: target 1.2 m to the left of the chassis, beyond the arm's reach")
 
 
-def base_kernel_check(robot: MobileManipulator, z) -> float:
-    """max |A^T B| of the base at z (round-off), a guard used by the tests."""
-    A, B = robot.base.A(z[0:robot.n_base]), robot.base.B(z[0:robot.n_base])
-    return float(np.max(np.abs(A.T @ B))) if A.size else 0.0
-
-
-
 __all__ = ["IKStatus", "MobileIKOptions", "MobileIKResult", "MobileManipulator", "Scenario", "StepProblem", "car_scenario",
            "lookahead_solver", "lookahead_steering", "make_options", "qprr_arm", "solve_ik", "step_problem", "step_solver",
            "three_r_arm"]
