@@ -1,11 +1,13 @@
 """Execution backends on existing engines: a local process pool (default) or Dask distributed.
 
-Both expose the same three calls the campaign loop uses - :meth:`Backend.submit`,
-:meth:`Backend.as_completed`, :meth:`Backend.close` - so a campaign has one code path:
+Both expose the calls the campaign loop uses - :meth:`Backend.submit`, :meth:`Backend.as_completed`,
+:meth:`Backend.is_lost`, :meth:`Backend.close` and :meth:`Backend.abort` - so a campaign has one
+code path:
 
 * :class:`LocalBackend`: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
   start method (no fork of a process holding Pinocchio objects), one process per core by
-  default;
+  default; each worker ignores SIGINT (the runner stops the campaign) and exits by itself within
+  0.25 s when the runner dies (even by SIGKILL) or aborts;
 * :class:`DaskBackend`: a :class:`dask.distributed.Client` on a running scheduler
   (``tcp://host:port``, the workers must have qprr installed) or on a
   :class:`dask.distributed.LocalCluster` started here, listening on the loopback interface
@@ -14,6 +16,8 @@ Both expose the same three calls the campaign loop uses - :meth:`Backend.submit`
   (debugging, tests).
 
 Tasks are module-level functions with plain-data arguments (:func:`qprr.campaign.worker.run_one`).
+A task whose worker died, whose pool broke or whose scheduler was lost is *lost*
+(:meth:`Backend.is_lost`): it produced no result, and the runner saves nothing for it.
 """
 
 from __future__ import annotations
@@ -22,6 +26,8 @@ import concurrent.futures as cf
 import logging
 import multiprocessing
 import os
+import signal
+import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Iterator
 
@@ -62,7 +68,15 @@ class Backend(ABC):
 
     @abstractmethod
     def close(self) -> None:
-        """Release the workers (pending tasks are cancelled)."""
+        """Release the workers (pending tasks are cancelled, running ones finish)."""
+
+    def abort(self) -> None:
+        """Stop at once (interrupt, failed write): pending tasks cancelled, running ones stopped, workers released."""
+        self.close()
+
+    def is_lost(self, exc: BaseException) -> bool:
+        """Whether a task's exception means the run was lost with its worker or scheduler (no result), not raised by the run."""
+        return False
 
     def describe(self) -> str:
         return f"{self.name}, {self.workers} worker{'s' if self.workers != 1 else ''}"
@@ -74,14 +88,31 @@ class Backend(ABC):
         self.close()
 
 
+def _watch(parent: int, stop) -> None:
+    """A worker's watchdog thread: exit when the runner is gone (re-parented) or has set ``stop`` (abort)."""
+    while not stop.wait(0.25):
+        if os.getppid() != parent:
+            os._exit(1)
+    os._exit(1)
+
+
+def _init_worker(parent: int, stop) -> None:
+    """Initializer of a local pool's worker: Ctrl-C is the runner's to handle; the watchdog of :func:`_watch`."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch, args=(parent, stop), name="qprr-campaign-watchdog", daemon=True).start()
+
+
 class LocalBackend(Backend):
-    """A pool of ``workers`` spawned processes on this machine (default: one per core)."""
+    """A pool of ``workers`` spawned processes on this machine (default: one per core); they cannot outlive the runner."""
 
     name = "local"
 
     def __init__(self, workers: int | None = None) -> None:
         self.workers = _workers(workers)
-        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"))
+        ctx = multiprocessing.get_context("spawn")
+        self._stop = ctx.Event()
+        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
+                                            initargs=(os.getpid(), self._stop))
 
     def submit(self, fn, *args, key=None):
         return self._pool.submit(fn, *args)
@@ -89,7 +120,15 @@ class LocalBackend(Backend):
     def as_completed(self, futures):
         return cf.as_completed(futures)
 
+    def is_lost(self, exc: BaseException) -> bool:
+        return isinstance(exc, (cf.process.BrokenProcessPool, cf.CancelledError))
+
     def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def abort(self) -> None:
+        """Pending tasks cancelled, the workers told to exit at once (their running tasks are dropped)."""
+        self._stop.set()
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
@@ -155,12 +194,16 @@ class DaskBackend(Backend):
     def as_completed(self, futures):
         return iter(self._as_completed(list(futures)))
 
+    def is_lost(self, exc: BaseException) -> bool:
+        distributed = _dask()
+        return isinstance(exc, (cf.CancelledError, distributed.KilledWorker, distributed.comm.CommClosedError, TimeoutError))
+
     def describe(self) -> str:
         where = "LocalCluster" if self._cluster is not None else "scheduler"
         return f"dask ({where} {self.address}), {self.workers} worker{'s' if self.workers != 1 else ''}"
 
     def close(self) -> None:
-        self._client.close()
+        self._client.close(timeout=10)  # a lost scheduler does not hold the runner
         if self._cluster is not None:
             self._cluster.close()
 
