@@ -12,7 +12,7 @@ code path:
   (``tcp://host:port``, the workers must have qprr installed) or on a
   :class:`dask.distributed.LocalCluster` started here, listening on the loopback interface
   only, one single-threaded worker process per core (extra ``qprr[dask]``);
-* :class:`InlineBackend`: runs each task in the calling process as it is submitted
+* :class:`InlineBackend`: runs each task in the calling process when the loop reaches it
   (debugging, tests).
 
 Tasks are module-level functions with plain-data arguments (:func:`qprr.campaign.worker.run_one`).
@@ -132,21 +132,31 @@ class LocalBackend(Backend):
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+class _Deferred(cf.Future):
+    """A future of the inline backend: the call runs when :meth:`InlineBackend.as_completed` reaches it."""
+
+    def __init__(self, fn: Callable, args: tuple) -> None:
+        super().__init__()
+        self.call = (fn, args)
+
+
 class InlineBackend(Backend):
-    """Runs every task at once in this process (a finished future per task)."""
+    """Runs every task in this process, one after the other, as the loop asks for it (a run saved before the next starts)."""
 
     name = "inline"
 
     def submit(self, fn, *args, key=None):
-        fut: cf.Future = cf.Future()
-        try:
-            fut.set_result(fn(*args))
-        except Exception as exc:  # the loop reports it like a failed remote task
-            fut.set_exception(exc)
-        return fut
+        return _Deferred(fn, args)
 
     def as_completed(self, futures):
-        return iter(list(futures))
+        for fut in list(futures):
+            if fut.set_running_or_notify_cancel():
+                fn, args = fut.call
+                try:
+                    fut.set_result(fn(*args))
+                except Exception as exc:  # the loop reports it like a failed remote task
+                    fut.set_exception(exc)
+            yield fut
 
     def close(self) -> None:
         """Nothing to release."""

@@ -41,6 +41,7 @@ from __future__ import annotations
 
 import csv
 import errno
+import functools
 import json
 import os
 import re
@@ -380,14 +381,19 @@ def read_meta(path: str | Path) -> dict:
     return meta
 
 
+_SPECS: dict[str, object] = {}
+"""Specifications read from metadata in this process, keyed by their JSON text (a report after a run reads it once)."""
+
+
 def _campaign_spec(meta: dict, mp: Path):
     """The specification of campaign metadata (None for a plain store), checked against its fingerprint."""
     if "spec" not in meta:
         return None
     from .spec import CampaignSpec
 
+    key = json.dumps(meta["spec"], sort_keys=True, default=str)
     try:
-        spec = CampaignSpec.from_mapping(meta["spec"])
+        spec = _SPECS.get(key) or _SPECS.setdefault(key, CampaignSpec.from_mapping(meta["spec"]))
     except (QprrError, TypeError, ValueError) as exc:
         raise ResultsFileError(f"{str(mp)!r}: key 'spec' is not a valid campaign specification ({exc}): {_FIX}") from exc
     if spec.fingerprint != meta["fingerprint"]:
@@ -407,37 +413,42 @@ class _Rows:
         self.n_runs = self.spec.n_runs if self.spec is not None else meta.get("n_runs")
         self.i_run = self.columns.index("run")
         self.rows: dict[int, list[str]] = {}
+        from .metrics import STATUSES
+
+        self.statuses = STATUSES
 
     def _bad(self, where: str, column: str, problem: str):
         return ResultsFileError(f"{where}, column {column!r}: {problem}: {_FIX}")
 
     def _check(self, where: str, column: str, kind: str, text: str) -> None:
-        from .metrics import STATUSES
-
+        if kind == "status":
+            if text not in self.statuses:
+                raise self._bad(where, column, f"{text!r} is not a status ({', '.join(self.statuses)})")
+            return
         try:
             if kind in ("run", "int"):
                 value = int(text)
                 if str(value) != text:
-                    raise ValueError
-                if kind == "run" and (value < 0 or (self.n_runs is not None and value >= self.n_runs)):
-                    raise self._bad(where, column, f"run {value} is outside the campaign's runs 0..{(self.n_runs or 0) - 1}")
+                    raise ValueError(text)
             elif kind == "float":
                 float(text)
             elif kind == "flag" and text not in ("0", "1"):
-                raise ValueError
-            elif kind == "status" and text not in STATUSES:
-                raise self._bad(where, column, f"{text!r} is not a status ({', '.join(STATUSES)})")
+                raise ValueError(text)
         except ValueError:
             what = {"run": "a run index (an integer)", "int": "an integer", "float": "a number", "flag": "0 or 1"}[kind]
             raise self._bad(where, column, f"{text!r} is not {what}") from None
+        if kind == "run" and (value < 0 or (self.n_runs is not None and value >= self.n_runs)):
+            raise self._bad(where, column, f"run {value} is outside the campaign's runs 0..{(self.n_runs or 0) - 1}")
 
-    def add(self, where: str, fields: list[str], checksum_ok: bool = True) -> None:
+    def add(self, where: str, fields: list[str], checksum_ok: bool | None = None) -> None:
+        """Validate one row (``checksum_ok``: the verdict of its checksum, None where rows have none) and keep it."""
         if len(fields) != len(self.columns):
-            raise ResultsFileError(f"{where}: {len(fields)} values where the header has {len(self.columns)} columns "
-                                   f"({', '.join(self.columns)}): {_FIX}")
+            extra = 0 if checksum_ok is None else 1
+            raise ResultsFileError(f"{where}: {len(fields) + extra} fields where the header has {len(self.columns) + extra} "
+                                   f"({', '.join(self.columns)}{', ' + CHECK if extra else ''}): {_FIX}")
         for c, k, f in zip(self.columns, self.kinds, fields):
             self._check(where, c, k, f)
-        if not checksum_ok:
+        if checksum_ok is False:
             raise self._bad(where, CHECK, "the checksum does not match the line (it was edited or damaged)")
         run = int(fields[self.i_run])
         if self.spec is not None:
@@ -445,13 +456,20 @@ class _Rows:
         self.rows[run] = fields
 
     def _check_run(self, where: str, run: int, fields: list[str]) -> None:
-        from .worker import params_row
-
-        r = self.spec.run(run)
-        expected = {"seed": str(r.seed), **{k: _fmt(v) for k, v in params_row(self.spec, r.params).items()}}
+        expected = _expected(self.spec.fingerprint, run)
         for j, c in enumerate(self.columns):
             if c in expected and fields[j] != expected[c]:
                 raise self._bad(where, c, f"{fields[j]!r} is not what the specification gives run {run} ({expected[c]!r})")
+
+
+@functools.lru_cache(maxsize=1 << 16)
+def _expected(fingerprint: str, run: int) -> dict[str, str]:
+    """The seed and parameter columns of ``run`` (as written) under the specification of ``fingerprint`` (in :data:`_SPECS`)."""
+    from .worker import params_row
+
+    spec = next(s for s in _SPECS.values() if s.fingerprint == fingerprint)
+    r = spec.run(run)
+    return {"seed": str(r.seed), **{k: _fmt(v) for k, v in params_row(spec, r.params).items()}}
 
 
 def _parse(raw: bytes) -> tuple[list[str], bool]:
