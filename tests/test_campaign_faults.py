@@ -383,6 +383,8 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
 
     spec, data, table, rows, names, ref_dir = reference
     monkeypatch.setenv("QPRR_TEST_DELAY", "0.4")
+    monkeypatch.setenv("QPRR_TEST_LOG", str(tmp_path / "started.log"))
+    saved_at_kill = []
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
                                   silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as client:
         pids = list(client.run(os.getpid).values())
@@ -394,6 +396,7 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
             t0 = time.monotonic()
             while (not out.exists() or out.read_bytes().count(b"\n") < 3) and time.monotonic() - t0 < 60:
                 time.sleep(0.05)
+            saved_at_kill.extend(read_results(out).table["run"].tolist())
             os.kill(pids[0], signal.SIGKILL)
 
         th = Thread(target=kill)
@@ -402,6 +405,8 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
         th.join()
     assert done.lost == 0 and done.remaining == 0 and "dask (scheduler" in done.where
     _same(done.results.table, table)
+    starts = [int(line.split()[0]) for line in (tmp_path / "started.log").read_text().splitlines()]
+    assert len(saved_at_kill) >= 2 and all(starts.count(r) == 1 for r in saved_at_kill)  # saved runs are never recomputed
 
 
 @pytest.mark.slow

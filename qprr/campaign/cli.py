@@ -45,6 +45,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     res = done.results
     ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
     lost = f", {done.lost} lost (not saved)" if done.lost else ""
+    lost += f", stopped by {done.interrupted}" if done.interrupted else ""
     print(f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
           f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}")
     if done.interrupted or done.lost:
