@@ -435,6 +435,7 @@ def test_a_lost_scheduler_saves_no_placeholder_and_exits_non_zero(reference, tmp
         cluster.wait()
     assert proc.returncode == 1, stderr
     assert "lost (not saved)" in stdout and "on dask (scheduler" in stdout, stdout
+    assert "Traceback" not in stderr and "runs lost with their worker or scheduler (" in stderr, stderr
     saved = read_results(out).table
     assert 2 <= len(saved) < spec.n_runs  # no placeholder rows: what is saved is what the runs gave
     _same(saved, table[np.isin(table["run"], saved["run"])])

@@ -171,6 +171,23 @@ def _dask():
     return distributed
 
 
+class _Quiet:
+    """Distributed's loggers at CRITICAL until :meth:`restore`: the runner reports lost runs itself, in one line,
+    instead of the client's reconnection tracebacks."""
+
+    def __init__(self) -> None:
+        names = ["distributed", "distributed.client", "distributed.utils", "distributed.core", "distributed.comm",
+                 "distributed.batched", "distributed.worker", "distributed.nanny", "distributed.scheduler"]
+        names += [n for n in list(logging.Logger.manager.loggerDict) if n.startswith("distributed.")]
+        self.levels = {n: logging.getLogger(n).level for n in dict.fromkeys(names)}
+        for n in self.levels:
+            logging.getLogger(n).setLevel(logging.CRITICAL)
+
+    def restore(self) -> None:
+        for n, level in self.levels.items():
+            logging.getLogger(n).setLevel(level)
+
+
 class DaskBackend(Backend):
     """A Dask client: on ``scheduler`` ("tcp://host:port") or on a new loopback-only LocalCluster of ``workers`` processes."""
 
@@ -179,23 +196,28 @@ class DaskBackend(Backend):
     def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
         distributed = _dask()
         self._cluster = None
-        if scheduler is not None:
-            if not isinstance(scheduler, str) or "://" not in scheduler:
-                raise InputError(f"scheduler must be an address such as tcp://10.0.0.5:8786, got {scheduler!r}")
-            if workers is not None:
-                raise InputError("workers applies to a LocalCluster; a running scheduler has its own workers")
-            try:
-                self._client = distributed.Client(scheduler, timeout="20s")
-            except OSError as exc:
-                raise InputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
-            self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
-            self.address = scheduler
-        else:
-            self.workers = _workers(workers)
-            self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                                     host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
-            self._client = distributed.Client(self._cluster)
-            self.address = self._cluster.scheduler_address
+        self._quiet = _Quiet()
+        try:
+            if scheduler is not None:
+                if not isinstance(scheduler, str) or "://" not in scheduler:
+                    raise InputError(f"scheduler must be an address such as tcp://10.0.0.5:8786, got {scheduler!r}")
+                if workers is not None:
+                    raise InputError("workers applies to a LocalCluster; a running scheduler has its own workers")
+                try:
+                    self._client = distributed.Client(scheduler, timeout="20s")
+                except OSError as exc:
+                    raise InputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
+                self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
+                self.address = scheduler
+            else:
+                self.workers = _workers(workers)
+                self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                                         host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
+                self._client = distributed.Client(self._cluster)
+                self.address = self._cluster.scheduler_address
+        except BaseException:
+            self._quiet.restore()
+            raise
         self._as_completed = distributed.as_completed
 
     def submit(self, fn, *args, key=None):
@@ -213,9 +235,12 @@ class DaskBackend(Backend):
         return f"dask ({where} {self.address}), {self.workers} worker{'s' if self.workers != 1 else ''}"
 
     def close(self) -> None:
-        self._client.close(timeout=10)  # a lost scheduler does not hold the runner
-        if self._cluster is not None:
-            self._cluster.close()
+        try:
+            self._client.close(timeout=10)  # a lost scheduler does not hold the runner
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            self._quiet.restore()
 
 
 def make_backend(name: str = "local", workers: int | None = None, scheduler: str | None = None) -> Backend:

@@ -186,7 +186,7 @@ def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultSt
         except Exception as exc:
             if be.is_lost(exc):  # the worker or the scheduler went away: not a result of the run
                 tally.lost += 1
-                tally.lost_reason = tally.lost_reason or f"{type(exc).__name__}: {exc}".strip()
+                tally.lost_reason = tally.lost_reason or f"{type(exc).__name__}: {exc}".strip().splitlines()[0]
                 continue
             row = nan_row(spec, names, run, "error", f"{type(exc).__name__}: {exc}")  # the task could not run
         store.append(row)
