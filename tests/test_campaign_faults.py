@@ -211,11 +211,14 @@ def test_bad_metadata_is_named_with_its_file_and_key(reference, tmp_path, meta, 
     assert str(tmp_path / "m.meta.json") in str(err.value)
 
 
-def test_a_success_bound_no_run_can_meet_is_refused(reference, tmp_path):
-    spec = CampaignSpec.from_mapping({**reference[0].to_dict(), "success": {"rmse_x": -0.1}}, base_dir=reference[5])
-    with pytest.raises(InputError, match=r"rmse_x = -0.1: no run can meet it"):
-        run_campaign(spec, tmp_path / "s.csv", backend="inline", progress=False)
-    assert not (tmp_path / "s.csv").exists()
+@pytest.mark.parametrize("metric", ["rmse_x", "rmse_position", "x_cm_max", "saturation", "recovery_time", "t_end"])
+def test_a_success_bound_no_run_can_meet_is_refused(reference, tmp_path, metric):
+    with pytest.raises(InputError, match=rf"{metric} = -0.1: no run can meet it \({metric} is >= 0"):
+        CampaignSpec.from_mapping({**reference[0].to_dict(), "success": {metric: -0.1}}, base_dir=reference[5])
+    CampaignSpec.from_mapping({**reference[0].to_dict(), "success": {metric: 0.0}}, base_dir=reference[5])  # met by a 0
+
+
+def test_a_success_bound_on_no_metric_is_refused(reference, tmp_path):
     spec = CampaignSpec.from_mapping({**reference[0].to_dict(), "success": {"seed": 3.0}}, base_dir=reference[5])
     with pytest.raises(UnknownNameError, match="metric of \\[success\\]"):  # a parameter is no success criterion
         run_campaign(spec, tmp_path / "s.csv", backend="inline", progress=False)

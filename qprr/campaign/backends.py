@@ -89,11 +89,10 @@ class Backend(ABC):
 
 
 def _watch(parent: int, stop) -> None:
-    """A worker's watchdog thread: exit when the runner is gone (re-parented) or has set ``stop`` (abort)."""
-    while not stop.wait(0.25):
-        if os.getppid() != parent:
-            os._exit(1)
-    os._exit(1)
+    """A worker's watchdog thread: end the worker when the runner is gone (re-parented) or has set ``stop`` (abort)."""
+    while not stop.wait(0.25) and os.getppid() == parent:
+        pass
+    os.kill(os.getpid(), signal.SIGTERM)  # the default action: the process ends, whatever its main thread is computing
 
 
 def _init_worker(parent: int, stop) -> None:

@@ -127,20 +127,14 @@ def kinds_of(spec: CampaignSpec, names) -> dict[str, str]:
     return kinds
 
 
-NONNEGATIVE = ("t_end", "wall_time", "x_cm_max", "saturation", "recovery_time")
-"""Metric columns that are >= 0 for every run (with the ``rmse_*`` ones): a negative success bound is met by none."""
-
-
 def check_success(spec: CampaignSpec, names) -> None:
-    """Refuse ``[success]`` bounds that are not metric columns, or that no run can meet (a negative bound on a metric >= 0)."""
+    """Refuse ``[success]`` bounds on columns that are no metric of the campaign (the specification refuses the bounds no
+    run can meet, :data:`~qprr.campaign.spec.NONNEGATIVE`)."""
     metrics = metric_columns(spec.metrics, names, spec.extras)
     allowed = [m for m in metrics if m not in ("status", "reason", "success")]
-    for k, bound in spec.success.items():
+    for k in spec.success:
         if k not in allowed:
             raise UnknownNameError("metric of [success]", k, allowed)
-        if bound < 0 and (k in NONNEGATIVE or k.startswith("rmse_")):
-            raise InputError(f"[success] {k} = {bound!r}: no run can meet it ({k} is >= 0 for every run, "
-                             f"a success needs {k} <= the bound): give a bound >= 0")
 
 
 class _Stop(KeyboardInterrupt):
@@ -171,10 +165,12 @@ class _Signals:
 
 @dataclass
 class _Tally:
+    skipped: int = 0
     executed: int = 0
     failed: int = 0
     lost: int = 0
     lost_reason: str = ""
+    interrupted: str = ""
 
 
 def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: Progress, tally: _Tally) -> None:
@@ -239,21 +235,20 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     todo = [i for i in range(spec.n_runs) if i not in store.done]
     if limit is not None:
         todo = todo[:limit]
-    skipped = len(store.done)
     own = not isinstance(backend, Backend)
     t0 = time.perf_counter()
-    bar = Progress(spec.name, skipped + len(todo), skipped, enabled=progress, stream=stream)
+    tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
+    bar = Progress(spec.name, tally.skipped + len(todo), tally.skipped, enabled=progress, stream=stream)
     if store.dropped and progress:
         print(f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: "
               f"its run is done again", file=bar.stream)
-    tally, interrupted, be, runs, clean = _Tally(), "", None, {}, False
     try:
         with _Signals():
             try:
                 if todo:
                     be = make_backend(backend, workers, scheduler) if own else backend
                     if progress:
-                        print(f"campaign {spec.name}: {len(todo)} runs to do ({skipped} already in {store.path}) on {be.describe()}",
+                        print(f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
                               file=bar.stream)
                     for i in todo:
                         run = spec.run(i)
@@ -261,27 +256,28 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
                     _collect(spec, names, be, runs, store, bar, tally)
                 clean = True
             except KeyboardInterrupt as exc:
-                interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
+                tally.interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
             finally:
                 bar.close()
                 _stop_backend(be, own, runs, clean)
     finally:
         store.close()
-    return _finish(spec, store, be, backend, tally, skipped, interrupted, time.perf_counter() - t0, progress, bar.stream)
+    return _finish(spec, store, be, backend, tally, time.perf_counter() - t0, bar.stream if progress else None)
 
 
-def _finish(spec, store, be, backend, tally: _Tally, skipped: int, interrupted: str, wall: float, progress: bool, stream):
+def _finish(spec, store, be, backend, tally: _Tally, wall: float, stream) -> CampaignRun:
+    """The table read back, the messages of an interrupted or lossy campaign (on ``stream``, if any), the record."""
     results = read_results(store.path)
     saved = len({int(r) for r in results.table["run"]})
     remaining = spec.n_runs - saved
-    if progress and interrupted:
-        print(f"campaign {spec.name}: stopped by {interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
+    if stream is not None and tally.interrupted:
+        print(f"campaign {spec.name}: stopped by {tally.interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
               f"{store.path}; run the same command again to resume", file=stream)
-    if progress and tally.lost:
+    if stream is not None and tally.lost:
         print(f"campaign {spec.name}: {tally.lost} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
               f"run the same command again to run them", file=stream)
     name = be.name if be is not None else backend if isinstance(backend, str) else backend.name
-    return CampaignRun(store.path, tally.executed, skipped, tally.failed, wall, name, results, interrupted, tally.lost,
+    return CampaignRun(store.path, tally.executed, tally.skipped, tally.failed, wall, name, results, tally.interrupted, tally.lost,
                        be.describe() if be is not None else "nothing to run", remaining)
 
 
