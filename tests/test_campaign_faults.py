@@ -353,7 +353,7 @@ def _wait_rows(out: Path, n: int, proc: subprocess.Popen, timeout: float = 60.0)
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM, signal.SIGINT])
 def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, tmp_path, sig):
     spec, data, table, rows, names, ref_dir = reference
     shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
@@ -368,14 +368,57 @@ def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, t
     while any(_alive(k) for k in kids) and time.monotonic() - t0 < 10:
         time.sleep(0.1)
     assert not [k for k in kids if _alive(k)], "processes outlived the runner"
-    if sig == signal.SIGTERM:
+    if sig != signal.SIGKILL:
         assert proc.returncode == 1, stderr
-        assert "stopped by SIGTERM" in stderr and "run the same command again to resume" in stderr
+        assert f"stopped by {sig.name}" in stderr and "run the same command again to resume" in stderr
+        assert "Traceback" not in stderr
     saved = read_results(out)
     assert 2 <= len(saved) < spec.n_runs
     again = run_campaign(spec, out, backend="inline", progress=False)
     assert again.skipped + again.executed >= spec.n_runs and again.remaining == 0
     _same(again.results.table, table)
+
+
+@pytest.mark.slow
+def test_a_local_worker_killed_midway_loses_runs_without_saving_them(reference, tmp_path, monkeypatch):
+    """A pool worker killed (out of memory, kill -9): the runs it and the broken pool had are lost, not rows; the
+    campaign says so and leaves them to the next run, which completes the table."""
+    spec, data, table, rows, names, ref_dir = reference
+    monkeypatch.setenv("QPRR_TEST_DELAY", "0.4")
+    out = tmp_path / "w.csv"
+
+    from threading import Thread
+
+    def kill():
+        t0 = time.monotonic()
+        while (not out.exists() or out.read_bytes().count(b"\n") < 3) and time.monotonic() - t0 < 60:
+            time.sleep(0.05)
+        workers = [p for p in _children(os.getpid()) if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]
+        os.kill(workers[0], signal.SIGKILL)
+
+    th = Thread(target=kill)
+    th.start()
+    done = run_campaign(spec, out, backend="local", workers=2, progress=False)
+    th.join()
+    assert done.lost > 0 and done.remaining == done.lost and done.executed == spec.n_runs - done.lost
+    saved = done.results.table
+    assert "error" not in {s for s, r in zip(saved["status"], saved["run"]) if rows[int(r)]["status"] != "error"}
+    again = run_campaign(spec, out, backend="inline", progress=False)
+    assert again.remaining == 0
+    _same(again.results.table, table)
+
+
+def test_a_damaged_parquet_part_is_named(reference, tmp_path):
+    pytest.importorskip("pyarrow")
+    spec, data, table, rows, names, ref_dir = reference
+    out = tmp_path / "p.parquet"
+    done = run_campaign(spec, out, backend="inline", progress=False)
+    _same(done.results.table, table)
+    part = sorted(out.glob("part-*.parquet"))[0]
+    part.write_bytes(part.read_bytes()[:-100])
+    with pytest.raises(ResultsFileError, match="not a readable Parquet part") as err:
+        read_results(out)
+    assert str(part) in str(err.value)
 
 
 # ---------------------------------------------------------------------------- Dask: a worker, the scheduler
