@@ -495,3 +495,29 @@ def test_kinds_cover_every_column(reference):
     kinds = kinds_of(spec, names)
     assert list(kinds) == list(columns_of(spec, names))
     assert kinds["run"] == "run" and kinds["status"] == "status" and kinds["success"] == "flag" and kinds["rmse_x"] == "float"
+
+
+# ---------------------------------------------------------------------------- the record format
+def test_any_text_round_trips_through_a_record_on_one_line():
+    """Property: whatever a reason holds (newlines, CR, NUL, quotes, commas, backslashes, any Unicode), its record is
+    one line whose checksum matches, and parsing gives the text back exactly; a changed byte fails the checksum."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    from qprr.campaign import store as store_mod
+
+    record, store_parse = store_mod.record, store_mod._parse
+
+    @settings(max_examples=150, deadline=None)
+    @given(st.lists(st.text(alphabet=st.characters(codec="utf-8")), min_size=1, max_size=4),
+           st.floats(allow_nan=True, allow_infinity=True), st.integers(-2**63, 2**63 - 1))
+    def check(texts, x, n):
+        line = record([n, x, *texts])
+        assert line.endswith(b"\n") and line.count(b"\n") == 1 and b"\r" not in line
+        fields, ok = store_parse(line[:-1])
+        assert ok and fields == [str(n), repr(x), *texts]
+        flipped = bytearray(line[:-1])
+        flipped[0] ^= 0x01
+        assert store_parse(bytes(flipped))[1] is False
+
+    check()
