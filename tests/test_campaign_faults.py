@@ -28,6 +28,7 @@ from qprr.errors import InputError, UnknownNameError
 
 TARGET = '''
 import os
+import signal
 import time
 
 from qprr.sim import simulate
@@ -36,6 +37,8 @@ from qprr.thesis.scenarios import flight_controller
 
 
 def target(params, seed, platform):
+    if str(params["k"]) == os.environ.get("QPRR_TEST_CRASH"):  # this run kills its worker (as running out of memory would)
+        os.kill(os.getpid(), signal.SIGKILL)
     if os.environ.get("QPRR_TEST_LOG"):
         with open(os.environ["QPRR_TEST_LOG"], "a") as fh:
             fh.write(f"{params['k']} {time.time()!r}\\n")
@@ -380,9 +383,9 @@ def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, t
 
 
 @pytest.mark.slow
-def test_a_local_worker_killed_midway_loses_runs_without_saving_them(reference, tmp_path, monkeypatch):
-    """A pool worker killed (out of memory, kill -9): the runs it and the broken pool had are lost, not rows; the
-    campaign says so and leaves them to the next run, which completes the table."""
+def test_a_local_worker_killed_midway_is_retried_on_a_new_pool(reference, tmp_path, monkeypatch):
+    """A pool worker killed once (out of memory, kill -9): the runs the broken pool had are lost, not rows, and
+    retried on a new pool: the table is complete and equal to an uninterrupted run's."""
     spec, data, table, rows, names, ref_dir = reference
     monkeypatch.setenv("QPRR_TEST_DELAY", "0.4")
     out = tmp_path / "w.csv"
@@ -400,12 +403,21 @@ def test_a_local_worker_killed_midway_loses_runs_without_saving_them(reference, 
     th.start()
     done = run_campaign(spec, out, backend="local", workers=2, progress=False)
     th.join()
-    assert done.lost > 0 and done.remaining == done.lost and done.executed == spec.n_runs - done.lost
+    assert (done.lost, done.remaining, done.executed) == (0, 0, spec.n_runs)
+    _same(done.results.table, table)
+
+
+@pytest.mark.slow
+def test_a_run_that_always_kills_its_worker_ends_lost_not_saved(reference, tmp_path, monkeypatch, capsys):
+    spec, data, table, rows, names, ref_dir = reference
+    monkeypatch.setenv("QPRR_TEST_CRASH", "4")
+    monkeypatch.setenv("QPRR_TEST_DELAY", "0.2")
+    done = run_campaign(spec, tmp_path / "c.csv", backend="local", workers=2, progress=True)
     saved = done.results.table
-    assert "error" not in {s for s, r in zip(saved["status"], saved["run"]) if rows[int(r)]["status"] != "error"}
-    again = run_campaign(spec, out, backend="inline", progress=False)
-    assert again.remaining == 0
-    _same(again.results.table, table)
+    assert done.lost >= 1 and done.remaining == done.lost and 4 not in saved["run"].tolist()
+    _same(saved, table[np.isin(table["run"], saved["run"])])  # no placeholder rows: what is saved is what the runs gave
+    err = capsys.readouterr().err
+    assert f"{done.lost} runs lost with their worker or scheduler (BrokenProcessPool" in err
 
 
 def test_a_damaged_parquet_part_is_named(reference, tmp_path):

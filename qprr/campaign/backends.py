@@ -1,8 +1,8 @@
 """Execution backends on existing engines: a local process pool (default) or Dask distributed.
 
 Both expose the calls the campaign loop uses - :meth:`Backend.submit`, :meth:`Backend.as_completed`,
-:meth:`Backend.is_lost`, :meth:`Backend.close` and :meth:`Backend.abort` - so a campaign has one
-code path:
+:meth:`Backend.is_lost`, :meth:`Backend.restart`, :meth:`Backend.close` and :meth:`Backend.abort` -
+so a campaign has one code path:
 
 * :class:`LocalBackend`: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
   start method (no fork of a process holding Pinocchio objects), one process per core by
@@ -17,7 +17,9 @@ code path:
 
 Tasks are module-level functions with plain-data arguments (:func:`qprr.campaign.worker.run_one`).
 A task whose worker died, whose pool broke or whose scheduler was lost is *lost*
-(:meth:`Backend.is_lost`): it produced no result, and the runner saves nothing for it.
+(:meth:`Backend.is_lost`): it produced no result, and the runner saves nothing for it.  The
+runner retries lost runs on a restarted backend (:meth:`Backend.restart`: a new local pool;
+Dask reschedules a dead worker's tasks by itself) while a retry round saves new rows.
 """
 
 from __future__ import annotations
@@ -78,6 +80,10 @@ class Backend(ABC):
         """Whether a task's exception means the run was lost with its worker or scheduler (no result), not raised by the run."""
         return False
 
+    def restart(self) -> bool:
+        """After lost tasks: make the backend usable again for a retry (True), or say it cannot (False: the runs stay lost)."""
+        return False
+
     def describe(self) -> str:
         return f"{self.name}, {self.workers} worker{'s' if self.workers != 1 else ''}"
 
@@ -108,10 +114,19 @@ class LocalBackend(Backend):
 
     def __init__(self, workers: int | None = None) -> None:
         self.workers = _workers(workers)
+        self._pool = self._new_pool()
+
+    def _new_pool(self) -> cf.ProcessPoolExecutor:
         ctx = multiprocessing.get_context("spawn")
         self._stop = ctx.Event()
-        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
-                                            initargs=(os.getpid(), self._stop))
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
+                                      initargs=(os.getpid(), self._stop))
+
+    def restart(self) -> bool:
+        """A new pool in place of a broken one (a worker died: out of memory, killed)."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._pool = self._new_pool()
+        return True
 
     def submit(self, fn, *args, key=None):
         return self._pool.submit(fn, *args)

@@ -7,7 +7,8 @@ its future is released then.  What stops a campaign, and what is kept:
 * Ctrl-C or SIGTERM: no more runs are started, the running ones are stopped, the saved rows
   are kept; :attr:`CampaignRun.interrupted` names the signal.
 * A run lost with its worker or its scheduler (:meth:`Backend.is_lost`): nothing is saved for
-  it (it is not a result); :attr:`CampaignRun.lost` counts them.
+  it (it is not a result); it is retried on a restarted backend (:meth:`Backend.restart`) while
+  a round of retries saves rows; :attr:`CampaignRun.lost` counts those left.
 * A failed write (full disk, read-only folder): :class:`~qprr.campaign.store.ResultsWriteError`
   is raised after the workers are stopped; no run is started after it.
 
@@ -21,7 +22,7 @@ import signal
 import sys
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..charts import as_int, as_name
@@ -170,7 +171,7 @@ class _Tally:
     skipped: int = 0
     executed: int = 0
     failed: int = 0
-    lost: int = 0
+    lost: list = field(default_factory=list)
     lost_reason: str = ""
     interrupted: str = ""
 
@@ -183,7 +184,7 @@ def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultSt
             row = fut.result()
         except Exception as exc:
             if be.is_lost(exc):  # the worker or the scheduler went away: not a result of the run
-                tally.lost += 1
+                tally.lost.append(run)
                 tally.lost_reason = tally.lost_reason or f"{type(exc).__name__}: {exc}".strip().splitlines()[0]
                 continue
             row = nan_row(spec, names, run, "error", f"{type(exc).__name__}: {exc}")  # the task could not run
@@ -252,10 +253,13 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
                     if progress:
                         print(f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
                               file=bar.stream)
-                    for i in todo:
-                        run = spec.run(i)
-                        runs[be.submit(run_one, payload, run, key=f"qprr-{spec.fingerprint}-{i}")] = run
-                    _collect(spec, names, be, runs, store, bar, tally)
+                    pending = [spec.run(i) for i in todo]
+                    while pending:  # retried on a restarted backend while a round saves rows
+                        saved_before = tally.executed
+                        runs.update({be.submit(run_one, payload, r, key=f"qprr-{spec.fingerprint}-{r.index}"): r for r in pending})
+                        _collect(spec, names, be, runs, store, bar, tally)
+                        retry = bool(tally.lost) and tally.executed > saved_before and be.restart()
+                        pending, tally.lost = (tally.lost, []) if retry else ([], tally.lost)
                 clean = True
             except KeyboardInterrupt as exc:
                 tally.interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
@@ -276,10 +280,10 @@ def _finish(spec, store, be, backend, tally: _Tally, wall: float, stream) -> Cam
         print(f"campaign {spec.name}: stopped by {tally.interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
               f"{store.path}; run the same command again to resume", file=stream)
     if stream is not None and tally.lost:
-        print(f"campaign {spec.name}: {tally.lost} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
+        print(f"campaign {spec.name}: {len(tally.lost)} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
               f"run the same command again to run them", file=stream)
     name = be.name if be is not None else backend if isinstance(backend, str) else backend.name
-    return CampaignRun(store.path, tally.executed, tally.skipped, tally.failed, wall, name, results, tally.interrupted, tally.lost,
+    return CampaignRun(store.path, tally.executed, tally.skipped, tally.failed, wall, name, results, tally.interrupted, len(tally.lost),
                        be.describe() if be is not None else "nothing to run", remaining)
 
 
