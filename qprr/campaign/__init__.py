@@ -38,7 +38,8 @@ Public API for other packages (e.g. a design search that runs its evaluations he
   the file it resumes).
 * ``make_backend(name, workers, scheduler) -> Backend``: ``submit(fn, *args, key=None)`` ->
   future, ``as_completed(futures)``, ``is_lost(exc)`` (the future's exception means its worker
-  or scheduler went away), ``close()``, ``abort()`` (stop at once).  Tasks: module-level
+  or scheduler went away), ``restart()`` (usable again after lost tasks: True for a new local
+  pool), ``close()``, ``abort()`` (stop at once).  Tasks: module-level
   functions with plain-data arguments.
 * ``ResultStore(path, columns, meta, *, fresh=False)``: ``append(row)``, ``flush()``,
   ``close()``, ``done`` (run indices saved, status not ``error``), ``dropped`` (bytes of a cut
