@@ -39,7 +39,6 @@ STATUSES = ("ok", "diverged", "failed", "error")
 """Run outcomes: the three :class:`qprr.sim.Status` values and ``error`` (an exception that is not a qprr error)."""
 
 BASE_COLUMNS = ("status", "reason", "t_end", "wall_time")
-
 POSITION = ("x", "y", "z")
 
 
