@@ -232,7 +232,7 @@ def test_failures_and_bugs_are_rows_with_their_reason(tmp_path):
     assert by[("raise", 0)][:2] == ("error", "ValueError: a bug in the target")
     assert by[("none", 0)][0] == "error" and "int" in by[("none", 0)][1]
     assert np.all(np.isnan(t["rmse_x"][t["status"] != "ok"]))
-    # an error row (a bug, a dead worker) is done again on resume; the others are kept
+    # an error row (a bug in the target) is done again on resume; the others are kept
     again = run_campaign(spec, tmp_path / "f.csv", backend="inline", progress=False)
     assert again.executed == int(np.sum(t["status"] == "error"))
 

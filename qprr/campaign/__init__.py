@@ -7,7 +7,8 @@ module                          what
 :mod:`qprr.campaign.metrics`    the per-run columns: RMSE (6.26), max CoG offset, saturation, ...
 :mod:`qprr.campaign.worker`     the task a worker runs (model built once per worker)
 :mod:`qprr.campaign.backends`   local process pool (default), Dask distributed, inline
-:mod:`qprr.campaign.store`      results appended to CSV / Parquet as they arrive; resume; read
+:mod:`qprr.campaign.store`      results appended as they arrive (one checksummed CSV record per
+                                line, or Parquet parts); resume after a cut; validated reads
 :mod:`qprr.campaign.runner`     :func:`run_campaign`: the one loop, with a progress line
 :mod:`qprr.campaign.report`     summary statistics per group, box plots, heat maps, success curves
 :mod:`qprr.campaign.targets`    :func:`~qprr.campaign.targets.scale_bandwidth`: one factor on a
@@ -24,16 +25,39 @@ Quick start::
 
 Reproducible: a specification gives the same table whatever the backend and the number of
 workers (each run's draws and seed come from the specification's seed and the run index).
+
+Public API for other packages (e.g. a design search that runs its evaluations here):
+
+* ``run_campaign(spec, output, *, backend="local", workers=None, scheduler=None, fresh=False,
+  limit=None, progress=True, stream=None) -> CampaignRun``: the one loop.  ``CampaignRun``:
+  ``path``, ``executed``, ``skipped``, ``failed``, ``lost`` (runs lost with a worker or the
+  scheduler: not saved), ``interrupted`` ("" or "SIGINT"/"SIGTERM"), ``remaining`` (runs of the
+  specification not saved), ``backend`` (name), ``where`` (what ran them), ``wall_time``,
+  ``results``.  Raises :class:`~qprr.campaign.store.ResultsWriteError` (a failed write: the
+  workers are stopped first) and :class:`~qprr.campaign.store.ResultsFileError` (a bad row in
+  the file it resumes).
+* ``make_backend(name, workers, scheduler) -> Backend``: ``submit(fn, *args, key=None)`` ->
+  future, ``as_completed(futures)``, ``is_lost(exc)`` (the future's exception means its worker
+  or scheduler went away), ``restart()`` (usable again after lost tasks: True for a new local
+  pool), ``close()``, ``abort()`` (stop at once).  Tasks: module-level
+  functions with plain-data arguments.
+* ``ResultStore(path, columns, meta, *, fresh=False)``: ``append(row)``, ``flush()``,
+  ``close()``, ``done`` (run indices saved, status not ``error``), ``dropped`` (bytes of a cut
+  record removed on resume).  ``meta`` needs ``fingerprint``; optional ``kinds`` (column ->
+  :data:`~qprr.campaign.store.KINDS`), ``n_runs`` and ``spec`` validate the rows.  ``columns``
+  must include ``run``.  ``read_results(path) -> Results`` (validated; ``table``, a numpy
+  structured array sorted by run), ``read_meta(path)``.
 """
 
 from .backends import BACKENDS, Backend, DaskBackend, InlineBackend, LocalBackend, make_backend
 from .metrics import STATUSES, metric_columns, metrics_of
 from .runner import CampaignRun, run_campaign
 from .spec import METRICS, MODEL_PARAMS, CampaignSpec, Distribution, Run
-from .store import Results, read_results
+from .store import KINDS, Results, ResultsFileError, ResultStore, ResultsWriteError, read_meta, read_results
 
 __all__ = [
     "BACKENDS",
+    "KINDS",
     "METRICS",
     "MODEL_PARAMS",
     "STATUSES",
@@ -44,11 +68,15 @@ __all__ = [
     "Distribution",
     "InlineBackend",
     "LocalBackend",
+    "ResultStore",
     "Results",
+    "ResultsFileError",
+    "ResultsWriteError",
     "Run",
     "make_backend",
     "metric_columns",
     "metrics_of",
+    "read_meta",
     "read_results",
     "run_campaign",
 ]

@@ -1,19 +1,25 @@
 """Execution backends on existing engines: a local process pool (default) or Dask distributed.
 
-Both expose the same three calls the campaign loop uses - :meth:`Backend.submit`,
-:meth:`Backend.as_completed`, :meth:`Backend.close` - so a campaign has one code path:
+Both expose the calls the campaign loop uses - :meth:`Backend.submit`, :meth:`Backend.as_completed`,
+:meth:`Backend.is_lost`, :meth:`Backend.restart`, :meth:`Backend.close` and :meth:`Backend.abort` -
+so a campaign has one code path:
 
 * :class:`LocalBackend`: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
   start method (no fork of a process holding Pinocchio objects), one process per core by
-  default;
+  default; each worker ignores SIGINT (the runner stops the campaign) and exits by itself within
+  0.25 s when the runner dies (even by SIGKILL) or aborts;
 * :class:`DaskBackend`: a :class:`dask.distributed.Client` on a running scheduler
   (``tcp://host:port``, the workers must have qprr installed) or on a
   :class:`dask.distributed.LocalCluster` started here, listening on the loopback interface
   only, one single-threaded worker process per core (extra ``qprr[dask]``);
-* :class:`InlineBackend`: runs each task in the calling process as it is submitted
+* :class:`InlineBackend`: runs each task in the calling process when the loop reaches it
   (debugging, tests).
 
 Tasks are module-level functions with plain-data arguments (:func:`qprr.campaign.worker.run_one`).
+A task whose worker died, whose pool broke or whose scheduler was lost is *lost*
+(:meth:`Backend.is_lost`): it produced no result, and the runner saves nothing for it.  The
+runner retries lost runs on a restarted backend (:meth:`Backend.restart`: a new local pool;
+Dask reschedules a dead worker's tasks by itself) while a retry round saves new rows.
 """
 
 from __future__ import annotations
@@ -22,6 +28,8 @@ import concurrent.futures as cf
 import logging
 import multiprocessing
 import os
+import signal
+import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Iterator
 
@@ -62,7 +70,19 @@ class Backend(ABC):
 
     @abstractmethod
     def close(self) -> None:
-        """Release the workers (pending tasks are cancelled)."""
+        """Release the workers (pending tasks are cancelled, running ones finish)."""
+
+    def abort(self) -> None:
+        """Stop at once (interrupt, failed write): pending tasks cancelled, running ones stopped, workers released."""
+        self.close()
+
+    def is_lost(self, exc: BaseException) -> bool:
+        """Whether a task's exception means the run was lost with its worker or scheduler (no result), not raised by the run."""
+        return False
+
+    def restart(self) -> bool:
+        """After lost tasks: make the backend usable again for a retry (True), or say it cannot (False: the runs stay lost)."""
+        return False
 
     def describe(self) -> str:
         return f"{self.name}, {self.workers} worker{'s' if self.workers != 1 else ''}"
@@ -74,14 +94,39 @@ class Backend(ABC):
         self.close()
 
 
+def _watch(parent: int, stop) -> None:
+    """A worker's watchdog thread: end the worker when the runner is gone (re-parented) or has set ``stop`` (abort)."""
+    while not stop.wait(0.25) and os.getppid() == parent:
+        pass
+    os.kill(os.getpid(), signal.SIGTERM)  # the default action: the process ends, whatever its main thread is computing
+
+
+def _init_worker(parent: int, stop) -> None:
+    """Initializer of a local pool's worker: Ctrl-C is the runner's to handle; the watchdog of :func:`_watch`."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_watch, args=(parent, stop), name="qprr-campaign-watchdog", daemon=True).start()
+
+
 class LocalBackend(Backend):
-    """A pool of ``workers`` spawned processes on this machine (default: one per core)."""
+    """A pool of ``workers`` spawned processes on this machine (default: one per core); they cannot outlive the runner."""
 
     name = "local"
 
     def __init__(self, workers: int | None = None) -> None:
         self.workers = _workers(workers)
-        self._pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=multiprocessing.get_context("spawn"))
+        self._pool = self._new_pool()
+
+    def _new_pool(self) -> cf.ProcessPoolExecutor:
+        ctx = multiprocessing.get_context("spawn")
+        self._stop = ctx.Event()
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
+                                      initargs=(os.getpid(), self._stop))
+
+    def restart(self) -> bool:
+        """A new pool in place of a broken one (a worker died: out of memory, killed)."""
+        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._pool = self._new_pool()
+        return True
 
     def submit(self, fn, *args, key=None):
         return self._pool.submit(fn, *args)
@@ -89,25 +134,43 @@ class LocalBackend(Backend):
     def as_completed(self, futures):
         return cf.as_completed(futures)
 
+    def is_lost(self, exc: BaseException) -> bool:
+        return isinstance(exc, (cf.process.BrokenProcessPool, cf.CancelledError))
+
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
+    def abort(self) -> None:
+        """Pending tasks cancelled, the workers told to exit at once (their running tasks are dropped)."""
+        self._stop.set()
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+class _Deferred(cf.Future):
+    """A future of the inline backend: the call runs when :meth:`InlineBackend.as_completed` reaches it."""
+
+    def __init__(self, fn: Callable, args: tuple) -> None:
+        super().__init__()
+        self.call = (fn, args)
+
 
 class InlineBackend(Backend):
-    """Runs every task at once in this process (a finished future per task)."""
+    """Runs every task in this process, one after the other, as the loop asks for it (a run saved before the next starts)."""
 
     name = "inline"
 
     def submit(self, fn, *args, key=None):
-        fut: cf.Future = cf.Future()
-        try:
-            fut.set_result(fn(*args))
-        except Exception as exc:  # the loop reports it like a failed remote task
-            fut.set_exception(exc)
-        return fut
+        return _Deferred(fn, args)
 
     def as_completed(self, futures):
-        return iter(list(futures))
+        for fut in list(futures):
+            if fut.set_running_or_notify_cancel():
+                fn, args = fut.call
+                try:
+                    fut.set_result(fn(*args))
+                except Exception as exc:  # the loop reports it like a failed remote task
+                    fut.set_exception(exc)
+            yield fut
 
     def close(self) -> None:
         """Nothing to release."""
@@ -122,6 +185,23 @@ def _dask():
     return distributed
 
 
+class _Quiet:
+    """Distributed's loggers at CRITICAL until :meth:`restore`: the runner reports lost runs itself, in one line,
+    instead of the client's reconnection tracebacks."""
+
+    def __init__(self) -> None:
+        names = ["distributed", "distributed.client", "distributed.utils", "distributed.core", "distributed.comm",
+                 "distributed.batched", "distributed.worker", "distributed.nanny", "distributed.scheduler"]
+        names += [n for n in list(logging.Logger.manager.loggerDict) if n.startswith("distributed.")]
+        self.levels = {n: logging.getLogger(n).level for n in dict.fromkeys(names)}
+        for n in self.levels:
+            logging.getLogger(n).setLevel(logging.CRITICAL)
+
+    def restore(self) -> None:
+        for n, level in self.levels.items():
+            logging.getLogger(n).setLevel(level)
+
+
 class DaskBackend(Backend):
     """A Dask client: on ``scheduler`` ("tcp://host:port") or on a new loopback-only LocalCluster of ``workers`` processes."""
 
@@ -130,23 +210,28 @@ class DaskBackend(Backend):
     def __init__(self, workers: int | None = None, scheduler: str | None = None) -> None:
         distributed = _dask()
         self._cluster = None
-        if scheduler is not None:
-            if not isinstance(scheduler, str) or "://" not in scheduler:
-                raise InputError(f"scheduler must be an address such as tcp://10.0.0.5:8786, got {scheduler!r}")
-            if workers is not None:
-                raise InputError("workers applies to a LocalCluster; a running scheduler has its own workers")
-            try:
-                self._client = distributed.Client(scheduler, timeout="20s")
-            except OSError as exc:
-                raise InputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
-            self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
-            self.address = scheduler
-        else:
-            self.workers = _workers(workers)
-            self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                                     host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
-            self._client = distributed.Client(self._cluster)
-            self.address = self._cluster.scheduler_address
+        self._quiet = _Quiet()
+        try:
+            if scheduler is not None:
+                if not isinstance(scheduler, str) or "://" not in scheduler:
+                    raise InputError(f"scheduler must be an address such as tcp://10.0.0.5:8786, got {scheduler!r}")
+                if workers is not None:
+                    raise InputError("workers applies to a LocalCluster; a running scheduler has its own workers")
+                try:
+                    self._client = distributed.Client(scheduler, timeout="20s")
+                except OSError as exc:
+                    raise InputError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}") from exc
+                self.workers = max(1, sum(w.get("nthreads", 1) for w in self._client.scheduler_info()["workers"].values()))
+                self.address = scheduler
+            else:
+                self.workers = _workers(workers)
+                self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
+                                                         host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
+                self._client = distributed.Client(self._cluster)
+                self.address = self._cluster.scheduler_address
+        except BaseException:
+            self._quiet.restore()
+            raise
         self._as_completed = distributed.as_completed
 
     def submit(self, fn, *args, key=None):
@@ -155,14 +240,21 @@ class DaskBackend(Backend):
     def as_completed(self, futures):
         return iter(self._as_completed(list(futures)))
 
+    def is_lost(self, exc: BaseException) -> bool:
+        distributed = _dask()
+        return isinstance(exc, (cf.CancelledError, distributed.KilledWorker, distributed.comm.CommClosedError, TimeoutError))
+
     def describe(self) -> str:
         where = "LocalCluster" if self._cluster is not None else "scheduler"
         return f"dask ({where} {self.address}), {self.workers} worker{'s' if self.workers != 1 else ''}"
 
     def close(self) -> None:
-        self._client.close()
-        if self._cluster is not None:
-            self._cluster.close()
+        try:
+            self._client.close(timeout=10)  # a lost scheduler does not hold the runner
+            if self._cluster is not None:
+                self._cluster.close()
+        finally:
+            self._quiet.restore()
 
 
 def make_backend(name: str = "local", workers: int | None = None, scheduler: str | None = None) -> Backend:

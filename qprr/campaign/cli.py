@@ -1,7 +1,11 @@
 """``qprr campaign run SPEC`` / ``qprr campaign report RESULTS`` / ``qprr campaign show SPEC``.
 
-Registered in :func:`qprr.cli.build_parser` through :func:`register_cli`.  Exit codes: 0 done
-(every run saved, whatever their status), 1 interrupted, 2 bad arguments or specification.
+Registered in :func:`qprr.cli.build_parser` through :func:`register_cli`.  Exit codes of ``run``:
+0 done (every run asked for saved, whatever their status), 1 runs remain (interrupted by Ctrl-C
+or SIGTERM, or lost with a worker or the scheduler: run the same command again), 2 bad
+arguments, specification or results file (a bad row is named with its file, line and column),
+3 the results could not be written (full disk, read-only folder: one line naming the file and
+the error; the rows saved before are kept).
 """
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from .report import report
     from .runner import run_campaign
     from .spec import CampaignSpec
+    from .store import ResultsWriteError
 
     prog = "qprr campaign run"
     try:
@@ -26,19 +31,27 @@ def _cmd_run(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         done = run_campaign(spec, output, backend=args.backend, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
                             limit=args.limit, progress=not args.quiet)
+    except ResultsWriteError as exc:
+        print(f"{prog}: error: {exc}; the campaign stopped (no run started after it), the rows saved before are kept: "
+              f"run the same command again once the file can be written", file=sys.stderr)
+        return 3
     except (QprrError, KeyError, ValueError) as exc:
         return _fail(prog, f"{type(exc).__name__}: {exc}")
     wall = time.perf_counter() - t0
     res = done.results
     ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
-    print(f"{spec.name}: {done.executed} runs now ({done.skipped} resumed), {len(res)}/{spec.n_runs} saved in {done.path}; "
-          f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.backend}")
+    lost = f", {done.lost} lost (not saved)" if done.lost else ""
+    lost += f", stopped by {done.interrupted}" if done.interrupted else ""
+    print(f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
+          f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}")
+    if done.interrupted or done.lost:
+        return 1
     if args.report:
         text, figures = report(res, args.report)
         print(text)
         for f in figures:
             print(f"figure {f}")
-    return 1 if done.interrupted else 0
+    return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:

@@ -42,10 +42,20 @@ def column(results: Results, name: str) -> np.ndarray:
     return t[name]
 
 
-def _label(name: str) -> str:
+def _unit(name: str) -> str | None:
+    """The unit of a column (:data:`UNITS`; other ``rmse_*`` columns are angles, ``model.*`` factors on the nominal value)."""
     u = UNITS.get(name)
     if u is None and name.startswith("rmse_"):
         u = "rad"
+    if u is None and name.startswith("model."):
+        u = "x nominal"
+    return u
+
+
+def _label(name: str, stat: str = "") -> str:
+    """``name [unit]`` (``name stat [unit]`` with a statistic), or the name alone for a column without unit."""
+    u = _unit(name)
+    name = f"{name} {stat}" if stat else name
     return f"{name} [{u}]" if u else name
 
 
@@ -117,10 +127,10 @@ def _num(x: float) -> str:
 
 
 def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90")) -> str:
-    """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics."""
-    head = [*summary.groups, "n", "completed", "success"]
+    """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics, with units."""
+    head = [*(_label(g) for g in summary.groups), "n", "completed", "success"]
     for m in summary.metrics:
-        head += [f"{m} {s}" for s in stats]
+        head += [_label(m, s) for s in stats]
     lines = []
     for row in summary.rows:
         cells = [str(row[g]) if not isinstance(row[g], float) else _num(row[g]) for g in summary.groups]
@@ -179,7 +189,7 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
     if log:
         ax.set_yscale("log")
     ax.set_ylabel(_label(metric))
-    ax.set_xlabel(by)
+    ax.set_xlabel(_label(by))
     ax.grid(alpha=0.3, axis="y")
     ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (completed runs)")
     fig.savefig(path, dpi=90)
@@ -227,8 +237,8 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
         im = ax.imshow(Z, origin="lower", aspect="auto", cmap="viridis" if vals is not None else "RdYlGn", norm=norm)
         ax.set_xticks(range(len(xv)), [_num(v) if isinstance(v, float) else str(v) for v in xv], rotation=45)
         ax.set_yticks(range(len(yv)), [_num(v) if isinstance(v, float) else str(v) for v in yv])
-        ax.set_xlabel(x)
-        ax.set_ylabel(y)
+        ax.set_xlabel(_label(x))
+        ax.set_ylabel(_label(y))
         ax.set_title(str(p) if p is not None else "")
         for i in range(len(yv)):
             for j in range(len(xv)):

@@ -1,17 +1,28 @@
 """Run a campaign: submit the runs not yet saved, save each row as it arrives, show progress.
 
 :func:`run_campaign` is the one loop every backend goes through (:mod:`qprr.campaign.backends`).
-A run's row is saved the moment it arrives (:class:`qprr.campaign.store.ResultStore`);
-interrupting (Ctrl-C) cancels the pending runs and keeps the saved ones; running the same
-specification to the same file again resumes: only the missing runs (and the rows of status
-``error``, a worker that died) are submitted.
+A run's row is saved the moment it arrives (:class:`qprr.campaign.store.ResultStore`), and
+its future is released then.  What stops a campaign, and what is kept:
+
+* Ctrl-C or SIGTERM: no more runs are started, the running ones are stopped, the saved rows
+  are kept; :attr:`CampaignRun.interrupted` names the signal.
+* A run lost with its worker or its scheduler (:meth:`Backend.is_lost`): nothing is saved for
+  it (it is not a result); it is retried on a restarted backend (:meth:`Backend.restart`) while
+  a round of retries saves rows; :attr:`CampaignRun.lost` counts those left.
+* A failed write (full disk, read-only folder): :class:`~qprr.campaign.store.ResultsWriteError`
+  is raised after the workers are stopped; no run is started after it.
+
+Running the same specification to the same file again resumes: only the missing runs (and the
+rows of status ``error``) are submitted.
 """
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..charts import as_int, as_name
@@ -79,7 +90,14 @@ class Progress:
 
 @dataclass
 class CampaignRun:
-    """What :func:`run_campaign` did: the results file, the runs executed now, failures, wall time, the table."""
+    """What :func:`run_campaign` did.
+
+    ``executed``: rows saved now; ``skipped``: runs already saved before; ``failed``: rows saved
+    now whose status is not ``ok``; ``lost``: runs lost with their worker or scheduler (not
+    saved); ``backend``: its name ("local", "dask", "inline"); ``where``: what ran the runs (e.g.
+    "dask (scheduler tcp://..., 4 workers)"); ``interrupted``: "" or the signal that stopped the
+    campaign ("SIGINT", "SIGTERM"); ``remaining``: runs of the specification not saved.
+    """
 
     path: Path
     executed: int
@@ -88,7 +106,10 @@ class CampaignRun:
     wall_time: float
     backend: str
     results: Results
-    interrupted: bool = False
+    interrupted: str = ""
+    lost: int = 0
+    where: str = ""
+    remaining: int = 0
 
     @property
     def runs_per_second(self) -> float:
@@ -99,6 +120,91 @@ def columns_of(spec: CampaignSpec, names) -> tuple[str, ...]:
     return ("run", "seed", *param_columns(spec), *metric_columns(spec.metrics, names, spec.extras))
 
 
+def kinds_of(spec: CampaignSpec, names) -> dict[str, str]:
+    """The kind of every column (:data:`qprr.campaign.store.KINDS`): what a row is validated against."""
+    kinds = {"run": "run", "seed": "int", **{c: "text" for c in param_columns(spec)}}
+    for c in metric_columns(spec.metrics, names, spec.extras):
+        kinds[c] = {"status": "status", "reason": "text", "success": "flag"}.get(c, "float")
+    return kinds
+
+
+def check_success(spec: CampaignSpec, names) -> None:
+    """Refuse ``[success]`` bounds on columns that are no metric of the campaign (the specification refuses the bounds no
+    run can meet, :data:`~qprr.campaign.spec.NONNEGATIVE`)."""
+    if not isinstance(spec, CampaignSpec):
+        raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
+    metrics = metric_columns(spec.metrics, names, spec.extras)
+    allowed = [m for m in metrics if m not in ("status", "reason", "success")]
+    for k in spec.success:
+        if k not in allowed:
+            raise UnknownNameError("metric of [success]", k, allowed)
+
+
+class _Stop(KeyboardInterrupt):
+    """SIGTERM, raised in the main thread like Ctrl-C's KeyboardInterrupt."""
+
+
+class _Signals:
+    """SIGTERM handled like SIGINT while a campaign runs (main thread only); a second signal is ignored."""
+
+    def __init__(self) -> None:
+        self.previous = None
+        self.fired = False
+
+    def _handle(self, signum, frame) -> None:
+        if not self.fired:
+            self.fired = True
+            raise _Stop("SIGTERM")
+
+    def __enter__(self) -> _Signals:
+        if threading.current_thread() is threading.main_thread():
+            self.previous = signal.signal(signal.SIGTERM, self._handle)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.previous is not None:
+            signal.signal(signal.SIGTERM, self.previous)
+
+
+@dataclass
+class _Tally:
+    skipped: int = 0
+    executed: int = 0
+    failed: int = 0
+    lost: list = field(default_factory=list)
+    lost_reason: str = ""
+    interrupted: str = ""
+
+
+def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: Progress, tally: _Tally) -> None:
+    """Save each row as its future completes, then release the future; lost runs are counted, not saved."""
+    for fut in be.as_completed(list(runs)):
+        run = runs.pop(fut)
+        try:
+            row = fut.result()
+        except Exception as exc:
+            if be.is_lost(exc):  # the worker or the scheduler went away: not a result of the run
+                tally.lost.append(run)
+                tally.lost_reason = tally.lost_reason or f"{type(exc).__name__}: {exc}".strip().splitlines()[0]
+                continue
+            row = nan_row(spec, names, run, "error", f"{type(exc).__name__}: {exc}")  # the task could not run
+        store.append(row)
+        tally.executed += 1
+        tally.failed += row["status"] != "ok"
+        bar.update(str(row["status"]))
+
+
+def _stop_backend(be: Backend | None, own: bool, runs: dict, clean: bool) -> None:
+    """Release the workers: normally (``clean``) or at once (pending futures cancelled, running tasks stopped)."""
+    if be is None:
+        return
+    if not clean:
+        for fut in runs:
+            fut.cancel()
+    if own:
+        be.close() if clean else be.abort()
+
+
 def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backend = "local", workers: int | None = None,
                  scheduler: str | None = None, fresh: bool = False, limit: int | None = None, progress: bool = True,
                  stream=None) -> CampaignRun:
@@ -107,7 +213,10 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     ``backend``: "local" (process pool, default), "dask" (``scheduler`` address or a
     LocalCluster of ``workers``), "inline", or a :class:`Backend` instance (not closed here).
     ``fresh``: discard existing results.  ``limit``: run at most this many of the missing runs
-    (the first ones by index).  Returns a :class:`CampaignRun`.
+    (the first ones by index).  Returns a :class:`CampaignRun`; raises
+    :class:`~qprr.campaign.store.ResultsWriteError` when a row cannot be written (the workers
+    stopped first, the rows saved before kept) and :class:`~qprr.campaign.store.ResultsFileError`
+    when the existing results hold a bad row.
     """
     if not isinstance(spec, CampaignSpec):
         raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
@@ -120,55 +229,62 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
         raise InputError(f"backend must be one of {', '.join(BACKENDS)} or a Backend, got {type(backend).__name__}")
     names = xi_names_of(spec)
     columns = columns_of(spec, names)
-    for k in spec.success:
-        if k not in columns or k in ("status", "reason", "success"):
-            raise UnknownNameError("metric of [success]", k, metric_columns(spec.metrics, names, spec.extras)[2:-1])
+    check_success(spec, names)
     meta = {"name": spec.name, "fingerprint": spec.fingerprint, "spec": spec.to_dict(), "params": list(param_columns(spec)),
-            "metrics": list(metric_columns(spec.metrics, names, spec.extras)), "names": list(names), "n_runs": spec.n_runs}
+            "metrics": list(metric_columns(spec.metrics, names, spec.extras)), "names": list(names), "n_runs": spec.n_runs,
+            "kinds": kinds_of(spec, names)}
     payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts
     store = ResultStore(output, columns, meta, fresh=fresh)
     todo = [i for i in range(spec.n_runs) if i not in store.done]
     if limit is not None:
         todo = todo[:limit]
-    skipped = len(store.done)
     own = not isinstance(backend, Backend)
     t0 = time.perf_counter()
-    bar = Progress(spec.name, skipped + len(todo), skipped, enabled=progress, stream=stream)
-    executed = failed = 0
-    interrupted = False
-    be = None
+    tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
+    bar = Progress(spec.name, tally.skipped + len(todo), tally.skipped, enabled=progress, stream=stream)
+    if store.dropped and progress:
+        print(f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: "
+              f"its run is done again", file=bar.stream)
     try:
-        if todo:
-            be = make_backend(backend, workers, scheduler) if own else backend
-            if progress:
-                print(f"campaign {spec.name}: {len(todo)} runs to do ({skipped} already in {store.path}) on {be.describe()}",
-                      file=bar.stream)
-            runs = {}
-            for i in todo:
-                run = spec.run(i)
-                runs[be.submit(run_one, payload, run, key=f"qprr-{spec.fingerprint}-{i}")] = run
-            for fut in be.as_completed(runs):
-                run = runs[fut]
-                try:
-                    row = fut.result()
-                except Exception as exc:  # the worker died or the task could not run: recorded, re-run on resume
-                    row = nan_row(spec, names, run, "error", f"{type(exc).__name__}: {exc}")
-                store.append(row)
-                executed += 1
-                failed += row["status"] != "ok"
-                bar.update(str(row["status"]))
-    except KeyboardInterrupt:
-        interrupted = True
+        with _Signals():
+            try:
+                if todo:
+                    be = make_backend(backend, workers, scheduler) if own else backend
+                    if progress:
+                        print(f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
+                              file=bar.stream)
+                    pending = [spec.run(i) for i in todo]
+                    while pending:  # retried on a restarted backend while a round saves rows
+                        saved_before = tally.executed
+                        runs.update({be.submit(run_one, payload, r, key=f"qprr-{spec.fingerprint}-{r.index}"): r for r in pending})
+                        _collect(spec, names, be, runs, store, bar, tally)
+                        retry = bool(tally.lost) and tally.executed > saved_before and be.restart()
+                        pending, tally.lost = (tally.lost, []) if retry else ([], tally.lost)
+                clean = True
+            except KeyboardInterrupt as exc:
+                tally.interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
+            finally:
+                bar.close()
+                _stop_backend(be, own, runs, clean)
     finally:
         store.close()
-        bar.close()
-        if be is not None and own:
-            be.close()
-    wall = time.perf_counter() - t0
-    if interrupted and progress:
-        print(f"campaign {spec.name}: interrupted after {executed} runs; run the same command again to resume", file=bar.stream)
-    return CampaignRun(store.path, executed, skipped, failed, wall, backend if isinstance(backend, str) else backend.name,
-                       read_results(store.path), interrupted)
+    return _finish(spec, store, be, backend, tally, time.perf_counter() - t0, bar.stream if progress else None)
 
 
-__all__ = ["CampaignRun", "run_campaign"]
+def _finish(spec, store, be, backend, tally: _Tally, wall: float, stream) -> CampaignRun:
+    """The table read back, the messages of an interrupted or lossy campaign (on ``stream``, if any), the record."""
+    results = read_results(store.path)
+    saved = len({int(r) for r in results.table["run"]})
+    remaining = spec.n_runs - saved
+    if stream is not None and tally.interrupted:
+        print(f"campaign {spec.name}: stopped by {tally.interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
+              f"{store.path}; run the same command again to resume", file=stream)
+    if stream is not None and tally.lost:
+        print(f"campaign {spec.name}: {len(tally.lost)} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
+              f"run the same command again to run them", file=stream)
+    name = be.name if be is not None else backend if isinstance(backend, str) else backend.name
+    return CampaignRun(store.path, tally.executed, tally.skipped, tally.failed, wall, name, results, tally.interrupted, len(tally.lost),
+                       be.describe() if be is not None else "nothing to run", remaining)
+
+
+__all__ = ["CampaignRun", "check_success", "run_campaign"]

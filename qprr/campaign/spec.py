@@ -63,6 +63,9 @@ MODEL_PARAMS = tuple(MODEL_PREFIX + f.name for f in fields(ModelError))
 METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
 """Metric groups a specification may keep (:func:`qprr.campaign.metrics.metrics_of`); default: all."""
 
+NONNEGATIVE = ("t_end", "wall_time", "x_cm_max", "saturation", "recovery_time")
+"""Metric columns >= 0 in every run (with every ``rmse_*``): a negative ``[success]`` bound on one is met by no run."""
+
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
 
 _SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "paired", "options", "grid", "random", "metrics",
@@ -258,6 +261,10 @@ class CampaignSpec:
         if not isinstance(self.success, Mapping):
             raise InputError(f"[success] must be a table metric = upper bound, got {self.success!r}")
         object.__setattr__(self, "success", {k: _number(v, f"success bound of {k!r}") for k, v in self.success.items()})
+        for k, bound in self.success.items():
+            if bound < 0 and (k in NONNEGATIVE or k.startswith("rmse_")):
+                raise InputError(f"[success] {k} = {bound!r}: no run can meet it ({k} is >= 0 for every run, "
+                                 f"a success needs {k} <= the bound): give a bound >= 0")
         seen: dict[str, str] = {}
         for where in ("options", "grid", "random"):
             for k in getattr(self, where):

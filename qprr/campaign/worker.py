@@ -191,7 +191,7 @@ def run_one(payload: Payload, run: Run) -> dict[str, object]:
 
 
 def nan_row(spec: CampaignSpec, names, run: Run, status: str, reason: str) -> dict[str, object]:
-    """The row of a run that never reached a worker or whose worker died (``error``, re-run on resume)."""
+    """The row of a run whose task raised outside the target (``error``, re-run on resume); runs lost with a worker get none."""
     row: dict[str, object] = {"run": run.index, "seed": run.seed}
     row.update(params_row(spec, run.params))
     row.update(metrics_of(None, spec.metrics, names, spec.extras, status=status, reason=reason, wall_time=math.nan))
