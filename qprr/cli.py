@@ -331,7 +331,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default=None, help="output path (default: the packaged urdf/qprr.urdf)")
     p.set_defaults(func=_cmd_urdf)
 
-    for module in ("qprr.viz.cli", "qprr.wheeled.cli", "qprr.analysis.cli", "qprr.campaign.cli"):  # command groups of other packages
+    for module in ("qprr.viz.cli", "qprr.wheeled.cli", "qprr.analysis.cli", "qprr.campaign.cli",
+                   "qprr.design.cli"):  # command groups of other packages
         try:
             mod = __import__(module, fromlist=["register_cli"])
         except ImportError:

@@ -19,10 +19,10 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
-from ..spec.metrics import METRICS, sign
 from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design
 from ..search.optimiser import make_optimiser
 from ..search.points import fixed_params, grid_points, n_points, point, reference_points
+from ..spec.metrics import METRICS, sign
 from ..spec.parameters import PARAMETERS
 from ..spec.study import DesignSpec
 from . import campaign_io as io

@@ -6,8 +6,8 @@ import numpy as np
 import pinocchio as pin
 
 from ...analysis import balance, capacity, hover, singularity, workspace
-from ..spec.study import Effort
 from ..spec.metrics import METRICS
+from ..spec.study import Effort
 
 
 def slider_of(platform) -> str | None:

@@ -15,10 +15,10 @@ from collections.abc import Mapping
 
 from ...errors import QprrError
 from ..model.candidate import Candidate, build_candidate
+from ..spec.metrics import METRICS
 from ..spec.parameters import PARAMETERS
 from ..spec.study import DesignSpec
 from .maps import evaluate_platform
-from ..spec.metrics import METRICS
 
 ID_COLUMNS = ("run", "seed", "kind", "architecture", "name", "generation")
 """Leading columns of a design table; then the parameters (:data:`PARAMETERS`), the status, the metrics."""

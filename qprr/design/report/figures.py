@@ -5,10 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from ...nomenclature import parse
-
 from ..search.pareto import dominated
 from ..spec.metrics import METRICS, label, sign
-
 
 MARKERS = {"Q": "o", "HEX": "s", "OCT": "D"}
 """Marker of each vehicle (Table 2.3 code); the colour is the arm's joint sequence."""

@@ -29,13 +29,12 @@ import hashlib
 import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from pathlib import Path
 
 from ...charts import as_file
 from ...errors import QprrError
-from .metrics import METRICS
 from ._check import fail, integer, number, table_keys
 from .mass import MassModel
+from .metrics import METRICS
 from .parameters import Parameter, default_parameters, parse_parameter
 
 OPTIMISERS = ("pymoo", "optuna")
