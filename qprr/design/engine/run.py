@@ -96,7 +96,7 @@ class _Session:
         if todo:
             if self.be is None:
                 self.be, self.owned = io.open_backend(self.backend_arg, self.workers, self.scheduler)
-                self.bar.message(f"{len(todo)} designs to evaluate now on {self.be.describe()}")
+                self.bar.message(f"{self.bar.total - self.bar.done} designs to evaluate on {self.be.describe()}")
             io.evaluate(self.be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row,
                         lambda p, exc: _error_row(self.spec, p, exc))
         return [self.rows[p["run"]] for p in points]
