@@ -93,7 +93,6 @@ def test_grid_reproduces_the_analysis_maps(tmp_path):
         links = [LinkSpec("P", length=L, mass=m.prismatic_actuator + m.link_density * L + m.rail_density * 0.08, lower=-0.04, upper=0.04)
                  if k == "P" else LinkSpec("R", length=L, mass=m.revolute_actuator + m.link_density * L) for k, L in zip(joints, ls)]
         m_arm = sum(k.mass for k in links)
-        n_rot = 4 if name.startswith("Q") else 6
         p = qprr.build(name, links=links, body_mass=3.0 - m_arm, thrust_to_weight=2.0)
         assert math.isclose(pin.computeTotalMass(p.model), 3.0, rel_tol=1e-14)  # equal take-off mass
         assert math.isclose(sum(r.f_max for r in p.rotors), 2.0 * 3.0 * 9.81, rel_tol=1e-14)  # equal total thrust
