@@ -8,7 +8,7 @@
   :func:`qprr.design.run_design` on a local process pool of 1 and of 2 workers, each pool started
   and warmed up first (startup excluded); rounds interleaved, the best of ``--repeat`` kept.
   Prints designs per second per core and the parallel efficiency rate(2) / (2 rate(1)).
-* Time per map of one evaluation (inline): workspace, balance, hover, capacity, singularity;
+* CPU time (process time: robust to a shared machine) per map of one evaluation (inline): workspace, balance, hover, capacity, singularity;
   the share spent outside the maps (building the platform, the row) says whether batching the
   map kernels across designs could pay.
 * ``--optimisers``: pymoo's NSGA2 and Optuna's NSGAIISampler on one small study (Q-PRR, reach,
@@ -85,19 +85,19 @@ def split(args) -> None:
     evaluate_design(spec.to_dict(), warm)  # imports and first-call costs out of the way
     for arch in ("Q-PRR", "HEX-RRR"):
         t = {}
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         p = build_candidate(Candidate(arch, {**params, "reach": 0.28}), spec.mass)
-        t["build"] = time.perf_counter() - t0
+        t["build"] = time.process_time() - t0
         n = args.samples
         for name, fn, kw in (("workspace", workspace, {"variants": []}), ("balance", balance, {"slider": slider_of(p), "tol": 1e-3}),
                              ("hover", hover, {}), ("capacity", capacity, {}), ("singularity", singularity, {"task": "position"})):
-            t0 = time.perf_counter()
+            t0 = time.process_time()
             fn(p, n_samples=n, **kw)
-            t[name] = time.perf_counter() - t0
+            t[name] = time.process_time() - t0
         point = {"run": 0, "seed": 0, "kind": "grid", "architecture": arch, "name": arch, "generation": -1, "params": {**params, "reach": 0.28}}
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         evaluate_design(spec.to_dict(), point)
-        total = time.perf_counter() - t0
+        total = time.process_time() - t0
         maps = sum(v for k, v in t.items() if k != "build")
         print(f"{arch}: one evaluation {total:.3f} s = maps {maps:.3f} s (" + ", ".join(f"{k} {v:.3f}" for k, v in t.items() if k != "build")
               + f") + build {t['build']:.3f} s + other {max(total - maps - t['build'], 0.0):.3f} s")
@@ -123,9 +123,9 @@ def optimisers(args) -> None:
             pts = []
             t_opt = 0.0
             for g in range(gens):
-                t0 = time.perf_counter()
+                t0 = time.process_time()
                 X = opt.ask()
-                t_opt += time.perf_counter() - t0
+                t_opt += time.process_time() - t0
                 F = np.empty((8, 2))
                 for k, x in enumerate(X):
                     key = tuple(np.round(x, 12))
@@ -135,9 +135,9 @@ def optimisers(args) -> None:
                         cache[key] = (-row["hover_volume"], row["arm_mass"])
                     F[k] = cache[key]
                 pts.append(F)
-                t0 = time.perf_counter()
+                t0 = time.process_time()
                 opt.tell(F, -np.ones((8, 1)))
-                t_opt += time.perf_counter() - t0
+                t_opt += time.process_time() - t0
                 hv[seed, g] = hypervolume_2d(np.vstack(pts), (0.0, 0.6))
             own.append(t_opt / (8 * gens))
         m = hv.mean(axis=0)

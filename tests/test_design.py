@@ -17,11 +17,10 @@ from qprr.analysis import balance, capacity, hover, singularity, workspace
 from qprr.campaign import read_results
 from qprr.design import DesignSpec, dominated, front, front_levels, ranked, run_design
 from qprr.design.report.rank import rows_of
-from qprr.design.search.optimiser import make_optimiser
+from qprr.design.search.optimiser import INSTALL, make_optimiser
 from qprr.errors import InputError, MissingDependencyError
 from qprr.nomenclature import LinkSpec
 
-INSTALL = "pip install 'qprr[design]' (or pip install pymoo optuna)"
 SAMPLES = 400
 
 
@@ -79,6 +78,28 @@ def test_spec_round_trips_and_loads_the_examples():
 
 
 # ------------------------------------------------------------------------------ evaluation = the maps
+def hit_share(region, balanced_body, across=40) -> float:
+    """Cells of the workspace's plane (its origin and basis) hit by a balanced point over cells hit by any."""
+    ws, bal = (region.points_body - region.origin) @ region.basis.T, (balanced_body - region.origin) @ region.basis.T
+    lo = ws.min(axis=0)
+    h = np.max(ws.max(axis=0) - lo) / across
+    cells = np.unique(np.floor((ws - lo) / h), axis=0)
+    hit = np.unique(np.floor((bal - lo) / h), axis=0)
+    both = (hit[:, None, :] == cells[None, :, :]).all(axis=2).any(axis=1)
+    return both.sum() / len(cells)
+
+
+def test_balance_share_limits():
+    """A tolerance of 1 m balances everything (share 1); the share grows with the tolerance; at 1 nm only the
+    postures with the arm's CoG on z_B remain (the straight-up arm), a few cells."""
+    from qprr.design.evaluate.maps import balanced_share
+
+    p = qprr.build("Q-RR")
+    region = workspace(p, n_samples=SAMPLES, variants=[]).regions[0]
+    shares = [balanced_share(region, balance(p, slider=None, n_samples=SAMPLES, tol=t)) for t in (1e-9, 1e-3, 1e-2, 1.0)]
+    assert shares == sorted(shares) and shares[-1] == 1.0 and 0.0 < shares[0] < 0.02
+
+
 def test_grid_reproduces_the_analysis_maps(tmp_path):
     """Each row equals the maps run directly on a platform built by hand from the (2.1) name and the mass model."""
     spec = DesignSpec.from_mapping(tiny())
@@ -99,9 +120,10 @@ def test_grid_reproduces_the_analysis_maps(tmp_path):
         r = rows[name]
         seed = int(r["seed"])
         slider = "joint1" if joints[0] == "P" else None
-        assert r["hover_volume"] == workspace(p, n_samples=SAMPLES, variants=[], n_shifts=4, seed=seed).regions[0].hover_volume.measure
+        ws = workspace(p, n_samples=SAMPLES, variants=[], n_shifts=4, seed=seed)
+        assert r["hover_volume"] == ws.regions[0].hover_volume.measure
         b = balance(p, slider=slider, n_samples=SAMPLES, tol=1e-3)
-        assert r["balance_fraction"] == (b.fraction_workspace.value if b.fraction_workspace is not None else 0.0)
+        assert r["balance_fraction"] == hit_share(ws.regions[0], b.ee_body[b.balanced])
         assert r["thrust_margin"] == hover(p, n_samples=SAMPLES).min_thrust_margin[0]
         c = capacity(p, n_samples=SAMPLES)
         far = np.hypot(c.ee_body[:, 0], c.ee_body[:, 1]) >= 0.15
@@ -190,12 +212,12 @@ def test_missing_optimiser_raises_with_the_install_command(monkeypatch):
         monkeypatch.setitem(sys.modules, mod, None)
         with pytest.raises(MissingDependencyError) as err:
             make_optimiser(name, [0.0], [1.0], 2, 1, 4, 0)
-        assert "pip install" in str(err.value) and "qprr[design]" in str(err.value)
+        assert INSTALL[name] in str(err.value) and "pip install" in INSTALL[name]
 
 
 @pytest.mark.parametrize("engine", ["pymoo", "optuna"])
 def test_nsga2_is_seeded_resumable_and_feasible(engine, tmp_path):
-    pytest.importorskip(engine, reason=f"{engine} is not installed: {INSTALL}")
+    pytest.importorskip(engine, reason=f"{engine} is not installed: {INSTALL[engine]}")
     spec = DesignSpec.from_mapping(tiny(architectures=["Q-PRR"], parameters={"reach": {"low": 0.15, "high": 0.4}, "total_mass": 3.0},
                                         search={"method": "nsga2", "optimiser": engine, "population": 4, "generations": 2},
                                         constraints={"arm_mass": {"max": 0.36}}))

@@ -5,7 +5,8 @@ Two engines behind one interface (:class:`Optimiser`): pymoo's ``NSGA2`` (defaul
 evaluated in parallel elsewhere, and told back in the order asked, so that a seeded study gives
 the same designs whatever the backend, the number of workers or the order evaluations finish.
 Constraints are told as violations (<= 0 feasible); a failed evaluation is told as infeasible with
-the worst objective values.  Both packages are optional (extra ``qprr[design]``).
+the worst objective values.  Both packages are optional: pymoo is the extra ``qprr[design]`` (chosen by
+measurement, docs/design.md), Optuna is installed apart (``pip install optuna``).
 """
 
 from __future__ import annotations
@@ -17,7 +18,8 @@ import numpy as np
 
 from ...errors import InputError, MissingDependencyError
 
-INSTALL = "pip install 'qprr[design]' (or pip install pymoo optuna)"
+INSTALL = {"pymoo": "pip install 'qprr[design]' (or pip install pymoo)", "optuna": "pip install optuna"}
+"""Install command of each engine: pymoo is the ``design`` extra (docs/design.md says why), Optuna the alternative."""
 
 
 class Optimiser(ABC):
@@ -47,7 +49,7 @@ class PymooNSGA2(Optimiser):
             from pymoo.core.problem import Problem
             from pymoo.problems.static import StaticProblem
         except ImportError as exc:
-            raise MissingDependencyError("pymoo", "the NSGA-II design search (search.optimiser = \"pymoo\")", INSTALL) from exc
+            raise MissingDependencyError("pymoo", "the NSGA-II design search (search.optimiser = \"pymoo\")", INSTALL["pymoo"]) from exc
         self._static, self._evaluator = StaticProblem, Evaluator
         self._problem = Problem(n_var=len(self.low), n_obj=n_obj, n_ieq_constr=max(n_constr, 1), xl=self.low, xu=self.high)
         self._alg = NSGA2(pop_size=population)
@@ -72,7 +74,7 @@ class OptunaNSGA2(Optimiser):
         try:
             import optuna
         except ImportError as exc:
-            raise MissingDependencyError("optuna", "the NSGA-II design search (search.optimiser = \"optuna\")", INSTALL) from exc
+            raise MissingDependencyError("optuna", "the NSGA-II design search (search.optimiser = \"optuna\")", INSTALL["optuna"]) from exc
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         cons = _violations if n_constr else None
         with warnings.catch_warnings():

@@ -5,9 +5,11 @@ name                        unit    better     map (qprr.analysis) and what is t
 ==========================  ======  =========  ==================================================================
 ``hover_volume``            m^3     max        :func:`~qprr.analysis.workspace`: volume swept under hover, yaw
                                                free (W_eb of Thesis (3.3))
-``balance_fraction``        --      max        :func:`~qprr.analysis.balance`: share of the workspace (in B)
-                                               reachable with the CoG within ``balance_tol`` of the thrust axis
-                                               (Thesis (3.79); with a slider, the slider position r* of (6.33))
+``balance_fraction``        --      max        :func:`~qprr.analysis.balance`: share of the workspace cells (in
+                                               B) reached by a configuration with the CoG within ``balance_tol``
+                                               of the thrust axis (Thesis (3.79); with a slider, at the slider
+                                               position r* of (6.33));
+                                               :func:`~qprr.design.evaluate.maps.balanced_share`
 ``thrust_margin``           N       max        :func:`~qprr.analysis.hover`: smallest thrust margin over the
                                                joint grid, no payload
 ``payload_at_reach``        kg      max        :func:`~qprr.analysis.capacity`: largest payload held with the
