@@ -2,8 +2,10 @@
 
 Run indices: the references first (0..R-1), then the grid in C order (architecture slowest, then
 the swept parameters in :data:`~qprr.design.spec.PARAMETERS` order); with NSGA-II, architecture
-``a`` generation ``g`` member ``k`` is run ``R + (a * generations + g) * population + k``.  The seed
-of run i is drawn from ``SeedSequence(seed, spawn_key=(i,))``: the table depends on the study only.
+``a`` generation ``g`` member ``k`` is run ``R + (a * generations + g) * population + k``.  Every design is measured with the same seed,
+drawn from ``SeedSequence(seed)`` (the workspace estimator's counting-grid shifts): common random
+numbers, so that two designs differ by their geometry, never by the shifts (two identical
+geometries give identical numbers).  The table depends on the study only.
 """
 
 from __future__ import annotations
@@ -18,14 +20,15 @@ REFERENCE_NAMES = {"q-prr": "Q-PRR (thesis)"}
 """The (2.1) name of each stored platform a study may evaluate as a reference."""
 
 
-def run_seed(spec: DesignSpec, index: int) -> int:
-    return int(np.random.SeedSequence(spec.seed, spawn_key=(index,)).generate_state(1)[0])
+def run_seed(spec: DesignSpec) -> int:
+    """The measurement seed of every design of ``spec`` (common random numbers, module docstring)."""
+    return int(np.random.SeedSequence(spec.seed).generate_state(1)[0])
 
 
 def point(spec: DesignSpec, index: int, kind: str, architecture: str, params: dict, generation: int = -1) -> dict:
     """A design point as plain data (the task's argument)."""
     name = REFERENCE_NAMES[architecture] if kind == "reference" else architecture
-    return {"run": index, "seed": run_seed(spec, index), "kind": kind, "architecture": architecture, "name": name,
+    return {"run": index, "seed": run_seed(spec), "kind": kind, "architecture": architecture, "name": name,
             "generation": generation, "params": dict(params)}
 
 
