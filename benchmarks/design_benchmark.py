@@ -11,6 +11,9 @@
 * CPU time (process time: robust to a shared machine) per map of one evaluation (inline): workspace, balance, hover, capacity, singularity;
   the share spent outside the maps (building the platform, the row) says whether batching the
   map kernels across designs could pay.
+* The fixed part of an evaluation: CPU time at n/4, n and 4n samples per map, fitted by a + b n;
+  a (per design, whatever the samples) is all that evaluating several designs in one batch of
+  map kernels could save; b n is the map kernels' batched numpy work.
 * ``--optimisers``: pymoo's NSGA2 and Optuna's NSGAIISampler on one small study (Q-PRR, reach,
   taper and slider stroke free; objectives hover volume (max) and arm mass (min); population 8,
   ``--generations`` (8), seeds 0..``--seeds`` - 1 (5)): the exact 2-D hypervolume of the feasible front after each
@@ -103,6 +106,30 @@ def split(args) -> None:
               + f") + build {t['build']:.3f} s + other {max(total - maps - t['build'], 0.0):.3f} s")
 
 
+def fixed_cost(args) -> None:
+    """t(n) = a + b n fitted over n/4, n, 4n samples per map: a is what batching designs together could save."""
+    from qprr.design.search.points import fixed_params
+
+    spec = study(8, args.samples)
+    params = fixed_params(spec)
+    ns = [args.samples // 4, args.samples, 4 * args.samples]
+    for arch in ("Q-PRR", "HEX-RRR"):
+        ts = []
+        for n in ns:
+            sp = DesignSpec.from_mapping({**spec.to_dict(), "effort": {**spec.to_dict()["effort"], "samples": n}})
+            point = {"run": 0, "seed": 0, "kind": "grid", "architecture": arch, "name": arch, "generation": -1, "params": {**params, "reach": 0.28}}
+            best = np.inf
+            for _ in range(2):
+                t0 = time.process_time()
+                evaluate_design(sp.to_dict(), point)
+                best = min(best, time.process_time() - t0)
+            ts.append(best)
+        b, a = np.polyfit(ns, ts, 1)
+        print(f"{arch}: CPU time per evaluation at {ns} samples: " + ", ".join(f"{t:.3f}" for t in ts)
+              + f" s; fixed part {a:.3f} s = {100 * a / (a + b * args.samples):.0f} % at {args.samples} samples "
+              f"(the most batching designs together could save)")
+
+
 def optimisers(args) -> None:
     base = {"name": "opt", "architectures": ["Q-PRR"], "objectives": ["hover_volume", "arm_mass"], "effort": {"samples": 2000},
             "parameters": {"reach": {"low": 0.15, "high": 0.45}, "taper": {"low": 0.3, "high": 1.5},
@@ -158,6 +185,7 @@ def main() -> int:
     args = ap.parse_args()
     print(f"load average before: {os.getloadavg()}")
     split(args)
+    fixed_cost(args)
     if not args.no_throughput:
         throughput(args)
     if args.optimisers:

@@ -17,8 +17,7 @@ class Progress:
         self.name, self.total, self.start, self.done, self.failed = name, total, done, done, 0
         self.enabled = enabled
         self.stream = sys.stderr if stream is None else stream
-        isatty = getattr(self.stream, "isatty", None)
-        self.tty = bool(isatty()) if callable(isatty) else False
+        self.tty = bool(self.stream.isatty())  # every io stream has isatty (a StringIO: False)
         self.t0 = self._last = time.perf_counter()
         self._last_frac = done / total if total else 1.0
 

@@ -147,7 +147,7 @@ def run_design(spec: DesignSpec, output, *, backend="local", workers: int | None
     done: dict[int, dict] = {}
     if store.rows_before:
         t = io.read_table(store.path).table
-        done = {int(r["run"]): {k: r[k].item() if hasattr(r[k], "item") else r[k] for k in t.dtype.names} for r in t}
+        done = {int(r["run"]): {k: r[k].item() for k in t.dtype.names} for r in t}
     total = n_points(spec)
     skipped = sum(1 for r in done.values() if r["status"] != "error")
     bar = Progress(spec.name, total, skipped, enabled=progress, stream=stream)
