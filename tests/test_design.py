@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 import math
 import sys
 
@@ -232,6 +233,17 @@ def test_nsga2_is_seeded_resumable_and_feasible(engine, tmp_path):
     again = run_design(spec, tmp_path / "b.csv", backend="inline", progress=False)
     assert (again.skipped, again.executed) == (5, 3)
     same_table(tmp_path / "a.csv", tmp_path / "b.csv")
+
+
+def test_progress_lines_in_a_log(tmp_path):
+    """Not a terminal: plain lines (no carriage return), the last one at 100 %."""
+    log = io.StringIO()
+    spec = DesignSpec.from_mapping(tiny(architectures=["Q-RR", "Q-RRR"], effort={"samples": 100}))
+    with pytest.raises(InputError):  # the output's folder does not exist: refused before any design
+        run_design(spec, "/nonexistent/dir/t.csv", backend="inline", stream=log)
+    run_design(spec, tmp_path / "t.csv", backend="inline", stream=log)
+    text = log.getvalue()
+    assert "\r" not in text and "2 designs to evaluate on inline" in text and "design tiny: 2/2 designs, 0 failed" in text
 
 
 # ------------------------------------------------------------------------------ command line and report

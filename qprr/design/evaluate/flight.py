@@ -17,14 +17,14 @@ from ...errors import QprrError
 from ...scenarios import SCENARIOS
 from ..model.candidate import Candidate, build_candidate
 from ..spec.parameters import PARAMETERS
-from ..spec.study import DesignSpec
+from .task import study_of
 
 FLIGHT_COLUMNS = ("status", "reason", "rmse_position", "x_cm_max", "saturation", "t_end")
 
 
 def fly_design(spec_dict: dict, row: dict) -> dict:
     """Fly the design of table row ``row`` (``run``, ``kind``, ``architecture``, the parameters); returns the flight metrics."""
-    spec = DesignSpec.from_mapping(spec_dict)
+    spec = study_of(spec_dict)
     cl = spec.closed_loop
     out = {"run": row["run"], "name": row["name"], **dict.fromkeys(FLIGHT_COLUMNS, math.nan)}
     try:

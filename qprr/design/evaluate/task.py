@@ -9,6 +9,7 @@ exception: a bug, recorded and re-run on resume), never a lost evaluation.
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from collections.abc import Mapping
@@ -49,9 +50,23 @@ def _platform(spec: DesignSpec, point: Mapping):
     return build_candidate(Candidate(point["architecture"], point["params"]), spec.mass)
 
 
+_SPECS: dict[str, DesignSpec] = {}
+"""This process's validated study, keyed by its JSON text (validated once per worker, not once per design)."""
+
+
+def study_of(spec_dict: dict) -> DesignSpec:
+    """The :class:`DesignSpec` of a task's plain-data study (cached in this process)."""
+    key = json.dumps(spec_dict, sort_keys=True)
+    spec = _SPECS.get(key)
+    if spec is None:
+        _SPECS.clear()
+        spec = _SPECS[key] = DesignSpec.from_mapping(spec_dict)
+    return spec
+
+
 def evaluate_design(spec_dict: dict, point: dict) -> dict:
     """The row of one design ``point`` (``run``, ``seed``, ``kind``, ``architecture``, ``name``, ``generation``, ``params``)."""
-    spec = DesignSpec.from_mapping(spec_dict)
+    spec = study_of(spec_dict)
     t0 = time.perf_counter()
     status, reason = "ok", ""
     values = dict.fromkeys(METRICS, math.nan)
