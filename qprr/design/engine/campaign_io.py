@@ -2,7 +2,8 @@
 
 Backends (:func:`qprr.campaign.make_backend`: local process pool, Dask, inline), the results
 store (:class:`qprr.campaign.store.ResultStore`: CSV/Parquet appended as rows arrive, fingerprint
-checked on resume, a lock per file) and the reader (:func:`qprr.campaign.read_results`).  If the
+checked on resume, a lock per file), the reader (:func:`qprr.campaign.read_results`) and the flight
+metrics (:func:`qprr.campaign.metrics_of`) of the closed-loop check.  If the
 campaign package changes these, only this module changes.
 """
 
@@ -11,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
-from ...campaign import BACKENDS, Backend, Results, make_backend, read_results
+from ...campaign import BACKENDS, Backend, Results, make_backend, metrics_of, read_results
 from ...campaign.store import ResultStore
 
 
@@ -49,4 +50,4 @@ def evaluate(backend: Backend, fn: Callable, spec_dict: dict, points: Iterable[d
         on_row(row)
 
 
-__all__ = ["BACKENDS", "Backend", "Results", "close_backend", "evaluate", "open_backend", "open_store", "read_table"]
+__all__ = ["BACKENDS", "Backend", "Results", "close_backend", "evaluate", "metrics_of", "open_backend", "open_store", "read_table"]

@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import math
 
-from ...campaign import metrics_of
 from ...errors import QprrError
 from ...scenarios import SCENARIOS
+from ..engine.campaign_io import metrics_of
 from ..model.candidate import Candidate, build_candidate
 from ..spec.parameters import PARAMETERS
 from .task import study_of
