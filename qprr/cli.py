@@ -18,6 +18,7 @@ from pathlib import Path
 from .analysis import cli as analysis_cli
 from .campaign import cli as campaign_cli
 from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
+from .design import cli as design_cli
 from .errors import QprrError
 from .registry import CHECKS, COMMANDS, COMPARISONS
 from .version import __version__
@@ -218,7 +219,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
         register_cli(sub)
-    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli):  # they import their optional packages when a command runs
+    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli, design_cli):  # optional packages load when a command runs
         group.register_cli(sub)
     return parser
 
