@@ -68,6 +68,16 @@ def _spd_solve(H: np.ndarray, b: np.ndarray) -> np.ndarray | None:
     return x if info == 0 and bool(np.isfinite(x).all()) else None
 
 
+def _within(Cz: np.ndarray, lo: np.ndarray, up: np.ndarray) -> bool:
+    """lo <= Cz <= up within 1e-10 of the bound scale (1 + the largest finite |bound|)."""
+    if not Cz.size:
+        return True
+    big = max(-float(lo.min()), float(up.max()), float(lo.max()), -float(up.min()))
+    scale = 1.0 + (big if big < np.inf else _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up)))
+    ftol = 1e-10 * scale
+    return float((Cz - lo).min()) >= -ftol and float((up - Cz).min()) >= -ftol
+
+
 def null_space(B: np.ndarray, tol: float) -> np.ndarray:
     """Orthonormal basis (columns) of the kernel of B; singular values <= ``tol`` count as zero."""
     s, Vt = right_singular(B)
@@ -125,13 +135,17 @@ class QPSettings:
 
 @dataclass(frozen=True)
 class LexResult:
-    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k||; ``iterations`` ProxQP iterations summed over levels;
-    ``x_levels[k]`` the solution after level k (the optimum of levels 1..k)."""
+    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k|| (computed when asked); ``iterations`` ProxQP iterations
+    summed over levels; ``x_levels[k]`` the solution after level k (the optimum of levels 1..k)."""
 
     x: np.ndarray
-    residuals: tuple[float, ...]
+    levels: tuple
     iterations: int
     x_levels: tuple = ()
+
+    @property
+    def residuals(self) -> tuple[float, ...]:
+        return tuple(float(np.linalg.norm(A @ self.x - b)) for A, b in self.levels)
 
 
 class Lexicographic:
@@ -244,25 +258,21 @@ class Lexicographic:
         infeasibility test fire on a feasible problem (observed on the 11-DOF hextilt_flying_arm_5).
         """
         m = H.shape[0]
+        if self.active_set_first and self._active.get(level) is None:
+            z = _spd_solve(H, -g)  # the usual case: no bound active, one Cholesky solve
+            if z is not None and _within(C @ z, lo, up):
+                return z, 0
         keep = np.abs(C).max(axis=1) > 1e-12 * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
         if not keep.all():
             C, lo, up = C[keep], lo[keep], up[keep]
         if self.active_set_first:
             guess = self._active.get(level)
             nc = C.shape[0]
-            if guess is None or not (guess[0].any() or guess[1].any()):
-                z = _spd_solve(H, -g)  # the usual case: no bound active, one Cholesky solve
-                if z is not None:
-                    Cz = C @ z
-                    ftol = 1e-10 * _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
-                    if bool(np.all(Cz >= lo - ftol)) and bool(np.all(Cz <= up + ftol)):
-                        self._active[level] = (np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
-                        return z, 0
             at_lo, at_up = (guess[0].copy(), guess[1].copy()) if guess is not None and guess[0].shape[0] == nc else (
                 np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
             out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
             if out is not None:
-                self._active[level] = (out[1], out[2])
+                self._active[level] = (out[1], out[2]) if (out[1].any() or out[2].any()) else None
                 return out[0], 0
         qp, fresh = self._qp(m, C.shape[0])
         if fresh:
@@ -358,8 +368,7 @@ class Lexicographic:
             if k < len(levels) - 1:
                 N = null_space(B, tol)
                 Z = N if Z is None else Z @ N
-        residuals = tuple(float(np.linalg.norm(A @ x - b)) for A, b in levels)
-        return LexResult(x, residuals, iters, tuple(x_levels))
+        return LexResult(x, tuple(levels), iters, tuple(x_levels))
 
 
 def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, z: np.ndarray,

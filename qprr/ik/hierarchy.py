@@ -24,6 +24,9 @@ from ..optim import Lexicographic, QPSettings
 from ..platform import Platform, check_platform
 from .tasks.base import check_linearized
 
+MET = 1e-14
+"""A level whose error entries are all below MET (m, rad: the rounding of forward kinematics near the origin) is met."""
+
 
 @dataclass(frozen=True)
 class HierarchyStep:
@@ -121,6 +124,11 @@ class HierarchySolver:
                 for tasks in levels:  # name the task
                     for t in tasks:
                         check_linearized(t, t.linearize(platform, data, q), nv)
+        if all(float(np.abs(e).max(initial=0.0)) <= MET for _, e in lin):
+            # every level met to rounding: dv = 0 is each level's optimum (zero objective, the regularisation pulls to
+            # 0 and 0 is inside the joint bounds); a solve would return a step of rounding size (|dv| < 1e-11)
+            dv = np.zeros(nv)
+            return HierarchyStep(dv, lin, 0, (dv,) * len(lin), (0.0,) * len(lin))
         q_arm = q[self.iq]
         lo_arm = self.lower - q_arm
         up_arm = self.upper - q_arm
@@ -130,7 +138,7 @@ class HierarchySolver:
         # hextilt_flying_arm_5); it fades as the task is met.  c = 0.1 (``lower_damping``): with c = 1 an
         # unsatisfiable posture level kept its damping and converged linearly (Q-PRR cold starts: 6 Newton iterations
         # median, 23 at worst, against 5 and 7 with 0.1; c = 0 cycles on the hextilt's position-only targets).
-        damping = [0.0] + [self.lower_damping * float(np.linalg.norm(J.T @ e)) for J, e in lin[1:]]
+        damping = [0.0] + [self.lower_damping * math.sqrt(float(g @ g)) for g in (J.T @ e for J, e in lin[1:])]
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
         return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping))
 

@@ -250,14 +250,22 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         if not np.all(np.isfinite(p)):
             raise NonFiniteError(f"target must be finite, got p = {p.tolist()}")
         return p, None
-    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(R))):
+    px, py, pz = p.tolist()
+    if not (math.isfinite(px + py + pz) and math.isfinite(sum(R.ravel().tolist()))):
         raise NonFiniteError(f"target must be finite, got p = {p.tolist()}, R = {R.tolist()}")
-    dev = float(np.abs(R.T @ R - np.eye(3)).max())
-    det = float(np.linalg.det(R))
-    if dev > 1e-9 or det < 0.0:
-        raise InputError(f"target rotation must be a rotation matrix (R^T R = I within 1e-9, det = +1); "
-                         f"max |R^T R - I| = {dev:.3g}, det = {det:.3g}")
+    dev = _rotation_deviation(R)
+    if not dev <= 1e-9:
+        raise InputError(f"target rotation must be a rotation matrix (R^T R = I and det = +1 within 1e-9); deviation {dev:.3g}, "
+                         f"det = {float(np.linalg.det(R)):.3g}")
     return p, R
+
+
+def _rotation_deviation(R: np.ndarray) -> float:
+    """How far R is from a rotation: the sum of |unit norm - 1| of its first two columns, |their dot product| and
+    |third column - first x second| (0 for a rotation; any of R^T R != I or det R != +1 shows; NaN propagates)."""
+    (A, B, C), (D, E, F), (G, H, I) = R.tolist()
+    return (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
+            + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))
 
 
 def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[float, float]:
@@ -281,9 +289,7 @@ def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[fl
         return pos, 0.0
     (a, b, c), (d, e, f), (g, h, i) = M.rotation.tolist()
     (A, B, C), (D, E, F), (G, H, I) = R_d.tolist()
-    # R_d a rotation: unit orthogonal columns (R_d^T R_d = I), right-handed (third column = first x second)
-    dev = (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
-           + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))  # a sum: NaN propagates
+    dev = _rotation_deviation(R_d)  # R_d a rotation: unit orthogonal columns, right-handed
     if not dev < 1e-9:
         raise InputError(f"R_d must be a rotation matrix (R^T R = I, det = +1): deviation {dev:.3g}")
     n21_12 = (C * b + F * e + I * h) - (B * c + E * f + H * i)
@@ -604,6 +610,11 @@ def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 
     q_arm_posture = platform.check_arm_limits(q_arm_posture, "q_arm_posture")
     if not isinstance(target, pin.SE3):
         target = as_vector(target, 3, "target")
+    return _levels(platform, target, q_arm_posture, base_yaw)
+
+
+def _levels(platform: Platform, target, q_arm_posture: np.ndarray, base_yaw: float) -> list[list[Task]]:
+    """:func:`default_levels` of inputs already checked (the IK's entry point did)."""
     if isinstance(target, pin.SE3):
         first = PoseTask(platform, target)
     else:
@@ -672,7 +683,7 @@ class IKSolver:
         q = ch.xi_to_q(xi)
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-        levels = opts.levels if opts.levels is not None else default_levels(platform, target, posture, float(xi[5]))
+        levels = opts.levels if opts.levels is not None else _levels(platform, target, posture, float(xi[5]))
         self._engine.reset()
         it, step, end = 0, None, Ending("max_iterations")
         shaper = _StepShaper(opts)
@@ -682,7 +693,7 @@ class IKSolver:
                 pos_err, rot_err = pose_errors(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
                 it += 1
-                step = self._engine.solve(platform, data, q, levels, validate=it == 1)
+                step = self._engine.solve(platform, data, q, levels, validate=it == 1 and opts.levels is not None)
                 dv, stop = shaper.shape(step, pose_ok)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
