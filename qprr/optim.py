@@ -423,29 +423,32 @@ def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarra
     """
     n = H.shape[0]
     n_eq = 0 if Aeq is None else Aeq.shape[0]
-    fin_lo, fin_up = np.isfinite(lo), np.isfinite(up)
-    at_lo, at_up = at_lo & fin_lo, at_up & fin_up & ~at_lo
-    scale = _bound_scale(lo, up, fin_lo, fin_up)
+    at_lo = at_lo & np.isfinite(lo)
+    at_up = at_up & np.isfinite(up) & ~at_lo
+    scale = _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
     ftol = 1e-10 * scale  # bounds nearly implied by the equalities make K ill-conditioned (cond 1e11 seen)
     gscale0 = 1.0 + float(np.abs(g).max(initial=0.0))
     hmax = float(np.abs(H).max(initial=0.0))
+    bound = np.where(at_lo, lo, up)
     seen: set[bytes] = set()
     for _ in range(2 * C.shape[0] + 2):
-        key = np.concatenate([at_lo, at_up]).tobytes()
+        at = at_lo | at_up
+        key = at_lo.tobytes() + at_up.tobytes()
         cycling = key in seen  # a degenerate vertex: a bound with a ~0 multiplier is dropped and re-added
         seen.add(key)
-        il, iu = np.flatnonzero(at_lo), np.flatnonzero(at_up)
-        k = il.size + iu.size + n_eq
+        idx = np.flatnonzero(at)
+        k = idx.size + n_eq
         if k == 0:
-            A, b = np.zeros((0, n)), np.zeros(0)
-            try:
-                zp = np.linalg.solve(H, -g)
-            except np.linalg.LinAlgError:
+            A = np.zeros((0, n))
+            zp = _spd_solve(H, -g)
+            if zp is None:
                 zp = np.linalg.lstsq(H, -g, rcond=1e-13)[0]
             mu = np.zeros(0)
+            res_x = H @ zp + g
+            res_b = np.zeros(0)
         else:
-            A = np.vstack([C[il], C[iu]] + ([Aeq] if n_eq else []))
-            b = np.concatenate([lo[il], up[iu]] + ([beq] if n_eq else []))
+            A = C[idx] if not n_eq else np.vstack([C[idx], Aeq])
+            b = bound[idx] if not n_eq else np.concatenate([bound[idx], beq])
             K = np.zeros((n + k, n + k))
             K[:n, :n] = H
             K[:n, n:] = A.T
@@ -456,26 +459,26 @@ def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarra
             except np.linalg.LinAlgError:  # dependent active bounds, or a flat direction left free: minimum norm
                 sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
             zp, mu = sol[:n], -sol[n:]  # H zp + g = A^T mu; mu >= 0 on lower bounds, <= 0 on upper ones
+            r = K @ sol - rhs
+            res_x, res_b = r[:n], r[n:]
         gscale = gscale0 + hmax * (1.0 + float(np.abs(zp).max(initial=0.0)))
-        if (float(np.abs(H @ zp + g - A.T @ mu).max(initial=0.0)) > 1e-10 * gscale
-                or float(np.abs(A @ zp - b).max(initial=0.0)) > ftol):
+        if float(np.abs(res_x).max(initial=0.0)) > 1e-10 * gscale or float(np.abs(res_b).max(initial=0.0)) > ftol:
             return None  # not solved accurately
-        wrong = np.concatenate([-mu[: il.size], mu[il.size: il.size + iu.size]])  # > 0: the bound pulls the wrong way
+        # > 0: the bound pulls the wrong way (a lower bound's multiplier must be >= 0, an upper one's <= 0)
+        wrong = np.where(at_lo[idx], -mu[: idx.size], mu[: idx.size])
         Czp = C @ zp
-        viol_lo = fin_lo & (lo - Czp > ftol)
-        viol_up = fin_up & (Czp - up > ftol)
+        viol_lo = lo - Czp > ftol  # (an infinite bound is never violated)
+        viol_up = (Czp - up > ftol) & ~viol_lo
         release = wrong > (1e-9 if cycling else 1e-12) * gscale
-        if not release.any() and not viol_lo.any() and not viol_up.any():
+        any_release = bool(release.any())
+        if not any_release and not viol_lo.any() and not viol_up.any():
             return zp, at_lo, at_up
-        if release.any():  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
-            j = int(np.argmax(wrong))
-            if j < il.size:
-                at_lo[il[j]] = False
-            else:
-                at_up[iu[j - il.size]] = False
+        if any_release:  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
+            i = idx[int(np.argmax(wrong))]
+            at_lo[i] = at_up[i] = False
         elif not cycling:  # add every violated bound
             at_lo |= viol_lo
-            at_up |= viol_up & ~at_lo
+            at_up |= viol_up
         else:  # add the most violated one only
             gap = np.maximum(np.where(viol_lo, lo - Czp, -np.inf), np.where(viol_up, Czp - up, -np.inf))
             i = int(np.argmax(gap))
@@ -483,6 +486,7 @@ def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarra
                 at_lo[i] = True
             else:
                 at_up[i] = True
+        bound = np.where(at_lo, lo, up)
     return None
 
 

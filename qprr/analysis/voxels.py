@@ -39,6 +39,7 @@ revolution (Pappus).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -173,6 +174,25 @@ class Zonotopes:
     def size(self) -> int:
         return int(self.centre.shape[0])
 
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lowest, highest) corner of the union of the bounding boxes (d,), computed once for every shift's count."""
+        lo = np.array([float((self.centre[:, k] - self.half[:, k]).min()) for k in range(self.centre.shape[1])])
+        hi = np.array([float((self.centre[:, k] + self.half[:, k]).max()) for k in range(self.centre.shape[1])])
+        return lo, hi
+
+    def mirrored(self) -> Zonotopes:
+        """The zonotopes mirrored about the plane x_0 = 0, exactly (negations): what :func:`prepare` gives for the
+        cells of the mirrored grid (2-D normals (-g_1, g_0) become (n_0, -n_1); offsets and half-widths unchanged)."""
+        c = self.centre.copy()
+        c[:, 0] *= -1.0
+        N = self.normals.copy()
+        if N.shape[2] == 2:
+            N[:, :, 1] *= -1.0
+        else:
+            raise InputError("mirrored zonotopes are implemented for profiles (d = 2) only")
+        return Zonotopes(c, N, self.offset, self.half)
+
 
 def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Sum over the last (short) axis of a * b, without numpy's slow short-axis reduction."""
@@ -216,6 +236,13 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
             ok &= span[:, k] > 0
         if not ok.all():
             centre, N, off, lo, span = centre[ok], N[ok], off[ok], lo[ok], span[ok]
+        counts = span[:, 0].copy()
+        for k in range(1, d):
+            counts *= span[:, k]
+        if s:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
+            new = _box_sums(_integral(occ), lo, span) < counts
+            if not new.all():
+                centre, N, off, lo, span, counts = centre[new], N[new], off[new], lo[new], span[new], counts[new]
         m = centre.shape[0]
         if m == 0:
             continue
@@ -224,9 +251,6 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
         base = N[:, :, 0] * rel[:, 0:1]
         for k in range(1, d):
             base += N[:, :, k] * rel[:, k:k + 1]
-        counts = span[:, 0].copy()
-        for k in range(1, d):
-            counts *= span[:, k]
         rep = np.repeat(np.arange(m), counts)
         local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
         offs = []
@@ -235,6 +259,12 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
             offs.append(local % sk)
             local //= sk
         offs = offs[::-1]
+        # a candidate cell already covered (by an earlier chunk) needs no test: the occupancy is an OR over the
+        # zonotopes, the same in any order; the cells of a redundant map are covered many times over
+        todo = ~occ[tuple(lo[rep, k] + offs[k] for k in range(d))]
+        if not todo.all():
+            rep = rep[todo]
+            offs = [o[todo] for o in offs]
         hit = np.ones(rep.size, dtype=bool)
         for j in range(f):  # facet by facet: |base + h N . off| <= offset
             proj = base[rep, j] + (h * N[rep, j, 0]) * offs[0]
@@ -245,6 +275,26 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
         idx = tuple(lo[sel, k] + offs[k][hit] for k in range(d))
         occ[idx] = True
     return occ
+
+
+def _integral(occ: np.ndarray) -> np.ndarray:
+    """Summed-area table of a boolean grid: S[i_1, ..., i_d] = number of True cells in occ[:i_1, ..., :i_d]."""
+    S = np.zeros(tuple(n + 1 for n in occ.shape), dtype=np.int64)
+    S[tuple(slice(1, None) for _ in occ.shape)] = occ
+    for ax in range(occ.ndim):
+        np.cumsum(S, axis=ax, out=S)
+    return S
+
+
+def _box_sums(S: np.ndarray, lo: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """Number of True cells in each box [lo, lo + span) (rows of lo, span) from the summed-area table S."""
+    d = lo.shape[1]
+    out = np.zeros(lo.shape[0], dtype=np.int64)
+    for corner in itertools.product((0, 1), repeat=d):
+        idx = tuple(lo[:, k] + corner[k] * span[:, k] for k in range(d))
+        sign = 1 if (d - sum(corner)) % 2 == 0 else -1
+        out += sign * S[idx]
+    return out
 
 
 def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> tuple[np.ndarray, tuple[int, ...]]:
@@ -258,8 +308,7 @@ def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[fl
     d = z.centre.shape[1]
     if z.size == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
-    lo_pt = (z.centre - z.half).min(axis=0)
-    hi_pt = (z.centre + z.half).max(axis=0)
+    lo_pt, hi_pt = z.bounds
     origin, shape = _grid_frame(np.vstack([lo_pt, hi_pt]), h, shift, 0.0)
     occ = covered_cells(z, h, origin, shape)
     if revolve:
@@ -271,19 +320,18 @@ def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[fl
     return value, occ, origin
 
 
-def _mirror(points_grid: np.ndarray) -> list[np.ndarray]:
-    m = points_grid.copy()
-    m[..., 0] *= -1.0
-    return [points_grid, m]
-
-
 def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> Zonotopes:
-    grids = _mirror(points_grid) if revolve else [points_grid]
-    parts = [cell_zonotopes(g, valid) for g in grids]
-    corner, gens, grow = (np.concatenate([p[i] for p in parts]) for i in range(3))
+    corner, gens, grow = cell_zonotopes(points_grid, valid)
     if gens.shape[1] > gens.shape[2]:  # redundant: the cells overlap, the union closes itself
         grow = np.zeros_like(grow)
-    return prepare(corner, gens, grow)
+    z = prepare(corner, gens, grow)
+    if not revolve:
+        return z
+    # the profile and its mirror (s -> -s): the mirror's zonotopes are this one's with the signs flipped, exactly as
+    # cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two)
+    m = z.mirrored()
+    return Zonotopes(*(np.concatenate([a, b]) for a, b in ((z.centre, m.centre), (z.normals, m.normals),
+                                                            (z.offset, m.offset), (z.half, m.half))))
 
 
 def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
