@@ -84,10 +84,12 @@ def _shifted(a: np.ndarray, axes: list[int], hi: set[int]) -> np.ndarray:
     return a[tuple(sl)]
 
 
-def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *,
+                   grow_cells: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(corner (m, d), generators (m, k, d), growth E (m,)) of the m grid cells (see the module docstring).
 
     ``valid``: a boolean grid (the grid's shape): only cells whose 2^k corners are all valid are kept.
+    ``grow_cells``: compute E (False: zeros, what a redundant map uses).
     """
     P = np.asarray(points_grid, dtype=float)
     axes = [a for a in range(P.ndim - 1) if P.shape[a] > 1]
@@ -99,13 +101,15 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None) -> 
         for r in range(len(axes) + 1):
             for sub in itertools.combinations(axes, r):
                 keep &= _shifted(V, axes, set(sub))
-        c, g, e = cell_zonotopes(P)
+        c, g, e = cell_zonotopes(P, grow_cells=grow_cells)
         keep = keep.reshape(-1)
         return c[keep], g[keep], e[keep]
     d = P.shape[-1]
     corner = _shifted(P, axes, set()).reshape(-1, d)
     gens = np.stack([(_shifted(P, axes, {a}) - _shifted(P, axes, set())).reshape(-1, d) for a in axes], axis=1)
     grow = np.zeros(corner.shape[0])
+    if not grow_cells:
+        return corner, gens, grow
     for a, b in itertools.combinations(axes, 2):
         mixed = _shifted(P, axes, {a, b}) - _shifted(P, axes, {a}) - _shifted(P, axes, {b}) + _shifted(P, axes, set())
         mixed = mixed.reshape(-1, d)
@@ -321,9 +325,9 @@ def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[fl
 
 
 def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> Zonotopes:
-    corner, gens, grow = cell_zonotopes(points_grid, valid)
-    if gens.shape[1] > gens.shape[2]:  # redundant: the cells overlap, the union closes itself
-        grow = np.zeros_like(grow)
+    k = sum(1 for n in points_grid.shape[:-1] if n > 1)
+    # redundant (more free joints than dimensions): the cells overlap, the union closes itself, no growth
+    corner, gens, grow = cell_zonotopes(points_grid, valid, grow_cells=k <= points_grid.shape[-1])
     z = prepare(corner, gens, grow)
     if not revolve:
         return z
@@ -406,15 +410,27 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
     return (est, first) if return_occupancy else est
 
 
-def occupancy(points: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """(cells of side ``h`` holding a point as a boolean grid, grid origin), one empty cell all round."""
+def occupancy(points: np.ndarray, h: float, bounds: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(cells of side ``h`` holding a point as a boolean grid, grid origin), one empty cell all round.
+
+    ``bounds``: (points.min(axis=0), points.max(axis=0)) when known (a caller trying several h)."""
     pts = np.asarray(points, dtype=float)
-    origin = pts.min(axis=0) - h
-    shape = tuple(int(x) for x in np.floor((pts.max(axis=0) - origin) / h).astype(np.int64) + 2)
-    idx = np.floor((pts - origin) / h).astype(np.int64)
-    occ = np.zeros(shape, dtype=bool)
-    occ[tuple(idx.T)] = True
-    return occ, origin
+    pmin, pmax = _column_bounds(pts) if bounds is None else bounds
+    origin = pmin - h
+    shape = tuple(int(x) for x in np.floor((pmax - origin) / h).astype(np.int64) + 2)
+    flat = np.zeros(int(np.prod(shape)), dtype=bool)
+    lin = np.floor((pts[:, 0] - origin[0]) / h).astype(np.int64)
+    for k in range(1, pts.shape[1]):  # C-order linear index of each point's cell
+        lin *= shape[k]
+        lin += np.floor((pts[:, k] - origin[k]) / h).astype(np.int64)
+    flat[lin] = True
+    return flat.reshape(shape), origin
+
+
+def _column_bounds(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(min, max) of each column (a strided reduction per column: faster than numpy's short-axis one)."""
+    return (np.array([float(pts[:, k].min()) for k in range(pts.shape[1])]),
+            np.array([float(pts[:, k].max()) for k in range(pts.shape[1])]))
 
 
 def boundary_cells(occ: np.ndarray) -> np.ndarray:
@@ -430,12 +446,13 @@ def display_occupancy(points: np.ndarray, pinhole_fraction: float = 1e-3, max_st
     :func:`estimate_measure`)."""
     pts = np.asarray(points, dtype=float)
     d = pts.shape[1]
-    ext = pts.max(axis=0) - pts.min(axis=0)
+    bounds = _column_bounds(pts)
+    ext = bounds[1] - bounds[0]
     ext = np.where(ext > 0, ext, ext.max())
     h = float((np.prod(ext) / pts.shape[0]) ** (1.0 / d))
     structure = ndimage.generate_binary_structure(d, 1).astype(np.int16)
     for _ in range(max_steps):
-        occ, origin = occupancy(pts, h)
+        occ, origin = occupancy(pts, h, bounds)
         nb = ndimage.convolve(occ.astype(np.int16), structure, mode="constant") - occ
         holes = int(np.sum(~occ & (nb == 2 * d)))
         if holes <= pinhole_fraction * occ.sum():
