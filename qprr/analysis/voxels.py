@@ -105,8 +105,12 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *,
         keep = keep.reshape(-1)
         return c[keep], g[keep], e[keep]
     d = P.shape[-1]
-    corner = _shifted(P, axes, set()).reshape(-1, d)
-    gens = np.stack([(_shifted(P, axes, {a}) - _shifted(P, axes, set())).reshape(-1, d) for a in axes], axis=1)
+    base = _shifted(P, axes, set())
+    corner = base.reshape(-1, d)
+    gens = np.empty((corner.shape[0], len(axes), d))
+    by_cell = gens.reshape(base.shape[:-1] + (len(axes), d))  # a view: each generator written in place
+    for j, a in enumerate(axes):
+        np.subtract(_shifted(P, axes, {a}), base, out=by_cell[..., j, :])
     grow = np.zeros(corner.shape[0])
     if not grow_cells:
         return corner, gens, grow
@@ -179,6 +183,11 @@ class Zonotopes:
         return int(self.centre.shape[0])
 
     @functools.cached_property
+    def corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centre - half, centre + half): the bounding boxes' corners (m, d), the same for every shift's count."""
+        return self.centre - self.half, self.centre + self.half
+
+    @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lowest, highest) corner of the union of the bounding boxes (d,), computed once for every shift's count."""
         lo = np.array([float((self.centre[:, k] - self.half[:, k]).min()) for k in range(self.centre.shape[1])])
@@ -209,7 +218,8 @@ def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes:
     """:class:`Zonotopes` of the cells of :func:`cell_zonotopes` that span their dimension."""
     keep = _spanning(gens)
-    corner, gens, grow = corner[keep], gens[keep], grow[keep]
+    if not keep.all():
+        corner, gens, grow = corner[keep], gens[keep], grow[keep]
     gsum, gabs = gens[:, 0, :].copy(), np.abs(gens[:, 0, :])
     for k in range(1, gens.shape[1]):
         gsum += gens[:, k, :]
@@ -224,16 +234,17 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     return Zonotopes(centre, N, offset, half)
 
 
-def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 32768) -> np.ndarray:
+def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072) -> np.ndarray:
     """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope."""
     d = z.centre.shape[1]
     f = z.normals.shape[1]
     occ = np.zeros(shape, dtype=bool)
     dims = np.array(shape)
     for s in range(0, z.size, chunk):
-        centre, N, off, half = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk], z.half[s:s + chunk]
-        lo = np.maximum(np.ceil((centre - half - origin) / h - 0.5).astype(np.int64), 0)
-        hi = np.minimum(np.floor((centre + half - origin) / h - 0.5).astype(np.int64), dims - 1)
+        centre, N, off = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk]
+        low, high = z.corners
+        lo = np.maximum(np.ceil((low[s:s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
+        hi = np.minimum(np.floor((high[s:s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
         span = hi - lo + 1
         ok = span[:, 0] > 0
         for k in range(1, d):
