@@ -37,7 +37,8 @@ processes, timeit's convention -- then the median and 95th percentile over the r
 targets.  Times are this thread's CPU time by default (``--clock cpu``; ``--clock wall`` for
 wall-clock time): other processes on a shared machine do not count; the load average is
 printed with the machine: on a busy one every number still grows (shared caches).  Progress
-is printed as each method completes; then a markdown table whose speed columns are ratios measured in this run (vs qprr's QP and vs the fastest peer that succeeds as often):
+is printed as each method completes; then a markdown table whose speed columns are ratios
+measured in this run (vs qprr's QP and vs the fastest peer that succeeds as often):
 absolute times hold on this machine only.  Saves a PNG.
 """
 
