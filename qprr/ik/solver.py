@@ -441,11 +441,11 @@ def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
     """Refuse a target so far from the origin that doubles near it are too coarse to tell a position error below
     ``position_tol``: at |p| = 1e17 m neighbouring doubles are 16 m apart and a "1e-16 m" error means nothing.
     Forward kinematics rounds to a few units in the last place of |p|: 16 of them must stay below a tenth of
-    the tolerance (with the default 1e-6 m: |p| up to about 6.7e7 m)."""
+    the tolerance (with the default 1e-6 m: |p| below 2^25 m, about 3.4e7 m)."""
     pmax = float(np.abs(p_d).max())
     ulp = float(np.spacing(pmax))
     if 16.0 * ulp > 0.1 * position_tol:
-        limit = 2.0 ** math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps))
+        limit = 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
         raise InputError(f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
                          f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
                          f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol")
