@@ -212,7 +212,7 @@ def test_covered_cells_do_not_depend_on_the_chunks(qprr_platform):
         grid = make_grid(qprr_platform, 20_000, locked)
         pts = np.concatenate([chain.frame_position(chain.pose(q), qprr_platform.ee_frame) for _, q in grid.chunks()])
         P = pts[:, [0, 2]].reshape(*(n for n in grid.shape if n > 1), 2)
-        z = _zonotopes_of(P, False)
+        (z,) = _zonotopes_of(P, False)
         h = default_cell(z)
         origin, shape = _grid_frame(np.vstack(z.bounds), h, np.array([0.37, 0.81]), 0.0)
         whole = covered_cells(z, h, origin, shape, chunk=z.size)  # one chunk: nothing skipped

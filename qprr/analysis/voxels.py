@@ -234,11 +234,14 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     return Zonotopes(centre, N, offset, half)
 
 
-def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072) -> np.ndarray:
-    """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope."""
+def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072,
+                  out: np.ndarray | None = None) -> np.ndarray:
+    """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
+    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set)."""
     d = z.centre.shape[1]
     f = z.normals.shape[1]
-    occ = np.zeros(shape, dtype=bool)
+    occ = np.zeros(shape, dtype=bool) if out is None else out
+    started = out is not None and bool(out.any())
     dims = np.array(shape)
     for s in range(0, z.size, chunk):
         centre, N, off = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk]
@@ -254,7 +257,7 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
         counts = span[:, 0].copy()
         for k in range(1, d):
             counts *= span[:, k]
-        if s:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
+        if s or started:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
             new = _box_sums(_integral(occ), lo, span) < counts
             if not new.all():
                 centre, N, off, lo, span, counts = centre[new], N[new], off[new], lo[new], span[new], counts[new]
@@ -319,13 +322,18 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
     return lo, shape
 
 
-def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    d = z.centre.shape[1]
-    if z.size == 0:
+def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
+    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``."""
+    d = parts[0].centre.shape[1]
+    if sum(z.size for z in parts) == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
-    lo_pt, hi_pt = z.bounds
+    lo_pt = np.min([z.bounds[0] for z in parts if z.size], axis=0)
+    hi_pt = np.max([z.bounds[1] for z in parts if z.size], axis=0)
     origin, shape = _grid_frame(np.vstack([lo_pt, hi_pt]), h, shift, 0.0)
-    occ = covered_cells(z, h, origin, shape)
+    occ = np.zeros(shape, dtype=bool)
+    for z in parts:
+        if z.size:
+            covered_cells(z, h, origin, shape, out=occ)
     if revolve:
         x = origin[0] + (np.arange(shape[0]) + 0.5) * h
         w = math.pi * np.abs(x) * h * h
@@ -335,18 +343,15 @@ def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[fl
     return value, occ, origin
 
 
-def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> Zonotopes:
+def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> tuple[Zonotopes, ...]:
     k = sum(1 for n in points_grid.shape[:-1] if n > 1)
     # redundant (more free joints than dimensions): the cells overlap, the union closes itself, no growth
     corner, gens, grow = cell_zonotopes(points_grid, valid, grow_cells=k <= points_grid.shape[-1])
     z = prepare(corner, gens, grow)
-    if not revolve:
-        return z
     # the profile and its mirror (s -> -s): the mirror's zonotopes are this one's with the signs flipped, exactly as
-    # cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two)
-    m = z.mirrored()
-    return Zonotopes(*(np.concatenate([a, b]) for a, b in ((z.centre, m.centre), (z.normals, m.normals),
-                                                            (z.offset, m.offset), (z.half, m.half))))
+    # cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two); counted as two
+    # parts of one union (no concatenated copy)
+    return (z, z.mirrored()) if revolve else (z,)
 
 
 def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
@@ -358,7 +363,12 @@ def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
 
 def default_cell(z: Zonotopes) -> float:
     """Counting cell side: the median bounding-box side of the grown cell zonotopes (a few candidate centres per cell)."""
-    return float(max(np.median(2.0 * z.half.max(axis=1)), 1e-12))
+    return _default_cell((z,))
+
+
+def _default_cell(parts: tuple[Zonotopes, ...]) -> float:
+    sides = np.concatenate([2.0 * z.half.max(axis=1) for z in parts])
+    return float(max(np.median(sides), 1e-12))
 
 
 def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, revolve: bool = False,
@@ -395,9 +405,10 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
         if valid.shape != P.shape[:-1]:
             raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
     fine = _zonotopes_of(P, revolve, valid)
-    if fine.size == 0:
+    n_fine = sum(z.size for z in fine)
+    if n_fine == 0:
         raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
-    h = default_cell(fine) if cell is None else float(cell)
+    h = _default_cell(fine) if cell is None else float(cell)
     if not (math.isfinite(h) and h > 0.0):
         raise InputError(f"cell must be a positive length in m, got {cell!r}")
     rng = np.random.default_rng(seed)
@@ -417,7 +428,7 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
     else:
         coarse_z = _zonotopes_of(Pc, revolve, None if valid is None else _coarsen(valid, 0))
         coarse = float(np.mean([_count(coarse_z, h, s, revolve)[0] for s in shifts]))
-    est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, fine.size)
+    est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
     return (est, first) if return_occupancy else est
 
 
