@@ -87,7 +87,7 @@ def self_test() -> str:
                         f"not gravity {a_expected.tolist()}")
     r = np.array(data.costs.costs["probe"].residual.r)
     if not float(np.max(np.abs(r - [0.0, 0.0, 0.5]))) <= SELF_TEST_TOL:
-        problems.append(f"a frame at [0, 0, 0.5] m reads {r.tolist()} m")
+        problems.append("a frame at [0, 0, 0.5] m is read elsewhere (frame translation residual wrong)")
     return "; ".join(problems)
 
 
