@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import importlib
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -59,6 +60,20 @@ def test_solve_summary_reads_the_metrics_and_is_absent_without_an_mpc():
     line = solve_summary(m)
     assert "native" in line and "median 2.00 ms" in line and "p95 4.00 ms" in line and "0 fallbacks" in line
     assert "Python models" in solve_summary({**m, "mpc_native_backend": 0.0})
+
+
+def test_benchmark_quick_mode_exits_0_and_prints_the_backends():
+    """benchmarks/mpc_benchmark.py --quick: exit 0 with crocoddyl's native models, with the Python ones only (the native
+    column skipped with the fix command) and without crocoddyl (the install command)."""
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, str(root / "benchmarks" / "mpc_benchmark.py"), "--quick"], capture_output=True, text=True,
+                         timeout=300, cwd=root)
+    assert out.returncode == 0, out.stderr
+    if importlib.util.find_spec("crocoddyl") is None:
+        assert "crocoddyl is not installed" in out.stdout and "qprr[mpc]" in out.stdout
+        return
+    assert "\npython " in out.stdout and "wall time: mpc" in out.stdout
+    assert ("python / native" in out.stdout) != ("native: skipped" in out.stdout and 'pin==4.0.*' in out.stdout)
 
 
 crocoddyl = pytest.importorskip("crocoddyl", reason=f"the MPC needs crocoddyl: {INSTALL}")
@@ -504,6 +519,18 @@ def test_bad_platform_and_settings_are_rejected(platform):
         ctrl.reset(State(), Reference(), 1e-3)
     with pytest.raises(InputError, match="before step"):
         mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2)).step(0.0, State(), Reference())
+
+
+def test_cli_simulate_prints_the_solve_statistics(capsys):
+    """qprr simulate ... --controller mpc ends with the MPC's solve statistics (median/p95, iterations, fallbacks, backend)."""
+    from qprr.cli import main
+
+    assert main(["simulate", "hover-reach", "--controller", "mpc", "--duration", "0.05", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    line = [s for s in out.splitlines() if s.startswith("mpc (")]
+    assert len(line) == 1, out
+    assert "5 solves" in line[0] and "p95" in line[0] and "fallbacks" in line[0]
+    assert ("Python models" in line[0]) == bool(mpc.NATIVE_PROBLEM)
 
 
 def test_mpc_is_selectable_by_name_and_runs_on_another_platform():
