@@ -113,6 +113,7 @@ def test_crocoddyl_thrusters_give_the_platform_actuation_matrix(name, layout):
 
 # --------------------------------------------------------------------------- derivatives
 BACKENDS = [pytest.param("python"), pytest.param("native", marks=native_only)]
+WITH_COG = mpc.MPCWeights(cog=100.0)  # the CoG term is off by default; these tests switch it on
 
 
 def _node(ctrl, backend: str, terminal: bool = False):
@@ -130,7 +131,7 @@ def _node(ctrl, backend: str, terminal: bool = False):
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_node_derivatives_match_finite_differences_on_the_manifold(platform, backend):
     """Fx, Fu (semi-implicit Euler of ABA) and Lx, Lu of one node against central differences (every residual active)."""
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"))
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"), weights=WITH_COG)
     dam, refs, st = _node(ctrl, backend)
     iam = crocoddyl.IntegratedActionModelEuler(dam, ctrl.h)
     rng = np.random.default_rng(3)
@@ -176,7 +177,7 @@ def test_node_derivatives_match_finite_differences_on_the_manifold(platform, bac
 def test_cog_residual_is_the_offset_from_the_thrust_axis_and_ignores_the_base_pose(name):
     """r_cog = kinematics.cog_offset_body ([x_cm, y_cm] of Thesis (3.78) on the Q-PRR) at any base pose, by both backends."""
     pf = qprr.load(name)
-    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2))
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
     dam = PlatformDynamics(LieState(ctrl.model), ctrl.node_spec(False))
     xi = pf.neutral_xi()
     xi[6:] = 0.5 * (np.clip(pf.arm_lower, -1, 1) + np.clip(pf.arm_upper, -1, 1)) + 0.1
@@ -210,11 +211,13 @@ def _random_case(pf, ctrl, rng):
 @native_only
 @pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5"])
 @pytest.mark.parametrize("terminal", [False, True])
-def test_native_node_equals_the_python_reference_at_random_states(name, terminal):
-    """crocoddyl's compiled node (FreeFwdDynamics + thrusters, its residuals, the CoG residual) against the Python reference:
-    accelerations, cost and its Gauss-Newton derivatives, Fx, Fu at 8 random states, references and controls."""
+@pytest.mark.parametrize("cog", [0.0, 100.0])
+def test_native_node_equals_the_python_reference_at_random_states(name, terminal, cog):
+    """crocoddyl's compiled node (FreeFwdDynamics + thrusters, its residuals, with and without the CoG residual, i.e. on
+    crocoddyl's ABA and computeAllTerms paths) against the Python reference: accelerations, cost and its Gauss-Newton
+    derivatives, Fx, Fu at 8 random states, references and controls."""
     pf = qprr.load(name)
-    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2))
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2), weights=mpc.MPCWeights(cog=cog))
     (nat, nat_refs, _), (ref, ref_refs, _) = _node(ctrl, "native", terminal), _node(ctrl, "python", terminal)
     dn, dr = nat.createData(), ref.createData()
     rng = np.random.default_rng(11)
@@ -239,7 +242,7 @@ def test_native_node_equals_the_python_reference_at_random_states(name, terminal
 def test_native_cog_residual_equals_the_thesis_offset():
     """The native CoG term: its residual is cog_offset_body (Thesis (3.78)) and its Jacobian the finite difference on the manifold."""
     pf = qprr.load()
-    ctrl = mpc.MPCController(pf, Hold(), settings=mpc.MPCSettings(horizon=2))
+    ctrl = mpc.MPCController(pf, Hold(), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
     node = NativeNode(crocoddyl.StateMultibody(ctrl.model), ctrl.actuation, ctrl.node_spec(False))
     d = node.dam.createData()
     st = LieState(ctrl.model)

@@ -33,6 +33,9 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
   - ``ee``: log6(M_ref^-1 M_ee(q)) of the end-effector pose (LOCAL), M_ref = FK(q_ref);
   - ``cog``: the offset of the system's centre of mass from the thrust axis, in the plane normal
     to it ([x_cm, y_cm] in B for coplanar rotors, Thesis (3.78); :func:`qprr.kinematics.cog_offset_body`);
+    off by default (``MPCWeights.cog = 0``): on crocoddyl's native models it is the one Python
+    residual and roughly doubles the solve time, against no measurable change of the static
+    mission's tracking (docs/mpc.md, "Measured");
   - ``joint limits``: a quadratic barrier on each arm joint past its soft limit (the model's
     position limits, where the simulator has its mechanical stops; ``joint_limit_margin``
     moves them inside: 0 by default, as the static mission asks for r0 = 0.04 m, the stop);
@@ -140,6 +143,8 @@ class MPCWeights:
     ``joint_limits`` weights an arm joint's overshoot past its soft limit (1/m^2 or 1/rad^2).
     With a joint weight q and this weight r, the joint's LQR bandwidth is about (q / r)^(1/4).
     ``tilt`` is roll and pitch of the base (x, y of the LOCAL rotation error), ``yaw`` its z.
+    ``cog`` [1/m^2] weights the CoG's offset from the thrust axis (body frame); 0 (the default) leaves
+    the term out (module docstring).
     """
 
     position: float = 100.0
@@ -151,7 +156,7 @@ class MPCWeights:
     arm_velocity: float = 1.0
     ee_position: float = 10.0
     ee_orientation: float = 1.0
-    cog: float = 100.0
+    cog: float = 0.0
     joint_limits: float = 1e6
     thrust: float = 1.0
     arm_acceleration: float = 1e-2
