@@ -173,7 +173,10 @@ class MPCSettings:
     ``rate`` [Hz]: solves per second (the node spacing is h = 1 / rate); ``horizon``: number of
     nodes N (horizon N h); ``backend``: the node models, ``"native"`` (crocoddyl's compiled models;
     an error when their self-test failed), ``"python"`` (:mod:`qprr.control.mpc_reference`) or
-    ``"auto"`` (native when the self-test passed, else python); ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``:
+    ``"auto"`` (native when the self-test passed, else python); ``threads``: crocoddyl's threads
+    over the native nodes (``ShootingProblem.nthreads``; Python nodes run in one); 1 by default: its OpenMP threads spin at
+    barriers, and beside the simulator on 2 shared cores 2 threads made each solve 3 times slower
+    in CPU time and 4-5 times in wall time (benchmarks/mpc_benchmark.py); ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``:
     for the cold start; ``th_stop``: crocoddyl's stopping threshold; ``feasibility_tol``: largest
     dynamic gap of an accepted plan; ``bound_margin`` [N]: the thrust bounds are planned
     this far inside; ``max_tilt`` [rad]: clamp of the feedforward tilt (6.17);
@@ -184,6 +187,7 @@ class MPCSettings:
     rate: float = 100.0
     horizon: int = 40
     backend: str = "auto"
+    threads: int = 1
     integrator: str = "rk2"
     max_iter: int = 10
     first_max_iter: int = 200
@@ -199,7 +203,7 @@ class MPCSettings:
         _positive(self, ("bound_margin",), allow_zero=True)
         if not as_real(self.joint_limit_margin, "MPCSettings.joint_limit_margin", nonnegative=True) < 0.5:
             raise InputError(f"MPCSettings.joint_limit_margin must be in [0, 0.5), got {self.joint_limit_margin!r}")
-        for name in ("horizon", "max_iter", "first_max_iter"):
+        for name in ("horizon", "max_iter", "first_max_iter", "threads"):
             as_int(getattr(self, name), f"MPCSettings.{name}", lo=1)
         if self.backend not in ("auto", *BACKENDS):
             raise UnknownNameError("backend", self.backend, ("auto", *BACKENDS))
@@ -387,6 +391,8 @@ class MPCController(Controller):
         self._nodes = list(nodes)  # (model, dynamics) in node order, rotated with the problem
         x0 = self.state.zero()
         self.problem = crocoddyl.ShootingProblem(x0, [m for m, _ in nodes], self._terminal)
+        if self.backend == "native":  # (crocoddyl runs Python nodes in one thread and warns when told otherwise)
+            self.problem.nthreads = self.settings.threads
         self.solver = crocoddyl.SolverBoxFDDP(self.problem)
         self.solver.th_stop = self.settings.th_stop
 
