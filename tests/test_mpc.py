@@ -272,7 +272,9 @@ def test_backend_follows_the_self_test(platform):
         with pytest.raises(InputError, match=r"pin==4\.0"):
             mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native"))
     else:
-        assert mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native")).backend == "native"
+        native = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native", threads=2))
+        assert native.backend == "native" and native.problem.nthreads == 2
+        assert auto.problem.nthreads == 1
     with pytest.raises(UnknownNameError, match="backend"):
         mpc.MPCSettings(backend="cpp")
 
@@ -515,6 +517,8 @@ def test_bad_platform_and_settings_are_rejected(platform):
         mpc.MPCSettings(integrator="midpoint")
     with pytest.raises(InputError, match="horizon"):
         mpc.MPCSettings(horizon=0)
+    with pytest.raises(InputError, match="threads"):
+        mpc.MPCSettings(threads=0)
     with pytest.raises(InputError, match="cog"):
         mpc.MPCWeights(cog=-1.0)
     ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=300.0, horizon=2))
