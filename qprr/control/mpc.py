@@ -391,8 +391,8 @@ class MPCController(Controller):
         self._nodes = list(nodes)  # (model, dynamics) in node order, rotated with the problem
         x0 = self.state.zero()
         self.problem = crocoddyl.ShootingProblem(x0, [m for m, _ in nodes], self._terminal)
-        if self.backend == "native":  # (crocoddyl runs Python nodes in one thread and warns when told otherwise)
-            self.problem.nthreads = self.settings.threads
+        if self.problem.nthreads != self.settings.threads:  # (crocoddyl runs a problem with Python parts in one thread and
+            self.problem.nthreads = self.settings.threads  # warns when told to use more)
         self.solver = crocoddyl.SolverBoxFDDP(self.problem)
         self.solver.th_stop = self.settings.th_stop
 
