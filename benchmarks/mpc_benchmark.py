@@ -65,7 +65,7 @@ def common_tilt_rmse(res: SimResult, traj, g: float = 9.81, max_tilt: float = 0.
 
 
 def ratio(a: float, b: float) -> str:
-    return f"{a / b:>8.2f}" if b > 0 else f"{'-':>8}"
+    return f" {a / b:>8.3g}" if b > 0 else f" {'-':>8}"
 
 
 def solve_line(label: str, st) -> str:
@@ -102,6 +102,7 @@ def section_backends(mpc, platform, traj, window: float, tilt_weights) -> dict:
         ctrl = mpc.MPCController(platform, weights=mpc.MPCWeights(tilt=w))
         res = run(platform, ctrl, traj, window)
         out[f"tilt weight {w:g}"] = (res, ctrl.stats())
+        print(solve_line(f"tilt weight {w:g}", out[f"tilt weight {w:g}"][1]))
     print("-" * len(head))
     return out
 
@@ -112,10 +113,10 @@ def section_mission(mpc, platform, traj, duration: float) -> tuple:
     idc = run(platform, flight_controller("idc", platform), traj, duration)
     idc_wall = time.perf_counter() - t0
     ctrl = mpc.MPCController(platform)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     res = run(platform, ctrl, traj, duration)
-    wall = time.perf_counter() - t0
-    head = f"{'RMSE (6.26)':<12}{'idc':>11}{'mpc':>11}{'ratio':>8}"
+    wall, cpu = time.perf_counter() - t0, time.process_time() - c0
+    head = f"{'RMSE (6.26)':<12}{'idc':>11}{'mpc':>11}{'ratio':>9}"
     print(head)
     print("-" * len(head))
     e_idc, e = idc.rmse(), res.rmse()
@@ -130,7 +131,8 @@ def section_mission(mpc, platform, traj, duration: float) -> tuple:
           f"p95 {1e3 * s['p95_solve_s']:.2f} ms (CPU {1e3 * s['median_solve_cpu_s']:.2f} / {1e3 * s['p95_solve_cpu_s']:.2f} ms); "
           f"{s['failed']:.0f} failed, {s['fallbacks']:.0f} fallbacks")
     print(f"wall time: mpc {wall:.1f} s for {duration:g} s simulated (ratio {wall / duration:.2f}; target <= ~1), idc {idc_wall:.1f} s; "
-          f"load average now {os.getloadavg()[0]:.2f}")
+          f"load average now {os.getloadavg()[0]:.2f}; CPU time of the mpc run (this process, all threads) {cpu:.1f} s "
+          f"(ratio {cpu / duration:.2f}: the wall time on an otherwise idle machine)")
     return idc, res
 
 
