@@ -174,10 +174,12 @@ class MPCSettings:
     nodes N (horizon N h); ``backend``: the node models, ``"native"`` (crocoddyl's compiled models;
     an error when their self-test failed), ``"python"`` (:mod:`qprr.control.mpc_reference`) or
     ``"auto"`` (native when the self-test passed, else python); ``threads``: crocoddyl's threads
-    over the native nodes (``ShootingProblem.nthreads``; Python nodes run in one); 1 by default: its OpenMP threads spin at
-    barriers, and beside the simulator on 2 shared cores 2 threads made each solve 3 times slower
-    in CPU time and 4-5 times in wall time (benchmarks/mpc_benchmark.py); ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``:
-    for the cold start; ``th_stop``: crocoddyl's stopping threshold; ``feasibility_tol``: largest
+    over the native nodes (``ShootingProblem.nthreads``; Python nodes run in one); 1 by default:
+    its OpenMP threads spin at barriers, and beside the simulator on 2 shared cores 2 threads made
+    each solve 3 times slower in CPU time and 4-5 times in wall time (docs/mpc.md); more is a
+    request crocoddyl refuses, with a warning, once Python-derived models exist in the process;
+    ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``: for the cold start;
+    ``th_stop``: crocoddyl's stopping threshold; ``feasibility_tol``: largest
     dynamic gap of an accepted plan; ``bound_margin`` [N]: the thrust bounds are planned
     this far inside; ``max_tilt`` [rad]: clamp of the feedforward tilt (6.17);
     ``joint_limit_margin``: the arm joints' soft limits are the model's position limits shrunk by
