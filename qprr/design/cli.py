@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..cli_common import integer
 from ..errors import QprrError
 
 
@@ -78,7 +79,7 @@ def _bound(k: str, lo, hi) -> str:
 
 
 def _report_args(r) -> None:
-    r.add_argument("--top", type=int, default=None, help="designs flown in the closed-loop check (default: the study's closed_loop.top)")
+    r.add_argument("--top", type=integer(lo=0), default=None, help="designs flown in the closed-loop check (default: the study's closed_loop.top)")
     r.add_argument("--no-flight", action="store_true", help="skip the closed-loop check")
     r.add_argument("--flight-backend", default="inline", choices=("local", "dask", "inline"),
                    help="where the closed-loop flights run (default inline: a few flights)")
@@ -96,7 +97,7 @@ def register_cli(sub) -> None:
     r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
     r.add_argument("--backend", default="local", choices=("local", "dask", "inline"),
                    help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)")
-    r.add_argument("--workers", type=int, default=None, help="worker processes (default: one per core)")
+    r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
     r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
     r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
     r.add_argument("--report", default=None, metavar="DIR", help="then write the report (summary.md, ranking, figures) into DIR")
@@ -112,5 +113,5 @@ def register_cli(sub) -> None:
 
     r = dsub.add_parser("show", help="print a study's size, fingerprint and first designs")
     r.add_argument("spec", help="design study (.toml or .json)")
-    r.add_argument("--first", type=int, default=8, help="designs to list (default 8)")
+    r.add_argument("--first", type=integer(lo=1), default=8, help="designs to list (default 8)")
     r.set_defaults(func=_cmd_show)

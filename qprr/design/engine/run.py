@@ -47,7 +47,7 @@ class DesignRun:
 
 
 def meta_of(spec: DesignSpec) -> dict:
-    return {"name": spec.name, "fingerprint": spec.fingerprint, "spec": spec.to_dict(), "kind": "design",
+    return {"name": spec.name, "fingerprint": spec.fingerprint, "design_spec": spec.to_dict(), "kind": "design",
             "params": [*ID_COLUMNS[2:], *PARAMETERS], "metrics": ["status", "reason", *METRICS, TAIL_COLUMNS[1]],
             "names": [], "n_runs": n_points(spec)}
 

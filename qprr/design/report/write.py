@@ -16,9 +16,10 @@ from .rank import markdown_table, ranked, rows_of
 def load_study(results) -> tuple[DesignSpec, list[dict]]:
     """The study and its rows from a results file (.csv / .parquet with its .meta.json) or a campaign Results."""
     res = results if isinstance(results, io.Results) else io.read_table(results)
-    if not res.spec or "architectures" not in res.spec:
+    study = res.meta.get("design_spec")
+    if not isinstance(study, dict) or "architectures" not in study:
         raise InputError(f"{str(res.path)!r} holds no design study (run `qprr design run SPEC -o FILE` first)")
-    return DesignSpec.from_mapping(res.spec), rows_of(res.table)
+    return DesignSpec.from_mapping(study), rows_of(res.table)
 
 
 def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, scheduler=None) -> list[dict]:
