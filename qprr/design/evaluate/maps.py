@@ -6,12 +6,14 @@ import numpy as np
 import pinocchio as pin
 
 from ...analysis import balance, capacity, hover, singularity, workspace
+from ...platform import check_platform
 from ..spec.metrics import METRICS
 from ..spec.study import Effort
 
 
 def slider_of(platform) -> str | None:
     """The first prismatic joint (the one :func:`qprr.analysis.balance` moves), or None."""
+    platform = check_platform(platform)
     return next((j.name for j in platform.arm if j.kind == "prismatic"), None)
 
 

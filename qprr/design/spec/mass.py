@@ -31,6 +31,12 @@ class MassModel:
     prismatic_actuator: float = 0.10  # a servo with its lead-screw carriage
     rail_density: float = 0.40  # a linear guide rail with its screw, per metre of stroke
 
+    def __post_init__(self) -> None:  # checked however it is built (from_mapping or directly)
+        if self.mode not in MODES:
+            fail("mass.mode", self.mode, f"one of {', '.join(MODES)}")
+        for k in ("body", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density"):
+            object.__setattr__(self, k, number(getattr(self, k), f"mass.{k}", lo=0.0, positive=(k == "body")))
+
     def link_mass(self, kind: str, length: float, stroke: float = 0.0) -> float:
         """Mass [kg] of the link after a joint of ``kind`` ("R" or "P") of ``length`` [m] (``stroke`` [m] for P)."""
         if kind == "P":

@@ -57,6 +57,12 @@ class Effort:
     balance_tol: float = 1e-3
     payload_reach: float = 0.15
 
+    def __post_init__(self) -> None:  # checked however it is built (the [effort] table or directly)
+        object.__setattr__(self, "samples", integer(self.samples, "effort.samples", lo=64))
+        object.__setattr__(self, "shifts", integer(self.shifts, "effort.shifts", lo=2))
+        object.__setattr__(self, "balance_tol", number(self.balance_tol, "effort.balance_tol", positive=True))
+        object.__setattr__(self, "payload_reach", number(self.payload_reach, "effort.payload_reach", lo=0.0))
+
 
 @dataclass(frozen=True)
 class Search:
@@ -68,6 +74,14 @@ class Search:
     population: int = 12
     generations: int = 5
 
+    def __post_init__(self) -> None:  # checked however it is built (the [search] table or directly)
+        if self.method not in SEARCH_METHODS:
+            fail("search.method", self.method, f"one of {', '.join(SEARCH_METHODS)}")
+        if self.optimiser not in OPTIMISERS:
+            fail("search.optimiser", self.optimiser, f"one of {', '.join(OPTIMISERS)}")
+        object.__setattr__(self, "population", integer(self.population, "search.population", lo=4))
+        object.__setattr__(self, "generations", integer(self.generations, "search.generations", lo=1))
+
 
 @dataclass(frozen=True)
 class ClosedLoop:
@@ -77,6 +91,16 @@ class ClosedLoop:
     scenario: str = "hover-reach"
     controller: str = "idc"
     duration: float = 8.0
+
+    def __post_init__(self) -> None:  # checked however it is built (the [closed_loop] table or directly)
+        from ...scenarios import SCENARIOS
+
+        object.__setattr__(self, "top", integer(self.top, "closed_loop.top", lo=0))
+        if not isinstance(self.scenario, str) or self.scenario not in SCENARIOS or SCENARIOS[self.scenario].platforms is not None:
+            fail("closed_loop.scenario", self.scenario, "a generic scenario (any platform), e.g. hover-reach")
+        if self.controller not in SCENARIOS[self.scenario].controllers:
+            fail("closed_loop.controller", self.controller, f"one of {', '.join(SCENARIOS[self.scenario].controllers)}")
+        object.__setattr__(self, "duration", number(self.duration, "closed_loop.duration", positive=True))
 
 
 @dataclass(frozen=True)
@@ -222,36 +246,12 @@ def _constraints(value) -> dict:
 
 
 def _effort(value) -> Effort:
-    d = table_keys(value, "effort", ("samples", "shifts", "balance_tol", "payload_reach"))
-    e = Effort()
-    return Effort(integer(d.get("samples", e.samples), "effort.samples", lo=64), integer(d.get("shifts", e.shifts), "effort.shifts", lo=2),
-                  number(d.get("balance_tol", e.balance_tol), "effort.balance_tol", positive=True),
-                  number(d.get("payload_reach", e.payload_reach), "effort.payload_reach", lo=0.0))
+    return Effort(**table_keys(value, "effort", ("samples", "shifts", "balance_tol", "payload_reach")))
 
 
 def _search(value) -> Search:
-    d = table_keys(value, "search", ("method", "optimiser", "population", "generations"))
-    s = Search()
-    method = d.get("method", s.method)
-    if method not in SEARCH_METHODS:
-        fail("search.method", method, f"one of {', '.join(SEARCH_METHODS)}")
-    opt = d.get("optimiser", s.optimiser)
-    if opt not in OPTIMISERS:
-        fail("search.optimiser", opt, f"one of {', '.join(OPTIMISERS)}")
-    return Search(method, opt, integer(d.get("population", s.population), "search.population", lo=4),
-                  integer(d.get("generations", s.generations), "search.generations", lo=1))
+    return Search(**table_keys(value, "search", ("method", "optimiser", "population", "generations")))
 
 
 def _closed_loop(value) -> ClosedLoop:
-    from ...scenarios import SCENARIOS
-
-    d = table_keys(value, "closed_loop", ("top", "scenario", "controller", "duration"))
-    c = ClosedLoop()
-    scen = d.get("scenario", c.scenario)
-    if scen not in SCENARIOS or SCENARIOS[scen].platforms is not None:
-        fail("closed_loop.scenario", scen, "a generic scenario (any platform), e.g. hover-reach")
-    ctrl = d.get("controller", c.controller)
-    if ctrl not in SCENARIOS[scen].controllers:
-        fail("closed_loop.controller", ctrl, f"one of {', '.join(SCENARIOS[scen].controllers)}")
-    return ClosedLoop(integer(d.get("top", c.top), "closed_loop.top", lo=0), scen, ctrl,
-                      number(d.get("duration", c.duration), "closed_loop.duration", positive=True))
+    return ClosedLoop(**table_keys(value, "closed_loop", ("top", "scenario", "controller", "duration")))
