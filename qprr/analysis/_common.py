@@ -325,3 +325,32 @@ def default_map_cell(coords: np.ndarray, cells_across: int = 120) -> float:
     """Cell side [m] for maps over a workspace: its largest extent over ``cells_across``."""
     ext = float((coords.max(axis=0) - coords.min(axis=0)).max())
     return max(ext / cells_across, 1e-9)
+
+
+def resolve_collision(platform: Platform, collision) -> tuple[object, str]:
+    """(the :class:`qprr.collision.CollisionModel` a map filters with, or None; a note saying why it is None).
+
+    ``collision``: None (default: filter when the platform has a collision model, i.e. a URDF with ``<collision>``
+    geometry on its arm links), True (filter; an error when there is no model) or False (no filter)."""
+    from ..collision import collision_model
+
+    if collision is False:
+        return None, "collisions not checked (collision=False)"
+    if collision is not None and collision is not True:
+        raise InputError(f"collision must be None (check when the platform has a collision model), True or False, got {collision!r}")
+    try:
+        return collision_model(platform), ""
+    except InputError as exc:
+        if collision is True:
+            raise
+        return None, f"collisions not checked: {exc}"
+
+
+def collision_mask(model, grid: JointGrid, progress=None, label: str = "collision check") -> np.ndarray:
+    """(grid.size,) bool: which grid configurations are free of self-collision (``model``: a CollisionModel)."""
+    free = np.empty(grid.size, dtype=bool)
+    for start, q in grid.chunks():
+        free[start:start + len(q)] = ~model.colliding_arm(q)
+        if progress:
+            progress((start + len(q)) / grid.size, label)
+    return free
