@@ -131,7 +131,8 @@ class HoverResult:
     ``rotor_ok``, ``effort_ok``, ``feasible`` (n_m, n).  ``payload``: :class:`PayloadLimits`
     (the envelope).  ``feasible_fraction`` (n_m,) of the configurations; ``min_thrust_margin``
     (n_m,) [N] over every configuration and ``worst_q`` (n_m, n_arm) where it occurs.
-    ``collision_free`` (n,) bool (None: collisions not checked, ``collision_note`` says why);
+    ``collision_free`` (n,) bool (None: collisions not checked); ``collision_note``: why not, or how the mask was
+    obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``feasible_free_fraction`` (n_m,): the configurations both collision-free and hover-feasible, as a fraction
     of all configurations (None without a collision check).
     """
@@ -267,7 +268,10 @@ def hover(
     status, reason = Status.OK, ""
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
-    free = collision_mask(cmodel, grid, progress, "hover map: collisions") if cmodel is not None else None
+    free = None
+    if cmodel is not None:
+        mask = collision_mask(cmodel, grid, progress, "hover map: collisions")
+        free, note = mask.free, f"collision check: {mask.describe()}"
     free_frac = (feasible & free).mean(axis=1) if free is not None else None
     return HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
                        PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,

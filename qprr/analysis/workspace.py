@@ -31,6 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..platform import Platform
 from ._common import (
+    CollisionMask,
     JointGrid,
     Status,
     affine_span,
@@ -77,6 +78,7 @@ class WorkspaceRegion:
     holes (:func:`qprr.analysis.voxels.display_occupancy`), which ``boundary`` follows;
     ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
+    ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only.
     """
 
@@ -95,6 +97,7 @@ class WorkspaceRegion:
     hover_occupancy: tuple | None
     outline: tuple | None = None
     collision_free: np.ndarray | None = None
+    collision_check: str = ""
     free_measure: MeasureEstimate | None = None
     free_hover_volume: MeasureEstimate | None = None
 
@@ -134,7 +137,7 @@ class WorkspaceResult:
                 fm = str(r.free_measure) if r.free_measure is not None else "n/a"
                 fh = f"; under hover {r.free_hover_volume}" if r.free_hover_volume is not None else ""
                 lines.append(f"      collision-free: {int(r.collision_free.sum())} of {r.grid.size} configurations "
-                             f"({100.0 * r.collision_free.mean():.2f}%), in B {fm}{fh}")
+                             f"({100.0 * r.collision_free.mean():.2f}%), in B {fm}{fh} [{r.collision_check}]")
         if self.collision_note:
             lines.append(f"  {self.collision_note}")
         for i in self.gain:
@@ -246,8 +249,9 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
                            "; ".join(reasons), note)
 
 
-def _free_measures(region: WorkspaceRegion, free: np.ndarray, n_shifts: int, seed: int) -> WorkspaceRegion:
+def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
     """``region`` with its collision-free mask and the measures of the image of the cells whose corners are all free."""
+    free = mask.free
     shape = tuple(n for n in region.grid.shape if n > 1)
     valid = free.reshape(shape)
     measure = hover_volume = None
@@ -262,7 +266,8 @@ def _free_measures(region: WorkspaceRegion, free: np.ndarray, n_shifts: int, see
                                             valid=valid)
         except InputError:
             hover_volume = None
-    return replace(region, collision_free=free, free_measure=measure, free_hover_volume=hover_volume)
+    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measure,
+                   free_hover_volume=hover_volume)
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int):
