@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError, MissingDependencyError
+from .errors import InputError, MissingDependencyError, QprrError
 from .platform import Platform, check_platform
 from .rotors import Rotor
 
@@ -75,7 +75,7 @@ def _package_dirs(platform: Platform) -> list[str]:
     dirs = []
     try:
         dirs.append(str(robots_dir().parent.parent))
-    except Exception:  # noqa: BLE001 - example-robot-data absent: user URDFs may still use relative meshes
+    except QprrError:  # example-robot-data absent: a user's URDF may still name its meshes by path
         pass
     source = platform.provenance.get("model", "")
     if source and Path(source).is_file():

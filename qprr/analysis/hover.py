@@ -33,7 +33,7 @@ them onto the workspace.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -184,19 +184,24 @@ class HoverResult:
         return "\n".join(lines)
 
 
-def hover(
-    platform: Platform,
-    *,
-    n_samples: int = 100_000,
-    payload_masses=(0.0,),
-    payload_offset=(0.0, 0.0, 0.0),
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    torque_reserve: float = 0.0,
-    progress=None,
-    collision: bool | None = None,
-) -> HoverResult:
+@dataclass(frozen=True)
+class HoverOptions:
+    """Settings of :func:`hover` (each can also be given to it as a keyword); see its parameters."""
+
+    n_samples: int = 100_000
+    payload_masses: object = (0.0,)
+    payload_offset: object = (0.0, 0.0, 0.0)
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    torque_reserve: object = 0.0
+    collision: bool | None = None
+
+
+def hover(platform: Platform, options: HoverOptions | None = None, *, progress=None, **settings) -> HoverResult:
     """Hover feasibility, thrusts, margins and attitude authority over the arm's joint grid.
+
+    ``options``: :class:`HoverOptions`, and/or its fields as keywords (``hover(p, n_samples=2000)``; an unknown
+    keyword is a TypeError).
 
     Parameters
     ----------
@@ -211,14 +216,17 @@ def hover(
     collision : flag the self-colliding configurations (None: when the platform has a collision model,
         :func:`qprr.analysis._common.resolve_collision`; True: required; False: off).
     """
+    o = replace(options or HoverOptions(), **settings) if settings else (options or HoverOptions())
+    if not isinstance(o, HoverOptions):
+        raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_platform(platform)
-    check_int("n_samples", n_samples, 2)
-    masses = check_masses(payload_masses)
-    cmodel, note = resolve_collision(platform, collision)
-    torque_reserve = check_reserve(torque_reserve)
-    payload = make_payload(platform, payload_offset)
+    check_int("n_samples", o.n_samples, 2)
+    masses = check_masses(o.payload_masses)
+    cmodel, note = resolve_collision(platform, o.collision)
+    torque_reserve = check_reserve(o.torque_reserve)
+    payload = make_payload(platform, o.payload_offset)
     progress = check_progress(progress)
-    grid = make_grid(platform, n_samples, locked, ranges)
+    grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
     W = wrench_set(platform)
     alloc = Allocator(platform)
     chain = ArmChain(platform)
@@ -268,14 +276,19 @@ def hover(
     status, reason = Status.OK, ""
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
-    free = None
-    if cmodel is not None:
-        mask = collision_mask(cmodel, grid, progress, "hover map: collisions")
-        free, note = mask.free, f"collision check: {mask.describe()}"
-    free_frac = (feasible & free).mean(axis=1) if free is not None else None
-    return HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
-                       PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
-                       margin[np.arange(nm), worst], allq[worst], status, reason, free, free_frac, note)
+    result = HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
+                         PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
+                         margin[np.arange(nm), worst], allq[worst], status, reason, collision_note=note)
+    return _with_collisions(result, cmodel, progress)
+
+
+def _with_collisions(result: HoverResult, cmodel, progress) -> HoverResult:
+    """``result`` with its collision-free mask and fractions (unchanged when ``cmodel`` is None)."""
+    if cmodel is None:
+        return result
+    mask = collision_mask(cmodel, result.grid, progress, "hover map: collisions")
+    return replace(result, collision_free=mask.free, feasible_free_fraction=(result.feasible & mask.free).mean(axis=1),
+                   collision_note=f"collision check: {mask.describe()}")
 
 
 def _alloc_margin(w: np.ndarray, alloc: Allocator, W: WrenchSet) -> np.ndarray:
