@@ -11,6 +11,7 @@ import pytest
 import qprr
 from qprr import urdfgen as ug
 from qprr.analysis import workspace
+from qprr.analysis._common import COLLISION_AUDIT_TOLERANCE, collision_mask, make_grid
 from qprr.analysis.hover import hover
 from qprr.collision import DISC_THICKNESS, collision_model, default_disc_radius
 from qprr.errors import InputError
@@ -151,7 +152,7 @@ def test_hover_map_collision_fraction_is_the_closed_form(pendulum):
 def test_workspace_collision_free_part(pendulum_cm):
     p = qprr.build("HEX-RRR")
     cm = collision_model(p)
-    r = workspace(p, n_samples=4000, hover=True)
+    r = workspace(p, n_samples=3000, hover=True)  # below COLLISION_EXACT_BELOW: every configuration checked
     reg = r.regions[0]
     q = reg.grid.configurations()
     assert np.array_equal(reg.collision_free, ~cm.colliding_arm(q))
@@ -159,8 +160,34 @@ def test_workspace_collision_free_part(pendulum_cm):
     assert reg.free_measure.measure < reg.measure.measure
     assert reg.free_hover_volume.measure < reg.hover_volume.measure
     assert "collision-free" in r.summary()
-    off = workspace(p, n_samples=4000, hover=False, collision=False)
+    off = workspace(p, n_samples=3000, hover=False, collision=False)
     assert off.regions[0].collision_free is None and off.regions[0].measure.measure == reg.measure.measure
+
+
+@pytest.mark.parametrize("name", ["q-prr", "HEX-RRR"])
+def test_coarse_to_fine_mask_against_every_configuration(name):
+    p = qprr.platforms.resolve(name)
+    cm = collision_model(p)
+    grid = make_grid(p, 40_000)
+    mask = collision_mask(cm, grid)
+    exact = ~cm.colliding_arm(grid.configurations())
+    wrong = np.count_nonzero(mask.free != exact)
+    assert mask.evaluated < grid.size and mask.audited == 1000
+    assert mask.mismatches <= COLLISION_AUDIT_TOLERANCE * mask.audited
+    assert wrong <= 0.005 * grid.size  # the audit's promise, measured on the whole grid
+    assert "inferred" in mask.describe()
+
+
+def test_failed_audit_checks_every_configuration(pendulum_cm, monkeypatch):
+    import qprr.analysis._common as common
+
+    p = qprr.build("HEX-RRR")
+    cm = collision_model(p)
+    grid = make_grid(p, 40_000)
+    monkeypatch.setattr(common, "COLLISION_AUDIT_TOLERANCE", -1.0)  # any audit fails
+    mask = common.collision_mask(cm, grid)
+    assert mask.evaluated == grid.size and "every one" in mask.describe()
+    assert np.array_equal(mask.free, ~cm.colliding_arm(grid.configurations()))
 
 
 # ------------------------------------------------------------------------------ the IK
