@@ -160,6 +160,10 @@ def test_workspace_collision_free_part(pendulum_cm):
     assert reg.free_measure.measure < reg.measure.measure
     assert reg.free_hover_volume.measure < reg.hover_volume.measure
     assert "collision-free" in r.summary()
+    q_prr = workspace(qprr.load("q-prr"), n_samples=3000, hover=False)  # two regions: with and without the slider
+    g = q_prr.gain_free[1][0]
+    assert g.value == q_prr.regions[0].free_measure.measure / q_prr.regions[1].free_measure.measure and q_prr.gain_free[1][1] is None
+    assert "collision-free parts: in B" in q_prr.summary()
     off = workspace(p, n_samples=3000, hover=False, collision=False)
     assert off.regions[0].collision_free is None and off.regions[0].measure.measure == reg.measure.measure
 

@@ -113,7 +113,9 @@ class WorkspaceResult:
     ``regions[0]`` has every joint free (apart from ``locked``); the others lock the joints of
     each variant.  ``gain[i]`` (i >= 1): regions[0] over regions[i] in B (``Ratio``) and
     ``gain_hover[i]`` under hover; ``difference[i]`` = measure(regions[0]) - measure(regions[i])
-    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.
+    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.  With a collision check:
+    ``gain_free[i]`` = (in B, under hover) ratios of the collision-free measures (None where not measured);
+    ``collision_note``: why collisions were not checked, if they were not.
     """
 
     platform_name: str
@@ -125,6 +127,7 @@ class WorkspaceResult:
     status: Status = Status.OK
     reason: str = ""
     collision_note: str = ""
+    gain_free: dict = field(default_factory=dict)
 
     def summary(self) -> str:
         """A few lines with the measures and the gains (all configurations, then the collision-free ones)."""
@@ -147,6 +150,10 @@ class WorkspaceResult:
             if i in self.gain_hover:
                 gh = self.gain_hover[i]
                 lines.append(f"  gain of [0] over [{i}] under hover: x{gh.value:.4f} +- {gh.error:.2g}")
+            if i in self.gain_free:
+                parts = [f"{where} x{g.value:.4f} +- {g.error:.2g}" for where, g in zip(("in B", "under hover"), self.gain_free[i])
+                         if g is not None]
+                lines.append(f"  gain of [0] over [{i}], collision-free parts: " + ", ".join(parts))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         return "\n".join(lines)
@@ -236,7 +243,7 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
         regions.append(region)
         if progress:
             progress((i + 1) / len(sets), f"workspace [{i}] {_label(lk)}")
-    gain, gain_hover, diff = {}, {}, {}
+    gain, gain_hover, diff, gain_free = {}, {}, {}, {}
     r0 = regions[0]
     for i, r in enumerate(regions[1:], start=1):
         if r0.measure is not None and r.measure is not None and r0.measure.dim == r.measure.dim:
@@ -244,9 +251,13 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
             diff[i] = (r0.measure.measure - r.measure.measure, float(np.hypot(r0.measure.error, r.measure.error)))
         if r0.hover_volume is not None and r.hover_volume is not None:
             gain_hover[i] = Ratio.of(r0.hover_volume, r.hover_volume)
+        free_gains = tuple(Ratio.of(a, b) if a is not None and b is not None and a.dim == b.dim else None
+                           for a, b in ((r0.free_measure, r.free_measure), (r0.free_hover_volume, r.free_hover_volume)))
+        if any(g is not None for g in free_gains):
+            gain_free[i] = free_gains
     status = Status.PARTIAL if reasons else Status.OK
     return WorkspaceResult(platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status,
-                           "; ".join(reasons), note)
+                           "; ".join(reasons), note, gain_free)
 
 
 def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
