@@ -45,6 +45,8 @@ class Rotor:
     kappa : drag torque per newton of thrust, c/b [m] (>= 0).
     f_min, f_max : thrust bounds [N], 0 <= f_min < f_max.
     name : a label (e.g. the URDF frame of the rotor).
+    radius : propeller radius [m] (the disc the blades sweep, used by :mod:`qprr.collision`); None: not given
+        (:func:`qprr.collision.default_disc_radius` derives one from the rotor spacing).
     """
 
     position_body: tuple[float, float, float]
@@ -54,6 +56,7 @@ class Rotor:
     f_min: float = 0.0
     f_max: float = math.inf
     name: str = ""
+    radius: float | None = None
 
     def __post_init__(self) -> None:
         label = f"rotor {self.name!r}" if self.name else "rotor"
@@ -73,6 +76,8 @@ class Rotor:
         object.__setattr__(self, "f_max", as_real(self.f_max, f"{label} f_max", positive=True, allow_inf=True, unit="N"))
         if not isinstance(self.name, str):
             raise InputError(f"{label} name must be a string, got {self.name!r}")
+        if self.radius is not None:
+            object.__setattr__(self, "radius", as_real(self.radius, f"{label} radius", positive=True, unit="m"))
         if not (math.isfinite(self.f_min) and 0.0 <= self.f_min < self.f_max):
             raise InputError(f"{label} thrust bounds must satisfy 0 <= f_min < f_max, got f_min = {self.f_min!r}, "
                              f"f_max = {self.f_max!r}")
@@ -192,8 +197,8 @@ def layout_rotors(n: int, arm_length: float, layout: str = "plus", **kwargs) -> 
 
 
 # ------------------------------------------------------------------ rotor descriptions (files)
-_ROTOR_KEYS = {"position", "axis", "quaternion_xyzw", "spin", "kappa", "f_min", "f_max", "name", "frame"}
-_DEFAULT_KEYS = {"kappa", "f_min", "f_max"}
+_ROTOR_KEYS = {"position", "axis", "quaternion_xyzw", "spin", "kappa", "f_min", "f_max", "name", "frame", "radius"}
+_DEFAULT_KEYS = {"kappa", "f_min", "f_max", "radius"}
 _MAX_ROTOR_DISTANCE = 10.0  # [m] from B: the largest multirotors span a few metres; beyond, positions are not in metres
 _AXIS_NORM_TOL = 1e-3  # a written axis is unit to this (rounded decimals), then normalised
 
@@ -223,7 +228,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     ``axis`` (a unit vector, default [0, 0, 1]) or ``quaternion_xyzw`` (the rotor frame's orientation in B, the
     thrust along its z), or ``frame``: the name of a frame of the platform's URDF whose placement
     gives the position and the axis (its z) - resolved by the caller through ``frame_positions``
-    (name -> (position, axis)).  ``kappa``, ``f_min``, ``f_max`` per rotor or in ``defaults``.
+    (name -> (position, axis)).  ``kappa``, ``f_min``, ``f_max`` (and the propeller ``radius`` [m], optional) per rotor or in ``defaults``.
     The optional ``base_link`` (a string) names the link the positions are written in; the caller
     (:func:`qprr.platform.from_model`) checks that it is the platform's base B.
     Unknown keys raise :class:`~qprr.errors.UnknownNameError`; a position farther than 10 m from B
@@ -290,7 +295,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
                     raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction "
                                      f"in B (here {unit})")
         out.append(Rotor(tuple(pos), tuple(axis), spin, e.get("kappa", 0.0), e.get("f_min", 0.0), e.get("f_max", math.inf),
-                         str(e.get("name", e.get("frame", f"rotor_{i + 1}")))))
+                         str(e.get("name", e.get("frame", f"rotor_{i + 1}"))), e.get("radius")))
     return tuple(out)
 
 

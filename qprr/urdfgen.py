@@ -1,5 +1,8 @@
 """Small URDF writer: links with inertials and primitive visuals, joints, and a robot around them.
 
+Each primitive visual also writes a ``<collision>`` element with the same origin and geometry (``collision=True``,
+the default), so the generated robots carry the collision model :mod:`qprr.collision` reads.
+
 Numbers are written with ``repr`` so a URDF read back gives the same doubles.
 """
 
@@ -52,31 +55,38 @@ def inertial(mass: float, com, inertia6) -> str:
     )
 
 
-def cylinder_visual(radius: float, length: float, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0)) -> str:
-    """``<visual>`` of a cylinder along the local z axis (after ``rpy``) centred at ``xyz``."""
-    material, color = _rgba(rgba)
-    radius, length = as_real(radius, "radius", positive=True), as_real(length, "length", positive=True)
-    return (
+def _shape(origin: str, geometry: str, material: str, color: str, collision: bool) -> str:
+    """A ``<visual>`` (and, with ``collision``, a ``<collision>`` of the same origin and geometry)."""
+    if not isinstance(collision, bool):
+        raise InputError(f"collision must be a bool, got {collision!r}")
+    out = (
         "    <visual>\n"
-        f'      <origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>\n'
-        f'      <geometry><cylinder radius="{num(radius)}" length="{num(length)}"/></geometry>\n'
+        f"      {origin}\n"
+        f"      <geometry>{geometry}</geometry>\n"
         f'      <material name="{material}"><color rgba="{color}"/></material>\n'
         "    </visual>\n"
     )
+    if collision:
+        out += f"    <collision>\n      {origin}\n      <geometry>{geometry}</geometry>\n    </collision>\n"
+    return out
 
 
-def box_visual(size, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0)) -> str:
-    """``<visual>`` of a box of side lengths ``size`` (3,) [m] centred at ``xyz``."""
+def cylinder_visual(radius: float, length: float, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0), *,
+                    collision: bool = True) -> str:
+    """``<visual>`` (and ``<collision>``) of a cylinder along the local z axis (after ``rpy``) centred at ``xyz``."""
+    material, color = _rgba(rgba)
+    radius, length = as_real(radius, "radius", positive=True), as_real(length, "length", positive=True)
+    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>',
+                  f'<cylinder radius="{num(radius)}" length="{num(length)}"/>', material, color, collision)
+
+
+def box_visual(size, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0), *, collision: bool = True) -> str:
+    """``<visual>`` (and ``<collision>``) of a box of side lengths ``size`` (3,) [m] centred at ``xyz``."""
     material, color = _rgba(rgba)
     if as_vector(size, 3, "size").min() <= 0.0:
         raise InputError(f"size must be 3 positive lengths [m], got {list(size)!r}")
-    return (
-        "    <visual>\n"
-        f'      <origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>\n'
-        f'      <geometry><box size="{vec(size, "size", 3)}"/></geometry>\n'
-        f'      <material name="{material}"><color rgba="{color}"/></material>\n'
-        "    </visual>\n"
-    )
+    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>', f'<box size="{vec(size, "size", 3)}"/>',
+                  material, color, collision)
 
 
 def rpy_of_axis(axis) -> tuple[float, float, float]:
@@ -91,17 +101,12 @@ def rpy_of_axis(axis) -> tuple[float, float, float]:
     return (roll, pitch, 0.0)
 
 
-def sphere_visual(radius: float, xyz=(0.0, 0.0, 0.0), rgba=(0.8, 0.2, 0.2, 1.0)) -> str:
-    """``<visual>`` of a sphere of ``radius`` [m] centred at ``xyz``."""
+def sphere_visual(radius: float, xyz=(0.0, 0.0, 0.0), rgba=(0.8, 0.2, 0.2, 1.0), *, collision: bool = True) -> str:
+    """``<visual>`` (and ``<collision>``) of a sphere of ``radius`` [m] centred at ``xyz``."""
     material, color = _rgba(rgba)
     radius = as_real(radius, "radius", positive=True)
-    return (
-        "    <visual>\n"
-        f'      <origin xyz="{vec(xyz, "xyz", 3)}" rpy="0 0 0"/>\n'
-        f'      <geometry><sphere radius="{num(radius)}"/></geometry>\n'
-        f'      <material name="{material}"><color rgba="{color}"/></material>\n'
-        "    </visual>\n"
-    )
+    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="0 0 0"/>', f'<sphere radius="{num(radius)}"/>', material, color,
+                  collision)
 
 
 def link(name: str, inner: str = "") -> str:

@@ -30,7 +30,7 @@ from ._common import JointGrid, Status, make_grid
 from .capacity import LIMITS, CapacityResult, capacity
 from .chain import ArmChain, Statics
 from .cog import BalanceResult, CoGResult, balance, cog_regions
-from .hover import HoverResult, PayloadLimits, hover
+from .hover import HoverOptions, HoverResult, PayloadLimits, hover
 from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
 from .singularity import SingularityResult, singularity
 from .voxels import MeasureEstimate, estimate_measure
@@ -43,6 +43,7 @@ __all__ = [
     "BalanceResult",
     "CapacityResult",
     "CoGResult",
+    "HoverOptions",
     "HoverResult",
     "JointGrid",
     "MeasureEstimate",

@@ -10,6 +10,7 @@ sit in memory as one array.
 
 from __future__ import annotations
 
+import itertools
 import math
 import sys
 from collections.abc import Callable, Iterator, Mapping
@@ -124,6 +125,11 @@ class JointGrid:
         """The grid points with flat indices [start, stop) as an (m, n_arm) array."""
         stop = self.size if stop is None else stop
         idx = np.unravel_index(np.arange(start, stop), self.shape)
+        return np.column_stack([ax[i] for ax, i in zip(self.axes, idx)])
+
+    def configurations_at(self, flat) -> np.ndarray:
+        """The grid points with the flat indices ``flat`` (m,) as an (m, n_arm) array."""
+        idx = np.unravel_index(np.asarray(flat, dtype=np.int64), self.shape)
         return np.column_stack([ax[i] for ax, i in zip(self.axes, idx)])
 
     def chunks(self, chunk: int = CHUNK) -> Iterator[tuple[int, np.ndarray]]:
@@ -325,3 +331,118 @@ def default_map_cell(coords: np.ndarray, cells_across: int = 120) -> float:
     """Cell side [m] for maps over a workspace: its largest extent over ``cells_across``."""
     ext = float((coords.max(axis=0) - coords.min(axis=0)).max())
     return max(ext / cells_across, 1e-9)
+
+
+def resolve_collision(platform: Platform, collision) -> tuple[object, str]:
+    """(the :class:`qprr.collision.CollisionModel` a map filters with, or None; a note saying why it is None).
+
+    ``collision``: None (default: filter when the platform has a collision model, i.e. a URDF with ``<collision>``
+    geometry on its arm links), True (filter; an error when there is no model) or False (no filter)."""
+    from ..collision import collision_model
+
+    if collision is False:
+        return None, "collisions not checked (collision=False)"
+    if collision is not None and collision is not True:
+        raise InputError(f"collision must be None (check when the platform has a collision model), True or False, got {collision!r}")
+    try:
+        return collision_model(platform), ""
+    except InputError as exc:
+        if collision is True:
+            raise
+        return None, f"collisions not checked: {exc}"
+
+
+@dataclass(frozen=True)
+class CollisionMask:
+    """Which configurations of a joint grid are free of self-collision (:func:`collision_mask`).
+
+    ``free`` (n,) bool; ``evaluated``: how many configurations ``pin.computeCollisions`` checked (the others took
+    the value on which the corners of their cell of the twice-coarser grid agree); ``audited``, ``mismatches``: a
+    random sample of the inferred configurations checked afterwards, and how many of them were wrong (the error bar of
+    the inference: a collision set thinner than a coarse cell could hide between agreeing corners)."""
+
+    free: np.ndarray
+    evaluated: int
+    audited: int
+    mismatches: int
+
+    def describe(self) -> str:
+        n = self.free.size
+        if self.evaluated == n:
+            failed = f" (the coarse-to-fine inference failed its audit: {self.mismatches} wrong of {self.audited})" if self.mismatches else ""
+            return f"every one of the {n} configurations checked{failed}"
+        return (f"{self.evaluated} of {n} configurations checked, the others inferred from agreeing corners of the "
+                f"twice-coarser grid (audit: {self.mismatches} wrong of {self.audited} checked at random)")
+
+
+COLLISION_AUDIT_TOLERANCE = 0.01
+"""Largest fraction of wrong inferences in the audit of :func:`collision_mask` before every configuration is checked."""
+
+COLLISION_EXACT_BELOW = 4096
+"""Grids smaller than this are checked configuration by configuration (no coarse-to-fine inference)."""
+
+
+def collision_mask(model, grid: JointGrid, progress=None, label: str = "collision check", *, audit: int = 1000,
+                   seed: int = 0) -> CollisionMask:
+    """The self-collision mask of the configurations of ``grid`` (``model``: a :class:`qprr.collision.CollisionModel`).
+
+    Coarse to fine: the grid with every other value along each axis (when every axis has an odd number of values,
+    so the ends are kept; else, and below :data:`COLLISION_EXACT_BELOW` configurations, every one is checked) is done
+    first (recursively); a configuration whose cell of that grid has all its corners free (or
+    all colliding) takes that value; the others (cells that straddle the boundary) are checked with
+    ``pin.computeCollisions``.  ``audit`` inferred configurations, drawn with ``seed``, are then checked too; their
+    mismatches are reported (:class:`CollisionMask`) and corrected.  When more than :data:`COLLISION_AUDIT_TOLERANCE`
+    of the audited ones are wrong (collision sets thinner than the coarse cells: a coarse grid in many joints), every
+    configuration is checked instead."""
+    free, evaluated = _free_coarse_to_fine(model, grid, progress, label)
+    inferred = np.flatnonzero(~evaluated)
+    audited = mismatches = 0
+    if inferred.size and audit:
+        pick = np.random.default_rng(seed).choice(inferred, size=min(audit, inferred.size), replace=False)
+        truth = ~model.colliding_arm(grid.configurations_at(pick))
+        audited, mismatches = int(pick.size), int(np.count_nonzero(truth != free[pick]))
+        free[pick] = truth
+        evaluated[pick] = True
+        if mismatches > COLLISION_AUDIT_TOLERANCE * audited:
+            rest = np.flatnonzero(~evaluated)
+            for k in range(0, rest.size, CHUNK):
+                free[rest[k:k + CHUNK]] = ~model.colliding_arm(grid.configurations_at(rest[k:k + CHUNK]))
+                if progress:
+                    progress(min(1.0, (k + CHUNK) / rest.size), f"{label} (every configuration)")
+            evaluated[:] = True
+    return CollisionMask(free, int(evaluated.sum()), audited, mismatches)
+
+
+def _free_coarse_to_fine(model, grid: JointGrid, progress, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """(free (n,), evaluated (n,) bool) of :func:`collision_mask` before the audit."""
+    shape = grid.shape
+    if grid.size < COLLISION_EXACT_BELOW or all(n < 3 for n in shape) or any(n >= 3 and n % 2 == 0 for n in shape):
+        free = np.empty(grid.size, dtype=bool)
+        for start, q in grid.chunks():
+            free[start:start + len(q)] = ~model.colliding_arm(q)
+            if progress:
+                progress((start + len(q)) / grid.size, label)
+        return free, np.ones(grid.size, dtype=bool)
+    coarse = JointGrid(grid.names, tuple(a[::2] if len(a) >= 3 else a for a in grid.axes), grid.locked)
+    cfree_flat, cevaluated = _free_coarse_to_fine(model, coarse, None, label)
+    cfree = cfree_flat.reshape(coarse.shape)
+    lo = [np.arange(n) // 2 if n >= 3 else np.zeros(n, dtype=np.int64) for n in shape]
+    hi = [(np.arange(n) + 1) // 2 if n >= 3 else np.zeros(n, dtype=np.int64) for n in shape]
+    all_free = np.ones(shape, dtype=bool)
+    any_free = np.zeros(shape, dtype=bool)
+    for corner in itertools.product((0, 1), repeat=len(shape)):
+        idx = np.ix_(*[(hi if c else lo)[k] for k, c in enumerate(corner)])
+        all_free &= cfree[idx]
+        any_free |= cfree[idx]
+    free = all_free.reshape(-1)
+    todo = np.flatnonzero((any_free & ~all_free).reshape(-1))
+    for k in range(0, todo.size, CHUNK):
+        sel = todo[k:k + CHUNK]
+        free[sel] = ~model.colliding_arm(grid.configurations_at(sel))
+        if progress:
+            progress(min(1.0, (k + sel.size) / todo.size), label)
+    evaluated = np.zeros(grid.size, dtype=bool)
+    evaluated[todo] = True
+    nodes = np.ix_(*[np.arange(0, n, 2) if n >= 3 else np.arange(n) for n in shape])  # the coarse grid's own points
+    evaluated.reshape(shape)[nodes] = cevaluated.reshape(coarse.shape)
+    return free, evaluated

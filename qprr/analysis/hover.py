@@ -20,6 +20,10 @@ tau(m) = tau_0 + m tau_1.  With the wrench set Z of the rotors
 * **payload envelope**: the largest m each configuration can hold, min of the rotor limit
   (the ray from w_0 along w_1 leaving Z) and the effort limit (each joint affine in m).
 
+With a collision model (:mod:`qprr.collision`) the configurations where the arm hits the body, a
+propeller disc or itself are flagged (``collision_free``) and every fraction is reported twice:
+over all configurations and over the collision-free ones (``feasible_free_fraction``).
+
 Thesis Sec. 6.4.1.1 states the capacity question ("the payload depends on the thrust if the
 mission is transport, on the joint torques if it is manipulation"); none of the thesis's
 anchors maps it.  Maps here are over configurations; :mod:`qprr.analysis.capacity` projects
@@ -29,7 +33,7 @@ them onto the workspace.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -43,8 +47,10 @@ from ._common import (
     check_masses,
     check_platform,
     check_progress,
+    collision_mask,
     make_grid,
     make_payload,
+    resolve_collision,
 )
 from .chain import ArmChain, Statics
 from .wrenchset import WrenchSet, wrench_set
@@ -125,6 +131,10 @@ class HoverResult:
     ``rotor_ok``, ``effort_ok``, ``feasible`` (n_m, n).  ``payload``: :class:`PayloadLimits`
     (the envelope).  ``feasible_fraction`` (n_m,) of the configurations; ``min_thrust_margin``
     (n_m,) [N] over every configuration and ``worst_q`` (n_m, n_arm) where it occurs.
+    ``collision_free`` (n,) bool (None: collisions not checked); ``collision_note``: why not, or how the mask was
+    obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
+    ``feasible_free_fraction`` (n_m,): the configurations both collision-free and hover-feasible, as a fraction
+    of all configurations (None without a collision check).
     """
 
     platform_name: str
@@ -148,6 +158,9 @@ class HoverResult:
     worst_q: np.ndarray
     status: Status
     reason: str
+    collision_free: np.ndarray | None = None
+    feasible_free_fraction: np.ndarray | None = None
+    collision_note: str = ""
 
     def summary(self) -> str:
         lines = [f"hover feasibility of {self.platform_name}: {self.grid.size} arm configurations, wrench set of rank "
@@ -157,6 +170,11 @@ class HoverResult:
                          f"(rotors {100 * self.rotor_ok[k].mean():.2f}%, efforts {100 * self.effort_ok[k].mean():.2f}%); "
                          f"min thrust margin {self.min_thrust_margin[k]:.4g} N at q_arm = {np.round(self.worst_q[k], 4).tolist()}; "
                          f"min roll/pitch/yaw authority {np.round(self.authority[k].min(axis=0), 4).tolist()} N m")
+            if self.collision_free is not None:
+                lines.append(f"    collision-free and hover-feasible: {100 * self.feasible_free_fraction[k]:.2f}% of the "
+                             f"configurations ({100 * self.collision_free.mean():.2f}% are collision-free)")
+        if self.collision_note:
+            lines.append(f"  {self.collision_note}")
         pl = self.payload.total
         ok = np.isfinite(pl)
         lines.append(f"  payload envelope (zero reserve): {np.nanmax(np.where(ok, pl, np.nan)):.4g} kg at best, "
@@ -166,18 +184,24 @@ class HoverResult:
         return "\n".join(lines)
 
 
-def hover(
-    platform: Platform,
-    *,
-    n_samples: int = 100_000,
-    payload_masses=(0.0,),
-    payload_offset=(0.0, 0.0, 0.0),
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    torque_reserve: float = 0.0,
-    progress=None,
-) -> HoverResult:
+@dataclass(frozen=True)
+class HoverOptions:
+    """Settings of :func:`hover` (each can also be given to it as a keyword); see its parameters."""
+
+    n_samples: int = 100_000
+    payload_masses: object = (0.0,)
+    payload_offset: object = (0.0, 0.0, 0.0)
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    torque_reserve: object = 0.0
+    collision: bool | None = None
+
+
+def hover(platform: Platform, options: HoverOptions | None = None, *, progress=None, **settings) -> HoverResult:
     """Hover feasibility, thrusts, margins and attitude authority over the arm's joint grid.
+
+    ``options``: :class:`HoverOptions`, and/or its fields as keywords (``hover(p, n_samples=2000)``; an unknown
+    keyword is a TypeError).
 
     Parameters
     ----------
@@ -189,14 +213,20 @@ def hover(
     torque_reserve : torque [N m] to keep available about x, y, z of B in the payload envelope
         (one value or three; 0: the rotors may saturate exactly).
     progress : None, True (stderr) or a callable (fraction, message).
+    collision : flag the self-colliding configurations (None: when the platform has a collision model,
+        :func:`qprr.analysis._common.resolve_collision`; True: required; False: off).
     """
+    o = replace(options or HoverOptions(), **settings) if settings else (options or HoverOptions())
+    if not isinstance(o, HoverOptions):
+        raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_platform(platform)
-    check_int("n_samples", n_samples, 2)
-    masses = check_masses(payload_masses)
-    torque_reserve = check_reserve(torque_reserve)
-    payload = make_payload(platform, payload_offset)
+    check_int("n_samples", o.n_samples, 2)
+    masses = check_masses(o.payload_masses)
+    cmodel, note = resolve_collision(platform, o.collision)
+    torque_reserve = check_reserve(o.torque_reserve)
+    payload = make_payload(platform, o.payload_offset)
     progress = check_progress(progress)
-    grid = make_grid(platform, n_samples, locked, ranges)
+    grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
     W = wrench_set(platform)
     alloc = Allocator(platform)
     chain = ArmChain(platform)
@@ -246,9 +276,19 @@ def hover(
     status, reason = Status.OK, ""
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
-    return HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
-                       PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
-                       margin[np.arange(nm), worst], allq[worst], status, reason)
+    result = HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
+                         PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
+                         margin[np.arange(nm), worst], allq[worst], status, reason, collision_note=note)
+    return _with_collisions(result, cmodel, progress)
+
+
+def _with_collisions(result: HoverResult, cmodel, progress) -> HoverResult:
+    """``result`` with its collision-free mask and fractions (unchanged when ``cmodel`` is None)."""
+    if cmodel is None:
+        return result
+    mask = collision_mask(cmodel, result.grid, progress, "hover map: collisions")
+    return replace(result, collision_free=mask.free, feasible_free_fraction=(result.feasible & mask.free).mean(axis=1),
+                   collision_note=f"collision check: {mask.describe()}")
 
 
 def _alloc_margin(w: np.ndarray, alloc: Allocator, W: WrenchSet) -> np.ndarray:

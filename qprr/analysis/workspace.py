@@ -12,7 +12,10 @@ positions W_b are unbounded, so what characterises a design is W_eb.  Two forms 
 
 Each region is computed with every joint free and with chosen joints locked (the thesis's
 Fig. 3.14/3.15: with and without the slider r0); the gain of the free joints is reported as a
-ratio and a difference, with error bars.  Measures come from :mod:`qprr.analysis.voxels`
+ratio and a difference, with error bars.  With a collision model (:mod:`qprr.collision`: the arm
+against the body, the propeller discs and itself) every region is measured twice: over the whole
+joint box, and over its collision-free configurations only (the image of the grid cells whose
+corners are all collision-free); both numbers are reported.  Measures come from :mod:`qprr.analysis.voxels`
 (cell counting over the linearised images of the joint-grid cells, error bar from the
 convergence in the grid size).  A planar arm (all joints moving the end effector in one
 plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover.
@@ -28,6 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..platform import Platform
 from ._common import (
+    CollisionMask,
     JointGrid,
     Status,
     affine_span,
@@ -35,7 +39,9 @@ from ._common import (
     check_locked,
     check_platform,
     check_progress,
+    collision_mask,
     make_grid,
+    resolve_collision,
 )
 from .chain import ArmChain
 from .voxels import MeasureEstimate, display_occupancy, estimate_measure
@@ -71,6 +77,9 @@ class WorkspaceRegion:
     ``outline``: the same or, for a redundant arm, the finer cells its samples fill without
     holes (:func:`qprr.analysis.voxels.display_occupancy`), which ``boundary`` follows;
     ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
+    ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
+    ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
+    ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only.
     """
 
     label: str
@@ -87,6 +96,10 @@ class WorkspaceRegion:
     profile: np.ndarray
     hover_occupancy: tuple | None
     outline: tuple | None = None
+    collision_free: np.ndarray | None = None
+    collision_check: str = ""
+    free_measure: MeasureEstimate | None = None
+    free_hover_volume: MeasureEstimate | None = None
 
     @property
     def dim(self) -> int:
@@ -100,7 +113,9 @@ class WorkspaceResult:
     ``regions[0]`` has every joint free (apart from ``locked``); the others lock the joints of
     each variant.  ``gain[i]`` (i >= 1): regions[0] over regions[i] in B (``Ratio``) and
     ``gain_hover[i]`` under hover; ``difference[i]`` = measure(regions[0]) - measure(regions[i])
-    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.
+    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.  With a collision check:
+    ``gain_free[i]`` = (in B, under hover) ratios of the collision-free measures (None where not measured);
+    ``collision_note``: why collisions were not checked, if they were not.
     """
 
     platform_name: str
@@ -111,14 +126,23 @@ class WorkspaceResult:
     difference: dict = field(default_factory=dict)
     status: Status = Status.OK
     reason: str = ""
+    collision_note: str = ""
+    gain_free: dict = field(default_factory=dict)
 
     def summary(self) -> str:
-        """A few lines with the measures and the gains."""
+        """A few lines with the measures and the gains (all configurations, then the collision-free ones)."""
         lines = [f"workspace of {self.frame!r} on {self.platform_name}"]
         for i, r in enumerate(self.regions):
             m = str(r.measure) if r.measure is not None else "n/a"
             hv = f"; under hover (yaw free) {r.hover_volume}" if r.hover_volume is not None else ""
             lines.append(f"  [{i}] {r.label}: {r.grid.size} configurations, in B {m}{hv}")
+            if r.collision_free is not None:
+                fm = str(r.free_measure) if r.free_measure is not None else "n/a"
+                fh = f"; under hover {r.free_hover_volume}" if r.free_hover_volume is not None else ""
+                lines.append(f"      collision-free: {int(r.collision_free.sum())} of {r.grid.size} configurations "
+                             f"({100.0 * r.collision_free.mean():.2f}%), in B {fm}{fh} [{r.collision_check}]")
+        if self.collision_note:
+            lines.append(f"  {self.collision_note}")
         for i in self.gain:
             g, d = self.gain[i], self.difference[i]
             lines.append(f"  gain of [0] over [{i}] in B: x{g.value:.4f} +- {g.error:.2g} (+{d[0]:.5g} +- {d[1]:.2g} "
@@ -126,6 +150,10 @@ class WorkspaceResult:
             if i in self.gain_hover:
                 gh = self.gain_hover[i]
                 lines.append(f"  gain of [0] over [{i}] under hover: x{gh.value:.4f} +- {gh.error:.2g}")
+            if i in self.gain_free:
+                parts = [f"{where} x{g.value:.4f} +- {g.error:.2g}" for where, g in zip(("in B", "under hover"), self.gain_free[i])
+                         if g is not None]
+                lines.append(f"  gain of [0] over [{i}], collision-free parts: " + ", ".join(parts))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         return "\n".join(lines)
@@ -157,7 +185,9 @@ class WorkspaceOptions:
     {name: (low, high)} narrower joint ranges than the limits (needed for a prismatic joint without limits);
     ``frame``: the frame whose origin is mapped (name or id; default the end effector); ``hover``: also compute
     the volume swept under hover (yaw free about z_B); ``n_shifts``, ``seed``: counting-grid shifts of the
-    measure estimator (:mod:`qprr.analysis.voxels`).
+    measure estimator (:mod:`qprr.analysis.voxels`); ``collision``: also measure the collision-free part of each
+    region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
+    required; False: off).  Cost: one ``pin.computeCollisions`` per grid configuration (docs/analysis.md).
     """
 
     n_samples: int = 1_000_000
@@ -168,6 +198,7 @@ class WorkspaceOptions:
     hover: bool = True
     n_shifts: int = 4
     seed: int = 0
+    collision: bool | None = None
 
 
 def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, progress=None, **settings) -> WorkspaceResult:
@@ -193,6 +224,7 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     progress = check_progress(progress)
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     chain = ArmChain(platform)
+    cmodel, note = resolve_collision(platform, o.collision)
     sets = [dict(base_locked)] + [{**base_locked, **v} for v in variants]
     regions, reasons = [], []
     for i, lk in enumerate(sets):
@@ -203,12 +235,15 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
             if progress:
                 progress((i + (start + len(q)) / grid.size * 0.3) / len(sets), f"workspace [{i}] {_label(lk)}")
         region, why = _region(pts, grid, lk, hover, n_shifts, seed)
+        if cmodel is not None:
+            sub = (lambda f, m, i=i: progress((i + 0.3 + 0.4 * f) / len(sets), f"workspace [{i}] collisions")) if progress else None
+            region = _free_measures(region, collision_mask(cmodel, grid, sub), n_shifts, seed)
         if why:
             reasons.append(f"[{i}] {why}")
         regions.append(region)
         if progress:
             progress((i + 1) / len(sets), f"workspace [{i}] {_label(lk)}")
-    gain, gain_hover, diff = {}, {}, {}
+    gain, gain_hover, diff, gain_free = {}, {}, {}, {}
     r0 = regions[0]
     for i, r in enumerate(regions[1:], start=1):
         if r0.measure is not None and r.measure is not None and r0.measure.dim == r.measure.dim:
@@ -216,9 +251,34 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
             diff[i] = (r0.measure.measure - r.measure.measure, float(np.hypot(r0.measure.error, r.measure.error)))
         if r0.hover_volume is not None and r.hover_volume is not None:
             gain_hover[i] = Ratio.of(r0.hover_volume, r.hover_volume)
+        free_gains = tuple(Ratio.of(a, b) if a is not None and b is not None and a.dim == b.dim else None
+                           for a, b in ((r0.free_measure, r.free_measure), (r0.free_hover_volume, r.free_hover_volume)))
+        if any(g is not None for g in free_gains):
+            gain_free[i] = free_gains
     status = Status.PARTIAL if reasons else Status.OK
     return WorkspaceResult(platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status,
-                           "; ".join(reasons))
+                           "; ".join(reasons), note, gain_free)
+
+
+def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
+    """``region`` with its collision-free mask and the measures of the image of the cells whose corners are all free."""
+    free = mask.free
+    shape = tuple(n for n in region.grid.shape if n > 1)
+    valid = free.reshape(shape)
+    measure = hover_volume = None
+    if region.measure is not None and free.any():
+        try:
+            measure = estimate_measure(region.coords.reshape(*shape, region.dim), n_shifts=n_shifts, seed=seed, valid=valid)
+        except InputError:  # no cell with all corners free: nothing to measure
+            measure = None
+    if region.hover_volume is not None and free.any():
+        try:
+            hover_volume = estimate_measure(region.profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True,
+                                            valid=valid)
+        except InputError:
+            hover_volume = None
+    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measure,
+                   free_hover_volume=hover_volume)
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int):

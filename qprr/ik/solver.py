@@ -23,6 +23,13 @@ Methods (``METHODS``):
 The thesis's analytic IGM (Algorithms 3-5) is the Q-PRR's own: :func:`qprr.thesis.igm.solve`
 adds it as method ``"igm"`` and uses it as the QP's initial guess.
 
+Self-collision (option ``collision_free`` of every method, :class:`Tolerances`): success also needs the returned
+configuration free of self-collision (:mod:`qprr.collision`: the arm against the body, the propeller discs and
+itself).  A solve whose answer collides is restarted from other arm postures (``collision_restarts`` of them, drawn
+uniformly in the joint limits with a fixed seed, the base placed so the end effector starts on the target); when
+every answer collides the result is a failure with status "collision" naming the pairs in contact.  The check is
+exact at the returned configuration (``pin.computeCollisions``); the path to it is not checked.
+
 Position error: ||p_e - p_d|| [m]; orientation error: ||log3(R_d^T R_e)|| [rad], both from
 Pinocchio's forward kinematics at the returned configuration.
 """
@@ -32,7 +39,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 import pinocchio as pin
@@ -70,6 +77,8 @@ class Tolerances:
     position_tol: float = 1e-6  # [m] success threshold on ||p_e - p_d||
     orientation_tol: float = 1e-6  # [rad] success threshold on ||log3(R_d^T R_e)||
     hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
+    collision_free: bool = False  # success needs no self-collision (qprr.collision); restarts when the answer collides
+    collision_restarts: int = 8  # other arm postures tried when the answer collides (collision_free)
 
     def __post_init__(self):
         self._check_tolerances()
@@ -77,6 +86,8 @@ class Tolerances:
     def _check_tolerances(self) -> None:
         for name in ("position_tol", "orientation_tol", "hover_tol"):
             _check_pos(name, getattr(self, name))
+        _check_bool("collision_free", self.collision_free)
+        ch.as_int(self.collision_restarts, "option collision_restarts", lo=0)
 
 
 @dataclass(frozen=True)
@@ -196,7 +207,7 @@ class IKResult:
 
     ``success``: pose within tolerance, arm within limits and (when required) hover-feasible.
     ``status``: "converged", "unreachable", "not_hover_feasible", "limits", "max_iterations",
-    "stalled", "diverged" or "solver_error"; ``reason`` says why in words when ``success`` is
+    "stalled", "diverged", "solver_error" or "collision" (option ``collision_free``); ``reason`` says why in words when ``success`` is
     False (empty otherwise).  ``xi`` and ``q`` hold the returned (best-effort when failed)
     configuration.  Errors: world position [m] and rotation angle [rad] (0 for a position-only
     target); ``x_cm``, ``y_cm``: CoG offset from the thrust axis in B [m]; ``roll``, ``pitch``:
@@ -306,8 +317,8 @@ def hover_q(platform: Platform, xi) -> np.ndarray:
     return np.array([xi[0], xi[1], xi[2], 0.0, 0.0, math.sin(half), math.cos(half), *xi[6:]])
 
 
-def default_guess(platform: Platform, data: pin.Data, p_world, R_world) -> np.ndarray:
-    """Initial guess xi0: level base, arm at its neutral posture, placed so that the end effector
+def default_guess(platform: Platform, data: pin.Data, p_world, R_world, q_arm=None) -> np.ndarray:
+    """Initial guess xi0: level base, arm at its neutral posture (or at ``q_arm``), placed so that the end effector
     is at ``p_world`` with the yaw that best aligns its orientation with ``R_world`` (keeps the
     current yaw convention of a position target: yaw 0)."""
     check_model_data(platform, data)
@@ -315,6 +326,8 @@ def default_guess(platform: Platform, data: pin.Data, p_world, R_world) -> np.nd
     if R_world is not None:
         R_world = ch.check_rotation(R_world, "R_world", 1e-9)
     q0 = platform.neutral_q()
+    if q_arm is not None:
+        q0[7:] = platform.check_arm_limits(q_arm, "q_arm")
     pin.framesForwardKinematics(platform.model, data, q0)
     bMe = data.oMi[1].actInv(data.oMf[platform.ee_frame])
     if R_world is None:
@@ -648,6 +661,11 @@ class IKSolver:
         self.initial_guess = initial_guess
         self.unreachable_hint = unreachable_hint
         self._engine = None
+        self._collision = None
+        if self.options.collision_free:
+            from ..collision import collision_model
+
+            self._collision = collision_model(platform)
         if method == "qp":
             o = self.options
             self._engine = HierarchySolver(platform, eps_abs=o.eps_abs, regularization=o.regularization, rank_tol=o.rank_tol)
@@ -670,13 +688,44 @@ class IKSolver:
             xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
         else:
             xi, init = self._guess(data, p_d, R_d, hover)
-        ctx = SolveContext(self.platform, data, self.method, p_d, R_d, opts, t0, init, _require_hover(self.platform, opts),
-                           self.unreachable_hint)
+        result = self._run(data, p_d, R_d, xi, init, t0)
+        if self._collision is not None:
+            result = self._collision_free(data, p_d, R_d, result, t0)
+        return result
+
+    def _run(self, data: pin.Data, p_d, R_d, xi: np.ndarray, init: str, t0: float) -> IKResult:
+        ctx = SolveContext(self.platform, data, self.method, p_d, R_d, self.options, t0, init,
+                           _require_hover(self.platform, self.options), self.unreachable_hint)
         if self.method == "clika":
             return solve_clika(ctx, xi)
         if self.method == "dls":
             return solve_dls(ctx, xi)
         return self._solve_qp(ctx, xi)
+
+    def _collision_free(self, data: pin.Data, p_d, R_d, result: IKResult, t0: float) -> IKResult:
+        """Restart from other arm postures while the answer collides (module docstring); a colliding answer never
+        leaves as a success."""
+        platform, cm = self.platform, self._collision
+        if not result.success:
+            return result
+        hits = cm.colliding_pairs(result.q)
+        if not hits:
+            return result
+        rng = np.random.default_rng(0)
+        lo, hi = np.maximum(platform.arm_lower, -math.pi), np.minimum(platform.arm_upper, math.pi)
+        for k in range(self.options.collision_restarts):
+            xi = default_guess(platform, data, p_d, R_d, rng.uniform(lo, hi))
+            label = f"restart {k + 1} (collision-free option): random arm posture, end effector on the target"
+            attempt = self._run(data, p_d, R_d, xi, label, t0)
+            if attempt.success:
+                attempt_hits = cm.colliding_pairs(attempt.q)
+                if not attempt_hits:
+                    return attempt
+                result, hits = attempt, attempt_hits
+        pairs = ", ".join(f"{a} / {b}" for a, b in hits)
+        return replace(result, success=False, status="collision", wall_time=time.perf_counter() - t0,
+                       reason=f"the pose is reached only in self-collision ({pairs}) after {self.options.collision_restarts} "
+                              "restarts from other arm postures (collision_restarts)")
 
     def _solve_qp(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts = self.platform, ctx.data, self.options

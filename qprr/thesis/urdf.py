@@ -10,7 +10,9 @@ Visual shapes (``<visual>``, no effect on the dynamics: Pinocchio's model reads 
 only) are primitives sized from the parameters: the hub, a boom from the hub to each rotor,
 the motor and a propeller disc on each rotor frame of ``layout`` (the other layout's frames stay
 bare), the slider rail at height d0, the links as cylinders of lengths d1, d2, d3, the
-revolute joint housings about y and a sphere at the end effector.
+revolute joint housings about y and a sphere at the end effector.  Each of these shapes is also a
+``<collision>`` element (same origin and geometry, :mod:`qprr.urdfgen`): the collision model of
+:mod:`qprr.collision` (the propeller discs included, so qprr adds no disc of its own for the Q-PRR).
 """
 
 from __future__ import annotations
