@@ -786,6 +786,8 @@ def _with(a: np.ndarray, x: float) -> np.ndarray:
 # ============================================================================ outcomes
 HOT = "hot-loop form on plain floats, unvalidated by design (runs every simulated millisecond); the validated forms are "
 ALLOWED: dict[tuple[str, str, str], str] = {
+    ("qprr.analysis.workspace.WorkspaceOptions", "frame", "*"): "a frame is a name or id of a platform: workspace() "
+    "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
     ("qprr.charts.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
     ("qprr.charts.as_array", "x", "*"): "as_array converts any shape; NaN and inf pass unless finite=True is asked",
     ("qprr.charts.wrap_angle", "a", "NaN entry"): "elementwise on any array: NaN stays NaN (logs of diverged runs), like numpy's ufuncs",

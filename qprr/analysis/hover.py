@@ -38,6 +38,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..actuation import Allocator
+from ..charts import as_vector
 from ..errors import InputError
 from ..platform import Platform
 from ._common import (
@@ -196,6 +197,14 @@ class HoverOptions:
     torque_reserve: object = 0.0
     collision: bool | None = None
 
+    def __post_init__(self) -> None:  # the platform-free settings are checked however the options are built
+        object.__setattr__(self, "n_samples", check_int("n_samples", self.n_samples, 2))
+        object.__setattr__(self, "payload_masses", tuple(float(m) for m in check_masses(self.payload_masses)))
+        object.__setattr__(self, "payload_offset", tuple(float(x) for x in as_vector(self.payload_offset, 3, "payload_offset")))
+        check_reserve(self.torque_reserve)
+        if self.collision is not None and not isinstance(self.collision, (bool, np.bool_)):
+            raise InputError(f"collision must be None (when a collision model exists), True or False, got {self.collision!r}")
+
 
 def hover(platform: Platform, options: HoverOptions | None = None, *, progress=None, **settings) -> HoverResult:
     """Hover feasibility, thrusts, margins and attitude authority over the arm's joint grid.
@@ -220,8 +229,7 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     if not isinstance(o, HoverOptions):
         raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_platform(platform)
-    check_int("n_samples", o.n_samples, 2)
-    masses = check_masses(o.payload_masses)
+    masses = np.array(o.payload_masses)
     cmodel, note = resolve_collision(platform, o.collision)
     torque_reserve = check_reserve(o.torque_reserve)
     payload = make_payload(platform, o.payload_offset)

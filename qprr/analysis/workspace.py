@@ -200,6 +200,15 @@ class WorkspaceOptions:
     seed: int = 0
     collision: bool | None = None
 
+    def __post_init__(self) -> None:  # the platform-free settings are checked however the options are built
+        object.__setattr__(self, "n_samples", check_int("n_samples", self.n_samples, 8))
+        object.__setattr__(self, "n_shifts", check_int("n_shifts", self.n_shifts, 2))
+        object.__setattr__(self, "seed", check_int("seed", self.seed, 0))
+        if not isinstance(self.hover, (bool, np.bool_)):
+            raise InputError(f"hover must be True or False, got {self.hover!r}")
+        if self.collision is not None and not isinstance(self.collision, (bool, np.bool_)):
+            raise InputError(f"collision must be None (when a collision model exists), True or False, got {self.collision!r}")
+
 
 def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, progress=None, **settings) -> WorkspaceResult:
     """The workspace of the frame (default: the end effector), with every joint free and per variant.
@@ -214,9 +223,6 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     n_samples, variants, locked, ranges, frame, hover = o.n_samples, o.variants, o.locked, o.ranges, o.frame, o.hover
     n_shifts, seed = o.n_shifts, o.seed
     check_platform(platform)
-    n_samples = check_int("n_samples", n_samples, 8)
-    check_int("n_shifts", n_shifts, 2)
-    check_int("seed", seed, 0)
     base_locked = check_locked(platform, locked)
     if variants is None:
         variants = default_variants(platform)
