@@ -120,7 +120,7 @@ class SimResult:
         start = as_real(start, "start", unit="s")
         sel = self.t >= start
         if not sel.any():
-            span = f"[{self.t[0]!r}, {self.t[-1]!r}] s" if self.n else "no tick"
+            span = f"[{float(self.t[0])!r}, {float(self.t[-1])!r}] s" if self.n else "no tick"
             raise InputError(f"rmse: start = {start!r} s is after the last logged tick (the run covers {span}); "
                              "give a start within the run")
         e = self.xi_d[sel] - self.xi[sel]
