@@ -599,7 +599,7 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
     k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
     what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
     label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
-    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {getattr(controller, 'name', type(controller).__name__)!r} "
+    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
                            f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)")
 
 
