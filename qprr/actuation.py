@@ -18,13 +18,13 @@ from __future__ import annotations
 import math
 import struct
 from dataclasses import dataclass
-from types import MethodType
+from math import hypot
 
 import numpy as np
 import pinocchio as pin
 
 from . import charts as ch
-from .charts import FloatWriter, as_real, as_vector
+from .charts import as_real, as_vector
 from .errors import DivergenceError, InputError
 from .kinematics import ee_jacobian_world
 from .optim import Lexicographic, QPSettings
@@ -105,8 +105,12 @@ class Allocator:
       thrusts closest to the exact allocation.  Variables are scaled by max f_max.
     * Arm efforts are clipped to the platform's effort limits.
 
-    :meth:`allocate` is the validated call; :meth:`allocate_into` the allocation-free one of the
-    simulator.  The object owns its QPs (warm-started between calls); it can be copied or pickled.
+    Calls: :meth:`allocate` validates its input and explains the result; :meth:`allocate_into`
+    writes into given buffers without validation (the in-loop form); :meth:`allocate_screened_into`
+    is :meth:`allocate_into` behind the screen of a NaN, infinite or absurd demand (-1), the call of
+    :func:`qprr.sim.simulate`.  A subclass changes the allocation by overriding :meth:`allocate_into`
+    (as :class:`IdealAllocator` does); the screen then applies to it as well.  The object owns its
+    QPs (warm-started between calls); it can be copied or pickled.
     """
 
     def __init__(self, platform: Platform, *, thrust_bounds: tuple[float, float] | None = None, weight_force: float = 1.0,
@@ -155,36 +159,14 @@ class Allocator:
         self._W = np.array([weight_force if self.rows[k] < 3 else weight_torque for k in self._lvl1])
         self._scale = float(f_max.max())
         self._lex = Lexicographic(n, None, settings=settings, regularization=0.0, rank_tol=1e-9, warm_start=True, exact_fallback=True)
-        self._write = FloatWriter(self.n_rotors + self.n_arm)
-        self._tau_write = FloatWriter(platform.nv)
-        # fast-path tests: uniform bounds compare min/max once; rows the rotors never produce are zeroed
+        # allocate_into's constants: the bounds as floats, the buffer layouts, the rows the rotors never produce
         self._uniform = bool(np.all(f_min == f_min[0]) and np.all(f_max == f_max[0]))
+        self._lo0, self._hi0 = self._lo[0], self._hi[0]
+        self._neg_lim = [-x for x in self._lim]
+        self._rotor_range, self._arm_range = range(n), range(self.n_arm)  # (indexing in a loop: the cheapest bound test)
+        self._f_format, self._tau_format = f"={n + self.n_arm}d", f"={platform.nv}d"  # struct layouts of f_out, tau_out
         self._zero_rows = [i for i in range(6) if i not in self.rows]
         self.qp_calls = 0
-        self._bind_fast_path()
-
-    def _bind_fast_path(self) -> None:
-        """Replace :meth:`allocate_into` on this instance by its form compiled for this allocator (see ``_FAST_PATH``).
-
-        Subclasses that override :meth:`allocate_into` keep their own.  The simulator's form
-        ``_screened_into`` first screens ``tau_d``: if its norm is NaN, inf or >= ``DEMAND_BOUND`` it writes
-        nothing and returns -1 (the loop then names the controller's bad entry); else it is
-        :meth:`allocate_into`.
-        """
-        if type(self).allocate_into is Allocator.allocate_into:
-            self.allocate_into = MethodType(_compile_fast_path(self), self)
-            self._screened_into = MethodType(_compile_fast_path(self, screened=True), self)
-
-    def __getstate__(self) -> dict:
-        """Pickle the values, not the compiled :meth:`allocate_into` (rebuilt by :meth:`__setstate__`)."""
-        state = self.__dict__.copy()
-        state.pop("allocate_into", None)
-        state.pop("_screened_into", None)
-        return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        self._bind_fast_path()
 
     @property
     def weights(self) -> np.ndarray:
@@ -255,19 +237,76 @@ class Allocator:
         """In-loop allocation without validation: writes f into ``f_out`` and, if given, N f into ``tau_out``.
 
         ``tau_d`` (nv,) float64; ``f_out`` (n_rotors + n_arm,) and ``tau_out`` (nv,) float64 arrays.
-        Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.
+        Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.  A NaN
+        demand raises :class:`~qprr.errors.DivergenceError` naming the wrench component or the arm
+        joint (NaN fails every bound test).
 
-        This generic form is the reference; each instance runs the same steps compiled for its
-        rotor count, arm joints, bounds and zero rows (``_FAST_PATH``; tests compare the two).
+        The steps of :meth:`reference_allocate_into` on plain floats (tests compare the two bit for
+        bit): bound tests as chained float comparisons in an indexed loop (one bound pair when every
+        rotor has the same bounds), buffers written with :func:`struct.pack_into`.
+        """
+        td = tau_d.tolist()
+        f = self.Omega_P_inv.dot(tau_d[self._rows])
+        fl = f.tolist()
+        flags = 0
+        if self._uniform:
+            lo, hi = self._lo0, self._hi0
+            for x in fl:
+                if not lo <= x <= hi:  # beyond a bound, or NaN
+                    flags = 1
+                    break
+        else:
+            lo, hi = self._lo, self._hi
+            for k in self._rotor_range:
+                if not lo[k] <= fl[k] <= hi[k]:
+                    flags = 1
+                    break
+        if flags:
+            f = self._solve_qp(tau_d[self.rows], f)
+            fl = f.tolist()
+        arm = td[6:]
+        if self.clip_arm:
+            lo, hi = self._neg_lim, self._lim
+            for k in self._arm_range:
+                if not lo[k] <= arm[k] <= hi[k]:  # beyond the limit, or NaN
+                    self._check_arm_finite(arm)
+                    arm = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
+                    flags |= 2
+                    break
+        elif arm and not math.isfinite(sum(arm)):
+            self._check_arm_finite(arm)
+        _put(f_out, self._f_format, fl + arm)
+        if tau_out is not None:
+            if flags or not self.square:
+                tau_out[0:6] = self.Omega @ f
+                tau_out[6:] = arm
+            else:  # exact: Omega f = tau_d on the producible rows, zero on the others; arm efforts as asked
+                for i in self._zero_rows:
+                    td[i] = 0.0
+                _put(tau_out, self._tau_format, td)
+        return flags
+
+    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+        """:meth:`allocate_into` behind the simulator's screen of the controller's output.
+
+        Returns -1 and writes nothing when the norm of ``tau_d`` is NaN, inf or >= :data:`DEMAND_BOUND`
+        (the simulator then names the controller's bad entry); otherwise ``self.allocate_into(tau_d,
+        f_out, tau_out)``: a subclass that overrides :meth:`allocate_into` is screened the same way.
+        This is the call :func:`qprr.sim.simulate` makes at every control tick.
+        """
+        if not hypot(*tau_d.tolist()) < DEMAND_BOUND:
+            return -1
+        return self.allocate_into(tau_d, f_out, tau_out)
+
+    def reference_allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+        """:meth:`allocate_into` written step by step: the specification the in-loop form is tested against, bit for bit.
+
+        Same arguments, writes and flags as :meth:`allocate_into` (tests/test_allocation_fast_path.py).
         """
         f = self.Omega_P_inv.dot(tau_d[self._rows])
         fl = f.tolist()
         flags = 0
-        lo, hi = self._lo, self._hi
-        if self._uniform:
-            inside = lo[0] <= min(fl) and max(fl) <= hi[0]  # NaN fails both
-        else:
-            inside = all(a <= x <= b for a, x, b in zip(lo, fl, hi))
+        inside = all(a <= x <= b for a, x, b in zip(self._lo, fl, self._hi))  # NaN fails
         if not inside:
             f = self._solve_qp(tau_d[self.rows], f)
             fl = f.tolist()
@@ -284,7 +323,7 @@ class Allocator:
                     break
         elif arm and not math.isfinite(sum(arm)):
             self._check_arm_finite(arm)
-        self._write(f_out, fl + arm)
+        _put(f_out, self._f_format, fl + arm)
         if tau_out is not None:
             if flags or not self.square:
                 tau_out[0:6] = self.Omega @ f
@@ -292,7 +331,7 @@ class Allocator:
             else:  # exact: Omega f = tau_d on the producible rows, zero on the others; arm efforts as asked
                 for i in self._zero_rows:
                     td[i] = 0.0
-                self._tau_write(tau_out, td)
+                _put(tau_out, self._tau_format, td)
         return flags
 
     def _check_arm_finite(self, arm: list[float]) -> None:
@@ -319,82 +358,19 @@ class Allocator:
         return f
 
 
-# The fast path of Allocator.allocate_into, compiled per allocator from this template (as State's hot
-# methods in qprr.charts): fixed-length unpacking of plain floats, chained comparisons with the bounds
-# (bound as globals _lo<i>, _hi<i>, _am<k> = -limit, _ap<k> = +limit), one buffer write.  Placeholders:
-# {T} "t0, ..., t<nv-1>" (tau_d), {F} "f0, ..., f<n-1>" (rotor thrusts), {A} the arm efforts, {INSIDE}
-# the rotor bound test, {ARM} the arm test, {TAU} the exact N f (zero rows zeroed).  The steps and
-# errors are those of the generic method: NaN fails every bound test, so a NaN wrench reaches
-# _solve_qp (which names it) and a NaN arm effort _check_arm_finite.
-_FAST_PATH = """
-def allocate_into(self, tau_d, f_out, tau_out=None):
-    {T}, = tau_d.tolist()
-{GUARD}    f = _P.dot(tau_d[_rows])
-    {F}, = f.tolist()
-    flags = 0
-    if not ({INSIDE}):
-        f = self._solve_qp(tau_d[self.rows], f)
-        {F}, = f.tolist()
-        flags = 1
-{ARM}
-    if f_out.dtype is _F8:
+_F8 = np.dtype(np.float64)
+
+
+def _put(out: np.ndarray, layout: str, values: list[float]) -> None:
+    """``out[:] = values`` for a float64 vector: packed straight into its buffer (``layout`` "=<n>d"); numpy's assignment
+    for another dtype or a non-contiguous view (a wrong length still raises)."""
+    if out.dtype is _F8:
         try:
-            _pack_f(f_out, 0, {F}{A})
-        except (TypeError, _struct_error):
-            f_out[:] = ({F}{A})
-    else:
-        f_out[:] = ({F}{A})
-    if tau_out is not None:
-        if {GENERAL}:
-            tau_out[0:6] = self.Omega @ f
-            tau_out[6:] = [{A0}]
-        elif tau_out.dtype is _F8:
-            try:
-                _pack_tau(tau_out, 0, {TAU})
-            except (TypeError, _struct_error):
-                tau_out[:] = ({TAU},)
-        else:
-            tau_out[:] = ({TAU},)
-    return flags
-"""
-_ARM_CLIP = """    if not ({TEST}):
-        self._check_arm_finite([{A0}])
-        {A0}, = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
-        flags |= 2
-"""
-_ARM_FINITE = """    if not isfinite({SUM}):
-        self._check_arm_finite([{A0}])
-"""
-
-
-def _compile_fast_path(alloc: Allocator, screened: bool = False):
-    """:meth:`Allocator.allocate_into` compiled for ``alloc`` (the template ``_FAST_PATH``); ``screened``: -1 on a bad ``tau_d``."""
-    n, m = alloc.n_rotors, alloc.n_arm
-    nv = 6 + m
-    fs = [f"f{i}" for i in range(n)]
-    arm = [f"t{6 + k}" for k in range(m)]
-    inside = " and ".join(f"_lo{i} <= f{i} <= _hi{i}" for i in range(n))
-    if not m:
-        arm_src = ""
-    elif alloc.clip_arm:
-        arm_src = _ARM_CLIP.format(TEST=" and ".join(f"_am{k} <= t{6 + k} <= _ap{k}" for k in range(m)), A0=", ".join(arm))
-    else:
-        arm_src = _ARM_FINITE.format(SUM=" + ".join(["0.0", *arm]), A0=", ".join(arm))
-    tau = ", ".join("0.0" if i in alloc._zero_rows else f"t{i}" for i in range(nv))
-    ts = ", ".join(f"t{i}" for i in range(nv))
-    guard = f"    if not hypot({ts}) < _bound:\n        return -1\n" if screened else ""
-    src = _FAST_PATH.format(T=ts, GUARD=guard, F=", ".join(fs), A="".join(f", {a}" for a in arm),
-                            INSIDE=inside, ARM=arm_src, GENERAL="flags" if alloc.square else "True", A0=", ".join(arm), TAU=tau)
-    ns = {"np": np, "isfinite": math.isfinite, "hypot": math.hypot, "_bound": DEMAND_BOUND, "_P": alloc.Omega_P_inv, "_rows": alloc._rows,
-          "_F8": np.dtype(np.float64),
-          "_pack_f": struct.Struct(f"={n + m}d").pack_into, "_pack_tau": struct.Struct(f"={nv}d").pack_into,
-          "_struct_error": struct.error}
-    ns.update({f"_lo{i}": x for i, x in enumerate(alloc._lo)})
-    ns.update({f"_hi{i}": x for i, x in enumerate(alloc._hi)})
-    ns.update({f"_am{k}": -x for k, x in enumerate(alloc._lim)})
-    ns.update({f"_ap{k}": x for k, x in enumerate(alloc._lim)})
-    exec(compile(src, f"<qprr.actuation.Allocator fast path, {n} rotors, {m} arm joints>", "exec"), ns)
-    return ns["allocate_into"]
+            struct.pack_into(layout, out, 0, *values)
+            return
+        except (TypeError, struct.error):  # not C-contiguous, or not the length of the layout
+            pass
+    out[:] = values
 
 
 class IdealAllocator(Allocator):

@@ -30,7 +30,7 @@ from .control import InverseDynamicsController
 from .control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
-from .sim import SimResult, simulate
+from .sim import SimConfig, SimResult, simulate
 from .sim.contact import CompliantWall, PrescribedWrench
 from .trajectory import Hold, MultiPhase, Phase
 
@@ -41,7 +41,7 @@ CONTACTS = ("wall", "wrench")
 
 
 def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progress: bool = False, *, contact: str = "wall",
-                     duration: float = 10.0, dt: float = 1e-3, integrator: str = "midpoint", seed: int = 0, z: float = 2.0,
+                     duration: float = 10.0, dt: float = SimConfig.dt, integrator: str = "midpoint", seed: int = 0, z: float = 2.0,
                      reach_fraction: float = 0.3, omega_n: float = 4.0, zeta: float = 1.0, mass: float = 1.0,
                      gap: float = 0.05, penetration: float = 0.05, wall_stiffness: float = 2000.0, wall_damping: float = 20.0,
                      force=(0.5, 0.0, 0.3), t_on: float = 1.0, t_off: float = 6.0) -> SimResult:

@@ -30,7 +30,7 @@ from .control import make_controller
 from .errors import InputError, UnknownNameError
 from .platform import Platform
 from .registry import SCENARIOS
-from .sim import SimResult, simulate
+from .sim import SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 
 
@@ -99,7 +99,7 @@ class Scenario:
 # ------------------------------------------------------------------------- generic scenarios
 COMMON_OPTIONS = {
     "duration": Option(10.0, "run length [s]"),
-    "dt": Option(1e-3, "integration step [s]"),
+    "dt": Option(SimConfig.dt, "integration step [s]"),
     "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
     "seed": Option(0, "noise seed"),
     "law": Option(DEFAULT_LAW, f"transition law: {', '.join(LAWS)}"),
@@ -148,7 +148,7 @@ GENERIC = (
     Scenario("ee-impedance", "any platform: end-effector impedance (6.72)-(6.73) against a compliant wall or a force step",
              _ee_impedance, ("opspace-impedance", "idc"),
              {"contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
-              "duration": Option(10.0, "run length [s]"), "dt": Option(1e-3, "integration step [s]"),
+              "duration": Option(10.0, "run length [s]"), "dt": Option(SimConfig.dt, "integration step [s]"),
               "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"), "seed": Option(0, "seed"),
               "z": Option(2.0, "hover height [m]"),
               "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),

@@ -795,7 +795,7 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.charts.wrap_angle", "a", "2-D"): "elementwise on an array of any shape",
     ("qprr.charts.wrap_angle", "a", "empty"): "elementwise on an array of any shape (empty in, empty out)",
     ("qprr.charts.State.*", "*", "*"): HOT + "the array functions of qprr.charts (tests check them against each other)",
-    ("qprr.actuation.*Allocator.allocate_into", "*", "*"): HOT + "Allocator.allocate",
+    ("qprr.actuation.*Allocator.*_into", "*", "*"): HOT + "Allocator.allocate (allocate_into, its screened form and its reference)",
     ("qprr.kinematics.com_jacobian_body_from", "*", "*"): "the second half of com_jacobian_body for a caller whose data already holds "
     "the CoM and its Jacobian (hot path); without the platform it cannot check data or the width of Jc",
     ("qprr.rotors.Rotor", "f_max", "inf"): "f_max = inf: a rotor without an upper thrust bound (the default)",

@@ -1,9 +1,11 @@
-"""The compiled fast path of Allocator.allocate_into against the generic method it is compiled from.
+"""The in-loop Allocator.allocate_into against Allocator.reference_allocate_into, the step-by-step form it implements.
 
-Each Allocator runs ``allocate_into`` compiled for its rotor count, arm joints, bounds and zero rows
-(``qprr.actuation._FAST_PATH``).  Here two twin allocators (same QP warm-start history) receive the
-same demands, one through the compiled method, one through the generic ``Allocator.allocate_into``:
-thrusts, efforts, N f and flags must agree bit for bit, and bad input must raise the same error.
+``allocate_into`` runs the allocation on plain floats with precomputed bound lists and packed buffer
+writes (one bound pair when every rotor has the same bounds).  Here two twin allocators (same QP
+warm-start history) receive the same demands, one through ``allocate_into``, one through
+``reference_allocate_into``: thrusts, efforts, N f and flags must agree bit for bit, and bad input
+must raise the same error.  ``allocate_screened_into`` is ``allocate_into`` behind the screen of a
+NaN, infinite or absurd demand, for the base class and for a subclass that overrides ``allocate_into``.
 """
 
 from __future__ import annotations
@@ -19,7 +21,8 @@ from hypothesis import strategies as st
 
 import qprr
 import qprr.thesis
-from qprr.actuation import Allocator
+from qprr.actuation import Allocator, IdealAllocator
+from qprr.rotors import ideal_wrench_set
 
 
 def _non_uniform(p):
@@ -65,10 +68,9 @@ def _demand(p, thrust_scale, arm_scale, nan_at, lateral):
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_compiled_fast_path_is_the_generic_method(case, data):
+def test_in_loop_form_is_the_reference_method(case, data):
     p, kwargs = case
     fast, ref = Allocator(p, **kwargs), Allocator(p, **kwargs)  # fresh twins: the same (empty) QP warm start
-    assert fast.allocate_into.__func__ is not Allocator.allocate_into  # the compiled form is bound
     thrust = data.draw(st.lists(st.floats(-0.5, 1.5), min_size=p.n_rotors, max_size=p.n_rotors))
     inside = data.draw(st.booleans())  # half the cases on the exact path
     if inside:
@@ -78,7 +80,7 @@ def test_compiled_fast_path_is_the_generic_method(case, data):
     lateral = data.draw(st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=2))
     tau = _demand(p, thrust, arm, nan_at, lateral)
     a = _run(fast.allocate_into, tau, p.n_actuators, p.nv)
-    b = _run(lambda *args: Allocator.allocate_into(ref, *args), tau, p.n_actuators, p.nv)
+    b = _run(ref.reference_allocate_into, tau, p.n_actuators, p.nv)
     if b[0] == "error":
         assert a == b
         return
@@ -100,11 +102,11 @@ def test_nan_wrench_and_nan_arm_effort_raise_the_generic_messages():
         with pytest.raises(qprr.errors.DivergenceError, match=pattern) as fast_err:
             alloc.allocate_into(tau, np.empty(p.n_actuators))
         with pytest.raises(qprr.errors.DivergenceError) as ref_err:
-            Allocator.allocate_into(Allocator(p), tau, np.empty(p.n_actuators))
+            Allocator(p).reference_allocate_into(tau, np.empty(p.n_actuators))
         assert str(fast_err.value) == str(ref_err.value)
 
 
-def test_copies_rebuild_the_compiled_method_for_themselves():
+def test_copies_allocate_for_themselves():
     alloc = Allocator(qprr.build("HEX-RRR"))
     p = alloc.platform
     tau = p.actuation_matrix @ np.concatenate([1.4 * p.thrust_max, 3.0 * p.arm_effort_limits])  # rotors and arm saturated
@@ -114,22 +116,39 @@ def test_copies_rebuild_the_compiled_method_for_themselves():
         calls = other.qp_calls
         assert other.allocate_into(tau, f1) == alloc.allocate_into(tau, f2) == 3
         np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-7 * p.thrust_max.max())
-        assert other.qp_calls == calls + 1  # the copy's own counter: its method is bound to it
+        assert other.qp_calls == calls + 1  # the copy's own counter and QPs
 
 
 @settings(max_examples=40, deadline=None)
 @given(scale=st.floats(-2.0, 2.0), bad_at=st.integers(0, 8), bad=st.sampled_from([np.nan, np.inf, -np.inf, 1e151, -3e200]))
 def test_screened_form_refuses_exactly_the_bad_demands(scale, bad_at, bad):
-    """The simulator's ``_screened_into``: -1 and nothing written when the norm of tau_d is NaN, inf or
+    """The simulator's ``allocate_screened_into``: -1 and nothing written when the norm of tau_d is NaN, inf or
     >= DEMAND_BOUND (even on a row no rotor produces), else allocate_into's answer."""
     alloc = Allocator(qprr.thesis.load())
     p = alloc.platform
     tau = p.actuation_matrix @ np.concatenate([alloc.hover_thrusts() * (1.0 + 0.2 * scale), scale * p.arm_effort_limits])
     f1, t1, f2, t2 = (np.zeros(n) for n in (p.n_actuators, p.nv, p.n_actuators, p.nv))
-    assert alloc._screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2) >= 0
+    assert alloc.allocate_screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2) >= 0
     np.testing.assert_array_equal(f1, f2)
     np.testing.assert_array_equal(t1, t2)
     tau[bad_at] = bad
     f1[:], t1[:] = -7.0, -7.0
-    assert alloc._screened_into(tau, f1, t1) == -1
+    assert alloc.allocate_screened_into(tau, f1, t1) == -1
     assert np.all(f1 == -7.0) and np.all(t1 == -7.0)
+
+
+def test_a_subclass_that_overrides_allocate_into_is_screened_and_allocated_by_its_own_method():
+    """IdealAllocator overrides allocate_into: the screened call runs its allocation (N f = tau_d exactly on the ideal
+    wrench set, where the base class's least squares would not) and refuses a NaN demand with -1."""
+    p = qprr.thesis.load().replace(rotors=ideal_wrench_set(10.0, 10.0))
+    alloc = IdealAllocator(p)
+    tau = np.r_[0.3, -0.2, 4.0, 0.05, -0.02, 0.01, 0.0, 0.1, -0.1]
+    f1, t1, f2, t2 = np.zeros(p.n_actuators), np.zeros(p.nv), np.zeros(p.n_actuators), np.zeros(p.nv)
+    assert alloc.allocate_screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2) == 0
+    np.testing.assert_array_equal(f1, f2)
+    np.testing.assert_array_equal(t1, t2)
+    np.testing.assert_allclose(t1, tau, rtol=1e-14, atol=1e-14)
+    np.testing.assert_allclose(p.actuation_matrix @ f1, tau, rtol=1e-14, atol=1e-14)
+    tau[4] = np.nan
+    f1[:] = -7.0
+    assert alloc.allocate_screened_into(tau, f1, t1) == -1 and np.all(f1 == -7.0)

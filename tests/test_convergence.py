@@ -122,7 +122,7 @@ def _hooked_object():
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, math.pi / 2, 0.0])
     p0, _ = qm.ee_pose_xi(ROBOT, ROBOT.data(), xi0)
     pen = mu * mass * _G / k  # the steady sliding force
-    obj = it.PushedMass(ROBOT, mass=mass, origin=p0 + np.r_[pen, 0.0, 0.0], direction=(-1.0, 0.0, 0.0), velocity=V,
+    obj = it.PushedMass(ROBOT, mass=mass, origin=p0 + np.r_[pen, 0.0, 0.0], direction=(-1.0, 0.0, 0.0), initial=(0.0, V),
                         stiffness=k, damping=5.0, friction=mu)
     rate = np.r_[-V, np.zeros(8)]
     return ROBOT, flight_controller("idc", ROBOT), _Ramp(xi0, rate), dict(xi0=xi0, xi_dot0=rate, external_wrench=obj,

@@ -45,6 +45,8 @@ def results(draw) -> SimResult:
                                                    st.sampled_from([(m,), (m, 3), (7,), (), (0,)])), max_size=4))
     metrics = draw(st.dictionaries(TEXT, FLOATS, max_size=4))
     names = draw(st.one_of(st.just(()), st.lists(TEXT, min_size=n_xi, max_size=n_xi).map(tuple)))
+    lows = draw(hnp.arrays(np.float64, n_rotors, elements=st.floats(0.0, 10.0)))
+    bounds = draw(st.one_of(st.none(), st.just(np.column_stack([lows, lows + 5.0]))))
     return SimResult(
         scenario=draw(TEXT), controller=draw(TEXT), dt=draw(st.floats(1e-6, 1.0)), integrator=draw(TEXT),
         t=t, xi=arr((m, n_xi)), xi_dot=arr((m, n_xi)), xi_d=arr((m, n_xi)), xi_dot_d=arr((m, n_xi)), u=arr((m, n_xi)),
@@ -52,7 +54,7 @@ def results(draw) -> SimResult:
         flags=draw(hnp.arrays(np.int8, m, elements=st.integers(0, 7))), u_ext=arr((m, n_xi)),
         wall_time=draw(st.floats(0.0, 1e4)), status=draw(st.sampled_from(list(Status))), reason=draw(TEXT),
         seed=draw(st.one_of(st.none(), st.integers(0, 2**63 - 1))), control_period=draw(st.floats(1e-6, 1.0)),
-        platform=draw(TEXT), names=names, series=series, metrics=metrics)
+        platform=draw(TEXT), names=names, series=series, metrics=metrics, rotor_bounds=bounds)
 
 
 def _same_array(a: np.ndarray, b: np.ndarray) -> bool:
@@ -75,6 +77,9 @@ def test_save_load_round_trip_is_bit_exact(res):
               "names"):
         assert getattr(back, k) == getattr(res, k), k
     assert isinstance(back.status, Status)
+    assert (back.rotor_bounds is None) == (res.rotor_bounds is None)
+    if res.rotor_bounds is not None:
+        assert _same_array(back.rotor_bounds, res.rotor_bounds)
     assert set(back.series) == set(res.series) and all(_same_array(back.series[k], np.asarray(v)) for k, v in res.series.items())
     assert set(back.metrics) == set(res.metrics) and all(_same_number(back.metrics[k], v) for k, v in res.metrics.items())
 
@@ -97,7 +102,7 @@ def test_save_writes_the_format_version_and_never_creates_folders(tmp_path):
     res = _result()
     path = res.save(tmp_path / "r.npz")
     with np.load(path) as z:
-        assert json.loads(str(z["meta"]))["format_version"] == FORMAT_VERSION == 2
+        assert json.loads(str(z["meta"]))["format_version"] == FORMAT_VERSION == 3
     with pytest.raises(InputError, match="folder .*missing.* does not exist"):
         res.save(tmp_path / "missing" / "r.npz")
     assert not (tmp_path / "missing").exists()
@@ -178,7 +183,7 @@ def test_load_rejects_missing_foreign_truncated_and_corrupted_files(saved, tmp_p
     (tmp_path / "single.npz").write_bytes((tmp_path / "single.npy").read_bytes())
     with pytest.raises(InputError, match="single array"):
         SimResult.load(tmp_path / "single.npz")
-    with pytest.raises(InputError, match="format version 1; this qprr reads version 2"):
+    with pytest.raises(InputError, match="format version 1; this qprr reads versions 2, 3"):
         SimResult.load(_rewrite(saved, tmp_path / "v1.npz", meta={"format_version": 1}))
     objects = np.empty(6, dtype=object)
     with pytest.raises(InputError, match="cannot read 'xi'"):
@@ -248,3 +253,31 @@ def test_yaw_held_across_pi_reports_the_true_error(robot):
     assert 1e-4 < e < 0.01
     late = res.rmse(start=1.5)["psi"]
     assert late < 1e-3 * e
+
+
+# ------------------------------------------------------------------------------ rotor bounds (format 3)
+def test_rotor_bounds_are_recorded_by_a_run_and_kept_in_its_file(robot, tmp_path):
+    """A run records its allocation's bounds per rotor (the Q-PRR's [0, 20] N); the file keeps them (format 3); a
+    format-2 file (no rotor_bounds member) still loads, without them; a bounds array of another shape is refused."""
+    res = simulate(robot, flight_controller("idc", robot), Hold((0, 0, 1, 0, 0, 0, 0, 0, 0)), 0.05)
+    expected = np.column_stack([robot.thrust_min, robot.thrust_max])
+    np.testing.assert_array_equal(res.rotor_bounds, expected)
+    assert np.all(res.f >= res.rotor_bounds[:, 0]) and np.all(res.f <= res.rotor_bounds[:, 1])
+    path = res.save(tmp_path / "r.npz")
+    np.testing.assert_array_equal(SimResult.load(path).rotor_bounds, expected)
+    old = SimResult.load(_rewrite(path, tmp_path / "v2.npz", meta={"format_version": 2}, drop=("rotor_bounds",)))
+    assert old.rotor_bounds is None
+    np.testing.assert_array_equal(old.f, res.f)
+    with pytest.raises(ShapeError, match=r"rotor_bounds must have shape \(4, 2\)") as err:
+        SimResult.load(_rewrite(path, tmp_path / "bad.npz", arrays={"rotor_bounds": np.zeros((3, 2))}))
+    assert "bad.npz" in str(err.value)
+    with pytest.raises(InputError, match=r"f_min <= f_max"):
+        _result(rotor_bounds=np.array([[1.0, 0.0]] * 4))
+
+
+def test_rmse_from_a_start_after_the_run_is_refused():
+    res = _result(m=6, series={}, metrics={})  # ticks at 0 ... 5 ms
+    assert set(res.rmse(start=5e-3)) == set(res.names)
+    for start in (6e-3, 1.0):
+        with pytest.raises(InputError, match=r"start = .* after the last logged tick .*\[0\.0, 0\.005\] s"):
+            res.rmse(start=start)

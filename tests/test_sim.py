@@ -15,8 +15,8 @@ from qprr.control.base import Controller
 from qprr.dynamics import dynamics_xi
 from qprr.errors import DivergenceError, InputError, UnknownNameError
 from qprr.kinematics import com_body
-from qprr.scenarios import run
-from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimResult, WhiteNoise, simulate
+from qprr.scenarios import SCENARIOS, run
+from qprr.sim import BaseDrag, Limits, PayloadChange, PayloadSchedule, Pulse, SimConfig, SimInputs, SimResult, WhiteNoise, simulate
 from qprr.thesis.bsg import cog_betas
 from qprr.trajectory import Hold
 
@@ -452,3 +452,55 @@ def test_bad_simulation_arguments(robot):
 def test_progress_bar_on_stderr(robot, capsys):
     simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold(), 0.2, progress=True, integrator="midpoint")
     assert "100.0%" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------ configuration
+def test_settings_as_keywords_or_as_objects_give_the_same_run(robot):
+    """simulate's keyword settings are SimConfig / SimInputs fields: either form gives the same run bit for bit, a keyword
+    overrides the object, an unknown keyword names the valid ones."""
+    xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    ctrl = OpenLoop(_hover_u(robot, xi) + np.r_[0.2, 0, 0.3, 0, 0.01, 0, 0, 0, 0])
+    noise = WhiteNoise(0.05)
+    a = simulate(robot, ctrl, Hold(tuple(xi)), 0.1, dt=2e-3, integrator="rk4", seed=3, disturbance=noise, xi_dot0=np.r_[0.1, 0, 0, 0, 0, 0, 0, 0, 0])
+    cfg = SimConfig(dt=2e-3, integrator="euler", seed=3)
+    inputs = SimInputs(disturbance=noise, xi_dot0=np.r_[0.1, 0, 0, 0, 0, 0, 0, 0, 0])
+    b = simulate(robot, ctrl, Hold(tuple(xi)), 0.1, config=cfg, inputs=inputs, integrator="rk4")
+    for name in ("xi", "xi_dot", "u", "f", "u_ext"):
+        np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    assert a.integrator == b.integrator == "rk4" and a.dt == b.dt == 2e-3 and np.any(a.u_ext)
+    with pytest.raises(UnknownNameError, match="'dtt'.*valid.*dt.*xi0"):
+        simulate(robot, ctrl, Hold(tuple(xi)), 0.1, dtt=1e-3)
+
+
+def test_config_is_validated_once_with_named_errors():
+    assert SimConfig().dt == SimConfig.dt == 1e-3 and SimConfig().period == 1e-3 and SimConfig().substeps == 1
+    assert SimConfig(dt=1e-3, control_period=4e-3).substeps == 4
+    for kwargs, pattern in [({"dt": 0.0}, "dt must be a positive number"), ({"dt": float("nan")}, "dt must"),
+                            ({"dt": "1ms"}, "dt must"), ({"control_period": 2.5e-3}, "integer multiple of dt"),
+                            ({"seed": -1}, "seed"), ({"limits": (1, 2)}, "limits must be a qprr.sim.Limits"),
+                            ({"joint_stops": 1}, "joint_stops must be True or False"), ({"max_log_bytes": -5}, "max_log_bytes")]:
+        with pytest.raises(InputError, match=pattern):
+            SimConfig(**kwargs)
+    with pytest.raises(UnknownNameError, match="integrator"):
+        SimConfig(integrator="verlet")
+
+
+def test_scenarios_take_the_step_from_the_simulation_config():
+    """One home for the default step: every scenario offering a dt option defaults to SimConfig.dt."""
+    with_dt = [s for s in SCENARIOS.values() if "dt" in s.options]
+    assert with_dt and all(s.options["dt"].default == SimConfig.dt for s in with_dt)
+
+
+def test_a_run_whose_logs_cannot_fit_is_refused_before_allocating(robot):
+    """duration = 1e12 s at dt = 1 ms: 1e15 ticks, an exbibyte of logs: an InputError naming the duration, the step and the
+    size, at once (no MemoryError); the same with an explicit, small bound on the logs."""
+    ctrl = OpenLoop(np.zeros(9))
+    with pytest.raises(InputError, match=r"duration = 1000000000000\.0 s .*dt = 0\.001 s.* 1e\+15 control ticks.* EiB") as err:
+        simulate(robot, ctrl, Hold(), 1e12)
+    assert "max_log_bytes" in str(err.value)
+    with pytest.raises(InputError, match=r"duration = 20\.0 s .*control period of 0\.004 s.*MiB, more than the 1 MiB allowed"):
+        simulate(robot, ctrl, Hold(), 20.0, control_period=4e-3, max_log_bytes=2**20)
+    res = simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold(), 0.1, max_log_bytes=2**20)  # 100 ticks fit
+    assert res.n == 100
+    with pytest.raises(InputError, match="duration must be a number of seconds >= the control period"):
+        simulate(robot, ctrl, Hold(), 1e-4)

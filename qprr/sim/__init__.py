@@ -3,7 +3,9 @@
 ===============================  ==================================================================
 module                           what
 ===============================  ==================================================================
-:mod:`qprr.sim.loop`             :func:`simulate`, :class:`Limits`
+:mod:`qprr.sim.loop`             :func:`simulate` (setup, loop, result)
+:mod:`qprr.sim.config`           :class:`SimConfig` (step, integrator, screens, logging: one default each),
+                                 :class:`SimInputs`, :class:`Limits`
 :mod:`qprr.sim.result`           :class:`SimResult` (RMSE (6.26), extras, versioned .npz files)
 :mod:`qprr.sim.integrators`      Lie-group Euler, midpoint, RK4 of the stated orders
 :mod:`qprr.sim.disturbances`     white noise (6.27), pulses (6.28), drag
@@ -17,11 +19,12 @@ module                           what
 """
 
 from .actuators import RotorDynamics
+from .config import INTEGRATORS, Limits, SimConfig, SimInputs
 from .contact import CompliantWall, ContactHistory, PrescribedWrench, PushedMass
 from .disturbances import BaseDrag, Disturbance, Disturbances, Pulse, StateDisturbance, WhiteNoise
 from .environment import Environment
 from .integrators import ORDERS, STEPPERS
-from .loop import INTEGRATORS, Limits, simulate
+from .loop import simulate
 from .payload import PayloadChange, PayloadSchedule
 from .result import FORMAT_VERSION, SimResult, Status
 from .wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
@@ -47,6 +50,8 @@ __all__ = [
     "Pulse",
     "PushedMass",
     "RotorDynamics",
+    "SimConfig",
+    "SimInputs",
     "SimResult",
     "StateDisturbance",
     "Status",

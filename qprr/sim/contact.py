@@ -130,26 +130,26 @@ class PushedMass(_Contact):
     delta = direction . (p_e - origin) - s; in contact (delta > 0) the force on the object is
     F = max(0, k delta + d delta_dot) along +direction, and -F direction on the end effector.
 
-    State z = [s, s_dot] [m, m/s], integrated with the robot by the simulator's integrator:
-    s_ddot = (F - F_f) / m with Coulomb friction (coefficient ``friction``, normal force m g):
+    State z = [s, s_dot] [m, m/s] (``initial``: its value at the start, default at rest at the origin),
+    integrated with the robot by the simulator's integrator: s_ddot = (F - F_f) / m with Coulomb
+    friction (coefficient ``friction``, normal force m g, g the platform's gravity):
     F_f = mu m g sign(s_dot) while sliding, and F_f = clip(F, -mu m g, mu m g) at rest (static
     friction: the object sticks while F <= mu m g).  A sliding object whose velocity changes
     sign during an integration step is caught by static friction at the end of that step
     (:meth:`settle`, an event resolved at step boundaries).
     """
 
-    def __init__(self, platform: Platform, *, mass: float, origin, direction=(1.0, 0.0, 0.0), position: float = 0.0,
-                 velocity: float = 0.0, stiffness: float = 500.0, damping: float = 20.0, friction: float = 0.0,
-                 g: float | None = None) -> None:
+    def __init__(self, platform: Platform, *, mass: float, origin, direction=(1.0, 0.0, 0.0), initial=(0.0, 0.0),
+                 stiffness: float = 500.0, damping: float = 20.0, friction: float = 0.0) -> None:
         if not (np.isfinite(mass) and mass > 0.0):
             raise InputError(f"mass must be > 0 kg, got {mass!r}")
         if not (np.isfinite(friction) and friction >= 0.0):
             raise InputError(f"friction must be >= 0, got {friction!r}")
         self.mass = float(mass)
         self.origin = as_vector(origin, 3, "origin").copy()
-        self.s0, self.sd0 = float(position), float(velocity)
+        self.s0, self.sd0 = as_vector(initial, 2, "initial (position [m], velocity [m/s])").tolist()
         self.mu = float(friction)
-        self.g = platform.g if g is None else float(g)
+        self.g = platform.g
         super().__init__(platform, direction, stiffness, damping)
 
     def initial_state(self) -> np.ndarray:

@@ -172,13 +172,3 @@ STEPPERS: dict[str, Callable] = {"euler": semi_implicit_euler, "midpoint": expli
 ORDERS: dict[str, int] = {"euler": 1, "midpoint": 2, "rk4": 4}
 """Integrator name -> order of accuracy on smooth problems (global error O(dt^order))."""
 
-
-def integrate_fixed(model: pin.Model, f: Callable, method: str, t0: float, q0, v0, dt: float, n: int,
-                    z0=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """``n`` steps of ``method`` (a key of :data:`STEPPERS`) from (t0, q0, v0[, z0]); returns the final (q, v, z)."""
-    step = make_stepper(method, model, dt)
-    q, v = np.array(q0, dtype=float), np.array(v0, dtype=float)
-    z = None if z0 is None else np.array(z0, dtype=float)
-    for k in range(n):
-        q, v, z = step(f, t0 + k * dt, q, v, z)
-    return q, v, z

@@ -46,29 +46,29 @@ from __future__ import annotations
 import math
 import sys
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..actuation import DEMAND_BOUND, Allocator
+from ..actuation import Allocator
 from ..charts import State, as_vector
 from ..control.base import Controller, Reference
-from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError, UnknownNameError
+from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
 from ..joint_friction import JointFriction
 from ..platform import Platform
 from . import disturbances as dist
 from .actuators import RotorDynamics
+from .config import INTEGRATORS, Limits, SimConfig, SimInputs, resolve
 from .environment import Environment
-from .integrators import STEPPERS, make_stepper
+from .integrators import make_stepper
 from .mismatch import PlantActuators, check_plant
 from .payload import PayloadSchedule, PlantPayload
 from .result import SimResult, Status
 from .stops import apply_joint_stops
 
-INTEGRATORS = tuple(STEPPERS)
+__all__ = ["INTEGRATORS", "Limits", "SimConfig", "SimInputs", "check_sample", "simulate"]
 
 
 class _Progress:
@@ -91,117 +91,195 @@ class _Progress:
             sys.stderr.write("\n")
 
 
-@dataclass(frozen=True)
-class Limits:
-    """Runaway bounds: a state beyond them stops the run with DivergenceError."""
-
-    position: float = 1e3  # m
-    linear_velocity: float = 100.0  # m/s
-    angular_velocity: float = 100.0  # rad/s
-    joint_velocity: float = 100.0  # m/s or rad/s
-
-    def __post_init__(self) -> None:
-        for name in ("position", "linear_velocity", "angular_velocity", "joint_velocity"):
-            object.__setattr__(self, name, ch.as_real(getattr(self, name), f"limits {name}", positive=True, allow_inf=True))
-
-
-def simulate(
-    platform: Platform,
-    controller: Controller,
-    trajectory,
-    duration: float,
-    *,
-    dt: float = 1e-3,
-    integrator: str = "midpoint",
-    control_period: float | None = None,
-    xi0=None,
-    xi_dot0=None,
-    disturbance=None,
-    external_wrench: Environment | Callable[[float, np.ndarray, np.ndarray], np.ndarray] | None = None,
-    payload: PayloadSchedule | None = None,
-    allocator: Allocator | None = None,
-    actuators: RotorDynamics | None = None,
-    seed: int | None = 0,
-    limits: Limits = Limits(),
-    joint_stops: bool = True,
-    progress: bool = False,
-    scenario: str = "custom",
-    plant: Platform | None = None,
-) -> SimResult:
+def simulate(platform: Platform, controller: Controller, trajectory, duration: float, *, config: SimConfig | None = None,
+             inputs: SimInputs | None = None, **options) -> SimResult:
     """Run ``controller`` on ``platform`` along ``trajectory`` for ``duration`` seconds.
 
     Parameters
     ----------
     trajectory : an object with ``sample(t) -> Sample`` (xi, xi_dot, xi_ddot of shape (m, 6 + n_arm)),
         e.g. :mod:`qprr.trajectory`.
-    dt : integration step [s]; control_period : period of the digital controller [s] (default
-        ``dt``), an integer multiple of ``dt``: the controller, the allocation, the disturbance
-        samples and the payload changes act at the control ticks and are held in between, while
-        the plant is integrated with ``control_period / dt`` steps per period.  The result has one
-        row per control tick.
-    xi0, xi_dot0 : initial state (default: the trajectory at t = 0, at rest).
-    disturbance : a :class:`~qprr.sim.disturbances.Disturbance`, a
-        :class:`~qprr.sim.disturbances.StateDisturbance` or a
-        :class:`~qprr.sim.disturbances.Disturbances` sum.
-    external_wrench : an :class:`~qprr.sim.environment.Environment` (contact model) or a callable
-        ``(t, q, v) -> h`` (6,), the world wrench at the end effector, evaluated at every stage.
-    payload : a :class:`~qprr.sim.payload.PayloadSchedule` (the plant's model is a copy).
-    allocator : default ``Allocator(platform)``.  seed : seeds the noise (and the wind turbulence).
-    actuators : a :class:`~qprr.sim.actuators.RotorDynamics` (motor lag, speed limits, thrust b w^2)
-        between allocation and plant; None (default): thrusts applied as allocated.
-    joint_stops : the arm joints end at mechanical stops at their limits
-        (:func:`qprr.sim.stops.apply_joint_stops`; flag bit 4); the initial state and every arm
-        reference must then lie inside the limits.
-    plant : the robot simulated when it differs from ``platform``, the model the controller and
-        the allocation know (model errors, :func:`qprr.sim.mismatch.perturbed`): same structure,
-        other inertias and rotor constants; its rotors produce the commanded thrusts within their
-        own bounds (:class:`qprr.sim.mismatch.PlantActuators`).  Default: ``platform``.
+    duration : run length [s], at least one control period; a run whose logs would not fit in
+        :attr:`SimConfig.log_bound <qprr.sim.config.SimConfig.log_bound>` is refused.
+    config : the settings, a :class:`~qprr.sim.config.SimConfig` (``dt``, ``integrator``,
+        ``control_period``, ``seed``, ``limits``, ``joint_stops``, ``progress``, ``scenario``,
+        ``max_log_bytes``); default ``SimConfig()``.
+    inputs : what the run starts from and what acts on it, a :class:`~qprr.sim.config.SimInputs`
+        (``xi0``, ``xi_dot0``, ``disturbance``, ``external_wrench``, ``payload``, ``allocator``,
+        ``actuators``, ``plant``); default: none of them.
+    **options : any field of either by name, e.g. ``simulate(p, c, ref, 5.0, dt=2e-3, xi0=x0)``; a
+        name given here overrides ``config`` and ``inputs``, an unknown name raises
+        :class:`~qprr.errors.UnknownNameError`.
 
-    Returns a :class:`~qprr.sim.result.SimResult`; raises :class:`~qprr.errors.DivergenceError`
-    (with ``.result``) on NaN or runaway states.  See the module docstring for the step.
+    Returns a :class:`~qprr.sim.result.SimResult` (one row per control tick); raises
+    :class:`~qprr.errors.DivergenceError` (with ``.result``) on NaN or runaway states.  See the
+    module docstring for the step.
     """
+    config, inputs = resolve(config, inputs, options)
+    run = _setup(platform, controller, trajectory, duration, config, inputs)
+    bar = _Progress(run.n, f"{config.scenario}/{controller.name}", config.progress)
+    t_start = time.perf_counter()
+    try:
+        m, err, q, v = _loop(run, bar)
+    finally:
+        bar.close()
+    wall = time.perf_counter() - t_start
+    if err is None:
+        return _result(run, m, Status.OK, "completed", wall)
+    err = _with_context(platform, err, (m - 1) * config.period, q, v, run.bounds)
+    err.result = _result(run, m, Status.DIVERGED if isinstance(err, DivergenceError) else Status.FAILED, str(err), wall)
+    raise err from None
+
+
+# ------------------------------------------------------------------------------------- setup
+@dataclass
+class _Logs:
+    """The per-tick logs of a run, one row per control tick, filled in place by :func:`_loop`.
+
+    The world CoM is logged raw; x_cm in B and the unallocated force tau_d - N f (tau_d = S^-T u)
+    are derived after the loop, vectorised (:func:`_result`).  ``rotor_speed`` and
+    ``thrust_command``: the actuator stage's (None without it).
+    """
+
+    xi: np.ndarray
+    xi_dot: np.ndarray
+    u: np.ndarray
+    f: np.ndarray
+    com: np.ndarray
+    flags: np.ndarray
+    rotor_speed: np.ndarray | None = None
+    thrust_command: np.ndarray | None = None
+
+    @classmethod
+    def empty(cls, n: int, platform: Platform, rotor_stage: bool) -> _Logs:
+        nxi, nr = platform.n_xi, platform.n_rotors
+        rotor = (np.zeros((n, nr)), np.zeros((n, nr))) if rotor_stage else (None, None)
+        return cls(np.zeros((n, nxi)), np.zeros((n, nxi)), np.zeros((n, nxi)), np.zeros((n, platform.n_actuators)),
+                   np.zeros((n, 3)), np.zeros(n, dtype=np.int8), *rotor)
+
+
+def _bytes_per_tick(platform: Platform, rotor_stage: bool) -> int:
+    """Memory one control tick takes [bytes], from above: the logs, the reference samples and disturbance rows (also
+    as Python floats), and what :func:`_result` derives from them (float64 arrays)."""
+    nxi, nv, na, nr = platform.n_xi, platform.nv, platform.n_actuators, platform.n_rotors
+    logs = 3 * nxi + na + 3 + (2 * nr if rotor_stage else 0)
+    reference = 1 + 3 * nxi + nxi + 4 * nxi  # t, the samples, u_ext and its rows as Python floats (32 bytes each)
+    derived = 9 + 3 + 2 * nv + na  # rotation matrices, x_cm, tau_d and the unallocated force, copies of f
+    return 8 * (logs + reference + derived) + 1
+
+
+@dataclass
+class _Run:
+    """Everything a run needs, built once by :func:`_setup`, read by :func:`_loop` and :func:`_result`."""
+
+    platform: Platform
+    controller: Controller
+    config: SimConfig
+    n: int
+    t: np.ndarray
+    xi_d: np.ndarray
+    xi_dot_d: np.ndarray
+    xi_ddot_d: np.ndarray
+    u_ext: np.ndarray
+    u_ext_rows: list | None  # per-tick disturbance rows as float lists (None where zero), None if all zero
+    state_dist: list
+    logs: _Logs
+    plant_payload: PlantPayload
+    plant: _Plant
+    allocate: object  # allocate_screened_into of the allocator (or of PlantActuators with another plant)
+    N: np.ndarray  # the plant's actuation matrix
+    rotor_bounds: np.ndarray
+    state: State
+    reference: Reference
+    q: np.ndarray
+    v: np.ndarray
+    stepper: object
+    rotor_stage: _RotorStage | None
+    bounds: tuple[float, float, float, float]
+
+
+def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs: SimInputs) -> _Run:
+    """Check the arguments against the platform and build the run: reference samples, disturbances, plant, logs, state."""
+    _check_types(platform, controller, trajectory, inputs)
+    rotors = _bind_rotors(platform, inputs.actuators, config.dt)
+    n = config.ticks(duration, _bytes_per_tick(platform, rotors is not None))
+    t = np.arange(n) * config.period
+    sample = trajectory.sample(t)
+    _check_sample(sample, n, platform.n_xi)
+    xi_d, xi_dot_d, xi_ddot_d = sample.xi.copy(), sample.xi_dot.copy(), sample.xi_ddot.copy()
+    xi0 = xi_d[0].copy() if inputs.xi0 is None else ch.as_xi(inputs.xi0, "xi0", platform.n_xi)
+    if config.joint_stops:
+        platform.check_arm_limits(xi0[6:], "xi0[6:]")
+        _check_arm_references(platform, t, xi_d)
+    xi_dot0 = np.zeros(platform.n_xi) if inputs.xi_dot0 is None else as_vector(inputs.xi_dot0, platform.n_xi, "xi_dot0")
+    u_ext, state_dist = _disturbances(platform, config, inputs.disturbance, t)
+    ext_rows = np.any(u_ext != 0.0, axis=1)
+    u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if ext_rows.any() else None
+
+    robot = platform if inputs.plant is None else check_plant(platform, inputs.plant)  # what is integrated
+    plant_payload = PlantPayload(robot, inputs.payload or PayloadSchedule())
+    model = plant_payload.model  # the plant: a copy, never platform.model
+    data = model.createData()
+    plant_payload.apply_until(0.0)
+    alloc = _allocator(platform, inputs.allocator)
+    allocate = alloc.allocate_screened_into if robot is platform else PlantActuators(alloc, robot).allocate_screened_into
+    q, v = ch.xi_to_q(xi0), ch.xi_dot_to_v(xi0, xi_dot0)
+    state = State(platform.n_arm)
+    state.update(0.0, q, v)
+    reference = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
+    if controller.uses_preview:  # a planning controller sees the trajectory ahead
+        controller.set_preview(trajectory)
+    controller.reset(state, reference, config.period)
+    tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
+    plant = _Plant(model, data, tau, platform.ee_frame, inputs.external_wrench, state_dist, rotors, platform.rotor_matrix)
+    plant.add_joint_friction(JointFriction.from_model(model, config.dt))
+    logs = _Logs.empty(n, platform, rotors is not None)
+    stage = None if rotors is None else _RotorStage(rotors, platform, plant, alloc, logs, controller.uses_applied_force)
+    lim = config.limits
+    return _Run(platform, controller, config, n, t, xi_d, xi_dot_d, xi_ddot_d, u_ext, u_ext_rows, state_dist, logs,
+                plant_payload, plant, allocate, np.array(robot.actuation_matrix), np.column_stack([alloc.f_min, alloc.f_max]),
+                state, reference, q, v, _stepper(config, plant), stage,
+                (lim.position, lim.linear_velocity, lim.angular_velocity, lim.joint_velocity))
+
+
+def _check_types(platform, controller, trajectory, inputs: SimInputs) -> None:
+    """The objects ``simulate`` is given are of the kinds it runs (InputError naming the argument)."""
     if not isinstance(platform, Platform):
         raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
-    if integrator not in INTEGRATORS:
-        raise UnknownNameError("integrator", integrator, INTEGRATORS)
-    if not isinstance(dt, (int, float)) or not (math.isfinite(dt) and dt > 0.0):
-        raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
-    if control_period is None:
-        period, substeps = float(dt), 1
-    else:
-        if not isinstance(control_period, (int, float)) or not (math.isfinite(control_period) and control_period > 0.0):
-            raise InputError(f"control_period must be a positive number of seconds, got {control_period!r}")
-        substeps = int(round(control_period / dt))
-        if substeps < 1 or abs(substeps * dt - control_period) > 1e-9 * control_period:
-            raise InputError(f"control_period = {control_period!r} s must be an integer multiple of dt = {dt!r} s")
-        period = float(control_period)
-    if not isinstance(duration, (int, float)) or not (math.isfinite(duration) and duration >= period):
-        raise InputError(f"duration must be a number of seconds >= the control period {period!r} s, got {duration!r}")
     if not isinstance(controller, Controller):
         raise InputError(f"controller must be a qprr.control Controller, got {type(controller).__name__}")
     if not hasattr(trajectory, "sample"):
         raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory), got {type(trajectory).__name__}")
+    payload = inputs.payload
     if payload is not None and not isinstance(payload, PayloadSchedule):
         raise InputError(f"payload must be None or a qprr.sim.PayloadSchedule, got {type(payload).__name__} {payload!r:.60}")
-    if seed is not None:
-        seed = ch.as_int(seed, "seed", lo=0)
-    if not isinstance(limits, Limits):
-        raise InputError(f"limits must be a qprr.sim.Limits, got {type(limits).__name__}")
-    nxi, n_arm = platform.n_xi, platform.n_arm
-    n = int(round(duration / period))
-    t = np.arange(n) * period
-    sample = trajectory.sample(t)
-    _check_sample(sample, n, nxi)
-    xi_d = sample.xi.copy()
-    xi_dot_d = sample.xi_dot.copy()
-    xi_ddot_d = sample.xi_ddot.copy()
-    xi0 = xi_d[0].copy() if xi0 is None else ch.as_xi(xi0, "xi0", nxi)
-    lo, hi = platform.arm_lower.tolist(), platform.arm_upper.tolist()
-    if joint_stops:
-        platform.check_arm_limits(xi0[6:], "xi0[6:]")
-        _check_arm_references(platform, t, xi_d)
-    xi_dot0 = np.zeros(nxi) if xi_dot0 is None else as_vector(xi_dot0, nxi, "xi_dot0")
-    rng = np.random.default_rng(seed)
+
+
+def _bind_rotors(platform: Platform, actuators, dt: float):
+    """The actuator stage's rotors bound to the platform (None without the stage); dt must resolve the motor lag."""
+    if actuators is None:
+        return None
+    if not isinstance(actuators, RotorDynamics):
+        raise InputError(f"actuators must be a qprr.sim.RotorDynamics or None, got {type(actuators).__name__}")
+    rotors = actuators.bind(platform.n_rotors)
+    if dt > min(actuators.time_constant):  # explicit schemes: stable for dt < 2 T (Euler, midpoint)
+        raise InputError(f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
+                         "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt")
+    return rotors
+
+
+def _allocator(platform: Platform, allocator) -> Allocator:
+    """``allocator`` checked against the platform (default: ``Allocator(platform)``)."""
+    alloc = allocator if allocator is not None else Allocator(platform)
+    if not isinstance(alloc, Allocator) or alloc.platform.nv != platform.nv or alloc.n_rotors != platform.n_rotors:
+        raise InputError("allocator must be a qprr.actuation.Allocator of this platform")
+    return alloc
+
+
+def _disturbances(platform: Platform, config: SimConfig, disturbance, t: np.ndarray) -> tuple[np.ndarray, list]:
+    """(u_ext (n, n_xi) of the timed disturbances at the ticks, the state-dependent ones realized for this run)."""
+    n, nxi = t.shape[0], platform.n_xi
+    rng = np.random.default_rng(config.seed)
     timed, state_dist = dist.split(disturbance)
     u_ext = np.zeros((n, nxi)) if timed is None else np.asarray(timed.values(t, rng, nxi), dtype=float)
     if u_ext.shape != (n, nxi):
@@ -209,83 +287,77 @@ def simulate(
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
     # state-dependent disturbances drawn once per run (wind turbulence), after the timed ones (same seed, same draws)
-    state_dist = [d.realize(t, rng, period) if hasattr(d, "realize") else d for d in state_dist]
-    ext_rows = np.any(u_ext != 0.0, axis=1)
-    has_ext = bool(ext_rows.any())
-    # per-tick disturbance rows as float lists (None where zero): no array indexing in the loop
-    u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if has_ext else None
+    return u_ext, [d.realize(t, rng, config.period) if hasattr(d, "realize") else d for d in state_dist]
 
-    robot = platform if plant is None else check_plant(platform, plant)  # what is integrated
-    plant_payload = PlantPayload(robot, payload or PayloadSchedule())
-    model = plant_payload.model  # the plant: a copy, never platform.model
-    data = model.createData()
-    plant_payload.apply_until(0.0)
-    alloc = allocator if allocator is not None else Allocator(platform)
-    if not isinstance(alloc, Allocator) or alloc.platform.nv != platform.nv or alloc.n_rotors != platform.n_rotors:
-        raise InputError("allocator must be a qprr.actuation.Allocator of this platform")
-    N = np.array(robot.actuation_matrix)
-    n_act = platform.n_actuators
 
-    # logs (the world CoM is logged raw; x_cm in B and the unallocated force
-    # tau_d - N f with tau_d = S^-T u are derived after the loop, vectorised)
-    xi_log = np.zeros((n, nxi))
-    xid_log = np.zeros((n, nxi))
-    u_log = np.zeros((n, nxi))
-    f_log = np.zeros((n, n_act))
-    com_log = np.zeros((n, 3))
-    flags = np.zeros(n, dtype=np.int8)
+def _stepper(config: SimConfig, plant: _Plant):
+    """One integration step of the configured integrator, followed by the environment's discrete events at its end
+    (:meth:`~qprr.sim.environment.Environment.settle`) when the environment has a state."""
+    step = make_stepper(config.integrator, plant.model, config.dt)
+    if plant.env is None or not plant.n_env:
+        return step
+    settle = plant.settle
 
-    q = ch.xi_to_q(xi0)
-    v = ch.xi_dot_to_v(xi0, xi_dot0)
-    state = State(n_arm)
-    state.update(0.0, q, v)
-    ref = Reference(xi_d[0], xi_dot_d[0], xi_ddot_d[0])
-    if getattr(controller, "uses_preview", False):  # a planning controller sees the trajectory ahead
-        controller.set_preview(trajectory)
-    controller.reset(state, ref, period)
-    tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
-    if actuators is not None and not isinstance(actuators, RotorDynamics):
-        raise InputError(f"actuators must be a qprr.sim.RotorDynamics or None, got {type(actuators).__name__}")
-    rotors = actuators.bind(platform.n_rotors) if actuators is not None else None
-    if rotors is not None and dt > min(actuators.time_constant):  # explicit schemes: stable for dt < 2 T (Euler, midpoint)
-        raise InputError(f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
-                         "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt")
-    plant = _Plant(model, data, tau, platform.ee_frame, external_wrench, state_dist, rotors, platform.rotor_matrix, dt)
-    env, z = plant.env, plant.z0
-    rhs, first_stage = plant.rhs, plant.first_stage
-    settle = plant.settle if (env is not None and plant.n_env) else None
-    if rotors is not None:
-        nr, n_env = platform.n_rotors, plant.n_env
-        w_log, fc_log = np.zeros((n, nr)), np.zeros((n, nr))
-        Omega_r = np.array(platform.rotor_matrix)
-        w_start = rotors.initial()
-    stepper = make_stepper(integrator, model, dt)
-    steps = [j * dt for j in range(substeps)]  # step start times within a control period
-    plain = plant.plain  # ABA alone: no state-dependent input
-    bar = _Progress(n, f"{scenario}/{getattr(controller, 'name', 'controller')}", progress)
-    bounds = (limits.position, limits.linear_velocity, limits.angular_velocity, limits.joint_velocity)
-    q_bound, v_bound = limits.position, min(bounds[1:])  # |any entry| beyond its bound => the norm beyond these
+    def step_and_settle(f, t, q, v, z, first):
+        q1, v1, z1 = step(f, t, q, v, z, first)
+        return q1, v1, settle(t, z, z1)
+
+    return step_and_settle
+
+
+class _RotorStage:
+    """The actuator stage at a control tick: the allocated thrusts are speed commands, the thrusts the rotors
+    produce (b w^2 of the integrated speeds) are logged and, for a controller that uses the applied force, held."""
+
+    def __init__(self, rotors, platform: Platform, plant: _Plant, alloc: Allocator, logs: _Logs, wants_applied: bool) -> None:
+        self.rotors, self.plant, self.alloc, self.logs, self.wants_applied = rotors, plant, alloc, logs, wants_applied
+        self.nr, self.n_env = platform.n_rotors, plant.n_env
+        self.Omega = np.array(platform.rotor_matrix)
+        self.w_start = rotors.initial()
+
+    def tick(self, k: int, q: np.ndarray, z: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """Log tick ``k``'s command and speeds, put the produced thrusts in the f log; returns z (set at tick 0)."""
+        nr, n_env, rotors, logs = self.nr, self.n_env, self.rotors, self.logs
+        fc = logs.f[k, 0:nr]
+        logs.thrust_command[k] = fc
+        w_c = rotors.command(fc)
+        if k == 0:
+            w0 = self.w_start
+            if isinstance(w0, str):  # "command": at the first command; "hover": thrusts that hold q0 still
+                w0 = w_c.copy() if w0 == "command" else rotors.speeds_of(
+                    self.alloc.allocate(pin.computeGeneralizedGravity(self.plant.model, self.plant.data, q)).f[0:nr])
+            z = np.concatenate([z[:n_env], w0])
+        w = z[n_env:]
+        logs.rotor_speed[k] = w
+        logs.f[k, 0:nr] = rotors.thrust(w)
+        tau[0:6] = self.Omega @ logs.f[k, 0:nr] if self.wants_applied else 0.0
+        return z
+
+
+# -------------------------------------------------------------------------------------- loop
+def _loop(run: _Run, bar: _Progress) -> tuple[int, QprrError | None, np.ndarray, np.ndarray]:
+    """The control ticks (module docstring): (ticks logged, the qprr error that ended the run or None, last q, v)."""
+    platform, controller, cfg, logs, plant, state, ref = run.platform, run.controller, run.config, run.logs, run.plant, run.state, run.reference
+    n, period, q, v, z, tau, bounds = run.n, cfg.period, run.q, run.v, plant.z0, plant.tau, run.bounds
+    xi_log, xid_log, u_log, f_log, com_log, flags = logs.xi, logs.xi_dot, logs.u, logs.f, logs.com, logs.flags
+    xi_d, xi_dot_d, xi_ddot_d, u_ext_rows, stage = run.xi_d, run.xi_dot_d, run.xi_ddot_d, run.u_ext_rows, run.rotor_stage
+    model, data, rhs, first_stage, plain, stepper = plant.model, plant.data, plant.rhs, plant.first_stage, plant.plain, run.stepper
+    payload, payload_pending = run.plant_payload, run.plant_payload.pending
+    steps = [j * cfg.dt for j in range(cfg.substeps)]  # step start times within a control period
+    joint_stops, lo, hi, arm_range = cfg.joint_stops, platform.arm_lower.tolist(), platform.arm_upper.tolist(), range(platform.n_arm)
+    q_bound, v_bound = bounds[0], min(bounds[1:])  # |any entry| beyond its bound => the norm beyond these
     hypot = math.hypot  # the norm of a list: 2-3x cheaper than ndarray.dot on these sizes (benchmarks/step_instructions.py)
-    POSITION = pin.KinematicLevel.POSITION
-    wants_applied = bool(getattr(controller, "uses_applied_force", False))
-    pin_out = getattr(controller, "output", "xi") == "pinocchio"
-    payload_pending = plant_payload.pending
-    b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
-    add, com, step, aba = np.add, pin.centerOfMass, controller.step, pin.aba
-    # the allocator's screened form checks tau_d itself (returns -1 on NaN, inf or |tau_d| >= DEMAND_BOUND)
-    screened = getattr(alloc, "_screened_into", None) if robot is platform else None
-    allocate = screened or (alloc.allocate_into if robot is platform else PlantActuators(alloc, robot).allocate_into)
+    POSITION, add, com, step, aba, allocate = pin.KinematicLevel.POSITION, np.add, pin.centerOfMass, controller.step, pin.aba, run.allocate
+    wants_applied, pin_out, has_ext, progress = controller.uses_applied_force, controller.output == "pinocchio", u_ext_rows is not None, cfg.progress
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
-    arm_range = range(n_arm)
-    t_start = time.perf_counter()
+    b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
     k = 0
-    status, reason = Status.OK, "completed"
     try:
         for k in range(n):
             tk = k * period
             if payload_pending:  # payload changes act at control ticks
-                plant_payload.apply_until(tk)
-                payload_pending = plant_payload.pending
+                payload.apply_until(tk)
+                payload_pending = payload.pending
             state.xi, state.xi_dot = xi_log[k], xid_log[k]  # the state writes its xi straight into the log
             if not update(tk, q, v, v_bound):  # |v| NaN or >= v_bound at the end of the previous tick: named check there
                 if k:
@@ -301,31 +373,16 @@ def simulate(
                 u = step(tk, state, ref)
                 u_log[k] = u
                 tau_d = force_from_xi(u, tau_d_buf)
-            if screened is None and not hypot(*tau_d.tolist()) < DEMAND_BOUND:  # NaN, inf or absurd controller output
-                raise _bad_output(platform, controller, tk, u_log[k], pin_out)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
-                if fl < 0:  # the screened allocator refused tau_d: NaN, inf or absurd controller output
+                if fl < 0:  # the screened allocation refused tau_d: NaN, inf or absurd controller output
                     raise _bad_output(platform, controller, tk, u_log[k], pin_out)
                 flags[k] = fl
-            if rotors is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
-                fc = f_log[k, 0:nr]
-                fc_log[k] = fc
-                w_c = rotors.command(fc)
-                if k == 0:
-                    if isinstance(w_start, str):  # "command": at the first command; "hover": thrusts that hold q0 still
-                        w0 = w_c.copy() if w_start == "command" else rotors.speeds_of(
-                            alloc.allocate(pin.computeGeneralizedGravity(model, data, q)).f[0:nr])
-                    else:
-                        w0 = w_start
-                    z = np.concatenate([z[:n_env], w0])
-                w = z[n_env:]
-                w_log[k] = w
-                f_log[k, 0:nr] = rotors.thrust(w)
-                tau[0:6] = Omega_r @ f_log[k, 0:nr] if wants_applied else 0.0
+            if stage is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
+                z = stage.tick(k, q, z, tau)
             if wants_applied:
                 set_applied(tau)
-                if rotors is not None:
+                if stage is not None:
                     tau[0:6] = 0.0
             if has_ext:
                 ue = u_ext_rows[k]
@@ -335,12 +392,7 @@ def simulate(
             a = aba(model, data, q, v, tau) if plain else first_stage(tk, q, v, z)
             com_log[k] = com(model, data, POSITION, False)
             for j in steps:
-                if settle is None:
-                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
-                else:
-                    z_before = z
-                    q, v, z = stepper(rhs, tk + j, q, v, z, a)
-                    z = settle(tk + j, z_before, z)
+                q, v, z = stepper(rhs, tk + j, q, v, z, a)
                 a = None
                 if joint_stops:
                     qa = q[7:].tolist()
@@ -349,43 +401,50 @@ def simulate(
                             q, v = apply_joint_stops(model, data, q, v, lo, hi)
                             flags[k] |= 4
                             break
-            # every tick: the norm of v bounds every velocity (NaN fails it), screened by the next tick's update (and the
-            # final check); q, which only integrates v, every 16 ticks (a finite v keeps q finite; the position bound is
-            # a slow drift); the named check only on failure
+            # v: screened every tick by the next update (and the final check); q, which integrates v, every 16 ticks
             if not (k & 15 or hypot(*q.tolist()) < q_bound):
                 _check(platform, tk + period, q, v, bounds)
             if progress and k % bar.every == 0:
                 bar.update(k)
         _check(platform, n * period, q, v, bounds)
-        m = n
     except QprrError as err:
-        m = k + 1
-        err = _with_context(platform, err, k * period, q, v, bounds)
-        status = Status.DIVERGED if isinstance(err, DivergenceError) else Status.FAILED
-        reason = str(err)
-        err.result = _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
-                             com_log, N, flags, u_ext, time.perf_counter() - t_start, seed, m, status, reason, pin_out=pin_out,
-                             period=period)
-        _extras(err.result, m, state_dist, (w_log, fc_log) if rotors is not None else None)
-        raise err from None
-    finally:
-        if progress:
-            bar.close()
-    res = _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log,
-                  com_log, N, flags, u_ext, None, seed, m, status, reason, t_start, pin_out, period)
-    _extras(res, m, state_dist, (w_log, fc_log) if rotors is not None else None)
-    return res
+        return k + 1, err, q, v
+    return n, None, q, v
 
 
-def _extras(res: SimResult, m: int, state_dist, rotor_logs) -> None:
-    """Series of the optional stages: rotor speeds and thrust commands, what realized disturbances report (the wind)."""
-    if rotor_logs is not None:
-        res.series["rotor_speed"] = rotor_logs[0][:m].copy()
-        res.series["thrust_command"] = rotor_logs[1][:m].copy()
-    for d in state_dist:
+# ------------------------------------------------------------------------------------ result
+def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimResult:
+    """The first ``m`` ticks as a :class:`SimResult`: the logs, what is derived from them, and what the controller and the
+    optional stages report (the controller's metrics and series, rotor speeds and commands, the wind)."""
+    platform, cfg, logs = run.platform, run.config, run.logs
+    xi = logs.xi[:m]
+    R = ch.euler_to_rotation_batch(xi[:, 3:6])
+    x_cm = ch.to_body_batch(R, logs.com[:m], xi[:, 0:3])  # R^T (c - p)
+    u = logs.u[:m]
+    if run.controller.output == "pinocchio":  # the controller returned Pinocchio forces: log u = S^T tau_d
+        tau_d = u.copy()
+        u[:] = ch.force_to_xi_batch(R, xi, tau_d)
+    else:
+        tau_d = ch.force_from_xi_batch(R, xi, u)
+    nr = platform.n_rotors
+    res = SimResult(
+        scenario=cfg.scenario, controller=run.controller.name, dt=cfg.dt, integrator=cfg.integrator, t=run.t[:m].copy(),
+        xi=xi, xi_dot=logs.xi_dot[:m], xi_d=run.xi_d[:m], xi_dot_d=run.xi_dot_d[:m], u=u, f=logs.f[:m, 0:nr].copy(),
+        arm_effort=logs.f[:m, nr:].copy(), x_cm=x_cm, unallocated=tau_d - logs.f[:m] @ run.N.T, flags=logs.flags[:m],
+        u_ext=run.u_ext[:m], wall_time=wall, status=status, reason=reason, seed=cfg.seed, control_period=cfg.period,
+        platform=platform.name, names=platform.xi_names, arm_kinds=tuple(j.kind for j in platform.arm), rotor_bounds=run.rotor_bounds,
+    )
+    metrics, series = run.controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
+    res.metrics.update(metrics)
+    res.series.update(series)
+    if run.rotor_stage is not None:
+        res.series["rotor_speed"] = logs.rotor_speed[:m].copy()
+        res.series["thrust_command"] = logs.thrust_command[:m].copy()
+    for d in run.state_dist:
         report = getattr(d, "report", None)
         if callable(report):
             res.series.update({k: v[:m] for k, v in report().items()})
+    return res
 
 
 def _check_sample(sample, n: int, nxi: int) -> None:
@@ -425,7 +484,7 @@ class _Plant:
     ``tau`` at every stage and dw/dt = (w_c - w) / T is part of z_dot.
     """
 
-    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist, rotors=None, Omega=None, step=0.0) -> None:
+    def __init__(self, model, data, tau, ee_frame, external_wrench, state_dist, rotors=None, Omega=None) -> None:
         self.model, self.data, self.tau, self.ee = model, data, tau, ee_frame
         self.state_dist = tuple(state_dist)
         self.env = external_wrench if isinstance(external_wrench, Environment) else None
@@ -442,8 +501,8 @@ class _Plant:
         self.n_env = 0 if self.z0 is None else self.z0.shape[0]
         self.rotors, self.Omega = rotors, (None if Omega is None else np.array(Omega))
         aba = pin.aba
-        self.friction = JointFriction.from_model(model, step)  # the URDF's <dynamics damping friction> (None: none)
-        self.plain = self.env is None and self.fn is None and not self.state_dist and rotors is None and self.friction is None
+        self.friction = None  # the URDF's joint damping and friction: :meth:`add_joint_friction`
+        self.plain = self.env is None and self.fn is None and not self.state_dist and rotors is None
         if rotors is not None:  # rotor speeds appended to z (the first command sets them at tick 0)
             self.z0 = np.concatenate([self.z0 if self.z0 is not None else np.zeros(0), np.zeros(rotors.n)])
             self.rhs = self._rhs_rotors
@@ -453,6 +512,14 @@ class _Plant:
             self.rhs = self._rhs
         else:
             self.rhs = self._rhs_z
+
+    def add_joint_friction(self, friction: JointFriction | None) -> None:
+        """The joints' viscous damping and Coulomb friction (:class:`qprr.joint_friction.JointFriction`, from the
+        URDF's ``<dynamics damping friction>``; None: none) in every stage's generalised force."""
+        self.friction = friction
+        if friction is not None and self.plain:
+            self.plain = False
+            self.rhs = self._rhs if self.z0 is None else self._rhs_z
 
     def settle(self, t: float, z_before, z_after):
         """The environment's discrete events on its part of z (the rotor speeds have none)."""
@@ -516,33 +583,6 @@ class _Plant:
 _NO_STATE = np.zeros(0)
 
 
-def _result(platform, scenario, controller, dt, integrator, t, xi_log, xid_log, xi_d, xi_dot_d, u_log, f_log, com_log,
-            N, flags, u_ext, wall, seed, m, status, reason, t_start=None, pin_out=False, period=None) -> SimResult:
-    xi = xi_log[:m]
-    R = ch.euler_to_rotation_batch(xi[:, 3:6])
-    x_cm = ch.to_body_batch(R, com_log[:m], xi[:, 0:3])  # R^T (c - p)
-    if pin_out:  # the controller returned Pinocchio forces: log u = S^T tau_d
-        tau_d = u_log[:m].copy()
-        u_log[:m] = ch.force_to_xi_batch(R, xi, tau_d)
-    else:
-        tau_d = ch.force_from_xi_batch(R, xi, u_log[:m])
-    unalloc = tau_d - f_log[:m] @ N.T
-    if wall is None:
-        wall = time.perf_counter() - t_start
-    nr = platform.n_rotors
-    res = SimResult(
-        scenario=scenario, controller=getattr(controller, "name", type(controller).__name__), dt=dt,
-        integrator=integrator, t=t[:m].copy(), xi=xi, xi_dot=xid_log[:m], xi_d=xi_d[:m], xi_dot_d=xi_dot_d[:m],
-        u=u_log[:m], f=f_log[:m, 0:nr].copy(), arm_effort=f_log[:m, nr:].copy(), x_cm=x_cm, unallocated=unalloc,
-        flags=flags[:m], u_ext=u_ext[:m], wall_time=wall, status=status, reason=reason, seed=seed, control_period=period,
-        platform=platform.name, names=platform.xi_names, arm_kinds=tuple(j.kind for j in platform.arm),
-    )
-    metrics, series = controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
-    res.metrics.update(metrics)
-    res.series.update(series)
-    return res
-
-
 _BASE_V = ("v_x", "v_y", "v_z", "omega_x", "omega_y", "omega_z")
 
 
@@ -572,7 +612,7 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
     k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
     what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
     label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
-    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {getattr(controller, 'name', type(controller).__name__)!r} "
+    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
                            f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)")
 
 

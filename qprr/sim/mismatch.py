@@ -114,7 +114,9 @@ class PlantActuators:
     ``allocate_into`` has :meth:`qprr.actuation.Allocator.allocate_into`'s contract: ``f_out``
     receives the thrusts the plant's rotors produce (commands clipped to the plant's bounds)
     and the arm efforts, ``tau_out`` the plant's N f; flag 1 is set when the model's or the
-    plant's thrust bounds were active.
+    plant's thrust bounds were active.  ``allocate_screened_into`` (the simulator's call) has
+    :meth:`qprr.actuation.Allocator.allocate_screened_into`'s: -1 and nothing written on a NaN,
+    infinite or absurd demand.
     """
 
     def __init__(self, allocator: Allocator, plant: Platform) -> None:
@@ -125,7 +127,16 @@ class PlantActuators:
         self._same_bounds = bool(np.array_equal(self.f_min, allocator.f_min) and np.array_equal(self.f_max, allocator.f_max))
 
     def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
-        flags = self.allocator.allocate_into(tau_d, f_out, None)
+        """The model's allocation, the plant's thrusts (see the class docstring)."""
+        return self._plant_side(self.allocator.allocate_into(tau_d, f_out, None), f_out, tau_out)
+
+    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+        """:meth:`allocate_into` behind the allocator's screen: -1 (nothing written) on a NaN, infinite or absurd ``tau_d``."""
+        flags = self.allocator.allocate_screened_into(tau_d, f_out, None)
+        return flags if flags < 0 else self._plant_side(flags, f_out, tau_out)
+
+    def _plant_side(self, flags: int, f_out: np.ndarray, tau_out: np.ndarray | None) -> int:
+        """The commanded thrusts in ``f_out`` clipped to the plant's bounds; the plant's N f into ``tau_out``."""
         nr = self.n_rotors
         f = f_out[:nr]
         if not self._same_bounds:

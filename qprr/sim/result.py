@@ -15,8 +15,16 @@ import numpy as np
 from ..charts import as_file, as_real, wrap_angle, xi_names
 from ..errors import InputError, ShapeError
 
-FORMAT_VERSION = 2
-"""Version of the .npz layout written by :meth:`SimResult.save` (1: qprr 0.1, no version field, no extras)."""
+FORMAT_VERSION = 3
+"""Version of the .npz layout written by :meth:`SimResult.save`.
+
+1: qprr 0.1, no version field, no extras (not read).  2: metadata and extras.  3: version 2 plus the
+array ``rotor_bounds`` (n_rotors, 2) [N] when the result has it.  The rule: :meth:`SimResult.load`
+reads :data:`READABLE_VERSIONS`; a version-2 file loads with ``rotor_bounds = None`` (not recorded).
+"""
+
+READABLE_VERSIONS = (2, 3)
+"""Format versions :meth:`SimResult.load` reads (see :data:`FORMAT_VERSION`)."""
 
 ARRAYS = ("t", "xi", "xi_dot", "xi_d", "xi_dot_d", "u", "f", "arm_effort", "x_cm", "unallocated", "flags", "u_ext")
 
@@ -55,6 +63,9 @@ class SimResult:
       named numbers (e.g. the recovery time of a payload drop).  Both are saved.
     * ``arm_kinds``: "prismatic" or "revolute" per arm joint (the units of the figures; empty in
       files written before it existed).
+    * ``rotor_bounds`` (n_rotors, 2) [N]: per rotor [f_min, f_max], the thrust bounds the run's
+      allocation respected (the platform's, or those given to its allocator); None when not
+      recorded (a result built by hand, a file of format 2).
     """
 
     scenario: str
@@ -83,6 +94,7 @@ class SimResult:
     series: dict[str, np.ndarray] = field(default_factory=dict)
     metrics: dict[str, float] = field(default_factory=dict)
     arm_kinds: tuple[str, ...] = ()
+    rotor_bounds: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.control_period is None:
@@ -90,6 +102,8 @@ class SimResult:
         self.status = Status(self.status)
         if not self.names:
             self.names = xi_names(self.xi.shape[1] - 6) if self.xi.ndim == 2 else ()
+        if self.rotor_bounds is not None:
+            self.rotor_bounds = _check_rotor_bounds(self.rotor_bounds, self.f, "rotor_bounds")
 
     @property
     def n(self) -> int:
@@ -100,8 +114,15 @@ class SimResult:
         return int(self.xi.shape[1]) - 6
 
     def rmse(self, start: float = 0.0) -> dict[str, float]:
-        """Thesis (6.26): sqrt(mean((xi_d - xi)^2)) per variable over t >= ``start``; Euler-angle errors wrapped to [-pi, pi)."""
-        sel = self.t >= as_real(start, "start", unit="s")
+        """Thesis (6.26): sqrt(mean((xi_d - xi)^2)) per variable over t >= ``start``; Euler-angle errors wrapped to [-pi, pi).
+
+        ``start`` beyond the last logged tick (no sample to average) raises InputError naming the run's span."""
+        start = as_real(start, "start", unit="s")
+        sel = self.t >= start
+        if not sel.any():
+            span = f"[{float(self.t[0])!r}, {float(self.t[-1])!r}] s" if self.n else "no tick"
+            raise InputError(f"rmse: start = {start!r} s is after the last logged tick (the run covers {span}); "
+                             "give a start within the run")
         e = self.xi_d[sel] - self.xi[sel]
         e[:, ANGLES] = wrap_angle(e[:, ANGLES])
         return {name: float(np.sqrt(np.mean(e[:, i] ** 2))) for i, name in enumerate(self.names)}
@@ -137,6 +158,8 @@ class SimResult:
                     names=list(self.names), metrics={k: float(v) for k, v in self.metrics.items()},
                     series=sorted(self.series), arm_kinds=list(self.arm_kinds))
         arrays = {k: getattr(self, k) for k in ARRAYS}
+        if self.rotor_bounds is not None:
+            arrays["rotor_bounds"] = self.rotor_bounds
         extras = {f"series_{k}": np.asarray(v) for k, v in self.series.items()}
         try:
             np.savez_compressed(path, **arrays, **extras, meta=np.array(json.dumps(meta)))
@@ -170,8 +193,9 @@ class SimResult:
             if not isinstance(meta, dict):
                 raise InputError(f"{source}: corrupted metadata (a JSON object expected, got {type(meta).__name__})")
             version = meta.get("format_version")
-            if version != FORMAT_VERSION:
-                raise InputError(f"{source} has format version {version!r}; this qprr reads version {FORMAT_VERSION}")
+            if version not in READABLE_VERSIONS or isinstance(version, bool):
+                raise InputError(f"{source} has format version {version!r}; this qprr reads versions "
+                                 f"{', '.join(map(str, READABLE_VERSIONS))}")
             missing = [k for k in ARRAYS if k not in files]
             if missing:
                 raise InputError(f"{source} lacks the arrays {missing}: truncated or not a result file")
@@ -181,16 +205,36 @@ class SimResult:
                 raise InputError(f"{source} lacks the series {missing} its metadata lists: truncated or corrupted")
             arrays = {k: _read(z, k, source) for k in ARRAYS}
             series = {k: _read(z, f"series_{k}", source) for k in meta["series"]}
+            bounds = _read(z, "rotor_bounds", source) if version >= 3 and "rotor_bounds" in files else None
         _validate(arrays, meta, source)
+        if bounds is not None:
+            bounds = _check_rotor_bounds(bounds, arrays["f"], f"{source}: rotor_bounds", loaded=True)
         return cls(**arrays, scenario=meta["scenario"], controller=meta["controller"], dt=float(meta["dt"]),
                    integrator=meta["integrator"], wall_time=float(meta["wall_time"]), status=meta["status"],
                    reason=meta["reason"], seed=meta["seed"], control_period=float(meta["control_period"]),
                    platform=meta["platform"], names=tuple(meta["names"]), series=series,
-                   metrics={k: float(v) for k, v in meta["metrics"].items()}, arm_kinds=tuple(meta["arm_kinds"]))
+                   metrics={k: float(v) for k, v in meta["metrics"].items()}, arm_kinds=tuple(meta["arm_kinds"]),
+                   rotor_bounds=bounds)
 
 
 _READ_ERRORS = (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error)
 """What numpy and zipfile raise on a foreign, truncated or corrupted file (ValueError: also pickled object arrays)."""
+
+
+def _check_rotor_bounds(bounds, f: np.ndarray, what: str, loaded: bool = False) -> np.ndarray:
+    """``bounds`` as a float array (n_rotors, 2) of [f_min, f_max] rows, f_min <= f_max, n_rotors the columns of ``f``."""
+    if loaded and bounds.dtype.kind != "f":
+        raise InputError(f"{what} must be float, got dtype {bounds.dtype}")
+    try:
+        b = np.array(bounds, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{what} must be an array (n_rotors, 2) of thrust bounds [N], got {bounds!r:.80}") from exc
+    n_rotors = f.shape[1] if f.ndim == 2 else -1
+    if b.shape != (n_rotors, 2):
+        raise ShapeError(f"{what} must have shape ({n_rotors}, 2) (one [f_min, f_max] row per rotor of f), got {b.shape}")
+    if not (np.all(np.isfinite(b)) and np.all(b[:, 0] <= b[:, 1])):
+        raise InputError(f"{what} must hold finite rows [f_min, f_max] with f_min <= f_max [N], got {b.tolist()}")
+    return b
 
 
 def _read(z, key: str, source: str) -> np.ndarray:

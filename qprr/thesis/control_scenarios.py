@@ -36,7 +36,7 @@ from ..control import IDCGains, InverseDynamicsController
 from ..errors import UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
-from ..sim import SimResult, simulate
+from ..sim import SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
@@ -121,7 +121,7 @@ def _settling_time(t: np.ndarray, x: np.ndarray, target: float, start: float, to
 
 
 def point_to_point(platform=None, controller: str = "idc", progress: bool = False, *, target=POINT_TARGET, duration: float = 10.0,
-                   actuation: str = "ideal", dt: float = 1e-3, integrator: str = "midpoint", seed: int = 0) -> SimResult:
+                   actuation: str = "ideal", dt: float = SimConfig.dt, integrator: str = "midpoint", seed: int = 0) -> SimResult:
     """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``target`` [m], IDC with K_P = 30 I_9,
     K_D = 18 I_9 (module docstring for ``actuation``)."""
     platform = _q_prr(platform)
@@ -221,7 +221,7 @@ def plot_realistic(result: SimResult, path) -> Path:
     """The run's page (:func:`qprr.viz.plot_result`) and, next to it (``<stem>-wind<suffix>``), the wind and rotor speeds."""
     from ..viz import figure_path, new_figure
 
-    out = plot_result(result, path, thrust_bounds=(0.0, 20.0))
+    out = plot_result(result, path)
     s = result.series
     if "wind_velocity" not in s and "rotor_speed" not in s:
         return out
@@ -266,7 +266,7 @@ SCENARIOS = (
     Scenario("point-to-point", "regulation to p_b = [5, 5, 10] without trajectory, IDC K_P = 30 I, K_D = 18 I", _runner(point_to_point),
              ("idc",), {"target": Option(POINT_TARGET, "p_b set point [m]"), "duration": Option(10.0, "run length [s]"),
                         "actuation": Option("ideal", "ideal (the thesis's u applied as is) or rotors (the Q-PRR's four bounded rotors)"),
-                        "dt": Option(1e-3, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"),
+                        "dt": Option(SimConfig.dt, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"),
                         "seed": Option(0, "seed")},
              ("q-prr",), plot_point_to_point, "Sec. 6.3.1.1, Fig. 6.4", margin_summary),
     Scenario("annex-a", "dynamic-manipulator mission (BSG + MFC) to p_b = [10, 6, 10]",
@@ -275,7 +275,8 @@ SCENARIOS = (
     Scenario("aggressive-reach", "climb 2 m and reach 0.6 m forward in 1 s: the IDC saturates the rotors, the MPC plans within them",
              _runner(_aggressive), ("mpc", *[c for c in _FLIGHT_CONTROLLERS if c != "mpc"]),
              {"duration": Option(3.0, "run length [s]"), "climb": Option(2.0, "climb [m] in 1 s"), "forward": Option(0.6, "reach along x [m]"),
-              "dt": Option(1e-3, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"), "seed": Option(0, "seed")},
+              "dt": Option(SimConfig.dt, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"),
+              "seed": Option(0, "seed")},
              ("q-prr",), _plot_flight, "", margin_summary),
     Scenario("realistic", "a mission with motor lag, air drag in wind (mean + Dryden + gust) and joint friction", _runner(_realistic),
              _FLIGHT_CONTROLLERS, _REALISTIC, ("q-prr",), plot_realistic, "(5.36) F_v and D, not simulated in the thesis", margin_summary),

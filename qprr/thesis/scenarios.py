@@ -56,6 +56,7 @@ from ..sim import (
     PrescribedWrench,
     Pulse,
     PushedMass,
+    SimConfig,
     SimResult,
     WhiteNoise,
     simulate,
@@ -69,7 +70,6 @@ from .missions import NAMES, dynamic_mission, static_mission
 from .robot import load, params_of
 
 SEED = 0
-DT = 1e-3
 
 THESIS_NAMES = {"idc": "IDC", "dsid": "MPC", "mfc": "MFC"}
 """What the thesis calls each controller (Table 6.3 columns)."""
@@ -145,7 +145,7 @@ _BSG_CONTROLLERS = ("mfc", "idc", "dsid", "decoupled")
 
 def _plot_flight(result: SimResult, path) -> Path:
     """The Chapter 6.3 page of a flight scenario (its panels titled with the thesis's figure numbers, :data:`FIGURES`)."""
-    return plot_result(result, path, thrust_bounds=(0.0, 20.0))
+    return plot_result(result, path)
 
 
 FLIGHT_SCENARIOS = (
@@ -300,7 +300,7 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     ctrl = builders[controller]()
     schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
     disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
-    res = simulate(platform, ctrl, trajectory, duration, dt=DT, payload=schedule, disturbance=disturbance, seed=seed,
+    res = simulate(platform, ctrl, trajectory, duration, payload=schedule, disturbance=disturbance, seed=seed,
                    progress=progress, scenario="payload-drop", plant=plant)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
     if getattr(ctrl, "mode", None) == "estimate":
@@ -392,7 +392,7 @@ def _push(platform, controller, progress, xi0, trajectory, push, duration, objec
     obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
                      friction=friction)
     ctrl = _push_controller(controller, platform, obj)
-    res = simulate(platform, ctrl, trajectory, duration, dt=DT, external_wrench=obj, seed=seed, progress=progress,
+    res = simulate(platform, ctrl, trajectory, duration, external_wrench=obj, seed=seed, progress=progress,
                    scenario=trajectory.name)
     _contact_series(res, obj)
     res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
@@ -437,7 +437,7 @@ def impedance(platform=None, controller: str = "impedance", progress: bool = Fal
     if controller not in builders:
         raise UnknownNameError("controller", controller, IMPEDANCE_CONTROLLERS)
     ctrl = builders[controller]()
-    res = simulate(platform, ctrl, Hold(xi0), duration, dt=DT, external_wrench=ee, disturbance=pulse, seed=seed,
+    res = simulate(platform, ctrl, Hold(xi0), duration, external_wrench=ee, disturbance=pulse, seed=seed,
                    progress=progress, scenario="impedance")
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
@@ -570,7 +570,7 @@ INTERACTION_PANEL = Panel("interaction", "interaction forces (world x, y, z)", _
 
 def plot_payload_drop(result: SimResult, path) -> Path:
     """The Sec. 6.4.2.3 figures of ``payload-drop`` (Fig. 6.49-6.51) with the payload mass (true, estimated) and the release."""
-    return plot_result(result, path, panels=_SEC_6_4_PANELS + (PAYLOAD_PANEL, "rotors", "cog"), thrust_bounds=(0.0, 20.0),
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (PAYLOAD_PANEL, "rotors", "cog"),
                        events=((result.metrics["release_time"], "release"),))
 
 
@@ -578,14 +578,14 @@ def plot_push(result: SimResult, path) -> Path:
     """The Sec. 6.4.3 figures of a push scenario (Fig. 6.54-6.58 or 6.60-6.64) with the contact force and the object's motion."""
     m = result.metrics
     events = tuple((m[k], k.replace("_", " ")) for k in ("push_start", "push_end") if k in m)
-    return plot_result(result, path, panels=_SEC_6_4_PANELS + (CONTACT_PANEL, "rotors", "cog"), thrust_bounds=(0.0, 20.0),
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (CONTACT_PANEL, "rotors", "cog"),
                        events=events)
 
 
 def plot_impedance(result: SimResult, path) -> Path:
     """The Sec. 6.4.3.4 figures of ``impedance`` (Fig. 6.66-6.70) with the interaction forces and the compliant deflections."""
     return plot_result(result, path, panels=_SEC_6_4_PANELS + (INTERACTION_PANEL, DEFLECTION_PANEL, "rotors"),
-                       thrust_bounds=(0.0, 20.0), events=((result.metrics["t_off"], "forces off"),))
+                       events=((result.metrics["t_off"], "forces off"),))
 
 
 def summary(result: SimResult) -> list[str]:
@@ -699,7 +699,7 @@ class Comparison:
         return "\n".join(lines)
 
 
-def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: float = 30.0, dt: float = 1e-3,
+def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: float = 30.0, dt: float = SimConfig.dt,
             progress: bool = False) -> Comparison:
     """Run the three controllers on the static mission (Sec. 6.3.1.4) and collect RMSE and wall times."""
     platform = _q_prr(platform)

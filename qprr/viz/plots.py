@@ -371,6 +371,8 @@ def _rotors(ax, res, thrust_bounds=None):
     _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
     sat = (res.flags & 1) != 0
     lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
+    if thrust_bounds is None and res.rotor_bounds is not None:  # the bounds the run's allocation respected
+        thrust_bounds = tuple(float(b) for b in np.unique(res.rotor_bounds))
     if thrust_bounds:
         shown = [b for b in thrust_bounds if lo <= b <= hi]
         for b in shown:
@@ -543,7 +545,8 @@ def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, 
     title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
     figures : figure numbers per panel name (default: those of the scenario that made ``res``; pass
         ``{}`` for none).
-    thrust_bounds : (f_min, f_max) [N] drawn on the ``rotors`` panel.
+    thrust_bounds : thrust bounds [N] drawn on the ``rotors`` panel (default: the distinct values of the
+        result's ``rotor_bounds``; none for a result that does not record them).
     events : (time [s], label) pairs drawn as vertical lines on the time panels (a release, a contact).
     ncols : columns of the page (default 3, or fewer panels).
 
