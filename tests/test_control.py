@@ -137,7 +137,7 @@ def test_ipid_printed_sign_diverges_and_corrected_converges():
             Fe = F  # exact estimate: isolates the sign of the law
             e, ed = -y, -yd
             ie += e * dt
-            u = law(Fe, 0.0, e, ie, ed, alpha, kp, ki, kd)
+            u = law(Fe, 0.0, e, ie, ed)
             ydd = F + alpha * u
             yd += dt * ydd
             y += dt * yd
@@ -145,8 +145,8 @@ def test_ipid_printed_sign_diverges_and_corrected_converges():
                 return y
         return y
 
-    assert abs(run(ipid)) < 5e-3  # slow pole s = -0.146 of s^3 + 35 s^2 + 60 s + 8
-    assert abs(run(ipid_thesis_printed)) > 1e6
+    assert abs(run(lambda *err: ipid(*err, alpha, (kp, ki, kd)))) < 5e-3  # slow pole s = -0.146 of s^3 + 35 s^2 + 60 s + 8
+    assert abs(run(lambda *err: ipid_thesis_printed(*err, alpha, kp, ki, kd))) > 1e6
 
 
 # ----------------------------------------------------------------------------- BSG (6.33)-(6.35)

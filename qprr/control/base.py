@@ -30,7 +30,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..charts import State, as_int, as_real, as_vector, as_xi
-from ..errors import InputError
+from ..errors import InputError, NotResetError
 
 
 class Reference:
@@ -77,6 +77,27 @@ class Controller(ABC):
     """What :meth:`step` returns: "xi" (default), u in thesis coordinates; or "pinocchio",
     tau = S^-T u at the measured state (a controller that computes tau anyway saves two
     coordinate changes per step; the simulator still logs u)."""
+
+    tilt = None
+    """The roll/pitch reference filter of a controller that derives them from (6.17) (a
+    :class:`~qprr.control.filters.TiltReference` or :class:`~qprr.control.filters.SingleTiltReference`,
+    made by :meth:`reset`), else None.  A wrapper (e.g. the thesis's BSG) may read its last references."""
+
+    _dt: float | None = None
+
+    @property
+    def dt(self) -> float:
+        """Control period [s], set by :meth:`reset` (which the simulator calls before the run); there is no
+        default: reading it before ``reset`` raises :class:`~qprr.errors.NotResetError`."""
+        dt = self._dt
+        if dt is None:
+            raise NotResetError(f"{type(self).__name__}.dt (the control period) is not set: call "
+                                f"reset(state, ref, dt) first (qprr.sim.simulate does it before the run)")
+        return dt
+
+    @dt.setter
+    def dt(self, value: float | None) -> None:
+        self._dt = value
 
     uses_preview: bool = False
     """Set True to be handed the run's whole reference trajectory before it starts (:meth:`set_preview`):

@@ -162,6 +162,7 @@ class ImpedanceController(LayeredIDC):
         self.limit_margin = as_real(limit_margin, "limit_margin", nonnegative=True)
         super().__init__(platform, gains, ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
         self.name = "impedance"
+        self.log: list[np.ndarray] = []  # filled by the run (reset empties it)
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         super().reset(state, ref, dt)

@@ -213,8 +213,7 @@ class InverseDynamicsController(Controller):
         self._refs_hook = cls.update_references is not InverseDynamicsController.update_references
         self._ff_hook = cls.feedforward is not InverseDynamicsController.feedforward
         self._task_hook = cls.task_accelerations is not InverseDynamicsController.task_accelerations
-        self.dt = 1e-3
-        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
+        self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
 
     def __getstate__(self) -> dict:
         """Pickle without the bound ``struct`` method (rebuilt by :meth:`__setstate__`): controllers go to worker processes."""
@@ -285,8 +284,9 @@ class InverseDynamicsController(Controller):
                 xi_d[3], xi_d[4] = self.tilt.x
                 xi_dot_d[3], xi_dot_d[4] = self.tilt.xd
             else:  # first step: none yet, use the measured tilt
-                xi_d[3], xi_d[4] = state._xi[3], state._xi[4]
-        self._desired._from_xi(state.t, xi_d, xi_dot_d, False, True)  # update_xi(..., arrays=False, reuse=True)
+                x = state.xi_floats
+                xi_d[3], xi_d[4] = x[3], x[4]
+        self._desired.set_from_xi(state.t, xi_d, xi_dot_d, arrays=False, reuse=True)
         return self._desired
 
     def update_references(self, t: float, state: State, ref: Reference) -> None:
@@ -315,7 +315,7 @@ class InverseDynamicsController(Controller):
         M (CRBA, local convention) depends on the arm joints only, so at a held desired arm
         pose the rows of the previous step are exact."""
         if self._desired is not None:
-            key = self._pack(*ms._xi[6:])
+            key = self._pack(*ms.xi_floats[6:])
             if key != self._mass_key:
                 self._mass_rows = _crba(model, data, q)[self._lost_rows, 0:6].tolist()
                 self._mass_key = key
@@ -327,7 +327,7 @@ class InverseDynamicsController(Controller):
         """u = B alpha + C xi_dot + G with alpha from the outer loops and roll/pitch from (6.17)."""
         if self._refs_hook:
             self.update_references(t, state, ref)
-        x, xd = state._xi, state._xd
+        x, xd = state.xi_floats, state.xi_dot_floats
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         ms = self._model_state(state, r, rd)
         model, data, q, v = self.model, self.data, ms.q, ms.v
@@ -345,10 +345,7 @@ class InverseDynamicsController(Controller):
         if tilt is not None:
             write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
             t0 = _rnea(model, data, q, v, abuf).tolist()
-            # u_fb of (6.21) with alpha_phi = alpha_theta = 0: R times the body force of RNEA (State.lin_to_world)
-            f0, f1, f2 = t0[0:3]
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = ms._r
-            u_fb = (r00 * f0 + r01 * f1 + r02 * f2, r10 * f0 + r11 * f1 + r12 * f2, r20 * f0 + r21 * f1 + r22 * f2)
+            u_fb = ms.lin_to_world(t0[0:3])  # u_fb of (6.21) at alpha_phi = alpha_theta = 0: R times RNEA's body force
             if ff is not None:
                 u_fb = (u_fb[0] + ff[0], u_fb[1] + ff[1], u_fb[2] + ff[2])
             tilt.update(x[5], u_fb, rdd[0:3], self._g, self.dt)

@@ -41,8 +41,12 @@ _TWO_PI = 2.0 * math.pi
 
 
 def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
-         kp: float, ki: float, kd: float) -> float:
-    """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y."""
+         gains: tuple[float, float, float]) -> float:
+    """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y.
+
+    ``gains`` = (K_P, K_I, K_D) of the coordinate.
+    """
+    kp, ki, kd = gains
     return (-F_est + y_ddot_ref + kp * e + ki * e_int + kd * e_dot) / alpha
 
 
@@ -124,8 +128,7 @@ class ModelFreeController(Controller):
         if not isinstance(gains, MFCGains):
             raise InputError(f"gains must be an MFCGains, got {type(gains).__name__}")
         self.gains = gains.resolved(platform.n_xi)
-        self.dt = 1e-3
-        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
+        self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
 
     def _alpha_from_inertia(self, state: State) -> list[float]:
         """alpha_i = c (B^-1)_ii with B = S^T M S at the given state (computed once, not in the loop)."""
@@ -161,12 +164,12 @@ class ModelFreeController(Controller):
         u_applied is the measured input of the previous step (``state.u_applied``): for x, y, z
         the force the tilted thrust really produced, not the u_fb asked for.
         """
-        yd = state._xd
+        yd = state.xi_dot_floats
         if self.yd_prev is None:
             self.yd_prev = list(yd)
             return
         dt = self.dt
-        zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state._ua)
+        zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state.u_applied_floats)
         if self._have_F:  # raw = (y_dot - y_dot_prev) / dt - alpha u, low-passed: F += k (raw - F)
             self.F = [f + k * ((y - p) / dt - al * ua - f) for f, k, y, p, al, ua in zipped]
         else:
@@ -174,21 +177,8 @@ class ModelFreeController(Controller):
         self._have_F = True
         self.yd_prev = list(yd)
 
-    def _ipid(self, i: int, x, xd, r, rd, rdd) -> float:
-        g = self.gains
-        e = r[i] - x[i]
-        if i == 5:
-            e = (e + math.pi) % (2.0 * math.pi) - math.pi
-        self.integral[i] += e * self.dt
-        return ipid(self.F[i], rdd[i], e, self.integral[i], rd[i] - xd[i], self.alpha[i], g.kp[i], g.ki[i], g.kd[i])
-
-    def _attitude_references(self, state: State, ref: Reference, u_fb) -> None:
-        """(6.17) on u_fb -> :class:`TiltReference` -> phi_d, theta_d (and rates) into ``ref``."""
-        self.tilt.update(state.xi[5], u_fb, ref.xi_ddot[0:3].tolist(), self._g, self.dt)
-        self.tilt.write(ref)
-
     def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float]) -> None:
-        """:meth:`_ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...), results into ``u``."""
+        """:func:`ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...) on plain floats, results into ``u``."""
         integ, dt, F, al = self.integral, self.dt, self.F, self.alpha
         for i, kp, ki, kd in loops:
             e = r[i] - x[i]
@@ -201,7 +191,7 @@ class ModelFreeController(Controller):
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u_i from the iPID (6.37, corrected) of each coordinate; roll/pitch references from (6.17)."""
         self._estimate_F(state)
-        x, xd = state._xi, state._xd
+        x, xd = state.xi_floats, state.xi_dot_floats
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         u = [0.0] * len(x)
         self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u)
