@@ -69,8 +69,8 @@ class _LockedArmIDC(InverseDynamicsController):
 
     name = "decoupled-base"
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._locked = State(self.platform.n_arm)
 
     def _alpha_plan(self, idx) -> tuple[tuple, tuple]:

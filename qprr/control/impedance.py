@@ -162,10 +162,9 @@ class ImpedanceController(LayeredIDC):
         self.limit_margin = as_real(limit_margin, "limit_margin", nonnegative=True)
         super().__init__(platform, gains, ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
         self.name = "impedance"
-        self.log: list[np.ndarray] = []  # filled by the run (reset empties it)
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         imp = self.impedance
         self.base_filter = ImpedanceFilter(imp.M_base, imp.D_base, imp.K_base)
         self.arm_filter = ImpedanceFilter(*imp.arm(self.platform.n_arm))

@@ -214,6 +214,7 @@ class InverseDynamicsController(Controller):
         self._ff_hook = cls.feedforward is not InverseDynamicsController.feedforward
         self._task_hook = cls.task_accelerations is not InverseDynamicsController.task_accelerations
         self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
+        self._new_run()
 
     def __getstate__(self) -> dict:
         """Pickle without the bound ``struct`` method (rebuilt by :meth:`__setstate__`): controllers go to worker processes."""
@@ -226,7 +227,12 @@ class InverseDynamicsController(Controller):
         self._pack = struct.Struct(f"={self.platform.n_arm}d").pack
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt = check_reset(self, state, ref, dt)
+        """Start a run: the control period ``dt`` [s] (checked with the state and reference), then :meth:`_new_run`."""
+        self.dt = check_reset(self, state, ref, dt)
+        self._new_run()
+
+    def _new_run(self) -> None:
+        """Fresh per-run values (integrals, filters, buffers, caches); a configuration extends it for its own."""
         n = self.platform.n_xi
         self.integral = [0.0] * n
         g = self.gains
@@ -450,8 +456,8 @@ class LayeredIDC(InverseDynamicsController):
         if ee_sensor is not None or base_sensor is not None:
             self.name = "layered-idc-ft" if compensate else "layered-idc"
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._h_f = None
         self._u_e = np.zeros(self.platform.n_xi)
         self._h_b = np.zeros(4)
@@ -518,8 +524,8 @@ class PayloadIDC(LayeredIDC):
         """Change the known payload mass (mode "known"): e.g. a scheduled release the controller is told about."""
         self.known_mass = _mass(mass, "mass")
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         if self.estimator is not None:
             self.estimator.reset()
         self._prev = None

@@ -129,6 +129,9 @@ class ModelFreeController(Controller):
             raise InputError(f"gains must be an MFCGains, got {type(gains).__name__}")
         self.gains = gains.resolved(platform.n_xi)
         self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
+        self.alpha = None  # alpha_i of (6.36): set by reset (from the initial state unless the gains give it)
+        self._kf = None  # gains of the F_est low-pass: set by reset (they depend on dt)
+        self._new_run()
 
     def _alpha_from_inertia(self, state: State) -> list[float]:
         """alpha_i = c (B^-1)_ii with B = S^T M S at the given state (computed once, not in the loop)."""
@@ -141,16 +144,22 @@ class ModelFreeController(Controller):
         return [self.gains.alpha_scale * float(v) for v in d]
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
+        """Start a run: the control period ``dt`` [s], alpha (from ``state`` unless the gains give it), fresh loops."""
         self.dt = dt = check_reset(self, state, ref, dt)
         g = self.gains
         self.alpha = list(g.alpha) if g.alpha is not None else self._alpha_from_inertia(state)
+        self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
+        self._new_run()
+
+    def _new_run(self) -> None:
+        """Fresh per-run values: integrals, F_est, the tilt reference filter."""
+        g = self.gains
         n = self.platform.n_xi
         self.integral = [0.0] * n
         self.u_prev = [0.0] * n
         self.yd_prev = None
         self.F = [0.0] * n
         self._have_F = False
-        self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
         p = self.platform
         self.tilt = TiltReference(g.filter_omega, g.max_tilt, 0.05 * p.total_mass * p.g)
         self._g = p.g

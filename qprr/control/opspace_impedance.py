@@ -260,7 +260,6 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         # damping of the task inverse: eigenvalues of A W A^T below ~ damping x that of the base's own translation
         scale = 1.0 / platform.total_mass if weighting == "inertia" else BASE_RANGE ** 2
         self._eps2 = (float(damping) * scale) ** 2
-        self.log: list[np.ndarray] = []  # filled by the run (reset empties it)
 
     def _range_weights(self) -> np.ndarray:
         """W_ii = (half range)^2 of each task coordinate: arm joints their limits; base translations BASE_RANGE, base angles pi/2."""
@@ -289,8 +288,8 @@ class OperationalSpaceImpedance(InverseDynamicsController):
             raise InputError(f"coordinates must be distinct and not empty, got {coordinates!r}")
         return tuple(out)
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._h = np.zeros(6)
         self._step_t = None
         self.log: list[np.ndarray] = []

@@ -92,12 +92,13 @@ class CogStabilizer(Controller):
 
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """Write r0_d, theta3_d (filtered, with rates) into ``ref`` and return the inner controller's u."""
+        dt = self.dt
         theta = state.xi_floats[4] if self.pitch == "measured" else self.inner.tilt.x[1]
         r0_d, t3_d = self.joint_references(float(theta), ref.xi.item(7))
         if not self._started:
             self.filter.reset((r0_d, t3_d))
             self._started = True
-        self.filter.update((r0_d, t3_d), self.dt)
+        self.filter.update((r0_d, t3_d), dt)
         f = self.filter
         ref.xi[6], ref.xi[8] = f.x
         ref.xi_dot[6], ref.xi_dot[8] = f.xd
