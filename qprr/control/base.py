@@ -54,13 +54,15 @@ class Reference:
 
 def check_reset(controller, state, ref, dt) -> float:
     """The arguments of :meth:`Controller.reset` checked (a :class:`State` and a :class:`Reference` of the controller's
-    platform size, a control period dt > 0 [s]); returns dt as a float.  ``reset`` runs once per run: the per-step
-    calls (``step``) take the simulator's own State and Reference unchecked."""
+    platform size, when it has one, a control period dt > 0 [s]); returns dt as a float.  ``reset`` runs once per run:
+    the per-step calls (``step``) take the simulator's own State and Reference unchecked."""
+    if not isinstance(controller, Controller):
+        raise InputError(f"controller must be a qprr.control.Controller, got {type(controller).__name__}")
     if not isinstance(state, State):
         raise InputError(f"state must be a qprr.charts.State, got {type(state).__name__}")
     if not isinstance(ref, Reference):
         raise InputError(f"ref must be a qprr.control.Reference, got {type(ref).__name__}")
-    platform = getattr(controller, "platform", None)
+    platform = controller.platform
     if platform is not None and (state.n_arm != platform.n_arm or np.shape(ref.xi) != (platform.n_xi,)):
         raise InputError(f"state and ref must be of the controller's platform ({platform.n_xi} thesis coordinates), "
                          f"got a state of {6 + state.n_arm} and a reference of shape {np.shape(ref.xi)}")
@@ -71,6 +73,9 @@ class Controller(ABC):
     """Base class: ``step(t, state, ref) -> u`` (see the module docstring)."""
 
     name: str = "controller"
+    platform = None
+    """The :class:`~qprr.platform.Platform` controlled (its sizes are checked by :meth:`reset`), or None for a
+    controller not tied to one."""
     uses_applied_force: bool = False
     """Set True to have the simulator fill ``state.u_applied`` (costs ~1 us per step)."""
     output: str = "xi"
