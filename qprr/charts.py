@@ -603,15 +603,17 @@ class State:
     # on vectors of 6 + n entries).  Arm entries are carried through by slicing.
     """Measured state at one step (updated in place by :meth:`update`; no allocation per step).
 
-    Attributes: ``t`` [s]; ``q`` (7 + n,), ``v`` (6 + n,) Pinocchio; ``xi``, ``xi_dot`` (6 + n,) thesis;
-    ``sf``, ``cf``, ``st``, ``ct``: sin/cos of phi and theta; ``n_arm`` arm joints (default 3, the Q-PRR's).
+    Attributes (set by :meth:`update` / :meth:`set_from_xi`; read them, do not assign them): ``t`` [s];
+    ``q`` (7 + n,), ``v`` (6 + n,) Pinocchio; ``xi``, ``xi_dot`` (6 + n,) thesis; ``sf``, ``cf``, ``st``,
+    ``ct``: sin/cos of phi and theta; ``n_arm`` arm joints (default 3, the Q-PRR's); and, for controllers
+    that compute on plain floats, the same values as tuples of Python floats: ``xi_floats``,
+    ``xi_dot_floats``, ``rotation_floats`` (R_b row-major: r00, r01, r02, r10, ..., r22) and
+    ``u_applied_floats``.
 
-    Read-only properties: ``R`` (3, 3) body-to-world rotation; ``u_applied`` (6 + n,): the generalised
+    Properties: ``R`` (3, 3) body-to-world rotation (a new array); ``u_applied`` (6 + n,): the generalised
     force the actuators applied during the previous step (thesis coordinates, disturbances excluded) -
     the "measured input" of the model-free controller, filled only for controllers with
-    ``uses_applied_force = True``; ``arm`` (q_arm); and the same values as tuples of Python floats for
-    controllers that compute on plain floats: :attr:`xi_floats`, :attr:`xi_dot_floats`,
-    :attr:`rotation_floats` (R row-major), :attr:`u_applied_floats`.
+    ``uses_applied_force = True``; ``arm`` (q_arm, a new list).
 
     Maps (tests check them against the array functions of this module):
 
@@ -623,8 +625,8 @@ class State:
     * :meth:`lin_to_world`, :meth:`lin_to_body`, :meth:`euler_accel_to_omega_dot`.
     """
 
-    __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "sf", "cf", "st", "ct",
-                 "_ua", "_r", "_v", "_xi", "_xd", "_qv", "_wq", "_wv")
+    __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "sf", "cf", "st", "ct", "xi_floats", "xi_dot_floats",
+                 "rotation_floats", "u_applied_floats", "_v", "_qv", "_wq", "_wv")
 
     def __init__(self, n_arm: int = 3) -> None:
         if not (isinstance(n_arm, (int, np.integer)) and n_arm >= 0):
@@ -637,58 +639,37 @@ class State:
         self.v = np.zeros(n)
         self.xi = np.zeros(n)
         self.xi_dot = np.zeros(n)
-        self._ua = (0.0,) * n
-        self._r = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+        self.u_applied_floats = (0.0,) * n
+        self.rotation_floats = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
         self._v = (0.0,) * n
-        self._xi = (0.0,) * n
-        self._xd = (0.0,) * n
+        self.xi_floats = (0.0,) * n
+        self.xi_dot_floats = (0.0,) * n
         self._qv = None
         self._wq, self._wv = FloatWriter(n + 1), FloatWriter(n)
         self.sf, self.cf, self.st, self.ct = 0.0, 1.0, 0.0, 1.0
 
-    # ------------------------------------------------------------------ plain-float views
-    @property
-    def xi_floats(self) -> tuple[float, ...]:
-        """xi (6 + n,) as a tuple of Python floats (the values of ``xi``, without an array round trip)."""
-        return self._xi
-
-    @property
-    def xi_dot_floats(self) -> tuple[float, ...]:
-        """xi_dot (6 + n,) as a tuple of Python floats."""
-        return self._xd
-
-    @property
-    def rotation_floats(self) -> tuple[float, ...]:
-        """Body-to-world rotation R_b as 9 Python floats, row-major (r00, r01, r02, r10, ..., r22)."""
-        return self._r
-
-    @property
-    def u_applied_floats(self) -> tuple[float, ...]:
-        """:attr:`u_applied` as a tuple of Python floats."""
-        return self._ua
-
     @property
     def R(self) -> np.ndarray:
         """Body-to-world rotation R_b (3, 3) (a new array)."""
-        return np.array(self._r).reshape(3, 3)
+        return np.array(self.rotation_floats).reshape(3, 3)
 
     @property
     def u_applied(self) -> np.ndarray:
         """Generalised force applied during the previous step, thesis coordinates (a new array)."""
-        return np.array(self._ua)
+        return np.array(self.u_applied_floats)
 
     @u_applied.setter
     def u_applied(self, value) -> None:
-        self._ua = tuple(as_vector(value, 6 + self.n_arm, "u_applied").tolist())
+        self.u_applied_floats = tuple(as_vector(value, 6 + self.n_arm, "u_applied").tolist())
 
     def set_applied(self, tau: np.ndarray) -> None:
         """Store u_applied = S^T tau for the Pinocchio generalised force ``tau`` the actuators applied."""
-        self._ua = tuple(self.force_to_xi_list(tau))
+        self.u_applied_floats = tuple(self.force_to_xi_list(tau))
 
     @property
     def arm(self) -> list[float]:
         """Arm joint positions q_arm (a new list of floats)."""
-        return list(self._xi[6:])
+        return list(self.xi_floats[6:])
 
     # ------------------------------------------------------------------ filling the state
     def update(self, t: float, q: np.ndarray, v: np.ndarray, v_bound: float | None = None) -> bool:
@@ -713,7 +694,7 @@ class State:
         r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
         r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
         r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
-        self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+        self.rotation_floats = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
         ch = hypot(r21, r22)
         if not ch > 1e-6:  # also catches NaN
             raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
@@ -723,11 +704,11 @@ class State:
         self.cf = cf = r22 / ch
         self.st = st = -r20
         self.ct = ch
-        self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), *ql[7:])
+        self.xi_floats = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), *ql[7:])
         self._wv(self.xi, xi)
         # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
         psi_d = (sf * wy_ + cf * wz_) / ch
-        self._xd = xd = (r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
+        self.xi_dot_floats = xd = (r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
                          wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, *vl[6:])
         self._wv(self.xi_dot, xd)
         return True
@@ -767,11 +748,11 @@ class State:
         else:
             self.q = np.array(qt)
             self.v = np.array(v)
-        self._r = r
+        self.rotation_floats = r
         self._v = v
-        self._xd = xd = tuple(xi_dot)
+        self.xi_dot_floats = xd = tuple(xi_dot)
         self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
-        self._xi = xi_t = (x, y, z, phi, theta, psi, *xi[6:])
+        self.xi_floats = xi_t = (x, y, z, phi, theta, psi, *xi[6:])
         if arrays:
             self.xi = np.array(xi_t)
             self.xi_dot = np.array(xd)
@@ -788,9 +769,9 @@ class State:
     def accel_to_v_list(self, xi_ddot) -> list[float]:
         """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot as a list of floats (``xi_ddot``: a sequence of floats)."""
         ax, ay, az, pdd, tdd, sdd = xi_ddot[:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
         vx, vy, vz, wx, wy, wz = self._v[:6]
-        pd, td, sd = self._xd[3:6]
+        pd, td, sd = self.xi_dot_floats[3:6]
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
         return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
@@ -808,7 +789,7 @@ class State:
         """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T) as a list of floats."""
         tau = tau.tolist() if isinstance(tau, np.ndarray) else tau
         f0, f1, f2, m0, m1, m2 = tau[:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         return [r00 * f0 + r01 * f1 + r02 * f2,
                 r10 * f0 + r11 * f1 + r12 * f2,
@@ -825,7 +806,7 @@ class State:
         """Pinocchio generalised force tau = S^-T u (into ``out``, a float64 array, if given)."""
         u = u.tolist() if isinstance(u, np.ndarray) else u
         u0, u1, u2, m0, m1, m2 = u[:6]
-        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
         sf, cf = self.sf, self.cf
         w = (m2 + self.st * m0) / self.ct
         tau = (r00 * u0 + r10 * u1 + r20 * u2,
@@ -839,13 +820,13 @@ class State:
     def lin_to_world(self, f_body) -> tuple[float, float, float]:
         """R f for a body-frame 3-vector (plain floats)."""
         f0, f1, f2 = f_body
-        r = self._r
+        r = self.rotation_floats
         return (r[0] * f0 + r[1] * f1 + r[2] * f2, r[3] * f0 + r[4] * f1 + r[5] * f2, r[6] * f0 + r[7] * f1 + r[8] * f2)
 
     def lin_to_body(self, f_world) -> tuple[float, float, float]:
         """R^T f for a world-frame 3-vector (plain floats)."""
         f0, f1, f2 = f_world
-        r = self._r
+        r = self.rotation_floats
         return (r[0] * f0 + r[3] * f1 + r[6] * f2, r[1] * f0 + r[4] * f1 + r[7] * f2, r[2] * f0 + r[5] * f1 + r[8] * f2)
 
     def euler_accel_to_omega_dot(self, a0: float, a1: float, a2: float) -> tuple[float, float, float]:

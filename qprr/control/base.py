@@ -69,6 +69,12 @@ def check_reset(controller, state, ref, dt) -> float:
     return as_real(dt, "dt", positive=True, unit="s")
 
 
+def not_reset(controller) -> NotResetError:
+    """The error of a controller used before :meth:`Controller.reset` gave it its control period."""
+    return NotResetError(f"{type(controller).__name__}.dt (the control period) is not set: call reset(state, ref, dt) "
+                         f"first (qprr.sim.simulate does it before the run)")
+
+
 class Controller(ABC):
     """Base class: ``step(t, state, ref) -> u`` (see the module docstring)."""
 
@@ -96,8 +102,7 @@ class Controller(ABC):
         default: reading it before ``reset`` raises :class:`~qprr.errors.NotResetError`."""
         dt = self._dt
         if dt is None:
-            raise NotResetError(f"{type(self).__name__}.dt (the control period) is not set: call "
-                                f"reset(state, ref, dt) first (qprr.sim.simulate does it before the run)")
+            raise not_reset(self)
         return dt
 
     @dt.setter

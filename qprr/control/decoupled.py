@@ -81,7 +81,7 @@ class _LockedArmIDC(InverseDynamicsController):
             return state
         xd = list(state.xi_dot_floats)
         xd[6:] = [0.0] * self.platform.n_arm
-        self._locked.set_from_xi(state.t, state.xi_floats, xd, arrays=False, reuse=True)
+        self._locked.set_from_xi(state.t, state.xi_floats, xd, False, True)  # arrays=False, reuse=True
         return self._locked
 
 

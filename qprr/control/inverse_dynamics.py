@@ -62,7 +62,7 @@ from ..charts import FloatWriter, State, as_array, as_real, as_vector
 from ..errors import InputError, UnknownNameError
 from ..payload import MassEstimator, PayloadModel
 from ..platform import Platform, check_platform
-from .base import Controller, Reference, check_reset
+from .base import Controller, Reference, check_reset, not_reset
 from .filters import SingleTiltReference, TiltReference
 
 _PI = math.pi
@@ -263,12 +263,12 @@ class InverseDynamicsController(Controller):
         other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if i == 5 or g.ki[i])
         return plain, other
 
-    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float]) -> list[float]:
-        """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists)."""
+    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float], dt: float) -> list[float]:
+        """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists; dt [s] for the integrals)."""
         plain, other = plan
         for i, kp, kd in plain:  # PD: alpha = xi_ddot_d + k_D e_dot + k_P e
             al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * (r[i] - x[i])
-        integ, dt = self.integral, self.dt
+        integ = self.integral
         for i, kp, kd, ki in other:  # + k_I int e; the yaw error wrapped to [-pi, pi)
             e = r[i] - x[i]
             if i == 5:
@@ -292,7 +292,7 @@ class InverseDynamicsController(Controller):
             else:  # first step: none yet, use the measured tilt
                 x = state.xi_floats
                 xi_d[3], xi_d[4] = x[3], x[4]
-        self._desired.set_from_xi(state.t, xi_d, xi_dot_d, arrays=False, reuse=True)
+        self._desired.set_from_xi(state.t, xi_d, xi_dot_d, False, True)  # arrays=False, reuse=True
         return self._desired
 
     def update_references(self, t: float, state: State, ref: Reference) -> None:
@@ -331,13 +331,16 @@ class InverseDynamicsController(Controller):
     # ------------------------------------------------------------------ step
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u = B alpha + C xi_dot + G with alpha from the outer loops and roll/pitch from (6.17)."""
+        dt = self._dt  # the control period (read once: this runs every tick)
+        if dt is None:
+            raise not_reset(self)
         if self._refs_hook:
             self.update_references(t, state, ref)
         x, xd = state.xi_floats, state.xi_dot_floats
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         ms = self._model_state(state, r, rd)
         model, data, q, v = self.model, self.data, ms.q, ms.v
-        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r))
+        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r), dt)
         a = ms.accel_to_v_list(alpha)
         abuf = self._abuf
         write = self._write
@@ -354,13 +357,13 @@ class InverseDynamicsController(Controller):
             u_fb = ms.lin_to_world(t0[0:3])  # u_fb of (6.21) at alpha_phi = alpha_theta = 0: R times RNEA's body force
             if ff is not None:
                 u_fb = (u_fb[0] + ff[0], u_fb[1] + ff[1], u_fb[2] + ff[2])
-            tilt.update(x[5], u_fb, rdd[0:3], self._g, self.dt)
+            tilt.update(x[5], u_fb, rdd[0:3], self._g, dt)
             tilt.write(ref)
             self._started = True
             r[3], r[4] = tilt.x
             rd[3], rd[4] = tilt.xd
             rdd[3], rdd[4] = tilt.xdd
-            self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha)
+            self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha, dt)
             # omega_dot change of the roll/pitch accelerations: T [alpha_phi, alpha_theta, 0] (State.euler_accel_to_omega_dot)
             a3, a4 = alpha[3], alpha[4]
             sf, cf = ms.sf, ms.cf

@@ -33,7 +33,7 @@ import pinocchio as pin
 from ..charts import State, as_array, as_int, as_real, rate_map
 from ..errors import InputError
 from ..platform import Platform, check_platform
-from .base import Controller, Reference, check_reset
+from .base import Controller, Reference, check_reset, not_reset
 from .filters import TiltReference
 
 _PI = math.pi
@@ -167,17 +167,15 @@ class ModelFreeController(Controller):
         self._loops_outer = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (0, 1, 2, 5, *range(6, n)))
         self._loops_tilt = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (3, 4))
 
-    def _estimate_F(self, state: State) -> None:
-        """F_est = y_ddot_meas - alpha u_applied (backward difference, optional low-pass).
+    def _estimate_F(self, state: State, yd, dt: float) -> None:
+        """F_est = y_ddot_meas - alpha u_applied (backward difference over dt [s] of the rates ``yd``, optional low-pass).
 
         u_applied is the measured input of the previous step (``state.u_applied``): for x, y, z
         the force the tilted thrust really produced, not the u_fb asked for.
         """
-        yd = state.xi_dot_floats
         if self.yd_prev is None:
             self.yd_prev = list(yd)
             return
-        dt = self.dt
         zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state.u_applied_floats)
         if self._have_F:  # raw = (y_dot - y_dot_prev) / dt - alpha u, low-passed: F += k (raw - F)
             self.F = [f + k * ((y - p) / dt - al * ua - f) for f, k, y, p, al, ua in zipped]
@@ -186,9 +184,9 @@ class ModelFreeController(Controller):
         self._have_F = True
         self.yd_prev = list(yd)
 
-    def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float]) -> None:
+    def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float], dt: float) -> None:
         """:func:`ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...) on plain floats, results into ``u``."""
-        integ, dt, F, al = self.integral, self.dt, self.F, self.alpha
+        integ, F, al = self.integral, self.F, self.alpha
         for i, kp, ki, kd in loops:
             e = r[i] - x[i]
             if i == 5:
@@ -199,17 +197,20 @@ class ModelFreeController(Controller):
 
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u_i from the iPID (6.37, corrected) of each coordinate; roll/pitch references from (6.17)."""
-        self._estimate_F(state)
+        dt = self._dt  # the control period (read once: this runs every tick)
+        if dt is None:
+            raise not_reset(self)
         x, xd = state.xi_floats, state.xi_dot_floats
+        self._estimate_F(state, xd, dt)
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         u = [0.0] * len(x)
-        self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u)
+        self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u, dt)
         tilt = self.tilt
-        tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, self.dt)
+        tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, dt)
         tilt.write(ref)
         r[3], r[4] = tilt.x
         rd[3], rd[4] = tilt.xd
         rdd[3], rdd[4] = tilt.xdd
-        self._ipid_loops(self._loops_tilt, x, xd, r, rd, rdd, u)
+        self._ipid_loops(self._loops_tilt, x, xd, r, rd, rdd, u, dt)
         self.u_prev = u
         return np.array(u)
