@@ -27,7 +27,6 @@ import os
 import struct
 from math import atan2, cos, hypot, sin
 from pathlib import Path
-from types import MethodType
 
 import numpy as np
 import pinocchio as pin
@@ -597,251 +596,240 @@ class FloatWriter:
         return arr
 
 
-# The hot methods of State, on plain floats.  Their source is written once here and compiled per
-# State for its number of arm joints: "{Q}" stands for ", q0, q1, ..." (arm positions), "{D}" for
-# ", d0, d1, ..." (arm rates or accelerations or efforts); fixed-length unpacking of plain floats
-# costs half of star-unpacking, and these run several times per millisecond of simulated time.
-_HOT_METHODS = """
-def update(self, t, q, v, v_bound=None):
-    self.t = t
-    self.q = q
-    self.v = v
-    x, y, z, qx, qy, qz, qw{Q} = q.tolist()
-    self._v = vl = v.tolist()
-    vx, vy, vz, wx_, wy_, wz_{D} = vl
-    if v_bound is not None and not hypot(vx, vy, vz, wx_, wy_, wz_{D}) < v_bound:
-        return False
-    xx, yy, zz = qx * qx, qy * qy, qz * qz
-    xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
-    r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
-    r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
-    r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
-    self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    ch = hypot(r21, r22)
-    if not ch > 1e-6:  # also catches NaN
-        raise DivergenceError(f"t = {{t:.4f}} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
-                              f"q = {{q.tolist()}}")
-    # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
-    self.sf = sf = r21 / ch
-    self.cf = cf = r22 / ch
-    self.st = st = -r20
-    self.ct = ch
-    self._xi = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00){Q})
-    self._wv(self.xi, xi)
-    # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
-    psi_d = (sf * wy_ + cf * wz_) / ch
-    self._xd = xd = [r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
-                     wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d{D}]
-    self._wv(self.xi_dot, xd)
-    return True
-
-
-def _from_xi(self, t, xi, xd, arrays, reuse):
-    x, y, z, phi, theta, psi{Q} = xi
-    c1, s1 = cos(0.5 * phi), sin(0.5 * phi)
-    c2, s2 = cos(0.5 * theta), sin(0.5 * theta)
-    c3, s3 = cos(0.5 * psi), sin(0.5 * psi)
-    # sin/cos of the full angles from the half angles
-    sf, cf = 2.0 * s1 * c1, c1 * c1 - s1 * s1
-    st, ct = 2.0 * s2 * c2, c2 * c2 - s2 * s2
-    sp, cp = 2.0 * s3 * c3, c3 * c3 - s3 * s3
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(sf, cf, st, ct, sp, cp)
-    px, py, pz, pd, td, sd{D} = xd
-    # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
-    v = [r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
-         pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd{D}]
-    self.t = t
-    # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
-    qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
-          c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3{Q})
-    if reuse:
-        if self._qv is None:
-            self._qv = (np.zeros(len(qt)), np.zeros(len(v)))
-        self.q, self.v = qv = self._qv
-        self._wq(qv[0], qt)
-        self._wv(qv[1], v)
-    else:
-        self.q = np.array(qt)
-        self.v = np.array(v)
-    self._r = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
-    self._v = v
-    self._xd = xd
-    self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
-    xi_t = (x, y, z, phi, theta, psi{Q})
-    self._xi = xi_t
-    if arrays:
-        self.xi = np.array(xi_t)
-        self.xi_dot = np.array(xd)
-
-
-def accel_to_v_list(self, xi_ddot):
-    ax, ay, az, pdd, tdd, sdd{D} = xi_ddot
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-    vx, vy, vz, wx, wy, wz{V} = self._v
-    _, _, _, pd, td, sd{V} = self._xd
-    sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-    # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
-    return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
-            r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
-            r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
-            pdd - st * sdd - ct * td * sd,
-            cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
-            -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd{D}]
-
-
-def force_to_xi_list(self, tau):
-    f0, f1, f2, m0, m1, m2{D} = tau.tolist() if isinstance(tau, np.ndarray) else tau
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-    sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-    return [r00 * f0 + r01 * f1 + r02 * f2,
-            r10 * f0 + r11 * f1 + r12 * f2,
-            r20 * f0 + r21 * f1 + r22 * f2,
-            m0,
-            cf * m1 - sf * m2,
-            -st * m0 + sf * ct * m1 + cf * ct * m2{D}]
-
-
-def force_from_xi(self, u, out=None):
-    u0, u1, u2, m0, m1, m2{D} = u.tolist() if isinstance(u, np.ndarray) else u
-    r00, r01, r02, r10, r11, r12, r20, r21, r22 = self._r
-    sf, cf = self.sf, self.cf
-    w = (m2 + self.st * m0) / self.ct
-    tau = (r00 * u0 + r10 * u1 + r20 * u2,
-           r01 * u0 + r11 * u1 + r21 * u2,
-           r02 * u0 + r12 * u1 + r22 * u2,
-           m0,
-           cf * m1 + sf * w,
-           -sf * m1 + cf * w{D})
-    return np.array(tau) if out is None else self._wv(out, tau)
-"""
-_HOT_NAMES = ("update", "_from_xi", "accel_to_v_list", "force_to_xi_list", "force_from_xi")
-
-
-def _hot_methods(n_arm: int) -> dict:
-    """The hot methods of :class:`State` compiled for ``n_arm`` arm joints (the template above)."""
-    src = _HOT_METHODS.format(Q="".join(f", q{i}" for i in range(n_arm)), D="".join(f", d{i}" for i in range(n_arm)),
-                              V="".join(f", _{i}" for i in range(n_arm)))
-    ns = {"np": np, "cos": cos, "sin": sin, "atan2": atan2, "hypot": hypot, "DivergenceError": DivergenceError,
-          "_rotation_entries": _rotation_entries}
-    exec(compile(src, f"<qprr.charts.State hot methods, n_arm = {n_arm}>", "exec"), ns)
-    return {name: ns[name] for name in _HOT_NAMES}
-
-
 class State:
     # The array maps above on plain floats, for loops that run every millisecond (simulator,
-    # controllers): one xi <-> (q, v) update caches R_b and the trigonometry that S, S_dot
-    # and S^-T need, so each map below is a few multiplications.  The plain-float copies
-    # ``_xi``, ``_xd``, ``_v`` (and ``_ua``) let controllers skip array round trips.
+    # controllers): one xi <-> (q, v) update caches R_b and the trigonometry that S, S_dot and
+    # S^-T need, so each map below is a few multiplications on Python floats (cheaper than numpy
+    # on vectors of 6 + n entries).  Arm entries are carried through by slicing.
     """Measured state at one step (updated in place by :meth:`update`; no allocation per step).
 
-    Attributes: ``q`` (7 + n,), ``v`` (6 + n,) Pinocchio; ``xi``, ``xi_dot`` (6 + n,) thesis;
-    ``R`` (3, 3) body-to-world rotation (property); trigonometric values of phi and theta;
-    ``u_applied`` (6 + n,): the generalised force the actuators applied during the previous step
-    (thesis coordinates, disturbances excluded) - the "measured input" of the model-free
-    controller; filled only for controllers with ``uses_applied_force = True``.
-    ``n_arm`` arm joints (default 3, the Q-PRR's).
+    Attributes (set by :meth:`update` / :meth:`set_from_xi`; read them, do not assign them): ``t`` [s];
+    ``q`` (7 + n,), ``v`` (6 + n,) Pinocchio; ``xi``, ``xi_dot`` (6 + n,) thesis; ``sf``, ``cf``, ``st``,
+    ``ct``: sin/cos of phi and theta; ``n_arm`` arm joints (default 3, the Q-PRR's); and, for controllers
+    that compute on plain floats, the same values as tuples of Python floats: ``xi_floats``,
+    ``xi_dot_floats``, ``rotation_floats`` (R_b row-major: r00, r01, r02, r10, ..., r22) and
+    ``u_applied_floats``.
 
-    Methods (compiled for ``n_arm`` from one template, see ``_HOT_METHODS``; tests check them
-    against the array functions of this module):
+    Properties: ``R`` (3, 3) body-to-world rotation (a new array); ``u_applied`` (6 + n,): the generalised
+    force the actuators applied during the previous step (thesis coordinates, disturbances excluded) -
+    the "measured input" of the model-free controller, filled only for controllers with
+    ``uses_applied_force = True``; ``arm`` (q_arm, a new list).
 
-    * ``update(t, q, v, v_bound=None)``: fill every field from (q, v); DivergenceError at the Euler singularity or on NaN;
-      returns True, or False with only ``t``, ``q``, ``v`` set when the norm of v is NaN or not below ``v_bound``
-      (the simulator's per-tick velocity screen);
-    * ``accel_to_v_list(xi_ddot)``: Pinocchio's a = S xi_ddot + S_dot xi_dot as a list of floats;
-    * ``force_to_xi_list(tau)``: u = S^T tau (Thesis (5.40)-(5.43), R_Q = S^T) as a list;
-    * ``force_from_xi(u, out=None)``: tau = S^-T u (into ``out`` if given, a float64 array);
-    * ``_from_xi(t, xi, xd, arrays, reuse)``: :meth:`update_xi` on plain sequences.
+    Maps (tests check them against the array functions of this module):
+
+    * :meth:`update` ``(t, q, v, v_bound=None)``: every field from (q, v);
+    * :meth:`update_xi` / :meth:`set_from_xi` ``(t, xi, xi_dot, arrays, reuse)``: every field from (xi, xi_dot);
+    * :meth:`accel_to_v_list` / :meth:`accel_to_v`: Pinocchio's a = S xi_ddot + S_dot xi_dot;
+    * :meth:`force_to_xi_list` / :meth:`force_to_xi`: u = S^T tau (Thesis (5.40)-(5.43), R_Q = S^T);
+    * :meth:`force_from_xi`: tau = S^-T u;
+    * :meth:`lin_to_world`, :meth:`lin_to_body`, :meth:`euler_accel_to_omega_dot`.
     """
 
-    __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "_ua", "_r", "_v", "_xi", "_xd", "_qv", "_wq", "_wv",
-                 "sf", "cf", "st", "ct", *_HOT_NAMES)
+    __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "sf", "cf", "st", "ct", "xi_floats", "xi_dot_floats",
+                 "rotation_floats", "u_applied_floats", "_v", "_qv", "_wq", "_wv")
 
     def __init__(self, n_arm: int = 3) -> None:
         if not (isinstance(n_arm, (int, np.integer)) and n_arm >= 0):
             raise InputError(f"n_arm must be an integer >= 0, got {n_arm!r}")
         n = 6 + int(n_arm)
         self.n_arm = int(n_arm)
-        for name, fn in _hot_methods(self.n_arm).items():
-            setattr(self, name, MethodType(fn, self))
         self.t = 0.0
         self.q = np.zeros(n + 1)
         self.q[6] = 1.0
         self.v = np.zeros(n)
         self.xi = np.zeros(n)
         self.xi_dot = np.zeros(n)
-        self._ua = [0.0] * n
-        self._r = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
-        self._v = [0.0] * n
-        self._xi = (0.0,) * n
-        self._xd = [0.0] * n
+        self.u_applied_floats = (0.0,) * n
+        self.rotation_floats = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+        self._v = (0.0,) * n
+        self.xi_floats = (0.0,) * n
+        self.xi_dot_floats = (0.0,) * n
         self._qv = None
         self._wq, self._wv = FloatWriter(n + 1), FloatWriter(n)
         self.sf, self.cf, self.st, self.ct = 0.0, 1.0, 0.0, 1.0
 
-    def __getstate__(self) -> dict:
-        """Pickle the values, not the compiled methods (rebuilt for ``n_arm`` by :meth:`__setstate__`)."""
-        return {k: getattr(self, k) for k in self.__slots__ if k not in _HOT_NAMES and hasattr(self, k)}
-
-    def __setstate__(self, state: dict) -> None:
-        for name, fn in _hot_methods(state["n_arm"]).items():
-            setattr(self, name, MethodType(fn, self))
-        for k, v in state.items():
-            setattr(self, k, v)
-
     @property
     def R(self) -> np.ndarray:
         """Body-to-world rotation R_b (3, 3) (a new array)."""
-        return np.array(self._r).reshape(3, 3)
+        return np.array(self.rotation_floats).reshape(3, 3)
 
     @property
     def u_applied(self) -> np.ndarray:
         """Generalised force applied during the previous step, thesis coordinates (a new array)."""
-        return np.array(self._ua)
+        return np.array(self.u_applied_floats)
 
     @u_applied.setter
     def u_applied(self, value) -> None:
-        self._ua = as_vector(value, 6 + self.n_arm, "u_applied").tolist()
+        self.u_applied_floats = tuple(as_vector(value, 6 + self.n_arm, "u_applied").tolist())
 
     def set_applied(self, tau: np.ndarray) -> None:
         """Store u_applied = S^T tau for the Pinocchio generalised force ``tau`` the actuators applied."""
-        self._ua = self.force_to_xi_list(tau)
+        self.u_applied_floats = tuple(self.force_to_xi_list(tau))
 
     @property
     def arm(self) -> list[float]:
         """Arm joint positions q_arm (a new list of floats)."""
-        return list(self._xi[6:])
+        return list(self.xi_floats[6:])
+
+    # ------------------------------------------------------------------ filling the state
+    def update(self, t: float, q: np.ndarray, v: np.ndarray, v_bound: float | None = None) -> bool:
+        """Fill every field from Pinocchio's (q, v) (float64 arrays, kept by reference as ``q`` and ``v``).
+
+        Returns True; or False, with only ``t``, ``q`` and ``v`` set, when the norm of v is NaN or not
+        below ``v_bound`` (the simulator's per-tick velocity screen).  Raises DivergenceError at the
+        Euler singularity (theta = +-pi/2) or on a NaN attitude.
+        """
+        self.t = t
+        self.q = q
+        self.v = v
+        ql = q.tolist()
+        self._v = vl = v.tolist()
+        if v_bound is not None and not hypot(*vl) < v_bound:
+            return False
+        x, y, z, qx, qy, qz, qw = ql[:7]
+        vx, vy, vz, wx_, wy_, wz_ = vl[:6]
+        # R_b of the unit quaternion (x, y, z, w)
+        xx, yy, zz = qx * qx, qy * qy, qz * qz
+        xy, xz, yz, wx, wy, wz = qx * qy, qx * qz, qy * qz, qw * qx, qw * qy, qw * qz
+        r00, r01, r02 = 1.0 - 2.0 * (yy + zz), 2.0 * (xy - wz), 2.0 * (xz + wy)
+        r10, r11, r12 = 2.0 * (xy + wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz - wx)
+        r20, r21, r22 = 2.0 * (xz - wy), 2.0 * (yz + wx), 1.0 - 2.0 * (xx + yy)
+        self.rotation_floats = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
+        ch = hypot(r21, r22)
+        if not ch > 1e-6:  # also catches NaN
+            raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
+                                  f"q = {q.tolist()}")
+        # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
+        self.sf = sf = r21 / ch
+        self.cf = cf = r22 / ch
+        self.st = st = -r20
+        self.ct = ch
+        self.xi_floats = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), *ql[7:])
+        self._wv(self.xi, xi)
+        # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
+        psi_d = (sf * wy_ + cf * wz_) / ch
+        self.xi_dot_floats = xd = (r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
+                         wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, *vl[6:])
+        self._wv(self.xi_dot, xd)
+        return True
+
+    def set_from_xi(self, t: float, xi, xi_dot, arrays: bool = True, reuse: bool = False) -> None:
+        """Fill every field from thesis coordinates given as sequences of Python floats (lists or tuples).
+
+        The form of :meth:`update_xi` for controllers that evaluate a model at another state on plain
+        floats (desired state, locked arm): no conversion, no check.  ``arrays=False`` skips writing
+        the ``xi`` / ``xi_dot`` arrays (q, v, the maps and the float views are set); ``reuse=True``
+        writes q and v into two arrays this State owns and overwrites at each such call (no
+        allocation; a caller that keeps ``q`` or ``v`` must copy them).
+        """
+        x, y, z, phi, theta, psi = xi[:6]
+        c1, s1 = cos(0.5 * phi), sin(0.5 * phi)
+        c2, s2 = cos(0.5 * theta), sin(0.5 * theta)
+        c3, s3 = cos(0.5 * psi), sin(0.5 * psi)
+        # sin/cos of the full angles from the half angles
+        sf, cf = 2.0 * s1 * c1, c1 * c1 - s1 * s1
+        st, ct = 2.0 * s2 * c2, c2 * c2 - s2 * s2
+        sp, cp = 2.0 * s3 * c3, c3 * c3 - s3 * s3
+        r = r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(sf, cf, st, ct, sp, cp)
+        px, py, pz, pd, td, sd = xi_dot[:6]
+        # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
+        v = (r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
+             pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd, *xi_dot[6:])
+        # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
+        qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
+              c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, *xi[6:])
+        self.t = t
+        if reuse:
+            if self._qv is None:
+                self._qv = (np.zeros(len(qt)), np.zeros(len(v)))
+            self.q, self.v = qv = self._qv
+            self._wq(qv[0], qt)
+            self._wv(qv[1], v)
+        else:
+            self.q = np.array(qt)
+            self.v = np.array(v)
+        self.rotation_floats = r
+        self._v = v
+        self.xi_dot_floats = xd = tuple(xi_dot)
+        self.sf, self.cf, self.st, self.ct = sf, cf, st, ct
+        self.xi_floats = xi_t = (x, y, z, phi, theta, psi, *xi[6:])
+        if arrays:
+            self.xi = np.array(xi_t)
+            self.xi_dot = np.array(xd)
 
     def update_xi(self, t: float, xi, xi_dot, arrays: bool = True, reuse: bool = False) -> None:
         """Fill the state from thesis coordinates (used to evaluate a model at a desired state).
 
-        ``arrays=False`` skips writing the ``xi`` / ``xi_dot`` arrays (q, v and the maps are set).
-        ``reuse=True`` writes q and v into two arrays this State owns and overwrites at each
-        such call (no allocation; a caller that keeps ``q`` or ``v`` must copy them).
+        ``xi``, ``xi_dot``: arrays or sequences (6 + n,).  ``arrays`` and ``reuse``: as for :meth:`set_from_xi`.
         """
-        self._from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else tuple(xi),
-                      xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else list(xi_dot), arrays, reuse)
+        self.set_from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else tuple(xi),
+                         xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else tuple(xi_dot), arrays, reuse)
+
+    # ------------------------------------------------------------------ maps at the current state
+    def accel_to_v_list(self, xi_ddot) -> list[float]:
+        """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot as a list of floats (``xi_ddot``: a sequence of floats)."""
+        ax, ay, az, pdd, tdd, sdd = xi_ddot[:6]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
+        vx, vy, vz, wx, wy, wz = self._v[:6]
+        pd, td, sd = self.xi_dot_floats[3:6]
+        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
+        # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
+        return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
+                r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
+                r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
+                pdd - st * sdd - ct * td * sd,
+                cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
+                -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd, *xi_ddot[6:]]
 
     def accel_to_v(self, xi_ddot) -> np.ndarray:
         """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot (cf. :func:`xi_ddot_to_a`)."""
         return np.array(self.accel_to_v_list(xi_ddot.tolist() if isinstance(xi_ddot, np.ndarray) else xi_ddot))
 
+    def force_to_xi_list(self, tau) -> list[float]:
+        """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T) as a list of floats."""
+        tau = tau.tolist() if isinstance(tau, np.ndarray) else tau
+        f0, f1, f2, m0, m1, m2 = tau[:6]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
+        sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
+        return [r00 * f0 + r01 * f1 + r02 * f2,
+                r10 * f0 + r11 * f1 + r12 * f2,
+                r20 * f0 + r21 * f1 + r22 * f2,
+                m0,
+                cf * m1 - sf * m2,
+                -st * m0 + sf * ct * m1 + cf * ct * m2, *tau[6:]]
+
+    def force_to_xi(self, tau) -> np.ndarray:
+        """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
+        return np.array(self.force_to_xi_list(tau))
+
+    def force_from_xi(self, u, out: np.ndarray | None = None) -> np.ndarray:
+        """Pinocchio generalised force tau = S^-T u (into ``out``, a float64 array, if given)."""
+        u = u.tolist() if isinstance(u, np.ndarray) else u
+        u0, u1, u2, m0, m1, m2 = u[:6]
+        r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
+        sf, cf = self.sf, self.cf
+        w = (m2 + self.st * m0) / self.ct
+        tau = (r00 * u0 + r10 * u1 + r20 * u2,
+               r01 * u0 + r11 * u1 + r21 * u2,
+               r02 * u0 + r12 * u1 + r22 * u2,
+               m0,
+               cf * m1 + sf * w,
+               -sf * m1 + cf * w, *u[6:])
+        return np.array(tau) if out is None else self._wv(out, tau)
+
     def lin_to_world(self, f_body) -> tuple[float, float, float]:
         """R f for a body-frame 3-vector (plain floats)."""
         f0, f1, f2 = f_body
-        r = self._r
+        r = self.rotation_floats
         return (r[0] * f0 + r[1] * f1 + r[2] * f2, r[3] * f0 + r[4] * f1 + r[5] * f2, r[6] * f0 + r[7] * f1 + r[8] * f2)
 
     def lin_to_body(self, f_world) -> tuple[float, float, float]:
         """R^T f for a world-frame 3-vector (plain floats)."""
         f0, f1, f2 = f_world
-        r = self._r
+        r = self.rotation_floats
         return (r[0] * f0 + r[3] * f1 + r[6] * f2, r[1] * f0 + r[4] * f1 + r[7] * f2, r[2] * f0 + r[5] * f1 + r[8] * f2)
 
     def euler_accel_to_omega_dot(self, a0: float, a1: float, a2: float) -> tuple[float, float, float]:
         """T(phi, theta) [a0, a1, a2]: change of omega_dot (body) for a change of Euler accelerations."""
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         return (a0 - st * a2, cf * a1 + sf * ct * a2, -sf * a1 + cf * ct * a2)
-
-    def force_to_xi(self, tau) -> np.ndarray:
-        """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
-        return np.array(self.force_to_xi_list(tau))

@@ -58,6 +58,10 @@ class SolverError(QprrError, RuntimeError):
     """A numerical solver (QP, linear system) failed to return a trustworthy answer."""
 
 
+class NotResetError(QprrError, RuntimeError):
+    """An object used before the call that sets it up for a run (e.g. a controller's ``dt`` before ``reset``)."""
+
+
 class MissingDependencyError(QprrError, ImportError):
     """An optional dependency is not installed; the message gives the install command."""
 

@@ -523,6 +523,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.control.*", "uz_min", S(1.0, "nonneg")),
     ("qprr.control.*", "n", S(2, "int")),
     ("qprr.control.*", "values", F(lambda c: np.ones(2))),
+    ("qprr.control.mfc.ipid", "gains", F(lambda c: (60.0, 8.0, 35.0))),
     ("qprr.control.*", "raw", F(lambda c: np.ones(2))),
     ("qprr.control.*", "n_arm", S(3, "count")),
     ("qprr.control.*", "n_xi", S(9, "count")),
@@ -815,7 +816,6 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.control.filters.*.update", "*", "*"): HOT + "the filter's constructor (its settings) and reset",
     ("qprr.control.filters.*.write", "*", "*"): HOT + "the filter's constructor (its settings) and reset",
     ("qprr.control.mfc.ipid", "*", "*"): HOT + "ModelFreeController (the iPID law (6.21) of each coordinate at every tick)",
-    ("qprr.control.base.check_reset", "controller", "*"): "any controller (its platform, when it has one, sizes the check)",
     ("qprr.control.filters.tilt_6_17", "*", "*"): HOT + "TiltReference (tilt_6_17 runs every control tick on its checked state)",
     ("qprr.control.filters.CommandFilter.reset", "*", "*"): HOT + "CommandFilter's constructor (reset is its per-run start on the "
     "values update gives it)",

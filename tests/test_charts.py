@@ -258,6 +258,48 @@ def test_state_matches_the_array_functions(state, seed):
     np.testing.assert_allclose(t.q, q, atol=1e-15)
 
 
+@SETTINGS
+@given(chart_state(max_pitch=1.3), st.integers(0, 2**32 - 1))
+def test_state_set_from_xi_and_float_views_match_the_array_maps(state, seed):
+    """set_from_xi on plain floats, the controllers' form (arrays=False, reuse=True), gives q, v and the maps of the array
+    functions; the float views are the values the arrays hold; update's velocity screen returns False with only t, q, v set."""
+    n, xi, w = state
+    rng = np.random.default_rng(seed)
+    q, v = co.xi_to_qv(xi, w)
+    s = co.State(n)
+    xi_before = s.xi.copy()
+    s.set_from_xi(0.25, tuple(xi.tolist()), w.tolist(), arrays=False, reuse=True)
+    assert s.t == 0.25 and np.array_equal(s.xi, xi_before)  # arrays=False: the xi arrays are not written
+    np.testing.assert_allclose(s.q, q, atol=1e-15)
+    np.testing.assert_allclose(s.v, v, atol=1e-13 * (1 + np.abs(w).max()))
+    assert s.xi_floats == tuple(xi.tolist()) and s.xi_dot_floats == tuple(w.tolist())
+    np.testing.assert_allclose(np.reshape(s.rotation_floats, (3, 3)), co.euler_to_rotation(xi[3:6]), atol=1e-15)
+    tau, u, xdd = rng.normal(size=6 + n), rng.normal(size=6 + n), rng.normal(size=6 + n)
+    np.testing.assert_allclose(s.force_to_xi_list(tau), co.force_to_xi(xi, tau), atol=1e-12)
+    out = np.zeros(6 + n)
+    assert s.force_from_xi(u.tolist(), out) is out
+    np.testing.assert_allclose(out, co.force_from_xi(xi, u), atol=1e-10 / np.cos(xi[4]))
+    np.testing.assert_allclose(s.accel_to_v_list(xdd.tolist()), co.xi_ddot_to_a(xi, w, xdd), atol=1e-9 * (1 + np.abs(w).max()) ** 2)
+    q_buffer = s.q
+    s.set_from_xi(0.5, xi.tolist(), w.tolist(), arrays=True, reuse=True)  # reuse: the same buffer, overwritten
+    assert s.q is q_buffer and np.array_equal(s.xi, xi) and np.array_equal(s.xi_dot, w)
+    # from (q, v): the float views hold exactly what the arrays hold
+    m = co.State(n)
+    assert m.update(0.5, q, v) is True
+    assert m.xi_floats == tuple(m.xi.tolist()) and m.xi_dot_floats == tuple(m.xi_dot.tolist())
+    assert np.array_equal(np.reshape(m.rotation_floats, (3, 3)), m.R)
+    m.set_applied(tau)
+    assert m.u_applied_floats == tuple(m.u_applied.tolist())
+    # the velocity screen: |v| below the bound fills the state; not below it (or NaN) sets only t, q, v
+    speed = float(np.linalg.norm(v))
+    assert co.State(n).update(1.0, q, v, v_bound=speed * (1 + 1e-9) + 1e-300) is True
+    for bound, vel in ((speed * (1 - 1e-9), v), (1e300, np.where(np.arange(6 + n) == 0, np.nan, v))):
+        b = co.State(n)
+        assert b.update(1.0, q, vel, v_bound=bound) is False
+        assert b.t == 1.0 and b.q is q and b.v is vel
+        assert np.array_equal(b.xi, np.zeros(6 + n)) and b.xi_floats == (0.0,) * (6 + n) and b.rotation_floats == co.State(n).rotation_floats
+
+
 @pytest.mark.parametrize("n", N_ARMS)
 def test_batch_functions_match_the_state(n):
     """The *_batch maps over a logged run (rows) equal the State maps row by row."""

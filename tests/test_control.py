@@ -11,6 +11,7 @@ import pytest
 from qprr import charts as co
 from qprr.charts import State
 from qprr.control import (
+    DecoupledController,
     DesiredStateInverseDynamics,
     IDCGains,
     InverseDynamicsController,
@@ -22,7 +23,7 @@ from qprr.control import (
 )
 from qprr.control.filters import CommandFilter, tilt_6_17
 from qprr.dynamics import dynamics_xi
-from qprr.errors import InputError, UnknownNameError
+from qprr.errors import InputError, NotResetError, UnknownNameError
 from qprr.kinematics import com_body
 from qprr.sim import simulate
 from qprr.thesis import gains
@@ -137,7 +138,7 @@ def test_ipid_printed_sign_diverges_and_corrected_converges():
             Fe = F  # exact estimate: isolates the sign of the law
             e, ed = -y, -yd
             ie += e * dt
-            u = law(Fe, 0.0, e, ie, ed, alpha, kp, ki, kd)
+            u = law(Fe, 0.0, e, ie, ed)
             ydd = F + alpha * u
             yd += dt * ydd
             y += dt * yd
@@ -145,8 +146,8 @@ def test_ipid_printed_sign_diverges_and_corrected_converges():
                 return y
         return y
 
-    assert abs(run(ipid)) < 5e-3  # slow pole s = -0.146 of s^3 + 35 s^2 + 60 s + 8
-    assert abs(run(ipid_thesis_printed)) > 1e6
+    assert abs(run(lambda *err: ipid(*err, alpha, (kp, ki, kd)))) < 5e-3  # slow pole s = -0.146 of s^3 + 35 s^2 + 60 s + 8
+    assert abs(run(lambda *err: ipid_thesis_printed(*err, alpha, kp, ki, kd))) > 1e6
 
 
 # ----------------------------------------------------------------------------- BSG (6.33)-(6.35)
@@ -203,6 +204,24 @@ def test_idc_at_rest_returns_gravity_and_no_lateral_body_force(robot):
     ctrl.reset(st, ref, 1e-3)
     tau = ctrl.step(0.0, st, ref)
     np.testing.assert_allclose(tau[0:2], 0.0, atol=1e-9)
+
+
+def test_controllers_take_the_control_period_from_reset_only(robot):
+    """No made-up default step: dt is unset until reset(state, ref, dt) (NotResetError before, also on step), then it is
+    the period given; a BSG asked for the inner controller's desired pitch refuses an inner one that derives none."""
+    xi = np.r_[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.3, -0.2]
+    st = _state_at(xi)
+    for ctrl in (InverseDynamicsController(robot), DesiredStateInverseDynamics(robot), ModelFreeController(robot),
+                 DecoupledController(robot), CogStabilizer(robot, ModelFreeController(robot))):
+        with pytest.raises(NotResetError, match=r"dt .*reset\(state, ref, dt\)"):
+            _ = ctrl.dt
+        with pytest.raises(NotResetError, match="reset"):
+            ctrl.step(0.0, st, Reference(xi.copy(), np.zeros(9), np.zeros(9)))
+        ctrl.reset(st, Reference(xi.copy(), np.zeros(9), np.zeros(9)), 2e-3)
+        assert ctrl.dt == 2e-3
+        assert np.all(np.isfinite(ctrl.step(0.0, st, Reference(xi.copy(), np.zeros(9), np.zeros(9)))))
+    with pytest.raises(InputError, match="pitch='desired'.*tilt is None"):
+        CogStabilizer(robot, DecoupledController(robot), pitch="desired").reset(st, Reference(xi.copy()), 1e-3)
 
 
 def test_controller_registry_and_gain_validation(robot):

@@ -271,6 +271,10 @@ def test_input_errors():
         OperationalSpaceImpedance(p, ee_sensor=np.zeros(6))
     c = OperationalSpaceImpedance(p, coordinates=["z", "theta2", 8])
     assert c.coordinates == (2, 7, 8)
+    with pytest.raises(InputError, match=r"unknown keyword argument\(s\) \['at'\]"):  # the core is at the measured state
+        OperationalSpaceImpedance(p, at="desired")
+    c = OperationalSpaceImpedance(p, tilt="single", output="xi", name="ops-single")  # options of the core pass on
+    assert (c.tilt_mode, c.output, c.name, c.realizable) == ("single", "xi", "ops-single", True)
     assert make_controller("opspace-impedance", p).impedance.mass is None
 
 

@@ -1,6 +1,6 @@
 """What a campaign sends to worker processes must pickle and behave identically after the round trip.
 
-Platforms, controllers (with their QPs, compiled State methods and struct writers) and
+Platforms, controllers (with their QPs, States and struct writers) and
 allocators are pickled, unpickled and run: the closed loop must be bit-identical to the one
 run with the originals.
 """
@@ -39,7 +39,7 @@ def test_float_writer_round_trip_writes_the_same_values():
     assert w.n == 4
 
 
-def test_state_round_trip_keeps_values_and_compiled_maps(platform):
+def test_state_round_trip_keeps_values_and_maps(platform):
     rng = np.random.default_rng(3)
     xi = np.r_[rng.normal(size=3), 0.3, -0.2, 1.1, 0.02, 0.4, -0.3]
     xi_dot = rng.normal(size=9)
@@ -50,7 +50,7 @@ def test_state_round_trip_keeps_values_and_compiled_maps(platform):
     np.testing.assert_array_equal(c.xi, s.xi)
     np.testing.assert_array_equal(c.R, s.R)
     tau = rng.normal(size=9)
-    assert c.force_to_xi_list(tau) == s.force_to_xi_list(tau)  # the rebuilt maps act on the copied state
+    assert c.force_to_xi_list(tau) == s.force_to_xi_list(tau)  # the maps act on the copied state
     c.update(0.6, s.q, s.v)  # and the copy updates itself, not the original
     assert c.t == 0.6 and s.t == 0.5
 

@@ -30,7 +30,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 
 from ..charts import State, as_int, as_real, as_vector, as_xi
-from ..errors import InputError
+from ..errors import InputError, NotResetError
 
 
 class Reference:
@@ -54,29 +54,60 @@ class Reference:
 
 def check_reset(controller, state, ref, dt) -> float:
     """The arguments of :meth:`Controller.reset` checked (a :class:`State` and a :class:`Reference` of the controller's
-    platform size, a control period dt > 0 [s]); returns dt as a float.  ``reset`` runs once per run: the per-step
-    calls (``step``) take the simulator's own State and Reference unchecked."""
+    platform size, when it has one, a control period dt > 0 [s]); returns dt as a float.  ``reset`` runs once per run:
+    the per-step calls (``step``) take the simulator's own State and Reference unchecked."""
+    if not isinstance(controller, Controller):
+        raise InputError(f"controller must be a qprr.control.Controller, got {type(controller).__name__}")
     if not isinstance(state, State):
         raise InputError(f"state must be a qprr.charts.State, got {type(state).__name__}")
     if not isinstance(ref, Reference):
         raise InputError(f"ref must be a qprr.control.Reference, got {type(ref).__name__}")
-    platform = getattr(controller, "platform", None)
+    platform = controller.platform
     if platform is not None and (state.n_arm != platform.n_arm or np.shape(ref.xi) != (platform.n_xi,)):
         raise InputError(f"state and ref must be of the controller's platform ({platform.n_xi} thesis coordinates), "
                          f"got a state of {6 + state.n_arm} and a reference of shape {np.shape(ref.xi)}")
     return as_real(dt, "dt", positive=True, unit="s")
 
 
+def not_reset(controller) -> NotResetError:
+    """The error of a controller used before :meth:`Controller.reset` gave it its control period."""
+    return NotResetError(f"{type(controller).__name__}.dt (the control period) is not set: call reset(state, ref, dt) "
+                         f"first (qprr.sim.simulate does it before the run)")
+
+
 class Controller(ABC):
     """Base class: ``step(t, state, ref) -> u`` (see the module docstring)."""
 
     name: str = "controller"
+    platform = None
+    """The :class:`~qprr.platform.Platform` controlled (its sizes are checked by :meth:`reset`), or None for a
+    controller not tied to one."""
     uses_applied_force: bool = False
     """Set True to have the simulator fill ``state.u_applied`` (costs ~1 us per step)."""
     output: str = "xi"
     """What :meth:`step` returns: "xi" (default), u in thesis coordinates; or "pinocchio",
     tau = S^-T u at the measured state (a controller that computes tau anyway saves two
     coordinate changes per step; the simulator still logs u)."""
+
+    tilt = None
+    """The roll/pitch reference filter of a controller that derives them from (6.17) (a
+    :class:`~qprr.control.filters.TiltReference` or :class:`~qprr.control.filters.SingleTiltReference`,
+    made by :meth:`reset`), else None.  A wrapper (e.g. the thesis's BSG) may read its last references."""
+
+    _dt: float | None = None
+
+    @property
+    def dt(self) -> float:
+        """Control period [s], set by :meth:`reset` (which the simulator calls before the run); there is no
+        default: reading it before ``reset`` raises :class:`~qprr.errors.NotResetError`."""
+        dt = self._dt
+        if dt is None:
+            raise not_reset(self)
+        return dt
+
+    @dt.setter
+    def dt(self, value: float | None) -> None:
+        self._dt = value
 
     uses_preview: bool = False
     """Set True to be handed the run's whole reference trajectory before it starts (:meth:`set_preview`):

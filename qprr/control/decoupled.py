@@ -35,7 +35,7 @@ import pinocchio as pin
 from ..charts import State
 from ..errors import InputError, UnknownNameError
 from ..platform import Platform, from_model
-from .base import Controller, Reference
+from .base import Controller, Reference, check_reset
 from .inverse_dynamics import IDCGains, InverseDynamicsController
 
 ARM_GRAVITY = ("level", "measured")
@@ -69,8 +69,8 @@ class _LockedArmIDC(InverseDynamicsController):
 
     name = "decoupled-base"
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._locked = State(self.platform.n_arm)
 
     def _alpha_plan(self, idx) -> tuple[tuple, tuple]:
@@ -79,9 +79,9 @@ class _LockedArmIDC(InverseDynamicsController):
     def _model_state(self, state: State, r: list, rd: list) -> State:
         if self.platform.n_arm == 0:
             return state
-        xd = list(state._xd)
+        xd = list(state.xi_dot_floats)
         xd[6:] = [0.0] * self.platform.n_arm
-        self._locked._from_xi(state.t, state._xi, xd, False, True)
+        self._locked.set_from_xi(state.t, state.xi_floats, xd, False, True)  # arrays=False, reuse=True
         return self._locked
 
 
@@ -120,17 +120,17 @@ class DecoupledController(Controller):
         g = self.gains
         self._arm_gains = [(6 + k, g.kp[6 + k], g.kd[6 + k], g.ki[6 + k]) for k in range(n)]
         self._g_world = np.array(platform.model.gravity.linear)
-        self.dt = 1e-3
+        self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
         self._integral = [0.0] * n
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt
+        self.dt = check_reset(self, state, ref, dt)
         self.base.reset(state, ref, dt)
         self._integral = [0.0] * self.platform.n_arm
 
     def arm_accelerations(self, state: State, ref: Reference) -> np.ndarray:
         """alpha_q = q_ddot_d + K_D e_dot + K_P e + K_I int e of the arm joints, Thesis (6.24) (updates the integral)."""
-        x, xd = state._xi, state._xd
+        x, xd = state.xi_floats, state.xi_dot_floats
         r, rd, rdd = ref.xi, ref.xi_dot, ref.xi_ddot
         out = np.empty(self.platform.n_arm)
         for k, (i, kp, kd, ki) in enumerate(self._arm_gains):

@@ -163,8 +163,8 @@ class ImpedanceController(LayeredIDC):
         super().__init__(platform, gains, ee_sensor=ee_sensor, base_sensor=base_sensor, compensate=compensate)
         self.name = "impedance"
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         imp = self.impedance
         self.base_filter = ImpedanceFilter(imp.M_base, imp.D_base, imp.K_base)
         self.arm_filter = ImpedanceFilter(*imp.arm(self.platform.n_arm))

@@ -63,7 +63,7 @@ from ..errors import InputError, UnknownNameError
 from ..joint_friction import JointFriction
 from ..payload import MassEstimator, PayloadModel
 from ..platform import Platform, check_platform
-from .base import Controller, Reference, check_reset
+from .base import Controller, Reference, check_reset, not_reset
 from .filters import SingleTiltReference, TiltReference
 
 _PI = math.pi
@@ -216,8 +216,8 @@ class InverseDynamicsController(Controller):
         self._refs_hook = cls.update_references is not InverseDynamicsController.update_references
         self._ff_hook = cls.feedforward is not InverseDynamicsController.feedforward
         self._task_hook = cls.task_accelerations is not InverseDynamicsController.task_accelerations
-        self.dt = 1e-3
-        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
+        self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
+        self._new_run()
 
     def __getstate__(self) -> dict:
         """Pickle without the bound ``struct`` method (rebuilt by :meth:`__setstate__`): controllers go to worker processes."""
@@ -230,7 +230,12 @@ class InverseDynamicsController(Controller):
         self._pack = struct.Struct(f"={self.platform.n_arm}d").pack
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
-        self.dt = dt = check_reset(self, state, ref, dt)
+        """Start a run: the control period ``dt`` [s] (checked with the state and reference), then :meth:`_new_run`."""
+        self.dt = check_reset(self, state, ref, dt)
+        self._new_run()
+
+    def _new_run(self) -> None:
+        """Fresh per-run values (integrals, filters, buffers, caches); a configuration extends it for its own."""
         n = self.platform.n_xi
         self.integral = [0.0] * n
         g = self.gains
@@ -261,12 +266,12 @@ class InverseDynamicsController(Controller):
         other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if i == 5 or g.ki[i])
         return plain, other
 
-    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float]) -> list[float]:
-        """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists)."""
+    def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float], dt: float) -> list[float]:
+        """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists; dt [s] for the integrals)."""
         plain, other = plan
         for i, kp, kd in plain:  # PD: alpha = xi_ddot_d + k_D e_dot + k_P e
             al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * (r[i] - x[i])
-        integ, dt = self.integral, self.dt
+        integ = self.integral
         for i, kp, kd, ki in other:  # + k_I int e; the yaw error wrapped to [-pi, pi)
             e = r[i] - x[i]
             if i == 5:
@@ -288,8 +293,9 @@ class InverseDynamicsController(Controller):
                 xi_d[3], xi_d[4] = self.tilt.x
                 xi_dot_d[3], xi_dot_d[4] = self.tilt.xd
             else:  # first step: none yet, use the measured tilt
-                xi_d[3], xi_d[4] = state._xi[3], state._xi[4]
-        self._desired._from_xi(state.t, xi_d, xi_dot_d, False, True)  # update_xi(..., arrays=False, reuse=True)
+                x = state.xi_floats
+                xi_d[3], xi_d[4] = x[3], x[4]
+        self._desired.set_from_xi(state.t, xi_d, xi_dot_d, False, True)  # arrays=False, reuse=True
         return self._desired
 
     def update_references(self, t: float, state: State, ref: Reference) -> None:
@@ -318,7 +324,7 @@ class InverseDynamicsController(Controller):
         M (CRBA, local convention) depends on the arm joints only, so at a held desired arm
         pose the rows of the previous step are exact."""
         if self._desired is not None:
-            key = self._pack(*ms._xi[6:])
+            key = self._pack(*ms.xi_floats[6:])
             if key != self._mass_key:
                 self._mass_rows = _crba(model, data, q)[self._lost_rows, 0:6].tolist()
                 self._mass_key = key
@@ -328,13 +334,16 @@ class InverseDynamicsController(Controller):
     # ------------------------------------------------------------------ step
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u = B alpha + C xi_dot + G with alpha from the outer loops and roll/pitch from (6.17)."""
+        dt = self._dt  # the control period (read once: this runs every tick)
+        if dt is None:
+            raise not_reset(self)
         if self._refs_hook:
             self.update_references(t, state, ref)
-        x, xd = state._xi, state._xd
+        x, xd = state.xi_floats, state.xi_dot_floats
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         ms = self._model_state(state, r, rd)
         model, data, q, v = self.model, self.data, ms.q, ms.v
-        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r))
+        alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r), dt)
         a = ms.accel_to_v_list(alpha)
         abuf = self._abuf
         write = self._write
@@ -348,19 +357,16 @@ class InverseDynamicsController(Controller):
         if tilt is not None:
             write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
             t0 = _rnea(model, data, q, v, abuf).tolist()
-            # u_fb of (6.21) with alpha_phi = alpha_theta = 0: R times the body force of RNEA (State.lin_to_world)
-            f0, f1, f2 = t0[0:3]
-            r00, r01, r02, r10, r11, r12, r20, r21, r22 = ms._r
-            u_fb = (r00 * f0 + r01 * f1 + r02 * f2, r10 * f0 + r11 * f1 + r12 * f2, r20 * f0 + r21 * f1 + r22 * f2)
+            u_fb = ms.lin_to_world(t0[0:3])  # u_fb of (6.21) at alpha_phi = alpha_theta = 0: R times RNEA's body force
             if ff is not None:
                 u_fb = (u_fb[0] + ff[0], u_fb[1] + ff[1], u_fb[2] + ff[2])
-            tilt.update(x[5], u_fb, rdd[0:3], self._g, self.dt)
+            tilt.update(x[5], u_fb, rdd[0:3], self._g, dt)
             tilt.write(ref)
             self._started = True
             r[3], r[4] = tilt.x
             rd[3], rd[4] = tilt.xd
             rdd[3], rdd[4] = tilt.xdd
-            self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha)
+            self._alpha_loops(x, xd, r, rd, rdd, self._loops_tilt, alpha, dt)
             # omega_dot change of the roll/pitch accelerations: T [alpha_phi, alpha_theta, 0] (State.euler_accel_to_omega_dot)
             a3, a4 = alpha[3], alpha[4]
             sf, cf = ms.sf, ms.cf
@@ -458,8 +464,8 @@ class LayeredIDC(InverseDynamicsController):
         if ee_sensor is not None or base_sensor is not None:
             self.name = "layered-idc-ft" if compensate else "layered-idc"
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._h_f = None
         self._u_e = np.zeros(self.platform.n_xi)
         self._h_b = np.zeros(4)
@@ -526,8 +532,8 @@ class PayloadIDC(LayeredIDC):
         """Change the known payload mass (mode "known"): e.g. a scheduled release the controller is told about."""
         self.known_mass = _mass(mass, "mass")
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         if self.estimator is not None:
             self.estimator.reset()
         self._prev = None

@@ -33,7 +33,7 @@ import pinocchio as pin
 from ..charts import State, as_array, as_int, as_real, rate_map
 from ..errors import InputError
 from ..platform import Platform, check_platform
-from .base import Controller, Reference, check_reset
+from .base import Controller, Reference, check_reset, not_reset
 from .filters import TiltReference
 
 _PI = math.pi
@@ -41,8 +41,12 @@ _TWO_PI = 2.0 * math.pi
 
 
 def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
-         kp: float, ki: float, kd: float) -> float:
-    """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y."""
+         gains: tuple[float, float, float]) -> float:
+    """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y.
+
+    ``gains`` = (K_P, K_I, K_D) of the coordinate.
+    """
+    kp, ki, kd = gains
     return (-F_est + y_ddot_ref + kp * e + ki * e_int + kd * e_dot) / alpha
 
 
@@ -124,8 +128,10 @@ class ModelFreeController(Controller):
         if not isinstance(gains, MFCGains):
             raise InputError(f"gains must be an MFCGains, got {type(gains).__name__}")
         self.gains = gains.resolved(platform.n_xi)
-        self.dt = 1e-3
-        self.reset(State(platform.n_arm), Reference(n_xi=platform.n_xi), 1e-3)
+        self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
+        self.alpha = None  # alpha_i of (6.36): set by reset (from the initial state unless the gains give it)
+        self._kf = None  # gains of the F_est low-pass: set by reset (they depend on dt)
+        self._new_run()
 
     def _alpha_from_inertia(self, state: State) -> list[float]:
         """alpha_i = c (B^-1)_ii with B = S^T M S at the given state (computed once, not in the loop)."""
@@ -138,16 +144,22 @@ class ModelFreeController(Controller):
         return [self.gains.alpha_scale * float(v) for v in d]
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
+        """Start a run: the control period ``dt`` [s], alpha (from ``state`` unless the gains give it), fresh loops."""
         self.dt = dt = check_reset(self, state, ref, dt)
         g = self.gains
         self.alpha = list(g.alpha) if g.alpha is not None else self._alpha_from_inertia(state)
+        self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
+        self._new_run()
+
+    def _new_run(self) -> None:
+        """Fresh per-run values: integrals, F_est, the tilt reference filter."""
+        g = self.gains
         n = self.platform.n_xi
         self.integral = [0.0] * n
         self.u_prev = [0.0] * n
         self.yd_prev = None
         self.F = [0.0] * n
         self._have_F = False
-        self._kf = [1.0 if tf <= 0 else dt / (tf + dt) for tf in g.f_filter]
         p = self.platform
         self.tilt = TiltReference(g.filter_omega, g.max_tilt, 0.05 * p.total_mass * p.g)
         self._g = p.g
@@ -155,18 +167,16 @@ class ModelFreeController(Controller):
         self._loops_outer = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (0, 1, 2, 5, *range(6, n)))
         self._loops_tilt = tuple((i, g.kp[i], g.ki[i], g.kd[i]) for i in (3, 4))
 
-    def _estimate_F(self, state: State) -> None:
-        """F_est = y_ddot_meas - alpha u_applied (backward difference, optional low-pass).
+    def _estimate_F(self, state: State, yd, dt: float) -> None:
+        """F_est = y_ddot_meas - alpha u_applied (backward difference over dt [s] of the rates ``yd``, optional low-pass).
 
         u_applied is the measured input of the previous step (``state.u_applied``): for x, y, z
         the force the tilted thrust really produced, not the u_fb asked for.
         """
-        yd = state._xd
         if self.yd_prev is None:
             self.yd_prev = list(yd)
             return
-        dt = self.dt
-        zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state._ua)
+        zipped = zip(self.F, self._kf, yd, self.yd_prev, self.alpha, state.u_applied_floats)
         if self._have_F:  # raw = (y_dot - y_dot_prev) / dt - alpha u, low-passed: F += k (raw - F)
             self.F = [f + k * ((y - p) / dt - al * ua - f) for f, k, y, p, al, ua in zipped]
         else:
@@ -174,22 +184,9 @@ class ModelFreeController(Controller):
         self._have_F = True
         self.yd_prev = list(yd)
 
-    def _ipid(self, i: int, x, xd, r, rd, rdd) -> float:
-        g = self.gains
-        e = r[i] - x[i]
-        if i == 5:
-            e = (e + math.pi) % (2.0 * math.pi) - math.pi
-        self.integral[i] += e * self.dt
-        return ipid(self.F[i], rdd[i], e, self.integral[i], rd[i] - xd[i], self.alpha[i], g.kp[i], g.ki[i], g.kd[i])
-
-    def _attitude_references(self, state: State, ref: Reference, u_fb) -> None:
-        """(6.17) on u_fb -> :class:`TiltReference` -> phi_d, theta_d (and rates) into ``ref``."""
-        self.tilt.update(state.xi[5], u_fb, ref.xi_ddot[0:3].tolist(), self._g, self.dt)
-        self.tilt.write(ref)
-
-    def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float]) -> None:
-        """:meth:`_ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...), results into ``u``."""
-        integ, dt, F, al = self.integral, self.dt, self.F, self.alpha
+    def _ipid_loops(self, loops, x, xd, r, rd, rdd, u: list[float], dt: float) -> None:
+        """:func:`ipid` for ``loops`` = ((i, k_P,i, k_I,i, k_D,i), ...) on plain floats, results into ``u``."""
+        integ, F, al = self.integral, self.F, self.alpha
         for i, kp, ki, kd in loops:
             e = r[i] - x[i]
             if i == 5:
@@ -200,17 +197,20 @@ class ModelFreeController(Controller):
 
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """u_i from the iPID (6.37, corrected) of each coordinate; roll/pitch references from (6.17)."""
-        self._estimate_F(state)
-        x, xd = state._xi, state._xd
+        dt = self._dt  # the control period (read once: this runs every tick)
+        if dt is None:
+            raise not_reset(self)
+        x, xd = state.xi_floats, state.xi_dot_floats
+        self._estimate_F(state, xd, dt)
         r, rd, rdd = ref.xi.tolist(), ref.xi_dot.tolist(), ref.xi_ddot.tolist()
         u = [0.0] * len(x)
-        self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u)
+        self._ipid_loops(self._loops_outer, x, xd, r, rd, rdd, u, dt)
         tilt = self.tilt
-        tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, self.dt)
+        tilt.update(x[5], (u[0], u[1], u[2]), rdd[0:3], self._g, dt)
         tilt.write(ref)
         r[3], r[4] = tilt.x
         rd[3], rd[4] = tilt.xd
         rdd[3], rdd[4] = tilt.xdd
-        self._ipid_loops(self._loops_tilt, x, xd, r, rd, rdd, u)
+        self._ipid_loops(self._loops_tilt, x, xd, r, rd, rdd, u, dt)
         self.u_prev = u
         return np.array(u)

@@ -190,6 +190,9 @@ WEIGHTINGS = ("range", "inertia")
 BASE_RANGE = 0.1
 """Half range [m] given to a base translation in the "range" weighting (it has no limit)."""
 
+CORE_OPTIONS = ("tilt", "output", "name")
+"""Keywords of :class:`OperationalSpaceImpedance` passed on to :class:`InverseDynamicsController`."""
+
 
 class OperationalSpaceImpedance(InverseDynamicsController):
     """End-effector impedance (Thesis (6.72)-(6.73)) as a task on the inverse-dynamics core (module docstring).
@@ -209,7 +212,8 @@ class OperationalSpaceImpedance(InverseDynamicsController):
     damping : damping of the task inverse near singular directions, relative to what the base's
         own translation gives (a direction served by the task coordinates 100 times less than by a
         base translation is about half damped at the default 0.01).
-    tilt, output, name : as for :class:`InverseDynamicsController`.
+    **core : ``tilt``, ``output``, ``name``, keywords passed to :class:`InverseDynamicsController`
+        (the core here is always ``realizable``, evaluated at the measured state).
 
     ``history()`` returns the logged end-effector position, reference, error, force and a*.
     """
@@ -218,8 +222,7 @@ class OperationalSpaceImpedance(InverseDynamicsController):
 
     def __init__(self, platform: Platform, impedance: EndEffectorImpedance | None = None, gains: IDCGains | None = None, *,
                  ee_sensor: Callable[[float], np.ndarray] | None = None, coordinates=None, weighting: str = "range",
-                 damping: float = 0.01,
-                 tilt: str | None = None, output: str | None = None, name: str | None = None) -> None:
+                 damping: float = 0.01, **core) -> None:
         if not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         if ee_sensor is not None and not callable(ee_sensor):
@@ -247,7 +250,11 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         self._rstate = State(platform.n_arm)
         self._zeros = [0.0] * platform.n_xi
         self._M_inv = None if impedance.mass is None else np.linalg.inv(impedance.mass)
-        super().__init__(platform, gains, realizable=True, tilt=tilt, output=output, name=name)
+        unknown = sorted(set(core) - set(CORE_OPTIONS))
+        if unknown:
+            raise InputError(f"OperationalSpaceImpedance got unknown keyword argument(s) {unknown}: the options passed to "
+                             f"the inverse-dynamics core are {CORE_OPTIONS}")
+        super().__init__(platform, gains, realizable=True, **core)
         self.coordinates = self._task_coordinates(coordinates)
         self._W = None if weighting == "inertia" else self._range_weights()
         # damping of the task inverse: eigenvalues of A W A^T below ~ damping x that of the base's own translation
@@ -281,8 +288,8 @@ class OperationalSpaceImpedance(InverseDynamicsController):
             raise InputError(f"coordinates must be distinct and not empty, got {coordinates!r}")
         return tuple(out)
 
-    def reset(self, state: State, ref: Reference, dt: float) -> None:
-        super().reset(state, ref, dt)
+    def _new_run(self) -> None:
+        super()._new_run()
         self._h = np.zeros(6)
         self._step_t = None
         self.log: list[np.ndarray] = []

@@ -78,6 +78,10 @@ class CogStabilizer(Controller):
         self.filter = CommandFilter(2, self.filter_omega)
         self._started = False
         self.inner.reset(state, ref, dt)
+        if self.pitch == "desired" and self.inner.tilt is None:
+            raise InputError(f"pitch='desired' reads the inner controller's roll/pitch references, but "
+                             f"{type(self.inner).__name__} ({self.inner.name}) derives none (its tilt is None): "
+                             f"use pitch='measured' or an inner controller with a tilt reference")
 
     def joint_references(self, theta: float, theta2_d: float) -> tuple[float, float]:
         """(r0_d, theta3_d) of (6.33)-(6.35) for pitch ``theta``, clamped to the joint limits."""
@@ -88,13 +92,13 @@ class CogStabilizer(Controller):
 
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """Write r0_d, theta3_d (filtered, with rates) into ``ref`` and return the inner controller's u."""
-        tilt = None if self.pitch == "measured" else getattr(self.inner, "tilt", None)
-        theta = state._xi[4] if tilt is None else tilt.x[1]
+        dt = self.dt
+        theta = state.xi_floats[4] if self.pitch == "measured" else self.inner.tilt.x[1]
         r0_d, t3_d = self.joint_references(float(theta), ref.xi.item(7))
         if not self._started:
             self.filter.reset((r0_d, t3_d))
             self._started = True
-        self.filter.update((r0_d, t3_d), self.dt)
+        self.filter.update((r0_d, t3_d), dt)
         f = self.filter
         ref.xi[6], ref.xi[8] = f.x
         ref.xi_dot[6], ref.xi_dot[8] = f.xd
