@@ -6,6 +6,11 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   ``run(name, controller, platform=..., plant=..., **options)``; or ``callable``: a function
   ``(params, seed) -> SimResult`` given as ``"package.module:function"`` or
   ``"path/to/file.py:function"`` (a relative path is taken from the specification's folder);
+* ``platform``: a name (:data:`qprr.platforms.NAMES` or a (2.1) designation such as ``"HEX-RRR"``,
+  built by :func:`qprr.build`) or a table ``{urdf = FILE, rotors = FILE.toml, ee_frame = NAME}``
+  (:data:`PLATFORM_KEYS`; paths relative to the specification's folder; the files' SHA-256 join
+  the table, so a changed file is a changed specification and fingerprint); the ``rmse_<var>``
+  columns are named from its coordinates;
 * ``options``: fixed parameters of every run; ``grid``: lists of values, every combination is
   run (the last name varies fastest); ``random``: :class:`Distribution` s, drawn anew for each
   run; ``samples``: runs per grid point (each with its own draws and seed); ``paired = true``:
