@@ -218,3 +218,16 @@ def test_model_errors_perturb_any_platform(name):
             np.testing.assert_allclose(mp.inertias[j].inertia, 0.9 * m.inertias[j].inertia, rtol=1e-14, atol=1e-16)
     assert [r.kappa for r in plant.rotors] == pytest.approx([1.05 * r.kappa for r in p.rotors], rel=1e-15)
     assert [r.f_max for r in plant.rotors] == pytest.approx([0.95 * r.f_max for r in p.rotors], rel=1e-15)
+
+
+def test_campaign_show_names_the_platform_and_its_columns(tmp_path, capsys):
+    from qprr.cli import main
+
+    robot, specs = _user_robot(tmp_path)
+    assert main(["campaign", "show", str(_write_spec(specs)), "--first", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "hover-reach on quad_rrr (urdf ../robot/quad_rrr.urdf, rotors ../robot/quad_rrr.rotors.toml, ee_frame gripper)" in out
+    assert "rmse_shoulder, rmse_elbow" in out and not any(f"rmse_{n}" in out for n in Q_PRR_ARM) and "q-prr" not in out
+    spec = _write_spec(specs, platform="borinot_flying_arm_2")
+    assert main(["campaign", "show", str(spec)]) == 0
+    assert "on borinot_flying_arm_2;" in capsys.readouterr().out
