@@ -69,6 +69,8 @@ def test_a_platform_table_is_read_relative_to_the_specification(tmp_path, monkey
         CampaignSpec.load(_write_spec(specs, platform={"urdf": "quad.urdf", "rotors": "../robot/quad_rrr.rotors.toml"}))
     with pytest.raises(UnknownNameError, match="key of the platform table 'rotor'.*'rotors'"):
         CampaignSpec.load(_write_spec(specs, platform={"urdf": "../robot/quad_rrr.urdf", "rotor": "x.toml"}))
+    with pytest.raises(InputError, match=r"'static-idc' runs on q-prr, not on platform = 'urdf \.\./robot/quad_rrr\.urdf.*hover-reach"):
+        CampaignSpec.load(_write_spec(specs, scenario="static-idc"))
     with pytest.raises(InputError, match=r"ee_frame = 'claw'.*claw"):
         platform_of(CampaignSpec.load(_write_spec(specs, platform={**spec.to_dict()["platform"], "ee_frame": "claw"})))
 
