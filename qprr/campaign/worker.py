@@ -37,7 +37,9 @@ def load_platform(name: str | Mapping, files: Mapping[str, str] | None = None) -
     rotor file (:meth:`CampaignSpec.platform_files`), so that a worker needs no copy of them.
     """
     from ..nomenclature import build
+    from ..platform import from_urdf
     from ..platforms import NAMES, load
+    from .spec import toml_loads
 
     if isinstance(name, str):
         if files is not None:
@@ -47,9 +49,6 @@ def load_platform(name: str | Mapping, files: Mapping[str, str] | None = None) -
         raise InputError(f"name must be a platform name or a table {{urdf, rotors, ee_frame}} with files = {{urdf: text, "
                          f"rotors: text}}, got name={name!r}, files={None if files is None else sorted(files)}")
     platform = name
-    from ..platform import from_urdf
-    from .spec import toml_loads
-
     rotors = toml_loads(files["rotors"], f"platform.rotors = {platform['rotors']!r}")
     try:
         return from_urdf(files["urdf"], rotors, ee_frame=platform.get("ee_frame"),
