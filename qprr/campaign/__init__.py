@@ -23,6 +23,11 @@ Quick start::
     python -m qprr campaign run examples/campaigns/quickstart.toml -o quick.csv
     python -m qprr campaign report quick.csv --out quick-report
 
+Any platform: ``platform = "borinot_flying_arm_2"`` (any registered name or a (2.1) designation)
+or ``platform = {urdf = "robot.urdf", rotors = "robot.rotors.toml", ee_frame = "gripper"}`` (paths
+relative to the specification; the files' content is part of its fingerprint); the ``rmse_*``
+columns carry the platform's coordinate names.
+
 Reproducible: a specification gives the same table whatever the backend and the number of
 workers (each run's draws and seed come from the specification's seed and the run index).
 

@@ -70,15 +70,20 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
+    from .metrics import metric_columns
     from .spec import CampaignSpec
+    from .worker import platform_of
 
     try:
         spec = CampaignSpec.load(args.spec)
+        platform = platform_of(spec)
     except (QprrError, KeyError, ValueError) as exc:
         return _fail("qprr campaign show", f"{type(exc).__name__}: {exc}")
     target = f"scenario {spec.scenario}" if spec.scenario else f"callable {spec.callable}"
-    print(f"{spec.name}: {target} on {spec.platform}; {spec.n_points} grid points x {spec.samples} samples = {spec.n_runs} runs; "
-          f"seed {spec.seed}; fingerprint {spec.fingerprint}")
+    given = "" if spec.platform_label == platform.name else f" ({spec.platform_label})"
+    print(f"{spec.name}: {target} on {platform.name}{given}; {spec.n_points} grid points x {spec.samples} samples = "
+          f"{spec.n_runs} runs; seed {spec.seed}; fingerprint {spec.fingerprint}")
+    print(f"  metrics: {', '.join(metric_columns(spec.metrics, platform.xi_names, spec.extras))}")
     for run in (spec.run(i) for i in range(min(args.first, spec.n_runs))):
         print(f"  run {run.index}: seed {run.seed}, " + ", ".join(f"{k}={v!r}" for k, v in run.params.items()))
     return 0

@@ -6,6 +6,11 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   ``run(name, controller, platform=..., plant=..., **options)``; or ``callable``: a function
   ``(params, seed) -> SimResult`` given as ``"package.module:function"`` or
   ``"path/to/file.py:function"`` (a relative path is taken from the specification's folder);
+* ``platform``: a name (:data:`qprr.platforms.NAMES` or a (2.1) designation such as ``"HEX-RRR"``,
+  built by :func:`qprr.build`) or a table ``{urdf = FILE, rotors = FILE.toml, ee_frame = NAME}``
+  (:data:`PLATFORM_KEYS`; paths relative to the specification's folder; the files' SHA-256 join
+  the table, so a changed file is a changed specification and fingerprint); the ``rmse_<var>``
+  columns are named from its coordinates;
 * ``options``: fixed parameters of every run; ``grid``: lists of values, every combination is
   run (the last name varies fastest); ``random``: :class:`Distribution` s, drawn anew for each
   run; ``samples``: runs per grid point (each with its own draws and seed); ``paired = true``:
@@ -192,20 +197,102 @@ def _grid_values(name: str, value) -> tuple:
     return values
 
 
-def _check_platform_name(name) -> None:
-    """A campaign's platform: "q-prr", a stored platform (:data:`qprr.platforms.NAMES`) or a (2.1) designation."""
-    from ..errors import QprrError
-    from ..nomenclature import parse
+PLATFORM_KEYS = ("urdf", "rotors", "ee_frame", "sha256")
+"""Keys of a platform table: ``urdf`` and ``rotors`` (files, relative to the specification's folder), ``ee_frame``
+(optional), ``sha256`` (the files' content hashes: computed when the files are read; given, the files must match)."""
+
+_TABLE_EXAMPLE = 'platform = { urdf = "robot.urdf", rotors = "robot.rotors.toml", ee_frame = "ee" }'
+
+
+def platform_names() -> tuple[str, ...]:
+    """The platform names a campaign accepts besides (2.1) designations: :data:`qprr.platforms.NAMES`, each once."""
     from ..platforms import NAMES
 
-    if not isinstance(name, str):
-        raise InputError(f"platform must be a platform name (q-prr, {', '.join(NAMES)} or a designation such as HEX-RRR), got {name!r}")
-    if name == "q-prr" or name in NAMES:
-        return
+    return tuple(dict.fromkeys(NAMES))
+
+
+def _check_platform_name(name: str) -> str:
+    """A campaign's platform by name: a registered platform (:data:`qprr.platforms.NAMES`) or a (2.1) designation."""
+    from ..errors import QprrError
+    from ..nomenclature import parse
+
+    valid = platform_names()
+    if name in valid:
+        return name
     try:
         parse(name)
-    except QprrError as exc:
-        raise InputError(f"platform {name!r} is neither q-prr, {', '.join(NAMES)} nor a designation: {exc}") from exc
+    except QprrError:
+        raise UnknownNameError("platform", name, (*valid, "or a (2.1) designation such as 'HEX-RRR'",
+                                                  f"or a URDF with its rotor file: {_TABLE_EXAMPLE}")) from None
+    return name
+
+
+def _platform_file(table: Mapping, key: str, suffixes: tuple[str, ...], base_dir: str) -> Path:
+    value = table.get(key)
+    if not isinstance(value, str) or not value:
+        raise InputError(f"platform.{key} must be a file name (a string), got {value!r}: {_TABLE_EXAMPLE}")
+    if suffixes and not value.lower().endswith(suffixes):
+        raise InputError(f"platform.{key} = {value!r} must be a {' or '.join(suffixes)} file: {_TABLE_EXAMPLE}")
+    return Path(value) if Path(value).is_absolute() else Path(base_dir) / value
+
+
+def _read_platform_file(table: Mapping, key: str, base_dir: str) -> bytes:
+    path = _platform_file(table, key, (), base_dir)
+    if not path.is_file():
+        raise InputError(f"platform.{key} = {table[key]!r}: no file {str(path)!r} (paths are relative to the "
+                         f"specification's folder {base_dir!r}): give the file's path")
+    return path.read_bytes()
+
+
+def _check_platform_table(table: Mapping, base_dir: str) -> dict:
+    """A campaign's platform given by files (see :data:`PLATFORM_KEYS`), normalised with its ``sha256`` table."""
+    for k in table:
+        if k not in PLATFORM_KEYS:
+            raise UnknownNameError("key of the platform table", k, PLATFORM_KEYS)
+    out = {}
+    for key, suffixes in (("urdf", (".urdf", ".xml")), ("rotors", (".toml",))):
+        _platform_file(table, key, suffixes, base_dir)
+        out[key] = table[key]
+    if "ee_frame" in table:
+        if not isinstance(table["ee_frame"], str) or not table["ee_frame"]:
+            raise InputError(f"platform.ee_frame must be a frame name of the URDF (a string), got {table['ee_frame']!r}; "
+                             f"leave it out for the last frame of the arm")
+        out["ee_frame"] = table["ee_frame"]
+    digests = table.get("sha256")
+    if digests is None:  # read the files now: their content is part of the specification
+        digests = {}
+        for key in ("urdf", "rotors"):
+            digests[key] = hashlib.sha256(_read_platform_file(table, key, base_dir)).hexdigest()
+    if not isinstance(digests, Mapping) or set(digests) != {"urdf", "rotors"} or not all(
+            isinstance(v, str) and len(v) == 64 and all(c in "0123456789abcdef" for c in v) for v in digests.values()):
+        raise InputError(f"platform.sha256 must be {{urdf = HEX, rotors = HEX}} (64 hex digits each, the files' SHA-256), "
+                         f"got {digests!r}: leave it out and it is computed from the files")
+    out["sha256"] = {"urdf": digests["urdf"], "rotors": digests["rotors"]}
+    return out
+
+
+def _check_platform(value, base_dir: str) -> str | dict:
+    if isinstance(value, str):
+        return _check_platform_name(value)
+    if isinstance(value, Mapping):
+        return _check_platform_table(value, base_dir)
+    raise InputError(f"platform must be a name (one of {', '.join(platform_names())} or a (2.1) designation such as "
+                     f"'HEX-RRR') or a table {_TABLE_EXAMPLE}, got {value!r}")
+
+
+def toml_loads(text: str, what: str) -> dict:
+    """Parse TOML ``text`` (``what`` names it in errors); Python 3.10 needs tomli."""
+    try:
+        import tomllib
+    except ImportError:  # Python 3.10
+        try:
+            import tomli as tomllib
+        except ImportError as exc:
+            raise MissingDependencyError("tomli", "reading TOML files on Python 3.10", "pip install tomli") from exc
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise InputError(f"{what}: invalid TOML: {exc}") from exc
 
 
 @dataclass(frozen=True)
@@ -215,7 +302,7 @@ class CampaignSpec:
     name: str
     scenario: str | None = None
     callable: str | None = None
-    platform: str = "q-prr"
+    platform: str | Mapping[str, object] = "q-prr"
     seed: int = 0
     samples: int = 1
     options: Mapping[str, object] = field(default_factory=dict)
@@ -239,10 +326,10 @@ class CampaignSpec:
             raise InputError(f"samples must be an integer >= 1, got {self.samples!r}")
         if not isinstance(self.paired, bool):
             raise InputError(f"paired must be true or false, got {self.paired!r}")
-        _check_platform_name(self.platform)
         if not isinstance(self.base_dir, (str, Path)):
             raise InputError(f"base_dir must be a folder (a string), got {self.base_dir!r}")
         object.__setattr__(self, "base_dir", str(self.base_dir))
+        object.__setattr__(self, "platform", _check_platform(self.platform, self.base_dir))
         for where in ("options", "grid", "random", "success"):
             if not isinstance(getattr(self, where), Mapping):
                 raise InputError(f"{where} must be a table (mapping) of parameter = value, got {getattr(self, where)!r}")
@@ -290,7 +377,9 @@ class CampaignSpec:
 
         sc = SCENARIOS[self.scenario]  # UnknownNameError lists the scenarios
         if self.platform != "q-prr" and sc.platforms is not None and self.platform not in sc.platforms:
-            raise InputError(f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform {self.platform!r}")
+            anywhere = ", ".join(n for n, x in SCENARIOS.items() if x.platforms is None)
+            raise InputError(f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform = {self.platform_label!r}: "
+                             f"choose a scenario for any platform ({anywhere}) or one of its platforms")
         for k in self.parameter_names:
             if k in ("controller", "seed") or k.startswith(MODEL_PREFIX):
                 continue
@@ -313,6 +402,35 @@ class CampaignSpec:
         if name in self.random and self.random[name].kind == "choice":
             return self.random[name].values
         return ()
+
+    # ------------------------------------------------------------------ platform
+    @property
+    def platform_label(self) -> str:
+        """The platform as the specification gives it: its name, or ``urdf FILE, rotors FILE[, ee_frame F]``."""
+        if isinstance(self.platform, str):
+            return self.platform
+        return ", ".join(f"{k} {self.platform[k]}" for k in ("urdf", "rotors", "ee_frame") if k in self.platform)
+
+    def platform_files(self) -> dict[str, str] | None:
+        """The text of a platform table's files (``urdf``, ``rotors``), checked against its ``sha256``; None for a name.
+
+        Raises :class:`InputError` naming the file when it is missing or its content changed since
+        the specification was read (a changed URDF is a changed specification)."""
+        if isinstance(self.platform, str):
+            return None
+        out = {}
+        for key in ("urdf", "rotors"):
+            data = _read_platform_file(self.platform, key, self.base_dir)
+            digest = hashlib.sha256(data).hexdigest()
+            if digest != self.platform["sha256"][key]:
+                raise InputError(f"platform.{key} = {self.platform[key]!r}: the file changed (sha256 {digest[:12]}..., "
+                                 f"the specification's {self.platform['sha256'][key][:12]}...): load the specification again "
+                                 f"(a new fingerprint: a new campaign) or restore the file")
+            try:
+                out[key] = data.decode()
+            except UnicodeDecodeError as exc:
+                raise InputError(f"platform.{key} = {self.platform[key]!r} is not a text file: {exc}") from exc
+        return out
 
     # ------------------------------------------------------------------ parameters and runs
     @property
@@ -363,7 +481,8 @@ class CampaignSpec:
         """The specification as plain data (TOML/JSON-able); :meth:`from_mapping` reads it back."""
         out = {"name": self.name}
         out["scenario" if self.scenario is not None else "callable"] = self.scenario if self.scenario is not None else self.callable
-        out.update(platform=self.platform, seed=self.seed, samples=self.samples, options=dict(self.options),
+        platform = self.platform if isinstance(self.platform, str) else {**self.platform, "sha256": dict(self.platform["sha256"])}
+        out.update(platform=platform, seed=self.seed, samples=self.samples, options=dict(self.options),
                    grid={k: list(v) for k, v in self.grid.items()}, random={k: d.to_dict() for k, d in self.random.items()},
                    metrics=list(self.metrics), extras=list(self.extras), success=dict(self.success))
         if self.paired:
@@ -405,17 +524,7 @@ class CampaignSpec:
         except UnicodeDecodeError as exc:
             raise InputError(f"{str(path)!r} is not a text file (a .toml or .json specification): {exc}") from exc
         if path.suffix == ".toml":
-            try:
-                import tomllib
-            except ImportError:  # Python 3.10
-                try:
-                    import tomli as tomllib
-                except ImportError as exc:
-                    raise MissingDependencyError("tomli", "reading TOML campaign specifications on Python 3.10", "pip install tomli") from exc
-            try:
-                data = tomllib.loads(text)
-            except tomllib.TOMLDecodeError as exc:
-                raise InputError(f"{str(path)!r}: invalid TOML: {exc}") from exc
+            data = toml_loads(text, repr(str(path)))
         elif path.suffix == ".json":
             try:
                 data = json.loads(text)

@@ -228,7 +228,8 @@ class ResultStore:
             old = read_meta(self.path)
             if old.get("fingerprint") != meta.get("fingerprint"):
                 raise InputError(f"{str(self.path)!r} holds results of another specification (fingerprint {old.get('fingerprint')!r}, "
-                                 f"this one {meta.get('fingerprint')!r}): choose another output or start afresh (--fresh)")
+                                 f"this one {meta.get('fingerprint')!r}{_spec_difference(old.get('spec'), meta.get('spec'))}): "
+                                 f"choose another output or start afresh (--fresh)")
             if list(old["columns"]) != list(columns):
                 raise InputError(f"{str(self.path)!r} has other columns than this campaign's: choose another output or --fresh")
             if old["format_version"] != META_VERSION:
@@ -390,6 +391,26 @@ def read_meta(path: str | Path) -> dict:
 _SPECS: dict[str, object] = {}
 """Specifications read from metadata in this process, keyed by their JSON text (a report after a run reads it once)."""
 _BY_FINGERPRINT: dict[str, object] = {}
+
+
+def _spec_difference(old, new) -> str:
+    """``; it differs in ...``: the keys of two specifications (as dicts) that differ, a platform file's content named."""
+    if not isinstance(old, dict) or not isinstance(new, dict):
+        return ""
+    keys = [k for k in sorted(set(old) | set(new)) if old.get(k) != new.get(k)]
+    parts = []
+    for k in keys:
+        o, n = old.get(k), new.get(k)
+        if k == "platform" and isinstance(o, dict) and isinstance(n, dict) and isinstance(o.get("sha256"), dict) \
+                and isinstance(n.get("sha256"), dict):
+            changed = [f for f in ("urdf", "rotors") if o["sha256"].get(f) != n["sha256"].get(f)]
+            same_paths = all(o.get(f) == n.get(f) for f in ("urdf", "rotors", "ee_frame"))
+            if changed and same_paths:
+                parts += [f"the content of platform.{f} = {n.get(f)!r} (sha256 {str(o['sha256'].get(f))[:12]}... -> "
+                          f"{str(n['sha256'].get(f))[:12]}...)" for f in changed]
+                continue
+        parts.append(k)
+    return f"; it differs in {', '.join(parts)}" if parts else ""
 
 
 def _campaign_spec(meta: dict, mp: Path):

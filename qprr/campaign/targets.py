@@ -5,7 +5,9 @@ its mission, gains, disturbances and model errors as parameters is
 :func:`qprr.thesis.flight.flight` (``callable = "qprr.thesis.flight:flight"``).
 
 A callable target takes ``(params, seed)`` or ``(params, seed, platform)``: the three-argument
-form receives the campaign's platform, built once per worker.
+form receives the campaign's platform (the specification's ``platform``: a name or a URDF with its
+rotor file), built once per worker.  A target that returns the flight of another platform (other
+coordinates) gets an ``error`` row saying so: its errors would have no column.
 """
 
 from __future__ import annotations

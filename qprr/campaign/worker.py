@@ -22,35 +22,64 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError, QprrError
+from ..platform import Platform
 from ..sim import SimResult
 from ..sim.mismatch import perturbed
 from .metrics import metrics_of
 from .spec import MODEL_PREFIX, CampaignSpec, Run, model_error
 
 
-def load_platform(name: str):
-    """The platform of a campaign: "q-prr", a stored one (:func:`qprr.load`) or a (2.1) name (:func:`qprr.build`)."""
-    from ..nomenclature import build
-    from ..platforms import NAMES, load
+def load_platform(name: str | Mapping, files: Mapping[str, str] | None = None) -> Platform:
+    """The platform of a campaign, ``name`` as :attr:`CampaignSpec.platform` gives it.
 
-    if not isinstance(name, str):
-        raise InputError(f"platform name must be a string (q-prr, {', '.join(NAMES)} or a designation such as HEX-RRR), got {name!r}")
-    return load(name) if (name == "q-prr" or name in NAMES) else build(name)
+    A name: a registered one (:func:`qprr.load`) or a (2.1) designation (:func:`qprr.build`).  A
+    table ``{urdf, rotors, ee_frame}``: :func:`qprr.from_urdf` on ``files``, the text of its URDF and
+    rotor file (:meth:`CampaignSpec.platform_files`), so that a worker needs no copy of them.
+    """
+    from ..nomenclature import build
+    from ..platform import from_urdf
+    from ..platforms import NAMES, load
+    from .spec import toml_loads
+
+    if isinstance(name, str):
+        if files is not None:
+            raise InputError(f"platform name {name!r} takes no files, got files for {sorted(files)}: files go with a table")
+        return load(name) if name in NAMES else build(name)
+    if not isinstance(name, Mapping) or not isinstance(files, Mapping) or set(files) != {"urdf", "rotors"}:
+        raise InputError(f"name must be a platform name or a table {{urdf, rotors, ee_frame}} with files = {{urdf: text, "
+                         f"rotors: text}}, got name={name!r}, files={None if files is None else sorted(files)}")
+    platform = name
+    rotors = toml_loads(files["rotors"], f"platform.rotors = {platform['rotors']!r}")
+    try:
+        return from_urdf(files["urdf"], rotors, ee_frame=platform.get("ee_frame"),
+                         provenance={"model": str(platform["urdf"]), "rotors": str(platform["rotors"])})
+    except QprrError as exc:  # the file's own error, prefixed with the specification's key
+        raise InputError(f"platform = {{urdf = {platform['urdf']!r}, rotors = {platform['rotors']!r}"
+                        + (f", ee_frame = {platform['ee_frame']!r}" if "ee_frame" in platform else "") + f"}}: {exc}") from exc
+
+
+def platform_of(spec: CampaignSpec) -> Platform:
+    """The campaign's platform, built in this process (a platform table's files read and checked now)."""
+    if not isinstance(spec, CampaignSpec):
+        raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
+    return load_platform(spec.platform, spec.platform_files())
 
 
 def xi_names_of(spec: CampaignSpec) -> tuple[str, ...]:
     """The coordinate names of the campaign's platform (the ``rmse_<var>`` columns)."""
-    return load_platform(spec.platform).xi_names
+    return platform_of(spec).xi_names
 
 
 @dataclass
 class Payload:
-    """What a task carries: the specification (as data), its folder, and a user file's source text (or None)."""
+    """What a task carries: the specification (as data), its folder, a user file's source text (or None), and the
+    text of a platform table's URDF and rotor file (or None)."""
 
     spec: dict
     base_dir: str
     source: str | None = None
     fingerprint: str = ""
+    platform_files: dict | None = None
 
 
 def make_payload(spec: CampaignSpec) -> Payload:
@@ -65,7 +94,7 @@ def make_payload(spec: CampaignSpec) -> Payload:
             if not path.is_file():
                 raise InputError(f"callable {spec.callable!r}: file {str(path)!r} does not exist")
             source = path.read_text()
-    return Payload(spec.to_dict(), spec.base_dir, source, spec.fingerprint)
+    return Payload(spec.to_dict(), spec.base_dir, source, spec.fingerprint, spec.platform_files())
 
 
 def _load_callable(spec: CampaignSpec, source: str | None) -> Callable:
@@ -101,7 +130,7 @@ class Context:
 def build_context(payload: Payload) -> Context:
     """Build the platform and the target of a campaign (once per worker)."""
     spec = CampaignSpec.from_mapping(payload.spec, base_dir=payload.base_dir)
-    platform = load_platform(spec.platform)
+    platform = load_platform(spec.platform, payload.platform_files)
     if spec.scenario is not None:
         from ..scenarios import SCENARIOS
 
@@ -139,6 +168,11 @@ def execute(ctx: Context, run: Run) -> dict[str, object]:
         result = ctx.target(run)
         if not isinstance(result, SimResult):
             result, status, reason = None, "error", f"the target returned {type(result).__name__}, not a SimResult"
+        elif tuple(result.names) != tuple(ctx.names):  # its errors would be lost in the campaign's columns
+            result, status, reason = None, "error", (
+                f"the target flew {result.platform or 'a platform'} (coordinates {', '.join(result.names)}), not the "
+                f"campaign's platform = {spec.platform_label!r} (coordinates {', '.join(ctx.names)}): set platform in the "
+                f"specification to the one the target flies, and take it as the target's third argument")
     except QprrError as err:
         result = getattr(err, "result", None)
         status = None if result is not None else "failed"
