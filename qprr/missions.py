@@ -63,23 +63,27 @@ PAYLOAD_KEYS = ("time", "mass")
 
 
 # ------------------------------------------------------------------------- building blocks
-def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
-    """``make_controller(name, platform)`` with the gain set ``gains`` (module docstring); ``kwargs`` to the constructor."""
+def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str, object]:
+    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none)."""
     if not isinstance(gains, str):
         raise InputError(f"gains must be 'platform', 'class', a registered gain table or a TOML file, got {gains!r}")
     if gains == "platform":
-        kwargs = {**platform_gains(name, platform), **kwargs}
-    elif gains.endswith(".toml"):
-        kwargs = {**load_gain_file(gains, name, platform), **kwargs}
-    elif gains != "class":
-        from .registry import GAIN_TABLES
+        return platform_gains(name, platform)
+    if gains.endswith(".toml"):
+        return load_gain_file(gains, name, platform)
+    if gains == "class":
+        return {}
+    from .registry import GAIN_TABLES
 
-        table = GAIN_TABLES[gains]()
-        key = "impedance" if isinstance(table, (ImpedanceGains, EndEffectorImpedance)) else "gains"
-        if not isinstance(table, (IDCGains, MFCGains, ImpedanceGains, EndEffectorImpedance)):
-            raise InputError(f"gain table {gains!r} gives a {type(table).__name__}, not gains of qprr.control")
-        kwargs = {key: table, **kwargs}
-    return make_controller(name, platform, **kwargs)
+    table = GAIN_TABLES[gains]()
+    if not isinstance(table, (IDCGains, MFCGains, ImpedanceGains, EndEffectorImpedance)):
+        raise InputError(f"gain table {gains!r} gives a {type(table).__name__}, not gains of qprr.control")
+    return {"impedance" if isinstance(table, (ImpedanceGains, EndEffectorImpedance)) else "gains": table}
+
+
+def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
+    """``make_controller(name, platform)`` with the gain set ``gains`` (:func:`gain_arguments`); ``kwargs`` to the constructor."""
+    return make_controller(name, platform, **{**gain_arguments(name, platform, gains), **kwargs})
 
 
 def reach_posture(platform: Platform, fraction: float) -> np.ndarray:
@@ -316,5 +320,5 @@ def summary(result) -> list[str]:
     return ["; ".join(parts)] if parts else []
 
 
-__all__ = ["PAYLOAD_KEYS", "PHASE_KEYS", "controller_for", "default_mission", "mission", "motor_lag", "noise", "payload", "point_to_point",
+__all__ = ["PAYLOAD_KEYS", "PHASE_KEYS", "controller_for", "default_mission", "gain_arguments", "mission", "motor_lag", "noise", "payload", "point_to_point",
            "pulses", "push", "reach_posture", "read_mission", "summary", "takeoff_hover", "wind"]

@@ -27,7 +27,9 @@ neutral configuration) and the error at which a loop may spend all of it (:class
 
 The force-level gains (the impedance filters' M, D, K) are those bandwidths times the inertia
 each coordinate moves: ``M = m`` (or ``I_z``, ``M_jj``), ``K = M w^2``, ``D = 2 M w`` (critically
-damped), so scaling the masses, inertias and actuators by k scales them by k and leaves the
+damped); the end-effector impedance (``opspace-impedance``) has ``K = m w_pos^2`` with the desired
+mass ``M_d = m / ratio^2`` (its own frequency is then ``w_att``; with ``M_d = m`` it was too slow to
+reach a wall on borinot_flying_arm_2), critically damped, so scaling the masses, inertias and actuators by k scales them by k and leaves the
 acceleration gains unchanged.  :func:`platform_gains` returns the constructor keyword arguments
 of a controller (``make_controller(name, platform, **platform_gains(name, platform))``);
 :func:`load_gains` reads overrides from a TOML file; :func:`gain_lines` prints them.  The
@@ -172,8 +174,8 @@ def _derive(controller: str, authority: Authority, targets: Targets) -> dict[str
         return {"gains": idc_gains(w), "impedance": impedance_gains(authority, w)}
     if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
         # borinot_flying_arm_2: derived posture loops at w_att with the end-effector task diverge in contact)
-        imp = EndEffectorImpedance.from_frequency(w[0], 1.0, authority.mass)  # K = m w_pos^2, D = 2 m w_pos
-        return {"impedance": EndEffectorImpedance(imp.stiffness, imp.damping, None)}  # natural inertia: no sensor needed
+        m_d = authority.mass / targets.ratio**2  # K = m w_pos^2 with M_d = m / ratio^2: the impedance's own frequency is w_att
+        return {"impedance": EndEffectorImpedance.from_frequency(w[3], 1.0, m_d)}
     raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
 
 
