@@ -15,6 +15,9 @@ generic            what
 ``ee-impedance``   any platform: the end effector under operational-space impedance (Thesis
                    (6.72)-(6.73)) pressed into a compliant wall or pushed by a force step
                    (:mod:`qprr.impedance_scenario`)
+``takeoff-hover``  any platform, and the other missions of :mod:`qprr.missions` (``fly-to``, ``mission``
+``...``            given as data, ``grasp-drop``, ``ee-push``, ``hover-wind``, ``motor-lag``, ``hover-noise``,
+                   ``hover-pulses``): gains derived from the platform (:mod:`qprr.control.gains`)
 =================  ===========================================================================
 
 The thesis's scenarios are listed by ``qprr simulate --help`` and :mod:`qprr.thesis.scenarios`.
