@@ -33,14 +33,14 @@ own defaults), a name of :data:`qprr.registry.GAIN_TABLES` or a TOML file (:func
 
 from __future__ import annotations
 
-import tomllib
 from pathlib import Path
 
 import numpy as np
+import tomllib
 
 from .control import make_controller
-from .control.gains import platform_gains
 from .control.gains import load_gains as load_gain_file
+from .control.gains import platform_gains
 from .control.impedance import ImpedanceGains
 from .control.inverse_dynamics import IDCGains
 from .control.mfc import MFCGains
@@ -102,8 +102,9 @@ def _platform(platform: Platform | None) -> Platform:
 
 
 def _fly(platform, ctrl, trajectory, o: dict, progress: bool, name: str, **extra):
-    return simulate(platform, ctrl, trajectory, o["duration"], dt=o["dt"], integrator=o["integrator"], seed=o["seed"],
-                    progress=progress, scenario=name, **extra)
+    return simulate(
+        platform, ctrl, trajectory, o["duration"], dt=o["dt"], integrator=o["integrator"], seed=o["seed"], progress=progress, scenario=name, **extra
+    )
 
 
 def _errors(res, final: np.ndarray) -> None:
@@ -186,8 +187,7 @@ def default_mission(platform: Platform, duration: float) -> dict:
     (50-80 %, every joint 60 % of the way to its upper limit), as data (:func:`read_mission`)."""
     D = duration
     q = reach_posture(platform, 0.6)
-    phases = [{"coordinate": "z", "start": 0.0, "end": 0.3 * D, "target": 2.0},
-              {"coordinate": "x", "start": 0.3 * D, "end": 0.6 * D, "target": 1.0}]
+    phases = [{"coordinate": "z", "start": 0.0, "end": 0.3 * D, "target": 2.0}, {"coordinate": "x", "start": 0.3 * D, "end": 0.6 * D, "target": 1.0}]
     phases += [{"coordinate": n, "start": 0.5 * D, "end": 0.8 * D, "target": float(v)} for n, v in zip(platform.arm_names, q)]
     return {"phase": phases}
 
@@ -224,11 +224,11 @@ def push(platform=None, controller="opspace-impedance", progress=False, **o):
     platform = _platform(platform)
     xi0, _ = _hover(platform, o)
     p_e0, _ = ee_pose_xi(platform, platform.data(), xi0)
-    wall = CompliantWall(platform, point=p_e0 + np.array([o["gap"], 0.0, 0.0]), normal=(-1.0, 0.0, 0.0),
-                         stiffness=o["wall_stiffness"], damping=o["wall_damping"])
+    wall = CompliantWall(
+        platform, point=p_e0 + np.array([o["gap"], 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=o["wall_stiffness"], damping=o["wall_damping"]
+    )
     D = o["duration"]
-    traj = MultiPhase((Phase("x", 0.2 * D, 0.5 * D, o["gap"] + o["penetration"]),), tuple(xi0), name="ee-push", law=o["law"],
-                      names=platform.xi_names)
+    traj = MultiPhase((Phase("x", 0.2 * D, 0.5 * D, o["gap"] + o["penetration"]),), tuple(xi0), name="ee-push", law=o["law"], names=platform.xi_names)
     sensor = {"ee_sensor": wall.measured} if controller == "opspace-impedance" else {}
     ctrl = controller_for(controller, platform, o["gains"], **sensor)
     res = _fly(platform, ctrl, traj, o, progress, "ee-push", external_wrench=wall)
@@ -281,8 +281,15 @@ def noise(platform=None, controller="idc", progress=False, **o):
     xi, traj = _hover(platform, o)
     a = Authority.from_platform(platform)
     amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "hover-noise",
-               disturbance=WhiteNoise(tuple(o["fraction"] * amp)))
+    res = _fly(
+        platform,
+        controller_for(controller, platform, o["gains"]),
+        traj,
+        o,
+        progress,
+        "hover-noise",
+        disturbance=WhiteNoise(tuple(o["fraction"] * amp)),
+    )
     _errors(res, xi)
     return res
 
@@ -299,8 +306,7 @@ def pulses(platform=None, controller="idc", progress=False, **o):
             g = np.zeros(n)
             g[list(idx)] = value
             shots.append(Pulse(start * D, (start + 0.05) * D, tuple(g)))
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "hover-pulses",
-               disturbance=Disturbances(tuple(shots)))
+    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "hover-pulses", disturbance=Disturbances(tuple(shots)))
     _errors(res, xi)
     return res
 
@@ -310,8 +316,10 @@ def summary(result) -> list[str]:
     m = result.metrics
     parts = []
     if "final_position_error" in m:
-        parts.append(f"final position error {1e3 * m['final_position_error']:.3f} mm, final arm error {m['final_arm_error']:.3e}, "
-                     f"max position error {1e3 * m['max_position_error']:.2f} mm")
+        parts.append(
+            f"final position error {1e3 * m['final_position_error']:.3f} mm, final arm error {m['final_arm_error']:.3e}, "
+            f"max position error {1e3 * m['max_position_error']:.2f} mm"
+        )
     if "payload_mass" in m:
         parts.append(f"payload {m['payload_mass']:.3f} kg grasped at {m['t_grasp']:.2f} s, dropped at {m['t_drop']:.2f} s")
     if "contact_force" in m:
@@ -320,5 +328,22 @@ def summary(result) -> list[str]:
     return ["; ".join(parts)] if parts else []
 
 
-__all__ = ["PAYLOAD_KEYS", "PHASE_KEYS", "controller_for", "default_mission", "gain_arguments", "mission", "motor_lag", "noise", "payload", "point_to_point",
-           "pulses", "push", "reach_posture", "read_mission", "summary", "takeoff_hover", "wind"]
+__all__ = [
+    "PAYLOAD_KEYS",
+    "PHASE_KEYS",
+    "controller_for",
+    "default_mission",
+    "gain_arguments",
+    "mission",
+    "motor_lag",
+    "noise",
+    "payload",
+    "point_to_point",
+    "pulses",
+    "push",
+    "reach_posture",
+    "read_mission",
+    "summary",
+    "takeoff_hover",
+    "wind",
+]

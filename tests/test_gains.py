@@ -11,7 +11,7 @@ from hypothesis import strategies as st
 
 import qprr
 from qprr.cli import main
-from qprr.control.gains import Authority, Targets, bandwidths, idc_gains, load_gains, platform_gains
+from qprr.control.gains import Authority, Targets, bandwidths, derive, idc_gains, load_gains, platform_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance
 from qprr.errors import QprrError, UnknownNameError
 from qprr.platform import max_lift
@@ -27,8 +27,15 @@ def quad():
 
 
 POSITIVE = st.floats(0.05, 50.0)
-AUTHORITY = st.builds(lambda m, i, margin, tau, ia, ea: Authority(m, (i, i, 0.5 * i), margin, (tau, tau, 0.2 * tau), (ia, ia), (ea, math.inf)),
-                      POSITIVE, POSITIVE, POSITIVE, POSITIVE, POSITIVE, POSITIVE)
+AUTHORITY = st.builds(
+    lambda m, i, margin, tau, ia, ea: Authority(m, (i, i, 0.5 * i), margin, (tau, tau, 0.2 * tau), (ia, ia), (ea, math.inf)),
+    POSITIVE,
+    POSITIVE,
+    POSITIVE,
+    POSITIVE,
+    POSITIVE,
+    POSITIVE,
+)
 
 
 @settings(max_examples=40, deadline=None)
@@ -48,13 +55,13 @@ def test_error_polynomials_have_their_poles_at_w(a):
 def test_scaling_every_mass_and_actuator_by_k_scales_force_gains_by_k(a, k):
     """A k times heavier, k times stronger robot: the same bandwidths and acceleration gains, force-level gains times k."""
     np.testing.assert_allclose(bandwidths(a.scaled(k)), bandwidths(a), rtol=1e-13)
-    from qprr.control.gains import _derive
 
     for name in ("impedance", "opspace-impedance"):
-        base, big = _derive(name, a, Targets()), _derive(name, a.scaled(k), Targets())
+        base, big = derive(name, a, Targets()), derive(name, a.scaled(k), Targets())
         imp, imp_k = base["impedance"], big["impedance"]
-        fields = ("stiffness", "damping", "mass") if isinstance(imp, EndEffectorImpedance) else (
-            "M_base", "D_base", "K_base", "M_arm", "D_arm", "K_arm")
+        fields = (
+            ("stiffness", "damping", "mass") if isinstance(imp, EndEffectorImpedance) else ("M_base", "D_base", "K_base", "M_arm", "D_arm", "K_arm")
+        )
         for f in fields:
             np.testing.assert_allclose(np.asarray(getattr(imp_k, f)), k * np.asarray(getattr(imp, f)), rtol=1e-13)
         if "gains" in base:

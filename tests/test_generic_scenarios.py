@@ -25,10 +25,14 @@ def small_mission(platform) -> dict:
     """Climb to 1 m, fly 0.3 m along x, reach the first arm joint out; grasp 10 % of the mass at 1.3 s, release at 1.8 s."""
     q = platform.neutral_q()[7:]
     hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q + 1.0)
-    return {"phase": [{"coordinate": "z", "start": 0.0, "end": 1.2, "target": 1.0},
-                      {"coordinate": "x", "start": 1.2, "end": 2.0, "target": 0.3},
-                      {"coordinate": platform.arm_names[0], "start": 1.0, "end": 2.2, "target": float(q[0] + 0.4 * (hi[0] - q[0]))}],
-            "payload": [{"time": 1.3, "mass": 0.1 * platform.total_mass}, {"time": 1.8, "mass": 0.0}]}
+    return {
+        "phase": [
+            {"coordinate": "z", "start": 0.0, "end": 1.2, "target": 1.0},
+            {"coordinate": "x", "start": 1.2, "end": 2.0, "target": 0.3},
+            {"coordinate": platform.arm_names[0], "start": 1.0, "end": 2.2, "target": float(q[0] + 0.4 * (hi[0] - q[0]))},
+        ],
+        "payload": [{"time": 1.3, "mass": 0.1 * platform.total_mass}, {"time": 1.8, "mass": 0.0}],
+    }
 
 
 OPTIONS = {"fly-to": {"target": (0.3, 0.2, 1.0)}, "motor-lag": {"target": (0.3, 0.2, 1.0)}}

@@ -40,12 +40,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+import tomllib
 
 from ..errors import InputError, UnknownNameError
 from ..platform import Platform, check_platform
@@ -106,22 +106,35 @@ class Authority:
         az = A[2]
         margin = float(np.sum(np.where(az > 0.0, f_hi * az, 0.0))) - m * platform.g
         if not margin > 0.0:
-            raise InputError(f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
-                             "its authority; raise f_max in the rotor file")
+            raise InputError(
+                f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
+                "its authority; raise f_max in the rotor file"
+            )
         hover = np.zeros(6)
         hover[2] = m * platform.g
         f_h = np.clip(np.linalg.pinv(A) @ hover, f_lo, f_hi)
         swing = np.minimum(f_hi - f_h, f_h - f_lo)
         torque = np.abs(A[3:6]) @ np.maximum(swing, 0.0)
         n = platform.n_arm
-        return cls(m, tuple(float(v) for v in np.diag(M)[3:6]), margin, tuple(float(v) for v in torque),
-                   tuple(float(v) for v in np.diag(M)[6:6 + n]), tuple(float(v) for v in platform.arm_effort_limits))
+        return cls(
+            m,
+            tuple(float(v) for v in np.diag(M)[3:6]),
+            margin,
+            tuple(float(v) for v in torque),
+            tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
+            tuple(float(v) for v in platform.arm_effort_limits),
+        )
 
     def scaled(self, k: float) -> Authority:
         """Every mass, inertia, force and torque times ``k`` (a geometrically similar, k times heavier robot)."""
-        return Authority(k * self.mass, tuple(k * v for v in self.inertia), k * self.thrust_margin,
-                         tuple(k * v for v in self.torque), tuple(k * v for v in self.arm_inertia),
-                         tuple(k * v for v in self.arm_effort))
+        return Authority(
+            k * self.mass,
+            tuple(k * v for v in self.inertia),
+            k * self.thrust_margin,
+            tuple(k * v for v in self.torque),
+            tuple(k * v for v in self.arm_inertia),
+            tuple(k * v for v in self.arm_effort),
+        )
 
 
 def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
@@ -156,11 +169,13 @@ def impedance_gains(authority: Authority, w: np.ndarray) -> ImpedanceGains:
     m = np.array([authority.mass] * 3 + [authority.inertia[2]] + list(authority.arm_inertia))
     ww = np.concatenate([w[0:3], w[5:6], w[6:]])
     K, D = m * ww**2, 2.0 * m * ww
-    return ImpedanceGains(M_base=tuple(m[:4]), D_base=tuple(D[:4]), K_base=tuple(K[:4]), M_arm=tuple(m[4:]) or 1.0,
-                          D_arm=tuple(D[4:]) or 1.0, K_arm=tuple(K[4:]) or 1.0)
+    return ImpedanceGains(
+        M_base=tuple(m[:4]), D_base=tuple(D[:4]), K_base=tuple(K[:4]), M_arm=tuple(m[4:]) or 1.0, D_arm=tuple(D[4:]) or 1.0, K_arm=tuple(K[4:]) or 1.0
+    )
 
 
-def _derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
+def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
+    """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
     w = bandwidths(authority, targets)
     if controller in ("idc", "layered-idc", "payload-idc", "decoupled"):
         return {"gains": idc_gains(w)}
@@ -183,8 +198,7 @@ DERIVED = ("idc", "dsid", "mfc", "layered-idc", "payload-idc", "decoupled", "imp
 """Controllers :func:`platform_gains` derives gains for (``mpc`` has cost weights, not gains)."""
 
 
-def platform_gains(controller: str, platform: Platform, targets: Targets | None = None,
-                   overrides: dict | None = None) -> dict[str, object]:
+def platform_gains(controller: str, platform: Platform, targets: Targets | None = None, overrides: dict | None = None) -> dict[str, object]:
     """Keyword arguments of ``make_controller(controller, platform, ...)``: gains derived from ``platform`` (module docstring).
 
     ``targets``: :class:`Targets` (default: its defaults); ``overrides``: ``{argument: {field: value}}``
@@ -196,7 +210,7 @@ def platform_gains(controller: str, platform: Platform, targets: Targets | None 
     targets = Targets() if targets is None else targets
     if not isinstance(targets, Targets):
         raise InputError(f"targets must be a qprr.control.gains.Targets, got {type(targets).__name__}")
-    kwargs = _derive(controller, Authority.from_platform(platform), targets)
+    kwargs = derive(controller, Authority.from_platform(platform), targets)
     for arg, fields in (overrides or {}).items():
         if arg not in kwargs:
             raise UnknownNameError(f"gain argument of {controller!r}", arg, tuple(kwargs))
@@ -236,8 +250,10 @@ def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[st
     if extra:
         raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *DERIVED))
     if set(table) - {"targets"} and controller not in table:
-        raise InputError(f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
-                         f"{controller!r}: add a [{controller}.gains] table")
+        raise InputError(
+            f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
+            f"{controller!r}: add a [{controller}.gains] table"
+        )
     try:
         targets = Targets(**table.get("targets", {}))
     except TypeError as exc:
@@ -265,5 +281,4 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
     return lines
 
 
-__all__ = ["DERIVED", "Authority", "Targets", "bandwidths", "gain_lines", "idc_gains", "impedance_gains", "load_gains",
-           "platform_gains"]
+__all__ = ["DERIVED", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]
