@@ -60,6 +60,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         anim_path = output_path(getattr(args, "animate", None), (".gif", ".mp4"), "animate")
     except ValueError as exc:
         return fail(prog, str(exc))
+    if args.gains is not None:
+        if "gains" not in sc.options:
+            return fail(prog, f"--gains does not apply to scenario {sc.name!r} (it sets its own); scenarios that take it: "
+                              f"{', '.join(n for n, s in SCENARIOS.items() if 'gains' in s.options)}")
+        options["gains"] = args.gains
     platform = None
     if any(x is not None for x in (args.platform, args.layout, args.urdf, args.rotors, args.ee_frame)):
         name = args.platform or ("q-prr" if args.urdf is None else args.urdf)
@@ -69,6 +74,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             platform = platform_from_args(args)
         except QprrError as exc:
             return fail(prog, f"--platform {name!r}: {exc}" if args.platform and not args.urdf else str(exc))
+    if args.print_gains:
+        return _print_gains(sc, platform, args.controller or sc.controllers[0], options.get("gains"))
     progress = not args.quiet and sys.stderr.isatty()
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
@@ -91,6 +98,24 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if anim_path is not None:
         _animate(res, platform, anim_path)
     return code
+
+
+def _print_gains(sc, platform, controller: str, gains: str | None) -> int:
+    """Print the gains ``controller`` gets in scenario ``sc`` on ``platform`` (``--print-gains``), without running."""
+    from .control.gains import gain_lines
+    from .missions import gain_arguments
+    from .platforms import load as load_platform
+
+    platform = platform or load_platform()
+    spec = gains or (sc.options["gains"].default if "gains" in sc.options else "class")
+    try:
+        kwargs = gain_arguments(controller, platform, spec)
+    except QprrError as exc:
+        return fail("qprr simulate", f"--gains {spec!r}: {exc}")
+    print(f"gains of {controller} in {sc.name} on {platform.name} ({spec})")
+    for line in gain_lines(kwargs, platform.xi_names) if kwargs else [f"  the defaults of the {controller} class"]:
+        print(line)
+    return 0
 
 
 def _animate(res, platform, path: Path) -> None:
@@ -166,13 +191,18 @@ def _scenario_help() -> str:
     from .scenarios import SCENARIOS
 
     lines = []
-    for name, sc in SCENARIOS.items():
-        where = f" [{sc.source}]" if sc.source else ""
-        on = f"; platforms: {', '.join(sc.platforms)}" if sc.platforms else "; any platform"
-        lines.append(f"  {name:<15} {sc.description}{where}")
-        lines.append(f"  {'':<15} controllers: {', '.join(sc.controllers)}{on}")
-        opts = ", ".join(f"{k}={o.default!r}" for k, o in sc.options.items())
-        lines.append(f"  {'':<15} options: {opts}")
+    for title, group in (("any platform (--platform NAME or --urdf F --rotors F.toml)", lambda s: s.platforms is None),
+                         ("thesis (the Q-PRR)", lambda s: s.platforms is not None)):
+        lines.append(f"{title}:")
+        for name, sc in SCENARIOS.items():
+            if not group(sc):
+                continue
+            where = f" [{sc.source}]" if sc.source else ""
+            on = f"; platforms: {', '.join(sc.platforms)}" if sc.platforms else ""
+            lines.append(f"  {name:<15} {sc.description}{where}")
+            lines.append(f"  {'':<15} controllers: {', '.join(sc.controllers)}{on}")
+            opts = ", ".join(f"{k}={o.default!r}" for k, o in sc.options.items())
+            lines.append(f"  {'':<15} options: {opts}")
     return "\n".join(lines)
 
 
@@ -198,6 +228,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--law", default=None, choices=("septic", "quintic", "thesis"),
                    help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))")
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="any scenario option (listed above), repeatable")
+    p.add_argument("--gains", default=None, metavar="FILE.toml|NAME",
+                   help="gain set of a generic scenario: platform (derived, default), class, a registered table (q-prr:idc), "
+                        "or a TOML file ([targets], [<controller>.gains]; docs/simulation.md)")
+    p.add_argument("--print-gains", action="store_true", help="print the controller's gains on the platform and exit")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
 

@@ -15,6 +15,9 @@ generic            what
 ``ee-impedance``   any platform: the end effector under operational-space impedance (Thesis
                    (6.72)-(6.73)) pressed into a compliant wall or pushed by a force step
                    (:mod:`qprr.impedance_scenario`)
+``takeoff-hover``  any platform, and the other missions of :mod:`qprr.missions` (``fly-to``, ``mission``
+``...``            given as data, ``grasp-drop``, ``ee-push``, ``hover-wind``, ``motor-lag``, ``hover-noise``,
+                   ``hover-pulses``): gains derived from the platform (:mod:`qprr.control.gains`)
 =================  ===========================================================================
 
 The thesis's scenarios are listed by ``qprr simulate --help`` and :mod:`qprr.thesis.scenarios`.
@@ -164,7 +167,77 @@ GENERIC = (
 )
 
 
-for _scenario in GENERIC:
+def _mission_runner(name: str) -> Callable[..., SimResult]:
+    """A runner of :mod:`qprr.missions` (imported on first use)."""
+
+    def runner(platform, controller, progress, **options):
+        from . import missions
+
+        return getattr(missions, name)(platform, controller, progress, **options)
+
+    runner.__name__ = name
+    return runner
+
+
+def _mission_summary(result: SimResult) -> list[str]:
+    from .missions import summary
+
+    return summary(result)
+
+
+GAINS_OPTION = Option("platform", "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
+                                  "class (the controller's own defaults), a registered gain table, or FILE.toml")
+"""The ``gains`` option of the missions (:func:`qprr.missions.controller_for`)."""
+_FLIGHT = ("idc", "dsid", "decoupled")
+_HOVER = {**COMMON_OPTIONS, "gains": GAINS_OPTION, "z": Option(2.0, "hover height [m]"),
+          "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits")}
+_MOVE = {**_HOVER, "target": Option((1.0, 0.5, 2.0), "base position to reach [m], world x, y, z"),
+         "reach_fraction": Option(0.6, "arm target: fraction of the way from neutral to the upper joint limits")}
+del _MOVE["z"]
+
+MISSIONS = (
+    Scenario("takeoff-hover", "any platform: climb from the ground to z in the first 40 % of the run, hold",
+             _mission_runner("takeoff_hover"), _FLIGHT, {k: v for k, v in _HOVER.items() if k != "reach_fraction"},
+             summary=_mission_summary),
+    Scenario("fly-to", "any platform: climb, fly to target while the arm reaches out, hold",
+             _mission_runner("point_to_point"), _FLIGHT, _MOVE, summary=_mission_summary),
+    Scenario("mission", "any platform: phases of base and arm coordinates by name from a TOML file (payload grasp/release too)",
+             _mission_runner("mission"), _FLIGHT,
+             {**COMMON_OPTIONS, "gains": GAINS_OPTION,
+              "mission": Option("", "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) "
+                                    "tables; empty: climb, fly 1 m, reach out")},
+             summary=_mission_summary),
+    Scenario("grasp-drop", "any platform: a mass grasped at the end effector at 25 % of the run, dropped at 55 %",
+             _mission_runner("payload"), ("idc", "payload-idc"),
+             {**_HOVER, "mass_fraction": Option(0.1, "payload mass as a fraction of the platform's mass")},
+             summary=_mission_summary),
+    Scenario("ee-push", "any platform: the end effector pushed into a compliant wall under impedance, held",
+             _mission_runner("push"), ("opspace-impedance", "idc"),
+             {**_HOVER, "gap": Option(0.05, "distance from the end effector to the wall at the start [m]"),
+              "penetration": Option(0.05, "how far the reference ends inside the wall [m]"),
+              "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"), "wall_damping": Option(20.0, "wall damping [N s/m]")},
+             summary=_mission_summary),
+    Scenario("hover-wind", "any platform: hover in a mean wind with a 1 - cos gust (base drag)", _mission_runner("wind"), _FLIGHT,
+             {**_HOVER, "mean_wind": Option((2.0, 0.0, 0.0), "mean wind [m/s], world x, y, z"),
+              "gust": Option((3.0, 1.0, 0.0), "gust peak [m/s], world x, y, z"),
+              "drag": Option(0.3, "linear drag coefficient of the base [N s/m]")},
+             summary=_mission_summary),
+    Scenario("motor-lag", "any platform: point-to-point at height through first-order rotor dynamics",
+             _mission_runner("motor_lag"), _FLIGHT,
+             {**_MOVE, "tau": Option(0.005, "rotor time constant [s]"),
+              "thrust_factor": Option(1e-5, "rotor thrust factor b [N s^2] (f = b w^2)")},
+             summary=_mission_summary),
+    Scenario("hover-noise", "any platform: hover under white noise on every generalised force (6.27)", _mission_runner("noise"), _FLIGHT,
+             {**_HOVER, "fraction": Option(0.02, "noise amplitude: fraction of each coordinate's actuator authority")}, summary=_mission_summary),
+    Scenario("hover-pulses", "any platform: hover hit by force pulses on z, x and y, then the arm (6.28)", _mission_runner("pulses"),
+             _FLIGHT, {**_HOVER, "force": Option(2.0, "pulse on the base forces [N]"),
+                       "torque": Option(0.05, "pulse on the arm efforts [N m or N]")},
+             summary=_mission_summary),
+)
+"""The generic missions of :mod:`qprr.missions` (any platform, gains derived from it)."""
+
+
+for _scenario in GENERIC + MISSIONS:
     SCENARIOS.register(_scenario.name, _scenario)
 del _scenario
 
@@ -180,4 +253,4 @@ def run(name: str, controller: str | None = None, *, platform: Platform | None =
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
 
 
-__all__ = ["COMMON_OPTIONS", "GENERIC", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
+__all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]

@@ -1,0 +1,284 @@
+"""Default gains derived from the platform: mass, inertia, actuator authority and bandwidth targets.
+
+Every controller of :mod:`qprr.control` closes its loops on the exactly linearised error dynamics
+of each thesis coordinate (x, y, z, phi, theta, psi, then the arm joints).  A coordinate with a
+bandwidth ``w`` [rad/s] gets the critically damped pole placement
+
+* with an integral term (the attitude): ``(s + w)^3 = s^3 + 3 w s^2 + 3 w^2 s + w^3``, i.e.
+  ``k_D = 3 w``, ``k_P = 3 w^2``, ``k_I = w^3``;
+* without (position, arm): ``(s + w)^2 = s^2 + 2 w s + w^2``, i.e. ``k_D = 2 w``, ``k_P = w^2``.
+
+The bandwidths come from the actuator authority (:class:`Authority`, read from the platform at its
+neutral configuration) and the error at which a loop may spend all of it (:class:`Targets`):
+
+* position: ``w_a = sqrt(a / e_pos)`` with ``a = (sum f_max a_z - m g) / m`` the hover thrust
+  margin per unit mass [m/s^2] (a P-term at the error ``e_pos`` asks for the whole margin);
+* attitude (roll, pitch): ``w_t = sqrt(tau_k / (I_k e_att))`` with ``tau_k`` the torque the rotors
+  add about body axis k around the hover thrusts (each rotor moves by at most
+  ``min(f_max - f_h, f_h - f_min)``), ``I_k`` the base's rotational inertia at B;
+* the cascade: the attitude loop runs ``ratio`` times faster than the position loop, so
+  ``w_pos = min(w_a, w_t / ratio, cap / ratio)`` and ``w_att = ratio w_pos`` on roll and pitch;
+  yaw gets ``min(ratio w_pos, sqrt(tau_z / (I_z e_att)))`` (drag torques are weak);
+* each arm joint j: ``w_j = min(sqrt(effort_j / (M_jj e_arm)), w_att)`` with ``M_jj`` the joint's
+  inertia in the mass matrix: no faster than the attitude loop, which must reject the arm's
+  reaction on the base (measured on examples/my_platform with a 0.35 kg payload: arm poles at
+  17 and 32 rad/s saturate the rotors on 73 % of the steps and the run diverges; at ``w_att``
+  it holds).
+
+The force-level gains (the impedance filters' M, D, K) are those bandwidths times the inertia
+each coordinate moves: ``M = m`` (or ``I_z``, ``M_jj``), ``K = M w^2``, ``D = 2 M w`` (critically
+damped); the end-effector impedance (``opspace-impedance``) has ``K = m w_pos^2`` with the desired
+mass ``M_d = m / ratio^2`` (its own frequency is then ``w_att``; with ``M_d = m`` it was too slow to
+reach a wall on borinot_flying_arm_2), critically damped, so scaling the masses, inertias and actuators by k scales them by k and leaves the
+acceleration gains unchanged.  :func:`platform_gains` returns the constructor keyword arguments
+of a controller (``make_controller(name, platform, **platform_gains(name, platform))``);
+:func:`load_gains` reads overrides from a TOML file; :func:`gain_lines` prints them.  The
+thesis's printed tables are registered gain sets (:data:`qprr.registry.GAIN_TABLES`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+import tomllib
+
+from ..errors import InputError, UnknownNameError
+from ..platform import Platform, check_platform
+from .impedance import ImpedanceGains
+from .inverse_dynamics import IDCGains
+from .mfc import MFCGains
+from .opspace_impedance import EndEffectorImpedance
+
+
+@dataclass(frozen=True)
+class Targets:
+    """Bandwidth targets: the errors at which a loop spends its whole authority, the cascade ratio, the cap.
+
+    ``position_error`` [m], ``attitude_error`` [rad], ``arm_error`` [m or rad] (> 0); ``ratio``
+    (>= 1): attitude bandwidth over position bandwidth; ``cap`` [rad/s]: the largest bandwidth of any
+    loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05).
+    """
+
+    position_error: float = 1.0
+    attitude_error: float = 0.5
+    arm_error: float = 0.5
+    ratio: float = 5.0
+    cap: float = 40.0
+
+    def __post_init__(self) -> None:
+        for name in ("position_error", "attitude_error", "arm_error", "cap"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0.0):
+                raise InputError(f"gain target {name} must be a finite number > 0, got {v!r}")
+        if not (isinstance(self.ratio, (int, float)) and math.isfinite(self.ratio) and self.ratio >= 1.0):
+            raise InputError(f"gain target ratio must be a number >= 1 (attitude over position bandwidth), got {self.ratio!r}")
+
+
+@dataclass(frozen=True)
+class Authority:
+    """What the actuators can do against what they move (SI): the inputs of the bandwidth formulas (module docstring).
+
+    ``mass`` m [kg]; ``inertia`` (3,) diagonal of the base's rotational inertia at B, body axes [kg m^2];
+    ``thrust_margin`` [N] (sum f_max a_z - m g); ``torque`` (3,) [N m] about the body axes around hover;
+    ``arm_inertia`` (n_arm,) [kg m^2 or kg]; ``arm_effort`` (n_arm,) [N m or N] (inf: unlimited).
+    """
+
+    mass: float
+    inertia: tuple[float, float, float]
+    thrust_margin: float
+    torque: tuple[float, float, float]
+    arm_inertia: tuple[float, ...]
+    arm_effort: tuple[float, ...]
+
+    @classmethod
+    def from_platform(cls, platform: Platform) -> Authority:
+        """Read at the neutral configuration: M = crba(q_neutral) (LOCAL), rotor bounds, arm effort limits."""
+        platform = check_platform(platform)
+        m = platform.total_mass
+        M = pin.crba(platform.model, platform.data(), platform.neutral_q())
+        A = np.asarray(platform.rotor_matrix)
+        f_lo, f_hi = np.asarray(platform.thrust_min), np.asarray(platform.thrust_max)
+        az = A[2]
+        margin = float(np.sum(np.where(az > 0.0, f_hi * az, 0.0))) - m * platform.g
+        if not margin > 0.0:
+            raise InputError(
+                f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
+                "its authority; raise f_max in the rotor file"
+            )
+        hover = np.zeros(6)
+        hover[2] = m * platform.g
+        f_h = np.clip(np.linalg.pinv(A) @ hover, f_lo, f_hi)
+        swing = np.minimum(f_hi - f_h, f_h - f_lo)
+        torque = np.abs(A[3:6]) @ np.maximum(swing, 0.0)
+        n = platform.n_arm
+        return cls(
+            m,
+            tuple(float(v) for v in np.diag(M)[3:6]),
+            margin,
+            tuple(float(v) for v in torque),
+            tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
+            tuple(float(v) for v in platform.arm_effort_limits),
+        )
+
+    def scaled(self, k: float) -> Authority:
+        """Every mass, inertia, force and torque times ``k`` (a geometrically similar, k times heavier robot)."""
+        return Authority(
+            k * self.mass,
+            tuple(k * v for v in self.inertia),
+            k * self.thrust_margin,
+            tuple(k * v for v in self.torque),
+            tuple(k * v for v in self.arm_inertia),
+            tuple(k * v for v in self.arm_effort),
+        )
+
+
+def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
+    """w [rad/s] per thesis coordinate (6 + n_arm), by the formulas of the module docstring."""
+    a, t = authority, targets
+
+    def w_of(force, inertia, error):
+        return math.sqrt(force / (inertia * error)) if inertia > 0.0 and force > 0.0 else math.inf
+
+    w_lift = w_of(a.thrust_margin, a.mass, t.position_error)
+    w_tilt = min(w_of(a.torque[k], a.inertia[k], t.attitude_error) for k in (0, 1))
+    w_pos = min(w_lift, w_tilt / t.ratio, t.cap / t.ratio)
+    w_att = t.ratio * w_pos
+    w_yaw = min(w_att, w_of(a.torque[2], a.inertia[2], t.attitude_error))
+    w_arm = [min(w_of(e, i, t.arm_error), w_att) for e, i in zip(a.arm_effort, a.arm_inertia)]
+    return np.array([w_pos] * 3 + [w_att, w_att, w_yaw] + w_arm)
+
+
+def idc_gains(w: np.ndarray, **kwargs) -> IDCGains:
+    """(s + w)^2 on position and arm, (s + w)^3 on the attitude (module docstring); ``kwargs`` to :class:`IDCGains`."""
+    w = np.asarray(w, dtype=float)
+    cubic = np.zeros(w.shape[0], dtype=bool)
+    cubic[3:6] = True
+    kp = np.where(cubic, 3.0 * w**2, w**2)
+    kd = np.where(cubic, 3.0 * w, 2.0 * w)
+    ki = np.where(cubic, w**3, 0.0)
+    return IDCGains(kp=tuple(kp), kd=tuple(kd), ki=tuple(ki), **kwargs)
+
+
+def impedance_gains(authority: Authority, w: np.ndarray) -> ImpedanceGains:
+    """Impedance filters (6.74)-(6.75) on (x, y, z, psi) and the arm: M = the moved inertia, K = M w^2, D = 2 M w."""
+    m = np.array([authority.mass] * 3 + [authority.inertia[2]] + list(authority.arm_inertia))
+    ww = np.concatenate([w[0:3], w[5:6], w[6:]])
+    K, D = m * ww**2, 2.0 * m * ww
+    return ImpedanceGains(
+        M_base=tuple(m[:4]), D_base=tuple(D[:4]), K_base=tuple(K[:4]), M_arm=tuple(m[4:]) or 1.0, D_arm=tuple(D[4:]) or 1.0, K_arm=tuple(K[4:]) or 1.0
+    )
+
+
+def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
+    """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
+    w = bandwidths(authority, targets)
+    if controller in ("idc", "layered-idc", "payload-idc", "decoupled"):
+        return {"gains": idc_gains(w)}
+    if controller == "dsid":  # the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap
+        w_d = w.copy()
+        w_d[6:] = targets.cap
+        return {"gains": idc_gains(w_d, filter_omega=20.0)}
+    if controller == "mfc":  # iPID (6.37): the same error polynomial (s + w)^3 on every coordinate
+        return {"gains": MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3))}
+    if controller == "impedance":
+        return {"gains": idc_gains(w), "impedance": impedance_gains(authority, w)}
+    if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
+        # borinot_flying_arm_2: derived posture loops at w_att with the end-effector task diverge in contact)
+        m_d = authority.mass / targets.ratio**2  # K = m w_pos^2 with M_d = m / ratio^2: the impedance's own frequency is w_att
+        return {"impedance": EndEffectorImpedance.from_frequency(w[3], 1.0, m_d)}
+    raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
+
+
+DERIVED = ("idc", "dsid", "mfc", "layered-idc", "payload-idc", "decoupled", "impedance", "opspace-impedance")
+"""Controllers :func:`platform_gains` derives gains for (``mpc`` has cost weights, not gains)."""
+
+
+def platform_gains(controller: str, platform: Platform, targets: Targets | None = None, overrides: dict | None = None) -> dict[str, object]:
+    """Keyword arguments of ``make_controller(controller, platform, ...)``: gains derived from ``platform`` (module docstring).
+
+    ``targets``: :class:`Targets` (default: its defaults); ``overrides``: ``{argument: {field: value}}``
+    replacing fields of the derived objects (e.g. ``{"gains": {"kp": [...]}}``; a number for a
+    per-coordinate field applies to every coordinate).
+    """
+    if controller not in DERIVED:
+        raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
+    targets = Targets() if targets is None else targets
+    if not isinstance(targets, Targets):
+        raise InputError(f"targets must be a qprr.control.gains.Targets, got {type(targets).__name__}")
+    kwargs = derive(controller, Authority.from_platform(platform), targets)
+    for arg, fields in (overrides or {}).items():
+        if arg not in kwargs:
+            raise UnknownNameError(f"gain argument of {controller!r}", arg, tuple(kwargs))
+        kwargs[arg] = _replaced(kwargs[arg], fields, platform.n_xi, f"{controller}.{arg}")
+    return kwargs
+
+
+def _replaced(obj, fields: dict, n_xi: int, where: str):
+    if not isinstance(fields, dict):
+        raise InputError(f"gain overrides of {where} must be a table of field = value, got {fields!r}")
+    valid = tuple(f.name for f in dataclasses.fields(obj))
+    changes = {}
+    for name, value in fields.items():
+        if name not in valid:
+            raise UnknownNameError(f"field of {where}", name, valid)
+        current = getattr(obj, name)
+        if isinstance(current, tuple) and isinstance(value, (int, float)) and len(current) == n_xi:
+            value = (float(value),) * n_xi
+        changes[name] = tuple(value) if isinstance(value, list) else value
+    return dataclasses.replace(obj, **changes)
+
+
+def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[str, object]:
+    """Constructor keyword arguments from a TOML file: ``[targets]`` (fields of :class:`Targets`) re-derives,
+    then ``[<controller>.<argument>]`` tables replace fields (e.g. ``[idc.gains] kp = [...]``).
+
+    A file for another controller's tables only raises (it would silently change nothing)."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"gains file {str(path)!r} does not exist (a TOML file: [targets] and [<controller>.gains] tables)")
+    with path.open("rb") as fh:
+        try:
+            table = tomllib.load(fh)
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"gains file {str(path)!r}: not valid TOML ({exc})") from exc
+    extra = [k for k in table if k not in ("targets", *DERIVED)]
+    if extra:
+        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *DERIVED))
+    if set(table) - {"targets"} and controller not in table:
+        raise InputError(
+            f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
+            f"{controller!r}: add a [{controller}.gains] table"
+        )
+    try:
+        targets = Targets(**table.get("targets", {}))
+    except TypeError as exc:
+        raise InputError(f"gains file {str(path)!r}: [targets] takes {[f.name for f in dataclasses.fields(Targets)]} ({exc})") from exc
+    return platform_gains(controller, platform, targets, table.get(controller))
+
+
+def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
+    """Readable lines of a controller's gain arguments: one row per coordinate ``names`` (xi's names)."""
+    lines = []
+    for arg, obj in kwargs.items():
+        lines.append(f"{arg}: {type(obj).__name__}")
+        fields = dataclasses.fields(obj) if dataclasses.is_dataclass(obj) else ()
+        vectors = [f.name for f in fields if isinstance(getattr(obj, f.name), tuple) and len(getattr(obj, f.name)) == len(names)]
+        if vectors:
+            lines.append(f"  {'coordinate':<14}" + "".join(f"{v:>12}" for v in vectors))
+            for i, n in enumerate(names):
+                lines.append(f"  {n:<14}" + "".join(f"{getattr(obj, v)[i]:>12.5g}" for v in vectors))
+        for f in fields:
+            if f.name in vectors:
+                continue
+            value = getattr(obj, f.name)
+            shown = np.round(np.asarray(value, dtype=float), 6).tolist() if value is not None else None
+            lines.append(f"  {f.name} = {shown}")
+    return lines
+
+
+__all__ = ["DERIVED", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]

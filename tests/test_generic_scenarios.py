@@ -1,0 +1,93 @@
+"""The generic missions of qprr.missions on four platforms: each reaches its physical check, names its own coordinates.
+
+Runs are short (3 s at 1 kHz, targets scaled down): the missions scale their timing with the duration.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import qprr
+from qprr.missions import read_mission
+from qprr.scenarios import MISSIONS, SCENARIOS, run
+
+PLATFORMS = ("q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
+QPRR_WORDS = ("r0", "theta2", "theta3", "q-prr", "Q-PRR")
+
+
+@pytest.fixture(scope="module", params=PLATFORMS)
+def platform(request):
+    return qprr.build(request.param) if request.param == "HEX-RRR" else qprr.load(request.param)
+
+
+def small_mission(platform) -> dict:
+    """Climb to 1 m, fly 0.3 m along x, reach the first arm joint out; grasp 10 % of the mass at 1.3 s, release at 1.8 s."""
+    q = platform.neutral_q()[7:]
+    hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q + 1.0)
+    return {
+        "phase": [
+            {"coordinate": "z", "start": 0.0, "end": 1.2, "target": 1.0},
+            {"coordinate": "x", "start": 1.2, "end": 2.0, "target": 0.3},
+            {"coordinate": platform.arm_names[0], "start": 1.0, "end": 2.2, "target": float(q[0] + 0.4 * (hi[0] - q[0]))},
+        ],
+        "payload": [{"time": 1.3, "mass": 0.1 * platform.total_mass}, {"time": 1.8, "mass": 0.0}],
+    }
+
+
+OPTIONS = {"fly-to": {"target": (0.3, 0.2, 1.0)}, "motor-lag": {"target": (0.3, 0.2, 1.0)}}
+
+
+def check(name: str, m: dict) -> None:
+    """The physical check of each mission (metrics recorded by qprr.missions)."""
+    if name in ("takeoff-hover", "fly-to", "motor-lag"):  # reaches the target
+        assert m["final_position_error"] < 0.01 and m["final_arm_error"] < 0.02
+    elif name == "mission":
+        assert m["final_position_error"] < 0.05 and m["final_arm_error"] < 0.05
+    elif name in ("grasp-drop", "hover-pulses"):  # disturbed, then recovers
+        assert m["max_position_error"] > 0.005 and m["final_position_error"] < 0.5 * m["max_position_error"]
+    elif name == "ee-push":  # impedance and wall in series: F = penetration K k / (K + k)
+        assert m["contact_force"] == pytest.approx(m["predicted_force"], rel=0.05)
+    elif name == "hover-wind":
+        assert 1e-3 < m["max_position_error"] < 0.2
+    elif name == "hover-noise":
+        assert m["max_position_error"] < 0.02
+    else:
+        raise AssertionError(f"no check for {name}")
+
+
+@pytest.mark.parametrize("name", [s.name for s in MISSIONS])
+def test_mission_reaches_its_check(platform, name):
+    options = {"mission": small_mission(platform)} if name == "mission" else OPTIONS.get(name, {})
+    res = run(name, platform=platform, duration=3.0, **options)
+    assert res.status == "ok" and res.platform == platform.name
+    check(name, res.metrics)
+    assert tuple(res.names) == platform.xi_names and tuple(res.rmse()) == platform.xi_names
+    if "theta2" not in platform.xi_names:  # not the Q-PRR
+        text = "\n".join([*SCENARIOS[name].summary(res), " ".join(res.rmse()), res.platform, res.scenario])
+        assert not any(w in text for w in QPRR_WORDS), text
+
+
+def test_mission_as_data_is_read_and_checked(tmp_path):
+    """A mission file of [[phase]] and [[payload]] tables; a phase with a missing key, an unknown table, a missing file raise."""
+    f = tmp_path / "m.toml"
+    f.write_text('[[phase]]\ncoordinate = "z"\nstart = 0.0\nend = 2.0\ntarget = 1.5\n[[payload]]\ntime = 1.0\nmass = 0.2\n')
+    phases, payload = read_mission(f)
+    assert phases[0].coordinate == "z" and phases[0].value == 1.5 and payload.mass_at(1.5) == 0.2
+    with pytest.raises(qprr.QprrError, match="needs exactly"):
+        read_mission({"phase": [{"coordinate": "z", "start": 0.0, "end": 1.0}]})
+    with pytest.raises(qprr.QprrError, match="mission table"):
+        read_mission({"phase": [], "phases": []})
+    with pytest.raises(qprr.QprrError, match="does not exist"):
+        read_mission(tmp_path / "none.toml")
+
+
+def test_mission_unknown_coordinate_names_the_platforms_own():
+    p = qprr.load("borinot_flying_arm_2")
+    with pytest.raises(qprr.QprrError, match="flying_arm_2__j_bl_link1"):
+        run("mission", platform=p, duration=1.0, mission={"phase": [{"coordinate": "theta2", "start": 0.0, "end": 1.0, "target": 0.1}]})
+
+
+def test_every_mission_takes_any_platform_and_the_gains_option():
+    for s in MISSIONS:
+        assert s.platforms is None and "gains" in s.options and s.options["gains"].default == "platform"
