@@ -6,7 +6,6 @@ Figures are drawn with matplotlib's object API (no pyplot), headless.
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import subprocess
 import sys
