@@ -489,7 +489,7 @@ def _path(ax, res):
     half *= 1.05
     for setter, m in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), mid):
         setter(m - half, m + half)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_box_aspect((1, 1, 1), zoom=0.85)  # room for the axis labels inside the panel
     if unit == "mm":
         ax.set_xlabel("x - x0 [mm]")
         ax.set_ylabel("y - y0 [mm]")
