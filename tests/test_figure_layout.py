@@ -173,3 +173,29 @@ def test_wheeled_straight_line_shows_the_robot():
     labels = [t.get_text() for t in axs[0].get_legend().get_texts()]
     assert any(lab.startswith("robot, drawn x") for lab in labels)  # enlarged, and says so
     assert {"fixed wheel", "centred steerable wheel"} <= set(labels)
+
+
+# ============================================================================ the viewer's camera
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5"])
+def test_viewer_camera_frames_any_platform(name):
+    """Every point of the robot (rotor discs, arm, end effector) lies inside the initial camera's cone, with room to spare."""
+    viewer = pytest.importorskip("qprr.viz.viewer", reason="pip install 'qprr[viewer]'", exc_type=qprr.errors.MissingDependencyError)
+    from qprr.charts import xi_to_q
+    from qprr.viz.geometry import rotor_radius
+    from qprr.viz.scene import robot_pose
+
+    platform = qprr.load(name)
+    xi = np.zeros(platform.n_xi)
+    xi[2] = 1.0
+    pose = robot_pose(platform, platform.data(), xi_to_q(xi))
+    look_at, position = viewer.camera_framing(pose, rotor_radius(platform))
+    axis = (look_at - position) / np.linalg.norm(look_at - position)
+    r = rotor_radius(platform)
+    pts = np.vstack([pose.rotor_world + r * s for s in np.eye(3)] + [pose.rotor_world - r * s for s in np.eye(3)]
+                    + [pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :]])
+    rel = pts - position
+    angle = np.arccos(np.clip(rel @ axis / np.linalg.norm(rel, axis=1), -1.0, 1.0))
+    assert 0.3 * viewer.CAMERA_FOV / 2 < angle.max() < 0.9 * viewer.CAMERA_FOV / 2, (name, np.degrees(angle.max()))  # fills the view
+    centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0)) - position
+    assert np.arccos(min(1.0, centre @ axis / np.linalg.norm(centre))) < np.radians(1.0)  # the box's centre in the middle of the view
+    assert np.linalg.norm(look_at - pose.p_base_world) < 2.0 * np.ptp(pts, axis=0).max()  # aimed at the robot, not the origin
