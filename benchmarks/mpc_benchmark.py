@@ -46,6 +46,7 @@ from qprr.thesis.control_scenarios import thrust_margins  # noqa: E402
 from qprr.thesis.missions import NAMES, static_mission  # noqa: E402
 from qprr.thesis.scenarios import flight_controller  # noqa: E402
 from qprr.viz import figure_path, new_figure  # noqa: E402
+from qprr.viz.plots import legend  # noqa: E402
 
 
 def run(platform, ctrl, traj, duration) -> SimResult:
@@ -183,19 +184,19 @@ def plot(path, idc, mpcs, reach, lo, hi) -> Path:
         a.set_title(f"static mission: {NAMES[i]} error")
         a.set_ylabel(f"{NAMES[i]}_d - {NAMES[i]} [mm]")
         a.set_xlabel("t [s]")
-        a.legend()
+        legend(a)  # below the panel: never over the curves
     res_i, res_r = reach[(2.0, "idc")], reach[(2.0, "mpc")]
     a = ax[1, 0]
     a.plot(res_i.t, res_i.f[:, 0], color="tab:red", label="idc: rotor 1 applied")
     for j in range(4):
         a.plot(res_r.t, res_r.f[:, j], color="tab:blue", lw=1, label="mpc: rotors 1-4 applied" if j == 0 else None)
     for b in (lo, hi):
-        a.axhline(b, color="k", ls="--", lw=0.8)
+        a.axhline(b, color="k", ls="--", lw=0.8, label="rotor bounds" if b == lo else None)
     a.set_xlim(0.3, 2.5)
     a.set_title("aggressive reach (climb 2 m in 1 s): rotor thrusts and bounds")
     a.set_ylabel("thrust [N]")
     a.set_xlabel("t [s]")
-    a.legend(fontsize=8)
+    legend(a)
     a = ax[1, 1]
     for res, name, c in ((res_i, "idc", "tab:red"), (res_r, "mpc", "tab:blue")):
         a.plot(res.t, res.xi[:, 2], color=c, label=f"{name} z [m]")
@@ -204,8 +205,8 @@ def plot(path, idc, mpcs, reach, lo, hi) -> Path:
     a.plot(res_r.t, res_r.xi_d[:, 7], "k--", lw=0.8)
     a.set_title("aggressive reach (climb 2 m): z and theta2")
     a.set_xlabel("t [s]")
-    a.legend(fontsize=8)
-    fig.tight_layout()
+    a.set_ylabel("z [m], theta2 [rad]")
+    legend(a)
     fig.savefig(path, dpi=90)
     return path
 
