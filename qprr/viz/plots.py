@@ -653,9 +653,8 @@ def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, 
         draw(p, a)
     if title is None:
         title = default_title(res)
-    if title:
-        size = 10.5 if n > 1 else 9
-        fig.suptitle(wrap_title(title, fig.get_figwidth(), size), fontsize=size)
+    if title:  # wrapped to the page: a single panel's page is narrower than the RMSE line
+        fig.suptitle(wrap_title(title, fig.get_figwidth(), 10.5 if n > 1 else 9), fontsize=10.5 if n > 1 else 9)
     if path is None:
         return fig
     return save_figure(fig, path, dpi)
