@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import qprr
-from qprr.analysis import hover, workspace
+from qprr.analysis import hover, singularity, workspace
 from qprr.analysis import plots as analysis_plots
 from qprr.scenarios import run
 from qprr.viz import new_figure, plot_result
@@ -150,6 +150,7 @@ def test_hover_and_workspace_maps():
     platform = qprr.load()
     check_layout(analysis_plots.hover_figure(hover(platform, n_samples=1500)), "hover map")
     check_layout(analysis_plots.workspace_figure(workspace(platform, n_samples=2000)), "workspace map")
+    check_layout(analysis_plots.singularity_figure(singularity(platform, n_samples=2000)), "singularity map")  # joints in rad / m
 
 
 def test_hover_map_constant_field_and_yes_no_map():

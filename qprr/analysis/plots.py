@@ -193,12 +193,13 @@ def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
         colour = COLOURS[c % len(COLOURS)]
         if r.occupancy is not None and r.basis.shape[0] == 2 and np.allclose(np.abs(r.basis), np.eye(3)[[0, 2]]):
             grid, o, h = r.occupancy
-            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, f"[{key[0]}] {r.label}, m = {r.mass:g} kg: {r.measure}")
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4,
+                         f"{plain(r.label)}, payload {r.mass:g} kg: {measure_text(r.measure)}")
         else:
             step = max(1, len(r.com) // 20000)
             loc = r.com[::step]
             ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour,
-                       label=f"[{key[0]}] {r.label}, m = {r.mass:g} kg")
+                       label=f"{plain(r.label)}, payload {r.mass:g} kg")
     ax.axvline(0.0, color="k", lw=0.6, ls="--", label="thrust axis")
     ax.set_xlabel("x_cm in B [m]")
     ax.set_ylabel("z_cm in B [m]")
@@ -223,8 +224,8 @@ def plot_balance(result: BalanceResult, ax=None, axes=None):
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
     im = ax.pcolormesh(a0, a1, vals.T, shading="nearest", cmap="coolwarm")
     ax.figure.colorbar(im, ax=ax, label=label)
-    ax.set_xlabel(f"{g.names[axes[0]]}")
-    ax.set_ylabel(f"{g.names[axes[1]]}")
+    ax.set_xlabel(g.label(axes[0]))
+    ax.set_ylabel(g.label(axes[1]))
     ax.set_title(f"CoG on the thrust axis: {100 * result.fraction_configurations:.1f}% of the grid", fontsize=9)
     return ax
 
@@ -236,11 +237,12 @@ def plot_balanced_workspace(result: BalanceResult, ax=None):
     step = max(1, int(ok.sum()) // 40000)
     ax.scatter(result.ee_body[ok][::step, 0], result.ee_body[ok][::step, 2], s=0.3, color="tab:green", label="CoG balanced")
     if result.fraction_workspace is not None:
-        ax.text(0.02, 0.98, f"{100 * result.fraction_workspace.value:.2f} +- {100 * result.fraction_workspace.error:.2g}% of the workspace",
-                transform=ax.transAxes, va="top", fontsize=8)
+        ax.scatter([], [], s=0, label=f"{100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % "
+                   "of the workspace")
     ax.set_xlabel("x_B [m]")
     ax.set_ylabel("z_B [m]")
     ax.set_aspect("equal")
+    _legend_below(ax)
     ax.set_title("end-effector positions with the CoG on the thrust axis", fontsize=9)
     return ax
 
@@ -309,8 +311,8 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     fig.colorbar(im, ax=axs[1], label="distance to the singular set [rad or m/L]")
     axs[1].set_title(f"distance to the singular set (L = {result.length:.3g} m)", fontsize=8)
     for ax in axs[:2]:
-        ax.set_xlabel(g.names[axes[0]])
-        ax.set_ylabel(g.names[axes[1]])
+        ax.set_xlabel(g.label(axes[0]))
+        ax.set_ylabel(g.label(axes[1]))
     # (c): det_system along one joint, at the first / middle / last value of another
     sa = system_axis if system_axis is not None else axes[0] if len(free) < 3 else free[1]
     va = next((a for a in free if a != sa), sa)
@@ -320,7 +322,7 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
         axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g}")
     for j, (lab, (x, y)) in enumerate((reference or {}).items()):
         axs[2].plot(x, y, color=COLOURS[j], ls="--", lw=1.0, label=lab)
-    axs[2].set_xlabel(g.names[sa])
+    axs[2].set_xlabel(g.label(sa))
     axs[2].set_ylabel("det(J J^T), J = [base | arm] at zero Euler angles")
     _legend_below(axs[2])
     axs[2].set_title("the system's det(J J^T) (Thesis (4.44))" + (": never 0" if result.det_system.min() > 0 else ""), fontsize=8)
@@ -501,8 +503,8 @@ def opspace_figure(result: OpSpaceMap):
     for ax, (vals, label, cmap) in zip(axs, panels):
         im = ax.pcolormesh(a0, a1, vals.reshape(g.shape)[sl].T, shading="nearest", cmap=cmap)
         fig.colorbar(im, ax=ax, label=label)
-        ax.set_xlabel(g.names[axes[0]])
-        ax.set_ylabel(g.names[axes[1]])
+        ax.set_xlabel(g.label(axes[0]))
+        ax.set_ylabel(g.label(axes[1]))
     others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
     fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
                  + (f", {others}" if others else ""))
