@@ -109,10 +109,13 @@ class JointGrid:
     locked: tuple[str, ...]
     kinds: tuple[str, ...] = ()
 
+    def unit(self, k: int) -> str:
+        """Unit of joint ``k``: m for a prismatic joint, rad for a revolute one ("m or rad" when unknown)."""
+        return {"prismatic": "m", "revolute": "rad"}.get(self.kinds[k] if k < len(self.kinds) else "", "m or rad")
+
     def label(self, k: int) -> str:
-        """Axis label of joint ``k``: its name and unit (m for a prismatic joint, rad for a revolute one)."""
-        unit = {"prismatic": "m", "revolute": "rad"}.get(self.kinds[k] if k < len(self.kinds) else "", "m or rad")
-        return f"{self.names[k]} [{unit}]"
+        """Axis label of joint ``k``: its name and unit."""
+        return f"{self.names[k]} [{self.unit(k)}]"
 
     @property
     def shape(self) -> tuple[int, ...]:

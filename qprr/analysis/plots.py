@@ -292,7 +292,7 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     fig = new_figure((16, 4.6))
     axs = fig.subplots(1, 3)
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
-    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g} {g.unit(a)}" for a in free if a not in axes)
     if result.det_task is not None:
         vals, label = result.det_task.reshape(g.shape)[sl], f"det J_t [m^{result.rank}]"
         lim = np.abs(vals).max()
@@ -319,7 +319,7 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     for j, idx in enumerate((0, len(g.axes[va]) // 2, len(g.axes[va]) - 1)):
         s2 = _slice_index(g, (sa,), {va: g.axes[va][idx]})
         y = result.det_system.reshape(g.shape)[s2]
-        axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g}")
+        axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g} {g.unit(va)}")
     for j, (lab, (x, y)) in enumerate((reference or {}).items()):
         axs[2].plot(x, y, color=COLOURS[j], ls="--", lw=1.0, label=lab)
     axs[2].set_xlabel(g.label(sa))
@@ -505,7 +505,7 @@ def opspace_figure(result: OpSpaceMap):
         fig.colorbar(im, ax=ax, label=label)
         ax.set_xlabel(g.label(axes[0]))
         ax.set_ylabel(g.label(axes[1]))
-    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g} {g.unit(a)}" for a in free if a not in axes)
     fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
                  + (f", {others}" if others else ""))
     return fig
