@@ -40,7 +40,7 @@ for platform in (qprr.load("q-prr", layout="x"), qprr.build("HEX-RRR"), qprr.loa
     ax.plot(res.t, 1e3 * res.x_cm[:, 0], label=platform.name)
     plot_result(res, out / f"run_{platform.name.split(' ')[0].lower()}.png")
 ax.set_xlabel("t [s]")
-ax.set_ylabel("$x_{cm}$, CoM in B [mm]")
+ax.set_ylabel("$x_{cm}$, CoG offset in B [mm]")
 ax.set_title("the same mission on three platforms")
 ax.grid(alpha=0.3)
 ax.legend()

@@ -6,7 +6,6 @@ Figures are drawn with matplotlib's object API (no pyplot), headless.
 from __future__ import annotations
 
 import dataclasses
-import math
 import re
 import subprocess
 import sys
@@ -43,7 +42,7 @@ def test_page_has_units_on_every_axis(res, tmp_path):
         else:
             labels = (a.get_ylabel(),)
         for lab in labels:
-            assert re.search(r"\[(m|mm|deg|N|N m|kg|s)\]", lab), (a.get_title(), lab)
+            assert re.search(r"\[(m|mm|rad|N|N m|kg|s)\]", lab), (a.get_title(), lab)
     for a in fig.axes:  # twin axes share the host's x axis: only hosts carry the time label
         if getattr(a, "name", "") != "3d" and a.get_title():
             assert a.get_xlabel().startswith("t [s]")
@@ -51,15 +50,17 @@ def test_page_has_units_on_every_axis(res, tmp_path):
     assert path == tmp_path / "page.png" and path.read_bytes()[:4] == b"\x89PNG"
 
 
-def test_angles_in_degrees_lengths_in_metres_or_millimetres(res):
+def test_angles_in_radians_lengths_in_metres_or_millimetres(res):
+    """One angle unit in every output (docs/guide.md): radians, as the CLI prints them."""
     fig = plot_result(res, panels=("attitude", "arm"))
     att, arm = fig.axes[0], fig.axes[1]
-    assert att.get_ylabel() == "attitude [deg]"
+    assert att.get_ylabel() == "attitude [rad]"
     theta = next(line for line in att.get_lines() if line.get_label() == r"$\theta$")
-    assert np.array_equal(theta.get_ydata(), res.xi[:, 4] * 180.0 / math.pi)
-    # the Q-PRR's arm: a prismatic joint (mm, |r0| < 0.1 m) and two revolute ones (deg) on a labelled twin axis
+    assert np.array_equal(theta.get_ydata(), res.xi[:, 4])
+    # the Q-PRR's arm: a prismatic joint (mm, |r0| < 0.1 m) and two revolute ones (rad) on a labelled twin axis
     twins = [a for a in fig.axes[2:]]
-    assert arm.get_ylabel() == "lengths [mm]" and twins and twins[0].get_ylabel() == "angles [deg]"
+    assert arm.get_ylabel() == "lengths [mm]" and twins and twins[0].get_ylabel() == "angles [rad]"
+    assert arm.get_zorder() > twins[0].get_zorder()  # the lengths (r0) are drawn above the angles, never hidden
     r0 = next(line for line in arm.get_lines() if line.get_label().startswith("$r_{0}$"))
     assert np.allclose(r0.get_ydata(), 1e3 * res.xi[:, 6], rtol=0, atol=1e-15)
 
@@ -80,7 +81,7 @@ def test_single_panels_into_your_axes(res):
     a2 = fig.add_subplot(1, 2, 2, projection="3d")
     out = plot_result(res, panels=("cog", "path"), ax=(a1, a2))
     assert out is fig
-    assert a1.get_ylabel() == "CoM in B [mm]"
+    assert a1.get_ylabel() == "CoG offset in B [mm]"
     xcm = a1.get_lines()[0]
     assert np.array_equal(xcm.get_ydata(), 1e3 * res.x_cm[:, 0])
     with pytest.raises(InputError, match="3d"):

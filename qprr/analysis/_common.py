@@ -102,11 +102,21 @@ class JointGrid:
 
     ``shape`` = (len(axes[0]), ...); ``size`` its product; configurations are in C order
     (the last joint varies fastest).  ``locked``: names of the joints held at one value.
+    ``kinds``: "prismatic" or "revolute" per joint (the units of the maps' axes: m or rad).
     """
 
     names: tuple[str, ...]
     axes: tuple[np.ndarray, ...]
     locked: tuple[str, ...]
+    kinds: tuple[str, ...] = ()
+
+    def unit(self, k: int) -> str:
+        """Unit of joint ``k``: m for a prismatic joint, rad for a revolute one ("m or rad" when unknown)."""
+        return {"prismatic": "m", "revolute": "rad"}.get(self.kinds[k] if k < len(self.kinds) else "", "m or rad")
+
+    def label(self, k: int) -> str:
+        """Axis label of joint ``k``: its name and unit."""
+        return f"{self.names[k]} [{self.unit(k)}]"
 
     @property
     def shape(self) -> tuple[int, ...]:
@@ -234,7 +244,7 @@ def make_grid(platform: Platform, n_samples: int, locked: Mapping[str, float] | 
     free = [k for k, j in enumerate(platform.arm) if j.name not in locked]
     if not free:
         axes = tuple(np.array([locked[j.name]]) for j in platform.arm)
-        return JointGrid(platform.arm_names, axes, tuple(locked))
+        return JointGrid(platform.arm_names, axes, tuple(locked), tuple(j.kind for j in platform.arm))
     lever = lever_lengths(platform, rng)
     span = np.array([lever[k] * (rng[k, 1] - rng[k, 0]) for k in free])
     moving = span > 0
@@ -255,7 +265,7 @@ def make_grid(platform: Platform, n_samples: int, locked: Mapping[str, float] | 
         else:
             i = free.index(k)
             axes.append(np.linspace(rng[k, 0], rng[k, 1], int(counts[i])))
-    return JointGrid(platform.arm_names, tuple(axes), tuple(locked))
+    return JointGrid(platform.arm_names, tuple(axes), tuple(locked), tuple(j.kind for j in platform.arm))
 
 
 # ------------------------------------------------------------------------------ progress

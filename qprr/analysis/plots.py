@@ -7,11 +7,12 @@ Every ``plot_*`` function draws into an ``ax`` (a new figure if None) and return
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 
 import numpy as np
 
-from ..viz.plots import new_figure
+from ..viz.plots import legend, new_figure, plain, tidy_3d
 from .capacity import LIMITS, CapacityResult
 from .cog import BalanceResult, CoGResult
 from .hover import HoverResult
@@ -38,6 +39,26 @@ def _axis_names(basis: np.ndarray) -> list[str]:
     return out
 
 
+_POWERS = {"^2": "\u00b2", "^3": "\u00b3"}
+
+
+def measure_text(m) -> str:
+    """A length, area or volume with its error bar, as a reader writes it: ``0.2004 ± 0.0004 m²``
+    (the value to the error bar's first digit, the error with one significant figure)."""
+    unit = m.unit
+    for k, v in _POWERS.items():
+        unit = unit.replace(k, v)
+    if not (np.isfinite(m.error) and m.error > 0):
+        return f"{m.measure:.4g} {unit}"
+    digits = max(0, -int(np.floor(np.log10(m.error))))
+    return f"{m.measure:.{digits}f} ± {m.error:.1g} {unit}"
+
+
+def _legend_below(ax) -> None:
+    """The legend under the axes (outside the regions it names)."""
+    legend(ax, ncol=1)
+
+
 def _cells_image(ax, grid, origin, h, colour, alpha, label=None):
     """Fill covered cells of a 2-D occupancy grid."""
     from matplotlib.colors import ListedColormap
@@ -61,20 +82,21 @@ def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | 
         grid, o, h = r.outline if r.outline is not None else r.occupancy
         if r.dim == 2:  # hull coordinates shifted back to B's axes
             _cells_image(ax, grid, o + r.origin @ r.basis.T, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
-                         f"[{i}] {r.label}: {r.measure}")
+                         f"{plain(r.label)}: {measure_text(r.measure)}")
             for ln in r.boundary:
                 loc = ln @ r.basis.T
                 ax.plot(loc[:, 0], loc[:, 1], color=COLOURS[i % len(COLOURS)], lw=0.8)
         elif r.dim == 3:  # the x-z projection of the covered cells (any y)
             proj = grid.any(axis=1)
-            _cells_image(ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45, f"[{i}] {r.label}: {r.measure} (x-z projection)")
+            _cells_image(ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45,
+                         f"{plain(r.label)}: {measure_text(r.measure)} (x-z projection)")
     r0 = result.regions[0]
     names = _axis_names(r0.basis) if r0.dim == 2 else ["x_B [m]", "z_B [m]"]
     ax.set_xlabel(names[0])
     ax.set_ylabel(names[1] if len(names) > 1 else "")
     ax.set_aspect("equal")
-    ax.legend(loc="lower left", fontsize=7)
-    ax.set_title(title or f"workspace of {result.frame} in B")
+    _legend_below(ax)
+    ax.set_title(title or f"workspace of {plain(result.frame)} in B", fontsize=10)
     return ax
 
 
@@ -87,13 +109,14 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
         if r.hover_occupancy is None:
             continue
         grid, o, h = r.hover_occupancy
-        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55, f"[{i}] {r.label}: {r.hover_volume}")
+        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
+                     f"{plain(r.label)}: {measure_text(r.hover_volume)}")
     ax.axvline(0.0, color="k", lw=0.6, ls="--")
     ax.set_xlabel("distance to the yaw axis (signed) [m]")
     ax.set_ylabel("z (world, from the base) [m]")
     ax.set_aspect("equal")
-    ax.legend(loc="lower left", fontsize=7)
-    ax.set_title("hover workspace: section through the yaw axis")
+    _legend_below(ax)
+    ax.set_title("hover workspace: section through the yaw axis", fontsize=10)
     return ax
 
 
@@ -122,7 +145,8 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
     ax.set_box_aspect(None, zoom=0.88)  # room for the z label inside the panel
-    ax.set_title(f"hover workspace [{region}] {r.label}: {r.hover_volume}", fontsize=8)
+    tidy_3d(ax)
+    ax.set_title(f"hover workspace, {plain(r.label)}:\n{measure_text(r.hover_volume)}", fontsize=9)
     return ax
 
 
@@ -145,11 +169,12 @@ def workspace_figure(result: WorkspaceResult):
     plot_workspace(result, fig.add_subplot(2, 3, 1), [0], title=f"(a) {result.regions[0].label}")
     plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
     ax3 = fig.add_subplot(2, 3, 3)
-    plot_workspace(result, ax3, [0, 1], title="(c) gained by the free joints")
-    if 1 in result.gain:
+    gained = "(c) gained by the free joints"
+    if 1 in result.gain:  # the gain belongs to the panel's title, not to a note floating over the regions
         g, d = result.gain[1], result.difference[1]
-        ax3.text(0.02, 0.98, f"gain x{g.value:.3f} +- {g.error:.2g}\n+{d[0]:.4g} +- {d[1]:.1g} {result.regions[0].measure.unit}",
-                 transform=ax3.transAxes, va="top", fontsize=8)
+        unit = measure_text(dataclasses.replace(result.regions[0].measure, measure=d[0], error=d[1]))
+        gained += f":\nx{g.value:.3f} ± {g.error:.1g} (+ {unit})"
+    plot_workspace(result, ax3, [0, 1], title=gained)
     plot_hover_workspace(result, fig.add_subplot(2, 3, 4))
     plot_hover_solid(result, fig.add_subplot(2, 3, 5, projection="3d"), 0)
     plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
@@ -168,16 +193,17 @@ def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
         colour = COLOURS[c % len(COLOURS)]
         if r.occupancy is not None and r.basis.shape[0] == 2 and np.allclose(np.abs(r.basis), np.eye(3)[[0, 2]]):
             grid, o, h = r.occupancy
-            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, f"[{key[0]}] {r.label}, m = {r.mass:g} kg: {r.measure}")
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4,
+                         f"{plain(r.label)}, payload {r.mass:g} kg: {measure_text(r.measure)}")
         else:
             step = max(1, len(r.com) // 20000)
             loc = r.com[::step]
             ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour,
-                       label=f"[{key[0]}] {r.label}, m = {r.mass:g} kg")
+                       label=f"{plain(r.label)}, payload {r.mass:g} kg")
     ax.axvline(0.0, color="k", lw=0.6, ls="--", label="thrust axis")
     ax.set_xlabel("x_cm in B [m]")
     ax.set_ylabel("z_cm in B [m]")
-    ax.legend(fontsize=6, loc="lower left")
+    _legend_below(ax)
     ax.set_title(title or f"CoG regions of {result.platform_name}")
     return ax
 
@@ -198,8 +224,8 @@ def plot_balance(result: BalanceResult, ax=None, axes=None):
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
     im = ax.pcolormesh(a0, a1, vals.T, shading="nearest", cmap="coolwarm")
     ax.figure.colorbar(im, ax=ax, label=label)
-    ax.set_xlabel(f"{g.names[axes[0]]}")
-    ax.set_ylabel(f"{g.names[axes[1]]}")
+    ax.set_xlabel(g.label(axes[0]))
+    ax.set_ylabel(g.label(axes[1]))
     ax.set_title(f"CoG on the thrust axis: {100 * result.fraction_configurations:.1f}% of the grid", fontsize=9)
     return ax
 
@@ -211,11 +237,12 @@ def plot_balanced_workspace(result: BalanceResult, ax=None):
     step = max(1, int(ok.sum()) // 40000)
     ax.scatter(result.ee_body[ok][::step, 0], result.ee_body[ok][::step, 2], s=0.3, color="tab:green", label="CoG balanced")
     if result.fraction_workspace is not None:
-        ax.text(0.02, 0.98, f"{100 * result.fraction_workspace.value:.2f} +- {100 * result.fraction_workspace.error:.2g}% of the workspace",
-                transform=ax.transAxes, va="top", fontsize=8)
+        ax.scatter([], [], s=0, label=f"{100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % "
+                   "of the workspace")
     ax.set_xlabel("x_B [m]")
     ax.set_ylabel("z_B [m]")
     ax.set_aspect("equal")
+    _legend_below(ax)
     ax.set_title("end-effector positions with the CoG on the thrust axis", fontsize=9)
     return ax
 
@@ -265,7 +292,7 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     fig = new_figure((16, 4.6))
     axs = fig.subplots(1, 3)
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
-    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g} {g.unit(a)}" for a in free if a not in axes)
     if result.det_task is not None:
         vals, label = result.det_task.reshape(g.shape)[sl], f"det J_t [m^{result.rank}]"
         lim = np.abs(vals).max()
@@ -284,20 +311,20 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
     fig.colorbar(im, ax=axs[1], label="distance to the singular set [rad or m/L]")
     axs[1].set_title(f"distance to the singular set (L = {result.length:.3g} m)", fontsize=8)
     for ax in axs[:2]:
-        ax.set_xlabel(g.names[axes[0]])
-        ax.set_ylabel(g.names[axes[1]])
+        ax.set_xlabel(g.label(axes[0]))
+        ax.set_ylabel(g.label(axes[1]))
     # (c): det_system along one joint, at the first / middle / last value of another
     sa = system_axis if system_axis is not None else axes[0] if len(free) < 3 else free[1]
     va = next((a for a in free if a != sa), sa)
     for j, idx in enumerate((0, len(g.axes[va]) // 2, len(g.axes[va]) - 1)):
         s2 = _slice_index(g, (sa,), {va: g.axes[va][idx]})
         y = result.det_system.reshape(g.shape)[s2]
-        axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g}")
+        axs[2].plot(g.axes[sa], y, color=COLOURS[j], lw=2.0, alpha=0.6, label=f"model, {g.names[va]} = {g.axes[va][idx]:.3g} {g.unit(va)}")
     for j, (lab, (x, y)) in enumerate((reference or {}).items()):
         axs[2].plot(x, y, color=COLOURS[j], ls="--", lw=1.0, label=lab)
-    axs[2].set_xlabel(g.names[sa])
+    axs[2].set_xlabel(g.label(sa))
     axs[2].set_ylabel("det(J J^T), J = [base | arm] at zero Euler angles")
-    axs[2].legend(fontsize=7)
+    _legend_below(axs[2])
     axs[2].set_title("the system's det(J J^T) (Thesis (4.44))" + (": never 0" if result.det_system.min() > 0 else ""), fontsize=8)
     fig.suptitle(f"{result.platform_name}: singularities (Thesis (4.42)-(4.45))")
     return fig
@@ -305,6 +332,8 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
 
 # ================================================================================ hover / capacity
 def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, reducer="max"):
+    """The best value per cell; a field that is the same in every cell is drawn in one colour with its value
+    in the title (a colour bar over a constant reads as "no data"); returns the image."""
     from ._common import best_per_cell
 
     best, _, o = best_per_cell(coords, values if reducer == "max" else -values, h)
@@ -316,10 +345,35 @@ def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, red
             best = np.nanmax(best, axis=1) if reducer == "max" else np.nanmin(best, axis=1)
         o = o[[0, 2]]
     extent = (o[0], o[0] + best.shape[0] * h, o[1], o[1] + best.shape[1] * h)
-    im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
-    ax.figure.colorbar(im, ax=ax, label=label)
+    finite = best[np.isfinite(best)]
+    lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 0.0)
+    if isinstance(cmap, str) and hi - lo <= 1e-9 * max(1.0, abs(hi)):
+        from matplotlib.colors import ListedColormap
+
+        im = ax.imshow(np.where(np.isfinite(best), 1.0, np.nan).T, origin="lower", extent=extent,
+                       cmap=ListedColormap(["tab:cyan"]), alpha=0.6, interpolation="nearest")
+        ax.fill([], [], color="tab:cyan", alpha=0.6, label=f"{label}: {hi:.4g} in every cell (constant)")
+        _legend_below(ax)
+    else:
+        im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+        if label:
+            ax.figure.colorbar(im, ax=ax, label=label)
     ax.set_aspect("equal")
     return im
+
+
+def _yes_no_map(ax, coords, ok, h, yes: str, no: str) -> None:
+    """Cells where ``ok`` holds for some sample (green) or for none (red), with a two-entry legend, not a colour bar."""
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    cmap = ListedColormap(["tab:red", "tab:green"])
+    im = _workspace_map(ax, coords, ok.astype(float), h, cmap, "")
+    im.set_norm(BoundaryNorm([-0.5, 0.5, 1.5], 2))
+    cells = np.ma.filled(np.ma.asarray(im.get_array(), dtype=float), np.nan)
+    share = float(np.nanmean(cells)) if np.isfinite(cells).any() else 0.0
+    ax.fill([], [], color="tab:green", label=f"{yes} ({100 * share:.0f} % of the cells)")
+    ax.fill([], [], color="tab:red", label=f"{no} ({100 * (1 - share):.0f} %)")
+    _legend_below(ax)
 
 
 def _plane(ee):
@@ -344,8 +398,7 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
         _workspace_map(ax, coords, result.authority[k, :, j], h, "cividis", f"{axis} authority left [N m]")
         ax.set_title(f"largest {axis} torque still available", fontsize=8)
     kk = len(result.masses) - 1
-    feas = result.feasible[kk].astype(float)
-    _workspace_map(axs[1, 1], coords, feas, h, "RdYlGn", "hover-feasible (1) / impossible (0)", 0, 1)
+    _yes_no_map(axs[1, 1], coords, result.feasible[kk], h, "hover possible", "impossible")
     axs[1, 1].set_title(f"where hovering is possible with {result.masses[kk]:g} kg (some configuration)", fontsize=8)
     for ax in list(axs[0]) + [axs[1, 0], axs[1, 1]]:
         ax.set_xlabel(names[0])
@@ -356,7 +409,7 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
     ax.plot(result.masses, 100 * result.effort_ok.mean(axis=1), "^--", label="efforts within limits")
     ax.set_xlabel("payload [kg]")
     ax.set_ylabel("share of the configurations [%]")
-    ax.legend(fontsize=7)
+    _legend_below(ax)
     ax.set_title(f"payload envelope; collective limit {result.payload.collective:.3g} kg", fontsize=8)
     fig.suptitle(f"{result.platform_name}: hover feasibility and thrust margin")
     return fig
@@ -389,7 +442,7 @@ def wrench_set_figure(result: HoverResult, index: int | None = None):
         ax.plot(*w0[[a, b]], "k+", ms=12, label="hover wrench")
         ax.set_xlabel(names[a])
         ax.set_ylabel(names[b])
-        ax.legend(fontsize=7)
+        _legend_below(ax)
     q = result.grid.configurations(i, i + 1)[0]
     fig.suptitle(f"{result.platform_name}: wrench set (rank {W.rank}) sections at q_arm = {np.round(q, 3).tolist()}", fontsize=9)
     return fig
@@ -424,7 +477,7 @@ def capacity_figure(result: CapacityResult):
     fr = result.map_fractions()
     for k, name in enumerate(LIMITS):
         axs[1].fill([], [], color=cmap(k), label=f"{name} ({100 * fr[name]:.1f}%)")
-    axs[1].legend(fontsize=7, loc="lower left")
+    _legend_below(axs[1])
     axs[1].set_title("limiting factor", fontsize=8)
     names = _axis_names(result.basis) if result.basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
     for ax in axs:
@@ -450,9 +503,9 @@ def opspace_figure(result: OpSpaceMap):
     for ax, (vals, label, cmap) in zip(axs, panels):
         im = ax.pcolormesh(a0, a1, vals.reshape(g.shape)[sl].T, shading="nearest", cmap=cmap)
         fig.colorbar(im, ax=ax, label=label)
-        ax.set_xlabel(g.names[axes[0]])
-        ax.set_ylabel(g.names[axes[1]])
-    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g}" for a in free if a not in axes)
+        ax.set_xlabel(g.label(axes[0]))
+        ax.set_ylabel(g.label(axes[1]))
+    others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g} {g.unit(a)}" for a in free if a not in axes)
     fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
                  + (f", {others}" if others else ""))
     return fig

@@ -63,7 +63,7 @@ from ..sim import (
 )
 from ..trajectory import Hold, MultiPhase, Phase, Spiral
 from ..viz import plot_result
-from ..viz.plots import DEG, REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
+from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains
 from .bsg import CogStabilizer
 from .missions import NAMES, dynamic_mission, static_mission
@@ -541,11 +541,11 @@ def _deflection_panel(ax, result: SimResult) -> None:
     ax.set_ylabel(f"lengths [{unit}]")
     robust_limits(ax, [scale * y for y in raw], min_span=1e-3, t=t)
     ax2 = ax.twinx()
-    ax2.plot(t, DEG * (result.xi[:, 7] - x0[7]), color="C2", lw=1.3, label=r"$\theta_2 - \theta_{2d}$ [deg]")
+    ax2.plot(t, result.xi[:, 7] - x0[7], color="C2", lw=1.3, label=r"$\theta_2 - \theta_{2d}$ [rad]")
     if "impedance_t" in s:
-        ax2.plot(s["impedance_t"], DEG * s["impedance_delta_q"][:, 1], color="C2", ls=":", lw=1.2, label=r"filter $\Delta\theta_2$")
-    ax2.set_ylabel("angles [deg]")
-    robust_limits(ax2, [DEG * (result.xi[:, 7] - x0[7])], min_span=1e-3, t=t)
+        ax2.plot(s["impedance_t"], s["impedance_delta_q"][:, 1], color="C2", ls=":", lw=1.2, label=r"filter $\Delta\theta_2$")
+    ax2.set_ylabel("angles [rad]")
+    robust_limits(ax2, [result.xi[:, 7] - x0[7]], min_span=2e-5, t=t)
     time_axis(ax, result)
     legend(ax, ax2)
 

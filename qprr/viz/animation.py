@@ -197,7 +197,7 @@ def _disc(centre: np.ndarray, normal: np.ndarray, radius: float, unit: np.ndarra
     return centre + radius * (unit[:, 0:1] * e1 + unit[:, 1:2] * e2)
 
 
-def _arrows(starts: np.ndarray, vectors: np.ndarray, side: np.ndarray) -> np.ndarray:
+def _arrows(starts: np.ndarray, vectors: np.ndarray, side: np.ndarray, head: float = 0.05) -> np.ndarray:
     """Segments (3 m, 2, 3) of m arrows: the shaft and two head strokes in the plane of ``side``."""
     segs = []
     for s, v in zip(starts, vectors):
@@ -210,7 +210,7 @@ def _arrows(starts: np.ndarray, vectors: np.ndarray, side: np.ndarray) -> np.nda
         w = side - (side @ u) * u
         nw = float(np.linalg.norm(w))
         w = w / nw if nw > 1e-9 else np.cross(u, [0.0, 0.0, 1.0]) / max(np.linalg.norm(np.cross(u, [0.0, 0.0, 1.0])), 1e-9)
-        h = min(0.3 * length, 0.05)
+        h = min(0.3 * length, head)  # head [m]: at most a fixed share of the platform's size
         segs += [[s, e], [e, e - h * u + 0.5 * h * w], [e, e - h * u - 0.5 * h * w]]
     return np.array(segs)
 
@@ -412,12 +412,12 @@ def animate(
             line = f"t = {times[k]:6.2f} s   CoG to axis {1000 * _cog_distance(pose):5.1f} mm"
             if f is not None:
                 fk = f[i]
-                thrusts.set_segments(_arrows(pose.rotor_world, fk[:, None] * thrust_scale * pose.rotor_axis_world, R[:, 0]))
+                thrusts.set_segments(_arrows(pose.rotor_world, fk[:, None] * thrust_scale * pose.rotor_axis_world, R[:, 0], 0.12 * L))
                 thrusts.set_color(np.repeat([cmap(x) for x in np.clip(fk / f_ref, 0.0, 1.0)], 3, axis=0))
                 foot.set_text("f [N] " + " ".join(f"{v:.2f}" for v in fk))
             if contact is not None:
                 fc = contact[i]
-                force.set_segments(_arrows(pose.ee_world[None, :], (force_scale * fc)[None, :], R[:, 2]))
+                force.set_segments(_arrows(pose.ee_world[None, :], (force_scale * fc)[None, :], R[:, 2], 0.12 * L))
                 line += f"   |F| {np.linalg.norm(fc):.2f} N"
             head.set_text(line)
             canvas.restore_region(background)

@@ -15,7 +15,9 @@ import numpy as np
 from ..charts import wrap_angle
 from ..errors import InputError
 from ..sim import SimResult
-from .plots import figure_path, new_figure
+from .plots import coordinate_kinds, figure_path, new_figure, plain
+
+_UNITS = {"length": "m", "angle": "rad", "unknown": "m or rad"}
 
 ANGLES = (3, 4, 5)
 
@@ -41,7 +43,8 @@ def plot_overlay(results: Mapping[str, SimResult], path, *, rows: Sequence[str] 
     """
     _check(results)
     first = next(iter(results.values()))
-    names = first.names
+    names = [plain(n) for n in first.names]
+    units = [_UNITS[k] for k in coordinate_kinds(first)]
     n_arm = first.n_arm
     fig = new_figure((15, 3.2 * len(rows) + 0.6))
     axes = np.atleast_2d(fig.subplots(len(rows), 3, sharex=True, squeeze=False))
@@ -53,13 +56,13 @@ def plot_overlay(results: Mapping[str, SimResult], path, *, rows: Sequence[str] 
                 for k, (label, res) in enumerate(results.items()):
                     ax[j].plot(res.t, res.xi[:, i], color=f"C{k}", lw=1.1, label=label)
                 ax[j].plot(first.t, first.xi_d[:, i], "k--", lw=0.8, label="reference")
-                ax[j].set_ylabel(names[i] + (" [m]" if i < 3 else ""))
+                ax[j].set_ylabel(f"{names[i]} [{units[i]}]")
         elif row in ("position error", "arm error", "attitude error"):
             idx = {"position error": (0, 1, 2), "attitude error": (3, 4, 5), "arm error": tuple(range(6, 6 + min(3, n_arm)))}[row]
             for j, i in enumerate(idx):
                 for k, (label, res) in enumerate(results.items()):
                     ax[j].plot(res.t, _errors(res)[:, i], color=f"C{k}", lw=1.0, label=label)
-                ax[j].set_ylabel(f"{names[i]}_d - {names[i]}")
+                ax[j].set_ylabel(f"{names[i]}_d - {names[i]} [{units[i]}]")
         elif row == "thrust":
             for k, (label, res) in enumerate(results.items()):
                 ax[0].plot(res.t, res.f.sum(axis=1), color=f"C{k}", lw=1.0, label=label)
@@ -74,7 +77,8 @@ def plot_overlay(results: Mapping[str, SimResult], path, *, rows: Sequence[str] 
             a.grid(alpha=0.3)
             if time_window is not None:
                 a.set_xlim(*time_window)
-        ax[0].legend(fontsize=7, loc="best")
+        handles, labels = ax[0].get_legend_handles_labels()  # right of the row: never over the curves
+        ax[-1].legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     for a in axes[-1]:
         a.set_xlabel("t [s]")
     if title:

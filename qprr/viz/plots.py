@@ -18,9 +18,12 @@ their bounds), ``path`` (3-D, Fig. 6.13-6.14), ``cog`` (x_cm, y_cm in B, Fig. 6.
 rotors and joints produced after the allocation); where the controller asked for something else (a
 bound was active, or a force the rotors cannot produce), the commanded value is drawn dotted.  Your own panels are :class:`Panel` objects.
 
-One style for every figure of the project: SI units on every axis, angles in degrees, the
-prismatic joints in metres and the revolute ones in degrees (two labelled axes when an arm has
-both), references dashed in black *above* the measured curves, axis limits that ignore spikes
+One style for every figure of the project: SI units on every axis, angles in radians (as on the
+command line and in the thesis coordinates), the prismatic joints in metres (millimetres when
+small) and the revolute ones in radians (two labelled axes when an arm has both, the lengths drawn
+above the angles), labels built from the platform's own joint names and types (prismatic: m, N;
+revolute: rad, N m; any name renders: mathtext specials are escaped), legends outside the data
+(below each time panel), page titles wrapped to the page width, references dashed in black *above* the measured curves, axis limits that ignore spikes
 of a few milliseconds (a clipped spike is marked by a red triangle at the edge, with its peak in
 the legend), and a 3-D path with equal axes (millimetres about the start point when the motion
 is small).  Figure numbers in the titles come from the scenario that made the result
@@ -46,6 +49,7 @@ from ..registry import SCENARIOS
 from ..sim import SimResult
 
 DEG = 180.0 / math.pi
+"""Degrees per radian (for figures that choose degrees explicitly; the panels here draw radians)."""
 REFERENCE_STYLE = {"color": "k", "ls": (0, (4, 2)), "lw": 0.9, "zorder": 4}
 """References: thin black dashes drawn above the measured curves."""
 COMMANDED_STYLE = {"ls": ":", "lw": 1.0, "zorder": 3}
@@ -95,17 +99,36 @@ def save_figure(fig, path: str | Path, dpi: int = 90) -> Path:
 _GREEK = {"phi", "theta", "psi", "alpha", "beta", "gamma", "delta", "eta", "mu", "tau", "omega", "rho", "sigma", "chi", "zeta"}
 
 
-def pretty(name: str) -> str:
-    """A coordinate name as mathtext: ``theta2`` -> $\\theta_2$, ``r0`` -> $r_0$, ``phi`` -> $\\phi$, ``x`` -> $x$."""
+def plain(text: str) -> str:
+    """``text`` shown as it is written: every ``$`` escaped, so that matplotlib never parses it as mathtext
+    (a URDF joint name such as ``j$1`` or ``a_b^c`` renders literally)."""
+    return str(text).replace("$", "\\$")
+
+
+def _symbol(name: str) -> str | None:
+    """The mathtext body of a short coordinate name (``theta2`` -> ``\\theta_{2}``), None for any other name."""
     m = re.fullmatch(r"([A-Za-z]+)_?(\d*)", name)
     if m is None:
-        return name
+        return None
     base, sub = m.groups()
     if base in _GREEK:
         base = "\\" + base
     elif len(base) > 1:
-        return name  # a long name (a URDF joint): plain text
-    return f"${base}_{{{sub}}}$" if sub else f"${base}$"
+        return None  # a long name (a URDF joint): not a symbol
+    return f"{base}_{{{sub}}}" if sub else base
+
+
+def pretty(name: str) -> str:
+    """A coordinate name as a label: ``theta2`` -> $\\theta_2$, ``r0`` -> $r_0$, ``phi`` -> $\\phi$, ``x`` -> $x$;
+    any other name (a URDF joint: ``shoulder``, ``j_1$``) as plain text (:func:`plain`)."""
+    sym = _symbol(str(name))
+    return plain(name) if sym is None else f"${sym}$"
+
+
+def effort_label(name: str) -> str:
+    """The generalised force of a joint: $u_{\\mu,\\theta_2}$ for a short name, $u_\\mu$ (shoulder) for any other."""
+    sym = _symbol(str(name))
+    return f"$u_{{\\mu,{sym}}}$" if sym is not None else f"$u_\\mu$ ({plain(name)})"
 
 
 def _check_res(res) -> SimResult:
@@ -126,7 +149,7 @@ def coordinate_kinds(res: SimResult) -> tuple[str, ...]:
     return tuple(kinds)
 
 
-_UNIT = {"length": ("m", 1.0), "angle": ("deg", DEG), "unknown": ("m or rad", 1.0)}
+_UNIT = {"length": ("m", 1.0), "angle": ("rad", 1.0), "unknown": ("m or rad", 1.0)}
 _FORCE_UNIT = {"length": "N", "angle": "N m", "unknown": "N or N m"}
 
 
@@ -186,20 +209,37 @@ def robust_limits(ax, arrays: Sequence[np.ndarray], *, min_span: float, t=None, 
     return lo, hi
 
 
+LEGEND_DROP = 34.0
+"""[points] the legend of a time panel hangs this far below the bottom of its axes: under the tick
+labels and the "t [s]" label, outside the data (constrained layout makes room for it)."""
+
+
 def legend(ax, *others, **kwargs) -> None:
-    """One legend for ``ax`` and its twin axes ``others`` (small font, semi-transparent frame)."""
+    """One legend for ``ax`` and its twin axes ``others``, below the axes (outside the data), small font.
+
+    ``kwargs`` go to ``Axes.legend`` (``loc`` and ``bbox_to_anchor`` place it elsewhere)."""
+    from matplotlib.transforms import ScaledTranslation
+
     handles, labels = [], []
     for a in (ax, *others):
         h, lab = a.get_legend_handles_labels()
         handles += h
         labels += lab
     if handles:
-        opts = {"fontsize": 7.5, "framealpha": 0.85, "loc": "best", "ncol": 2 if len(handles) > 4 else 1,
-                "handlelength": 1.8}
+        drop = ScaledTranslation(0.0, -LEGEND_DROP / 72.0, ax.figure.dpi_scale_trans)
+        opts = {"fontsize": 7.5, "framealpha": 0.85, "loc": "upper center", "bbox_to_anchor": (0.5, 0.0),
+                "bbox_transform": ax.transAxes + drop, "ncol": min(len(handles), 4), "handlelength": 1.8,
+                "borderaxespad": 0.0, "columnspacing": 1.2}
         opts.update(kwargs)
-        top = (ax, *others)[-1]  # a twin axis is drawn above its host: a legend on the host would be hidden
+        top = max((ax, *others), key=lambda a: a.get_zorder())  # drawn last: nothing covers its legend
         leg = top.legend(handles, labels, **opts)
         leg.set_zorder(10)
+
+
+def _under(host, twin) -> None:
+    """Draw ``twin`` (the angles) beneath ``host`` (the lengths): the host's curves stay visible where they cross."""
+    host.set_zorder(twin.get_zorder() + 1)
+    host.patch.set_visible(False)
 
 
 def _draw_signals(ax, t, values, labels, *, colors, refs=None, commanded=None, lw=1.4, ref_label="reference"):
@@ -222,7 +262,8 @@ def length_unit(arrays) -> tuple[str, float]:
 
 def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
     """Coordinates ``idx`` of xi (measured vs reference, or reference - measured): lengths on the left axis
-    (m, or mm when small), angles in degrees (on a labelled twin axis when both kinds are present)."""
+    (m, or mm when small), angles in radians (on a labelled twin axis when both kinds are present, drawn
+    beneath the lengths so that neither group hides the other)."""
     t = res.t
     kinds = coordinate_kinds(res)
     lengths = [i for i in idx if kinds[i] != "angle"]
@@ -234,6 +275,8 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
     ref_label = "reference"
     for g, group in enumerate(groups):
         a = ax if g == 0 else ax.twinx()
+        if g:
+            _under(ax, a)
         kind = kinds[group[0]]
         if errors:
             e = res.xi_d[:, group] - res.xi[:, group]
@@ -243,7 +286,7 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
         else:
             raw, raw_refs = [res.xi[:, i] for i in group], [res.xi_d[:, i] for i in group]
         if kind == "angle":
-            unit, scale = "deg", DEG
+            unit, scale = "rad", 1.0
         elif kind == "length":
             unit, scale = length_unit(raw + raw_refs)
         else:
@@ -259,10 +302,10 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
             a.set_ylabel(f"{'lengths' if g == 0 else 'angles'}{' (ref. - meas.)' if errors else ''} [{unit}]")
         else:
             a.set_ylabel(f"{what} [{unit}]")
-        if errors:  # errors: down to a micrometre or a thousandth of a degree
-            span = {"deg": 1e-3, "mm": 1e-3}.get(unit, 1e-6)
+        if errors:  # errors: down to a micrometre or twenty microradians
+            span = {"rad": 2e-5, "mm": 1e-3}.get(unit, 1e-6)
         else:  # values: a flat curve shows as flat, not as rounding noise
-            span = {"deg": 1.0, "mm": 1.0, "m": 0.01}.get(unit, 1e-3)
+            span = {"rad": 0.02, "mm": 1.0, "m": 0.01}.get(unit, 1e-3)
         robust_limits(a, vals + refs, min_span=span, t=t)
         axes.append(a)
     time_axis(ax, res)
@@ -290,6 +333,8 @@ def _force_panel(ax, res, idx, ylabel: str, labels) -> None:
     axes = []
     for g, (unit, group) in enumerate(groups[:2]):
         a = ax if g == 0 else ax.twinx()
+        if g:
+            _under(ax, a)
         vals = [u_app[:, i] for i in group]
         gap = [np.max(np.abs(res.u[:, i] - u_app[:, i])) if res.n else 0.0 for i in group]
         scale = max([np.max(np.abs(v)) for v in vals] + [1e-9])
@@ -306,12 +351,8 @@ def _force_panel(ax, res, idx, ylabel: str, labels) -> None:
 
 
 def _u_labels(res: SimResult) -> list[str]:
-    names = res.names
     out = [r"$u_{f_b,x}$", r"$u_{f_b,y}$", r"$u_{f_b,z}$", r"$u_{\tau,\phi}$", r"$u_{\tau,\theta}$", r"$u_{\tau,\psi}$"]
-    for n in names[6:]:
-        p = pretty(n)
-        out.append(f"$u_{{\\mu,{p.strip('$')}}}$" if p.startswith("$") else f"u_mu,{n}")
-    return out
+    return out + [effort_label(n) for n in res.names[6:]]
 
 
 # ============================================================================ the panels
@@ -393,7 +434,7 @@ def _cog(ax, res):
     _draw_signals(ax, t, vals, [r"$x_{cm}$", r"$y_{cm}$"], colors=["C0", "C1"])
     ax.axhline(0.0, color="0.4", lw=0.6, zorder=1)
     robust_limits(ax, vals, min_span=0.1, t=t)
-    ax.set_ylabel("CoM in B [mm]")
+    ax.set_ylabel("CoG offset in B [mm]")
     time_axis(ax, res)
     legend(ax)
 
@@ -415,6 +456,8 @@ def _disturbance(ax, res):
     groups = list(by_unit.items())[:2]
     for g, (unit, group) in enumerate(groups):
         a = ax if g == 0 else ax.twinx()
+        if g:
+            _under(ax, a)
         for i in group:
             a.step(t[sel], u[sel, i], where="post", color=f"C{idx.index(i) % 10}", lw=0.9,
                    label=f"{pretty(res.names[i])}" + (f" [{unit}]" if len(groups) > 1 else ""))
@@ -425,7 +468,7 @@ def _disturbance(ax, res):
     if window:
         ax.set_xlim(float(t[0]), float(t[sel][-1]))
         ax.set_xlabel("t [s] (first 0.05 s: a new value every step)")
-    legend(ax, *axes[1:], ncol=3 if len(idx) > 4 else 1)
+    legend(ax, *axes[1:])
 
 
 def _path(ax, res):
@@ -448,7 +491,7 @@ def _path(ax, res):
     half *= 1.05
     for setter, m in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), mid):
         setter(m - half, m + half)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_box_aspect((1, 1, 1), zoom=0.85)  # room for the axis labels inside the panel
     if unit == "mm":
         ax.set_xlabel("x - x0 [mm]")
         ax.set_ylabel("y - y0 [mm]")
@@ -459,10 +502,18 @@ def _path(ax, res):
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
         ax.set_zlabel("z [m]")
+    tidy_3d(ax)
+    ax.legend(fontsize=7.5, loc="upper right", bbox_to_anchor=(0.0, 1.0), framealpha=0.85, borderaxespad=0.0)
+
+
+def tidy_3d(ax, nbins: int = 4) -> None:
+    """3-D axes whose tick labels do not run into each other: at most ``nbins`` ticks per axis, no offset, small font."""
+    from matplotlib.ticker import MaxNLocator
+
     for axis in (ax.xaxis, ax.yaxis, ax.zaxis):
+        axis.set_major_locator(MaxNLocator(nbins))
         axis.get_major_formatter().set_useOffset(False)
-    ax.tick_params(labelsize=7.5)
-    ax.legend(fontsize=7.5, loc="upper left", framealpha=0.85)
+    ax.tick_params(labelsize=7)
 
 
 PANELS: dict[str, Panel] = {
@@ -476,7 +527,7 @@ PANELS: dict[str, Panel] = {
     "arm_efforts": Panel("arm_efforts", r"arm efforts $u_\mu$", _arm_efforts),
     "rotors": Panel("rotors", "rotor thrusts (allocation)", _rotors),
     "path": Panel("path", "3-D path of B", _path, "3d"),
-    "cog": Panel("cog", "CoM offset in B", _cog),
+    "cog": Panel("cog", "CoG offset in B", _cog),
     "disturbance": Panel("disturbance", "disturbance $u_{ext}$", _disturbance),
 }
 """Every panel by name (see the module docstring)."""
@@ -605,15 +656,25 @@ def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, 
         draw(p, a)
     if title is None:
         title = default_title(res)
-    if title:
-        fig.suptitle(title, fontsize=10.5 if n > 1 else 9)
+    if title:  # wrapped to the page: a single panel's page is narrower than the RMSE line
+        fig.suptitle(wrap_title(title, fig.get_figwidth(), 10.5 if n > 1 else 9), fontsize=10.5 if n > 1 else 9)
     if path is None:
         return fig
     return save_figure(fig, path, dpi)
 
 
+def wrap_title(title: str, width_in: float, fontsize: float) -> str:
+    """``title`` with each line broken after ", " so that it fits ``width_in`` inches at ``fontsize`` points
+    (a character of the default sans-serif font is at most about 0.62 em wide)."""
+    import textwrap
+
+    chars = max(20, int(0.95 * width_in * 72.0 / (0.62 * fontsize)))
+    return "\n".join(textwrap.fill(line, chars, break_long_words=False, break_on_hyphens=False) for line in title.split("\n"))
+
+
 def default_title(res: SimResult) -> str:
-    """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in degrees)."""
+    """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in
+    radians, as on the command line)."""
     _check_res(res)
     src = scenario_source(res)
     on = f" on {res.platform}" if res.platform else ""
@@ -624,9 +685,10 @@ def default_title(res: SimResult) -> str:
     parts = []
     for (name, v), kind in zip(res.rmse().items(), kinds):
         unit, scale = _UNIT[kind]
-        parts.append(f"{name} {scale * v:.2g} {unit}")
+        parts.append(f"{plain(name)} {scale * v:.2g} {unit}")
     return head + "\nRMSE (6.26): " + ", ".join(parts)
 
 
-__all__ = ["DEFAULT_PANELS", "PANELS", "Panel", "applied_forces", "coordinate_kinds", "default_title", "figure_path", "legend",
-           "new_figure", "plot_result", "pretty", "robust_limits", "save_figure", "scenario_figures", "time_axis"]
+__all__ = ["DEFAULT_PANELS", "PANELS", "Panel", "applied_forces", "coordinate_kinds", "default_title", "effort_label", "figure_path",
+           "legend", "new_figure", "plain", "plot_result", "pretty", "robust_limits", "save_figure", "scenario_figures", "tidy_3d",
+           "time_axis", "wrap_title"]

@@ -52,7 +52,7 @@ from ..errors import InputError, ShapeError, UnknownNameError
 from ..ik import IKResult
 from ..kinematics import cog_offset_body
 from ..platform import Platform
-from .geometry import characteristic_length, visual_model
+from .geometry import characteristic_length, rotor_radius, visual_model
 from .ikpath import ik_solve
 from .run import RunLog, as_run, load_run
 from .scene import HoverReport, RobotPose, arm_chain, hover_report, robot_pose
@@ -163,10 +163,11 @@ class Viewer:
         self.visualizer.loadViewerModel(rootNodeName="/robot")
         scene.set_up_direction("+z")
         scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25, plane="xy")
-        x0, y0, z0 = self._xi[0:3]
-        self.server.initial_camera.fov = math.radians(50.0)
-        self.server.initial_camera.look_at = (x0, y0, z0 + 0.3 * L)
-        self.server.initial_camera.position = (x0 + 1.7 * L + 0.1, y0 - 2.2 * L - 0.1, z0 + 1.3 * L + 0.1)
+        look_at, position = camera_framing(robot_pose(p, self._data, ch.xi_to_q(self._xi), self._chain), rotor_radius(p),
+                                           CAMERA_FOV)
+        self.server.initial_camera.fov = CAMERA_FOV
+        self.server.initial_camera.look_at = tuple(look_at)
+        self.server.initial_camera.position = tuple(position)
         self._cog = scene.add_icosphere("/markers/cog", radius=0.04 * L + 0.01, color=(200, 30, 30))
         self._cog_label = scene.add_label("/markers/cog/label", "CoG")
         self._axis = scene.add_line_segments("/markers/thrust_axis", np.zeros((1, 2, 3)), (90, 90, 90), thickness=0.004)
@@ -496,6 +497,28 @@ class Viewer:
 
 
 # ====================================================================== helpers
+CAMERA_FOV = math.radians(50.0)
+"""Vertical field of view of the viewer's initial camera [rad]."""
+CAMERA_DIRECTION = np.array([1.7, -2.2, 1.3]) / np.linalg.norm([1.7, -2.2, 1.3])
+"""Unit vector from the robot towards the initial camera (front right, above), world frame."""
+
+
+def camera_framing(pose: RobotPose, rotor_r: float, fov: float = CAMERA_FOV, margin: float = 1.15):
+    """(look_at, position) [m, world] of a camera that sees the whole robot at ``pose``.
+
+    The robot's bounding box (rotor centres widened by the rotor radius ``rotor_r``, the arm's joint
+    origins, the end effector, the CoG) has a bounding sphere of radius rho about its centre c; a
+    camera on :data:`CAMERA_DIRECTION` at distance ``margin`` rho / sin(fov / 2) from c, looking at
+    c, holds that sphere in its view for any aspect ratio wider than tall (any platform's size).
+    """
+    discs = [pose.rotor_world + sign * rotor_r * e for e in np.eye(3) for sign in (1.0, -1.0)]
+    pts = np.vstack([*discs, pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :]])
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    centre = 0.5 * (lo + hi)
+    rho = max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
+    return centre, centre + margin * rho / math.sin(0.5 * fov) * CAMERA_DIRECTION
+
+
 def _wxyz(R: np.ndarray) -> tuple[float, float, float, float]:
     x, y, z, w = pin.Quaternion(np.asarray(R)).coeffs()
     return (float(w), float(x), float(y), float(z))

@@ -157,7 +157,7 @@ def _tricycle_demo() -> Demo:
                 a = ax[i, j]
                 plots.plot_path(a, r, models[d], n_robots=5 if c != "b" else 4)
                 u = TRICYCLE_CASES[c]
-                a.set_title(f"{d}-driven, case {c}: u1 = {u[0]:g}, u2 = {u[1]:.3g}\n{r.status.value}, t_end = {r.t[-1]:.3g} s",
+                a.set_title(f"{d}-driven, case {c}: u1 = {u[0]:g} m/s, u2 = {u[1]:.3g} rad/s\n{r.status.value}, t_end = {r.t[-1]:.3g} s",
                             fontsize=9)
         return plots.save(fig, path)
 
@@ -376,7 +376,9 @@ def _car_parking_demo() -> Demo:
         plots.plot_states(ax[0, 1], r)
         for k in (1, 2):
             ax[0, 1].axvline(k * pk.T, color="k", lw=0.5, ls=":")
-        ax[0, 1].set_title("phases: (z1, z2) to goal | z3 | z4", fontsize=9)
+        still = int(np.sum([np.ptp(r.q[(r.t >= (k - 1) * pk.T) & (r.t <= k * pk.T)], axis=0).max() < 1e-12 for k in (1, 2, 3)]))
+        note = f"\n(z1, z2, z3) start at their goal: phase{'s 1-2 move' if still > 1 else ' 1 moves'} nothing" if still else ""
+        ax[0, 1].set_title("phases: (z1, z2) to goal | z3 | z4" + note, fontsize=9)
         return plots.save(fig, path)
 
     return Demo("car-parking", lines, plot)

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..charts import as_int, as_vector, rot_z
 from ..errors import InputError
-from ..viz.plots import figure_path, new_figure
+from ..viz.plots import figure_path, legend, new_figure
 from .chassis import ICRStatus, WheeledRobot
 from .kinematics import KinematicModel
 from .sim import WheeledSimResult
@@ -39,14 +39,34 @@ def _wheel_geometry(robot: WheeledRobot, sigma):
     return out
 
 
+WHEEL_NAMES = {WheelKind.FIXED: "fixed wheel", WheelKind.CENTRED_STEERABLE: "centred steerable wheel",
+               WheelKind.OFF_CENTRED_STEERABLE: "off-centred steerable wheel", WheelKind.SWEDISH: "Swedish wheel"}
+"""What each wheel colour of :data:`COLORS` means (the legend of :func:`wheel_legend`)."""
+VISIBLE = 12.0
+"""A path longer than this many robot sizes draws the robot enlarged (by a stated factor) so that it can be seen."""
+
+
+def wheel_legend(ax, robot: WheeledRobot) -> None:
+    """Legend entries (no drawing) naming the colour of each kind of wheel ``robot`` has."""
+    for kind in dict.fromkeys(w.kind for w in robot.wheels):
+        ax.plot([], [], color=COLORS[kind], lw=3, solid_capstyle="butt", label=WHEEL_NAMES[kind])
+
+
+def robot_size(robot: WheeledRobot) -> float:
+    """[m] the largest extent of the wheel contact points and O_R (at zero steering), at least 0.1 m."""
+    pts = np.array([[0.0, 0.0]] + [g[1] for g in _wheel_geometry(robot, np.zeros(robot.n_steering))])
+    return max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 0.1)
+
+
 def draw_robot(ax, robot: WheeledRobot, pose=(0.0, 0.0, 0.0), sigma=None, *, color: str = "0.4", alpha: float = 1.0,
-               wheel_scale: float = 1.0, label: str | None = None) -> None:
+               scale: float = 1.0, label: str | None = None) -> None:
     """Chassis outline (convex hull of the wheels and O_R) and wheels (segments along their
-    planes, length 2 r) of ``robot`` at world ``pose`` = (x, y, theta) and steering ``sigma``."""
+    planes, length 2 r) of ``robot`` at world ``pose`` = (x, y, theta) and steering ``sigma``,
+    drawn ``scale`` times its size about the pose (``scale`` > 1 shows a robot on a long path)."""
     from matplotlib.patches import Polygon
 
     x, y, th = (float(v) for v in pose)
-    R = rot_z(th)[:2, :2]
+    R = scale * rot_z(th)[:2, :2]
     sig = np.zeros(robot.n_steering) if sigma is None else np.asarray(sigma, dtype=float)
     geo = _wheel_geometry(robot, sig)
     pts = np.array([[0.0, 0.0]] + [g[1] for g in geo])
@@ -57,7 +77,7 @@ def draw_robot(ax, robot: WheeledRobot, pose=(0.0, 0.0, 0.0), sigma=None, *, col
     ax.add_patch(Polygon(world, closed=True, fill=False, ec=color, alpha=0.8 * alpha, lw=0.8))
     for w, p, d, _ in geo:
         c = (R @ p) + [x, y]
-        dw = R @ d * w.r * wheel_scale
+        dw = R @ d * w.r
         ax.plot([c[0] - dw[0], c[0] + dw[0]], [c[1] - dw[1], c[1] + dw[1]], color=COLORS[w.kind], lw=3, alpha=alpha,
                 solid_capstyle="butt")
         if w.kind is WheelKind.OFF_CENTRED_STEERABLE:
@@ -122,14 +142,21 @@ def plot_icr(ax, robot: WheeledRobot, sigma=None, twist=None, *, extent: float |
 
 def plot_path(ax, result: WheeledSimResult, model: KinematicModel | None = None, *, n_robots: int = 6, color: str = "tab:blue",
               label: str | None = None) -> None:
-    """(x, y) path of ``result``; with ``model``, its robot drawn at ``n_robots`` instants."""
+    """(x, y) path of ``result``; with ``model``, its robot drawn at ``n_robots`` instants (enlarged, with the
+    factor in the legend, when the path is longer than :data:`VISIBLE` robot sizes) and a legend of its wheels."""
     q = result.q
     ax.plot(q[:, 0], q[:, 1], color=color, lw=1.2, label=label or result.model)
     ax.plot(q[0, 0], q[0, 1], "o", color=color, ms=4)
     ax.plot(q[-1, 0], q[-1, 1], "s", color=color, ms=4)
     if model is not None and model.robot is not None and n_robots > 0:
-        for k in np.linspace(0, len(q) - 1, n_robots).astype(int):
-            draw_robot(ax, model.robot, q[k, 0:3], q[k, 3:3 + model.robot.n_steering], color=color, alpha=0.7)
+        size = robot_size(model.robot)
+        extent = max(float(np.ptp(q[:, 0])), float(np.ptp(q[:, 1])))
+        scale = max(1.0, float(np.round(extent / (VISIBLE * size))))
+        for j, k in enumerate(np.linspace(0, len(q) - 1, n_robots).astype(int)):
+            draw_robot(ax, model.robot, q[k, 0:3], q[k, 3:3 + model.robot.n_steering], color=color, alpha=0.7, scale=scale,
+                       label=f"robot, drawn x{scale:g} (to be seen)" if scale > 1 and j == 0 else None)
+        wheel_legend(ax, model.robot)
+    legend(ax, ncol=2)
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
@@ -144,7 +171,7 @@ def plot_wheel_speeds(ax, result: WheeledSimResult) -> None:
     ax.set_xlabel("t [s]")
     ax.set_ylabel("wheel speed [rad/s]")
     if result.wheel_speeds:
-        ax.legend(fontsize=7)
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.grid(alpha=0.3)
 
 
@@ -154,7 +181,7 @@ def plot_states(ax, result: WheeledSimResult) -> None:
         ax.plot(result.t, result.q[:, i], lw=1, label=name)
     ax.set_xlabel("t [s]")
     ax.set_ylabel("q [m, rad]")
-    ax.legend(fontsize=7)
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     ax.grid(alpha=0.3)
 
 
@@ -186,4 +213,5 @@ def save(fig, path: str | Path, *, dpi: int = 80) -> Path:
     return path
 
 
-__all__ = ["draw_robot", "figure", "plot_icr", "plot_path", "plot_residual", "plot_states", "plot_wheel_speeds", "save"]
+__all__ = ["COLORS", "VISIBLE", "WHEEL_NAMES", "draw_robot", "figure", "plot_icr", "plot_path", "plot_residual", "plot_states",
+           "plot_wheel_speeds", "robot_size", "save", "wheel_legend"]
