@@ -86,12 +86,12 @@ def catalogue(tree: Path, timeout: float) -> tuple[Counter, dict, list]:
 
 
 # ------------------------------------------------------------------------ the issue's scenarios
-# Each prints one verdict word; the API of the tree decides which branch runs (new: qprr.platform; old: qprr.model).
+# Each prints one verdict word; the API of the tree decides which branch runs (new: qprr.model; old: qprr.model).
 _PRELUDE = r'''
 import copy, math, pickle, sys, threading
 import numpy as np, pinocchio as pin
 import qprr
-NEW = __import__("importlib").util.find_spec("qprr.platform") is not None
+NEW = __import__("importlib").util.find_spec("qprr.model") is not None
 if NEW:
     import qprr.thesis
     P = qprr.thesis.load(); DATA = P.data()

@@ -38,10 +38,10 @@ from .errors import QprrError
 from .errors import ShapeError as ShapeError
 from .errors import SolverError as SolverError
 from .errors import UnknownNameError as UnknownNameError
+from .model import ArmJoint as ArmJoint
+from .model import Platform, from_urdf
+from .model import from_model as from_model
 from .nomenclature import build
-from .platform import ArmJoint as ArmJoint
-from .platform import Platform, from_urdf
-from .platform import from_model as from_model
 from .platforms import load
 from .rotors import Rotor as Rotor
 from .version import __version__ as __version__

@@ -24,11 +24,11 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as ch
-from .charts import as_real, as_vector
 from .errors import DivergenceError, InputError
 from .kinematics import ee_jacobian_world
+from .model import Platform, check_model_data, check_platform
 from .optim import Lexicographic, QPSettings
-from .platform import Platform, check_model_data, check_platform
+from .validation import as_real, as_vector
 
 
 def input_map_matrix(xi) -> np.ndarray:

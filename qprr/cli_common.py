@@ -3,7 +3,7 @@
 output-path checks, the platform options, and the converters of numeric options.
 
 Every numeric option is read by :func:`real`, :func:`integer` or :func:`reals` (argparse ``type``
-functions built on :func:`qprr.charts.as_real` and :func:`qprr.charts.as_int`): a bad value ends in
+functions built on :func:`qprr.validation.as_real` and :func:`qprr.validation.as_int`): a bad value ends in
 one line naming the option, exit code 2, before anything runs.
 """
 
@@ -14,8 +14,8 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from .charts import as_int, as_real
 from .errors import InputError
+from .validation import as_int, as_real
 
 
 class Parser(argparse.ArgumentParser):
@@ -120,7 +120,7 @@ def _argument_error(exc: InputError) -> argparse.ArgumentTypeError:
 
 def real(*, positive: bool = False, nonnegative: bool = False, lo: float | None = None, hi: float | None = None,
          unit: str = "") -> Callable[[str], float]:
-    """An argparse ``type``: the option's text as a finite float checked by :func:`qprr.charts.as_real` (same bounds)."""
+    """An argparse ``type``: the option's text as a finite float checked by :func:`qprr.validation.as_real` (same bounds)."""
 
     def real_number(text: str) -> float:
         try:
@@ -136,7 +136,7 @@ def real(*, positive: bool = False, nonnegative: bool = False, lo: float | None 
 
 
 def integer(*, lo: int | None = None, hi: int | None = None) -> Callable[[str], int]:
-    """An argparse ``type``: the option's text as an int checked by :func:`qprr.charts.as_int` (same bounds)."""
+    """An argparse ``type``: the option's text as an int checked by :func:`qprr.validation.as_int` (same bounds)."""
 
     def whole_number(text: str) -> int:
         try:
@@ -166,7 +166,7 @@ def reals(*, nonnegative: bool = False, unit: str = "") -> Callable[[str], list[
 
 def option_value(text: str, default, name: str):
     """A ``NAME=VALUE`` option's text converted to the type of its ``default`` (a bool, int, float, tuple of
-    floats or string), numbers by :func:`qprr.charts.as_real` / :func:`qprr.charts.as_int`; raises
+    floats or string), numbers by :func:`qprr.validation.as_real` / :func:`qprr.validation.as_int`; raises
     :class:`~qprr.errors.InputError` naming ``name`` and the text."""
     if isinstance(default, bool):
         if text.lower() in ("1", "true", "yes", "on"):

@@ -11,7 +11,7 @@
 
 Collision pairs: every two geometries on different bodies, except those on adjacent bodies (one joint the parent
 of the other: they touch at the joint by construction) and those already in contact at the neutral configuration
-(:meth:`qprr.platform.Platform.neutral_q`: a contact the design accepts, e.g. a link resting in its housing).  The
+(:meth:`qprr.model.Platform.neutral_q`: a contact the design accepts, e.g. a link resting in its housing).  The
 excluded pairs are kept on the model (``adjacent``, ``neutral_contacts``) so that a report can list them.
 
 The pairs are checked the most often colliding first (counted over a few random arm configurations), so that a
@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InputError, MissingDependencyError, QprrError
-from .platform import Platform, check_platform
+from .model import Platform, check_platform
 from .rotors import Rotor
 
 DISC_THICKNESS = 0.01
@@ -171,7 +171,7 @@ def collision_model(platform: Platform, *, package_dirs: Sequence[str] | None = 
 
     ``package_dirs``: folders for ``package://`` mesh paths (default: example-robot-data's share folder and the
     URDF file's folder).  Raises :class:`~qprr.errors.InputError` when the platform has no URDF text (made with
-    :func:`qprr.platform.from_model`) or its arm links carry no ``<collision>`` geometry (say what to add).
+    :func:`qprr.model.from_model`) or its arm links carry no ``<collision>`` geometry (say what to add).
     """
     check_platform(platform)
     if platform.urdf is None:

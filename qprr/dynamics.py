@@ -11,9 +11,9 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as ch
-from .charts import as_vector
 from .kinematics import check_q
-from .platform import Platform, check_model_data
+from .model import Platform, check_model_data
+from .validation import as_vector
 
 
 def mass_matrix(platform: Platform, data: pin.Data, q) -> np.ndarray:

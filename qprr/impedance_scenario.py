@@ -25,7 +25,6 @@ from pathlib import Path
 
 import numpy as np
 
-from .charts import as_vector
 from .control import InverseDynamicsController
 from .control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from .errors import InputError, UnknownNameError
@@ -33,6 +32,7 @@ from .kinematics import ee_pose_xi
 from .sim import SimConfig, SimResult, simulate
 from .sim.contact import CompliantWall, PrescribedWrench
 from .trajectory import Hold, MultiPhase, Phase
+from .validation import as_vector
 
 CONTROLLERS = ("opspace-impedance", "idc")
 """Controllers of the scenario: the operational-space impedance with a wrist sensor, the plain IDC (no compliance law)."""

@@ -4,7 +4,7 @@ A body of mass m > 0 with rotational inertia I about its CoM exists iff I is sym
 (semi-)definite and its principal moments satisfy the triangle inequalities I_k <= I_i + I_j,
 i.e. every second moment of mass Sigma_k = integral of x_k^2 dm = (I_i + I_j - I_k) / 2 is >= 0.
 :func:`check_rigid_body` raises :class:`~qprr.errors.NonPhysicalError` naming the body and the
-inequality; platforms (:mod:`qprr.platform`) and parameter sets (:mod:`qprr.thesis.params`) call it.
+inequality; platforms (:mod:`qprr.model`) and parameter sets (:mod:`qprr.thesis.params`) call it.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import math
 
 import numpy as np
 
-from .charts import as_array, as_vector
 from .errors import InputError, NonPhysicalError
+from .validation import as_array, as_vector
 
 TRIANGLE_RTOL = 1e-12
 """Relative tolerance (of the largest principal moment) of the triangle inequalities: a body on the boundary

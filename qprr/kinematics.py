@@ -10,9 +10,9 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as ch
-from .charts import as_vector
 from .errors import InputError
-from .platform import Platform, check_model_data, check_platform
+from .model import Platform, check_model_data, check_platform
+from .validation import as_matrix, as_vector
 
 _BASE_JOINT = 1  # the free flyer: B is its frame
 
@@ -125,7 +125,7 @@ def com_jacobian_body_from(data: pin.Data, Jc: np.ndarray) -> np.ndarray:
     """:func:`com_jacobian_body` from a ``data`` that already holds the CoM and its world Jacobian ``Jc``."""
     if not isinstance(data, pin.Data):
         raise InputError(f"data must be a pinocchio.Data, got {type(data).__name__}")
-    Jc = ch.as_matrix(Jc, (3, None), "Jc")
+    Jc = as_matrix(Jc, (3, None), "Jc")
     R = data.oMi[_BASE_JOINT].rotation
     c_b = R.T @ (data.com[0] - data.oMi[_BASE_JOINT].translation)
     J = R.T @ Jc

@@ -47,7 +47,7 @@ from .control.mfc import MFCGains
 from .control.opspace_impedance import EndEffectorImpedance
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
-from .platform import Platform
+from .model import Platform
 from .sim import simulate
 from .sim.actuators import RotorDynamics
 from .sim.contact import CompliantWall

@@ -6,7 +6,7 @@ wing, ``FLW`` flying wing) carrying ``m`` arms whose letters give the joints (``
 ``P`` prismatic, ``C`` cable); a count of 1 is not written (Hypothesis 1 of Sec. 2.4).  Examples:
 ``Q-PRR`` (the thesis's robot), ``HEL-RRR``, ``3Q-RR``, ``Q-3RP``.
 
-:func:`parse` reads a name; :func:`build` makes a :class:`~qprr.platform.Platform` of one
+:func:`parse` reads a name; :func:`build` makes a :class:`~qprr.model.Platform` of one
 multirotor and one serial arm: ``Q``, ``HEX``, ``OCT`` (with ``X`` or ``+`` after the code for the
 rotor layout, e.g. ``QX-PRR``, or the ``layout`` argument) and ``R``/``P`` joints.  Names that
 (2.1) allows but :func:`build` does not make raise :class:`UnsupportedDesignError` saying why:
@@ -31,10 +31,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from . import urdfgen as ug
-from .charts import as_name, as_real, as_vector
 from .errors import InputError, QprrError
-from .platform import Platform, from_urdf
+from .model import Platform, from_urdf
 from .rotors import LAYOUTS, Rotor, layout_rotors
+from .validation import as_name, as_real, as_vector
 
 UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
 """Multirotor codes of Table 2.3 that :func:`build` makes, and their rotor counts."""
@@ -193,7 +193,7 @@ def build(
         propeller's drag ratio), ``f_min``, ``f_max = thrust_to_weight m g / n`` and ``tilt`` [rad]
         (alternating tilts about the rotor arms: ``tilt > 0`` on a HEX is fully actuated).
     g : gravity [m/s^2].  joint_names, link_names, base_name, ee_name : URDF names.
-    allow_nonphysical : skip the inertia checks (as :func:`qprr.platform.from_urdf`), e.g. to
+    allow_nonphysical : skip the inertia checks (as :func:`qprr.model.from_urdf`), e.g. to
         rebuild a printed table that no rigid body has.
     """
     d = parse(name)

@@ -28,14 +28,14 @@ import numpy as np
 import pinocchio as pin
 
 from . import charts as co
-from .charts import as_int, as_real, as_vector
 from .dynamics import dynamics_xi
 from .errors import InputError, NonPhysicalError, PlausibilityError, UnknownNameError
 from .inertia import check_rigid_body
 from .kinematics import check_q
-from .platform import Platform, check_flight, check_model_data, check_platform, max_lift
+from .model import Platform, check_flight, check_model_data, check_platform, max_lift
 from .plausibility import DEFAULT as PLAUSIBLE
 from .plausibility import check_plausibility_setting
+from .validation import as_int, as_real, as_vector
 
 APPROACHES = ("link3", "body")
 """Known-mass models: "link3" = point mass folded into link 3 (Thesis (6.40)); "body" = rigid
@@ -113,7 +113,7 @@ def with_payload(platform: Platform, payload: Payload | float, approach: str = "
     The copy's model has ``inertias[j] = nominal + payload`` for the end effector's parent joint j
     (``pin.Inertia`` addition: mass, CoM and parallel-axis term at once); ``platform.model`` is
     untouched.  ``platform.params`` is kept as is.  The checks of a loaded platform apply to the copy
-    (:func:`qprr.platform.check_flight`: inertias, lift, hover and attitude authority) and to the payload (a rigid body,
+    (:func:`qprr.model.check_flight`: inertias, lift, hover and attitude authority) and to the payload (a rigid body,
     com and size within ``plausibility``, :class:`qprr.plausibility.Plausibility`, None: no range check): a payload the
     rotors cannot lift raises :class:`~qprr.errors.NonPhysicalError` suggesting grams.
     """

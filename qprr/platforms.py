@@ -25,7 +25,7 @@ from pathlib import Path
 import pinocchio as pin
 
 from .errors import InputError, QprrError, UnknownNameError
-from .platform import Platform, from_urdf
+from .model import Platform, from_urdf
 from .registry import Registry
 from .rotors import read_rotor_file
 

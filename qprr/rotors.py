@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .charts import as_file, as_int, as_real, as_vector
 from .errors import InputError, UnknownNameError
+from .validation import as_file, as_int, as_real, as_vector
 
 
 def _finite3(value, name: str) -> tuple[float, float, float]:
@@ -230,7 +230,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     gives the position and the axis (its z) - resolved by the caller through ``frame_positions``
     (name -> (position, axis)).  ``kappa``, ``f_min``, ``f_max`` (and the propeller ``radius`` [m], optional) per rotor or in ``defaults``.
     The optional ``base_link`` (a string) names the link the positions are written in; the caller
-    (:func:`qprr.platform.from_model`) checks that it is the platform's base B.
+    (:func:`qprr.model.from_model`) checks that it is the platform's base B.
     Unknown keys raise :class:`~qprr.errors.UnknownNameError`; a position farther than 10 m from B
     or an axis whose norm is not 1 (to 1e-3) raises :class:`~qprr.errors.InputError` (units, typos).
     """

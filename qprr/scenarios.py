@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 from .control import make_controller
 from .errors import InputError, UnknownNameError
-from .platform import Platform
+from .model import Platform
 from .registry import SCENARIOS
 from .sim import SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach

@@ -37,8 +37,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .charts import as_array, as_int, as_interval, as_real, as_vector, as_xi, xi_names
+from .charts import as_xi, xi_names
 from .errors import InputError, ShapeError, UnknownNameError
+from .validation import as_array, as_int, as_interval, as_real, as_vector
 
 
 @dataclass(frozen=True)
@@ -255,7 +256,7 @@ def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0
     ``q_arm`` (default: 60 % of the way from the neutral posture to the upper limit of each joint)
     must lie inside the joint limits; the arm starts at its neutral posture; yaw held at ``psi``.
     """
-    from .platform import check_platform
+    from .model import check_platform
 
     p = as_vector(p_hover, 3, "p_hover")
     q0 = check_platform(platform).neutral_q()[7:]

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from .charts import as_array, as_real, as_vector
 from .errors import InputError
+from .validation import as_array, as_real, as_vector
 
 
 def num(x: float, name: str = "x") -> str:

@@ -162,7 +162,7 @@ class Ctx:
         import qprr
 
         self.qprr = qprr
-        self.new = importlib.util.find_spec("qprr.platform") is not None
+        self.new = importlib.util.find_spec("qprr.model") is not None
 
     def once(self, key: str, make: Callable[[], object]):
         if key not in self._cache:
@@ -433,20 +433,20 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.sim.result.SimResult.load", "path", Spec("path_in", lambda c: c.result_file())),
     ("qprr.sim.result.SimResult.save", "path", Spec("path_out", lambda c: c.tmp / "saved.npz")),
     ("qprr.rotors.read_rotor_file", "path", Spec("path_in", lambda c: c.rotors_toml())),
-    ("qprr.platform.from_urdf", "urdf", Spec("path_in", lambda c: c.urdf_path())),
-    ("qprr.platform.from_urdf", "rotors", Spec("obj", lambda c: c.platform.rotors)),
-    ("qprr.platform.from_model", "rotors", Spec("obj", lambda c: c.platform.rotors)),
+    ("qprr.model.from_urdf", "urdf", Spec("path_in", lambda c: c.urdf_path())),
+    ("qprr.model.from_urdf", "rotors", Spec("obj", lambda c: c.platform.rotors)),
+    ("qprr.model.from_model", "rotors", Spec("obj", lambda c: c.platform.rotors)),
     ("qprr.platforms.multirotor_model", "name", S("hector", "name")),
     ("qprr.charts.rot_?", "a", S(0.3)),
-    ("qprr.platform.*frame_id", "name", S("end_effector", "frame")),
-    ("qprr.platform.check_*", "name", S("platform", "skip")),
-    ("qprr.platform.Platform.check_arm_limits", "name", S("q_arm", "skip")),
-    ("qprr.platform.from_*", "name", S("P", "skip")),
-    ("qprr.platform.Platform", "name", S("P", "skip")),
-    ("qprr.platform.Platform", "base_frame", S(1, "frame")),
-    ("qprr.platform.Platform", "ee_frame", Spec("frame", lambda c: c.platform.ee_frame)),
-    ("qprr.platform.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
-    ("qprr.platform.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
+    ("qprr.model.*frame_id", "name", S("end_effector", "frame")),
+    ("qprr.model.check_*", "name", S("platform", "skip")),
+    ("qprr.model.Platform.check_arm_limits", "name", S("q_arm", "skip")),
+    ("qprr.model.from_*", "name", S("P", "skip")),
+    ("qprr.model.Platform", "name", S("P", "skip")),
+    ("qprr.model.Platform", "base_frame", S(1, "frame")),
+    ("qprr.model.Platform", "ee_frame", Spec("frame", lambda c: c.platform.ee_frame)),
+    ("qprr.model.Platform", "arm", Spec("obj", lambda c: c.platform.arm)),
+    ("qprr.model.check_urdf_inertials", "xml_text", Spec("text", lambda c: c.urdf_path().read_text())),
     ("qprr.rotors.*", "n", S(4, "count")),
     ("qprr.viz.*", "t", Spec("vec", lambda c: np.linspace(0.0, 1.0, 5))),
     ("qprr.viz.*", "p_world", Spec("mat", lambda c: np.tile(c.target(), (5, 1)))),
@@ -578,18 +578,18 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.charts.to_body_batch", "R", Spec("mat", lambda c: np.stack([_rot(), _rot()]))),
     ("qprr.charts.to_body_batch", "p_world", Spec("mat", lambda c: np.ones((2, 3)))),
     ("qprr.charts.to_body_batch", "origin_world", Spec("mat", lambda c: np.zeros((2, 3)))),
-    ("qprr.charts.as_real", "x", S(0.5)),
-    ("qprr.charts.as_int", "x", S(3, "int")),
-    ("qprr.charts.as_name", "x", S("a", "name")),
-    ("qprr.charts.as_interval", "x", F(lambda c: np.array([0.0, 1.0]))),
-    ("qprr.charts.as_file", "x", Spec("path_in", lambda c: c.result_file())),
-    ("qprr.charts.as_output_path", "x", Spec("path_out", lambda c: c.tmp / "out.npz")),
+    ("qprr.validation.as_real", "x", S(0.5)),
+    ("qprr.validation.as_int", "x", S(3, "int")),
+    ("qprr.validation.as_name", "x", S("a", "name")),
+    ("qprr.validation.as_interval", "x", F(lambda c: np.array([0.0, 1.0]))),
+    ("qprr.validation.as_file", "x", Spec("path_in", lambda c: c.result_file())),
+    ("qprr.validation.as_output_path", "x", Spec("path_out", lambda c: c.tmp / "out.npz")),
     ("qprr.charts.as_*", "x", F(lambda c: np.ones(3))),
     ("qprr.charts.as_*", "name", Spec("skip", lambda c: "x")),
     ("qprr.charts.as_*", "what", Spec("skip", lambda c: "file")),
-    ("qprr.charts.as_name", "valid", Spec("skip", lambda c: ("a", "b"))),
-    ("qprr.charts.as_vector", "n", S(3, "skip")),
-    ("qprr.charts.as_matrix", "shape", Spec("skip", lambda c: (3,))),
+    ("qprr.validation.as_name", "valid", Spec("skip", lambda c: ("a", "b"))),
+    ("qprr.validation.as_vector", "n", S(3, "skip")),
+    ("qprr.validation.as_matrix", "shape", Spec("skip", lambda c: (3,))),
     ("qprr.charts.xi_names", "n_arm", S(3, "int")),
     ("qprr.charts.FloatWriter", "n", S(3, "int")),
     ("qprr.charts.State.lin_to_*", "f_*", F(lambda c: np.ones(3))),
@@ -648,7 +648,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
 
 INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.sim.result.SimResult": lambda c: c.sim_result(),
-    "qprr.platform.Platform": lambda c: c.platform,
+    "qprr.model.Platform": lambda c: c.platform,
     "qprr.thesis.params.QPRRParams": lambda c: importlib.import_module("qprr.thesis.params").thesis_params(),
     "qprr.mdh.MDHRow": lambda c: importlib.import_module("qprr.mdh").MDHRow(0, 0.1, 0.2, 0.3, 0.4),
     "qprr.thesis.params.Link": lambda c: importlib.import_module("qprr.thesis.params").thesis_params().links[0],
@@ -789,8 +789,8 @@ HOT = "hot-loop form on plain floats, unvalidated by design (runs every simulate
 ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.analysis.workspace.WorkspaceOptions", "frame", "*"): "a frame is a name or id of a platform: workspace() "
     "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
-    ("qprr.charts.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
-    ("qprr.charts.as_array", "x", "*"): "as_array converts any shape; NaN and inf pass unless finite=True is asked",
+    ("qprr.validation.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
+    ("qprr.validation.as_array", "x", "*"): "as_array converts any shape; NaN and inf pass unless finite=True is asked",
     ("qprr.charts.wrap_angle", "a", "NaN entry"): "elementwise on any array: NaN stays NaN (logs of diverged runs), like numpy's ufuncs",
     ("qprr.charts.wrap_angle", "a", "inf entry"): "elementwise on any array: inf maps to NaN, like numpy's remainder",
     ("qprr.charts.wrap_angle", "a", "2-D"): "elementwise on an array of any shape",
@@ -800,8 +800,8 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.kinematics.com_jacobian_body_from", "*", "*"): "the second half of com_jacobian_body for a caller whose data already holds "
     "the CoM and its Jacobian (hot path); without the platform it cannot check data or the width of Jc",
     ("qprr.rotors.Rotor", "f_max", "inf"): "f_max = inf: a rotor without an upper thrust bound (the default)",
-    ("qprr.platform.from_*", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
-    ("qprr.platform.Platform", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
+    ("qprr.model.from_*", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
+    ("qprr.model.Platform", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
     ("qprr.ik.tasks.*.linearize", "*", "*"): HOT + "IKSolver.solve (linearize runs in every iteration on a configuration the "
     "solver validated; its output is checked: qprr.ik.tasks.base.check_linearized)",
     ("qprr.ik.tasks.base.update_kinematics", "*", "*"): HOT + "IKSolver.solve (once per iteration, before the tasks)",
@@ -827,7 +827,7 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     "law (reset checks the state and reference once per run)",
     ("qprr.control.mpc.MPCController.set_preview", "trajectory", "None"): "None: no preview (the current reference is "
     "extrapolated over the horizon, as documented)",
-    ("qprr.platform.from_urdf", "g", "zero"): "g = 0: free flight (momentum and energy conservation tests fly without gravity)",
+    ("qprr.model.from_urdf", "g", "zero"): "g = 0: free flight (momentum and energy conservation tests fly without gravity)",
     ("qprr.campaign.metrics.metrics_of", "wall_time", "NaN"): "NaN (the default): not measured, the result's own wall time is used",
     ("qprr.campaign.spec.CampaignSpec", "base_dir", "unknown name"): "base_dir is any folder name: a relative callable file is "
     "read from it when the runs start (a remote worker need not have it: the file travels as text)",

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import qprr.thesis
-from qprr.platform import Platform
+from qprr.model import Platform
 
 _PACKAGE = Path(qprr.__file__).resolve().parent
 

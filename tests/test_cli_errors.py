@@ -10,6 +10,7 @@ import re
 import pytest
 
 from qprr.cli import build_parser, main
+from qprr.validation import as_real
 
 BAD = [
     (["simulate", "static-idc", "--integrator", "rk5"], "rk5"),
@@ -52,7 +53,7 @@ BAD = [
     ([], "command"),
     (["frobnicate"], "frobnicate"),
 ]
-NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli_common: charts.as_real/as_int)
+NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli_common: as_real/as_int)
     (["simulate", "static-idc", "--duration", "1e12"], "duration"),  # logs that cannot fit in memory (the simulator's bound or MemoryError)
     (["simulate", "static-idc", "--duration", "1e400"], "--duration.*finite"),
     (["simulate", "static-idc", "--seed", "-1"], "--seed"),
@@ -141,12 +142,12 @@ def test_no_numeric_option_bypasses_the_converters():
 
 
 def test_the_converters_are_the_charts_checks():
-    """The CLI's messages are those of qprr.charts.as_real / as_int (one set of rules for Python and the command line)."""
+    """The CLI's messages are those of qprr.validation.as_real / as_int (one set of rules for Python and the command line)."""
     import argparse
 
-    from qprr.charts import as_int, as_real
     from qprr.cli_common import integer, real, reals
     from qprr.errors import InputError
+    from qprr.validation import as_int
 
     cases = [(real(**kw), text, lambda t, kw=kw: as_real(float(t), "value", **kw))
              for text, kw in (("-1", dict(positive=True)), ("nan", {}), ("inf", dict(nonnegative=True)), ("5", dict(lo=0.0, hi=1.0)))]

@@ -16,7 +16,7 @@ from qprr.analysis.hover import hover
 from qprr.collision import DISC_THICKNESS, collision_model, default_disc_radius
 from qprr.errors import InputError
 from qprr.ik import IKSolver
-from qprr.platform import from_model
+from qprr.model import from_model
 from qprr.rotors import Rotor, quadrotor, ring, rotors_from_mapping
 
 # A test robot with a closed-form collision set: a flat body box (top at z = H), a yaw joint at height A

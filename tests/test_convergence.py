@@ -36,7 +36,7 @@ from qprr.charts import xi_to_qv
 from qprr.control import PayloadIDC
 from qprr.control.base import Controller
 from qprr.control.impedance import ImpedanceController
-from qprr.platform import Platform
+from qprr.model import Platform
 from qprr.sim import BaseDrag, PayloadChange, PayloadSchedule, Pulse, WhiteNoise, simulate
 from qprr.sim.integrators import ORDERS
 from qprr.thesis import gains

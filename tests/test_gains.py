@@ -14,7 +14,7 @@ from qprr.cli import main
 from qprr.control.gains import Authority, Targets, bandwidths, derive, idc_gains, load_gains, platform_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance
 from qprr.errors import QprrError, UnknownNameError
-from qprr.platform import max_lift
+from qprr.model import max_lift
 from qprr.sim import simulate
 from qprr.trajectory import Hold
 

@@ -21,7 +21,7 @@ import qprr
 import qprr.thesis
 from qprr.errors import InputError, NonPhysicalError, UnknownNameError
 from qprr.inertia import check_rigid_body
-from qprr.platform import from_model, from_urdf
+from qprr.model import from_model, from_urdf
 from qprr.thesis.urdf import URDF_PATH, build_urdf
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)

@@ -127,7 +127,7 @@ def test_the_shipped_platforms_are_plausible():
 # ----------------------------------------------------------------------------------------------- payloads
 def test_a_payload_the_rotors_cannot_lift_is_refused_with_a_grams_hint():
     p = qprr.load()
-    lift = qprr.platform.max_lift(p)  # 80 N for the thesis Q-PRR
+    lift = qprr.model.max_lift(p)  # 80 N for the thesis Q-PRR
     with pytest.raises(NonPhysicalError, match=r"payload mass 100 kg.*at most 80 N.*grams\? 100 g = 0.1 kg"):
         with_payload(p, 100.0)
     m_max = lift / p.g - p.total_mass
@@ -149,7 +149,7 @@ def test_with_payload_applies_the_inertia_checks_of_a_loaded_urdf():
 def test_a_payload_that_moves_the_cog_beyond_the_rotors_cannot_hover():
     """A mass that the rotors lift (sum f_max >= m g) but far off the thrust axis: no thrusts inside the bounds balance it."""
     p = qprr.load()
-    m = 0.5 * (qprr.platform.max_lift(p) / p.g - p.total_mass)
+    m = 0.5 * (qprr.model.max_lift(p) / p.g - p.total_mass)
     summary_ok = with_payload(p, Payload(m, (0.0, 0.0, 0.0))).actuation_summary()
     assert summary_ok.can_hover
     far = Payload(m, (1.5, 1.5, 1.5))  # 2.6 m from the end effector

@@ -19,10 +19,10 @@ from enum import Enum
 
 import numpy as np
 
-from ..charts import as_array, as_int, as_real, as_vector
 from ..errors import InputError, LimitError, UnknownNameError
-from ..platform import Platform
-from ..platform import check_platform as _check_platform
+from ..model import Platform
+from ..model import check_platform as _check_platform
+from ..validation import as_array, as_int, as_real, as_vector
 
 
 @dataclass(frozen=True)
@@ -51,7 +51,7 @@ class Status(str, Enum):
 
 
 def check_platform(platform) -> Platform:
-    """:func:`qprr.platform.check_platform`, and the platform must have an arm (the maps are over its configurations)."""
+    """:func:`qprr.model.check_platform`, and the platform must have an arm (the maps are over its configurations)."""
     _check_platform(platform)
     if platform.n_arm == 0:
         raise InputError(f"platform {platform.name!r} has no arm joints: there is no arm configuration space to map")
@@ -59,12 +59,12 @@ def check_platform(platform) -> Platform:
 
 
 def check_int(name: str, value, lo: int = 1) -> int:
-    """:func:`qprr.charts.as_int` with the argument order of this package."""
+    """:func:`qprr.validation.as_int` with the argument order of this package."""
     return as_int(value, name, lo=lo)
 
 
 def check_pos(name: str, value, strict: bool = True) -> float:
-    """:func:`qprr.charts.as_real` (> 0, or >= 0 when not ``strict``) with the argument order of this package."""
+    """:func:`qprr.validation.as_real` (> 0, or >= 0 when not ``strict``) with the argument order of this package."""
     return as_real(value, name, positive=strict, nonnegative=not strict)
 
 

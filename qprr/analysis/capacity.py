@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..platform import Platform
+from ..model import Platform
 from ._common import (
     JointGrid,
     Status,

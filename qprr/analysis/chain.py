@@ -30,9 +30,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_array, as_vector
 from ..errors import InputError, ShapeError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_array, as_vector
 
 _SNAP = 1e-15
 

@@ -31,7 +31,7 @@ def resolve_platform(name: str):
 def map_reference(map_name: str, platform, result) -> MapReference | None:
     """The first reference a provider of :data:`qprr.registry.MAP_REFERENCES` gives for this map and platform, or None."""
     from ..errors import UnknownNameError
-    from ..platform import check_platform
+    from ..model import check_platform
     from ..registry import MAP_REFERENCES
 
     if map_name not in MAPS:

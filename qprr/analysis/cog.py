@@ -32,7 +32,7 @@ import numpy as np
 
 from ..charts import euler_to_rotation_batch
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform
+from ..model import Platform
 from ._common import (
     JointGrid,
     Status,

@@ -38,9 +38,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..actuation import Allocator
-from ..charts import as_vector
 from ..errors import InputError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_vector
 from ._common import (
     JointGrid,
     Status,

@@ -42,10 +42,10 @@ import pinocchio as pin
 from scipy.linalg import solve_triangular
 
 from .. import charts as ch
-from ..charts import as_vector
 from ..errors import InputError
 from ..kinematics import check_q
-from ..platform import Platform, check_data
+from ..model import Platform, check_data
+from ..validation import as_vector
 from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
 
 

@@ -32,7 +32,7 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import UnknownNameError
-from ..platform import Platform
+from ..model import Platform
 from ._common import (
     JointGrid,
     Status,

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import InputError
-from ..platform import Platform
+from ..model import Platform
 from ._common import (
     CollisionMask,
     JointGrid,

@@ -31,9 +31,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_array
 from ..errors import InputError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
+from ..validation import as_array
 
 AXES = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
 """Names of the base-wrench components (at B, in B axes)."""

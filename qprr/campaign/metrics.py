@@ -31,9 +31,9 @@ import math
 
 import numpy as np
 
-from ..charts import as_name, as_real
 from ..errors import InputError
 from ..sim import SimResult, Status
+from ..validation import as_name, as_real
 
 STATUSES = ("ok", "diverged", "failed", "error")
 """Run outcomes: the three :class:`qprr.sim.Status` values and ``error`` (an exception that is not a qprr error)."""

@@ -25,8 +25,8 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ..charts import as_int, as_name
 from ..errors import InputError, UnknownNameError
+from ..validation import as_int, as_name
 from .backends import BACKENDS, Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec

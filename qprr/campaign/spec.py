@@ -57,9 +57,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_file
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..sim.mismatch import ModelError
+from ..validation import as_file
 
 MODEL_PREFIX = "model."
 MODEL_PARAMS = tuple(MODEL_PREFIX + f.name for f in fields(ModelError))

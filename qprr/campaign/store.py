@@ -55,8 +55,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_file, as_output_path
 from ..errors import InputError, MissingDependencyError, QprrError
+from ..validation import as_file, as_output_path
 
 FORMATS = (".csv", ".parquet")
 META_VERSION = 2

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from ..charts import as_int, as_name, as_real
 from ..errors import InputError
+from ..validation import as_int, as_name, as_real
 
 _GROUPS = {"position": (0, 1, 2), "attitude": (3, 4, 5), "arm": None}
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..errors import InputError, QprrError
-from ..platform import Platform
+from ..model import Platform
 from ..sim import SimResult
 from ..sim.mismatch import perturbed
 from .metrics import metrics_of
@@ -36,8 +36,8 @@ def load_platform(name: str | Mapping, files: Mapping[str, str] | None = None) -
     table ``{urdf, rotors, ee_frame}``: :func:`qprr.from_urdf` on ``files``, the text of its URDF and
     rotor file (:meth:`CampaignSpec.platform_files`), so that a worker needs no copy of them.
     """
+    from ..model import from_urdf
     from ..nomenclature import build
-    from ..platform import from_urdf
     from ..platforms import NAMES, load
     from .spec import toml_loads
 

@@ -33,7 +33,7 @@ from __future__ import annotations
 from importlib.util import find_spec
 
 from ..errors import MissingDependencyError, UnknownNameError
-from ..platform import Platform
+from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17

@@ -29,8 +29,9 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..charts import State, as_int, as_real, as_vector, as_xi
+from ..charts import State, as_xi
 from ..errors import InputError, NotResetError
+from ..validation import as_int, as_real, as_vector
 
 
 class Reference:
@@ -80,7 +81,7 @@ class Controller(ABC):
 
     name: str = "controller"
     platform = None
-    """The :class:`~qprr.platform.Platform` controlled (its sizes are checked by :meth:`reset`), or None for a
+    """The :class:`~qprr.model.Platform` controlled (its sizes are checked by :meth:`reset`), or None for a
     controller not tied to one."""
     uses_applied_force: bool = False
     """Set True to have the simulator fill ``state.u_applied`` (costs ~1 us per step)."""

@@ -34,7 +34,7 @@ import pinocchio as pin
 
 from ..charts import State
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform, from_model
+from ..model import Platform, from_model
 from .base import Controller, Reference, check_reset
 from .inverse_dynamics import IDCGains, InverseDynamicsController
 

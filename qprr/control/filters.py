@@ -14,7 +14,7 @@ import math
 from math import asin, atan, cos, sin, sqrt
 from typing import TYPE_CHECKING
 
-from ..charts import as_int, as_real
+from ..validation import as_int, as_real
 
 if TYPE_CHECKING:
     from .base import Reference

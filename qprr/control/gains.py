@@ -48,7 +48,7 @@ import pinocchio as pin
 import tomllib
 
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
 from .impedance import ImpedanceGains
 from .inverse_dynamics import IDCGains
 from .mfc import MFCGains

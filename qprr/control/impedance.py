@@ -33,9 +33,10 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.linalg import expm
 
-from ..charts import State, as_array, as_int, as_real, as_vector, euler_rate_matrix, euler_to_rotation
+from ..charts import State, euler_rate_matrix, euler_to_rotation
 from ..errors import InputError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
+from ..validation import as_array, as_int, as_real, as_vector
 from .base import Reference
 from .inverse_dynamics import IDCGains, LayeredIDC
 

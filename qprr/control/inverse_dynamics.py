@@ -58,11 +58,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import FloatWriter, State, as_array, as_real, as_vector
+from ..charts import FloatWriter, State
 from ..errors import InputError, UnknownNameError
 from ..joint_friction import JointFriction
+from ..model import Platform, check_platform
 from ..payload import MassEstimator, PayloadModel
-from ..platform import Platform, check_platform
+from ..validation import as_array, as_real, as_vector
 from .base import Controller, Reference, check_reset, not_reset
 from .filters import SingleTiltReference, TiltReference
 

@@ -30,9 +30,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import State, as_array, as_int, as_real, rate_map
+from ..charts import State, rate_map
 from ..errors import InputError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
+from ..validation import as_array, as_int, as_real
 from .base import Controller, Reference, check_reset, not_reset
 from .filters import TiltReference
 

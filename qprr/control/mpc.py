@@ -2,7 +2,7 @@
 
 Not in the thesis: the controller it calls "MPC" (Annex A.2) is inverse dynamics at the desired
 state (qprr's ``dsid``) and optimises nothing over a horizon.  This one does, on the full
-coupled model of any :class:`~qprr.platform.Platform` (the same Pinocchio model the simulator
+coupled model of any :class:`~qprr.model.Platform` (the same Pinocchio model the simulator
 integrates), with its rotor set.  Install: ``pip install "qprr[mpc]"`` (crocoddyl 3.2.1 with
 pin 4.0.x, the pair its wheel is compiled for; docs/mpc.md).
 
@@ -98,9 +98,10 @@ from dataclasses import dataclass, fields
 import numpy as np
 import pinocchio as pin
 
-from ..charts import State, as_int, as_real, as_vector, xi_ddot_to_a, xi_to_qv
+from ..charts import State, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_int, as_real, as_vector
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
 from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus
@@ -220,7 +221,7 @@ def _check_platform(platform: Platform) -> tuple[list, np.ndarray, np.ndarray]:
     """Crocoddyl thrusters and the input bounds (u_lb, u_ub) of ``platform``; finite bounds are required.
 
     (Rotor positions, unit axes, spins and kappa are validated by :class:`qprr.rotors.Rotor` and the
-    free-flyer root by :class:`~qprr.platform.Platform`.)
+    free-flyer root by :class:`~qprr.model.Platform`.)
     """
     if not isinstance(platform, Platform):
         raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
@@ -276,7 +277,7 @@ class MPCController(Controller):
     Parameters
     ----------
     platform
-        The :class:`~qprr.platform.Platform` controlled: its model (free-flyer root), rotors (finite
+        The :class:`~qprr.model.Platform` controlled: its model (free-flyer root), rotors (finite
         thrust bounds needed), arm effort limits (finite), end-effector frame and thrust axis.
     trajectory
         Reference (``sample(t) -> TrajectorySample`` in thesis coordinates) previewed over the

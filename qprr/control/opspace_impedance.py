@@ -79,9 +79,10 @@ import pinocchio as pin
 from scipy.linalg import expm
 
 from .. import charts as ch
-from ..charts import State, as_array, as_vector
+from ..charts import State
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_array, as_vector
 from .base import Reference
 from .inverse_dynamics import IDCGains, InverseDynamicsController
 

@@ -28,10 +28,10 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector
 from ..errors import InputError, UnknownNameError
 from ..kinematics import cog_offset_body, com_jacobian_body
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_vector
 
 NO_EFFECT_TOL = 1e-9
 """The joint has no effect on the CoG offset when |g| < NO_EFFECT_TOL m_s / m: its axis is within 1e-9 rad of the

@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_int, as_real
+from ..model import Platform, check_platform
 from ..optim import Lexicographic, QPSettings
-from ..platform import Platform, check_platform
+from ..validation import as_int, as_real
 from .tasks.base import check_linearized
 
 MET = 1e-14

@@ -45,9 +45,9 @@ import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..charts import as_vector
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
-from ..platform import Platform, check_data, check_model_data, check_platform
+from ..model import Platform, check_data, check_model_data, check_platform
+from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
@@ -60,11 +60,11 @@ __all__ = ["METHODS", "OPTIONS", "ClikaOptions", "DLSOptions", "IKResult", "IKSo
 
 # ============================================================================ options
 def _check_pos(name: str, value, strict: bool = True) -> None:
-    ch.as_real(value, f"option {name}", positive=strict, nonnegative=not strict)
+    as_real(value, f"option {name}", positive=strict, nonnegative=not strict)
 
 
 def _check_int(name: str, value) -> None:
-    ch.as_int(value, f"option {name}", lo=1)
+    as_int(value, f"option {name}", lo=1)
 
 
 def _check_bool(name: str, value) -> None:
@@ -87,7 +87,7 @@ class Tolerances:
         for name in ("position_tol", "orientation_tol", "hover_tol"):
             _check_pos(name, getattr(self, name))
         _check_bool("collision_free", self.collision_free)
-        ch.as_int(self.collision_restarts, "option collision_restarts", lo=0)
+        as_int(self.collision_restarts, "option collision_restarts", lo=0)
 
 
 @dataclass(frozen=True)
@@ -112,7 +112,7 @@ class ClikaOptions(Tolerances):
         if np.any(k <= 0):
             raise InputError(f"option gains must be positive, got {k.tolist()}")
         if self.weights is not None:
-            w = ch.as_array(self.weights, "option weights")
+            w = as_array(self.weights, "option weights")
             if w.ndim != 1 or w.shape[0] < 6 or np.any(~np.isfinite(w)) or np.any(w <= 0):
                 raise InputError(f"option weights must be 6 + n_arm positive numbers, got {np.asarray(self.weights).tolist()}")
         _check_pos("dt", self.dt)
@@ -171,7 +171,7 @@ class QPOptions(Tolerances):
         if self.require_hover is not None:
             _check_bool("require_hover", self.require_hover)
         if self.posture is not None:
-            ch.as_array(self.posture, "option posture")
+            as_array(self.posture, "option posture")
         if self.levels is not None:
             ok = len(self.levels) > 0 and all(len(level) > 0 and all(isinstance(t, Task) for t in level) for level in self.levels)
             if not ok:
@@ -247,12 +247,12 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         p, R = target.translation.copy(), target.rotation.copy()
     elif isinstance(target, (tuple, list)) and len(target) == 2:
         p = as_vector(target[0], 3, "target position")
-        R = ch.as_array(target[1], "target rotation")
+        R = as_array(target[1], "target rotation")
         if R.shape != (3, 3):
             raise ShapeError(f"target rotation must have shape (3, 3), got {R.shape}")
     else:
         try:
-            p = ch.as_array(target, "target")
+            p = as_array(target, "target")
         except InputError:
             raise InputError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position (3,), got {target!r}") from None
         if p.shape != (3,):
@@ -290,7 +290,7 @@ def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[fl
     if not (isinstance(p_d, np.ndarray) and p_d.shape == (3,) and p_d.dtype.kind == "f"):
         p_d = as_vector(p_d, 3, "p_d")
     if R_d is not None and not (isinstance(R_d, np.ndarray) and R_d.shape == (3, 3) and R_d.dtype.kind == "f"):
-        R_d = ch.as_matrix(R_d, (3, 3), "R_d")
+        R_d = as_matrix(R_d, (3, 3), "R_d")
     x, y, z = M.translation.tolist()
     px, py, pz = p_d.tolist()
     if not math.isfinite(px + py + pz):
@@ -619,7 +619,7 @@ def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 
     thrust.  A list you may edit and pass back through the ``levels`` option.
     """
     check_platform(platform)
-    base_yaw = ch.as_real(base_yaw, "base_yaw", unit="rad")
+    base_yaw = as_real(base_yaw, "base_yaw", unit="rad")
     q_arm_posture = platform.check_arm_limits(q_arm_posture, "q_arm_posture")
     if not isinstance(target, pin.SE3):
         target = as_vector(target, 3, "target")

@@ -30,8 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_array, as_int, as_vector
 from ..errors import InputError, ShapeError
+from ..validation import as_array, as_int, as_vector
 
 
 def _per_rotor(value, n: int, name: str) -> np.ndarray:

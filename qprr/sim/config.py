@@ -14,8 +14,8 @@ import math
 import os
 from dataclasses import dataclass
 
-from ..charts import as_int, as_real
 from ..errors import InputError, UnknownNameError
+from ..validation import as_int, as_real
 from .integrators import STEPPERS
 
 INTEGRATORS = tuple(STEPPERS)

@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector
 from ..errors import InputError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_vector
 from .environment import Environment
 
 

@@ -19,8 +19,8 @@ from typing import Protocol
 
 import numpy as np
 
-from ..charts import as_array, as_int, as_real
 from ..errors import InputError, ShapeError
+from ..validation import as_array, as_int, as_real
 
 
 def check_values_args(t, rng, n_xi) -> tuple[np.ndarray, int]:

@@ -53,11 +53,12 @@ import pinocchio as pin
 
 from .. import charts as ch
 from ..actuation import Allocator
-from ..charts import State, as_vector
+from ..charts import State
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
 from ..joint_friction import JointFriction
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_int, as_vector
 from . import disturbances as dist
 from .actuators import RotorDynamics
 from .config import INTEGRATORS, Limits, SimConfig, SimInputs, resolve
@@ -639,4 +640,4 @@ def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) ->
 
 def check_sample(sample, n: int, nxi: int = 9) -> None:
     """Public form of the trajectory sample check (shape (n, 6 + n_arm), finite)."""
-    _check_sample(sample, ch.as_int(n, "n", lo=0), ch.as_int(nxi, "nxi", lo=6))
+    _check_sample(sample, as_int(n, "n", lo=0), as_int(nxi, "nxi", lo=6))

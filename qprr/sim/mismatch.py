@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from ..actuation import Allocator
 from ..errors import InputError
-from ..platform import Platform
+from ..model import Platform
 
 
 def _factor(value, name: str) -> float:

@@ -12,9 +12,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_real, as_vector
 from ..errors import InputError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
+from ..validation import as_real, as_vector
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_file, as_real, wrap_angle, xi_names
+from ..charts import wrap_angle, xi_names
 from ..errors import InputError, ShapeError
+from ..validation import as_file, as_real
 
 FORMAT_VERSION = 3
 """Version of the .npz layout written by :meth:`SimResult.save`.

@@ -53,8 +53,8 @@ import pinocchio as pin
 from scipy.linalg import expm, solve_continuous_lyapunov
 
 from .. import charts as ch
-from ..charts import as_array, as_int, as_real, as_vector
 from ..errors import InputError, ShapeError
+from ..validation import as_array, as_int, as_real, as_vector
 
 FT = 0.3048
 """One foot [m] (the MIL low-altitude formulas are in feet)."""

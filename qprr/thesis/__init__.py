@@ -3,7 +3,7 @@
 K. Bouzgou, *Contribution a l'architecture, la modelisation et la commande d'un bras
 manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers refer to it.
 
-* :func:`load` - the Q-PRR as a :class:`qprr.platform.Platform` (the flagship instance of the
+* :func:`load` - the Q-PRR as a :class:`qprr.model.Platform` (the flagship instance of the
   generic core), from :mod:`qprr.thesis.params` (Tables 3.1-3.3 and the values the thesis does
   not print, each with its provenance) and the URDF of :mod:`qprr.thesis.urdf`;
 * :mod:`qprr.thesis.printed` - closed forms as printed and corrected; :mod:`qprr.thesis.checks`

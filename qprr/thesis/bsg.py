@@ -23,11 +23,12 @@ import math
 
 import numpy as np
 
-from ..charts import State, as_real, checked_module
+from ..charts import State
 from ..control.base import Controller, Reference, check_reset
 from ..control.filters import CommandFilter
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_real, checked_module
 from .params import QPRRParams
 from .robot import params_of
 

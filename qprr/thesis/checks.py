@@ -30,9 +30,10 @@ from .. import dynamics as dyn
 from .. import kinematics as kin
 from .. import mdh
 from ..actuation import Allocator, input_map_matrix
-from ..charts import as_array, as_int, as_vector, check_rotation, unit_quaternion
+from ..charts import check_rotation, unit_quaternion
 from ..errors import InputError, ShapeError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
+from ..validation import as_array, as_int, as_vector
 from . import printed as th
 from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
 

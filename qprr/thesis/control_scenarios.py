@@ -31,13 +31,13 @@ from pathlib import Path
 import numpy as np
 
 from ..actuation import IdealAllocator
-from ..charts import as_vector
 from ..control import IDCGains, InverseDynamicsController
 from ..errors import UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..sim import SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
+from ..validation import as_vector
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from ..campaign.spec import MODEL_PREFIX, model_error
 from ..campaign.targets import scale_bandwidth
 from ..errors import InputError, UnknownNameError
-from ..platform import check_platform
+from ..model import check_platform
 from ..sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
 from ..sim.mismatch import perturbed
 from .bsg import CogStabilizer

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector, check_rotation, checked_module
+from ..charts import check_rotation
 from ..errors import InputError, UnknownNameError
 from ..ik.solver import (
     OPTIONS as _GENERIC_OPTIONS,
@@ -40,7 +40,8 @@ from ..ik.solver import (
     parse_target,
     prepare_xi0,
 )
-from ..platform import Platform, check_data
+from ..model import Platform, check_data
+from ..validation import as_vector, checked_module
 from .params import QPRRParams
 from .robot import params_of
 

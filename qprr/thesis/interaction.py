@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_vector, checked_module
+from ..validation import as_vector, checked_module
 from .printed import T_3_25, J_eb_4_26, rotation_3_4
 
 

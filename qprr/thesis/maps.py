@@ -13,7 +13,7 @@ import numpy as np
 from ..analysis._common import MapReference
 from ..analysis.singularity import SingularityResult
 from ..errors import InputError
-from ..platform import Platform
+from ..model import Platform
 from . import printed
 from .params import QPRRParams
 

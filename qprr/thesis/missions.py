@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from ..charts import as_interval, as_real, as_vector, checked_module
 from ..errors import InputError, UnknownNameError
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
+from ..validation import as_interval, as_real, as_vector, checked_module
 
 PATHS = ("xy", "line")
 """Horizontal paths of the missions: x then y (Fig. 6.13), or the line y = a x + b (Sec. 6.3.1.2)."""

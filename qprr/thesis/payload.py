@@ -12,8 +12,9 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_int, as_matrix, as_real, as_vector, checked_module, rot_y
+from ..charts import rot_y
 from ..errors import InputError
+from ..validation import as_int, as_matrix, as_real, as_vector, checked_module
 from .params import QPRRParams
 from .printed import T_3_25, com_3_78_corrected, rotation_3_4
 

@@ -24,10 +24,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_vector, check_rotation, checked_module, rot_y, rot_z
+from ..charts import check_rotation, rot_y, rot_z
 from ..errors import InputError
 from ..mdh import MDHRow, kk_transform
 from ..mdh import chain as chain_frames
+from ..validation import as_vector, checked_module
 from .params import QPRRParams
 
 E3 = np.array([0.0, 0.0, 1.0])

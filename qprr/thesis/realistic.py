@@ -36,11 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_real, as_vector
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
 from ..sim.actuators import RotorDynamics
 from ..sim.disturbances import Disturbances
 from ..sim.wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
+from ..validation import as_real, as_vector
 from .robot import load, params_of
 
 TIME_CONSTANT = 0.005

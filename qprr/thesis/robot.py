@@ -1,4 +1,4 @@
-"""The Q-PRR as a :class:`qprr.platform.Platform`: its rotors, its loader and the check that URDF and parameters agree.
+"""The Q-PRR as a :class:`qprr.model.Platform`: its rotors, its loader and the check that URDF and parameters agree.
 
 Re-exported by :mod:`qprr.thesis`; the thesis's modules import from here (not from the package's ``__init__``).
 """
@@ -9,7 +9,7 @@ import math
 from pathlib import Path
 
 from ..errors import InputError, UnknownNameError
-from ..platform import Platform, from_urdf
+from ..model import Platform, from_urdf
 from ..rotors import Rotor
 from .params import LAYOUTS, VARIANTS, QPRRParams, thesis_params
 from .urdf import URDF_PATH, build_urdf
@@ -34,7 +34,7 @@ def rotor_set(params: QPRRParams, layout: str = "plus") -> tuple[Rotor, ...]:
 
 
 def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_path: Path | str | None = None) -> Platform:
-    """The Q-PRR as a :class:`~qprr.platform.Platform` (free flyer, nq = 10, nv = 9).
+    """The Q-PRR as a :class:`~qprr.model.Platform` (free flyer, nq = 10, nv = 9).
 
     ``params``: a :class:`QPRRParams`, a variant name (``"thesis"`` default: Hypothesis 1;
     ``"cad"``: Table 3.1 CoMs and the arm base as a body), or None.  ``layout``: ``"plus"``

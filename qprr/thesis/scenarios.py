@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import kinematics as kin
-from ..charts import as_interval, as_vector, checked_module, euler_to_rotation_batch, force_to_xi_batch
+from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..control import (
     DecoupledController,
     DesiredStateInverseDynamics,
@@ -62,6 +62,7 @@ from ..sim import (
     simulate,
 )
 from ..trajectory import Hold, MultiPhase, Phase, Spiral
+from ..validation import as_interval, as_vector, checked_module
 from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains

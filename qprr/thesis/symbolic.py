@@ -46,8 +46,9 @@ except ImportError as exc:  # pragma: no cover - exercised only without the test
         'qprr.thesis.symbolic needs sympy, which is in the test extra: pip install "qprr[test]"'
     ) from exc
 
-from ..charts import EULER_TOL, as_vector, checked_module
+from ..charts import EULER_TOL
 from ..errors import EulerSingularityError, InputError
+from ..validation import as_vector, checked_module
 from .params import QPRRParams, thesis_params
 
 XI_NAMES = ("x", "y", "z", "phi", "theta", "psi", "r0", "theta2", "theta3")

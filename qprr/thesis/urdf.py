@@ -118,7 +118,7 @@ def build_urdf(params: QPRRParams | None = None, *, layout: str = "plus", visual
 
 def write_urdf(path: Path | str = URDF_PATH, params: QPRRParams | None = None, *, layout: str = "plus") -> Path:
     """Write the generated URDF to ``path`` and return it."""
-    from ..charts import as_output_path
+    from ..validation import as_output_path
 
     path = as_output_path(path, "path", suffixes=(".urdf",))
     text = build_urdf(params, layout=layout)

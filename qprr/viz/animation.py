@@ -23,9 +23,9 @@ from pathlib import Path
 import numpy as np
 
 from .. import charts as ch
-from ..charts import as_array, as_real
 from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_array, as_real
 from .geometry import characteristic_length, rotor_radius
 from .scene import RobotPose, arm_chain, robot_pose
 
@@ -59,20 +59,20 @@ class AnimationInfo:
 def _check_inputs(platform: Platform, t, xi, f, contact):
     if not isinstance(platform, Platform):
         raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
-    t = ch.as_array(t, "t")
+    t = as_array(t, "t")
     if t.ndim != 1 or t.shape[0] < 1:
         raise ShapeError(f"t must have shape (n,) with n >= 1, got {t.shape}")
     n = t.shape[0]
     if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
         raise InputError("t must be finite and non-decreasing [s]")
-    xi = ch.as_array(xi, "xi")
+    xi = as_array(xi, "xi")
     if xi.shape != (n, platform.n_xi):
         raise ShapeError(f"xi must have shape ({n}, {platform.n_xi}) for platform {platform.name!r} "
                          f"(6 + {platform.n_arm} arm joints), got {xi.shape}")
     out = [t, xi]
     for name, a, width in (("f", f, platform.n_rotors), ("contact_force_world", contact, 3)):
         if a is not None:
-            a = ch.as_array(a, name)
+            a = as_array(a, name)
             if a.shape != (n, width):
                 raise ShapeError(f"{name} must have shape ({n}, {width}), got {a.shape}")
         out.append(a)

@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError
-from ..platform import Platform, check_platform
+from ..model import Platform, check_platform
 
 _HUB = np.array([0.25, 0.27, 0.32, 1.0])
 _BOOM = np.array([0.35, 0.35, 0.38, 1.0])

@@ -18,12 +18,13 @@ import pinocchio as pin
 
 from .. import charts as ch
 from ..actuation import Allocator
-from ..charts import as_vector, as_xi
+from ..charts import as_xi
 from ..errors import InputError, ShapeError
 from ..ik import IKResult, IKSolver, QPOptions
 from ..ik.tasks import ComTask, HoverTask, PoseTask, PositionTask, PostureTask
 from ..kinematics import cog_offset_body
-from ..platform import Platform, check_model_data, check_platform
+from ..model import Platform, check_model_data, check_platform
+from ..validation import as_array, as_matrix, as_vector
 from .run import RunLog
 from .scene import hover_report
 
@@ -95,14 +96,14 @@ def ik_path(platform: Platform, t, p_world, R_world=None, *, hover: bool = True,
     also when a bound is violated); ``x_cm`` of the path the CoG offset from the thrust axis.
     """
     check_platform(platform)
-    p_world = ch.as_matrix(p_world, (None, 3), "p_world")
-    t = ch.as_array(t, "t")
-    p = ch.as_array(p_world, "p_world")
+    p_world = as_matrix(p_world, (None, 3), "p_world")
+    t = as_array(t, "t")
+    p = as_array(p_world, "p_world")
     n = t.shape[0] if t.ndim == 1 else -1
     if n < 1 or p.shape != (n, 3):
         raise ShapeError(f"t must have shape (n,) and p_world (n, 3); got {t.shape} and {p.shape}")
     if R_world is not None:
-        R_world = ch.as_array(R_world, "R_world")
+        R_world = as_array(R_world, "R_world")
         if R_world.shape != (n, 3, 3):
             raise ShapeError(f"R_world must have shape ({n}, 3, 3), got {R_world.shape}")
     data = platform.data()

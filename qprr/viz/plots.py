@@ -43,10 +43,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_int, as_vector, euler_to_rotation_batch, force_to_xi_batch
+from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..registry import SCENARIOS
 from ..sim import SimResult
+from ..validation import as_int, as_vector
 
 DEG = 180.0 / math.pi
 """Degrees per radian (for figures that choose degrees explicitly; the panels here draw radians)."""

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_array
 from ..errors import InputError, NonFiniteError, ShapeError
+from ..validation import as_array
 
 ARRAYS = ("t", "xi", "f", "arm_effort", "contact_wrench_world")
 """Array attributes of a run, in file order (``t`` and ``xi`` required)."""

@@ -17,7 +17,7 @@ from ..actuation import Allocator
 from ..dynamics import generalized_gravity
 from ..errors import InputError
 from ..kinematics import check_q
-from ..platform import Platform, check_model_data, check_platform
+from ..model import Platform, check_model_data, check_platform
 
 
 @dataclass(frozen=True)

@@ -51,7 +51,8 @@ from ..actuation import Allocator
 from ..errors import InputError, ShapeError, UnknownNameError
 from ..ik import IKResult
 from ..kinematics import cog_offset_body
-from ..platform import Platform
+from ..model import Platform
+from ..validation import as_vector
 from .geometry import characteristic_length, rotor_radius, visual_model
 from .ikpath import ik_solve
 from .run import RunLog, as_run, load_run
@@ -90,7 +91,7 @@ class Viewer:
 
     Parameters
     ----------
-    platform : the :class:`~qprr.platform.Platform` to show.
+    platform : the :class:`~qprr.model.Platform` to show.
     port : TCP port on 127.0.0.1 (0: any free port; see :attr:`url`).  A port in use raises
         :class:`~qprr.errors.PortInUseError` (viser would silently take the next one).
     xi : initial thesis coordinates (default: the neutral arm, level, 1 m above the origin).
@@ -266,7 +267,7 @@ class Viewer:
         Returns the :class:`~qprr.ik.IKResult` the viewer shows; the robot moves to its
         configuration when the IK returned one.
         """
-        p_world = ch.as_vector(p_world, 3, "p_world")
+        p_world = as_vector(p_world, 3, "p_world")
         with self._lock:
             if R_world is not None:
                 R_world = ch.check_rotation(R_world, "R_world")

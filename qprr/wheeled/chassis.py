@@ -23,8 +23,9 @@ from enum import Enum
 
 import numpy as np
 
-from ..charts import as_real, as_vector, rot_z, wrap_angle
+from ..charts import rot_z, wrap_angle
 from ..errors import InputError
+from ..validation import as_real, as_vector
 from ._backend import is_symbolic, matrix
 from .wheels import Wheel, WheelKind
 

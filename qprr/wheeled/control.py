@@ -32,8 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_real, as_vector, wrap_angle
+from ..charts import wrap_angle
 from ..errors import InputError
+from ..validation import as_real, as_vector
 
 
 def _gain(name: str, value: float) -> float:

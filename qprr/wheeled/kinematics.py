@@ -19,8 +19,8 @@ from abc import ABC, abstractmethod
 
 import numpy as np
 
-from ..charts import as_vector
 from ..errors import InputError
+from ..validation import as_vector
 from ._backend import is_symbolic, sympy_module
 from .chassis import WheeledRobot, rotation
 from .wheels import WheelKind

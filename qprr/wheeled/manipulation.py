@@ -40,9 +40,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..charts import as_real, as_vector
 from ..errors import InputError, LimitError, SolverError, UnknownNameError
 from ..optim import Lexicographic, QPSettings
+from ..validation import as_real, as_vector
 from .kinematics import KinematicModel
 from .robots import FrontTricycle, RearTricycle
 

@@ -13,8 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..charts import as_int, as_vector, rot_z
+from ..charts import rot_z
 from ..errors import InputError
+from ..validation import as_int, as_vector
 from ..viz.plots import figure_path, legend, new_figure
 from .chassis import ICRStatus, WheeledRobot
 from .kinematics import KinematicModel

@@ -29,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..charts import as_real, checked_args
 from ..errors import InputError, KinematicSingularityError, UnknownNameError
+from ..validation import as_real, checked_args
 from ._backend import exact, is_symbolic, matrix
 from .chassis import AckermannSteering, Mobility, NamedSteering, SynchroSteering, WheeledRobot, wheel_at
 from .kinematics import KinematicModel, check_duration

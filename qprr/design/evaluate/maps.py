@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...analysis import balance, capacity, hover, singularity, workspace
-from ...platform import check_platform
+from ...model import check_platform
 from ..spec.metrics import METRICS
 from ..spec.study import Effort
 

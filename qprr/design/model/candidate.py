@@ -1,7 +1,7 @@
 """A candidate design: an architecture of (2.1) and its parameter values, built into a platform.
 
 :func:`build_candidate` turns ``("Q-PRR", {"reach": 0.28, ...})`` into a
-:class:`~qprr.platform.Platform` with :func:`qprr.nomenclature.build`: the revolute links share
+:class:`~qprr.model.Platform` with :func:`qprr.nomenclature.build`: the revolute links share
 ``reach`` in the ratio ``taper`` (link k+1 = taper x link k), a prismatic joint gets the
 ``slider_link`` length and +-``slider_stroke``/2 limits, every link's mass comes from the
 :class:`~qprr.design.spec.MassModel`, and the rotors are sized so that every design has the same

@@ -30,8 +30,8 @@ import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from ...charts import as_file
 from ...errors import QprrError
+from ...validation import as_file
 from ._check import fail, integer, number, table_keys
 from .mass import MassModel
 from .metrics import METRICS

@@ -7,9 +7,9 @@ from abc import ABC, abstractmethod
 import numpy as np
 import pinocchio as pin
 
-from ...charts import as_vector
 from ...errors import InputError, NonFiniteError, ShapeError
-from ...platform import Platform
+from ...model import Platform
+from ...validation import as_vector
 
 
 def update_kinematics(platform: Platform, data: pin.Data, q: np.ndarray) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ...charts import as_vector
+from ...validation import as_vector
 from .base import Task, scaled, sqrt_weights, task_name
 
 

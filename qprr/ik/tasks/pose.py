@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ...charts import as_vector
 from ...errors import InputError
-from ...platform import Platform, check_platform
+from ...model import Platform, check_platform
+from ...validation import as_vector
 from .base import Task, scaled, sqrt_weights, task_name
 
 

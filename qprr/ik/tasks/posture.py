@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...charts import as_vector
-from ...platform import check_platform
+from ...model import check_platform
+from ...validation import as_vector
 from .base import Task, scaled, sqrt_weights, task_name
 
 

@@ -401,7 +401,7 @@ class Platform:
 
     def check_arm_limits(self, q_arm, name: str = "q_arm") -> np.ndarray:
         """Return ``q_arm`` (n_arm,) if finite and inside the joint limits, else raise :class:`LimitError`."""
-        from .charts import as_vector
+        from .validation import as_vector
 
         q_arm = as_vector(q_arm, self.n_arm, name)
         bad = [k for k, j in enumerate(self.arm) if not j.lower - 1e-12 <= q_arm[k] <= j.upper + 1e-12]
@@ -822,7 +822,7 @@ def from_urdf(
     (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
     ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).
     """
-    from .charts import as_real
+    from .validation import as_real
 
     text, source = _urdf_text(urdf)
     g = as_real(g, "g", nonnegative=True, unit="m/s^2")  # g = 0: free flight (conservation tests)
@@ -838,8 +838,8 @@ def from_urdf(
     model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
     rotor_source = None
     if isinstance(rotors, (str, Path)):
-        from .charts import as_file
         from .rotors import read_rotor_file
+        from .validation import as_file
 
         rotor_source = str(rotors)
         if Path(rotors).suffix.lower() != ".toml":
@@ -853,7 +853,7 @@ def from_urdf(
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:
-    from .charts import as_file
+    from .validation import as_file
 
     if isinstance(urdf, Path) or (isinstance(urdf, str) and not urdf.lstrip().startswith("<")):
         path = as_file(urdf, "urdf", what="URDF file")
