@@ -92,24 +92,26 @@ class Progress:
         else:
             options = {"file": _Lines(self.stream), "mininterval": LOG_INTERVAL if interval is None else interval, "miniters": 1,
                        "ascii": True, "bar_format": LOG_FORMAT}
+        self._done, self._total = initial, total  # kept here too: a disabled tqdm does not count
         self._bar = tqdm(total=total, desc=label, initial=initial, unit=unit, disable=self.quiet, leave=True, **options)
 
     @property
     def n(self) -> int:
         """Units done so far."""
-        return int(self._bar.n)
+        return self._done
 
     @property
     def total(self) -> int:
-        return int(self._bar.total)
+        return self._total
 
     def update(self, n: int = 1) -> None:
         """``n`` more units done."""
+        self._done += n
         self._bar.update(n)
 
     def update_to(self, done: int) -> None:
         """``done`` units done in all."""
-        self._bar.update(done - self._bar.n)
+        self.update(done - self._done)
 
     def set_postfix(self, text: str) -> None:
         """A text after the counts (``3 failed``), shown from the next line on."""
