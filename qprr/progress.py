@@ -136,8 +136,8 @@ class Progress:
 class FractionProgress:
     """A ``progress(fraction, message)`` callable (the design maps' hook) drawing one :class:`Progress` per message.
 
-    The fraction in [0, 1] is shown as a percentage; a new message closes the previous
-    bar and opens the next.  Call :meth:`close` at the end.
+    The fraction in [0, 1] is shown as a percentage; a fraction of 1 closes the bar, a new message
+    closes the previous one and opens the next.  :meth:`close` ends a bar left open.
     """
 
     def __init__(self, *, quiet: bool = False, stream: TextIO | None = None, interval: float | None = None) -> None:
@@ -151,6 +151,8 @@ class FractionProgress:
             self._bar = Progress(100, message, quiet=self.quiet, stream=self.stream, unit="%", interval=self.interval)
             self._message = message
         self._bar.update_to(min(100, max(0, int(100 * fraction))))
+        if fraction >= 1.0:
+            self.close()
 
     def close(self) -> None:
         if self._bar is not None:

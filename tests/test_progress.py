@@ -104,8 +104,10 @@ def test_fraction_progress_one_display_per_message():
     for k in range(11):
         hook(k / 10, "workspace map")
     hook(0.5, "CoG balance")
-    hook(1.0, "CoG balance")
+    hook(1.0, "CoG balance")  # a fraction of 1 closes the bar: close() after it adds nothing
+    text = log.getvalue()
     hook.close()
+    assert log.getvalue() == text
     lines = log.getvalue().splitlines()
     assert "\r" not in log.getvalue()
     assert [s.split(":")[0] for s in lines] == ["workspace map"] * 2 + ["CoG balance"] * 2
