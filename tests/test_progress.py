@@ -118,3 +118,18 @@ def test_fraction_progress_one_display_per_message():
 def test_bad_arguments_are_named(kwargs):
     with pytest.raises(InputError, match="total|interval"):
         Progress(**kwargs, stream=io.StringIO())
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_analyze_shows_progress_in_a_log_by_default_and_quiet_silences_it(quiet, capsys):
+    from qprr.analysis.cli import main
+
+    assert main(["analyze", "hover", "--samples", "2000", "--payload", "0", *(["--quiet"] if quiet else [])]) == 0
+    captured = capsys.readouterr()
+    assert "hover map of" in captured.out  # the map ran
+    lines = [s for s in captured.err.splitlines() if s.startswith("hover map: ")]
+    if quiet:
+        assert captured.err == ""
+    else:
+        assert "\r" not in captured.err  # capsys's stderr is no terminal: plain lines
+        assert lines[0].startswith("hover map: 0/100 (0%)") and lines[-1].startswith("hover map: 100/100 (100%)")
