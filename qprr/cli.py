@@ -18,6 +18,7 @@ from pathlib import Path
 from .analysis import cli as analysis_cli
 from .campaign import cli as campaign_cli
 from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
+from .design import cli as design_cli
 from .errors import QprrError
 from .registry import CHECKS, COMMANDS, COMPARISONS
 from .version import __version__
@@ -101,6 +102,8 @@ def _animate(res, platform, path: Path) -> None:
 def _summary(res) -> str:
     import numpy as np
 
+    from .control.mpc_stats import solve_summary
+
     e = res.rmse()
     kinds = ("m",) * 3 + ("rad",) * 3 + tuple("m" if k == "prismatic" else "rad" if k == "revolute" else "m or rad"
                                                for k in (res.arm_kinds or ("",) * res.n_arm))
@@ -109,6 +112,9 @@ def _summary(res) -> str:
              "RMSE (6.26): " + ", ".join(f"{k} {v:.3e} {u}" for (k, v), u in zip(e.items(), kinds)),
              f"rotor saturation on {100 * res.saturation_fraction():.2f} % of the steps; "
              f"max |CoG offset in B| = {1e3 * float(np.max(np.hypot(res.x_cm[:, 0], res.x_cm[:, 1]))):.2f} mm"]
+    mpc_line = solve_summary(res.metrics)  # the MPC's solve statistics (None for other controllers)
+    if mpc_line is not None:
+        lines.append(mpc_line)
     return "\n".join(lines)
 
 
@@ -218,7 +224,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
         register_cli(sub)
-    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli):  # they import their optional packages when a command runs
+    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli, design_cli):  # optional packages load when a command runs
         group.register_cli(sub)
     return parser
 

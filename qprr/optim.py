@@ -36,10 +36,11 @@ from proxsuite import proxqp
 
 from .errors import InputError, SolverError
 
-try:  # LAPACK's SVD without numpy.linalg's wrapper: 3x cheaper on these tiny matrices
+try:  # LAPACK without numpy.linalg's wrapper: 3x cheaper on these tiny matrices
     from scipy.linalg.lapack import dgesdd as _dgesdd  # scipy is a dependency of proxsuite
+    from scipy.linalg.lapack import dposv as _dposv
 except ImportError:  # pragma: no cover
-    _dgesdd = None
+    _dgesdd = _dposv = None
 
 _SOLVED = proxqp.QPSolverOutput.PROXQP_SOLVED
 _INFEASIBLE = (proxqp.QPSolverOutput.PROXQP_PRIMAL_INFEASIBLE, proxqp.QPSolverOutput.PROXQP_DUAL_INFEASIBLE)
@@ -54,6 +55,27 @@ def right_singular(B: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             return s, Vt
     _, s, Vt = np.linalg.svd(B)
     return s, Vt
+
+
+def _spd_solve(H: np.ndarray, b: np.ndarray) -> np.ndarray | None:
+    """H^-1 b for a symmetric positive definite H by Cholesky (None if H is not positive definite to working precision)."""
+    if _dposv is None:  # pragma: no cover
+        try:
+            return np.linalg.solve(H, b)
+        except np.linalg.LinAlgError:
+            return None
+    _, x, info = _dposv(H, b)
+    return x if info == 0 and bool(np.isfinite(x).all()) else None
+
+
+def _within(Cz: np.ndarray, lo: np.ndarray, up: np.ndarray) -> bool:
+    """lo <= Cz <= up within 1e-10 of the bound scale (1 + the largest finite |bound|)."""
+    if not Cz.size:
+        return True
+    big = max(-float(lo.min()), float(up.max()), float(lo.max()), -float(up.min()))
+    scale = 1.0 + (big if big < np.inf else _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up)))
+    ftol = 1e-10 * scale
+    return float((Cz - lo).min()) >= -ftol and float((up - Cz).min()) >= -ftol
 
 
 def null_space(B: np.ndarray, tol: float) -> np.ndarray:
@@ -113,13 +135,17 @@ class QPSettings:
 
 @dataclass(frozen=True)
 class LexResult:
-    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k||; ``iterations`` ProxQP iterations summed over levels;
-    ``x_levels[k]`` the solution after level k (the optimum of levels 1..k)."""
+    """``x`` the solution; ``residuals[k]`` = ||A_k x - b_k|| (computed when asked); ``iterations`` ProxQP iterations
+    summed over levels; ``x_levels[k]`` the solution after level k (the optimum of levels 1..k)."""
 
     x: np.ndarray
-    residuals: tuple[float, ...]
+    levels: tuple
     iterations: int
     x_levels: tuple = ()
+
+    @property
+    def residuals(self) -> tuple[float, ...]:
+        return tuple(float(np.linalg.norm(A @ self.x - b)) for A, b in self.levels)
 
 
 class Lexicographic:
@@ -142,13 +168,19 @@ class Lexicographic:
     exact_fallback : when ProxQP stops at its iteration limit on a level, solve that level
         exactly with :func:`active_set_qp` instead of raising (an infeasibility verdict on a
         level, always a false positive since z = 0 is feasible, takes that path in any case).
+    active_set_first : solve each level first by :func:`kkt_on_active_set` from the bounds that
+        were active at that level in the previous call (none after :meth:`reset`); ProxQP (and the
+        polish) only when those steps do not end at a KKT point.  The answer is then the exact
+        optimum without a QP set-up: a sequence of similar problems (the IK's Newton iterations)
+        mostly costs one linear solve per level.
 
     The object owns its ProxQP instances; it can be deep-copied or pickled (the copy builds its
     own QPs on first use).
     """
 
     def __init__(self, n: int, bounded=None, *, settings: QPSettings | None = None, regularization: float = 0.0,
-                 rank_tol: float = 1e-9, warm_start: bool = True, exact_fallback: bool = False, polish: bool = True) -> None:
+                 rank_tol: float = 1e-9, warm_start: bool = True, exact_fallback: bool = False, polish: bool = True,
+                 active_set_first: bool = False) -> None:
         if not (isinstance(n, (int, np.integer)) and n >= 1):
             raise InputError(f"n must be an integer >= 1, got {n!r}")
         if not (np.isfinite(regularization) and regularization >= 0):
@@ -168,6 +200,8 @@ class Lexicographic:
         self.warm_start = bool(warm_start)
         self.exact_fallback = bool(exact_fallback)
         self.polish = bool(polish)
+        self.active_set_first = bool(active_set_first)
+        self._active: dict[int, tuple] = {}
         self._C_full = np.eye(n)[self.bounded]
         self._qps: dict[int, object] = {}
         self._warm: dict[int, tuple] = {}
@@ -179,6 +213,7 @@ class Lexicographic:
         state["_qps"] = {}  # ProxQP objects are rebuilt by the copy (copying them is unsafe)
         state["_warm"] = {}
         state["_fresh"] = set()
+        state["_active"] = {}
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -199,6 +234,7 @@ class Lexicographic:
         self._warm.clear()
         self._qps.clear()
         self._fresh.clear()
+        self._active.clear()
 
     # ------------------------------------------------------------------ QP
     def _qp(self, m: int, n_in: int):
@@ -225,9 +261,22 @@ class Lexicographic:
         of 1e-11 at a joint limit).
         """
         m = H.shape[0]
+        if self.active_set_first and self._active.get(level) is None:
+            z = _spd_solve(H, -g)  # the usual case: no bound active, one Cholesky solve
+            if z is not None and _within(C @ z, lo, up):
+                return z, 0
         keep = np.abs(C).max(axis=1) > self.rank_tol * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
         if not keep.all():
             C, lo, up = C[keep], lo[keep], up[keep]
+        if self.active_set_first:
+            guess = self._active.get(level)
+            nc = C.shape[0]
+            at_lo, at_up = (guess[0].copy(), guess[1].copy()) if guess is not None and guess[0].shape[0] == nc else (
+                np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
+            out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
+            if out is not None:
+                self._active[level] = (out[1], out[2]) if (out[1].any() or out[2].any()) else None
+                return out[0], 0
         qp, fresh = self._qp(m, C.shape[0])
         if fresh:
             qp.init(H, g, None, None, C, lo, up)
@@ -322,8 +371,7 @@ class Lexicographic:
             if k < len(levels) - 1:
                 N = null_space(B, tol)
                 Z = N if Z is None else Z @ N
-        residuals = tuple(float(np.linalg.norm(A @ x - b)) for A, b in levels)
-        return LexResult(x, residuals, iters, tuple(x_levels))
+        return LexResult(x, tuple(levels), iters, tuple(x_levels))
 
 
 def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, z: np.ndarray,
@@ -342,11 +390,10 @@ def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
     where the objective is nearly flat (a damping of 1e-7), where ProxQP's answer can be off by
     1e-7 within its tolerance.
     """
-    n = H.shape[0]
     n_eq = 0 if Aeq is None else Aeq.shape[0]
     fin_lo, fin_up = np.isfinite(lo), np.isfinite(up)
-    scale = 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
-    ftol = 1e-10 * scale  # bounds nearly implied by the equalities make K ill-conditioned (cond 1e11 seen)
+    scale = _bound_scale(lo, up, fin_lo, fin_up)
+    ftol = 1e-10 * scale
     Cz = C @ z
     at_lo = fin_lo & (Cz - lo <= 1e-6 * scale)
     at_up = fin_up & (up - Cz <= 1e-6 * scale) & ~at_lo
@@ -359,45 +406,82 @@ def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
             Czp = C @ zp
             if not (np.any(Czp < lo - ftol) or np.any(Czp > up + ftol)):
                 return zp
+    out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up, Aeq, beq)
+    return None if out is None else out[0]
+
+
+def _bound_scale(lo, up, fin_lo, fin_up) -> float:
+    return 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
+
+
+def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, at_lo: np.ndarray,
+                      at_up: np.ndarray, Aeq: np.ndarray | None = None, beq: np.ndarray | None = None):
+    """(z, at_lo, at_up): the exact KKT point of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq), found
+    by active-set steps from the guessed active bounds ``at_lo``, ``at_up`` (boolean masks over the rows of C); None
+    when the steps run out or a KKT system is not solved accurately.
+
+    A returned point satisfies the KKT conditions (stationarity, primal feasibility within 1e-10 of the bound scale,
+    multipliers of the right sign), so it is the global optimum of the convex QP.  Started from the active set of the
+    previous call it usually ends after one linear solve: the IK's levels change little between iterations.
+    """
+    n = H.shape[0]
+    n_eq = 0 if Aeq is None else Aeq.shape[0]
+    at_lo = at_lo & np.isfinite(lo)
+    at_up = at_up & np.isfinite(up) & ~at_lo
+    scale = _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
+    ftol = 1e-10 * scale  # bounds nearly implied by the equalities make K ill-conditioned (cond 1e11 seen)
+    gscale0 = 1.0 + float(np.abs(g).max(initial=0.0))
+    hmax = float(np.abs(H).max(initial=0.0))
+    bound = np.where(at_lo, lo, up)
     seen: set[bytes] = set()
     for _ in range(2 * C.shape[0] + 2):
-        key = np.concatenate([at_lo, at_up]).tobytes()
+        at = at_lo | at_up
+        key = at_lo.tobytes() + at_up.tobytes()
         cycling = key in seen  # a degenerate vertex: a bound with a ~0 multiplier is dropped and re-added
         seen.add(key)
-        il, iu = np.flatnonzero(at_lo), np.flatnonzero(at_up)
-        A = np.vstack([C[il], C[iu]] + ([Aeq] if n_eq else []))
-        b = np.concatenate([lo[il], up[iu]] + ([beq] if n_eq else []))
-        k = A.shape[0]
-        K = np.zeros((n + k, n + k))
-        K[:n, :n] = H
-        K[:n, n:] = A.T
-        K[n:, :n] = A
-        rhs = np.concatenate([-g, b])
-        try:
-            sol = np.linalg.solve(K, rhs)
-        except np.linalg.LinAlgError:  # dependent active bounds, or a flat direction left free: minimum norm
-            sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
-        zp, mu = sol[:n], -sol[n:]  # H zp + g = A^T mu; mu >= 0 on lower bounds, <= 0 on upper ones
-        gscale = 1.0 + float(np.abs(g).max(initial=0.0)) + float(np.abs(H).max(initial=0.0)) * (1.0 + float(np.abs(zp).max(initial=0.0)))
-        if (float(np.abs(H @ zp + g - A.T @ mu).max(initial=0.0)) > 1e-10 * gscale
-                or float(np.abs(A @ zp - b).max(initial=0.0)) > ftol):
-            return None  # not solved accurately: keep ProxQP's answer
-        wrong = np.concatenate([-mu[: il.size], mu[il.size: il.size + iu.size]])  # > 0: the bound pulls the wrong way
+        idx = np.flatnonzero(at)
+        k = idx.size + n_eq
+        if k == 0:
+            A = np.zeros((0, n))
+            zp = _spd_solve(H, -g)
+            if zp is None:
+                zp = np.linalg.lstsq(H, -g, rcond=1e-13)[0]
+            mu = np.zeros(0)
+            res_x = H @ zp + g
+            res_b = np.zeros(0)
+        else:
+            A = C[idx] if not n_eq else np.vstack([C[idx], Aeq])
+            b = bound[idx] if not n_eq else np.concatenate([bound[idx], beq])
+            K = np.zeros((n + k, n + k))
+            K[:n, :n] = H
+            K[:n, n:] = A.T
+            K[n:, :n] = A
+            rhs = np.concatenate([-g, b])
+            try:
+                sol = np.linalg.solve(K, rhs)
+            except np.linalg.LinAlgError:  # dependent active bounds, or a flat direction left free: minimum norm
+                sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
+            zp, mu = sol[:n], -sol[n:]  # H zp + g = A^T mu; mu >= 0 on lower bounds, <= 0 on upper ones
+            r = K @ sol - rhs
+            res_x, res_b = r[:n], r[n:]
+        gscale = gscale0 + hmax * (1.0 + float(np.abs(zp).max(initial=0.0)))
+        if float(np.abs(res_x).max(initial=0.0)) > 1e-10 * gscale or float(np.abs(res_b).max(initial=0.0)) > ftol:
+            return None  # not solved accurately
+        # > 0: the bound pulls the wrong way (a lower bound's multiplier must be >= 0, an upper one's <= 0)
+        wrong = np.where(at_lo[idx], -mu[: idx.size], mu[: idx.size])
         Czp = C @ zp
-        viol_lo = fin_lo & (lo - Czp > ftol)
-        viol_up = fin_up & (Czp - up > ftol)
+        viol_lo = lo - Czp > ftol  # (an infinite bound is never violated)
+        viol_up = (Czp - up > ftol) & ~viol_lo
         release = wrong > (1e-9 if cycling else 1e-12) * gscale
-        if not release.any() and not viol_lo.any() and not viol_up.any():
-            return zp
-        if release.any():  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
-            j = int(np.argmax(wrong))
-            if j < il.size:
-                at_lo[il[j]] = False
-            else:
-                at_up[iu[j - il.size]] = False
+        any_release = bool(release.any())
+        if not any_release and not viol_lo.any() and not viol_up.any():
+            return zp, at_lo, at_up
+        if any_release:  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
+            i = idx[int(np.argmax(wrong))]
+            at_lo[i] = at_up[i] = False
         elif not cycling:  # add every violated bound
             at_lo |= viol_lo
-            at_up |= viol_up & ~at_lo
+            at_up |= viol_up
         else:  # add the most violated one only
             gap = np.maximum(np.where(viol_lo, lo - Czp, -np.inf), np.where(viol_up, Czp - up, -np.inf))
             i = int(np.argmax(gap))
@@ -405,6 +489,7 @@ def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
                 at_lo[i] = True
             else:
                 at_up[i] = True
+        bound = np.where(at_lo, lo, up)
     return None
 
 

@@ -180,3 +180,51 @@ def test_workspace_input_errors(qprr_platform):
         workspace(qprr_platform, n_sample=1000)  # unknown keyword
     with pytest.raises(InputError, match="n_shifts"):
         estimate_measure(np.zeros((5, 5, 2)), n_shifts=1)
+
+
+def test_mirrored_zonotopes_are_those_of_the_mirrored_grid(qprr_platform):
+    """The hover profile's mirror (s -> -s) is built by exact negations: bit for bit what cell_zonotopes + prepare
+    give on the mirrored grid (the volume is the same as with the former two-grid computation)."""
+    from qprr.analysis import ArmChain, make_grid
+    from qprr.analysis.voxels import cell_zonotopes, prepare
+
+    chain = ArmChain(qprr_platform)
+    grid = make_grid(qprr_platform, 3000)
+    pts = np.concatenate([chain.frame_position(chain.pose(q), qprr_platform.ee_frame) for _, q in grid.chunks()])
+    P = np.column_stack([np.hypot(pts[:, 0], pts[:, 1]) * np.sign(pts[:, 0]), pts[:, 2]]).reshape(*grid.shape, 2)
+    for grow in (True, False):
+        z = prepare(*cell_zonotopes(P, grow_cells=grow))
+        M = P.copy()
+        M[..., 0] *= -1.0
+        ref = prepare(*cell_zonotopes(M, grow_cells=grow))
+        got = z.mirrored()
+        for a, b in ((got.centre, ref.centre), (got.normals, ref.normals), (got.offset, ref.offset), (got.half, ref.half)):
+            assert np.array_equal(a, b)
+
+
+def test_covered_cells_do_not_depend_on_the_chunks(qprr_platform):
+    """Skipping the cells and zonotopes already covered by earlier chunks leaves the occupancy unchanged."""
+    from qprr.analysis import ArmChain, make_grid
+    from qprr.analysis.voxels import _grid_frame, _zonotopes_of, covered_cells, default_cell
+
+    chain = ArmChain(qprr_platform)
+    for locked in ({}, {"r0": 0.0}):  # redundant (3 joints onto a plane) and not
+        grid = make_grid(qprr_platform, 20_000, locked)
+        pts = np.concatenate([chain.frame_position(chain.pose(q), qprr_platform.ee_frame) for _, q in grid.chunks()])
+        P = pts[:, [0, 2]].reshape(*(n for n in grid.shape if n > 1), 2)
+        (z,) = _zonotopes_of(P, False)
+        h = default_cell(z)
+        origin, shape = _grid_frame(np.vstack(z.bounds), h, np.array([0.37, 0.81]), 0.0)
+        whole = covered_cells(z, h, origin, shape, chunk=z.size)  # one chunk: nothing skipped
+        assert whole.any()
+        for chunk in (97, 1000, 4096):
+            assert np.array_equal(covered_cells(z, h, origin, shape, chunk=chunk), whole)
+
+
+def test_options_object_and_keywords_agree(qprr_platform):
+    from qprr.analysis import WorkspaceOptions
+
+    a = workspace(qprr_platform, WorkspaceOptions(n_samples=5000, variants=[], hover=False))
+    b = workspace(qprr_platform, n_samples=5000, variants=[], hover=False)
+    c = workspace(qprr_platform, WorkspaceOptions(n_samples=9000), variants=[], hover=False, n_samples=5000)
+    assert a.regions[0].measure == b.regions[0].measure == c.regions[0].measure

@@ -518,13 +518,14 @@ def test_qp_ik_from_upside_down_ends_in_hover(name):
 
 
 def test_a_failing_qp_raises_solver_error(rob, dat):
-    """The ProxQP status is checked: a QP stopped before convergence is an error, not a step."""
+    """The ProxQP status is checked: a QP stopped before convergence is an error, not a step (ProxQP alone: the exact
+    active-set path, tried first by default, solves this level without it)."""
     xi = np.array([0.0, 0.0, 1.0, 0.2, -0.1, 0.3, 0.04, 1.2, 0.5])  # r0 on its upper limit
     q = co.xi_to_q(xi)
     M_d = kin.ee_placement(rob, dat, co.xi_to_q(xi + 0.3))
     levels = qprr.ik.default_levels(rob, M_d, [-0.04, -1.0, 1.0])
     tasks.update_kinematics(rob, dat, q)
-    eng = qprr.ik.HierarchySolver(rob, max_qp_iter=1, eps_abs=1e-14)
+    eng = qprr.ik.HierarchySolver(rob, max_qp_iter=1, eps_abs=1e-14, active_set_first=False)
     eng.reset()
     with pytest.raises(qprr.SolverError, match="ProxQP did not solve level"):
         eng.solve(rob, dat, q, levels)
@@ -637,3 +638,35 @@ def test_results_are_deterministic(rob, dat, hover_targets):
         for x, y in zip(first, again):
             np.testing.assert_array_equal(x, y)
 
+
+
+# --------------------------------------------------------- targets whose doubles cannot resolve the tolerance
+@pytest.mark.parametrize("method", ["qp", "dls", "igm", "clika"])
+def test_targets_too_far_for_the_tolerance_are_refused(rob, dat, method):
+    """Issue 22.5: at |p| = 1e17 m neighbouring doubles are 16 m apart, a "1e-16 m" error would mean nothing: the target
+    is refused with the reason; the largest accepted distance keeps 16 ulps below a tenth of the tolerance."""
+    R = np.eye(3)
+    for far in (1e17, 1e9):
+        with pytest.raises(InputError, match="too far from the origin"):
+            igm.solve(rob, dat, (np.array([far, 0.0, 1.0]), R), method)
+    from qprr.ik.solver import check_resolvable
+
+    # the bound follows the tolerance, not a fixed distance: 16 ulps of |p| below a tenth of it
+    check_resolvable(np.array([3.0e7, 0.0, 0.0]), 1e-6)
+    check_resolvable(np.array([1e9, 0.0, 0.0]), 1e-3)
+    with pytest.raises(InputError, match="below about 3.36e"):
+        check_resolvable(np.array([4.0e7, 0.0, 0.0]), 1e-6)
+    assert 16 * np.spacing(3.0e7) <= 0.1 * 1e-6 < 16 * np.spacing(4.0e7)
+
+
+@settings(max_examples=30, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1))
+def test_exact_active_set_step_equals_the_proxqp_step(seed):
+    """The hierarchy's step by exact solves on the active set (default) equals the ProxQP + polish step (the two
+    paths of qprr.optim.Lexicographic), joint limits active included."""
+    rob, dat, q, full = _random_step_problem(seed)
+    tasks.update_kinematics(rob, dat, q)
+    a = qprr.ik.HierarchySolver(rob, active_set_first=True)
+    b = qprr.ik.HierarchySolver(rob, active_set_first=False, max_qp_iter=100000)
+    sa, sb = a.solve(rob, dat, q, full), b.solve(rob, dat, q, full)
+    assert np.abs(sa.dv - sb.dv).max() <= 1e-7 * (1 + np.abs(sb.dv).max())

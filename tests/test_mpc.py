@@ -1,14 +1,19 @@
-"""Receding-horizon MPC (qprr.control.mpc): actuation, derivatives, LQR agreement, thrust bounds, fallback, selection.
+"""Receding-horizon MPC (qprr.control.mpc): actuation, derivatives, LQR agreement, thrust bounds, fallback, selection,
+crocoddyl's native node models against the Python reference, the backend self-test, the solve statistics.
 
-The checks that need crocoddyl skip without it (``pytest.importorskip``); the install message
-is checked without it.
+The checks that need crocoddyl skip without it (install command in the reason); those that need crocoddyl's native
+models to read the installed pinocchio (the consistent pair of the ``mpc`` extra) skip with the fix command.  The
+install message is checked without crocoddyl.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import importlib
+import importlib.util
+import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -19,8 +24,9 @@ from qprr.actuation import Allocator
 from qprr.charts import State, xi_to_qv
 from qprr.control import make_controller
 from qprr.control.base import Reference
+from qprr.control.mpc_stats import INSTALL, solve_summary
 from qprr.errors import InputError, MissingDependencyError, UnknownNameError
-from qprr.kinematics import cog_offset_body, com_body
+from qprr.kinematics import cog_offset_body
 from qprr.sim import simulate
 from qprr.trajectory import Hold
 
@@ -29,7 +35,7 @@ def test_missing_crocoddyl_gives_the_install_command(monkeypatch):
     saved = sys.modules.pop("qprr.control.mpc", None)
     monkeypatch.setitem(sys.modules, "crocoddyl", None)  # import crocoddyl now raises ImportError
     try:
-        with pytest.raises(MissingDependencyError, match=r"pip install --no-deps crocoddyl==3\.2\.1") as info:
+        with pytest.raises(MissingDependencyError, match=r'pip install "qprr\[mpc\]"') as info:
             importlib.import_module("qprr.control.mpc")
         assert isinstance(info.value, ImportError)
     finally:
@@ -42,12 +48,41 @@ def test_make_controller_without_crocoddyl_names_the_install_command(monkeypatch
     import qprr.control as control
 
     monkeypatch.delitem(control.CONTROLLERS, "mpc", raising=False)
-    with pytest.raises(MissingDependencyError, match="crocoddyl.*pip install --no-deps"):
+    with pytest.raises(MissingDependencyError, match=r"crocoddyl.*qprr\[mpc\]"):
         make_controller("mpc", qprr.load())
 
 
-crocoddyl = pytest.importorskip("crocoddyl", reason="the mpc extra: pip install --no-deps crocoddyl==3.2.1 libcrocoddyl==3.2.1 (docs/mpc.md)")
-mpc = importlib.import_module("qprr.control.mpc")  # with crocoddyl installed, an import error is a failure
+def test_solve_summary_reads_the_metrics_and_is_absent_without_an_mpc():
+    assert solve_summary({"x": 1.0}) is None
+    m = {"mpc_solves": 3.0, "mpc_native_backend": 1.0, "mpc_median_solve_s": 0.002, "mpc_p95_solve_s": 0.004,
+         "mpc_median_solve_cpu_s": 0.0019, "mpc_p95_solve_cpu_s": 0.0039, "mpc_median_iterations": 1.0, "mpc_converged": 2.0,
+         "mpc_iteration_limit": 1.0, "mpc_failed": 0.0, "mpc_fallbacks": 0.0}
+    line = solve_summary(m)
+    assert "native" in line and "median 2.00 ms" in line and "p95 4.00 ms" in line and "0 fallbacks" in line
+    assert "Python models" in solve_summary({**m, "mpc_native_backend": 0.0})
+
+
+def test_benchmark_quick_mode_exits_0_and_prints_the_backends():
+    """benchmarks/mpc_benchmark.py --quick: exit 0 with crocoddyl's native models, with the Python ones only (the native
+    column skipped with the fix command) and without crocoddyl (the install command)."""
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, str(root / "benchmarks" / "mpc_benchmark.py"), "--quick"], capture_output=True, text=True,
+                         timeout=300, cwd=root)
+    assert out.returncode == 0, out.stderr
+    if importlib.util.find_spec("crocoddyl") is None:
+        assert "crocoddyl is not installed" in out.stdout and "qprr[mpc]" in out.stdout
+        return
+    assert "\npython " in out.stdout and "wall time: mpc" in out.stdout
+    assert ("python / native" in out.stdout) != ("native: skipped" in out.stdout and 'pin==4.0.*' in out.stdout)
+
+
+crocoddyl = pytest.importorskip("crocoddyl", reason=f"the MPC needs crocoddyl: {INSTALL}")
+mpc = importlib.import_module("qprr.control.mpc")  # with crocoddyl installed, an import error of qprr is a failure
+from qprr.control.mpc_native import NativeNode  # noqa: E402
+from qprr.control.mpc_reference import LieState, PlatformDynamics  # noqa: E402
+
+native_only = pytest.mark.skipif(bool(mpc.NATIVE_PROBLEM), reason=f"crocoddyl's native models disagree with the installed "
+                                 f"pinocchio ({mpc.NATIVE_PROBLEM}); install the consistent pair: {mpc.FIX}")
 
 
 @pytest.fixture(scope="module")
@@ -77,19 +112,37 @@ def test_crocoddyl_thrusters_give_the_platform_actuation_matrix(name, layout):
 
 
 # --------------------------------------------------------------------------- derivatives
-def test_node_derivatives_match_finite_differences_on_the_manifold(platform):
+BACKENDS = [pytest.param("python"), pytest.param("native", marks=native_only)]
+WITH_COG = mpc.MPCWeights(cog=100.0)  # the CoG term is off by default; these tests switch it on
+
+
+def _node(ctrl, backend: str, terminal: bool = False):
+    """(differential model, object setting its references, state) of one node of ``ctrl``'s problem, built from its public spec."""
+    spec = ctrl.node_spec(terminal)
+    if backend == "native":
+        state = crocoddyl.StateMultibody(ctrl.model)
+        node = NativeNode(state, ctrl.actuation, spec)
+        return node.dam, node, state
+    state = LieState(ctrl.model)
+    dam = PlatformDynamics(state, spec)
+    return dam, dam, state
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_node_derivatives_match_finite_differences_on_the_manifold(platform, backend):
     """Fx, Fu (semi-implicit Euler of ABA) and Lx, Lu of one node against central differences (every residual active)."""
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"))
-    iam, dam = ctrl._nodes[0]
-    st = ctrl.state
+    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"), weights=WITH_COG)
+    dam, refs, st = _node(ctrl, backend)
+    iam = crocoddyl.IntegratedActionModelEuler(dam, ctrl.h)
     rng = np.random.default_rng(3)
     xi = np.array([0.3, -0.2, 1.0, 0.2, -0.3, 0.5, 0.02, 2.2, -0.4])  # theta2 past its limit: the barrier is active
     q, v = xi_to_qv(xi, rng.normal(size=9))
     x = np.concatenate([q, v])
     x_ref = st.integrate(x, 0.2 * rng.normal(size=18))
-    pin.framesForwardKinematics(ctrl.model, ctrl._data, x_ref[:10])
-    M_ref = ctrl._data.oMf[ctrl.ee_frame] * pin.exp6(pin.Motion(0.1 * rng.normal(size=6)))
-    dam.set_reference(x_ref, M_ref, np.array([7.0, 9.0, 8.0, 10.0, 1.0, 0.1, -0.05]))
+    data = ctrl.model.createData()
+    pin.framesForwardKinematics(ctrl.model, data, x_ref[:10])
+    M_ref = data.oMf[ctrl.ee_frame] * pin.exp6(pin.Motion(0.1 * rng.normal(size=6)))
+    refs.set_reference(x_ref, M_ref, np.array([7.0, 9.0, 8.0, 10.0, 1.0, 0.1, -0.05]))
     u = np.array([6.0, 11.0, 9.0, 8.0, -2.0, 0.3, 0.01])
     d = iam.createData()
     iam.calc(d, x, u)
@@ -122,22 +175,133 @@ def test_node_derivatives_match_finite_differences_on_the_manifold(platform):
 
 @pytest.mark.parametrize("name", ["q-prr", "hextilt_flying_arm_5"])
 def test_cog_residual_is_the_offset_from_the_thrust_axis_and_ignores_the_base_pose(name):
-    """r_cog = kinematics.cog_offset_body ([x_cm, y_cm] of Thesis (3.78) on the Q-PRR); its base-pose Jacobian columns vanish."""
+    """r_cog = kinematics.cog_offset_body ([x_cm, y_cm] of Thesis (3.78) on the Q-PRR) at any base pose, by both backends."""
     pf = qprr.load(name)
-    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2))
-    iam, dam = ctrl._nodes[0]
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
+    dam = PlatformDynamics(LieState(ctrl.model), ctrl.node_spec(False))
     xi = pf.neutral_xi()
-    xi[0:6] = [1.0, 2.0, 3.0, 0.3, -0.2, 1.1]
     xi[6:] = 0.5 * (np.clip(pf.arm_lower, -1, 1) + np.clip(pf.arm_upper, -1, 1)) + 0.1
-    q, v = xi_to_qv(xi, np.zeros(pf.n_xi))
-    d = iam.createData()
-    iam.calcDiff(d, np.concatenate([q, v]), np.zeros(ctrl.nu))
-    nv = pf.nv
-    np.testing.assert_allclose(dam._Rx[2 * nv + 6:2 * nv + 8, 0:6], 0.0, atol=1e-12)
     data = pf.data()
-    r, _ = dam._residual_x(q, v, com_body(pf, data, q))  # (the node's kinematics are at q after calcDiff)
-    np.testing.assert_allclose(r[2 * nv + 6:2 * nv + 8], cog_offset_body(pf, data, q), rtol=0, atol=1e-15)
-    assert np.linalg.norm(cog_offset_body(pf, data, q)) > 1e-3  # not trivially zero
+    expected = None
+    for base in ([1.0, 2.0, 3.0, 0.3, -0.2, 1.1], [-4.0, 0.5, 0.0, -0.6, 0.4, -2.0]):
+        xi[0:6] = base
+        q, v = xi_to_qv(xi, np.zeros(pf.n_xi))
+        r = dam.residuals(np.concatenate([q, v]))["cog"]
+        np.testing.assert_allclose(r, cog_offset_body(pf, data, q), rtol=0, atol=1e-15)
+        expected = r if expected is None else expected
+        np.testing.assert_allclose(r, expected, rtol=0, atol=1e-14)  # the base pose does not move the CoG in B
+    assert np.linalg.norm(expected) > 1e-3  # not trivially zero
+
+
+def _random_case(pf, ctrl, rng):
+    """A random state (arm joints sometimes past their limits), references and control of ``pf``."""
+    n = pf.n_xi
+    xi = np.r_[rng.uniform(-2, 2, 3), rng.uniform(-0.8, 0.8, 3), rng.uniform(-1.5, 1.5, n - 6)]
+    lo, hi = np.clip(pf.arm_lower, -3, 3), np.clip(pf.arm_upper, -3, 3)
+    xi[6:] = lo + rng.uniform(-0.2, 1.2, n - 6) * (hi - lo)  # about a third of the joints past a limit
+    q, v = xi_to_qv(xi, rng.normal(size=n))
+    x = np.concatenate([q, v])
+    x_ref = LieState(ctrl.model).integrate(x, 0.3 * rng.normal(size=2 * pf.nv))
+    M_ref = pin.SE3.Random()
+    u_ref = rng.uniform(0.0, 10.0, ctrl.nu)
+    u = np.clip(rng.uniform(-2.0, 15.0, ctrl.nu), ctrl.u_lb, ctrl.u_ub)
+    return x, (x_ref, M_ref, u_ref), u
+
+
+@native_only
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5"])
+@pytest.mark.parametrize("terminal", [False, True])
+@pytest.mark.parametrize("cog", [0.0, 100.0])
+def test_native_node_equals_the_python_reference_at_random_states(name, terminal, cog):
+    """crocoddyl's compiled node (FreeFwdDynamics + thrusters, its residuals, with and without the CoG residual, i.e. on
+    crocoddyl's ABA and computeAllTerms paths) against the Python reference: accelerations, cost and its Gauss-Newton
+    derivatives, Fx, Fu at 8 random states, references and controls."""
+    pf = qprr.load(name)
+    ctrl = mpc.MPCController(pf, Hold(tuple(pf.neutral_xi())), settings=mpc.MPCSettings(horizon=2), weights=mpc.MPCWeights(cog=cog))
+    (nat, nat_refs, _), (ref, ref_refs, _) = _node(ctrl, "native", terminal), _node(ctrl, "python", terminal)
+    dn, dr = nat.createData(), ref.createData()
+    rng = np.random.default_rng(11)
+    for _ in range(8):
+        x, refs, u = _random_case(pf, ctrl, rng)
+        nat_refs.set_reference(*refs)
+        ref_refs.set_reference(*refs)
+        args = (x,) if terminal else (x, u)
+        for m, d in ((nat, dn), (ref, dr)):
+            m.calc(d, *args)
+            m.calcDiff(d, *args)
+        scale = max(1.0, abs(dr.cost))
+        assert abs(dn.cost - dr.cost) <= 1e-11 * scale
+        names = ("Lx", "Lxx") if terminal else ("xout", "Fx", "Fu", "Lx", "Lu", "Lxx", "Luu", "Lxu")
+        for attr in names:
+            a, b = np.array(getattr(dn, attr)), np.array(getattr(dr, attr))
+            err = np.max(np.abs(a - b)) / max(1.0, np.max(np.abs(b)))
+            assert err < 1e-10, f"{attr}: relative difference {err:.2e}"
+
+
+@native_only
+def test_native_cog_residual_equals_the_thesis_offset():
+    """The native CoG term: its residual is cog_offset_body (Thesis (3.78)) and its Jacobian the finite difference on the manifold."""
+    pf = qprr.load()
+    ctrl = mpc.MPCController(pf, Hold(), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
+    node = NativeNode(crocoddyl.StateMultibody(ctrl.model), ctrl.actuation, ctrl.node_spec(False))
+    d = node.dam.createData()
+    st = LieState(ctrl.model)
+    rng = np.random.default_rng(5)
+    x, refs, u = _random_case(pf, ctrl, rng)
+    node.set_reference(*refs)
+    node.dam.calc(d, x, u)
+    node.dam.calcDiff(d, x, u)
+    res = d.costs.costs["cog"].residual
+    np.testing.assert_allclose(res.r, cog_offset_body(pf, pf.data(), x[:10]), rtol=0, atol=1e-14)
+    eps, J = 1e-6, np.zeros((2, 18))
+    for i in range(18):
+        e = np.zeros(18)
+        e[i] = eps
+        J[:, i] = (cog_offset_body(pf, pf.data(), st.integrate(x, e)[:10]) - cog_offset_body(pf, pf.data(), st.integrate(x, -e)[:10])) / (2 * eps)
+    np.testing.assert_allclose(res.Rx, J, rtol=0, atol=1e-8)
+
+
+def test_backend_follows_the_self_test(platform):
+    """auto: native when crocoddyl's compiled models passed their self-test, else the Python models; 'native' on an
+    inconsistent pair raises with the fix command; 'python' always works.  The self-test itself: gravity at rest."""
+    auto = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2))
+    assert auto.backend == ("python" if mpc.NATIVE_PROBLEM else "native")
+    assert mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="python")).backend == "python"
+    if mpc.NATIVE_PROBLEM:
+        assert "not gravity" in mpc.NATIVE_PROBLEM
+        with pytest.raises(InputError, match=r"pin==4\.0"):
+            mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native"))
+    else:
+        assert mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native")).backend == "native"
+    assert auto.problem.nthreads == 1  # the default: one thread
+    with pytest.raises(UnknownNameError, match="backend"):
+        mpc.MPCSettings(backend="cpp")
+
+
+def test_a_failed_self_test_warns_once_and_falls_back_to_the_python_models():
+    """A fresh interpreter where the self-test reports a problem: one RuntimeWarning naming the versions and the fix, and the
+    controller runs on the Python models (stats and report say so)."""
+    code = """
+import warnings
+import qprr.control.mpc_native as native
+native.self_test = lambda: "free-forward dynamics at rest with u = 0 give [0, 0, 0] m/s^2, not gravity"
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    import qprr.control.mpc as mpc
+    import qprr.control.mpc as mpc_again
+import qprr
+from qprr.trajectory import Hold
+ctrl = mpc.MPCController(qprr.load(), Hold(), settings=mpc.MPCSettings(horizon=2))
+msgs = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
+print(len(msgs), ctrl.backend, ctrl.stats().backend)
+print(msgs[0])
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[1],
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
+    first, msg = out.stdout.splitlines()[:2]
+    assert first == "1 python python"
+    assert "crocoddyl 3.2.1" in msg and "pin " in msg and mpc.FIX in msg and "not gravity" in msg
 
 
 # -------------------------------------------------------------------------- LQR agreement
@@ -223,7 +387,7 @@ def test_mpc_first_control_agrees_with_lqr_when_no_bound_is_active(platform):
         st = ctrl.stats()
         assert st.status[0] == "converged"
         assert st.thrust_margin[0] > 1.0  # no bound active
-        u_mpc = ctrl._u
+        u_mpc = ctrl.stats().u[0]
         u_lqr = _lqr_first_control(ctrl, platform, x_eq, u_eq, dx)
         errors.append(np.linalg.norm(u_mpc - u_lqr) / np.linalg.norm(u_lqr - u_eq))
     assert errors[1] < 1e-2
@@ -241,7 +405,7 @@ def test_mpc_tracks_like_the_exact_inverse_dynamics_at_hover(platform):
     ctrl.reset(s, Reference(xi.copy()), 1e-2)
     ctrl.step(0.0, s, Reference(xi.copy()))
     _, _, u_ref = ctrl.reference(xi, np.zeros(9), np.zeros(9))
-    np.testing.assert_allclose(ctrl._u, u_ref, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(ctrl.stats().u[0], u_ref, rtol=0, atol=1e-8)
     np.testing.assert_allclose(platform.actuation_matrix @ u_ref, pin.computeGeneralizedGravity(platform.model, platform.data(), q),
                                atol=1e-10)
 
@@ -352,6 +516,8 @@ def test_bad_platform_and_settings_are_rejected(platform):
         mpc.MPCSettings(integrator="midpoint")
     with pytest.raises(InputError, match="horizon"):
         mpc.MPCSettings(horizon=0)
+    with pytest.raises(InputError, match="threads"):
+        mpc.MPCSettings(threads=0)
     with pytest.raises(InputError, match="cog"):
         mpc.MPCWeights(cog=-1.0)
     ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=300.0, horizon=2))
@@ -359,6 +525,18 @@ def test_bad_platform_and_settings_are_rejected(platform):
         ctrl.reset(State(), Reference(), 1e-3)
     with pytest.raises(InputError, match="before step"):
         mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2)).step(0.0, State(), Reference())
+
+
+def test_cli_simulate_prints_the_solve_statistics(capsys):
+    """qprr simulate ... --controller mpc ends with the MPC's solve statistics (median/p95, iterations, fallbacks, backend)."""
+    from qprr.cli import main
+
+    assert main(["simulate", "hover-reach", "--controller", "mpc", "--duration", "0.05", "--quiet"]) == 0
+    out = capsys.readouterr().out
+    line = [s for s in out.splitlines() if s.startswith("mpc (")]
+    assert len(line) == 1, out
+    assert "5 solves" in line[0] and "p95" in line[0] and "fallbacks" in line[0]
+    assert ("Python models" in line[0]) == bool(mpc.NATIVE_PROBLEM)
 
 
 def test_mpc_is_selectable_by_name_and_runs_on_another_platform():

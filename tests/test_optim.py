@@ -140,3 +140,45 @@ def test_qp_settings_duality_gap():
     assert qp.settings.eps_duality_gap_abs == 1e-6
     with pytest.raises(InputError, match="eps_duality_gap"):
         QPSettings(eps_duality_gap=0.0)
+
+
+@SETTINGS
+@given(box_qp(), st.integers(0, 2**32 - 1))
+def test_kkt_on_active_set_returns_only_the_optimum(qp, seed):
+    """From any guessed active set the active-set steps end at a KKT point (the optimum) or decline (None)."""
+    from qprr.optim import kkt_on_active_set
+
+    H, g, C, lo, up = qp
+    H = H + 1e-6 * np.eye(H.shape[0])  # strictly convex, as every level of the engine (regularisation)
+    rng = np.random.default_rng(seed)
+    at_lo = rng.random(C.shape[0]) < 0.3
+    at_up = (rng.random(C.shape[0]) < 0.3) & ~at_lo
+    out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
+    if out is not None:
+        assert_kkt(H, g, C, lo, up, out[0])
+        ref = active_set_qp(H, g, C, lo, up)
+        assert np.abs(out[0] - ref).max() <= 1e-7 * (1 + np.abs(ref).max())  # the optimum is unique
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(st.integers(0, 2**32 - 1))
+def test_active_set_first_gives_the_proxqp_and_polish_answer(seed):
+    """Lexicographic(active_set_first=True) (exact solves on the previous active set, ProxQP only as fallback) returns
+    the same levels as ProxQP + polish, over a sequence of related problems (as the IK's iterations)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 10))
+    bounded = range(n // 2, n)
+    a = Lexicographic(n, bounded, regularization=1e-7, active_set_first=True)
+    b = Lexicographic(n, bounded, regularization=1e-7, active_set_first=False)
+    A1, A2 = rng.normal(size=(min(3, n - 1), n)), rng.normal(size=(2, n))
+    for _ in range(4):
+        levels = [(A1, rng.normal(size=A1.shape[0])), (A2, rng.normal(size=2)), (np.eye(n), rng.normal(size=n))]
+        nb = n - n // 2
+        lo, up = -rng.uniform(0, 0.3, nb), rng.uniform(0, 0.3, nb)
+        lo[rng.random(nb) < 0.3] = 0.0
+        ra, rb = a.solve(levels, lo, up), b.solve(levels, lo, up)
+        for xa, xb in zip(ra.x_levels, rb.x_levels):
+            # two exact solutions of levels whose Hessian B^T B + 1e-7 I has a condition number up to ~1e8:
+            # Cholesky and LU agree to cond * eps ~ 1e-8
+            assert np.abs(xa - xb).max() <= 1e-7 * (1 + np.abs(xb).max())
+        A1 = A1 + 0.05 * rng.normal(size=A1.shape)

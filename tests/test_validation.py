@@ -258,7 +258,9 @@ def test_a_link_length_is_the_joint_offset_it_names():
 
 
 def test_a_non_numeric_urdf_mass_is_refused():
-    text = qprr.thesis.URDF_PATH.read_text().replace('<mass value="3.029"/>', '<mass value="heavy"/>', 1)
+    from qprr.thesis.urdf import URDF_PATH
+
+    text = URDF_PATH.read_text().replace('<mass value="3.029"/>', '<mass value="heavy"/>', 1)
     assert "heavy" in text
     with pytest.raises(NonPhysicalError, match="link 'multirotor' has a non-numeric mass or inertia"):
         qprr.from_urdf(text, P.rotors, ee_frame="end_effector")

@@ -34,7 +34,7 @@ from .hover import HoverResult, PayloadLimits, hover
 from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
 from .singularity import SingularityResult, singularity
 from .voxels import MeasureEstimate, estimate_measure
-from .workspace import WorkspaceResult, reachable, workspace
+from .workspace import WorkspaceOptions, WorkspaceResult, reachable, workspace
 from .wrenchset import WrenchSet, wrench_set
 
 __all__ = [
@@ -53,6 +53,7 @@ __all__ = [
     "SingularityResult",
     "Statics",
     "Status",
+    "WorkspaceOptions",
     "WorkspaceResult",
     "WrenchSet",
     "balance",

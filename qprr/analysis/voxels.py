@@ -39,6 +39,7 @@ revolution (Pappus).
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass
@@ -83,10 +84,12 @@ def _shifted(a: np.ndarray, axes: list[int], hi: set[int]) -> np.ndarray:
     return a[tuple(sl)]
 
 
-def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *,
+                   grow_cells: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(corner (m, d), generators (m, k, d), growth E (m,)) of the m grid cells (see the module docstring).
 
     ``valid``: a boolean grid (the grid's shape): only cells whose 2^k corners are all valid are kept.
+    ``grow_cells``: compute E (False: zeros, what a redundant map uses).
     """
     P = np.asarray(points_grid, dtype=float)
     axes = [a for a in range(P.ndim - 1) if P.shape[a] > 1]
@@ -98,13 +101,19 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None) -> 
         for r in range(len(axes) + 1):
             for sub in itertools.combinations(axes, r):
                 keep &= _shifted(V, axes, set(sub))
-        c, g, e = cell_zonotopes(P)
+        c, g, e = cell_zonotopes(P, grow_cells=grow_cells)
         keep = keep.reshape(-1)
         return c[keep], g[keep], e[keep]
     d = P.shape[-1]
-    corner = _shifted(P, axes, set()).reshape(-1, d)
-    gens = np.stack([(_shifted(P, axes, {a}) - _shifted(P, axes, set())).reshape(-1, d) for a in axes], axis=1)
+    base = _shifted(P, axes, set())
+    corner = base.reshape(-1, d)
+    gens = np.empty((corner.shape[0], len(axes), d))
+    by_cell = gens.reshape(base.shape[:-1] + (len(axes), d))  # a view: each generator written in place
+    for j, a in enumerate(axes):
+        np.subtract(_shifted(P, axes, {a}), base, out=by_cell[..., j, :])
     grow = np.zeros(corner.shape[0])
+    if not grow_cells:
+        return corner, gens, grow
     for a, b in itertools.combinations(axes, 2):
         mixed = _shifted(P, axes, {a, b}) - _shifted(P, axes, {a}) - _shifted(P, axes, {b}) + _shifted(P, axes, set())
         mixed = mixed.reshape(-1, d)
@@ -173,6 +182,30 @@ class Zonotopes:
     def size(self) -> int:
         return int(self.centre.shape[0])
 
+    @functools.cached_property
+    def corners(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centre - half, centre + half): the bounding boxes' corners (m, d), the same for every shift's count."""
+        return self.centre - self.half, self.centre + self.half
+
+    @functools.cached_property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """(lowest, highest) corner of the union of the bounding boxes (d,), computed once for every shift's count."""
+        lo = np.array([float((self.centre[:, k] - self.half[:, k]).min()) for k in range(self.centre.shape[1])])
+        hi = np.array([float((self.centre[:, k] + self.half[:, k]).max()) for k in range(self.centre.shape[1])])
+        return lo, hi
+
+    def mirrored(self) -> Zonotopes:
+        """The zonotopes mirrored about the plane x_0 = 0, exactly (negations): what :func:`prepare` gives for the
+        cells of the mirrored grid (2-D normals (-g_1, g_0) become (n_0, -n_1); offsets and half-widths unchanged)."""
+        c = self.centre.copy()
+        c[:, 0] *= -1.0
+        N = self.normals.copy()
+        if N.shape[2] == 2:
+            N[:, :, 1] *= -1.0
+        else:
+            raise InputError("mirrored zonotopes are implemented for profiles (d = 2) only")
+        return Zonotopes(c, N, self.offset, self.half)
+
 
 def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Sum over the last (short) axis of a * b, without numpy's slow short-axis reduction."""
@@ -185,7 +218,8 @@ def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes:
     """:class:`Zonotopes` of the cells of :func:`cell_zonotopes` that span their dimension."""
     keep = _spanning(gens)
-    corner, gens, grow = corner[keep], gens[keep], grow[keep]
+    if not keep.all():
+        corner, gens, grow = corner[keep], gens[keep], grow[keep]
     gsum, gabs = gens[:, 0, :].copy(), np.abs(gens[:, 0, :])
     for k in range(1, gens.shape[1]):
         gsum += gens[:, k, :]
@@ -200,22 +234,33 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     return Zonotopes(centre, N, offset, half)
 
 
-def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 32768) -> np.ndarray:
-    """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope."""
+def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072,
+                  out: np.ndarray | None = None) -> np.ndarray:
+    """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
+    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set)."""
     d = z.centre.shape[1]
     f = z.normals.shape[1]
-    occ = np.zeros(shape, dtype=bool)
+    occ = np.zeros(shape, dtype=bool) if out is None else out
+    started = out is not None and bool(out.any())
     dims = np.array(shape)
     for s in range(0, z.size, chunk):
-        centre, N, off, half = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk], z.half[s:s + chunk]
-        lo = np.maximum(np.ceil((centre - half - origin) / h - 0.5).astype(np.int64), 0)
-        hi = np.minimum(np.floor((centre + half - origin) / h - 0.5).astype(np.int64), dims - 1)
+        centre, N, off = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk]
+        low, high = z.corners
+        lo = np.maximum(np.ceil((low[s:s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
+        hi = np.minimum(np.floor((high[s:s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
         span = hi - lo + 1
         ok = span[:, 0] > 0
         for k in range(1, d):
             ok &= span[:, k] > 0
         if not ok.all():
             centre, N, off, lo, span = centre[ok], N[ok], off[ok], lo[ok], span[ok]
+        counts = span[:, 0].copy()
+        for k in range(1, d):
+            counts *= span[:, k]
+        if s or started:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
+            new = _box_sums(_integral(occ), lo, span) < counts
+            if not new.all():
+                centre, N, off, lo, span, counts = centre[new], N[new], off[new], lo[new], span[new], counts[new]
         m = centre.shape[0]
         if m == 0:
             continue
@@ -224,9 +269,6 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
         base = N[:, :, 0] * rel[:, 0:1]
         for k in range(1, d):
             base += N[:, :, k] * rel[:, k:k + 1]
-        counts = span[:, 0].copy()
-        for k in range(1, d):
-            counts *= span[:, k]
         rep = np.repeat(np.arange(m), counts)
         local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
         offs = []
@@ -235,6 +277,12 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
             offs.append(local % sk)
             local //= sk
         offs = offs[::-1]
+        # a candidate cell already covered (by an earlier chunk) needs no test: the occupancy is an OR over the
+        # zonotopes, the same in any order; the cells of a redundant map are covered many times over
+        todo = ~occ[tuple(lo[rep, k] + offs[k] for k in range(d))]
+        if not todo.all():
+            rep = rep[todo]
+            offs = [o[todo] for o in offs]
         hit = np.ones(rep.size, dtype=bool)
         for j in range(f):  # facet by facet: |base + h N . off| <= offset
             proj = base[rep, j] + (h * N[rep, j, 0]) * offs[0]
@@ -247,6 +295,26 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
     return occ
 
 
+def _integral(occ: np.ndarray) -> np.ndarray:
+    """Summed-area table of a boolean grid: S[i_1, ..., i_d] = number of True cells in occ[:i_1, ..., :i_d]."""
+    S = np.zeros(tuple(n + 1 for n in occ.shape), dtype=np.int64)
+    S[tuple(slice(1, None) for _ in occ.shape)] = occ
+    for ax in range(occ.ndim):
+        np.cumsum(S, axis=ax, out=S)
+    return S
+
+
+def _box_sums(S: np.ndarray, lo: np.ndarray, span: np.ndarray) -> np.ndarray:
+    """Number of True cells in each box [lo, lo + span) (rows of lo, span) from the summed-area table S."""
+    d = lo.shape[1]
+    out = np.zeros(lo.shape[0], dtype=np.int64)
+    for corner in itertools.product((0, 1), repeat=d):
+        idx = tuple(lo[:, k] + corner[k] * span[:, k] for k in range(d))
+        sign = 1 if (d - sum(corner)) % 2 == 0 else -1
+        out += sign * S[idx]
+    return out
+
+
 def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> tuple[np.ndarray, tuple[int, ...]]:
     lo = points.min(axis=0) - pad - (1.0 + shift) * h
     hi = points.max(axis=0) + pad
@@ -254,14 +322,18 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
     return lo, shape
 
 
-def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    d = z.centre.shape[1]
-    if z.size == 0:
+def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
+    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``."""
+    d = parts[0].centre.shape[1]
+    if sum(z.size for z in parts) == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
-    lo_pt = (z.centre - z.half).min(axis=0)
-    hi_pt = (z.centre + z.half).max(axis=0)
+    lo_pt = np.min([z.bounds[0] for z in parts if z.size], axis=0)
+    hi_pt = np.max([z.bounds[1] for z in parts if z.size], axis=0)
     origin, shape = _grid_frame(np.vstack([lo_pt, hi_pt]), h, shift, 0.0)
-    occ = covered_cells(z, h, origin, shape)
+    occ = np.zeros(shape, dtype=bool)
+    for z in parts:
+        if z.size:
+            covered_cells(z, h, origin, shape, out=occ)
     if revolve:
         x = origin[0] + (np.arange(shape[0]) + 0.5) * h
         w = math.pi * np.abs(x) * h * h
@@ -271,19 +343,15 @@ def _count(z: Zonotopes, h: float, shift: np.ndarray, revolve: bool) -> tuple[fl
     return value, occ, origin
 
 
-def _mirror(points_grid: np.ndarray) -> list[np.ndarray]:
-    m = points_grid.copy()
-    m[..., 0] *= -1.0
-    return [points_grid, m]
-
-
-def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> Zonotopes:
-    grids = _mirror(points_grid) if revolve else [points_grid]
-    parts = [cell_zonotopes(g, valid) for g in grids]
-    corner, gens, grow = (np.concatenate([p[i] for p in parts]) for i in range(3))
-    if gens.shape[1] > gens.shape[2]:  # redundant: the cells overlap, the union closes itself
-        grow = np.zeros_like(grow)
-    return prepare(corner, gens, grow)
+def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> tuple[Zonotopes, ...]:
+    k = sum(1 for n in points_grid.shape[:-1] if n > 1)
+    # redundant (more free joints than dimensions): the cells overlap, the union closes itself, no growth
+    corner, gens, grow = cell_zonotopes(points_grid, valid, grow_cells=k <= points_grid.shape[-1])
+    z = prepare(corner, gens, grow)
+    # the profile and its mirror (s -> -s): the mirror's zonotopes are this one's with the signs flipped, exactly as
+    # cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two); counted as two
+    # parts of one union (no concatenated copy)
+    return (z, z.mirrored()) if revolve else (z,)
 
 
 def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
@@ -295,7 +363,12 @@ def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
 
 def default_cell(z: Zonotopes) -> float:
     """Counting cell side: the median bounding-box side of the grown cell zonotopes (a few candidate centres per cell)."""
-    return float(max(np.median(2.0 * z.half.max(axis=1)), 1e-12))
+    return _default_cell((z,))
+
+
+def _default_cell(parts: tuple[Zonotopes, ...]) -> float:
+    sides = np.concatenate([2.0 * z.half.max(axis=1) for z in parts])
+    return float(max(np.median(sides), 1e-12))
 
 
 def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, revolve: bool = False,
@@ -332,9 +405,10 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
         if valid.shape != P.shape[:-1]:
             raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
     fine = _zonotopes_of(P, revolve, valid)
-    if fine.size == 0:
+    n_fine = sum(z.size for z in fine)
+    if n_fine == 0:
         raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
-    h = default_cell(fine) if cell is None else float(cell)
+    h = _default_cell(fine) if cell is None else float(cell)
     if not (math.isfinite(h) and h > 0.0):
         raise InputError(f"cell must be a positive length in m, got {cell!r}")
     rng = np.random.default_rng(seed)
@@ -354,19 +428,31 @@ def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 
     else:
         coarse_z = _zonotopes_of(Pc, revolve, None if valid is None else _coarsen(valid, 0))
         coarse = float(np.mean([_count(coarse_z, h, s, revolve)[0] for s in shifts]))
-    est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, fine.size)
+    est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
     return (est, first) if return_occupancy else est
 
 
-def occupancy(points: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray]:
-    """(cells of side ``h`` holding a point as a boolean grid, grid origin), one empty cell all round."""
+def occupancy(points: np.ndarray, h: float, bounds: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(cells of side ``h`` holding a point as a boolean grid, grid origin), one empty cell all round.
+
+    ``bounds``: (points.min(axis=0), points.max(axis=0)) when known (a caller trying several h)."""
     pts = np.asarray(points, dtype=float)
-    origin = pts.min(axis=0) - h
-    shape = tuple(int(x) for x in np.floor((pts.max(axis=0) - origin) / h).astype(np.int64) + 2)
-    idx = np.floor((pts - origin) / h).astype(np.int64)
-    occ = np.zeros(shape, dtype=bool)
-    occ[tuple(idx.T)] = True
-    return occ, origin
+    pmin, pmax = _column_bounds(pts) if bounds is None else bounds
+    origin = pmin - h
+    shape = tuple(int(x) for x in np.floor((pmax - origin) / h).astype(np.int64) + 2)
+    flat = np.zeros(int(np.prod(shape)), dtype=bool)
+    lin = np.floor((pts[:, 0] - origin[0]) / h).astype(np.int64)
+    for k in range(1, pts.shape[1]):  # C-order linear index of each point's cell
+        lin *= shape[k]
+        lin += np.floor((pts[:, k] - origin[k]) / h).astype(np.int64)
+    flat[lin] = True
+    return flat.reshape(shape), origin
+
+
+def _column_bounds(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(min, max) of each column (a strided reduction per column: faster than numpy's short-axis one)."""
+    return (np.array([float(pts[:, k].min()) for k in range(pts.shape[1])]),
+            np.array([float(pts[:, k].max()) for k in range(pts.shape[1])]))
 
 
 def boundary_cells(occ: np.ndarray) -> np.ndarray:
@@ -382,12 +468,13 @@ def display_occupancy(points: np.ndarray, pinhole_fraction: float = 1e-3, max_st
     :func:`estimate_measure`)."""
     pts = np.asarray(points, dtype=float)
     d = pts.shape[1]
-    ext = pts.max(axis=0) - pts.min(axis=0)
+    bounds = _column_bounds(pts)
+    ext = bounds[1] - bounds[0]
     ext = np.where(ext > 0, ext, ext.max())
     h = float((np.prod(ext) / pts.shape[0]) ** (1.0 / d))
     structure = ndimage.generate_binary_structure(d, 1).astype(np.int16)
     for _ in range(max_steps):
-        occ, origin = occupancy(pts, h)
+        occ, origin = occupancy(pts, h, bounds)
         nb = ndimage.convolve(occ.astype(np.int16), structure, mode="constant") - occ
         holes = int(np.sum(~occ & (nb == 2 * d)))
         if holes <= pinhole_fraction * occ.sum():

@@ -21,7 +21,7 @@ plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -147,39 +147,41 @@ def _label(locked: Mapping[str, float]) -> str:
     return ", ".join(f"{k} locked at {v:g}" for k, v in locked.items())
 
 
-def workspace(
-    platform: Platform,
-    *,
-    n_samples: int = 1_000_000,
-    variants: Sequence[Mapping[str, float]] | None = None,
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    frame=None,
-    hover: bool = True,
-    n_shifts: int = 4,
-    seed: int = 0,
-    progress=None,
-) -> WorkspaceResult:
-    """The workspace of ``frame`` (default: the end effector), with every joint free and per variant.
+@dataclass(frozen=True)
+class WorkspaceOptions:
+    """Settings of :func:`workspace` (each can also be given to it as a keyword).
 
-    Parameters
-    ----------
-    platform : the platform (any serial arm of prismatic/revolute joints).
-    n_samples : joint-grid size per region (balanced grid, :func:`qprr.analysis._common.make_grid`).
-    variants : sets of joints to lock, ``[{name: value}, ...]`` [m or rad]; default: each
-        prismatic joint locked at 0 (the workspace "without the slider").
-    locked : joints locked in every region.
-    ranges : {name: (low, high)} narrower joint ranges than the limits (needed for a prismatic
-        joint without limits).
-    frame : the frame whose origin is mapped (name or id; default the end effector).
-    hover : also compute the volume swept under hover (yaw free about z_B).
-    n_shifts, seed : counting-grid shifts of the measure estimator (:mod:`qprr.analysis.voxels`).
-    progress : None, True (stderr) or a callable (fraction, message).
-
-    Returns
-    -------
-    WorkspaceResult
+    ``n_samples``: joint-grid size per region (balanced grid, :func:`qprr.analysis._common.make_grid`);
+    ``variants``: sets of joints to lock, ``[{name: value}, ...]`` [m or rad] (default: each prismatic joint
+    locked at 0, the workspace "without the slider"); ``locked``: joints locked in every region; ``ranges``:
+    {name: (low, high)} narrower joint ranges than the limits (needed for a prismatic joint without limits);
+    ``frame``: the frame whose origin is mapped (name or id; default the end effector); ``hover``: also compute
+    the volume swept under hover (yaw free about z_B); ``n_shifts``, ``seed``: counting-grid shifts of the
+    measure estimator (:mod:`qprr.analysis.voxels`).
     """
+
+    n_samples: int = 1_000_000
+    variants: Sequence[Mapping[str, float]] | None = None
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    frame: object = None
+    hover: bool = True
+    n_shifts: int = 4
+    seed: int = 0
+
+
+def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, progress=None, **settings) -> WorkspaceResult:
+    """The workspace of the frame (default: the end effector), with every joint free and per variant.
+
+    ``platform``: any serial arm of prismatic/revolute joints; ``options``: :class:`WorkspaceOptions`, and/or its
+    fields as keywords (``workspace(p, n_samples=200_000, hover=False)``; an unknown keyword is a TypeError);
+    ``progress``: None, True (stderr) or a callable (fraction, message).
+    """
+    o = replace(options or WorkspaceOptions(), **settings) if settings else (options or WorkspaceOptions())
+    if not isinstance(o, WorkspaceOptions):
+        raise InputError(f"options must be a WorkspaceOptions, got {type(o).__name__}")
+    n_samples, variants, locked, ranges, frame, hover = o.n_samples, o.variants, o.locked, o.ranges, o.frame, o.hover
+    n_shifts, seed = o.n_shifts, o.seed
     check_platform(platform)
     n_samples = check_int("n_samples", n_samples, 8)
     check_int("n_shifts", n_shifts, 2)

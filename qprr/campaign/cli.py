@@ -11,6 +11,7 @@ the error; the rows saved before are kept).
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 from ..cli_common import fail as _fail

@@ -50,7 +50,7 @@ import re
 import time
 import zlib
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -544,7 +544,8 @@ class Results:
     """A campaign's table: ``table`` (numpy structured array, one row per run, sorted by ``run``) and its metadata.
 
     ``params``: the parameter columns; ``metrics``: the metric columns; ``spec``: the
-    specification as a dict; ``names``: the xi names of the RMSE columns.
+    specification as a dict; ``names``: the xi names of the RMSE columns; ``meta``: the whole
+    ``.meta.json`` (what another writer of the store, e.g. :mod:`qprr.design`, keeps beside the table).
     """
 
     table: np.ndarray
@@ -553,6 +554,7 @@ class Results:
     spec: dict
     names: tuple[str, ...]
     path: Path
+    meta: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.table)
@@ -628,4 +630,4 @@ def read_results(path: str | Path) -> Results:
     else:
         table = np.empty(0, dtype=[(c, float) for c in columns])
     return Results(table, tuple(meta.get("params", ())), tuple(meta.get("metrics", ())), meta.get("spec", {}),
-                   tuple(meta.get("names", ())), path)
+                   tuple(meta.get("names", ())), path, meta)

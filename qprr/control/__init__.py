@@ -46,6 +46,7 @@ from .inverse_dynamics import (
     PayloadIDC,
 )
 from .mfc import MFCGains, ModelFreeController, ipid
+from .mpc_stats import INSTALL as _MPC_INSTALL
 from .opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance
 
 CONTROLLERS = {
@@ -60,8 +61,8 @@ CONTROLLERS = {
 }
 """Controller classes (or factories) by name: ``CONTROLLERS[name](platform, **kwargs)``."""
 
-MPC_INSTALL = "pip install --no-deps crocoddyl==3.2.1 libcrocoddyl==3.2.1"
-"""Install command of the ``mpc`` extra that keeps example-robot-data and pin (docs/mpc.md)."""
+MPC_INSTALL = _MPC_INSTALL
+"""Install command of the ``mpc`` extra (docs/mpc.md): crocoddyl with the pinocchio its wheel is built for."""
 
 OPTIONAL = {"mpc": ("crocoddyl", "the receding-horizon MPC (controller 'mpc')", MPC_INSTALL)}
 """Controllers that need an optional dependency: name -> (package, purpose, install command)."""

@@ -3,8 +3,8 @@
 Not in the thesis: the controller it calls "MPC" (Annex A.2) is inverse dynamics at the desired
 state (qprr's ``dsid``) and optimises nothing over a horizon.  This one does, on the full
 coupled model of any :class:`~qprr.platform.Platform` (the same Pinocchio model the simulator
-integrates), with its rotor set.  Install crocoddyl without its dependencies (see "Installing"
-below): ``pip install --no-deps crocoddyl==3.2.1 libcrocoddyl==3.2.1``.
+integrates), with its rotor set.  Install: ``pip install "qprr[mpc]"`` (crocoddyl 3.2.1 with
+pin 4.0.x, the pair its wheel is compiled for; docs/mpc.md).
 
 Optimal control problem, solved every MPC period h (default 10 ms, 100 Hz) over N nodes
 (default 40: a 0.4 s horizon), from the measured state x_0 = (q, v):
@@ -33,6 +33,9 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
   - ``ee``: log6(M_ref^-1 M_ee(q)) of the end-effector pose (LOCAL), M_ref = FK(q_ref);
   - ``cog``: the offset of the system's centre of mass from the thrust axis, in the plane normal
     to it ([x_cm, y_cm] in B for coplanar rotors, Thesis (3.78); :func:`qprr.kinematics.cog_offset_body`);
+    off by default (``MPCWeights.cog = 0``): on crocoddyl's native models it is the one Python
+    residual and roughly doubles the solve time, against no measurable change of the static
+    mission's tracking (docs/mpc.md, "Measured");
   - ``joint limits``: a quadratic barrier on each arm joint past its soft limit (the model's
     position limits, where the simulator has its mechanical stops; ``joint_limit_margin``
     moves them inside: 0 by default, as the static mission asks for r0 = 0.04 m, the stop);
@@ -72,62 +75,55 @@ configuration, clipped to the bounds); each fallback increments ``fallback_count
 records its time and reason in ``events``.  :meth:`MPCController.stats` returns every solve's
 wall time, iterations, status and the margin of its planned thrusts to the rotor bounds.
 
-Why not crocoddyl's multibody models.  The PyPI wheel crocoddyl 3.2.1 (the only one built on
-cmeel-boost 1.90, which pin 4.1 uses) was compiled against pinocchio 4.0's headers.  Pinocchio
-4.1 inserted four members in ``ModelTpl`` (lower/upper acceleration and jerk limits) before
-``frames``, ``supports``, ``subtrees`` and ``gravity``, so crocoddyl's compiled code reads
-those at the wrong offsets: measured with pin 4.1.0, its ``DifferentialActionModelFreeFwdDynamics``
-returns ABA without gravity (9.81 m/s^2 off), ``ResidualModelFrameTranslation`` returns
-[0, 0, 3e-322] for a frame at [0, 0, 0.5], frame-placement residuals are NaN and solves
-segfault; with pin 4.0.0 the same script agrees with pinocchio to 0.  The members before the
-insertion (nq, nv, joints, names, position and velocity limits) are read correctly.  So this
-module uses crocoddyl's core (Box-FDDP, the shooting problem, the RK/Euler integrated models)
-and its ``ActuationModelFloatingBaseThrusters`` (which reads only names and joints), and
-evaluates the dynamics, costs and state operations with pinocchio's Python API
-(:class:`LieState`, :class:`PlatformDynamics`).  The price is Python work per node: about
-17 us per model evaluation and 55 us per derivative evaluation on the machine of
-benchmarks/mpc_benchmark.py.
+Backends (``MPCSettings.backend``).  ``native``: every node is crocoddyl's compiled
+``DifferentialActionModelFreeFwdDynamics`` with ``ActuationModelFloatingBaseThrusters`` and
+crocoddyl's state, frame-placement and control residuals, plus one small residual for the CoG
+term (:mod:`qprr.control.mpc_native`); ``python``: the same node written on pinocchio's Python
+API (:mod:`qprr.control.mpc_reference`, the tested reference, about 6 times slower).  A crocoddyl
+wheel paired with a pinocchio it was not compiled for reads pinocchio's ``Model`` at wrong
+offsets without any error (crocoddyl 3.2.1 is built on pin 4.0; with pin 4.1 its dynamics lose
+gravity and its frame residuals read garbage), so this module runs :func:`qprr.control.mpc_native.self_test`
+once at import: when it fails, a ``RuntimeWarning`` names the installed versions and the fix
+(:data:`FIX`), ``backend="auto"`` (the default) uses the Python models and ``backend="native"``
+raises.  :attr:`MPCController.backend` and :meth:`MPCController.stats` say which was used.
 """
 
 from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, fields
-from enum import Enum
 
 import numpy as np
 import pinocchio as pin
 
 from ..charts import State, as_int, as_real, as_vector, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
-from ..kinematics import com_jacobian_body_from
 from ..platform import Platform
-from . import MPC_INSTALL as INSTALL  # the extra's install command (docs/mpc.md, "Installing")
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
+from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus
 
 try:
     import crocoddyl
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
     raise MissingDependencyError("crocoddyl", "the receding-horizon MPC (qprr.control.mpc)", INSTALL) from exc
 
+from . import mpc_native  # after the crocoddyl check (it needs crocoddyl)
+from .mpc_reference import LieState, NodeSpec, PlatformDynamics
+
+FIX = 'pip install "crocoddyl==3.2.1" "pin==4.0.*"'
+"""Install command that restores a consistent crocoddyl / pinocchio pair (the ``mpc`` extra's pins)."""
+
+NATIVE_PROBLEM = mpc_native.self_test()
+""""" when crocoddyl's compiled models read the installed pinocchio correctly (checked once, at import), else what failed."""
+
+if NATIVE_PROBLEM:
+    warnings.warn(f"qprr.control.mpc: crocoddyl's compiled models do not read the installed pinocchio correctly ({mpc_native.versions()}: "
+                  f"{NATIVE_PROBLEM}); the MPC uses its Python models (about 6 times slower).  Fix: {FIX}", RuntimeWarning, stacklevel=2)
+
 INTEGRATORS = ("euler", "rk2", "rk3", "rk4")
-
-
-class SolveStatus(str, Enum):
-    """Outcome of one MPC solve (see the module docstring)."""
-
-    CONVERGED = "converged"
-    ITERATION_LIMIT = "iteration-limit"
-    FAILED = "failed"
-
-
-class Fallback(str, Enum):
-    """What the controller applies after a failed solve."""
-
-    PREVIOUS_PLAN = "previous-plan"
-    HOVER = "hover"
 
 
 # ================================================================================ settings
@@ -147,6 +143,8 @@ class MPCWeights:
     ``joint_limits`` weights an arm joint's overshoot past its soft limit (1/m^2 or 1/rad^2).
     With a joint weight q and this weight r, the joint's LQR bandwidth is about (q / r)^(1/4).
     ``tilt`` is roll and pitch of the base (x, y of the LOCAL rotation error), ``yaw`` its z.
+    ``cog`` [1/m^2] weights the CoG's offset from the thrust axis (body frame); 0 (the default) leaves
+    the term out (module docstring).
     """
 
     position: float = 100.0
@@ -158,7 +156,7 @@ class MPCWeights:
     arm_velocity: float = 1.0
     ee_position: float = 10.0
     ee_orientation: float = 1.0
-    cog: float = 100.0
+    cog: float = 0.0
     joint_limits: float = 1e6
     thrust: float = 1.0
     arm_acceleration: float = 1e-2
@@ -173,8 +171,15 @@ class MPCSettings:
     """Horizon, rate and solver settings.
 
     ``rate`` [Hz]: solves per second (the node spacing is h = 1 / rate); ``horizon``: number of
-    nodes N (horizon N h); ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``:
-    for the cold start; ``th_stop``: crocoddyl's stopping threshold; ``feasibility_tol``: largest
+    nodes N (horizon N h); ``backend``: the node models, ``"native"`` (crocoddyl's compiled models;
+    an error when their self-test failed), ``"python"`` (:mod:`qprr.control.mpc_reference`) or
+    ``"auto"`` (native when the self-test passed, else python); ``threads``: crocoddyl's threads
+    over the native nodes (``ShootingProblem.nthreads``; Python nodes run in one); 1 by default:
+    its OpenMP threads spin at barriers, and beside the simulator on 2 shared cores 2 threads made
+    each solve 3 times slower in CPU time and 4-5 times in wall time (docs/mpc.md); more is a
+    request crocoddyl refuses, with a warning, once Python-derived models exist in the process;
+    ``max_iter``: Box-FDDP iterations per solve; ``first_max_iter``: for the cold start;
+    ``th_stop``: crocoddyl's stopping threshold; ``feasibility_tol``: largest
     dynamic gap of an accepted plan; ``bound_margin`` [N]: the thrust bounds are planned
     this far inside; ``max_tilt`` [rad]: clamp of the feedforward tilt (6.17);
     ``joint_limit_margin``: the arm joints' soft limits are the model's position limits shrunk by
@@ -183,6 +188,8 @@ class MPCSettings:
 
     rate: float = 100.0
     horizon: int = 40
+    backend: str = "auto"
+    threads: int = 1
     integrator: str = "rk2"
     max_iter: int = 10
     first_max_iter: int = 200
@@ -198,245 +205,14 @@ class MPCSettings:
         _positive(self, ("bound_margin",), allow_zero=True)
         if not as_real(self.joint_limit_margin, "MPCSettings.joint_limit_margin", nonnegative=True) < 0.5:
             raise InputError(f"MPCSettings.joint_limit_margin must be in [0, 0.5), got {self.joint_limit_margin!r}")
-        for name in ("horizon", "max_iter", "first_max_iter"):
+        for name in ("horizon", "max_iter", "first_max_iter", "threads"):
             as_int(getattr(self, name), f"MPCSettings.{name}", lo=1)
+        if self.backend not in ("auto", *BACKENDS):
+            raise UnknownNameError("backend", self.backend, ("auto", *BACKENDS))
         if self.integrator not in INTEGRATORS:
             raise UnknownNameError("integrator", self.integrator, INTEGRATORS)
         if not self.max_tilt < math.pi / 2:
             raise InputError(f"MPCSettings.max_tilt must be < pi/2 rad, got {self.max_tilt!r}")
-
-
-@dataclass
-class MPCStats:
-    """Per-solve log of a run: one entry per MPC period.
-
-    ``t`` [s] solve instants; ``solve_time`` [s] wall time of crocoddyl's ``solve``;
-    ``solve_cpu`` [s] the CPU time of this thread during it (less sensitive to a loaded machine);
-    ``step_time`` [s] wall time of the whole MPC update (references, shift, solve, checks);
-    ``iterations``; ``status`` (:class:`SolveStatus` values); ``cost``; ``gap`` dynamic
-    infeasibility after the solve; ``thrust_margin`` [N] min over the plan of the distance of
-    every planned thrust to its nearest bound (negative: a bound exceeded); ``fallback``
-    ("" or a :class:`Fallback` value); ``u`` (n, nu) the control applied from each solve on
-    (rotor thrusts [N], then arm efforts).
-    """
-
-    t: np.ndarray
-    solve_time: np.ndarray
-    solve_cpu: np.ndarray
-    step_time: np.ndarray
-    iterations: np.ndarray
-    status: tuple[str, ...]
-    cost: np.ndarray
-    gap: np.ndarray
-    thrust_margin: np.ndarray
-    fallback: tuple[str, ...]
-    u: np.ndarray
-
-    def summary(self, skip_first: bool = True) -> dict[str, float]:
-        """Median and 95th percentile of the solve time [s] (the cold first solve left out by default), counts."""
-        sel = slice(1, None) if skip_first and len(self.t) > 1 else slice(None)
-        st = self.solve_time[sel]
-        return {
-            "solves": float(len(self.t)),
-            "median_solve_s": float(np.median(st)) if st.size else float("nan"),
-            "p95_solve_s": float(np.percentile(st, 95)) if st.size else float("nan"),
-            "max_solve_s": float(np.max(st)) if st.size else float("nan"),
-            "median_solve_cpu_s": float(np.median(self.solve_cpu[sel])) if st.size else float("nan"),
-            "p95_solve_cpu_s": float(np.percentile(self.solve_cpu[sel], 95)) if st.size else float("nan"),
-            "median_iterations": float(np.median(self.iterations[sel])) if st.size else float("nan"),
-            "converged": float(sum(s == SolveStatus.CONVERGED.value for s in self.status)),
-            "iteration_limit": float(sum(s == SolveStatus.ITERATION_LIMIT.value for s in self.status)),
-            "failed": float(sum(s == SolveStatus.FAILED.value for s in self.status)),
-            "min_thrust_margin_N": float(np.min(self.thrust_margin)) if self.thrust_margin.size else float("nan"),
-        }
-
-
-# ====================================================================== state and dynamics
-class LieState(crocoddyl.StateAbstract):
-    """x = (q, v) with tangent dx = (dq, dv): q (+) dq = ``pin.integrate`` (LOCAL), as crocoddyl's StateMultibody.
-
-    Written on pinocchio's Python API (see "Why not crocoddyl's multibody models" in the module
-    docstring): integrate, diff and their Jacobians are pinocchio's integrate, difference,
-    dIntegrate, dDifference and dIntegrateTransport.
-    """
-
-    def __init__(self, model: pin.Model) -> None:
-        if not isinstance(model, pin.Model):
-            raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__}")
-        crocoddyl.StateAbstract.__init__(self, model.nq + model.nv, 2 * model.nv)
-        self.model = model
-        self._nq, self._nv = model.nq, model.nv
-
-    def zero(self) -> np.ndarray:
-        return np.concatenate([pin.neutral(self.model), np.zeros(self._nv)])
-
-    def rand(self) -> np.ndarray:
-        m = self.model
-        q = pin.randomConfiguration(m, -np.ones(m.nq), np.ones(m.nq))
-        return np.concatenate([q, np.random.default_rng().uniform(-1.0, 1.0, self._nv)])
-
-    def diff(self, x0, x1) -> np.ndarray:
-        nq = self._nq
-        return np.concatenate([pin.difference(self.model, x0[:nq], x1[:nq]), x1[nq:] - x0[nq:]])
-
-    def integrate(self, x, dx) -> np.ndarray:
-        nq, nv = self._nq, self._nv
-        return np.concatenate([pin.integrate(self.model, x[:nq], dx[:nv]), x[nq:] + dx[nv:]])
-
-    def _block(self, Jq: np.ndarray, sign: float) -> np.ndarray:
-        nv = self._nv
-        J = np.zeros((2 * nv, 2 * nv))
-        J[:nv, :nv] = Jq
-        J[nv:, nv:] = sign * np.eye(nv)
-        return J
-
-    def Jdiff(self, x0, x1, firstsecond=crocoddyl.Jcomponent.both):
-        nq = self._nq
-        q0, q1 = x0[:nq], x1[:nq]
-        if firstsecond == crocoddyl.Jcomponent.first:
-            return self._block(pin.dDifference(self.model, q0, q1, pin.ARG0), -1.0)
-        if firstsecond == crocoddyl.Jcomponent.second:
-            return self._block(pin.dDifference(self.model, q0, q1, pin.ARG1), 1.0)
-        return [self.Jdiff(x0, x1, crocoddyl.Jcomponent.first), self.Jdiff(x0, x1, crocoddyl.Jcomponent.second)]
-
-    def Jintegrate(self, x, dx, firstsecond=crocoddyl.Jcomponent.both):
-        q, dq = x[: self._nq], dx[: self._nv]
-        if firstsecond == crocoddyl.Jcomponent.first:
-            return self._block(pin.dIntegrate(self.model, q, dq, pin.ARG0), 1.0)
-        if firstsecond == crocoddyl.Jcomponent.second:
-            return self._block(pin.dIntegrate(self.model, q, dq, pin.ARG1), 1.0)
-        return [self.Jintegrate(x, dx, crocoddyl.Jcomponent.first), self.Jintegrate(x, dx, crocoddyl.Jcomponent.second)]
-
-    def JintegrateTransport(self, x, dx, Jin, firstsecond):
-        nv = self._nv
-        arg = pin.ARG0 if firstsecond == crocoddyl.Jcomponent.first else pin.ARG1
-        out = np.array(Jin, dtype=float)
-        out[:nv] = pin.dIntegrateTransport(self.model, x[: self._nq], dx[:nv], out[:nv], arg)
-        return out
-
-
-class PlatformDynamics(crocoddyl.DifferentialActionModelAbstract):
-    """Continuous-time node of the MPC: a = ABA(q, v, W u) and l = 1/2 r^T diag(w) r (Gauss-Newton Hessian).
-
-    r = [x (-) x_ref (2 nv); log6(M_ref^-1 M_ee) (6); e_cog (2); joint-limit overshoot (n_arm);
-    s (u - u_ref) (nu)], the last block on running nodes only; the overshoot of arm joint j is
-    min(q_j - lo_j, 0) + max(q_j - hi_j, 0) (a quadratic barrier on the soft limits lo, hi); s =
-    ``u_scale`` (1 for the rotors, 1 / M_jj for arm joint j).  e_cog = E (c_B - a) is the CoG
-    offset from the thrust axis (point a, the rows of E span the plane normal to it: the
-    platform's ``thrust_axis`` and ``thrust_axis_basis``), [x_cm, y_cm] of Thesis (3.78) for
-    coplanar rotors (:func:`qprr.kinematics.cog_offset_body`; Jacobian E times
-    :func:`qprr.kinematics.com_jacobian_body_from`).
-    Derivatives: ``pin.computeABADerivatives`` (Fx), M^-1 W (Fu), dDifference, Jlog6 times the
-    LOCAL frame Jacobian, the CoM Jacobian in B (checked against finite differences in
-    tests/test_mpc.py).  References are set with :meth:`set_reference`.
-    """
-
-    def __init__(self, state: LieState, W: np.ndarray, ee_frame: int, weights: np.ndarray, terminal: bool,
-                 u_lb: np.ndarray, u_ub: np.ndarray, u_scale: np.ndarray, q_lo: np.ndarray, q_hi: np.ndarray,
-                 axis_point: np.ndarray, axis_basis: np.ndarray) -> None:
-        nu = W.shape[1]
-        crocoddyl.DifferentialActionModelAbstract.__init__(self, state, nu, len(weights))
-        model = state.model
-        self.model = model
-        self._pdata = model.createData()
-        self._axis_point, self._axis_basis = axis_point, axis_basis
-        self.W = W
-        self.ee_frame = ee_frame
-        self.weights = weights
-        self.terminal = terminal
-        self.u_lb, self.u_ub = u_lb, u_ub
-        nq, nv = model.nq, model.nv
-        self._nq, self._nv, self._nu = nq, nv, nu
-        self.x_ref = state.zero()
-        self.M_ref_inv = pin.SE3.Identity()
-        self.u_ref = np.zeros(nu)
-        self.u_scale = u_scale
-        # constant pieces of the derivatives
-        self._q_lo, self._q_hi = q_lo, q_hi  # arm joints (q[7:]), the soft limits
-        self._nx_res = 2 * nv + 8 + (nv - 6)  # residual rows that depend on the state only
-        self._w_u = weights[self._nx_res :]
-        self._Luu = np.diag(self._w_u * u_scale**2) if not terminal else None
-        self._Rx = np.zeros((self._nx_res, 2 * nv))  # residual Jacobian without the control rows
-        self._Rx[nv : 2 * nv, nv:] = np.eye(nv)
-
-    def set_reference(self, x_ref: np.ndarray, M_ref: pin.SE3, u_ref: np.ndarray) -> None:
-        """x_ref = (q_ref, v_ref), M_ref the end-effector pose (world), u_ref (nu,)."""
-        self.x_ref = x_ref
-        self.M_ref_inv = M_ref.inverse()
-        self.u_ref = u_ref
-
-    def _residual_x(self, q, v, c_b) -> tuple[np.ndarray, pin.SE3]:
-        """State part of r (everything but the control block); the kinematics of ``_pdata`` at q are up to date."""
-        m, nq = self.model, self._nq
-        M_rel = self.M_ref_inv * pin.updateFramePlacement(m, self._pdata, self.ee_frame)
-        x_ref = self.x_ref
-        q_arm = q[7:]
-        over = np.minimum(q_arm - self._q_lo, 0.0) + np.maximum(q_arm - self._q_hi, 0.0)
-        e_cog = self._axis_basis @ (c_b - self._axis_point)
-        r = np.concatenate((pin.difference(m, x_ref[:nq], q), v - x_ref[nq:], pin.log6(M_rel).vector, e_cog, over))
-        return r, M_rel
-
-    # crocoddyl calls these from C++: a Python exception escaping them aborts the process
-    # (boost::python::error_already_set is no std::exception), so any failure becomes NaN
-    # outputs, which crocoddyl's line search and backward pass reject as such
-    def calc(self, data, x, u=None) -> None:
-        try:
-            self._calc(data, x, u)
-        except Exception:
-            data.cost = math.nan
-            if u is not None:
-                data.xout[:] = math.nan
-
-    def calcDiff(self, data, x, u=None) -> None:
-        try:
-            self._calc_diff(data, x, u)
-        except Exception:
-            data.Lx[:] = math.nan
-            if u is not None:
-                data.Fx[:, :] = math.nan
-
-    def _calc(self, data, x, u) -> None:
-        m, d, nq = self.model, self._pdata, self._nq
-        q, v = x[:nq], x[nq:]
-        if u is not None:
-            data.xout[:] = pin.aba(m, d, q, v, self.W @ u)
-        c_b = d.oMi[1].actInv(pin.centerOfMass(m, d, q, False))  # forward kinematics at q, then the CoM in B
-        r, _ = self._residual_x(q, v, c_b)
-        cost = float(np.dot(self.weights[: r.shape[0]] * r, r))
-        if u is not None:
-            ru = self.u_scale * (u - self.u_ref)
-            cost += float(np.dot(self._w_u * ru, ru))
-        data.cost = 0.5 * cost
-
-    def _calc_diff(self, data, x, u) -> None:
-        m, d, nq, nv = self.model, self._pdata, self._nq, self._nv
-        q, v = x[:nq], x[nq:]
-        if u is not None:
-            ddq_dq, ddq_dv, Minv = pin.computeABADerivatives(m, d, q, v, self.W @ u)
-            data.Fx[:, :nv] = ddq_dq
-            data.Fx[:, nv:] = ddq_dv
-            data.Fu[:, :] = Minv @ self.W
-        # jacobianCenterOfMass also computes the joint Jacobians (documented), used by getFrameJacobian
-        J_cog = self._axis_basis @ com_jacobian_body_from(d, pin.jacobianCenterOfMass(m, d, q, False))
-        c_b = d.oMi[1].actInv(d.com[0])
-        r, M_rel = self._residual_x(q, v, c_b)
-        Rx = self._Rx
-        Rx[:nv, :nv] = pin.dDifference(m, self.x_ref[:nq], q, pin.ARG1)
-        Rx[2 * nv : 2 * nv + 6, :nv] = pin.Jlog6(M_rel) @ pin.getFrameJacobian(m, d, self.ee_frame, pin.LOCAL)
-        Rx[2 * nv + 6 : 2 * nv + 8, :nv] = J_cog
-        q_arm = q[7:]
-        Rx[2 * nv + 8 :, 6:nv] = np.diag(((q_arm < self._q_lo) | (q_arm > self._q_hi)).astype(float))
-        w = self.weights[: r.shape[0]]
-        data.Lx[:] = Rx.T @ (w * r)
-        data.Lxx[:, :] = Rx.T @ (w[:, None] * Rx)
-        if u is not None:
-            ru = self.u_scale * (u - self.u_ref)
-            data.Lu[:] = self.u_scale * (self._w_u * ru)
-            data.Luu[:, :] = self._Luu
-            data.Lxu[:, :] = 0.0
-
-    def createData(self):
-        return crocoddyl.DifferentialActionDataAbstract(self)
 
 
 # ================================================================================ platform
@@ -476,6 +252,23 @@ def _frame_with_z(a: np.ndarray) -> np.ndarray:
     return np.column_stack([x, np.cross(a, x), a])
 
 
+def _check_trajectory(trajectory) -> None:
+    if trajectory is not None and not (hasattr(trajectory, "sample") and callable(trajectory.sample)):
+        raise InputError(f"trajectory must have a sample(t) method, got {type(trajectory).__name__}")
+
+
+def _resolve_backend(requested: str) -> str:
+    """The node models to use for ``MPCSettings.backend`` (module docstring, "Backends")."""
+    if requested == "python":
+        return "python"
+    if NATIVE_PROBLEM:
+        if requested == "native":
+            raise InputError(f"MPCSettings.backend = 'native': crocoddyl's compiled models do not read the installed pinocchio "
+                             f"correctly ({mpc_native.versions()}: {NATIVE_PROBLEM}); fix: {FIX}, or use backend='python' or 'auto'")
+        return "python"
+    return "native"
+
+
 # ============================================================================= controller
 class MPCController(Controller):
     """Receding-horizon MPC with rotor thrust bounds on crocoddyl (see the module docstring).
@@ -508,8 +301,8 @@ class MPCController(Controller):
             raise InputError(f"weights must be an MPCWeights, got {type(self.weights).__name__}")
         if not isinstance(self.settings, MPCSettings):
             raise InputError(f"settings must be an MPCSettings, got {type(self.settings).__name__}")
-        if trajectory is not None and not callable(getattr(trajectory, "sample", None)):
-            raise InputError(f"trajectory must have a sample(t) method, got {type(trajectory).__name__}")
+        _check_trajectory(trajectory)
+        self.backend = _resolve_backend(self.settings.backend)
         thrusters, u_lb, u_ub = _check_platform(platform)
         self.platform = platform
         self.trajectory = trajectory
@@ -525,29 +318,36 @@ class MPCController(Controller):
         self._plan_lb = u_lb + np.r_[np.full(n_rot, m), np.zeros(len(u_lb) - n_rot)]
         self._plan_ub = u_ub - np.r_[np.full(n_rot, m), np.zeros(len(u_ub) - n_rot)]
         self._data = model.createData()
-        # crocoddyl's actuation model needs its StateMultibody; only W (and nu) are taken from it
-        # (module docstring: its multibody dynamics do not read pinocchio 4.1's Model correctly)
-        self.actuation = crocoddyl.ActuationModelFloatingBaseThrusters(crocoddyl.StateMultibody(model), thrusters)
-        self.state = LieState(model)
+        multibody = crocoddyl.StateMultibody(model)
+        self.actuation = crocoddyl.ActuationModelFloatingBaseThrusters(multibody, thrusters)
+        self.state = multibody if self.backend == "native" else LieState(model)
         self.W = np.array(self.actuation.Wthrust)  # tau = W u
         self.W_pinv = np.linalg.pinv(self.W)
         self.nu = self.actuation.nu
         self.g = float(np.linalg.norm(model.gravity.linear))
         self.h = 1.0 / self.settings.rate
         self.ee_frame = int(platform.ee_frame)
-        # arm efforts are weighted through the joint acceleration they give, tau_j / M_jj (at the
-        # neutral configuration): one weight suits a 0.1 kg wrist and a 0.5 kg slider alike
-        M = pin.crba(model, self._data, platform.neutral_q())
-        self._u_scale = np.r_[np.ones(n_rot), 1.0 / np.diag(M)[6:]]
-        # soft joint limits: the arm's position limits shrunk by joint_limit_margin of their range
-        lo, hi = np.array(platform.arm_lower), np.array(platform.arm_upper)
-        span = np.where(np.isfinite(hi - lo), hi - lo, 0.0)
-        self._q_lo = np.where(np.isfinite(lo), lo + self.settings.joint_limit_margin * span, -np.inf)
-        self._q_hi = np.where(np.isfinite(hi), hi - self.settings.joint_limit_margin * span, np.inf)
+        self._u_scale, self._q_lo, self._q_hi = self._scales_and_limits()
         self._build_problem()
         self.dt = None
         self._hold_steps = None  # set by reset
         self._clear()
+
+    def _scales_and_limits(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Control scale s (1 for the rotors, 1 / M_jj for arm joint j) and the arm's soft limits (lo, hi).
+
+        Arm efforts are weighted through the joint acceleration they give, tau_j / M_jj (at the
+        neutral configuration): one weight suits a 0.1 kg wrist and a 0.5 kg slider alike.  The soft
+        limits are the arm's position limits shrunk by ``joint_limit_margin`` of their range.
+        """
+        pf = self.platform
+        M = pin.crba(self.model, self._data, pf.neutral_q())
+        u_scale = np.r_[np.ones(self.n_rotors), 1.0 / np.diag(M)[6:]]
+        lo, hi = np.array(pf.arm_lower), np.array(pf.arm_upper)
+        span = np.where(np.isfinite(hi - lo), hi - lo, 0.0)
+        q_lo = np.where(np.isfinite(lo), lo + self.settings.joint_limit_margin * span, -np.inf)
+        q_hi = np.where(np.isfinite(hi), hi - self.settings.joint_limit_margin * span, np.inf)
+        return u_scale, q_lo, q_hi
 
     # ------------------------------------------------------------------ problem
     def _state_weights(self, factor: float = 1.0) -> np.ndarray:
@@ -557,17 +357,26 @@ class MPCController(Controller):
         vel = [w.linear_velocity] * 3 + [w.angular_velocity] * 3 + [w.arm_velocity] * n_arm
         return factor * np.array(pos + vel, dtype=float)
 
-    def _node(self, terminal: bool) -> tuple:
-        """One node: (integrated action model, its :class:`PlatformDynamics`)."""
+    def node_spec(self, terminal: bool) -> NodeSpec:
+        """Weights and constants of a running (``terminal=False``) or the terminal node (:class:`NodeSpec`)."""
         w, nu, nr = self.weights, self.nu, self.n_rotors
         factor = w.terminal_factor if terminal else 1.0
         parts = [self._state_weights(factor), factor * np.array([w.ee_position] * 3 + [w.ee_orientation] * 3), np.full(2, factor * w.cog),
                  np.full(self.model.nv - 6, factor * w.joint_limits)]
         if not terminal:
             parts.append(np.r_[np.full(nr, w.thrust), np.full(nu - nr, w.arm_acceleration)])
-        dam = PlatformDynamics(self.state, self.W, self.ee_frame, np.concatenate(parts), terminal, self._plan_lb, self._plan_ub,
-                               self._u_scale, self._q_lo, self._q_hi, np.array(self.platform.thrust_axis[0]),
-                               np.array(self.platform.thrust_axis_basis))
+        return NodeSpec(W=self.W, ee_frame=self.ee_frame, weights=np.concatenate(parts), terminal=terminal, u_scale=self._u_scale,
+                        q_lo=self._q_lo, q_hi=self._q_hi, axis_point=np.array(self.platform.thrust_axis[0]),
+                        axis_basis=np.array(self.platform.thrust_axis_basis))
+
+    def _node(self, terminal: bool) -> tuple:
+        """One node: (integrated action model, the object whose ``set_reference`` sets its references)."""
+        spec = self.node_spec(terminal)
+        if self.backend == "native":
+            refs = mpc_native.NativeNode(self.state, self.actuation, spec)
+            dam = refs.dam
+        else:
+            refs = dam = PlatformDynamics(self.state, spec)
         h = 0.0 if terminal else self.h
         if self.settings.integrator == "euler":
             iam = crocoddyl.IntegratedActionModelEuler(dam, h)
@@ -575,7 +384,7 @@ class MPCController(Controller):
             order = {"rk2": crocoddyl.RKType.two, "rk3": crocoddyl.RKType.three, "rk4": crocoddyl.RKType.four}
             iam = crocoddyl.IntegratedActionModelRK(dam, order[self.settings.integrator], h)
         iam.u_lb, iam.u_ub = self._plan_lb, self._plan_ub
-        return iam, dam
+        return iam, refs
 
     def _build_problem(self) -> None:
         N = self.settings.horizon
@@ -584,6 +393,8 @@ class MPCController(Controller):
         self._nodes = list(nodes)  # (model, dynamics) in node order, rotated with the problem
         x0 = self.state.zero()
         self.problem = crocoddyl.ShootingProblem(x0, [m for m, _ in nodes], self._terminal)
+        if self.problem.nthreads != self.settings.threads:  # (crocoddyl runs a problem with Python parts in one thread and
+            self.problem.nthreads = self.settings.threads  # warns when told to use more)
         self.solver = crocoddyl.SolverBoxFDDP(self.problem)
         self.solver.th_stop = self.settings.th_stop
 
@@ -632,14 +443,13 @@ class MPCController(Controller):
         return out
 
     @staticmethod
-    def _set(dam: PlatformDynamics, reference) -> None:
-        dam.set_reference(*reference)
+    def _set(node, reference) -> None:
+        node.set_reference(*reference)
 
     # ------------------------------------------------------------------ Controller API
     def set_preview(self, trajectory) -> None:
         """The run's trajectory, previewed over the horizon (the simulator calls this before :meth:`reset`)."""
-        if trajectory is not None and not callable(getattr(trajectory, "sample", None)):
-            raise InputError(f"trajectory must have a sample(t) method, got {type(trajectory).__name__}")
+        _check_trajectory(trajectory)
         self.trajectory = trajectory
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
@@ -678,7 +488,7 @@ class MPCController(Controller):
     def stats(self) -> MPCStats:
         """Per-solve log of the run so far (:class:`MPCStats`)."""
         L = self._log
-        return MPCStats(t=np.array(L["t"]), solve_time=np.array(L["solve_time"]), solve_cpu=np.array(L["solve_cpu"]),
+        return MPCStats(backend=self.backend, t=np.array(L["t"]), solve_time=np.array(L["solve_time"]), solve_cpu=np.array(L["solve_cpu"]),
                         step_time=np.array(L["step_time"]),
                         iterations=np.array(L["iterations"], dtype=int), status=tuple(L["status"]), cost=np.array(L["cost"]),
                         gap=np.array(L["gap"]), thrust_margin=np.array(L["thrust_margin"]), fallback=tuple(L["fallback"]),
@@ -691,7 +501,6 @@ class MPCController(Controller):
         metrics = {f"mpc_{k}": v for k, v in st.summary().items()}
         metrics["mpc_min_plan_thrust_margin_N"] = metrics.pop("mpc_min_thrust_margin_N")
         metrics["mpc_max_plan_bound_violation_N"] = float(self.max_bound_violation)
-        metrics["mpc_fallbacks"] = float(self.fallback_count)
         series = {"mpc_t": st.t, "mpc_solve_time": st.solve_time, "mpc_solve_cpu": st.solve_cpu,
                   "mpc_iterations": st.iterations.astype(float), "mpc_thrust_margin": st.thrust_margin}
         return metrics, series
@@ -736,7 +545,10 @@ class MPCController(Controller):
             first, res = self._nodes.pop(0)
             r_last, r_term = self._references(t, ref, (N - 1, N))
             self._set(res, r_last)
-            problem.circularAppend(first)  # (new data: crocoddyl cannot check a Python model's data)
+            if self.backend == "native":
+                problem.circularAppend(first, problem.runningDatas[0])
+            else:
+                problem.circularAppend(first)  # (new data: crocoddyl cannot check a Python model's data)
             self._nodes.append((first, res))
             self._set(self._terminal_res, r_term)
             xs, us = self._warm_start(x0)
@@ -856,4 +668,5 @@ class MPCController(Controller):
         return np.clip(self.W_pinv @ g, self._plan_lb, self._plan_ub)
 
 
-__all__ = ["Fallback", "MPCController", "MPCSettings", "MPCStats", "MPCWeights", "LieState", "PlatformDynamics", "SolveStatus"]
+__all__ = ["FIX", "NATIVE_PROBLEM", "Fallback", "LieState", "MPCController", "MPCSettings", "MPCStats", "MPCWeights", "NodeSpec",
+           "PlatformDynamics", "SolveStatus"]

@@ -225,13 +225,6 @@ class IKResult:
     level_errors: tuple = field(default=())
 
 
-def failed_result(method: str, status: str, reason: str, iterations: int, t0: float, init: str) -> IKResult:
-    """A result without a configuration (the method could not produce one)."""
-    nan = float("nan")
-    return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False,
-                    time.perf_counter() - t0, init)
-
-
 # ============================================================================= inputs
 def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
     """(p_world, R_world) of a ``pin.SE3``, a ``(p_world, R_world)`` pair or a position alone (R None), validated.
@@ -257,14 +250,22 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         if not np.all(np.isfinite(p)):
             raise NonFiniteError(f"target must be finite, got p = {p.tolist()}")
         return p, None
-    if not (np.all(np.isfinite(p)) and np.all(np.isfinite(R))):
+    px, py, pz = p.tolist()
+    if not (math.isfinite(px + py + pz) and math.isfinite(sum(R.ravel().tolist()))):
         raise NonFiniteError(f"target must be finite, got p = {p.tolist()}, R = {R.tolist()}")
-    dev = float(np.abs(R.T @ R - np.eye(3)).max())
-    det = float(np.linalg.det(R))
-    if dev > 1e-9 or det < 0.0:
-        raise InputError(f"target rotation must be a rotation matrix (R^T R = I within 1e-9, det = +1); "
-                         f"max |R^T R - I| = {dev:.3g}, det = {det:.3g}")
+    dev = _rotation_deviation(R)
+    if not dev <= 1e-9:
+        raise InputError(f"target rotation must be a rotation matrix (R^T R = I and det = +1 within 1e-9); deviation {dev:.3g}, "
+                         f"det = {float(np.linalg.det(R)):.3g}")
     return p, R
+
+
+def _rotation_deviation(R: np.ndarray) -> float:
+    """How far R is from a rotation: the sum of |unit norm - 1| of its first two columns, |their dot product| and
+    |third column - first x second| (0 for a rotation; any of R^T R != I or det R != +1 shows; NaN propagates)."""
+    (A, B, C), (D, E, F), (G, H, I) = R.tolist()
+    return (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
+            + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))
 
 
 def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[float, float]:
@@ -288,9 +289,7 @@ def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[fl
         return pos, 0.0
     (a, b, c), (d, e, f), (g, h, i) = M.rotation.tolist()
     (A, B, C), (D, E, F), (G, H, I) = R_d.tolist()
-    # R_d a rotation: unit orthogonal columns (R_d^T R_d = I), right-handed (third column = first x second)
-    dev = (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
-           + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))  # a sum: NaN propagates
+    dev = _rotation_deviation(R_d)  # R_d a rotation: unit orthogonal columns, right-handed
     if not dev < 1e-9:
         raise InputError(f"R_d must be a rotation matrix (R^T R = I, det = +1): deviation {dev:.3g}")
     n21_12 = (C * b + F * e + I * h) - (B * c + E * f + H * i)
@@ -334,22 +333,49 @@ def default_guess(platform: Platform, data: pin.Data, p_world, R_world) -> np.nd
 
 
 # ======================================================================== evaluation
-def finish(platform: Platform, data: pin.Data, method: str, q: np.ndarray, xi, p_d, R_d, opts, *, status: str, reason: str,
-           iterations: int, t0: float, init: str, require_hover: bool, level_errors=(), kinematics_ready: bool = False,
-           unreachable_hint: Callable | None = None) -> IKResult:
-    """Evaluate q with Pinocchio (FK, CoM) and build the result; decide success.
+@dataclass(frozen=True, slots=True)
+class SolveContext:
+    """What one solve is about, shared by the method and :func:`finish`: the platform and its data, the method's name,
+    the parsed target (p_d, R_d; R_d None for a position), the options, the start time t0 (perf_counter), the label of
+    the initial guess, whether success needs hover, and ``unreachable_hint(R_d) -> str``, a platform-specific
+    explanation of why a target is not reachable in hover (the Q-PRR: its end-effector y axis must be horizontal),
+    "" if it is (None: no explanation)."""
 
-    ``unreachable_hint(R_d) -> str``: a platform-specific explanation of why a target is not
-    reachable in hover (the Q-PRR: its end-effector y axis must be horizontal), or "" if it is.
-    """
-    model = platform.model
-    if kinematics_ready:  # data already holds FK, frames and CoM at q
+    platform: Platform
+    data: pin.Data
+    method: str
+    p_d: np.ndarray
+    R_d: np.ndarray | None
+    opts: object
+    t0: float
+    init: str
+    require_hover: bool
+    unreachable_hint: Callable | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Ending:
+    """How a method's iteration ended: ``status``, ``reason`` (non-empty: a failure whatever the errors),
+    ``iterations``, the levels' errors (method "qp"), and whether ``data`` already holds FK, frames and CoM at q."""
+
+    status: str
+    reason: str = ""
+    iterations: int = 0
+    level_errors: tuple = ()
+    kinematics_ready: bool = False
+
+
+def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
+    """Evaluate q with Pinocchio (FK, CoM) and build the result; decide success (``xi``: q's thesis coordinates
+    when the method has them, else computed from q)."""
+    platform, data, opts = ctx.platform, ctx.data, ctx.opts
+    if end.kinematics_ready:  # data already holds FK, frames and CoM at q
         c = data.com[0]
         M = data.oMf[platform.ee_frame]
     else:
-        c = pin.centerOfMass(model, data, q, False)
-        M = pin.updateFramePlacement(model, data, platform.ee_frame)
-    pos_err, rot_err = pose_errors(M, p_d, R_d)
+        c = pin.centerOfMass(platform.model, data, q, False)
+        M = pin.updateFramePlacement(platform.model, data, platform.ee_frame)
+    pos_err, rot_err = pose_errors(M, ctx.p_d, ctx.R_d)
     base = data.oMi[1]
     Rb = base.rotation
     off = platform.thrust_axis_basis @ (base.actInv(c) - platform.thrust_axis[0])
@@ -361,15 +387,36 @@ def finish(platform: Platform, data: pin.Data, method: str, q: np.ndarray, xi, p
     lo, hi = platform.arm_lower, platform.arm_upper
     within = bool(np.all(q_arm >= lo - 1e-12) and np.all(q_arm <= hi + 1e-12))
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
-    success = pose_ok and within and (hover_ok or not require_hover) and not reason
-    hint = unreachable_hint(R_d) if (unreachable_hint is not None and R_d is not None) else ""
-    if not success and not reason:
+    status, reason = end.status, end.reason
+    success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
+    if not success:
+        status, reason = _failure(ctx, end, q_arm, (pos_err, rot_err, roll, pitch), (pose_ok, within))
+    if xi is None:
+        xi = _xi_of_q(q, Rb)
+    return IKResult(
+        method=ctx.method, success=bool(success), status=status if not success else "converged", reason=reason,
+        xi=xi, q=q, iterations=int(end.iterations), position_error=pos_err, orientation_error=rot_err,
+        x_cm=float(off[0]), y_cm=float(off[1]), roll=roll, pitch=pitch, hover_feasible=bool(hover_ok),
+        within_limits=within, wall_time=time.perf_counter() - ctx.t0, initial_guess=ctx.init, level_errors=end.level_errors,
+    )
+
+
+def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, verdicts: tuple) -> tuple[str, str]:
+    """(status, reason) of a failed solve, in words from the measured errors (pos_err, rot_err, roll, pitch) and the
+    verdicts (pose_ok, within limits)."""
+    pos_err, rot_err, roll, pitch = errors
+    pose_ok, within = verdicts
+    status, reason = end.status, end.reason
+    hint = ctx.unreachable_hint(ctx.R_d) if (ctx.unreachable_hint is not None and ctx.R_d is not None) else ""
+    if not reason:
         if not within:
+            lo, hi = ctx.platform.arm_lower, ctx.platform.arm_upper
             status = "limits"
             reason = f"joints out of limits: q_arm = {q_arm.tolist()} not in [{lo.tolist()}, {hi.tolist()}]"
         elif not pose_ok:
             status = status if status != "converged" else "stalled"
-            reason = f"pose not reached after {iterations} iterations: position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
+            reason = (f"pose not reached after {end.iterations} iterations: position error {pos_err:.3g} m, orientation "
+                      f"error {rot_err:.3g} rad")
         else:
             status = "not_hover_feasible"
             if hint:
@@ -378,16 +425,30 @@ def finish(platform: Platform, data: pin.Data, method: str, q: np.ndarray, xi, p
                 reason = (f"the pose is reached with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: the iteration "
                           "stopped at a tilted configuration (joint limit or local minimum from this start, or a target that "
                           "needs a tilted base); try another xi0")
-    if not success and status != "not_hover_feasible" and require_hover and "hover" not in reason and hint:
+    if status != "not_hover_feasible" and ctx.require_hover and "hover" not in reason and hint:
         reason += f"; the target is unreachable in hover ({hint})"
-    if xi is None:
-        xi = _xi_of_q(q, Rb)
-    return IKResult(
-        method=method, success=bool(success), status=status if not success else "converged", reason=reason,
-        xi=xi, q=q, iterations=int(iterations), position_error=pos_err, orientation_error=rot_err,
-        x_cm=float(off[0]), y_cm=float(off[1]), roll=roll, pitch=pitch, hover_feasible=bool(hover_ok),
-        within_limits=within, wall_time=time.perf_counter() - t0, initial_guess=init, level_errors=level_errors,
-    )
+    return status, reason
+
+
+def failed_result(method: str, status: str, reason: str, iterations: int, t0: float, init: str) -> IKResult:
+    """A result without a configuration (the method could not produce one)."""
+    nan = float("nan")
+    return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False,
+                    time.perf_counter() - t0, init)
+
+
+def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
+    """Refuse a target so far from the origin that doubles near it are too coarse to tell a position error below
+    ``position_tol``: at |p| = 1e17 m neighbouring doubles are 16 m apart and a "1e-16 m" error means nothing.
+    Forward kinematics rounds to a few units in the last place of |p|: 16 of them must stay below a tenth of
+    the tolerance (with the default 1e-6 m: |p| below 2^25 m, about 3.4e7 m)."""
+    pmax = float(np.abs(p_d).max())
+    ulp = float(np.spacing(pmax))
+    if 16.0 * ulp > 0.1 * position_tol:
+        limit = 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
+        raise InputError(f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
+                         f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
+                         f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol")
 
 
 def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
@@ -416,8 +477,9 @@ def _hover_cols(platform: Platform) -> np.ndarray:
     return np.r_[0, 1, 2, 5, np.arange(6, platform.nv)]
 
 
-def solve_clika(platform, data, p_d, R_d, xi, init, opts: ClikaOptions, t0, hint=None) -> IKResult:
+def solve_clika(ctx: SolveContext, xi: np.ndarray) -> IKResult:
     """CLIKA, Thesis (4.38)-(4.41): xi_dot = W^-1/2 (J W^-1/2)^+ K e integrated with step dt (4.30)."""
+    platform, data, p_d, R_d, opts = ctx.platform, ctx.data, ctx.p_d, ctx.R_d, ctx.opts
     if R_d is None:
         raise InputError("method 'clika' needs a full pose target (p_world, R_world); use 'qp' or 'dls' for a position")
     model, fid = platform.model, platform.ee_frame
@@ -460,12 +522,12 @@ def solve_clika(platform, data, p_d, R_d, xi, init, opts: ClikaOptions, t0, hint
     q = ch.xi_to_q(xi)
     if status == "max_iterations":
         reason = f"CLIKA did not converge in {opts.max_iter} iterations"
-    return finish(platform, data, "clika", q, None, p_d, R_d, opts, status=status, reason=reason, iterations=it,
-                  t0=t0, init=init, require_hover=_require_hover(platform, opts), unreachable_hint=hint)
+    return finish(ctx, q, Ending(status, reason, it))
 
 
-def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=None) -> IKResult:
+def solve_dls(ctx: SolveContext, xi: np.ndarray) -> IKResult:
     """Damped least squares (Levenberg-Marquardt) on log6 (or on the position error for a position target)."""
+    platform, data, p_d, R_d, opts = ctx.platform, ctx.data, ctx.p_d, ctx.R_d, ctx.opts
     model, fid = platform.model, platform.ee_frame
     cols = _hover_cols(platform) if opts.hover else np.arange(platform.nv)
     lo, hi = platform.arm_lower, platform.arm_upper
@@ -528,8 +590,7 @@ def solve_dls(platform, data, p_d, R_d, xi, init, opts: DLSOptions, t0, hint=Non
         if lam > 1e10 or slow >= 3:
             status = "stalled"
             break
-    return finish(platform, data, "dls", q, None, p_d, R_d, opts, status=status, reason="", iterations=it,
-                  t0=t0, init=init, require_hover=_require_hover(platform, opts), unreachable_hint=hint)
+    return finish(ctx, q, Ending(status, "", it))
 
 
 def _require_hover(platform: Platform, opts) -> bool:
@@ -549,6 +610,11 @@ def default_levels(platform: Platform, target, q_arm_posture, base_yaw: float = 
     q_arm_posture = platform.check_arm_limits(q_arm_posture, "q_arm_posture")
     if not isinstance(target, pin.SE3):
         target = as_vector(target, 3, "target")
+    return _levels(platform, target, q_arm_posture, base_yaw)
+
+
+def _levels(platform: Platform, target, q_arm_posture: np.ndarray, base_yaw: float) -> list[list[Task]]:
+    """:func:`default_levels` of inputs already checked (the IK's entry point did)."""
     if isinstance(target, pin.SE3):
         first = PoseTask(platform, target)
     else:
@@ -598,82 +664,95 @@ class IKSolver:
         check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
+        check_resolvable(p_d, opts.position_tol)
         hover = getattr(opts, "hover", False)
         if xi0 is not None:
             xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
         else:
             xi, init = self._guess(data, p_d, R_d, hover)
+        ctx = SolveContext(self.platform, data, self.method, p_d, R_d, opts, t0, init, _require_hover(self.platform, opts),
+                           self.unreachable_hint)
         if self.method == "clika":
-            return solve_clika(self.platform, data, p_d, R_d, xi, init, opts, t0, self.unreachable_hint)
+            return solve_clika(ctx, xi)
         if self.method == "dls":
-            return solve_dls(self.platform, data, p_d, R_d, xi, init, opts, t0, self.unreachable_hint)
-        return self._solve_qp(data, p_d, R_d, xi, init, t0)
+            return solve_dls(ctx, xi)
+        return self._solve_qp(ctx, xi)
 
-    def _solve_qp(self, data, p_d, R_d, xi, init, t0) -> IKResult:
-        platform, opts = self.platform, self.options
-        model = platform.model
+    def _solve_qp(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
+        platform, data, opts = self.platform, ctx.data, self.options
         q = ch.xi_to_q(xi)
-        require_hover = _require_hover(platform, opts)
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
-        target = pin.SE3(R_d, p_d) if R_d is not None else p_d
-        levels = opts.levels if opts.levels is not None else default_levels(platform, target, posture, float(xi[5]))
-        engine = self._engine
-        engine.reset()
-        lo, hi = engine.lower, engine.upper
-        fid = platform.ee_frame
-        status, it, step, ready = "max_iterations", 0, None, False
-        lower_prev, flat = None, 0
-        e1_prev, rest_scale = math.inf, 1.0
+        target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
+        levels = opts.levels if opts.levels is not None else _levels(platform, target, posture, float(xi[5]))
+        self._engine.reset()
+        it, step, end = 0, None, Ending("max_iterations")
+        shaper = _StepShaper(opts)
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
-                pos_err, rot_err = pose_errors(data.oMf[fid], p_d, R_d)
+                pos_err, rot_err = pose_errors(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
                 it += 1
-                step = engine.solve(platform, data, q, levels)
-                largest = float(np.abs(step.dv).max())
-                small = largest < opts.step_tol
-                if small and largest < 1e-15:
-                    status, ready = ("converged" if pose_ok else "stalled"), True
-                    break
-                # the lower levels may converge only linearly (damped, unsatisfiable): once the
-                # pose holds, stop when their errors no longer decrease, compared in priority order
-                # (the first level that moved decides: a posture error rising while the hover error
-                # falls is progress)
-                lower = step.errors[1:]
-                flat = flat + 1 if (pose_ok and not _lexicographic_progress(lower, lower_prev)) else 0
-                lower_prev = lower
-                if flat >= 3:
-                    status, ready = "converged", True
-                    break
-                # level 1 converges quadratically on its own; the lower levels' part of the step
-                # moves along level 1's kernel at first order only, and its second-order effect can
-                # hold level 1 off its target: when level 1 stops halving its error, that part is
-                # halved until it does again (doubled back, up to full, when level 1 progresses)
-                e1 = step.errors[0]
-                if not pose_ok and e1 > 0.5 * e1_prev:
-                    rest_scale *= 0.5
-                elif rest_scale < 1.0:
-                    rest_scale = min(1.0, 2.0 * rest_scale)
-                e1_prev = e1
-                dv = step.dv
-                if largest > opts.max_step or rest_scale < 1.0:
-                    d1 = step.dv_first
-                    rest = (dv - d1) * rest_scale
-                    m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
-                    dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (
-                        rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
-                q = pin.integrate(model, q, dv)
-                np.clip(q[7:], lo, hi, out=q[7:])  # ProxQP meets the bounds to eps_abs; remove that slack
-                if small:  # stationary: every level settled; the last (tiny) Newton step is kept
-                    status = "converged" if pose_ok else "stalled"
+                step = self._engine.solve(platform, data, q, levels, validate=it == 1 and opts.levels is not None)
+                dv, stop = shaper.shape(step, pose_ok)
+                if dv is not None:
+                    q = pin.integrate(platform.model, q, dv)
+                    np.clip(q[7:], self._engine.lower, self._engine.upper, out=q[7:])  # remove the QP's bound slack
+                if stop:
+                    end = Ending(stop if pose_ok or stop != "converged_stationary" else "stalled", kinematics_ready=dv is None)
                     break
         except SolverError as exc:
-            return finish(platform, data, "qp", q, None, p_d, R_d, opts, status="solver_error", reason=str(exc),
-                          iterations=it, t0=t0, init=init, require_hover=require_hover, unreachable_hint=self.unreachable_hint)
-        return finish(platform, data, "qp", q, None, p_d, R_d, opts, status=status, reason="", iterations=it, t0=t0,
-                      init=init, require_hover=require_hover, kinematics_ready=ready,
-                      level_errors=_level_errors(platform, data, q, levels, ready, step), unreachable_hint=self.unreachable_hint)
+            return finish(ctx, q, Ending("solver_error", str(exc), it))
+        status = "converged" if end.status == "converged_stationary" else end.status
+        return finish(ctx, q, Ending(status, "", it, _level_errors(platform, data, q, levels, end.kinematics_ready, step),
+                                     end.kinematics_ready))
+
+
+class _StepShaper:
+    """The QP IK's step control and stopping tests, iteration after iteration.
+
+    ``shape(step, pose_ok) -> (dv or None, stop)``: dv the step to take (None: none, q is the answer and ``data``
+    holds its kinematics), stop "" to go on, else "converged_stationary" (the step vanished: converged if the pose
+    holds, stalled otherwise) or "converged" (the pose holds and the lower levels stopped improving).
+    """
+
+    def __init__(self, opts: QPOptions) -> None:
+        self.opts = opts
+        self.lower_prev, self.flat = None, 0
+        self.e1_prev, self.rest_scale = math.inf, 1.0
+
+    def shape(self, step, pose_ok: bool):
+        opts = self.opts
+        largest = float(np.abs(step.dv).max())
+        small = largest < opts.step_tol
+        if small and largest < 1e-15:
+            return None, "converged_stationary"
+        # the lower levels may converge only linearly (damped, unsatisfiable): once the pose holds, stop when their
+        # errors no longer decrease, compared in priority order (the first level that moved decides: a posture error
+        # rising while the hover error falls is progress)
+        lower = step.errors[1:]
+        self.flat = self.flat + 1 if (pose_ok and not _lexicographic_progress(lower, self.lower_prev)) else 0
+        self.lower_prev = lower
+        if self.flat >= 3:
+            return None, "converged"
+        # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
+        # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
+        # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
+        e1 = step.errors[0]
+        if not pose_ok and e1 > 0.5 * self.e1_prev:
+            self.rest_scale *= 0.5
+        elif self.rest_scale < 1.0:
+            self.rest_scale = min(1.0, 2.0 * self.rest_scale)
+        self.e1_prev = e1
+        dv = step.dv
+        if largest > opts.max_step or self.rest_scale < 1.0:
+            d1 = step.dv_first
+            rest = (dv - d1) * self.rest_scale
+            m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
+            dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (
+                rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
+        # small: stationary, every level settled; the last (tiny) Newton step is kept
+        return dv, ("converged_stationary" if small else "")
 
 
 def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:

@@ -25,11 +25,14 @@ from ..ik.solver import (
     OPTIONS as _GENERIC_OPTIONS,
 )
 from ..ik.solver import (
+    Ending,
     IKResult,
     IKSolver,
+    SolveContext,
     Tolerances,
     _check_int,
     _check_pos,
+    check_resolvable,
     failed_result,
     finish,
     hover_q,
@@ -82,8 +85,12 @@ def default_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
 
 def hover_tilt(R_world) -> float:
     """Angle [rad] by which the end-effector y axis leaves the horizontal plane (0 iff reachable in hover)."""
-    R_world = check_rotation(R_world, "R_world", 1e-6)
-    return math.asin(min(1.0, abs(float(R_world[2, 1]))))
+    return _tilt(check_rotation(R_world, "R_world", 1e-6))
+
+
+def _tilt(R: np.ndarray) -> float:
+    """:func:`hover_tilt` of a rotation already checked (the IK's parsed target)."""
+    return math.asin(min(1.0, abs(float(R[2, 1]))))
 
 
 # ================================================================ thesis IGM helpers
@@ -113,6 +120,24 @@ class ArmConstants:
 
 def arm_constants(params: QPRRParams) -> ArmConstants:
     """:class:`ArmConstants` of ``params``."""
+    return _arm_constants(params)
+
+
+_LAST_CONSTANTS: tuple = (None, None)  # (params, constants) of the last call: the IK asks for the same ones per solve
+
+
+def _arm_constants(params: QPRRParams) -> ArmConstants:
+    """:func:`arm_constants` remembered for the last (immutable) parameter set."""
+    global _LAST_CONSTANTS
+    last = _LAST_CONSTANTS
+    if last[0] is params:
+        return last[1]
+    K = _compute_arm_constants(params)
+    _LAST_CONSTANTS = (params, K)
+    return K
+
+
+def _compute_arm_constants(params: QPRRParams) -> ArmConstants:
     (m1, c1), (m2, c2), (m3, c3) = ((link.mass, link.com) for link in params.links)
     rail_m, rail_c = (params.rail.mass, params.rail.com) if params.rail is not None else (0.0, (0.0, 0.0, 0.0))
     return ArmConstants(
@@ -159,6 +184,10 @@ def prismatic_check(x_b_prime: float, y_b_prime: float, psi: float, r0: float, r
     Returns (x_b, y_b, r0).  The end effector does not move: x_b' = x_b + c_psi r0 and
     y_b' = y_b + s_psi r0 are what (3.72) fixed.
     """
+    return _prismatic(x_b_prime, y_b_prime, psi, r0, r0_min, r0_max)
+
+
+def _prismatic(x_b_prime: float, y_b_prime: float, psi: float, r0: float, r0_min: float, r0_max: float) -> tuple[float, float, float]:
     r0 = min(max(r0, r0_min), r0_max)
     return x_b_prime - math.cos(psi) * r0, y_b_prime - math.sin(psi) * r0, r0
 
@@ -267,7 +296,7 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
         xp, yp, zb = px - cps * h, py - sps * h, pz - d01 - d2 * math.cos(th2) - d3 * c23
     # (3.79)-(3.81): r0 minimising |x_cm|, then Algorithm 5 (corrected) and (3.71)
     gx = K.k0 + K.a_s * math.sin(th2) + K.a_c * math.cos(th2) + K.b_s * s23 + K.b_c * c23
-    xb, yb, r0 = prismatic_check(xp, yp, psi, -gx / K.M_s, lo0, hi0)
+    xb, yb, r0 = _prismatic(xp, yp, psi, -gx / K.M_s, lo0, hi0)
     return [xb, yb, zb, 0.0, 0.0, psi, r0, th2, t23 - th2], it, "converged", ""
 
 
@@ -285,7 +314,7 @@ def _guess_tuple(params: QPRRParams, p_d) -> tuple:
 
 def unreachable_hint(R_world) -> str:
     """Why a target is not reachable in hover: its y axis tilted out of the horizontal plane ("" if it is not)."""
-    tilt = hover_tilt(R_world)
+    tilt = _tilt(check_rotation(R_world, "R_world", 1e-6))
     return f"the target's y axis is tilted {tilt:.3g} rad out of the horizontal plane" if tilt > 1e-6 else ""
 
 
@@ -298,21 +327,22 @@ def solve_igm(platform: Platform, data: pin.Data, target, xi0=None, options=None
     p_d, R_d = parse_target(target)
     if R_d is None:
         raise InputError("method 'igm' needs a full pose target (p_world, R_world)")
+    check_resolvable(p_d, opts.position_tol)
     if xi0 is not None:
         guess, init = prepare_xi0(platform, xi0, hover=False).tolist(), "xi0 (given)"
     else:  # (the guess's yaw is not used: psi comes from the target)
         guess, init = _guess_tuple(params, p_d), "hover below the target, arm straight"
-    xi_l, it, status, reason = _igm_core(arm_constants(params), p_d, R_d, guess, opts)
+    xi_l, it, status, reason = _igm_core(_arm_constants(params), p_d, R_d, guess, opts)
     if xi_l is None:
         return failed_result("igm", status, reason, it, t0, init)
-    tilt = hover_tilt(R_d)
+    tilt = _tilt(R_d)
     if tilt > opts.orientation_tol:
         status = "unreachable"
         reason = (f"the target orientation is not reachable in hover: its y axis is tilted {tilt:.3g} rad out of the "
                   "horizontal plane, which needs a base roll/pitch (Algorithm 3 assumes phi = theta = 0)")
     xi = np.array(xi_l)
-    return finish(platform, data, "igm", hover_q(platform, xi_l), xi, p_d, R_d, opts, status=status, reason=reason,
-                  iterations=it, t0=t0, init=init, require_hover=True)
+    ctx = SolveContext(platform, data, "igm", p_d, R_d, opts, t0, init, True)
+    return finish(ctx, hover_q(platform, xi_l), Ending(status, reason, it), xi)
 
 
 def _thesis_guess(platform, data, p_d, R_d):
@@ -327,7 +357,7 @@ def _thesis_guess(platform, data, p_d, R_d):
 def _igm_guess(platform, data, p_d, R_d):
     params = params_of(platform)
     if R_d is not None:
-        xi_l, _, _, _ = _igm_core(arm_constants(params), p_d, R_d, _guess_tuple(params, p_d), _IGM_BALANCE)
+        xi_l, _, _, _ = _igm_core(_arm_constants(params), p_d, R_d, _guess_tuple(params, p_d), _IGM_BALANCE)
         if xi_l is not None:
             return np.array(xi_l), "analytic IGM (balanced theta2)"
         return default_guess(params, p_d, R_d), "hover below the target, arm straight (IGM failed)"
@@ -362,4 +392,6 @@ def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=No
     return solver(platform, method, options, init=init).solve(data, target, xi0)
 
 
-checked_module(globals())  # the closed forms refuse NaN, strings, complex, a non-QPRRParams, in their annotated arguments
+# the closed forms refuse NaN, strings, complex, a non-QPRRParams, in their annotated arguments; the IK entry points
+# check their own inputs once (a wrapper per call doubled the IGM's time)
+checked_module(globals(), skip=("solve_igm", "solver", "solve"))

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import numpy as np
+import pinocchio as pin
+
 from ...charts import as_vector
-from ...kinematics import com_jacobian_body_from
 from .base import Task, scaled, sqrt_weights, task_name
 
 
@@ -24,6 +26,11 @@ class ComTask(Task):
     def linearize(self, platform, data, q):
         point, E = platform.thrust_axis[0], platform.thrust_axis_basis
         base = data.oMi[1]
-        c_b = base.rotation.T @ (data.com[0] - base.translation)
-        J = E @ com_jacobian_body_from(data, data.Jcom)
-        return scaled(self._sw, J, self.target - E @ (c_b - point))
+        R = base.rotation
+        c_b = R.T @ (data.com[0] - base.translation)
+        # the body-frame CoM Jacobian of qprr.kinematics.com_jacobian_body_from, from the data filled by
+        # update_kinematics (no argument checks on this per-iteration path): R^T Jcom - [I, -hat(c_b), 0]
+        J_b = R.T @ data.Jcom
+        J_b[:, 0:3] -= np.eye(3)
+        J_b[:, 3:6] += pin.skew(c_b)
+        return scaled(self._sw, E @ J_b, self.target - E @ (c_b - point))

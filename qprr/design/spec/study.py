@@ -1,0 +1,257 @@
+"""A design study: candidate space, objectives, constraints, effort, search (TOML / JSON / dict).
+
+Example (``examples/design/thesis_architectures.toml``)::
+
+    name = "thesis-architectures"
+    seed = 2026
+    architectures = ["Q-PRR", "Q-RR", "Q-RRR", "HEX-RRR"]   # (2.1) names qprr.build makes
+    references = ["q-prr"]                                  # stored platforms evaluated as they are
+    objectives = ["hover_volume", "balance_fraction", "thrust_margin", "arm_mass"]
+    [parameters]            # a number, a list (grid) or {low, high} (optimised); see PARAMETERS
+    reach = 0.28
+    [mass]                  # MassModel: mode, body, material / link_density, actuators, rail
+    mode = "equal-total"
+    [constraints]           # {min = a} / {max = b} on any metric
+    thrust_margin = { min = 0.5 }
+    [effort]                # samples per map, counting-grid shifts, balance tolerance, payload reach
+    samples = 10000
+    [search]                # method = "grid" | "nsga2"; optimiser, population, generations
+    method = "grid"
+    [closed_loop]           # the flight check of the top designs in the report
+    top = 3
+
+Every key is checked when the file is read: an error names the key, the value and the fix.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from ...charts import as_file
+from ...errors import QprrError
+from ._check import fail, integer, number, table_keys
+from .mass import MassModel
+from .metrics import METRICS
+from .parameters import Parameter, default_parameters, parse_parameter
+
+OPTIMISERS = ("pymoo", "optuna")
+"""Multi-objective optimisers (NSGA-II) a study may use; the first is the default (docs/design.md says why)."""
+
+SEARCH_METHODS = ("grid", "nsga2")
+REFERENCES = ("q-prr",)
+"""Stored platforms a study may evaluate as they are (the thesis's Q-PRR)."""
+_KEYS = ("name", "description", "seed", "architectures", "references", "objectives", "parameters", "mass", "constraints", "effort",
+         "search", "closed_loop")
+
+
+@dataclass(frozen=True)
+class Effort:
+    """Evaluation effort: joint-grid ``samples`` per map, ``shifts`` of the measure's counting grid,
+    ``balance_tol`` [m] (the thesis's epsilon of (3.79)), ``payload_reach`` [m] of ``payload_at_reach``."""
+
+    samples: int = 10_000
+    shifts: int = 4
+    balance_tol: float = 1e-3
+    payload_reach: float = 0.15
+
+
+@dataclass(frozen=True)
+class Search:
+    """``method``: "grid" (every architecture x every listed value) or "nsga2" (per architecture, the
+    ranged parameters optimised by ``optimiser`` over ``generations`` of ``population`` designs)."""
+
+    method: str = "grid"
+    optimiser: str = OPTIMISERS[0]
+    population: int = 12
+    generations: int = 5
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """The report's flight check: ``top`` designs fly ``scenario`` with ``controller`` for ``duration`` [s]."""
+
+    top: int = 3
+    scenario: str = "hover-reach"
+    controller: str = "idc"
+    duration: float = 8.0
+
+
+@dataclass(frozen=True)
+class DesignSpec:
+    """A validated design study (module docstring).  :meth:`load` reads TOML/JSON, :meth:`from_mapping` a dict."""
+
+    name: str
+    architectures: tuple[str, ...]
+    objectives: tuple[str, ...]
+    parameters: dict[str, Parameter]
+    seed: int = 0
+    references: tuple[str, ...] = ()
+    mass: MassModel = field(default_factory=MassModel)
+    constraints: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
+    effort: Effort = field(default_factory=Effort)
+    search: Search = field(default_factory=Search)
+    closed_loop: ClosedLoop = field(default_factory=ClosedLoop)
+    description: str = ""
+
+    @property
+    def optimised(self) -> tuple[str, ...]:
+        """The parameters given as ranges."""
+        return tuple(k for k, p in self.parameters.items() if p.optimised)
+
+    @property
+    def swept(self) -> tuple[str, ...]:
+        """The parameters given as lists of several values."""
+        return tuple(k for k, p in self.parameters.items() if len(p.values) > 1)
+
+    @property
+    def fingerprint(self) -> str:
+        """A hash of everything that changes the results (not the description or the closed-loop check)."""
+        d = self.to_dict()
+        d.pop("description")
+        d.pop("closed_loop")
+        return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
+
+    def to_dict(self) -> dict:
+        return {"name": self.name, "description": self.description, "seed": self.seed, "architectures": list(self.architectures),
+                "references": list(self.references), "objectives": list(self.objectives),
+                "parameters": {k: p.to_dict() for k, p in self.parameters.items()}, "mass": self.mass.to_dict(),
+                "constraints": {k: {n: v for n, v in zip(("min", "max"), b) if v is not None} for k, b in self.constraints.items()},
+                "effort": vars(self.effort).copy(), "search": vars(self.search).copy(), "closed_loop": vars(self.closed_loop).copy()}
+
+    @classmethod
+    def load(cls, path) -> DesignSpec:
+        """Read a ``.toml`` or ``.json`` study."""
+        p = as_file(path, "spec", what="design specification")
+        if p.suffix == ".toml":
+            try:
+                import tomllib
+            except ImportError:  # Python 3.10
+                import tomli as tomllib
+            try:
+                data = tomllib.loads(p.read_text())
+            except tomllib.TOMLDecodeError as exc:
+                fail("spec", str(p), f"valid TOML ({exc})")
+        elif p.suffix == ".json":
+            try:
+                data = json.loads(p.read_text())
+            except json.JSONDecodeError as exc:
+                fail("spec", str(p), f"valid JSON ({exc})")
+        else:
+            fail("spec", str(p), "a .toml or .json file")
+        return cls.from_mapping(data)
+
+    @classmethod
+    def from_mapping(cls, data: Mapping) -> DesignSpec:
+        """Validate a study given as a dict (the TOML tables as nested dicts)."""
+        d = table_keys(data, "", _KEYS)
+        name = d.get("name")
+        if not isinstance(name, str) or not name.strip() or any(c in name for c in "/\\"):
+            fail("name", name, "a non-empty study name without slashes")
+        seed = integer(d.get("seed", 0), "seed", lo=0)
+        archs = _architectures(d.get("architectures"))
+        refs = _names(d.get("references", []), "references", REFERENCES)
+        objectives = _names(d.get("objectives"), "objectives", tuple(METRICS), need=2)
+        params = default_parameters()
+        for k, v in table_keys(d.get("parameters", {}), "parameters", tuple(params)).items():
+            params[k] = parse_parameter(k, v)
+        constraints = _constraints(d.get("constraints", {}))
+        effort = _effort(d.get("effort", {}))
+        search = _search(d.get("search", {}))
+        closed = _closed_loop(d.get("closed_loop", {}))
+        ranged = [k for k, p in params.items() if p.optimised]
+        if search.method == "grid" and ranged:
+            fail(f"parameters.{ranged[0]}", params[ranged[0]].to_dict(), "a number or a list for search.method = \"grid\" "
+                 "(ranges need search.method = \"nsga2\")")
+        if search.method == "nsga2" and not ranged:
+            fail("search.method", "nsga2", "give at least one parameter as a range {low, high}, or use method = \"grid\"")
+        desc = d.get("description", "")
+        if not isinstance(desc, str):
+            fail("description", desc, "a string")
+        return cls(name.strip(), archs, objectives, params, seed, refs, MassModel.from_mapping(d.get("mass", {})), constraints, effort,
+                   search, closed, desc)
+
+
+def _names(value, key: str, valid: tuple[str, ...], need: int = 0) -> tuple[str, ...]:
+    if not isinstance(value, (list, tuple)) or len(value) < need:
+        fail(key, value, f"a list of at least {need} names among {', '.join(valid)}" if need else f"a list of names among {', '.join(valid)}")
+    for v in value:
+        if v not in valid:
+            fail(key, v, f"names among {', '.join(valid)}")
+    if len(set(value)) != len(value):
+        fail(key, list(value), "each name once")
+    return tuple(value)
+
+
+def _architectures(value) -> tuple[str, ...]:
+    from ...nomenclature import UAV_ROTORS, parse
+
+    if not isinstance(value, (list, tuple)) or not value:
+        fail("architectures", value, "a non-empty list of (2.1) names such as [\"Q-PRR\", \"HEX-RRR\"]")
+    out = []
+    for a in value:
+        try:
+            d = parse(a)
+        except QprrError as exc:
+            fail("architectures", a, f"a (2.1) name ({exc})")
+        if d.n_uav != 1 or d.n_arms != 1 or d.uav not in UAV_ROTORS or set(d.joints) - set("RP") or "R" not in d.joints:
+            fail("architectures", a, "one multirotor (Q, HEX, OCT) and one arm of R and P joints with at least one R "
+                 "(qprr.build makes no other; several vehicles or arms, cables and helicopters are not built)")
+        if d.joints.count("P") > 1:
+            fail("architectures", a, "at most one P joint (the slider parameters describe one)")
+        out.append(d.name.strip().upper())
+    if len(set(out)) != len(out):
+        fail("architectures", list(value), "each architecture once")
+    return tuple(out)
+
+
+def _constraints(value) -> dict:
+    out = {}
+    for k, v in table_keys(value, "constraints", tuple(METRICS)).items():
+        b = table_keys(v, f"constraints.{k}", ("min", "max"))
+        if not b:
+            fail(f"constraints.{k}", v, "{min = a} and/or {max = b}")
+        lo = number(b["min"], f"constraints.{k}.min") if "min" in b else None
+        hi = number(b["max"], f"constraints.{k}.max") if "max" in b else None
+        if lo is not None and hi is not None and not lo <= hi:
+            fail(f"constraints.{k}", v, "min <= max")
+        out[k] = (lo, hi)
+    return out
+
+
+def _effort(value) -> Effort:
+    d = table_keys(value, "effort", ("samples", "shifts", "balance_tol", "payload_reach"))
+    e = Effort()
+    return Effort(integer(d.get("samples", e.samples), "effort.samples", lo=64), integer(d.get("shifts", e.shifts), "effort.shifts", lo=2),
+                  number(d.get("balance_tol", e.balance_tol), "effort.balance_tol", positive=True),
+                  number(d.get("payload_reach", e.payload_reach), "effort.payload_reach", lo=0.0))
+
+
+def _search(value) -> Search:
+    d = table_keys(value, "search", ("method", "optimiser", "population", "generations"))
+    s = Search()
+    method = d.get("method", s.method)
+    if method not in SEARCH_METHODS:
+        fail("search.method", method, f"one of {', '.join(SEARCH_METHODS)}")
+    opt = d.get("optimiser", s.optimiser)
+    if opt not in OPTIMISERS:
+        fail("search.optimiser", opt, f"one of {', '.join(OPTIMISERS)}")
+    return Search(method, opt, integer(d.get("population", s.population), "search.population", lo=4),
+                  integer(d.get("generations", s.generations), "search.generations", lo=1))
+
+
+def _closed_loop(value) -> ClosedLoop:
+    from ...scenarios import SCENARIOS
+
+    d = table_keys(value, "closed_loop", ("top", "scenario", "controller", "duration"))
+    c = ClosedLoop()
+    scen = d.get("scenario", c.scenario)
+    if scen not in SCENARIOS or SCENARIOS[scen].platforms is not None:
+        fail("closed_loop.scenario", scen, "a generic scenario (any platform), e.g. hover-reach")
+    ctrl = d.get("controller", c.controller)
+    if ctrl not in SCENARIOS[scen].controllers:
+        fail("closed_loop.controller", ctrl, f"one of {', '.join(SCENARIOS[scen].controllers)}")
+    return ClosedLoop(integer(d.get("top", c.top), "closed_loop.top", lo=0), scen, ctrl,
+                      number(d.get("duration", c.duration), "closed_loop.duration", positive=True))
