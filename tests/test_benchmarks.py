@@ -28,14 +28,12 @@ BENCH = ROOT / "benchmarks"
 HELPERS = {"machine.py"}
 """Modules the benchmarks import (the machine report), not benchmarks."""
 NOT_YET_QUICK = {
-    "mpc_benchmark.py": "its --quick comes with branch e-mpc",
-    "ik_benchmark.py": "its --quick comes with branch f-ikmaps",
     "analysis_benchmark.py": "its --quick comes with branch f-ikmaps",
     "design_benchmark.py": "its --quick comes with branch j-design",
 }
 """Benchmarks skipped until their branch gives them ``--quick``; the lead empties this list after merging."""
 RATIO = re.compile(r"\bratios?\b.*\d", re.IGNORECASE)
-MISSING = re.compile(r"not installed \((pip|apt-get) install [^)]+\)")
+MISSING = re.compile(r"\bnot installed\b.*\b(pip|apt-get) install \S+")
 """A benchmark's message when an optional package or tool is absent: what is missing and its install command."""
 TIMEOUT = 240.0
 """Seconds per benchmark: each takes a few seconds on an idle machine, far longer beside other work."""
