@@ -11,6 +11,10 @@ campaigns, the wheeled demos).  Where it goes decides how it looks:
   elapsed 00:12, ETA 00:18, 10.00it/s``;
 * ``quiet=True``: nothing at all (the counts are still kept).
 
+:class:`StatusProgress` counts units that end with a status (campaign runs, design evaluations,
+the failed ones shown apart); :class:`FractionProgress` is the ``progress(fraction, message)``
+hook of the design maps.
+
 A line is written only when :meth:`Progress.update` (or :meth:`Progress.update_to`) is called:
 code that reports every step, or every few percent, gives a line at least every ``interval``
 seconds while it runs.
@@ -133,6 +137,37 @@ class Progress:
         self.close()
 
 
+class StatusProgress:
+    """Units of work that each end with a status (campaign runs, design evaluations): done / total and failed.
+
+    ``update(status)`` counts one unit; a status other than "ok" counts as failed (shown after the
+    counts).  ``message(text)`` prints ``label: text`` on its own line.  The other arguments are
+    those of :class:`Progress`.
+    """
+
+    def __init__(self, label: str, total: int, done: int = 0, *, quiet: bool = False, stream: TextIO | None = None,
+                 unit: str = "run", interval: float | None = None) -> None:
+        self.label, self.failed = label, 0
+        self._bar = Progress(total, label, quiet=quiet, stream=stream, initial=done, unit=unit, interval=interval)
+        self.stream = self._bar.stream
+
+    @property
+    def done(self) -> int:
+        return self._bar.n
+
+    def update(self, status: str) -> None:
+        if status != "ok":
+            self.failed += 1
+            self._bar.set_postfix(f"{self.failed} failed")
+        self._bar.update()
+
+    def message(self, text: str) -> None:
+        self._bar.write(f"{self.label}: {text}")
+
+    def close(self) -> None:
+        self._bar.close()
+
+
 class FractionProgress:
     """A ``progress(fraction, message)`` callable (the design maps' hook) drawing one :class:`Progress` per message.
 
@@ -160,4 +195,4 @@ class FractionProgress:
         self._bar, self._message = None, None
 
 
-__all__ = ["LOG_FORMAT", "LOG_INTERVAL", "TTY_INTERVAL", "FractionProgress", "Progress", "is_terminal"]
+__all__ = ["LOG_FORMAT", "LOG_INTERVAL", "TTY_INTERVAL", "FractionProgress", "Progress", "StatusProgress", "is_terminal"]

@@ -145,3 +145,21 @@ def test_wheeled_simulate_reports_its_steps_only_when_asked(capsys):
     assert err.splitlines()[-1].startswith("unicycle: 100/100 (100%)")
     simulate(Unicycle(), [0.0, 0.0, 0.0], [1.0, 0.5], 1.0, 0.01)
     assert capsys.readouterr().err == ""
+
+
+def test_status_progress_counts_failures_and_prints_messages():
+    from qprr.progress import StatusProgress
+
+    log = io.StringIO()
+    bar = StatusProgress("campaign c", 4, 1, stream=log, unit="run", interval=1e-9)  # one run saved before: resumed
+    bar.message("3 runs to do")
+    for status in ("ok", "error", "ok"):
+        bar.update(status)
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and "campaign c: 3 runs to do" in lines
+    assert lines[0].startswith("campaign c: 1/4 (25%)") and lines[-1].startswith("campaign c: 4/4 (100%)")
+    assert lines[-1].endswith(", 1 failed") and (bar.done, bar.failed) == (4, 1)
+    quiet = io.StringIO()
+    StatusProgress("c", 2, quiet=True, stream=quiet).message("nothing")
+    assert quiet.getvalue() == ""

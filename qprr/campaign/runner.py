@@ -26,34 +26,12 @@ from pathlib import Path
 
 from ..charts import as_int, as_name
 from ..errors import InputError, UnknownNameError
-from ..progress import Progress
+from ..progress import StatusProgress
 from .backends import BACKENDS, Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
 from .worker import make_payload, nan_row, param_columns, run_one, xi_names_of
-
-
-class CampaignProgress:
-    """Runs done / total and failed, on :class:`qprr.progress.Progress` (a bar on a terminal, lines in a log).
-
-    ``update(status)`` counts one saved row; a status other than "ok" counts as failed.
-    """
-
-    def __init__(self, name: str, total: int, done: int = 0, enabled: bool = True, stream=None) -> None:
-        self.failed = 0
-        self._bar = Progress(total, f"campaign {name}", quiet=not enabled, stream=stream, initial=done, unit="run")
-        self._bar.set_postfix("0 failed")
-        self.stream = self._bar.stream
-
-    def update(self, status: str) -> None:
-        if status != "ok":
-            self.failed += 1
-            self._bar.set_postfix(f"{self.failed} failed")
-        self._bar.update()
-
-    def close(self) -> None:
-        self._bar.close()
 
 
 @dataclass
@@ -144,7 +122,7 @@ class _Tally:
     interrupted: str = ""
 
 
-def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: CampaignProgress, tally: _Tally) -> None:
+def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: StatusProgress, tally: _Tally) -> None:
     """Save each row as its future completes, then release the future; lost runs are counted, not saved."""
     for fut in be.as_completed(list(runs)):
         run = runs.pop(fut)
@@ -209,7 +187,7 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     own = not isinstance(backend, Backend)
     t0 = time.perf_counter()
     tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
-    bar = CampaignProgress(spec.name, tally.skipped + len(todo), tally.skipped, enabled=progress, stream=stream)
+    bar = StatusProgress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
     if store.dropped and progress:
         print(f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: "
               f"its run is done again", file=bar.stream)
