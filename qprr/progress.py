@@ -155,6 +155,10 @@ class StatusProgress:
     def done(self) -> int:
         return self._bar.n
 
+    @property
+    def total(self) -> int:
+        return self._bar.total
+
     def update(self, status: str) -> None:
         if status != "ok":
             self.failed += 1

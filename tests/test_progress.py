@@ -159,7 +159,7 @@ def test_status_progress_counts_failures_and_prints_messages():
     lines = log.getvalue().splitlines()
     assert "\r" not in log.getvalue() and "campaign c: 3 runs to do" in lines
     assert lines[0].startswith("campaign c: 1/4 (25%)") and lines[-1].startswith("campaign c: 4/4 (100%)")
-    assert lines[-1].endswith(", 1 failed") and (bar.done, bar.failed) == (4, 1)
+    assert lines[-1].endswith(", 1 failed") and (bar.done, bar.total, bar.failed) == (4, 4, 1)
     quiet = io.StringIO()
     StatusProgress("c", 2, quiet=True, stream=quiet).message("nothing")
     assert quiet.getvalue() == ""
