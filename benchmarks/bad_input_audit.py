@@ -2,6 +2,7 @@
 
     python benchmarks/bad_input_audit.py                       # this tree
     python benchmarks/bad_input_audit.py --old /tmp/old         # and an old tree, side by side
+    python benchmarks/bad_input_audit.py --quick               # qprr.charts' cases and two scenarios: a smoke run
     (git -C /work/main archive main | tar -x -C /tmp/old makes the old tree)
 
 Two sets of cases, both run in child interpreters (a case that kills the interpreter is a crash):
@@ -49,15 +50,17 @@ def on_outcome(i, o):
     out.write(json.dumps({"index": i, "target": o.target, "param": o.param, "label": o.label, "verdict": o.verdict,
                           "detail": o.detail[:200]}) + "\n")
 
-rep = cat.run(hooks=cat._Hooks(start_at=start_at, on_start=on_start, on_outcome=on_outcome))
+prefix = sys.argv[4]
+include = (lambda t: t.module == prefix or t.module.startswith(prefix + ".")) if prefix else None
+rep = cat.run(include=include, hooks=cat._Hooks(start_at=start_at, on_start=on_start, on_outcome=on_outcome))
 out.write(json.dumps({"done": True, "fed": len({o.target for o in rep.outcomes}), "not_fed": len(rep.not_fed),
                       "baseline_failed": len(rep.baseline_failed), "seconds": rep.seconds}) + "\n")
 '''
 
 
-def catalogue(tree: Path, timeout: float) -> tuple[Counter, dict, list]:
+def catalogue(tree: Path, timeout: float, module: str = "") -> tuple[Counter, dict, list]:
     """Run the catalogue on ``tree`` in child processes; a child that dies marks its current case as a crash and the next
-    child resumes after it."""
+    child resumes after it.  ``module``: only the callables of this module (and its submodules); "": all."""
     counts, info, crashes = Counter(), {}, []
     env = {**os.environ, "PYTHONPATH": str(tree), "MPLBACKEND": "Agg"}
     with tempfile.TemporaryDirectory() as tmp:
@@ -65,7 +68,8 @@ def catalogue(tree: Path, timeout: float) -> tuple[Counter, dict, list]:
         start_at = 0
         t0 = time.perf_counter()
         while True:
-            proc = subprocess.run([sys.executable, "-c", _CHILD, str(HERE / "tests" / "catalogue.py"), str(start_at), str(log)],
+            proc = subprocess.run([sys.executable, "-c", _CHILD, str(HERE / "tests" / "catalogue.py"), str(start_at), str(log),
+                                   module],
                                   cwd=tmp, env=env, capture_output=True, text=True, timeout=timeout)
             lines = [json.loads(ln) for ln in log.read_text().splitlines() if ln.strip()]
             if lines and "done" in lines[-1]:
@@ -283,11 +287,12 @@ verdict(f)
 }
 
 
-def scenarios(tree: Path, timeout: float) -> dict[str, str]:
+def scenarios(tree: Path, timeout: float, names=None) -> dict[str, str]:
     env = {**os.environ, "PYTHONPATH": str(tree), "MPLBACKEND": "Agg"}
     out = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for name, body in SCENARIOS.items():
+        for name in names or SCENARIOS:
+            body = SCENARIOS[name]
             proc = subprocess.run([sys.executable, "-c", _PRELUDE + textwrap.dedent(body)], cwd=tmp, env=env, capture_output=True,
                                   text=True, timeout=timeout)
             word = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else ""
@@ -306,34 +311,42 @@ def table(rows: dict[str, Counter], title: str) -> str:
     return "\n".join(lines)
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--old", default=None, help="an old qprr tree to audit side by side (e.g. /tmp/old)")
     ap.add_argument("--timeout", type=float, default=900.0, help="seconds per child process")
     ap.add_argument("--show", type=int, default=15, help="list this many failing catalogue cases per tree")
-    args = ap.parse_args()
+    ap.add_argument("--quick", action="store_true", help="the catalogue of qprr.charts only and two scenarios (a smoke run)")
+    args = ap.parse_args(argv)
+    module, names = ("qprr.charts", list(SCENARIOS)[:2]) if args.quick else ("", list(SCENARIOS))
     trees = {"current": HERE}
     if args.old:
         trees = {"old main": Path(args.old).resolve(), **trees}
     cat_rows, sc_rows, sc_detail = {}, {}, {}
     for label, tree in trees.items():
-        counts, info, bad = catalogue(tree, args.timeout)
+        counts, info, bad = catalogue(tree, args.timeout, module)
         cat_rows[label] = counts
         print(f"[{label}] {tree}: catalogue fed {info.get('fed')} callables, {sum(counts.values())} cases in {info['seconds']:.0f} s "
               f"(not fed: {info.get('not_fed')}, no valid call from the table: {info.get('baseline_failed')})")
         for o in bad[: args.show]:
             print(f"    {o['verdict']:8s} {o['target']}({o['param']} = {o['label']}): {o['detail'][:110]}")
-        sc = scenarios(tree, args.timeout)
+        sc = scenarios(tree, args.timeout, names)
         sc_detail[label] = sc
         sc_rows[label] = Counter(sc.values())
     print()
     print(table(cat_rows, "catalogue (tests/catalogue.py): bad-input cases per category"))
     print()
     print(table(sc_rows, "issue 16 scenarios (by item number)"))
-    width = max(map(len, SCENARIOS))
+    width = max(map(len, names))
     print("\n" + f"{'scenario':<{width}}" + "".join(f"{t:>12}" for t in trees))
-    for name in SCENARIOS:
+    for name in names:
         print(f"{name:<{width}}" + "".join(f"{sc_detail[t][name]:>12}" for t in trees))
+    print()
+    for t in trees:
+        cases = cat_rows[t] + sc_rows[t]
+        good = cases["good"] + cases["allowed"]
+        print(f"ratio of good answers (good error, documented result or right answer), {t}: {good / max(1, sum(cases.values())):.3f} "
+              f"of {sum(cases.values())} cases")
     return 0
 
 

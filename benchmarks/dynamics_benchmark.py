@@ -1,12 +1,14 @@
 """Cost of B, C, G in thesis coordinates: Pinocchio (qprr.model.dynamics_xi) vs the
-lambdified sympy Lagrange model (qprr.symbolic).
+lambdified sympy Lagrange model (qprr.thesis.symbolic).
 
-    python benchmarks/dynamics_benchmark.py [--states 300] [--reps 20] [--variant thesis|cad]
+    python benchmarks/dynamics_benchmark.py [--states 300] [--reps 20] [--variant thesis|cad] [--quick]
 
 Prints the machine, checks that both implementations agree at every benchmark state,
 warms up, then times each variant at N seeded states (each state: mean of ``reps`` calls)
 and reports the median and the 5th/95th percentiles over states in microseconds, the
 one-off derivation + code-generation time of the sympy model, and sympy/pinocchio ratios.
+``--quick``: 10 states x 2 calls, no fresh derivation (the cached model): a smoke run of a few seconds.
+Needs sympy (``pip install sympy``); without it, says so and exits 0.
 """
 
 from __future__ import annotations
@@ -21,10 +23,12 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
 from machine import machine_lines
 
+from qprr.thesis import load, params_of
+
 
 def _states(robot, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
     rng = np.random.default_rng(seed)
-    p = robot.params
+    p = params_of(robot)
     out = []
     for _ in range(n):
         xi = np.r_[
@@ -55,31 +59,40 @@ def main(argv=None) -> int:
     ap.add_argument("--reps", type=int, default=20, help="calls per state (timed together)")
     ap.add_argument("--variant", default="thesis", choices=["thesis", "cad"])
     ap.add_argument("--seed", type=int, default=2021)
+    ap.add_argument("--quick", action="store_true", help="10 states x 2 calls, no fresh derivation (a smoke run)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.states, args.reps = 10, 2
+    try:
+        import sympy  # noqa: F401
+    except ImportError:
+        print("dynamics_benchmark: sympy is not installed (pip install sympy, or pip install 'qprr[symbolic]'); nothing measured")
+        return 0
 
     import pinocchio as pin
 
-    from qprr import coordinates as co
-    from qprr import model as qm
-    from qprr import symbolic as sy
+    from qprr import charts as co
+    from qprr import dynamics as qd
+    from qprr.thesis import symbolic as sy
 
     print("machine")
     for line in machine_lines(("sympy",)):
         print(f"  {line}")
 
-    robot = qm.load(args.variant)
+    robot = load(args.variant)
     data = robot.data()
 
     # one-off costs: a fresh derivation + code generation (no cache), then the cached path
-    t0 = time.perf_counter()
-    src = sy._generate(robot.params)
-    t_derive = time.perf_counter() - t0
-    t0 = time.perf_counter()
-    compile(src, "<bench>", "exec")
-    t_compile = time.perf_counter() - t0
-    sm = sy.symbolic_model(robot.params)
-    print(f"\nsympy model ({args.variant}): derivation + CSE code generation {t_derive:.2f} s (fresh, in-process), "
-          f"compile {t_compile * 1e3:.1f} ms, {len(src) / 1024:.0f} KiB of generated code")
+    if not args.quick:
+        t0 = time.perf_counter()
+        src = sy._generate(params_of(robot))
+        t_derive = time.perf_counter() - t0
+        t0 = time.perf_counter()
+        compile(src, "<bench>", "exec")
+        t_compile = time.perf_counter() - t0
+        print(f"\nsympy model ({args.variant}): derivation + CSE code generation {t_derive:.2f} s (fresh, in-process), "
+              f"compile {t_compile * 1e3:.1f} ms, {len(src) / 1024:.0f} KiB of generated code")
+    sm = sy.symbolic_model(params_of(robot))
     print(f"  symbolic_model() setup: {sm.setup_seconds * 1e3:.1f} ms "
           f"({'read from the disk cache' if sm.from_disk_cache else 'derived, now written to the disk cache'})")
 
@@ -88,7 +101,7 @@ def main(argv=None) -> int:
     # correctness first
     worst = {"B": 0.0, "C": 0.0, "G": 0.0}
     for xi, w in states:
-        for name, a, b in zip("BCG", qm.dynamics_xi(robot, data, xi, w), sm.dynamics(xi, w)):
+        for name, a, b in zip("BCG", qd.dynamics_xi(robot, data, xi, w), sm.dynamics(xi, w)):
             worst[name] = max(worst[name], float(np.linalg.norm(a - b) / max(np.linalg.norm(b), 1e-300)))
     print(f"\nagreement at {len(states)} states (max relative Frobenius error): "
           + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
@@ -99,7 +112,7 @@ def main(argv=None) -> int:
     model = robot.model
 
     def pin_bcg(xi, w):
-        return qm.dynamics_xi(robot, data, xi, w)
+        return qd.dynamics_xi(robot, data, xi, w)
 
     def pin_bg_xi(xi, w):  # B = S^T M S, G = S^T g in thesis coordinates
         q = co.xi_to_q(xi)
@@ -145,8 +158,8 @@ def main(argv=None) -> int:
 
     names = [n for n, _ in cases]
     print("\nratios (sympy / pinocchio, medians)")
-    print(f"  B, C, G : {results[names[3]] / results[names[0]]:.2f}")
-    print(f"  B + G   : {results[names[4]] / results[names[1]]:.2f}")
+    print(f"  ratio B, C, G : {results[names[3]] / results[names[0]]:.2f}")
+    print(f"  ratio B + G   : {results[names[4]] / results[names[1]]:.2f}")
     return 0
 
 

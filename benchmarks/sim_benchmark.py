@@ -2,6 +2,9 @@
 
     python benchmarks/sim_benchmark.py [--repeat 5] [--quick]
 
+``--quick``: a smoke run of a few seconds: static-idc only, 2 s flights instead of 30 s (the thesis's
+time scaled to 2 s), 1 s closed loops, one round, midpoint only.
+
 1. Every 30 s flight scenario of Thesis Sec. 6.3 at 1 kHz, checked first (status ok, position RMSE
    < 0.3 m), then timed ``repeat`` times: median / min / max wall time on this machine and the
    ratio to the thesis's run time (Table 6.3 text: Matlab 2018, Intel Core i7 3.4 GHz; 14 min for
@@ -64,11 +67,11 @@ def bare_loop_step(platform, integrator: str, n: int, dt: float = 1e-3) -> float
     return (time.perf_counter() - t0) / n
 
 
-def in_loop_controller_share(platform, name: str) -> tuple[float, float]:
-    """(controller seconds per step, whole step seconds) in the static mission's closed loop (10 s), best of 3."""
+def in_loop_controller_share(platform, name: str, seconds: float = 10.0, rounds: int = 3) -> tuple[float, float]:
+    """(controller seconds per step, whole step seconds) in the static mission's closed loop (``seconds``), best of ``rounds``."""
     best = (float("inf"), float("inf"))
     clock = time.perf_counter
-    for _ in range(3):
+    for _ in range(rounds):
         ctrl = flight_controller(name, platform)
         inner = ctrl.step
         spent = [0.0]
@@ -80,7 +83,7 @@ def in_loop_controller_share(platform, name: str) -> tuple[float, float]:
             return u
 
         ctrl.step = timed  # the loop calls the instance's step
-        res = simulate(platform, ctrl, static_mission(), 10.0)
+        res = simulate(platform, ctrl, static_mission(), seconds)
         if res.wall_time / res.n < best[1]:
             best = (spent[0] / res.n, res.wall_time / res.n)
     return best
@@ -89,59 +92,67 @@ def in_loop_controller_share(platform, name: str) -> tuple[float, float]:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--repeat", type=int, default=5, help="timed runs per scenario (after one checked run)")
-    ap.add_argument("--quick", action="store_true", help="3 scenarios, 2 repeats, shorter bare loops (a smoke run)")
+    ap.add_argument("--quick", action="store_true", help="static-idc only, 2 s flights, 1 s loops, one round (a smoke run)")
     args = ap.parse_args(argv)
     if args.repeat < 1:
         ap.error("--repeat must be >= 1")
-    scenarios = FLIGHT[:3] if args.quick else FLIGHT
-    repeat = 2 if args.quick else args.repeat
-    n_bare = 3000 if args.quick else 10000
+    scenarios = FLIGHT[:1] if args.quick else FLIGHT
+    repeat = 1 if args.quick else args.repeat
+    n_bare = 1000 if args.quick else 10000
+    flight = 2.0 if args.quick else 30.0  # simulated seconds of a section-1 run
+    loop_s, rounds = (1.0, 1) if args.quick else (10.0, 3)
 
     print("# qprr simulation benchmark\n")
     for line in machine_lines():
         print(f"- {line}")
     platform = qprr.load()
-    print(f"\n## 1. Scenarios vs the thesis (30 s at 1 kHz, midpoint integrator; {repeat} timed runs after one checked run)\n")
+    print(f"\n## 1. Scenarios vs the thesis ({flight:g} s at 1 kHz, midpoint integrator; {repeat} timed runs after one checked run)\n")
     head = f"{'scenario':<13}{'ctrl':<6}{'median [s]':>11}{'min':>8}{'max':>8}{'thesis':>9}{'ours faster by':>16}"
     print(head)
     print("-" * len(head), flush=True)
+    speedups = []
     for name in scenarios:
         sc = SCENARIOS[name]
-        res = sc.run(platform=platform)
+        res = sc.run(platform=platform, duration=flight)
         e = res.rmse()
         if str(res.status) != "ok" or max(e["x"], e["y"], e["z"]) > 0.3:
             print(f"{name:<13} check failed: {res.status} ({res.reason}); position RMSE {e['x']:.2e}, {e['y']:.2e}, {e['z']:.2e} m")
             return 1
-        times = [sc.run(platform=platform).wall_time for _ in range(repeat)]
+        times = [sc.run(platform=platform, duration=flight).wall_time for _ in range(repeat)]
         med = statistics.median(times)
-        thesis = THESIS_RUN_TIME_S[THESIS_FOR[name]]
-        print(f"{name:<13}{sc.controllers[0]:<6}{med:>11.3f}{min(times):>8.3f}{max(times):>8.3f}{thesis / 60:>6.0f} min"
+        thesis = THESIS_RUN_TIME_S[THESIS_FOR[name]] * flight / 30.0  # the thesis's 30 s runs, per simulated second
+        speedups.append(thesis / med)
+        print(f"{name:<13}{sc.controllers[0]:<6}{med:>11.3f}{min(times):>8.3f}{max(times):>8.3f}{thesis / 60:>6.1f} min"
               f"{thesis / med:>15.0f}x", flush=True)
-    print("\n(thesis: Simulink on a 2018 Core i7; ours: on this machine, the same 30 s of simulated time)")
+    print(f"\n(thesis: Simulink on a 2018 Core i7, its time scaled to {flight:g} s; ours: on this machine, the same simulated time)")
+    print(f"ratio thesis time / ours, median over the scenarios: {statistics.median(speedups):.0f}")
 
     print("\n## 2. One step: closed loop vs a bare Pinocchio loop (ABA + the same integrator), measured alternately\n")
-    head = f"{'closed loop (10 s runs)':<28}{'per step [us]':>14}{'bare loop [us]':>16}{'ratio':>8}"
+    head = f"{f'closed loop ({loop_s:g} s runs)':<28}{'per step [us]':>14}{'bare loop [us]':>16}{'ratio':>8}"
     print(head)
     print("-" * len(head), flush=True)
     rows = [("static-idc", "midpoint"), ("static-dsid", "midpoint"), ("static-mfc", "midpoint"),
             ("static-idc", "euler"), ("static-idc", "rk4")]
-    bare = {}
+    rows = rows[:1] if args.quick else rows
+    bare, ratios = {}, []
     for name, integ in rows:
         closed, base = [], []
-        for _ in range(3):  # alternate: both see the same load
-            r = SCENARIOS[name].run(platform=platform, integrator=integ, duration=10.0)
+        for _ in range(rounds):  # alternate: both see the same load
+            r = SCENARIOS[name].run(platform=platform, integrator=integ, duration=loop_s)
             closed.append(r.wall_time / r.n)
             base.append(bare_loop_step(platform, integ, n_bare))
         c, b = min(closed), min(base)
         bare[integ] = min(bare.get(integ, b), b)
         label = f"{name} ({THESIS_FOR[name]}, {integ})"
         print(f"{label:<28}{1e6 * c:>14.1f}{1e6 * b:>16.1f}{c / b:>7.1f}x", flush=True)
-    print("\n(best of 3 of each, alternated; ABA calls per step: euler 1, midpoint 2, rk4 4; the closed loop adds the")
+        ratios.append(c / b)
+    print(f"ratio closed loop / bare loop, {rows[0][0]} ({rows[0][1]}): {ratios[0]:.2f}")
+    print(f"\n(best of {rounds} of each, alternated; ABA calls per step: euler 1, midpoint 2, rk4 4; the closed loop adds the")
     print(" controller, the allocation, the state conversions and the logs)")
 
-    print("\n## 3. Where a closed-loop step goes (static mission, 10 s, controller timed inside the loop)\n")
-    for name in ("idc", "dsid", "mfc"):
-        c, whole = in_loop_controller_share(platform, name)
+    print(f"\n## 3. Where a closed-loop step goes (static mission, {loop_s:g} s, controller timed inside the loop)\n")
+    for name in ("idc",) if args.quick else ("idc", "dsid", "mfc"):
+        c, whole = in_loop_controller_share(platform, name, loop_s, rounds)
         print(f"{name:<5} controller {1e6 * c:5.1f} us ({100 * c / whole:2.0f} %) + the rest {1e6 * (whole - c):5.1f} us "
               f"(allocation, plant, logs) = {1e6 * whole:5.1f} us per step", flush=True)
     return 0

@@ -1,6 +1,7 @@
 """Figures of docs/notes-spikes.md: each spike of issue 10 item 3 before and after its fix.
 
     python benchmarks/spikes_figures.py [out_dir]      # default docs/figures
+    python benchmarks/spikes_figures.py --quick        # the phase-switch figure only, to a temporary folder
 
 The "before" cases stay reproducible with the current code: the quintic transition law
 (``law="quintic"``), the printed spiral (``Spiral(blend=0)``), the printed velocity gain of
@@ -11,8 +12,10 @@ the thrust.  About 15 s of simulation in all.  The spikes are the subject here: 
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -40,10 +43,12 @@ def static_switch(robot, out: Path) -> Path:
     """static-idc around the x -> y switch at t = 10 s, quintic vs septic law."""
     fig = new_figure((11, 8))
     ax = fig.subplots(3, 2, sharex=True, sharey="row")
+    peak = {}
     for col, law in enumerate(("quintic", "septic")):
         res = simulate(robot, scn.flight_controller("idc", robot), static_mission(law=law), 10.1)
         s = res.t >= 9.98
         t = res.t[s]
+        peak[law] = float(np.max(np.abs(np.diff(res.u[s, 3:5], axis=0))))  # the largest tick-to-tick jump of u_tau
         for j in range(4):
             ax[0, col].plot(t, res.f[s, j], lw=1.0, label=f"$f_{j + 1}$")
         ax[1, col].plot(t, res.u[s, 3], lw=1.0, label=r"$u_{\tau,\phi}$ [N m]")
@@ -58,6 +63,8 @@ def static_switch(robot, out: Path) -> Path:
     ax[1, 0].set_ylabel("controller output u [N m, N]")
     ax[2, 0].set_ylabel("tilt-rate reference [deg/s]")
     _finish(ax.flat, "lower left")
+    print(f"static switch: largest tick-to-tick jump of the attitude torques, quintic {peak['quintic']:.3g} N m, septic "
+          f"{peak['septic']:.3g} N m; ratio quintic / septic {peak['quintic'] / peak['septic']:.2f}")
     return save_figure(fig, out / "spikes-static-switch.png", dpi=80)
 
 
@@ -140,14 +147,20 @@ def push_prismatic(robot, out: Path) -> Path:
 
 
 def main(argv=None) -> int:
-    argv = sys.argv[1:] if argv is None else argv
-    out = Path(argv[0]) if argv else Path(__file__).resolve().parents[1] / "docs" / "figures"
-    if not out.is_dir():
-        print(f"spikes_figures: error: folder {out} does not exist", file=sys.stderr)
-        return 2
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out_dir", nargs="?", type=Path, default=Path(__file__).resolve().parents[1] / "docs" / "figures")
+    ap.add_argument("--quick", action="store_true", help="the phase-switch figure only, to a temporary folder (a smoke run)")
+    args = ap.parse_args(argv)
     robot = qprr.load()
+    if args.quick:
+        with tempfile.TemporaryDirectory() as tmp:
+            print(f"static_switch: {static_switch(robot, Path(tmp))}", flush=True)
+        return 0
+    if not args.out_dir.is_dir():
+        print(f"spikes_figures: error: folder {args.out_dir} does not exist", file=sys.stderr)
+        return 2
     for fn in (static_switch, spiral_start, dsid_chatter, push_prismatic):
-        print(f"{fn.__name__}: {fn(robot, out)}", flush=True)
+        print(f"{fn.__name__}: {fn(robot, args.out_dir)}", flush=True)
     return 0
 
 

@@ -14,7 +14,11 @@ make the trigonometry costlier from one tree to another). Their ratio is the clo
 garbage collector is off in the measured runs: a full collection scans every object of every
 imported module (its cost depends on what the process imported, not on the loop) and falls in
 or out of the measured window by chance, which moved the counts by 10 %. Needs
-valgrind (apt-get install valgrind); about 1 min per workload.
+valgrind (apt-get install valgrind); about 1 min per workload.  Without valgrind it says so and exits 0.
+
+``--quick`` (a smoke run of a few seconds; valgrind's start-up alone costs about 40 s of CPU per run): the
+same workloads run natively and timed inside the process (0.6 s minus 0.2 s of simulated time, after a
+0.1 s warm-up): per-step wall-clock times and their ratio, not instruction counts.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ import re
 import shutil
 import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -32,7 +37,7 @@ SCENARIOS = ("static-idc", "static-mfc", "static-dsid")
 THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 """One thread each: idle BLAS threads spin, and valgrind would count their spinning (load-dependent)."""
 
-WORKLOAD = r'''
+SETUP = r'''
 import sys
 sys.path.insert(0, {tree!r})
 import gc
@@ -48,18 +53,35 @@ else:
     run = lambda name: scenarios.run(name, duration=seconds)
 data = model.createData()
 gc.disable()  # see the module docstring
-if what == "bare":
-    dt, half = 1e-3, 0.5e-3
-    q = pin.neutral(model); q[2] = 5.0
-    v = np.zeros(model.nv); tau = pin.computeGeneralizedGravity(model, data, q).copy()  # held at rest: same work in every tree
-    for _ in range(int(round(seconds / dt))):
-        a = pin.aba(model, data, q, v, tau)
-        vh = v + half * a
-        a2 = pin.aba(model, data, pin.integrate(model, q, half * v), vh, tau)
-        q = pin.integrate(model, q, dt * vh)
-        v = v + dt * a2
-else:
-    run(what)
+'''
+BARE = r'''dt, half = 1e-3, 0.5e-3
+q = pin.neutral(model); q[2] = 5.0
+v = np.zeros(model.nv); tau = pin.computeGeneralizedGravity(model, data, q).copy()  # held at rest: same work in every tree
+for _ in range(int(round(seconds / dt))):
+    a = pin.aba(model, data, q, v, tau)
+    vh = v + half * a
+    a2 = pin.aba(model, data, pin.integrate(model, q, half * v), vh, tau)
+    q = pin.integrate(model, q, dt * vh)
+    v = v + dt * a2
+'''
+WORKLOAD = SETUP + 'if what == "bare":\n' + textwrap.indent(BARE, "    ") + "else:\n    run(what)\n"
+NATIVE = SETUP + r'''import time
+
+
+def workload():
+    if what == "bare":
+''' + textwrap.indent(BARE, "        ") + r'''    else:
+        run(what)
+
+
+workload()  # warm-up; then the difference of two timed runs in this process
+short, long = 2 * seconds, 6 * seconds
+clock = []
+for seconds in (short, long):
+    t0 = time.perf_counter()
+    workload()
+    clock.append(time.perf_counter() - t0)
+print("per step", (clock[1] - clock[0]) / round((long - short) / 1e-3))
 '''
 
 
@@ -79,19 +101,45 @@ def per_step(tree: Path, what: str, short: float = 1.0, long: float = 3.0) -> fl
     return (instructions(tree, what, long) - instructions(tree, what, short)) / steps
 
 
+def native_per_step(tree: Path, what: str, seconds: float = 0.1) -> float:
+    """Wall-clock seconds per 1 ms step of a workload run natively (no valgrind): after a warm-up run of ``seconds``,
+    the difference of runs of 6 and 2 x ``seconds`` in the same process, divided by the extra steps."""
+    code = NATIVE.format(tree=str(tree), what=what, seconds=seconds)
+    env = dict(os.environ, PYTHONHASHSEED="0", **{k: "1" for k in THREAD_VARS})
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd="/", env=env)
+    found = re.search(r"per step ([0-9.eE+-]+)", proc.stdout)
+    if proc.returncode != 0 or found is None:
+        raise SystemExit(f"run of {what!r} failed:\n{proc.stderr[-2000:]}")
+    return float(found.group(1))
+
+
+def quick(tree: Path, scenarios) -> int:
+    print(f"qprr tree: {tree}; {sys.executable}; --quick: native runs, wall-clock microseconds per 1 ms step (not instructions)")
+    bare = native_per_step(tree, "bare")
+    print(f"{'bare ABA + integrate (midpoint)':34s} {1e6 * bare:10.1f} us       1.00", flush=True)
+    for name in scenarios:
+        closed = native_per_step(tree, name)
+        print(f"{name:34s} {1e6 * closed:10.1f} us ratio {closed / bare:5.2f}", flush=True)
+    return 0
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--tree", type=Path, default=ROOT, help="checkout whose qprr is measured (default: this one)")
-    parser.add_argument("--scenarios", nargs="+", default=list(SCENARIOS), help="closed loops to measure")
+    parser.add_argument("--scenarios", nargs="+", default=None, help="closed loops to measure (default: all three; --quick: static-idc)")
+    parser.add_argument("--quick", action="store_true", help="native runs timed by the clock, not valgrind (a smoke run)")
     args = parser.parse_args(argv)
-    if shutil.which("valgrind") is None:
-        print("valgrind is not installed (apt-get install valgrind)", file=sys.stderr)
-        return 2
     tree = args.tree.resolve()
+    if args.quick:
+        return quick(tree, args.scenarios or SCENARIOS[:1])
+    if shutil.which("valgrind") is None:
+        print("step_instructions: valgrind is not installed (apt-get install valgrind); nothing measured "
+              "(--quick runs the workloads natively)")
+        return 0
     print(f"qprr tree: {tree}; {sys.executable}; instructions per 1 ms step (difference of 3 s and 1 s runs)")
     bare = per_step(tree, "bare")
     print(f"{'bare ABA + integrate (midpoint)':34s} {bare:10.0f}        1.00", flush=True)
-    for name in args.scenarios:
+    for name in args.scenarios or SCENARIOS:
         closed = per_step(tree, name)
         print(f"{name:34s} {closed:10.0f} ratio {closed / bare:5.2f}", flush=True)
     return 0

@@ -1,6 +1,6 @@
 """Campaign result store: write cost per run of the line store, the plain CSV it replaced, and SQLite.
 
-    python benchmarks/store_benchmark.py [--rows 10000] [--repeat 3]
+    python benchmarks/store_benchmark.py [--rows 10000] [--repeat 3] [--quick]
 
 Rows of the robustness study's shape (``examples/campaigns/robustness.toml``: run, seed,
 controller, model.payload, 4 model-error factors, status, reason, t_end, wall_time, 9 RMSE
@@ -18,7 +18,7 @@ line), with the study's samples raised so that it has ``--rows`` runs, written t
 Each configuration writes the same rows to a fresh file in a temporary folder; ``--repeat``
 interleaved rounds, best kept (the machine is shared; the load average is printed).  Then the
 read of the whole table back, every row validated (``read_results``), per row.  Ratios are
-measured side by side in this one run.  Exits 0.
+measured side by side in this one run.  Exits 0.  ``--quick``: 300 rows, one round (a smoke run).
 """
 
 from __future__ import annotations
@@ -107,7 +107,10 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--rows", type=int, default=10000, help="rows written (default 10000)")
     ap.add_argument("--repeat", type=int, default=3, help="interleaved rounds, best kept (default 3)")
+    ap.add_argument("--quick", action="store_true", help="300 rows, one round (a smoke run)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.rows, args.repeat = 300, 1
     print(f"load average before: {os.getloadavg()[0]:.2f}")
     columns, meta, rows = rows_of(args.rows)
     configs = {"csv+flush (before)": write_csv_flush, "line store (now)": write_line_store,
@@ -136,6 +139,7 @@ def main(argv=None) -> int:
     for name, dt in best.items():
         print(f"{name:<22} {1e6 * dt / args.rows:>8.1f} {dt / ref:>9.2f} {size[name] / args.rows:>10.0f}")
     print("-" * 52)
+    print(f"ratio line store / csv+flush (write time): {best['line store (now)'] / ref:.2f}")
     print(f"read back with every row validated (read_results): {1e6 * t_read / args.rows:.1f} us/row, {t_read:.2f} s in all")
     print(f"a robustness run takes 0.7 s: the line store's write is {1e2 * best['line store (now)'] / args.rows / 0.7:.4f} % of it")
     print(f"load average after: {os.getloadavg()[0]:.2f}")

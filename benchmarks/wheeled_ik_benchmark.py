@@ -18,6 +18,10 @@ row succeeds or every row fails, and those where every row ends with the same st
 
     python benchmarks/wheeled_ik_benchmark.py [--runs 20] [--seeds 0 1 2] [--max-iter 400] [--options '{"polish": false}']
                                               [--against 646d1ac [--against-options '{"elimination": "nullspace"}']]
+                                              [--quick]
+
+The last line gives the ratio of the median time per solve of the two arms (3R / Q-PRR), measured
+side by side.  ``--quick``: 3 problems of one seed per arm, a smoke run of a few seconds.
 """
 
 from __future__ import annotations
@@ -99,7 +103,10 @@ def main(argv=None) -> int:
     ap.add_argument("--options", action="append", help="JSON options of the current solve_ik (repeat: one row each)")
     ap.add_argument("--against", metavar="REV", help="git revision whose solve_ik runs side by side")
     ap.add_argument("--against-options", action="append", help="JSON options of the --against solve_ik (repeatable)")
+    ap.add_argument("--quick", action="store_true", help="3 problems of seed 0 per arm (a smoke run)")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.runs, args.seeds = 3, [0]
     print("\n".join(machine_lines()))
     def label(name, extra):
         return f"{name} {' '.join(f'{k}={v}' for k, v in extra.items())}".strip()
@@ -118,6 +125,7 @@ def main(argv=None) -> int:
     print(f"{'arm':5s} {'solve_ik':34s} {'runs':>5s} {'success':>7s} {'iterations':>11s} {'ms/solve':>17s} "
           f"{'us/iter':>8s} {'max|E dz|':>9s} {'max slip':>8s}  outcomes")
     print(f"{'':5s} {'':34s} {'':5s} {'':7s} {'med':>5s} {'p90':>5s} {'converged':>8s} {'all':>8s}")
+    per_solve = {}
     for arm in ("qprr", "3r"):
         scen = {k: mod.car_scenario(arm).robot for k, (mod, _) in solvers.items()}
         tally = {k: Tally() for k in solvers}
@@ -136,11 +144,13 @@ def main(argv=None) -> int:
                 agree_success += len(ok) == 1
         for k in solvers:
             print(tally[k].row(arm, k))
+        per_solve[arm] = float(np.median(tally[first].t_all))
         if len(solvers) > 1:
             n = sum(tally[first].status.values())
             print(f"{arm:5s} problems where every row converges or every row fails: {agree_success} of {n}; "
                   f"where every row ends with the same status: {agree} of {n}")
         sys.stdout.flush()
+    print(f"ratio of the median times per solve ({first}), 3r / qprr arm: {per_solve['3r'] / per_solve['qprr']:.2f}")
     return 0
 
 

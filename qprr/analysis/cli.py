@@ -14,6 +14,7 @@ import argparse
 import sys
 import time
 
+from ..progress import FractionProgress
 from ._common import MapReference
 
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
@@ -46,6 +47,28 @@ def map_reference(map_name: str, platform, result) -> MapReference | None:
 
 def run(args: argparse.Namespace) -> int:
     from ..cli_common import fail, output_path, platform_from_args
+
+    try:
+        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+    except ValueError as exc:
+        return fail("qprr analyze", str(exc))
+    platform = platform_from_args(args)
+    n = args.samples or DEFAULT_SAMPLES[args.map]
+    progress = FractionProgress(quiet=args.quiet)  # stderr: a bar on a terminal, plain lines in a log
+    t0 = time.perf_counter()
+    try:
+        res, fig = _compute(args, platform, n, progress)
+    finally:
+        progress.close()
+    print(f"{args.map} map of {platform.name}: {time.perf_counter() - t0:.2f} s")
+    if fig is not None:
+        fig.savefig(args.plot, dpi=120)
+        print(f"saved {args.plot}")
+    return 0
+
+
+def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgress):
+    """The map ``args.map`` of ``platform`` over ``n`` samples, its summary printed; (result, figure or None)."""
     from . import plots
     from .capacity import capacity
     from .cog import balance, cog_regions
@@ -54,14 +77,6 @@ def run(args: argparse.Namespace) -> int:
     from .singularity import singularity
     from .workspace import workspace
 
-    try:
-        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
-    except ValueError as exc:
-        return fail("qprr analyze", str(exc))
-    platform = platform_from_args(args)
-    n = args.samples or DEFAULT_SAMPLES[args.map]
-    progress = True if args.progress else None
-    t0 = time.perf_counter()
     fig = None
     if args.map == "workspace":
         res = workspace(platform, n_samples=n, progress=progress)
@@ -105,11 +120,7 @@ def run(args: argparse.Namespace) -> int:
         print(res.summary())
         if args.plot:
             fig = plots.opspace_figure(res)
-    print(f"{args.map} map of {platform.name}: {time.perf_counter() - t0:.2f} s")
-    if fig is not None:
-        fig.savefig(args.plot, dpi=120)
-        print(f"saved {args.plot}")
-    return 0
+    return res, fig
 
 
 def register_cli(sub) -> None:
@@ -130,7 +141,8 @@ def register_cli(sub) -> None:
     p.add_argument("--reserve", type=real(nonnegative=True, unit="N m"), default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
     p.add_argument("--task", default="pose", choices=("pose", "position"), help="task rows of the singularity map")
     p.add_argument("--tol", type=real(nonnegative=True, unit="m"), default=1e-6, help="CoG offset counted as balanced [m] (cog)")
-    p.add_argument("--progress", action="store_true", help="show progress on stderr")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, "
+                                                                 "a line every few seconds in a log)")
     p.set_defaults(func=run)
 
 

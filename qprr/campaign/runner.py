@@ -19,73 +19,19 @@ rows of status ``error``) are submitted.
 from __future__ import annotations
 
 import signal
-import sys
 import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import InputError, UnknownNameError
+from ..progress import StatusProgress
 from ..validation import as_int, as_name
 from .backends import BACKENDS, Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
 from .worker import make_payload, nan_row, param_columns, run_one, xi_names_of
-
-
-def _duration(s: float) -> str:
-    if s != s or s == float("inf"):
-        return "--"
-    s = int(round(s))
-    h, r = divmod(s, 3600)
-    m, sec = divmod(r, 60)
-    return f"{h}h{m:02d}m{sec:02d}s" if h else f"{m}m{sec:02d}s" if m else f"{sec}s"
-
-
-class Progress:
-    """One status line on stderr: runs done / total, failed, rate and ETA.
-
-    On a terminal the line is rewritten in place; otherwise a line is printed every 10 % of the
-    runs or every 30 s, whichever comes first.
-    """
-
-    def __init__(self, name: str, total: int, done: int = 0, enabled: bool = True, stream=None) -> None:
-        self.name, self.total, self.start_done = name, total, done
-        self.done, self.failed = done, 0
-        self.enabled = enabled
-        self.stream = sys.stderr if stream is None else stream
-        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
-        self.t0 = time.perf_counter()
-        self._last_print, self._last_frac = self.t0, done / total if total else 1.0
-
-    def line(self) -> str:
-        el = time.perf_counter() - self.t0
-        new = self.done - self.start_done
-        rate = new / el if el > 0 else 0.0
-        eta = (self.total - self.done) / rate if rate > 0 else float("nan")
-        return (f"campaign {self.name}: {self.done}/{self.total} runs, {self.failed} failed, "
-                f"{rate:.2f} runs/s, elapsed {_duration(el)}, ETA {_duration(eta)}")
-
-    def update(self, status: str) -> None:
-        self.done += 1
-        if status != "ok":
-            self.failed += 1
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if self.tty:
-            self.stream.write("\r" + self.line() + "\033[K")
-            self.stream.flush()
-        elif self.done == self.total or now - self._last_print > 30.0 or self.done / self.total - self._last_frac >= 0.1:
-            self.stream.write(self.line() + "\n")
-            self.stream.flush()
-            self._last_print, self._last_frac = now, self.done / self.total
-
-    def close(self) -> None:
-        if self.enabled and self.tty:
-            self.stream.write("\n")
-            self.stream.flush()
 
 
 @dataclass
@@ -176,7 +122,7 @@ class _Tally:
     interrupted: str = ""
 
 
-def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: Progress, tally: _Tally) -> None:
+def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultStore, bar: StatusProgress, tally: _Tally) -> None:
     """Save each row as its future completes, then release the future; lost runs are counted, not saved."""
     for fut in be.as_completed(list(runs)):
         run = runs.pop(fut)
@@ -241,7 +187,7 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     own = not isinstance(backend, Backend)
     t0 = time.perf_counter()
     tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
-    bar = Progress(spec.name, tally.skipped + len(todo), tally.skipped, enabled=progress, stream=stream)
+    bar = StatusProgress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
     if store.dropped and progress:
         print(f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: "
               f"its run is done again", file=bar.stream)

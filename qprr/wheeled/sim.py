@@ -18,7 +18,6 @@ array with one row per step, a callable ``u = f(t, q)`` or an object with
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass, field
 from enum import Enum
@@ -26,6 +25,7 @@ from enum import Enum
 import numpy as np
 
 from ..errors import InputError, KinematicSingularityError, NonFiniteError
+from ..progress import Progress
 from .kinematics import KinematicModel, check_duration
 
 # ------------------------------------------------------------------------- exact flows
@@ -165,7 +165,8 @@ def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.0
     Each step is the model's exact flow (see the module docstring).  When the motion
     reaches a singularity of the model (e.g. the rear-driven tricycle driven with its
     steering at psi = pi/2) the run stops before that step with status "singular" and the
-    reason; the samples up to that instant are returned.
+    reason; the samples up to that instant are returned.  ``progress``: show the steps done
+    (:class:`qprr.progress.Progress` on stderr: a bar on a terminal, lines in a log).
     """
     if not isinstance(model, KinematicModel):
         raise InputError(f"model must be a KinematicModel, got {type(model).__name__}")
@@ -187,6 +188,7 @@ def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.0
     status, reason = SimStatus.OK, f"{n_steps} steps of {dt:g} s"
     t0 = time.perf_counter()
     done = n_steps
+    bar = Progress(n_steps, model.name, quiet=not progress, unit="step")
     for k in range(done):
         try:
             u = model.check_u(source(k, float(t[k]), q.copy(), dt))
@@ -202,10 +204,8 @@ def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.0
             speeds.setdefault(name, []).append(val)
         q = q_next
         Q[k + 1] = q
-        if progress and sys.stderr.isatty() and (k % max(1, n_steps // 50) == 0):
-            print(f"\r{model.name}: {100 * (k + 1) / n_steps:5.1f} %", end="", file=sys.stderr)
-    if progress and sys.stderr.isatty():
-        print(file=sys.stderr)
+        bar.update()
+    bar.close()
     return WheeledSimResult(model.name, model.coordinates, model.inputs, t[: done + 1], Q[: done + 1], U[:done], res[:done],
                             {k: np.array(v[:done]) for k, v in speeds.items()}, dt, status, reason, time.perf_counter() - t0)
 
