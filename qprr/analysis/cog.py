@@ -428,6 +428,9 @@ def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _Ba
                   "(a curve or isolated points in the workspace, or a band too thin for the grid): no measure at this "
                   "tol and n_samples")
         return None, ws_m, None, reason
+    if bal_m.coarse == 0.0 < bal_m.raw:
+        return bal_m, ws_m, Ratio.of(bal_m, ws_m), ("the grid with twice the step resolves none of the balanced band, so its "
+                                                    "error bar is no bound: the measure is a lower bound; raise n_samples")
     return bal_m, ws_m, Ratio.of(bal_m, ws_m), ""
 
 
