@@ -234,3 +234,22 @@ def test_cog_input_errors(qp):
         balance(qp, n_samples=1000, slider="theta2")
     with pytest.raises(InputError, match="pitch"):
         cog_regions(qp, n_samples=1000, pitch=(0.0, 2.0))
+
+
+def test_options_and_keywords_are_one_setting(qp):
+    """balance/cog_regions take their settings as an options dataclass or as keywords, the same result either way."""
+    from qprr.analysis import BalanceOptions, CoGOptions
+
+    a = balance(qp, BalanceOptions(n_samples=3000, tol=1e-3))
+    b = balance(qp, n_samples=3000, tol=1e-3)
+    c = balance(qp, BalanceOptions(n_samples=5000), n_samples=3000, tol=1e-3)  # keywords replace the options' fields
+    for r in (b, c):
+        np.testing.assert_array_equal(a.offset_clamped, r.offset_clamped)
+        assert a.fraction_workspace == r.fraction_workspace
+    g1 = cog_regions(qp, CoGOptions(n_samples=3000, payload_masses=(0.0, 0.5)))
+    g2 = cog_regions(qp, n_samples=3000, payload_masses=(0.0, 0.5))
+    np.testing.assert_array_equal(g1.regions[(1, 1)].com, g2.regions[(1, 1)].com)
+    with pytest.raises(TypeError):
+        balance(qp, n_sample=3000)
+    with pytest.raises(InputError, match="BalanceOptions"):
+        balance(qp, CoGOptions())
