@@ -256,7 +256,7 @@ def q_prr_balanced_area(p, n_side=300, n_r=81):
 
 
 def test_q_prr_balanced_workspace_matches_an_independent_count(qp):
-    """The published share (docs/analysis.md, 12.74 +- 0.05 % at 2e5 samples) measured at 6e4 samples: its error bar
+    """The published share (docs/analysis.md, 12.74 +- 0.12 % at 2e5 samples) measured at 6e4 samples: its error bar
     covers the point-by-point count within the count's own 3-sigma sampling error."""
     ws_area, bal_area, hits = q_prr_balanced_area(qp)
     b = balance(qp, n_samples=60_000)
