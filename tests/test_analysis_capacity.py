@@ -137,3 +137,14 @@ def test_payload_capacity_is_the_maps_implementation(name):
         h = pl.holding_efforts(p, r.q_arm, pl.Payload(r.max_mass, off))
         j = p.arm_names.index(r.limiting)
         assert abs(abs(h.arm_effort[j]) - p.arm_effort_limits[j]) < 1e-10 * p.arm_effort_limits[j]
+
+
+def test_capacity_options_and_keywords_agree(qp):
+    from qprr.analysis import CapacityOptions
+
+    a = capacity(qp, CapacityOptions(n_samples=2000, torque_reserve=0.5))
+    b = capacity(qp, n_samples=2000, torque_reserve=0.5)
+    np.testing.assert_array_equal(a.capacity, b.capacity)
+    np.testing.assert_array_equal(a.limiting, b.limiting)
+    with pytest.raises(TypeError):
+        capacity(qp, n_sample=2000)

@@ -111,3 +111,14 @@ def test_singularity_input_errors(qp):
         singularity(qp, n_samples=1000, task="orientation")
     with pytest.raises(InputError, match="tol"):
         singularity(qp, n_samples=1000, tol=0.0)
+
+
+def test_singularity_options_and_keywords_agree(qp):
+    from qprr.analysis import SingularityOptions
+
+    a = singularity(qp, SingularityOptions(n_samples=2000, task="position"))
+    b = singularity(qp, n_samples=2000, task="position")
+    np.testing.assert_array_equal(a.manipulability, b.manipulability)
+    np.testing.assert_array_equal(a.distance, b.distance)
+    with pytest.raises(InputError, match="SingularityOptions"):
+        singularity(qp, {"n_samples": 2000})

@@ -27,12 +27,12 @@ come from :mod:`qprr.analysis.voxels`.  Command line: ``python -m qprr analyze M
 """
 
 from ._common import JointGrid, Status, make_grid
-from .capacity import LIMITS, CapacityResult, capacity
+from .capacity import LIMITS, CapacityOptions, CapacityResult, capacity
 from .chain import ArmChain, Statics
-from .cog import BalanceResult, CoGResult, balance, cog_regions
+from .cog import BalanceOptions, BalanceResult, CoGOptions, CoGResult, balance, cog_regions
 from .hover import HoverOptions, HoverResult, PayloadLimits, hover
 from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
-from .singularity import SingularityResult, singularity
+from .singularity import SingularityOptions, SingularityResult, singularity
 from .voxels import MeasureEstimate, estimate_measure
 from .workspace import WorkspaceOptions, WorkspaceResult, reachable, workspace
 from .wrenchset import WrenchSet, wrench_set
@@ -40,8 +40,11 @@ from .wrenchset import WrenchSet, wrench_set
 __all__ = [
     "LIMITS",
     "ArmChain",
+    "BalanceOptions",
     "BalanceResult",
+    "CapacityOptions",
     "CapacityResult",
+    "CoGOptions",
     "CoGResult",
     "HoverOptions",
     "HoverResult",
@@ -51,6 +54,7 @@ __all__ = [
     "OpSpaceModel",
     "OpSpaceModelXi",
     "PayloadLimits",
+    "SingularityOptions",
     "SingularityResult",
     "Statics",
     "Status",

@@ -24,10 +24,11 @@ slider - chooses the one that balances the CoG).
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..errors import InputError
 from ..model import Platform
 from ._common import (
     JointGrid,
@@ -114,35 +115,42 @@ class CapacityResult:
         return "\n".join(lines)
 
 
-def capacity(
-    platform: Platform,
-    *,
-    n_samples: int = 200_000,
-    payload_offset=(0.0, 0.0, 0.0),
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    torque_reserve: float = 0.0,
-    thrust_tol: float = 0.01,
-    cell: float | None = None,
-    progress=None,
-) -> CapacityResult:
-    """Payload capacity map (see the module docstring).
+@dataclass(frozen=True)
+class CapacityOptions:
+    """Settings of :func:`capacity` (each can also be given to it as a keyword).
 
-    Parameters
-    ----------
-    platform : any platform with finite thrust bounds and arm effort limits.
-    n_samples : joint-grid size.
-    payload_offset : payload centre in the end-effector frame [m].
-    locked, ranges : as in :func:`qprr.analysis.workspace`.
-    torque_reserve : torque [N m] kept available about x, y, z of B (one value or three).
-    thrust_tol : relative gap below which the rotors' limit counts as the collective thrust's.
-    cell : workspace cell side [m] (default: the largest extent / 120).
-    progress : None, True (stderr) or a callable (fraction, message).
+    ``n_samples``: joint-grid size; ``payload_offset``: payload centre in the end-effector frame [m];
+    ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace`; ``torque_reserve``: torque [N m]
+    kept available about x, y, z of B (one value or three); ``thrust_tol``: relative gap below which
+    the rotors' limit counts as the collective thrust's; ``cell``: workspace cell side [m] (default:
+    the largest extent / 120).
     """
+
+    n_samples: int = 200_000
+    payload_offset: object = (0.0, 0.0, 0.0)
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    torque_reserve: object = 0.0
+    thrust_tol: float = 0.01
+    cell: float | None = None
+
+
+def capacity(platform: Platform, options: CapacityOptions | None = None, *, progress=None, **settings) -> CapacityResult:
+    """Payload capacity map (see the module docstring) of any platform with finite thrust bounds and arm effort limits.
+
+    ``options``: :class:`CapacityOptions`, and/or its fields as keywords (``capacity(p, n_samples=2e4,
+    torque_reserve=0.5)``; an unknown keyword is a TypeError); ``progress``: None, True (stderr) or a
+    callable (fraction, message).
+    """
+    o = options if options is not None else CapacityOptions()
+    if not isinstance(o, CapacityOptions):
+        raise InputError(f"options must be a CapacityOptions, got {type(o).__name__}")
+    o = replace(o, **settings) if settings else o
+    n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
     check_platform(platform)
     check_int("n_samples", n_samples, 2)
-    torque_reserve = check_reserve(torque_reserve)
-    thrust_tol = check_pos("thrust_tol", thrust_tol, strict=False)
+    torque_reserve = check_reserve(o.torque_reserve)
+    thrust_tol = check_pos("thrust_tol", o.thrust_tol, strict=False)
     payload = make_payload(platform, payload_offset)
     progress = check_progress(progress)
     grid = make_grid(platform, n_samples, locked, ranges)

@@ -17,7 +17,10 @@ translates its whole subtree rigidly, so the CoG offset from the thrust axis is 
 slider position r: o(r) = o(r_lo) + (r - r_lo) s.  Over a grid of the other joints, the r*
 minimising |o(r)| is read off directly; the CoG is balanced where the residual |o(r*)| is 0
 (within ``tol``) and r* lies in the joint limits.  The end-effector positions of the balanced
-configurations form a region whose share of the workspace is reported.  Without a prismatic
+configurations form a region whose share of the workspace is reported, measured on the grid cells
+that resolve r* (:data:`RESOLVED_STROKE`; near s = 0 r* runs through infinity) with an error bar
+for the cells lost at the region's edge (:data:`MASKED_RICHARDSON`); tests compare it with
+point-by-point counts for the Q-PRR and for a slider at the tip (Q-RRP).  Without a prismatic
 joint, the map is |o| over the whole joint grid and the configurations within ``tol`` of the
 axis.  For the Q-PRR, r* = -((m2/2 + m3) d2 s2 + m3 d3 s23 / 2) / (m1 + m2 + m3), the zero of
 (3.80) / (6.33) (tests compare).
@@ -25,8 +28,9 @@ axis.  For the Q-PRR, r* = -((m2/2 + m3) d2 s2 + m3 d3 s23 / 2) / (m1 + m2 + m3)
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -109,57 +113,94 @@ def _label(locked) -> str:
     return ", ".join(f"{k} locked at {v:g}" for k, v in locked.items()) if locked else "all joints free"
 
 
-def cog_regions(
-    platform: Platform,
-    *,
-    n_samples: int = 200_000,
-    payload_masses=(0.0,),
-    payload_offset=(0.0, 0.0, 0.0),
-    variants: Sequence[Mapping[str, float]] | None = None,
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    pitch: tuple[float, float] | None = None,
-    n_pitch: int = 9,
-    n_shifts: int = 4,
-    progress=None,
-) -> CoGResult:
+def _settings(cls, options, settings: dict):
+    """``options`` (an instance of ``cls`` or None) with the keyword ``settings`` replacing its fields."""
+    o = options if options is not None else cls()
+    if not isinstance(o, cls):
+        raise InputError(f"options must be a {cls.__name__}, got {type(o).__name__}")
+    return replace(o, **settings) if settings else o
+
+
+@dataclass(frozen=True)
+class CoGOptions:
+    """Settings of :func:`cog_regions` (each can also be given to it as a keyword).
+
+    ``n_samples``: joint-grid size per region; ``payload_masses`` [kg]: a point payload at
+    ``payload_offset`` [m] in the end-effector frame; ``variants``: locked-joint sets compared with
+    the free arm (default: each prismatic joint locked at 0); ``locked``, ``ranges``: as in
+    :func:`qprr.analysis.workspace`; ``pitch``: (low, high) base pitch [rad]: map
+    p_c - p_b = R_y(theta) p_cm in world-aligned axes, Thesis (6.29) with (6.31), over ``n_pitch``
+    pitches (None: the CoG in B); ``n_shifts``: counting shifts of the measure estimator.
+    """
+
+    n_samples: int = 200_000
+    payload_masses: Sequence[float] = (0.0,)
+    payload_offset: Sequence[float] = (0.0, 0.0, 0.0)
+    variants: Sequence[Mapping[str, float]] | None = None
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    pitch: tuple[float, float] | None = None
+    n_pitch: int = 9
+    n_shifts: int = 4
+
+
+def _pitches(pitch, n_pitch: int) -> np.ndarray:
+    """The base pitches [rad] of :class:`CoGOptions` (one zero pitch without ``pitch``)."""
+    if pitch is None:
+        return np.zeros(1)
+    lo, hi = (float(x) for x in pitch)
+    if not (np.isfinite(lo) and np.isfinite(hi) and -np.pi / 2 < lo <= hi < np.pi / 2):
+        raise InputError(f"pitch must be (low, high) inside (-pi/2, pi/2) rad, got {pitch!r}")
+    return np.linspace(lo, hi, 2 * (check_int("n_pitch", n_pitch, 2) // 2) + 1)
+
+
+def _region(lk: dict, m: float, grid: JointGrid, com_body: np.ndarray, pitches: np.ndarray, axis, n_shifts: int):
+    """(CoGRegion, reason or "") of the CoG positions ``com_body`` (grid.size, 3) for one locked set and payload mass."""
+    point, B = axis
+    c = com_body
+    off = (c - point) @ B.T
+    if len(pitches) > 1:
+        Rp = euler_to_rotation_batch(np.column_stack([np.zeros_like(pitches), pitches, np.zeros_like(pitches)]))
+        c = np.einsum("pij,nj->npi", Rp, c).reshape(-1, 3)
+        off = np.repeat(off, len(pitches), axis=0)
+    origin, basis = affine_span(c)
+    coords = (c - origin) @ basis.T
+    shape = tuple(s for s in grid.shape if s > 1) + ((len(pitches),) if len(pitches) > 1 else ())
+    measure = occ = None
+    reason = ""
+    if basis.shape[0] and len(shape) >= basis.shape[0]:
+        measure, occ = estimate_measure(coords.reshape(*shape, basis.shape[0]), n_shifts=n_shifts, return_occupancy=True)
+    else:
+        reason = "the CoG region is lower-dimensional than its hull, no measure"
+    region = CoGRegion(_label(lk), dict(lk), float(m), grid, pitches, c, off, origin, basis, measure, occ,
+                       (c.min(axis=0), c.max(axis=0)))
+    return region, reason
+
+
+def cog_regions(platform: Platform, options: CoGOptions | None = None, *, progress=None, **settings) -> CoGResult:
     """CoG regions in B per locked-joint variant and payload mass (Thesis (6.29)-(6.32), Fig. 6.31/6.32/6.47/6.48).
 
-    Parameters
-    ----------
-    n_samples : joint-grid size per region.
-    payload_masses : payload masses [kg], a point at ``payload_offset`` [m] in the end-effector frame.
-    variants : locked-joint sets compared with the free arm (default: each prismatic joint locked at 0).
-    locked, ranges : as in :func:`qprr.analysis.workspace`.
-    pitch : (low, high) base pitch [rad]: map p_c - p_b = R_y(theta) p_cm in world-aligned axes,
-        Thesis (6.29) with (6.31), over ``n_pitch`` pitches (default None: the CoG in B).
-    n_shifts : counting shifts of the measure estimator.
-    progress : None, True (stderr) or a callable (fraction, message).
+    ``options``: :class:`CoGOptions`, and/or its fields as keywords (``cog_regions(p, n_samples=2e4,
+    payload_masses=(0, 0.5))``; an unknown keyword is a TypeError); ``progress``: None, True
+    (stderr) or a callable (fraction, message).
     """
+    o = _settings(CoGOptions, options, settings)
     check_platform(platform)
-    check_int("n_samples", n_samples, 8)
-    masses = check_masses(payload_masses)
-    check_int("n_shifts", n_shifts, 2)
-    check_int("n_pitch", n_pitch, 2)
-    payload = make_payload(platform, payload_offset)
-    base = check_locked(platform, locked)
-    variants = default_variants(platform) if variants is None else [check_locked(platform, v) for v in variants]
+    check_int("n_samples", o.n_samples, 8)
+    masses = check_masses(o.payload_masses)
+    check_int("n_shifts", o.n_shifts, 2)
+    check_int("n_pitch", o.n_pitch, 2)
+    payload = make_payload(platform, o.payload_offset)
+    base = check_locked(platform, o.locked)
+    variants = default_variants(platform) if o.variants is None else [check_locked(platform, v) for v in o.variants]
     progress = check_progress(progress)
-    if pitch is None:
-        pitches = np.zeros(1)
-    else:
-        lo, hi = (float(x) for x in pitch)
-        if not (np.isfinite(lo) and np.isfinite(hi) and -np.pi / 2 < lo <= hi < np.pi / 2):
-            raise InputError(f"pitch must be (low, high) inside (-pi/2, pi/2) rad, got {pitch!r}")
-        pitches = np.linspace(lo, hi, 2 * (check_int("n_pitch", n_pitch, 2) // 2) + 1)
-    Rp = euler_to_rotation_batch(np.column_stack([np.zeros_like(pitches), pitches, np.zeros_like(pitches)]))
+    pitches = _pitches(o.pitch, o.n_pitch)
     chain = ArmChain(platform)
-    point, _ = platform.thrust_axis
-    B = np.array(platform.thrust_axis_basis)
+    axis = (platform.thrust_axis[0], np.array(platform.thrust_axis_basis))
     sets = [base] + [{**base, **v} for v in variants]
     regions, reasons = {}, []
     for v, lk in enumerate(sets):
-        grid = make_grid(platform, n_samples, lk, ranges)
+        grid = make_grid(platform, o.n_samples, lk, o.ranges)
         coms = np.empty((len(masses), grid.size, 3))
         for start, q in grid.chunks():
             st = chain.statics(chain.pose(q), payload.frame, payload.offset_frame)
@@ -168,21 +209,9 @@ def cog_regions(
             if progress:
                 progress((v + (start + len(q)) / grid.size) / len(sets), "CoG regions")
         for k, m in enumerate(masses):
-            c = coms[k]
-            off = (c - point) @ B.T
-            if len(pitches) > 1:
-                c = np.einsum("pij,nj->npi", Rp, c).reshape(-1, 3)
-                off = np.repeat(off, len(pitches), axis=0)
-            origin, basis = affine_span(c)
-            coords = (c - origin) @ basis.T
-            shape = tuple(s for s in grid.shape if s > 1) + ((len(pitches),) if len(pitches) > 1 else ())
-            measure = occ = None
-            if basis.shape[0] and len(shape) >= basis.shape[0]:
-                measure, occ = estimate_measure(coords.reshape(*shape, basis.shape[0]), n_shifts=n_shifts, return_occupancy=True)
-            else:
-                reasons.append(f"[{v}] payload {m:g} kg: the CoG region is lower-dimensional than its hull, no measure")
-            regions[(v, k)] = CoGRegion(_label(lk), dict(lk), float(m), grid, pitches, c, off, origin, basis, measure, occ,
-                                        (c.min(axis=0), c.max(axis=0)))
+            regions[(v, k)], why = _region(lk, m, grid, coms[k], pitches, axis, o.n_shifts)
+            if why:
+                reasons.append(f"[{v}] payload {m:g} kg: {why}")
     return CoGResult(platform.name, masses, tuple(sets), regions, Status.PARTIAL if reasons else Status.OK, "; ".join(reasons))
 
 
@@ -232,117 +261,223 @@ class BalanceResult:
         return "\n".join(lines)
 
 
-def balance(
-    platform: Platform,
-    *,
-    slider: str | None = "auto",
-    n_samples: int = 200_000,
-    payload_mass: float = 0.0,
-    payload_offset=(0.0, 0.0, 0.0),
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    tol: float = 1e-6,
-    n_shifts: int = 4,
-    progress=None,
-) -> BalanceResult:
-    """The slider position that zeroes the CoG offset from the thrust axis, over the other joints.
+@dataclass(frozen=True)
+class BalanceOptions:
+    """Settings of :func:`balance` (each can also be given to it as a keyword).
 
-    Parameters
-    ----------
-    slider : name of the prismatic joint used to balance; "auto": the platform's only prismatic
-        joint (an error names them if there are several); None: no slider (map |offset|).
-    n_samples : grid size over the other joints (over all joints without a slider).
-    payload_mass, payload_offset : a point payload [kg] at [m] in the end-effector frame.
-    locked, ranges : as in :func:`qprr.analysis.workspace` (the slider may not be locked).
-    tol : offset [m] that counts as balanced (the thesis's epsilon of (3.79); default 1e-6 m:
-        exactly on the axis up to round-off).
+    ``slider``: name of the prismatic joint used to balance; "auto": the platform's only prismatic
+    joint (an error names them if there are several); None: no slider (map |offset|).
+    ``n_samples``: grid size over the other joints (over all joints without a slider).
+    ``payload_mass``, ``payload_offset``: a point payload [kg] at [m] in the end-effector frame.
+    ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace` (the slider may not be locked).
+    ``tol``: offset [m] that counts as balanced (the thesis's epsilon of (3.79); default 1e-6 m:
+    exactly on the axis up to round-off).  ``n_shifts``: counting shifts of the measure estimator.
     """
-    check_platform(platform)
-    check_int("n_samples", n_samples, 8)
-    check_int("n_shifts", n_shifts, 2)
-    m = float(check_masses([payload_mass], "payload_mass")[0])
-    payload = make_payload(platform, payload_offset)
-    tol = check_pos("tol", tol)
-    progress = check_progress(progress)
-    base = check_locked(platform, locked)
+
+    slider: str | None = "auto"
+    n_samples: int = 200_000
+    payload_mass: float = 0.0
+    payload_offset: Sequence[float] = (0.0, 0.0, 0.0)
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    tol: float = 1e-6
+    n_shifts: int = 4
+
+
+@dataclass(frozen=True)
+class _BalanceMap:
+    """The balance map on ``grid``: r*, residual (None without a slider), clamped offset, end effector, and
+    ``smooth``: grid points where every grid cell at the point resolves the balancing slider position
+    (:func:`_resolved_points`)."""
+
+    grid: JointGrid
+    r_star: np.ndarray | None
+    residual: np.ndarray | None
+    offset: np.ndarray
+    ee_body: np.ndarray
+    smooth: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Loading:
+    """What the CoG of a configuration depends on besides the joints: the chain, the payload (mass ``mass`` [kg]),
+    the thrust axis (``point`` [m] and the (2, 3) ``basis`` of the offset, both in B)."""
+
+    chain: ArmChain
+    payload: object
+    mass: float
+    point: np.ndarray
+    basis: np.ndarray
+
+    def offset_body(self, pose) -> np.ndarray:
+        """(n, 2) CoG offset [m] from the thrust axis in B (thrust-axis basis axes)."""
+        c = self.chain.statics(pose, self.payload.frame, self.payload.offset_frame).com_loaded(self.mass)
+        return (c - self.point) @ self.basis.T
+
+
+def _slider_of(platform: Platform, slider, base: dict) -> str | None:
+    """The balancing slider of :class:`BalanceOptions` resolved ("auto", a name or None)."""
     prism = [j.name for j in platform.arm if j.kind == "prismatic" and j.name not in base]
     if slider == "auto":
         if len(prism) > 1:
             raise InputError(f"platform {platform.name!r} has several prismatic joints {prism}: name the slider")
-        slider = prism[0] if prism else None
-    elif slider is not None:
+        return prism[0] if prism else None
+    if slider is not None:
         if slider not in platform.arm_names:
             raise UnknownNameError("slider joint", slider, tuple(prism))
         if slider not in prism:
             raise InputError(f"slider {slider!r} must be a free prismatic joint (free prismatic joints: {prism})")
-    chain = ArmChain(platform)
-    point, _ = platform.thrust_axis
-    B = np.array(platform.thrust_axis_basis)
-    reason = ""
-    if slider is None:
-        grid = make_grid(platform, n_samples, base, ranges)
-        off = np.empty(grid.size)
-        ee = np.empty((grid.size, 3))
-        for start, q in grid.chunks():
-            pose = chain.pose(q)
-            c = chain.statics(pose, payload.frame, payload.offset_frame).com_loaded(m)
-            off[start:start + len(q)] = np.sqrt((((c - point) @ B.T) ** 2).sum(axis=1))
-            ee[start:start + len(q)] = chain.frame_position(pose, platform.ee_frame)
-        ok = off <= tol
-        r_star = resid = None
-        valid_grid = ok
-        ws_grid = grid
-    else:
-        k = platform.arm_names.index(slider)
-        js = platform.arm[k]
-        lo_r, hi_r = (js.lower, js.upper) if ranges is None or slider not in ranges else ranges[slider]
-        grid = make_grid(platform, n_samples, {**base, slider: float(lo_r)}, ranges)
-        n = grid.size
-        r_star, resid, off, ee = np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3))
-        for start, q in grid.chunks():
-            sl = slice(start, start + len(q))
-            c_lo = chain.statics(chain.pose(q), payload.frame, payload.offset_frame).com_loaded(m)
-            q_hi = q.copy()
-            q_hi[:, k] = hi_r
-            c_hi = chain.statics(chain.pose(q_hi), payload.frame, payload.offset_frame).com_loaded(m)
-            o_lo = (c_lo - point) @ B.T
-            s = ((c_hi - point) @ B.T - o_lo) / (hi_r - lo_r)  # d offset / d r (exact: affine)
-            ss = (s**2).sum(axis=1)
-            with np.errstate(divide="ignore", invalid="ignore"):
-                t = np.where(ss > 1e-24, -(s * o_lo).sum(axis=1) / ss, np.nan)
-            r = lo_r + t
-            r_star[sl] = r
-            resid[sl] = np.sqrt(((o_lo + np.nan_to_num(t)[:, None] * s) ** 2).sum(axis=1))
-            rc = np.clip(np.nan_to_num(r, nan=lo_r), lo_r, hi_r)
-            off[sl] = np.sqrt(((o_lo + (rc - lo_r)[:, None] * s) ** 2).sum(axis=1))
-            qb = q.copy()
-            qb[:, k] = rc
-            ee[sl] = chain.frame_position(chain.pose(qb), platform.ee_frame)
-            if progress:
-                progress((start + len(q)) / n, "CoG balance")
-        ok = off <= tol
-        valid_grid = ok
-        ws_grid = make_grid(platform, n_samples, base, ranges)
-    frac_cfg = float(ok.mean())
-    bal_m = ws_m = ratio = None
-    # measures of the balanced end-effector set and of the workspace, in the workspace's hull
+    return slider
+
+
+def _offset_map(platform: Platform, load: _Loading, grid: JointGrid) -> _BalanceMap:
+    """No slider: |offset| and the end effector over the whole joint grid."""
+    off = np.empty(grid.size)
+    ee = np.empty((grid.size, 3))
+    for start, q in grid.chunks():
+        pose = load.chain.pose(q)
+        off[start:start + len(q)] = np.sqrt((load.offset_body(pose) ** 2).sum(axis=1))
+        ee[start:start + len(q)] = load.chain.frame_position(pose, platform.ee_frame)
+    return _BalanceMap(grid, None, None, off, ee, np.ones(grid.size, dtype=bool))
+
+
+def _slider_map(platform: Platform, load: _Loading, grid: JointGrid, k: int, limits: tuple[float, float], progress) -> _BalanceMap:
+    """With the slider (arm joint ``k``, ``limits`` [m]): o(r) = o(r_lo) + (r - r_lo) s is affine in r (the slider
+    translates its subtree), so r* = argmin |o(r)| is read off; the end effector at r* clamped to the limits."""
+    lo_r, hi_r = limits
+    n = grid.size
+    r_star, resid, off, ee, s_all = np.empty(n), np.empty(n), np.empty(n), np.empty((n, 3)), np.empty((n, load.basis.shape[0]))
+    for start, q in grid.chunks():
+        sl = slice(start, start + len(q))
+        o_lo = load.offset_body(load.chain.pose(q))
+        q_hi = q.copy()
+        q_hi[:, k] = hi_r
+        s = (load.offset_body(load.chain.pose(q_hi)) - o_lo) / (hi_r - lo_r)  # d offset / d r (exact: affine)
+        s_all[sl] = s
+        ss = (s**2).sum(axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(ss > 1e-24, -(s * o_lo).sum(axis=1) / ss, np.nan)
+        r = lo_r + t
+        r_star[sl] = r
+        resid[sl] = np.sqrt(((o_lo + np.nan_to_num(t)[:, None] * s) ** 2).sum(axis=1))
+        rc = np.clip(np.nan_to_num(r, nan=lo_r), lo_r, hi_r)
+        off[sl] = np.sqrt(((o_lo + (rc - lo_r)[:, None] * s) ** 2).sum(axis=1))
+        qb = q.copy()
+        qb[:, k] = rc
+        ee[sl] = load.chain.frame_position(load.chain.pose(qb), platform.ee_frame)
+        if progress:
+            progress((start + len(q)) / n, "CoG balance")
+    return _BalanceMap(grid, r_star, resid, off, ee, _resolved_points(s_all, r_star, limits, grid.shape))
+
+
+def _cell_corners(shape: tuple[int, ...]):
+    """Per corner of the grid cells: the index tuple selecting that corner of every cell (axes of length 1 kept)."""
+    axes = [a for a, n in enumerate(shape) if n > 1]
+    for corner in itertools.product((0, 1), repeat=len(axes)):
+        sl = [slice(None)] * len(shape)
+        for a, c in zip(axes, corner):
+            sl[a] = slice(1, None) if c else slice(0, -1)
+        yield tuple(sl)
+
+
+RESOLVED_STROKE = 0.25
+"""Largest change of the balancing slider position r* across one grid cell, as a share of the stroke, for the cell to
+count in the balanced measure (:func:`_resolved_points`)."""
+
+
+def _resolved_points(s: np.ndarray, r_star: np.ndarray, limits: tuple[float, float], shape: tuple[int, ...]) -> np.ndarray:
+    """Grid points all of whose cells resolve the balancing slider position r* = lo - o . s / |s|^2 (s = d offset / d r,
+    (n, c)): s keeps one side (s . s_0 > 0 at every corner, s_0 the cell's first corner) and r* clamped to the
+    ``limits`` changes by at most :data:`RESOLVED_STROKE` of the stroke across the cell.  Near s = 0, r* runs through infinity: inside a cell the
+    end effector would move by a whole stroke (or jump between the stops where s changes sign), and the cell's
+    affine model (a zonotope grown by the second differences, :mod:`qprr.analysis.voxels`) would cover ground that the
+    balanced set does not reach.  The cells left out lie in a strip along s = 0 whose width shrinks with the grid
+    step; the measure's coarse-grid comparison shows what they cost."""
+    S = s.reshape(*shape, s.shape[1])
+    R = np.clip(r_star, *limits).reshape(shape)  # the position used (clamped to the stops); NaN where s = 0
+    corners = list(_cell_corners(shape))
+    first = S[corners[0]]
+    bad = np.zeros(first.shape[:-1], dtype=bool)
+    r_lo, r_hi = R[corners[0]].copy(), R[corners[0]].copy()
+    for c in corners:
+        bad |= ~((S[c] * first).sum(axis=-1) > 0.0) | np.isnan(R[c])
+        r_lo, r_hi = np.fmin(r_lo, R[c]), np.fmax(r_hi, R[c])
+    with np.errstate(invalid="ignore"):
+        bad |= ~(r_hi - r_lo <= RESOLVED_STROKE * (limits[1] - limits[0]))
+    ok = np.ones(shape, dtype=bool)
+    for c in corners:
+        ok[c] &= ~bad
+    return ok.reshape(-1)
+
+
+MASKED_RICHARDSON = 2.0
+"""Error bar of the balanced measure: this times |count(dq) - count(2 dq)| plus twice the shifts' standard error.  The
+cells across the boundary of the balanced set (where r* reaches a stop) are left out whole, a loss that shrinks
+slowly with the grid step: on the Q-PRR the count rose by 7.6e-5 then 5.0e-5 m^2 from 5e4 to 2e5 to 8e5 samples
+(order ~0.6 in the step, ratio 2/3 per halving), so the error of the finer count is up to twice the difference
+(the geometric tail 2/3 / (1 - 2/3)); :func:`qprr.analysis.voxels.estimate_measure` assumes order ~1.6 (half)."""
+
+
+def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _BalanceMap, ok: np.ndarray, n_shifts: int):
+    """(balanced measure, workspace measure, their Ratio, reason or "") of the end-effector positions, in the workspace's hull."""
     ws_pts = np.empty((ws_grid.size, 3))
     for start, q in ws_grid.chunks():
         ws_pts[start:start + len(q)] = chain.frame_position(chain.pose(q), platform.ee_frame)
     origin, basis = affine_span(ws_pts)
     dim = basis.shape[0]
     ws_shape = tuple(s for s in ws_grid.shape if s > 1)
-    bshape = tuple(s for s in grid.shape if s > 1)
-    if dim and len(ws_shape) >= dim and len(bshape) >= dim:
-        ws_m = estimate_measure(((ws_pts - origin) @ basis.T).reshape(*ws_shape, dim), n_shifts=n_shifts)
-        try:
-            bal_m = estimate_measure(((ee - origin) @ basis.T).reshape(*bshape, dim), n_shifts=n_shifts, valid=valid_grid.reshape(bshape))
-            ratio = Ratio.of(bal_m, ws_m)
-        except InputError:
-            reason = ("no configuration balances the CoG within tol" if not ok.any() else
-                      "the balanced configurations cover no full grid cell (a curve or isolated points in the workspace): "
-                      "their share of the workspace is 0 at this tol")
+    bshape = tuple(s for s in bmap.grid.shape if s > 1)
+    if not (dim and len(ws_shape) >= dim and len(bshape) >= dim):
+        return None, None, None, "the balanced set has fewer free joints than the workspace dimension: no measure (see fraction_configurations)"
+    ws_m = estimate_measure(((ws_pts - origin) @ basis.T).reshape(*ws_shape, dim), n_shifts=n_shifts)
+    try:
+        bal_m = estimate_measure(((bmap.ee_body - origin) @ basis.T).reshape(*bshape, dim), n_shifts=n_shifts,
+                                valid=(ok & bmap.smooth).reshape(bshape))
+        bal_m = replace(bal_m, error=MASKED_RICHARDSON * abs(bal_m.raw - bal_m.coarse) + 2.0 * bal_m.stderr)
+    except InputError:
+        reason = ("no configuration balances the CoG within tol" if not ok.any() else
+                  "the balanced configurations cover no full grid cell on which the balancing slider position is resolved "
+                  "(a curve or isolated points in the workspace, or a band too thin for the grid): no measure at this "
+                  "tol and n_samples")
+        return None, ws_m, None, reason
+    if bal_m.coarse == 0.0 < bal_m.raw:
+        return bal_m, ws_m, Ratio.of(bal_m, ws_m), ("the grid with twice the step resolves none of the balanced band, so its "
+                                                    "error bar is no bound: the measure is a lower bound; raise n_samples")
+    return bal_m, ws_m, Ratio.of(bal_m, ws_m), ""
+
+
+def balance(platform: Platform, options: BalanceOptions | None = None, *, progress=None, **settings) -> BalanceResult:
+    """The slider position that zeroes the CoG offset from the thrust axis, over the other joints.
+
+    ``options``: :class:`BalanceOptions`, and/or its fields as keywords (``balance(p, n_samples=2e4,
+    tol=1e-3)``; an unknown keyword is a TypeError); ``progress``: None, True (stderr) or a callable
+    (fraction, message).  The balanced end-effector set is measured over the grid cells on which the
+    balancing slider position is continuous (see :func:`_resolved_points`).
+    """
+    o = _settings(BalanceOptions, options, settings)
+    check_platform(platform)
+    check_int("n_samples", o.n_samples, 8)
+    check_int("n_shifts", o.n_shifts, 2)
+    m = float(check_masses([o.payload_mass], "payload_mass")[0])
+    payload = make_payload(platform, o.payload_offset)
+    tol = check_pos("tol", o.tol)
+    progress = check_progress(progress)
+    base = check_locked(platform, o.locked)
+    slider = _slider_of(platform, o.slider, base)
+    chain = ArmChain(platform)
+    point, _ = platform.thrust_axis
+    load = _Loading(chain, payload, m, point, np.array(platform.thrust_axis_basis))
+    ws_grid = make_grid(platform, o.n_samples, base, o.ranges)
+    if slider is None:
+        bmap = _offset_map(platform, load, ws_grid)
     else:
-        reason = "the balanced set has fewer free joints than the workspace dimension: no measure (see fraction_configurations)"
+        k = platform.arm_names.index(slider)
+        js = platform.arm[k]
+        lo_r, hi_r = (js.lower, js.upper) if o.ranges is None or slider not in o.ranges else o.ranges[slider]
+        grid = make_grid(platform, o.n_samples, {**base, slider: float(lo_r)}, o.ranges)
+        bmap = _slider_map(platform, load, grid, k, (lo_r, hi_r), progress)
+    ok = bmap.offset <= tol
+    bal_m, ws_m, ratio, reason = _measures(platform, chain, ws_grid, bmap, ok, o.n_shifts)
     status = Status.OK if not reason else (Status.EMPTY if not ok.any() else Status.PARTIAL)
-    return BalanceResult(platform.name, slider, m, tol, grid, r_star, resid, off, ok, ee, frac_cfg, bal_m, ws_m, ratio, status, reason)
+    return BalanceResult(platform.name, slider, m, tol, bmap.grid, bmap.r_star, bmap.residual, bmap.offset, ok, bmap.ee_body,
+                         float(ok.mean()), bal_m, ws_m, ratio, status, reason)

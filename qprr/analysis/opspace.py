@@ -210,15 +210,32 @@ def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     S = ch.rate_map(xi)
     a0 = ch.rate_map_dot(xi, w) @ w  # Pinocchio acceleration at xi_ddot = 0
-    return opspace_terms_xi(platform.model, data, fid, ch.xi_to_q(xi), S @ w, a0, S, rows, cols, xi.copy(), w.copy())
+    return opspace_terms_xi(platform.model, data, fid, RateMapState(ch.xi_to_q(xi), S @ w, a0, S, xi.copy(), w.copy()), rows, cols)
 
 
-def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, v: np.ndarray, a0: np.ndarray, S: np.ndarray,
-                     rows: tuple[int, ...], cols: tuple[int, ...], xi=None, xi_dot=None, *,
-                     operational: bool = True) -> OpSpaceModelXi:
-    """:func:`opspace_model_xi` from a checked Pinocchio state: v = S xi_dot and a0 = S_dot xi_dot given (no input checks;
-    for control loops that hold them already, e.g. :class:`qprr.charts.State`).  ``operational=False`` stops after the
-    kinematics and the mass matrices (``n``, ``G``, ``Lambda``, ``Lambda_inv``, ``J_bar``, ``mu``, ``p`` None, ``rank`` -1)."""
+@dataclass(frozen=True)
+class RateMapState:
+    """A checked Pinocchio state with the thesis rate map, what :func:`opspace_terms_xi` reads.
+
+    ``q`` (nq,), ``v`` = S xi_dot (nv,) [LOCAL], ``a0`` = S_dot xi_dot (nv,) (Pinocchio's acceleration at
+    xi_ddot = 0), ``S`` (nv, 6 + n) the rate map xi_dot -> v (:func:`qprr.charts.rate_map`); ``xi``,
+    ``xi_dot``: the thesis coordinates and rates, copied into the result (None if not at hand).
+    """
+
+    q: np.ndarray
+    v: np.ndarray
+    a0: np.ndarray
+    S: np.ndarray
+    xi: np.ndarray | None = None
+    xi_dot: np.ndarray | None = None
+
+
+def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, state: RateMapState, rows: tuple[int, ...],
+                     cols: tuple[int, ...], *, operational: bool = True) -> OpSpaceModelXi:
+    """:func:`opspace_model_xi` from a checked :class:`RateMapState` (no input checks; for control loops that hold it
+    already, e.g. :class:`qprr.charts.State`).  ``operational=False`` stops after the kinematics and the mass matrices
+    (``n``, ``G``, ``Lambda``, ``Lambda_inv``, ``J_bar``, ``mu``, ``p`` None, ``rank`` -1)."""
+    q, v, a0, S = state.q, state.v, state.a0, state.S
     M = pin.crba(model, data, q)
     M = np.triu(M) + np.triu(M, 1).T
     B = S.T @ M @ S
@@ -229,14 +246,18 @@ def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, 
     pin.forwardKinematics(model, data, q, v, a0)
     pin.updateFramePlacement(model, data, fid)
     acc = pin.getFrameClassicalAcceleration(model, data, fid, pin.LOCAL_WORLD_ALIGNED)
-    r = list(rows)
     J = Jv @ S
     twist = Jv @ v
     drift = np.concatenate([acc.linear, acc.angular])
+    kin = (state.xi, state.xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B)
     if not operational:
-        return OpSpaceModelXi(xi, xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B,
-                              None, None, Jv, M, None, None, None, None, None, -1)
-    c = list(cols)
+        return OpSpaceModelXi(*kin, None, None, Jv, M, None, None, None, None, None, -1)
+    L, Li, Jbar, mu, p, rank = _task_space(J, B, n, G, drift, list(rows), list(cols))
+    return OpSpaceModelXi(*kin, n, G, Jv, M, L, Li, Jbar, mu, p, rank)
+
+
+def _task_space(J, B, n, G, drift, r: list[int], c: list[int]):
+    """(Lambda, Lambda^-1, J_bar, mu, p, rank) on the rows ``r`` and free coordinates ``c``, Thesis (5.47)-(5.52)."""
     Jc = J[np.ix_(r, c)]
     X = np.linalg.solve(B[np.ix_(c, c)], Jc.T)
     Li = Jc @ X
@@ -246,8 +267,7 @@ def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, q: np.ndarray, 
     Jbar = X @ L
     mu = Jbar.T @ (n - G)[c] - L @ drift[r]
     p = Jbar.T @ G[c]
-    return OpSpaceModelXi(xi, xi_dot, fid, tuple(rows), tuple(cols), data.oMf[fid].translation.copy(), twist, J, drift, B, n, G,
-                          Jv, M, L, Li, Jbar, mu, p, rank)
+    return L, Li, Jbar, mu, p, rank
 
 
 @dataclass(frozen=True)

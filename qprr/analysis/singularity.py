@@ -26,12 +26,12 @@ which the thesis does not map.  :func:`singularity` computes over the joint grid
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy import ndimage
 
-from ..errors import UnknownNameError
+from ..errors import InputError, UnknownNameError
 from ..model import Platform
 from ._common import (
     JointGrid,
@@ -114,53 +114,47 @@ def system_det(J_arm: np.ndarray, p_eb: np.ndarray) -> np.ndarray:
     return np.linalg.det(A)
 
 
-def singularity(
-    platform: Platform,
-    *,
-    n_samples: int = 200_000,
-    task: str = "pose",
-    length: float | None = None,
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    frame=None,
-    tol: float = 1e-3,
-    progress=None,
-) -> SingularityResult:
-    """Singularity maps of ``frame`` (default: the end effector) over the arm's joint grid.
+@dataclass(frozen=True)
+class SingularityOptions:
+    """Settings of :func:`singularity` (each can also be given to it as a keyword).
 
-    Parameters
-    ----------
-    task : "pose" (six rows, angular ones scaled by ``length``) or "position".
-    length : [m] (default: the arm's reach, the largest revolute lever of
-        :func:`qprr.analysis._common.lever_lengths`; 1 m for an arm without revolute joints).
-    locked, ranges : as in :func:`qprr.analysis.workspace`.
-    tol : sigma_r / sigma_1 below which a configuration counts as singular (non-square J_t).
-    progress : None, True (stderr) or a callable (fraction, message).
+    ``n_samples``: joint-grid size; ``task``: "pose" (six rows, angular ones scaled by ``length``) or
+    "position"; ``length`` [m]: default the arm's reach, the largest revolute lever of
+    :func:`qprr.analysis._common.lever_lengths` (1 m for an arm without revolute joints); ``locked``,
+    ``ranges``: as in :func:`qprr.analysis.workspace`; ``frame``: the frame mapped (name or id; default
+    the end effector); ``tol``: sigma_r / sigma_1 below which a configuration counts as singular
+    (non-square J_t).
     """
-    check_platform(platform)
-    check_int("n_samples", n_samples, 8)
-    if task not in TASKS:
-        raise UnknownNameError("singularity task", task, TASKS)
-    tol = check_pos("tol", tol)
-    progress = check_progress(progress)
-    fid = platform.ee_frame if frame is None else platform.frame_id(frame)
-    grid = make_grid(platform, n_samples, locked, ranges)
-    if length is None:
-        levers = lever_lengths(platform, joint_ranges(platform, ranges))
-        rev = [levers[i] for i, j in enumerate(platform.arm) if j.kind == "revolute"]
-        length = float(max(rev)) if rev and max(rev) > 0 else 1.0
-    length = check_pos("length", length)
-    chain = ArmChain(platform)
-    free = [a for a in range(platform.n_arm) if grid.shape[a] > 1]  # locked joints are no columns of J_t
-    n, na = grid.size, len(free)
+
+    n_samples: int = 200_000
+    task: str = "pose"
+    length: float | None = None
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    frame: object = None
+    tol: float = 1e-3
+
+
+def _reach(platform: Platform, ranges) -> float:
+    """The default ``length`` [m]: the largest revolute lever (1 m without revolute joints)."""
+    levers = lever_lengths(platform, joint_ranges(platform, ranges))
+    rev = [levers[i] for i, j in enumerate(platform.arm) if j.kind == "revolute"]
+    return float(max(rev)) if rev and max(rev) > 0 else 1.0
+
+
+def _task_rows(chain: ArmChain, grid, fid: int, task: str, free: list[int]) -> list[int]:
+    """Task rows that do not vanish everywhere: probed on a few hundred configurations spread over the grid."""
     rows_all = list(range(6)) if task == "pose" else [0, 1, 2]
-    # rows that vanish everywhere: probe a few hundred configurations spread over the grid
-    probe = grid.configurations(0, n)[:: max(1, n // 512)]
+    probe = grid.configurations(0, grid.size)[:: max(1, grid.size // 512)]
     Jp = chain.jacobian(chain.pose(probe), fid)[:, :, free]
     scale = np.abs(Jp).max()
-    rows = [r for r in rows_all if np.abs(Jp[:, r, :]).max() > 1e-12 * max(scale, 1e-300)]
+    return [r for r in rows_all if np.abs(Jp[:, r, :]).max() > 1e-12 * max(scale, 1e-300)]
+
+
+def _jacobian_maps(chain: ArmChain, grid, fid: int, rows: list[int], free: list[int], length: float, progress):
+    """(squared singular values (n, min(k, na)), det J_t (n,) or None if J_t is not square, det(J J^T) of (4.42)) on the grid."""
+    n, na, k = grid.size, len(free), len(rows)
     w_rows = np.array([1.0 if r < 3 else length for r in rows])
-    k = len(rows)
     sig2 = np.empty((n, min(k, na)))
     det_task = np.empty(n) if k == na else None
     det_sys = np.empty(n)
@@ -168,43 +162,69 @@ def singularity(
         sl = slice(start, start + len(q))
         pose = chain.pose(q)
         J = chain.jacobian(pose, fid)
-        p = chain.frame_position(pose, fid)
-        det_sys[sl] = system_det(J, p)
+        det_sys[sl] = system_det(J, chain.frame_position(pose, fid))
         Jt = J[:, rows, :][:, :, free] * w_rows[None, :, None]
         sig2[sl] = np.linalg.svd(Jt, compute_uv=False) ** 2  # not eigenvalues of J J^T: they lose the small sigma
         if det_task is not None:
             det_task[sl] = np.linalg.det(Jt)
         if progress:
             progress((start + len(q)) / n, "singularity map")
+    return sig2, det_task, det_sys
+
+
+def _singular_set(det_task, sig_r: np.ndarray, square: bool, sq_shape: tuple[int, ...], tol: float) -> np.ndarray:
+    """Singular grid points: where det J_t vanishes or changes sign between neighbours (square J_t), else sigma_r <= tol sigma_1."""
+    if not square:
+        return (sig_r[:, -1] <= tol * sig_r[:, 0]).reshape(sq_shape)
+    D = det_task.reshape(sq_shape)
+    sing = np.abs(D) <= 1e-12 * np.abs(D).max()
+    for ax in range(D.ndim):  # a sign change between neighbours: both sides are next to the zero set
+        a = np.take(D, range(D.shape[ax] - 1), axis=ax)
+        b = np.take(D, range(1, D.shape[ax]), axis=ax)
+        ch = (a * b) < 0
+        sing |= np.pad(ch, [(0, 1) if i == ax else (0, 0) for i in range(D.ndim)])
+        sing |= np.pad(ch, [(1, 0) if i == ax else (0, 0) for i in range(D.ndim)])
+    return sing
+
+
+def singularity(platform: Platform, options: SingularityOptions | None = None, *, progress=None, **settings) -> SingularityResult:
+    """Singularity maps of ``frame`` (default: the end effector) over the arm's joint grid.
+
+    ``options``: :class:`SingularityOptions`, and/or its fields as keywords (``singularity(p,
+    n_samples=2e4, task="position")``; an unknown keyword is a TypeError); ``progress``: None, True
+    (stderr) or a callable (fraction, message).
+    """
+    o = options if options is not None else SingularityOptions()
+    if not isinstance(o, SingularityOptions):
+        raise InputError(f"options must be a SingularityOptions, got {type(o).__name__}")
+    o = replace(o, **settings) if settings else o
+    check_platform(platform)
+    check_int("n_samples", o.n_samples, 8)
+    if o.task not in TASKS:
+        raise UnknownNameError("singularity task", o.task, TASKS)
+    tol = check_pos("tol", o.tol)
+    progress = check_progress(progress)
+    fid = platform.ee_frame if o.frame is None else platform.frame_id(o.frame)
+    grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
+    length = check_pos("length", _reach(platform, o.ranges) if o.length is None else o.length)
+    chain = ArmChain(platform)
+    free = [a for a in range(platform.n_arm) if grid.shape[a] > 1]  # locked joints are no columns of J_t
+    rows = _task_rows(chain, grid, fid, o.task, free)
+    sig2, det_task, det_sys = _jacobian_maps(chain, grid, fid, rows, free, length, progress)
     sigma = np.sqrt(np.clip(sig2, 0.0, None))
     rank = int(np.max(np.sum(sigma > 1e-9 * np.maximum(sigma[:, :1], 1e-300), axis=1)))
     sig_r = sigma[:, :rank]
     manip = np.prod(sig_r, axis=1)
     with np.errstate(divide="ignore"):
         cond = np.where(sig_r[:, -1] > 0, sig_r[:, 0] / sig_r[:, -1], np.inf)
-    shape = grid.shape
-    free_axes = [a for a in range(len(shape)) if shape[a] > 1]
-    sq_shape = tuple(shape[a] for a in free_axes)
-    if det_task is not None and rank == k:
-        D = det_task.reshape(sq_shape)
-        sing = np.abs(D) <= 1e-12 * np.abs(D).max()
-        for ax in range(D.ndim):  # a sign change between neighbours: both sides are next to the zero set
-            a = np.take(D, range(D.shape[ax] - 1), axis=ax)
-            b = np.take(D, range(1, D.shape[ax]), axis=ax)
-            ch = (a * b) < 0
-            sing |= np.pad(ch, [(0, 1) if i == ax else (0, 0) for i in range(D.ndim)])
-            sing |= np.pad(ch, [(1, 0) if i == ax else (0, 0) for i in range(D.ndim)])
-    else:
-        sing = (sig_r[:, -1] <= tol * sig_r[:, 0]).reshape(sq_shape)
-    spacing = []
-    for a in free_axes:
-        step = grid.axes[a][1] - grid.axes[a][0]
-        spacing.append(step / length if platform.arm[a].kind == "prismatic" else step)
+    sq_shape = tuple(grid.shape[a] for a in free)
+    sing = _singular_set(det_task, sig_r, det_task is not None and rank == len(rows), sq_shape, tol)
+    spacing = [(grid.axes[a][1] - grid.axes[a][0]) / (length if platform.arm[a].kind == "prismatic" else 1.0) for a in free]
     if sing.any():
         dist = ndimage.distance_transform_edt(~sing, sampling=spacing).reshape(-1)
         status, reason = Status.OK, ""
     else:
-        dist = np.full(n, np.inf)
+        dist = np.full(grid.size, np.inf)
         status, reason = Status.OK, "no singular configuration on the grid (distance = inf)"
-    return SingularityResult(platform.name, task, grid, tuple(ROW_NAMES[r] for r in rows), length, rank, sig_r, manip, cond,
+    return SingularityResult(platform.name, o.task, grid, tuple(ROW_NAMES[r] for r in rows), length, rank, sig_r, manip, cond,
                              det_task, det_sys, sing.reshape(-1), dist, status, reason)

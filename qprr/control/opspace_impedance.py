@@ -243,9 +243,10 @@ class OperationalSpaceImpedance(InverseDynamicsController):
             raise InputError(f"damping must be a number >= 0, got {damping!r}")
         self.impedance = impedance
         self.ee_sensor = ee_sensor
-        from ..analysis.opspace import opspace_terms_xi  # the analysis package loads only with this controller
+        from ..analysis.opspace import RateMapState, opspace_terms_xi  # the analysis package loads only with this controller
 
         self._terms = opspace_terms_xi
+        self._state = RateMapState
         self._tdata = platform.model.createData()
         self._rdata = platform.model.createData()
         self._rstate = State(platform.n_arm)
@@ -330,7 +331,7 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         if self._step_t != t:  # first call of this step: the model, the reference and a*
             S = ch.rate_map(state.xi)
             a0 = np.array(state.accel_to_v_list(self._zeros))  # S_dot xi_dot: the acceleration at xi_ddot = 0
-            m = self._terms(P.model, self._tdata, P.ee_frame, state.q, state.v, a0, S, (0, 1, 2), self.coordinates,
+            m = self._terms(P.model, self._tdata, P.ee_frame, self._state(state.q, state.v, a0, S), (0, 1, 2), self.coordinates,
                             operational=False)
             p_r, v_r, a_r = self._ref
             e = m.position - p_r
