@@ -36,7 +36,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
+    import tomli as tomllib
 
 from .control import make_controller
 from .control.gains import load_gains as load_gain_file
@@ -47,7 +51,7 @@ from .control.mfc import MFCGains
 from .control.opspace_impedance import EndEffectorImpedance
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
-from .model import Platform
+from .model import Platform, check_platform
 from .sim import simulate
 from .sim.actuators import RotorDynamics
 from .sim.contact import CompliantWall
@@ -55,6 +59,7 @@ from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
 from .sim.wind import AerodynamicDrag, Gust, Wind
 from .trajectory import Hold, MultiPhase, Phase
+from .validation import as_real
 
 PHASE_KEYS = ("coordinate", "start", "end", "target")
 """Keys of one phase of a mission given as data (``[[phase]]`` tables of a TOML file)."""
@@ -88,6 +93,7 @@ def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
 
 def reach_posture(platform: Platform, fraction: float) -> np.ndarray:
     """Arm joints ``fraction`` of the way from the neutral posture to the upper limits (neutral + 1 where unlimited)."""
+    platform = check_platform(platform)
     if not (isinstance(fraction, (int, float)) and 0.0 <= fraction <= 1.0):
         raise InputError(f"reach_fraction must be in [0, 1], got {fraction!r}")
     q0 = platform.neutral_q()[7:]
@@ -185,7 +191,8 @@ def read_mission(source) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
 def default_mission(platform: Platform, duration: float) -> dict:
     """The mission flown when none is given: climb to 2 m (0-30 %), fly 1 m along x (30-60 %), reach the arm out
     (50-80 %, every joint 60 % of the way to its upper limit), as data (:func:`read_mission`)."""
-    D = duration
+    platform = check_platform(platform)
+    D = as_real(duration, "duration", positive=True)
     q = reach_posture(platform, 0.6)
     phases = [{"coordinate": "z", "start": 0.0, "end": 0.3 * D, "target": 2.0}, {"coordinate": "x", "start": 0.3 * D, "end": 0.6 * D, "target": 1.0}]
     phases += [{"coordinate": n, "start": 0.5 * D, "end": 0.8 * D, "target": float(v)} for n, v in zip(platform.arm_names, q)]

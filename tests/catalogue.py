@@ -72,6 +72,7 @@ SKIP_MODULES = ("qprr.__main__",)
 NOT_FED: dict[str, str] = {
     "qprr.cli.*": "the command line: tests/test_cli_errors.py runs bad invocations in child processes",
     "qprr.*.cli.*": "the command line: tests/test_cli_errors.py runs bad invocations in child processes",
+    "qprr.control.base.not_reset": "builds the NotResetError a controller raises about itself (tests/test_control.py)",
     "qprr.cli_common.Parser*": "argparse.ArgumentParser with one-line errors: its constructor is argparse's own",
     "*.main": "a command-line entry point (reads sys.argv, exits the interpreter)",
     "qprr.ik.tasks.base.Task*": "abstract base class (its subclasses are fed)",
@@ -586,7 +587,9 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.validation.as_output_path", "x", Spec("path_out", lambda c: c.tmp / "out.npz")),
     ("qprr.charts.as_*", "x", F(lambda c: np.ones(3))),
     ("qprr.charts.as_*", "name", Spec("skip", lambda c: "x")),
-    ("qprr.charts.as_*", "what", Spec("skip", lambda c: "file")),
+    ("qprr.validation.as_*", "x", F(lambda c: np.ones(3))),
+    ("qprr.validation.as_*", "name", Spec("skip", lambda c: "x")),
+    ("qprr.validation.as_*", "what", Spec("skip", lambda c: "file")),
     ("qprr.validation.as_name", "valid", Spec("skip", lambda c: ("a", "b"))),
     ("qprr.validation.as_vector", "n", S(3, "skip")),
     ("qprr.validation.as_matrix", "shape", Spec("skip", lambda c: (3,))),
@@ -787,6 +790,11 @@ def _with(a: np.ndarray, x: float) -> np.ndarray:
 # ============================================================================ outcomes
 HOT = "hot-loop form on plain floats, unvalidated by design (runs every simulated millisecond); the validated forms are "
 ALLOWED: dict[tuple[str, str, str], str] = {
+    ("qprr.analysis.cog.BalanceOptions", "slider", "None"): "None: no slider, the map of |offset| (documented)",
+    ("qprr.analysis.cog.BalanceOptions", "slider", "unknown name"): "a slider is a joint of a platform: balance() "
+    "checks it against the platform's prismatic joints (naming them)",
+    ("qprr.analysis.singularity.SingularityOptions", "frame", "*"): "a frame is a name or id of a platform: singularity() "
+    "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
     ("qprr.analysis.workspace.WorkspaceOptions", "frame", "*"): "a frame is a name or id of a platform: workspace() "
     "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
     ("qprr.validation.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
@@ -852,7 +860,7 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.trajectory.*", "t", "wrong length"): "any number of sample times",
     ("qprr.trajectory.*", "t", "empty"): "no sample times: an empty sample",
     ("qprr.trajectory.transition", "t", "2-D"): "transition is elementwise over times of any shape",
-    ("qprr.analysis.cog.balance", "slider", "None"): "slider None: no slider (the balance of the other joints)",
+
     ("qprr.analysis.chain.ArmChain.*", "q_arm", "2-D"): "a batch of configurations, one per row",
     ("qprr.analysis.*", "payload_masses", "wrong length"): "any number of payload masses",
     ("qprr.viz.animation.frame_indices", "t", "wrong length"): "any number of samples",

@@ -30,6 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model import Platform
+from ..validation import as_vector
 from ._common import (
     JointGrid,
     Status,
@@ -133,6 +134,14 @@ class CapacityOptions:
     torque_reserve: object = 0.0
     thrust_tol: float = 0.01
     cell: float | None = None
+
+    def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
+        check_int("n_samples", self.n_samples, 2)
+        as_vector(self.payload_offset, 3, "payload_offset")
+        check_reserve(self.torque_reserve)
+        check_pos("thrust_tol", self.thrust_tol, strict=False)
+        if self.cell is not None:
+            check_pos("cell", self.cell)
 
 
 def capacity(platform: Platform, options: CapacityOptions | None = None, *, progress=None, **settings) -> CapacityResult:

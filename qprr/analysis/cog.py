@@ -37,6 +37,7 @@ import numpy as np
 from ..charts import euler_to_rotation_batch
 from ..errors import InputError, UnknownNameError
 from ..model import Platform
+from ..validation import as_vector
 from ._common import (
     JointGrid,
     Status,
@@ -142,6 +143,13 @@ class CoGOptions:
     pitch: tuple[float, float] | None = None
     n_pitch: int = 9
     n_shifts: int = 4
+
+    def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
+        check_int("n_samples", self.n_samples, 8)
+        check_masses(self.payload_masses)
+        as_vector(self.payload_offset, 3, "payload_offset")
+        check_int("n_pitch", self.n_pitch, 2)
+        check_int("n_shifts", self.n_shifts, 2)
 
 
 def _pitches(pitch, n_pitch: int) -> np.ndarray:
@@ -282,6 +290,15 @@ class BalanceOptions:
     ranges: Mapping[str, tuple[float, float]] | None = None
     tol: float = 1e-6
     n_shifts: int = 4
+
+    def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
+        if self.slider is not None and not isinstance(self.slider, str):
+            raise InputError(f"slider must be a prismatic joint's name, 'auto' or None, got {self.slider!r}")
+        check_int("n_samples", self.n_samples, 8)
+        check_masses([self.payload_mass], "payload_mass")
+        as_vector(self.payload_offset, 3, "payload_offset")
+        check_pos("tol", self.tol)
+        check_int("n_shifts", self.n_shifts, 2)
 
 
 @dataclass(frozen=True)

@@ -134,6 +134,14 @@ class SingularityOptions:
     frame: object = None
     tol: float = 1e-3
 
+    def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
+        check_int("n_samples", self.n_samples, 8)
+        if self.task not in TASKS:
+            raise UnknownNameError("singularity task", self.task, TASKS)
+        if self.length is not None:
+            check_pos("length", self.length)
+        check_pos("tol", self.tol)
+
 
 def _reach(platform: Platform, ranges) -> float:
     """The default ``length`` [m]: the largest revolute lever (1 m without revolute joints)."""

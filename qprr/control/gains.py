@@ -45,7 +45,11 @@ from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
-import tomllib
+
+try:
+    import tomllib
+except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
+    import tomli as tomllib
 
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
