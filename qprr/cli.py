@@ -76,7 +76,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             return fail(prog, f"--platform {name!r}: {exc}" if args.platform and not args.urdf else str(exc))
     if args.print_gains:
         return _print_gains(sc, platform, args.controller or sc.controllers[0], options.get("gains"))
-    progress = not args.quiet and sys.stderr.isatty()
+    progress = not args.quiet
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
         code = 0
@@ -159,7 +159,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     ok = True
     duration = None if args.duration == 30.0 else args.duration
-    progress = not args.quiet and sys.stderr.isatty()
+    progress = not args.quiet
     reports = [rep for runner, batch in batches.items()
                for rep in runner(batch, duration=duration, plot_dir=args.plot, progress=progress)]
     for rep in reports:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import sys
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
@@ -22,6 +21,7 @@ import numpy as np
 from ..errors import InputError, LimitError, UnknownNameError
 from ..model import Platform
 from ..model import check_platform as _check_platform
+from ..progress import FractionProgress
 from ..validation import as_array, as_int, as_real, as_vector
 
 
@@ -276,17 +276,10 @@ def check_progress(progress) -> ProgressFn | None:
     if progress is None or progress is False:
         return None
     if progress is True:
-        return print_progress
+        return FractionProgress()
     if not callable(progress):
         raise InputError(f"progress must be None, True or a callable (fraction, message), got {progress!r}")
     return progress
-
-
-def print_progress(fraction: float, message: str) -> None:
-    """Progress on stderr: ``message  37%`` on one line, a newline when done."""
-    end = "\n" if fraction >= 1.0 else ""
-    sys.stderr.write(f"\r{message} {100.0 * fraction:5.1f}%{end}")
-    sys.stderr.flush()
 
 
 

@@ -44,7 +44,6 @@ during the run is re-raised with the time and the state; the partial result is a
 from __future__ import annotations
 
 import math
-import sys
 import time
 from dataclasses import dataclass
 
@@ -58,6 +57,7 @@ from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
 from ..joint_friction import JointFriction
 from ..model import Platform
+from ..progress import Progress
 from ..validation import as_int, as_vector
 from . import disturbances as dist
 from .actuators import RotorDynamics
@@ -70,26 +70,6 @@ from .result import SimResult, Status
 from .stops import apply_joint_stops
 
 __all__ = ["INTEGRATORS", "Limits", "SimConfig", "SimInputs", "check_sample", "simulate"]
-
-
-class _Progress:
-    """Minimal text progress bar on stderr (updates every 2 %)."""
-
-    def __init__(self, n: int, label: str, enabled: bool) -> None:
-        self.n, self.label, self.enabled = n, label, enabled
-        self.every = max(1, n // 50)
-        self.t0 = time.perf_counter()
-
-    def update(self, k: int) -> None:
-        frac = k / self.n
-        bar = "#" * int(30 * frac)
-        sys.stderr.write(f"\r{self.label} [{bar:<30}] {100 * frac:5.1f}% {time.perf_counter() - self.t0:6.2f} s")
-        sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            self.update(self.n)
-            sys.stderr.write("\n")
 
 
 def simulate(platform: Platform, controller: Controller, trajectory, duration: float, *, config: SimConfig | None = None,
@@ -118,10 +98,11 @@ def simulate(platform: Platform, controller: Controller, trajectory, duration: f
     """
     config, inputs = resolve(config, inputs, options)
     run = _setup(platform, controller, trajectory, duration, config, inputs)
-    bar = _Progress(run.n, f"{config.scenario}/{controller.name}", config.progress)
+    bar = Progress(run.n, f"{config.scenario}/{controller.name}", quiet=not config.progress, unit="tick")
     t_start = time.perf_counter()
     try:
         m, err, q, v = _loop(run, bar)
+        bar.update_to(m)
     finally:
         bar.close()
     wall = time.perf_counter() - t_start
@@ -336,7 +317,7 @@ class _RotorStage:
 
 
 # -------------------------------------------------------------------------------------- loop
-def _loop(run: _Run, bar: _Progress) -> tuple[int, QprrError | None, np.ndarray, np.ndarray]:
+def _loop(run: _Run, bar: Progress) -> tuple[int, QprrError | None, np.ndarray, np.ndarray]:
     """The control ticks (module docstring): (ticks logged, the qprr error that ended the run or None, last q, v)."""
     platform, controller, cfg, logs, plant, state, ref = run.platform, run.controller, run.config, run.logs, run.plant, run.state, run.reference
     n, period, q, v, z, tau, bounds = run.n, cfg.period, run.q, run.v, plant.z0, plant.tau, run.bounds
@@ -350,6 +331,7 @@ def _loop(run: _Run, bar: _Progress) -> tuple[int, QprrError | None, np.ndarray,
     hypot = math.hypot  # the norm of a list: 2-3x cheaper than ndarray.dot on these sizes (benchmarks/step_instructions.py)
     POSITION, add, com, step, aba, allocate = pin.KinematicLevel.POSITION, np.add, pin.centerOfMass, controller.step, pin.aba, run.allocate
     wants_applied, pin_out, has_ext, progress = controller.uses_applied_force, controller.output == "pinocchio", u_ext_rows is not None, cfg.progress
+    every = max(1, n // 1000)  # progress: at most a thousand updates per run (lines are rate-limited)
     update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
     b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
     k = 0
@@ -405,8 +387,8 @@ def _loop(run: _Run, bar: _Progress) -> tuple[int, QprrError | None, np.ndarray,
             # v: screened every tick by the next update (and the final check); q, which integrates v, every 16 ticks
             if not (k & 15 or hypot(*q.tolist()) < q_bound):
                 _check(platform, tk + period, q, v, bounds)
-            if progress and k % bar.every == 0:
-                bar.update(k)
+            if progress and k % every == 0:
+                bar.update_to(k)
         _check(platform, n * period, q, v, bounds)
     except QprrError as err:
         return k + 1, err, q, v

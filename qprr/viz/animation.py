@@ -15,7 +15,6 @@ from __future__ import annotations
 import math
 import shutil
 import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +24,7 @@ import numpy as np
 from .. import charts as ch
 from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError
 from ..model import Platform
+from ..progress import Progress
 from ..validation import as_array, as_real
 from .geometry import characteristic_length, rotor_radius
 from .scene import RobotPose, arm_chain, robot_pose
@@ -387,7 +387,7 @@ def animate(
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(path.stem + ".partial" + path.suffix)
     writer, kind = _writer_for(partial, fps, (width, height), swatch)
-    bar = _Progress(len(poses), f"animating {path.name}", progress)
+    bar = Progress(len(poses), f"animating {path.name}", quiet=not progress, unit="frame")
     try:
         for k, (pose, i) in enumerate(zip(poses, idx)):
             p, R = pose.p_base_world, pose.R_base_world
@@ -425,7 +425,7 @@ def animate(
             fig.draw_artist(head)
             fig.draw_artist(foot)
             writer.add(np.asarray(canvas.buffer_rgba()))
-            bar.update(k + 1)
+            bar.update()
         writer.close()
         partial.replace(path)
     except BaseException:
@@ -450,23 +450,3 @@ def animate_result(platform: Platform, result, path: str | Path, **options) -> A
         raise ShapeError(f"the run logs {run.f.shape[1]} rotor thrusts per sample; platform {platform.name!r} has {platform.n_rotors} rotors")
     contact = None if run.contact_wrench_world is None else run.contact_wrench_world[:, 0:3]
     return animate(platform, run.t, run.xi, path, f=run.f, contact_force_world=contact, **options)
-
-
-class _Progress:
-    """A text progress bar on stderr (updated every 2 %)."""
-
-    def __init__(self, n: int, label: str, enabled: bool) -> None:
-        self.n, self.label, self.enabled = max(n, 1), label, enabled
-        self.every = max(1, self.n // 50)
-        self.t0 = time.perf_counter()
-
-    def update(self, k: int) -> None:
-        if self.enabled and (k % self.every == 0 or k == self.n):
-            frac = k / self.n
-            sys.stderr.write(f"\r{self.label} [{'#' * int(30 * frac):<30}] {100 * frac:5.1f}% {time.perf_counter() - self.t0:6.1f} s")
-            sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")
-            sys.stderr.flush()

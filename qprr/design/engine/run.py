@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
+from ...progress import StatusProgress
 from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design
 from ..search.optimiser import make_optimiser
 from ..search.points import fixed_params, grid_points, n_points, point, reference_points
@@ -26,7 +27,6 @@ from ..spec.metrics import METRICS, sign
 from ..spec.parameters import PARAMETERS
 from ..spec.study import DesignSpec
 from . import campaign_io as io
-from .progress import Progress
 
 FAILED = 1e9
 """Objective value (minimisation form) and violation told to the optimiser for a design that failed."""
@@ -150,7 +150,7 @@ def run_design(spec: DesignSpec, output, *, backend="local", workers: int | None
         done = {int(r["run"]): {k: r[k].item() for k in t.dtype.names} for r in t}
     total = n_points(spec)
     skipped = sum(1 for r in done.values() if r["status"] != "error")
-    bar = Progress(spec.name, total, skipped, enabled=progress, stream=stream)
+    bar = StatusProgress(f"design {spec.name}", total, skipped, quiet=not progress, stream=stream, unit="design")
     session = _Session(spec, store, done, backend, workers, scheduler, bar)
     t0 = time.perf_counter()
     interrupted = False
