@@ -137,7 +137,7 @@ def main(argv=None) -> int:
         # same configurations batched, to compare values
         mine = []
         for start in range(0, len(sub), 4096):
-            q = sub[start:start + 4096]
+            q = sub[start : start + 4096]
             pose = chain.pose(q)
             if what == "workspace":
                 mine.append(chain.frame_position(pose, fid))
@@ -183,13 +183,17 @@ def main(argv=None) -> int:
     t0, c0 = time.perf_counter(), time.thread_time()
     ws = workspace(p, n_samples=n)
     t_ws, c_ws = time.perf_counter() - t0, time.thread_time() - c0
-    print(f"| workspace (+ variants: {len(ws.regions) - 1}) | {n:,} per region | {t_ws:.2f} (CPU {c_ws:.2f}) | region 0: FK "
-          f"{t_fk:.2f} s, measure in B {t_area:.2f} s, hover volume {t_vol:.2f} s |")
-    for name, fn, nn in [("cog regions (2 payloads)", lambda: cog_regions(p, n_samples=200_000, payload_masses=[0.0, 0.5]), 200_000),
-                         ("singularity", lambda: singularity(p, n_samples=200_000), 200_000),
-                         ("hover (6 payloads)", lambda: hover(p, n_samples=100_000, payload_masses=[0, 0.25, 0.5, 1, 1.5, 2]), 100_000),
-                         ("capacity", lambda: capacity_map(p, n_samples=200_000), 200_000),
-                         ("opspace (Pinocchio per configuration)", lambda: opspace_map(p, n_samples=10_000), 10_000)]:
+    print(
+        f"| workspace (+ variants: {len(ws.regions) - 1}) | {n:,} per region | {t_ws:.2f} (CPU {c_ws:.2f}) | region 0: FK "
+        f"{t_fk:.2f} s, measure in B {t_area:.2f} s, hover volume {t_vol:.2f} s |"
+    )
+    for name, fn, nn in [
+        ("cog regions (2 payloads)", lambda: cog_regions(p, n_samples=200_000, payload_masses=[0.0, 0.5]), 200_000),
+        ("singularity", lambda: singularity(p, n_samples=200_000), 200_000),
+        ("hover (6 payloads)", lambda: hover(p, n_samples=100_000, payload_masses=[0, 0.25, 0.5, 1, 1.5, 2]), 100_000),
+        ("capacity", lambda: capacity_map(p, n_samples=200_000), 200_000),
+        ("opspace (Pinocchio per configuration)", lambda: opspace_map(p, n_samples=10_000), 10_000),
+    ]:
         t0 = time.perf_counter()
         fn()
         dt = time.perf_counter() - t0

@@ -73,8 +73,11 @@ def main(argv=None) -> int:
                 size = path.stat().st_size
             med = float(np.median(times))
             spread = f" (min {min(times):.1f}, max {max(times):.1f})" if len(times) > 1 else ""
-            print(f"{suffix[1:]:>4}: {frames} frames 640x480 at 20 fps for {seconds:g} s of run: {med:.1f} s{spread}, "
-                  f"{size / 1e6:.1f} MB, {info.writer}; ratio wall time / run length {med / seconds:.2f}", flush=True)
+            print(
+                f"{suffix[1:]:>4}: {frames} frames 640x480 at 20 fps for {seconds:g} s of run: {med:.1f} s{spread}, "
+                f"{size / 1e6:.1f} MB, {info.writer}; ratio wall time / run length {med / seconds:.2f}",
+                flush=True,
+            )
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(f"peak resident memory {peak:.0f} MB")
     print(f"(qprr {qprr.__version__})")

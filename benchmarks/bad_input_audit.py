@@ -35,7 +35,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent.parent
 CATEGORIES = ("silent", "crash", "unclear", "good", "allowed")
 
-_CHILD = r'''
+_CHILD = r"""
 import importlib.util, json, sys
 spec = importlib.util.spec_from_file_location("catalogue", sys.argv[1])
 cat = importlib.util.module_from_spec(spec)
@@ -55,7 +55,7 @@ include = (lambda t: t.module == prefix or t.module.startswith(prefix + ".")) if
 rep = cat.run(include=include, hooks=cat._Hooks(start_at=start_at, on_start=on_start, on_outcome=on_outcome))
 out.write(json.dumps({"done": True, "fed": len({o.target for o in rep.outcomes}), "not_fed": len(rep.not_fed),
                       "baseline_failed": len(rep.baseline_failed), "seconds": rep.seconds}) + "\n")
-'''
+"""
 
 
 def catalogue(tree: Path, timeout: float, module: str = "") -> tuple[Counter, dict, list]:
@@ -68,9 +68,14 @@ def catalogue(tree: Path, timeout: float, module: str = "") -> tuple[Counter, di
         start_at = 0
         t0 = time.perf_counter()
         while True:
-            proc = subprocess.run([sys.executable, "-c", _CHILD, str(HERE / "tests" / "catalogue.py"), str(start_at), str(log),
-                                   module],
-                                  cwd=tmp, env=env, capture_output=True, text=True, timeout=timeout)
+            proc = subprocess.run(
+                [sys.executable, "-c", _CHILD, str(HERE / "tests" / "catalogue.py"), str(start_at), str(log), module],
+                cwd=tmp,
+                env=env,
+                capture_output=True,
+                text=True,
+                timeout=timeout,
+            )
             lines = [json.loads(ln) for ln in log.read_text().splitlines() if ln.strip()]
             if lines and "done" in lines[-1]:
                 info = lines[-1]
@@ -80,8 +85,12 @@ def catalogue(tree: Path, timeout: float, module: str = "") -> tuple[Counter, di
                 raise RuntimeError(f"the catalogue child failed before any case (exit {proc.returncode}):\n{proc.stderr[-2000:]}")
             crashes.append((started[-1], proc.returncode))
             start_at = started[-1]
-            log.open("a").write(json.dumps({"index": start_at, "verdict": "crash", "target": "?", "param": "?", "label": "?",
-                                            "detail": f"exit code {proc.returncode}"}) + "\n")
+            log.open("a").write(
+                json.dumps(
+                    {"index": start_at, "verdict": "crash", "target": "?", "param": "?", "label": "?", "detail": f"exit code {proc.returncode}"}
+                )
+                + "\n"
+            )
         outcomes = [ln for ln in lines if "verdict" in ln]
         info["seconds"] = time.perf_counter() - t0
     for o in outcomes:
@@ -91,7 +100,7 @@ def catalogue(tree: Path, timeout: float, module: str = "") -> tuple[Counter, di
 
 # ------------------------------------------------------------------------ the issue's scenarios
 # Each prints one verdict word; the API of the tree decides which branch runs (new: qprr.model; old: qprr.model).
-_PRELUDE = r'''
+_PRELUDE = r"""
 import copy, math, pickle, sys, threading
 import numpy as np, pinocchio as pin
 import qprr
@@ -115,10 +124,10 @@ def verdict(fn, names=()):
         print("unclear")
     else:
         print("good" if ok else "silent")
-'''
+"""
 
 SCENARIOS = {
-    "1 rmse wraps a yaw error across +-pi": r'''
+    "1 rmse wraps a yaw error across +-pi": r"""
 def f():
     from qprr.sim import SimResult
     m, n = 101, 9
@@ -132,22 +141,22 @@ def f():
     kw = {k: v for k, v in kw.items() if k in inspect.signature(SimResult).parameters}
     return abs(SimResult(**kw).rmse()["psi"] - 1e-6) < 1e-9
 verdict(f)
-''',
-    "2 a NaN link mass in the parameters": r'''
+""",
+    "2 a NaN link mass in the parameters": r"""
 def f():
     mod = __import__("qprr.thesis.params" if NEW else "qprr.params", fromlist=["x"])
     p = mod.thesis_params().with_changes(multirotor_mass=float("nan"))
     return False
 verdict(f, ("mass",))
-''',
-    "2 zero thrust factor": r'''
+""",
+    "2 zero thrust factor": r"""
 def f():
     mod = __import__("qprr.thesis.params" if NEW else "qprr.params", fromlist=["x"])
     mod.thesis_params().with_changes(thrust_factor=0.0)
     return False
 verdict(f, ("thrust_factor",))
-''',
-    "3 parameters contradicting the URDF (d3 = 0.5)": r'''
+""",
+    "3 parameters contradicting the URDF (d3 = 0.5)": r"""
 def f():
     if NEW:
         qprr.thesis.load(qprr.thesis.thesis_params().with_changes(d3=0.5), urdf_path=qprr.thesis.URDF_PATH)
@@ -156,15 +165,15 @@ def f():
         kin.load(prm.thesis_params().with_changes(d3=0.5), urdf_path=u.URDF_PATH)
     return False
 verdict(f, ("d3",))
-''',
-    "4 negative payload mass (PayloadModel.set_mass)": r'''
+""",
+    "4 negative payload mass (PayloadModel.set_mass)": r"""
 def f():
     from qprr.payload import PayloadModel
     PayloadModel(P).set_mass(-1.0)
     return False
 verdict(f, ("mass",))
-''',
-    "4 mass estimator after a NaN sample": r'''
+""",
+    "4 mass estimator after a NaN sample": r"""
 def f():
     from qprr.payload import MassEstimator
     e = MassEstimator(P)
@@ -173,27 +182,27 @@ def f():
     e.update(q, np.zeros(nv), np.full(nv, np.nan), np.zeros(nv), 0.01)
     return False
 verdict(f, ("tau_prev",))
-''',
-    "5 zero quaternion in q": r'''
+""",
+    "5 zero quaternion in q": r"""
 def f():
     q = pin.neutral(P.model); q[3:7] = 0.0
     kin.ee_placement(P, DATA, q)
     return False
 verdict(f, ("q[3:7]", "quaternion"))
-''',
-    "5 rotation_to_euler of 2 R": r'''
+""",
+    "5 rotation_to_euler of 2 R": r"""
 def f():
     rotation_to_euler(2.0 * euler_to_rotation([0.1, 0.2, 0.3]))
     return False
 verdict(f, ("rotation",))
-''',
-    "5 complex xi": r'''
+""",
+    "5 complex xi": r"""
 def f():
     xi_to_q(np.ones(9) + 1j)
     return False
 verdict(f, ("xi",))
-''',
-    "6 CLIKA success at roll = pi/2": r'''
+""",
+    "6 CLIKA success at roll = pi/2": r"""
 def f():
     xi = np.zeros(9); xi[2] = 1.0; xi[3] = math.pi / 2 - 1e-3
     M = kin.ee_placement(P, DATA, xi_to_q(xi))
@@ -205,8 +214,8 @@ def f():
         r = ik.solve(P, DATA, M, "clika", xi0=np.zeros(9), options={"weights": (1, 1, 1, 1, 1, 1, 1e4, 1, 1)})
     return not r.success
 verdict(f)
-''',
-    "7 simulate a reference beyond the joint limits": r'''
+""",
+    "7 simulate a reference beyond the joint limits": r"""
 def f():
     from qprr.sim import simulate
     from qprr.control import make_controller
@@ -216,8 +225,8 @@ def f():
     simulate(P, make_controller("idc", P), traj, 0.2)
     return False
 verdict(f, ("theta2",))
-''',
-    "8 result file with dt = 'fast'": r'''
+""",
+    "8 result file with dt = 'fast'": r"""
 def f():
     import json, tempfile, os
     from qprr.sim import SimResult
@@ -231,8 +240,8 @@ def f():
     SimResult.load(path)
     return False
 verdict(f, ("dt",))
-''',
-    "9 qp IK: 4 threads vs serial": r'''
+""",
+    "9 qp IK: 4 threads vs serial": r"""
 def f():
     rng = np.random.default_rng(9); targets = []
     for _ in range(12):
@@ -256,8 +265,8 @@ def f():
     [t.start() for t in th]; [t.join() for t in th]
     return all(np.array_equal(out[i], serial[i]) for i in range(12))
 verdict(f)
-''',
-    "10 deepcopy(Allocator), then a saturated allocation": r'''
+""",
+    "10 deepcopy(Allocator), then a saturated allocation": r"""
 def f():
     if NEW:
         from qprr.actuation import Allocator
@@ -270,8 +279,8 @@ def f():
     b = copy.deepcopy(a)
     return np.allclose(b.allocate(tau).f, first, atol=1e-7)
 verdict(f)
-''',
-    "10 pickle(Allocator), then a saturated allocation": r'''
+""",
+    "10 pickle(Allocator), then a saturated allocation": r"""
 def f():
     if NEW:
         from qprr.actuation import Allocator
@@ -283,7 +292,7 @@ def f():
     b = pickle.loads(pickle.dumps(a))
     return np.allclose(b.allocate(tau).f, first, atol=1e-7)
 verdict(f)
-''',
+""",
 }
 
 
@@ -293,8 +302,9 @@ def scenarios(tree: Path, timeout: float, names=None) -> dict[str, str]:
     with tempfile.TemporaryDirectory() as tmp:
         for name in names or SCENARIOS:
             body = SCENARIOS[name]
-            proc = subprocess.run([sys.executable, "-c", _PRELUDE + textwrap.dedent(body)], cwd=tmp, env=env, capture_output=True,
-                                  text=True, timeout=timeout)
+            proc = subprocess.run(
+                [sys.executable, "-c", _PRELUDE + textwrap.dedent(body)], cwd=tmp, env=env, capture_output=True, text=True, timeout=timeout
+            )
             word = proc.stdout.strip().splitlines()[-1] if proc.stdout.strip() else ""
             out[name] = word if proc.returncode == 0 and word in CATEGORIES else ("crash" if proc.returncode < 0 else "unclear")
     return out
@@ -304,8 +314,9 @@ def table(rows: dict[str, Counter], title: str) -> str:
     trees = list(rows)
     lines = [title, f"{'category':<22}" + "".join(f"{t:>12}" for t in trees)]
     for c in CATEGORIES:
-        label = {"silent": "silent wrong answer", "crash": "crash", "unclear": "unclear error", "good": "good error",
-                 "allowed": "documented result"}[c]
+        label = {"silent": "silent wrong answer", "crash": "crash", "unclear": "unclear error", "good": "good error", "allowed": "documented result"}[
+            c
+        ]
         lines.append(f"{label:<22}" + "".join(f"{rows[t].get(c, 0):>12}" for t in trees))
     lines.append(f"{'total':<22}" + "".join(f"{sum(rows[t].values()):>12}" for t in trees))
     return "\n".join(lines)
@@ -326,8 +337,10 @@ def main(argv=None) -> int:
     for label, tree in trees.items():
         counts, info, bad = catalogue(tree, args.timeout, module)
         cat_rows[label] = counts
-        print(f"[{label}] {tree}: catalogue fed {info.get('fed')} callables, {sum(counts.values())} cases in {info['seconds']:.0f} s "
-              f"(not fed: {info.get('not_fed')}, no valid call from the table: {info.get('baseline_failed')})")
+        print(
+            f"[{label}] {tree}: catalogue fed {info.get('fed')} callables, {sum(counts.values())} cases in {info['seconds']:.0f} s "
+            f"(not fed: {info.get('not_fed')}, no valid call from the table: {info.get('baseline_failed')})"
+        )
         for o in bad[: args.show]:
             print(f"    {o['verdict']:8s} {o['target']}({o['param']} = {o['label']}): {o['detail'][:110]}")
         sc = scenarios(tree, args.timeout, names)
@@ -345,8 +358,10 @@ def main(argv=None) -> int:
     for t in trees:
         cases = cat_rows[t] + sc_rows[t]
         good = cases["good"] + cases["allowed"]
-        print(f"ratio of good answers (good error, documented result or right answer), {t}: {good / max(1, sum(cases.values())):.3f} "
-              f"of {sum(cases.values())} cases")
+        print(
+            f"ratio of good answers (good error, documented result or right answer), {t}: {good / max(1, sum(cases.values())):.3f} "
+            f"of {sum(cases.values())} cases"
+        )
     return 0
 
 

@@ -43,9 +43,16 @@ from qprr.campaign import CampaignSpec, make_backend, run_campaign
 
 
 def spec(name: str, runs: int, duration: float) -> CampaignSpec:
-    return CampaignSpec.from_mapping({"name": name, "scenario": "static-idc", "seed": 1, "samples": runs,
-                                      "options": {"duration": duration},
-                                      "random": {"model.mass": {"dist": "uniform", "low": 0.9, "high": 1.1}}})
+    return CampaignSpec.from_mapping(
+        {
+            "name": name,
+            "scenario": "static-idc",
+            "seed": 1,
+            "samples": runs,
+            "options": {"duration": duration},
+            "random": {"model.mass": {"dist": "uniform", "low": 0.9, "high": 1.1}},
+        }
+    )
 
 
 def timed(backend, sp: CampaignSpec, folder: Path) -> float:
@@ -86,14 +93,21 @@ def raw(workers: int, runs: int, duration: float) -> float:
     slack = 4.0
     while True:
         start = time.time() + slack  # every process imported and warmed up by then (checked: else again, with more time)
-        procs = [subprocess.Popen([sys.executable, "-c", _RAW.format(path=sys.path[:2], start=start, n=n, duration=duration)],
-                                  stdout=subprocess.PIPE, text=True) for n in share]
+        procs = [
+            subprocess.Popen(
+                [sys.executable, "-c", _RAW.format(path=sys.path[:2], start=start, n=n, duration=duration)], stdout=subprocess.PIPE, text=True
+            )
+            for n in share
+        ]
         stamps = [[float(x) for x in p.communicate()[0].split()] for p in procs]
         late = max(ready for ready, _ in stamps) - start
         if late <= 0 or slack >= 64.0:
             if late > 0:
-                print(f"raw: a process was ready {late:.1f} s after the common start even with {slack:g} s of slack: "
-                      f"its rate is underestimated (the machine is overloaded)", flush=True)
+                print(
+                    f"raw: a process was ready {late:.1f} s after the common start even with {slack:g} s of slack: "
+                    f"its rate is underestimated (the machine is overloaded)",
+                    flush=True,
+                )
             return runs / (max(end for _, end in stamps) - start)
         slack *= 2
 
@@ -105,8 +119,14 @@ def main(argv=None) -> int:
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2], help="worker counts (default 1 2)")
     ap.add_argument("--repeat", type=int, default=2, help="rounds over every configuration, interleaved; the best is kept (default 2)")
     ap.add_argument("--no-dask", action="store_true", help="local backend only")
-    ap.add_argument("--tiny", type=int, nargs=2, default=[20, 220], metavar=("N1", "N2"),
-                    help="sizes of the tiny-run campaigns for the per-run overhead (default 20 220)")
+    ap.add_argument(
+        "--tiny",
+        type=int,
+        nargs=2,
+        default=[20, 220],
+        metavar=("N1", "N2"),
+        help="sizes of the tiny-run campaigns for the per-run overhead (default 20 220)",
+    )
     ap.add_argument("--quick", action="store_true", help="2 runs of 0.2 s, 1 worker, 1 round, local only (a smoke run)")
     args = ap.parse_args(argv)
     if args.quick:
@@ -123,8 +143,10 @@ def main(argv=None) -> int:
 
     print(f"qprr imported from {Path(qprr.__file__).parent}")
     backends = ["local"] + ([] if args.no_dask else ["dask"])
-    print(f"\nthroughput: {args.runs} runs of static-idc, {args.duration:g} s at 1 kHz each (steady state, warmed-up workers); "
-          f"{args.repeat} interleaved rounds\n")
+    print(
+        f"\nthroughput: {args.runs} runs of static-idc, {args.duration:g} s at 1 kHz each (steady state, warmed-up workers); "
+        f"{args.repeat} interleaved rounds\n"
+    )
     print(f"{'round':>5} {'backend':<8} {'workers':>7} {'startup s':>10} {'wall s':>8} {'runs/s':>8} {'load':>5}")
     print("-" * 58)
     rates: dict[tuple[str, int], list[float]] = {}
@@ -150,8 +172,10 @@ def main(argv=None) -> int:
                         overhead.setdefault(be_name, []).append((t2 - t1) / (n2 - n1))
                     be.close()
                     rates.setdefault((be_name, w), []).append(args.runs / wall)
-                    print(f"{rnd + 1:>5} {be_name:<8} {w:>7} {startup:>10.2f} {wall:>8.2f} {args.runs / wall:>8.3f} "
-                          f"{os.getloadavg()[0]:>5.2f}", flush=True)
+                    print(
+                        f"{rnd + 1:>5} {be_name:<8} {w:>7} {startup:>10.2f} {wall:>8.2f} {args.runs / wall:>8.3f} {os.getloadavg()[0]:>5.2f}",
+                        flush=True,
+                    )
     print("-" * 58)
     print(f"\nbest of {args.repeat} rounds:\n")
     print(f"{'backend':<8} {'workers':>7} {'runs/s':>8} {'s/run/worker':>13} {'efficiency':>11}")
@@ -175,8 +199,10 @@ def main(argv=None) -> int:
         print(f"per-run overhead, {be_name}: {1e3 * o:.2f} ms per task round trip (tiny runs, 1 worker)")
     if "dask" in best_o:
         run_s = 1.0 / max(rates[("local", 1)])
-        print(f"Dask path - local path: {1e3 * (best_o['dask'] - best_o['local']):+.2f} ms per run "
-              f"({100 * (best_o['dask'] - best_o['local']) / run_s:+.2f} % of a {args.duration:g} s run)")
+        print(
+            f"Dask path - local path: {1e3 * (best_o['dask'] - best_o['local']):+.2f} ms per run "
+            f"({100 * (best_o['dask'] - best_o['local']) / run_s:+.2f} % of a {args.duration:g} s run)"
+        )
     for (be_name, w), r in rates.items():
         if be_name != "raw" and ("raw", w) in rates:
             print(f"ratio {be_name} / raw processes, {w} workers: {max(r) / max(rates[('raw', w)]):.2f} of the machine's rate")

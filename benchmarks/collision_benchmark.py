@@ -40,12 +40,18 @@ def main(n_samples: int, exact_max: int = 300_000) -> int:
         t = time.perf_counter()
         exact = ~cm.colliding_arm(grid.configurations()) if grid.size <= exact_max else None
         t_exact = time.perf_counter() - t
-        print(f"{name}: {len(cm.pairs)} pairs, model built in {t_build:.2f} s; grid {grid.size}: map {t_map:.2f} s, collisions "
-              f"{t_coll:.2f} s ({1e6 * t_coll / grid.size:.1f} us/configuration, x{t_coll / t_map:.1f} the map); "
-              f"collision-free {100 * mask.free.mean():.2f}%; {mask.describe()}", flush=True)
+        print(
+            f"{name}: {len(cm.pairs)} pairs, model built in {t_build:.2f} s; grid {grid.size}: map {t_map:.2f} s, collisions "
+            f"{t_coll:.2f} s ({1e6 * t_coll / grid.size:.1f} us/configuration, x{t_coll / t_map:.1f} the map); "
+            f"collision-free {100 * mask.free.mean():.2f}%; {mask.describe()}",
+            flush=True,
+        )
         if exact is not None:
-            print(f"    every configuration checked: {t_exact:.2f} s (x{t_exact / t_coll:.1f} the coarse-to-fine check); "
-                  f"{int((exact != mask.free).sum())} configurations differ", flush=True)
+            print(
+                f"    every configuration checked: {t_exact:.2f} s (x{t_exact / t_coll:.1f} the coarse-to-fine check); "
+                f"{int((exact != mask.free).sum())} configurations differ",
+                flush=True,
+            )
     return 0
 
 

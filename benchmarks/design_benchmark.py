@@ -49,8 +49,15 @@ def study(n: int, samples: int, offset: float = 0.0) -> DesignSpec:
     """``n`` designs: the architectures x distinct reaches (a grid)."""
     per = int(np.ceil(n / len(ARCHS)))
     reach = [round(0.22 + offset + 0.01 * k, 4) for k in range(per)]
-    return DesignSpec.from_mapping({"name": f"bench-{n}-{offset}", "architectures": ARCHS, "objectives": ["hover_volume", "arm_mass"],
-                                    "parameters": {"reach": reach}, "effort": {"samples": samples}})
+    return DesignSpec.from_mapping(
+        {
+            "name": f"bench-{n}-{offset}",
+            "architectures": ARCHS,
+            "objectives": ["hover_volume", "arm_mass"],
+            "parameters": {"reach": reach},
+            "effort": {"samples": samples},
+        }
+    )
 
 
 def throughput(args) -> None:
@@ -92,8 +99,13 @@ def split(args) -> None:
         p = build_candidate(Candidate(arch, {**params, "reach": 0.28}), spec.mass)
         t["build"] = time.process_time() - t0
         n = args.samples
-        for name, fn, kw in (("workspace", workspace, {"variants": []}), ("balance", balance, {"slider": slider_of(p), "tol": 1e-3}),
-                             ("hover", hover, {}), ("capacity", capacity, {}), ("singularity", singularity, {"task": "position"})):
+        for name, fn, kw in (
+            ("workspace", workspace, {"variants": []}),
+            ("balance", balance, {"slider": slider_of(p), "tol": 1e-3}),
+            ("hover", hover, {}),
+            ("capacity", capacity, {}),
+            ("singularity", singularity, {"task": "position"}),
+        ):
             t0 = time.process_time()
             fn(p, n_samples=n, **kw)
             t[name] = time.process_time() - t0
@@ -102,8 +114,11 @@ def split(args) -> None:
         evaluate_design(spec.to_dict(), point)
         total = time.process_time() - t0
         maps = sum(v for k, v in t.items() if k != "build")
-        print(f"{arch}: one evaluation {total:.3f} s = maps {maps:.3f} s (" + ", ".join(f"{k} {v:.3f}" for k, v in t.items() if k != "build")
-              + f") + build {t['build']:.3f} s + other {max(total - maps - t['build'], 0.0):.3f} s")
+        print(
+            f"{arch}: one evaluation {total:.3f} s = maps {maps:.3f} s ("
+            + ", ".join(f"{k} {v:.3f}" for k, v in t.items() if k != "build")
+            + f") + build {t['build']:.3f} s + other {max(total - maps - t['build'], 0.0):.3f} s"
+        )
 
 
 def fixed_cost(args) -> None:
@@ -125,16 +140,23 @@ def fixed_cost(args) -> None:
                 best = min(best, time.process_time() - t0)
             ts.append(best)
         b, a = np.polyfit(ns, ts, 1)
-        print(f"{arch}: CPU time per evaluation at {ns} samples: " + ", ".join(f"{t:.3f}" for t in ts)
-              + f" s; fixed part {a:.3f} s = {100 * a / (a + b * args.samples):.0f} % at {args.samples} samples "
-              f"(the most batching designs together could save)")
+        print(
+            f"{arch}: CPU time per evaluation at {ns} samples: "
+            + ", ".join(f"{t:.3f}" for t in ts)
+            + f" s; fixed part {a:.3f} s = {100 * a / (a + b * args.samples):.0f} % at {args.samples} samples "
+            f"(the most batching designs together could save)"
+        )
 
 
 def optimisers(args) -> None:
-    base = {"name": "opt", "architectures": ["Q-PRR"], "objectives": ["hover_volume", "arm_mass"], "effort": {"samples": 2000},
-            "parameters": {"reach": {"low": 0.15, "high": 0.45}, "taper": {"low": 0.3, "high": 1.5},
-                           "slider_stroke": {"low": 0.02, "high": 0.16}},
-            "search": {"method": "nsga2", "population": 8, "generations": args.generations}}
+    base = {
+        "name": "opt",
+        "architectures": ["Q-PRR"],
+        "objectives": ["hover_volume", "arm_mass"],
+        "effort": {"samples": 2000},
+        "parameters": {"reach": {"low": 0.15, "high": 0.45}, "taper": {"low": 0.3, "high": 1.5}, "slider_stroke": {"low": 0.02, "high": 0.16}},
+        "search": {"method": "nsga2", "population": 8, "generations": args.generations},
+    }
     spec = DesignSpec.from_mapping(base)
     names = spec.optimised
     lo = [spec.parameters[k].low for k in names]
@@ -157,8 +179,18 @@ def optimisers(args) -> None:
                 for k, x in enumerate(X):
                     key = tuple(np.round(x, 12))
                     if key not in cache:
-                        row = evaluate_design(spec.to_dict(), {"run": 0, "seed": 0, "kind": "nsga2", "architecture": "Q-PRR", "name": "Q-PRR",
-                                                               "generation": g, "params": {**fixed, **dict(zip(names, map(float, x)))}})
+                        row = evaluate_design(
+                            spec.to_dict(),
+                            {
+                                "run": 0,
+                                "seed": 0,
+                                "kind": "nsga2",
+                                "architecture": "Q-PRR",
+                                "name": "Q-PRR",
+                                "generation": g,
+                                "params": {**fixed, **dict(zip(names, map(float, x)))},
+                            },
+                        )
                         cache[key] = (-row["hover_volume"], row["arm_mass"])
                     F[k] = cache[key]
                 pts.append(F)
@@ -168,9 +200,12 @@ def optimisers(args) -> None:
                 hv[seed, g] = hypervolume_2d(np.vstack(pts), (0.0, 0.6))
             own.append(t_opt / (8 * gens))
         m = hv.mean(axis=0)
-        print(f"{engine}: hypervolume [m^3 kg] after 8, 16, ..., {8 * gens} evaluations (mean of {seeds} seeds): "
-              + ", ".join(f"{v:.5f}" for v in m) + f"; worst / best seed at {8 * gens}: {hv[:, -1].min():.5f} / {hv[:, -1].max():.5f}; "
-              f"optimiser time per evaluation {1e3 * np.mean(own):.2f} ms")
+        print(
+            f"{engine}: hypervolume [m^3 kg] after 8, 16, ..., {8 * gens} evaluations (mean of {seeds} seeds): "
+            + ", ".join(f"{v:.5f}" for v in m)
+            + f"; worst / best seed at {8 * gens}: {hv[:, -1].min():.5f} / {hv[:, -1].max():.5f}; "
+            f"optimiser time per evaluation {1e3 * np.mean(own):.2f} ms"
+        )
 
 
 def main() -> int:

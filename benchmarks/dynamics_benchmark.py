@@ -90,11 +90,15 @@ def main(argv=None) -> int:
         t0 = time.perf_counter()
         compile(src, "<bench>", "exec")
         t_compile = time.perf_counter() - t0
-        print(f"\nsympy model ({args.variant}): derivation + CSE code generation {t_derive:.2f} s (fresh, in-process), "
-              f"compile {t_compile * 1e3:.1f} ms, {len(src) / 1024:.0f} KiB of generated code")
+        print(
+            f"\nsympy model ({args.variant}): derivation + CSE code generation {t_derive:.2f} s (fresh, in-process), "
+            f"compile {t_compile * 1e3:.1f} ms, {len(src) / 1024:.0f} KiB of generated code"
+        )
     sm = sy.symbolic_model(params_of(robot))
-    print(f"  symbolic_model() setup: {sm.setup_seconds * 1e3:.1f} ms "
-          f"({'read from the disk cache' if sm.from_disk_cache else 'derived, now written to the disk cache'})")
+    print(
+        f"  symbolic_model() setup: {sm.setup_seconds * 1e3:.1f} ms "
+        f"({'read from the disk cache' if sm.from_disk_cache else 'derived, now written to the disk cache'})"
+    )
 
     states = _states(robot, args.states, args.seed)
 
@@ -103,8 +107,7 @@ def main(argv=None) -> int:
     for xi, w in states:
         for name, a, b in zip("BCG", qd.dynamics_xi(robot, data, xi, w), sm.dynamics(xi, w)):
             worst[name] = max(worst[name], float(np.linalg.norm(a - b) / max(np.linalg.norm(b), 1e-300)))
-    print(f"\nagreement at {len(states)} states (max relative Frobenius error): "
-          + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
+    print(f"\nagreement at {len(states)} states (max relative Frobenius error): " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     if max(worst.values()) > 1e-9:
         print("FAILED: the implementations disagree; not timing")
         return 1

@@ -131,6 +131,7 @@ class Method:
 def qprr_methods(robot, data):
     """qprr's methods through the thesis front end (qprr.thesis.igm: thesis guesses, IGM start for the QP);
     solvers and options built once, outside the timing, as an application would."""
+
     def make(method, options=None, init="igm"):
         if method == "igm":
             opts = igm.make_options("igm", options, igm.OPTIONS)
@@ -169,10 +170,12 @@ def hover_chain_urdf(params) -> str:
         name = el.get("name", "")
         if el.tag in ("link", "joint") and name.startswith("rotor_"):
             root.remove(el)
-    chain = [("base_x", "prismatic", "1 0 0", "world", "slider_x", 100.0),
-             ("base_y", "prismatic", "0 1 0", "slider_x", "slider_y", 100.0),
-             ("base_z", "prismatic", "0 0 1", "slider_y", "slider_z", 100.0),
-             ("base_yaw", "revolute", "0 0 1", "slider_z", "multirotor", 2.0 * math.pi)]
+    chain = [
+        ("base_x", "prismatic", "1 0 0", "world", "slider_x", 100.0),
+        ("base_y", "prismatic", "0 1 0", "slider_x", "slider_y", 100.0),
+        ("base_z", "prismatic", "0 0 1", "slider_y", "slider_z", 100.0),
+        ("base_yaw", "revolute", "0 0 1", "slider_z", "multirotor", 2.0 * math.pi),
+    ]
     new = [ET.Element("link", name="world")]
     for name, kind, axis, parent, child, lim in chain:
         if child != "multirotor":
@@ -203,11 +206,14 @@ def check_chain(robot, data, urdf_path: str) -> None:
         xi[HOVER_COLS] = np.r_[rng.uniform(-3, 3, 3), rng.uniform(-np.pi, np.pi), rng.uniform(robot.arm_lower, robot.arm_upper)]
         pin.framesForwardKinematics(model, cdata, xi[HOVER_COLS])
         worst = max(worst, float(np.abs(cdata.oMf[fid].homogeneous - kin.ee_placement(robot, data, qprr.xi_to_q(xi)).homogeneous).max()))
-    if not (worst < 1e-12 and np.allclose(model.lowerPositionLimit[4:], robot.arm_lower)
-            and np.allclose(model.upperPositionLimit[4:], robot.arm_upper)):
+    if not (
+        worst < 1e-12 and np.allclose(model.lowerPositionLimit[4:], robot.arm_lower) and np.allclose(model.upperPositionLimit[4:], robot.arm_upper)
+    ):
         raise RuntimeError(f"the peers' hover chain differs from the free-flyer model (max pose difference {worst:.1e})")
-    print(f"hover chain for the peers: same end-effector pose as the free-flyer model at 100 hover configurations "
-          f"(max difference {worst:.1e}), same arm limits\n")
+    print(
+        f"hover chain for the peers: same end-effector pose as the free-flyer model at 100 hover configurations "
+        f"(max difference {worst:.1e}), same arm limits\n"
+    )
 
 
 def _xi_of_chain(h) -> np.ndarray:
@@ -285,8 +291,7 @@ def peer_methods(robot, urdf_path: str, only_pink: bool = False):
         logging.getLogger("ikpy").setLevel(logging.ERROR)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            chain = ikpy.chain.Chain.from_urdf_file(urdf_path, base_elements=["world"],
-                                                    active_links_mask=[False] + [True] * 7 + [False])
+            chain = ikpy.chain.Chain.from_urdf_file(urdf_path, base_elements=["world"], active_links_mask=[False] + [True] * 7 + [False])
         if len(chain.links) != 9:
             raise RuntimeError(f"unexpected chain {[link.name for link in chain.links]}")
 
@@ -359,8 +364,7 @@ def correctness_pass(robot, data, methods, reach, unreach) -> int:
             c = check(robot, data, o.xi, M)
             m.unreach_results.append((o, c))
         rate = 100.0 * np.mean([c.success for _, c in m.results])
-        print(f"  checked {m.name:<30s} {rate:5.1f} % success on the reachable targets ({time.perf_counter() - t0:5.1f} s)",
-              flush=True)
+        print(f"  checked {m.name:<30s} {rate:5.1f} % success on the reachable targets ({time.perf_counter() - t0:5.1f} s)", flush=True)
     return bad
 
 
@@ -381,8 +385,7 @@ def timing_pass(methods, reach, reps: int) -> None:
             gc.enable()
         med = float(np.median(m.times))
         ref = med if ref is None else ref  # the first method timed (qp, IGM start) is the reference
-        print(f"  timed   {m.name:<30s} median {_fmt_us(med):>6} us on this machine = {med / ref:6.2f} x qp "
-              f"({r} run(s) per target)", flush=True)
+        print(f"  timed   {m.name:<30s} median {_fmt_us(med):>6} us on this machine = {med / ref:6.2f} x qp ({r} run(s) per target)", flush=True)
 
 
 CLOCK = {"cpu": time.thread_time, "wall": time.perf_counter}
@@ -415,8 +418,10 @@ def table(methods) -> str:
     ref_t = np.median(ref.times) if ref else float("nan")
     peer = _best_peer(methods)
     peer_t = np.median(peer.times) if peer else float("nan")
-    head = ("| method | problem | initial guess | success (reachable) | median [us] | p95 [us] | vs qp | vs best peer | "
-            "median iters | median abs(x_cm) [mm] | CoG on axis | hover-feasible | unreachable: refused | wrong success |")
+    head = (
+        "| method | problem | initial guess | success (reachable) | median [us] | p95 [us] | vs qp | vs best peer | "
+        "median iters | median abs(x_cm) [mm] | CoG on axis | hover-feasible | unreachable: refused | wrong success |"
+    )
     lines = [head, "|" + "---|" * 14]
     for m in methods:
         if m.unavailable:
@@ -457,17 +462,14 @@ def ratios_report(methods) -> list[str]:
     out = []
     if qp is not None:
         rate = np.mean([c.success for _, c in qp.results])
-        out.append(f"- QP IK (IGM start): {100 * rate:.1f} % success within limits; median {_fmt_us(np.median(qp.times))} us "
-                   "on this machine")
+        out.append(f"- QP IK (IGM start): {100 * rate:.1f} % success within limits; median {_fmt_us(np.median(qp.times))} us on this machine")
     if qp is not None and igm_m is not None:
-        out.append(f"- the analytic IGM takes {np.median(igm_m.times) / np.median(qp.times):.3f} of the QP's median time "
-                   "(it also starts the QP)")
+        out.append(f"- the analytic IGM takes {np.median(igm_m.times) / np.median(qp.times):.3f} of the QP's median time (it also starts the QP)")
     peers = [m for m in methods if m.peer and not m.unavailable and m.times]
     for m in peers:
         rate = np.mean([c.success for _, c in m.results])
         if qp is not None:
-            out.append(f"- {m.name}: {np.median(m.times) / np.median(qp.times):.2f} x the QP's median time, "
-                       f"{100 * rate:.1f} % success")
+            out.append(f"- {m.name}: {np.median(m.times) / np.median(qp.times):.2f} x the QP's median time, {100 * rate:.1f} % success")
     if not peers:
         out.append("- peers not measured (--no-peers, or pip install 'qprr[peers]')")
     pink = by.get("pink FrameTask (proxqp)")
@@ -476,8 +478,10 @@ def ratios_report(methods) -> list[str]:
         if m is not None and pink is not None:
             rate = np.mean([c.success for _, c in m.results])
             prate = np.mean([c.success for _, c in pink.results])
-            out.append(f"- ratio to pink, {name}: pink's median time / qprr's = {np.median(pink.times) / np.median(m.times):.2f} "
-                       f"(target >= 2; success {100 * rate:.1f} % vs pink's {100 * prate:.1f} %)")
+            out.append(
+                f"- ratio to pink, {name}: pink's median time / qprr's = {np.median(pink.times) / np.median(m.times):.2f} "
+                f"(target >= 2; success {100 * rate:.1f} % vs pink's {100 * prate:.1f} %)"
+            )
     return out
 
 
@@ -488,8 +492,7 @@ def plot(methods, path: Path) -> None:
     ax0, ax1 = fig.subplots(1, 2, gridspec_kw={"width_ratios": [3, 2]})
     labels = [m.name for m in ms]
     y = np.arange(len(ms))
-    ax0.boxplot([np.array(m.times) * 1e6 for m in ms], positions=y, orientation="horizontal", tick_labels=labels,
-                showfliers=False, whis=(5, 95))
+    ax0.boxplot([np.array(m.times) * 1e6 for m in ms], positions=y, orientation="horizontal", tick_labels=labels, showfliers=False, whis=(5, 95))
     ax0.set_xscale("log")
     ax0.set_xlabel("time per target [us] on this machine (box: quartiles, whiskers: 5-95 %)")
     ax0.set_ylim(len(ms) - 0.5, -0.5)
@@ -536,8 +539,12 @@ def main(argv=None) -> int:
     ap.add_argument("--reps", type=int, default=5, help="timed runs per target (fast methods)")
     ap.add_argument("--no-peers", action="store_true", help="skip pink, rtb and ikpy")
     ap.add_argument("--png", default="ik_benchmark.png", help="figure file (its folder must exist)")
-    ap.add_argument("--clock", choices=tuple(CLOCK), default="cpu",
-                    help="cpu: this thread's CPU time (default: other processes on a shared machine do not count); wall")
+    ap.add_argument(
+        "--clock",
+        choices=tuple(CLOCK),
+        default="cpu",
+        help="cpu: this thread's CPU time (default: other processes on a shared machine do not count); wall",
+    )
     ap.add_argument("--quick", action="store_true", help="12 + 4 targets, 1 run each, pink as the only peer (seconds)")
     args = ap.parse_args(argv)
     if args.quick:
@@ -553,8 +560,10 @@ def main(argv=None) -> int:
     robot = qprr.load()
     data = robot.data()
     reach, unreach = make_targets(robot, data, args.n, args.n_unreachable, args.seed)
-    print(f"{len(reach)} reachable targets (FK of random in-limit hover configurations), {len(unreach)} unreachable "
-          f"in hover (y axis tilted 1e-3..0.5 rad out of the horizontal plane), seed {args.seed}\n")
+    print(
+        f"{len(reach)} reachable targets (FK of random in-limit hover configurations), {len(unreach)} unreachable "
+        f"in hover (y axis tilted 1e-3..0.5 rad out of the horizontal plane), seed {args.seed}\n"
+    )
     methods = qprr_methods(robot, data)
     if not args.no_peers:
         urdf = Path(tempfile.mkdtemp(prefix="qprr_ik_")) / "qprr_hover_chain.urdf"

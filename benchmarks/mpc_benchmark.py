@@ -58,8 +58,9 @@ def common_tilt_rmse(res: SimResult, traj, g: float = 9.81, max_tilt: float = 0.
     """RMSE [rad] of roll and pitch against the feedforward tilt (6.17) of the trajectory's reference acceleration."""
     s = traj.sample(res.t)
     a = s.xi_ddot
-    ref = np.array([tilt_6_17(ax, ay, az + g, math.cos(psi), math.sin(psi), max_tilt)
-                    for ax, ay, az, psi in zip(a[:, 0], a[:, 1], a[:, 2], s.xi[:, 5])])
+    ref = np.array(
+        [tilt_6_17(ax, ay, az + g, math.cos(psi), math.sin(psi), max_tilt) for ax, ay, az, psi in zip(a[:, 0], a[:, 1], a[:, 2], s.xi[:, 5])]
+    )
     e = res.xi[:, 3:5] - ref
     return tuple(float(v) for v in np.sqrt(np.mean(e**2, axis=0)))
 
@@ -70,14 +71,18 @@ def ratio(a: float, b: float) -> str:
 
 def solve_line(label: str, st) -> str:
     s = st.summary()
-    return (f"{label:<22}{1e3 * s['median_solve_s']:>9.2f}{1e3 * s['p95_solve_s']:>9.2f}{1e3 * s['median_solve_cpu_s']:>10.2f}"
-            f"{1e3 * s['p95_solve_cpu_s']:>10.2f}{s['median_iterations']:>7.0f}{s['failed']:>7.0f}{s['fallbacks']:>10.0f}")
+    return (
+        f"{label:<22}{1e3 * s['median_solve_s']:>9.2f}{1e3 * s['p95_solve_s']:>9.2f}{1e3 * s['median_solve_cpu_s']:>10.2f}"
+        f"{1e3 * s['p95_solve_cpu_s']:>10.2f}{s['median_iterations']:>7.0f}{s['failed']:>7.0f}{s['fallbacks']:>10.0f}"
+    )
 
 
 def section_backends(mpc, platform, traj, window: float, tilt_weights) -> dict:
     """Both backends (and other tilt weights) on the first ``window`` seconds; returns {label: (result, stats)}."""
-    print(f"\n1. solve time per MPC step, static mission 0-{window:g} s (RK2, {mpc.MPCSettings().horizon} nodes of "
-          f"{1e3 / mpc.MPCSettings().rate:g} ms), cold first solve left out")
+    print(
+        f"\n1. solve time per MPC step, static mission 0-{window:g} s (RK2, {mpc.MPCSettings().horizon} nodes of "
+        f"{1e3 / mpc.MPCSettings().rate:g} ms), cold first solve left out"
+    )
     head = f"{'backend':<22}{'median':>9}{'p95':>9}{'CPU med':>10}{'CPU p95':>10}{'iters':>7}{'failed':>7}{'fallbacks':>10}   [ms]"
     print(head)
     print("-" * len(head))
@@ -92,8 +97,10 @@ def section_backends(mpc, platform, traj, window: float, tilt_weights) -> dict:
         print(f"native: skipped, crocoddyl's compiled models fail their self-test ({mpc.NATIVE_PROBLEM}); fix: {mpc.FIX}")
     else:
         n, p = out["native"][1].summary(), out["python"][1].summary()
-        print(f"{'python / native':<22}{p['median_solve_s'] / n['median_solve_s']:>9.2f}{p['p95_solve_s'] / n['p95_solve_s']:>9.2f}"
-              f"{p['median_solve_cpu_s'] / n['median_solve_cpu_s']:>10.2f}{p['p95_solve_cpu_s'] / n['p95_solve_cpu_s']:>10.2f}")
+        print(
+            f"{'python / native':<22}{p['median_solve_s'] / n['median_solve_s']:>9.2f}{p['p95_solve_s'] / n['p95_solve_s']:>9.2f}"
+            f"{p['median_solve_cpu_s'] / n['median_solve_cpu_s']:>10.2f}{p['p95_solve_cpu_s'] / n['p95_solve_cpu_s']:>10.2f}"
+        )
         ctrl = mpc.MPCController(platform, settings=mpc.MPCSettings(backend="native"), weights=mpc.MPCWeights(cog=COG_WEIGHT))
         res = run(platform, ctrl, traj, window)
         out["native + CoG term"] = (res, ctrl.stats())
@@ -127,18 +134,24 @@ def section_mission(mpc, platform, traj, duration: float) -> tuple:
         print(f"{name:<12}{ci[k]:>11.3e}{cm[k]:>11.3e}{ratio(cm[k], ci[k])}")
     print("-" * len(head))
     s = ctrl.stats().summary()
-    print(f"status idc {idc.status}, mpc {res.status} (backend {ctrl.backend}); solve median {1e3 * s['median_solve_s']:.2f} ms, "
-          f"p95 {1e3 * s['p95_solve_s']:.2f} ms (CPU {1e3 * s['median_solve_cpu_s']:.2f} / {1e3 * s['p95_solve_cpu_s']:.2f} ms); "
-          f"{s['failed']:.0f} failed, {s['fallbacks']:.0f} fallbacks")
-    print(f"wall time: mpc {wall:.1f} s for {duration:g} s simulated (ratio {wall / duration:.2f}; target <= ~1), idc {idc_wall:.1f} s; "
-          f"load average now {os.getloadavg()[0]:.2f}; CPU time of the mpc run (this process, all threads) {cpu:.1f} s "
-          f"(ratio {cpu / duration:.2f}: the wall time on an otherwise idle machine)")
+    print(
+        f"status idc {idc.status}, mpc {res.status} (backend {ctrl.backend}); solve median {1e3 * s['median_solve_s']:.2f} ms, "
+        f"p95 {1e3 * s['p95_solve_s']:.2f} ms (CPU {1e3 * s['median_solve_cpu_s']:.2f} / {1e3 * s['p95_solve_cpu_s']:.2f} ms); "
+        f"{s['failed']:.0f} failed, {s['fallbacks']:.0f} fallbacks"
+    )
+    print(
+        f"wall time: mpc {wall:.1f} s for {duration:g} s simulated (ratio {wall / duration:.2f}; target <= ~1), idc {idc_wall:.1f} s; "
+        f"load average now {os.getloadavg()[0]:.2f}; CPU time of the mpc run (this process, all threads) {cpu:.1f} s "
+        f"(ratio {cpu / duration:.2f}: the wall time on an otherwise idle machine)"
+    )
     return idc, res
 
 
 def section_attitude(runs: dict, traj) -> None:
-    print("\n3. roll/pitch against the common feedforward tilt (6.17) and against each run's logged reference, "
-          "first window; x, y RMSE for the same runs")
+    print(
+        "\n3. roll/pitch against the common feedforward tilt (6.17) and against each run's logged reference, "
+        "first window; x, y RMSE for the same runs"
+    )
     head = f"{'run':<22}{'phi common':>12}{'theta common':>14}{'phi logged':>12}{'theta logged':>14}{'x':>11}{'y':>11}"
     print(head)
     print("-" * len(head))
@@ -160,8 +173,10 @@ def section_reach(platform) -> None:
             res = err.result
         m, e = thrust_margins(res, platform), res.rmse()
         plan = f", smallest planned margin {res.metrics['mpc_min_plan_thrust_margin_N']:.2g} N" if cname == "mpc" else ""
-        print(f"{cname}: {res.status}; a rotor clipped on {100 * m['saturated_fraction']:.2f} % of the ticks, asked-for margin "
-              f"{m['asked_margin_N']:.3g} N{plan}; RMSE x {e['x']:.2e} m, z {e['z']:.2e} m, theta2 {e['theta2']:.2e} rad")
+        print(
+            f"{cname}: {res.status}; a rotor clipped on {100 * m['saturated_fraction']:.2f} % of the ticks, asked-for margin "
+            f"{m['asked_margin_N']:.3g} N{plan}; RMSE x {e['x']:.2e} m, z {e['z']:.2e} m, theta2 {e['theta2']:.2e} rad"
+        )
 
 
 def main(argv=None) -> int:

@@ -42,8 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.p
 from machine import machine_lines
 
 FLIGHT = ("static-idc", "static-dsid", "static-mfc", "spiral", "noise", "pulses", "dynamic-bsg")
-THESIS_FOR = {"static-idc": "idc", "static-dsid": "dsid", "static-mfc": "mfc", "spiral": "idc", "noise": "idc",
-              "pulses": "idc", "dynamic-bsg": "mfc"}
+THESIS_FOR = {"static-idc": "idc", "static-dsid": "dsid", "static-mfc": "mfc", "spiral": "idc", "noise": "idc", "pulses": "idc", "dynamic-bsg": "mfc"}
 """Which of the thesis's three run times each scenario compares with (its controller)."""
 
 
@@ -122,8 +121,10 @@ def main(argv=None) -> int:
         med = statistics.median(times)
         thesis = THESIS_RUN_TIME_S[THESIS_FOR[name]] * flight / 30.0  # the thesis's 30 s runs, per simulated second
         speedups.append(thesis / med)
-        print(f"{name:<13}{sc.controllers[0]:<6}{med:>11.3f}{min(times):>8.3f}{max(times):>8.3f}{thesis / 60:>6.1f} min"
-              f"{thesis / med:>15.0f}x", flush=True)
+        print(
+            f"{name:<13}{sc.controllers[0]:<6}{med:>11.3f}{min(times):>8.3f}{max(times):>8.3f}{thesis / 60:>6.1f} min{thesis / med:>15.0f}x",
+            flush=True,
+        )
     print(f"\n(thesis: Simulink on a 2018 Core i7, its time scaled to {flight:g} s; ours: on this machine, the same simulated time)")
     print(f"ratio thesis time / ours, median over the scenarios: {statistics.median(speedups):.0f}")
 
@@ -131,8 +132,7 @@ def main(argv=None) -> int:
     head = f"{f'closed loop ({loop_s:g} s runs)':<28}{'per step [us]':>14}{'bare loop [us]':>16}{'ratio':>8}"
     print(head)
     print("-" * len(head), flush=True)
-    rows = [("static-idc", "midpoint"), ("static-dsid", "midpoint"), ("static-mfc", "midpoint"),
-            ("static-idc", "euler"), ("static-idc", "rk4")]
+    rows = [("static-idc", "midpoint"), ("static-dsid", "midpoint"), ("static-mfc", "midpoint"), ("static-idc", "euler"), ("static-idc", "rk4")]
     rows = rows[:1] if args.quick else rows
     bare, ratios = {}, []
     for name, integ in rows:
@@ -153,8 +153,11 @@ def main(argv=None) -> int:
     print(f"\n## 3. Where a closed-loop step goes (static mission, {loop_s:g} s, controller timed inside the loop)\n")
     for name in ("idc",) if args.quick else ("idc", "dsid", "mfc"):
         c, whole = in_loop_controller_share(platform, name, loop_s, rounds)
-        print(f"{name:<5} controller {1e6 * c:5.1f} us ({100 * c / whole:2.0f} %) + the rest {1e6 * (whole - c):5.1f} us "
-              f"(allocation, plant, logs) = {1e6 * whole:5.1f} us per step", flush=True)
+        print(
+            f"{name:<5} controller {1e6 * c:5.1f} us ({100 * c / whole:2.0f} %) + the rest {1e6 * (whole - c):5.1f} us "
+            f"(allocation, plant, logs) = {1e6 * whole:5.1f} us per step",
+            flush=True,
+        )
     return 0
 
 

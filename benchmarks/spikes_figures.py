@@ -63,8 +63,10 @@ def static_switch(robot, out: Path) -> Path:
     ax[1, 0].set_ylabel("controller output u [N m, N]")
     ax[2, 0].set_ylabel("tilt-rate reference [deg/s]")
     _finish(ax.flat, "lower left")
-    print(f"static switch: largest tick-to-tick jump of the attitude torques, quintic {peak['quintic']:.3g} N m, septic "
-          f"{peak['septic']:.3g} N m; ratio quintic / septic {peak['quintic'] / peak['septic']:.2f}")
+    print(
+        f"static switch: largest tick-to-tick jump of the attitude torques, quintic {peak['quintic']:.3g} N m, septic "
+        f"{peak['septic']:.3g} N m; ratio quintic / septic {peak['quintic'] / peak['septic']:.2f}"
+    )
     return save_figure(fig, out / "spikes-static-switch.png", dpi=80)
 
 
@@ -140,8 +142,7 @@ def push_prismatic(robot, out: Path) -> Path:
     ax.plot(c.t, c.force, lw=1.0, ls="--", label="k = 500 N/m, force not cancelled through the thrust")
     ax.set_xlabel("t [s]")
     ax.set_ylabel("contact force [N]")
-    ax.set_title(f"push-prismatic: once the object sticks, contacts stiffer than k* = m g / h = {weight / h:.0f} N/m "
-                 f"(h = {100 * h:.1f} cm) bounce")
+    ax.set_title(f"push-prismatic: once the object sticks, contacts stiffer than k* = m g / h = {weight / h:.0f} N/m (h = {100 * h:.1f} cm) bounce")
     _finish([ax], "lower left")
     return save_figure(fig, out / "spikes-push-prismatic.png", dpi=80)
 

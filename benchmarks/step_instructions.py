@@ -37,7 +37,7 @@ SCENARIOS = ("static-idc", "static-mfc", "static-dsid")
 THREAD_VARS = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS")
 """One thread each: idle BLAS threads spin, and valgrind would count their spinning (load-dependent)."""
 
-SETUP = r'''
+SETUP = r"""
 import sys
 sys.path.insert(0, {tree!r})
 import gc
@@ -53,8 +53,8 @@ else:
     run = lambda name: scenarios.run(name, duration=seconds)
 data = model.createData()
 gc.disable()  # see the module docstring
-'''
-BARE = r'''dt, half = 1e-3, 0.5e-3
+"""
+BARE = r"""dt, half = 1e-3, 0.5e-3
 q = pin.neutral(model); q[2] = 5.0
 v = np.zeros(model.nv); tau = pin.computeGeneralizedGravity(model, data, q).copy()  # held at rest: same work in every tree
 for _ in range(int(round(seconds / dt))):
@@ -63,14 +63,18 @@ for _ in range(int(round(seconds / dt))):
     a2 = pin.aba(model, data, pin.integrate(model, q, half * v), vh, tau)
     q = pin.integrate(model, q, dt * vh)
     v = v + dt * a2
-'''
+"""
 WORKLOAD = SETUP + 'if what == "bare":\n' + textwrap.indent(BARE, "    ") + "else:\n    run(what)\n"
-NATIVE = SETUP + r'''import time
+NATIVE = (
+    SETUP
+    + r"""import time
 
 
 def workload():
     if what == "bare":
-''' + textwrap.indent(BARE, "        ") + r'''    else:
+"""
+    + textwrap.indent(BARE, "        ")
+    + r"""    else:
         run(what)
 
 
@@ -82,14 +86,20 @@ for seconds in (short, long):
     workload()
     clock.append(time.perf_counter() - t0)
 print("per step", (clock[1] - clock[0]) / round((long - short) / 1e-3))
-'''
+"""
+)
 
 
 def instructions(tree: Path, what: str, seconds: float) -> int:
     code = WORKLOAD.format(tree=str(tree), what=what, seconds=seconds)
     env = dict(os.environ, PYTHONHASHSEED="0", **{k: "1" for k in THREAD_VARS})
-    proc = subprocess.run(["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable, "-c", code],
-                          capture_output=True, text=True, cwd="/", env=env)
+    proc = subprocess.run(
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", sys.executable, "-c", code],
+        capture_output=True,
+        text=True,
+        cwd="/",
+        env=env,
+    )
     found = re.search(r"Collected : (\d+)", proc.stderr)
     if proc.returncode != 0 or found is None:
         raise SystemExit(f"valgrind run of {what!r} failed:\n{proc.stderr[-2000:]}")
@@ -133,8 +143,7 @@ def main(argv=None) -> int:
     if args.quick:
         return quick(tree, args.scenarios or SCENARIOS[:1])
     if shutil.which("valgrind") is None:
-        print("step_instructions: valgrind is not installed (apt-get install valgrind); nothing measured "
-              "(--quick runs the workloads natively)")
+        print("step_instructions: valgrind is not installed (apt-get install valgrind); nothing measured (--quick runs the workloads natively)")
         return 0
     print(f"qprr tree: {tree}; {sys.executable}; instructions per 1 ms step (difference of 3 s and 1 s runs)")
     bare = per_step(tree, "bare")

@@ -52,14 +52,20 @@ def rows_of(n: int):
     spec = CampaignSpec.from_mapping(d)
     names = xi_names_of(spec)
     columns = columns_of(spec, names)
-    meta = {"name": spec.name, "fingerprint": spec.fingerprint, "spec": spec.to_dict(), "n_runs": spec.n_runs,
-            "kinds": kinds_of(spec, names), "metrics": list(columns[columns.index("status"):])}
+    meta = {
+        "name": spec.name,
+        "fingerprint": spec.fingerprint,
+        "spec": spec.to_dict(),
+        "n_runs": spec.n_runs,
+        "kinds": kinds_of(spec, names),
+        "metrics": list(columns[columns.index("status") :]),
+    }
     rng = np.random.default_rng(0)
     rows = []
     for i in range(n):
         r = spec.run(i)
         row = {"run": i, "seed": r.seed, **params_row(spec, r.params)}
-        for c in columns[len(row):]:
+        for c in columns[len(row) :]:
             row[c] = float(rng.lognormal(-3, 1))
         row.update(status="ok", reason="completed", success=int(rng.integers(2)))
         rows.append(row)
@@ -93,13 +99,14 @@ def _sqlite(sync: str):
         db.execute("PRAGMA journal_mode=WAL")
         db.execute(f"PRAGMA synchronous={sync}")
         cols = ", ".join(f'"{c}"' for c in columns)
-        db.execute(f"CREATE TABLE results ({cols}, PRIMARY KEY (\"run\"))")
+        db.execute(f'CREATE TABLE results ({cols}, PRIMARY KEY ("run"))')
         sql = f"INSERT OR REPLACE INTO results ({cols}) VALUES ({', '.join('?' * len(columns))})"
         for row in rows:
             db.execute("BEGIN")
             db.execute(sql, [row[c] for c in columns])
             db.execute("COMMIT")
         db.close()
+
     return write
 
 
@@ -113,8 +120,12 @@ def main(argv=None) -> int:
         args.rows, args.repeat = 300, 1
     print(f"load average before: {os.getloadavg()[0]:.2f}")
     columns, meta, rows = rows_of(args.rows)
-    configs = {"csv+flush (before)": write_csv_flush, "line store (now)": write_line_store,
-               "sqlite WAL, NORMAL": _sqlite("NORMAL"), "sqlite WAL, FULL": _sqlite("FULL")}
+    configs = {
+        "csv+flush (before)": write_csv_flush,
+        "line store (now)": write_line_store,
+        "sqlite WAL, NORMAL": _sqlite("NORMAL"),
+        "sqlite WAL, FULL": _sqlite("FULL"),
+    }
     best: dict[str, float] = {}
     size: dict[str, int] = {}
     with tempfile.TemporaryDirectory() as tmp:

@@ -47,8 +47,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def module_at(rev: str) -> types.ModuleType:
     """qprr.wheeled.manipulation as it was at git revision ``rev``, executed inside the current package."""
-    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:qprr/wheeled/manipulation.py"], capture_output=True,
-                         text=True, check=True).stdout
+    src = subprocess.run(["git", "-C", str(ROOT), "show", f"{rev}:qprr/wheeled/manipulation.py"], capture_output=True, text=True, check=True).stdout
     mod = types.ModuleType(f"qprr.wheeled._manipulation_at_{rev}")
     mod.__package__ = "qprr.wheeled"
     sys.modules[mod.__name__] = mod  # dataclasses look their module up there
@@ -91,8 +90,10 @@ class Tally:
         it = f"{np.median(self.iters):5.0f} {np.percentile(self.iters, 90):5.0f}" if self.iters else f"{'-':>5s} {'-':>5s}"
         t_ok = f"{1e3 * np.median(self.t_ok):8.1f}" if self.t_ok else f"{'-':>8s}"
         outcome = ", ".join(f"{k} {v}" for k, v in sorted(self.status.items()))
-        return (f"{arm:5s} {label:34s} {n:5d} {100 * ok / n:6.1f}% {it} {t_ok} {1e3 * np.median(self.t_all):8.1f} "
-                f"{1e6 * np.median(self.per_iter):8.0f} {self.qp_res:9.1e} {self.slip:8.1e}  {outcome}")
+        return (
+            f"{arm:5s} {label:34s} {n:5d} {100 * ok / n:6.1f}% {it} {t_ok} {1e3 * np.median(self.t_all):8.1f} "
+            f"{1e6 * np.median(self.per_iter):8.0f} {self.qp_res:9.1e} {self.slip:8.1e}  {outcome}"
+        )
 
 
 def main(argv=None) -> int:
@@ -108,6 +109,7 @@ def main(argv=None) -> int:
     if args.quick:
         args.runs, args.seeds = 3, [0]
     print("\n".join(machine_lines()))
+
     def label(name, extra):
         return f"{name} {' '.join(f'{k}={v}' for k, v in extra.items())}".strip()
 
@@ -122,8 +124,10 @@ def main(argv=None) -> int:
             solvers[label(args.against, extra)] = (old, {"max_iter": args.max_iter, **extra})
     first = next(iter(solvers))
     print(f"{len(args.seeds)} seeds x {args.runs} problems per arm, at most {args.max_iter} IK iterations")
-    print(f"{'arm':5s} {'solve_ik':34s} {'runs':>5s} {'success':>7s} {'iterations':>11s} {'ms/solve':>17s} "
-          f"{'us/iter':>8s} {'max|E dz|':>9s} {'max slip':>8s}  outcomes")
+    print(
+        f"{'arm':5s} {'solve_ik':34s} {'runs':>5s} {'success':>7s} {'iterations':>11s} {'ms/solve':>17s} "
+        f"{'us/iter':>8s} {'max|E dz|':>9s} {'max slip':>8s}  outcomes"
+    )
     print(f"{'':5s} {'':34s} {'':5s} {'':7s} {'med':>5s} {'p90':>5s} {'converged':>8s} {'all':>8s}")
     per_solve = {}
     for arm in ("qprr", "3r"):
@@ -147,8 +151,10 @@ def main(argv=None) -> int:
         per_solve[arm] = float(np.median(tally[first].t_all))
         if len(solvers) > 1:
             n = sum(tally[first].status.values())
-            print(f"{arm:5s} problems where every row converges or every row fails: {agree_success} of {n}; "
-                  f"where every row ends with the same status: {agree} of {n}")
+            print(
+                f"{arm:5s} problems where every row converges or every row fails: {agree_success} of {n}; "
+                f"where every row ends with the same status: {agree} of {n}"
+            )
         sys.stdout.flush()
     print(f"ratio of the median times per solve ({first}), 3r / qprr arm: {per_solve['3r'] / per_solve['qprr']:.2f}")
     return 0

@@ -27,11 +27,15 @@ platform = qprr.load("q-prr", layout="x")  # the Q-PRR with its rotors in "X"
 
 # 1. the reference: smooth transitions (minimum-snap septic law) of named coordinates, from rest
 trajectory = MultiPhase(
-    (Phase("z", 0.0, 3.0, 2.0),  # coordinate, start [s], end [s], value [m or rad]
-     Phase("x", 3.0, 6.0, 1.0),
-     Phase("theta2", 6.0, 9.0, 0.5),
-     Phase("theta3", 6.0, 9.0, -0.8)),
-    xi0=platform.neutral_xi(), names=platform.xi_names)
+    (
+        Phase("z", 0.0, 3.0, 2.0),  # coordinate, start [s], end [s], value [m or rad]
+        Phase("x", 3.0, 6.0, 1.0),
+        Phase("theta2", 6.0, 9.0, 0.5),
+        Phase("theta3", 6.0, 9.0, -0.8),
+    ),
+    xi0=platform.neutral_xi(),
+    names=platform.xi_names,
+)
 
 # 2. the controller: inverse dynamics (Thesis Sec. 6.3.1); default gains for any platform,
 #    or your own per-coordinate gains (order x, y, z, phi, theta, psi, then the arm)

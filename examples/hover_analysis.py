@@ -35,8 +35,10 @@ for t2 in theta2:
         spread.append(f.max() - f.min())
 r0_star, spread_fixed, spread_bal = map(np.array, (r0_star, spread_fixed, spread_bal))
 inside = (r0_star >= platform.arm_lower[0]) & (r0_star <= platform.arm_upper[0])
-print(f"the slider balances the CoG for theta2 in [{theta2[inside].min():.3f}, {theta2[inside].max():.3f}] rad "
-      f"(slider range [{platform.arm_lower[0]}, {platform.arm_upper[0]}] m)")
+print(
+    f"the slider balances the CoG for theta2 in [{theta2[inside].min():.3f}, {theta2[inside].max():.3f}] rad "
+    f"(slider range [{platform.arm_lower[0]}, {platform.arm_upper[0]}] m)"
+)
 print(f"largest hover thrust spread: {spread_fixed.max():.3f} N with the slider at 0, {spread_bal.max():.3f} N balancing")
 
 fig = new_figure((10, 3.8))

@@ -25,8 +25,9 @@ def fly(platform):
     """Climb to 2 m, 1 m along x, then the second arm joint to 60 % of its upper limit."""
     joint = platform.arm_names[1]
     target = 0.6 * float(platform.arm_upper[1])
-    trajectory = MultiPhase((Phase("z", 0.0, 3.0, 2.0), Phase("x", 3.0, 6.0, 1.0), Phase(joint, 6.0, 9.0, target)),
-                            xi0=platform.neutral_xi(), names=platform.xi_names)
+    trajectory = MultiPhase(
+        (Phase("z", 0.0, 3.0, 2.0), Phase("x", 3.0, 6.0, 1.0), Phase(joint, 6.0, 9.0, target)), xi0=platform.neutral_xi(), names=platform.xi_names
+    )
     return simulate(platform, make_controller("idc", platform), trajectory, 12.0)
 
 
@@ -35,8 +36,10 @@ ax = fig.add_subplot()
 for platform in (qprr.load("q-prr", layout="x"), qprr.build("HEX-RRR"), qprr.load("borinot_flying_arm_2")):
     res = fly(platform)
     e = res.rmse()
-    print(f"{platform.name}: {platform.n_rotors} rotors, arm {platform.arm_names}: {res.status}, "
-          f"RMSE x {e['x']:.1e} m, z {e['z']:.1e} m; wall time {res.wall_time:.2f} s")
+    print(
+        f"{platform.name}: {platform.n_rotors} rotors, arm {platform.arm_names}: {res.status}, "
+        f"RMSE x {e['x']:.1e} m, z {e['z']:.1e} m; wall time {res.wall_time:.2f} s"
+    )
     ax.plot(res.t, 1e3 * res.x_cm[:, 0], label=platform.name)
     plot_result(res, out / f"run_{platform.name.split(' ')[0].lower()}.png")
 ax.set_xlabel("t [s]")

@@ -44,22 +44,25 @@ check = pin.Data(platform.model)
 pin.framesForwardKinematics(platform.model, check, res.q)
 M = check.oMf[platform.ee_frame]
 print(f"IK {res.status}: xi = {np.round(res.xi, 4).tolist()}")
-print(f"IK position error {np.linalg.norm(M.translation - target.translation):.2e} m, orientation error "
-      f"{np.linalg.norm(pin.log3(target.rotation.T @ M.rotation)):.2e} rad, roll/pitch ({res.roll:+.1e}, {res.pitch:+.1e}) rad, "
-      f"CoG offset ({res.x_cm * 1e3:+.2e}, {res.y_cm * 1e3:+.2e}) mm")
+print(
+    f"IK position error {np.linalg.norm(M.translation - target.translation):.2e} m, orientation error "
+    f"{np.linalg.norm(pin.log3(target.rotation.T @ M.rotation)):.2e} rad, roll/pitch ({res.roll:+.1e}, {res.pitch:+.1e}) rad, "
+    f"CoG offset ({res.x_cm * 1e3:+.2e}, {res.y_cm * 1e3:+.2e}) mm"
+)
 
 # 2. allocation: the rotor thrusts that hold the IK configuration still
 f = Allocator(platform).hover_thrusts(data, res.q)
 mg = platform.total_mass * platform.g
-print(f"hover thrusts {np.round(f, 4).tolist()} N, sum {f.sum():.15g} N = m g {mg:.15g} N "
-      f"(relative difference {abs(f.sum() - mg) / mg:.1e})")
+print(f"hover thrusts {np.round(f, 4).tolist()} N, sum {f.sum():.15g} N = m g {mg:.15g} N (relative difference {abs(f.sum() - mg) / mg:.1e})")
 
 # 3. fly there: climb to the IK base position with the IK heading, then move the arm to the IK posture
 mission = hover_and_reach(platform, res.xi[0:3], res.xi[6:], psi=res.xi[5])
 flight = simulate(platform, make_controller("idc", platform), mission, 8.0, scenario="reach the IK target")
 end = kinematics.ee_placement(platform, data, charts.xi_to_q(flight.xi[-1]))
 e = flight.rmse()
-print(f"flight {flight.status}: position RMSE {max(e['x'], e['y'], e['z']):.1e} m, "
-      f"end effector {np.linalg.norm(end.translation - target.translation) * 1e3:.3f} mm from the target at t = 8 s, "
-      f"rotor saturation {100 * flight.saturation_fraction():.1f} %")
+print(
+    f"flight {flight.status}: position RMSE {max(e['x'], e['y'], e['z']):.1e} m, "
+    f"end effector {np.linalg.norm(end.translation - target.translation) * 1e3:.3f} mm from the target at t = 8 s, "
+    f"rotor saturation {100 * flight.saturation_fraction():.1f} %"
+)
 print("figure", plot_result(flight, out / "own_platform.png"))

@@ -45,8 +45,12 @@ for label, platform in platforms.items():
     figure = plot_result(flight, out / f"tour-{label.replace(' ', '').replace('+', 'plus').lower()}.png")
     e = flight.rmse()
     print(f"{label:22} {platform!r}")
-    print(f"{'':22} IK {res.status}: position error {res.position_error:.1e} m, CoG offset "
-          f"({res.x_cm * 1e3:+.2f}, {res.y_cm * 1e3:+.2f}) mm, roll/pitch ({res.roll:+.1e}, {res.pitch:+.1e}) rad")
-    print(f"{'':22} hover thrusts {np.round(thrusts.f[:platform.n_rotors], 3).tolist()} N ({thrusts.status})")
-    print(f"{'':22} hover-and-reach: {flight.status}, position RMSE {max(e['x'], e['y'], e['z']):.1e} m, "
-          f"saturation {100 * flight.saturation_fraction():.1f} %, figure {figure}")
+    print(
+        f"{'':22} IK {res.status}: position error {res.position_error:.1e} m, CoG offset "
+        f"({res.x_cm * 1e3:+.2f}, {res.y_cm * 1e3:+.2f}) mm, roll/pitch ({res.roll:+.1e}, {res.pitch:+.1e}) rad"
+    )
+    print(f"{'':22} hover thrusts {np.round(thrusts.f[: platform.n_rotors], 3).tolist()} N ({thrusts.status})")
+    print(
+        f"{'':22} hover-and-reach: {flight.status}, position RMSE {max(e['x'], e['y'], e['z']):.1e} m, "
+        f"saturation {100 * flight.saturation_fraction():.1f} %, figure {figure}"
+    )

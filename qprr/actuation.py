@@ -113,8 +113,16 @@ class Allocator:
     QPs (warm-started between calls); it can be copied or pickled.
     """
 
-    def __init__(self, platform: Platform, *, thrust_bounds: tuple[float, float] | None = None, weight_force: float = 1.0,
-                 weight_torque: float | None = None, clip_arm: bool = True, settings: QPSettings = ALLOCATION_SETTINGS) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        *,
+        thrust_bounds: tuple[float, float] | None = None,
+        weight_force: float = 1.0,
+        weight_torque: float | None = None,
+        clip_arm: bool = True,
+        settings: QPSettings = ALLOCATION_SETTINGS,
+    ) -> None:
         check_platform(platform)
         n = platform.n_rotors
         if thrust_bounds is None:
@@ -218,8 +226,10 @@ class Allocator:
         if not rot:
             lost = float(np.linalg.norm(residual[0:6]))
             if lost > 1e-9:
-                reasons.append(f"base wrench {np.round(residual[0:6], 12).tolist()} outside what the rotors can produce "
-                               f"(rank {self.platform.wrench_rank} of 6{self._unproducible()})")
+                reasons.append(
+                    f"base wrench {np.round(residual[0:6], 12).tolist()} outside what the rotors can produce "
+                    f"(rank {self.platform.wrench_rank} of 6{self._unproducible()})"
+                )
         status = "saturated" if (rot or arm) else "exact"
         return AllocationResult(f, tau_d.copy(), achieved, residual, rot, arm, status, "; ".join(reasons) or "all producible components met")
 
@@ -420,4 +430,3 @@ def ideal_pattern():
     from .rotors import ideal_wrench_set
 
     return ideal_wrench_set(1.0, 1.0)
-

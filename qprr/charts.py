@@ -37,18 +37,6 @@ _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 
 
-
-
-
-
-
-
-
-
-
-
-
-
 def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     """A thesis-coordinate vector: 1-D, finite, 6 + n_arm entries (``n`` checked when given)."""
     a = as_array(xi, name)
@@ -56,22 +44,6 @@ def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
         want = f"({n},)" if n is not None else "(6 + n_arm,)"
         raise ShapeError(f"{name} must have shape {want}, got shape {a.shape}")
     return as_vector(a, a.shape[0], name)
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 def xi_names(n_arm: int, arm_names=None) -> tuple[str, ...]:
@@ -117,9 +89,7 @@ def rot_z(a: float) -> np.ndarray:
 
 def _rotation_entries(sf, cf, st, ct, sp, cp):
     """Entries of Rz(psi) Ry(theta) Rx(phi), row-major, from the sines and cosines (Thesis (3.4))."""
-    return (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf,
-            sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf,
-            -st, ct * sf, ct * cf)
+    return (cp * ct, cp * st * sf - sp * cf, cp * st * cf + sp * sf, sp * ct, sp * st * sf + cp * cf, sp * st * cf - cp * sf, -st, ct * sf, ct * cf)
 
 
 def _rotation(phi: float, theta: float, psi: float) -> np.ndarray:
@@ -137,8 +107,7 @@ def euler_to_rotation_batch(euler: np.ndarray) -> np.ndarray:
     e = as_array(euler, "euler", ndim=2)  # NaN rows pass: logs of diverged runs
     if e.shape[1] != 3:
         raise ShapeError(f"euler must have shape (m, 3), got shape {e.shape}")
-    entries = _rotation_entries(np.sin(e[:, 0]), np.cos(e[:, 0]), np.sin(e[:, 1]), np.cos(e[:, 1]),
-                                np.sin(e[:, 2]), np.cos(e[:, 2]))
+    entries = _rotation_entries(np.sin(e[:, 0]), np.cos(e[:, 0]), np.sin(e[:, 1]), np.cos(e[:, 1]), np.sin(e[:, 2]), np.cos(e[:, 2]))
     return np.stack(entries, axis=-1).reshape(-1, 3, 3)
 
 
@@ -156,8 +125,7 @@ def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
     R = as_matrix(R, (3, 3), name)
     err = float(np.abs(R.T @ R - np.eye(3)).max())
     if not err <= tol or not np.linalg.det(R) > 0.0:
-        raise InputError(f"{name} must be a rotation matrix (R^T R = I, det R = +1): |R^T R - I| = {err:.3g}, "
-                         f"det R = {np.linalg.det(R):.6g}")
+        raise InputError(f"{name} must be a rotation matrix (R^T R = I, det R = +1): |R^T R - I| = {err:.3g}, det R = {np.linalg.det(R):.6g}")
     return R
 
 
@@ -444,8 +412,26 @@ class State:
     * :meth:`lin_to_world`, :meth:`lin_to_body`, :meth:`euler_accel_to_omega_dot`.
     """
 
-    __slots__ = ("t", "n_arm", "q", "v", "xi", "xi_dot", "sf", "cf", "st", "ct", "xi_floats", "xi_dot_floats",
-                 "rotation_floats", "u_applied_floats", "_v", "_qv", "_wq", "_wv")
+    __slots__ = (
+        "t",
+        "n_arm",
+        "q",
+        "v",
+        "xi",
+        "xi_dot",
+        "sf",
+        "cf",
+        "st",
+        "ct",
+        "xi_floats",
+        "xi_dot_floats",
+        "rotation_floats",
+        "u_applied_floats",
+        "_v",
+        "_qv",
+        "_wq",
+        "_wv",
+    )
 
     def __init__(self, n_arm: int = 3) -> None:
         if not (isinstance(n_arm, (int, np.integer)) and n_arm >= 0):
@@ -516,8 +502,7 @@ class State:
         self.rotation_floats = (r00, r01, r02, r10, r11, r12, r20, r21, r22)
         ch = hypot(r21, r22)
         if not ch > 1e-6:  # also catches NaN
-            raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; "
-                                  f"q = {q.tolist()}")
+            raise DivergenceError(f"t = {t:.4f} s: pitch theta reached +-pi/2 (ZYX Euler singularity) or the attitude is NaN; q = {q.tolist()}")
         # sin/cos of phi and theta straight from R: R[2,1] = c_theta s_phi, R[2,2] = c_theta c_phi
         self.sf = sf = r21 / ch
         self.cf = cf = r22 / ch
@@ -527,8 +512,15 @@ class State:
         self._wv(self.xi, xi)
         # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
         psi_d = (sf * wy_ + cf * wz_) / ch
-        self.xi_dot_floats = xd = (r00 * vx + r01 * vy + r02 * vz, r10 * vx + r11 * vy + r12 * vz, r20 * vx + r21 * vy + r22 * vz,
-                         wx_ + st * psi_d, cf * wy_ - sf * wz_, psi_d, *vl[6:])
+        self.xi_dot_floats = xd = (
+            r00 * vx + r01 * vy + r02 * vz,
+            r10 * vx + r11 * vy + r12 * vz,
+            r20 * vx + r21 * vy + r22 * vz,
+            wx_ + st * psi_d,
+            cf * wy_ - sf * wz_,
+            psi_d,
+            *vl[6:],
+        )
         self._wv(self.xi_dot, xd)
         return True
 
@@ -552,11 +544,17 @@ class State:
         r = r00, r01, r02, r10, r11, r12, r20, r21, r22 = _rotation_entries(sf, cf, st, ct, sp, cp)
         px, py, pz, pd, td, sd = xi_dot[:6]
         # v = S xi_dot: v_lin = R^T p_dot, omega = T euler_dot
-        v = (r00 * px + r10 * py + r20 * pz, r01 * px + r11 * py + r21 * pz, r02 * px + r12 * py + r22 * pz,
-             pd - st * sd, cf * td + r21 * sd, -sf * td + r22 * sd, *xi_dot[6:])
+        v = (
+            r00 * px + r10 * py + r20 * pz,
+            r01 * px + r11 * py + r21 * pz,
+            r02 * px + r12 * py + r22 * pz,
+            pd - st * sd,
+            cf * td + r21 * sd,
+            -sf * td + r22 * sd,
+            *xi_dot[6:],
+        )
         # quaternion of Rz(psi) Ry(theta) Rx(phi), (x, y, z, w)
-        qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3,
-              c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, *xi[6:])
+        qt = (x, y, z, s1 * c2 * c3 - c1 * s2 * s3, c1 * s2 * c3 + s1 * c2 * s3, c1 * c2 * s3 - s1 * s2 * c3, c1 * c2 * c3 + s1 * s2 * s3, *xi[6:])
         self.t = t
         if reuse:
             if self._qv is None:
@@ -581,8 +579,13 @@ class State:
 
         ``xi``, ``xi_dot``: arrays or sequences (6 + n,).  ``arrays`` and ``reuse``: as for :meth:`set_from_xi`.
         """
-        self.set_from_xi(t, xi.tolist() if isinstance(xi, np.ndarray) else tuple(xi),
-                         xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else tuple(xi_dot), arrays, reuse)
+        self.set_from_xi(
+            t,
+            xi.tolist() if isinstance(xi, np.ndarray) else tuple(xi),
+            xi_dot.tolist() if isinstance(xi_dot, np.ndarray) else tuple(xi_dot),
+            arrays,
+            reuse,
+        )
 
     # ------------------------------------------------------------------ maps at the current state
     def accel_to_v_list(self, xi_ddot) -> list[float]:
@@ -593,12 +596,15 @@ class State:
         pd, td, sd = self.xi_dot_floats[3:6]
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
         # a_lin = R^T p_ddot - omega x v_lin  (v_lin = R^T p_dot);  a_ang = T euler_ddot + T_dot euler_dot
-        return [r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
-                r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
-                r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
-                pdd - st * sdd - ct * td * sd,
-                cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
-                -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd, *xi_ddot[6:]]
+        return [
+            r00 * ax + r10 * ay + r20 * az - (wy * vz - wz * vy),
+            r01 * ax + r11 * ay + r21 * az - (wz * vx - wx * vz),
+            r02 * ax + r12 * ay + r22 * az - (wx * vy - wy * vx),
+            pdd - st * sdd - ct * td * sd,
+            cf * tdd + sf * ct * sdd - sf * pd * td + (cf * ct * pd - sf * st * td) * sd,
+            -sf * tdd + cf * ct * sdd - cf * pd * td + (-sf * ct * pd - cf * st * td) * sd,
+            *xi_ddot[6:],
+        ]
 
     def accel_to_v(self, xi_ddot) -> np.ndarray:
         """Pinocchio acceleration a = S xi_ddot + S_dot xi_dot (cf. :func:`xi_ddot_to_a`)."""
@@ -610,12 +616,15 @@ class State:
         f0, f1, f2, m0, m1, m2 = tau[:6]
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
         sf, cf, st, ct = self.sf, self.cf, self.st, self.ct
-        return [r00 * f0 + r01 * f1 + r02 * f2,
-                r10 * f0 + r11 * f1 + r12 * f2,
-                r20 * f0 + r21 * f1 + r22 * f2,
-                m0,
-                cf * m1 - sf * m2,
-                -st * m0 + sf * ct * m1 + cf * ct * m2, *tau[6:]]
+        return [
+            r00 * f0 + r01 * f1 + r02 * f2,
+            r10 * f0 + r11 * f1 + r12 * f2,
+            r20 * f0 + r21 * f1 + r22 * f2,
+            m0,
+            cf * m1 - sf * m2,
+            -st * m0 + sf * ct * m1 + cf * ct * m2,
+            *tau[6:],
+        ]
 
     def force_to_xi(self, tau) -> np.ndarray:
         """Thesis generalised force u = S^T tau (Thesis (5.40)-(5.43) with R_Q = S^T)."""
@@ -628,12 +637,15 @@ class State:
         r00, r01, r02, r10, r11, r12, r20, r21, r22 = self.rotation_floats
         sf, cf = self.sf, self.cf
         w = (m2 + self.st * m0) / self.ct
-        tau = (r00 * u0 + r10 * u1 + r20 * u2,
-               r01 * u0 + r11 * u1 + r21 * u2,
-               r02 * u0 + r12 * u1 + r22 * u2,
-               m0,
-               cf * m1 + sf * w,
-               -sf * m1 + cf * w, *u[6:])
+        tau = (
+            r00 * u0 + r10 * u1 + r20 * u2,
+            r01 * u0 + r11 * u1 + r21 * u2,
+            r02 * u0 + r12 * u1 + r22 * u2,
+            m0,
+            cf * m1 + sf * w,
+            -sf * m1 + cf * w,
+            *u[6:],
+        )
         return np.array(tau) if out is None else self._wv(out, tau)
 
     def lin_to_world(self, f_body) -> tuple[float, float, float]:

@@ -62,8 +62,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         return fail(prog, str(exc))
     if args.gains is not None:
         if "gains" not in sc.options:
-            return fail(prog, f"--gains does not apply to scenario {sc.name!r} (it sets its own); scenarios that take it: "
-                              f"{', '.join(n for n, s in SCENARIOS.items() if 'gains' in s.options)}")
+            return fail(
+                prog,
+                f"--gains does not apply to scenario {sc.name!r} (it sets its own); scenarios that take it: "
+                f"{', '.join(n for n, s in SCENARIOS.items() if 'gains' in s.options)}",
+            )
         options["gains"] = args.gains
     platform = None
     if any(x is not None for x in (args.platform, args.layout, args.urdf, args.rotors, args.ee_frame)):
@@ -130,13 +133,18 @@ def _summary(res) -> str:
     from .control.mpc_stats import solve_summary
 
     e = res.rmse()
-    kinds = ("m",) * 3 + ("rad",) * 3 + tuple("m" if k == "prismatic" else "rad" if k == "revolute" else "m or rad"
-                                               for k in (res.arm_kinds or ("",) * res.n_arm))
-    lines = [f"scenario {res.scenario}, platform {res.platform}, controller {res.controller}: {res.status} ({res.reason}); "
-             f"{res.n} steps of {res.control_period * 1e3:g} ms in {res.wall_time:.3f} s",
-             "RMSE (6.26): " + ", ".join(f"{k} {v:.3e} {u}" for (k, v), u in zip(e.items(), kinds)),
-             f"rotor saturation on {100 * res.saturation_fraction():.2f} % of the steps; "
-             f"max |CoG offset in B| = {1e3 * float(np.max(np.hypot(res.x_cm[:, 0], res.x_cm[:, 1]))):.2f} mm"]
+    kinds = (
+        ("m",) * 3
+        + ("rad",) * 3
+        + tuple("m" if k == "prismatic" else "rad" if k == "revolute" else "m or rad" for k in (res.arm_kinds or ("",) * res.n_arm))
+    )
+    lines = [
+        f"scenario {res.scenario}, platform {res.platform}, controller {res.controller}: {res.status} ({res.reason}); "
+        f"{res.n} steps of {res.control_period * 1e3:g} ms in {res.wall_time:.3f} s",
+        "RMSE (6.26): " + ", ".join(f"{k} {v:.3e} {u}" for (k, v), u in zip(e.items(), kinds)),
+        f"rotor saturation on {100 * res.saturation_fraction():.2f} % of the steps; "
+        f"max |CoG offset in B| = {1e3 * float(np.max(np.hypot(res.x_cm[:, 0], res.x_cm[:, 1]))):.2f} mm",
+    ]
     mpc_line = solve_summary(res.metrics)  # the MPC's solve statistics (None for other controllers)
     if mpc_line is not None:
         lines.append(mpc_line)
@@ -160,8 +168,7 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     ok = True
     duration = None if args.duration == 30.0 else args.duration
     progress = not args.quiet
-    reports = [rep for runner, batch in batches.items()
-               for rep in runner(batch, duration=duration, plot_dir=args.plot, progress=progress)]
+    reports = [rep for runner, batch in batches.items() for rep in runner(batch, duration=duration, plot_dir=args.plot, progress=progress)]
     for rep in reports:
         print(f"== {rep.name}")
         for line in rep.lines:
@@ -191,8 +198,10 @@ def _scenario_help() -> str:
     from .scenarios import SCENARIOS
 
     lines = []
-    for title, group in (("any platform (--platform NAME or --urdf F --rotors F.toml)", lambda s: s.platforms is None),
-                         ("thesis (the Q-PRR)", lambda s: s.platforms is not None)):
+    for title, group in (
+        ("any platform (--platform NAME or --urdf F --rotors F.toml)", lambda s: s.platforms is None),
+        ("thesis (the Q-PRR)", lambda s: s.platforms is not None),
+    ):
         lines.append(f"{title}:")
         for name, sc in SCENARIOS.items():
             if not group(sc):
@@ -211,9 +220,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"qprr {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
-    p = sub.add_parser("simulate", help="run a named scenario (prints RMSE; optional figure, .npz, animation)",
-                       description="Run a named scenario.\n\nscenarios:\n" + _scenario_help(),
-                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p = sub.add_parser(
+        "simulate",
+        help="run a named scenario (prints RMSE; optional figure, .npz, animation)",
+        description="Run a named scenario.\n\nscenarios:\n" + _scenario_help(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("scenario", help="a scenario name (listed above)")
     p.add_argument("--controller", default=None, help="override the scenario's controller (see the list above)")
     add_platform_options(p)
@@ -222,38 +234,60 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--animate", default=None, metavar="FILE.gif", help="save a 3-D animation (.gif, or .mp4 with ffmpeg)")
     p.add_argument("--duration", type=real(positive=True, unit="s"), default=None, help="seconds (default: the scenario's)")
     p.add_argument("--dt", type=real(positive=True, unit="s"), default=None, help="integration step [s] (default 1e-3)")
-    p.add_argument("--integrator", default=None, choices=("midpoint", "rk4", "euler"),
-                   help="midpoint (default, 2nd order), rk4 (4th) or euler (semi-implicit, 1st)")
+    p.add_argument(
+        "--integrator",
+        default=None,
+        choices=("midpoint", "rk4", "euler"),
+        help="midpoint (default, 2nd order), rk4 (4th) or euler (semi-implicit, 1st)",
+    )
     p.add_argument("--seed", type=integer(lo=0), default=None, help="noise seed (default 0)")
-    p.add_argument("--law", default=None, choices=("septic", "quintic", "thesis"),
-                   help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))")
+    p.add_argument(
+        "--law",
+        default=None,
+        choices=("septic", "quintic", "thesis"),
+        help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))",
+    )
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="any scenario option (listed above), repeatable")
-    p.add_argument("--gains", default=None, metavar="FILE.toml|NAME",
-                   help="gain set of a generic scenario: platform (derived, default), class, a registered table (q-prr:idc), "
-                        "or a TOML file ([targets], [<controller>.gains]; docs/simulation.md)")
+    p.add_argument(
+        "--gains",
+        default=None,
+        metavar="FILE.toml|NAME",
+        help="gain set of a generic scenario: platform (derived, default), class, a registered table (q-prr:idc), "
+        "or a TOML file ([targets], [<controller>.gains]; docs/simulation.md)",
+    )
     p.add_argument("--print-gains", action="store_true", help="print the controller's gains on the platform and exit")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
 
-    p = sub.add_parser("compare", help="the Chapter 6 comparisons: Table 6.3 (default), overlays, noise, sweeps, decoupled, mpc, ...",
-                       description="Print (and with --plot draw) the Chapter 6 comparisons: table (Table 6.3, default), overlay "
-                       "(Figs. 6.19-6.21), noise (Fig. 6.23), sweeps (Figs. 6.42-6.45), decoupled (coupled vs decoupled, "
-                       "Sec. 6.2.2), mpc (receding-horizon MPC vs IDC), realistic (motor lag, wind, friction), lag (motor time "
-                       "constants), or all.")
+    p = sub.add_parser(
+        "compare",
+        help="the Chapter 6 comparisons: Table 6.3 (default), overlays, noise, sweeps, decoupled, mpc, ...",
+        description="Print (and with --plot draw) the Chapter 6 comparisons: table (Table 6.3, default), overlay "
+        "(Figs. 6.19-6.21), noise (Fig. 6.23), sweeps (Figs. 6.42-6.45), decoupled (coupled vs decoupled, "
+        "Sec. 6.2.2), mpc (receding-horizon MPC vs IDC), realistic (motor lag, wind, friction), lag (motor time "
+        "constants), or all.",
+    )
     p.add_argument("names", nargs="*", metavar="NAME", help="comparisons to run (default: table)")
     p.add_argument("--plot", default=None, metavar="DIR", help="save the figures into this existing folder")
     p.add_argument("--duration", type=real(positive=True, unit="s"), default=30.0, help="mission seconds (default 30)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 
-    p = sub.add_parser("check", help="check the model against the thesis's closed forms (table of verdicts)",
-                       description="Check the model against the thesis's closed forms; prints a table of verdicts, "
-                       "exit code 0 iff all hold.  The sympy Lagrange model (test extra) is derived once per parameter "
-                       "set and its generated code cached in $QPRR_CACHE_DIR, else $XDG_CACHE_HOME/qprr, else "
-                       "~/.cache/qprr (about 50 kB per parameter set; safe to delete).")
+    p = sub.add_parser(
+        "check",
+        help="check the model against the thesis's closed forms (table of verdicts)",
+        description="Check the model against the thesis's closed forms; prints a table of verdicts, "
+        "exit code 0 iff all hold.  The sympy Lagrange model (test extra) is derived once per parameter "
+        "set and its generated code cached in $QPRR_CACHE_DIR, else $XDG_CACHE_HOME/qprr, else "
+        "~/.cache/qprr (about 50 kB per parameter set; safe to delete).",
+    )
     p.add_argument("-v", "--verbose", action="store_true", help="print the evidence behind each verdict")
-    p.add_argument("--cache-dir", default=None, metavar="DIR",
-                   help="folder of the sympy model's cache (default: $QPRR_CACHE_DIR or ~/.cache/qprr); made if its parent exists")
+    p.add_argument(
+        "--cache-dir",
+        default=None,
+        metavar="DIR",
+        help="folder of the sympy model's cache (default: $QPRR_CACHE_DIR or ~/.cache/qprr); made if its parent exists",
+    )
     p.set_defaults(func=_cmd_check)
 
     for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)

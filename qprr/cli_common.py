@@ -31,7 +31,7 @@ def fail(prog: str, message: str) -> int:
 
 
 def _writable(folder: Path) -> str:
-    """"" if a file can be created in ``folder`` (tried with a temporary file, removed at once), else why not."""
+    """ "" if a file can be created in ``folder`` (tried with a temporary file, removed at once), else why not."""
     import tempfile
 
     try:
@@ -82,8 +82,9 @@ def cache_dir(path: str | None) -> Path | None:
     return p
 
 
-PLATFORM_HELP = ("q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR; "
-                 "your own: --urdf FILE.urdf --rotors FILE.toml")
+PLATFORM_HELP = (
+    "q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR; your own: --urdf FILE.urdf --rotors FILE.toml"
+)
 
 
 def add_platform_options(p: argparse.ArgumentParser, *, name_option: bool = True) -> None:
@@ -118,8 +119,9 @@ def _argument_error(exc: InputError) -> argparse.ArgumentTypeError:
     return argparse.ArgumentTypeError(str(exc))
 
 
-def real(*, positive: bool = False, nonnegative: bool = False, lo: float | None = None, hi: float | None = None,
-         unit: str = "") -> Callable[[str], float]:
+def real(
+    *, positive: bool = False, nonnegative: bool = False, lo: float | None = None, hi: float | None = None, unit: str = ""
+) -> Callable[[str], float]:
     """An argparse ``type``: the option's text as a finite float checked by :func:`qprr.validation.as_real` (same bounds)."""
 
     def real_number(text: str) -> float:
@@ -187,5 +189,16 @@ def option_value(text: str, default, name: str):
     return tuple(values) if isinstance(default, tuple) else values[0]
 
 
-__all__ = ["PLATFORM_HELP", "Parser", "add_platform_options", "cache_dir", "fail", "integer", "option_value", "output_path",
-           "platform_from_args", "real", "reals"]
+__all__ = [
+    "PLATFORM_HELP",
+    "Parser",
+    "add_platform_options",
+    "cache_dir",
+    "fail",
+    "integer",
+    "option_value",
+    "output_path",
+    "platform_from_args",
+    "real",
+    "reals",
+]

@@ -56,8 +56,10 @@ def default_disc_radius(rotors: Sequence[Rotor]) -> float:
         if planar > 1e-6:
             best = min(best, 0.5 * planar)
     if not math.isfinite(best):
-        raise InputError("no two rotors sit side by side, so no propeller radius can be derived from their spacing: give "
-                         "'radius' [m] for each rotor in the rotor file (or in its [defaults])")
+        raise InputError(
+            "no two rotors sit side by side, so no propeller radius can be derived from their spacing: give "
+            "'radius' [m] for each rotor in the rotor file (or in its [defaults])"
+        )
     return best
 
 
@@ -116,8 +118,7 @@ class CollisionModel:
             full = self.neutral_q.copy()
             full[7:] = q
             return full
-        raise InputError(f"q must be a configuration ({self.model.nq},) or an arm configuration ({self.model.nq - 7},), "
-                         f"got shape {q.shape}")
+        raise InputError(f"q must be a configuration ({self.model.nq},) or an arm configuration ({self.model.nq - 7},), got shape {q.shape}")
 
     def colliding(self, q, data: tuple | None = None) -> bool:
         """Whether configuration ``q`` (nq,) or arm configuration (n_arm,) puts some checked pair in contact."""
@@ -161,8 +162,7 @@ class CollisionModel:
             lines.append("  rotor discs added: " + ", ".join(f"{n} r = {r:.4g} m ({src})" for n, r, src in self.discs))
         lines.append(f"  pairs skipped as adjacent bodies: {len(self.adjacent)}")
         if self.neutral_contacts:
-            lines.append("  pairs skipped as in contact at the neutral configuration: "
-                         + ", ".join(f"{a} / {b}" for a, b in self.neutral_contacts))
+            lines.append("  pairs skipped as in contact at the neutral configuration: " + ", ".join(f"{a} / {b}" for a, b in self.neutral_contacts))
         return "\n".join(lines)
 
 
@@ -175,19 +175,25 @@ def collision_model(platform: Platform, *, package_dirs: Sequence[str] | None = 
     """
     check_platform(platform)
     if platform.urdf is None:
-        raise InputError(f"platform {platform.name!r} has no URDF (made with from_model): no collision geometry to read; "
-                         "build it with qprr.from_urdf from a URDF whose links have <collision> elements")
+        raise InputError(
+            f"platform {platform.name!r} has no URDF (made with from_model): no collision geometry to read; "
+            "build it with qprr.from_urdf from a URDF whose links have <collision> elements"
+        )
     dirs = list(package_dirs) if package_dirs is not None else _package_dirs(platform)
     model = platform.model
     try:
         geom = pin.buildGeomFromUrdfString(model, platform.urdf, pin.GeometryType.COLLISION, package_dirs=dirs)
     except ValueError as exc:
-        raise InputError(f"platform {platform.name!r}: Pinocchio could not read the URDF's collision geometry ({exc}); "
-                         f"mesh folders searched: {dirs} (package_dirs=...)") from exc
+        raise InputError(
+            f"platform {platform.name!r}: Pinocchio could not read the URDF's collision geometry ({exc}); "
+            f"mesh folders searched: {dirs} (package_dirs=...)"
+        ) from exc
     on_arm = [g.name for g in geom.geometryObjects if g.parentJoint > 1]
     if not on_arm:
-        raise InputError(f"platform {platform.name!r}: no arm link of its URDF has a <collision> element: add the links' "
-                         "shapes (qprr.urdfgen writes them with every primitive visual)")
+        raise InputError(
+            f"platform {platform.name!r}: no arm link of its URDF has a <collision> element: add the links' "
+            "shapes (qprr.urdfgen writes them with every primitive visual)"
+        )
     discs = _add_discs(platform, geom)
     pairs, adjacent, contacts = _select_pairs(platform, geom)
     return CollisionModel(platform.name, model, geom, platform.neutral_q(), pairs, adjacent, contacts, discs)

@@ -40,11 +40,29 @@ CONTROLLERS = ("opspace-impedance", "idc")
 CONTACTS = ("wall", "wrench")
 
 
-def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progress: bool = False, *, contact: str = "wall",
-                     duration: float = 10.0, dt: float = SimConfig.dt, integrator: str = "midpoint", seed: int = 0, z: float = 2.0,
-                     reach_fraction: float = 0.3, omega_n: float = 4.0, zeta: float = 1.0, mass: float = 1.0,
-                     gap: float = 0.05, penetration: float = 0.05, wall_stiffness: float = 2000.0, wall_damping: float = 20.0,
-                     force=(0.5, 0.0, 0.3), t_on: float = 1.0, t_off: float = 6.0) -> SimResult:
+def run_ee_impedance(
+    platform=None,
+    controller: str = "opspace-impedance",
+    progress: bool = False,
+    *,
+    contact: str = "wall",
+    duration: float = 10.0,
+    dt: float = SimConfig.dt,
+    integrator: str = "midpoint",
+    seed: int = 0,
+    z: float = 2.0,
+    reach_fraction: float = 0.3,
+    omega_n: float = 4.0,
+    zeta: float = 1.0,
+    mass: float = 1.0,
+    gap: float = 0.05,
+    penetration: float = 0.05,
+    wall_stiffness: float = 2000.0,
+    wall_damping: float = 20.0,
+    force=(0.5, 0.0, 0.3),
+    t_on: float = 1.0,
+    t_off: float = 6.0,
+) -> SimResult:
     """Run the scenario (module docstring); options as in :data:`qprr.scenarios.SCENARIOS` ``["ee-impedance"]``."""
     from .platforms import load
 
@@ -65,13 +83,11 @@ def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progr
     if contact == "wall":
         if not (gap >= 0.0 and penetration > 0.0):
             raise InputError(f"need gap >= 0 and penetration > 0 m, got {gap!r}, {penetration!r}")
-        env = CompliantWall(platform, point=p_e0 + np.array([gap, 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=wall_stiffness,
-                            damping=wall_damping)
+        env = CompliantWall(platform, point=p_e0 + np.array([gap, 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=wall_stiffness, damping=wall_damping)
         d = gap + penetration
         phases = (Phase("x", t_on, t_on + 2.0, d), Phase("x", t_off, t_off + 2.0, 0.0))
         if t_off < t_on + 2.0 or t_off + 2.0 > duration:
-            raise InputError(f"the wall scenario needs t_off >= t_on + 2 s and duration >= t_off + 2 s, got {t_on!r}, {t_off!r}, "
-                             f"{duration!r}")
+            raise InputError(f"the wall scenario needs t_off >= t_on + 2 s and duration >= t_off + 2 s, got {t_on!r}, {t_off!r}, {duration!r}")
         trajectory = MultiPhase(phases, tuple(xi0), name="ee-impedance-wall")
         sensor = env.measured
     else:
@@ -84,8 +100,9 @@ def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progr
         ctrl = OperationalSpaceImpedance(platform, imp, ee_sensor=sensor)
     else:
         ctrl = InverseDynamicsController(platform)
-    res = simulate(platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, external_wrench=env,
-                   progress=progress, scenario="ee-impedance")
+    res = simulate(
+        platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, external_wrench=env, progress=progress, scenario="ee-impedance"
+    )
     s = res.series
     s["ee_force"] = _wrenches(env, res)[:, 0:3]
     if isinstance(ctrl, OperationalSpaceImpedance):
@@ -132,8 +149,10 @@ def summary(result: SimResult) -> list[str]:
     """Steady-state deflection against K_d^-1 h just before the release; the step-response fit of a force step."""
     s, m = result.series, result.metrics
     d = steady_state(result, m["t_off"] - result.dt)
-    lines = [f"at t = {d['t']:.3f} s: force {np.round(d['h'], 4).tolist()} N, deflection {np.round(1e3 * d['e'], 3).tolist()} mm, "
-             f"K^-1 h = {np.round(1e3 * d['predicted'], 3).tolist()} mm"]
+    lines = [
+        f"at t = {d['t']:.3f} s: force {np.round(d['h'], 4).tolist()} N, deflection {np.round(1e3 * d['e'], 3).tolist()} mm, "
+        f"K^-1 h = {np.round(1e3 * d['predicted'], 3).tolist()} mm"
+    ]
     if "ee_ideal" in s:
         err = np.abs(s["ee_error"] - s["ee_ideal"]).max(axis=0)
         lines.append(f"max |e - e_ideal| (ideal impedance driven by the measured force): {np.round(1e3 * err, 3).tolist()} mm")

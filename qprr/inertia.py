@@ -83,8 +83,9 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
     axes = ("x", "y", "z") if diagonal else ("principal axis 1", "principal axis 2", "principal axis 3")
     if moments.min() < -TRIANGLE_RTOL * max(float(np.abs(moments).max()), 1e-300):
         k = int(np.argmin(moments))
-        raise NonPhysicalError(f"{body}: rotational inertia is not positive semi-definite, {names[k]} = {moments[k]:.6g} kg m^2 "
-                               f"(inertia {tuple(inertia)!r})")
+        raise NonPhysicalError(
+            f"{body}: rotational inertia is not positive semi-definite, {names[k]} = {moments[k]:.6g} kg m^2 (inertia {tuple(inertia)!r})"
+        )
     if not check_triangle:
         return
     sigma = second_moments(moments)
@@ -94,4 +95,5 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
         raise NonPhysicalError(
             f"{body}: principal moments {tuple(float(x) for x in moments)} kg m^2 break the triangle inequality "
             f"{names[k]} <= {names[i]} + {names[j]}: {moments[k]:.6g} > {moments[i] + moments[j]:.6g} by {-2.0 * sigma[k]:.4g} kg m^2, "
-            f"a negative second moment of mass along {axes[k]} ({sigma[k]:.4g} kg m^2)")
+            f"a negative second moment of mass along {axes[k]} ({sigma[k]:.4g} kg m^2)"
+        )

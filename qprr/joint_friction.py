@@ -70,8 +70,10 @@ class JointFriction:
         if not (np.any(d != 0.0) or np.any(F != 0.0)):
             return None
         if model.njoints > 1 and model.joints[1].shortname() == "JointModelFreeFlyer" and (np.any(d[:6] != 0.0) or np.any(F[:6] != 0.0)):
-            raise InputError(f"the free-flyer joint of {model.name!r} has damping {d[:6].tolist()} / friction {F[:6].tolist()}: "
-                             "joint friction applies to the arm joints only")
+            raise InputError(
+                f"the free-flyer joint of {model.name!r} has damping {d[:6].tolist()} / friction {F[:6].tolist()}: "
+                "joint friction applies to the arm joints only"
+            )
         return cls(d, F, velocity_scale, step, np.array(model.armature))
 
     def add_generalized_force(self, v, out: np.ndarray) -> np.ndarray:

@@ -98,12 +98,7 @@ def kk_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
     Evaluated as the product of the four elementary transforms, which is what (3.27)
     states; :func:`qprr.thesis.printed.mdh_3_28` is the closed form printed as (3.28).
     """
-    return (
-        _homogeneous(R=rot_x(alpha))
-        @ _homogeneous(p=(d, 0.0, 0.0))
-        @ _homogeneous(R=rot_z(theta))
-        @ _homogeneous(p=(0.0, 0.0, r))
-    )
+    return _homogeneous(R=rot_x(alpha)) @ _homogeneous(p=(d, 0.0, 0.0)) @ _homogeneous(R=rot_z(theta)) @ _homogeneous(p=(0.0, 0.0, r))
 
 
 def _check_rows(rows: Sequence[MDHRow]) -> tuple[MDHRow, ...]:
@@ -134,8 +129,9 @@ def n_joints(rows: Sequence[MDHRow]) -> int:
     return sum(row.joint for row in _check_rows(rows))
 
 
-def chain(rows: Sequence[MDHRow], q, base=None, tool=None, *,
-          transform: Callable[[float, float, float, float], np.ndarray] = kk_transform) -> list[np.ndarray]:
+def chain(
+    rows: Sequence[MDHRow], q, base=None, tool=None, *, transform: Callable[[float, float, float, float], np.ndarray] = kk_transform
+) -> list[np.ndarray]:
     """[^bT_1, ..., ^bT_n] (and ^bT_f last when ``tool`` is given), Thesis (3.29)-(3.30).
 
     ``q`` holds one value per joint row, in table order [m or rad]; ``base`` = ^bT_0 and

@@ -100,24 +100,27 @@ def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
             vals = {k: float(inertia_el.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
         except (TypeError, ValueError) as exc:
             raise NonPhysicalError(f"{source}: link {name!r} has a non-numeric mass or inertia ({exc})") from exc
-        I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]],
-                      [vals["ixz"], vals["iyz"], vals["izz"]]])
+        I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]], [vals["ixz"], vals["iyz"], vals["izz"]]])
         check_rigid_body(f"{source}: link {name!r}", mass, (0.0, 0.0, 0.0), I, allow_massless=True)
     with_inertial = {link.get("name") for link in root.iter("link") if link.find("inertial") is not None}
     children = {c.get("link") for c in root.iter("child")}
     roots = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
     if len(roots) == 1 and roots[0] not in with_inertial:
-        raise NonPhysicalError(f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
-                               "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
-                               'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
-                               "</inertial> when the body's mass sits on links fixed to it")
+        raise NonPhysicalError(
+            f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
+            "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
+            'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
+            "</inertial> when the body's mass sits on links fixed to it"
+        )
     for joint in root.iter("joint"):
         child = joint.find("child")
         if joint.get("type") != "fixed" and child is not None and child.get("link") not in with_inertial:
-            raise NonPhysicalError(f"{source}: link {child.get('link')!r}, moved by joint {joint.get('name')!r}, has no <inertial> "
-                                   "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
-                                   '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
-                                   "for a link that is massless on purpose")
+            raise NonPhysicalError(
+                f"{source}: link {child.get('link')!r}, moved by joint {joint.get('name')!r}, has no <inertial> "
+                "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
+                '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
+                "for a link that is massless on purpose"
+            )
 
 
 def _attr_numbers(el: ET.Element, attr: str, count: int, where: str, *, required: bool = False) -> list[float] | None:
@@ -166,8 +169,10 @@ def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[s
         if axis_el is not None:
             axis = _attr_numbers(axis_el, "xyz", 3, where)
             if axis is not None and not math.hypot(*axis) > 1e-9:
-                raise InputError(f"{where}: <axis xyz> = {axis_el.get('xyz')!r} is the zero vector; give the unit direction of "
-                                 f'the joint axis in the joint frame, e.g. "0 0 1"')
+                raise InputError(
+                    f"{where}: <axis xyz> = {axis_el.get('xyz')!r} is the zero vector; give the unit direction of "
+                    f'the joint axis in the joint frame, e.g. "0 0 1"'
+                )
         limit = joint.find("limit")
         if limit is not None:
             for attr in ("lower", "upper"):
@@ -200,16 +205,19 @@ def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
             if not name:
                 raise InputError(f'{source}: <{tag}> number {k + 1} has no name="..."')
             if name in seen:
-                raise InputError(f"{source}: two <{tag}> elements are named {name!r} (numbers {seen[name] + 1} and {k + 1}); "
-                                 f"{tag} names must be unique")
+                raise InputError(
+                    f"{source}: two <{tag}> elements are named {name!r} (numbers {seen[name] + 1} and {k + 1}); {tag} names must be unique"
+                )
             seen[name] = k
     links = {el.get("name") for el in root.findall("link")}
     parent_of: dict[str, str] = {}
     for joint in root.findall("joint"):
         parent, child = _check_urdf_joint_xml(joint, links, source)
         if child in parent_of:
-            raise InputError(f"{source}: link {child!r} has two parents: it is the <child> of joints {parent_of[child]!r} and "
-                             f"{joint.get('name')!r} (a URDF is a tree: each link has at most one parent joint)")
+            raise InputError(
+                f"{source}: link {child!r} has two parents: it is the <child> of joints {parent_of[child]!r} and "
+                f"{joint.get('name')!r} (a URDF is a tree: each link has at most one parent joint)"
+            )
         parent_of[child] = joint.get("name")
     for link in root.findall("link"):
         inertial = link.find("inertial")
@@ -246,19 +254,25 @@ def check_urdf_joints(xml_text: str, source: str = "URDF") -> None:
             parent = joint.find("parent")
             parent = parent.get("link") if parent is not None else None
             if parent is not None and parent not in children_all:  # a "world" link holding the body
-                raise InputError(f"{source}: joint {name!r} is {kind}: qprr adds the multirotor's free-flyer joint itself; remove "
-                                 f"link {parent!r} and joint {name!r} so that the multirotor body is the URDF's root link")
+                raise InputError(
+                    f"{source}: joint {name!r} is {kind}: qprr adds the multirotor's free-flyer joint itself; remove "
+                    f"link {parent!r} and joint {name!r} so that the multirotor body is the URDF's root link"
+                )
             raise InputError(f"{source}: joint {name!r} is {kind}: not supported as an arm joint (1-DOF revolute or prismatic only)")
         if kind == "continuous":
-            raise InputError(f"{source}: joint {name!r} is continuous (unbounded): not supported as an arm joint yet; make it "
-                             'type="revolute" with <limit lower="..." upper="..." effort="..." velocity="..."/>')
+            raise InputError(
+                f"{source}: joint {name!r} is continuous (unbounded): not supported as an arm joint yet; make it "
+                'type="revolute" with <limit lower="..." upper="..." effort="..." velocity="..."/>'
+            )
         if kind not in _ARM_JOINT_TYPES:
             raise UnknownNameError(f"type of joint {name!r} in {source}", kind, _ARM_JOINT_TYPES)
         if kind != "fixed":
             limit = joint.find("limit")
             if limit is None or limit.get("lower") is None or limit.get("upper") is None:
-                raise InputError(f"{source}: {kind} joint {name!r} needs <limit lower=\"...\" upper=\"...\" effort=\"...\" "
-                                 f'velocity="..."/> ({"rad" if kind == "revolute" else "m"}, N{" m" if kind == "revolute" else ""})')
+                raise InputError(
+                    f'{source}: {kind} joint {name!r} needs <limit lower="..." upper="..." effort="..." '
+                    f'velocity="..."/> ({"rad" if kind == "revolute" else "m"}, N{" m" if kind == "revolute" else ""})'
+                )
     roots = [link for link in links if link not in children]
     if len(roots) != 1:
         raise InputError(f"{source}: a URDF has exactly one root link (the multirotor body), found {len(roots)}: {roots}")
@@ -436,8 +450,8 @@ class Platform:
     def actuation_matrix(self) -> np.ndarray:
         """N (nv x n_actuators) = blockdiag(Omega, I): Pinocchio's tau = N [f; efforts] (Thesis (5.44)-(5.46))."""
         N = np.zeros((self.nv, self.n_actuators))
-        N[0:6, 0:self.n_rotors] = self.rotor_matrix
-        N[6:, self.n_rotors:] = np.eye(self.n_arm)
+        N[0:6, 0 : self.n_rotors] = self.rotor_matrix
+        N[6:, self.n_rotors :] = np.eye(self.n_arm)
         return _readonly(N)
 
     @cached_property
@@ -529,16 +543,17 @@ class Platform:
 
     def __repr__(self) -> str:
         kinds = "".join("P" if j.kind == "prismatic" else "R" for j in self.arm)
-        return (f"Platform({self.name!r}, {self.n_rotors} rotors, arm {kinds or '-'}, {self.total_mass:.3f} kg, "
-                f"{'fully actuated' if self.fully_actuated else 'under-actuated'})")
+        return (
+            f"Platform({self.name!r}, {self.n_rotors} rotors, arm {kinds or '-'}, {self.total_mass:.3f} kg, "
+            f"{'fully actuated' if self.fully_actuated else 'under-actuated'})"
+        )
 
 
 # ============================================================================== argument checks
 def check_platform(platform, name: str = "platform") -> Platform:
     """``platform`` if it is a :class:`Platform`, else an :class:`InputError` naming ``name``."""
     if not isinstance(platform, Platform):
-        raise InputError(f"{name} must be a qprr Platform (qprr.load, qprr.build, qprr.from_urdf), got {type(platform).__name__} "
-                         f"{_short(platform)}")
+        raise InputError(f"{name} must be a qprr Platform (qprr.load, qprr.build, qprr.from_urdf), got {type(platform).__name__} {_short(platform)}")
     return platform
 
 
@@ -548,8 +563,10 @@ def check_data(platform: Platform, data, name: str = "data") -> pin.Data:
     if not isinstance(data, pin.Data):
         raise InputError(f"{name} must be a pinocchio.Data from platform.data(), got {type(data).__name__} {_short(data)}")
     if len(data.oMf) != platform.model.nframes:
-        raise ShapeError(f"{name} was made for another model ({len(data.oMf)} frames; platform {platform.name!r} has "
-                         f"{platform.model.nframes}): use platform.data()")
+        raise ShapeError(
+            f"{name} was made for another model ({len(data.oMf)} frames; platform {platform.name!r} has "
+            f"{platform.model.nframes}): use platform.data()"
+        )
     return data
 
 
@@ -591,8 +608,10 @@ def _arm_joints(model: pin.Model) -> tuple[ArmJoint, ...]:
         elif short in _PRISMATIC:
             kind = "prismatic"
         elif short.startswith("JointModelRU") or short == "JointModelRevoluteUnboundedUnaligned":
-            raise InputError(f"joint {name!r} is continuous (unbounded revolute, nq = 2): not supported as an arm joint yet; "
-                             "give it limits in the URDF (type revolute)")
+            raise InputError(
+                f"joint {name!r} is continuous (unbounded revolute, nq = 2): not supported as an arm joint yet; "
+                "give it limits in the URDF (type revolute)"
+            )
         else:
             raise InputError(f"joint {name!r} of type {short} is not supported as an arm joint (1-DOF prismatic or revolute only)")
         if model.parents[j] == 0:
@@ -604,8 +623,7 @@ def _arm_joints(model: pin.Model) -> tuple[ArmJoint, ...]:
             raise InputError(f"joint {name!r}: lower limit {lo!r} is above the upper limit {hi!r}")
         eff = float(model.effortLimit[jm.idx_v])
         vel = float(model.velocityLimit[jm.idx_v])
-        out.append(ArmJoint(name, kind, j, jm.idx_q, jm.idx_v, lo, hi, math.inf if eff >= _HUGE else eff,
-                            math.inf if vel >= _HUGE else vel))
+        out.append(ArmJoint(name, kind, j, jm.idx_q, jm.idx_v, lo, hi, math.inf if eff >= _HUGE else eff, math.inf if vel >= _HUGE else vel))
     return tuple(out)
 
 
@@ -648,16 +666,25 @@ def _resolve_rotors(model: pin.Model, base: int, rotors, rotor_source: str | Non
                     at_b.append(f.name)
             written_in = rotors.get("base_link")
             if isinstance(written_in, str) and written_in not in at_b:
-                where = (f"it moves with arm joint {moving[written_in]!r}" if written_in in moving else
-                         f"it is not a frame of {model.name!r}" if written_in not in frames else "it is not at B")
-                raise InputError(f"base_link = {written_in!r}, but rotor positions are written in B, the frame of the URDF's root "
-                                 f"link {model.frames[base].name!r} (where qprr puts the free-flyer joint), and {where}; "
-                                 f"frames at B: {at_b} (is the multirotor body the root of your URDF?)")
+                where = (
+                    f"it moves with arm joint {moving[written_in]!r}"
+                    if written_in in moving
+                    else f"it is not a frame of {model.name!r}"
+                    if written_in not in frames
+                    else "it is not at B"
+                )
+                raise InputError(
+                    f"base_link = {written_in!r}, but rotor positions are written in B, the frame of the URDF's root "
+                    f"link {model.frames[base].name!r} (where qprr puts the free-flyer joint), and {where}; "
+                    f"frames at B: {at_b} (is the multirotor body the root of your URDF?)"
+                )
             for k, entry in enumerate(rotors.get("rotor") or ()):
                 if isinstance(entry, Mapping) and entry.get("frame") in moving:
-                    raise InputError(f"rotor {k + 1}: frame {entry['frame']!r} moves with arm joint {moving[entry['frame']]!r}; "
-                                     f"rotors sit on the multirotor body, the URDF's root link {model.frames[base].name!r} "
-                                     "(is the body the root of your URDF?)")
+                    raise InputError(
+                        f"rotor {k + 1}: frame {entry['frame']!r} moves with arm joint {moving[entry['frame']]!r}; "
+                        f"rotors sit on the multirotor body, the URDF's root link {model.frames[base].name!r} "
+                        "(is the body the root of your URDF?)"
+                    )
             rotors = rotors_from_mapping(rotors, frames)
         elif isinstance(rotors, (str, Path)):
             raise InputError(f"rotors: a file path is read by from_urdf (or qprr.rotors.read_rotor_file); got {str(rotors)!r}")
@@ -702,8 +729,9 @@ def from_model(
     if not isinstance(model, pin.Model):
         raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
     if not (isinstance(rotors, Mapping) or (isinstance(rotors, Sequence) and not isinstance(rotors, str))):
-        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor or a rotor description mapping, got {type(rotors).__name__} "
-                         f"{_short(rotors)}")
+        raise InputError(
+            f"rotors must be a sequence of qprr.rotors.Rotor or a rotor description mapping, got {type(rotors).__name__} {_short(rotors)}"
+        )
     model = pin.Model(model)
     if allow_nonphysical:
         provenance = {**(provenance or {}), "WARNING": "inertia checks skipped (allow_nonphysical=True): not a physical body set"}
@@ -744,11 +772,13 @@ def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> No
     if ratio > plausibility.thrust_to_weight_max:
         from .errors import PlausibilityError
 
-        raise PlausibilityError(f"{source}: the rotors' thrust-to-weight ratio sum(f_max) / (m g) = {ratio:.4g} is outside the "
-                                f"plausible range for an aerial robot (<= {plausibility.thrust_to_weight_max:g}; racing drones reach "
-                                f"10-15): thrust bounds in grams-force? (f_max of rotor 1 = {platform.rotors[0].f_max:g} gf = "
-                                f"{platform.rotors[0].f_max * 9.80665e-3:.4g} N), or masses too small (m = {platform.total_mass:.6g} kg). "
-                                "If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, thrust_to_weight_max=...)")
+        raise PlausibilityError(
+            f"{source}: the rotors' thrust-to-weight ratio sum(f_max) / (m g) = {ratio:.4g} is outside the "
+            f"plausible range for an aerial robot (<= {plausibility.thrust_to_weight_max:g}; racing drones reach "
+            f"10-15): thrust bounds in grams-force? (f_max of rotor 1 = {platform.rotors[0].f_max:g} gf = "
+            f"{platform.rotors[0].f_max * 9.80665e-3:.4g} N), or masses too small (m = {platform.total_mass:.6g} kg). "
+            "If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, thrust_to_weight_max=...)"
+        )
 
 
 def max_lift(platform: Platform) -> float:
@@ -765,8 +795,7 @@ def check_flight(platform: Platform, source: str | None = None) -> None:
     _check_mass_matrix(platform)
     _check_lift(platform, None)
     if platform.g > 0.0:  # g = 0: free flight, nothing to hover against
-        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body,
-                        source or f"platform {platform.name!r}")
+        check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source or f"platform {platform.name!r}")
 
 
 def _check_lift(platform: Platform, rotor_source: str | None) -> None:
@@ -778,10 +807,12 @@ def _check_lift(platform: Platform, rotor_source: str | None) -> None:
         model = platform.model
         j = max(range(1, model.njoints), key=lambda k: model.inertias[k].mass)
         links = [f.name for f in model.frames if f.parentJoint == j and f.type == pin.FrameType.BODY]
-        raise NonPhysicalError(f"platform {platform.name!r} cannot lift itself: its rotors push at most {lift:.6g} N along z_B "
-                               f"({rot}), its weight m g is {weight:.6g} N (m = {platform.total_mass:.6g} kg, g = {platform.g:.6g} m/s^2); "
-                               f"the heaviest body: link {' + '.join(map(repr, links))} ({model.inertias[j].mass:.6g} kg); "
-                               "URDF masses are in kg (grams / 1000), thrust bounds in N")
+        raise NonPhysicalError(
+            f"platform {platform.name!r} cannot lift itself: its rotors push at most {lift:.6g} N along z_B "
+            f"({rot}), its weight m g is {weight:.6g} N (m = {platform.total_mass:.6g} kg, g = {platform.g:.6g} m/s^2); "
+            f"the heaviest body: link {' + '.join(map(repr, links))} ({model.inertias[j].mass:.6g} kg); "
+            "URDF masses are in kg (grams / 1000), thrust bounds in N"
+        )
 
 
 def _check_mass_matrix(platform: Platform) -> None:
@@ -848,8 +879,19 @@ def from_urdf(
     prov = {"model": source, **(provenance or {})}
     if rotor_source is not None:
         prov.setdefault("rotors", rotor_source)
-    return from_model(model, rotors, ee_frame=ee_frame, ee_frames=ee_frames, name=name or model.name, params=params, provenance=prov,
-                      allow_nonphysical=allow_nonphysical, urdf=text, rotor_source=rotor_source, plausibility=plausibility)
+    return from_model(
+        model,
+        rotors,
+        ee_frame=ee_frame,
+        ee_frames=ee_frames,
+        name=name or model.name,
+        params=params,
+        provenance=prov,
+        allow_nonphysical=allow_nonphysical,
+        urdf=text,
+        rotor_source=rotor_source,
+        plausibility=plausibility,
+    )
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

@@ -79,8 +79,7 @@ def parse(name: str) -> Designation:
     if uav not in UAV_ROTORS and uav not in OTHER_UAVS and uav[-1] in "X+":
         uav, layout = uav[:-1], uav[-1]  # "QX": a quadrotor in the X layout
     if uav not in UAV_ROTORS and uav not in OTHER_UAVS:
-        raise InputError(f"{name!r}: unknown vehicle code {uav!r}; Table 2.3 codes: "
-                         f"{', '.join(list(UAV_ROTORS) + list(OTHER_UAVS))}")
+        raise InputError(f"{name!r}: unknown vehicle code {uav!r}; Table 2.3 codes: {', '.join(list(UAV_ROTORS) + list(OTHER_UAVS))}")
     bad = set(joints) - set(JOINTS)
     if bad:
         raise InputError(f"{name!r}: unknown joint letter(s) {''.join(sorted(bad))!r}; (2.1) letters: R, P, C")
@@ -92,17 +91,21 @@ def _check_buildable(d: Designation) -> None:
     if d.n_uav == 0:
         raise UnsupportedDesignError(f"{d.name}: n = 0 names a parallel robot (Hypothesis 1 of Sec. 2.4), not an aerial manipulator")
     if d.uav in OTHER_UAVS:
-        raise UnsupportedDesignError(f"{d.name}: a {OTHER_UAVS[d.uav]} is not a multirotor; build() makes Q, HEX and OCT vehicles "
-                                     "(it needs an actuator model other than rotors)")
+        raise UnsupportedDesignError(
+            f"{d.name}: a {OTHER_UAVS[d.uav]} is not a multirotor; build() makes Q, HEX and OCT vehicles "
+            "(it needs an actuator model other than rotors)"
+        )
     if d.n_uav > 1:
         raise UnsupportedDesignError(
             f"{d.name}: {d.n_uav} cooperating vehicles sharing an arm form a closed kinematic chain; supporting it needs "
             "loop-closure constraints (Pinocchio's constraint models with constrained forward dynamics) and an allocation "
-            "across the vehicles")
+            "across the vehicles"
+        )
     if d.n_arms > 1:
         raise UnsupportedDesignError(
             f"{d.name}: {d.n_arms} arms make the kinematic tree branch at the base; supporting it needs one end-effector task "
-            "per arm and arm-indexed efforts (the platform core assumes one serial arm)")
+            "per arm and arm-indexed efforts (the platform core assumes one serial arm)"
+        )
     if "C" in d.joints:
         raise UnsupportedDesignError(f"{d.name}: cable joints (C) need a tension-only cable model, not a rigid joint")
 
@@ -244,8 +247,12 @@ def build(
         raise InputError(f"joint_names and link_names need {n} entries each")
     sign = 1.0 if arm_direction == "up" else -1.0
 
-    parts = [ug.link(base_name, ug.inertial(m_body, (0.0, 0.0, 0.0), body_inertia)
-                     + ug.cylinder_visual(0.3 * l_rot, 0.4 * body_height, rgba=(0.55, 0.63, 0.75, 1.0)))]
+    parts = [
+        ug.link(
+            base_name,
+            ug.inertial(m_body, (0.0, 0.0, 0.0), body_inertia) + ug.cylinder_visual(0.3 * l_rot, 0.4 * body_height, rgba=(0.55, 0.63, 0.75, 1.0)),
+        )
+    ]
     parent, origin = base_name, tuple(mount_xyz)
     total_mass = m_body
     for spec, jn, ln in zip(links, joint_names, link_names):
@@ -273,8 +280,10 @@ def build(
         parts.append(ug.link(rn, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))))
         parts.append(ug.joint(f"{rn}_fixed", "fixed", base_name, rn, r.position_body, rpy=ug.rpy_of_axis(r.axis_body)))
     text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
-    prov = {"design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
-            "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)"}
-    return from_urdf(text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov,
-                     allow_nonphysical=allow_nonphysical)
-
+    prov = {
+        "design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
+        "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)",
+    }
+    return from_urdf(
+        text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov, allow_nonphysical=allow_nonphysical
+    )

@@ -81,7 +81,7 @@ def _within(Cz: np.ndarray, lo: np.ndarray, up: np.ndarray) -> bool:
 def null_space(B: np.ndarray, tol: float) -> np.ndarray:
     """Orthonormal basis (columns) of the kernel of B; singular values <= ``tol`` count as zero."""
     s, Vt = right_singular(B)
-    return Vt[int(np.count_nonzero(s > tol)):].T
+    return Vt[int(np.count_nonzero(s > tol)) :].T
 
 
 @dataclass(frozen=True)
@@ -178,9 +178,19 @@ class Lexicographic:
     own QPs on first use).
     """
 
-    def __init__(self, n: int, bounded=None, *, settings: QPSettings | None = None, regularization: float = 0.0,
-                 rank_tol: float = 1e-9, warm_start: bool = True, exact_fallback: bool = False, polish: bool = True,
-                 active_set_first: bool = False) -> None:
+    def __init__(
+        self,
+        n: int,
+        bounded=None,
+        *,
+        settings: QPSettings | None = None,
+        regularization: float = 0.0,
+        rank_tol: float = 1e-9,
+        warm_start: bool = True,
+        exact_fallback: bool = False,
+        polish: bool = True,
+        active_set_first: bool = False,
+    ) -> None:
         if not (isinstance(n, (int, np.integer)) and n >= 1):
             raise InputError(f"n must be an integer >= 1, got {n!r}")
         if not (np.isfinite(regularization) and regularization >= 0):
@@ -271,8 +281,11 @@ class Lexicographic:
         if self.active_set_first:
             guess = self._active.get(level)
             nc = C.shape[0]
-            at_lo, at_up = (guess[0].copy(), guess[1].copy()) if guess is not None and guess[0].shape[0] == nc else (
-                np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
+            at_lo, at_up = (
+                (guess[0].copy(), guess[1].copy())
+                if guess is not None and guess[0].shape[0] == nc
+                else (np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
+            )
             out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
             if out is not None:
                 self._active[level] = (out[1], out[2]) if (out[1].any() or out[2].any()) else None
@@ -306,7 +319,8 @@ class Lexicographic:
         if res.info.status != _SOLVED:
             raise SolverError(
                 f"ProxQP did not solve level {level + 1} ({m} variables, {C.shape[0]} bounds): status {res.info.status.name}, "
-                f"primal residual {res.info.pri_res:.3g}, dual residual {res.info.dua_res:.3g}")
+                f"primal residual {res.info.pri_res:.3g}, dual residual {res.info.dua_res:.3g}"
+            )
         z = res.x.copy()
         if self.warm_start:
             self._warm[level] = (z, res.z.copy())
@@ -314,8 +328,7 @@ class Lexicographic:
         return (z if polished is None else polished), int(res.info.iter)
 
     # ------------------------------------------------------------------ solve
-    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None,
-              equality=None) -> LexResult:
+    def solve(self, levels: Sequence[tuple[np.ndarray, np.ndarray]], lower, upper, x0=None, damping=None, equality=None) -> LexResult:
         """Solve ``levels`` (sequence of (A_k, b_k)) under ``lower <= x[bounded] <= upper``.
 
         ``x0`` (default 0, clipped to the bounds) is the point the regularisation of level 1 pulls
@@ -374,8 +387,16 @@ class Lexicographic:
         return LexResult(x, tuple(levels), iters, tuple(x_levels))
 
 
-def polish_box_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, z: np.ndarray,
-                  Aeq: np.ndarray | None = None, beq: np.ndarray | None = None) -> np.ndarray | None:
+def polish_box_qp(
+    H: np.ndarray,
+    g: np.ndarray,
+    C: np.ndarray,
+    lo: np.ndarray,
+    up: np.ndarray,
+    z: np.ndarray,
+    Aeq: np.ndarray | None = None,
+    beq: np.ndarray | None = None,
+) -> np.ndarray | None:
     """The exact optimum of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq) from an approximate ``z``.
 
     ProxQP stops within its tolerance, at a point that also depends in its last digits on
@@ -414,8 +435,17 @@ def _bound_scale(lo, up, fin_lo, fin_up) -> float:
     return 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
 
 
-def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, at_lo: np.ndarray,
-                      at_up: np.ndarray, Aeq: np.ndarray | None = None, beq: np.ndarray | None = None):
+def kkt_on_active_set(
+    H: np.ndarray,
+    g: np.ndarray,
+    C: np.ndarray,
+    lo: np.ndarray,
+    up: np.ndarray,
+    at_lo: np.ndarray,
+    at_up: np.ndarray,
+    Aeq: np.ndarray | None = None,
+    beq: np.ndarray | None = None,
+):
     """(z, at_lo, at_up): the exact KKT point of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq), found
     by active-set steps from the guessed active bounds ``at_lo``, ``at_up`` (boolean masks over the rows of C); None
     when the steps run out or a KKT system is not solved accurately.
@@ -493,8 +523,7 @@ def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarra
     return None
 
 
-def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray,
-                  max_iter: int = 1000) -> np.ndarray | None:
+def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, max_iter: int = 1000) -> np.ndarray | None:
     """argmin 1/2 z^T H z + g^T z s.t. lo <= C z <= up, from the feasible point z = 0 (None if not solved).
 
     Primal active-set method for convex QPs (Nocedal and Wright, *Numerical Optimization*,
@@ -525,8 +554,9 @@ def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
         # stationary on the working set: no step, or one that decreases the objective by rounding only
         # (the minimum-norm step of a semi-definite H carries rounding noise of |H| eps)
         decrease = -float(grad @ p + 0.5 * (p @ (H @ p)))
-        if (float(np.abs(p).max(initial=0.0)) <= 1e-11 * (1.0 + float(np.abs(z).max(initial=0.0)))
-                or decrease <= 1e-14 * scale * (1.0 + float(np.abs(z).max(initial=0.0)))):
+        if float(np.abs(p).max(initial=0.0)) <= 1e-11 * (1.0 + float(np.abs(z).max(initial=0.0))) or decrease <= 1e-14 * scale * (
+            1.0 + float(np.abs(z).max(initial=0.0))
+        ):
             if k == 0:
                 return z
             lam = np.linalg.lstsq(AW.T, grad, rcond=1e-13)[0]  # grad = A_W^T lam at a stationary point

@@ -139,21 +139,27 @@ def _check_payload(platform: Platform, payload: Payload, plausibility) -> None:
     if plausibility is not None:
         d = float(np.linalg.norm(payload.com_ee))
         if d > plausibility.length_max:
-            raise PlausibilityError(f"payload com_ee is {d:g} m from the end effector, outside the plausible range (<= "
-                                    f"{plausibility.length_max:g} m): millimetres? {d:g} mm = {d / 1000:g} m. If you mean it, pass "
-                                    "plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, length_max=...)")
+            raise PlausibilityError(
+                f"payload com_ee is {d:g} m from the end effector, outside the plausible range (<= "
+                f"{plausibility.length_max:g} m): millimetres? {d:g} mm = {d / 1000:g} m. If you mean it, pass "
+                "plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, length_max=...)"
+            )
         radius = math.sqrt(max(payload.inertia[:3]) / payload.mass) if payload.mass > 0.0 else 0.0
         if radius > plausibility.gyration_radius_max:
-            raise PlausibilityError(f"payload inertia {payload.inertia!r} with mass {payload.mass:g} kg has a radius of gyration "
-                                    f"of {radius:g} m (> {plausibility.gyration_radius_max:g} m): kg mm^2 or g mm^2? If you mean it, "
-                                    "pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, gyration_radius_max=...)")
+            raise PlausibilityError(
+                f"payload inertia {payload.inertia!r} with mass {payload.mass:g} kg has a radius of gyration "
+                f"of {radius:g} m (> {plausibility.gyration_radius_max:g} m): kg mm^2 or g mm^2? If you mean it, "
+                "pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, gyration_radius_max=...)"
+            )
     lift, g = max_lift(platform), platform.g
     weight = (platform.total_mass + payload.mass) * g
     if weight > lift:
-        raise NonPhysicalError(f"payload mass {payload.mass:g} kg: platform {platform.name!r} ({platform.total_mass:.4g} kg) with it "
-                               f"weighs {weight:.6g} N, its rotors push at most {lift:.6g} N along z_B, so at most "
-                               f"{max(lift / g - platform.total_mass, 0.0) if g > 0 else math.inf:.4g} kg can be carried; a mass "
-                               f"in grams? {payload.mass:g} g = {payload.mass / 1000:g} kg")
+        raise NonPhysicalError(
+            f"payload mass {payload.mass:g} kg: platform {platform.name!r} ({platform.total_mass:.4g} kg) with it "
+            f"weighs {weight:.6g} N, its rotors push at most {lift:.6g} N along z_B, so at most "
+            f"{max(lift / g - platform.total_mass, 0.0) if g > 0 else math.inf:.4g} kg can be carried; a mass "
+            f"in grams? {payload.mass:g} g = {payload.mass / 1000:g} kg"
+        )
 
 
 class PayloadModel:
@@ -275,8 +281,15 @@ def holding_efforts(platform: Platform, q_arm, payload: Payload | float) -> Hold
     for k, joint in enumerate(platform.arm):
         if abs(g1[6 + k]) > joint.effort:
             reasons.append(f"{joint.name} |{g1[6 + k]:.4f}| > {joint.effort}")
-    return HoldingEffort(q_arm, payload.mass, thrust, g1[6:].copy(), g0[6:].copy(),
-                         "exceeds" if reasons else "ok", "; ".join(reasons) if reasons else "within thrust and effort limits")
+    return HoldingEffort(
+        q_arm,
+        payload.mass,
+        thrust,
+        g1[6:].copy(),
+        g0[6:].copy(),
+        "exceeds" if reasons else "ok",
+        "; ".join(reasons) if reasons else "within thrust and effort limits",
+    )
 
 
 @dataclass(frozen=True)
@@ -298,8 +311,16 @@ class PayloadCapacity:
     reason: str
 
 
-def payload_capacity(platform: Platform, mission: str = "manipulation", q_arm=None, *, thrust_reserve: float = 0.0,
-                     n_grid: int = 121, com_ee=(0.0, 0.0, 0.0), configurations=None) -> PayloadCapacity:
+def payload_capacity(
+    platform: Platform,
+    mission: str = "manipulation",
+    q_arm=None,
+    *,
+    thrust_reserve: float = 0.0,
+    n_grid: int = 121,
+    com_ee=(0.0, 0.0, 0.0),
+    configurations=None,
+) -> PayloadCapacity:
     """Largest point payload at the end effector (``com_ee``) for ``mission``.
 
     * "transport" (arm at rest, joints on their stops): thrust only, Hypothesis 5
@@ -337,7 +358,7 @@ def payload_capacity(platform: Platform, mission: str = "manipulation", q_arm=No
     best_q = [None] * platform.n_arm
     m_thrust = None
     for start in range(0, rows.shape[0], 16384):
-        chunk = rows[start:start + 16384]
+        chunk = rows[start : start + 16384]
         pl = payload_limits(chain.statics(chain.pose(chunk), platform.ee_frame, offset), W, limits, platform.g)
         # collective thrust F_max / g - m, F_max reduced by the reserve
         m_thrust = (pl.collective + platform.total_mass) * (1.0 - thrust_reserve) - platform.total_mass
@@ -460,8 +481,17 @@ class MassEstimator:
     start (the estimate begins at ``initial``).
     """
 
-    def __init__(self, platform: Platform, *, time_constant: float = 0.05, com_ee=(0.0, 0.0, 0.0), initial: float = 0.0,
-                 min_mass: float = 0.0, max_mass: float = math.inf, prior_weight: float = 1e-3) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        *,
+        time_constant: float = 0.05,
+        com_ee=(0.0, 0.0, 0.0),
+        initial: float = 0.0,
+        min_mass: float = 0.0,
+        max_mass: float = math.inf,
+        prior_weight: float = 1e-3,
+    ) -> None:
         check_platform(platform)
         time_constant = as_real(time_constant, "time_constant", positive=True, unit="s")
         initial = as_real(initial, "initial", nonnegative=True, unit="kg")

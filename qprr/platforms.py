@@ -117,8 +117,14 @@ def rotor_dynamics(name: str = DEFAULT_PLATFORM, **overrides):
     return ROTOR_DYNAMICS[name](**overrides)
 
 
-def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | Path | None = None,
-            rotors: str | Path | None = None, ee_frame: str | None = None) -> Platform:
+def resolve(
+    name: str | None = None,
+    *,
+    layout: str | None = None,
+    urdf: str | Path | None = None,
+    rotors: str | Path | None = None,
+    ee_frame: str | None = None,
+) -> Platform:
     """The platform a command line names: one of :data:`NAMES`, a (2.1) name, or a user's URDF.
 
     ``urdf`` with ``rotors`` (a TOML rotor file) and an optional ``ee_frame``: :func:`qprr.from_urdf`
@@ -131,15 +137,19 @@ def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | P
 
     if urdf is not None:
         if name is not None or layout is not None:
-            raise InputError(f"give a platform name ({name!r}) or a URDF ({str(urdf)!r}), not both"
-                             if name is not None else f"layout {layout!r} applies to named platforms, not to a URDF")
+            raise InputError(
+                f"give a platform name ({name!r}) or a URDF ({str(urdf)!r}), not both"
+                if name is not None
+                else f"layout {layout!r} applies to named platforms, not to a URDF"
+            )
         if rotors is None:
             raise InputError(f"the URDF {str(urdf)!r} needs its rotor description: a TOML file (docs/platforms.md)")
         return from_urdf(urdf, rotors if isinstance(rotors, Path) else Path(rotors), ee_frame=ee_frame)
     if rotors is not None or ee_frame is not None:
         given = ", ".join(f"{k} = {v!r}" for k, v in (("rotors", rotors), ("ee_frame", ee_frame)) if v is not None)
-        raise InputError(f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...); named platforms "
-                         f"have their own: got {given}")
+        raise InputError(
+            f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...); named platforms have their own: got {given}"
+        )
     name = DEFAULT_PLATFORM if name is None else name
     if name == "q-prr":
         return load("q-prr", layout=layout or "plus")
@@ -150,8 +160,9 @@ def resolve(name: str | None = None, *, layout: str | None = None, urdf: str | P
     try:
         parse(name)
     except InputError:
-        raise UnknownNameError("platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR'",
-                                                  "or a URDF with its rotor file (--urdf FILE --rotors FILE.toml)")) from None
+        raise UnknownNameError(
+            "platform", name, (*NAMES, "or a (2.1) name such as 'HEX-RRR'", "or a URDF with its rotor file (--urdf FILE --rotors FILE.toml)")
+        ) from None
     return build(name, layout=layout)
 
 

@@ -67,15 +67,19 @@ DEFAULT = Plausibility()
 def check_plausibility_setting(plausibility) -> Plausibility | None:
     """``plausibility`` if it is a :class:`Plausibility` or None (checks off), else an :class:`InputError`."""
     if plausibility is not None and not isinstance(plausibility, Plausibility):
-        raise InputError(f"plausibility must be a qprr.plausibility.Plausibility (or None: no range checks), got "
-                         f"{type(plausibility).__name__} {plausibility!r:.60}")
+        raise InputError(
+            f"plausibility must be a qprr.plausibility.Plausibility (or None: no range checks), got "
+            f"{type(plausibility).__name__} {plausibility!r:.60}"
+        )
     return plausibility
 
 
 def _refuse(what: str, value: float, field_name: str, bound: float, slip: str) -> None:
-    raise PlausibilityError(f"{what} = {value!r} is outside the plausible range for an aerial robot (<= {bound:g}): {slip}. "
-                            f"If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, "
-                            f"{field_name}=...) ")
+    raise PlausibilityError(
+        f"{what} = {value!r} is outside the plausible range for an aerial robot (<= {bound:g}): {slip}. "
+        f"If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, "
+        f"{field_name}=...) "
+    )
 
 
 def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: str = "the rotor set") -> None:
@@ -87,14 +91,25 @@ def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: st
         label = f"{source}: rotor {k + 1} ({r.name!r})"
         d = math.hypot(*r.position_body)
         if d > P.rotor_distance_max:
-            _refuse(f"{label} distance to B [m]", d, "rotor_distance_max", P.rotor_distance_max,
-                    f"positions in millimetres? {d:g} mm = {d / 1000:g} m")
+            _refuse(
+                f"{label} distance to B [m]", d, "rotor_distance_max", P.rotor_distance_max, f"positions in millimetres? {d:g} mm = {d / 1000:g} m"
+            )
         if r.kappa > P.kappa_max:
-            _refuse(f"{label} kappa [m]", r.kappa, "kappa_max", P.kappa_max,
-                    f"a drag/thrust ratio in millimetres? {r.kappa:g} mm = {r.kappa / 1000:g} m (propellers: 0.005-0.06 m)")
+            _refuse(
+                f"{label} kappa [m]",
+                r.kappa,
+                "kappa_max",
+                P.kappa_max,
+                f"a drag/thrust ratio in millimetres? {r.kappa:g} mm = {r.kappa / 1000:g} m (propellers: 0.005-0.06 m)",
+            )
         if math.isfinite(r.f_max) and r.f_max > P.rotor_thrust_max:
-            _refuse(f"{label} f_max [N]", r.f_max, "rotor_thrust_max", P.rotor_thrust_max,
-                    f"a thrust in grams-force? {r.f_max:g} gf = {r.f_max * 9.80665e-3:.4g} N")
+            _refuse(
+                f"{label} f_max [N]",
+                r.f_max,
+                "rotor_thrust_max",
+                P.rotor_thrust_max,
+                f"a thrust in grams-force? {r.f_max:g} gf = {r.f_max * 9.80665e-3:.4g} N",
+            )
 
 
 # ------------------------------------------------------------------------- URDF
@@ -112,8 +127,13 @@ def _check_joint(joint: ET.Element, P: Plausibility, source: str) -> None:
         xyz = _floats(origin.get("xyz"))
         d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
         if d > P.length_max:
-            _refuse(f"{source}: joint {name!r} <origin xyz> length [m]", d, "length_max", P.length_max,
-                    f"lengths in millimetres? {d:g} mm = {d / 1000:g} m")
+            _refuse(
+                f"{source}: joint {name!r} <origin xyz> length [m]",
+                d,
+                "length_max",
+                P.length_max,
+                f"lengths in millimetres? {d:g} mm = {d / 1000:g} m",
+            )
     limit = joint.find("limit")
     if limit is not None and kind in ("revolute", "prismatic"):
         for attr in ("lower", "upper"):
@@ -122,27 +142,49 @@ def _check_joint(joint: ET.Element, P: Plausibility, source: str) -> None:
                 continue
             v = v[0]
             if kind == "revolute" and abs(v) > P.revolute_limit_max:
-                _refuse(f"{source}: revolute joint {name!r} <limit {attr}> [rad]", v, "revolute_limit_max", P.revolute_limit_max,
-                        f"degrees? {v:g} deg = {math.radians(v):.6g} rad")
+                _refuse(
+                    f"{source}: revolute joint {name!r} <limit {attr}> [rad]",
+                    v,
+                    "revolute_limit_max",
+                    P.revolute_limit_max,
+                    f"degrees? {v:g} deg = {math.radians(v):.6g} rad",
+                )
             if kind == "prismatic" and abs(v) > P.prismatic_limit_max:
-                _refuse(f"{source}: prismatic joint {name!r} <limit {attr}> [m]", v, "prismatic_limit_max", P.prismatic_limit_max,
-                        f"millimetres? {v:g} mm = {v / 1000:g} m")
+                _refuse(
+                    f"{source}: prismatic joint {name!r} <limit {attr}> [m]",
+                    v,
+                    "prismatic_limit_max",
+                    P.prismatic_limit_max,
+                    f"millimetres? {v:g} mm = {v / 1000:g} m",
+                )
         eff = _floats(limit.get("effort"))
-        bound, field_name = ((P.revolute_effort_max, "revolute_effort_max") if kind == "revolute" else
-                             (P.prismatic_effort_max, "prismatic_effort_max"))
+        bound, field_name = (P.revolute_effort_max, "revolute_effort_max") if kind == "revolute" else (P.prismatic_effort_max, "prismatic_effort_max")
         if eff and eff[0] > bound:
             unit = "N m" if kind == "revolute" else "N"
-            _refuse(f"{source}: joint {name!r} <limit effort> [{unit}]", eff[0], field_name, bound,
-                    f"N mm or kg cm? {eff[0]:g} N mm = {eff[0] / 1000:g} N m" if kind == "revolute" else
-                    f"grams-force? {eff[0]:g} gf = {eff[0] * 9.80665e-3:.4g} N")
+            _refuse(
+                f"{source}: joint {name!r} <limit effort> [{unit}]",
+                eff[0],
+                field_name,
+                bound,
+                f"N mm or kg cm? {eff[0]:g} N mm = {eff[0] / 1000:g} N m"
+                if kind == "revolute"
+                else f"grams-force? {eff[0]:g} gf = {eff[0] * 9.80665e-3:.4g} N",
+            )
     dyn = joint.find("dynamics")
     if dyn is not None:
-        for attr, bound, field_name in (("damping", P.joint_damping_max, "joint_damping_max"),
-                                        ("friction", P.joint_friction_max, "joint_friction_max")):
+        for attr, bound, field_name in (
+            ("damping", P.joint_damping_max, "joint_damping_max"),
+            ("friction", P.joint_friction_max, "joint_friction_max"),
+        ):
             v = _floats(dyn.get(attr))
             if v and abs(v[0]) > bound:
-                _refuse(f"{source}: joint {name!r} <dynamics {attr}>", v[0], field_name, bound,
-                        "per-millimetre or per-degree units? URDF dynamics are in SI per radian or per metre")
+                _refuse(
+                    f"{source}: joint {name!r} <dynamics {attr}>",
+                    v[0],
+                    field_name,
+                    bound,
+                    "per-millimetre or per-degree units? URDF dynamics are in SI per radian or per metre",
+                )
 
 
 def _check_link(link: ET.Element, P: Plausibility, source: str) -> None:
@@ -154,23 +196,27 @@ def _check_link(link: ET.Element, P: Plausibility, source: str) -> None:
     mass = _floats(mass_el.get("value")) if mass_el is not None else []
     m = mass[0] if mass else 0.0
     if m > P.link_mass_max:
-        _refuse(f"{source}: link {name!r} <mass value> [kg]", m, "link_mass_max", P.link_mass_max,
-                f"grams? {m:g} g = {m / 1000:g} kg")
+        _refuse(f"{source}: link {name!r} <mass value> [kg]", m, "link_mass_max", P.link_mass_max, f"grams? {m:g} g = {m / 1000:g} kg")
     origin = inertial.find("origin")
     xyz = _floats(origin.get("xyz")) if origin is not None else []
     d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
     if d > P.length_max:
-        _refuse(f"{source}: link {name!r} <inertial><origin xyz> length [m]", d, "length_max", P.length_max,
-                f"millimetres? {d:g} mm = {d / 1000:g} m")
+        _refuse(
+            f"{source}: link {name!r} <inertial><origin xyz> length [m]", d, "length_max", P.length_max, f"millimetres? {d:g} mm = {d / 1000:g} m"
+        )
     inertia = inertial.find("inertia")
     if inertia is not None and m > 0.0:
         moments = [v for k in ("ixx", "iyy", "izz") for v in _floats(inertia.get(k))[:1]]
         if moments and max(moments) > 0.0:
             radius = math.sqrt(max(moments) / m)
             if radius > P.gyration_radius_max:
-                _refuse(f"{source}: link {name!r} radius of gyration sqrt(I_max / m) [m]", radius, "gyration_radius_max",
-                        P.gyration_radius_max, f"an inertia in kg mm^2 or g mm^2? (I_max = {max(moments):g}, m = {m:g}: "
-                        f"in kg mm^2 the radius would be {radius / 1000:g} m)")
+                _refuse(
+                    f"{source}: link {name!r} radius of gyration sqrt(I_max / m) [m]",
+                    radius,
+                    "gyration_radius_max",
+                    P.gyration_radius_max,
+                    f"an inertia in kg mm^2 or g mm^2? (I_max = {max(moments):g}, m = {m:g}: in kg mm^2 the radius would be {radius / 1000:g} m)",
+                )
 
 
 def check_urdf(root: ET.Element, plausibility: Plausibility | None, source: str = "URDF") -> None:

@@ -82,8 +82,17 @@ class Progress:
     (or leaving a ``with`` block) ends the display.
     """
 
-    def __init__(self, total: int, label: str = "", *, quiet: bool = False, stream: TextIO | None = None, initial: int = 0,
-                 unit: str = "it", interval: float | None = None) -> None:
+    def __init__(
+        self,
+        total: int,
+        label: str = "",
+        *,
+        quiet: bool = False,
+        stream: TextIO | None = None,
+        initial: int = 0,
+        unit: str = "it",
+        interval: float | None = None,
+    ) -> None:
         if isinstance(total, bool) or not isinstance(total, int) or total < 0:
             raise InputError(f"total must be an integer >= 0, got {total!r}: the number of units of work")
         if interval is not None and not interval > 0:
@@ -94,8 +103,13 @@ class Progress:
         if self.tty:
             options = {"file": self.stream, "mininterval": TTY_INTERVAL if interval is None else interval, "dynamic_ncols": True}
         else:
-            options = {"file": _Lines(self.stream), "mininterval": LOG_INTERVAL if interval is None else interval, "miniters": 1,
-                       "ascii": True, "bar_format": LOG_FORMAT}
+            options = {
+                "file": _Lines(self.stream),
+                "mininterval": LOG_INTERVAL if interval is None else interval,
+                "miniters": 1,
+                "ascii": True,
+                "bar_format": LOG_FORMAT,
+            }
         self._done, self._total = initial, total  # kept here too: a disabled tqdm does not count
         self._bar = tqdm(total=total, desc=label, initial=initial, unit=unit, disable=self.quiet, leave=True, **options)
 
@@ -145,8 +159,17 @@ class StatusProgress:
     those of :class:`Progress`.
     """
 
-    def __init__(self, label: str, total: int, done: int = 0, *, quiet: bool = False, stream: TextIO | None = None,
-                 unit: str = "run", interval: float | None = None) -> None:
+    def __init__(
+        self,
+        label: str,
+        total: int,
+        done: int = 0,
+        *,
+        quiet: bool = False,
+        stream: TextIO | None = None,
+        unit: str = "run",
+        interval: float | None = None,
+    ) -> None:
         self.label, self.failed = label, 0
         self._bar = Progress(total, label, quiet=quiet, stream=stream, initial=done, unit=unit, interval=interval)
         self.stream = self._bar.stream

@@ -174,5 +174,16 @@ COMMANDS: Registry[Callable[..., None]] = Registry("command group", COMMAND_GROU
 entry points of :data:`COMMAND_GROUP` (read on first use; the front end's modules are not plug-in code)."""
 
 
-__all__ = ["CHECKS", "COMMAND_GROUP", "COMMANDS", "COMPARISONS", "GAIN_TABLES", "MAP_REFERENCES", "PARAMETER_SETS", "PLUGIN_GROUP", "SCENARIOS",
-           "Registry", "load_plugins"]
+__all__ = [
+    "CHECKS",
+    "COMMAND_GROUP",
+    "COMMANDS",
+    "COMPARISONS",
+    "GAIN_TABLES",
+    "MAP_REFERENCES",
+    "PARAMETER_SETS",
+    "PLUGIN_GROUP",
+    "SCENARIOS",
+    "Registry",
+    "load_plugins",
+]

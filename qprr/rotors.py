@@ -66,8 +66,7 @@ class Rotor:
         if not norm > 1e-9:
             raise InputError(f"{label} axis_body must be a non-zero vector, got {self.axis_body!r}")
         object.__setattr__(self, "position_body", p)
-        object.__setattr__(self, "axis_body", tuple(float(x) for x in a / norm) if abs(norm - 1.0) > 1e-15 else
-                           tuple(float(x) for x in a))
+        object.__setattr__(self, "axis_body", tuple(float(x) for x in a / norm) if abs(norm - 1.0) > 1e-15 else tuple(float(x) for x in a))
         if self.spin not in (1, -1):
             raise InputError(f"{label} spin must be +1 or -1, got {self.spin!r}")
         object.__setattr__(self, "spin", int(self.spin))
@@ -79,8 +78,7 @@ class Rotor:
         if self.radius is not None:
             object.__setattr__(self, "radius", as_real(self.radius, f"{label} radius", positive=True, unit="m"))
         if not (math.isfinite(self.f_min) and 0.0 <= self.f_min < self.f_max):
-            raise InputError(f"{label} thrust bounds must satisfy 0 <= f_min < f_max, got f_min = {self.f_min!r}, "
-                             f"f_max = {self.f_max!r}")
+            raise InputError(f"{label} thrust bounds must satisfy 0 <= f_min < f_max, got f_min = {self.f_min!r}, f_max = {self.f_max!r}")
 
     def wrench_column(self) -> np.ndarray:
         """[a; p x a + spin kappa a] (6,): the base wrench at B, in B axes, per newton of thrust."""
@@ -174,9 +172,14 @@ def ideal_wrench_set(force_max: float, torque_max: float, *, name: str = "ideal"
         ax = "xyz"[k]
         neg = tuple(-c for c in e)
         half = 0.5 * torque_max
-        out += [Rotor(o, e, 1, 0.0, 0.0, force_max, f"{name}_f{ax}+"), Rotor(o, neg, 1, 0.0, 0.0, force_max, f"{name}_f{ax}-"),
-                Rotor(o, e, 1, 1.0, 0.0, half, f"{name}_m{ax}+a"), Rotor(o, neg, -1, 1.0, 0.0, half, f"{name}_m{ax}+b"),
-                Rotor(o, e, -1, 1.0, 0.0, half, f"{name}_m{ax}-a"), Rotor(o, neg, 1, 1.0, 0.0, half, f"{name}_m{ax}-b")]
+        out += [
+            Rotor(o, e, 1, 0.0, 0.0, force_max, f"{name}_f{ax}+"),
+            Rotor(o, neg, 1, 0.0, 0.0, force_max, f"{name}_f{ax}-"),
+            Rotor(o, e, 1, 1.0, 0.0, half, f"{name}_m{ax}+a"),
+            Rotor(o, neg, -1, 1.0, 0.0, half, f"{name}_m{ax}+b"),
+            Rotor(o, e, -1, 1.0, 0.0, half, f"{name}_m{ax}-a"),
+            Rotor(o, neg, 1, 1.0, 0.0, half, f"{name}_m{ax}-b"),
+        ]
     return tuple(out)
 
 
@@ -205,8 +208,12 @@ _AXIS_NORM_TOL = 1e-3  # a written axis is unit to this (rounded decimals), then
 
 def _listed3(value, what: str) -> tuple[float, float, float]:
     """A description's 3-vector: a list of 3 finite numbers (not a string, not a table)."""
-    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence) or len(value) != 3 or not all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value):
+    if (
+        isinstance(value, (str, bytes, Mapping))
+        or not isinstance(value, Sequence)
+        or len(value) != 3
+        or not all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in value)
+    ):
         raise InputError(f"{what} must be a list of 3 finite numbers, e.g. [0.2, 0.0, 0.05], got {value!r}")
     return (float(value[0]), float(value[1]), float(value[2]))
 
@@ -250,8 +257,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
         raise UnknownNameError("rotor default", sorted(bad)[0], tuple(sorted(_DEFAULT_KEYS)))
     entries = desc.get("rotor")
     if not entries or isinstance(entries, Mapping) or not isinstance(entries, (list, tuple)):
-        raise InputError("a rotor description needs a non-empty list 'rotor' of tables (in TOML: one [[rotor]] per rotor), "
-                         f"got {entries!r}")
+        raise InputError(f"a rotor description needs a non-empty list 'rotor' of tables (in TOML: one [[rotor]] per rotor), got {entries!r}")
     out = []
     for i, entry in enumerate(entries):
         if not isinstance(entry, Mapping):
@@ -261,7 +267,7 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
             raise UnknownNameError(f"key of rotor {i + 1}", sorted(bad)[0], tuple(sorted(_ROTOR_KEYS)))
         e = {**defaults, **entry}
         if "spin" not in e:
-            raise InputError(f"rotor {i + 1} needs 'spin': \"cw\" (+1: reaction torque along +axis) or \"ccw\" (-1)")
+            raise InputError(f'rotor {i + 1} needs \'spin\': "cw" (+1: reaction torque along +axis) or "ccw" (-1)')
         spin = e.get("spin")
         if isinstance(spin, str):
             if spin.lower() not in ("cw", "ccw"):
@@ -278,8 +284,10 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
             pos = _listed3(e["position"], f"rotor {i + 1} position [m]")
             distance = math.hypot(*pos)
             if distance > _MAX_ROTOR_DISTANCE:
-                raise InputError(f"rotor {i + 1} position {list(pos)} is {distance:.4g} m from B: positions are in metres "
-                                 "(millimetres divided by 1000), in the frame of the URDF's root link")
+                raise InputError(
+                    f"rotor {i + 1} position {list(pos)} is {distance:.4g} m from B: positions are in metres "
+                    "(millimetres divided by 1000), in the frame of the URDF's root link"
+                )
             if "quaternion_xyzw" in e and "axis" in e:
                 raise InputError(f"rotor {i + 1}: give 'axis' or 'quaternion_xyzw', not both")
             if "quaternion_xyzw" in e:
@@ -292,10 +300,19 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
                 norm = math.hypot(*axis)
                 if abs(norm - 1.0) > _AXIS_NORM_TOL:
                     unit = [round(x / norm, 6) for x in axis] if norm > 0 else "a non-zero vector"
-                    raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction "
-                                     f"in B (here {unit})")
-        out.append(Rotor(tuple(pos), tuple(axis), spin, e.get("kappa", 0.0), e.get("f_min", 0.0), e.get("f_max", math.inf),
-                         str(e.get("name", e.get("frame", f"rotor_{i + 1}"))), e.get("radius")))
+                    raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction in B (here {unit})")
+        out.append(
+            Rotor(
+                tuple(pos),
+                tuple(axis),
+                spin,
+                e.get("kappa", 0.0),
+                e.get("f_min", 0.0),
+                e.get("f_max", math.inf),
+                str(e.get("name", e.get("frame", f"rotor_{i + 1}"))),
+                e.get("radius"),
+            )
+        )
     return tuple(out)
 
 
@@ -381,8 +398,10 @@ class ActuationSummary:
     def __str__(self) -> str:
         kind = "fully actuated" if self.fully_actuated else "under-actuated"
         f = ", ".join(f"{x:.4g}" for x in self.hover_thrusts)
-        return (f"rank {self.rank} ({kind}); wrench directions {', '.join(self.directions) or 'none'}; attitude map rank "
-                f"{self.attitude_rank}/4, condition {self.condition:.4g}; hover thrusts [{f}] N, margin {self.hover_margin:.4g} N")
+        return (
+            f"rank {self.rank} ({kind}); wrench directions {', '.join(self.directions) or 'none'}; attitude map rank "
+            f"{self.attitude_rank}/4, condition {self.condition:.4g}; hover thrusts [{f}] N, margin {self.hover_margin:.4g} N"
+        )
 
 
 def _rank(s: np.ndarray) -> int:
@@ -436,11 +455,19 @@ def _summary(rotors: Sequence[Rotor], weight: float, com_body, optimal_margin: b
         # variables [f (n), s]; maximise s
         A_ub = np.vstack([np.hstack([-np.eye(n), np.ones((n, 1))]), np.hstack([np.eye(n)[fin], np.ones((int(fin.sum()), 1))])])
         b_ub = np.concatenate([-lo, hi[fin]])
-        res = linprog(np.r_[np.zeros(n), -1.0], A_ub=A_ub, b_ub=b_ub, A_eq=np.hstack([Omega, np.zeros((6, 1))]), b_eq=w,
-                      bounds=[(None, None)] * n + [(None, max(weight, 1e-9))], method="highs")
+        res = linprog(
+            np.r_[np.zeros(n), -1.0],
+            A_ub=A_ub,
+            b_ub=b_ub,
+            A_eq=np.hstack([Omega, np.zeros((6, 1))]),
+            b_eq=w,
+            bounds=[(None, None)] * n + [(None, max(weight, 1e-9))],
+            method="highs",
+        )
         margin = float(-res.fun) if res.status == 0 else -math.inf
-    return ActuationSummary(rank, directions, _ro(basis), rank == 6, _ro(d), att_rank, condition, float(length), _ro(w),
-                            _ro(np.asarray(f_ls, dtype=float)), margin)
+    return ActuationSummary(
+        rank, directions, _ro(basis), rank == 6, _ro(d), att_rank, condition, float(length), _ro(w), _ro(np.asarray(f_ls, dtype=float)), margin
+    )
 
 
 def _ro(a: np.ndarray) -> np.ndarray:
@@ -459,8 +486,12 @@ def duplicate_rotors(rotors: Sequence[Rotor]) -> list[tuple[int, int]]:
     for i, a in enumerate(rotors):
         for j in range(i + 1, len(rotors)):
             b = rotors[j]
-            if (math.dist(a.position_body, b.position_body) < DUPLICATE_DISTANCE and np.dot(a.axis_body, b.axis_body) > 1.0 - 1e-9
-                    and a.spin == b.spin and abs(a.kappa - b.kappa) <= 1e-12):
+            if (
+                math.dist(a.position_body, b.position_body) < DUPLICATE_DISTANCE
+                and np.dot(a.axis_body, b.axis_body) > 1.0 - 1e-9
+                and a.spin == b.spin
+                and abs(a.kappa - b.kappa) <= 1e-12
+            ):
                 out.append((i, j))
     return out
 
@@ -474,8 +505,7 @@ def _why_no_attitude(rotors: Sequence[Rotor], d: np.ndarray) -> str:
     if len(rotors) < 4:
         reasons.append(f"{len(rotors)} rotor(s) produce at most {len(rotors)} independent wrench components; a multirotor needs 4")
     if parallel and len({r.spin for r in rotors}) == 1:
-        reasons.append("every rotor has the same spin: the drag torques only add up, give half of them the other spin "
-                       "(\"cw\" / \"ccw\")")
+        reasons.append('every rotor has the same spin: the drag torques only add up, give half of them the other spin ("cw" / "ccw")')
     if parallel and all(r.kappa == 0.0 for r in rotors):
         reasons.append("every drag/thrust ratio kappa is 0: parallel rotors then give no yaw torque (propellers: 0.005-0.06 m)")
     if np.all(np.linalg.norm(p_perp, axis=1) < DUPLICATE_DISTANCE):
@@ -501,23 +531,33 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
     names = [r.name or f"rotor_{k + 1}" for k, r in enumerate(rotors)]
     if dup:
         pairs = ", ".join(f"{names[i]!r} (rotor {i + 1}) and {names[j]!r} (rotor {j + 1})" for i, j in dup)
-        raise ActuationError(f"{source}: {pairs} are the same rotor written twice (same position, axis, spin and kappa); "
-                             "was a rotor table pasted twice? Remove the copies (coaxial pairs sit at different heights)")
+        raise ActuationError(
+            f"{source}: {pairs} are the same rotor written twice (same position, axis, spin and kappa); "
+            "was a rotor table pasted twice? Remove the copies (coaxial pairs sit at different heights)"
+        )
     summary = _summary(rotors, as_real(weight, "weight", nonnegative=True, unit="N"), com_body, optimal_margin=False)
     listed = ", ".join(names)
     if not summary.can_control_attitude:
         raise ActuationError(
             f"{source}: the rotors [{listed}] span {summary.attitude_rank} of the 4 directions (collective thrust, roll, "
             f"pitch and yaw torque) every flight controller needs (wrench rank {summary.rank}, directions "
-            f"{', '.join(summary.directions) or 'none'}): {_why_no_attitude(rotors, summary.thrust_axis_body)}")
+            f"{', '.join(summary.directions) or 'none'}): {_why_no_attitude(rotors, summary.thrust_axis_body)}"
+        )
     if not summary.can_hover:
-        why = ("no thrusts give the hover wrench m g [d; c x d] (CoG outside what the rotors can balance)"
-               if np.isnan(summary.hover_thrusts).any() else
-               f"the best hover thrusts keep a margin of {summary.hover_margin:.4g} N to their bounds [f_min, f_max]")
-        raise ActuationError(f"{source}: the rotors [{listed}] cannot hover the vehicle (weight {weight:.6g} N, CoG "
-                             f"{np.round(np.asarray(com_body, dtype=float), 6).tolist()} m in B at the neutral configuration): "
-                             f"{why}; check the positions (frame B, metres), the thrust bounds and the spins")
+        why = (
+            "no thrusts give the hover wrench m g [d; c x d] (CoG outside what the rotors can balance)"
+            if np.isnan(summary.hover_thrusts).any()
+            else f"the best hover thrusts keep a margin of {summary.hover_margin:.4g} N to their bounds [f_min, f_max]"
+        )
+        raise ActuationError(
+            f"{source}: the rotors [{listed}] cannot hover the vehicle (weight {weight:.6g} N, CoG "
+            f"{np.round(np.asarray(com_body, dtype=float), 6).tolist()} m in B at the neutral configuration): "
+            f"{why}; check the positions (frame B, metres), the thrust bounds and the spins"
+        )
     if summary.condition > CONDITION_WARN:
-        warnings.warn(f"{source}: the rotors' attitude map is badly conditioned (condition {summary.condition:.3g} > "
-                      f"{CONDITION_WARN:g}): one of thrust, roll, pitch, yaw is far weaker than the others", ActuationWarning,
-                      stacklevel=3)
+        warnings.warn(
+            f"{source}: the rotors' attitude map is badly conditioned (condition {summary.condition:.3g} > "
+            f"{CONDITION_WARN:g}): one of thrust, roll, pitch, yaw is far weaker than the others",
+            ActuationWarning,
+            stacklevel=3,
+        )

@@ -73,8 +73,9 @@ class Scenario:
         """Whether the runner can fly a plant other than the controller's model (a ``plant`` argument)."""
         return "plant" in inspect.signature(self.runner).parameters
 
-    def run(self, platform: Platform | None = None, controller: str | None = None, progress: bool = False,
-            plant: Platform | None = None, **options) -> SimResult:
+    def run(
+        self, platform: Platform | None = None, controller: str | None = None, progress: bool = False, plant: Platform | None = None, **options
+    ) -> SimResult:
         """Run with ``options`` (unknown names raise :class:`UnknownNameError` listing the valid ones).
 
         ``plant``: fly another robot than the controller's model ``platform`` (model errors,
@@ -93,8 +94,10 @@ class Scenario:
             raise UnknownNameError("transition law", values["law"], LAWS)
         if plant is not None:
             if not self.takes_plant:
-                raise InputError(f"scenario {self.name!r} flies its model: it takes no plant (model errors); "
-                                 f"scenarios that do: {', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}")
+                raise InputError(
+                    f"scenario {self.name!r} flies its model: it takes no plant (model errors); "
+                    f"scenarios that do: {', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}"
+                )
             values["plant"] = plant
         return self.runner(platform=platform, controller=controller or self.controllers[0], progress=progress, **values)
 
@@ -121,8 +124,9 @@ def _hover_reach(platform, controller, progress, duration, dt, integrator, seed,
     q_arm = q0 + reach_fraction * (hi - q0)
     trajectory = hover_and_reach(platform, (0.0, 0.0, z), q_arm, law=law)
     ctrl = make_controller(controller, platform)
-    return simulate(platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, progress=progress,
-                    scenario="hover-reach", plant=plant)
+    return simulate(
+        platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, progress=progress, scenario="hover-reach", plant=plant
+    )
 
 
 def _ee_impedance(platform, controller, progress, **options):
@@ -144,26 +148,46 @@ def _ee_impedance_summary(result):
 
 
 GENERIC = (
-    Scenario("hover-reach", "any platform: climb to z, then move every arm joint towards its upper limit", _hover_reach,
-             ("idc", "dsid", "mfc", "decoupled", "mpc"),
-             {**COMMON_OPTIONS, "z": Option(2.0, "hover height [m]"),
-              "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits")}),
-    Scenario("ee-impedance", "any platform: end-effector impedance (6.72)-(6.73) against a compliant wall or a force step",
-             _ee_impedance, ("opspace-impedance", "idc"),
-             {"contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
-              "duration": Option(10.0, "run length [s]"), "dt": Option(SimConfig.dt, "integration step [s]"),
-              "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"), "seed": Option(0, "seed"),
-              "z": Option(2.0, "hover height [m]"),
-              "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
-              "omega_n": Option(4.0, "impedance natural frequency [rad/s] (every axis)"),
-              "zeta": Option(1.0, "impedance damping ratio"), "mass": Option(1.0, "impedance mass M_d [kg]"),
-              "gap": Option(0.05, "wall: distance from the end effector to the wall at the start [m]"),
-              "penetration": Option(0.05, "wall: how far the reference ends inside the wall [m]"),
-              "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"), "wall_damping": Option(20.0, "wall damping [N s/m]"),
-              "force": Option((0.5, 0.0, 0.3), "wrench: force on the end effector [N], world x, y, z"),
-              "t_on": Option(1.0, "wall: approach starts; wrench: force on [s]"),
-              "t_off": Option(6.0, "wall: retreat starts; wrench: force off [s]")},
-             None, _ee_impedance_plot, "Sec. 6.4.3.3, (6.71)-(6.73)", _ee_impedance_summary),
+    Scenario(
+        "hover-reach",
+        "any platform: climb to z, then move every arm joint towards its upper limit",
+        _hover_reach,
+        ("idc", "dsid", "mfc", "decoupled", "mpc"),
+        {
+            **COMMON_OPTIONS,
+            "z": Option(2.0, "hover height [m]"),
+            "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits"),
+        },
+    ),
+    Scenario(
+        "ee-impedance",
+        "any platform: end-effector impedance (6.72)-(6.73) against a compliant wall or a force step",
+        _ee_impedance,
+        ("opspace-impedance", "idc"),
+        {
+            "contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
+            "duration": Option(10.0, "run length [s]"),
+            "dt": Option(SimConfig.dt, "integration step [s]"),
+            "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
+            "seed": Option(0, "seed"),
+            "z": Option(2.0, "hover height [m]"),
+            "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
+            "omega_n": Option(4.0, "impedance natural frequency [rad/s] (every axis)"),
+            "zeta": Option(1.0, "impedance damping ratio"),
+            "mass": Option(1.0, "impedance mass M_d [kg]"),
+            "gap": Option(0.05, "wall: distance from the end effector to the wall at the start [m]"),
+            "penetration": Option(0.05, "wall: how far the reference ends inside the wall [m]"),
+            "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"),
+            "wall_damping": Option(20.0, "wall damping [N s/m]"),
+            "force": Option((0.5, 0.0, 0.3), "wrench: force on the end effector [N], world x, y, z"),
+            "t_on": Option(1.0, "wall: approach starts; wrench: force on [s]"),
+            "t_off": Option(6.0, "wall: retreat starts; wrench: force off [s]"),
+        },
+        None,
+        _ee_impedance_plot,
+        "Sec. 6.4.3.3, (6.71)-(6.73)",
+        _ee_impedance_summary,
+    ),
 )
 
 
@@ -185,54 +209,116 @@ def _mission_summary(result: SimResult) -> list[str]:
     return summary(result)
 
 
-GAINS_OPTION = Option("platform", "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
-                                  "class (the controller's own defaults), a registered gain table, or FILE.toml")
+GAINS_OPTION = Option(
+    "platform",
+    "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
+    "class (the controller's own defaults), a registered gain table, or FILE.toml",
+)
 """The ``gains`` option of the missions (:func:`qprr.missions.controller_for`)."""
 _FLIGHT = ("idc", "dsid", "decoupled")
-_HOVER = {**COMMON_OPTIONS, "gains": GAINS_OPTION, "z": Option(2.0, "hover height [m]"),
-          "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits")}
-_MOVE = {**_HOVER, "target": Option((1.0, 0.5, 2.0), "base position to reach [m], world x, y, z"),
-         "reach_fraction": Option(0.6, "arm target: fraction of the way from neutral to the upper joint limits")}
+_HOVER = {
+    **COMMON_OPTIONS,
+    "gains": GAINS_OPTION,
+    "z": Option(2.0, "hover height [m]"),
+    "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
+}
+_MOVE = {
+    **_HOVER,
+    "target": Option((1.0, 0.5, 2.0), "base position to reach [m], world x, y, z"),
+    "reach_fraction": Option(0.6, "arm target: fraction of the way from neutral to the upper joint limits"),
+}
 del _MOVE["z"]
 
 MISSIONS = (
-    Scenario("takeoff-hover", "any platform: climb from the ground to z in the first 40 % of the run, hold",
-             _mission_runner("takeoff_hover"), _FLIGHT, {k: v for k, v in _HOVER.items() if k != "reach_fraction"},
-             summary=_mission_summary),
-    Scenario("fly-to", "any platform: climb, fly to target while the arm reaches out, hold",
-             _mission_runner("point_to_point"), _FLIGHT, _MOVE, summary=_mission_summary),
-    Scenario("mission", "any platform: phases of base and arm coordinates by name from a TOML file (payload grasp/release too)",
-             _mission_runner("mission"), _FLIGHT,
-             {**COMMON_OPTIONS, "gains": GAINS_OPTION,
-              "mission": Option("", "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) "
-                                    "tables; empty: climb, fly 1 m, reach out")},
-             summary=_mission_summary),
-    Scenario("grasp-drop", "any platform: a mass grasped at the end effector at 25 % of the run, dropped at 55 %",
-             _mission_runner("payload"), ("idc", "payload-idc"),
-             {**_HOVER, "mass_fraction": Option(0.1, "payload mass as a fraction of the platform's mass")},
-             summary=_mission_summary),
-    Scenario("ee-push", "any platform: the end effector pushed into a compliant wall under impedance, held",
-             _mission_runner("push"), ("opspace-impedance", "idc"),
-             {**_HOVER, "gap": Option(0.05, "distance from the end effector to the wall at the start [m]"),
-              "penetration": Option(0.05, "how far the reference ends inside the wall [m]"),
-              "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"), "wall_damping": Option(20.0, "wall damping [N s/m]")},
-             summary=_mission_summary),
-    Scenario("hover-wind", "any platform: hover in a mean wind with a 1 - cos gust (base drag)", _mission_runner("wind"), _FLIGHT,
-             {**_HOVER, "mean_wind": Option((2.0, 0.0, 0.0), "mean wind [m/s], world x, y, z"),
-              "gust": Option((3.0, 1.0, 0.0), "gust peak [m/s], world x, y, z"),
-              "drag": Option(0.3, "linear drag coefficient of the base [N s/m]")},
-             summary=_mission_summary),
-    Scenario("motor-lag", "any platform: point-to-point at height through first-order rotor dynamics",
-             _mission_runner("motor_lag"), _FLIGHT,
-             {**_MOVE, "tau": Option(0.005, "rotor time constant [s]"),
-              "thrust_factor": Option(1e-5, "rotor thrust factor b [N s^2] (f = b w^2)")},
-             summary=_mission_summary),
-    Scenario("hover-noise", "any platform: hover under white noise on every generalised force (6.27)", _mission_runner("noise"), _FLIGHT,
-             {**_HOVER, "fraction": Option(0.02, "noise amplitude: fraction of each coordinate's actuator authority")}, summary=_mission_summary),
-    Scenario("hover-pulses", "any platform: hover hit by force pulses on z, x and y, then the arm (6.28)", _mission_runner("pulses"),
-             _FLIGHT, {**_HOVER, "force": Option(2.0, "pulse on the base forces [N]"),
-                       "torque": Option(0.05, "pulse on the arm efforts [N m or N]")},
-             summary=_mission_summary),
+    Scenario(
+        "takeoff-hover",
+        "any platform: climb from the ground to z in the first 40 % of the run, hold",
+        _mission_runner("takeoff_hover"),
+        _FLIGHT,
+        {k: v for k, v in _HOVER.items() if k != "reach_fraction"},
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "fly-to",
+        "any platform: climb, fly to target while the arm reaches out, hold",
+        _mission_runner("point_to_point"),
+        _FLIGHT,
+        _MOVE,
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "mission",
+        "any platform: phases of base and arm coordinates by name from a TOML file (payload grasp/release too)",
+        _mission_runner("mission"),
+        _FLIGHT,
+        {
+            **COMMON_OPTIONS,
+            "gains": GAINS_OPTION,
+            "mission": Option(
+                "", "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables; empty: climb, fly 1 m, reach out"
+            ),
+        },
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "grasp-drop",
+        "any platform: a mass grasped at the end effector at 25 % of the run, dropped at 55 %",
+        _mission_runner("payload"),
+        ("idc", "payload-idc"),
+        {**_HOVER, "mass_fraction": Option(0.1, "payload mass as a fraction of the platform's mass")},
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "ee-push",
+        "any platform: the end effector pushed into a compliant wall under impedance, held",
+        _mission_runner("push"),
+        ("opspace-impedance", "idc"),
+        {
+            **_HOVER,
+            "gap": Option(0.05, "distance from the end effector to the wall at the start [m]"),
+            "penetration": Option(0.05, "how far the reference ends inside the wall [m]"),
+            "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"),
+            "wall_damping": Option(20.0, "wall damping [N s/m]"),
+        },
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "hover-wind",
+        "any platform: hover in a mean wind with a 1 - cos gust (base drag)",
+        _mission_runner("wind"),
+        _FLIGHT,
+        {
+            **_HOVER,
+            "mean_wind": Option((2.0, 0.0, 0.0), "mean wind [m/s], world x, y, z"),
+            "gust": Option((3.0, 1.0, 0.0), "gust peak [m/s], world x, y, z"),
+            "drag": Option(0.3, "linear drag coefficient of the base [N s/m]"),
+        },
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "motor-lag",
+        "any platform: point-to-point at height through first-order rotor dynamics",
+        _mission_runner("motor_lag"),
+        _FLIGHT,
+        {**_MOVE, "tau": Option(0.005, "rotor time constant [s]"), "thrust_factor": Option(1e-5, "rotor thrust factor b [N s^2] (f = b w^2)")},
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "hover-noise",
+        "any platform: hover under white noise on every generalised force (6.27)",
+        _mission_runner("noise"),
+        _FLIGHT,
+        {**_HOVER, "fraction": Option(0.02, "noise amplitude: fraction of each coordinate's actuator authority")},
+        summary=_mission_summary,
+    ),
+    Scenario(
+        "hover-pulses",
+        "any platform: hover hit by force pulses on z, x and y, then the arm (6.28)",
+        _mission_runner("pulses"),
+        _FLIGHT,
+        {**_HOVER, "force": Option(2.0, "pulse on the base forces [N]"), "torque": Option(0.05, "pulse on the arm efforts [N m or N]")},
+        summary=_mission_summary,
+    ),
 )
 """The generic missions of :mod:`qprr.missions` (any platform, gains derived from it)."""
 
@@ -247,8 +333,7 @@ def get_scenario(name: str) -> Scenario:
     return SCENARIOS[name]
 
 
-def run(name: str, controller: str | None = None, *, platform: Platform | None = None, progress: bool = False,
-        **options) -> SimResult:
+def run(name: str, controller: str | None = None, *, platform: Platform | None = None, progress: bool = False, **options) -> SimResult:
     """Run scenario ``name`` (optionally with another ``controller`` by name and on another ``platform``)."""
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
 

@@ -77,8 +77,7 @@ def _sigmoid(tau: np.ndarray, order: int) -> list[np.ndarray]:
 def _quintic(tau: np.ndarray, order: int) -> list[np.ndarray]:
     """Minimum-jerk quintic s = 10 tau^3 - 15 tau^4 + 6 tau^5 and its derivatives on [0, 1]."""
     x = np.clip(tau, 0.0, 1.0)
-    s = [x**3 * (10 - 15 * x + 6 * x * x), 30 * x**2 * (1 - x) ** 2, 60 * x * (1 - x) * (1 - 2 * x),
-         60 - 360 * x + 360 * x * x, -360 + 720 * x]
+    s = [x**3 * (10 - 15 * x + 6 * x * x), 30 * x**2 * (1 - x) ** 2, 60 * x * (1 - x) * (1 - 2 * x), 60 - 360 * x + 360 * x * x, -360 + 720 * x]
     return s[: order + 1]
 
 
@@ -90,8 +89,13 @@ def _septic(tau: np.ndarray, order: int) -> list[np.ndarray]:
     """
     x = np.clip(tau, 0.0, 1.0)
     w = 1.0 - x
-    s = [x**4 * (35 - 84 * x + 70 * x * x - 20 * x**3), 140 * (x * w) ** 3, 420 * (x * w) ** 2 * (1 - 2 * x),
-         840 * x * w * (1 - 5 * x + 5 * x * x), 840 - 10080 * x + 25200 * x * x - 16800 * x**3]
+    s = [
+        x**4 * (35 - 84 * x + 70 * x * x - 20 * x**3),
+        140 * (x * w) ** 3,
+        420 * (x * w) ** 2 * (1 - 2 * x),
+        840 * x * w * (1 - 5 * x + 5 * x * x),
+        840 - 10080 * x + 25200 * x * x - 16800 * x**3,
+    ]
     return s[: order + 1]
 
 
@@ -111,8 +115,7 @@ def _times(t) -> np.ndarray:
     return as_array(t, "t", finite=True)
 
 
-def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, order: int = 3,
-               law: str = DEFAULT_LAW) -> list[np.ndarray]:
+def transition(t, t1: float, t2: float, start: float = 0.0, end: float = 1.0, order: int = 3, law: str = DEFAULT_LAW) -> list[np.ndarray]:
     """Smooth transition of Thesis (6.16) from ``start`` (t <= t1) to ``end`` (t >= t2).
 
     sigma(t) = start + (end - start) s((t - t1) / T), T = t2 - t1 (the thesis's T_s, printed
@@ -249,8 +252,9 @@ def line_phases(a: float, b: float, x_start: float, x_end: float, t1: float, t2:
     return Phase(cx, t1, t2, float(x_end)), Phase(cy, t1, t2, float(a * x_end + b))
 
 
-def hover_and_reach(platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0, 3.0), reach=(3.0, 6.0), psi: float = 0.0,
-                    law: str = DEFAULT_LAW) -> MultiPhase:
+def hover_and_reach(
+    platform, p_hover=(0.0, 0.0, 2.0), q_arm=None, *, climb=(0.0, 3.0), reach=(3.0, 6.0), psi: float = 0.0, law: str = DEFAULT_LAW
+) -> MultiPhase:
     """A mission for any platform: climb from the origin to ``p_hover`` [m] (world), then move the arm to ``q_arm``.
 
     ``q_arm`` (default: 60 % of the way from the neutral posture to the upper limit of each joint)
@@ -300,8 +304,14 @@ class Spiral:
     name: str = field(default="spiral", compare=False)
 
     def __post_init__(self) -> None:
-        for name, kw in (("z", {}), ("climb_time", {"positive": True}), ("t_f", {"nonnegative": True}), ("rate", {}),
-                         ("period", {"positive": True}), ("blend", {"nonnegative": True})):
+        for name, kw in (
+            ("z", {}),
+            ("climb_time", {"positive": True}),
+            ("t_f", {"nonnegative": True}),
+            ("rate", {}),
+            ("period", {"positive": True}),
+            ("blend", {"nonnegative": True}),
+        ):
             object.__setattr__(self, name, as_real(getattr(self, name), f"spiral {name}", **kw))
         object.__setattr__(self, "arm", tuple(as_array(self.arm, "spiral arm", finite=True, ndim=1).tolist()))
 

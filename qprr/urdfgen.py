@@ -38,7 +38,7 @@ def _rgba(rgba) -> tuple[str, str]:
 
 def xml_name(x, name: str) -> str:
     """``x`` if it can name a URDF link, joint or robot (a non-empty string without <, >, quotes or &)."""
-    if not isinstance(x, str) or not x or any(ch in x for ch in "<>\"&"):
+    if not isinstance(x, str) or not x or any(ch in x for ch in '<>"&'):
         raise InputError(f"{name} must be a non-empty XML name, got {x!r}")
     return x
 
@@ -71,13 +71,19 @@ def _shape(origin: str, geometry: str, material: str, color: str, collision: boo
     return out
 
 
-def cylinder_visual(radius: float, length: float, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0), *,
-                    collision: bool = True) -> str:
+def cylinder_visual(
+    radius: float, length: float, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0), *, collision: bool = True
+) -> str:
     """``<visual>`` (and ``<collision>``) of a cylinder along the local z axis (after ``rpy``) centred at ``xyz``."""
     material, color = _rgba(rgba)
     radius, length = as_real(radius, "radius", positive=True), as_real(length, "length", positive=True)
-    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>',
-                  f'<cylinder radius="{num(radius)}" length="{num(length)}"/>', material, color, collision)
+    return _shape(
+        f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>',
+        f'<cylinder radius="{num(radius)}" length="{num(length)}"/>',
+        material,
+        color,
+        collision,
+    )
 
 
 def box_visual(size, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0.6, 1.0), *, collision: bool = True) -> str:
@@ -85,8 +91,9 @@ def box_visual(size, xyz=(0.0, 0.0, 0.0), rpy=(0.0, 0.0, 0.0), rgba=(0.6, 0.6, 0
     material, color = _rgba(rgba)
     if as_vector(size, 3, "size").min() <= 0.0:
         raise InputError(f"size must be 3 positive lengths [m], got {list(size)!r}")
-    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>', f'<box size="{vec(size, "size", 3)}"/>',
-                  material, color, collision)
+    return _shape(
+        f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="{vec(rpy, "rpy", 3)}"/>', f'<box size="{vec(size, "size", 3)}"/>', material, color, collision
+    )
 
 
 def rpy_of_axis(axis) -> tuple[float, float, float]:
@@ -105,8 +112,7 @@ def sphere_visual(radius: float, xyz=(0.0, 0.0, 0.0), rgba=(0.8, 0.2, 0.2, 1.0),
     """``<visual>`` (and ``<collision>``) of a sphere of ``radius`` [m] centred at ``xyz``."""
     material, color = _rgba(rgba)
     radius = as_real(radius, "radius", positive=True)
-    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="0 0 0"/>', f'<sphere radius="{num(radius)}"/>', material, color,
-                  collision)
+    return _shape(f'<origin xyz="{vec(xyz, "xyz", 3)}" rpy="0 0 0"/>', f'<sphere radius="{num(radius)}"/>', material, color, collision)
 
 
 def link(name: str, inner: str = "") -> str:

@@ -23,6 +23,7 @@ from .errors import InputError, NonFiniteError, ShapeError, UnknownNameError
 # imaginary part dropped), object, string and boolean data, None, ragged sequences.
 _REAL_KINDS = "iuf"
 
+
 def _preview(x) -> str:
     """A short printable form of a bad value for error messages."""
     try:
@@ -30,6 +31,7 @@ def _preview(x) -> str:
     except Exception:
         text = f"<{type(x).__name__}>"
     return text if len(text) <= 80 else text[:77] + "..."
+
 
 def as_array(x, name: str, *, finite: bool = False, ndim: int | None = None) -> np.ndarray:
     """``x`` as a float array; refuses None, complex, object, string and boolean data, naming ``name``.
@@ -57,6 +59,7 @@ def as_array(x, name: str, *, finite: bool = False, ndim: int | None = None) -> 
         raise NonFiniteError(f"{name} must be finite, got {_preview(a)}")
     return a
 
+
 def as_vector(x, n: int, name: str) -> np.ndarray:
     """``x`` as a finite float vector of length ``n``; raise naming ``name`` otherwise."""
     a = as_array(x, name)
@@ -67,6 +70,7 @@ def as_vector(x, n: int, name: str) -> np.ndarray:
             raise NonFiniteError(f"{name} must be finite, got {a.tolist()}")
     return a
 
+
 def as_matrix(x, shape: tuple, name: str) -> np.ndarray:
     """``x`` as a finite float array of ``shape`` (an entry None matches any size, e.g. ``(None, 3)``)."""
     a = as_array(x, name, finite=True)
@@ -74,6 +78,7 @@ def as_matrix(x, shape: tuple, name: str) -> np.ndarray:
         want = "(" + ", ".join("m" if s is None else str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
         raise ShapeError(f"{name} must have shape {want}, got shape {a.shape}")
     return a
+
 
 def as_interval(x, name: str, *, lo: float | None = None, unit: str = "s") -> tuple[float, float]:
     """``x`` as an interval (a, b) of two finite numbers with a < b (and a >= ``lo`` when given), e.g. a phase's times."""
@@ -83,8 +88,18 @@ def as_interval(x, name: str, *, lo: float | None = None, unit: str = "s") -> tu
         raise InputError(f"{name} must be an interval (a, b) with a < b{floor} [{unit}], got {(a, b)!r}")
     return a, b
 
-def as_real(x, name: str, *, positive: bool = False, nonnegative: bool = False, allow_inf: bool = False,
-            lo: float | None = None, hi: float | None = None, unit: str = "") -> float:
+
+def as_real(
+    x,
+    name: str,
+    *,
+    positive: bool = False,
+    nonnegative: bool = False,
+    allow_inf: bool = False,
+    lo: float | None = None,
+    hi: float | None = None,
+    unit: str = "",
+) -> float:
     """``x`` as a Python float: a real number (not a bool, a string, a complex or None), finite unless
     ``allow_inf``, > 0 if ``positive``, >= 0 if ``nonnegative``, in [lo, hi] when given; else an
     :class:`InputError` naming ``name`` and the value (``unit`` completes the message, e.g. "s")."""
@@ -100,10 +115,19 @@ def as_real(x, name: str, *, positive: bool = False, nonnegative: bool = False, 
         if math.isnan(v) or not allow_inf:
             raise NonFiniteError(f"{name} must be {'a number' if allow_inf else 'finite'}, got {v!r}")
     if (positive and not v > 0.0) or (nonnegative and not v >= 0.0) or (lo is not None and v < lo) or (hi is not None and v > hi):
-        bound = " and ".join(b for b in (("> 0" if positive else ""), (">= 0" if nonnegative else ""),
-                                         (f">= {lo!r}" if lo is not None else ""), (f"<= {hi!r}" if hi is not None else "")) if b)
+        bound = " and ".join(
+            b
+            for b in (
+                ("> 0" if positive else ""),
+                (">= 0" if nonnegative else ""),
+                (f">= {lo!r}" if lo is not None else ""),
+                (f"<= {hi!r}" if hi is not None else ""),
+            )
+            if b
+        )
         raise InputError(f"{name} must be {bound}{' ' + unit if unit else ''}, got {v!r}")
     return v
+
 
 def as_int(x, name: str, *, lo: int | None = None, hi: int | None = None) -> int:
     """``x`` as a Python int (an int or numpy integer, not a bool or a float), in [lo, hi] when given."""
@@ -115,6 +139,7 @@ def as_int(x, name: str, *, lo: int | None = None, hi: int | None = None) -> int
         raise InputError(f"{name} must be an integer {bound}, got {v!r}")
     return v
 
+
 def as_name(x, name: str, valid, kind: str | None = None) -> str:
     """``x`` if it is one of the strings ``valid``, else :class:`UnknownNameError` listing them (``kind`` names
     the thing in the message, default ``name``)."""
@@ -122,6 +147,7 @@ def as_name(x, name: str, valid, kind: str | None = None) -> str:
     if not isinstance(x, str) or x not in valid:
         raise UnknownNameError(f"{kind or name} ({name})" if kind else name, x, valid)
     return x
+
 
 def as_file(x, name: str, *, what: str = "file") -> Path:
     """``x`` (a str or a path) as the Path of an existing regular file, else an :class:`InputError` naming ``name`` and the path."""
@@ -132,6 +158,7 @@ def as_file(x, name: str, *, what: str = "file") -> Path:
         state = "is a directory" if path.is_dir() else "does not exist"
         raise InputError(f"{name}: {what} {str(path)!r} {state}")
     return path
+
 
 def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
     """``x`` as the Path of a file to write: not a directory, its parent a directory or creatable (not under a file),
@@ -150,6 +177,7 @@ def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
         raise InputError(f"{name}: cannot write {str(path)!r}: {str(parent)!r} is a file, not a directory")
     return path
 
+
 def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
     """Decorator: the arguments of ``fn`` converted by their annotation before it runs.
 
@@ -159,6 +187,7 @@ def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
     For closed forms with scalar arguments (the printed thesis formulas, the lecture's): a NaN, a
     string or a complex number in gets an error naming the argument instead of a NaN out.
     """
+
     def wrap(f):
         sig = inspect.signature(f)
         names = list(sig.parameters)
@@ -166,9 +195,9 @@ def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
         for p in sig.parameters.values():
             ann = p.annotation if isinstance(p.annotation, str) else getattr(p.annotation, "__name__", "")
             if ann == "float":
-                checks[p.name] = (lambda v, n=p.name, inf=p.name in allow_inf: as_real(v, n, allow_inf=inf))
+                checks[p.name] = lambda v, n=p.name, inf=p.name in allow_inf: as_real(v, n, allow_inf=inf)
             elif ann == "int":
-                checks[p.name] = (lambda v, n=p.name: as_int(v, n))
+                checks[p.name] = lambda v, n=p.name: as_int(v, n)
             elif ann.isidentifier() and ann[:1].isupper():
                 checks[p.name] = _instance_check(f, p.name, ann, p.default is None)
         if not checks:
@@ -177,7 +206,7 @@ def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
         @functools.wraps(f)
         def checked(*args, **kwargs):
             if args:
-                args = tuple(checks[n](a) if n in checks else a for n, a in zip(names, args)) + args[len(names):]
+                args = tuple(checks[n](a) if n in checks else a for n, a in zip(names, args)) + args[len(names) :]
             for k in kwargs.keys() & checks.keys():
                 kwargs[k] = checks[k](kwargs[k])
             return f(*args, **kwargs)
@@ -186,13 +215,15 @@ def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
 
     return wrap if fn is None else wrap(fn)
 
+
 def checked_module(namespace: dict, *, skip: tuple[str, ...] = ()) -> None:
     """:func:`checked_args` on every public function defined in a module (call it at the end of the module with
     ``globals()``): closed-form modules check their arguments without a decorator on each formula."""
     module = namespace["__name__"]
     for name, obj in list(namespace.items()):
-        if (inspect.isfunction(obj) and obj.__module__ == module and not name.startswith("_") and name not in skip):
+        if inspect.isfunction(obj) and obj.__module__ == module and not name.startswith("_") and name not in skip:
             namespace[name] = checked_args(obj)
+
 
 def _instance_check(f, name: str, cls_name: str, none_ok: bool):
     """A check that an argument is an instance of the class named ``cls_name`` in ``f``'s module (resolved at the first call)."""

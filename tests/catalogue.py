@@ -108,8 +108,9 @@ def _optional_missing(exc: ImportError) -> bool:
     """An import error that says an optional package is missing (not a bug of qprr: that must fail)."""
     from qprr.errors import MissingDependencyError
 
-    return isinstance(exc, MissingDependencyError) or (isinstance(exc, ModuleNotFoundError) and exc.name is not None
-                                                       and exc.name.split(".")[0] != "qprr")
+    return isinstance(exc, MissingDependencyError) or (
+        isinstance(exc, ModuleNotFoundError) and exc.name is not None and exc.name.split(".")[0] != "qprr"
+    )
 
 
 def walk(package: str = "qprr") -> list[Target]:
@@ -249,8 +250,11 @@ class Ctx:
 
     def reference(self):
         base = importlib.import_module("qprr.control.base")
-        return base.Reference(self.xi(), np.zeros(self.n_xi), np.zeros(self.n_xi), self.n_xi) if self.new else \
-            base.Reference(self.xi(), np.zeros(self.n_xi), np.zeros(self.n_xi))
+        return (
+            base.Reference(self.xi(), np.zeros(self.n_xi), np.zeros(self.n_xi), self.n_xi)
+            if self.new
+            else base.Reference(self.xi(), np.zeros(self.n_xi), np.zeros(self.n_xi))
+        )
 
     def controller(self):
         c = importlib.import_module("qprr.control")
@@ -264,11 +268,13 @@ class Ctx:
         def make():
             sim = importlib.import_module("qprr.sim")
             return sim.simulate(self.platform, self.controller(), self.trajectory(), 0.02, dt=0.002)
+
         return self.once("sim_result", make)
 
     def result_file(self) -> Path:
         def make():
             return self.sim_result().save(self.tmp / "result.npz")
+
         return self.once("result_file", make)
 
     def file(self, name: str, content: bytes) -> Path:
@@ -279,30 +285,40 @@ class Ctx:
     def rotors_toml(self) -> Path:
         def make():
             plats = importlib.import_module("qprr.platforms")
-            return next(plats.robots_dir().glob("*.toml")) if hasattr(plats, "robots_dir") and list(plats.robots_dir().glob("*.toml")) \
+            return (
+                next(plats.robots_dir().glob("*.toml"))
+                if hasattr(plats, "robots_dir") and list(plats.robots_dir().glob("*.toml"))
                 else next((Path(importlib.import_module("qprr").__file__).parent / "data").glob("*.toml"))
+            )
+
         return self.once("rotors_toml", make)
 
     def ideal_platform(self):
         """The platform with qprr.rotors.ideal_wrench_set thrusters (what IdealAllocator allocates on)."""
+
         def make():
             ideal = importlib.import_module("qprr.rotors").ideal_wrench_set(40.0, 5.0)
             return self.platform.replace(rotors=ideal, name="ideal")
+
         return self.once("ideal_platform", make)
 
     def campaign_spec(self):
         """A one-run campaign of a 0.02 s hover-reach."""
-        return self.once("campaign_spec", lambda: importlib.import_module("qprr.campaign.spec").CampaignSpec(
-            name="catalogue", scenario="hover-reach", options={"duration": 0.02}))
+        return self.once(
+            "campaign_spec",
+            lambda: importlib.import_module("qprr.campaign.spec").CampaignSpec(name="catalogue", scenario="hover-reach", options={"duration": 0.02}),
+        )
 
     def campaign_spec_file(self) -> Path:
-        return self.once("campaign_spec_file", lambda: self.file(
-            "campaign.toml", b'name = "catalogue"\nscenario = "hover-reach"\n[options]\nduration = 0.02\n'))
+        return self.once(
+            "campaign_spec_file", lambda: self.file("campaign.toml", b'name = "catalogue"\nscenario = "hover-reach"\n[options]\nduration = 0.02\n')
+        )
 
     def campaign_results_file(self) -> Path:
         def make():
             runner = importlib.import_module("qprr.campaign.runner")
             return runner.run_campaign(self.campaign_spec(), self.tmp / "campaign.csv", backend="inline", progress=False).path
+
         return self.once("campaign_results_file", make)
 
     def fresh_path(self, name: str) -> Path:
@@ -482,8 +498,11 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.thesis.*", "p_cm*", F(lambda c: np.array([0.01, 0.0, 0.1]))),
     ("qprr.thesis.*", "omega_b", F(lambda c: np.array([0.1, 0.0, 0.1]))),
     ("qprr.thesis.*", "lambdas", F(lambda c: np.array([0.1, 0.2, 0.3, 0.4]))),
-    ("qprr.thesis.*", "factors", Spec("obj", lambda c: importlib.import_module("qprr.thesis.printed").lu_factors_4_42(
-        c.q_arm(), (0.04, 0.055, 0.18, 0.1)))),
+    (
+        "qprr.thesis.*",
+        "factors",
+        Spec("obj", lambda c: importlib.import_module("qprr.thesis.printed").lu_factors_4_42(c.q_arm(), (0.04, 0.055, 0.18, 0.1))),
+    ),
     ("qprr.thesis.*", "B??", Spec("mat", lambda c: np.eye(3))),
     ("qprr.thesis.interaction.*", "h", F(lambda c: np.array([0.1, 0.0, 0.2, 0.0, 0.01, 0.0]))),
     ("qprr.thesis.interaction.*", "contact_b", F(lambda c: np.array([0.3, 0.0, 0.1]))),
@@ -533,8 +552,11 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.control.impedance.*", "euler_e", F(lambda c: np.array([0.1, 0.0, 0.2]))),
     ("qprr.control.inverse_dynamics.IDCGains", "k?", V(lambda c: np.ones(c.n_xi))),
     ("qprr.control.inverse_dynamics.IDCGains.*", "names", S(None, "skip")),
-    ("qprr.payload.combine_inertias", "?", Spec("obj", lambda c: importlib.import_module("qprr.payload").RigidInertia(
-        0.5, np.zeros(3), np.eye(3) * 1e-3))),
+    (
+        "qprr.payload.combine_inertias",
+        "?",
+        Spec("obj", lambda c: importlib.import_module("qprr.payload").RigidInertia(0.5, np.zeros(3), np.eye(3) * 1e-3)),
+    ),
     ("qprr.ik.tasks.pose.*Pose*", "target", Spec("obj", lambda c: c.target_pose())),
     ("qprr.ik.tasks.pose.BaseOrientationTask", "R_target", Spec("rot", lambda c: _rot())),
     ("qprr.ik.tasks.*", "name", S("t", "label")),
@@ -544,8 +566,11 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.ik.*", "M", Spec("obj", lambda c: c.target_pose())),
     ("qprr.ik.*", "p_d", F(lambda c: c.target())),
     ("qprr.ik.*", "R_d", Spec("rot", lambda c: _rot())),
-    ("qprr.ik.hierarchy.HierarchySolver.solve", "levels", Spec("obj", lambda c: importlib.import_module("qprr.ik").default_levels(
-        c.platform, c.target(), c.q_arm()))),
+    (
+        "qprr.ik.hierarchy.HierarchySolver.solve",
+        "levels",
+        Spec("obj", lambda c: importlib.import_module("qprr.ik").default_levels(c.platform, c.target(), c.q_arm())),
+    ),
     ("qprr.nomenclature.LinkSpec", "kind", S("R", "name")),
     ("qprr.nomenclature.build", "*_name", S("x", "xmlname")),
     ("qprr.urdfgen.num", "name", S("x", "skip")),
@@ -659,7 +684,8 @@ INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.campaign.spec.CampaignSpec": lambda c: c.campaign_spec(),
     "qprr.campaign.spec.Distribution": lambda c: importlib.import_module("qprr.campaign.spec").Distribution("uniform", 0.5, 1.5),
     "qprr.campaign.store.ResultStore": lambda c: importlib.import_module("qprr.campaign.store").ResultStore(
-        c.fresh_path("store.csv"), ("run", "status"), {"fingerprint": "catalogue"}),
+        c.fresh_path("store.csv"), ("run", "status"), {"fingerprint": "catalogue"}
+    ),
 }
 
 
@@ -673,9 +699,11 @@ def _rot() -> np.ndarray:
 
 
 def spec_for(target: Target, param: inspect.Parameter) -> Spec | None:
-    hits = [(sum(x.count(w) for x in (pattern, name) for w in "*?"), -len(pattern) - len(name), k, spec)
-            for k, (pattern, name, spec) in enumerate(QUALIFIED)
-            if fnmatch.fnmatchcase(param.name, name) and fnmatch.fnmatchcase(target.qualname, pattern)]
+    hits = [
+        (sum(x.count(w) for x in (pattern, name) for w in "*?"), -len(pattern) - len(name), k, spec)
+        for k, (pattern, name, spec) in enumerate(QUALIFIED)
+        if fnmatch.fnmatchcase(param.name, name) and fnmatch.fnmatchcase(target.qualname, pattern)
+    ]
     if hits:
         return min(hits, key=lambda h: h[:3])[3]  # the most specific pattern
     if param.name in SPECS:
@@ -700,8 +728,25 @@ def spec_for(target: Target, param: inspect.Parameter) -> Spec | None:
     return Spec("skip", lambda c, d=d: d)
 
 
-FREE_TEXT = {"name", "label", "title", "description", "color", "help", "message", "source", "scenario", "detail", "reason",
-             "provenance", "prefix", "suffix", "unit", "text", "what"}
+FREE_TEXT = {
+    "name",
+    "label",
+    "title",
+    "description",
+    "color",
+    "help",
+    "message",
+    "source",
+    "scenario",
+    "detail",
+    "reason",
+    "provenance",
+    "prefix",
+    "suffix",
+    "unit",
+    "text",
+    "what",
+}
 
 
 # ============================================================================ bad values
@@ -860,14 +905,12 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.trajectory.*", "t", "wrong length"): "any number of sample times",
     ("qprr.trajectory.*", "t", "empty"): "no sample times: an empty sample",
     ("qprr.trajectory.transition", "t", "2-D"): "transition is elementwise over times of any shape",
-
     ("qprr.analysis.chain.ArmChain.*", "q_arm", "2-D"): "a batch of configurations, one per row",
     ("qprr.analysis.*", "payload_masses", "wrong length"): "any number of payload masses",
     ("qprr.viz.animation.frame_indices", "t", "wrong length"): "any number of samples",
     ("qprr.viz.run.RunLog", "xi", "wrong shape"): "xi of (n, 8): a platform with two arm joints",
     ("qprr.wheeled.wheels.*Wheel.*", "s", "*"): "dual numeric/symbolic (backend m): s may be a sympy expression",
-    ("qprr.wheeled.robots.*.[AB]", "q", "*"): "dual numeric/symbolic (backend m): q may hold sympy symbols; simulate and the "
-    "controllers check q",
+    ("qprr.wheeled.robots.*.[AB]", "q", "*"): "dual numeric/symbolic (backend m): q may hold sympy symbols; simulate and the controllers check q",
     ("qprr.wheeled.robots.*.singularity", "q", "*"): "dual numeric/symbolic: q may hold sympy symbols",
     ("qprr.wheeled.sim.sinc", "*", "*"): HOT + "se2_flow (every integration step)",
     ("qprr.wheeled.robots.Omnidirectional", "robot", "*"): "robot None: the default three-wheel layout",
@@ -1014,8 +1057,10 @@ def instance_of(cls: type, ctx: Ctx):
     return fn(*args, **kwargs)
 
 
-RECORDS = {"ArmJoint": "a joint record that from_model reads off the Pinocchio model",
-           "Evidence": "what a check of qprr.thesis.checks returns (the numbers it measured)"}
+RECORDS = {
+    "ArmJoint": "a joint record that from_model reads off the Pinocchio model",
+    "Evidence": "what a check of qprr.thesis.checks returns (the numbers it measured)",
+}
 
 
 def is_record(cls: type, returned: set[str]) -> bool:
@@ -1058,8 +1103,14 @@ class _Hooks:
         return True
 
 
-def run(targets: list[Target] | None = None, *, include: Callable[[Target], bool] | None = None, timeout: float = TIMEOUT,
-        progress: Callable[[str], None] | None = None, hooks: _Hooks | None = None) -> Report:
+def run(
+    targets: list[Target] | None = None,
+    *,
+    include: Callable[[Target], bool] | None = None,
+    timeout: float = TIMEOUT,
+    progress: Callable[[str], None] | None = None,
+    hooks: _Hooks | None = None,
+) -> Report:
     """Feed every target its bad values; see the module docstring.  ``hooks``: see :class:`_Hooks` (audit only)."""
     t_start = time.perf_counter()
     targets = walk() if targets is None else targets
@@ -1090,8 +1141,11 @@ def _run_all(targets, include, timeout, progress, hooks, returned, errors, ctx, 
         if isinstance(target.obj, type) and is_record(target.obj, returned):
             report.not_fed[target.qualname] = "result record (returned by the API, not an entry point)"
             continue
-        if target.owner is not None and is_record(target.owner, returned) and \
-                f"{target.owner.__module__}.{target.owner.__qualname__}" not in INSTANCES:
+        if (
+            target.owner is not None
+            and is_record(target.owner, returned)
+            and f"{target.owner.__module__}.{target.owner.__qualname__}" not in INSTANCES
+        ):
             report.not_fed[target.qualname] = "method of a result record without an instance builder (INSTANCES)"
             continue
         pl = plan(target)

@@ -87,15 +87,17 @@ def _urdf_variants(text: str) -> Iterator[tuple[str, str, str]]:
                 yield f"joint {name!r} <limit {attr}> missing", name, _edit_attr(text, "joint", name, "limit", attr, None)
                 yield f"joint {name!r} <limit {attr}> NaN", name, _edit_attr(text, "joint", name, "limit", attr, "nan")
                 yield f"joint {name!r} <limit {attr}> negative", name, _edit_attr(text, "joint", name, "limit", attr, "-1")
-            yield (f"joint {name!r} <limit effort> in N mm", name,
-                   _edit_attr(text, "joint", name, "limit", "effort", f"{1e6 * float(lim.get('effort')):g}"))
-        dup = ET.tostring(joint, encoding="unicode").replace(f'<child link="{joint.find("child").get("link")}"',
-                                                             '<child link="extra"', 1)
-        extra = ('<link name="extra"><inertial><mass value="0.01"/><inertia ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" '
-                 'izz="1e-6"/></inertial></link>')
+            yield (
+                f"joint {name!r} <limit effort> in N mm",
+                name,
+                _edit_attr(text, "joint", name, "limit", "effort", f"{1e6 * float(lim.get('effort')):g}"),
+            )
+        dup = ET.tostring(joint, encoding="unicode").replace(f'<child link="{joint.find("child").get("link")}"', '<child link="extra"', 1)
+        extra = (
+            '<link name="extra"><inertial><mass value="0.01"/><inertia ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"/></inertial></link>'
+        )
         yield f"joint {name!r} name twice", name, text.replace("</robot>", dup + extra + "</robot>")
-        yield (f"joint {name!r} <child> unknown", name,
-               _edit_attr(text, "joint", name, "child", "link", joint.find("child").get("link") + "_typo"))
+        yield (f"joint {name!r} <child> unknown", name, _edit_attr(text, "joint", name, "child", "link", joint.find("child").get("link") + "_typo"))
         child = joint.find("child").get("link")
         second = f'<joint name="second_{name}" type="fixed"><parent link="{root.find("link").get("name")}"/><child link="{child}"/></joint>'
         if joint.find("parent").get("link") != root.find("link").get("name"):
@@ -107,8 +109,7 @@ def _urdf_variants(text: str) -> Iterator[tuple[str, str, str]]:
         inertial = link.find("inertial")
         if inertial is not None:
             mass = float(inertial.find("mass").get("value"))
-            yield (f"link {name!r} <mass> in grams", name,
-                   _edit_attr(text, "link", name, "inertial/mass", "value", f"{1000 * mass:g}"))
+            yield (f"link {name!r} <mass> in grams", name, _edit_attr(text, "link", name, "inertial/mass", "value", f"{1000 * mass:g}"))
             yield f"link {name!r} <mass> NaN", name, _edit_attr(text, "link", name, "inertial/mass", "value", "nan")
             if k == 0:
                 t = ET.fromstring(text)
@@ -134,8 +135,11 @@ def _rotor_variants(text: str) -> Iterator[tuple[str, str, str]]:
     yield "the rotor table pasted twice", "written twice", text + "\n" + "[[rotor]]" + "[[rotor]]".join(rotors)
     heights = iter(range(1, n + 1))
     yield "rotors at the centre", "rotor", re.sub(r"position = \[[^\]]*\]", lambda m: f"position = [0.0, 0.0, {0.03 * next(heights):g}]", text)
-    yield "rotors on one line", "one line", re.sub(r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]",
-                                                   lambda m: f"position = [{m.group(1)}, 0.0, {m.group(3)}]", text)
+    yield (
+        "rotors on one line",
+        "one line",
+        re.sub(r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]", lambda m: f"position = [{m.group(1)}, 0.0, {m.group(3)}]", text),
+    )
     yield "positions in millimetres", "rotor 1", re.sub(r"position = \[([-\d., ]+)\]", _mm, text)
 
 
@@ -180,8 +184,12 @@ def valid_variants() -> list[Variant]:
     """The first three entries of :data:`VALID_BY_DESIGN`, as files."""
     urdf, rotors = URDF.read_text(), ROTORS.read_text()
     head, *tables = rotors.split("[[rotor]]")
-    upper = [re.sub(r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]",
-                    lambda m: f"position = [{m.group(1)}, {m.group(2)}, {float(m.group(3)) + 0.08:g}]", t) for t in tables]
+    upper = [
+        re.sub(
+            r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]", lambda m: f"position = [{m.group(1)}, {m.group(2)}, {float(m.group(3)) + 0.08:g}]", t
+        )
+        for t in tables
+    ]
     upper = [t.replace('"cw"', '"x"').replace('"ccw"', '"cw"').replace('"x"', '"ccw"') for t in upper]
     x8 = rotors + "\n[[rotor]]" + "[[rotor]]".join(upper)
     root = ET.fromstring(urdf)
@@ -197,5 +205,4 @@ def valid_variants() -> list[Variant]:
     ET.SubElement(joint, "child", link="body_mass")
     massless_root = ET.tostring(root, encoding="unicode")
     pi_limits = _edit_attr(_edit_attr(urdf, "joint", "yaw", "limit", "lower", "-3.14159"), "joint", "yaw", "limit", "upper", "3.14159")
-    return [Variant("X8 coaxial", "", urdf, x8), Variant("massless root", "", massless_root, rotors),
-            Variant("+-pi limits", "", pi_limits, rotors)]
+    return [Variant("X8 coaxial", "", urdf, x8), Variant("massless root", "", massless_root, rotors), Variant("+-pi limits", "", pi_limits, rotors)]

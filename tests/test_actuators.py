@@ -65,9 +65,16 @@ def test_speed_saturation_caps_the_thrust():
     """A command above b w_max^2 spins the rotor to w_max and no further; a negative or tiny one to w_min."""
     act = RotorDynamics((B,) * 4, 0.005, 100.0, 700.0)
     np.testing.assert_allclose(act.speed_command([30.0, 1e-9, -5.0, B * 300.0**2]), [700.0, 100.0, 100.0, 300.0])
-    res = simulate(PLATFORM, _Thrusts(PLATFORM, np.array([19.0, 19.0, 19.0, 19.0])), Hold(), 0.1, dt=1e-4, integrator="rk4",
-                   actuators=RotorDynamics.for_rotors(PLATFORM.rotors, B, 0.005, w_max=700.0, initial=(100.0,) * 4),
-                   joint_stops=False)
+    res = simulate(
+        PLATFORM,
+        _Thrusts(PLATFORM, np.array([19.0, 19.0, 19.0, 19.0])),
+        Hold(),
+        0.1,
+        dt=1e-4,
+        integrator="rk4",
+        actuators=RotorDynamics.for_rotors(PLATFORM.rotors, B, 0.005, w_max=700.0, initial=(100.0,) * 4),
+        joint_stops=False,
+    )
     w = res.series["rotor_speed"]
     assert np.all(w <= 700.0 + 1e-9) and w[-1, 0] == pytest.approx(700.0, rel=1e-8)
     assert np.all(res.f <= B * 700.0**2 * (1 + 1e-12))
@@ -84,8 +91,7 @@ def test_start_hovering_holds_the_initial_configuration():
     """initial="hover": the rotors start at the speeds whose thrusts b w^2 carry the weight (CoG on the thrust axis: m g / 4
     each), whatever the controller's first command."""
     act = rotor_dynamics("q-prr", initial="hover")
-    res = simulate(PLATFORM, _Thrusts(PLATFORM, np.zeros(4)), Hold(), 0.003, actuators=act, joint_stops=False,
-                   xi0=np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0])
+    res = simulate(PLATFORM, _Thrusts(PLATFORM, np.zeros(4)), Hold(), 0.003, actuators=act, joint_stops=False, xi0=np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0])
     np.testing.assert_allclose(res.f[0], PLATFORM.total_mass * PLATFORM.g / 4, rtol=1e-12)
     assert res.series["rotor_speed"][1, 0] < res.series["rotor_speed"][0, 0]  # then they spin down to the zero command
 
@@ -98,8 +104,13 @@ def test_validation():
     with pytest.raises(ShapeError, match="one per rotor"):
         RotorDynamics((B,) * 4, (0.01, 0.02), 0.0, 800.0)
     with pytest.raises(ShapeError, match="4 rotors, the platform 6"):
-        simulate(qprr.load("borinot_flying_arm_2"), make_controller("idc", qprr.load("borinot_flying_arm_2")), Hold((0,) * 8), 0.01,
-                 actuators=rotor_dynamics("q-prr"))
+        simulate(
+            qprr.load("borinot_flying_arm_2"),
+            make_controller("idc", qprr.load("borinot_flying_arm_2")),
+            Hold((0,) * 8),
+            0.01,
+            actuators=rotor_dynamics("q-prr"),
+        )
     with pytest.raises(InputError, match="motor time constant"):
         simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(), 0.1, dt=1e-2, actuators=rotor_dynamics("q-prr"))
     with pytest.raises(InputError, match="RotorDynamics"):
@@ -136,24 +147,39 @@ CASES = {
     "idc + motor lag": lambda: dict(actuators=rotor_dynamics("q-prr", time_constant=0.005)),
     "idc + motor lag + wind drag + friction": lambda: dict(
         actuators=rotor_dynamics("q-prr", time_constant=0.005),
-        disturbance=qprr.sim.Disturbances((AerodynamicDrag((1.0, 1.0, 0.3), (0.03, 0.03, 0.09), 0.01, _wind()),
-                                           ViscousFriction((0.0,) * 6 + (0.5, 0.0075, 0.00025))))),
+        disturbance=qprr.sim.Disturbances(
+            (AerodynamicDrag((1.0, 1.0, 0.3), (0.03, 0.03, 0.09), 0.01, _wind()), ViscousFriction((0.0,) * 6 + (0.5, 0.0075, 0.00025)))
+        ),
+    ),
 }
 START = {"euler": 4, "midpoint": 4, "rk4": 4}
 
 
 def _final(name: str, integrator: str, substeps: int):
     kw = CASES[name]()
-    res = simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(tuple(XI_REF)), 0.5, dt=T_C / substeps, control_period=T_C,
-                   integrator=integrator, xi0=XI_CL, xi_dot0=XID_CL, joint_stops=False, seed=3, **kw)
+    res = simulate(
+        PLATFORM,
+        make_controller("idc", PLATFORM),
+        Hold(tuple(XI_REF)),
+        0.5,
+        dt=T_C / substeps,
+        control_period=T_C,
+        integrator=integrator,
+        xi0=XI_CL,
+        xi_dot0=XID_CL,
+        joint_stops=False,
+        seed=3,
+        **kw,
+    )
     assert res.status == "ok" and not np.any(res.flags)
     q, v = xi_to_qv(res.xi[-1], res.xi_dot[-1])
     return q, v, res.series["rotor_speed"][-1]
 
 
 def _error(a, b) -> float:
-    return max(float(np.abs(pin.difference(PLATFORM.model, a[0], b[0])).max()), float(np.abs(a[1] - b[1]).max()),
-               float(np.abs(a[2] - b[2]).max()) / 100.0)  # rotor speeds in hundreds of rad/s
+    return max(
+        float(np.abs(pin.difference(PLATFORM.model, a[0], b[0])).max()), float(np.abs(a[1] - b[1]).max()), float(np.abs(a[2] - b[2]).max()) / 100.0
+    )  # rotor speeds in hundreds of rad/s
 
 
 @pytest.fixture(scope="module")
@@ -182,8 +208,7 @@ def test_observed_order_with_the_actuator_stage(name, integrator, references):
 def test_no_stage_is_the_plain_simulator():
     """actuators=None and no wind: the run is the plain simulator's, bit for bit (the thesis scenarios are unchanged)."""
     a = simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(tuple(XI_REF)), 0.2, xi0=XI_CL, xi_dot0=XID_CL, joint_stops=False)
-    b = simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(tuple(XI_REF)), 0.2, xi0=XI_CL, xi_dot0=XID_CL, joint_stops=False,
-                 actuators=None)
+    b = simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(tuple(XI_REF)), 0.2, xi0=XI_CL, xi_dot0=XID_CL, joint_stops=False, actuators=None)
     np.testing.assert_array_equal(a.xi, b.xi)
     assert "rotor_speed" not in a.series
     assert math.isfinite(a.xi.sum())

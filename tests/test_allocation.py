@@ -19,6 +19,7 @@ def allocation_inverse(robot):
 def rotor_matrix(robot):
     return robot.rotor_matrix
 
+
 wrench = st.tuples(st.floats(-20, 120), st.floats(-8, 8), st.floats(-8, 8), st.floats(-3, 3))
 
 

@@ -27,8 +27,7 @@ from qprr.rotors import ideal_wrench_set
 
 def _non_uniform(p):
     """``p`` with per-rotor bounds that differ (f_min 0..0.3 N, f_max scaled 0.7..1.2)."""
-    rotors = tuple(dataclasses.replace(r, f_min=0.1 * (i % 4), f_max=r.f_max * (0.7 + 0.1 * i))
-                   for i, r in enumerate(p.rotors))
+    rotors = tuple(dataclasses.replace(r, f_min=0.1 * (i % 4), f_max=r.f_max * (0.7 + 0.1 * i)) for i, r in enumerate(p.rotors))
     return p.replace(rotors=rotors)
 
 
@@ -89,7 +88,7 @@ def test_in_loop_form_is_the_reference_method(case, data):
     np.testing.assert_array_equal(a[2], b[2])
     # and the physics: N f is what tau_out holds, thrusts within the bounds
     np.testing.assert_allclose(a[2], p.actuation_matrix @ a[1], rtol=0, atol=1e-9 * (1 + np.abs(tau[np.isfinite(tau)]).max()))
-    assert np.all(a[1][:p.n_rotors] >= fast.f_min - 1e-12) and np.all(a[1][:p.n_rotors] <= fast.f_max + 1e-12)
+    assert np.all(a[1][: p.n_rotors] >= fast.f_min - 1e-12) and np.all(a[1][: p.n_rotors] <= fast.f_max + 1e-12)
 
 
 def test_nan_wrench_and_nan_arm_effort_raise_the_generic_messages():

@@ -61,7 +61,7 @@ def test_random_demands_always_within_bounds(platform):
         res = alloc.allocate(tau)
         f = res.f[: p.n_rotors]
         assert np.all(f >= p.thrust_min) and np.all(f <= p.thrust_max), f
-        assert np.all(np.abs(res.f[p.n_rotors:]) <= p.arm_effort_limits)
+        assert np.all(np.abs(res.f[p.n_rotors :]) <= p.arm_effort_limits)
         np.testing.assert_allclose(res.tau_achieved, p.actuation_matrix @ res.f, atol=1e-12)
         free = alloc.Omega_P_inv @ tau[alloc.rows]
         assert res.rotor_saturated == bool(np.any(free < p.thrust_min) or np.any(free > p.thrust_max))
@@ -91,7 +91,7 @@ def test_exact_path_meets_the_producible_rows(platform):
         assert res.status == "exact" and not res.rotor_saturated
         np.testing.assert_allclose(res.tau_achieved[rows], tau[rows], atol=1e-10 * (1 + np.abs(tau).max()))
         np.testing.assert_allclose(res.tau_achieved[others], 0.0, atol=1e-12)
-        np.testing.assert_allclose(res.f[p.n_rotors:], tau[6:], atol=0)
+        np.testing.assert_allclose(res.f[p.n_rotors :], tau[6:], atol=0)
         f = res.f[: p.n_rotors]
         np.testing.assert_allclose(f, np.linalg.pinv(p.rotor_matrix[rows]) @ tau[rows], atol=1e-10)
         if p.n_rotors == len(rows):

@@ -43,8 +43,14 @@ def test_registered_in_the_qprr_command():
     from pathlib import Path
 
     root = Path(__file__).resolve().parents[1]
-    out = subprocess.run([sys.executable, "-m", "qprr", "analyze", "capacity", "--samples", "500"], cwd=root, capture_output=True,
-                         text=True, timeout=120, env={**os.environ, "PYTHONPATH": str(root)})
+    out = subprocess.run(
+        [sys.executable, "-m", "qprr", "analyze", "capacity", "--samples", "500"],
+        cwd=root,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env={**os.environ, "PYTHONPATH": str(root)},
+    )
     assert out.returncode == 0, out.stderr
     assert "payload capacity of Q-PRR" in out.stdout
 

@@ -139,9 +139,13 @@ def planar_rrp_geometry(p):
     for i in (2, 3, 4):
         assert np.allclose(model.jointPlacements[i].translation[:2], 0) and np.allclose(model.jointPlacements[i].rotation, np.eye(3))
     joints = (model.jointPlacements[3].translation[2], model.jointPlacements[4].translation[2])
-    return {"base": model.jointPlacements[2].translation[2], "joints": joints,
-            "tip": f.placement.translation[2], "m": [model.inertias[i].mass for i in range(1, 5)],
-            "lever": [model.inertias[i].lever.copy() for i in range(1, 5)]}
+    return {
+        "base": model.jointPlacements[2].translation[2],
+        "joints": joints,
+        "tip": f.placement.translation[2],
+        "m": [model.inertias[i].mass for i in range(1, 5)],
+        "lever": [model.inertias[i].lever.copy() for i in range(1, 5)],
+    }
 
 
 def planar_rrp_balanced_area(p, n_side=200, n_r=41):
@@ -183,8 +187,11 @@ def design_study_q_rrp():
     """The Q-RRP of the design study examples/design/thesis_architectures.toml (thesis masses and reach, +-4 cm slider)."""
     from qprr.nomenclature import LinkSpec, build
 
-    links = [LinkSpec("R", length=0.18, mass=0.1), LinkSpec("R", length=0.1, mass=0.092),
-             LinkSpec("P", length=0.055, mass=0.1375, lower=-0.04, upper=0.04)]
+    links = [
+        LinkSpec("R", length=0.18, mass=0.1),
+        LinkSpec("R", length=0.1, mass=0.092),
+        LinkSpec("P", length=0.055, mass=0.1375, lower=-0.04, upper=0.04),
+    ]
     return build("Q-RRP", links=links, body_mass=3.19)
 
 

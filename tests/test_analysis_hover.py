@@ -30,8 +30,15 @@ def lp_margin(p, w):
     c = np.zeros(n + 1)
     c[-1] = -1.0
     A_ub = np.vstack([np.hstack([-np.eye(n), np.ones((n, 1))]), np.hstack([np.eye(n), np.ones((n, 1))])])
-    res = linprog(c, A_ub=A_ub, b_ub=np.concatenate([-p.thrust_min, p.thrust_max]), A_eq=np.hstack([p.rotor_matrix, np.zeros((6, 1))]),
-                  b_eq=w, bounds=[(None, None)] * (n + 1), method="highs")
+    res = linprog(
+        c,
+        A_ub=A_ub,
+        b_ub=np.concatenate([-p.thrust_min, p.thrust_max]),
+        A_eq=np.hstack([p.rotor_matrix, np.zeros((6, 1))]),
+        b_eq=w,
+        bounds=[(None, None)] * (n + 1),
+        method="highs",
+    )
     return -res.fun
 
 
@@ -39,8 +46,9 @@ def lp_ray(p, w, e):
     n = p.n_rotors
     c = np.zeros(n + 1)
     c[-1] = -1.0
-    res = linprog(c, A_eq=np.hstack([p.rotor_matrix, -e[:, None]]), b_eq=w, bounds=list(zip(p.thrust_min, p.thrust_max)) + [(None, None)],
-                  method="highs")
+    res = linprog(
+        c, A_eq=np.hstack([p.rotor_matrix, -e[:, None]]), b_eq=w, bounds=list(zip(p.thrust_min, p.thrust_max)) + [(None, None)], method="highs"
+    )
     return -res.fun if res.status == 0 else -np.inf
 
 
@@ -66,8 +74,7 @@ def test_wrench_set_is_the_linear_programme(name):
     # a lateral force is not producible by coplanar rotors
     if W.rank == 4:
         assert not W.contains(p.rotor_matrix @ (0.5 * (p.thrust_min + p.thrust_max)) + np.array([1e-3, 0, 0, 0, 0, 0]))
-    zmax = linprog(-p.rotor_matrix[2], A_eq=p.rotor_matrix[0:2], b_eq=np.zeros(2), bounds=list(zip(p.thrust_min, p.thrust_max)),
-                   method="highs")
+    zmax = linprog(-p.rotor_matrix[2], A_eq=p.rotor_matrix[0:2], b_eq=np.zeros(2), bounds=list(zip(p.thrust_min, p.thrust_max)), method="highs")
     assert abs(W.force_max() + zmax.fun) < 1e-9
 
 
@@ -189,7 +196,7 @@ def test_hover_feasible_configuration_holds_in_simulation():
     res = sim.simulate(p, control.InverseDynamicsController(p), trajectory.Hold(xi0), 2.0)
     assert not np.any(res.flags & 3), "a rotor bound or an effort limit was active"
     assert np.abs(res.xi[:, 0:3] - xi0[0:3]).max() < 1e-3
-    assert np.abs(res.f[:, 0:p.n_rotors] - r.thrusts[i]).max() < 1e-9
+    assert np.abs(res.f[:, 0 : p.n_rotors] - r.thrusts[i]).max() < 1e-9
     # the payload envelope at the configuration where the rotors limit it most
     k = int(np.argmin(np.where(r.payload.rotors < r.payload.effort, r.payload.rotors, np.inf)))
     m_lim = float(r.payload.rotors[k])
@@ -205,5 +212,5 @@ def test_hover_feasible_configuration_holds_in_simulation():
             res = err.result
         assert bool(np.any(res.flags & 1)) is saturates
         if not saturates:
-            assert np.abs(res.f[:, 0:p.n_rotors] - expect.thrusts[0]).max() < 1e-9
+            assert np.abs(res.f[:, 0 : p.n_rotors] - expect.thrusts[0]).max() < 1e-9
             assert np.abs(res.xi[:, 0:3] - xi0[0:3]).max() < 1e-3

@@ -53,13 +53,10 @@ def test_benchmark_quick_mode_exits_0_and_prints_a_ratio(name, tmp_path):
     if name in NOT_YET_QUICK:
         assert "--quick" not in source, f"{name} accepts --quick now: remove it from NOT_YET_QUICK"
         pytest.skip(f"{name} has no --quick yet: {NOT_YET_QUICK[name]}")
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])),
-           "MPLBACKEND": "Agg"}
-    proc = subprocess.run([sys.executable, str(BENCH / name), "--quick"], cwd=tmp_path, env=env, capture_output=True, text=True,
-                          timeout=TIMEOUT)
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")])), "MPLBACKEND": "Agg"}
+    proc = subprocess.run([sys.executable, str(BENCH / name), "--quick"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=TIMEOUT)
     out = proc.stdout + proc.stderr
     assert proc.returncode == 0, f"{name} --quick exited {proc.returncode}:\n{out[-3000:]}"
     assert "\r" not in proc.stdout, f"{name} wrote a carriage return to a pipe"
     ratios = [line for line in out.splitlines() if RATIO.search(line)]
     assert ratios or MISSING.search(out), f"{name} --quick printed no ratio line and no missing-package message:\n{out[-3000:]}"
-

@@ -18,7 +18,10 @@ from qprr.thesis import gains
 from qprr.thesis.flight import flight
 
 SMALL = {
-    "name": "small", "scenario": "static-idc", "seed": 11, "samples": 2,
+    "name": "small",
+    "scenario": "static-idc",
+    "seed": 11,
+    "samples": 2,
     "options": {"duration": 0.3},
     "grid": {"controller": ["idc", "mfc"], "model.payload": [0.0, 0.2]},
     "random": {"model.mass": {"dist": "uniform", "low": 0.9, "high": 1.1}},
@@ -69,8 +72,7 @@ def test_runs_enumerate_the_grid_last_name_fastest_with_seeded_draws():
     spec = CampaignSpec.from_mapping(SMALL)
     assert spec.n_runs == 8 and spec.varying == ("controller", "model.payload", "model.mass")
     runs = list(spec.runs())
-    assert [(r.params["controller"], r.params["model.payload"]) for r in runs[::2]] == [
-        ("idc", 0.0), ("idc", 0.2), ("mfc", 0.0), ("mfc", 0.2)]
+    assert [(r.params["controller"], r.params["model.payload"]) for r in runs[::2]] == [("idc", 0.0), ("idc", 0.2), ("mfc", 0.0), ("mfc", 0.2)]
     assert all(0.9 <= r.params["model.mass"] <= 1.1 for r in runs)
     assert len({r.seed for r in runs}) == 8 and len({r.params["model.mass"] for r in runs}) == 8
     again = CampaignSpec.from_mapping(SMALL)
@@ -94,20 +96,23 @@ def test_an_explicit_seed_parameter_is_the_run_seed():
     assert [r.seed for r in spec.runs()] == [4, 4, 5, 5]
 
 
-@pytest.mark.parametrize("change, error, match", [
-    ({"wind": 1}, UnknownNameError, "campaign specification key"),
-    ({"options": {"duraton": 1.0}}, UnknownNameError, "duration"),
-    ({"grid": {"controller": ["pid"]}}, UnknownNameError, "idc"),
-    ({"grid": {"model.masss": [1.0]}}, UnknownNameError, "model.mass"),
-    ({"grid": {"model.mass": [0.0]}}, InputError, "mass"),
-    ({"grid": {"controller": "idc"}}, InputError, "list"),
-    ({"options": {"controller": "idc", "duration": 0.3}}, InputError, "twice"),
-    ({"scenario": "push-thrust", "grid": {"model.mass": [1.0]}, "random": {}, "options": {}}, InputError, "perturbed plant"),
-    ({"random": {"model.mass": {"dist": "uniform", "low": 2, "high": 1}}}, InputError, "low must be <= high"),
-    ({"random": {"model.mass": {"dist": "gauss"}}}, UnknownNameError, "normal"),
-    ({"samples": 0}, InputError, "samples"),
-    ({"callable": "x:y"}, InputError, "exactly one target"),
-])
+@pytest.mark.parametrize(
+    "change, error, match",
+    [
+        ({"wind": 1}, UnknownNameError, "campaign specification key"),
+        ({"options": {"duraton": 1.0}}, UnknownNameError, "duration"),
+        ({"grid": {"controller": ["pid"]}}, UnknownNameError, "idc"),
+        ({"grid": {"model.masss": [1.0]}}, UnknownNameError, "model.mass"),
+        ({"grid": {"model.mass": [0.0]}}, InputError, "mass"),
+        ({"grid": {"controller": "idc"}}, InputError, "list"),
+        ({"options": {"controller": "idc", "duration": 0.3}}, InputError, "twice"),
+        ({"scenario": "push-thrust", "grid": {"model.mass": [1.0]}, "random": {}, "options": {}}, InputError, "perturbed plant"),
+        ({"random": {"model.mass": {"dist": "uniform", "low": 2, "high": 1}}}, InputError, "low must be <= high"),
+        ({"random": {"model.mass": {"dist": "gauss"}}}, UnknownNameError, "normal"),
+        ({"samples": 0}, InputError, "samples"),
+        ({"callable": "x:y"}, InputError, "exactly one target"),
+    ],
+)
 def test_bad_specifications_fail_at_load_naming_the_culprit(change, error, match):
     with pytest.raises(error, match=match):
         CampaignSpec.from_mapping({**SMALL, **change})
@@ -130,9 +135,9 @@ def test_toml_and_json_give_the_same_specification(tmp_path):
     import json
 
     (tmp_path / "s.json").write_text(json.dumps(SMALL))
-    toml = '''name = "small"\nscenario = "static-idc"\nseed = 11\nsamples = 2\n[options]\nduration = 0.3\n[grid]
+    toml = """name = "small"\nscenario = "static-idc"\nseed = 11\nsamples = 2\n[options]\nduration = 0.3\n[grid]
 controller = ["idc", "mfc"]\n"model.payload" = [0.0, 0.2]\n[random]\n"model.mass" = { dist = "uniform", low = 0.9, high = 1.1 }
-[success]\nrmse_position = 0.05\n'''
+[success]\nrmse_position = 0.05\n"""
     (tmp_path / "s.toml").write_text(toml)
     a, b = CampaignSpec.load(tmp_path / "s.json"), CampaignSpec.load(tmp_path / "s.toml")
     assert a.fingerprint == b.fingerprint and list(a.runs()) == list(b.runs())
@@ -180,11 +185,16 @@ def test_same_table_on_a_running_scheduler_and_locally_for_a_larger_campaign(tmp
     distributed = pytest.importorskip("distributed")
     import logging
 
-    spec = CampaignSpec.from_mapping({**SMALL, "samples": 10, "options": {"duration": 2.0},
-                                      "random": {**SMALL["random"], "model.kappa": {"dist": "normal", "mean": 1.0, "std": 0.05}}})
+    spec = CampaignSpec.from_mapping(
+        {
+            **SMALL,
+            "samples": 10,
+            "options": {"duration": 2.0},
+            "random": {**SMALL["random"], "model.kappa": {"dist": "normal", "mean": 1.0, "std": 0.05}},
+        }
+    )
     a = run_campaign(spec, tmp_path / "a.csv", backend="local", workers=2, progress=False)
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                                  silence_logs=logging.ERROR) as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR) as cluster:
         b = run_campaign(spec, tmp_path / "b.csv", backend="dask", scheduler=cluster.scheduler_address, progress=False)
     assert a.executed == b.executed == 40
     _same_tables(a.results.table, b.results.table)
@@ -221,8 +231,9 @@ def test_one_writer_per_results_file(tmp_path):
 
 def test_failures_and_bugs_are_rows_with_their_reason(tmp_path):
     (tmp_path / "user.py").write_text(USER_FILE)
-    spec = CampaignSpec.from_mapping({"name": "fail", "callable": "user.py:target", "grid": {"kind": ["fly", "raise", "none"],
-                                      "spin": [0, 1]}}, base_dir=tmp_path)
+    spec = CampaignSpec.from_mapping(
+        {"name": "fail", "callable": "user.py:target", "grid": {"kind": ["fly", "raise", "none"], "spin": [0, 1]}}, base_dir=tmp_path
+    )
     res = run_campaign(spec, tmp_path / "f.csv", backend="local", workers=2, progress=False).results
     t = res.table
     by = {(k, f): (s, r, te) for k, f, s, r, te in zip(t["kind"], t["spin"], t["status"], t["reason"], t["t_end"])}

@@ -26,7 +26,7 @@ from qprr.campaign.store import ResultsFileError, ResultStore, ResultsWriteError
 from qprr.campaign.worker import make_payload, run_one, xi_names_of
 from qprr.errors import InputError, UnknownNameError
 
-TARGET = '''
+TARGET = """
 import os
 import signal
 import time
@@ -46,16 +46,24 @@ def target(params, seed, platform):
     if params["k"] % 3 == 2:
         raise ValueError(f'run {params["k"]} failed,\\n  File "x.py", line 3, in "target"\\n    a, b = "1,2"\\\\n\\nValueError: end')
     return simulate(platform, flight_controller("idc", platform), static_mission(), 0.02, seed=seed)
-'''
+"""
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
 def _spec(tmp_path: Path, n: int = 9) -> CampaignSpec:
     (tmp_path / "target.py").write_text(TARGET)
-    return CampaignSpec.from_mapping({"name": "faults", "callable": "target.py:target", "seed": 3, "grid": {"k": list(range(n))},
-                                      "random": {"x": {"dist": "uniform", "low": 0.0, "high": 1.0}}, "metrics": ["rmse"]},
-                                     base_dir=tmp_path)
+    return CampaignSpec.from_mapping(
+        {
+            "name": "faults",
+            "callable": "target.py:target",
+            "seed": 3,
+            "grid": {"k": list(range(n))},
+            "random": {"x": {"dist": "uniform", "low": 0.0, "high": 1.0}},
+            "metrics": ["rmse"],
+        },
+        base_dir=tmp_path,
+    )
 
 
 def _same(a, b) -> None:
@@ -144,16 +152,19 @@ def _edit(line: bytes, column: int, value: bytes, columns) -> bytes:
     return ",".join(fields).encode()
 
 
-@pytest.mark.parametrize("case, column, match", [
-    ("garbage", None, "2 fields where the header has 20"),
-    ("run=999", "run", "run 999 is outside the campaign's runs 0..8"),
-    ("run=abc", "run", "'abc' is not a run index"),
-    ("rmse_x=oops", "rmse_x", "'oops' is not a number"),
-    ("status=great", "status", "'great' is not a status"),
-    ("success=2", "success", "'2' is not 0 or 1"),
-    ("rmse_x=0.5", "crc32", "checksum does not match"),
-    ("seed=1 with its checksum", "seed", "is not what the specification gives run 1"),
-])
+@pytest.mark.parametrize(
+    "case, column, match",
+    [
+        ("garbage", None, "2 fields where the header has 20"),
+        ("run=999", "run", "run 999 is outside the campaign's runs 0..8"),
+        ("run=abc", "run", "'abc' is not a run index"),
+        ("rmse_x=oops", "rmse_x", "'oops' is not a number"),
+        ("status=great", "status", "'great' is not a status"),
+        ("success=2", "success", "'2' is not 0 or 1"),
+        ("rmse_x=0.5", "crc32", "checksum does not match"),
+        ("seed=1 with its checksum", "seed", "is not what the specification gives run 1"),
+    ],
+)
 def test_a_bad_row_is_named_with_file_line_and_column_and_refused(reference, tmp_path, case, column, match, capsys):
     import zlib
 
@@ -168,7 +179,7 @@ def test_a_bad_row_is_named_with_file_line_and_column_and_refused(reference, tmp
         name, value = case.split(" ")[0].split("=")
         body = _edit(lines[2], columns.index(name), value.encode(), columns)  # line 3 of the file: run 1
         if "checksum" in case:
-            body = body[:body.rfind(b",") + 1]
+            body = body[: body.rfind(b",") + 1]
             body += b"%08x" % zlib.crc32(body)
         lines[2] = body
     out = tmp_path / "bad.csv"
@@ -184,14 +195,17 @@ def test_a_bad_row_is_named_with_file_line_and_column_and_refused(reference, tmp
     assert where in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("meta, match", [
-    ([1, 2], "JSON object, this file holds a list"),
-    ({"fingerprint": "x", "format_version": 2}, "key 'columns' is missing"),
-    ("drop:fingerprint", "key 'fingerprint' is missing"),
-    ("spec:seed=4", "its 'spec' has fingerprint"),
-    ("columns:7", "key 'columns' must be a JSON list"),
-    ("kinds:status=real", "'kinds' gives column 'status' the kind 'real'"),
-])
+@pytest.mark.parametrize(
+    "meta, match",
+    [
+        ([1, 2], "JSON object, this file holds a list"),
+        ({"fingerprint": "x", "format_version": 2}, "key 'columns' is missing"),
+        ("drop:fingerprint", "key 'fingerprint' is missing"),
+        ("spec:seed=4", "its 'spec' has fingerprint"),
+        ("columns:7", "key 'columns' must be a JSON list"),
+        ("kinds:status=real", "'kinds' gives column 'status' the kind 'real'"),
+    ],
+)
 def test_bad_metadata_is_named_with_its_file_and_key(reference, tmp_path, meta, match):
     spec, data, table, rows, names, ref_dir = reference
     good = json.loads((ref_dir / "full.meta.json").read_text())
@@ -283,9 +297,13 @@ def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path
                 fh.write(b"\0" * (8192 - 1024 - 4096 + 900))
             except OSError:
                 pass
-        proc = subprocess.run([sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out),
-                               "--backend", "inline", "--quiet"], capture_output=True, text=True, cwd=ROOT,
-                              env={**os.environ, "PYTHONPATH": str(ROOT)})
+        proc = subprocess.run(
+            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "inline", "--quiet"],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+            env={**os.environ, "PYTHONPATH": str(ROOT)},
+        )
         assert proc.returncode == 3, proc.stderr
         err = proc.stderr.strip().splitlines()
         assert len(err) == 1 and f"'{out}'" in err[0] and "No space left on device" in err[0], proc.stderr
@@ -340,9 +358,14 @@ def _alive(pid: int) -> bool:
 
 def _start(tmp_path: Path, spec: CampaignSpec, out: Path, delay: float) -> subprocess.Popen:
     (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
-    return subprocess.Popen([sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out),
-                             "--backend", "local", "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True, env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": str(delay)})
+    return subprocess.Popen(
+        [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "local", "--workers", "2"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": str(delay)},
+    )
 
 
 def _wait_rows(out: Path, n: int, proc: subprocess.Popen, timeout: float = 60.0) -> None:
@@ -443,8 +466,12 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
     monkeypatch.setenv("QPRR_TEST_DELAY", "0.4")
     monkeypatch.setenv("QPRR_TEST_LOG", str(tmp_path / "started.log"))
     saved_at_kill = []
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None,
-                                  silence_logs=logging.CRITICAL) as cluster, distributed.Client(cluster) as client:
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, host="127.0.0.1", dashboard_address=None, silence_logs=logging.CRITICAL
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
         pids = list(client.run(os.getpid).values())
         out = tmp_path / "d.csv"
 
@@ -473,17 +500,32 @@ def test_a_lost_scheduler_saves_no_placeholder_and_exits_non_zero(reference, tmp
     spec, data, table, rows, names, ref_dir = reference
     shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
     (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
-    cluster = subprocess.Popen([sys.executable, "-c", "import logging, time, distributed\n"
-                                "c = distributed.LocalCluster(n_workers=1, threads_per_worker=1, host='127.0.0.1', "
-                                "dashboard_address=None, silence_logs=logging.CRITICAL)\nprint(c.scheduler_address, flush=True)\n"
-                                "time.sleep(600)"], cwd=ROOT, stdout=subprocess.PIPE, text=True,
-                               env={**os.environ, "PYTHONPATH": str(ROOT)}, start_new_session=True)
+    cluster = subprocess.Popen(
+        [
+            sys.executable,
+            "-c",
+            "import logging, time, distributed\n"
+            "c = distributed.LocalCluster(n_workers=1, threads_per_worker=1, host='127.0.0.1', "
+            "dashboard_address=None, silence_logs=logging.CRITICAL)\nprint(c.scheduler_address, flush=True)\n"
+            "time.sleep(600)",
+        ],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        text=True,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        start_new_session=True,
+    )
     try:
         address = cluster.stdout.readline().strip()
         out = tmp_path / "l.csv"
-        proc = subprocess.Popen([sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out),
-                                 "--scheduler", address], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                                env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.5"})
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--scheduler", address],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.5"},
+        )
         _wait_rows(out, 2, proc)
         os.killpg(cluster.pid, signal.SIGKILL)  # the scheduler and its worker
         stdout, stderr = proc.communicate(timeout=120)
@@ -521,8 +563,11 @@ def test_any_text_round_trips_through_a_record_on_one_line():
     record, store_parse = store_mod.record, store_mod._parse
 
     @settings(max_examples=150, deadline=None)
-    @given(st.lists(st.text(alphabet=st.characters(codec="utf-8")), min_size=1, max_size=4),
-           st.floats(allow_nan=True, allow_infinity=True), st.integers(-2**63, 2**63 - 1))
+    @given(
+        st.lists(st.text(alphabet=st.characters(codec="utf-8")), min_size=1, max_size=4),
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(-(2**63), 2**63 - 1),
+    )
     def check(texts, x, n):
         line = record([n, x, *texts])
         assert line.endswith(b"\n") and line.count(b"\n") == 1 and b"\r" not in line

@@ -37,8 +37,19 @@ def test_the_catalogue_covers_the_api(report):
     print(f"no valid call from the table ({len(report.baseline_failed)}): {sorted(report.baseline_failed)}")
     print(f"modules not imported (optional dependency missing): {catalogue.MISSING}")
     assert len(fed) >= 400 and len(report.outcomes) >= 5000
-    for core in ("qprr.charts.", "qprr.kinematics.", "qprr.dynamics.", "qprr.actuation.", "qprr.ik.", "qprr.payload.",
-                 "qprr.model.", "qprr.rotors.", "qprr.trajectory.", "qprr.sim.loop.", "qprr.sim.result."):
+    for core in (
+        "qprr.charts.",
+        "qprr.kinematics.",
+        "qprr.dynamics.",
+        "qprr.actuation.",
+        "qprr.ik.",
+        "qprr.payload.",
+        "qprr.model.",
+        "qprr.rotors.",
+        "qprr.trajectory.",
+        "qprr.sim.loop.",
+        "qprr.sim.result.",
+    ):
         unbuilt = [k for k in report.baseline_failed if k.startswith(core)]
         assert not unbuilt, f"the catalogue cannot call these core functions with valid arguments: {unbuilt}"
 
@@ -49,8 +60,9 @@ def test_allowed_entries_are_explained_and_in_use(report):
         assert why.strip(), f"allow-list entry {(pattern, param, label)} has no reason"
         if any(pattern.startswith(module + ".") for module in catalogue.MISSING):
             continue  # its module needs an optional dependency that is not installed: no case can use it here
-        assert any(fnmatch.fnmatchcase(t, pattern) and fnmatch.fnmatchcase(p, param) and fnmatch.fnmatchcase(lb, label)
-                   for t, p, lb in used), f"stale allow-list entry {(pattern, param, label)}: no case uses it"
+        assert any(fnmatch.fnmatchcase(t, pattern) and fnmatch.fnmatchcase(p, param) and fnmatch.fnmatchcase(lb, label) for t, p, lb in used), (
+            f"stale allow-list entry {(pattern, param, label)}: no case uses it"
+        )
 
 
 def test_the_judge_needs_the_argument_name():
@@ -74,8 +86,9 @@ def test_every_bad_urdf_and_rotor_file_ends_in_a_qprr_error_naming_the_element()
     outcomes = catalogue_files.run_files()
     bad = [o for o in outcomes if o.verdict != "good"]
     assert len(outcomes) >= 90, len(outcomes)
-    assert not bad, f"{len(bad)} of {len(outcomes)} bad files not refused naming the element ({Counter(o.verdict for o in outcomes)}):\n" + \
-        "\n".join(f"{o.verdict:8s} {o.label}: {o.detail}" for o in bad)
+    assert not bad, f"{len(bad)} of {len(outcomes)} bad files not refused naming the element ({Counter(o.verdict for o in outcomes)}):\n" + "\n".join(
+        f"{o.verdict:8s} {o.label}: {o.detail}" for o in bad
+    )
 
 
 def test_the_near_mistakes_that_are_legitimate_load(tmp_path):

@@ -46,9 +46,7 @@ def test_round_trip_xi_qv(xi, xi_dot):
 def test_rate_map_is_the_tangent_map(xi, xi_dot):
     """pin.difference(q(xi), q(xi + h xi_dot)) / h -> S(xi) xi_dot: v really is Pinocchio's velocity."""
     h = 1e-6
-    dq = pin.difference(
-        _ff_model(), co.xi_to_q(xi - h * xi_dot), co.xi_to_q(xi + h * xi_dot)
-    ) / (2 * h)
+    dq = pin.difference(_ff_model(), co.xi_to_q(xi - h * xi_dot), co.xi_to_q(xi + h * xi_dot)) / (2 * h)
     np.testing.assert_allclose(dq, co.rate_map(xi) @ xi_dot, atol=1e-6 * (1 + np.abs(xi_dot).max()))
 
 
@@ -164,10 +162,12 @@ def free_flyer_model(n_arm: int) -> pin.Model:
         import qprr
         import qprr.thesis
 
-        _MODELS[n_arm] = {0: lambda: qprr.platforms.multirotor_model("hector"),
-                          2: lambda: qprr.load("borinot_flying_arm_2").model,
-                          3: lambda: qprr.thesis.load().model,
-                          5: lambda: qprr.load("hextilt_flying_arm_5").model}[n_arm]()
+        _MODELS[n_arm] = {
+            0: lambda: qprr.platforms.multirotor_model("hector"),
+            2: lambda: qprr.load("borinot_flying_arm_2").model,
+            3: lambda: qprr.thesis.load().model,
+            5: lambda: qprr.load("hextilt_flying_arm_5").model,
+        }[n_arm]()
         assert _MODELS[n_arm].nv == 6 + n_arm
     return _MODELS[n_arm]
 
@@ -176,8 +176,10 @@ def free_flyer_model(n_arm: int) -> pin.Model:
 def chart_state(draw, max_pitch: float = 1.5):
     """(n_arm, xi, xi_dot) for n_arm in N_ARMS (arm values within +-1, any sign)."""
     n = draw(st.sampled_from(N_ARMS))
-    xi = np.array([draw(real), draw(real), draw(real), draw(angle), draw(st.floats(-max_pitch, max_pitch)), draw(angle)]
-                  + [draw(st.floats(-1.0, 1.0)) for _ in range(n)])
+    xi = np.array(
+        [draw(real), draw(real), draw(real), draw(angle), draw(st.floats(-max_pitch, max_pitch)), draw(angle)]
+        + [draw(st.floats(-1.0, 1.0)) for _ in range(n)]
+    )
     w = np.array([draw(st.floats(-5.0, 5.0)) for _ in range(6 + n)])
     return n, xi, w
 
@@ -214,7 +216,7 @@ def test_any_arm_force_map_by_virtual_power(state, forces):
     """u = S^T tau: u . xi_dot is the power of a world force at B, a body torque and arm efforts, with omega_body
     from central differences of R (independent of T)."""
     n, xi, w = state
-    f_world, tau_body, efforts = np.array(forces[0:3]), np.array(forces[3:6]), np.array(forces[6:6 + n])
+    f_world, tau_body, efforts = np.array(forces[0:3]), np.array(forces[3:6]), np.array(forces[6 : 6 + n])
     R = co.euler_to_rotation(xi[3:6])
     tau = np.r_[R.T @ f_world, tau_body, efforts]  # Pinocchio's generalised force of that load
     h = 1e-6
@@ -305,8 +307,9 @@ def test_batch_functions_match_the_state(n):
     """The *_batch maps over a logged run (rows) equal the State maps row by row."""
     rng = np.random.default_rng(20 + n)
     m = 50
-    xi = np.column_stack([rng.uniform(-3, 3, (m, 3)), rng.uniform(-3, 3, m), rng.uniform(-1.4, 1.4, m), rng.uniform(-3, 3, m),
-                          rng.uniform(-1, 1, (m, n))])
+    xi = np.column_stack(
+        [rng.uniform(-3, 3, (m, 3)), rng.uniform(-3, 3, m), rng.uniform(-1.4, 1.4, m), rng.uniform(-3, 3, m), rng.uniform(-1, 1, (m, n))]
+    )
     tau, u, p = rng.normal(size=(m, 6 + n)), rng.normal(size=(m, 6 + n)), rng.normal(size=(m, 3))
     R = co.euler_to_rotation_batch(xi[:, 3:6])
     s = co.State(n)

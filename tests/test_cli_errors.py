@@ -149,8 +149,10 @@ def test_the_converters_are_the_charts_checks():
     from qprr.errors import InputError
     from qprr.validation import as_int
 
-    cases = [(real(**kw), text, lambda t, kw=kw: as_real(float(t), "value", **kw))
-             for text, kw in (("-1", dict(positive=True)), ("nan", {}), ("inf", dict(nonnegative=True)), ("5", dict(lo=0.0, hi=1.0)))]
+    cases = [
+        (real(**kw), text, lambda t, kw=kw: as_real(float(t), "value", **kw))
+        for text, kw in (("-1", dict(positive=True)), ("nan", {}), ("inf", dict(nonnegative=True)), ("5", dict(lo=0.0, hi=1.0)))
+    ]
     cases.append((integer(lo=1), "0", lambda t: as_int(int(t), "value", lo=1)))
     for convert, text, check in cases:
         with pytest.raises(argparse.ArgumentTypeError) as cli_err:

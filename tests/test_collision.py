@@ -40,8 +40,7 @@ def _test_urdf() -> str:
 
 
 def _test_platform(radius=0.05):
-    rotors = tuple(Rotor(r.position_body, r.axis_body, r.spin, 0.01, 0.0, 10.0, r.name, radius)
-                   for r in quadrotor(0.5, kappa=0.01, f_max=10.0))
+    rotors = tuple(Rotor(r.position_body, r.axis_body, r.spin, 0.01, 0.0, 10.0, r.name, radius) for r in quadrotor(0.5, kappa=0.01, f_max=10.0))
     return qprr.from_urdf(_test_urdf(), rotors, ee_frame="tip")
 
 
@@ -109,8 +108,10 @@ def test_default_disc_radius_is_half_the_nearest_spacing():
 
 
 def test_rotor_file_radius_key():
-    desc = {"defaults": {"radius": 0.1, "f_max": 10.0}, "rotor": [{"position": [0.3, 0.0, 0.0], "spin": "cw"},
-                                                                  {"position": [-0.3, 0.0, 0.0], "spin": "ccw", "radius": 0.12}]}
+    desc = {
+        "defaults": {"radius": 0.1, "f_max": 10.0},
+        "rotor": [{"position": [0.3, 0.0, 0.0], "spin": "cw"}, {"position": [-0.3, 0.0, 0.0], "spin": "ccw", "radius": 0.12}],
+    }
     assert [r.radius for r in rotors_from_mapping(desc)] == [0.1, 0.12]
     with pytest.raises(InputError, match="radius"):
         Rotor((0.0, 0.0, 0.0), radius=-0.1)

@@ -211,8 +211,13 @@ def test_controllers_take_the_control_period_from_reset_only(robot):
     the period given; a BSG asked for the inner controller's desired pitch refuses an inner one that derives none."""
     xi = np.r_[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.3, -0.2]
     st = _state_at(xi)
-    for ctrl in (InverseDynamicsController(robot), DesiredStateInverseDynamics(robot), ModelFreeController(robot),
-                 DecoupledController(robot), CogStabilizer(robot, ModelFreeController(robot))):
+    for ctrl in (
+        InverseDynamicsController(robot),
+        DesiredStateInverseDynamics(robot),
+        ModelFreeController(robot),
+        DecoupledController(robot),
+        CogStabilizer(robot, ModelFreeController(robot)),
+    ):
         with pytest.raises(NotResetError, match=r"dt .*reset\(state, ref, dt\)"):
             _ = ctrl.dt
         with pytest.raises(NotResetError, match="reset"):

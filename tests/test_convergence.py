@@ -122,11 +122,11 @@ def _hooked_object():
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, math.pi / 2, 0.0])
     p0, _ = qm.ee_pose_xi(ROBOT, ROBOT.data(), xi0)
     pen = mu * mass * _G / k  # the steady sliding force
-    obj = it.PushedMass(ROBOT, mass=mass, origin=p0 + np.r_[pen, 0.0, 0.0], direction=(-1.0, 0.0, 0.0), initial=(0.0, V),
-                        stiffness=k, damping=5.0, friction=mu)
+    obj = it.PushedMass(
+        ROBOT, mass=mass, origin=p0 + np.r_[pen, 0.0, 0.0], direction=(-1.0, 0.0, 0.0), initial=(0.0, V), stiffness=k, damping=5.0, friction=mu
+    )
     rate = np.r_[-V, np.zeros(8)]
-    return ROBOT, flight_controller("idc", ROBOT), _Ramp(xi0, rate), dict(xi0=xi0, xi_dot0=rate, external_wrench=obj,
-                                                                          joint_stops=False)
+    return ROBOT, flight_controller("idc", ROBOT), _Ramp(xi0, rate), dict(xi0=xi0, xi_dot0=rate, external_wrench=obj, joint_stops=False)
 
 
 def _impedance():
@@ -134,8 +134,9 @@ def _impedance():
     ee = it.PrescribedWrench(np.r_[0.05, 0.01, 0.05, 0.0, 0.0, 0.0], 0.1, 0.4)
     gamma = np.zeros(9)
     gamma[[0, 1, 2, 5]] = hb
-    ctrl = ImpedanceController(ROBOT, gains.impedance(), gains.impedance_filters(), ee_sensor=ee.measured,
-                               base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4))
+    ctrl = ImpedanceController(
+        ROBOT, gains.impedance(), gains.impedance_filters(), ee_sensor=ee.measured, base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4)
+    )
     return _closed(ctrl, external_wrench=ee, disturbance=Pulse(0.1, 0.4, tuple(gamma)))
 
 
@@ -158,8 +159,7 @@ class Case:
 
 _CL = {"euler": 4, "midpoint": 2, "rk4": 1}
 CASES: dict[str, Case] = {
-    "free motion": Case(lambda: (FREE, _Tau(np.zeros(9)), Hold(tuple(XI_FREE)),
-                                 dict(xi0=XI_FREE, xi_dot0=XID_FREE, joint_stops=False))),
+    "free motion": Case(lambda: (FREE, _Tau(np.zeros(9)), Hold(tuple(XI_FREE)), dict(xi0=XI_FREE, xi_dot0=XID_FREE, joint_stops=False))),
     "gravity + constant thrust": Case(_open),
     "hook: end-effector wrench": Case(lambda: _open(external_wrench=_ee_spring), start={"euler": 4, "midpoint": 2, "rk4": 1}),
     "hook: state disturbance (drag)": Case(lambda: _open(disturbance=BaseDrag(0.5, 0.05))),
@@ -191,8 +191,11 @@ def final_state(case: Case, integrator: str, substeps: int) -> tuple[Platform, n
 
 
 def state_error(robot, a, b) -> float:
-    return max(float(np.abs(pin.difference(robot.model, a[0], b[0])).max()), float(np.abs(a[1] - b[1]).max()),
-               float(np.abs(a[2] - b[2]).max()) if a[2].size else 0.0)
+    return max(
+        float(np.abs(pin.difference(robot.model, a[0], b[0])).max()),
+        float(np.abs(a[1] - b[1]).max()),
+        float(np.abs(a[2] - b[2]).max()) if a[2].size else 0.0,
+    )
 
 
 def observed_orders(case: Case, integrator: str, reference=None) -> tuple[np.ndarray, np.ndarray]:

@@ -26,11 +26,15 @@ SAMPLES = 400
 
 
 def tiny(**over) -> dict:
-    d = {"name": "tiny", "seed": 3, "architectures": ["Q-PRR", "Q-RR", "HEX-RRR"],
-         "objectives": ["hover_volume", "balance_fraction", "thrust_margin", "arm_mass"],
-         "parameters": {"reach": 0.3, "taper": 0.6, "slider_stroke": 0.08, "slider_link": 0.05, "total_mass": 3.0,
-                        "thrust_to_weight": 2.0},
-         "effort": {"samples": SAMPLES}, "constraints": {"thrust_margin": {"min": 0.0}}}
+    d = {
+        "name": "tiny",
+        "seed": 3,
+        "architectures": ["Q-PRR", "Q-RR", "HEX-RRR"],
+        "objectives": ["hover_volume", "balance_fraction", "thrust_margin", "arm_mass"],
+        "parameters": {"reach": 0.3, "taper": 0.6, "slider_stroke": 0.08, "slider_link": 0.05, "total_mass": 3.0, "thrust_to_weight": 2.0},
+        "effort": {"samples": SAMPLES},
+        "constraints": {"thrust_margin": {"min": 0.0}},
+    }
     d.update(over)
     return d
 
@@ -45,24 +49,27 @@ def same_table(a, b) -> None:
 
 
 # ------------------------------------------------------------------------------ specification
-@pytest.mark.parametrize("change, key, fix", [
-    ({"architectures": ["Q-PRRX"]}, "architectures", "(2.1) name"),
-    ({"architectures": ["3Q-RR"]}, "architectures", "one multirotor"),
-    ({"architectures": ["Q-PPR"]}, "architectures", "at most one P joint"),
-    ({"objectives": ["hover_volume"]}, "objectives", "at least 2"),
-    ({"objectives": ["hover_volume", "speed"]}, "objectives", "names among"),
-    ({"parameters": {"reach": -0.1}}, "parameters.reach", ">= 0.05"),
-    ({"parameters": {"length": 0.2}}, "parameters.length", "use one of reach"),
-    ({"parameters": {"reach": {"low": 0.3, "high": 0.2}}}, "parameters.reach", "low < high"),
-    ({"parameters": {"reach": {"low": 0.2, "high": 0.3}}}, "parameters.reach", "nsga2"),
-    ({"search": {"method": "nsga2"}}, "search.method", "range"),
-    ({"search": {"method": "grid", "optimiser": "deap"}}, "search.optimiser", "pymoo, optuna"),
-    ({"mass": {"material": "steel"}}, "mass.material", "carbon"),
-    ({"constraints": {"thrust_margin": {"least": 1}}}, "constraints.thrust_margin.least", "min, max"),
-    ({"effort": {"samples": 3}}, "effort.samples", ">= 64"),
-    ({"closed_loop": {"scenario": "static-idc"}}, "closed_loop.scenario", "generic scenario"),
-    ({"colour": "red"}, "colour", "remove it"),
-])
+@pytest.mark.parametrize(
+    "change, key, fix",
+    [
+        ({"architectures": ["Q-PRRX"]}, "architectures", "(2.1) name"),
+        ({"architectures": ["3Q-RR"]}, "architectures", "one multirotor"),
+        ({"architectures": ["Q-PPR"]}, "architectures", "at most one P joint"),
+        ({"objectives": ["hover_volume"]}, "objectives", "at least 2"),
+        ({"objectives": ["hover_volume", "speed"]}, "objectives", "names among"),
+        ({"parameters": {"reach": -0.1}}, "parameters.reach", ">= 0.05"),
+        ({"parameters": {"length": 0.2}}, "parameters.length", "use one of reach"),
+        ({"parameters": {"reach": {"low": 0.3, "high": 0.2}}}, "parameters.reach", "low < high"),
+        ({"parameters": {"reach": {"low": 0.2, "high": 0.3}}}, "parameters.reach", "nsga2"),
+        ({"search": {"method": "nsga2"}}, "search.method", "range"),
+        ({"search": {"method": "grid", "optimiser": "deap"}}, "search.optimiser", "pymoo, optuna"),
+        ({"mass": {"material": "steel"}}, "mass.material", "carbon"),
+        ({"constraints": {"thrust_margin": {"least": 1}}}, "constraints.thrust_margin.least", "min, max"),
+        ({"effort": {"samples": 3}}, "effort.samples", ">= 64"),
+        ({"closed_loop": {"scenario": "static-idc"}}, "closed_loop.scenario", "generic scenario"),
+        ({"colour": "red"}, "colour", "remove it"),
+    ],
+)
 def test_spec_errors_name_key_value_and_fix(change, key, fix):
     with pytest.raises(InputError) as err:
         DesignSpec.from_mapping(tiny(**change))
@@ -112,8 +119,12 @@ def test_grid_reproduces_the_analysis_maps(tmp_path):
     lengths = {"Q-PRR": [0.05, d2, d3], "Q-RR": [d2, d3], "HEX-RRR": [0.3 / 1.96, 0.18 / 1.96, 0.108 / 1.96]}
     for name, ls in lengths.items():
         joints = name.split("-")[1]
-        links = [LinkSpec("P", length=L, mass=m.prismatic_actuator + m.link_density * L + m.rail_density * 0.08, lower=-0.04, upper=0.04)
-                 if k == "P" else LinkSpec("R", length=L, mass=m.revolute_actuator + m.link_density * L) for k, L in zip(joints, ls)]
+        links = [
+            LinkSpec("P", length=L, mass=m.prismatic_actuator + m.link_density * L + m.rail_density * 0.08, lower=-0.04, upper=0.04)
+            if k == "P"
+            else LinkSpec("R", length=L, mass=m.revolute_actuator + m.link_density * L)
+            for k, L in zip(joints, ls)
+        ]
         m_arm = sum(k.mass for k in links)
         p = qprr.build(name, links=links, body_mass=3.0 - m_arm, thrust_to_weight=2.0)
         assert math.isclose(pin.computeTotalMass(p.model), 3.0, rel_tol=1e-14)  # equal take-off mass
@@ -191,8 +202,9 @@ def test_dominance_and_levels_match_brute_force(points):
 
 
 def test_no_design_of_the_front_is_dominated_by_an_evaluated_one(tmp_path):
-    spec = DesignSpec.from_mapping(tiny(architectures=["Q-PRR", "Q-RR", "Q-RRR", "Q-RPR", "HEX-RR"],
-                                        parameters={"reach": [0.2, 0.3], "taper": 0.6, "total_mass": 3.0}))
+    spec = DesignSpec.from_mapping(
+        tiny(architectures=["Q-PRR", "Q-RR", "Q-RRR", "Q-RPR", "HEX-RR"], parameters={"reach": [0.2, 0.3], "taper": 0.6, "total_mass": 3.0})
+    )
     rows = rows_of(run_design(spec, tmp_path / "t.csv", backend="inline", progress=False).results.table)
     assert len(rows) == 10
     fr = front(rows, spec.objectives)
@@ -219,9 +231,14 @@ def test_missing_optimiser_raises_with_the_install_command(monkeypatch):
 @pytest.mark.parametrize("engine", ["pymoo", "optuna"])
 def test_nsga2_is_seeded_resumable_and_feasible(engine, tmp_path):
     pytest.importorskip(engine, reason=f"{engine} is not installed: {INSTALL[engine]}")
-    spec = DesignSpec.from_mapping(tiny(architectures=["Q-PRR"], parameters={"reach": {"low": 0.15, "high": 0.4}, "total_mass": 3.0},
-                                        search={"method": "nsga2", "optimiser": engine, "population": 4, "generations": 2},
-                                        constraints={"arm_mass": {"max": 0.36}}))
+    spec = DesignSpec.from_mapping(
+        tiny(
+            architectures=["Q-PRR"],
+            parameters={"reach": {"low": 0.15, "high": 0.4}, "total_mass": 3.0},
+            search={"method": "nsga2", "optimiser": engine, "population": 4, "generations": 2},
+            constraints={"arm_mass": {"max": 0.36}},
+        )
+    )
     run_design(spec, tmp_path / "a.csv", backend="inline", progress=False)
     t = read_results(tmp_path / "a.csv").table
     assert len(t) == 8 and set(t["generation"].tolist()) == {0, 1}
@@ -251,8 +268,10 @@ def test_cli_run_report_show(tmp_path, capsys):
     from qprr.cli import main
 
     spec = tmp_path / "s.toml"
-    spec.write_text('name = "cli"\narchitectures = ["Q-PRR", "Q-RR", "Q-RRR"]\nobjectives = ["hover_volume", "arm_mass"]\n'
-                    '[effort]\nsamples = 300\n[closed_loop]\ntop = 1\nduration = 0.5\n')
+    spec.write_text(
+        'name = "cli"\narchitectures = ["Q-PRR", "Q-RR", "Q-RRR"]\nobjectives = ["hover_volume", "arm_mass"]\n'
+        "[effort]\nsamples = 300\n[closed_loop]\ntop = 1\nduration = 0.5\n"
+    )
     assert main(["design", "show", str(spec)]) == 0
     assert "3 designs" in capsys.readouterr().out
     out = tmp_path / "rep"

@@ -45,7 +45,7 @@ def python_blocks(text: str) -> list[tuple[str, str]]:
     """(code, reason) of every ```python block; reason is "" for a block that runs, else its not-run marker's reason."""
     out = []
     for m in re.finditer(r"```python\n(.*?)```", text, flags=re.S):
-        before = text[:m.start()].rstrip("\n").rsplit("\n", 1)[-1]
+        before = text[: m.start()].rstrip("\n").rsplit("\n", 1)[-1]
         marker = NOT_RUN.search(before)
         out.append((m.group(1), marker.group(1) if marker else ""))
     return out
@@ -82,14 +82,21 @@ def test_blocks_run(page, tmp_path):
 def test_pages_with_blocks():
     """The pages a reader runs code from (a page losing its blocks by accident fails here)."""
     counts = {p: len(python_blocks(read(p))) for p in PAGES}
-    for page, least in {"docs/guide.md": 9, "docs/platforms.md": 4, "README.md": 3, "docs/ik.md": 2, "docs/interaction.md": 1,
-                        "docs/mpc.md": 1, "docs/wheeled.md": 1}.items():
+    for page, least in {
+        "docs/guide.md": 9,
+        "docs/platforms.md": 4,
+        "README.md": 3,
+        "docs/ik.md": 2,
+        "docs/interaction.md": 1,
+        "docs/mpc.md": 1,
+        "docs/wheeled.md": 1,
+    }.items():
         assert counts[page] >= least, (page, counts[page])
 
 
 # ------------------------------------------------------------------------------------- names
 def resolve(dotted: str) -> str:
-    """"" if ``dotted`` (qprr.a.b.c) is a module of this repository or an attribute of one, else why not."""
+    """ "" if ``dotted`` (qprr.a.b.c) is a module of this repository or an attribute of one, else why not."""
     parts = dotted.split(".")
     for i in range(len(parts), 0, -1):
         name = ".".join(parts[:i])
@@ -110,14 +117,14 @@ def resolve(dotted: str) -> str:
             return f"{name} is not in this repository ({path})"
         for attr in parts[i:]:
             if not hasattr(obj, attr):
-                return f"{'.'.join(parts[:parts.index(attr)])} has no {attr!r}"
+                return f"{'.'.join(parts[: parts.index(attr)])} has no {attr!r}"
             obj = getattr(obj, attr)
         return ""
     return f"no module {parts[0]!r}"
 
 
 def defined_in_source(path: Path, attrs: list[str], module: str) -> str:
-    """"" if the attribute chain ``attrs`` (a class, then a method...) is defined in the source file ``path``, else why
+    """ "" if the attribute chain ``attrs`` (a class, then a method...) is defined in the source file ``path``, else why
     not: the check of a module that cannot be imported here because an optional dependency is absent."""
     body = ast.parse(path.read_text()).body
     for k, attr in enumerate(attrs):
@@ -144,10 +151,19 @@ def test_dotted_names_resolve():
     import json
 
     names = sorted({(page, name) for page in PAGES for name in dotted_names(read(page))})
-    code = ("import json, sys; sys.path.insert(0, sys.argv[1]); from tests.test_docs import resolve; "
-            "print(json.dumps([resolve(n) for n in json.loads(sys.stdin.read())]))")
-    proc = subprocess.run([sys.executable, "-c", code, str(ROOT)], input=json.dumps([n for _, n in names]), cwd=ROOT,
-                          env=dict(os.environ, MPLBACKEND="Agg"), capture_output=True, text=True, timeout=300)
+    code = (
+        "import json, sys; sys.path.insert(0, sys.argv[1]); from tests.test_docs import resolve; "
+        "print(json.dumps([resolve(n) for n in json.loads(sys.stdin.read())]))"
+    )
+    proc = subprocess.run(
+        [sys.executable, "-c", code, str(ROOT)],
+        input=json.dumps([n for _, n in names]),
+        cwd=ROOT,
+        env=dict(os.environ, MPLBACKEND="Agg"),
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert proc.returncode == 0, proc.stderr[-3000:]
     why = json.loads(proc.stdout.strip().splitlines()[-1])
     bad = [f"{page}: {name}: {w}" for (page, name), w in zip(names, why) if w]
@@ -211,7 +227,7 @@ def commands(text: str) -> list[str]:
 
 
 def check_command(parser, argv: list[str]) -> str:
-    """"" if ``qprr ARGV`` parses and names things that exist, else why not."""
+    """ "" if ``qprr ARGV`` parses and names things that exist, else why not."""
     from qprr.platforms import NAMES
     from qprr.scenarios import SCENARIOS
     from qprr.thesis.comparisons import COMPARISONS

@@ -26,6 +26,7 @@ from .strategies import rates_strategy, xi_strategy
 SETTINGS = settings(max_examples=30, deadline=None, derandomize=True)
 REL = 1e-9
 
+
 @pytest.fixture(scope="module", params=["thesis", "cad"])
 def pair(request):
     """(robot, data, symbolic model) of one parameter variant."""

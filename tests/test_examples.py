@@ -18,8 +18,7 @@ EXAMPLES = ROOT / "examples"
 
 def run_example(name: str, tmp_path: Path) -> str:
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-    proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(tmp_path)], cwd=tmp_path, env=env, capture_output=True,
-                          text=True, timeout=300)
+    proc = subprocess.run([sys.executable, str(EXAMPLES / name), str(tmp_path)], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
     assert proc.returncode == 0, f"{name} failed:\n{proc.stdout}\n{proc.stderr}"
     assert "Traceback" not in proc.stderr and "Warning" not in proc.stderr, proc.stderr
     return proc.stdout
@@ -37,8 +36,16 @@ def figure(tmp_path: Path, name: str) -> None:
 
 
 def test_every_example_is_tested():
-    tested = {"pose_and_cog.py", "ik_hover.py", "custom_mission.py", "allocation.py", "hover_analysis.py", "other_platforms.py",
-              "platforms_tour.py", "own_platform.py"}
+    tested = {
+        "pose_and_cog.py",
+        "ik_hover.py",
+        "custom_mission.py",
+        "allocation.py",
+        "hover_analysis.py",
+        "other_platforms.py",
+        "platforms_tour.py",
+        "own_platform.py",
+    }
     assert {p.name for p in EXAMPLES.glob("*.py")} == tested
 
 

@@ -67,7 +67,7 @@ def check_layout(fig, what: str) -> None:
     titles = [a.title for a in fig.axes if a.title.get_text()] + ([fig._suptitle] if fig._suptitle is not None else [])
     boxes = [(t.get_text(), t.get_window_extent(renderer)) for t in titles]
     for i, (ti, bi) in enumerate(boxes):
-        for tj, bj in boxes[i + 1:]:
+        for tj, bj in boxes[i + 1 :]:
             assert not bi.overlaps(bj), f"{what}: titles {ti!r} and {tj!r} overlap"
     for a in fig.axes:
         leg = a.get_legend()
@@ -192,8 +192,11 @@ def test_viewer_camera_frames_any_platform(name):
     look_at, position = viewer.camera_framing(pose, rotor_radius(platform))
     axis = (look_at - position) / np.linalg.norm(look_at - position)
     r = rotor_radius(platform)
-    pts = np.vstack([pose.rotor_world + r * s for s in np.eye(3)] + [pose.rotor_world - r * s for s in np.eye(3)]
-                    + [pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :]])
+    pts = np.vstack(
+        [pose.rotor_world + r * s for s in np.eye(3)]
+        + [pose.rotor_world - r * s for s in np.eye(3)]
+        + [pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :]]
+    )
     rel = pts - position
     angle = np.arccos(np.clip(rel @ axis / np.linalg.norm(rel, axis=1), -1.0, 1.0))
     assert 0.3 * viewer.CAMERA_FOV / 2 < angle.max() < 0.9 * viewer.CAMERA_FOV / 2, (name, np.degrees(angle.max()))  # fills the view

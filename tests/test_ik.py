@@ -158,8 +158,7 @@ def test_igm_cog_closed_form_matches_pinocchio_for_cad_parameters(cad_robot):
         assert res.success, res.reason
         K = igm.arm_constants(cad_robot.params)
         r0, t2, t3 = res.xi[6:9]
-        x_cm = (K.M_s * r0 + K.k0 + K.a_s * math.sin(t2) + K.a_c * math.cos(t2) + K.b_s * math.sin(t2 + t3)
-                + K.b_c * math.cos(t2 + t3)) / K.m_G
+        x_cm = (K.M_s * r0 + K.k0 + K.a_s * math.sin(t2) + K.a_c * math.cos(t2) + K.b_s * math.sin(t2 + t3) + K.b_c * math.cos(t2 + t3)) / K.m_G
         c_b = kin.com_body(cad_robot, data, res.q)
         assert abs(x_cm - c_b[0]) < 1e-12 and abs(K.y0 / K.m_G - c_b[1]) < 1e-12
 
@@ -262,8 +261,7 @@ def test_3_78_cog_height_misprint(rob, dat):
         c = kin.com_body(rob, dat, q)
         x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * p.d2 * math.sin(t2) + m3 * p.d3 * math.sin(t2 + t3) / 2) / mG
         z_printed = ((m1 + m2 + m3) * (p.d0 + p.d1) + (m2 + m3) * p.d2 * math.cos(t2) / 2 + m3 * p.d3 * math.cos(t2 + t3) / 2) / mG
-        z_fixed = (m1 * (p.d0 + p.d1 / 2) + (m2 + m3) * (p.d0 + p.d1) + (m2 / 2 + m3) * p.d2 * math.cos(t2)
-                   + m3 * p.d3 * math.cos(t2 + t3) / 2) / mG
+        z_fixed = (m1 * (p.d0 + p.d1 / 2) + (m2 + m3) * (p.d0 + p.d1) + (m2 / 2 + m3) * p.d2 * math.cos(t2) + m3 * p.d3 * math.cos(t2 + t3) / 2) / mG
         assert abs(c[0] - x) < 1e-15 and abs(c[2] - z_fixed) < 1e-15
         assert abs(c[2] - z_printed) > 5e-4  # ~1 mm (4 %) off, against 1e-15 for the fixed form
 
@@ -384,7 +382,7 @@ def test_each_level_is_its_qp_optimum_under_the_earlier_levels(seed):
             earlier = np.vstack([Jj for Jj, _ in step.linearized[:k]])
             assert np.abs(earlier @ (dv - prev)).max() < 1e-10  # the earlier optima are kept
             _, s, Vt = np.linalg.svd(earlier)
-            Z = Vt[int(np.count_nonzero(s > 1e-9)):].T  # ker of the earlier levels
+            Z = Vt[int(np.count_nonzero(s > 1e-9)) :].T  # ker of the earlier levels
         else:
             Z = np.eye(rob.nv)
         act_lo = arm <= np.minimum(lo, prev[6:]) + 1e-10
@@ -637,7 +635,6 @@ def test_results_are_deterministic(rob, dat, hover_targets):
         again = [igm.solve(rob, dat, M, method, options=opts).q for M in reversed(hover_targets[:6])][::-1]
         for x, y in zip(first, again):
             np.testing.assert_array_equal(x, y)
-
 
 
 # --------------------------------------------------------- targets whose doubles cannot resolve the tolerance

@@ -87,8 +87,7 @@ def test_table_6_7_slider_stiffness_exceeds_the_stroke():
     assert 0.05 / gains.impedance_filters().K_arm[0] == pytest.approx(0.02)
 
 
-FAST = ImpedanceGains(M_base=(0.5,) * 4, D_base=(3.0,) * 4, K_base=(5.0,) * 4,
-                      M_arm=(0.05,) * 3, D_arm=(1.0, 0.5, 0.5), K_arm=(5.0, 1.0, 1.0))
+FAST = ImpedanceGains(M_base=(0.5,) * 4, D_base=(3.0,) * 4, K_base=(5.0,) * 4, M_arm=(0.05,) * 3, D_arm=(1.0, 0.5, 0.5), K_arm=(5.0, 1.0, 1.0))
 """Impedance gains whose slowest pole is -2.8 /s, so that a 6 s run reaches the steady state."""
 
 

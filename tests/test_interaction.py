@@ -154,8 +154,9 @@ def _push_run(robot, integrator, duration=0.045, dt=1e-3):
     p0, _ = qm.ee_pose_xi(robot, robot.data(), xi0)
     obj = it.PushedMass(robot, mass=0.5, origin=p0 - np.array([0.005, 0.0, 0.0]), stiffness=500.0, damping=0.0)
     xd0 = np.r_[0.2, np.zeros(8)]
-    res = simulate(robot, Zero(), Hold(tuple(xi0)), duration, dt=dt, integrator=integrator, xi0=xi0, xi_dot0=xd0,
-                   external_wrench=obj, joint_stops=False)
+    res = simulate(
+        robot, Zero(), Hold(tuple(xi0)), duration, dt=dt, integrator=integrator, xi0=xi0, xi_dot0=xd0, external_wrench=obj, joint_stops=False
+    )
     return res, obj
 
 
@@ -174,8 +175,7 @@ def test_pushed_object_and_robot_conserve_momentum_and_energy(free_robot):
         q, v = co.xi_to_qv(res.xi[k], res.xi_dot[k])
         hg = pin.computeCentroidalMomentum(free_robot.model, m_d, q, v)
         P.append(hg.linear[0] + obj.mass * c.velocity[k])
-        E.append(pin.computeKineticEnergy(free_robot.model, m_d, q, v) + 0.5 * obj.mass * c.velocity[k] ** 2
-                 + 0.5 * obj.k * c.penetration[k] ** 2)
+        E.append(pin.computeKineticEnergy(free_robot.model, m_d, q, v) + 0.5 * obj.mass * c.velocity[k] ** 2 + 0.5 * obj.k * c.penetration[k] ** 2)
     P, E = np.array(P), np.array(E)
     assert np.abs(P - P[0]).max() < 1e-12 * abs(P[0])
     assert np.abs(E - E[0]).max() < 5e-9 * E[0]

@@ -55,14 +55,16 @@ def _hextilt(damping: bool = True, friction: bool = True, g: float = 9.81):
 
 
 def _float(p, dt: float, integrator: str = "midpoint"):
-    return simulate(p, _Zero(p.nv), Hold((0.0,) * p.n_xi), T, dt=dt, xi_dot0=np.r_[np.zeros(6), QD0], integrator=integrator,
-                    joint_stops=False)
+    return simulate(p, _Zero(p.nv), Hold((0.0,) * p.n_xi), T, dt=dt, xi_dot0=np.r_[np.zeros(6), QD0], integrator=integrator, joint_stops=False)
 
 
 # ------------------------------------------------------------------------------------------------- the law
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3), st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
-       st.lists(st.floats(-5.0, 5.0), min_size=3, max_size=3))
+@given(
+    st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+    st.lists(st.floats(0.0, 2.0), min_size=3, max_size=3),
+    st.lists(st.floats(-5.0, 5.0), min_size=3, max_size=3),
+)
 def test_the_law_and_its_jacobian(d, F, v):
     jf = JointFriction(d, F)
     v = np.array(v)
@@ -160,13 +162,16 @@ def test_the_controller_compensates_the_nominal_friction():
 # ------------------------------------------------------------------------------------------------- MuJoCo
 def _mjcf(model: pin.Model, timestep: float) -> str:
     """An MJCF of a free-flyer Pinocchio model with hinge joints: the same bodies, inertias, axes and damping."""
+
     def fmt(a) -> str:
         return " ".join(f"{x:.17g}" for x in np.ravel(a))
 
     def inertial(Y) -> str:
         I = Y.inertia
-        return (f'<inertial pos="{fmt(Y.lever)}" mass="{Y.mass:.17g}" fullinertia="{I[0, 0]:.17g} {I[1, 1]:.17g} {I[2, 2]:.17g} '
-                f'{I[0, 1]:.17g} {I[0, 2]:.17g} {I[1, 2]:.17g}"/>')
+        return (
+            f'<inertial pos="{fmt(Y.lever)}" mass="{Y.mass:.17g}" fullinertia="{I[0, 0]:.17g} {I[1, 1]:.17g} {I[2, 2]:.17g} '
+            f'{I[0, 1]:.17g} {I[0, 2]:.17g} {I[1, 2]:.17g}"/>'
+        )
 
     children = {j: [k for k in range(2, model.njoints) if model.parents[k] == j] for j in range(model.njoints)}
     axes = {"JointModelRX": (1, 0, 0), "JointModelRY": (0, 1, 0), "JointModelRZ": (0, 0, 1)}
@@ -175,13 +180,18 @@ def _mjcf(model: pin.Model, timestep: float) -> str:
         M, jm = model.jointPlacements[j], model.joints[j]
         q = pin.Quaternion(M.rotation)
         axis = axes[jm.shortname()] if jm.shortname() in axes else jm.extract().axis
-        inner = (f'<joint name="{model.names[j]}" type="hinge" axis="{fmt(axis)}" damping="{model.damping[jm.idx_v]:.17g}"/>'
-                 + inertial(model.inertias[j]) + "".join(body(c) for c in children[j]))
+        inner = (
+            f'<joint name="{model.names[j]}" type="hinge" axis="{fmt(axis)}" damping="{model.damping[jm.idx_v]:.17g}"/>'
+            + inertial(model.inertias[j])
+            + "".join(body(c) for c in children[j])
+        )
         return f'<body name="b{j}" pos="{fmt(M.translation)}" quat="{q.w:.17g} {q.x:.17g} {q.y:.17g} {q.z:.17g}">{inner}</body>'
 
-    return (f'<mujoco><option gravity="{fmt(model.gravity.linear)}" integrator="RK4" timestep="{timestep!r}"/><worldbody>'
-            f'<body name="base"><freejoint/>{inertial(model.inertias[1])}{"".join(body(c) for c in children[1])}</body>'
-            "</worldbody></mujoco>")
+    return (
+        f'<mujoco><option gravity="{fmt(model.gravity.linear)}" integrator="RK4" timestep="{timestep!r}"/><worldbody>'
+        f'<body name="base"><freejoint/>{inertial(model.inertias[1])}{"".join(body(c) for c in children[1])}</body>'
+        "</worldbody></mujoco>"
+    )
 
 
 def test_damping_agrees_with_mujoco_at_first_order():

@@ -67,10 +67,16 @@ def imports(mod: str) -> list[tuple[int, str]]:
             out += [(node.lineno, s) for s in subs if s in MODULES]
             if any(s not in MODULES for s in subs):
                 out.append((node.lineno, target))
-        elif (isinstance(node, ast.Call) and node.args and isinstance(node.args[0], ast.Constant)
-              and isinstance(node.args[0].value, str)
-              and ((isinstance(node.func, ast.Name) and node.func.id in ("import_module", "__import__"))
-                   or (isinstance(node.func, ast.Attribute) and node.func.attr == "import_module"))):
+        elif (
+            isinstance(node, ast.Call)
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and isinstance(node.args[0].value, str)
+            and (
+                (isinstance(node.func, ast.Name) and node.func.id in ("import_module", "__import__"))
+                or (isinstance(node.func, ast.Attribute) and node.func.attr == "import_module")
+            )
+        ):
             out.append((node.lineno, node.args[0].value))
     return [(line, t) for line, t in out if t == "qprr" or t.startswith("qprr.")]
 
@@ -86,8 +92,7 @@ def test_no_module_imports_a_layer_above_its_own():
 
 def test_front_ends_reach_the_thesis_only_through_the_registries():
     """``qprr compare``, ``qprr check``, ``qprr urdf``, ``qprr analyze``'s references: the core's front ends name no thesis module."""
-    bad = [_where(mod, line, t) for mod in MODULES if is_front_end(mod) and not is_thesis(mod)
-           for line, t in imports(mod) if is_thesis(t)]
+    bad = [_where(mod, line, t) for mod in MODULES if is_front_end(mod) and not is_thesis(mod) for line, t in imports(mod) if is_thesis(t)]
     assert bad == [], "\n".join(bad)
 
 
@@ -136,24 +141,28 @@ def test_the_rules_see_what_they_forbid():
     """The audit is not blind: the thesis is imported by its own modules and the front ends import the core."""
     assert any(is_thesis(t) for line, t in imports("qprr.thesis.scenarios"))
     assert layer("qprr.viz.cli") == 2 and layer("qprr.thesis.robot") == 1 and layer("qprr.sim.loop") == 0
-    assert ("qprr.registry" in {t for _, t in imports("qprr.cli")})
+    assert "qprr.registry" in {t for _, t in imports("qprr.cli")}
 
 
 def test_importing_the_core_loads_no_thesis_module():
-    code = ("import sys, qprr, qprr.sim, qprr.control, qprr.ik, qprr.scenarios, qprr.viz, qprr.analysis, qprr.campaign, qprr.cli\n"
-            "qprr.cli.build_parser.__name__\n"
-            "print(sorted(m for m in sys.modules if m.startswith('qprr.thesis')))")
+    code = (
+        "import sys, qprr, qprr.sim, qprr.control, qprr.ik, qprr.scenarios, qprr.viz, qprr.analysis, qprr.campaign, qprr.cli\n"
+        "qprr.cli.build_parser.__name__\n"
+        "print(sorted(m for m in sys.modules if m.startswith('qprr.thesis')))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300, check=True)
     assert out.stdout.strip() == "[]", out.stdout
 
 
 def test_the_thesis_arrives_by_registration():
     """``qprr.load("q-prr")`` with no import of the thesis: the registry loads the plug-in (entry point ``qprr.plugins``)."""
-    code = ("import sys, qprr\n"
-            "assert 'qprr.thesis' not in sys.modules\n"
-            "p = qprr.load('q-prr')\n"
-            "from qprr.scenarios import SCENARIOS\n"
-            "print(p.name, 'qprr.thesis' in sys.modules, 'static-idc' in SCENARIOS)")
+    code = (
+        "import sys, qprr\n"
+        "assert 'qprr.thesis' not in sys.modules\n"
+        "p = qprr.load('q-prr')\n"
+        "from qprr.scenarios import SCENARIOS\n"
+        "print(p.name, 'qprr.thesis' in sys.modules, 'static-idc' in SCENARIOS)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["Q-PRR", "(thesis,", "plus)", "True", "True"], out.stdout
@@ -162,16 +171,19 @@ def test_the_thesis_arrives_by_registration():
 def test_the_public_face_is_the_workflow():
     """``import qprr`` gives the workflow (issue 20 item 5); the five heavier names load on first access, then are the
     objects of their modules."""
-    code = ("import sys, qprr\n"
-            "before = {m for m in ('qprr.sim', 'qprr.control', 'qprr.ik', 'qprr.actuation') if m in sys.modules}\n"
-            "import qprr.sim, qprr.control, qprr.ik, qprr.actuation\n"
-            "same = [qprr.simulate is qprr.sim.simulate, qprr.SimResult is qprr.sim.SimResult, qprr.IKSolver is qprr.ik.IKSolver,\n"
-            "        qprr.Allocator is qprr.actuation.Allocator, qprr.make_controller is qprr.control.make_controller]\n"
-            "print(sorted(before), all(same), sorted(qprr.__all__))")
+    code = (
+        "import sys, qprr\n"
+        "before = {m for m in ('qprr.sim', 'qprr.control', 'qprr.ik', 'qprr.actuation') if m in sys.modules}\n"
+        "import qprr.sim, qprr.control, qprr.ik, qprr.actuation\n"
+        "same = [qprr.simulate is qprr.sim.simulate, qprr.SimResult is qprr.sim.SimResult, qprr.IKSolver is qprr.ik.IKSolver,\n"
+        "        qprr.Allocator is qprr.actuation.Allocator, qprr.make_controller is qprr.control.make_controller]\n"
+        "print(sorted(before), all(same), sorted(qprr.__all__))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
-    assert out.stdout.strip() == ("[] True ['Allocator', 'IKSolver', 'Platform', 'QprrError', 'SimResult', 'build', 'from_urdf', "
-                                  "'load', 'make_controller', 'simulate']"), out.stdout
+    assert out.stdout.strip() == (
+        "[] True ['Allocator', 'IKSolver', 'Platform', 'QprrError', 'SimResult', 'build', 'from_urdf', 'load', 'make_controller', 'simulate']"
+    ), out.stdout
     import qprr
 
     with pytest.raises(AttributeError, match="no attribute 'simulat'"):

@@ -130,10 +130,12 @@ def test_gravity_vector_is_the_gradient_of_the_potential(robot, data):
     xi = random_xi(rng, robot)
     _, _, G = dyn.dynamics_xi(robot, data, xi, np.zeros(9))
     h = 1e-6
-    fd = np.array([
-        (dyn.potential_energy(robot, data, co.xi_to_q(xi + h * e)) - dyn.potential_energy(robot, data, co.xi_to_q(xi - h * e))) / (2 * h)
-        for e in np.eye(9)
-    ])
+    fd = np.array(
+        [
+            (dyn.potential_energy(robot, data, co.xi_to_q(xi + h * e)) - dyn.potential_energy(robot, data, co.xi_to_q(xi - h * e))) / (2 * h)
+            for e in np.eye(9)
+        ]
+    )
     np.testing.assert_allclose(G, fd, atol=1e-7)
     assert G[2] == pytest.approx(robot.params.total_mass * 9.8, rel=1e-12)  # dU/dz is the total weight
 
@@ -144,10 +146,9 @@ def test_christoffel_matrix_matches_finite_differences_of_B(robot, data):
     xi, xi_dot = random_xi(rng, robot), rng.uniform(-2, 2, 9)
     _, C, _ = dyn.dynamics_xi(robot, data, xi, xi_dot)
     h = 1e-6
-    dB = np.array([
-        (dyn.dynamics_xi(robot, data, xi + h * e, xi_dot)[0] - dyn.dynamics_xi(robot, data, xi - h * e, xi_dot)[0]) / (2 * h)
-        for e in np.eye(9)
-    ])
+    dB = np.array(
+        [(dyn.dynamics_xi(robot, data, xi + h * e, xi_dot)[0] - dyn.dynamics_xi(robot, data, xi - h * e, xi_dot)[0]) / (2 * h) for e in np.eye(9)]
+    )
     C_fd = 0.5 * (np.einsum("kij,k->ij", dB, xi_dot) + np.einsum("jik,k->ij", dB, xi_dot) - np.einsum("ijk,k->ij", dB, xi_dot))
     np.testing.assert_allclose(C, C_fd, atol=1e-8)
     B_dot = np.einsum("kij,k->ij", dB, xi_dot)

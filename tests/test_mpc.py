@@ -54,9 +54,19 @@ def test_make_controller_without_crocoddyl_names_the_install_command(monkeypatch
 
 def test_solve_summary_reads_the_metrics_and_is_absent_without_an_mpc():
     assert solve_summary({"x": 1.0}) is None
-    m = {"mpc_solves": 3.0, "mpc_native_backend": 1.0, "mpc_median_solve_s": 0.002, "mpc_p95_solve_s": 0.004,
-         "mpc_median_solve_cpu_s": 0.0019, "mpc_p95_solve_cpu_s": 0.0039, "mpc_median_iterations": 1.0, "mpc_converged": 2.0,
-         "mpc_iteration_limit": 1.0, "mpc_failed": 0.0, "mpc_fallbacks": 0.0}
+    m = {
+        "mpc_solves": 3.0,
+        "mpc_native_backend": 1.0,
+        "mpc_median_solve_s": 0.002,
+        "mpc_p95_solve_s": 0.004,
+        "mpc_median_solve_cpu_s": 0.0019,
+        "mpc_p95_solve_cpu_s": 0.0039,
+        "mpc_median_iterations": 1.0,
+        "mpc_converged": 2.0,
+        "mpc_iteration_limit": 1.0,
+        "mpc_failed": 0.0,
+        "mpc_fallbacks": 0.0,
+    }
     line = solve_summary(m)
     assert "native" in line and "median 2.00 ms" in line and "p95 4.00 ms" in line and "0 fallbacks" in line
     assert "Python models" in solve_summary({**m, "mpc_native_backend": 0.0})
@@ -66,14 +76,15 @@ def test_benchmark_quick_mode_exits_0_and_prints_the_backends():
     """benchmarks/mpc_benchmark.py --quick: exit 0 with crocoddyl's native models, with the Python ones only (the native
     column skipped with the fix command) and without crocoddyl (the install command)."""
     root = Path(__file__).resolve().parents[1]
-    out = subprocess.run([sys.executable, str(root / "benchmarks" / "mpc_benchmark.py"), "--quick"], capture_output=True, text=True,
-                         timeout=300, cwd=root)
+    out = subprocess.run(
+        [sys.executable, str(root / "benchmarks" / "mpc_benchmark.py"), "--quick"], capture_output=True, text=True, timeout=300, cwd=root
+    )
     assert out.returncode == 0, out.stderr
     if importlib.util.find_spec("crocoddyl") is None:
         assert "crocoddyl is not installed" in out.stdout and "qprr[mpc]" in out.stdout
         return
     assert "\npython " in out.stdout and "wall time: mpc" in out.stdout
-    assert ("python / native" in out.stdout) != ("native: skipped" in out.stdout and 'pin==4.0.*' in out.stdout)
+    assert ("python / native" in out.stdout) != ("native: skipped" in out.stdout and "pin==4.0.*" in out.stdout)
 
 
 crocoddyl = pytest.importorskip("crocoddyl", reason=f"the MPC needs crocoddyl: {INSTALL}")
@@ -81,8 +92,10 @@ mpc = importlib.import_module("qprr.control.mpc")  # with crocoddyl installed, a
 from qprr.control.mpc_native import NativeNode  # noqa: E402
 from qprr.control.mpc_reference import LieState, PlatformDynamics  # noqa: E402
 
-native_only = pytest.mark.skipif(bool(mpc.NATIVE_PROBLEM), reason=f"crocoddyl's native models disagree with the installed "
-                                 f"pinocchio ({mpc.NATIVE_PROBLEM}); install the consistent pair: {mpc.FIX}")
+native_only = pytest.mark.skipif(
+    bool(mpc.NATIVE_PROBLEM),
+    reason=f"crocoddyl's native models disagree with the installed pinocchio ({mpc.NATIVE_PROBLEM}); install the consistent pair: {mpc.FIX}",
+)
 
 
 @pytest.fixture(scope="module")
@@ -101,8 +114,7 @@ def _with_f_max(platform, f_max: float):
 
 
 # ---------------------------------------------------------------------------- actuation
-@pytest.mark.parametrize("name, layout", [("q-prr", "plus"), ("q-prr", "x"), ("borinot_flying_arm_2", None),
-                                          ("hextilt_flying_arm_5", None)])
+@pytest.mark.parametrize("name, layout", [("q-prr", "plus"), ("q-prr", "x"), ("borinot_flying_arm_2", None), ("hextilt_flying_arm_5", None)])
 def test_crocoddyl_thrusters_give_the_platform_actuation_matrix(name, layout):
     """crocoddyl's ActuationModelFloatingBaseThrusters from the rotor set = N of Thesis (5.44)-(5.46), for any rotor set."""
     pf = qprr.load(name, layout=layout) if layout else qprr.load(name)
@@ -296,8 +308,7 @@ msgs = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)
 print(len(msgs), ctrl.backend, ctrl.stats().backend)
 print(msgs[0])
 """
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[1],
-                         timeout=120)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=Path(__file__).resolve().parents[1], timeout=120)
     assert out.returncode == 0, out.stderr
     first, msg = out.stdout.splitlines()[:2]
     assert first == "1 python python"
@@ -349,8 +360,9 @@ def _lqr_first_control(ctrl, platform, x_eq: np.ndarray, u_eq: np.ndarray, dx0: 
         e[i] = eps
         B[:, i] = (minus(step(x_eq, u_eq + e), x1) - minus(step(x_eq, u_eq - e), x1)) / (2 * eps)
     n_arm = nv - 6
-    w_state = np.array([w.position] * 3 + [w.tilt, w.tilt, w.yaw] + [w.arm] * n_arm
-                       + [w.linear_velocity] * 3 + [w.angular_velocity] * 3 + [w.arm_velocity] * n_arm)
+    w_state = np.array(
+        [w.position] * 3 + [w.tilt, w.tilt, w.yaw] + [w.arm] * n_arm + [w.linear_velocity] * 3 + [w.angular_velocity] * 3 + [w.arm_velocity] * n_arm
+    )
     w_res = np.concatenate([w_state, [w.ee_position] * 3 + [w.ee_orientation] * 3, [w.cog] * 2])
     Q = Jr.T @ (w_res[:, None] * Jr)
     M = pin.crba(model, data, platform.neutral_q())
@@ -375,8 +387,9 @@ def test_mpc_first_control_agrees_with_lqr_when_no_bound_is_active(platform):
     ctrl = mpc.MPCController(platform, Hold(), settings=settings)
     x_eq = np.concatenate([platform.neutral_q(), np.zeros(9)])
     u_eq = np.r_[Allocator(platform).hover_thrusts(), 0.0, 0.0, 0.0]
-    np.testing.assert_allclose(platform.actuation_matrix @ u_eq,
-                               pin.computeGeneralizedGravity(platform.model, platform.data(), x_eq[:10]), atol=1e-12)
+    np.testing.assert_allclose(
+        platform.actuation_matrix @ u_eq, pin.computeGeneralizedGravity(platform.model, platform.data(), x_eq[:10]), atol=1e-12
+    )
     d = np.array([0.5, -0.4, 0.3, 0.2, -0.3, 0.6, 0.01, 0.3, -0.2, 0.2, 0.1, -0.3, 0.5, -0.4, 0.3, 0.05, 0.5, -0.5])
     errors = []
     for scale in (2e-3, 1e-3):
@@ -406,8 +419,7 @@ def test_mpc_tracks_like_the_exact_inverse_dynamics_at_hover(platform):
     ctrl.step(0.0, s, Reference(xi.copy()))
     _, _, u_ref = ctrl.reference(xi, np.zeros(9), np.zeros(9))
     np.testing.assert_allclose(ctrl.stats().u[0], u_ref, rtol=0, atol=1e-8)
-    np.testing.assert_allclose(platform.actuation_matrix @ u_ref, pin.computeGeneralizedGravity(platform.model, platform.data(), q),
-                               atol=1e-10)
+    np.testing.assert_allclose(platform.actuation_matrix @ u_ref, pin.computeGeneralizedGravity(platform.model, platform.data(), q), atol=1e-10)
 
 
 # ---------------------------------------------------------------------------- thrust bounds

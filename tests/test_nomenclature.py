@@ -21,34 +21,44 @@ SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 
 
 # ------------------------------------------------------------------------------- parsing
-@pytest.mark.parametrize("name, fields", [
-    ("Q-PRR", (1, "Q", None, 1, "PRR")),
-    ("QX-PRR", (1, "Q", "x", 1, "PRR")),
-    ("Q+-RR", (1, "Q", "plus", 1, "RR")),
-    ("HEX-RRR", (1, "HEX", None, 1, "RRR")),
-    ("oct-rr", (1, "OCT", None, 1, "RR")),
-    ("3Q-RR", (3, "Q", None, 1, "RR")),
-    ("Q-3RP", (1, "Q", None, 3, "RP")),
-    ("HEL-RRR", (1, "HEL", None, 1, "RRR")),
-    ("2QUA-RRC", (2, "QUA", None, 1, "RRC")),
-])
+@pytest.mark.parametrize(
+    "name, fields",
+    [
+        ("Q-PRR", (1, "Q", None, 1, "PRR")),
+        ("QX-PRR", (1, "Q", "x", 1, "PRR")),
+        ("Q+-RR", (1, "Q", "plus", 1, "RR")),
+        ("HEX-RRR", (1, "HEX", None, 1, "RRR")),
+        ("oct-rr", (1, "OCT", None, 1, "RR")),
+        ("3Q-RR", (3, "Q", None, 1, "RR")),
+        ("Q-3RP", (1, "Q", None, 3, "RP")),
+        ("HEL-RRR", (1, "HEL", None, 1, "RRR")),
+        ("2QUA-RRC", (2, "QUA", None, 1, "RRC")),
+    ],
+)
 def test_parse(name, fields):
     d = parse(name)
     assert (d.n_uav, d.uav, d.layout, d.n_arms, d.joints) == fields
 
 
-@pytest.mark.parametrize("name, match", [("QPRR", "not a name of formula"), ("Z-RR", "unknown vehicle code 'Z'"),
-                                         ("Q-RXR", "unknown joint letter"), (42, "a string")])
+@pytest.mark.parametrize(
+    "name, match", [("QPRR", "not a name of formula"), ("Z-RR", "unknown vehicle code 'Z'"), ("Q-RXR", "unknown joint letter"), (42, "a string")]
+)
 def test_parse_errors(name, match):
     with pytest.raises(InputError, match=match):
         parse(name)
 
 
 # ----------------------------------------------------------------------------- building
-@pytest.mark.parametrize("name, n_rotors, kinds, layout", [
-    ("Q-PRR", 4, "PRR", "plus"), ("QX-PRR", 4, "PRR", "x"), ("HEX-RRR", 6, "RRR", "plus"), ("OCT-RR", 8, "RR", "plus"),
-    ("Q-RRR", 4, "RRR", "plus"),
-])
+@pytest.mark.parametrize(
+    "name, n_rotors, kinds, layout",
+    [
+        ("Q-PRR", 4, "PRR", "plus"),
+        ("QX-PRR", 4, "PRR", "x"),
+        ("HEX-RRR", 6, "RRR", "plus"),
+        ("OCT-RR", 8, "RR", "plus"),
+        ("Q-RRR", 4, "RRR", "plus"),
+    ],
+)
 def test_build_makes_the_named_platform(name, n_rotors, kinds, layout):
     p = qprr.build(name)
     assert p.n_rotors == n_rotors and p.n_arm == len(kinds)
@@ -94,15 +104,18 @@ def test_hanging_arm_points_down():
     assert kin.ee_placement(p, p.data(), p.neutral_q()).translation[2] < 0.0
 
 
-@pytest.mark.parametrize("name, words", [
-    ("3Q-RR", ["closed kinematic chain", "constraint"]),
-    ("Q-3RP", ["branch", "arm"]),
-    ("Q-RRC", ["cable", "tension"]),
-    ("HEL-RRR", ["helicopter", "not a multirotor"]),
-    ("FXW-RR", ["fixed wing"]),
-    ("FLW-R", ["flying wing"]),
-    ("0Q-RR", ["parallel robot"]),
-])
+@pytest.mark.parametrize(
+    "name, words",
+    [
+        ("3Q-RR", ["closed kinematic chain", "constraint"]),
+        ("Q-3RP", ["branch", "arm"]),
+        ("Q-RRC", ["cable", "tension"]),
+        ("HEL-RRR", ["helicopter", "not a multirotor"]),
+        ("FXW-RR", ["fixed wing"]),
+        ("FLW-R", ["flying wing"]),
+        ("0Q-RR", ["parallel robot"]),
+    ],
+)
 def test_unsupported_designs_say_why(name, words):
     with pytest.raises(UnsupportedDesignError) as exc:
         qprr.build(name)
@@ -119,22 +132,34 @@ _PHYSICAL = all(i[0] + i[2] >= i[1] and i[0] + i[1] >= i[2] and i[1] + i[2] >= i
 def rebuilt_qprr(params) -> qprr.Platform:
     """The thesis's Q-PRR from its parameters through qprr.build (multirotor at B, arm mounted at d0 on z_B)."""
     limits = [params.r0_limits, params.theta2_limits, params.theta3_limits]
-    links = [LinkSpec(kind, length=link.length, mass=link.mass, inertia=link.inertia, com=link.com, lower=lo, upper=hi,
-                      effort=e, velocity=v)
-             for kind, link, (lo, hi), e, v in zip("PRR", params.links, limits, params.effort_limits, params.velocity_limits)]
-    return qprr.build("Q-PRR", body_mass=params.multirotor_mass, body_inertia=params.multirotor_inertia, links=links,
-                      rotors=qprr.thesis.rotor_set(params), mount_xyz=(0.0, 0.0, params.d0), g=params.g,
-                      joint_names=("r0", "theta2", "theta3"),
-                      allow_nonphysical=not _PHYSICAL)  # Table 3.2's link 2 until issue 8's parameters land
+    links = [
+        LinkSpec(kind, length=link.length, mass=link.mass, inertia=link.inertia, com=link.com, lower=lo, upper=hi, effort=e, velocity=v)
+        for kind, link, (lo, hi), e, v in zip("PRR", params.links, limits, params.effort_limits, params.velocity_limits)
+    ]
+    return qprr.build(
+        "Q-PRR",
+        body_mass=params.multirotor_mass,
+        body_inertia=params.multirotor_inertia,
+        links=links,
+        rotors=qprr.thesis.rotor_set(params),
+        mount_xyz=(0.0, 0.0, params.d0),
+        g=params.g,
+        joint_names=("r0", "theta2", "theta3"),
+        allow_nonphysical=not _PHYSICAL,
+    )  # Table 3.2's link 2 until issue 8's parameters land
 
 
 _BUILT, _THESIS = rebuilt_qprr(P), qprr.thesis.load()
 
 
 @SETTINGS
-@given(st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3), st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4),
-       st.tuples(*(st.floats(float(a), float(b)) for a, b in zip(P.lower_limits, P.upper_limits))),
-       st.lists(st.floats(-3.0, 3.0), min_size=9, max_size=9), st.lists(st.floats(-5.0, 5.0), min_size=9, max_size=9))
+@given(
+    st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3),
+    st.lists(st.floats(-1.0, 1.0), min_size=4, max_size=4),
+    st.tuples(*(st.floats(float(a), float(b)) for a, b in zip(P.lower_limits, P.upper_limits))),
+    st.lists(st.floats(-3.0, 3.0), min_size=9, max_size=9),
+    st.lists(st.floats(-5.0, 5.0), min_size=9, max_size=9),
+)
 def test_thesis_qprr_is_an_instance_of_the_nomenclature(p, quat, arm, v, a):
     """Mass matrix, bias forces (Coriolis + gravity) and the full inverse dynamics agree to ~1e-15."""
     if np.linalg.norm(quat) < 1e-3:
@@ -147,8 +172,7 @@ def test_thesis_qprr_is_an_instance_of_the_nomenclature(p, quat, arm, v, a):
     np.testing.assert_allclose(np.triu(Mb), np.triu(Mt), rtol=0, atol=1e-15 * np.abs(Mt).max())
     nb, nt = pin.nonLinearEffects(b.model, db, q, v), pin.nonLinearEffects(t.model, dt, q, v)
     np.testing.assert_allclose(nb, nt, rtol=0, atol=1e-14 * (1.0 + np.abs(nt).max()))
-    np.testing.assert_allclose(pin.rnea(b.model, db, q, v, a), pin.rnea(t.model, dt, q, v, a), rtol=0,
-                               atol=1e-14 * (1.0 + np.abs(nt).max()))
+    np.testing.assert_allclose(pin.rnea(b.model, db, q, v, a), pin.rnea(t.model, dt, q, v, a), rtol=0, atol=1e-14 * (1.0 + np.abs(nt).max()))
     np.testing.assert_allclose(kin.ee_placement(b, db, q).homogeneous, kin.ee_placement(t, dt, q).homogeneous, atol=1e-15)
 
 

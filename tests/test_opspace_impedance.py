@@ -69,8 +69,7 @@ def test_fully_actuated_law_is_khatibs_with_the_operational_space_model():
         assert np.allclose(hist["p_r"][-1], p_e, atol=1e-12)
         a_star = hist["a_star"][-1]
         e, e_dot = hist["e"][-1], m.velocity[0:3] - _ref_velocity(p, ref)
-        assert np.allclose(a_star, _ref_acc(p, ref) + np.linalg.solve(imp.mass, h[0:3] - imp.damping @ e_dot - imp.stiffness @ e),
-                           atol=1e-10)
+        assert np.allclose(a_star, _ref_acc(p, ref) + np.linalg.solve(imp.mass, h[0:3] - imp.damping @ e_dot - imp.stiffness @ e), atol=1e-10)
         # the URDF's joint friction is compensated in full at the reference arm rates (qprr.joint_friction), outside the projection
         ff = -JointFriction.from_model(p.model).generalized_force(np.r_[np.zeros(6), ref.xi_dot[6:]])
         khatib = J.T @ (m.Lambda @ a_star + m.mu + m.p) + (np.eye(p.nv) - J.T @ Jbar.T) @ (tau0 - ff) + ff - _J6(p, xi).T @ h
@@ -215,9 +214,10 @@ def test_free_space_tracks_like_the_idc(name):
     p = qprr.load(name).without_joint_friction()  # frictionless arm (joint friction: tests/test_joint_friction.py)
     traj = hover_and_reach(p, (0.5, 0.3, 1.0), climb=(0.0, 2.0), reach=(2.0, 3.5))
     out = {}
-    for label, c in (("idc", InverseDynamicsController(p)),
-                     ("ops", OperationalSpaceImpedance(p, EndEffectorImpedance.from_frequency(4.0, 1.0, 1.0),
-                                                       ee_sensor=lambda t: np.zeros(6)))):
+    for label, c in (
+        ("idc", InverseDynamicsController(p)),
+        ("ops", OperationalSpaceImpedance(p, EndEffectorImpedance.from_frequency(4.0, 1.0, 1.0), ee_sensor=lambda t: np.zeros(6))),
+    ):
         res = simulate(p, c, traj, 5.0)
         assert not np.any(res.flags & 5)
         d = p.data()

@@ -66,7 +66,7 @@ def _joint_type(kind: str):
     return lambda text: text.replace('name="elbow" type="revolute"', f'name="elbow" type="{kind}"')
 
 
-_FIRST_ROTOR = 'position = [0.1414, 0.1414, 0.03]\naxis = [0.0, 0.0, 1.0]'
+_FIRST_ROTOR = "position = [0.1414, 0.1414, 0.03]\naxis = [0.0, 0.0, 1.0]"
 # table row of docs/platforms.md -> (URDF edit, rotor-file edit, from_urdf keywords, rotor file name)
 MISTAKES = {
     '`ee_frame="grippr"`': (None, None, {"ee_frame": "grippr"}, None),
@@ -78,11 +78,22 @@ MISTAKES = {
     "a non-physical inertia, a negative mass": (lambda t: t.replace('izz="0.018"', 'izz="0.03"'), None, {}, None),
     "a moving link without `<inertial>`": (_no_inertial("upper_arm"), None, {}, None),
     "a `continuous` joint": (_joint_type("continuous"), None, {}, None),
-    "a revolute joint without `<limit>`": (lambda t: re.sub(r'(name="elbow" type="revolute">.*?)<limit[^>]*/>', r"\1", t, flags=re.S),
-                                           None, {}, None),
-    "a `world` link with a `floating` joint": (lambda t: t.replace('<robot name="quad_rrr">', '<robot name="quad_rrr">\n<link name="world"/>\n'
-                                               '<joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>'),
-                                               None, {}, None),
+    "a revolute joint without `<limit>`": (
+        lambda t: re.sub(r'(name="elbow" type="revolute">.*?)<limit[^>]*/>', r"\1", t, flags=re.S),
+        None,
+        {},
+        None,
+    ),
+    "a `world` link with a `floating` joint": (
+        lambda t: t.replace(
+            '<robot name="quad_rrr">',
+            '<robot name="quad_rrr">\n<link name="world"/>\n'
+            '<joint name="float" type="floating"><parent link="world"/><child link="base_link"/></joint>',
+        ),
+        None,
+        {},
+        None,
+    ),
     "a `planar` or `floating` arm joint": (_joint_type("planar"), None, {}, None),
     "the body is not the URDF's root (with `base_link` in the rotor file)": (lambda t: _REV, None, {"ee_frame": "gripper"}, None),
     "a rotor `frame` on an arm link": (None, lambda t: t.replace(_FIRST_ROTOR, 'frame = "forearm"'), {}, None),
@@ -92,7 +103,7 @@ MISTAKES = {
 
 def _doc_rows() -> dict[str, str]:
     text = (ROOT / "docs" / "platforms.md").read_text()
-    section = text[text.index("## When something is wrong"):text.index("## What the core assumes")]
+    section = text[text.index("## When something is wrong") : text.index("## What the core assumes")]
     rows = {}
     for line in section.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")] if line.startswith("| ") else []
@@ -153,17 +164,20 @@ def test_cli_simulate_analyze_animate_with_a_urdf(tmp_path, capsys):
     assert not (tmp_path / "wrong.gif").exists()
 
 
-@pytest.mark.parametrize("argv, fragment", [
-    (["simulate", "hover-reach", "--urdf", str(MY / "quad_rrr.urdf")], "needs --rotors FILE.toml"),
-    (["simulate", "hover-reach", "--rotors", str(MY / "quad_rrr.rotors.toml")], "give its --urdf too"),
-    (["simulate", "hover-reach", "--platform", "HEX-RRR", *OWN], "leave out --platform and --layout"),
-    (["simulate", "static-idc", *OWN], "runs on q-prr"),
-    (["simulate", "hover-reach", "--urdf", "nope.urdf", "--rotors", str(MY / "quad_rrr.rotors.toml")], "'nope.urdf' does not exist"),
-    (["simulate", "hover-reach", *OWN[:4], "--ee-frame", "grippr"], "unknown ee_frame 'grippr'"),
-    (["analyze", "hover", "--ee-frame", "gripper"], "give its --urdf too"),
-    (["analyze", "hover", "--platform", "quad"], "--urdf FILE --rotors FILE.toml"),
-    (["animate", "--platform", "borinot_flying_arm_2", "--layout", "x"], "layout 'x' applies to q-prr"),
-])
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        (["simulate", "hover-reach", "--urdf", str(MY / "quad_rrr.urdf")], "needs --rotors FILE.toml"),
+        (["simulate", "hover-reach", "--rotors", str(MY / "quad_rrr.rotors.toml")], "give its --urdf too"),
+        (["simulate", "hover-reach", "--platform", "HEX-RRR", *OWN], "leave out --platform and --layout"),
+        (["simulate", "static-idc", *OWN], "runs on q-prr"),
+        (["simulate", "hover-reach", "--urdf", "nope.urdf", "--rotors", str(MY / "quad_rrr.rotors.toml")], "'nope.urdf' does not exist"),
+        (["simulate", "hover-reach", *OWN[:4], "--ee-frame", "grippr"], "unknown ee_frame 'grippr'"),
+        (["analyze", "hover", "--ee-frame", "gripper"], "give its --urdf too"),
+        (["analyze", "hover", "--platform", "quad"], "--urdf FILE --rotors FILE.toml"),
+        (["animate", "--platform", "borinot_flying_arm_2", "--layout", "x"], "layout 'x' applies to q-prr"),
+    ],
+)
 def test_cli_platform_errors(argv, fragment, capsys):
     assert main(argv) == 2
     err = capsys.readouterr().err

@@ -89,26 +89,32 @@ def _link2(**changes) -> tuple:
     return (_P.links[0], replace(_L2, **changes), _P.links[2])
 
 
-@pytest.mark.parametrize("changes, pattern", [
-    (dict(multirotor_mass=-1.0), r"multirotor: mass must be finite and > 0 kg, got -1.0"),
-    (dict(multirotor_mass=float("nan")), r"multirotor: mass"),
-    (dict(multirotor_inertia=(1e-2, 1e-2, 3e-2, 0.0, 0.0, 0.0)), r"multirotor: .*I_zz <= I_xx \+ I_yy"),
-    (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 2e-2, 0.0, 0.0)), r"multirotor: rotational inertia is not positive semi-definite, I_1 = -0.01"),
-    (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 0.0, 0.0)), r"multirotor inertia \(Ixx, .*\) \[kg m\^2\] must have shape \(6,\), got shape \(5,\)"),
-    (dict(links=_link2(mass=0.0)), r"link2: mass"),
-    (dict(links=_link2(com=(0.0, math.inf, 0.0))), r"link2 com \(centre of mass, m\) must be finite, got \[0.0, inf, 0.0\]"),
-    (dict(links=_link2(inertia=(-1e-5, 5e-5, 5e-5, 0.0, 0.0, 0.0))), r"link2: rotational inertia is not positive semi-definite, I_xx = -1e-05"),
-    (dict(links=_link2(length=0.0)), r"link2: length"),
-    (dict(d2=0.0), r"d2 must be a positive"),
-    (dict(d0=-0.01), r"d0 must be a finite number >= 0"),
-    (dict(arm_length=-0.2), r"arm_length must be a positive"),
-    (dict(thrust_min=25.0), r"f_min <= f_max"),
-    (dict(r0_limits=(0.04, -0.04)), r"r0_limits .* lower <= upper"),
-    (dict(theta3_limits=(-1.0, math.nan)), r"theta3_limits"),
-    (dict(effort_limits=(20.0, 0.0, 5.0)), r"effort_limits must be 3 positive"),
-    (dict(g=-9.8), r"gravity g"),
-    (dict(drag_factor=0.0), r"drag_factor must be a positive"),
-])
+@pytest.mark.parametrize(
+    "changes, pattern",
+    [
+        (dict(multirotor_mass=-1.0), r"multirotor: mass must be finite and > 0 kg, got -1.0"),
+        (dict(multirotor_mass=float("nan")), r"multirotor: mass"),
+        (dict(multirotor_inertia=(1e-2, 1e-2, 3e-2, 0.0, 0.0, 0.0)), r"multirotor: .*I_zz <= I_xx \+ I_yy"),
+        (dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 2e-2, 0.0, 0.0)), r"multirotor: rotational inertia is not positive semi-definite, I_1 = -0.01"),
+        (
+            dict(multirotor_inertia=(1e-2, 1e-2, 1e-2, 0.0, 0.0)),
+            r"multirotor inertia \(Ixx, .*\) \[kg m\^2\] must have shape \(6,\), got shape \(5,\)",
+        ),
+        (dict(links=_link2(mass=0.0)), r"link2: mass"),
+        (dict(links=_link2(com=(0.0, math.inf, 0.0))), r"link2 com \(centre of mass, m\) must be finite, got \[0.0, inf, 0.0\]"),
+        (dict(links=_link2(inertia=(-1e-5, 5e-5, 5e-5, 0.0, 0.0, 0.0))), r"link2: rotational inertia is not positive semi-definite, I_xx = -1e-05"),
+        (dict(links=_link2(length=0.0)), r"link2: length"),
+        (dict(d2=0.0), r"d2 must be a positive"),
+        (dict(d0=-0.01), r"d0 must be a finite number >= 0"),
+        (dict(arm_length=-0.2), r"arm_length must be a positive"),
+        (dict(thrust_min=25.0), r"f_min <= f_max"),
+        (dict(r0_limits=(0.04, -0.04)), r"r0_limits .* lower <= upper"),
+        (dict(theta3_limits=(-1.0, math.nan)), r"theta3_limits"),
+        (dict(effort_limits=(20.0, 0.0, 5.0)), r"effort_limits must be 3 positive"),
+        (dict(g=-9.8), r"gravity g"),
+        (dict(drag_factor=0.0), r"drag_factor must be a positive"),
+    ],
+)
 def test_nonphysical_parameters_are_refused_with_the_body_and_the_inequality(changes, pattern):
     with pytest.raises(NonPhysicalError, match=pattern) as err:
         _P.with_changes(**changes)
@@ -125,8 +131,7 @@ def test_triangle_inequality_of_a_tensor_with_products_uses_principal_moments():
 
 
 @settings(max_examples=60, deadline=None)
-@given(st.lists(st.floats(1e-6, 1.0), min_size=3, max_size=3), st.lists(st.floats(-math.pi, math.pi), min_size=3, max_size=3),
-       st.floats(0.01, 10.0))
+@given(st.lists(st.floats(1e-6, 1.0), min_size=3, max_size=3), st.lists(st.floats(-math.pi, math.pi), min_size=3, max_size=3), st.floats(0.01, 10.0))
 def test_every_mass_distribution_is_accepted_and_a_negative_second_moment_is_not(sigma, rpy, mass):
     """I = tr(Sigma) 1 - Sigma for a positive second-moment matrix Sigma (any body) passes; making one principal second
     moment negative fails."""

@@ -238,7 +238,7 @@ def test_B_c_6_51_printed_blocks(robot, data):
     P = pl.Payload(0.1, inertia=(2e-5, 3e-5, 1e-5, 0.0, 0.0, 0.0))
     Bc, _ = pl.payload_terms_closed_form(robot, data, xi, P)
     printed = tp.B_c_6_51(xi, 0.1, Ic, _d(robot))
-    blk = lambda M, i, j: M[3 * i:3 * i + 3, 3 * j:3 * j + 3]  # noqa: E731
+    blk = lambda M, i, j: M[3 * i : 3 * i + 3, 3 * j : 3 * j + 3]  # noqa: E731
     for i, j in ((0, 0), (0, 1), (0, 2), (1, 2), (2, 2)):
         assert np.allclose(blk(printed, i, j), blk(Bc, i, j), atol=1e-14)
     assert np.abs(blk(printed, 1, 1) - blk(Bc, 1, 1)).max() > 1e-4
@@ -270,8 +270,15 @@ def test_estimator_converges_on_a_seeded_noisy_hover(robot):
     """Hover carrying 0.1 kg (unknown to the controller), white force noise 0.3 N (Thesis (6.27)) on x, y, z."""
     xi = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -0.04, 0.3, 0.5)
     ctrl = PayloadIDC(robot, gains.payload(), payload="estimate")
-    res = sim.simulate(robot, ctrl, Hold(xi), 1.5, payload=sim.PayloadSchedule((sim.PayloadChange(0.0, 0.1),)),
-                       disturbance=sim.WhiteNoise(0.3, components=(0, 1, 2)), seed=7)
+    res = sim.simulate(
+        robot,
+        ctrl,
+        Hold(xi),
+        1.5,
+        payload=sim.PayloadSchedule((sim.PayloadChange(0.0, 0.1),)),
+        disturbance=sim.WhiteNoise(0.3, components=(0, 1, 2)),
+        seed=7,
+    )
     m = np.asarray(ctrl.mass_log)
     late = m[res.t >= 0.5]
     assert np.abs(late - 0.1).max() < 0.01  # measured 0.0034 kg (time constant 0.05 s)

@@ -159,8 +159,10 @@ def test_unknown_rotor_frame_lists_the_frames():
 
 def test_rotor_frames_give_the_rotor_positions_and_axes():
     """A rotor described by a URDF frame sits where Pinocchio puts that frame (in B), thrusting along its z."""
-    desc = {"defaults": {"kappa": P.kappa, "f_max": P.thrust_max},
-            "rotor": [{"frame": f"rotor_x_{i}", "spin": s} for i, s in zip(range(1, 5), (1, -1, 1, -1))]}
+    desc = {
+        "defaults": {"kappa": P.kappa, "f_max": P.thrust_max},
+        "rotor": [{"frame": f"rotor_x_{i}", "spin": s} for i, s in zip(range(1, 5), (1, -1, 1, -1))],
+    }
     platform = from_urdf(TEXT, desc, ee_frame="end_effector", allow_nonphysical=True)
     ref = qprr.thesis.load(layout="x")
     np.testing.assert_allclose(platform.rotor_matrix, ref.rotor_matrix, atol=1e-15)

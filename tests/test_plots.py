@@ -176,18 +176,16 @@ def test_sec_6_4_figures_share_the_style(tmp_path):
 
 
 def test_library_never_selects_a_backend_nor_imports_pyplot(tmp_path):
-    code = ("import sys, qprr, qprr.viz, qprr.thesis.scenarios\n"
-            "from qprr.scenarios import run\n"
-            "r = run('hover-reach', duration=0.5)\n"
-            "qprr.viz.plot_result(r, sys.argv[1])\n"
-            "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n")
+    code = (
+        "import sys, qprr, qprr.viz, qprr.thesis.scenarios\n"
+        "from qprr.scenarios import run\n"
+        "r = run('hover-reach', duration=0.5)\n"
+        "qprr.viz.plot_result(r, sys.argv[1])\n"
+        "assert 'matplotlib.pyplot' not in sys.modules, 'pyplot imported'\n"
+    )
     env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": str(ROOT)}
-    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "f.png")], env=env, capture_output=True, text=True,
-                          timeout=120)
+    proc = subprocess.run([sys.executable, "-c", code, str(tmp_path / "f.png")], env=env, capture_output=True, text=True, timeout=120)
     assert proc.returncode == 0, proc.stderr
     for f in (ROOT / "qprr").rglob("*.py"):
         text = f.read_text()
         assert "matplotlib.use(" not in text and "import matplotlib.pyplot" not in text, f
-
-
-

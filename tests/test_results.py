@@ -41,20 +41,45 @@ def results(draw) -> SimResult:
     steps = draw(hnp.arrays(np.float64, m, elements=st.floats(1e-6, 1.0)))
     t = np.cumsum(steps) - steps[0]
     t = t if np.all(np.diff(t) > 0) else np.arange(m) * 1e-3
-    series = draw(st.dictionaries(SERIES_NAMES, hnp.arrays(st.sampled_from([np.float64, np.float32, np.int64, np.int8, np.bool_]),
-                                                   st.sampled_from([(m,), (m, 3), (7,), (), (0,)])), max_size=4))
+    series = draw(
+        st.dictionaries(
+            SERIES_NAMES,
+            hnp.arrays(st.sampled_from([np.float64, np.float32, np.int64, np.int8, np.bool_]), st.sampled_from([(m,), (m, 3), (7,), (), (0,)])),
+            max_size=4,
+        )
+    )
     metrics = draw(st.dictionaries(TEXT, FLOATS, max_size=4))
     names = draw(st.one_of(st.just(()), st.lists(TEXT, min_size=n_xi, max_size=n_xi).map(tuple)))
     lows = draw(hnp.arrays(np.float64, n_rotors, elements=st.floats(0.0, 10.0)))
     bounds = draw(st.one_of(st.none(), st.just(np.column_stack([lows, lows + 5.0]))))
     return SimResult(
-        scenario=draw(TEXT), controller=draw(TEXT), dt=draw(st.floats(1e-6, 1.0)), integrator=draw(TEXT),
-        t=t, xi=arr((m, n_xi)), xi_dot=arr((m, n_xi)), xi_d=arr((m, n_xi)), xi_dot_d=arr((m, n_xi)), u=arr((m, n_xi)),
-        f=arr((m, n_rotors)), arm_effort=arr((m, n_arm)), x_cm=arr((m, 3)), unallocated=arr((m, n_xi)),
-        flags=draw(hnp.arrays(np.int8, m, elements=st.integers(0, 7))), u_ext=arr((m, n_xi)),
-        wall_time=draw(st.floats(0.0, 1e4)), status=draw(st.sampled_from(list(Status))), reason=draw(TEXT),
-        seed=draw(st.one_of(st.none(), st.integers(0, 2**63 - 1))), control_period=draw(st.floats(1e-6, 1.0)),
-        platform=draw(TEXT), names=names, series=series, metrics=metrics, rotor_bounds=bounds)
+        scenario=draw(TEXT),
+        controller=draw(TEXT),
+        dt=draw(st.floats(1e-6, 1.0)),
+        integrator=draw(TEXT),
+        t=t,
+        xi=arr((m, n_xi)),
+        xi_dot=arr((m, n_xi)),
+        xi_d=arr((m, n_xi)),
+        xi_dot_d=arr((m, n_xi)),
+        u=arr((m, n_xi)),
+        f=arr((m, n_rotors)),
+        arm_effort=arr((m, n_arm)),
+        x_cm=arr((m, 3)),
+        unallocated=arr((m, n_xi)),
+        flags=draw(hnp.arrays(np.int8, m, elements=st.integers(0, 7))),
+        u_ext=arr((m, n_xi)),
+        wall_time=draw(st.floats(0.0, 1e4)),
+        status=draw(st.sampled_from(list(Status))),
+        reason=draw(TEXT),
+        seed=draw(st.one_of(st.none(), st.integers(0, 2**63 - 1))),
+        control_period=draw(st.floats(1e-6, 1.0)),
+        platform=draw(TEXT),
+        names=names,
+        series=series,
+        metrics=metrics,
+        rotor_bounds=bounds,
+    )
 
 
 def _same_array(a: np.ndarray, b: np.ndarray) -> bool:
@@ -73,8 +98,7 @@ def test_save_load_round_trip_is_bit_exact(res):
         back = SimResult.load(res.save(Path(tmp) / "run.npz"))
     for k in ARRAYS:
         assert _same_array(getattr(back, k), getattr(res, k)), k
-    for k in ("scenario", "controller", "dt", "integrator", "wall_time", "status", "reason", "seed", "control_period", "platform",
-              "names"):
+    for k in ("scenario", "controller", "dt", "integrator", "wall_time", "status", "reason", "seed", "control_period", "platform", "names"):
         assert getattr(back, k) == getattr(res, k), k
     assert isinstance(back.status, Status)
     assert (back.rotor_bounds is None) == (res.rotor_bounds is None)
@@ -122,9 +146,20 @@ def _result(m: int = 6, n_arm: int = 3, n_rotors: int = 4, **extra) -> SimResult
     rng = np.random.default_rng(7)
     n_xi = 6 + n_arm
     a = {k: rng.normal(size=(m, n_xi)) for k in ("xi", "xi_dot", "xi_d", "xi_dot_d", "u", "u_ext", "unallocated")}
-    kw = dict(scenario="s", controller="c", dt=1e-3, integrator="midpoint", t=np.arange(m) * 1e-3, f=rng.normal(size=(m, n_rotors)),
-              arm_effort=rng.normal(size=(m, n_arm)), x_cm=rng.normal(size=(m, 3)), flags=np.zeros(m, dtype=np.int8),
-              series={"contact_force": np.linspace(0.0, 1.0, m)}, metrics={"release_time": 0.5}, **a)
+    kw = dict(
+        scenario="s",
+        controller="c",
+        dt=1e-3,
+        integrator="midpoint",
+        t=np.arange(m) * 1e-3,
+        f=rng.normal(size=(m, n_rotors)),
+        arm_effort=rng.normal(size=(m, n_arm)),
+        x_cm=rng.normal(size=(m, 3)),
+        flags=np.zeros(m, dtype=np.int8),
+        series={"contact_force": np.linspace(0.0, 1.0, m)},
+        metrics={"release_time": 0.5},
+        **a,
+    )
     kw.update(extra)
     return SimResult(**kw)
 
@@ -170,7 +205,7 @@ def test_load_rejects_missing_foreign_truncated_and_corrupted_files(saved, tmp_p
     with np.load(saved) as z:
         assert "xi" in z.files
     start = raw.index(b"xi.npy") + 100  # inside the compressed data of xi
-    damaged[start:start + 40] = bytes(40)
+    damaged[start : start + 40] = bytes(40)
     path = tmp_path / "damaged.npz"
     path.write_bytes(bytes(damaged))
     with pytest.raises(InputError, match=r"cannot read 'xi'.*truncated, corrupted"):
@@ -190,29 +225,32 @@ def test_load_rejects_missing_foreign_truncated_and_corrupted_files(saved, tmp_p
         SimResult.load(_rewrite(saved, tmp_path / "obj.npz", arrays={"xi": objects}))
 
 
-@pytest.mark.parametrize("change, error, pattern", [
-    (dict(drop=("u",)), InputError, r"lacks the arrays \['u'\]"),
-    (dict(drop=("series_contact_force",)), InputError, r"lacks the series \['contact_force'\]"),
-    (dict(meta="{not json"), InputError, "corrupted metadata"),
-    (dict(meta="[1, 2]"), InputError, "corrupted metadata .*JSON object"),
-    (dict(meta={"status": "exploded"}), InputError, "unknown status 'exploded'"),
-    (dict(meta={"dt": float("nan")}), InputError, "dt must be a number > 0"),
-    (dict(meta={"scenario": None}), InputError, "scenario must be a string"),
-    (dict(meta={"seed": "7"}), InputError, "seed must be an integer"),
-    (dict(meta={"metrics": {"release_time": "soon"}}), InputError, "metrics must map names to numbers"),
-    (dict(meta={"names": ["x", "y"]}), ShapeError, "names has 2 entries for xi's 9 columns"),
-    (dict(arrays={"t": np.zeros((6, 1))}), ShapeError, "t must be a 1-D float array"),
-    (dict(arrays={"t": np.array([0.0, 2e-3, 1e-3, 3e-3, 4e-3, 5e-3])}), InputError, "t must be finite and increasing"),
-    (dict(arrays={"xi": np.zeros((6, 5))}), ShapeError, r"xi must have shape \(6, 6 \+ n_arm\), got \(6, 5\)"),
-    (dict(arrays={"xi": np.zeros((6, 9), dtype=int)}), InputError, "xi must be float"),
-    (dict(arrays={"xi_dot": np.zeros((6, 8))}), ShapeError, r"xi_dot must have shape \(6, 9\), got \(6, 8\)"),
-    (dict(arrays={"u": np.zeros((5, 9))}), ShapeError, "u has shape .* t has 6 rows"),
-    (dict(arrays={"arm_effort": np.zeros((6, 2))}), ShapeError, r"arm_effort must have shape \(6, 3\)"),
-    (dict(arrays={"x_cm": np.zeros((6, 2))}), ShapeError, r"x_cm must have shape \(6, 3\)"),
-    (dict(arrays={"unallocated": np.zeros((6, 4))}), ShapeError, r"unallocated must have shape \(6, 9\)"),
-    (dict(arrays={"f": np.zeros(6)}), ShapeError, r"f must have shape \(6, n_rotors >= 1\)"),
-    (dict(arrays={"flags": np.zeros(6)}), InputError, "flags must be a 1-D integer array"),
-])
+@pytest.mark.parametrize(
+    "change, error, pattern",
+    [
+        (dict(drop=("u",)), InputError, r"lacks the arrays \['u'\]"),
+        (dict(drop=("series_contact_force",)), InputError, r"lacks the series \['contact_force'\]"),
+        (dict(meta="{not json"), InputError, "corrupted metadata"),
+        (dict(meta="[1, 2]"), InputError, "corrupted metadata .*JSON object"),
+        (dict(meta={"status": "exploded"}), InputError, "unknown status 'exploded'"),
+        (dict(meta={"dt": float("nan")}), InputError, "dt must be a number > 0"),
+        (dict(meta={"scenario": None}), InputError, "scenario must be a string"),
+        (dict(meta={"seed": "7"}), InputError, "seed must be an integer"),
+        (dict(meta={"metrics": {"release_time": "soon"}}), InputError, "metrics must map names to numbers"),
+        (dict(meta={"names": ["x", "y"]}), ShapeError, "names has 2 entries for xi's 9 columns"),
+        (dict(arrays={"t": np.zeros((6, 1))}), ShapeError, "t must be a 1-D float array"),
+        (dict(arrays={"t": np.array([0.0, 2e-3, 1e-3, 3e-3, 4e-3, 5e-3])}), InputError, "t must be finite and increasing"),
+        (dict(arrays={"xi": np.zeros((6, 5))}), ShapeError, r"xi must have shape \(6, 6 \+ n_arm\), got \(6, 5\)"),
+        (dict(arrays={"xi": np.zeros((6, 9), dtype=int)}), InputError, "xi must be float"),
+        (dict(arrays={"xi_dot": np.zeros((6, 8))}), ShapeError, r"xi_dot must have shape \(6, 9\), got \(6, 8\)"),
+        (dict(arrays={"u": np.zeros((5, 9))}), ShapeError, "u has shape .* t has 6 rows"),
+        (dict(arrays={"arm_effort": np.zeros((6, 2))}), ShapeError, r"arm_effort must have shape \(6, 3\)"),
+        (dict(arrays={"x_cm": np.zeros((6, 2))}), ShapeError, r"x_cm must have shape \(6, 3\)"),
+        (dict(arrays={"unallocated": np.zeros((6, 4))}), ShapeError, r"unallocated must have shape \(6, 9\)"),
+        (dict(arrays={"f": np.zeros(6)}), ShapeError, r"f must have shape \(6, n_rotors >= 1\)"),
+        (dict(arrays={"flags": np.zeros(6)}), InputError, "flags must be a 1-D integer array"),
+    ],
+)
 def test_load_rejects_wrong_shapes_types_and_metadata(saved, tmp_path, change, error, pattern):
     path = _rewrite(saved, tmp_path / "bad.npz", **change)
     with pytest.raises(error, match=pattern) as err:

@@ -43,16 +43,15 @@ def _load(tmp_path, text: str):
 BAD = {
     "every rotor the same spin": (_toml([(p, "cw") for p, _ in GOOD]), "same spin"),
     "every kappa zero": (_toml(GOOD, kappa=0.0), "kappa is 0"),
-    "rotors on one line": (_toml([([x, 0.0, 0.03], s) for x, s in zip((-0.3, -0.1, 0.1, 0.3), ("cw", "ccw", "cw", "ccw"))]),
-                           "one line"),
-    "rotors at the centre (stacked on z_B)": (_toml([([0.0, 0.0, 0.03 * (k + 1)], s) for k, (_, s) in enumerate(GOOD)]),
-                                              "at the centre"),
-    "three coplanar rotors": (_toml([([0.2 * math.cos(a), 0.2 * math.sin(a), 0.03], s)
-                                     for a, s in zip((0.0, 2.1, 4.2), ("cw", "ccw", "cw"))], f_max=12.0), "3 rotor(s)"),
+    "rotors on one line": (_toml([([x, 0.0, 0.03], s) for x, s in zip((-0.3, -0.1, 0.1, 0.3), ("cw", "ccw", "cw", "ccw"))]), "one line"),
+    "rotors at the centre (stacked on z_B)": (_toml([([0.0, 0.0, 0.03 * (k + 1)], s) for k, (_, s) in enumerate(GOOD)]), "at the centre"),
+    "three coplanar rotors": (
+        _toml([([0.2 * math.cos(a), 0.2 * math.sin(a), 0.03], s) for a, s in zip((0.0, 2.1, 4.2), ("cw", "ccw", "cw"))], f_max=12.0),
+        "3 rotor(s)",
+    ),
     "a single rotor": (_toml([([0.0, 0.0, 0.03], "cw")], f_max=30.0), "1 rotor(s)"),
     "a rotor table pasted twice": (_toml(GOOD + GOOD), "written twice"),
-    "CoG outside the rotors (positions written about a corner)": (_toml([([x + 0.6, y + 0.6, z], s) for (x, y, z), s in GOOD]),
-                                                                  "cannot hover"),
+    "CoG outside the rotors (positions written about a corner)": (_toml([([x + 0.6, y + 0.6, z], s) for (x, y, z), s in GOOD]), "cannot hover"),
 }
 
 
@@ -80,8 +79,10 @@ def test_the_valid_example_set_loads_and_reports_what_it_can_do(tmp_path):
     # condition: closed form for the X quad, torques scaled by the arm length L: singular values of
     # [1 1 1 1; y_i / L; -x_i / L; s_i kappa / L] are 2, sqrt(2) y_i-norm..., ratio = 2 / (2 kappa / L)
     L = math.hypot(A, A, 0.03)
-    sv = np.linalg.svd(np.vstack([np.ones(4), [A / L, A / L, -A / L, -A / L], [-A / L, A / L, A / L, -A / L],
-                                  [0.016 / L, -0.016 / L, 0.016 / L, -0.016 / L]]), compute_uv=False)
+    sv = np.linalg.svd(
+        np.vstack([np.ones(4), [A / L, A / L, -A / L, -A / L], [-A / L, A / L, A / L, -A / L], [0.016 / L, -0.016 / L, 0.016 / L, -0.016 / L]]),
+        compute_uv=False,
+    )
     assert s.condition == pytest.approx(sv[0] / sv[-1], rel=1e-12)
 
 
@@ -102,9 +103,14 @@ def test_free_flight_skips_the_hover_requirement():
     assert actuation_summary(rotors, 0.0).can_control_attitude
 
 
-_valid_rings = st.builds(lambda n, r, kappa, tilt, f_max: ring(n, r, kappa=kappa, tilt=tilt, f_max=f_max),
-                         st.sampled_from([4, 6, 8]), st.floats(0.1, 0.6), st.floats(0.005, 0.06), st.floats(0.0, 0.5),
-                         st.floats(10.0, 40.0))
+_valid_rings = st.builds(
+    lambda n, r, kappa, tilt, f_max: ring(n, r, kappa=kappa, tilt=tilt, f_max=f_max),
+    st.sampled_from([4, 6, 8]),
+    st.floats(0.1, 0.6),
+    st.floats(0.005, 0.06),
+    st.floats(0.0, 0.5),
+    st.floats(10.0, 40.0),
+)
 
 
 def _rotate_z(rotor: Rotor, angle: float) -> Rotor:

@@ -27,8 +27,13 @@ def _frame(rotor: ro.Rotor) -> pin.SE3:
 
 # ------------------------------------------------------------------------- the wrench of a thrust
 @SETTINGS
-@given(st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3), st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
-       st.sampled_from([1, -1]), st.floats(0.0, 0.1), st.floats(0.0, 30.0))
+@given(
+    st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    st.lists(st.floats(-1.0, 1.0), min_size=3, max_size=3),
+    st.sampled_from([1, -1]),
+    st.floats(0.0, 0.1),
+    st.floats(0.0, 30.0),
+)
 def test_column_is_the_rotor_force_moved_to_b(p, a, spin, kappa, f):
     """Omega f = the force f a and drag torque spin kappa f a at the rotor, transported to B by Pinocchio's SE3."""
     if np.linalg.norm(a) < 1e-3:
@@ -66,18 +71,28 @@ def test_quadrotor_x_is_plus_turned_45_degrees():
     for a, b in zip(plus, x):
         np.testing.assert_allclose(rot_z(math.pi / 4) @ np.array(a.position_body), b.position_body, atol=1e-15)
     # the thesis numbering, (3.34)-(3.36): rotor 1 on -x_B, 2 on -y_B, 3 on +x_B, 4 on +y_B
-    np.testing.assert_allclose([r.position_body for r in plus], [[-0.225, 0, 0], [0, -0.225, 0], [0.225, 0, 0], [0, 0.225, 0]],
-                               atol=1e-15)
+    np.testing.assert_allclose([r.position_body for r in plus], [[-0.225, 0, 0], [0, -0.225, 0], [0.225, 0, 0], [0, 0.225, 0]], atol=1e-15)
     for layout in ("plus", "x"):  # the Q-PRR's own rotor set is the "+"/"x" ring of its parameters
         P = qprr.thesis.thesis_params()
         ring = ro.quadrotor(P.arm_length, layout, kappa=P.kappa)
         np.testing.assert_allclose(ro.rotor_matrix(ring), qprr.thesis.load(layout=layout).rotor_matrix, atol=1e-15)
 
 
-@pytest.mark.parametrize("n, layout, tilt, rank", [
-    (4, "plus", 0.0, 4), (4, "x", 0.0, 4), (6, "plus", 0.0, 4), (6, "x", 0.0, 4), (8, "plus", 0.0, 4), (8, "x", 0.0, 4),
-    (6, "plus", 0.3, 6), (6, "x", 0.5, 6), (8, "plus", 0.3, 6), (4, "plus", 0.3, 4),
-])
+@pytest.mark.parametrize(
+    "n, layout, tilt, rank",
+    [
+        (4, "plus", 0.0, 4),
+        (4, "x", 0.0, 4),
+        (6, "plus", 0.0, 4),
+        (6, "x", 0.0, 4),
+        (8, "plus", 0.0, 4),
+        (8, "x", 0.0, 4),
+        (6, "plus", 0.3, 6),
+        (6, "x", 0.5, 6),
+        (8, "plus", 0.3, 6),
+        (4, "plus", 0.3, 4),
+    ],
+)
 def test_wrench_rank(n, layout, tilt, rank):
     """Coplanar rotors produce thrust and three torques (rank 4); alternately tilted hexa- and octorotors all six
     (a tilted quadrotor has only four inputs)."""
@@ -135,28 +150,31 @@ spin = "cw"
 """
 
 
-@pytest.mark.parametrize("text, error, match", [
-    ("[defaults\nkappa = 1", InputError, "not valid TOML"),
-    (GOOD + "\n[extra]\na = 1\n", UnknownNameError, "rotor description key 'extra'; valid: 'base_link', 'defaults', 'rotor'"),
-    (GOOD.replace("kappa = 0.02", "kappa = 0.02\ndrag = 1"), UnknownNameError, "rotor default 'drag'"),
-    (GOOD.replace('spin = "cw"', 'spin = "cw"\ncolour = "red"'), UnknownNameError, "key of rotor 1 'colour'"),
-    (GOOD.replace('spin = "cw"', 'spin = "left"'), UnknownNameError, "spin of rotor 1 'left'"),
-    (GOOD.replace("position = [0.2, 0.0, 0.0]\n", ""), InputError, "rotor 1 needs 'position'"),
-    (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 1]\nquaternion_xyzw = [0, 0, 0, 1]'), InputError, "not both"),
-    (GOOD.replace('spin = "cw"', 'spin = "cw"\nquaternion_xyzw = [0, 0, 0, 0]'), InputError, "non-zero"),
-    (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 0]'), InputError, "non-zero vector"),
-    (GOOD.replace("f_max = 10.0", "f_max = 10.0\nf_min = 12.0"), InputError, "f_min < f_max"),
-    (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be >= 0 m, got -0.02"),
-    (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, "3 finite numbers"),
-    ("[defaults]\nkappa = 0.02\n", InputError, "non-empty list 'rotor'"),
-    # a new user's mistakes: each names the rotor and says what to write
-    (GOOD.replace('spin = "cw"\n', ""), InputError, "rotor 1 needs 'spin': \"cw\""),
-    (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 2]'), InputError, r"axis \[0.0, 0.0, 2.0\] has norm 2: .*\[0.0, 0.0, 1.0\]"),
-    (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [200.0, 0.0, 0.0]"), InputError, "200 m from B: positions are in metres"),
-    (GOOD.replace("position = [0.2, 0.0, 0.0]", 'position = "0.2, 0, 0"'), InputError, "position .* list of 3 finite numbers"),
-    (GOOD.replace("[[rotor]]", "[rotor]"), InputError, r"one \[\[rotor\]\] per rotor"),
-    (GOOD.replace("[defaults]", 'base_link = 3\n[defaults]'), InputError, "base_link must be the name of a link"),
-])
+@pytest.mark.parametrize(
+    "text, error, match",
+    [
+        ("[defaults\nkappa = 1", InputError, "not valid TOML"),
+        (GOOD + "\n[extra]\na = 1\n", UnknownNameError, "rotor description key 'extra'; valid: 'base_link', 'defaults', 'rotor'"),
+        (GOOD.replace("kappa = 0.02", "kappa = 0.02\ndrag = 1"), UnknownNameError, "rotor default 'drag'"),
+        (GOOD.replace('spin = "cw"', 'spin = "cw"\ncolour = "red"'), UnknownNameError, "key of rotor 1 'colour'"),
+        (GOOD.replace('spin = "cw"', 'spin = "left"'), UnknownNameError, "spin of rotor 1 'left'"),
+        (GOOD.replace("position = [0.2, 0.0, 0.0]\n", ""), InputError, "rotor 1 needs 'position'"),
+        (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 1]\nquaternion_xyzw = [0, 0, 0, 1]'), InputError, "not both"),
+        (GOOD.replace('spin = "cw"', 'spin = "cw"\nquaternion_xyzw = [0, 0, 0, 0]'), InputError, "non-zero"),
+        (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 0]'), InputError, "non-zero vector"),
+        (GOOD.replace("f_max = 10.0", "f_max = 10.0\nf_min = 12.0"), InputError, "f_min < f_max"),
+        (GOOD.replace("kappa = 0.02", "kappa = -0.02"), InputError, "kappa must be >= 0 m, got -0.02"),
+        (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [0.2, 0.0]"), InputError, "3 finite numbers"),
+        ("[defaults]\nkappa = 0.02\n", InputError, "non-empty list 'rotor'"),
+        # a new user's mistakes: each names the rotor and says what to write
+        (GOOD.replace('spin = "cw"\n', ""), InputError, "rotor 1 needs 'spin': \"cw\""),
+        (GOOD.replace('spin = "cw"', 'spin = "cw"\naxis = [0, 0, 2]'), InputError, r"axis \[0.0, 0.0, 2.0\] has norm 2: .*\[0.0, 0.0, 1.0\]"),
+        (GOOD.replace("position = [0.2, 0.0, 0.0]", "position = [200.0, 0.0, 0.0]"), InputError, "200 m from B: positions are in metres"),
+        (GOOD.replace("position = [0.2, 0.0, 0.0]", 'position = "0.2, 0, 0"'), InputError, "position .* list of 3 finite numbers"),
+        (GOOD.replace("[[rotor]]", "[rotor]"), InputError, r"one \[\[rotor\]\] per rotor"),
+        (GOOD.replace("[defaults]", "base_link = 3\n[defaults]"), InputError, "base_link must be the name of a link"),
+    ],
+)
 def test_rotor_file_errors_name_the_entry(tmp_path, text, error, match):
     path = _write(tmp_path, text)
     with pytest.raises(error, match=match):
@@ -171,10 +189,16 @@ def test_good_rotor_file_and_missing_file(tmp_path):
         ro.read_rotor_file(tmp_path / "nope.toml")
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    ({"spin": 0}, "spin must be"), ({"f_min": -1.0}, "f_min must be >= 0"), ({"f_max": float("nan")}, "f_max must be a number, got nan"),
-    ({"axis_body": (0.0, 0.0, 0.0)}, "non-zero"), ({"position_body": (0.0, float("inf"), 0.0)}, "finite"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        ({"spin": 0}, "spin must be"),
+        ({"f_min": -1.0}, "f_min must be >= 0"),
+        ({"f_max": float("nan")}, "f_max must be a number, got nan"),
+        ({"axis_body": (0.0, 0.0, 0.0)}, "non-zero"),
+        ({"position_body": (0.0, float("inf"), 0.0)}, "finite"),
+    ],
+)
 def test_bad_rotor_fields(kwargs, match):
     args = {"position_body": (0.2, 0.0, 0.0), **kwargs}
     with pytest.raises(InputError, match=match):

@@ -28,14 +28,28 @@ ARM = "desired-state ID: arm loops at w = 50 rad/s (w <= 25 diverges: G(xi_d) ac
 CASCADE = "MFC position loop through the thrust direction (6.17); septic reference peaks 1.30x the printed quintic's"
 MFC_ARM = "MFC: alpha = 3 (B^-1)_ii and the F estimator's filter, which the thesis does not print (naive 1/B_ii diverges)"
 DEPARTURES = {
-    ("idc", "z"): (0.05, 0.5, EXACT), ("idc", "phi"): (0.05, 0.5, EXACT), ("idc", "theta"): (0.01, 0.3, EXACT),
-    ("idc", "psi"): (1e-7, 1e-4, YAW), ("idc", "theta3"): (2.0, 7.0, ZOH),
-    ("dsid", "x"): (0.1, 0.5, KD), ("dsid", "y"): (0.07, 0.5, KD), ("dsid", "z"): (0.01, 0.1, EXACT),
-    ("dsid", "phi"): (0.002, 0.03, KD), ("dsid", "theta"): (0.002, 0.03, KD), ("dsid", "psi"): (0.01, 0.1, YAW),
-    ("dsid", "r0"): (1e-4, 2e-3, ARM), ("dsid", "theta2"): (5e-4, 1e-2, ARM), ("dsid", "theta3"): (3e-3, 0.05, ARM),
-    ("mfc", "x"): (2.0, 4.0, CASCADE), ("mfc", "y"): (2.0, 5.0, CASCADE), ("mfc", "z"): (0.03, 0.3, EXACT),
-    ("mfc", "phi"): (0.015, 0.2, EXACT), ("mfc", "theta"): (0.03, 0.3, EXACT), ("mfc", "psi"): (0.004, 0.04, YAW),
-    ("mfc", "theta2"): (6.0, 25.0, MFC_ARM), ("mfc", "theta3"): (7.0, 25.0, MFC_ARM),
+    ("idc", "z"): (0.05, 0.5, EXACT),
+    ("idc", "phi"): (0.05, 0.5, EXACT),
+    ("idc", "theta"): (0.01, 0.3, EXACT),
+    ("idc", "psi"): (1e-7, 1e-4, YAW),
+    ("idc", "theta3"): (2.0, 7.0, ZOH),
+    ("dsid", "x"): (0.1, 0.5, KD),
+    ("dsid", "y"): (0.07, 0.5, KD),
+    ("dsid", "z"): (0.01, 0.1, EXACT),
+    ("dsid", "phi"): (0.002, 0.03, KD),
+    ("dsid", "theta"): (0.002, 0.03, KD),
+    ("dsid", "psi"): (0.01, 0.1, YAW),
+    ("dsid", "r0"): (1e-4, 2e-3, ARM),
+    ("dsid", "theta2"): (5e-4, 1e-2, ARM),
+    ("dsid", "theta3"): (3e-3, 0.05, ARM),
+    ("mfc", "x"): (2.0, 4.0, CASCADE),
+    ("mfc", "y"): (2.0, 5.0, CASCADE),
+    ("mfc", "z"): (0.03, 0.3, EXACT),
+    ("mfc", "phi"): (0.015, 0.2, EXACT),
+    ("mfc", "theta"): (0.03, 0.3, EXACT),
+    ("mfc", "psi"): (0.004, 0.04, YAW),
+    ("mfc", "theta2"): (6.0, 25.0, MFC_ARM),
+    ("mfc", "theta3"): (7.0, 25.0, MFC_ARM),
 }
 
 

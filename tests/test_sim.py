@@ -90,18 +90,20 @@ def _invariants(robot, res, every=25):
     return np.abs(E - E[0]).max() / E[0], np.abs(P - P[0]).max(), np.abs(L - L[0]).max()
 
 
-@pytest.mark.parametrize("integrator, e_tol, p_tol, l_tol", [
-    ("midpoint", 1e-6, 1e-5, 1e-6),  # scenarios' integrator: measured 7.0e-7, 7.1e-6, 6.2e-7 over 10 s
-    ("rk4", 1e-10, 1e-6, 1e-8),      # measured 3.2e-12, 4.4e-7, 7.7e-9
-])
+@pytest.mark.parametrize(
+    "integrator, e_tol, p_tol, l_tol",
+    [
+        ("midpoint", 1e-6, 1e-5, 1e-6),  # scenarios' integrator: measured 7.0e-7, 7.1e-6, 6.2e-7 over 10 s
+        ("rk4", 1e-10, 1e-6, 1e-8),  # measured 3.2e-12, 4.4e-7, 7.7e-9
+    ],
+)
 def test_free_flight_conserves_energy_and_momentum(free_robot, integrator, e_tol, p_tol, l_tol):
     """No gravity, no input, tumbling with the arm moving: 10 s at 1 kHz (|E| = 0.71 J, |p| = 1.9 N s).
 
     The integrator on the smooth dynamics: joint stops off (the free arm would hit them).
     """
     zero = OpenLoop(np.zeros(9))
-    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, integrator=integrator, xi0=XI0, xi_dot0=XID0,
-                   joint_stops=False)
+    res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, integrator=integrator, xi0=XI0, xi_dot0=XID0, joint_stops=False)
     dE, dP, dL = _invariants(free_robot, res)
     assert dE < e_tol and dP < p_tol and dL < l_tol
 
@@ -165,8 +167,7 @@ def test_semi_implicit_euler_drifts_at_first_order(free_robot):
     zero = OpenLoop(np.zeros(9))
     drift = []
     for dt in (1e-3, 5e-4):
-        res = simulate(free_robot, zero, Hold(tuple(XI0)), 5.0, dt=dt, integrator="euler", xi0=XI0, xi_dot0=XID0,
-                       joint_stops=False)
+        res = simulate(free_robot, zero, Hold(tuple(XI0)), 5.0, dt=dt, integrator="euler", xi0=XI0, xi_dot0=XID0, joint_stops=False)
         drift.append(_invariants(free_robot, res)[0])
     assert drift[0] > 1e-3
     assert drift[0] / drift[1] == pytest.approx(2.0, rel=0.1)
@@ -195,8 +196,9 @@ def _error_at(robot, res, ref, t):
 def _orders(robot, controller, xi0, integrator, steps, **kw):
     """Observed orders at t = 0.392 s (a row of every log) against RK4 at steps[0] / 64."""
     ref = simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=steps[0] / 64, integrator="rk4", xi0=xi0, **kw)
-    errors = [_error_at(robot, simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=dt, integrator=integrator, xi0=xi0, **kw), ref, 0.392)
-              for dt in steps]
+    errors = [
+        _error_at(robot, simulate(robot, controller, Hold(tuple(xi0)), 0.4, dt=dt, integrator=integrator, xi0=xi0, **kw), ref, 0.392) for dt in steps
+    ]
     return np.array(errors), np.log2(np.array(errors[:-1]) / errors[1:])
 
 
@@ -204,8 +206,7 @@ def test_rk4_is_fourth_order_for_the_base_too(free_robot):
     """Free tumbling: halving dt (8, 4, 2, 1 ms) divides the error of the whole state (base position and attitude
     included) by 16.  RK4 summing stage velocities taken at different points of the group without the inverse
     differential of the exponential was second order for the base (ratios 4)."""
-    errors, orders = _orders(free_robot, ConstantTau(np.zeros(9)), XI0, "rk4", (8e-3, 4e-3, 2e-3, 1e-3), xi_dot0=2 * XID0,
-                             joint_stops=False)
+    errors, orders = _orders(free_robot, ConstantTau(np.zeros(9)), XI0, "rk4", (8e-3, 4e-3, 2e-3, 1e-3), xi_dot0=2 * XID0, joint_stops=False)
     assert np.all(np.abs(orders - 4.0) < 0.2), (errors, orders)
 
 
@@ -224,8 +225,16 @@ def test_end_effector_hook_keeps_the_midpoint_second_order(robot):
     xi0 = np.r_[0, 0, 1, 0.05, -0.05, 0.3, 0.01, 2.9, 0.3]  # arm hanging: a stable pendulum (joint stops off)
     G = pin.computeGeneralizedGravity(robot.model, data, xi_to_qv(xi0, np.zeros(9))[0])
     tau = np.r_[0, 0, 1.05 * m * g, 0.01, -0.01, 0.005, G[6:9]]
-    errors, orders = _orders(robot, ConstantTau(tau), xi0, "midpoint", (4e-3, 2e-3, 1e-3, 5e-4), external_wrench=spring,
-                             xi_dot0=np.r_[0.3, -0.2, 0.1, 0.3, -0.4, 0.2, 0.02, 0.5, -0.6], joint_stops=False)
+    errors, orders = _orders(
+        robot,
+        ConstantTau(tau),
+        xi0,
+        "midpoint",
+        (4e-3, 2e-3, 1e-3, 5e-4),
+        external_wrench=spring,
+        xi_dot0=np.r_[0.3, -0.2, 0.1, 0.3, -0.4, 0.2, 0.02, 0.5, -0.6],
+        joint_stops=False,
+    )
     assert np.all(np.abs(orders - 2.0) < 0.2), (errors, orders)
 
 
@@ -237,8 +246,7 @@ def test_far_from_the_origin_the_dynamics_do_not_change(robot):
     tau = np.r_[0, 0, 1.1 * m * g, 0.02, -0.03, 0.01, 0.5, 0.02, -0.005]
     xi0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]
     # open loop, no stops: theta3 spins past 100 rad/s within the second (a fast state, not a runaway)
-    kw = dict(xi_dot0=np.r_[0.5, -0.3, 0.2, 1.0, -2.0, 0.7, 0.05, 1.5, -2.0], joint_stops=False,
-              limits=Limits(position=1e5, joint_velocity=math.inf))
+    kw = dict(xi_dot0=np.r_[0.5, -0.3, 0.2, 1.0, -2.0, 0.7, 0.05, 1.5, -2.0], joint_stops=False, limits=Limits(position=1e5, joint_velocity=math.inf))
     near = simulate(robot, ConstantTau(tau), Hold(tuple(xi0)), 1.0, xi0=xi0, **kw)
     for offset in (10.0, 1e3):
         far0 = xi0.copy()
@@ -272,6 +280,7 @@ def test_divergence_raises_with_time_and_state(robot):
         simulate(robot, NaNController(), Hold((0, 0, 1, 0, 0, 0, 0, 0, 0)), 1.0, integrator="midpoint")
     res = err.value.result
     assert res.status == "diverged" and res.n < 100
+
 
 def test_runaway_names_the_state(free_robot):
     """No gravity, no input, 10 m/s along x: the position bound stops the run and says which coordinate."""
@@ -382,8 +391,7 @@ def test_noise_and_payload_changes_sit_on_the_control_grid(robot):
     whatever the integration step."""
     xi = np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
     m, g, mp = robot.params.total_mass, robot.params.g, 0.2
-    noisy = simulate(robot, OpenLoop(_hover_u(robot, xi)), Hold(tuple(xi)), 0.1, dt=1e-3, control_period=4e-3,
-                     disturbance=WhiteNoise(0.3))
+    noisy = simulate(robot, OpenLoop(_hover_u(robot, xi)), Hold(tuple(xi)), 0.1, dt=1e-3, control_period=4e-3, disturbance=WhiteNoise(0.3))
     assert noisy.u_ext.shape == (25, 9) and len(np.unique(noisy.u_ext[:, 0])) == 25
     drop = PayloadSchedule((PayloadChange(0.0, mp), PayloadChange(0.5021, 0.0)))
     u = np.r_[0, 0, (m + mp) * g, 0, 0, 0, 0, 0, 0]
@@ -398,8 +406,17 @@ def test_state_disturbance_drag_is_evaluated_at_every_stage(free_robot):
     translation with m_G v_z' = -c v_z, v_z(t) = v0 exp(-c t / m_G) (RK4 matches it to 1e-12)."""
     c, v0 = 0.8, 2.0
     xi = np.zeros(9)
-    res = simulate(free_robot, OpenLoop(np.zeros(9)), Hold(tuple(xi)), 1.0, dt=1e-3, integrator="rk4", xi0=xi,
-                   xi_dot0=np.r_[0, 0, v0, 0, 0, 0, 0, 0, 0], disturbance=BaseDrag(linear=c))
+    res = simulate(
+        free_robot,
+        OpenLoop(np.zeros(9)),
+        Hold(tuple(xi)),
+        1.0,
+        dt=1e-3,
+        integrator="rk4",
+        xi0=xi,
+        xi_dot0=np.r_[0, 0, v0, 0, 0, 0, 0, 0, 0],
+        disturbance=BaseDrag(linear=c),
+    )
     mG = free_robot.params.total_mass
     np.testing.assert_allclose(res.xi_dot[:, 2], v0 * np.exp(-c * res.t / mG), rtol=1e-12)
     assert np.abs(res.xi_dot[:, [0, 1, 3, 4, 5, 6, 7, 8]]).max() < 1e-14
@@ -476,10 +493,16 @@ def test_settings_as_keywords_or_as_objects_give_the_same_run(robot):
 def test_config_is_validated_once_with_named_errors():
     assert SimConfig().dt == SimConfig.dt == 1e-3 and SimConfig().period == 1e-3 and SimConfig().substeps == 1
     assert SimConfig(dt=1e-3, control_period=4e-3).substeps == 4
-    for kwargs, pattern in [({"dt": 0.0}, "dt must be a positive number"), ({"dt": float("nan")}, "dt must"),
-                            ({"dt": "1ms"}, "dt must"), ({"control_period": 2.5e-3}, "integer multiple of dt"),
-                            ({"seed": -1}, "seed"), ({"limits": (1, 2)}, "limits must be a qprr.sim.Limits"),
-                            ({"joint_stops": 1}, "joint_stops must be True or False"), ({"max_log_bytes": -5}, "max_log_bytes")]:
+    for kwargs, pattern in [
+        ({"dt": 0.0}, "dt must be a positive number"),
+        ({"dt": float("nan")}, "dt must"),
+        ({"dt": "1ms"}, "dt must"),
+        ({"control_period": 2.5e-3}, "integer multiple of dt"),
+        ({"seed": -1}, "seed"),
+        ({"limits": (1, 2)}, "limits must be a qprr.sim.Limits"),
+        ({"joint_stops": 1}, "joint_stops must be True or False"),
+        ({"max_log_bytes": -5}, "max_log_bytes"),
+    ]:
         with pytest.raises(InputError, match=pattern):
             SimConfig(**kwargs)
     with pytest.raises(UnknownNameError, match="integrator"):

@@ -145,8 +145,10 @@ def test_non_finite_controller_output_names_time_and_variable(platforms, name):
     u = np.zeros(p.n_xi)
     u[2] = p.total_mass * p.g
     xi = tuple(p.neutral_xi())
-    for index, pattern in ((7, f"controller 'open-loop' returned .* entry {p.arm_names[1]} = nan"),
-                           (2, "controller 'open-loop' returned .* entry z force/torque = nan")):
+    for index, pattern in (
+        (7, f"controller 'open-loop' returned .* entry {p.arm_names[1]} = nan"),
+        (2, "controller 'open-loop' returned .* entry z force/torque = nan"),
+    ):
         late = u.copy()
         late[index] = math.nan
         with pytest.raises(DivergenceError, match=r"^diverged at t = 0\.051 s: .*" + pattern) as err:

@@ -25,6 +25,8 @@ SETTINGS = settings(max_examples=25, deadline=None, derandomize=True)
 VARIANTS = {"thesis": thesis_params(), "cad": cad_params()}
 
 _p = thesis_params()
+
+
 @pytest.fixture(scope="module", params=list(VARIANTS))
 def sm(request) -> sy.SymbolicModel:
     return sy.symbolic_model(VARIANTS[request.param])
@@ -153,8 +155,9 @@ def test_definition_5_h_iii_zero(sm):
     """Definition 5: db_ii/dxi_i = 0 for every coordinate of the Q-PRR (so h_iii = 0)."""
     rng = np.random.default_rng(5)
     for _ in range(10):
-        xi = np.r_[rng.uniform(-1, 1, 3), rng.uniform(-3, 3), rng.uniform(-1.3, 1.3), rng.uniform(-3, 3),
-                   rng.uniform(_p.lower_limits, _p.upper_limits)]
+        xi = np.r_[
+            rng.uniform(-1, 1, 3), rng.uniform(-3, 3), rng.uniform(-1.3, 1.3), rng.uniform(-3, 3), rng.uniform(_p.lower_limits, _p.upper_limits)
+        ]
         dB = sm.inertia_derivatives(xi)
         assert max(abs(dB[i, i, i]) for i in range(9)) <= 1e-15
 

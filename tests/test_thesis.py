@@ -36,9 +36,7 @@ _angle = st.floats(-math.pi, math.pi)
 _tilt = st.floats(-1.3, 1.3)
 _rate = st.floats(-3.0, 3.0)
 _arm = st.tuples(*(st.floats(float(a), float(b)) for a, b in zip(P.lower_limits, P.upper_limits))).map(np.array)
-_xi = st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3), _tilt, _tilt, _angle, _arm).map(
-    lambda t: np.concatenate([t[:6], t[6]])
-)
+_xi = st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(-3, 3), _tilt, _tilt, _angle, _arm).map(lambda t: np.concatenate([t[:6], t[6]]))
 _rates9 = st.lists(_rate, min_size=9, max_size=9).map(np.array)
 _rates3 = st.lists(_rate, min_size=3, max_size=3).map(np.array)
 
@@ -77,8 +75,7 @@ def test_ned_configuration_is_the_ned_world(robot):
         q_up = ned_configuration(q)
         np.testing.assert_allclose(q_up[7:], q[7:], atol=0)
         assert dyn.potential_energy(robot, robot.data(), q_up) == pytest.approx(pin.computePotentialEnergy(model, dn, q), abs=1e-12)
-        np.testing.assert_allclose(dyn.generalized_gravity(robot, robot.data(), q_up), pin.computeGeneralizedGravity(model, dn, q),
-                                   atol=1e-12)
+        np.testing.assert_allclose(dyn.generalized_gravity(robot, robot.data(), q_up), pin.computeGeneralizedGravity(model, dn, q), atol=1e-12)
 
 
 # ================================================================== (3.4), (3.8), (3.25)

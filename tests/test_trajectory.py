@@ -19,8 +19,7 @@ def _fd(f, t, h=1e-6):
 
 @pytest.mark.parametrize("law", ["septic", "quintic", "thesis"])
 @settings(max_examples=30, deadline=None)
-@given(t1=st.floats(0.0, 5.0), T=st.floats(0.5, 10.0), a=st.floats(-10, 10), b=st.floats(-10, 10),
-       tau=st.floats(0.01, 0.99))
+@given(t1=st.floats(0.0, 5.0), T=st.floats(0.5, 10.0), a=st.floats(-10, 10), b=st.floats(-10, 10), tau=st.floats(0.01, 0.99))
 def test_transition_derivatives_match_finite_differences(law, t1, T, a, b, tau):
     t2 = t1 + T
     t = t1 + tau * T

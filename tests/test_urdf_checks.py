@@ -32,6 +32,7 @@ def _sub(old: str, new: str, count: int = 1):
     def f(text: str) -> str:
         assert old in text, old
         return text.replace(old, new, count)
+
     return f
 
 
@@ -46,11 +47,15 @@ XML_MISTAKES = {  # mistake -> (edit of the URDF, words the error must contain)
     "two numbers in an origin": (_sub('<origin xyz="0 0 -0.25"/>', '<origin xyz="0 -0.25"/>'), ["joint 'elbow'", "<origin xyz>", "3 finite"]),
     "a missing effort": (_sub('effort="1.5" ', ""), ["joint 'elbow'", "<limit effort>", "missing"]),
     "a zero joint axis": (_sub('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>'), ["joint 'yaw'", "<axis xyz>", "zero vector"]),
-    "a link with two parents": (_sub("</robot>", '<joint name="again" type="fixed"><parent link="base_link"/><child link="forearm"/>'
-                                     "</joint></robot>"), ["link 'forearm'", "two parents", "'elbow'", "'again'"]),
+    "a link with two parents": (
+        _sub("</robot>", '<joint name="again" type="fixed"><parent link="base_link"/><child link="forearm"/></joint></robot>'),
+        ["link 'forearm'", "two parents", "'elbow'", "'again'"],
+    ),
     "a joint to a link that does not exist": (_sub('<child link="forearm"/>', '<child link="foream"/>'), ["'foream'", "joint 'elbow'"]),
-    "a root link without <inertial>": (lambda t: t.replace(t[t.index("<inertial>"):t.index("</inertial>") + len("</inertial>")], "", 1),
-                                       ["root link 'base_link'", "no <inertial>", "wrong total mass"]),
+    "a root link without <inertial>": (
+        lambda t: t.replace(t[t.index("<inertial>") : t.index("</inertial>") + len("</inertial>")], "", 1),
+        ["root link 'base_link'", "no <inertial>", "wrong total mass"],
+    ),
 }
 
 
@@ -64,14 +69,20 @@ def test_a_urdf_mistake_names_the_element_and_the_attribute(mistake):
 
 
 UNIT_SLIPS = {  # mistake -> (edit of the URDF or of the rotor file, words of the error)
-    "revolute limits in degrees": (_sub('lower="-2.0" upper="2.0"', 'lower="-150" upper="150"'),
-                                   ["joint 'shoulder'", "<limit lower>", "degrees", "-2.61799 rad", "revolute_limit_max"]),
-    "an arm offset in millimetres": (_sub('<origin xyz="0 0 -0.25"/>', '<origin xyz="0 0 -250"/>'),
-                                     ["joint 'elbow'", "<origin xyz>", "millimetres", "0.25 m", "length_max"]),
+    "revolute limits in degrees": (
+        _sub('lower="-2.0" upper="2.0"', 'lower="-150" upper="150"'),
+        ["joint 'shoulder'", "<limit lower>", "degrees", "-2.61799 rad", "revolute_limit_max"],
+    ),
+    "an arm offset in millimetres": (
+        _sub('<origin xyz="0 0 -0.25"/>', '<origin xyz="0 0 -250"/>'),
+        ["joint 'elbow'", "<origin xyz>", "millimetres", "0.25 m", "length_max"],
+    ),
     "a link mass in grams": (_sub('<mass value="0.10"/>', '<mass value="100"/>'), None),  # plausible (100 kg): the lift refuses it
     "a base mass in grams": (_sub('<mass value="1.20"/>', '<mass value="1200"/>'), ["link 'base_link'", "grams", "1.2 kg"]),
-    "an inertia in kg mm^2": (_sub('ixx="5.21e-4" ixy="0" ixz="0" iyy="5.21e-4"', 'ixx="521" ixy="0" ixz="0" iyy="521"'),
-                              ["link 'upper_arm'", "radius of gyration", "kg mm^2"]),
+    "an inertia in kg mm^2": (
+        _sub('ixx="5.21e-4" ixy="0" ixz="0" iyy="5.21e-4"', 'ixx="521" ixy="0" ixz="0" iyy="521"'),
+        ["link 'upper_arm'", "radius of gyration", "kg mm^2"],
+    ),
     "an effort in N mm": (_sub('effort="3.0"', 'effort="3000"'), ["joint 'shoulder'", "<limit effort>", "N mm", "3 N m"]),
 }
 

@@ -54,8 +54,25 @@ P = qprr.thesis.load()
 def _result(xi, xi_d) -> SimResult:
     m, n = xi.shape
     z = np.zeros((m, n))
-    return SimResult("s", "c", 0.01, "euler", np.arange(m) * 0.01, xi, z, xi_d, z, z, np.zeros((m, 4)), np.zeros((m, n - 6)),
-                     np.zeros((m, 3)), z, np.zeros(m, dtype=np.int8), z, names=ch.xi_names(n - 6))
+    return SimResult(
+        "s",
+        "c",
+        0.01,
+        "euler",
+        np.arange(m) * 0.01,
+        xi,
+        z,
+        xi_d,
+        z,
+        z,
+        np.zeros((m, 4)),
+        np.zeros((m, n - 6)),
+        np.zeros((m, 3)),
+        z,
+        np.zeros(m, dtype=np.int8),
+        z,
+        names=ch.xi_names(n - 6),
+    )
 
 
 def test_rmse_wraps_angle_errors():
@@ -92,8 +109,15 @@ def test_rotation_to_euler_checks_orthonormality():
             ch.rotation_to_euler(bad)
 
 
-@pytest.mark.parametrize("bad, what", [(np.ones(9) + 1j, "complex"), (np.ones(9, dtype=object), "Python objects"),
-                                       (np.array(["1"] * 9), "strings"), (np.ones(9, dtype=bool), "booleans")])
+@pytest.mark.parametrize(
+    "bad, what",
+    [
+        (np.ones(9) + 1j, "complex"),
+        (np.ones(9, dtype=object), "Python objects"),
+        (np.array(["1"] * 9), "strings"),
+        (np.ones(9, dtype=bool), "booleans"),
+    ],
+)
 def test_arrays_that_numpy_would_coerce_are_refused(bad, what):
     with pytest.raises(InputError, match=f"tau_desired must be real numbers, got {what}"):
         Allocator(P).allocate(bad)
@@ -136,8 +160,11 @@ def test_a_task_whose_error_has_the_wrong_shape_is_named():
     data = P.data()
     M = kin.ee_placement(P, data, ch.xi_to_q(P.neutral_xi()))
     levels = [[PoseTask(P, M)], [_BadTask()]]
-    with pytest.raises(ShapeError, match=r"task _BadTask\(name='bad-task', dim=3\): linearize returned J of shape \(3, 9\) "
-                                         r"and e of shape \(2,\)"):
+    with pytest.raises(
+        ShapeError,
+        match=r"task _BadTask\(name='bad-task', dim=3\): linearize returned J of shape \(3, 9\) "
+        r"and e of shape \(2,\)",
+    ):
         IKSolver(P, "qp", {"levels": levels}).solve(data, M)
 
 
@@ -189,8 +216,9 @@ def test_a_runaway_state_is_named_the_tick_it_happens():
         return np.array([1e4 if t >= 0.1 else 0.0, 0, 0, 0, 0, 0])
 
     with pytest.raises(DivergenceError, match=r"diverged at t = 0\.1\d\d s: (velocity v_x|position x) = ") as info:
-        simulate(P, make_controller("idc", P), Hold(xi), 1.0, dt=0.002, external_wrench=push, limits=qprr.sim.Limits(
-            position=1e3, linear_velocity=5.0))
+        simulate(
+            P, make_controller("idc", P), Hold(xi), 1.0, dt=0.002, external_wrench=push, limits=qprr.sim.Limits(position=1e3, linear_velocity=5.0)
+        )
     assert info.value.result.status == "diverged"
 
 
@@ -210,9 +238,22 @@ def test_result_files_keep_series_and_metrics_and_refuse_bad_content(tmp_path):
     np.testing.assert_array_equal(back.series["mass_estimate"], res.series["mass_estimate"])
     assert back.metrics == {"recovery_time": 1.25} and back.status == res.status and back.names == res.names
     arrays = {k: getattr(res, k) for k in qprr.sim.result.ARRAYS}
-    meta = dict(format_version=qprr.sim.result.FORMAT_VERSION, scenario="s", controller="c", dt=0.005, integrator="midpoint",
-                control_period=0.005, wall_time=0.0, status="ok", reason="", seed=0, platform="p", names=list(res.names),
-                metrics={}, series=[])
+    meta = dict(
+        format_version=qprr.sim.result.FORMAT_VERSION,
+        scenario="s",
+        controller="c",
+        dt=0.005,
+        integrator="midpoint",
+        control_period=0.005,
+        wall_time=0.0,
+        status="ok",
+        reason="",
+        seed=0,
+        platform="p",
+        names=list(res.names),
+        metrics={},
+        series=[],
+    )
     import json
 
     def write(name, **changes):
@@ -231,16 +272,20 @@ def test_result_files_keep_series_and_metrics_and_refuse_bad_content(tmp_path):
     ]
     (tmp_path / "junk.npz").write_bytes(b"not a zip")
     np.savez(tmp_path / "foreign.npz", a=np.zeros(3))
-    cases += [(tmp_path / "junk.npz", "not a qprr result file"), (tmp_path / "foreign.npz", "no qprr metadata"),
-              (tmp_path / "nope.npz", "does not exist")]
+    cases += [
+        (tmp_path / "junk.npz", "not a qprr result file"),
+        (tmp_path / "foreign.npz", "no qprr metadata"),
+        (tmp_path / "nope.npz", "does not exist"),
+    ]
     for path, match in cases:
         with pytest.raises(InputError, match=match):
             SimResult.load(path)
 
 
 # ------------------------------------------------------------------------------------ items 2, 3, 4
-@pytest.mark.parametrize("field, value", [("thrust_factor", 0.0), ("drag_factor", -1e-7), ("arm_length", 0.0), ("d2", -0.1),
-                                          ("multirotor_mass", float("nan"))])
+@pytest.mark.parametrize(
+    "field, value", [("thrust_factor", 0.0), ("drag_factor", -1e-7), ("arm_length", 0.0), ("d2", -0.1), ("multirotor_mass", float("nan"))]
+)
 def test_nonphysical_parameters_are_refused_naming_them(field, value):
     with pytest.raises(NonPhysicalError, match=field if field != "multirotor_mass" else "multirotor: mass"):
         qprr.thesis.thesis_params().with_changes(**{field: value})
@@ -360,8 +405,13 @@ def _ik_case(xi, level, offset, method, require_hover):
 
 
 @_PROPS
-@given(xi=platform_xi_strategy(P, max_pitch=0.6), level=st.booleans(), offset=st.sampled_from([0.0, 0.5]),
-       method=st.sampled_from(["qp", "dls", "clika"]), require_hover=st.booleans())
+@given(
+    xi=platform_xi_strategy(P, max_pitch=0.6),
+    level=st.booleans(),
+    offset=st.sampled_from([0.0, 0.5]),
+    method=st.sampled_from(["qp", "dls", "clika"]),
+    require_hover=st.booleans(),
+)
 def test_ik_success_means_on_target_within_limits_and_hover_feasible(xi, level, offset, method, require_hover):
     """Targets: the end-effector pose of a random level configuration (reachable in hover) or of a tilted one (in general
     not), possibly moved up 0.5 m."""
@@ -400,7 +450,7 @@ def test_allocation_stays_within_bounds(w, platform):
     res = Allocator(p).allocate(tau)
     f = res.f[: p.n_rotors]
     assert np.all(f >= p.thrust_min - 1e-9) and np.all(f <= p.thrust_max + 1e-9)
-    assert np.all(np.abs(res.f[p.n_rotors:]) <= p.arm_effort_limits + 1e-12)
+    assert np.all(np.abs(res.f[p.n_rotors :]) <= p.arm_effort_limits + 1e-12)
     np.testing.assert_allclose(res.tau_achieved, p.actuation_matrix @ res.f, atol=1e-9)
 
 
@@ -413,16 +463,61 @@ def test_a_result_file_gives_back_the_whole_result(tmp_path_factory, m, n_arm, s
     rng = np.random.default_rng(seed)
     n = 6 + n_arm
     a = lambda *shape: rng.normal(size=shape)  # noqa: E731
-    res = SimResult("sc", "ctrl", 1e-3, "rk4", np.arange(m) * 1e-3, a(m, n), a(m, n), a(m, n), a(m, n), a(m, n), a(m, 4), a(m, n_arm),
-                    a(m, 3), a(m, n), rng.integers(0, 8, m).astype(np.int8), a(m, n), wall_time=0.5, status=status, reason="why",
-                    seed=seed, control_period=2e-3, platform="p", names=ch.xi_names(n_arm), series={"s": a(m)},
-                    metrics={"k": float(rng.normal())})
+    res = SimResult(
+        "sc",
+        "ctrl",
+        1e-3,
+        "rk4",
+        np.arange(m) * 1e-3,
+        a(m, n),
+        a(m, n),
+        a(m, n),
+        a(m, n),
+        a(m, n),
+        a(m, 4),
+        a(m, n_arm),
+        a(m, 3),
+        a(m, n),
+        rng.integers(0, 8, m).astype(np.int8),
+        a(m, n),
+        wall_time=0.5,
+        status=status,
+        reason="why",
+        seed=seed,
+        control_period=2e-3,
+        platform="p",
+        names=ch.xi_names(n_arm),
+        series={"s": a(m)},
+        metrics={"k": float(rng.normal())},
+    )
     back = SimResult.load(res.save(tmp_path_factory.mktemp("r") / "r.npz"))
     for k in qprr.sim.result.ARRAYS:
         np.testing.assert_array_equal(getattr(back, k), getattr(res, k))
-    assert (back.scenario, back.controller, back.dt, back.integrator, back.wall_time, back.reason, back.seed, back.control_period,
-            back.platform, back.names, back.metrics) == (res.scenario, res.controller, res.dt, res.integrator, res.wall_time,
-                                                         res.reason, res.seed, res.control_period, res.platform, res.names, res.metrics)
+    assert (
+        back.scenario,
+        back.controller,
+        back.dt,
+        back.integrator,
+        back.wall_time,
+        back.reason,
+        back.seed,
+        back.control_period,
+        back.platform,
+        back.names,
+        back.metrics,
+    ) == (
+        res.scenario,
+        res.controller,
+        res.dt,
+        res.integrator,
+        res.wall_time,
+        res.reason,
+        res.seed,
+        res.control_period,
+        res.platform,
+        res.names,
+        res.metrics,
+    )
     assert back.status.value == status
     np.testing.assert_array_equal(back.series["s"], res.series["s"])
 

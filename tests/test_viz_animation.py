@@ -81,8 +81,9 @@ def test_animate_result_reads_a_run(platform, tmp_path):
     t, xi, f = _run(platform)
     wrench = np.zeros((t.size, 6))
     wrench[:, 0] = 2.0
-    info = animate_result(platform, RunLog(t, xi, f=f, contact_wrench_world=wrench, platform=platform.name), tmp_path / "r.gif",
-                          view="fixed", **SMALL)
+    info = animate_result(
+        platform, RunLog(t, xi, f=f, contact_wrench_world=wrench, platform=platform.name), tmp_path / "r.gif", view="fixed", **SMALL
+    )
     assert info.frames == 11
     with pytest.raises(qprr.ShapeError, match="4 rotors"):
         animate_result(platform, RunLog(t, xi, f=np.zeros((t.size, 6))), tmp_path / "bad.gif", **SMALL)

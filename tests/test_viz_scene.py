@@ -40,15 +40,16 @@ def test_arm_polyline_is_the_thesis_chain(qprr_platform):
         xi = _random_xi(pf)
         r0, t2, t3 = xi[6:]
         R, p = euler_to_rotation(xi[3:6]), xi[0:3]
-        body = np.array([
-            [0.0, 0.0, 0.0],
-            [0.0, 0.0, P.d0],
-            [r0, 0.0, P.d0],
-            [r0, 0.0, P.d0 + P.d1],
-            [r0 + P.d2 * math.sin(t2), 0.0, P.d0 + P.d1 + P.d2 * math.cos(t2)],
-            [r0 + P.d2 * math.sin(t2) + P.d3 * math.sin(t2 + t3), 0.0,
-             P.d0 + P.d1 + P.d2 * math.cos(t2) + P.d3 * math.cos(t2 + t3)],
-        ])
+        body = np.array(
+            [
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, P.d0],
+                [r0, 0.0, P.d0],
+                [r0, 0.0, P.d0 + P.d1],
+                [r0 + P.d2 * math.sin(t2), 0.0, P.d0 + P.d1 + P.d2 * math.cos(t2)],
+                [r0 + P.d2 * math.sin(t2) + P.d3 * math.sin(t2 + t3), 0.0, P.d0 + P.d1 + P.d2 * math.cos(t2) + P.d3 * math.cos(t2 + t3)],
+            ]
+        )
         pose = robot_pose(pf, data, xi_to_q(xi))
         np.testing.assert_allclose(pose.arm_world, p + body @ R.T, atol=1e-13)
         np.testing.assert_allclose(pose.ee_world, kinematics.ee_placement(pf, pf.data(), xi_to_q(xi)).translation, atol=1e-13)
@@ -100,8 +101,9 @@ def test_fully_actuated_platform_hovers_tilted():
 
 
 def test_thrust_bound_violation_is_reported(qprr_platform):
-    heavy = qprr_platform.replace(rotors=tuple(r.__class__(r.position_body, r.axis_body, r.spin, r.kappa, 0.0, 5.0, r.name)
-                                               for r in qprr_platform.rotors))
+    heavy = qprr_platform.replace(
+        rotors=tuple(r.__class__(r.position_body, r.axis_body, r.spin, r.kappa, 0.0, 5.0, r.name) for r in qprr_platform.rotors)
+    )
     r = hover_report(Allocator(heavy), heavy.data(), heavy.neutral_q())
     assert not r.feasible
     np.testing.assert_allclose(r.margin_high, 5.0 - heavy.total_mass * heavy.g / 4.0, rtol=1e-14)

@@ -74,8 +74,7 @@ def test_pfaffian_of_the_tricycle_is_the_printed_one():
     for model in (FrontTricycle(D=0.3), RearTricycle(D=0.45)):
         for _ in range(5):
             x, y, th, psi = rng.uniform(-3, 3, 4)
-            printed = np.array([[-math.sin(th), math.cos(th), 0, 0],
-                                [-math.sin(th + psi), math.cos(th + psi), model.D * math.cos(psi), 0]])
+            printed = np.array([[-math.sin(th), math.cos(th), 0, 0], [-math.sin(th + psi), math.cos(th + psi), model.D * math.cos(psi), 0]])
             assert np.allclose(model.A([x, y, th, psi]).T, printed, atol=1e-14)
 
 

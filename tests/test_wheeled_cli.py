@@ -19,11 +19,14 @@ def test_help_lists_every_robot_and_exercise(capsys):
     assert set(catalogue()) == set(ROBOTS) | set(EXERCISES)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["wheeled", "hovercraft"], "unknown robot or exercise 'hovercraft'; valid: fixed-wheel"),
-    (["wheeled", "types", "--plot", "out.jpg"], "--plot 'out.jpg': the file must end in .png or .pdf or .svg"),
-    (["wheeled", "types", "--plot", "no-such-folder/t.png"], "folder 'no-such-folder' does not exist"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["wheeled", "hovercraft"], "unknown robot or exercise 'hovercraft'; valid: fixed-wheel"),
+        (["wheeled", "types", "--plot", "out.jpg"], "--plot 'out.jpg': the file must end in .png or .pdf or .svg"),
+        (["wheeled", "types", "--plot", "no-such-folder/t.png"], "folder 'no-such-folder' does not exist"),
+    ],
+)
 def test_bad_arguments_give_one_line_and_exit_code_2(capsys, argv, message):
     assert main(argv) == 2
     out, err = capsys.readouterr()

@@ -26,7 +26,7 @@ def test_kanayama_tracking_converges_to_the_zero_order_hold_floor():
     for dt in (0.04, 0.02):
         r = simulate(Unicycle(), [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 30.0, dt)
         e = _err(r, ref)
-        floors.append(e[int(22 / dt):].max())
+        floors.append(e[int(22 / dt) :].max())
         assert e[0] > 0.7
     assert floors[1] < 5e-3
     assert floors[0] / floors[1] == pytest.approx(2.0, rel=0.25)
@@ -54,8 +54,8 @@ def test_car_tracking_by_dynamic_feedback_linearisation():
     floors = []
     for dt in (0.04, 0.02):
         r = simulate(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 24.0, dt)
-        floors.append(_err(r, ref)[int(16 / dt):].max())
-        assert np.abs(r.q[int(10 / dt):, 3]).max() <= car.psi_max  # within the steering limit once converged
+        floors.append(_err(r, ref)[int(16 / dt) :].max())
+        assert np.abs(r.q[int(10 / dt) :, 3]).max() <= car.psi_max  # within the steering limit once converged
     assert floors[1] < 5e-3 and floors[0] / floors[1] == pytest.approx(2.0, rel=0.25)
 
 

@@ -42,8 +42,11 @@ def scenarios():
 
 @pytest.fixture(scope="module")
 def solved(scenarios):
-    return {(arm, respect): solve_ik(sc.robot, sc.target, sc.z0, {"respect_constraint": respect})
-            for arm, sc in scenarios.items() for respect in (True, False)}
+    return {
+        (arm, respect): solve_ik(sc.robot, sc.target, sc.z0, {"respect_constraint": respect})
+        for arm, sc in scenarios.items()
+        for respect in (True, False)
+    }
 
 
 def test_combined_model_is_chassis_then_mount_then_arm(scenarios):
@@ -123,9 +126,12 @@ def test_ik_ignoring_the_constraint_slides_sideways(solved, arm):
 
 
 @settings(max_examples=20, deadline=None)
-@given(pose=st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-math.pi, math.pi)),
-       psi=st.floats(-0.6, 0.6), arm=st.tuples(*(st.floats(-1.0, 1.0),) * 3),
-       target=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0.2, 1.0)))
+@given(
+    pose=st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-math.pi, math.pi)),
+    psi=st.floats(-0.6, 0.6),
+    arm=st.tuples(*(st.floats(-1.0, 1.0),) * 3),
+    target=st.tuples(st.floats(-3, 3), st.floats(-3, 3), st.floats(0.2, 1.0)),
+)
 # found by hypothesis: near-zero projected bound rows (1e-11) at a joint limit made the exact fallback cycle
 @example(pose=(-0.5, 1.0, -1.0), psi=0.0, arm=(-0.125, 1.0, 1e-10), target=(0.0, 0.0, 1.0))
 def test_ik_never_violates_the_pfaffian_constraint(pose, psi, arm, target):
@@ -212,14 +218,14 @@ def test_car_step_keeps_the_end_effector_optimum_and_the_pfaffian_constraint(sce
         assert np.abs(E @ dz).max() <= ROUNDING and np.abs(E @ dz1).max() <= ROUNDING
         assert np.all(dz >= prob.lower - 10 * opts.eps_abs) and np.all(dz <= prob.upper + 10 * opts.eps_abs)
         # level 1 in the free directions w (dz = N w): min ||M w - e||^2 + reg ||w||^2 s.t. lo <= N w <= up
-        N = np.linalg.svd(E)[2][np.linalg.matrix_rank(E):].T
+        N = np.linalg.svd(E)[2][np.linalg.matrix_rank(E) :].T
         M = J @ N
         H = 2 * (M.T @ M + opts.regularization * np.eye(N.shape[1]))
         assert_kkt(H, -2 * M.T @ e, N, prob.lower, prob.upper, N.T @ dz1)
         # level 2 (steering angle) in the directions level 1 leaves free, dz = dz1 + Z2 w with Z2 = N ker(M):
         # min ||Js Z2 w - (es - Js dz1)||^2 + reg ||w||^2 s.t. lo - dz1 <= Z2 w <= up - dz1
         s, Vt = np.linalg.svd(M)[1:]
-        Z2 = N @ Vt[int(np.count_nonzero(s > opts.rank_tol)):].T
+        Z2 = N @ Vt[int(np.count_nonzero(s > opts.rank_tol)) :].T
         K = Js @ Z2
         H2 = 2 * (K.T @ K + opts.regularization * np.eye(Z2.shape[1]))
         assert_kkt(H2, -2 * K.T @ (es - Js @ dz1), Z2, prob.lower - dz1, prob.upper - dz1, Z2.T @ (dz - dz1))
@@ -229,8 +235,15 @@ def test_car_step_keeps_the_end_effector_optimum_and_the_pfaffian_constraint(sce
 
 
 # a step of the benchmark (seed 0, problem 3, iteration 70) where ProxQP stalls on level 2
-_DEGENERATE_Z = [-0.6162247543402657, 0.9670442650284181, 2.910775760511703, -9.970059759722982e-08, 0.040000000000000424,
-                 1.3457760092993778, -0.005604897606805326]
+_DEGENERATE_Z = [
+    -0.6162247543402657,
+    0.9670442650284181,
+    2.910775760511703,
+    -9.970059759722982e-08,
+    0.040000000000000424,
+    1.3457760092993778,
+    -0.005604897606805326,
+]
 _DEGENERATE_TARGET = [-2.495907938505691, 1.995864885920387, 0.8296786459909467]
 
 

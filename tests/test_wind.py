@@ -131,8 +131,7 @@ def test_drag_closed_form():
     tau = drag.generalized_force(0.0, q, v)
     R = ch.euler_to_rotation(xi[3:6])
     vr = v[0:3] - R.T @ np.array([2.0, -1.0, 0.5])
-    np.testing.assert_allclose(tau[0:3], -np.array([1.0, 2.0, 0.3]) * vr - np.array([0.03, 0.05, 0.09]) * np.linalg.norm(vr) * vr,
-                               rtol=1e-13)
+    np.testing.assert_allclose(tau[0:3], -np.array([1.0, 2.0, 0.3]) * vr - np.array([0.03, 0.05, 0.09]) * np.linalg.norm(vr) * vr, rtol=1e-13)
     np.testing.assert_allclose(tau[3:6], -0.02 * v[3:6], rtol=1e-15)
     assert np.all(tau[6:] == 0.0) and tau.shape == (pf.nv,)
 
@@ -167,8 +166,9 @@ def test_falling_vehicle_reaches_the_terminal_velocity_relative_to_the_air(updra
     drag = AerodynamicDrag((1.0, 1.0, K1z), (0.03, 0.03, K2z), 0.01, Wind((0.0, 0.0, updraft)))
     m, g = pf.total_mass, pf.g
     v_t = (-K1z + math.sqrt(K1z**2 + 4 * K2z * m * g)) / (2 * K2z)
-    res = simulate(pf, _Off(), Hold((0, 0, 500, 0, 0, 0, 0, 0, 0)), 30.0, disturbance=drag, integrator="rk4", dt=2e-3,
-                   limits=qprr.sim.Limits(position=1e4))
+    res = simulate(
+        pf, _Off(), Hold((0, 0, 500, 0, 0, 0, 0, 0, 0)), 30.0, disturbance=drag, integrator="rk4", dt=2e-3, limits=qprr.sim.Limits(position=1e4)
+    )
     assert res.xi_dot[-1, 2] == pytest.approx(updraft - v_t, abs=1e-9)
     assert np.abs(res.xi[:, 3:5]).max() < 1e-12  # level all the way
 
@@ -194,9 +194,19 @@ def test_friction_dissipates_energy_of_a_free_swinging_arm():
     monotonically and the loss equals the dissipated work (trapezoid at 1 ms, to 1e-4)."""
     pf = qprr.load()
     fr = ViscousFriction((0.0,) * 6 + (0.5, 0.0075, 0.00025))
-    res = simulate(pf, _Off(), Hold(), 0.3, xi0=np.r_[0, 0, 100, 0, 0, 0, 0.0, 0.2, -0.2],
-                   xi_dot0=np.r_[0, 0, 0, 0, 0, 0, 0.02, 1.0, -2.0], disturbance=fr, integrator="rk4", dt=1e-4, control_period=1e-3,
-                   joint_stops=False)
+    res = simulate(
+        pf,
+        _Off(),
+        Hold(),
+        0.3,
+        xi0=np.r_[0, 0, 100, 0, 0, 0, 0.0, 0.2, -0.2],
+        xi_dot0=np.r_[0, 0, 0, 0, 0, 0, 0.02, 1.0, -2.0],
+        disturbance=fr,
+        integrator="rk4",
+        dt=1e-4,
+        control_period=1e-3,
+        joint_stops=False,
+    )
     d = pf.data()
     E = []
     for x, xd in zip(res.xi, res.xi_dot):

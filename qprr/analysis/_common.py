@@ -219,7 +219,7 @@ def lever_lengths(platform: Platform, ranges: np.ndarray) -> np.ndarray:
         if jt.joint_id not in chain:
             continue
         reach = float(np.linalg.norm(model.frames[platform.ee_frame].placement.translation))
-        for jj in chain[chain.index(jt.joint_id) + 1:]:
+        for jj in chain[chain.index(jt.joint_id) + 1 :]:
             reach += float(np.linalg.norm(model.jointPlacements[jj].translation))
             kk = jj - 2
             if platform.arm[kk].kind == "prismatic":
@@ -228,8 +228,9 @@ def lever_lengths(platform: Platform, ranges: np.ndarray) -> np.ndarray:
     return out
 
 
-def make_grid(platform: Platform, n_samples: int, locked: Mapping[str, float] | None = None,
-              ranges: Mapping[str, tuple[float, float]] | None = None) -> JointGrid:
+def make_grid(
+    platform: Platform, n_samples: int, locked: Mapping[str, float] | None = None, ranges: Mapping[str, tuple[float, float]] | None = None
+) -> JointGrid:
     """The balanced joint grid of about ``n_samples`` configurations (see the module docstring).
 
     Joint k gets n_k values with n_k proportional to its lever (:func:`lever_lengths`) times its
@@ -280,7 +281,6 @@ def check_progress(progress) -> ProgressFn | None:
     if not callable(progress):
         raise InputError(f"progress must be None, True or a callable (fraction, message), got {progress!r}")
     return progress
-
 
 
 def affine_span(points: np.ndarray, rel_tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
@@ -374,8 +374,10 @@ class CollisionMask:
         if self.evaluated == n:
             failed = f" (the coarse-to-fine inference failed its audit: {self.mismatches} wrong of {self.audited})" if self.mismatches else ""
             return f"every one of the {n} configurations checked{failed}"
-        return (f"{self.evaluated} of {n} configurations checked, the others inferred from agreeing corners of the "
-                f"twice-coarser grid (audit: {self.mismatches} wrong of {self.audited} checked at random)")
+        return (
+            f"{self.evaluated} of {n} configurations checked, the others inferred from agreeing corners of the "
+            f"twice-coarser grid (audit: {self.mismatches} wrong of {self.audited} checked at random)"
+        )
 
 
 COLLISION_AUDIT_TOLERANCE = 0.01
@@ -385,8 +387,7 @@ COLLISION_EXACT_BELOW = 4096
 """Grids smaller than this are checked configuration by configuration (no coarse-to-fine inference)."""
 
 
-def collision_mask(model, grid: JointGrid, progress=None, label: str = "collision check", *, audit: int = 1000,
-                   seed: int = 0) -> CollisionMask:
+def collision_mask(model, grid: JointGrid, progress=None, label: str = "collision check", *, audit: int = 1000, seed: int = 0) -> CollisionMask:
     """The self-collision mask of the configurations of ``grid`` (``model``: a :class:`qprr.collision.CollisionModel`).
 
     Coarse to fine: the grid with every other value along each axis (when every axis has an odd number of values,
@@ -409,7 +410,7 @@ def collision_mask(model, grid: JointGrid, progress=None, label: str = "collisio
         if mismatches > COLLISION_AUDIT_TOLERANCE * audited:
             rest = np.flatnonzero(~evaluated)
             for k in range(0, rest.size, CHUNK):
-                free[rest[k:k + CHUNK]] = ~model.colliding_arm(grid.configurations_at(rest[k:k + CHUNK]))
+                free[rest[k : k + CHUNK]] = ~model.colliding_arm(grid.configurations_at(rest[k : k + CHUNK]))
                 if progress:
                     progress(min(1.0, (k + CHUNK) / rest.size), f"{label} (every configuration)")
             evaluated[:] = True
@@ -422,7 +423,7 @@ def _free_coarse_to_fine(model, grid: JointGrid, progress, label: str) -> tuple[
     if grid.size < COLLISION_EXACT_BELOW or all(n < 3 for n in shape) or any(n >= 3 and n % 2 == 0 for n in shape):
         free = np.empty(grid.size, dtype=bool)
         for start, q in grid.chunks():
-            free[start:start + len(q)] = ~model.colliding_arm(q)
+            free[start : start + len(q)] = ~model.colliding_arm(q)
             if progress:
                 progress((start + len(q)) / grid.size, label)
         return free, np.ones(grid.size, dtype=bool)
@@ -440,7 +441,7 @@ def _free_coarse_to_fine(model, grid: JointGrid, progress, label: str) -> tuple[
     free = all_free.reshape(-1)
     todo = np.flatnonzero((any_free & ~all_free).reshape(-1))
     for k in range(0, todo.size, CHUNK):
-        sel = todo[k:k + CHUNK]
+        sel = todo[k : k + CHUNK]
         free[sel] = ~model.colliding_arm(grid.configurations_at(sel))
         if progress:
             progress(min(1.0, (k + sel.size) / todo.size), label)

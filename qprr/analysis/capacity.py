@@ -101,11 +101,13 @@ class CapacityResult:
     def summary(self) -> str:
         cap, q, ee = self.best
         fr = self.map_fractions()
-        lines = [f"payload capacity of {self.platform_name} (torque reserve {np.round(self.torque_reserve, 4).tolist()} N m): "
-                 f"collective-thrust limit {self.m_thrust:.4g} kg",
-                 f"  best {cap:.4g} kg at q_arm = {np.round(q, 4).tolist()} (end effector {np.round(ee, 4).tolist()} m in B)",
-                 f"  over the workspace ({int((self.map_limiting >= 0).sum())} cells of {self.cell * 1000:.3g} mm): smallest best "
-                 f"capacity {self.worst_reachable:.4g} kg; limited by " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items())]
+        lines = [
+            f"payload capacity of {self.platform_name} (torque reserve {np.round(self.torque_reserve, 4).tolist()} N m): "
+            f"collective-thrust limit {self.m_thrust:.4g} kg",
+            f"  best {cap:.4g} kg at q_arm = {np.round(q, 4).tolist()} (end effector {np.round(ee, 4).tolist()} m in B)",
+            f"  over the workspace ({int((self.map_limiting >= 0).sum())} cells of {self.cell * 1000:.3g} mm): smallest best "
+            f"capacity {self.worst_reachable:.4g} kg; limited by " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items()),
+        ]
         per = {}
         for j in self.effort_joint[self.limiting == 2]:
             per[self.joint_names[j]] = per.get(self.joint_names[j], 0) + 1
@@ -195,6 +197,26 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
     status, reason = Status.OK, ""
     if np.all(lim == 3):
         status, reason = Status.EMPTY, "no configuration hovers even without payload"
-    return CapacityResult(platform.name, grid, ee, float(m_thr), m_att, m_eff, joint, cap, lim, platform.arm_names,
-                          torque_reserve, origin, basis, h, best_map, map_lim, morigin, (float(cap[i]), allq, ee[i]),
-                          float(np.nanmin(best_map)), status, reason)
+    return CapacityResult(
+        platform.name,
+        grid,
+        ee,
+        float(m_thr),
+        m_att,
+        m_eff,
+        joint,
+        cap,
+        lim,
+        platform.arm_names,
+        torque_reserve,
+        origin,
+        basis,
+        h,
+        best_map,
+        map_lim,
+        morigin,
+        (float(cap[i]), allq, ee[i]),
+        float(np.nanmin(best_map)),
+        status,
+        reason,
+    )

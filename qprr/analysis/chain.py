@@ -177,9 +177,21 @@ class ArmChain:
             R0 = np.array(M0.rotation)
             K = pin.skew(axis)
             Y = model.inertias[j]
-            joints.append(_Joint(j, int(model.parents[j]), jt.kind, axis, _const_table(R0), _const_vec(np.array(M0.translation)),
-                                 _const_table(R0 @ K), _const_table(R0 @ K @ K), _const_vec(R0 @ axis), float(Y.mass),
-                                 np.array(Y.lever)))
+            joints.append(
+                _Joint(
+                    j,
+                    int(model.parents[j]),
+                    jt.kind,
+                    axis,
+                    _const_table(R0),
+                    _const_vec(np.array(M0.translation)),
+                    _const_table(R0 @ K),
+                    _const_table(R0 @ K @ K),
+                    _const_vec(R0 @ axis),
+                    float(Y.mass),
+                    np.array(Y.lever),
+                )
+            )
         self._joints = joints
         self.total_mass = self.base_mass + sum(j.mass for j in joints)
         # subtree membership: ancestors of each joint (arm joints only, model ids)
@@ -354,9 +366,11 @@ class ArmChain:
 
 
 def _cross(a, b):
-    return [_add((_mul(a[1], b[2]), _mul(-1.0, _mul(a[2], b[1])))),
-            _add((_mul(a[2], b[0]), _mul(-1.0, _mul(a[0], b[2])))),
-            _add((_mul(a[0], b[1]), _mul(-1.0, _mul(a[1], b[0]))))]
+    return [
+        _add((_mul(a[1], b[2]), _mul(-1.0, _mul(a[2], b[1])))),
+        _add((_mul(a[2], b[0]), _mul(-1.0, _mul(a[0], b[2])))),
+        _add((_mul(a[0], b[1]), _mul(-1.0, _mul(a[1], b[0])))),
+    ]
 
 
 def _dot(a, b):

@@ -18,8 +18,7 @@ from ..progress import FractionProgress
 from ._common import MapReference
 
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
-DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000,
-                   "opspace": 10_000}
+DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000, "opspace": 10_000}
 
 
 def resolve_platform(name: str):
@@ -127,12 +126,15 @@ def register_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
     from ..cli_common import add_platform_options, integer, real, reals
 
-    p = sub.add_parser("analyze", help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
-                       description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
-                                   "singularities, hover feasibility and thrust margins, payload capacity, operational-space inertia. "
-                                   "--platform takes a named platform (q-prr, borinot_flying_arm_2, hextilt_flying_arm_5) or a "
-                                   "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR; --urdf FILE --rotors "
-                                   "FILE.toml your own platform (docs/platforms.md).")
+    p = sub.add_parser(
+        "analyze",
+        help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
+        description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
+        "singularities, hover feasibility and thrust margins, payload capacity, operational-space inertia. "
+        "--platform takes a named platform (q-prr, borinot_flying_arm_2, hextilt_flying_arm_5) or a "
+        "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR; --urdf FILE --rotors "
+        "FILE.toml your own platform (docs/platforms.md).",
+    )
     p.add_argument("map", choices=MAPS, help="which map")
     add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")
@@ -141,8 +143,9 @@ def register_cli(sub) -> None:
     p.add_argument("--reserve", type=real(nonnegative=True, unit="N m"), default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
     p.add_argument("--task", default="pose", choices=("pose", "position"), help="task rows of the singularity map")
     p.add_argument("--tol", type=real(nonnegative=True, unit="m"), default=1e-6, help="CoG offset counted as balanced [m] (cog)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, "
-                                                                 "a line every few seconds in a log)")
+    p.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, a line every few seconds in a log)"
+    )
     p.set_defaults(func=run)
 
 

@@ -98,8 +98,10 @@ class CoGResult:
         for (v, _k), r in self.regions.items():
             lo, hi = r.extent
             m = str(r.measure) if r.measure is not None else "n/a"
-            lines.append(f"  [{v}] {r.label}, payload {r.mass:g} kg: measure {m}; x in [{lo[0]:.4f}, {hi[0]:.4f}], "
-                         f"z in [{lo[2]:.4f}, {hi[2]:.4f}] m; |offset| <= {np.sqrt((r.offset**2).sum(axis=1)).max():.4f} m")
+            lines.append(
+                f"  [{v}] {r.label}, payload {r.mass:g} kg: measure {m}; x in [{lo[0]:.4f}, {hi[0]:.4f}], "
+                f"z in [{lo[2]:.4f}, {hi[2]:.4f}] m; |offset| <= {np.sqrt((r.offset**2).sum(axis=1)).max():.4f} m"
+            )
         for k in range(len(self.masses)):
             a, b = self.regions.get((0, k)), self.regions.get((1, k))
             if a is not None and b is not None and a.measure is not None and b.measure is not None and a.measure.dim == b.measure.dim:
@@ -180,8 +182,7 @@ def _region(lk: dict, m: float, grid: JointGrid, com_body: np.ndarray, pitches: 
         measure, occ = estimate_measure(coords.reshape(*shape, basis.shape[0]), n_shifts=n_shifts, return_occupancy=True)
     else:
         reason = "the CoG region is lower-dimensional than its hull, no measure"
-    region = CoGRegion(_label(lk), dict(lk), float(m), grid, pitches, c, off, origin, basis, measure, occ,
-                       (c.min(axis=0), c.max(axis=0)))
+    region = CoGRegion(_label(lk), dict(lk), float(m), grid, pitches, c, off, origin, basis, measure, occ, (c.min(axis=0), c.max(axis=0)))
     return region, reason
 
 
@@ -213,7 +214,7 @@ def cog_regions(platform: Platform, options: CoGOptions | None = None, *, progre
         for start, q in grid.chunks():
             st = chain.statics(chain.pose(q), payload.frame, payload.offset_frame)
             for k, m in enumerate(masses):
-                coms[k, start:start + len(q)] = st.com_loaded(m)
+                coms[k, start : start + len(q)] = st.com_loaded(m)
             if progress:
                 progress((v + (start + len(q)) / grid.size) / len(sets), "CoG regions")
         for k, m in enumerate(masses):
@@ -259,11 +260,15 @@ class BalanceResult:
 
     def summary(self) -> str:
         what = f"slider {self.slider!r}" if self.slider else "no slider: |offset| over the joint grid"
-        lines = [f"CoG balance of {self.platform_name} ({what}, payload {self.mass:g} kg, tol {self.tol:g} m): "
-                 f"{100 * self.fraction_configurations:.2f}% of the {self.grid.size} grid configurations"]
+        lines = [
+            f"CoG balance of {self.platform_name} ({what}, payload {self.mass:g} kg, tol {self.tol:g} m): "
+            f"{100 * self.fraction_configurations:.2f}% of the {self.grid.size} grid configurations"
+        ]
         if self.fraction_workspace is not None:
-            lines.append(f"  end-effector positions reachable balanced: {self.balanced_measure} of {self.workspace_measure} "
-                         f"= {100 * self.fraction_workspace.value:.2f} +- {100 * self.fraction_workspace.error:.2g}% of the workspace")
+            lines.append(
+                f"  end-effector positions reachable balanced: {self.balanced_measure} of {self.workspace_measure} "
+                f"= {100 * self.fraction_workspace.value:.2f} +- {100 * self.fraction_workspace.error:.2g}% of the workspace"
+            )
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         return "\n".join(lines)
@@ -353,8 +358,8 @@ def _offset_map(platform: Platform, load: _Loading, grid: JointGrid) -> _Balance
     ee = np.empty((grid.size, 3))
     for start, q in grid.chunks():
         pose = load.chain.pose(q)
-        off[start:start + len(q)] = np.sqrt((load.offset_body(pose) ** 2).sum(axis=1))
-        ee[start:start + len(q)] = load.chain.frame_position(pose, platform.ee_frame)
+        off[start : start + len(q)] = np.sqrt((load.offset_body(pose) ** 2).sum(axis=1))
+        ee[start : start + len(q)] = load.chain.frame_position(pose, platform.ee_frame)
     return _BalanceMap(grid, None, None, off, ee, np.ones(grid.size, dtype=bool))
 
 
@@ -439,7 +444,7 @@ def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _Ba
     """(balanced measure, workspace measure, their Ratio, reason or "") of the end-effector positions, in the workspace's hull."""
     ws_pts = np.empty((ws_grid.size, 3))
     for start, q in ws_grid.chunks():
-        ws_pts[start:start + len(q)] = chain.frame_position(chain.pose(q), platform.ee_frame)
+        ws_pts[start : start + len(q)] = chain.frame_position(chain.pose(q), platform.ee_frame)
     origin, basis = affine_span(ws_pts)
     dim = basis.shape[0]
     ws_shape = tuple(s for s in ws_grid.shape if s > 1)
@@ -448,18 +453,29 @@ def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _Ba
         return None, None, None, "the balanced set has fewer free joints than the workspace dimension: no measure (see fraction_configurations)"
     ws_m = estimate_measure(((ws_pts - origin) @ basis.T).reshape(*ws_shape, dim), n_shifts=n_shifts)
     try:
-        bal_m = estimate_measure(((bmap.ee_body - origin) @ basis.T).reshape(*bshape, dim), n_shifts=n_shifts,
-                                valid=(ok & bmap.smooth).reshape(bshape))
+        bal_m = estimate_measure(
+            ((bmap.ee_body - origin) @ basis.T).reshape(*bshape, dim), n_shifts=n_shifts, valid=(ok & bmap.smooth).reshape(bshape)
+        )
         bal_m = replace(bal_m, error=MASKED_RICHARDSON * abs(bal_m.raw - bal_m.coarse) + 2.0 * bal_m.stderr)
     except InputError:
-        reason = ("no configuration balances the CoG within tol" if not ok.any() else
-                  "the balanced configurations cover no full grid cell on which the balancing slider position is resolved "
-                  "(a curve or isolated points in the workspace, or a band too thin for the grid): no measure at this "
-                  "tol and n_samples")
+        reason = (
+            "no configuration balances the CoG within tol"
+            if not ok.any()
+            else "the balanced configurations cover no full grid cell on which the balancing slider position is resolved "
+            "(a curve or isolated points in the workspace, or a band too thin for the grid): no measure at this "
+            "tol and n_samples"
+        )
         return None, ws_m, None, reason
     if bal_m.coarse == 0.0 < bal_m.raw:
-        return bal_m, ws_m, Ratio.of(bal_m, ws_m), ("the grid with twice the step resolves none of the balanced band, so its "
-                                                    "error bar is no bound: the measure is a lower bound; raise n_samples")
+        return (
+            bal_m,
+            ws_m,
+            Ratio.of(bal_m, ws_m),
+            (
+                "the grid with twice the step resolves none of the balanced band, so its "
+                "error bar is no bound: the measure is a lower bound; raise n_samples"
+            ),
+        )
     return bal_m, ws_m, Ratio.of(bal_m, ws_m), ""
 
 
@@ -496,5 +512,21 @@ def balance(platform: Platform, options: BalanceOptions | None = None, *, progre
     ok = bmap.offset <= tol
     bal_m, ws_m, ratio, reason = _measures(platform, chain, ws_grid, bmap, ok, o.n_shifts)
     status = Status.OK if not reason else (Status.EMPTY if not ok.any() else Status.PARTIAL)
-    return BalanceResult(platform.name, slider, m, tol, bmap.grid, bmap.r_star, bmap.residual, bmap.offset, ok, bmap.ee_body,
-                         float(ok.mean()), bal_m, ws_m, ratio, status, reason)
+    return BalanceResult(
+        platform.name,
+        slider,
+        m,
+        tol,
+        bmap.grid,
+        bmap.r_star,
+        bmap.residual,
+        bmap.offset,
+        ok,
+        bmap.ee_body,
+        float(ok.mean()),
+        bal_m,
+        ws_m,
+        ratio,
+        status,
+        reason,
+    )

@@ -164,22 +164,30 @@ class HoverResult:
     collision_note: str = ""
 
     def summary(self) -> str:
-        lines = [f"hover feasibility of {self.platform_name}: {self.grid.size} arm configurations, wrench set of rank "
-                 f"{self.wrench_set.rank} ({self.wrench_set.normals.shape[0]} facets)"]
+        lines = [
+            f"hover feasibility of {self.platform_name}: {self.grid.size} arm configurations, wrench set of rank "
+            f"{self.wrench_set.rank} ({self.wrench_set.normals.shape[0]} facets)"
+        ]
         for k, m in enumerate(self.masses):
-            lines.append(f"  payload {m:g} kg: hover-feasible at {100 * self.feasible_fraction[k]:.2f}% of the configurations "
-                         f"(rotors {100 * self.rotor_ok[k].mean():.2f}%, efforts {100 * self.effort_ok[k].mean():.2f}%); "
-                         f"min thrust margin {self.min_thrust_margin[k]:.4g} N at q_arm = {np.round(self.worst_q[k], 4).tolist()}; "
-                         f"min roll/pitch/yaw authority {np.round(self.authority[k].min(axis=0), 4).tolist()} N m")
+            lines.append(
+                f"  payload {m:g} kg: hover-feasible at {100 * self.feasible_fraction[k]:.2f}% of the configurations "
+                f"(rotors {100 * self.rotor_ok[k].mean():.2f}%, efforts {100 * self.effort_ok[k].mean():.2f}%); "
+                f"min thrust margin {self.min_thrust_margin[k]:.4g} N at q_arm = {np.round(self.worst_q[k], 4).tolist()}; "
+                f"min roll/pitch/yaw authority {np.round(self.authority[k].min(axis=0), 4).tolist()} N m"
+            )
             if self.collision_free is not None:
-                lines.append(f"    collision-free and hover-feasible: {100 * self.feasible_free_fraction[k]:.2f}% of the "
-                             f"configurations ({100 * self.collision_free.mean():.2f}% are collision-free)")
+                lines.append(
+                    f"    collision-free and hover-feasible: {100 * self.feasible_free_fraction[k]:.2f}% of the "
+                    f"configurations ({100 * self.collision_free.mean():.2f}% are collision-free)"
+                )
         if self.collision_note:
             lines.append(f"  {self.collision_note}")
         pl = self.payload.total
         ok = np.isfinite(pl)
-        lines.append(f"  payload envelope (zero reserve): {np.nanmax(np.where(ok, pl, np.nan)):.4g} kg at best, "
-                     f"{np.nanmin(np.where(ok, pl, np.nan)):.4g} kg at worst; collective-thrust limit {self.payload.collective:.4g} kg")
+        lines.append(
+            f"  payload envelope (zero reserve): {np.nanmax(np.where(ok, pl, np.nan)):.4g} kg at best, "
+            f"{np.nanmin(np.where(ok, pl, np.nan)):.4g} kg at worst; collective-thrust limit {self.payload.collective:.4g} kg"
+        )
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         return "\n".join(lines)
@@ -284,9 +292,30 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     status, reason = Status.OK, ""
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
-    result = HoverResult(platform.name, grid, masses, ee, thrusts, rmargin, tau_arm, margin, auth, fauth, rot_ok, eff_ok, feasible,
-                         PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per), W, w_hover, frac,
-                         margin[np.arange(nm), worst], allq[worst], status, reason, collision_note=note)
+    result = HoverResult(
+        platform.name,
+        grid,
+        masses,
+        ee,
+        thrusts,
+        rmargin,
+        tau_arm,
+        margin,
+        auth,
+        fauth,
+        rot_ok,
+        eff_ok,
+        feasible,
+        PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per),
+        W,
+        w_hover,
+        frac,
+        margin[np.arange(nm), worst],
+        allq[worst],
+        status,
+        reason,
+        collision_note=note,
+    )
     return _with_collisions(result, cmodel, progress)
 
 
@@ -295,8 +324,12 @@ def _with_collisions(result: HoverResult, cmodel, progress) -> HoverResult:
     if cmodel is None:
         return result
     mask = collision_mask(cmodel, result.grid, progress, "hover map: collisions")
-    return replace(result, collision_free=mask.free, feasible_free_fraction=(result.feasible & mask.free).mean(axis=1),
-                   collision_note=f"collision check: {mask.describe()}")
+    return replace(
+        result,
+        collision_free=mask.free,
+        feasible_free_fraction=(result.feasible & mask.free).mean(axis=1),
+        collision_note=f"collision check: {mask.describe()}",
+    )
 
 
 def _alloc_margin(w: np.ndarray, alloc: Allocator, W: WrenchSet) -> np.ndarray:

@@ -91,8 +91,10 @@ def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, 
         raise InputError(f"data must be a pinocchio.Data, got {type(data).__name__}")
     model = platform.arm_model() if fixed_base else platform.model
     if len(data.oMf) != model.nframes:
-        raise InputError(f"data was made for another model ({len(data.oMf)} frames, this one has {model.nframes}): use "
-                         f"{'platform.arm_model().createData()' if fixed_base else 'platform.data()'}")
+        raise InputError(
+            f"data was made for another model ({len(data.oMf)} frames, this one has {model.nframes}): use "
+            f"{'platform.arm_model().createData()' if fixed_base else 'platform.data()'}"
+        )
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     if fixed_base:
         fid = model.getFrameId(platform.model.frames[fid].name)
@@ -186,8 +188,7 @@ def _check_selection(values, n: int, name: str, names=None) -> tuple[int, ...]:
     return idx
 
 
-def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=None, *, rows="pose",
-                     coordinates=None) -> OpSpaceModelXi:
+def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=None, *, rows="pose", coordinates=None) -> OpSpaceModelXi:
     """The operational-space model of ``frame`` (default: end effector) in thesis coordinates, Thesis (5.47)-(5.52).
 
     Parameters
@@ -230,8 +231,9 @@ class RateMapState:
     xi_dot: np.ndarray | None = None
 
 
-def opspace_terms_xi(model: pin.Model, data: pin.Data, fid: int, state: RateMapState, rows: tuple[int, ...],
-                     cols: tuple[int, ...], *, operational: bool = True) -> OpSpaceModelXi:
+def opspace_terms_xi(
+    model: pin.Model, data: pin.Data, fid: int, state: RateMapState, rows: tuple[int, ...], cols: tuple[int, ...], *, operational: bool = True
+) -> OpSpaceModelXi:
     """:func:`opspace_model_xi` from a checked :class:`RateMapState` (no input checks; for control loops that hold it
     already, e.g. :class:`qprr.charts.State`).  ``operational=False`` stops after the kinematics and the mass matrices
     (``n``, ``G``, ``Lambda``, ``Lambda_inv``, ``J_bar``, ``mu``, ``p`` None, ``rank`` -1)."""
@@ -291,13 +293,22 @@ class OpSpaceMap:
 
     def summary(self) -> str:
         lo, hi = self.mass_xyz.min(axis=0), self.mass_xyz.max(axis=0)
-        return (f"operational space of {self.platform_name} ({self.grid.size} configurations): effective mass along x, y, z in "
-                f"[{lo[0]:.4g}, {hi[0]:.4g}], [{lo[1]:.4g}, {hi[1]:.4g}], [{lo[2]:.4g}, {hi[2]:.4g}] kg; "
-                f"condition number of Lambda in [{self.condition.min():.4g}, {self.condition.max():.4g}]")
+        return (
+            f"operational space of {self.platform_name} ({self.grid.size} configurations): effective mass along x, y, z in "
+            f"[{lo[0]:.4g}, {hi[0]:.4g}], [{lo[1]:.4g}, {hi[1]:.4g}], [{lo[2]:.4g}, {hi[2]:.4g}] kg; "
+            f"condition number of Lambda in [{self.condition.min():.4g}, {self.condition.max():.4g}]"
+        )
 
 
-def opspace_map(platform: Platform, *, n_samples: int = 20_000, locked: Mapping[str, float] | None = None,
-                ranges: Mapping[str, tuple[float, float]] | None = None, frame=None, progress=None) -> OpSpaceMap:
+def opspace_map(
+    platform: Platform,
+    *,
+    n_samples: int = 20_000,
+    locked: Mapping[str, float] | None = None,
+    ranges: Mapping[str, tuple[float, float]] | None = None,
+    frame=None,
+    progress=None,
+) -> OpSpaceMap:
     """Effective mass and conditioning of the operational-space inertia over the arm's joint grid (one Pinocchio
     evaluation per configuration: CRBA, the frame Jacobian and a Cholesky solve)."""
     check_platform(platform)

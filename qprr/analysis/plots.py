@@ -81,15 +81,23 @@ def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | 
             continue
         grid, o, h = r.outline if r.outline is not None else r.occupancy
         if r.dim == 2:  # hull coordinates shifted back to B's axes
-            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
-                         f"{plain(r.label)}: {measure_text(r.measure)}")
+            _cells_image(
+                ax,
+                grid,
+                o + r.origin @ r.basis.T,
+                h,
+                COLOURS[i % len(COLOURS)],
+                0.35 if i == 0 else 0.55,
+                f"{plain(r.label)}: {measure_text(r.measure)}",
+            )
             for ln in r.boundary:
                 loc = ln @ r.basis.T
                 ax.plot(loc[:, 0], loc[:, 1], color=COLOURS[i % len(COLOURS)], lw=0.8)
         elif r.dim == 3:  # the x-z projection of the covered cells (any y)
             proj = grid.any(axis=1)
-            _cells_image(ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45,
-                         f"{plain(r.label)}: {measure_text(r.measure)} (x-z projection)")
+            _cells_image(
+                ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45, f"{plain(r.label)}: {measure_text(r.measure)} (x-z projection)"
+            )
     r0 = result.regions[0]
     names = _axis_names(r0.basis) if r0.dim == 2 else ["x_B [m]", "z_B [m]"]
     ax.set_xlabel(names[0])
@@ -109,8 +117,7 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
         if r.hover_occupancy is None:
             continue
         grid, o, h = r.hover_occupancy
-        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55,
-                     f"{plain(r.label)}: {measure_text(r.hover_volume)}")
+        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55, f"{plain(r.label)}: {measure_text(r.hover_volume)}")
     ax.axvline(0.0, color="k", lw=0.6, ls="--")
     ax.set_xlabel("distance to the yaw axis (signed) [m]")
     ax.set_ylabel("z (world, from the base) [m]")
@@ -136,7 +143,7 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     for ln in lines:
         ln = np.asarray(ln)
         ln = ln[ln[:, 0] >= 0] if np.any(ln[:, 0] >= 0) else ln
-        s, z = ln[::max(1, len(ln) // 80), 0], ln[::max(1, len(ln) // 80), 1]
+        s, z = ln[:: max(1, len(ln) // 80), 0], ln[:: max(1, len(ln) // 80), 1]
         X = np.outer(np.abs(s), np.cos(phi))
         Y = np.outer(np.abs(s), np.sin(phi))
         Z = np.outer(z, np.ones_like(phi))
@@ -193,13 +200,11 @@ def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
         colour = COLOURS[c % len(COLOURS)]
         if r.occupancy is not None and r.basis.shape[0] == 2 and np.allclose(np.abs(r.basis), np.eye(3)[[0, 2]]):
             grid, o, h = r.occupancy
-            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4,
-                         f"{plain(r.label)}, payload {r.mass:g} kg: {measure_text(r.measure)}")
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, f"{plain(r.label)}, payload {r.mass:g} kg: {measure_text(r.measure)}")
         else:
             step = max(1, len(r.com) // 20000)
             loc = r.com[::step]
-            ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour,
-                       label=f"{plain(r.label)}, payload {r.mass:g} kg")
+            ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour, label=f"{plain(r.label)}, payload {r.mass:g} kg")
     ax.axvline(0.0, color="k", lw=0.6, ls="--", label="thrust axis")
     ax.set_xlabel("x_cm in B [m]")
     ax.set_ylabel("z_cm in B [m]")
@@ -237,8 +242,7 @@ def plot_balanced_workspace(result: BalanceResult, ax=None):
     step = max(1, int(ok.sum()) // 40000)
     ax.scatter(result.ee_body[ok][::step, 0], result.ee_body[ok][::step, 2], s=0.3, color="tab:green", label="CoG balanced")
     if result.fraction_workspace is not None:
-        ax.scatter([], [], s=0, label=f"{100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % "
-                   "of the workspace")
+        ax.scatter([], [], s=0, label=f"{100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % of the workspace")
     ax.set_xlabel("x_B [m]")
     ax.set_ylabel("z_B [m]")
     ax.set_aspect("equal")
@@ -350,8 +354,14 @@ def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, red
     if isinstance(cmap, str) and hi - lo <= 1e-9 * max(1.0, abs(hi)):
         from matplotlib.colors import ListedColormap
 
-        im = ax.imshow(np.where(np.isfinite(best), 1.0, np.nan).T, origin="lower", extent=extent,
-                       cmap=ListedColormap(["tab:cyan"]), alpha=0.6, interpolation="nearest")
+        im = ax.imshow(
+            np.where(np.isfinite(best), 1.0, np.nan).T,
+            origin="lower",
+            extent=extent,
+            cmap=ListedColormap(["tab:cyan"]),
+            alpha=0.6,
+            interpolation="nearest",
+        )
         ax.fill([], [], color="tab:cyan", alpha=0.6, label=f"{label}: {hi:.4g} in every cell (constant)")
         _legend_below(ax)
     else:
@@ -418,6 +428,7 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
 def wrench_set_figure(result: HoverResult, index: int | None = None):
     """2-D sections of the rotors' wrench set through the hover wrench of one configuration (default: the worst)."""
     from scipy.spatial import HalfspaceIntersection, QhullError
+
     W = result.wrench_set
     i = int(np.argmin(result.thrust_margin[0])) if index is None else index
     w0 = result.hover_wrench[i]
@@ -451,6 +462,7 @@ def wrench_set_figure(result: HoverResult, index: int | None = None):
 def capacity_figure(result: CapacityResult):
     """Thesis Fig. 6.46 generalised: best payload per workspace cell and the factor that limits it."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
+
     fig = new_figure((13, 5))
     axs = fig.subplots(1, 2)
     h = result.cell
@@ -469,11 +481,9 @@ def capacity_figure(result: CapacityResult):
     extent = (extent[0] + shift[0], extent[1] + shift[0], extent[2] + shift[1], extent[3] + shift[1])
     im = axs[0].imshow(grid.T, origin="lower", extent=extent, cmap="viridis", interpolation="nearest")
     fig.colorbar(im, ax=axs[0], label="largest payload [kg]")
-    axs[0].set_title(f"payload capacity (reserve {np.round(result.torque_reserve, 3).tolist()} N m); collective {result.m_thrust:.3g} kg",
-                     fontsize=8)
+    axs[0].set_title(f"payload capacity (reserve {np.round(result.torque_reserve, 3).tolist()} N m); collective {result.m_thrust:.3g} kg", fontsize=8)
     cmap = ListedColormap(["tab:blue", "tab:orange", "tab:red", "0.3"])
-    im = axs[1].imshow(lim.T, origin="lower", extent=extent, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4),
-                       interpolation="nearest")
+    im = axs[1].imshow(lim.T, origin="lower", extent=extent, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest")
     fr = result.map_fractions()
     for k, name in enumerate(LIMITS):
         axs[1].fill([], [], color=cmap(k), label=f"{name} ({100 * fr[name]:.1f}%)")
@@ -497,15 +507,16 @@ def opspace_figure(result: OpSpaceMap):
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
     fig = new_figure((16, 4.6))
     axs = fig.subplots(1, 3)
-    panels = [(result.mass_xyz[:, 0], "effective mass along x [kg]", "plasma"),
-              (result.mass_xyz[:, 2], "effective mass along z [kg]", "plasma"),
-              (np.log10(result.condition), "log10 cond(Lambda)", "viridis")]
+    panels = [
+        (result.mass_xyz[:, 0], "effective mass along x [kg]", "plasma"),
+        (result.mass_xyz[:, 2], "effective mass along z [kg]", "plasma"),
+        (np.log10(result.condition), "log10 cond(Lambda)", "viridis"),
+    ]
     for ax, (vals, label, cmap) in zip(axs, panels):
         im = ax.pcolormesh(a0, a1, vals.reshape(g.shape)[sl].T, shading="nearest", cmap=cmap)
         fig.colorbar(im, ax=ax, label=label)
         ax.set_xlabel(g.label(axes[0]))
         ax.set_ylabel(g.label(axes[1]))
     others = ", ".join(f"{g.names[a]} = {g.axes[a][len(g.axes[a]) // 2]:.3g} {g.unit(a)}" for a in free if a not in axes)
-    fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))"
-                 + (f", {others}" if others else ""))
+    fig.suptitle(f"{result.platform_name}: operational-space inertia at the end effector (Thesis (5.47)-(5.52))" + (f", {others}" if others else ""))
     return fig

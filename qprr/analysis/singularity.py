@@ -80,14 +80,16 @@ class SingularityResult:
     def summary(self) -> str:
         g = self.grid
         i = int(np.argmin(self.det_system))
-        lines = [f"singularities of {self.platform_name}: task {self.task!r} rows {list(self.rows)}, generic rank {self.rank}, "
-                 f"length scale {self.length:.4g} m, {g.size} configurations",
-                 f"  manipulability in [{self.manipulability.min():.4g}, {self.manipulability.max():.4g}] m^{self.rank}; "
-                 f"condition number median {np.median(self.condition):.4g}",
-                 f"  singular set: {100 * self.singular.mean():.2f}% of the grid points next to it; "
-                 f"median distance {np.median(self.distance):.4g} (rad or m/length)",
-                 f"  system det(J J^T) (base + arm Jacobian at zero Euler angles): min {self.det_system[i]:.6g} at q_arm = "
-                 f"{np.round(g.configurations(i, i + 1)[0], 4).tolist()}, max {self.det_system.max():.6g}"]
+        lines = [
+            f"singularities of {self.platform_name}: task {self.task!r} rows {list(self.rows)}, generic rank {self.rank}, "
+            f"length scale {self.length:.4g} m, {g.size} configurations",
+            f"  manipulability in [{self.manipulability.min():.4g}, {self.manipulability.max():.4g}] m^{self.rank}; "
+            f"condition number median {np.median(self.condition):.4g}",
+            f"  singular set: {100 * self.singular.mean():.2f}% of the grid points next to it; "
+            f"median distance {np.median(self.distance):.4g} (rad or m/length)",
+            f"  system det(J J^T) (base + arm Jacobian at zero Euler angles): min {self.det_system[i]:.6g} at q_arm = "
+            f"{np.round(g.configurations(i, i + 1)[0], 4).tolist()}, max {self.det_system.max():.6g}",
+        ]
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         return "\n".join(lines)
@@ -234,5 +236,20 @@ def singularity(platform: Platform, options: SingularityOptions | None = None, *
     else:
         dist = np.full(grid.size, np.inf)
         status, reason = Status.OK, "no singular configuration on the grid (distance = inf)"
-    return SingularityResult(platform.name, o.task, grid, tuple(ROW_NAMES[r] for r in rows), length, rank, sig_r, manip, cond,
-                             det_task, det_sys, sing.reshape(-1), dist, status, reason)
+    return SingularityResult(
+        platform.name,
+        o.task,
+        grid,
+        tuple(ROW_NAMES[r] for r in rows),
+        length,
+        rank,
+        sig_r,
+        manip,
+        cond,
+        det_task,
+        det_sys,
+        sing.reshape(-1),
+        dist,
+        status,
+        reason,
+    )

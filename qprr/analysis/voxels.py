@@ -84,8 +84,7 @@ def _shifted(a: np.ndarray, axes: list[int], hi: set[int]) -> np.ndarray:
     return a[tuple(sl)]
 
 
-def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *,
-                   grow_cells: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *, grow_cells: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(corner (m, d), generators (m, k, d), growth E (m,)) of the m grid cells (see the module docstring).
 
     ``valid``: a boolean grid (the grid's shape): only cells whose 2^k corners are all valid are kept.
@@ -234,8 +233,9 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     return Zonotopes(centre, N, offset, half)
 
 
-def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072,
-                  out: np.ndarray | None = None) -> np.ndarray:
+def covered_cells(
+    z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072, out: np.ndarray | None = None
+) -> np.ndarray:
     """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
     (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set)."""
     d = z.centre.shape[1]
@@ -244,10 +244,10 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
     started = out is not None and bool(out.any())
     dims = np.array(shape)
     for s in range(0, z.size, chunk):
-        centre, N, off = z.centre[s:s + chunk], z.normals[s:s + chunk], z.offset[s:s + chunk]
+        centre, N, off = z.centre[s : s + chunk], z.normals[s : s + chunk], z.offset[s : s + chunk]
         low, high = z.corners
-        lo = np.maximum(np.ceil((low[s:s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
-        hi = np.minimum(np.floor((high[s:s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
+        lo = np.maximum(np.ceil((low[s : s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
+        hi = np.minimum(np.floor((high[s : s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
         span = hi - lo + 1
         ok = span[:, 0] > 0
         for k in range(1, d):
@@ -268,7 +268,7 @@ def covered_cells(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, 
         rel = origin + (lo + 0.5) * h - centre
         base = N[:, :, 0] * rel[:, 0:1]
         for k in range(1, d):
-            base += N[:, :, k] * rel[:, k:k + 1]
+            base += N[:, :, k] * rel[:, k : k + 1]
         rep = np.repeat(np.arange(m), counts)
         local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
         offs = []
@@ -371,8 +371,9 @@ def _default_cell(parts: tuple[Zonotopes, ...]) -> float:
     return float(max(np.median(sides), 1e-12))
 
 
-def estimate_measure(points_grid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, revolve: bool = False,
-                     valid=None, return_occupancy: bool = False):
+def estimate_measure(
+    points_grid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, revolve: bool = False, valid=None, return_occupancy: bool = False
+):
     """Measure of the image of a joint grid (see the module docstring).
 
     Parameters
@@ -451,8 +452,7 @@ def occupancy(points: np.ndarray, h: float, bounds: tuple | None = None) -> tupl
 
 def _column_bounds(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(min, max) of each column (a strided reduction per column: faster than numpy's short-axis one)."""
-    return (np.array([float(pts[:, k].min()) for k in range(pts.shape[1])]),
-            np.array([float(pts[:, k].max()) for k in range(pts.shape[1])]))
+    return (np.array([float(pts[:, k].min()) for k in range(pts.shape[1])]), np.array([float(pts[:, k].max()) for k in range(pts.shape[1])]))
 
 
 def boundary_cells(occ: np.ndarray) -> np.ndarray:

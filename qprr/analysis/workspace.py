@@ -139,20 +139,20 @@ class WorkspaceResult:
             if r.collision_free is not None:
                 fm = str(r.free_measure) if r.free_measure is not None else "n/a"
                 fh = f"; under hover {r.free_hover_volume}" if r.free_hover_volume is not None else ""
-                lines.append(f"      collision-free: {int(r.collision_free.sum())} of {r.grid.size} configurations "
-                             f"({100.0 * r.collision_free.mean():.2f}%), in B {fm}{fh} [{r.collision_check}]")
+                lines.append(
+                    f"      collision-free: {int(r.collision_free.sum())} of {r.grid.size} configurations "
+                    f"({100.0 * r.collision_free.mean():.2f}%), in B {fm}{fh} [{r.collision_check}]"
+                )
         if self.collision_note:
             lines.append(f"  {self.collision_note}")
         for i in self.gain:
             g, d = self.gain[i], self.difference[i]
-            lines.append(f"  gain of [0] over [{i}] in B: x{g.value:.4f} +- {g.error:.2g} (+{d[0]:.5g} +- {d[1]:.2g} "
-                         f"{self.regions[0].measure.unit})")
+            lines.append(f"  gain of [0] over [{i}] in B: x{g.value:.4f} +- {g.error:.2g} (+{d[0]:.5g} +- {d[1]:.2g} {self.regions[0].measure.unit})")
             if i in self.gain_hover:
                 gh = self.gain_hover[i]
                 lines.append(f"  gain of [0] over [{i}] under hover: x{gh.value:.4f} +- {gh.error:.2g}")
             if i in self.gain_free:
-                parts = [f"{where} x{g.value:.4f} +- {g.error:.2g}" for where, g in zip(("in B", "under hover"), self.gain_free[i])
-                         if g is not None]
+                parts = [f"{where} x{g.value:.4f} +- {g.error:.2g}" for where, g in zip(("in B", "under hover"), self.gain_free[i]) if g is not None]
                 lines.append(f"  gain of [0] over [{i}], collision-free parts: " + ", ".join(parts))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
@@ -237,7 +237,7 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
         grid = make_grid(platform, n_samples, lk, ranges)
         pts = np.empty((grid.size, 3))
         for start, q in grid.chunks():
-            pts[start:start + len(q)] = chain.frame_position(chain.pose(q), fid)
+            pts[start : start + len(q)] = chain.frame_position(chain.pose(q), fid)
             if progress:
                 progress((i + (start + len(q)) / grid.size * 0.3) / len(sets), f"workspace [{i}] {_label(lk)}")
         region, why = _region(pts, grid, lk, hover, n_shifts, seed)
@@ -257,13 +257,16 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
             diff[i] = (r0.measure.measure - r.measure.measure, float(np.hypot(r0.measure.error, r.measure.error)))
         if r0.hover_volume is not None and r.hover_volume is not None:
             gain_hover[i] = Ratio.of(r0.hover_volume, r.hover_volume)
-        free_gains = tuple(Ratio.of(a, b) if a is not None and b is not None and a.dim == b.dim else None
-                           for a, b in ((r0.free_measure, r.free_measure), (r0.free_hover_volume, r.free_hover_volume)))
+        free_gains = tuple(
+            Ratio.of(a, b) if a is not None and b is not None and a.dim == b.dim else None
+            for a, b in ((r0.free_measure, r.free_measure), (r0.free_hover_volume, r.free_hover_volume))
+        )
         if any(g is not None for g in free_gains):
             gain_free[i] = free_gains
     status = Status.PARTIAL if reasons else Status.OK
-    return WorkspaceResult(platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status,
-                           "; ".join(reasons), note, gain_free)
+    return WorkspaceResult(
+        platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status, "; ".join(reasons), note, gain_free
+    )
 
 
 def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
@@ -279,12 +282,10 @@ def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, 
             measure = None
     if region.hover_volume is not None and free.any():
         try:
-            hover_volume = estimate_measure(region.profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True,
-                                            valid=valid)
+            hover_volume = estimate_measure(region.profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True, valid=valid)
         except InputError:
             hover_volume = None
-    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measure,
-                   free_hover_volume=hover_volume)
+    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measure, free_hover_volume=hover_volume)
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int):
@@ -318,8 +319,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
                 hocc = fine if fine[2] < hocc[2] else hocc
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
-    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc,
-                           outline), why
+    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc, outline), why
 
 
 def hover_profile(pts: np.ndarray, origin: np.ndarray, basis: np.ndarray) -> np.ndarray:

@@ -119,8 +119,7 @@ class LocalBackend(Backend):
     def _new_pool(self) -> cf.ProcessPoolExecutor:
         ctx = multiprocessing.get_context("spawn")
         self._stop = ctx.Event()
-        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker,
-                                      initargs=(os.getpid(), self._stop))
+        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(), self._stop))
 
     def restart(self) -> bool:
         """A new pool in place of a broken one (a worker died: out of memory, killed)."""
@@ -180,8 +179,9 @@ def _dask():
     try:
         import distributed
     except ImportError as exc:
-        raise MissingDependencyError("dask.distributed", "running campaigns on Dask", "pip install 'qprr[dask]' "
-                                     "(or pip install 'dask[distributed]')") from exc
+        raise MissingDependencyError(
+            "dask.distributed", "running campaigns on Dask", "pip install 'qprr[dask]' (or pip install 'dask[distributed]')"
+        ) from exc
     return distributed
 
 
@@ -190,8 +190,17 @@ class _Quiet:
     instead of the client's reconnection tracebacks."""
 
     def __init__(self) -> None:
-        names = ["distributed", "distributed.client", "distributed.utils", "distributed.core", "distributed.comm",
-                 "distributed.batched", "distributed.worker", "distributed.nanny", "distributed.scheduler"]
+        names = [
+            "distributed",
+            "distributed.client",
+            "distributed.utils",
+            "distributed.core",
+            "distributed.comm",
+            "distributed.batched",
+            "distributed.worker",
+            "distributed.nanny",
+            "distributed.scheduler",
+        ]
         names += [n for n in list(logging.Logger.manager.loggerDict) if n.startswith("distributed.")]
         self.levels = {n: logging.getLogger(n).level for n in dict.fromkeys(names)}
         for n in self.levels:
@@ -225,8 +234,9 @@ class DaskBackend(Backend):
                 self.address = scheduler
             else:
                 self.workers = _workers(workers)
-                self._cluster = distributed.LocalCluster(n_workers=self.workers, threads_per_worker=1, processes=True,
-                                                         host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR)
+                self._cluster = distributed.LocalCluster(
+                    n_workers=self.workers, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR
+                )
                 self._client = distributed.Client(self._cluster)
                 self.address = self._cluster.scheduler_address
         except BaseException:

@@ -30,11 +30,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
         spec = CampaignSpec.load(args.spec)
         output = args.output or f"{spec.name}.csv"
         t0 = time.perf_counter()
-        done = run_campaign(spec, output, backend=args.backend, workers=args.workers, scheduler=args.scheduler, fresh=args.fresh,
-                            limit=args.limit, progress=not args.quiet)
+        done = run_campaign(
+            spec,
+            output,
+            backend=args.backend,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            fresh=args.fresh,
+            limit=args.limit,
+            progress=not args.quiet,
+        )
     except ResultsWriteError as exc:
-        print(f"{prog}: error: {exc}; the campaign stopped (no run started after it), the rows saved before are kept: "
-              f"run the same command again once the file can be written", file=sys.stderr)
+        print(
+            f"{prog}: error: {exc}; the campaign stopped (no run started after it), the rows saved before are kept: "
+            f"run the same command again once the file can be written",
+            file=sys.stderr,
+        )
         return 3
     except (QprrError, KeyError, ValueError) as exc:
         return _fail(prog, f"{type(exc).__name__}: {exc}")
@@ -43,8 +54,10 @@ def _cmd_run(args: argparse.Namespace) -> int:
     ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
     lost = f", {done.lost} lost (not saved)" if done.lost else ""
     lost += f", stopped by {done.interrupted}" if done.interrupted else ""
-    print(f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
-          f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}")
+    print(
+        f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
+        f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}"
+    )
     if done.interrupted or done.lost:
         return 1
     if args.report:
@@ -59,8 +72,16 @@ def _cmd_report(args: argparse.Namespace) -> int:
     from .report import report
 
     try:
-        text, figures = report(args.results, args.out, by=args.by, metrics=args.metric, heatmap=args.heatmap, curve=args.curve,
-                               scatter=args.scatter, markdown=args.markdown)
+        text, figures = report(
+            args.results,
+            args.out,
+            by=args.by,
+            metrics=args.metric,
+            heatmap=args.heatmap,
+            curve=args.curve,
+            scatter=args.scatter,
+            markdown=args.markdown,
+        )
     except (QprrError, KeyError, ValueError) as exc:
         return _fail("qprr campaign report", f"{type(exc).__name__}: {exc}")
     print(text)
@@ -81,8 +102,10 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _fail("qprr campaign show", f"{type(exc).__name__}: {exc}")
     target = f"scenario {spec.scenario}" if spec.scenario else f"callable {spec.callable}"
     given = "" if spec.platform_label == platform.name else f" ({spec.platform_label})"
-    print(f"{spec.name}: {target} on {platform.name}{given}; {spec.n_points} grid points x {spec.samples} samples = "
-          f"{spec.n_runs} runs; seed {spec.seed}; fingerprint {spec.fingerprint}")
+    print(
+        f"{spec.name}: {target} on {platform.name}{given}; {spec.n_points} grid points x {spec.samples} samples = "
+        f"{spec.n_runs} runs; seed {spec.seed}; fingerprint {spec.fingerprint}"
+    )
     print(f"  metrics: {', '.join(metric_columns(spec.metrics, platform.xi_names, spec.extras))}")
     for run in (spec.run(i) for i in range(min(args.first, spec.n_runs))):
         print(f"  run {run.index}: seed {run.seed}, " + ", ".join(f"{k}={v!r}" for k, v in run.params.items()))
@@ -91,15 +114,22 @@ def _cmd_show(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add ``campaign run | report | show`` to the ``qprr`` command line."""
-    p = sub.add_parser("campaign", help="Monte-Carlo campaigns: many seeded runs, locally or on Dask, with robustness tables",
-                       description="Monte-Carlo campaigns (qprr.campaign): run a specification, report its results.")
+    p = sub.add_parser(
+        "campaign",
+        help="Monte-Carlo campaigns: many seeded runs, locally or on Dask, with robustness tables",
+        description="Monte-Carlo campaigns (qprr.campaign): run a specification, report its results.",
+    )
     csub = p.add_subparsers(dest="campaign_command", required=True, parser_class=type(p))
 
     r = csub.add_parser("run", help="run a campaign specification (.toml/.json); resumes an interrupted one")
     r.add_argument("spec", help="campaign specification (.toml or .json), e.g. examples/campaigns/quickstart.toml")
     r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
-    r.add_argument("--backend", default="local", choices=("local", "dask", "inline"),
-                   help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)")
+    r.add_argument(
+        "--backend",
+        default="local",
+        choices=("local", "dask", "inline"),
+        help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)",
+    )
     r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
     r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
     r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
@@ -112,12 +142,19 @@ def register_cli(sub) -> None:
     r.add_argument("results", help="results file (.csv or .parquet) with its .meta.json beside it")
     r.add_argument("--out", default=None, metavar="DIR", help="write summary.md and the figures (PNG) into DIR")
     r.add_argument("--by", nargs="+", default=None, help="group columns (default: controller and the grid parameters)")
-    r.add_argument("--metric", nargs="+", default=None, help="metric columns (default: rmse_position, x_cm_max, saturation, "
-                   "recovery_time when present)")
+    r.add_argument(
+        "--metric", nargs="+", default=None, help="metric columns (default: rmse_position, x_cm_max, saturation, recovery_time when present)"
+    )
     r.add_argument("--heatmap", nargs=2, default=None, metavar=("X", "Y"), help="two swept parameters for the heat maps")
     r.add_argument("--curve", default=None, metavar="X", help="parameter of the success-rate curve (default: every numeric one)")
-    r.add_argument("--scatter", nargs=2, action="append", default=None, metavar=("X", "METRIC"),
-                   help="a scatter plot of METRIC against parameter X, coloured by the first group column (repeatable)")
+    r.add_argument(
+        "--scatter",
+        nargs=2,
+        action="append",
+        default=None,
+        metavar=("X", "METRIC"),
+        help="a scatter plot of METRIC against parameter X, coloured by the first group column (repeatable)",
+    )
     r.add_argument("--markdown", action="store_true", help="print the table as Markdown")
     r.set_defaults(func=_cmd_report)
 

@@ -62,8 +62,9 @@ def metric_columns(groups, names, extras=()) -> tuple[str, ...]:
     return (*out, *extras, "success")
 
 
-def metrics_of(result: SimResult | None, groups, names, extras=(), *, status: str | None = None, reason: str = "",
-               wall_time: float = math.nan, success=None) -> dict[str, object]:
+def metrics_of(
+    result: SimResult | None, groups, names, extras=(), *, status: str | None = None, reason: str = "", wall_time: float = math.nan, success=None
+) -> dict[str, object]:
     """The row of one run: :func:`metric_columns` -> value.
 
     ``result`` may be None (the run raised before simulating); ``status``/``reason`` override
@@ -79,8 +80,12 @@ def metrics_of(result: SimResult | None, groups, names, extras=(), *, status: st
         row.update(status=status or "error", reason=reason, t_end=0.0, wall_time=wall_time)
         return row
     st = status or str(result.status)
-    row.update(status=st, reason=reason or result.reason, wall_time=result.wall_time if math.isnan(wall_time) else wall_time,
-               t_end=float(result.t[-1] + result.control_period) if result.n else 0.0)
+    row.update(
+        status=st,
+        reason=reason or result.reason,
+        wall_time=result.wall_time if math.isnan(wall_time) else wall_time,
+        t_end=float(result.t[-1] + result.control_period) if result.n else 0.0,
+    )
     for g in groups:
         if g == "rmse":
             if st == Status.OK.value:

@@ -28,10 +28,28 @@ from ..errors import InputError, UnknownNameError
 from ..viz import figure_path, new_figure
 from .store import Results, read_results
 
-UNITS = {"rmse_x": "m", "rmse_y": "m", "rmse_z": "m", "rmse_position": "m", "rmse_r0": "m", "x_cm_max": "m",
-         "saturation": "fraction of ticks", "recovery_time": "s", "wall_time": "s", "t_end": "s", "mass": "kg",
-         "model.payload": "kg", "recovery_peak_position": "m", "recovery_peak_angle": "rad", "mass_estimate_error": "kg",
-         "x": "m", "y": "m", "z": "m", "theta2_d": "rad", "noise": "x (6.27) amplitude"}
+UNITS = {
+    "rmse_x": "m",
+    "rmse_y": "m",
+    "rmse_z": "m",
+    "rmse_position": "m",
+    "rmse_r0": "m",
+    "x_cm_max": "m",
+    "saturation": "fraction of ticks",
+    "recovery_time": "s",
+    "wall_time": "s",
+    "t_end": "s",
+    "mass": "kg",
+    "model.payload": "kg",
+    "recovery_peak_position": "m",
+    "recovery_peak_angle": "rad",
+    "mass_estimate_error": "kg",
+    "x": "m",
+    "y": "m",
+    "z": "m",
+    "theta2_d": "rad",
+    "noise": "x (6.27) amplitude",
+}
 
 
 def column(results: Results, name: str) -> np.ndarray:
@@ -110,8 +128,12 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
             x = values[m][idx][ok]
             x = x[~np.isnan(x)]
             if x.size:  # order statistics without interpolation: inf (never recovered) stays inf
-                row[m] = {"median": float(np.median(x) if np.all(np.isfinite(x)) else np.percentile(x, 50, method="nearest")),
-                          "mean": float(np.mean(x)), "p90": float(np.percentile(x, 90, method="nearest")), "max": float(np.max(x))}
+                row[m] = {
+                    "median": float(np.median(x) if np.all(np.isfinite(x)) else np.percentile(x, 50, method="nearest")),
+                    "mean": float(np.mean(x)),
+                    "p90": float(np.percentile(x, 90, method="nearest")),
+                    "max": float(np.max(x)),
+                }
             else:
                 row[m] = None
         rows.append(row)
@@ -196,8 +218,7 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
     return path
 
 
-def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by: str | None = "controller",
-             title: str | None = None) -> Path:
+def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by: str | None = "controller", title: str | None = None) -> Path:
     """Median of ``metric`` (or the success rate, ``metric="success"``) over the grid of ``x`` and ``y``, one panel per ``by`` value."""
     path = figure_path(path)
     xs, ys = column(results, x), column(results, y)
@@ -243,8 +264,15 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
         for i in range(len(yv)):
             for j in range(len(xv)):
                 if np.isfinite(Z[i, j]):
-                    ax.text(j, i, f"{100 * Z[i, j]:.0f}%" if vals is None else _num(Z[i, j]), ha="center", va="center", fontsize=7,
-                            color="w" if norm(Z[i, j]) < 0.5 else "k")
+                    ax.text(
+                        j,
+                        i,
+                        f"{100 * Z[i, j]:.0f}%" if vals is None else _num(Z[i, j]),
+                        ha="center",
+                        va="center",
+                        fontsize=7,
+                        color="w" if norm(Z[i, j]) < 0.5 else "k",
+                    )
     fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric)}")
     fig.suptitle(title or f"{results.spec.get('name', '')}: {'success rate' if vals is None else 'median ' + metric} over {x} x {y}")
     fig.savefig(path, dpi=90, bbox_inches="tight")
@@ -282,8 +310,9 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
     return path
 
 
-def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
-                 log: bool | None = None) -> Path:
+def metric_curve(
+    results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None, log: bool | None = None
+) -> Path:
     """Median of ``metric`` against the swept parameter ``x`` (band: 25th-75th percentile), one curve per ``by`` value.
 
     Completed runs only; ``inf`` values (e.g. never recovered) are drawn at the top edge as crosses."""
@@ -313,7 +342,7 @@ def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "
             lo.append(np.percentile(z, 25, method="nearest") if z.size else np.nan)
             hi.append(np.percentile(z, 75, method="nearest") if z.size else np.nan)
         med, lo, hi = (np.where(np.isposinf(a), np.nan, a) for a in (np.array(med), np.array(lo), np.array(hi)))
-        line, = ax.plot(values, med, "o-", label=str(p) if p is not None else None)
+        (line,) = ax.plot(values, med, "o-", label=str(p) if p is not None else None)
         ax.fill_between(values, lo, hi, color=line.get_color(), alpha=0.15)
         if any(infs):  # a cross per curve at the top edge, staggered so that curves do not hide each other
             any_inf = True
@@ -333,8 +362,9 @@ def metric_curve(results: Results, x: str, metric: str, path, by: str | None = "
     return path
 
 
-def scatter_plot(results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None,
-                 log: bool | None = None) -> Path:
+def scatter_plot(
+    results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None, log: bool | None = None
+) -> Path:
     """``metric`` against any parameter ``x`` (e.g. a random one), one colour per ``by`` value; completed runs."""
     path = figure_path(path)
     xs = np.asarray(column(results, x), dtype=float)
@@ -365,8 +395,9 @@ def _numeric(results: Results, name: str) -> bool:
     return results.table[name].dtype.kind in "fiu"
 
 
-def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None,
-           markdown: bool = False) -> tuple[str, list[Path]]:
+def report(
+    path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None, markdown: bool = False
+) -> tuple[str, list[Path]]:
     """Summary text (and, with ``out``, ``summary.md`` and the figures in that folder); returns (text, figure paths).
 
     Figures: a box plot per metric (per controller, if there is one); a success-rate curve per
@@ -380,9 +411,13 @@ def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=N
     text = format_table(summ, markdown=markdown)
     bounds = res.spec.get("success") or {}
     crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
-    head = (f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}, "
-            f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
-            f"({100 * _success(res).mean():.1f} %){crit}" if len(res) else "no runs")
+    head = (
+        f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}, "
+        f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
+        f"({100 * _success(res).mean():.1f} %){crit}"
+        if len(res)
+        else "no runs"
+    )
     text = head + "\n" + text
     figures: list[Path] = []
     if out is None or not len(res):
@@ -397,7 +432,7 @@ def report(path_or_results, out: str | Path | None = None, *, by=None, metrics=N
         if by_ctrl:
             figures.append(box_plot(res, m, out / f"{stem}-box-{m}.png", by=by_ctrl))
     varying = [p for p in res.params if p != "controller" and _numeric(res, p) and np.unique(res.table[p]).size > 1]
-    for x in ([curve] if curve else varying):
+    for x in [curve] if curve else varying:
         figures.append(success_curve(res, x, out / f"{stem}-success-{x}.png", by=by_ctrl))
     grid = [p for p in res.params if p in res.spec.get("grid", {}) and p != "controller" and _numeric(res, p)]
     if grid:

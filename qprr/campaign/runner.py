@@ -151,9 +151,18 @@ def _stop_backend(be: Backend | None, own: bool, runs: dict, clean: bool) -> Non
         be.close() if clean else be.abort()
 
 
-def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backend = "local", workers: int | None = None,
-                 scheduler: str | None = None, fresh: bool = False, limit: int | None = None, progress: bool = True,
-                 stream=None) -> CampaignRun:
+def run_campaign(
+    spec: CampaignSpec,
+    output: str | Path,
+    *,
+    backend: str | Backend = "local",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    fresh: bool = False,
+    limit: int | None = None,
+    progress: bool = True,
+    stream=None,
+) -> CampaignRun:
     """Run ``spec``, saving rows to ``output`` (.csv or .parquet) as they arrive; resume what is there.
 
     ``backend``: "local" (process pool, default), "dask" (``scheduler`` address or a
@@ -176,9 +185,16 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     names = xi_names_of(spec)
     columns = columns_of(spec, names)
     check_success(spec, names)
-    meta = {"name": spec.name, "fingerprint": spec.fingerprint, "spec": spec.to_dict(), "params": list(param_columns(spec)),
-            "metrics": list(metric_columns(spec.metrics, names, spec.extras)), "names": list(names), "n_runs": spec.n_runs,
-            "kinds": kinds_of(spec, names)}
+    meta = {
+        "name": spec.name,
+        "fingerprint": spec.fingerprint,
+        "spec": spec.to_dict(),
+        "params": list(param_columns(spec)),
+        "metrics": list(metric_columns(spec.metrics, names, spec.extras)),
+        "names": list(names),
+        "n_runs": spec.n_runs,
+        "kinds": kinds_of(spec, names),
+    }
     payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts
     store = ResultStore(output, columns, meta, fresh=fresh)
     todo = [i for i in range(spec.n_runs) if i not in store.done]
@@ -189,16 +205,20 @@ def run_campaign(spec: CampaignSpec, output: str | Path, *, backend: str | Backe
     tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
     bar = StatusProgress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
     if store.dropped and progress:
-        print(f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: "
-              f"its run is done again", file=bar.stream)
+        print(
+            f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: its run is done again",
+            file=bar.stream,
+        )
     try:
         with _Signals():
             try:
                 if todo:
                     be = make_backend(backend, workers, scheduler) if own else backend
                     if progress:
-                        print(f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
-                              file=bar.stream)
+                        print(
+                            f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
+                            file=bar.stream,
+                        )
                     pending = [spec.run(i) for i in todo]
                     while pending:  # retried on a restarted backend while a round saves rows
                         saved_before = tally.executed
@@ -223,14 +243,31 @@ def _finish(spec, store, be, backend, tally: _Tally, wall: float, stream) -> Cam
     saved = len({int(r) for r in results.table["run"]})
     remaining = spec.n_runs - saved
     if stream is not None and tally.interrupted:
-        print(f"campaign {spec.name}: stopped by {tally.interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
-              f"{store.path}; run the same command again to resume", file=stream)
+        print(
+            f"campaign {spec.name}: stopped by {tally.interrupted} after {tally.executed} runs; {saved}/{spec.n_runs} saved in "
+            f"{store.path}; run the same command again to resume",
+            file=stream,
+        )
     if stream is not None and tally.lost:
-        print(f"campaign {spec.name}: {len(tally.lost)} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
-              f"run the same command again to run them", file=stream)
+        print(
+            f"campaign {spec.name}: {len(tally.lost)} runs lost with their worker or scheduler ({tally.lost_reason}), not saved; "
+            f"run the same command again to run them",
+            file=stream,
+        )
     name = be.name if be is not None else backend if isinstance(backend, str) else backend.name
-    return CampaignRun(store.path, tally.executed, tally.skipped, tally.failed, wall, name, results, tally.interrupted, len(tally.lost),
-                       be.describe() if be is not None else "nothing to run", remaining)
+    return CampaignRun(
+        store.path,
+        tally.executed,
+        tally.skipped,
+        tally.failed,
+        wall,
+        name,
+        results,
+        tally.interrupted,
+        len(tally.lost),
+        be.describe() if be is not None else "nothing to run",
+        remaining,
+    )
 
 
 __all__ = ["CampaignRun", "check_success", "run_campaign"]

@@ -73,8 +73,22 @@ NONNEGATIVE = ("t_end", "wall_time", "x_cm_max", "saturation", "recovery_time")
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
 
-_SPEC_KEYS = ("name", "scenario", "callable", "platform", "seed", "samples", "paired", "options", "grid", "random", "metrics",
-              "extras", "success", "description")
+_SPEC_KEYS = (
+    "name",
+    "scenario",
+    "callable",
+    "platform",
+    "seed",
+    "samples",
+    "paired",
+    "options",
+    "grid",
+    "random",
+    "metrics",
+    "extras",
+    "success",
+    "description",
+)
 
 
 def _number(x, what: str) -> float:
@@ -130,7 +144,7 @@ class Distribution:
     def from_mapping(cls, d: Mapping, name: str) -> Distribution:
         """``{dist = "uniform", low = 0.9, high = 1.1}`` (TOML) or the same dict."""
         if not isinstance(d, Mapping):
-            raise InputError(f"random parameter {name!r} must be a table such as {{dist = \"uniform\", low = 0, high = 1}}, got {d!r}")
+            raise InputError(f'random parameter {name!r} must be a table such as {{dist = "uniform", low = 0, high = 1}}, got {d!r}')
         d = dict(d)
         if "dist" not in d:
             raise InputError(f"random parameter {name!r} needs dist = one of {', '.join(DISTRIBUTIONS)}")
@@ -222,8 +236,9 @@ def _check_platform_name(name: str) -> str:
     try:
         parse(name)
     except QprrError:
-        raise UnknownNameError("platform", name, (*valid, "or a (2.1) designation such as 'HEX-RRR'",
-                                                  f"or a URDF with its rotor file: {_TABLE_EXAMPLE}")) from None
+        raise UnknownNameError(
+            "platform", name, (*valid, "or a (2.1) designation such as 'HEX-RRR'", f"or a URDF with its rotor file: {_TABLE_EXAMPLE}")
+        ) from None
     return name
 
 
@@ -239,8 +254,10 @@ def _platform_file(table: Mapping, key: str, suffixes: tuple[str, ...], base_dir
 def _read_platform_file(table: Mapping, key: str, base_dir: str) -> bytes:
     path = _platform_file(table, key, (), base_dir)
     if not path.is_file():
-        raise InputError(f"platform.{key} = {table[key]!r}: no file {str(path)!r} (paths are relative to the "
-                         f"specification's folder {base_dir!r}): give the file's path")
+        raise InputError(
+            f"platform.{key} = {table[key]!r}: no file {str(path)!r} (paths are relative to the "
+            f"specification's folder {base_dir!r}): give the file's path"
+        )
     return path.read_bytes()
 
 
@@ -255,18 +272,25 @@ def _check_platform_table(table: Mapping, base_dir: str) -> dict:
         out[key] = table[key]
     if "ee_frame" in table:
         if not isinstance(table["ee_frame"], str) or not table["ee_frame"]:
-            raise InputError(f"platform.ee_frame must be a frame name of the URDF (a string), got {table['ee_frame']!r}; "
-                             f"leave it out for the last frame of the arm")
+            raise InputError(
+                f"platform.ee_frame must be a frame name of the URDF (a string), got {table['ee_frame']!r}; "
+                f"leave it out for the last frame of the arm"
+            )
         out["ee_frame"] = table["ee_frame"]
     digests = table.get("sha256")
     if digests is None:  # read the files now: their content is part of the specification
         digests = {}
         for key in ("urdf", "rotors"):
             digests[key] = hashlib.sha256(_read_platform_file(table, key, base_dir)).hexdigest()
-    if not isinstance(digests, Mapping) or set(digests) != {"urdf", "rotors"} or not all(
-            isinstance(v, str) and len(v) == 64 and all(c in "0123456789abcdef" for c in v) for v in digests.values()):
-        raise InputError(f"platform.sha256 must be {{urdf = HEX, rotors = HEX}} (64 hex digits each, the files' SHA-256), "
-                         f"got {digests!r}: leave it out and it is computed from the files")
+    if (
+        not isinstance(digests, Mapping)
+        or set(digests) != {"urdf", "rotors"}
+        or not all(isinstance(v, str) and len(v) == 64 and all(c in "0123456789abcdef" for c in v) for v in digests.values())
+    ):
+        raise InputError(
+            f"platform.sha256 must be {{urdf = HEX, rotors = HEX}} (64 hex digits each, the files' SHA-256), "
+            f"got {digests!r}: leave it out and it is computed from the files"
+        )
     out["sha256"] = {"urdf": digests["urdf"], "rotors": digests["rotors"]}
     return out
 
@@ -276,8 +300,10 @@ def _check_platform(value, base_dir: str) -> str | dict:
         return _check_platform_name(value)
     if isinstance(value, Mapping):
         return _check_platform_table(value, base_dir)
-    raise InputError(f"platform must be a name (one of {', '.join(platform_names())} or a (2.1) designation such as "
-                     f"'HEX-RRR') or a table {_TABLE_EXAMPLE}, got {value!r}")
+    raise InputError(
+        f"platform must be a name (one of {', '.join(platform_names())} or a (2.1) designation such as "
+        f"'HEX-RRR') or a table {_TABLE_EXAMPLE}, got {value!r}"
+    )
 
 
 def toml_loads(text: str, what: str) -> dict:
@@ -319,7 +345,7 @@ class CampaignSpec:
         if not isinstance(self.name, str) or not self.name or any(c in self.name for c in "/\\"):
             raise InputError(f"campaign name must be a non-empty string without slashes, got {self.name!r}")
         if (self.scenario is None) == (self.callable is None):
-            raise InputError("a campaign needs exactly one target: scenario = NAME or callable = \"module:function\"")
+            raise InputError('a campaign needs exactly one target: scenario = NAME or callable = "module:function"')
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise InputError(f"seed must be an integer >= 0, got {self.seed!r}")
         if isinstance(self.samples, bool) or not isinstance(self.samples, int) or self.samples < 1:
@@ -350,8 +376,9 @@ class CampaignSpec:
         object.__setattr__(self, "success", {k: _number(v, f"success bound of {k!r}") for k, v in self.success.items()})
         for k, bound in self.success.items():
             if bound < 0 and (k in NONNEGATIVE or k.startswith("rmse_")):
-                raise InputError(f"[success] {k} = {bound!r}: no run can meet it ({k} is >= 0 for every run, "
-                                 f"a success needs {k} <= the bound): give a bound >= 0")
+                raise InputError(
+                    f"[success] {k} = {bound!r}: no run can meet it ({k} is >= 0 for every run, a success needs {k} <= the bound): give a bound >= 0"
+                )
         seen: dict[str, str] = {}
         for where in ("options", "grid", "random"):
             for k in getattr(self, where):
@@ -365,12 +392,12 @@ class CampaignSpec:
         if self.scenario is not None:
             self._check_scenario()
         elif not isinstance(self.callable, str) or ":" not in self.callable:
-            raise InputError(f"callable must be \"package.module:function\" or \"file.py:function\", got {self.callable!r}")
+            raise InputError(f'callable must be "package.module:function" or "file.py:function", got {self.callable!r}')
         # every model-error combination must be valid (fails here, not in a worker)
         for k, values in self.grid.items():
             if k.startswith(MODEL_PREFIX):
                 for v in values:
-                    ModelError(**{k[len(MODEL_PREFIX):]: v})
+                    ModelError(**{k[len(MODEL_PREFIX) :]: v})
 
     def _check_scenario(self) -> None:
         from ..scenarios import SCENARIOS
@@ -378,16 +405,20 @@ class CampaignSpec:
         sc = SCENARIOS[self.scenario]  # UnknownNameError lists the scenarios
         if self.platform != "q-prr" and sc.platforms is not None and self.platform not in sc.platforms:
             anywhere = ", ".join(n for n, x in SCENARIOS.items() if x.platforms is None)
-            raise InputError(f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform = {self.platform_label!r}: "
-                             f"choose a scenario for any platform ({anywhere}) or one of its platforms")
+            raise InputError(
+                f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform = {self.platform_label!r}: "
+                f"choose a scenario for any platform ({anywhere}) or one of its platforms"
+            )
         for k in self.parameter_names:
             if k in ("controller", "seed") or k.startswith(MODEL_PREFIX):
                 continue
             if k not in sc.options:
                 raise UnknownNameError(f"option of scenario {sc.name!r}", k, ("controller", "seed", *MODEL_PARAMS, *sc.options))
         if any(k.startswith(MODEL_PREFIX) for k in self.parameter_names) and not sc.takes_plant:
-            raise InputError(f"scenario {sc.name!r} cannot fly a perturbed plant: model.* parameters need one of "
-                             f"{', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}")
+            raise InputError(
+                f"scenario {sc.name!r} cannot fly a perturbed plant: model.* parameters need one of "
+                f"{', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}"
+            )
         if "seed" in self.parameter_names and "seed" not in sc.options:
             raise InputError(f"scenario {sc.name!r} takes no seed")
         for c in self._values("controller"):
@@ -423,9 +454,11 @@ class CampaignSpec:
             data = _read_platform_file(self.platform, key, self.base_dir)
             digest = hashlib.sha256(data).hexdigest()
             if digest != self.platform["sha256"][key]:
-                raise InputError(f"platform.{key} = {self.platform[key]!r}: the file changed (sha256 {digest[:12]}..., "
-                                 f"the specification's {self.platform['sha256'][key][:12]}...): load the specification again "
-                                 f"(a new fingerprint: a new campaign) or restore the file")
+                raise InputError(
+                    f"platform.{key} = {self.platform[key]!r}: the file changed (sha256 {digest[:12]}..., "
+                    f"the specification's {self.platform['sha256'][key][:12]}...): load the specification again "
+                    f"(a new fingerprint: a new campaign) or restore the file"
+                )
             try:
                 out[key] = data.decode()
             except UnicodeDecodeError as exc:
@@ -482,9 +515,17 @@ class CampaignSpec:
         out = {"name": self.name}
         out["scenario" if self.scenario is not None else "callable"] = self.scenario if self.scenario is not None else self.callable
         platform = self.platform if isinstance(self.platform, str) else {**self.platform, "sha256": dict(self.platform["sha256"])}
-        out.update(platform=platform, seed=self.seed, samples=self.samples, options=dict(self.options),
-                   grid={k: list(v) for k, v in self.grid.items()}, random={k: d.to_dict() for k, d in self.random.items()},
-                   metrics=list(self.metrics), extras=list(self.extras), success=dict(self.success))
+        out.update(
+            platform=platform,
+            seed=self.seed,
+            samples=self.samples,
+            options=dict(self.options),
+            grid={k: list(v) for k, v in self.grid.items()},
+            random={k: d.to_dict() for k, d in self.random.items()},
+            metrics=list(self.metrics),
+            extras=list(self.extras),
+            success=dict(self.success),
+        )
         if self.paired:
             out["paired"] = True
         if self.description:
@@ -541,5 +582,5 @@ def model_error(params: Mapping[str, object]) -> ModelError | None:
     """The :class:`ModelError` of a run's ``model.*`` parameters (None if it has none)."""
     if not isinstance(params, Mapping):
         raise InputError(f"params must be a mapping of parameter name -> value, got {type(params).__name__}")
-    kw = {k[len(MODEL_PREFIX):]: v for k, v in params.items() if k.startswith(MODEL_PREFIX)}
+    kw = {k[len(MODEL_PREFIX) :]: v for k, v in params.items() if k.startswith(MODEL_PREFIX)}
     return ModelError(**kw) if kw else None

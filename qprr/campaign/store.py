@@ -198,8 +198,13 @@ class ResultStore:
     """
 
     def __init__(self, path: str | Path, columns: tuple[str, ...], meta: dict, *, fresh: bool = False) -> None:
-        if isinstance(columns, str) or not isinstance(columns, (list, tuple)) or not columns or \
-                not all(isinstance(c, str) and c for c in columns) or len(set(columns)) != len(columns):
+        if (
+            isinstance(columns, str)
+            or not isinstance(columns, (list, tuple))
+            or not columns
+            or not all(isinstance(c, str) and c for c in columns)
+            or len(set(columns)) != len(columns)
+        ):
             raise InputError(f"columns must be a non-empty sequence of distinct column names, got {columns!r}")
         if CHECK in columns or "run" not in columns:
             raise InputError(f"columns must include 'run' (the key of a row) and not {CHECK!r} (the checksum), got {columns!r}")
@@ -227,14 +232,18 @@ class ResultStore:
         if self.path.exists() and not fresh:
             old = read_meta(self.path)
             if old.get("fingerprint") != meta.get("fingerprint"):
-                raise InputError(f"{str(self.path)!r} holds results of another specification (fingerprint {old.get('fingerprint')!r}, "
-                                 f"this one {meta.get('fingerprint')!r}{_spec_difference(old.get('spec'), meta.get('spec'))}): "
-                                 f"choose another output or start afresh (--fresh)")
+                raise InputError(
+                    f"{str(self.path)!r} holds results of another specification (fingerprint {old.get('fingerprint')!r}, "
+                    f"this one {meta.get('fingerprint')!r}{_spec_difference(old.get('spec'), meta.get('spec'))}): "
+                    f"choose another output or start afresh (--fresh)"
+                )
             if list(old["columns"]) != list(columns):
                 raise InputError(f"{str(self.path)!r} has other columns than this campaign's: choose another output or --fresh")
             if old["format_version"] != META_VERSION:
-                raise InputError(f"{str(self.path)!r} was written in format {old['format_version']} (a cut record could corrupt it); "
-                                 f"qprr reads it (qprr campaign report) but resumes only format {META_VERSION}: --fresh or another output")
+                raise InputError(
+                    f"{str(self.path)!r} was written in format {old['format_version']} (a cut record could corrupt it); "
+                    f"qprr reads it (qprr campaign report) but resumes only format {META_VERSION}: --fresh or another output"
+                )
             if not self.parquet:
                 self.dropped = _writes(self.path, _drop_incomplete, self.path)
             table = read_results(self.path).table  # every row validated: a bad one refuses the resume
@@ -401,13 +410,20 @@ def _spec_difference(old, new) -> str:
     parts = []
     for k in keys:
         o, n = old.get(k), new.get(k)
-        if k == "platform" and isinstance(o, dict) and isinstance(n, dict) and isinstance(o.get("sha256"), dict) \
-                and isinstance(n.get("sha256"), dict):
+        if (
+            k == "platform"
+            and isinstance(o, dict)
+            and isinstance(n, dict)
+            and isinstance(o.get("sha256"), dict)
+            and isinstance(n.get("sha256"), dict)
+        ):
             changed = [f for f in ("urdf", "rotors") if o["sha256"].get(f) != n["sha256"].get(f)]
             same_paths = all(o.get(f) == n.get(f) for f in ("urdf", "rotors", "ee_frame"))
             if changed and same_paths:
-                parts += [f"the content of platform.{f} = {n.get(f)!r} (sha256 {str(o['sha256'].get(f))[:12]}... -> "
-                          f"{str(n['sha256'].get(f))[:12]}...)" for f in changed]
+                parts += [
+                    f"the content of platform.{f} = {n.get(f)!r} (sha256 {str(o['sha256'].get(f))[:12]}... -> {str(n['sha256'].get(f))[:12]}...)"
+                    for f in changed
+                ]
                 continue
         parts.append(k)
     return f"; it differs in {', '.join(parts)}" if parts else ""
@@ -426,8 +442,9 @@ def _campaign_spec(meta: dict, mp: Path):
     except (QprrError, TypeError, ValueError) as exc:
         raise ResultsFileError(f"{str(mp)!r}: key 'spec' is not a valid campaign specification ({exc}): {_FIX}") from exc
     if fingerprint != meta["fingerprint"]:
-        raise ResultsFileError(f"{str(mp)!r}: its 'spec' has fingerprint {fingerprint!r}, not the {meta['fingerprint']!r} "
-                               f"it records (the file was edited): {_FIX}")
+        raise ResultsFileError(
+            f"{str(mp)!r}: its 'spec' has fingerprint {fingerprint!r}, not the {meta['fingerprint']!r} it records (the file was edited): {_FIX}"
+        )
     _BY_FINGERPRINT[fingerprint] = spec
     return spec
 
@@ -475,8 +492,10 @@ class _Rows:
         """Validate one row (``checksum_ok``: the verdict of its checksum, None where rows have none) and keep it."""
         if len(fields) != len(self.columns):
             extra = 0 if checksum_ok is None else 1
-            raise ResultsFileError(f"{where}: {len(fields) + extra} fields where the header has {len(self.columns) + extra} "
-                                   f"({', '.join(self.columns)}{', ' + CHECK if extra else ''}): {_FIX}")
+            raise ResultsFileError(
+                f"{where}: {len(fields) + extra} fields where the header has {len(self.columns) + extra} "
+                f"({', '.join(self.columns)}{', ' + CHECK if extra else ''}): {_FIX}"
+            )
         for c, k, f in zip(self.columns, self.kinds, fields):
             self._check(where, c, k, f)
         if checksum_ok is False:
@@ -507,7 +526,7 @@ def _parse(raw: bytes) -> tuple[list[str], bool]:
     """Fields and checksum verdict of one record (the bytes of a line without its newline)."""
     i = raw.rfind(b",")
     try:
-        ok = i >= 0 and len(raw) - i - 1 == 8 and zlib.crc32(raw[:i + 1]) == int(raw[i + 1:], 16)
+        ok = i >= 0 and len(raw) - i - 1 == 8 and zlib.crc32(raw[: i + 1]) == int(raw[i + 1 :], 16)
     except ValueError:
         ok = False
     body = raw[:i] if i >= 0 else raw
@@ -526,8 +545,9 @@ def _csv_rows(path: Path, rows: _Rows) -> None:
         return
     header = ",".join((*rows.columns, CHECK)).encode()
     if lines[0] != header:
-        raise ResultsFileError(f"{str(path)!r}, line 1: header {lines[0].decode(errors='replace')!r} differs from its metadata's "
-                               f"columns ({header.decode()!r}): {_FIX}")
+        raise ResultsFileError(
+            f"{str(path)!r}, line 1: header {lines[0].decode(errors='replace')!r} differs from its metadata's columns ({header.decode()!r}): {_FIX}"
+        )
     for n, raw in enumerate(lines[1:-1], start=2):
         fields, ok = _parse(raw)
         rows.add(f"{str(path)!r}, line {n}", fields, ok)
@@ -650,5 +670,6 @@ def read_results(path: str | Path) -> Results:
             table[c] = cols[c]
     else:
         table = np.empty(0, dtype=[(c, float) for c in columns])
-    return Results(table, tuple(meta.get("params", ())), tuple(meta.get("metrics", ())), meta.get("spec", {}),
-                   tuple(meta.get("names", ())), path, meta)
+    return Results(
+        table, tuple(meta.get("params", ())), tuple(meta.get("metrics", ())), meta.get("spec", {}), tuple(meta.get("names", ())), path, meta
+    )

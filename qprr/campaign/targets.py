@@ -31,8 +31,7 @@ def scale_bandwidth(gains, group: str, s: float, n_xi: int):
     s = as_real(s, f"bandwidth.{group}", positive=True)
     n_xi = as_int(n_xi, "n_xi", lo=6)
     if not all(len(getattr(gains, k, ())) == n_xi for k in ("kp", "kd", "ki")) or not dataclasses.is_dataclass(gains):
-        raise InputError(f"gains must be IDCGains or MFCGains with explicit vectors kp, kd, ki of n_xi = {n_xi} entries, "
-                         f"got {type(gains).__name__}")
+        raise InputError(f"gains must be IDCGains or MFCGains with explicit vectors kp, kd, ki of n_xi = {n_xi} entries, got {type(gains).__name__}")
     idx = _GROUPS[group] if _GROUPS[group] is not None else tuple(range(6, n_xi))
     changes = {}
     for name, power in (("kp", 2), ("kd", 1), ("ki", 3)):

@@ -46,16 +46,22 @@ def load_platform(name: str | Mapping, files: Mapping[str, str] | None = None) -
             raise InputError(f"platform name {name!r} takes no files, got files for {sorted(files)}: files go with a table")
         return load(name) if name in NAMES else build(name)
     if not isinstance(name, Mapping) or not isinstance(files, Mapping) or set(files) != {"urdf", "rotors"}:
-        raise InputError(f"name must be a platform name or a table {{urdf, rotors, ee_frame}} with files = {{urdf: text, "
-                         f"rotors: text}}, got name={name!r}, files={None if files is None else sorted(files)}")
+        raise InputError(
+            f"name must be a platform name or a table {{urdf, rotors, ee_frame}} with files = {{urdf: text, "
+            f"rotors: text}}, got name={name!r}, files={None if files is None else sorted(files)}"
+        )
     platform = name
     rotors = toml_loads(files["rotors"], f"platform.rotors = {platform['rotors']!r}")
     try:
-        return from_urdf(files["urdf"], rotors, ee_frame=platform.get("ee_frame"),
-                         provenance={"model": str(platform["urdf"]), "rotors": str(platform["rotors"])})
+        return from_urdf(
+            files["urdf"], rotors, ee_frame=platform.get("ee_frame"), provenance={"model": str(platform["urdf"]), "rotors": str(platform["rotors"])}
+        )
     except QprrError as exc:  # the file's own error, prefixed with the specification's key
-        raise InputError(f"platform = {{urdf = {platform['urdf']!r}, rotors = {platform['rotors']!r}"
-                        + (f", ee_frame = {platform['ee_frame']!r}" if "ee_frame" in platform else "") + f"}}: {exc}") from exc
+        raise InputError(
+            f"platform = {{urdf = {platform['urdf']!r}, rotors = {platform['rotors']!r}"
+            + (f", ee_frame = {platform['ee_frame']!r}" if "ee_frame" in platform else "")
+            + f"}}: {exc}"
+        ) from exc
 
 
 def platform_of(spec: CampaignSpec) -> Platform:
@@ -169,10 +175,15 @@ def execute(ctx: Context, run: Run) -> dict[str, object]:
         if not isinstance(result, SimResult):
             result, status, reason = None, "error", f"the target returned {type(result).__name__}, not a SimResult"
         elif tuple(result.names) != tuple(ctx.names):  # its errors would be lost in the campaign's columns
-            result, status, reason = None, "error", (
-                f"the target flew {result.platform or 'a platform'} (coordinates {', '.join(result.names)}), not the "
-                f"campaign's platform = {spec.platform_label!r} (coordinates {', '.join(ctx.names)}): set platform in the "
-                f"specification to the one the target flies, and take it as the target's third argument")
+            result, status, reason = (
+                None,
+                "error",
+                (
+                    f"the target flew {result.platform or 'a platform'} (coordinates {', '.join(result.names)}), not the "
+                    f"campaign's platform = {spec.platform_label!r} (coordinates {', '.join(ctx.names)}): set platform in the "
+                    f"specification to the one the target flies, and take it as the target's third argument"
+                ),
+            )
     except QprrError as err:
         result = getattr(err, "result", None)
         status = None if result is not None else "failed"
@@ -182,8 +193,7 @@ def execute(ctx: Context, run: Run) -> dict[str, object]:
     wall = time.perf_counter() - t0
     row: dict[str, object] = {"run": run.index, "seed": run.seed}
     row.update(params_row(spec, run.params))
-    row.update(metrics_of(result, spec.metrics, ctx.names, spec.extras, status=status, reason=reason, wall_time=wall,
-                          success=spec.success))
+    row.update(metrics_of(result, spec.metrics, ctx.names, spec.extras, status=status, reason=reason, wall_time=wall, success=spec.success))
     return row
 
 

@@ -65,15 +65,18 @@ def check_reset(controller, state, ref, dt) -> float:
         raise InputError(f"ref must be a qprr.control.Reference, got {type(ref).__name__}")
     platform = controller.platform
     if platform is not None and (state.n_arm != platform.n_arm or np.shape(ref.xi) != (platform.n_xi,)):
-        raise InputError(f"state and ref must be of the controller's platform ({platform.n_xi} thesis coordinates), "
-                         f"got a state of {6 + state.n_arm} and a reference of shape {np.shape(ref.xi)}")
+        raise InputError(
+            f"state and ref must be of the controller's platform ({platform.n_xi} thesis coordinates), "
+            f"got a state of {6 + state.n_arm} and a reference of shape {np.shape(ref.xi)}"
+        )
     return as_real(dt, "dt", positive=True, unit="s")
 
 
 def not_reset(controller) -> NotResetError:
     """The error of a controller used before :meth:`Controller.reset` gave it its control period."""
-    return NotResetError(f"{type(controller).__name__}.dt (the control period) is not set: call reset(state, ref, dt) "
-                         f"first (qprr.sim.simulate does it before the run)")
+    return NotResetError(
+        f"{type(controller).__name__}.dt (the control period) is not set: call reset(state, ref, dt) first (qprr.sim.simulate does it before the run)"
+    )
 
 
 class Controller(ABC):

@@ -41,8 +41,7 @@ from .inverse_dynamics import IDCGains, InverseDynamicsController
 ARM_GRAVITY = ("level", "measured")
 
 
-def fixed_base_inverse_dynamics(arm_model: pin.Model, data: pin.Data, q_arm, q_arm_dot, q_arm_ddot,
-                                gravity_base=None) -> np.ndarray:
+def fixed_base_inverse_dynamics(arm_model: pin.Model, data: pin.Data, q_arm, q_arm_dot, q_arm_ddot, gravity_base=None) -> np.ndarray:
     """u = B(q) q_ddot + C(q, q_dot) q_dot + G(q) of a fixed-base arm, Thesis (5.53) (RNEA).
 
     ``gravity_base`` (3,) [m/s^2]: the gravity vector in the base frame (default the model's,
@@ -104,8 +103,9 @@ class DecoupledController(Controller):
     name = "decoupled"
     output = "pinocchio"
 
-    def __init__(self, platform: Platform, gains: IDCGains | None = None, *, arm_gravity: str = "level",
-                 tilt: str | None = None, realizable: bool = True) -> None:
+    def __init__(
+        self, platform: Platform, gains: IDCGains | None = None, *, arm_gravity: str = "level", tilt: str | None = None, realizable: bool = True
+    ) -> None:
         if not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         if arm_gravity not in ARM_GRAVITY:
@@ -165,8 +165,13 @@ def lock_arm(platform: Platform, q_arm=None, *, name: str | None = None) -> Plat
         q[7:] = platform.check_arm_limits(q_arm)
     model = pin.buildReducedModel(platform.model, [j.joint_id for j in platform.arm], q)
     ee_name = platform.model.frames[platform.ee_frame].name
-    return from_model(model, platform.rotors, ee_frame=ee_name, name=name or f"{platform.name}-locked",
-                      provenance={**platform.provenance, "arm": f"locked at {q[7:].tolist()}"})
+    return from_model(
+        model,
+        platform.rotors,
+        ee_frame=ee_name,
+        name=name or f"{platform.name}-locked",
+        provenance={**platform.provenance, "arm": f"locked at {q[7:].tolist()}"},
+    )
 
 
 __all__ = ["ARM_GRAVITY", "DecoupledController", "fixed_base_inverse_dynamics", "lock_arm"]

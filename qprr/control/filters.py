@@ -19,6 +19,7 @@ from ..validation import as_int, as_real
 if TYPE_CHECKING:
     from .base import Reference
 
+
 def _filter_args(omega, max_tilt, uz_min) -> tuple[float, float, float]:
     """(omega [rad/s] > 0, max_tilt in (0, pi/2) [rad], uz_min >= 0 [N]) of the tilt references, checked."""
     omega = as_real(omega, "omega", positive=True, unit="rad/s")

@@ -62,8 +62,9 @@ class ImpedanceGains:
         for name in ("M_base", "D_base", "K_base", "M_arm", "D_arm", "K_arm"):
             v = np.atleast_1d(as_array(getattr(self, name), f"impedance {name}"))
             if (name.endswith("base") and v.shape != (4,)) or v.ndim != 1 or not np.all(np.isfinite(v) & (v > 0.0)):
-                raise InputError(f"impedance {name} must be {'4' if name.endswith('base') else 'n_arm (or 1)'} finite numbers > 0, "
-                                 f"got {getattr(self, name)!r}")
+                raise InputError(
+                    f"impedance {name} must be {'4' if name.endswith('base') else 'n_arm (or 1)'} finite numbers > 0, got {getattr(self, name)!r}"
+                )
 
     def arm(self, n_arm: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(M, D, K) of the arm filter for ``n_arm`` joints."""
@@ -151,10 +152,17 @@ class ImpedanceController(LayeredIDC):
 
     name = "impedance"
 
-    def __init__(self, platform: Platform, gains: IDCGains | None = None, impedance: ImpedanceGains | None = None, *,
-                 ee_sensor: Callable[[float], np.ndarray] | None = None,
-                 base_sensor: Callable[[float], np.ndarray] | None = None,
-                 compensate: bool = True, limit_margin: float = 1e-3) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        gains: IDCGains | None = None,
+        impedance: ImpedanceGains | None = None,
+        *,
+        ee_sensor: Callable[[float], np.ndarray] | None = None,
+        base_sensor: Callable[[float], np.ndarray] | None = None,
+        compensate: bool = True,
+        limit_margin: float = 1e-3,
+    ) -> None:
         check_platform(platform)
         self.impedance = ImpedanceGains() if impedance is None else impedance
         if not isinstance(self.impedance, ImpedanceGains):
@@ -205,4 +213,4 @@ class ImpedanceController(LayeredIDC):
         """Logged t, base deflection Delta_eta (m, 4), arm deflection Delta_q (m, n_arm), u_e (m, 6 + n_arm)."""
         n_arm, n_xi = self.platform.n_arm, self.platform.n_xi
         a = np.array(self.log) if self.log else np.zeros((0, 5 + n_arm + n_xi))
-        return {"t": a[:, 0], "delta_eta": a[:, 1:5], "delta_q": a[:, 5:5 + n_arm], "u_e": a[:, 5 + n_arm:]}
+        return {"t": a[:, 0], "delta_eta": a[:, 1:5], "delta_q": a[:, 5 : 5 + n_arm], "u_e": a[:, 5 + n_arm :]}

@@ -113,12 +113,12 @@ class IDCGains:
         return len(self.kp)
 
     @classmethod
-    def from_groups(cls, n_arm: int, position=(4.0, 4.0, 0.0), attitude=(300.0, 30.0, 1000.0), arm=(36.0, 12.0, 0.0),
-                    **kwargs) -> IDCGains:
+    def from_groups(cls, n_arm: int, position=(4.0, 4.0, 0.0), attitude=(300.0, 30.0, 1000.0), arm=(36.0, 12.0, 0.0), **kwargs) -> IDCGains:
         """Gains from (k_P, k_D, k_I) per group: ``position`` (x, y, z), ``attitude`` (phi, theta, psi), ``arm``.
 
         Each group entry may be a number (all coordinates of the group) or a tuple per coordinate.
         """
+
         def expand(v, n):
             a = np.broadcast_to(as_array(v, "gain"), (n,))
             return tuple(float(x) for x in a)
@@ -150,8 +150,7 @@ class IDCGains:
     def characteristic_polynomials(self, names=None) -> dict[str, np.ndarray]:
         """Closed-loop error polynomial per coordinate under exact linearisation: [1, k_D, k_P, k_I] (or [1, k_D, k_P])."""
         names = names or tuple(f"xi{i}" for i in range(self.n_xi))
-        return {n: (np.array([1.0, kd, kp, ki]) if ki > 0.0 else np.array([1.0, kd, kp]))
-                for n, kp, kd, ki in zip(names, self.kp, self.kd, self.ki)}
+        return {n: (np.array([1.0, kd, kp, ki]) if ki > 0.0 else np.array([1.0, kd, kp])) for n, kp, kd, ki in zip(names, self.kp, self.kd, self.ki)}
 
     def unstable_axes(self, names=None) -> list[str]:
         """Coordinates whose error polynomial is not Hurwitz (Routh: cubic needs k_D, k_I > 0 and k_D k_P > k_I; quadratic k_D, k_P > 0)."""
@@ -179,8 +178,17 @@ class InverseDynamicsController(Controller):
 
     name = "idc"
 
-    def __init__(self, platform: Platform, gains: IDCGains | None = None, *, at: str = "measured", realizable: bool = True,
-                 tilt: str | None = None, output: str | None = None, name: str | None = None) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        gains: IDCGains | None = None,
+        *,
+        at: str = "measured",
+        realizable: bool = True,
+        tilt: str | None = None,
+        output: str | None = None,
+        name: str | None = None,
+    ) -> None:
         check_platform(platform)
         if at not in MODEL_STATES:
             raise UnknownNameError("model state", at, MODEL_STATES)
@@ -443,10 +451,17 @@ class LayeredIDC(InverseDynamicsController):
 
     name = "layered-idc"
 
-    def __init__(self, platform: Platform, gains: IDCGains | None = None, *,
-                 ee_sensor: Callable[[float], np.ndarray] | None = None,
-                 base_sensor: Callable[[float], np.ndarray] | None = None, compensate: bool = True,
-                 sensor_filter: float | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        gains: IDCGains | None = None,
+        *,
+        ee_sensor: Callable[[float], np.ndarray] | None = None,
+        base_sensor: Callable[[float], np.ndarray] | None = None,
+        compensate: bool = True,
+        sensor_filter: float | None = None,
+        com_ee=(0.0, 0.0, 0.0),
+    ) -> None:
         check_platform(platform)
         if sensor_filter is not None:
             sensor_filter = as_real(sensor_filter, "sensor_filter", positive=True, unit="rad/s")
@@ -458,8 +473,7 @@ class LayeredIDC(InverseDynamicsController):
         self.base_sensor = base_sensor
         self.compensate = bool(compensate)
         self.pm = PayloadModel(platform, com_ee)
-        super().__init__(platform, gains, tilt="single" if not platform.fully_actuated else "none", realizable=False,
-                         output="xi")
+        super().__init__(platform, gains, tilt="single" if not platform.fully_actuated else "none", realizable=False, output="xi")
         self.model, self.data = self.pm.model, self.pm.data
         self._jdata = platform.model.createData()
         if ee_sensor is not None or base_sensor is not None:
@@ -484,8 +498,7 @@ class LayeredIDC(InverseDynamicsController):
                     self._h_f += (1.0 - math.exp(-self.sensor_filter * self.dt)) * (h - self._h_f)
                 h = self._h_f
             if np.any(h != 0.0):
-                J = pin.computeFrameJacobian(self.platform.model, self._jdata, state.q, self.platform.ee_frame,
-                                             pin.LOCAL_WORLD_ALIGNED)
+                J = pin.computeFrameJacobian(self.platform.model, self._jdata, state.q, self.platform.ee_frame, pin.LOCAL_WORLD_ALIGNED)
                 u_e = state.force_to_xi(J.T @ h)
         if self.base_sensor is not None:
             h_b = as_vector(self.base_sensor(t), 4, "base_sensor(t)")
@@ -515,8 +528,16 @@ class PayloadIDC(LayeredIDC):
     ``mass_log`` records m_hat at every step.
     """
 
-    def __init__(self, platform: Platform, gains: IDCGains | None = None, *, payload: str = "estimate",
-                 known_mass: float = 0.0, estimator: MassEstimator | None = None, com_ee=(0.0, 0.0, 0.0)) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        gains: IDCGains | None = None,
+        *,
+        payload: str = "estimate",
+        known_mass: float = 0.0,
+        estimator: MassEstimator | None = None,
+        com_ee=(0.0, 0.0, 0.0),
+    ) -> None:
         check_platform(platform)
         if payload not in PAYLOAD_MODES:
             raise UnknownNameError("payload mode", payload, PAYLOAD_MODES)

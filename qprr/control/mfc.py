@@ -41,8 +41,7 @@ _PI = math.pi
 _TWO_PI = 2.0 * math.pi
 
 
-def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
-         gains: tuple[float, float, float]) -> float:
+def ipid(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float, gains: tuple[float, float, float]) -> float:
     """Intelligent PID (6.37), sign corrected: u = (-F_est + y*_ddot + K_P e + K_I int e + K_D e_dot) / alpha, e = y* - y.
 
     ``gains`` = (K_P, K_I, K_D) of the coordinate.
@@ -111,10 +110,14 @@ class MFCGains:
                 raise InputError(f"MFC gains {name} have {len(v)} entries, the platform's xi has {n_xi}")
             return v
 
-        return replace(self, kp=fill(self.kp, (60.0,) * n_xi, "kp"), ki=fill(self.ki, (8.0,) * n_xi, "ki"),
-                       kd=fill(self.kd, (35.0,) * n_xi, "kd"),
-                       f_filter=fill(self.f_filter, (0.2, 0.2) + (0.0,) * (n_xi - 2), "f_filter"),
-                       alpha=None if self.alpha is None else fill(self.alpha, (), "alpha"))
+        return replace(
+            self,
+            kp=fill(self.kp, (60.0,) * n_xi, "kp"),
+            ki=fill(self.ki, (8.0,) * n_xi, "ki"),
+            kd=fill(self.kd, (35.0,) * n_xi, "kd"),
+            f_filter=fill(self.f_filter, (0.2, 0.2) + (0.0,) * (n_xi - 2), "f_filter"),
+            alpha=None if self.alpha is None else fill(self.alpha, (), "alpha"),
+        )
 
 
 class ModelFreeController(Controller):

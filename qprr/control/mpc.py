@@ -121,8 +121,12 @@ NATIVE_PROBLEM = mpc_native.self_test()
 """"" when crocoddyl's compiled models read the installed pinocchio correctly (checked once, at import), else what failed."""
 
 if NATIVE_PROBLEM:
-    warnings.warn(f"qprr.control.mpc: crocoddyl's compiled models do not read the installed pinocchio correctly ({mpc_native.versions()}: "
-                  f"{NATIVE_PROBLEM}); the MPC uses its Python models (about 6 times slower).  Fix: {FIX}", RuntimeWarning, stacklevel=2)
+    warnings.warn(
+        f"qprr.control.mpc: crocoddyl's compiled models do not read the installed pinocchio correctly ({mpc_native.versions()}: "
+        f"{NATIVE_PROBLEM}); the MPC uses its Python models (about 6 times slower).  Fix: {FIX}",
+        RuntimeWarning,
+        stacklevel=2,
+    )
 
 INTEGRATORS = ("euler", "rk2", "rk3", "rk4")
 
@@ -228,8 +232,10 @@ def _check_platform(platform: Platform) -> tuple[list, np.ndarray, np.ndarray]:
     limits = np.array(platform.arm_effort_limits, dtype=float)
     bad = [j.name for j, e in zip(platform.arm, limits) if not (math.isfinite(e) and e > 0.0)]
     if bad:
-        raise InputError(f"platform {platform.name!r}: the MPC needs finite effort limits > 0 on every arm joint; "
-                         f"joints {bad} have {[float(limits[platform.arm_names.index(b)]) for b in bad]}")
+        raise InputError(
+            f"platform {platform.name!r}: the MPC needs finite effort limits > 0 on every arm joint; "
+            f"joints {bad} have {[float(limits[platform.arm_names.index(b)]) for b in bad]}"
+        )
     thrusters = []
     for i, r in enumerate(platform.rotors):
         if not math.isfinite(r.f_max):
@@ -264,8 +270,10 @@ def _resolve_backend(requested: str) -> str:
         return "python"
     if NATIVE_PROBLEM:
         if requested == "native":
-            raise InputError(f"MPCSettings.backend = 'native': crocoddyl's compiled models do not read the installed pinocchio "
-                             f"correctly ({mpc_native.versions()}: {NATIVE_PROBLEM}); fix: {FIX}, or use backend='python' or 'auto'")
+            raise InputError(
+                f"MPCSettings.backend = 'native': crocoddyl's compiled models do not read the installed pinocchio "
+                f"correctly ({mpc_native.versions()}: {NATIVE_PROBLEM}); fix: {FIX}, or use backend='python' or 'auto'"
+            )
         return "python"
     return "native"
 
@@ -294,8 +302,7 @@ class MPCController(Controller):
     output = "pinocchio"
     uses_preview = True
 
-    def __init__(self, platform: Platform, trajectory=None, *, weights: MPCWeights | None = None,
-                 settings: MPCSettings | None = None) -> None:
+    def __init__(self, platform: Platform, trajectory=None, *, weights: MPCWeights | None = None, settings: MPCSettings | None = None) -> None:
         self.weights = MPCWeights() if weights is None else weights
         self.settings = MPCSettings() if settings is None else settings
         if not isinstance(self.weights, MPCWeights):
@@ -362,13 +369,25 @@ class MPCController(Controller):
         """Weights and constants of a running (``terminal=False``) or the terminal node (:class:`NodeSpec`)."""
         w, nu, nr = self.weights, self.nu, self.n_rotors
         factor = w.terminal_factor if terminal else 1.0
-        parts = [self._state_weights(factor), factor * np.array([w.ee_position] * 3 + [w.ee_orientation] * 3), np.full(2, factor * w.cog),
-                 np.full(self.model.nv - 6, factor * w.joint_limits)]
+        parts = [
+            self._state_weights(factor),
+            factor * np.array([w.ee_position] * 3 + [w.ee_orientation] * 3),
+            np.full(2, factor * w.cog),
+            np.full(self.model.nv - 6, factor * w.joint_limits),
+        ]
         if not terminal:
             parts.append(np.r_[np.full(nr, w.thrust), np.full(nu - nr, w.arm_acceleration)])
-        return NodeSpec(W=self.W, ee_frame=self.ee_frame, weights=np.concatenate(parts), terminal=terminal, u_scale=self._u_scale,
-                        q_lo=self._q_lo, q_hi=self._q_hi, axis_point=np.array(self.platform.thrust_axis[0]),
-                        axis_basis=np.array(self.platform.thrust_axis_basis))
+        return NodeSpec(
+            W=self.W,
+            ee_frame=self.ee_frame,
+            weights=np.concatenate(parts),
+            terminal=terminal,
+            u_scale=self._u_scale,
+            q_lo=self._q_lo,
+            q_hi=self._q_hi,
+            axis_point=np.array(self.platform.thrust_axis[0]),
+            axis_basis=np.array(self.platform.thrust_axis_basis),
+        )
 
     def _node(self, terminal: bool) -> tuple:
         """One node: (integrated action model, the object whose ``set_reference`` sets its references)."""
@@ -439,8 +458,7 @@ class MPCController(Controller):
         out = []
         for tk in times:  # second-order extrapolation of the current reference
             d = tk - t
-            out.append(self._reference(ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot,
-                                          ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
+            out.append(self._reference(ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot, ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
         return out
 
     @staticmethod
@@ -476,8 +494,9 @@ class MPCController(Controller):
         self.fallback_count = 0
         self.events = []
         self.max_bound_violation = 0.0
-        self._log = {k: [] for k in ("t", "solve_time", "solve_cpu", "step_time", "iterations", "status", "cost", "gap",
-                                     "thrust_margin", "fallback", "u")}
+        self._log = {
+            k: [] for k in ("t", "solve_time", "solve_cpu", "step_time", "iterations", "status", "cost", "gap", "thrust_margin", "fallback", "u")
+        }
 
     @property
     def planned_thrusts(self) -> np.ndarray | None:
@@ -489,11 +508,20 @@ class MPCController(Controller):
     def stats(self) -> MPCStats:
         """Per-solve log of the run so far (:class:`MPCStats`)."""
         L = self._log
-        return MPCStats(backend=self.backend, t=np.array(L["t"]), solve_time=np.array(L["solve_time"]), solve_cpu=np.array(L["solve_cpu"]),
-                        step_time=np.array(L["step_time"]),
-                        iterations=np.array(L["iterations"], dtype=int), status=tuple(L["status"]), cost=np.array(L["cost"]),
-                        gap=np.array(L["gap"]), thrust_margin=np.array(L["thrust_margin"]), fallback=tuple(L["fallback"]),
-                        u=np.array(L["u"]).reshape(-1, self.nu))
+        return MPCStats(
+            backend=self.backend,
+            t=np.array(L["t"]),
+            solve_time=np.array(L["solve_time"]),
+            solve_cpu=np.array(L["solve_cpu"]),
+            step_time=np.array(L["step_time"]),
+            iterations=np.array(L["iterations"], dtype=int),
+            status=tuple(L["status"]),
+            cost=np.array(L["cost"]),
+            gap=np.array(L["gap"]),
+            thrust_margin=np.array(L["thrust_margin"]),
+            fallback=tuple(L["fallback"]),
+            u=np.array(L["u"]).reshape(-1, self.nu),
+        )
 
     def report(self) -> tuple[dict[str, float], dict[str, np.ndarray]]:
         """Metrics ``mpc_*`` of :meth:`MPCStats.summary` (times in s, margins in N, counts) and the per-solve series
@@ -502,8 +530,13 @@ class MPCController(Controller):
         metrics = {f"mpc_{k}": v for k, v in st.summary().items()}
         metrics["mpc_min_plan_thrust_margin_N"] = metrics.pop("mpc_min_thrust_margin_N")
         metrics["mpc_max_plan_bound_violation_N"] = float(self.max_bound_violation)
-        series = {"mpc_t": st.t, "mpc_solve_time": st.solve_time, "mpc_solve_cpu": st.solve_cpu,
-                  "mpc_iterations": st.iterations.astype(float), "mpc_thrust_margin": st.thrust_margin}
+        series = {
+            "mpc_t": st.t,
+            "mpc_solve_time": st.solve_time,
+            "mpc_solve_cpu": st.solve_cpu,
+            "mpc_iterations": st.iterations.astype(float),
+            "mpc_thrust_margin": st.thrust_margin,
+        }
         return metrics, series
 
     def _write_tilt(self, ref: Reference) -> None:
@@ -669,5 +702,16 @@ class MPCController(Controller):
         return np.clip(self.W_pinv @ g, self._plan_lb, self._plan_ub)
 
 
-__all__ = ["FIX", "NATIVE_PROBLEM", "Fallback", "LieState", "MPCController", "MPCSettings", "MPCStats", "MPCWeights", "NodeSpec",
-           "PlatformDynamics", "SolveStatus"]
+__all__ = [
+    "FIX",
+    "NATIVE_PROBLEM",
+    "Fallback",
+    "LieState",
+    "MPCController",
+    "MPCSettings",
+    "MPCStats",
+    "MPCWeights",
+    "NodeSpec",
+    "PlatformDynamics",
+    "SolveStatus",
+]

@@ -61,7 +61,7 @@ def versions() -> str:
 
 
 def self_test() -> str:
-    """"" when crocoddyl's compiled models agree with pinocchio on a test body, else what disagreed.
+    """ "" when crocoddyl's compiled models agree with pinocchio on a test body, else what disagreed.
 
     A free-flyer body (1 kg) with a frame at [0, 0, 0.5] m: the free-forward dynamics at rest with
     u = 0 must return the model's gravity (LOCAL, at the identity pose), the frame translation
@@ -83,8 +83,9 @@ def self_test() -> str:
     problems = []
     err = float(np.max(np.abs(np.array(data.xout) - a_expected)))
     if not err <= SELF_TEST_TOL:
-        problems.append(f"free-forward dynamics at rest with u = 0 give {np.array(data.xout).round(6).tolist()} m/s^2, "
-                        f"not gravity {a_expected.tolist()}")
+        problems.append(
+            f"free-forward dynamics at rest with u = 0 give {np.array(data.xout).round(6).tolist()} m/s^2, not gravity {a_expected.tolist()}"
+        )
     r = np.array(data.costs.costs["probe"].residual.r)
     if not float(np.max(np.abs(r - [0.0, 0.0, 0.5]))) <= SELF_TEST_TOL:
         problems.append("a frame at [0, 0, 0.5] m is read elsewhere (frame translation residual wrong)")

@@ -99,11 +99,13 @@ def solve_summary(metrics: dict[str, float]) -> str | None:
         return None
     m = metrics
     backend = "crocoddyl's native models" if m["mpc_native_backend"] == 1.0 else "Python models (qprr.control.mpc_reference)"
-    return (f"mpc ({backend}): {m['mpc_solves']:.0f} solves, solve time median {1e3 * m['mpc_median_solve_s']:.2f} ms, "
-            f"p95 {1e3 * m['mpc_p95_solve_s']:.2f} ms (thread CPU median {1e3 * m['mpc_median_solve_cpu_s']:.2f} ms, "
-            f"p95 {1e3 * m['mpc_p95_solve_cpu_s']:.2f} ms); median {m['mpc_median_iterations']:.0f} iterations; "
-            f"{m['mpc_converged']:.0f} converged, {m['mpc_iteration_limit']:.0f} at the iteration limit, {m['mpc_failed']:.0f} failed, "
-            f"{m['mpc_fallbacks']:.0f} fallbacks")
+    return (
+        f"mpc ({backend}): {m['mpc_solves']:.0f} solves, solve time median {1e3 * m['mpc_median_solve_s']:.2f} ms, "
+        f"p95 {1e3 * m['mpc_p95_solve_s']:.2f} ms (thread CPU median {1e3 * m['mpc_median_solve_cpu_s']:.2f} ms, "
+        f"p95 {1e3 * m['mpc_p95_solve_cpu_s']:.2f} ms); median {m['mpc_median_iterations']:.0f} iterations; "
+        f"{m['mpc_converged']:.0f} converged, {m['mpc_iteration_limit']:.0f} at the iteration limit, {m['mpc_failed']:.0f} failed, "
+        f"{m['mpc_fallbacks']:.0f} fallbacks"
+    )
 
 
 __all__ = ["BACKENDS", "INSTALL", "Fallback", "MPCStats", "SolveStatus", "solve_summary"]

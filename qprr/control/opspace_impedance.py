@@ -221,21 +221,30 @@ class OperationalSpaceImpedance(InverseDynamicsController):
 
     name = "opspace-impedance"
 
-    def __init__(self, platform: Platform, impedance: EndEffectorImpedance | None = None, gains: IDCGains | None = None, *,
-                 ee_sensor: Callable[[float], np.ndarray] | None = None, coordinates=None, weighting: str = "range",
-                 damping: float = 0.01, **core) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        impedance: EndEffectorImpedance | None = None,
+        gains: IDCGains | None = None,
+        *,
+        ee_sensor: Callable[[float], np.ndarray] | None = None,
+        coordinates=None,
+        weighting: str = "range",
+        damping: float = 0.01,
+        **core,
+    ) -> None:
         if not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         if ee_sensor is not None and not callable(ee_sensor):
             raise InputError(f"ee_sensor must be a callable t -> wrench (6,) or None, got {type(ee_sensor).__name__}")
         if impedance is None:
-            impedance = (EndEffectorImpedance.from_frequency(4.0, 1.0, 1.0) if ee_sensor is not None
-                         else EndEffectorImpedance(16.0, 8.0, None))
+            impedance = EndEffectorImpedance.from_frequency(4.0, 1.0, 1.0) if ee_sensor is not None else EndEffectorImpedance(16.0, 8.0, None)
         if not isinstance(impedance, EndEffectorImpedance):
             raise InputError(f"impedance must be an EndEffectorImpedance, got {type(impedance).__name__}")
         if ee_sensor is None and impedance.mass is not None:
-            raise InputError("a desired end-effector mass needs the contact force: give ee_sensor, or mass=None for the "
-                             "natural operational-space inertia")
+            raise InputError(
+                "a desired end-effector mass needs the contact force: give ee_sensor, or mass=None for the natural operational-space inertia"
+            )
         if weighting not in WEIGHTINGS:
             raise UnknownNameError("weighting", weighting, WEIGHTINGS)
         self.weighting = weighting
@@ -254,20 +263,23 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         self._M_inv = None if impedance.mass is None else np.linalg.inv(impedance.mass)
         unknown = sorted(set(core) - set(CORE_OPTIONS))
         if unknown:
-            raise InputError(f"OperationalSpaceImpedance got unknown keyword argument(s) {unknown}: the options passed to "
-                             f"the inverse-dynamics core are {CORE_OPTIONS}")
+            raise InputError(
+                f"OperationalSpaceImpedance got unknown keyword argument(s) {unknown}: the options passed to "
+                f"the inverse-dynamics core are {CORE_OPTIONS}"
+            )
         super().__init__(platform, gains, realizable=True, **core)
         self.coordinates = self._task_coordinates(coordinates)
         self._W = None if weighting == "inertia" else self._range_weights()
         # damping of the task inverse: eigenvalues of A W A^T below ~ damping x that of the base's own translation
-        scale = 1.0 / platform.total_mass if weighting == "inertia" else BASE_RANGE ** 2
+        scale = 1.0 / platform.total_mass if weighting == "inertia" else BASE_RANGE**2
         self._eps2 = (float(damping) * scale) ** 2
 
     def _range_weights(self) -> np.ndarray:
         """W_ii = (half range)^2 of each task coordinate: arm joints their limits; base translations BASE_RANGE, base angles pi/2."""
         P = self.platform
-        half = np.concatenate([[BASE_RANGE] * 3, [0.5 * math.pi] * 3,
-                               np.where(np.isfinite(P.arm_upper - P.arm_lower), 0.5 * (P.arm_upper - P.arm_lower), math.pi)])
+        half = np.concatenate(
+            [[BASE_RANGE] * 3, [0.5 * math.pi] * 3, np.where(np.isfinite(P.arm_upper - P.arm_lower), 0.5 * (P.arm_upper - P.arm_lower), math.pi)]
+        )
         return half[list(self.coordinates)] ** 2
 
     def _task_coordinates(self, coordinates) -> tuple[int, ...]:
@@ -299,8 +311,9 @@ class OperationalSpaceImpedance(InverseDynamicsController):
     def reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(p_r, p_dot_r, p_ddot_r) (3,) each, world: the end effector at the trajectory's (xi_d, xi_dot_d, xi_ddot_d)."""
         if not isinstance(ref, Reference) or np.shape(ref.xi) != (self.platform.n_xi,):
-            raise InputError(f"ref must be a qprr.control.Reference of the platform's {self.platform.n_xi} thesis coordinates, "
-                             f"got {type(ref).__name__}")
+            raise InputError(
+                f"ref must be a qprr.control.Reference of the platform's {self.platform.n_xi} thesis coordinates, got {type(ref).__name__}"
+            )
         return self._reference(ref)
 
     def _reference(self, ref: Reference) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -331,8 +344,7 @@ class OperationalSpaceImpedance(InverseDynamicsController):
         if self._step_t != t:  # first call of this step: the model, the reference and a*
             S = ch.rate_map(state.xi)
             a0 = np.array(state.accel_to_v_list(self._zeros))  # S_dot xi_dot: the acceleration at xi_ddot = 0
-            m = self._terms(P.model, self._tdata, P.ee_frame, self._state(state.q, state.v, a0, S), (0, 1, 2), self.coordinates,
-                            operational=False)
+            m = self._terms(P.model, self._tdata, P.ee_frame, self._state(state.q, state.v, a0, S), (0, 1, 2), self.coordinates, operational=False)
             p_r, v_r, a_r = self._ref
             e = m.position - p_r
             e_dot = m.velocity[0:3] - v_r
@@ -401,10 +413,10 @@ def fit_second_order(t, y, y_final=None) -> tuple[float, float, float]:
         wd = w * math.sqrt(max(1.0 - z * z, 1e-12))
         return yi * (1.0 - np.exp(-z * w * t) * (np.cos(wd * t) + z * w / wd * np.sin(wd * t)))
 
-    yi0 = float(y[-max(1, y.size // 10):].mean()) if y_final is None else float(y_final)
+    yi0 = float(y[-max(1, y.size // 10) :].mean()) if y_final is None else float(y_final)
     k = int(np.argmax(np.abs(y - yi0) * (np.sign(y - yi0) == np.sign(yi0))))  # first overshoot peak
     over = max(abs(y[k] - yi0) / max(abs(yi0), 1e-300), 1e-4)
-    z0 = -math.log(over) / math.sqrt(math.pi ** 2 + math.log(over) ** 2)
+    z0 = -math.log(over) / math.sqrt(math.pi**2 + math.log(over) ** 2)
     w0 = math.pi / max(t[k], 1e-6) / math.sqrt(max(1.0 - z0 * z0, 1e-6))
     p0 = [w0, min(max(z0, 0.01), 0.95)] + ([yi0] if y_final is None else [])
     lo = [1e-6, 0.0] + ([-np.inf] if y_final is None else [])

@@ -32,5 +32,20 @@ from .report import front, ranked, report
 from .search import dominated, front_levels, make_optimiser
 from .spec import METRICS, PARAMETERS, DesignSpec, MassModel
 
-__all__ = ["METRICS", "PARAMETERS", "Candidate", "DesignRun", "DesignSpec", "MassModel", "build_candidate", "dominated",
-           "evaluate_platform", "front", "front_levels", "make_optimiser", "ranked", "report", "run_design"]
+__all__ = [
+    "METRICS",
+    "PARAMETERS",
+    "Candidate",
+    "DesignRun",
+    "DesignSpec",
+    "MassModel",
+    "build_candidate",
+    "dominated",
+    "evaluate_platform",
+    "front",
+    "front_levels",
+    "make_optimiser",
+    "ranked",
+    "report",
+    "run_design",
+]

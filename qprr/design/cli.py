@@ -34,11 +34,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
     prog = "qprr design run"
     try:
         spec = DesignSpec.load(args.spec)
-        done = run_design(spec, args.output or f"{spec.name}.csv", backend=args.backend, workers=args.workers,
-                          scheduler=args.scheduler, fresh=args.fresh, progress=not args.quiet)
+        done = run_design(
+            spec,
+            args.output or f"{spec.name}.csv",
+            backend=args.backend,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            fresh=args.fresh,
+            progress=not args.quiet,
+        )
         n = len(done.results)
-        print(f"{spec.name}: {done.executed} designs evaluated now ({done.skipped} resumed), {n} saved in {done.path}; "
-              f"{done.failed} failed; {done.wall_time:.1f} s on {done.backend}")
+        print(
+            f"{spec.name}: {done.executed} designs evaluated now ({done.skipped} resumed), {n} saved in {done.path}; "
+            f"{done.failed} failed; {done.wall_time:.1f} s on {done.backend}"
+        )
         if args.report and not done.interrupted:
             _print_report(done.results, args.report, args)
     except (QprrError, KeyError, ValueError) as exc:
@@ -64,10 +73,14 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _fail("qprr design show", f"{type(exc).__name__}: {exc}")
     s = spec.search
     how = "grid" if s.method == "grid" else f"NSGA-II ({s.optimiser}) over {', '.join(spec.optimised)}: {s.generations} generations x {s.population}"
-    print(f"{spec.name}: {len(spec.architectures)} architectures ({', '.join(spec.architectures)}), {len(spec.references)} references; "
-          f"{how}; {n_points(spec)} designs; {spec.effort.samples} samples per map; seed {spec.seed}; fingerprint {spec.fingerprint}")
-    print(f"  objectives: {', '.join(spec.objectives)}; constraints: "
-          + (", ".join(_bound(k, lo, hi) for k, (lo, hi) in spec.constraints.items()) or "none"))
+    print(
+        f"{spec.name}: {len(spec.architectures)} architectures ({', '.join(spec.architectures)}), {len(spec.references)} references; "
+        f"{how}; {n_points(spec)} designs; {spec.effort.samples} samples per map; seed {spec.seed}; fingerprint {spec.fingerprint}"
+    )
+    print(
+        f"  objectives: {', '.join(spec.objectives)}; constraints: "
+        + (", ".join(_bound(k, lo, hi) for k, (lo, hi) in spec.constraints.items()) or "none")
+    )
     pts = reference_points(spec) + (grid_points(spec) if s.method == "grid" else [])
     for p in pts[: args.first]:
         print(f"  design {p['run']}: {p['name']} " + ", ".join(f"{k}={v:g}" for k, v in p["params"].items()))
@@ -81,22 +94,33 @@ def _bound(k: str, lo, hi) -> str:
 def _report_args(r) -> None:
     r.add_argument("--top", type=integer(lo=0), default=None, help="designs flown in the closed-loop check (default: the study's closed_loop.top)")
     r.add_argument("--no-flight", action="store_true", help="skip the closed-loop check")
-    r.add_argument("--flight-backend", default="inline", choices=("local", "dask", "inline"),
-                   help="where the closed-loop flights run (default inline: a few flights)")
+    r.add_argument(
+        "--flight-backend",
+        default="inline",
+        choices=("local", "dask", "inline"),
+        help="where the closed-loop flights run (default inline: a few flights)",
+    )
 
 
 def register_cli(sub) -> None:
     """Add ``design run | report | show`` to the ``qprr`` command line."""
-    p = sub.add_parser("design", help="design search over the (2.1) nomenclature: Pareto fronts of architectures and parameters",
-                       description="Design studies (qprr.design): evaluate candidate aerial manipulators on the design maps, "
-                       "find the Pareto front, rank and fly the best.")
+    p = sub.add_parser(
+        "design",
+        help="design search over the (2.1) nomenclature: Pareto fronts of architectures and parameters",
+        description="Design studies (qprr.design): evaluate candidate aerial manipulators on the design maps, "
+        "find the Pareto front, rank and fly the best.",
+    )
     dsub = p.add_subparsers(dest="design_command", required=True, parser_class=type(p))
 
     r = dsub.add_parser("run", help="run a design study (.toml/.json); resumes an interrupted one")
     r.add_argument("spec", help="design study, e.g. examples/design/thesis_architectures.toml")
     r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
-    r.add_argument("--backend", default="local", choices=("local", "dask", "inline"),
-                   help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)")
+    r.add_argument(
+        "--backend",
+        default="local",
+        choices=("local", "dask", "inline"),
+        help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)",
+    )
     r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
     r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
     r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")

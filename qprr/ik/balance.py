@@ -71,8 +71,10 @@ def _prismatic_joint(platform: Platform, joint) -> int:
     prismatic = [k for k, j in enumerate(platform.arm) if j.kind == "prismatic"]
     if joint is None:
         if not prismatic:
-            raise InputError(f"platform {platform.name!r} has no prismatic arm joint (its arm: "
-                             f"{', '.join(f'{j.name} ({j.kind})' for j in platform.arm) or 'none'})")
+            raise InputError(
+                f"platform {platform.name!r} has no prismatic arm joint (its arm: "
+                f"{', '.join(f'{j.name} ({j.kind})' for j in platform.arm) or 'none'})"
+            )
         if len(prismatic) > 1:
             names = tuple(platform.arm[k].name for k in prismatic)
             raise InputError(f"platform {platform.name!r} has {len(names)} prismatic joints {names}: pass joint=<name>")
@@ -89,8 +91,10 @@ def _prismatic_joint(platform: Platform, joint) -> int:
     else:
         raise InputError(f"joint must be an arm joint name or index, got {joint!r}")
     if platform.arm[k].kind != "prismatic":
-        raise InputError(f"joint {names[k]!r} is {platform.arm[k].kind}, not prismatic; prismatic joints: "
-                         f"{tuple(platform.arm[i].name for i in prismatic) or 'none'}")
+        raise InputError(
+            f"joint {names[k]!r} is {platform.arm[k].kind}, not prismatic; prismatic joints: "
+            f"{tuple(platform.arm[i].name for i in prismatic) or 'none'}"
+        )
     return k
 
 
@@ -130,8 +134,10 @@ def balance_prismatic(platform: Platform, data: pin.Data, q_arm, joint: str | in
     if not math.sqrt(gg) >= NO_EFFECT_TOL * max(m_ratio, 1e-300):
         value = float(others[k])
         status, unclamped = "no_effect", math.nan
-        reason = (f"joint {arm.name!r} moves the CoG along the thrust axis only at this posture (its axis is parallel "
-                  "to the thrust axis): no value of it changes the offset")
+        reason = (
+            f"joint {arm.name!r} moves the CoG along the thrust axis only at this posture (its axis is parallel "
+            "to the thrust axis): no value of it changes the offset"
+        )
         within = False
     else:
         unclamped = float(q_arm[k] - (g @ o0) / gg)
@@ -142,8 +148,7 @@ def balance_prismatic(platform: Platform, data: pin.Data, q_arm, joint: str | in
         else:
             side = "upper" if unclamped > arm.upper else "lower"
             status = "limited"
-            reason = (f"joint {arm.name!r} would need {unclamped:.6g} m, beyond its {side} limit "
-                      f"{getattr(arm, side):.6g} m: stopped there")
+            reason = f"joint {arm.name!r} would need {unclamped:.6g} m, beyond its {side} limit {getattr(arm, side):.6g} m: stopped there"
     q_arm[k] = value
     q[7:] = q_arm
     offset = cog_offset_body(platform, data, q)

@@ -69,8 +69,17 @@ class HierarchySolver:
     The object owns its QPs: one solver per thread.
     """
 
-    def __init__(self, platform: Platform, *, eps_abs: float = 1e-9, regularization: float = 1e-7, rank_tol: float = 1e-9,
-                 max_qp_iter: int = 1000, lower_damping: float = 0.1, active_set_first: bool = True) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        *,
+        eps_abs: float = 1e-9,
+        regularization: float = 1e-7,
+        rank_tol: float = 1e-9,
+        max_qp_iter: int = 1000,
+        lower_damping: float = 0.1,
+        active_set_first: bool = True,
+    ) -> None:
         check_platform(platform)
         max_qp_iter = as_int(max_qp_iter, "max_qp_iter", lo=1)
         eps_abs = as_real(eps_abs, "eps_abs", positive=True)
@@ -82,8 +91,9 @@ class HierarchySolver:
         # so the detection thresholds sit far below eps_abs.  A small primal proximal step and a
         # stiff inequality penalty cut the iterations with an active joint limit from ~12 to ~4
         # (benchmarks/ik_benchmark.py) without changing the optimum.
-        self.settings = QPSettings(eps_abs=eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, max_iter=max_qp_iter,
-                                   default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6)
+        self.settings = QPSettings(
+            eps_abs=eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, max_iter=max_qp_iter, default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6
+        )
         self.platform = platform
         self.nv = platform.nv
         self.regularization = float(regularization)
@@ -93,9 +103,15 @@ class HierarchySolver:
         self.iq = slice(7, platform.nq)
         self.lower = np.array(platform.arm_lower)
         self.upper = np.array(platform.arm_upper)
-        self._lex = Lexicographic(platform.nv, range(6, platform.nv), settings=self.settings, regularization=regularization,
-                                  rank_tol=rank_tol, warm_start=True,
-                                  active_set_first=bool(active_set_first))
+        self._lex = Lexicographic(
+            platform.nv,
+            range(6, platform.nv),
+            settings=self.settings,
+            regularization=regularization,
+            rank_tol=rank_tol,
+            warm_start=True,
+            active_set_first=bool(active_set_first),
+        )
 
     def reset(self) -> None:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
@@ -118,8 +134,7 @@ class HierarchySolver:
                     Js, es = zip(*(check_linearized(t, t.linearize(platform, data, q), nv) for t in tasks))
                     lin.append((np.vstack(Js), np.concatenate(es)))
         else:
-            lin = [tasks[0].linearize(platform, data, q) if len(tasks) == 1 else _stack(platform, data, q, tasks)
-                   for tasks in levels]
+            lin = [tasks[0].linearize(platform, data, q) if len(tasks) == 1 else _stack(platform, data, q, tasks) for tasks in levels]
             if not math.isfinite(sum(float(J.sum()) + float(e.sum()) for J, e in lin)):
                 for tasks in levels:  # name the task
                     for t in tasks:

@@ -53,8 +53,21 @@ from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTa
 
 METHODS = ("clika", "dls", "qp")
 
-__all__ = ["METHODS", "OPTIONS", "ClikaOptions", "DLSOptions", "IKResult", "IKSolver", "QPOptions", "default_guess", "default_levels",
-           "make_options", "parse_target", "pose_errors", "solve"]
+__all__ = [
+    "METHODS",
+    "OPTIONS",
+    "ClikaOptions",
+    "DLSOptions",
+    "IKResult",
+    "IKSolver",
+    "QPOptions",
+    "default_guess",
+    "default_levels",
+    "make_options",
+    "parse_target",
+    "pose_errors",
+    "solve",
+]
 """The public API; the other names (finish, solve_clika, ...) are the methods' parts, shared with qprr.thesis.igm."""
 
 
@@ -256,8 +269,9 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         except InputError:
             raise InputError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position (3,), got {target!r}") from None
         if p.shape != (3,):
-            raise ShapeError(f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position of shape (3,), "
-                             f"got an array of shape {p.shape}")
+            raise ShapeError(
+                f"target must be a pinocchio.SE3, a (p_world, R_world) pair or a position of shape (3,), got an array of shape {p.shape}"
+            )
         if not np.all(np.isfinite(p)):
             raise NonFiniteError(f"target must be finite, got p = {p.tolist()}")
         return p, None
@@ -266,8 +280,10 @@ def parse_target(target) -> tuple[np.ndarray, np.ndarray | None]:
         raise NonFiniteError(f"target must be finite, got p = {p.tolist()}, R = {R.tolist()}")
     dev = _rotation_deviation(R)
     if not dev <= 1e-9:
-        raise InputError(f"target rotation must be a rotation matrix (R^T R = I and det = +1 within 1e-9); deviation {dev:.3g}, "
-                         f"det = {float(np.linalg.det(R)):.3g}")
+        raise InputError(
+            f"target rotation must be a rotation matrix (R^T R = I and det = +1 within 1e-9); deviation {dev:.3g}, "
+            f"det = {float(np.linalg.det(R)):.3g}"
+        )
     return p, R
 
 
@@ -275,8 +291,14 @@ def _rotation_deviation(R: np.ndarray) -> float:
     """How far R is from a rotation: the sum of |unit norm - 1| of its first two columns, |their dot product| and
     |third column - first x second| (0 for a rotation; any of R^T R != I or det R != +1 shows; NaN propagates)."""
     (A, B, C), (D, E, F), (G, H, I) = R.tolist()
-    return (abs(A * A + D * D + G * G - 1.0) + abs(B * B + E * E + H * H - 1.0) + abs(A * B + D * E + G * H)
-            + abs(D * H - G * E - C) + abs(G * B - A * H - F) + abs(A * E - D * B - I))
+    return (
+        abs(A * A + D * D + G * G - 1.0)
+        + abs(B * B + E * E + H * H - 1.0)
+        + abs(A * B + D * E + G * H)
+        + abs(D * H - G * E - C)
+        + abs(G * B - A * H - F)
+        + abs(A * E - D * B - I)
+    )
 
 
 def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[float, float]:
@@ -407,10 +429,24 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     if xi is None:
         xi = _xi_of_q(q, Rb)
     return IKResult(
-        method=ctx.method, success=bool(success), status=status if not success else "converged", reason=reason,
-        xi=xi, q=q, iterations=int(end.iterations), position_error=pos_err, orientation_error=rot_err,
-        x_cm=float(off[0]), y_cm=float(off[1]), roll=roll, pitch=pitch, hover_feasible=bool(hover_ok),
-        within_limits=within, wall_time=time.perf_counter() - ctx.t0, initial_guess=ctx.init, level_errors=end.level_errors,
+        method=ctx.method,
+        success=bool(success),
+        status=status if not success else "converged",
+        reason=reason,
+        xi=xi,
+        q=q,
+        iterations=int(end.iterations),
+        position_error=pos_err,
+        orientation_error=rot_err,
+        x_cm=float(off[0]),
+        y_cm=float(off[1]),
+        roll=roll,
+        pitch=pitch,
+        hover_feasible=bool(hover_ok),
+        within_limits=within,
+        wall_time=time.perf_counter() - ctx.t0,
+        initial_guess=ctx.init,
+        level_errors=end.level_errors,
     )
 
 
@@ -428,16 +464,17 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
             reason = f"joints out of limits: q_arm = {q_arm.tolist()} not in [{lo.tolist()}, {hi.tolist()}]"
         elif not pose_ok:
             status = status if status != "converged" else "stalled"
-            reason = (f"pose not reached after {end.iterations} iterations: position error {pos_err:.3g} m, orientation "
-                      f"error {rot_err:.3g} rad")
+            reason = f"pose not reached after {end.iterations} iterations: position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
         else:
             status = "not_hover_feasible"
             if hint:
                 reason = f"the pose is reached only with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad: not reachable in hover ({hint})"
             else:
-                reason = (f"the pose is reached with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: the iteration "
-                          "stopped at a tilted configuration (joint limit or local minimum from this start, or a target that "
-                          "needs a tilted base); try another xi0")
+                reason = (
+                    f"the pose is reached with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: the iteration "
+                    "stopped at a tilted configuration (joint limit or local minimum from this start, or a target that "
+                    "needs a tilted base); try another xi0"
+                )
     if status != "not_hover_feasible" and ctx.require_hover and "hover" not in reason and hint:
         reason += f"; the target is unreachable in hover ({hint})"
     return status, reason
@@ -446,8 +483,7 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
 def failed_result(method: str, status: str, reason: str, iterations: int, t0: float, init: str) -> IKResult:
     """A result without a configuration (the method could not produce one)."""
     nan = float("nan")
-    return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False,
-                    time.perf_counter() - t0, init)
+    return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False, time.perf_counter() - t0, init)
 
 
 def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
@@ -459,9 +495,11 @@ def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
     ulp = float(np.spacing(pmax))
     if 16.0 * ulp > 0.1 * position_tol:
         limit = 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
-        raise InputError(f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
-                         f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
-                         f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol")
+        raise InputError(
+            f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
+            f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
+            f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol"
+        )
 
 
 def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
@@ -479,8 +517,7 @@ def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
     xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
     platform.check_arm_limits(xi0[6:], "xi0[6:]")
     if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
-        raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); "
-                         "set hover=False or level xi0")
+        raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); set hover=False or level xi0")
     return xi0
 
 
@@ -581,8 +618,9 @@ def solve_dls(ctx: SolveContext, xi: np.ndarray) -> IKResult:
             U, sv, Vt = np.linalg.svd(J_all[:, free], full_matrices=False)
             Utf = U.T @ f
             step = -(Vt.T @ (sv / (sv * sv + lam) * Utf))
-            block = [j for j, d in zip(free, step)
-                     if j >= 6 and ((d < 0 and q[j + 1] <= lo[j - 6] + 1e-12) or (d > 0 and q[j + 1] >= hi[j - 6] - 1e-12))]
+            block = [
+                j for j, d in zip(free, step) if j >= 6 and ((d < 0 and q[j + 1] <= lo[j - 6] + 1e-12) or (d > 0 and q[j + 1] >= hi[j - 6] - 1e-12))
+            ]
             if not block:
                 break
             free = np.array([j for j in free if j not in block])
@@ -648,8 +686,9 @@ class IKSolver:
     solver per thread: its result depends on the inputs only (warm starts are reset per solve).
     """
 
-    def __init__(self, platform: Platform, method: str = "qp", options=None, *, initial_guess: Callable | None = None,
-                 unreachable_hint: Callable | None = None) -> None:
+    def __init__(
+        self, platform: Platform, method: str = "qp", options=None, *, initial_guess: Callable | None = None, unreachable_hint: Callable | None = None
+    ) -> None:
         check_platform(platform)
         if initial_guess is not None and not callable(initial_guess):
             raise InputError(f"initial_guess must be a callable (platform, data, p_world, R_world) -> (xi0, label), got {initial_guess!r}")
@@ -694,8 +733,9 @@ class IKSolver:
         return result
 
     def _run(self, data: pin.Data, p_d, R_d, xi: np.ndarray, init: str, t0: float) -> IKResult:
-        ctx = SolveContext(self.platform, data, self.method, p_d, R_d, self.options, t0, init,
-                           _require_hover(self.platform, self.options), self.unreachable_hint)
+        ctx = SolveContext(
+            self.platform, data, self.method, p_d, R_d, self.options, t0, init, _require_hover(self.platform, self.options), self.unreachable_hint
+        )
         if self.method == "clika":
             return solve_clika(ctx, xi)
         if self.method == "dls":
@@ -723,9 +763,14 @@ class IKSolver:
                     return attempt
                 result, hits = attempt, attempt_hits
         pairs = ", ".join(f"{a} / {b}" for a, b in hits)
-        return replace(result, success=False, status="collision", wall_time=time.perf_counter() - t0,
-                       reason=f"the pose is reached only in self-collision ({pairs}) after {self.options.collision_restarts} "
-                              "restarts from other arm postures (collision_restarts)")
+        return replace(
+            result,
+            success=False,
+            status="collision",
+            wall_time=time.perf_counter() - t0,
+            reason=f"the pose is reached only in self-collision ({pairs}) after {self.options.collision_restarts} "
+            "restarts from other arm postures (collision_restarts)",
+        )
 
     def _solve_qp(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts = self.platform, ctx.data, self.options
@@ -753,8 +798,7 @@ class IKSolver:
         except SolverError as exc:
             return finish(ctx, q, Ending("solver_error", str(exc), it))
         status = "converged" if end.status == "converged_stationary" else end.status
-        return finish(ctx, q, Ending(status, "", it, _level_errors(platform, data, q, levels, end.kinematics_ready, step),
-                                     end.kinematics_ready))
+        return finish(ctx, q, Ending(status, "", it, _level_errors(platform, data, q, levels, end.kinematics_ready, step), end.kinematics_ready))
 
 
 class _StepShaper:
@@ -798,8 +842,7 @@ class _StepShaper:
             d1 = step.dv_first
             rest = (dv - d1) * self.rest_scale
             m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
-            dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (
-                rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
+            dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
         # small: stationary, every level settled; the last (tiny) Newton step is kept
         return dv, ("converged_stationary" if small else "")
 

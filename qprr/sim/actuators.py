@@ -77,8 +77,7 @@ class RotorDynamics:
         if np.any(fields["time_constant"] <= 0.0):
             raise InputError(f"time_constant must be > 0 s, got {fields['time_constant'].tolist()}")
         if np.any(fields["w_min"] < 0.0) or np.any(fields["w_max"] <= fields["w_min"]):
-            raise InputError(f"speed limits need 0 <= w_min < w_max, got w_min = {fields['w_min'].tolist()}, "
-                             f"w_max = {fields['w_max'].tolist()}")
+            raise InputError(f"speed limits need 0 <= w_min < w_max, got w_min = {fields['w_min'].tolist()}, w_max = {fields['w_max'].tolist()}")
         for name, a in fields.items():
             object.__setattr__(self, name, tuple(float(x) for x in a))
         if isinstance(self.initial, str):
@@ -95,8 +94,7 @@ class RotorDynamics:
         return len(self.thrust_factor)
 
     @classmethod
-    def for_rotors(cls, rotors: Sequence, thrust_factor, time_constant, *, w_min=None, w_max=None,
-                   initial="command") -> RotorDynamics:
+    def for_rotors(cls, rotors: Sequence, thrust_factor, time_constant, *, w_min=None, w_max=None, initial="command") -> RotorDynamics:
         """The stage for a rotor set: speed limits from the thrust bounds, w = sqrt(f / b), unless given.
 
         ``rotors``: :class:`qprr.rotors.Rotor` objects (e.g. ``platform.rotors``); their f_max must be
@@ -190,8 +188,14 @@ def rotor_dynamics_from_mapping(desc, rotors, **overrides) -> RotorDynamics:
     missing = [k for k in ("thrust_factor", "time_constant") if k not in table]
     if missing:
         raise InputError(f"no motor data {missing} for this rotor set: give them (thrust_factor [N s^2], time_constant [s])")
-    return RotorDynamics.for_rotors(rotors, table["thrust_factor"], table["time_constant"], w_min=table.get("w_min"),
-                                    w_max=table.get("w_max"), initial=table.get("initial", "command"))
+    return RotorDynamics.for_rotors(
+        rotors,
+        table["thrust_factor"],
+        table["time_constant"],
+        w_min=table.get("w_min"),
+        w_max=table.get("w_max"),
+        initial=table.get("initial", "command"),
+    )
 
 
 def time_constant_of(t: np.ndarray, w: np.ndarray, w0: float, w_final: float) -> float:

@@ -137,10 +137,12 @@ class SimConfig:
         n = duration / period  # a float: an absurd duration must not build an absurd integer first
         need = n * bytes_per_tick
         if need > self.log_bound:
-            raise InputError(f"duration = {duration!r} s at a control period of {period!r} s (dt = {self.dt!r} s) is {n:.3g} "
-                             f"control ticks: the logs would take {_size(need)}, more than the {_size(self.log_bound)} allowed "
-                             "(max_log_bytes; default half the physical memory); shorten the duration or lengthen "
-                             "control_period")
+            raise InputError(
+                f"duration = {duration!r} s at a control period of {period!r} s (dt = {self.dt!r} s) is {n:.3g} "
+                f"control ticks: the logs would take {_size(need)}, more than the {_size(self.log_bound)} allowed "
+                "(max_log_bytes; default half the physical memory); shorten the duration or lengthen "
+                "control_period"
+            )
         return int(round(n))
 
 

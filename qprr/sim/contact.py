@@ -139,8 +139,18 @@ class PushedMass(_Contact):
     (:meth:`settle`, an event resolved at step boundaries).
     """
 
-    def __init__(self, platform: Platform, *, mass: float, origin, direction=(1.0, 0.0, 0.0), initial=(0.0, 0.0),
-                 stiffness: float = 500.0, damping: float = 20.0, friction: float = 0.0) -> None:
+    def __init__(
+        self,
+        platform: Platform,
+        *,
+        mass: float,
+        origin,
+        direction=(1.0, 0.0, 0.0),
+        initial=(0.0, 0.0),
+        stiffness: float = 500.0,
+        damping: float = 20.0,
+        friction: float = 0.0,
+    ) -> None:
         if not (np.isfinite(mass) and mass > 0.0):
             raise InputError(f"mass must be > 0 kg, got {mass!r}")
         if not (np.isfinite(friction) and friction >= 0.0):

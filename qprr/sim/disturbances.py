@@ -190,8 +190,9 @@ def split(disturbance) -> tuple[object | None, list]:
         elif hasattr(p, "values"):
             timed.append(p)
         else:
-            raise InputError(f"a disturbance needs values(t, rng, n_xi) (known in advance) or generalized_force(t, q, v) "
-                             f"(state-dependent), got {type(p).__name__}")
+            raise InputError(
+                f"a disturbance needs values(t, rng, n_xi) (known in advance) or generalized_force(t, q, v) (state-dependent), got {type(p).__name__}"
+            )
     if not timed:
         return None, state
     return (timed[0] if len(timed) == 1 else Disturbances(tuple(timed))), state

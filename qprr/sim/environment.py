@@ -45,8 +45,7 @@ class Environment(ABC):
         return int(np.size(self.initial_state()))
 
     @abstractmethod
-    def evaluate(self, t: float, p_world: np.ndarray, R_world: np.ndarray, twist_world: np.ndarray,
-                 z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate(self, t: float, p_world: np.ndarray, R_world: np.ndarray, twist_world: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(h_world (6,), z_dot (nz,)) at one integration stage; must not change the object."""
 
     def settle(self, t: float, z_before: np.ndarray, z_after: np.ndarray) -> np.ndarray:
@@ -57,8 +56,7 @@ class Environment(ABC):
         """Forget the previous run (logs, last reading); the simulator calls it at the start of a run."""
         self._h = np.zeros(6)
 
-    def observe(self, t: float, p_world: np.ndarray, R_world: np.ndarray, twist_world: np.ndarray, z: np.ndarray,
-                h_world: np.ndarray) -> None:
+    def observe(self, t: float, p_world: np.ndarray, R_world: np.ndarray, twist_world: np.ndarray, z: np.ndarray, h_world: np.ndarray) -> None:
         """Called at every control tick with the state and the wrench there (default: keep the wrench for :meth:`measured`)."""
         self._h = np.array(h_world, dtype=float)
 

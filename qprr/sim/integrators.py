@@ -148,20 +148,23 @@ def _rk4(model: pin.Model, dt: float) -> Callable:
 _FACTORIES: dict[str, Callable] = {"euler": _euler, "midpoint": _midpoint, "rk4": _rk4}
 
 
-def semi_implicit_euler(model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float,
-                        z: np.ndarray | None = None, first=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def semi_implicit_euler(
+    model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float, z: np.ndarray | None = None, first=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """One semi-implicit (symplectic) Euler step on the Lie group: v+ = v + dt a, q+ = q (+) dt v+, z+ = z + dt z_dot (first order)."""
     return _euler(model, dt)(f, t, q, v, z, first)
 
 
-def explicit_midpoint(model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float,
-                      z: np.ndarray | None = None, first=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def explicit_midpoint(
+    model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float, z: np.ndarray | None = None, first=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """One explicit-midpoint step on the Lie group (second order; see the module docstring)."""
     return _midpoint(model, dt)(f, t, q, v, z, first)
 
 
-def rk4(model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float,
-        z: np.ndarray | None = None, first=None) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+def rk4(
+    model: pin.Model, f: Callable, t: float, q: np.ndarray, v: np.ndarray, dt: float, z: np.ndarray | None = None, first=None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """One classical Runge-Kutta 4 step in the tangent chart at q (fourth order on the group; see the module docstring)."""
     return _rk4(model, dt)(f, t, q, v, z, first)
 
@@ -171,4 +174,3 @@ STEPPERS: dict[str, Callable] = {"euler": semi_implicit_euler, "midpoint": expli
 
 ORDERS: dict[str, int] = {"euler": 1, "midpoint": 2, "rk4": 4}
 """Integrator name -> order of accuracy on smooth problems (global error O(dt^order))."""
-

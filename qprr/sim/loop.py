@@ -72,8 +72,16 @@ from .stops import apply_joint_stops
 __all__ = ["INTEGRATORS", "Limits", "SimConfig", "SimInputs", "check_sample", "simulate"]
 
 
-def simulate(platform: Platform, controller: Controller, trajectory, duration: float, *, config: SimConfig | None = None,
-             inputs: SimInputs | None = None, **options) -> SimResult:
+def simulate(
+    platform: Platform,
+    controller: Controller,
+    trajectory,
+    duration: float,
+    *,
+    config: SimConfig | None = None,
+    inputs: SimInputs | None = None,
+    **options,
+) -> SimResult:
     """Run ``controller`` on ``platform`` along ``trajectory`` for ``duration`` seconds.
 
     Parameters
@@ -136,8 +144,15 @@ class _Logs:
     def empty(cls, n: int, platform: Platform, rotor_stage: bool) -> _Logs:
         nxi, nr = platform.n_xi, platform.n_rotors
         rotor = (np.zeros((n, nr)), np.zeros((n, nr))) if rotor_stage else (None, None)
-        return cls(np.zeros((n, nxi)), np.zeros((n, nxi)), np.zeros((n, nxi)), np.zeros((n, platform.n_actuators)),
-                   np.zeros((n, 3)), np.zeros(n, dtype=np.int8), *rotor)
+        return cls(
+            np.zeros((n, nxi)),
+            np.zeros((n, nxi)),
+            np.zeros((n, nxi)),
+            np.zeros((n, platform.n_actuators)),
+            np.zeros((n, 3)),
+            np.zeros(n, dtype=np.int8),
+            *rotor,
+        )
 
 
 def _bytes_per_tick(platform: Platform, rotor_stage: bool) -> int:
@@ -218,10 +233,32 @@ def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs
     logs = _Logs.empty(n, platform, rotors is not None)
     stage = None if rotors is None else _RotorStage(rotors, platform, plant, alloc, logs, controller.uses_applied_force)
     lim = config.limits
-    return _Run(platform, controller, config, n, t, xi_d, xi_dot_d, xi_ddot_d, u_ext, u_ext_rows, state_dist, logs,
-                plant_payload, plant, allocate, np.array(robot.actuation_matrix), np.column_stack([alloc.f_min, alloc.f_max]),
-                state, reference, q, v, _stepper(config, plant), stage,
-                (lim.position, lim.linear_velocity, lim.angular_velocity, lim.joint_velocity))
+    return _Run(
+        platform,
+        controller,
+        config,
+        n,
+        t,
+        xi_d,
+        xi_dot_d,
+        xi_ddot_d,
+        u_ext,
+        u_ext_rows,
+        state_dist,
+        logs,
+        plant_payload,
+        plant,
+        allocate,
+        np.array(robot.actuation_matrix),
+        np.column_stack([alloc.f_min, alloc.f_max]),
+        state,
+        reference,
+        q,
+        v,
+        _stepper(config, plant),
+        stage,
+        (lim.position, lim.linear_velocity, lim.angular_velocity, lim.joint_velocity),
+    )
 
 
 def _check_types(platform, controller, trajectory, inputs: SimInputs) -> None:
@@ -245,8 +282,10 @@ def _bind_rotors(platform: Platform, actuators, dt: float):
         raise InputError(f"actuators must be a qprr.sim.RotorDynamics or None, got {type(actuators).__name__}")
     rotors = actuators.bind(platform.n_rotors)
     if dt > min(actuators.time_constant):  # explicit schemes: stable for dt < 2 T (Euler, midpoint)
-        raise InputError(f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
-                         "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt")
+        raise InputError(
+            f"dt = {dt!r} s exceeds the smallest motor time constant {min(actuators.time_constant)!r} s: "
+            "the explicit integrators would be unstable or inaccurate on the rotor speeds; reduce dt"
+        )
     return rotors
 
 
@@ -306,8 +345,11 @@ class _RotorStage:
         if k == 0:
             w0 = self.w_start
             if isinstance(w0, str):  # "command": at the first command; "hover": thrusts that hold q0 still
-                w0 = w_c.copy() if w0 == "command" else rotors.speeds_of(
-                    self.alloc.allocate(pin.computeGeneralizedGravity(self.plant.model, self.plant.data, q)).f[0:nr])
+                w0 = (
+                    w_c.copy()
+                    if w0 == "command"
+                    else rotors.speeds_of(self.alloc.allocate(pin.computeGeneralizedGravity(self.plant.model, self.plant.data, q)).f[0:nr])
+                )
             z = np.concatenate([z[:n_env], w0])
         w = z[n_env:]
         logs.rotor_speed[k] = w
@@ -411,11 +453,31 @@ def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimR
         tau_d = ch.force_from_xi_batch(R, xi, u)
     nr = platform.n_rotors
     res = SimResult(
-        scenario=cfg.scenario, controller=run.controller.name, dt=cfg.dt, integrator=cfg.integrator, t=run.t[:m].copy(),
-        xi=xi, xi_dot=logs.xi_dot[:m], xi_d=run.xi_d[:m], xi_dot_d=run.xi_dot_d[:m], u=u, f=logs.f[:m, 0:nr].copy(),
-        arm_effort=logs.f[:m, nr:].copy(), x_cm=x_cm, unallocated=tau_d - logs.f[:m] @ run.N.T, flags=logs.flags[:m],
-        u_ext=run.u_ext[:m], wall_time=wall, status=status, reason=reason, seed=cfg.seed, control_period=cfg.period,
-        platform=platform.name, names=platform.xi_names, arm_kinds=tuple(j.kind for j in platform.arm), rotor_bounds=run.rotor_bounds,
+        scenario=cfg.scenario,
+        controller=run.controller.name,
+        dt=cfg.dt,
+        integrator=cfg.integrator,
+        t=run.t[:m].copy(),
+        xi=xi,
+        xi_dot=logs.xi_dot[:m],
+        xi_d=run.xi_d[:m],
+        xi_dot_d=run.xi_dot_d[:m],
+        u=u,
+        f=logs.f[:m, 0:nr].copy(),
+        arm_effort=logs.f[:m, nr:].copy(),
+        x_cm=x_cm,
+        unallocated=tau_d - logs.f[:m] @ run.N.T,
+        flags=logs.flags[:m],
+        u_ext=run.u_ext[:m],
+        wall_time=wall,
+        status=status,
+        reason=reason,
+        seed=cfg.seed,
+        control_period=cfg.period,
+        platform=platform.name,
+        names=platform.xi_names,
+        arm_kinds=tuple(j.kind for j in platform.arm),
+        rotor_bounds=run.rotor_bounds,
     )
     metrics, series = run.controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
     res.metrics.update(metrics)
@@ -449,9 +511,11 @@ def _check_arm_references(platform: Platform, t: np.ndarray, xi_d: np.ndarray) -
     if bad.any():
         k, j = np.argwhere(bad)[0]
         joint = platform.arm[j]
-        raise LimitError(f"trajectory: the reference of arm joint {joint.name!r} is {float(arm[k, j])!r} at t = {t[k]:.3f} s, outside its "
-                         f"limits [{joint.lower!r}, {joint.upper!r}] (the joint would sit on its stop); "
-                         "keep references inside the limits or pass joint_stops=False")
+        raise LimitError(
+            f"trajectory: the reference of arm joint {joint.name!r} is {float(arm[k, j])!r} at t = {t[k]:.3f} s, outside its "
+            f"limits [{joint.lower!r}, {joint.upper!r}] (the joint would sit on its stop); "
+            "keep references inside the limits or pass joint_stops=False"
+        )
 
 
 class _Plant:
@@ -558,7 +622,7 @@ class _Plant:
         out = self.rhs(t, q, v) if z is None else self.rhs(t, q, v, z)
         p, R, twist, h = self._last
         if self.rotors is not None:  # the environment sees its own part of z
-            z = z[:self.n_env] if self.n_env else None
+            z = z[: self.n_env] if self.n_env else None
         self.env.observe(t, p, R, twist, z if z is not None else _NO_STATE, h)
         return out
 
@@ -595,8 +659,10 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
     k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
     what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
     label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
-    return DivergenceError(f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
-                           f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)")
+    return DivergenceError(
+        f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
+        f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)"
+    )
 
 
 _BASE_F = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")

@@ -102,8 +102,11 @@ def check_plant(platform: Platform, plant: Platform) -> Platform:
     if not isinstance(plant, Platform):
         raise InputError(f"plant must be a qprr Platform, got {type(plant).__name__}")
     m, p = platform.model, plant.model
-    if (p.nq, p.nv, p.njoints, p.nframes) != (m.nq, m.nv, m.njoints, m.nframes) or plant.n_rotors != platform.n_rotors \
-            or plant.ee_frame != platform.ee_frame:
+    if (
+        (p.nq, p.nv, p.njoints, p.nframes) != (m.nq, m.nv, m.njoints, m.nframes)
+        or plant.n_rotors != platform.n_rotors
+        or plant.ee_frame != platform.ee_frame
+    ):
         raise InputError(f"plant {plant!r} does not have the structure of the model {platform!r} (joints, frames, rotors)")
     return plant
 

@@ -122,8 +122,7 @@ class SimResult:
         sel = self.t >= start
         if not sel.any():
             span = f"[{float(self.t[0])!r}, {float(self.t[-1])!r}] s" if self.n else "no tick"
-            raise InputError(f"rmse: start = {start!r} s is after the last logged tick (the run covers {span}); "
-                             "give a start within the run")
+            raise InputError(f"rmse: start = {start!r} s is after the last logged tick (the run covers {span}); give a start within the run")
         e = self.xi_d[sel] - self.xi[sel]
         e[:, ANGLES] = wrap_angle(e[:, ANGLES])
         return {name: float(np.sqrt(np.mean(e[:, i] ** 2))) for i, name in enumerate(self.names)}
@@ -153,11 +152,23 @@ class SimResult:
         bad = [k for k, v in self.metrics.items() if not _is_number(v)]
         if bad:
             raise InputError(f"metric {bad[0]!r} must be a number, got {self.metrics[bad[0]]!r}")
-        meta = dict(format_version=FORMAT_VERSION, scenario=self.scenario, controller=self.controller, dt=self.dt,
-                    integrator=self.integrator, control_period=self.control_period, wall_time=self.wall_time,
-                    status=self.status.value, reason=self.reason, seed=None if self.seed is None else int(self.seed), platform=self.platform,
-                    names=list(self.names), metrics={k: float(v) for k, v in self.metrics.items()},
-                    series=sorted(self.series), arm_kinds=list(self.arm_kinds))
+        meta = dict(
+            format_version=FORMAT_VERSION,
+            scenario=self.scenario,
+            controller=self.controller,
+            dt=self.dt,
+            integrator=self.integrator,
+            control_period=self.control_period,
+            wall_time=self.wall_time,
+            status=self.status.value,
+            reason=self.reason,
+            seed=None if self.seed is None else int(self.seed),
+            platform=self.platform,
+            names=list(self.names),
+            metrics={k: float(v) for k, v in self.metrics.items()},
+            series=sorted(self.series),
+            arm_kinds=list(self.arm_kinds),
+        )
         arrays = {k: getattr(self, k) for k in ARRAYS}
         if self.rotor_bounds is not None:
             arrays["rotor_bounds"] = self.rotor_bounds
@@ -195,8 +206,7 @@ class SimResult:
                 raise InputError(f"{source}: corrupted metadata (a JSON object expected, got {type(meta).__name__})")
             version = meta.get("format_version")
             if version not in READABLE_VERSIONS or isinstance(version, bool):
-                raise InputError(f"{source} has format version {version!r}; this qprr reads versions "
-                                 f"{', '.join(map(str, READABLE_VERSIONS))}")
+                raise InputError(f"{source} has format version {version!r}; this qprr reads versions {', '.join(map(str, READABLE_VERSIONS))}")
             missing = [k for k in ARRAYS if k not in files]
             if missing:
                 raise InputError(f"{source} lacks the arrays {missing}: truncated or not a result file")
@@ -210,12 +220,24 @@ class SimResult:
         _validate(arrays, meta, source)
         if bounds is not None:
             bounds = _check_rotor_bounds(bounds, arrays["f"], f"{source}: rotor_bounds", loaded=True)
-        return cls(**arrays, scenario=meta["scenario"], controller=meta["controller"], dt=float(meta["dt"]),
-                   integrator=meta["integrator"], wall_time=float(meta["wall_time"]), status=meta["status"],
-                   reason=meta["reason"], seed=meta["seed"], control_period=float(meta["control_period"]),
-                   platform=meta["platform"], names=tuple(meta["names"]), series=series,
-                   metrics={k: float(v) for k, v in meta["metrics"].items()}, arm_kinds=tuple(meta["arm_kinds"]),
-                   rotor_bounds=bounds)
+        return cls(
+            **arrays,
+            scenario=meta["scenario"],
+            controller=meta["controller"],
+            dt=float(meta["dt"]),
+            integrator=meta["integrator"],
+            wall_time=float(meta["wall_time"]),
+            status=meta["status"],
+            reason=meta["reason"],
+            seed=meta["seed"],
+            control_period=float(meta["control_period"]),
+            platform=meta["platform"],
+            names=tuple(meta["names"]),
+            series=series,
+            metrics={k: float(v) for k, v in meta["metrics"].items()},
+            arm_kinds=tuple(meta["arm_kinds"]),
+            rotor_bounds=bounds,
+        )
 
 
 _READ_ERRORS = (OSError, ValueError, EOFError, zipfile.BadZipFile, zlib.error)
@@ -243,8 +265,7 @@ def _read(z, key: str, source: str) -> np.ndarray:
     try:
         return z[key]
     except _READ_ERRORS as exc:
-        raise InputError(f"{source}: cannot read {key!r} ({type(exc).__name__}: {exc}): truncated, corrupted or not a "
-                         "qprr result file") from exc
+        raise InputError(f"{source}: cannot read {key!r} ({type(exc).__name__}: {exc}): truncated, corrupted or not a qprr result file") from exc
 
 
 def _utf8(text: str) -> bool:
@@ -262,8 +283,7 @@ def _is_number(v) -> bool:
 def _check_meta(meta: dict, source: str) -> dict:
     """The metadata's entries with their types checked (InputError naming the entry); optional ones filled in."""
     meta = {"platform": "", "names": [], "metrics": {}, "series": [], "arm_kinds": [], **meta}
-    missing = [k for k in ("scenario", "controller", "integrator", "dt", "control_period", "wall_time", "status", "reason", "seed")
-               if k not in meta]
+    missing = [k for k in ("scenario", "controller", "integrator", "dt", "control_period", "wall_time", "status", "reason", "seed") if k not in meta]
     if missing:
         raise InputError(f"{source}: metadata lacks {missing}: truncated or corrupted")
     for key in ("scenario", "controller", "integrator", "reason", "platform"):

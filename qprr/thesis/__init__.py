@@ -46,9 +46,19 @@ def _scenarios():
 def _gain_tables():
     from . import gains
 
-    tables = {"table-6.2": gains.table_6_2, "idc": gains.idc, "desired-state": gains.desired_state, "annex-a3": gains.annex_a3,
-              "table-6.5": gains.table_6_5, "payload": gains.payload, "table-6.7": gains.table_6_7, "impedance": gains.impedance,
-              "impedance-table-6.7": gains.impedance_table_6_7, "impedance-filters": gains.impedance_filters, "mfc": gains.mfc}
+    tables = {
+        "table-6.2": gains.table_6_2,
+        "idc": gains.idc,
+        "desired-state": gains.desired_state,
+        "annex-a3": gains.annex_a3,
+        "table-6.5": gains.table_6_5,
+        "payload": gains.payload,
+        "table-6.7": gains.table_6_7,
+        "impedance": gains.impedance,
+        "impedance-table-6.7": gains.impedance_table_6_7,
+        "impedance-filters": gains.impedance_filters,
+        "mfc": gains.mfc,
+    }
     return [(f"q-prr:{name}", fn) for name, fn in tables.items()]
 
 

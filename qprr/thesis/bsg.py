@@ -51,8 +51,7 @@ class CogStabilizer(Controller):
 
     name = "bsg"
 
-    def __init__(self, platform: Platform, inner: Controller, *, theta_e_d: float = 0.0, pitch: str = "measured",
-                 filter_omega: float = 20.0) -> None:
+    def __init__(self, platform: Platform, inner: Controller, *, theta_e_d: float = 0.0, pitch: str = "measured", filter_omega: float = 20.0) -> None:
         if pitch not in ("measured", "desired"):
             raise UnknownNameError("BSG pitch source", pitch, ("measured", "desired"))
         if not isinstance(inner, Controller):
@@ -80,9 +79,11 @@ class CogStabilizer(Controller):
         self._started = False
         self.inner.reset(state, ref, dt)
         if self.pitch == "desired" and self.inner.tilt is None:
-            raise InputError(f"pitch='desired' reads the inner controller's roll/pitch references, but "
-                             f"{type(self.inner).__name__} ({self.inner.name}) derives none (its tilt is None): "
-                             f"use pitch='measured' or an inner controller with a tilt reference")
+            raise InputError(
+                f"pitch='desired' reads the inner controller's roll/pitch references, but "
+                f"{type(self.inner).__name__} ({self.inner.name}) derives none (its tilt is None): "
+                f"use pitch='measured' or an inner controller with a tilt reference"
+            )
 
     def joint_references(self, theta: float, theta2_d: float) -> tuple[float, float]:
         """(r0_d, theta3_d) of (6.33)-(6.35) for pitch ``theta``, clamped to the joint limits."""

@@ -244,8 +244,11 @@ def _c_3_8(ctx: Context) -> Evidence:
         ec = max(ec, _maxabs(_wrap(th.euler_3_8_corrected(R) - xi[3:6])))
         if e1 > ep:
             ep, worst = e1, (xi[3:6], th.euler_3_8(R))
-    return Evidence(ep, ec, f"(phi, theta, psi) = {np.round(worst[0], 3).tolist()} -> printed (3.8) returns "
-                    f"{np.round(worst[1], 3).tolist()}: roll and yaw swapped")
+    return Evidence(
+        ep,
+        ec,
+        f"(phi, theta, psi) = {np.round(worst[0], 3).tolist()} -> printed (3.8) returns {np.round(worst[1], 3).tolist()}: roll and yaw swapped",
+    )
 
 
 def _c_3_25(ctx: Context) -> Evidence:
@@ -255,8 +258,12 @@ def _c_3_25(ctx: Context) -> Evidence:
         Tw = th.T_3_25(xi[3], xi[4]) @ xid[3:6]
         e_body = max(e_body, _maxabs(Tw - w_fd))
         e_world = max(e_world, _maxabs(Tw - _R(xi) @ w_fd))
-    return Evidence(e_body, None, f"T phi_dot vs (R^T R_dot)^vee by central differences; as a world-frame rate "
-                    f"(R omega_body), as (3.15) suggests, the error would be {e_world:.2g} rad/s")
+    return Evidence(
+        e_body,
+        None,
+        f"T phi_dot vs (R^T R_dot)^vee by central differences; as a world-frame rate "
+        f"(R omega_body), as (3.15) suggests, the error would be {e_world:.2g} rad/s",
+    )
 
 
 def _c_3_36(ctx: Context) -> Evidence:
@@ -264,8 +271,12 @@ def _c_3_36(ctx: Context) -> Evidence:
     Om = _plus(ctx).rotor_matrix
     ep = max(_maxabs(Om[2:6] - th.allocation_3_36(p.arm_length, p.drag_factor)), _maxabs(Om[0:2]))
     ec = max(_maxabs(Om[2:6] - th.allocation_3_36_corrected(p.arm_length, p.thrust_factor, p.drag_factor)), _maxabs(Om[0:2]))
-    return Evidence(ep, ec, f"yaw row printed c = {p.drag_factor:g} N m s^2, the force map needs c/b = {p.kappa:g} m "
-                    "(tau_i = c w_i^2 = (c/b) f_i); rows 1-3 agree with the rotor frames of the URDF")
+    return Evidence(
+        ep,
+        ec,
+        f"yaw row printed c = {p.drag_factor:g} N m s^2, the force map needs c/b = {p.kappa:g} m "
+        "(tau_i = c w_i^2 = (c/b) f_i); rows 1-3 agree with the rotor frames of the URDF",
+    )
 
 
 def _c_3_37(ctx: Context) -> Evidence:
@@ -275,8 +286,12 @@ def _c_3_37(ctx: Context) -> Evidence:
     scale = _maxabs(model_w2)
     ep = _maxabs(P - model_w2) / scale
     ec = _maxabs(th.allocation_3_37_corrected(p.thrust_factor, p.arm_length, p.drag_factor) - model_w2) / scale
-    return Evidence(ep, ec, f"relative to max|entry|; row 3 printed (-lb, 0, lb, 0) = {np.round(P[2], 8).tolist()}, model and (3.34): "
-                    f"tau_theta = bl(w1^2 - w3^2) -> {np.round(model_w2[2], 8).tolist()}")
+    return Evidence(
+        ep,
+        ec,
+        f"relative to max|entry|; row 3 printed (-lb, 0, lb, 0) = {np.round(P[2], 8).tolist()}, model and (3.34): "
+        f"tau_theta = bl(w1^2 - w3^2) -> {np.round(model_w2[2], 8).tolist()}",
+    )
 
 
 def _c_det_3_37(ctx: Context) -> Evidence:
@@ -286,9 +301,13 @@ def _c_det_3_37(ctx: Context) -> Evidence:
     printed_matrix = np.linalg.det(th.allocation_3_37(b, l, c))
     ep = abs(th.det_3_37(b, l, c) - printed_matrix) / abs(printed_matrix)
     ec = abs(th.det_3_37_corrected(b, l, c) - true) / abs(true)
-    return Evidence(ep, ec, f"relative error vs the determinant of the (3.37) matrix as printed: the statement holds for that "
-                    f"matrix. Not a separate misprint: with row 3 corrected (row (3.37) above) the model map's determinant "
-                    f"is {true:.4g} = -8 c l^2 b^3 (rel. err {ec:.1g}); invertibility holds either way")
+    return Evidence(
+        ep,
+        ec,
+        f"relative error vs the determinant of the (3.37) matrix as printed: the statement holds for that "
+        f"matrix. Not a separate misprint: with row 3 corrected (row (3.37) above) the model map's determinant "
+        f"is {true:.4g} = -8 c l^2 b^3 (rel. err {ec:.1g}); invertibility holds either way",
+    )
 
 
 def _c_A1(ctx: Context) -> Evidence:
@@ -298,8 +317,12 @@ def _c_A1(ctx: Context) -> Evidence:
     ep = _maxabs(th.rotor_inverse_A1(l, p.kappa) - model_inv)
     ec = _maxabs(th.rotor_inverse_A1_corrected(l, b, c) - model_inv)
     selfc = _maxabs(th.rotor_inverse_A1(l, c) @ th.allocation_3_36(l, c) - np.eye(4))
-    return Evidence(ep, ec, f"printed inverse read with c -> c/b vs inv(Omega_z); the printed inverse is not even the inverse "
-                    f"of its own (A.1) matrix: max|A1 (A.1) - I| = {selfc:.3g} (tau_theta column signs of f1, f3)")
+    return Evidence(
+        ep,
+        ec,
+        f"printed inverse read with c -> c/b vs inv(Omega_z); the printed inverse is not even the inverse "
+        f"of its own (A.1) matrix: max|A1 (A.1) - I| = {selfc:.3g} (tau_theta column signs of f1, f3)",
+    )
 
 
 def _arm_states(ctx: Context):
@@ -316,8 +339,12 @@ def _c_3_42(ctx: Context) -> Evidence:
         printed = th.potential_3_42(R, q_arm, ctx.params)
         ep = max(ep, abs(printed - dyn.potential_energy(up, du, ned_configuration(q))))
         ec = max(ec, abs(-printed - dyn.potential_energy(up, du, q)))
-    return Evidence(ep, ec, "vs Pinocchio potential energy with gravity +g e3 (NED, as (3.42) implies), base at the origin; "
-                    "in the z-up world of (5.27)-(5.29) the sign is opposite: U = -U_(3.42) there")
+    return Evidence(
+        ep,
+        ec,
+        "vs Pinocchio potential energy with gravity +g e3 (NED, as (3.42) implies), base at the origin; "
+        "in the z-up world of (5.27)-(5.29) the sign is opposite: U = -U_(3.42) there",
+    )
 
 
 def _c_3_43(ctx: Context) -> Evidence:
@@ -329,8 +356,12 @@ def _c_3_43(ctx: Context) -> Evidence:
         model_up = kin.arm_gravity_torque_body(ctx.platform, ctx.data, q)
         ec = max(ec, _maxabs(th.arm_torque_3_43_corrected(R, q_arm, ctx.params) - model_up))
         flip = max(flip, _maxabs(printed - model_up))
-    return Evidence(ep, ec, f"vs RNEA torque of the arm on B with gravity +g e3 (NED of (3.42)); in our z-up model the printed "
-                    f"sign is opposite (max error {flip:.3g} N m), -m_G g xi_c x R_b^T e3 holds")
+    return Evidence(
+        ep,
+        ec,
+        f"vs RNEA torque of the arm on B with gravity +g e3 (NED of (3.42)); in our z-up model the printed "
+        f"sign is opposite (max error {flip:.3g} N m), -m_G g xi_c x R_b^T e3 holds",
+    )
 
 
 def _c_3_44(ctx: Context) -> Evidence:
@@ -352,8 +383,12 @@ def _c_3_61(ctx: Context) -> Evidence:
         ec = max(ec, _maxabs(th.p_e_3_61_corrected(xi, ctx.d) - p))
         if e > ep:
             ep, worst = e, (xi, th.p_e_3_61(xi, ctx.d)[1], p[1])
-    return Evidence(ep, ec, f"y_e printed with c_theta c_psi x_eb: at xi = {np.round(worst[0], 3).tolist()} printed y_e = "
-                    f"{worst[1]:.4f}, model {worst[2]:.4f}; (3.65) prints the right c_theta s_psi")
+    return Evidence(
+        ep,
+        ec,
+        f"y_e printed with c_theta c_psi x_eb: at xi = {np.round(worst[0], 3).tolist()} printed y_e = "
+        f"{worst[1]:.4f}, model {worst[2]:.4f}; (3.65) prints the right c_theta s_psi",
+    )
 
 
 def _c_3_62(ctx: Context) -> Evidence:
@@ -370,8 +405,11 @@ def _c_3_64(ctx: Context) -> Evidence:
         ang = th.euler_3_64(R)
         ep = max(ep, _maxabs(th.zyz_to_rotation(ang) - R))
         zyx = max(zyx, _maxabs(th.rotation_3_4(*ang) - R))
-    return Evidence(ep, None, f"Rz(phi_e) Ry(theta_e) Rz(psi_e) rebuilds R_e; read as ZYX angles like (3.4)/(3.8) the "
-                    f"same numbers give a rotation off by {zyx:.3g}")
+    return Evidence(
+        ep,
+        None,
+        f"Rz(phi_e) Ry(theta_e) Rz(psi_e) rebuilds R_e; read as ZYX angles like (3.4)/(3.8) the same numbers give a rotation off by {zyx:.3g}",
+    )
 
 
 def _c_3_65(ctx: Context) -> Evidence:
@@ -416,9 +454,13 @@ def _c_3_68_ang(ctx: Context) -> Evidence:
         ec = max(ec, _maxabs(_wrap(th.hover_fk_3_68_corrected(*xi[0:3], xi[5], xi[6:9], ctx.d)[3:6] - ref)))
         if e > ep:
             ep, worst = e, (xi, printed, ref)
-    return Evidence(ep, ec, f"lines 4-6 vs (3.64) of the model R_e at phi = theta = 0: psi = {worst[0][5]:.3f}, "
-                    f"theta2 + theta3 = {worst[0][7] + worst[0][8]:.3f} -> printed {np.round(worst[1], 3).tolist()}, "
-                    f"true {np.round(worst[2], 3).tolist()}")
+    return Evidence(
+        ep,
+        ec,
+        f"lines 4-6 vs (3.64) of the model R_e at phi = theta = 0: psi = {worst[0][5]:.3f}, "
+        f"theta2 + theta3 = {worst[0][7] + worst[0][8]:.3f} -> printed {np.round(worst[1], 3).tolist()}, "
+        f"true {np.round(worst[2], 3).tolist()}",
+    )
 
 
 def _c_3_78_xy(ctx: Context) -> Evidence:
@@ -433,8 +475,12 @@ def _c_3_78_z(ctx: Context) -> Evidence:
         ep = max(ep, abs(th.com_3_78(xi[6:9], ctx.params)[2] - z))
         ec = max(ec, abs(th.com_3_78_corrected(xi[6:9], ctx.params)[2] - z))
     m1, m2, m3 = (k.mass for k in ctx.params.links)
-    return Evidence(ep, ec, f"printed sum m_i (d0 + d1) overcounts link 1 by m1 d1/2 = {m1 * ctx.params.d1 / 2:.3g} kg m and "
-                    f"(m2 + m3) d2 c2 / 2 undercounts link 3 by m3 d2 c2 / 2 ({m3 * ctx.params.d2 / 2:.3g} c2 kg m)")
+    return Evidence(
+        ep,
+        ec,
+        f"printed sum m_i (d0 + d1) overcounts link 1 by m1 d1/2 = {m1 * ctx.params.d1 / 2:.3g} kg m and "
+        f"(m2 + m3) d2 c2 / 2 undercounts link 3 by m3 d2 c2 / 2 ({m3 * ctx.params.d2 / 2:.3g} c2 kg m)",
+    )
 
 
 def _c_3_80(ctx: Context) -> Evidence:
@@ -528,9 +574,13 @@ def _c_3_27(ctx: Context) -> Evidence:
         J = pin.computeFrameJacobian(model, data, q, tool, pin.LOCAL_WORLD_ALIGNED)
         Ju = pin.computeFrameJacobian(urdf, udata, q, ee, pin.LOCAL_WORLD_ALIGNED)
         e_pin = max(e_pin, _maxabs(J - Ju))
-    return Evidence(max(err, e_pin), None, f"chain (3.29)-(3.30) of the product (3.27) with Table 3.4 (alpha = pi/2 on the theta2 "
-                    f"row, as (3.53)), ^bT_0 (3.49), ^4T_eb (3.51), frame by frame vs the URDF: {_fmt(parts)}; the Pinocchio "
-                    f"model built from the table (qprr.mdh.build_model): frames and end-effector Jacobian vs the URDF {e_pin:.1g}")
+    return Evidence(
+        max(err, e_pin),
+        None,
+        f"chain (3.29)-(3.30) of the product (3.27) with Table 3.4 (alpha = pi/2 on the theta2 "
+        f"row, as (3.53)), ^bT_0 (3.49), ^4T_eb (3.51), frame by frame vs the URDF: {_fmt(parts)}; the Pinocchio "
+        f"model built from the table (qprr.mdh.build_model): frames and end-effector Jacobian vs the URDF {e_pin:.1g}",
+    )
 
 
 def _c_3_28(ctx: Context) -> Evidence:
@@ -545,17 +595,25 @@ def _c_3_28(ctx: Context) -> Evidence:
         direct = max(direct, _maxabs(P - mdh.kk_transform(a, d, t, r)))
         orth = max(orth, _maxabs(P[0:3, 0:3].T @ P[0:3, 0:3] - np.eye(3)))
         ec = max(ec, _maxabs(th.mdh_3_28_corrected(a, d, t, r) - mdh.kk_transform(a, d, t, r)))
-    return Evidence(max(ep, direct), ec, f"entry (1,2) printed +sin(theta), the product (3.27) gives -sin(theta): vs the product "
-                    f"{direct:.2g}; as printed R^T R - I reaches {orth:.2g} (not a rotation); chained as in (3.29) vs the URDF: "
-                    f"{_fmt(parts)}")
+    return Evidence(
+        max(ep, direct),
+        ec,
+        f"entry (1,2) printed +sin(theta), the product (3.27) gives -sin(theta): vs the product "
+        f"{direct:.2g}; as printed R^T R - I reaches {orth:.2g} (not a rotation); chained as in (3.29) vs the URDF: "
+        f"{_fmt(parts)}",
+    )
 
 
 def _c_table_3_4(ctx: Context) -> Evidence:
     ep, parts = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4(ctx.d)))
     ec, _ = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4_corrected(ctx.d)))
     z2 = mdh.chain(th.table_3_4(ctx.d), np.zeros(3), base=th.T_b0_3_49())[1][0:3, 2]
-    return Evidence(ep, ec, f"printed alpha = pi on the theta2 row puts z_2 = {np.round(z2, 12).tolist()} (the slider axis), "
-                    f"the URDF joint theta2 turns about +y_B; frame by frame: {_fmt(parts)}; alpha = pi/2, as (3.53) is printed, holds")
+    return Evidence(
+        ep,
+        ec,
+        f"printed alpha = pi on the theta2 row puts z_2 = {np.round(z2, 12).tolist()} (the slider axis), "
+        f"the URDF joint theta2 turns about +y_B; frame by frame: {_fmt(parts)}; alpha = pi/2, as (3.53) is printed, holds",
+    )
 
 
 def _required_tool(ctx: Context, q) -> np.ndarray:
@@ -572,16 +630,24 @@ def _c_3_48(ctx: Context) -> Evidence:
     for q in _arm_qs(ctx):  # ^bT_0 that ends (3.27)-(3.30) with (3.51) on the URDF end effector
         T_0eb = mdh.chain(th.table_3_4_corrected(ctx.d), q, tool=th.T_4eb_3_51())[-1]
         req = max(req, _maxabs(urdf_arm_frames(model, data, q)[2] @ np.linalg.inv(T_0eb) - th.T_b0_3_49()))
-    return Evidence(max(stated, req), None, f"Rot(y, pi/2) Rot(z, pi) vs the printed matrix (3.49): {stated:.1g}; the ^bT_0 the URDF "
-                    f"requires (end effector times the inverse of ^0T_eb) vs (3.49): {req:.1g}; z_0 = x_B, the slider axis")
+    return Evidence(
+        max(stated, req),
+        None,
+        f"Rot(y, pi/2) Rot(z, pi) vs the printed matrix (3.49): {stated:.1g}; the ^bT_0 the URDF "
+        f"requires (end effector times the inverse of ^0T_eb) vs (3.49): {req:.1g}; z_0 = x_B, the slider axis",
+    )
 
 
 def _c_3_50(ctx: Context) -> Evidence:
     ep = max(_maxabs(th.T_4eb_3_50() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
     ec = max(_maxabs(th.T_4eb_3_50_corrected() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
-    return Evidence(ep, ec, f"Rot(y, pi/2) Rot(z, -pi/2) = {np.round(th.T_4eb_3_50()[0:3, 0:3], 12).astype(int).tolist()} vs the "
-                    f"^4T_eb the URDF requires ((^bT_4)^-1 ^bT_eb, constant): the matrix printed as its result (3.51) is "
-                    f"Rot(y, pi/2) Rot(z, +pi/2)")
+    return Evidence(
+        ep,
+        ec,
+        f"Rot(y, pi/2) Rot(z, -pi/2) = {np.round(th.T_4eb_3_50()[0:3, 0:3], 12).astype(int).tolist()} vs the "
+        f"^4T_eb the URDF requires ((^bT_4)^-1 ^bT_eb, constant): the matrix printed as its result (3.51) is "
+        f"Rot(y, pi/2) Rot(z, +pi/2)",
+    )
 
 
 def _c_3_51(ctx: Context) -> Evidence:
@@ -600,17 +666,24 @@ def _c_3_52(ctx: Context) -> Evidence:
         e_kk = max(e_kk, max(_maxabs(P - row.transform(v)) for P, row, v in zip(printed, rows, values)))
         e_tab = max(e_tab, _maxabs(printed[1] - printed_rows[1].transform(t2)))
     err, parts = _chain_vs_urdf(ctx, lambda q: th.mdh_frames_3_56(q, ctx.d))
-    return Evidence(max(e_kk, err), None, f"each printed matrix vs (3.27) of its row {e_kk:.1g}; chained, frame by frame vs the URDF: "
-                    f"{_fmt(parts)}; (3.53) is printed with alpha = pi/2: vs (3.27) of the printed Table 3.4 row (alpha = pi) "
-                    f"it is off by {e_tab:.2g}")
+    return Evidence(
+        max(e_kk, err),
+        None,
+        f"each printed matrix vs (3.27) of its row {e_kk:.1g}; chained, frame by frame vs the URDF: "
+        f"{_fmt(parts)}; (3.53) is printed with alpha = pi/2: vs (3.27) of the printed Table 3.4 row (alpha = pi) "
+        f"it is off by {e_tab:.2g}",
+    )
 
 
 def _c_3_56(ctx: Context) -> Evidence:
     model, data = _urdf_arm(ctx)
     e_urdf = max(_maxabs(th.T_eb_3_56(q, ctx.d) - urdf_arm_frames(model, data, q)[2]) for q in _arm_qs(ctx))
     e_58 = max(_maxabs(th.T_eb_3_56(q, ctx.d) - th.T_eb_3_58(q, ctx.d)) for q in _arm_qs(ctx))
-    return Evidence(max(e_urdf, e_58), None, f"product of the printed (3.49), (3.52)-(3.55), (3.51) vs the URDF end effector "
-                    f"({e_urdf:.1g}) and vs (3.58) ({e_58:.1g})")
+    return Evidence(
+        max(e_urdf, e_58),
+        None,
+        f"product of the printed (3.49), (3.52)-(3.55), (3.51) vs the URDF end effector ({e_urdf:.1g}) and vs (3.58) ({e_58:.1g})",
+    )
 
 
 # ------------------------------------------------------------------ payload in (3.76)-(3.78)
@@ -632,8 +705,11 @@ def _c_3_76(ctx: Context) -> Evidence:
     for xi, _ in ctx.states:
         M = kin.ee_placement_body(ctx.platform, ctx.data, _q(xi))
         err = max(err, _maxabs(th.payload_com_3_76(xi[6:9], ctx.d, PAYLOAD_OFFSET) - M.act(np.array([0.0, 0.0, PAYLOAD_OFFSET]))))
-    return Evidence(err, None, f"p_cl at d_cl = {PAYLOAD_OFFSET} m beyond the end effector along link 3 vs Pinocchio "
-                    "(end-effector placement in B applied to (0, 0, d_cl))")
+    return Evidence(
+        err,
+        None,
+        f"p_cl at d_cl = {PAYLOAD_OFFSET} m beyond the end effector along link 3 vs Pinocchio (end-effector placement in B applied to (0, 0, d_cl))",
+    )
 
 
 def _c_3_78_payload(ctx: Context) -> Evidence:
@@ -649,10 +725,14 @@ def _c_3_78_payload(ctx: Context) -> Evidence:
         ec = max(ec, _maxabs(th.com_3_78_corrected(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl) - ref))
         if e > ep:
             ep, worst = e, (xi[6:9], printed[0], ref[0])
-    return Evidence(ep, ec, f"x_cm (whose only misprint is the payload term) with m_l = {m_l} kg at d_cl = {d_cl} m vs Pinocchio "
-                    f"(qprr.payload.com_with_payload): at q_arm = {np.round(worst[0], 3).tolist()} printed {worst[1]:.5f} m, model "
-                    f"{worst[2]:.5f} m; printed - true = (1 - m_l[kg]) x_cl / m_G: '+ x_cl' adds a length to kg m; z_cm is off by "
-                    f"{ez:.2g} m (payload term and the z_cm misprint above); the corrected form (m_l p_cl, (3.76)) holds in x, y, z")
+    return Evidence(
+        ep,
+        ec,
+        f"x_cm (whose only misprint is the payload term) with m_l = {m_l} kg at d_cl = {d_cl} m vs Pinocchio "
+        f"(qprr.payload.com_with_payload): at q_arm = {np.round(worst[0], 3).tolist()} printed {worst[1]:.5f} m, model "
+        f"{worst[2]:.5f} m; printed - true = (1 - m_l[kg]) x_cl / m_G: '+ x_cl' adds a length to kg m; z_cm is off by "
+        f"{ez:.2g} m (payload term and the z_cm misprint above); the corrected form (m_l p_cl, (3.76)) holds in x, y, z",
+    )
 
 
 # ------------------------------------------------------------------------------ chapter 4
@@ -683,8 +763,10 @@ def _c_4_27(ctx: Context) -> Evidence:
 
 
 def _c_4_28(ctx: Context) -> Evidence:
-    err = max(abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]))
-              for xi, _ in ctx.states)
+    err = max(
+        abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]))
+        for xi, _ in ctx.states
+    )
     return Evidence(err, None, "det of the reduced Pinocchio arm Jacobian")
 
 
@@ -723,8 +805,12 @@ def _c_4_44(ctx: Context) -> Evidence:
         q_arm = rng.uniform([-0.04, -np.pi, -np.pi], [0.04, np.pi, np.pi])
         ref = th.det_JJt_4_44(q_arm[0], q_arm[1], ctx.d)
         err = max(err, abs(ref - _zero_euler_det(ctx.platform, ctx.data, q_arm)), abs(ref - _zero_euler_det(other, do, q_arm)))
-    return Evidence(err, None, "vs det(J J^T) of the 6x9 model Jacobian (4.13) at zero Euler angles, for d3 = 0.10 and 0.25 m "
-                    "and random theta3: the true determinant depends on neither")
+    return Evidence(
+        err,
+        None,
+        "vs det(J J^T) of the 6x9 model Jacobian (4.13) at zero Euler angles, for d3 = 0.10 and 0.25 m "
+        "and random theta3: the true determinant depends on neither",
+    )
 
 
 def _sol_check(fn, r0):
@@ -733,8 +819,12 @@ def _sol_check(fn, r0):
         e44 = max(abs(fn(t) - th.det_JJt_4_44(r0, t, ctx.d)) for t in grid)
         emod = max(abs(fn(t) - _zero_euler_det(ctx.platform, ctx.data, np.array([r0, t, 0.3]))) for t in grid)
         lo = min(fn(t) for t in grid)
-        return Evidence(max(e44, emod), None, f"printed 4-digit numbers vs (4.44) ({e44:.1g}) and vs the model det(J J^T) "
-                        f"({emod:.1g}) with d0 + d1 = 0.095, d2 = 0.18, theta2 on a grid; min over theta2 = {lo:.4f} (never 0)")
+        return Evidence(
+            max(e44, emod),
+            None,
+            f"printed 4-digit numbers vs (4.44) ({e44:.1g}) and vs the model det(J J^T) "
+            f"({emod:.1g}) with d0 + d1 = 0.095, d2 = 0.18, theta2 on a grid; min over theta2 = {lo:.4f} (never 0)",
+        )
 
     return run
 
@@ -777,9 +867,12 @@ def _lu_check(names: tuple[str, ...], what: str):
                 ep[n] = max(ep[n], abs(printed[n] - ref))
                 ec = max(ec, abs(corrected[n] - ref))
         wrong = [n for n in names if ep[n] > 1e-10]
-        return Evidence(max(ep.values()), ec if wrong else None,
-                        "each factor vs the Doolittle factorisation (unit lower J_L, unique) of the model J J^T at zero Euler "
-                        "angles (J of (4.13)): " + ", ".join(f"{n} {e:.1g}" for n, e in ep.items()) + (f"; {what}" if what else ""))
+        return Evidence(
+            max(ep.values()),
+            ec if wrong else None,
+            "each factor vs the Doolittle factorisation (unit lower J_L, unique) of the model J J^T at zero Euler "
+            "angles (J of (4.13)): " + ", ".join(f"{n} {e:.1g}" for n, e in ep.items()) + (f"; {what}" if what else ""),
+        )
 
     return run
 
@@ -790,8 +883,12 @@ def _c_4_42_pattern(ctx: Context) -> Evidence:
         Lc, Uc = th.lu_matrices_4_42(th.lu_factors_4_42_corrected(q, ctx.d))
         zeros = max(zeros, _maxabs(L[(Lc == 0) & ~np.eye(6, dtype=bool)]), _maxabs(U[Uc == 0]))
         prod = max(prod, _maxabs(Lc @ Uc - A))
-    return Evidence(max(zeros, prod), None, f"the model's Doolittle factors vanish where (4.42) prints 0 ({zeros:.1g}); J_L J_U rebuilt "
-                    f"from the factors (a31 = b13/b11 is not printed) equals J J^T ({prod:.1g})")
+    return Evidence(
+        max(zeros, prod),
+        None,
+        f"the model's Doolittle factors vanish where (4.42) prints 0 ({zeros:.1g}); J_L J_U rebuilt "
+        f"from the factors (a31 = b13/b11 is not printed) equals J J^T ({prod:.1g})",
+    )
 
 
 def _c_4_43(ctx: Context) -> Evidence:
@@ -801,9 +898,13 @@ def _c_4_43(ctx: Context) -> Evidence:
         ident = max(ident, abs(np.prod(np.diag(U)) - det) / det)
         with_printed = max(with_printed, abs(th.det_4_43(th.lu_factors_4_42(q, ctx.d)) - det) / det)
         with_corrected = max(with_corrected, abs(th.det_4_43(th.lu_factors_4_42_corrected(q, ctx.d)) - det) / det)
-    return Evidence(ident, with_corrected, f"relative error of the identity det(J J^T) = prod of Doolittle's diagonal b_ii of the "
-                    f"model; with the (4.42) factors as printed the product is off by {with_printed:.2g} through b55 alone (its "
-                    f"own row), with the corrected b55 by {with_corrected:.1g}")
+    return Evidence(
+        ident,
+        with_corrected,
+        f"relative error of the identity det(J J^T) = prod of Doolittle's diagonal b_ii of the "
+        f"model; with the (4.42) factors as printed the product is off by {with_printed:.2g} through b55 alone (its "
+        f"own row), with the corrected b55 by {with_corrected:.1g}",
+    )
 
 
 def _c_4_43_text(ctx: Context) -> Evidence:
@@ -811,8 +912,12 @@ def _c_4_43_text(ctx: Context) -> Evidence:
     for _, _, L, U in _lu_samples(ctx):
         ep = max(ep, abs(np.linalg.det(U) - 1.0))
         ec = max(ec, abs(np.linalg.det(L) - 1.0))
-    return Evidence(ep, ec, f"the text after (4.43) says det(J_U) = 1: |det(J_U) - 1| reaches {ep:.3g}; the unit-diagonal factor "
-                    f"is J_L (|det(J_L) - 1| {ec:.1g}), which is what makes det(J J^T) = det(J_U)")
+    return Evidence(
+        ep,
+        ec,
+        f"the text after (4.43) says det(J_U) = 1: |det(J_U) - 1| reaches {ep:.3g}; the unit-diagonal factor "
+        f"is J_L (|det(J_L) - 1| {ec:.1g}), which is what makes det(J J^T) = det(J_U)",
+    )
 
 
 def _c_4_24(ctx: Context) -> Evidence:
@@ -823,8 +928,12 @@ def _c_4_24(ctx: Context) -> Evidence:
         v_eb = T_beb[:3, :3].T @ (kin.arm_jacobian_body(ctx.platform, ctx.data, q)[0:3] @ qd)
         ep = max(ep, _maxabs(th.v_ee_4_24(q, qd, ctx.d) - v_eb))
         ec = max(ec, _maxabs(th.v_ee_4_24(q, qd, ctx.d, corrected=True) - v_eb))
-    return Evidence(ep, ec, "Pinocchio's end-effector velocity relative to B (arm Jacobian), in the eb axes of the MDH chain "
-                    "(3.49), Table 3.4, (3.51): the theta2_dot coefficient of row 1 is d2 c3 + d3, printed d2 s3 + d3")
+    return Evidence(
+        ep,
+        ec,
+        "Pinocchio's end-effector velocity relative to B (arm Jacobian), in the eb axes of the MDH chain "
+        "(3.49), Table 3.4, (3.51): the theta2_dot coefficient of row 1 is d2 c3 + d3, printed d2 s3 + d3",
+    )
 
 
 def _c_5_20(ctx: Context) -> Evidence:
@@ -843,9 +952,13 @@ def _c_5_20(ctx: Context) -> Evidence:
             err = max(_maxabs(Jp - Jp_fd), _maxabs(Jo - Jo_ref))
             ep, ec = (max(ep, err), ec) if index == "printed" else (ep, max(ec, err))
         fd_err = max(fd_err, _maxabs(th.link_jacobians_5_20(q, ctx.d)[0] - Jp_fd))
-    return Evidence(ep, ec, "columns built from the thesis's own MDH frames (Table 3.4 after (3.49)) vs central differences of the "
-                    "link CoMs (3.78) and the joint axes: with z_(j-1), p_(j-1) as printed, joint 2's column is about z_1 = x_B (the "
-                    f"slider axis); with the modified-DH index z_j, p_j it holds (differences vs the closed form: {fd_err:.1g})")
+    return Evidence(
+        ep,
+        ec,
+        "columns built from the thesis's own MDH frames (Table 3.4 after (3.49)) vs central differences of the "
+        "link CoMs (3.78) and the joint axes: with z_(j-1), p_(j-1) as printed, joint 2's column is about z_1 = x_B (the "
+        f"slider axis); with the modified-DH index z_j, p_j it holds (differences vs the closed form: {fd_err:.1g})",
+    )
 
 
 def _c_4_45(ctx: Context) -> Evidence:
@@ -861,10 +974,14 @@ def _c_4_45(ctx: Context) -> Evidence:
     lam, *_ = np.linalg.lstsq(Bp, dets, rcond=None)  # the best constants the printed basis allows
     ep = _maxabs(Bp @ lam - dets)
     ec = max(abs(th.det_JJt_4_45_corrected(q[0], q[1], ctx.d) - dt) for q, dt in zip(pts, dets))
-    return Evidence(ep, ec, f"best constant lambda_1..8 (least squares over {len(pts)} random (r0, theta2, theta3)) still misses the "
-                    f"model det(J J^T) by {ep:.2g}: (4.44) has 4 d2 r0 s2 (coefficient of s2 = {4 * p.d2:.4f} r0, cf. -0.0288 "
-                    f"and +0.0288 in (4.46), (4.48)) and no constant s2 term; with r0 s2 in place of s2 and the lambda of (4.44) "
-                    f"it is exact")
+    return Evidence(
+        ep,
+        ec,
+        f"best constant lambda_1..8 (least squares over {len(pts)} random (r0, theta2, theta3)) still misses the "
+        f"model det(J J^T) by {ep:.2g}: (4.44) has 4 d2 r0 s2 (coefficient of s2 = {4 * p.d2:.4f} r0, cf. -0.0288 "
+        f"and +0.0288 in (4.46), (4.48)) and no constant s2 term; with r0 s2 in place of s2 and the lambda of (4.44) "
+        f"it is exact",
+    )
 
 
 # ------------------------------------------------------------------------------ chapter 5
@@ -903,8 +1020,12 @@ def _c_5_15(ctx: Context) -> Evidence:
         ke = pin.computeKineticEnergy(model, data, _q(xi), v)
         ep = max(ep, abs(th.kinetic_multirotor_5_15(xi[3:6], xid[3:6], ctx.params) - ke))
         ec = max(ec, abs(th.kinetic_multirotor_5_15_corrected(xi[3:6], xid[3:6], ctx.params) - ke))
-    return Evidence(ep, ec, "vs Pinocchio kinetic energy of the multirotor alone with omega_body from differences of R_b; "
-                    "Q = R_b^T T mixes the body rate T phi_dot with the world-frame tensor R_b I_b R_b^T")
+    return Evidence(
+        ep,
+        ec,
+        "vs Pinocchio kinetic energy of the multirotor alone with omega_body from differences of R_b; "
+        "Q = R_b^T T mixes the body rate T phi_dot with the world-frame tensor R_b I_b R_b^T",
+    )
 
 
 def _c_5_25(ctx: Context) -> Evidence:
@@ -936,8 +1057,11 @@ def _c_5_35(ctx: Context) -> Evidence:
         Bdot = np.einsum("ijk,k->ij", dB, xid)
         N = Bdot - 2 * C
         skew = max(skew, _maxabs(N + N.T))
-    return Evidence(max(err, skew), None, f"model C vs Christoffel symbols of central differences of B ({err:.1g}); "
-                    f"B_dot - 2C skew-symmetric (Hypothesis 7) to {skew:.1g}")
+    return Evidence(
+        max(err, skew),
+        None,
+        f"model C vs Christoffel symbols of central differences of B ({err:.1g}); B_dot - 2C skew-symmetric (Hypothesis 7) to {skew:.1g}",
+    )
 
 
 def _c_5_37(ctx: Context) -> Evidence:
@@ -978,10 +1102,13 @@ def _virtual_power_error(RQ_fn, ctx: Context) -> float:
 def _rq_check(fn):
     def run(ctx: Context) -> Evidence:
         ep = _virtual_power_error(fn, ctx)
-        ec = max(_virtual_power_error(th.R_Q_corrected, ctx),
-                 max(_maxabs(th.R_Q_corrected(xi) - input_map_matrix(xi)) for xi, _ in ctx.states))
-        return Evidence(ep, ec, "u^T xi_dot vs the power f_world . p_dot + tau_body . omega_body + mu . q_arm_dot "
-                        "(omega_body by differences of R_b); the corrected middle block is T^T")
+        ec = max(_virtual_power_error(th.R_Q_corrected, ctx), max(_maxabs(th.R_Q_corrected(xi) - input_map_matrix(xi)) for xi, _ in ctx.states))
+        return Evidence(
+            ep,
+            ec,
+            "u^T xi_dot vs the power f_world . p_dot + tau_body . omega_body + mu . q_arm_dot "
+            "(omega_body by differences of R_b); the corrected middle block is T^T",
+        )
 
     return run
 
@@ -1015,8 +1142,12 @@ def _c_5_5_B(ctx: Context) -> Evidence:
         ec = max(ec, _maxabs(th.arm_B_5_5_corrected(q, ctx.params) - M))
     bad = _bad_entries(np.array(errs), 1e-10, _ARM_B_NAMES)
     I2, I3 = ctx.params.links[1].inertia, ctx.params.links[2].inertia
-    return Evidence(ep, ec, f"vs CRBA with the base locked; wrong entries: {bad} (b22 uses I_z2 = {I2[2]:g} for the joint-axis "
-                    f"moment I_y2 = {I2[1]:g}; b33 adds I_z3 + s23^2 (I_x3 - I_z3) = {I3[2]:g} + s23^2 ({I3[0] - I3[2]:g}))")
+    return Evidence(
+        ep,
+        ec,
+        f"vs CRBA with the base locked; wrong entries: {bad} (b22 uses I_z2 = {I2[2]:g} for the joint-axis "
+        f"moment I_y2 = {I2[1]:g}; b33 adds I_z3 + s23^2 (I_x3 - I_z3) = {I3[2]:g} + s23^2 ({I3[0] - I3[2]:g}))",
+    )
 
 
 def _c_5_5_C(ctx: Context) -> Evidence:
@@ -1030,8 +1161,12 @@ def _c_5_5_C(ctx: Context) -> Evidence:
         ep = max(ep, e.max())
         ec = max(ec, _maxabs(th.arm_C_5_5_corrected(q, qd, ctx.params) - Cm))
     bad = _bad_entries(np.array(errs), 1e-10, [n.replace("b", "c") for n in _ARM_B_NAMES])
-    return Evidence(ep, ec, f"vs Christoffel symbols of the locked-base CRBA (exact derivatives from RNEA); wrong entries: {bad} "
-                    "(they differentiate the spurious s23^2 (I_x3 - I_z3) of b33)")
+    return Evidence(
+        ep,
+        ec,
+        f"vs Christoffel symbols of the locked-base CRBA (exact derivatives from RNEA); wrong entries: {bad} "
+        "(they differentiate the spurious s23^2 (I_x3 - I_z3) of b33)",
+    )
 
 
 def _c_5_5_G(ctx: Context) -> Evidence:
@@ -1042,8 +1177,12 @@ def _c_5_5_G(ctx: Context) -> Evidence:
     for q, _, _ in _arm_samples(ctx):
         ep = max(ep, _maxabs(th.arm_G_5_5(q, ctx.params) - pin.computeGeneralizedGravity(model, data, q)))
         level = max(level, _maxabs(th.arm_G_5_5(q, ctx.params) - pin.computeGeneralizedGravity(lm, ld, q)))
-    return Evidence(ep, None, "vs Pinocchio generalised gravity of the locked-base arm with the base pitched by +pi/2 "
-                    f"(gravity +g x_B, along the slider); with the base level (z up) it would be off by {level:.3g}")
+    return Evidence(
+        ep,
+        None,
+        "vs Pinocchio generalised gravity of the locked-base arm with the base pitched by +pi/2 "
+        f"(gravity +g x_B, along the slider); with the base level (z up) it would be off by {level:.3g}",
+    )
 
 
 def _u_check(i: int, what: str):
@@ -1100,8 +1239,11 @@ def _symbolic_errors(ctx: Context) -> dict:
 
 def _symbolic_check(name: str):
     def run(ctx: Context) -> Evidence:
-        return Evidence(_symbolic_errors(ctx)[name], None, f"{name} of the Lagrange model derived symbolically (qprr.thesis.symbolic, "
-                        "sympy, no Pinocchio) vs CRBA/RNEA in xi coordinates")
+        return Evidence(
+            _symbolic_errors(ctx)[name],
+            None,
+            f"{name} of the Lagrange model derived symbolically (qprr.thesis.symbolic, sympy, no Pinocchio) vs CRBA/RNEA in xi coordinates",
+        )
 
     return run
 
@@ -1140,9 +1282,13 @@ def _c_6_29_rate(ctx: Context) -> Evidence:
         omega_body, R = v[3:6], _R(xi)
         ep = max(ep, _maxabs(th.p_c_dot_6_29(xid[0:3], R, omega_body, p_cm, p_cm_dot) - vcom))
         e_world = max(e_world, _maxabs(th.p_c_dot_6_29(xid[0:3], R, R @ omega_body, p_cm, p_cm_dot) - vcom))
-    return Evidence(ep, None, f"vs Pinocchio CoM velocity (p_cm_dot by central differences along the arm joints) with omega_b = "
-                    f"T phi_b_dot, the body rate; with the world rate R_b T phi_b_dot (as (4.7) reads omega_b) it is off by "
-                    f"{e_world:.2g} m/s")
+    return Evidence(
+        ep,
+        None,
+        f"vs Pinocchio CoM velocity (p_cm_dot by central differences along the arm joints) with omega_b = "
+        f"T phi_b_dot, the body rate; with the world rate R_b T phi_b_dot (as (4.7) reads omega_b) it is off by "
+        f"{e_world:.2g} m/s",
+    )
 
 
 def _c_6_30_xy(ctx: Context) -> Evidence:
@@ -1157,8 +1303,12 @@ def _c_6_30_z(ctx: Context) -> Evidence:
         ep = max(ep, abs(th.com_6_30(xi[6:9], ctx.params)[2] - z))
         ec = max(ec, abs(th.com_3_78_corrected(xi[6:9], ctx.params)[2] - z))
     m1 = ctx.params.links[0].mass
-    return Evidence(ep, ec, f"(6.30c) fixes the (m2/2 + m3) d2 c2 of (3.78) but keeps sum m_i (d0 + d1): link 1's CoM is at d0 + d1/2, "
-                    f"printed - true = m1 d1 / (2 m_G) = {m1 * ctx.params.d1 / 2 / ctx.params.total_mass:.3g} m at every q")
+    return Evidence(
+        ep,
+        ec,
+        f"(6.30c) fixes the (m2/2 + m3) d2 c2 of (3.78) but keeps sum m_i (d0 + d1): link 1's CoM is at d0 + d1/2, "
+        f"printed - true = m1 d1 / (2 m_G) = {m1 * ctx.params.d1 / 2 / ctx.params.total_mass:.3g} m at every q",
+    )
 
 
 def _pitch_only_offsets(ctx: Context, phi: float = 0.0, psi: float = 0.0):
@@ -1171,8 +1321,12 @@ def _pitch_only_offsets(ctx: Context, phi: float = 0.0, psi: float = 0.0):
 def _c_6_31(ctx: Context) -> Evidence:
     err = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx))
     rolled = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx, phi=0.3))
-    return Evidence(err, None, f"R_theta p_cm vs Pinocchio p_c - p_b (world axes) at phi = psi = 0, |theta| < 0.4; at phi = 0.3 rad "
-                    f"it is off by {rolled:.2g} m. A rigid pitch leaves p_cm in B (hence x_cm, the thrust-line offset) unchanged")
+    return Evidence(
+        err,
+        None,
+        f"R_theta p_cm vs Pinocchio p_c - p_b (world axes) at phi = psi = 0, |theta| < 0.4; at phi = 0.3 rad "
+        f"it is off by {rolled:.2g} m. A rigid pitch leaves p_cm in B (hence x_cm, the thrust-line offset) unchanged",
+    )
 
 
 def _c_6_32(ctx: Context) -> Evidence:
@@ -1195,8 +1349,12 @@ def _c_6_34(ctx: Context) -> Evidence:
         e_zyz = max(e_zyz, abs(float(_wrap(zyz - te))))
     for xi in _level_states(ctx, phi=0.2):
         e_roll = max(e_roll, _ee_pitch_error(ctx, xi, th.theta_e_6_34(xi[4], xi[7], xi[8])))
-    return Evidence(ep, None, f"R_e of Pinocchio vs Rz(psi) Ry(theta + theta2 + theta3) at phi = 0 (any psi); read as the ZYZ "
-                    f"theta_e of (3.64) (in [0, pi]) it is off by {e_zyz:.2g} rad; at phi = 0.2 rad R_e is off by {e_roll:.2g}")
+    return Evidence(
+        ep,
+        None,
+        f"R_e of Pinocchio vs Rz(psi) Ry(theta + theta2 + theta3) at phi = 0 (any psi); read as the ZYZ "
+        f"theta_e of (3.64) (in [0, pi]) it is off by {e_zyz:.2g} rad; at phi = 0.2 rad R_e is off by {e_roll:.2g}",
+    )
 
 
 def _c_6_35(ctx: Context) -> Evidence:
@@ -1223,9 +1381,13 @@ def _c_6_35(ctx: Context) -> Evidence:
                 err = max(err, e)
             else:
                 e_roll = max(e_roll, e)
-    return Evidence(err, None, f"CogStabilizer.joint_references(theta, theta2_d) -> (r0_d, theta3_d) from (6.35) and x_cm = 0 of "
-                    f"(6.33), put into the model: Pinocchio x_cm in B and R_e vs Rz(psi) Ry(theta_e^d), {n} states with "
-                    f"|theta| < 0.3 ({clamped} with clamped references skipped); at phi = 0.2 rad the end effector is off by {e_roll:.2g}")
+    return Evidence(
+        err,
+        None,
+        f"CogStabilizer.joint_references(theta, theta2_d) -> (r0_d, theta3_d) from (6.35) and x_cm = 0 of "
+        f"(6.33), put into the model: Pinocchio x_cm in B and R_e vs Rz(psi) Ry(theta_e^d), {n} states with "
+        f"|theta| < 0.3 ({clamped} with clamped references skipped); at phi = 0.2 rad the end effector is off by {e_roll:.2g}",
+    )
 
 
 # ---------------------------------------------------------------------------- registry
@@ -1272,12 +1434,24 @@ CHECKS: tuple[Check, ...] = (
     Check("(4.44)", "det(J J^T) at zero Euler angles", _c_4_44, 1e-10),
     Check("(4.42)", "J J^T = J_L J_U, sparsity pattern", _c_4_42_pattern, 1e-12),
     Check("(4.42)", "L factors a42, a51, a62, a64", _lu_check(("a42", "a51", "a62", "a64"), ""), 1e-12),
-    Check("(4.42)", "L factor a53", _lu_check(("a53",), "a53 = b35 / b33 (the printed text has an unmatched parenthesis "
-                                                      "and lacks the terms of b33)"), 1e-12),
+    Check(
+        "(4.42)",
+        "L factor a53",
+        _lu_check(("a53",), "a53 = b35 / b33 (the printed text has an unmatched parenthesis and lacks the terms of b33)"),
+        1e-12,
+    ),
     Check("(4.42)", "U factors b_ij except b55", _lu_check(tuple(n for n in th.LU_U_NAMES if n != "b55"), ""), 1e-12),
-    Check("(4.42)", "U factor b55", _lu_check(("b55",), "b55 = 3 - b15^2/b11 - b35^2/b33: the printed last denominator has "
-                                                      "d2^4 s2 c2 and 2 d2 d3 s23 c23 where b33 has d2^2 sin 2theta2 and "
-                                                      "2 d2 d3 sin(2theta2 + theta3)"), 1e-12),
+    Check(
+        "(4.42)",
+        "U factor b55",
+        _lu_check(
+            ("b55",),
+            "b55 = 3 - b15^2/b11 - b35^2/b33: the printed last denominator has "
+            "d2^4 s2 c2 and 2 d2 d3 s23 c23 where b33 has d2^2 sin 2theta2 and "
+            "2 d2 d3 sin(2theta2 + theta3)",
+        ),
+        1e-12,
+    ),
     Check("(4.43)", "det(J J^T) = b11 b22 b33 b44 b55 b66 (identity)", _c_4_43, 1e-12),
     Check("(4.43) text", "the unit-determinant factor (det(J_U) = 1 in the text)", _c_4_43_text, 1e-12),
     Check("(4.45)", "det(J J^T) in the lambda basis", _c_4_45, 1e-10),
@@ -1306,16 +1480,25 @@ CHECKS: tuple[Check, ...] = (
     Check("5.5.3", "u(2), theta2 torque", _u_check(1, "m2 d2^2/2 (b22: /4), I_z2, theta3_dot for theta3_ddot, b33 terms"), 1e-10),
     Check("5.5.3", "u(3), theta3 torque", _u_check(2, "the spurious (I_x3 - I_z3) terms of b33"), 1e-10),
     Check("(6.29)", "p_c = p_b + R_b p_cm", _c_6_29, 1e-12),
-    Check("(6.29)'", "p_c_dot = p_b_dot + R_b (w x p_cm + p_cm_dot)", _c_6_29_rate, 1e-7,
-          "omega_b the body rate T phi_b_dot (3.25)"),
+    Check("(6.29)'", "p_c_dot = p_b_dot + R_b (w x p_cm + p_cm_dot)", _c_6_29_rate, 1e-7, "omega_b the body rate T phi_b_dot (3.25)"),
     Check("(6.30ab)", "CoG x_cm, y_cm in B", _c_6_30_xy, 1e-12),
     Check("(6.30c)", "CoG z_cm in B", _c_6_30_z, 1e-12),
     Check("(6.31)", "p'_cm = R_theta p_cm", _c_6_31, 1e-12, CONV_PITCH),
     Check("(6.32)", "nabla p_cm = (R_theta - I) p_cm", _c_6_32, 1e-12, CONV_PITCH),
-    Check("(6.34)", "theta_e = theta + theta2 + theta3", _c_6_34, 1e-12,
-          "phi = 0, theta_e the pitch of R_e = Rz(psi) Ry(theta_e), not the ZYZ theta_e of (3.64)"),
-    Check("(6.35)", "BSG references (r0_d, theta3_d) in the model", _c_6_35, 1e-12,
-          "phi = 0 (Hypothesis 4 of Sec. 6.3.3), references inside the joint limits"),
+    Check(
+        "(6.34)",
+        "theta_e = theta + theta2 + theta3",
+        _c_6_34,
+        1e-12,
+        "phi = 0, theta_e the pitch of R_e = Rz(psi) Ry(theta_e), not the ZYZ theta_e of (3.64)",
+    ),
+    Check(
+        "(6.35)",
+        "BSG references (r0_d, theta3_d) in the model",
+        _c_6_35,
+        1e-12,
+        "phi = 0 (Hypothesis 4 of Sec. 6.3.3), references inside the joint limits",
+    ),
     Check("conv.", "xi <-> (q, v, a) round trips", _c_conversion, 1e-7),
     Check("(5.36)", "B: Pinocchio vs sympy", _symbolic_check("B"), 1e-9),
     Check("(5.36)", "C: Pinocchio vs sympy", _symbolic_check("C"), 1e-9),
@@ -1331,8 +1514,7 @@ def evaluate(check: Check, ctx: Context) -> CheckResult:
     except _Skip as exc:
         return CheckResult(check.equation, check.quantity, None, None, check.tolerance, str(exc), "skipped", str(exc))
     except Exception as exc:  # a crashing check is a failing check, reported with its cause
-        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, "FAIL", "fail",
-                           f"{type(exc).__name__}: {exc}")
+        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, "FAIL", "fail", f"{type(exc).__name__}: {exc}")
     tol = check.tolerance
     printed_ok = bool(np.isfinite(ev.printed_error) and ev.printed_error <= tol)
     corrected_ok = ev.corrected_error is not None and bool(np.isfinite(ev.corrected_error) and ev.corrected_error <= tol)
@@ -1395,8 +1577,10 @@ def main(verbose: bool = False) -> int:
     n_fail = sum(not r.ok for r in results)
     n_mis = sum(r.verdict.startswith("misprint") for r in results)
     n_skip = sum(r.status == "skipped" for r in results)
-    print(f"\n{len(results)} checks: {len(results) - n_fail - n_skip} hold ({n_mis} of them misprints whose corrected form holds), "
-          f"{n_skip} skipped, {n_fail} failed  [{time.perf_counter() - t0:.1f} s]")
+    print(
+        f"\n{len(results)} checks: {len(results) - n_fail - n_skip} hold ({n_mis} of them misprints whose corrected form holds), "
+        f"{n_skip} skipped, {n_fail} failed  [{time.perf_counter() - t0:.1f} s]"
+    )
     return 0 if n_fail == 0 else 1
 
 

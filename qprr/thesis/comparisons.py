@@ -112,8 +112,7 @@ def compare_table(runs: _Runs, plot_dir: Path | None) -> Report:
     rep = Report("table")
     res = {c: runs.get(f"static-{c}", c) for c in ("idc", "dsid", "mfc")}
     head = f"{'variable':<9}" + "".join(f"{c + ' (ours)':>13}{THESIS_NAMES[c] + ' (thesis)':>15}" for c in res)
-    rep.lines += ["RMSE (6.26) on the static mission (Sec. 6.3.1.4), ours vs Thesis Table 6.3 (thesis MPC = our dsid)", head,
-                  "-" * len(head)]
+    rep.lines += ["RMSE (6.26) on the static mission (Sec. 6.3.1.4), ours vs Thesis Table 6.3 (thesis MPC = our dsid)", head, "-" * len(head)]
     for i, v in enumerate(NAMES):
         rep.lines.append(f"{v:<9}" + "".join(f"{r.rmse()[v]:>13.3e}{TABLE_6_3[c][i]:>15.4e}" for c, r in res.items()))
     rep.lines.append(f"{'time':<9}" + "".join(f"{r.wall_time:>12.3f}s{THESIS_RUN_TIME_S[c] / 60:>12.0f}min" for c, r in res.items()))
@@ -131,8 +130,15 @@ def compare_overlay(runs: _Runs, plot_dir: Path | None) -> Report:
     res = {f"{c} ({THESIS_NAMES[c]})": runs.get(f"static-{c}", c) for c in ("idc", "dsid", "mfc")}
     rep.lines += ["three controllers on the static mission (Figs. 6.19-6.21)", *_rmse_table(res)]
     if plot_dir is not None:
-        _save(rep, plot_overlay(res, _dir(plot_dir, "fig-6.19-6.21.png"), rows=("position", "position error", "arm error"),
-                                title="Figs. 6.19-6.21: IDC, desired-state ID (thesis MPC), MFC - positions, position errors, arm errors"))
+        _save(
+            rep,
+            plot_overlay(
+                res,
+                _dir(plot_dir, "fig-6.19-6.21.png"),
+                rows=("position", "position error", "arm error"),
+                title="Figs. 6.19-6.21: IDC, desired-state ID (thesis MPC), MFC - positions, position errors, arm errors",
+            ),
+        )
     rep.ok = all(r.status == "ok" for r in res.values())
     return rep
 
@@ -146,8 +152,9 @@ def compare_noise(runs: _Runs, plot_dir: Path | None) -> Report:
     rep.lines.append("white noise (6.27) of the noise scenario: uniform in [-a, a], a new sample every control tick; per component")
     rep.lines.append(f"{'component':<10}{'a':>8}{'mean':>11}{'std':>10}{'a/sqrt(3)':>11}{'max|u|':>9}")
     for i, n in enumerate(NAMES):
-        rep.lines.append(f"{n:<10}{amp[i]:>8.3g}{u[:, i].mean():>11.2e}{u[:, i].std():>10.4f}{amp[i] / math.sqrt(3):>11.4f}"
-                         f"{np.abs(u[:, i]).max():>9.4f}")
+        rep.lines.append(
+            f"{n:<10}{amp[i]:>8.3g}{u[:, i].mean():>11.2e}{u[:, i].std():>10.4f}{amp[i] / math.sqrt(3):>11.4f}{np.abs(u[:, i]).max():>9.4f}"
+        )
     rep.lines.append(f"tracking with it (IDC): {_fmt_rmse(res.rmse())}")
     if plot_dir is not None:
         fig = new_figure((13, 7))
@@ -166,8 +173,9 @@ def compare_noise(runs: _Runs, plot_dir: Path | None) -> Report:
                 a.legend(fontsize=7, loc="upper right")
         ax[2, 0].set_xlabel("t [s]")
         ax[2, 1].set_xlabel("t [s]")
-        fig.suptitle("Fig. 6.23: white noise u_ext of (6.27) (seeded, uniform; +-0.3 on seven forces, +-0.01 N m on the revolute joints)",
-                     fontsize=10)
+        fig.suptitle(
+            "Fig. 6.23: white noise u_ext of (6.27) (seeded, uniform; +-0.3 on seven forces, +-0.01 N m on the revolute joints)", fontsize=10
+        )
         p = figure_path(_dir(plot_dir, "fig-6.23-noise.png"))
         fig.savefig(p, dpi=80)
         _save(rep, p)
@@ -198,14 +206,15 @@ def compare_sweeps(runs: _Runs, plot_dir: Path | None) -> Report:
     pairs = {(te, t2): _bsg_run(te, t2, duration, runs.progress) for te, t2 in SWEEP_PAIRS}
     theta2 = {t2: (pairs[(0.0, t2)] if (0.0, t2) in pairs else _bsg_run(0.0, t2, duration, runs.progress)) for t2 in SWEEP_THETA2}
     rep.lines.append("BSG + MFC, dynamic mission (Sec. 6.3.3.3): final x_cm, r0, theta3 and max |x_cm| after the arm phase starts (15 s)")
-    rep.lines.append(f"{'theta_e^d':>10}{'theta2^d':>10}{'status':>10}{'x_cm [mm]':>11}{'max|x_cm|':>11}{'r0 [m]':>9}{'theta3':>9}"
-                     f"{'theta_e':>9}")
+    rep.lines.append(f"{'theta_e^d':>10}{'theta2^d':>10}{'status':>10}{'x_cm [mm]':>11}{'max|x_cm|':>11}{'r0 [m]':>9}{'theta3':>9}{'theta_e':>9}")
     for (te, t2), r in list(pairs.items()) + [((0.0, t2), r) for t2, r in theta2.items() if (0.0, t2) not in pairs]:
         after = r.t >= 15.0
         te_meas = r.xi[-1, 4] + r.xi[-1, 7] + r.xi[-1, 8]  # (6.34)
-        rep.lines.append(f"{te:>10.2f}{t2:>10.2f}{str(r.status):>10}{1e3 * r.x_cm[-1, 0]:>11.3f}"
-                         f"{1e3 * np.abs(r.x_cm[after, 0]).max() if after.any() else float('nan'):>11.3f}{r.xi[-1, 6]:>9.4f}"
-                         f"{r.xi[-1, 8]:>9.4f}{te_meas:>9.4f}")
+        rep.lines.append(
+            f"{te:>10.2f}{t2:>10.2f}{str(r.status):>10}{1e3 * r.x_cm[-1, 0]:>11.3f}"
+            f"{1e3 * np.abs(r.x_cm[after, 0]).max() if after.any() else float('nan'):>11.3f}{r.xi[-1, 6]:>9.4f}"
+            f"{r.xi[-1, 8]:>9.4f}{te_meas:>9.4f}"
+        )
         rep.ok &= r.status == "ok"
     if plot_dir is not None:
         fig = new_figure((14, 9))
@@ -253,10 +262,21 @@ def compare_decoupled(runs: _Runs, plot_dir: Path | None) -> Report:
     rep.ok = all(r.status == "ok" for r in rows.values())
     if plot_dir is not None:
         res = {"coupled IDC": rows["static-idc / idc"], "decoupled": rows["static-idc / decoupled"]}
-        _save(rep, plot_overlay(res, _dir(plot_dir, "coupled-vs-decoupled.png"), rows=("position error", "attitude error", "arm error"),
-                                title="coupled IDC vs decoupled control (Sec. 6.2.2), static mission, Table 6.2 gains"))
-        _save(rep, plot_rmse_bars({k: v.rmse() for k, v in rows.items()}, _dir(plot_dir, "coupled-vs-decoupled-rmse.png"),
-                                  title="RMSE (6.26): coupled IDC vs decoupled"))
+        _save(
+            rep,
+            plot_overlay(
+                res,
+                _dir(plot_dir, "coupled-vs-decoupled.png"),
+                rows=("position error", "attitude error", "arm error"),
+                title="coupled IDC vs decoupled control (Sec. 6.2.2), static mission, Table 6.2 gains",
+            ),
+        )
+        _save(
+            rep,
+            plot_rmse_bars(
+                {k: v.rmse() for k, v in rows.items()}, _dir(plot_dir, "coupled-vs-decoupled-rmse.png"), title="RMSE (6.26): coupled IDC vs decoupled"
+            ),
+        )
     return rep
 
 
@@ -275,25 +295,45 @@ def compare_mpc(runs: _Runs, plot_dir: Path | None) -> Report:
         for c in (idc, "mpc"):
             rows[f"{sc} / {c}"] = runs.get(sc, c)
     rep.lines += ["receding-horizon MPC (100 Hz, 40 nodes, Box-FDDP, rotor bounds) vs IDC", *_rmse_table(rows)]
-    rep.lines.append(f"{'run':<28}{'applied margin':>15}{'asked margin':>14}{'saturated %':>13}{'solve med/p95 [ms]':>20}"
-                     f"{'CPU med/p95 [ms]':>18}{'failed':>8}{'plan margin':>12}")
+    rep.lines.append(
+        f"{'run':<28}{'applied margin':>15}{'asked margin':>14}{'saturated %':>13}{'solve med/p95 [ms]':>20}"
+        f"{'CPU med/p95 [ms]':>18}{'failed':>8}{'plan margin':>12}"
+    )
     for label, r in rows.items():
         m = thrust_margins(r, platform)
         mm = r.metrics
-        mpc = (f"{1e3 * mm['mpc_median_solve_s']:>9.1f}/{1e3 * mm['mpc_p95_solve_s']:<10.1f}"
-               f"{1e3 * mm['mpc_median_solve_cpu_s']:>8.1f}/{1e3 * mm['mpc_p95_solve_cpu_s']:<9.1f}{mm['mpc_failed']:>8.0f}"
-               f"{mm['mpc_min_plan_thrust_margin_N']:>12.3g}") if "mpc_solves" in mm else f"{'-':>20}{'-':>18}{'-':>8}{'-':>12}"
+        mpc = (
+            (
+                f"{1e3 * mm['mpc_median_solve_s']:>9.1f}/{1e3 * mm['mpc_p95_solve_s']:<10.1f}"
+                f"{1e3 * mm['mpc_median_solve_cpu_s']:>8.1f}/{1e3 * mm['mpc_p95_solve_cpu_s']:<9.1f}{mm['mpc_failed']:>8.0f}"
+                f"{mm['mpc_min_plan_thrust_margin_N']:>12.3g}"
+            )
+            if "mpc_solves" in mm
+            else f"{'-':>20}{'-':>18}{'-':>8}{'-':>12}"
+        )
         rep.lines.append(f"{label:<28}{m['applied_margin_N']:>15.3g}{m['asked_margin_N']:>14.3g}{100 * m['saturated_fraction']:>13.2f}{mpc}")
-    rep.lines.append("margins in N: applied = closest applied thrust to [0, 20] N; asked = closest thrust the controller asked for "
-                     "(negative: beyond a bound, clipped by the allocator); plan = smallest margin of any MPC plan")
+    rep.lines.append(
+        "margins in N: applied = closest applied thrust to [0, 20] N; asked = closest thrust the controller asked for "
+        "(negative: beyond a bound, clipped by the allocator); plan = smallest margin of any MPC plan"
+    )
     rep.ok = all(r.status == "ok" for k, r in rows.items() if k.endswith("/ mpc"))
     if plot_dir is not None:
         res = {"IDC": rows["static-idc / idc"], "MPC": rows["static-idc / mpc"]}
-        _save(rep, plot_overlay(res, _dir(plot_dir, "mpc-vs-idc-static.png"), rows=("position error", "arm error", "thrust"),
-                                title="MPC vs IDC, static mission"))
+        _save(
+            rep,
+            plot_overlay(
+                res, _dir(plot_dir, "mpc-vs-idc-static.png"), rows=("position error", "arm error", "thrust"), title="MPC vs IDC, static mission"
+            ),
+        )
         _save(rep, _plot_reach(rows["aggressive-reach / idc"], rows["aggressive-reach / mpc"], platform, _dir(plot_dir, "mpc-vs-idc-reach.png")))
-        _save(rep, plot_rmse_bars({k: v.rmse() for k, v in rows.items() if not k.startswith("aggressive")},
-                                  _dir(plot_dir, "mpc-vs-idc-rmse.png"), title="RMSE (6.26): MPC vs IDC"))
+        _save(
+            rep,
+            plot_rmse_bars(
+                {k: v.rmse() for k, v in rows.items() if not k.startswith("aggressive")},
+                _dir(plot_dir, "mpc-vs-idc-rmse.png"),
+                title="RMSE (6.26): MPC vs IDC",
+            ),
+        )
     return rep
 
 
@@ -335,19 +375,35 @@ def compare_realistic(runs: _Runs, plot_dir: Path | None) -> Report:
     ctrls = [c for c in ("idc", "dsid", "mfc", "decoupled", "mpc") if c in CONTROLLERS]
     rows = {c: runs.get("realistic", c) for c in ctrls}
     ideal = {c: runs.get(f"static-{c}" if c in ("idc", "dsid", "mfc") else "static-idc", c) for c in ctrls}
-    rep.lines += ["every controller on the static mission with motor lag (5 ms), drag in wind (2.2 m/s mean, Dryden light "
-                  "turbulence, a 2 m/s gust) and joint friction (scenario realistic, seed 0)", *_rmse_table(rows)]
-    rep.lines.append("position RMSE (max of x, y, z) realistic / ideal: " + ", ".join(
-        f"{c} {max(rows[c].rmse()[n] for n in 'xyz') / max(ideal[c].rmse()[n] for n in 'xyz'):.1f}x" for c in ctrls))
+    rep.lines += [
+        "every controller on the static mission with motor lag (5 ms), drag in wind (2.2 m/s mean, Dryden light "
+        "turbulence, a 2 m/s gust) and joint friction (scenario realistic, seed 0)",
+        *_rmse_table(rows),
+    ]
+    rep.lines.append(
+        "position RMSE (max of x, y, z) realistic / ideal: "
+        + ", ".join(f"{c} {max(rows[c].rmse()[n] for n in 'xyz') / max(ideal[c].rmse()[n] for n in 'xyz'):.1f}x" for c in ctrls)
+    )
     for c, r in rows.items():
         m = thrust_margins(r, load())
         rep.lines.append(f"{c}: {r.status}; thrust margin applied {m['applied_margin_N']:.3g} N, asked {m['asked_margin_N']:.3g} N")
     rep.ok = all(r.status == "ok" for r in rows.values())
     if plot_dir is not None:
-        _save(rep, plot_overlay(rows, _dir(plot_dir, "realistic.png"), rows=("position error", "attitude error", "arm error"),
-                                title="realistic: motor lag, drag in wind, joint friction - every controller"))
-        _save(rep, plot_rmse_bars({c: r.rmse() for c, r in rows.items()}, _dir(plot_dir, "realistic-rmse.png"),
-                                  title="RMSE (6.26) with motor lag, wind and friction"))
+        _save(
+            rep,
+            plot_overlay(
+                rows,
+                _dir(plot_dir, "realistic.png"),
+                rows=("position error", "attitude error", "arm error"),
+                title="realistic: motor lag, drag in wind, joint friction - every controller",
+            ),
+        )
+        _save(
+            rep,
+            plot_rmse_bars(
+                {c: r.rmse() for c, r in rows.items()}, _dir(plot_dir, "realistic-rmse.png"), title="RMSE (6.26) with motor lag, wind and friction"
+            ),
+        )
     return rep
 
 
@@ -366,8 +422,9 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
         for T in LAG_TIME_CONSTANTS:
             act = rotor_dynamics(platform, time_constant=T) if T > 0 else None
             try:
-                r = simulate(platform, flight_controller(c, platform), static_mission(), duration, actuators=act, progress=runs.progress,
-                             scenario="lag")
+                r = simulate(
+                    platform, flight_controller(c, platform), static_mission(), duration, actuators=act, progress=runs.progress, scenario="lag"
+                )
             except QprrError as err:
                 r = getattr(err, "result", None)
                 if r is None:
@@ -405,13 +462,18 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
 
 
 COMPARISONS: dict[str, Callable[[_Runs, Path | None], Report]] = {
-    "table": compare_table, "overlay": compare_overlay, "noise": compare_noise, "sweeps": compare_sweeps,
-    "decoupled": compare_decoupled, "mpc": compare_mpc, "realistic": compare_realistic, "lag": compare_lag,
+    "table": compare_table,
+    "overlay": compare_overlay,
+    "noise": compare_noise,
+    "sweeps": compare_sweeps,
+    "decoupled": compare_decoupled,
+    "mpc": compare_mpc,
+    "realistic": compare_realistic,
+    "lag": compare_lag,
 }
 
 
-def run_comparisons(names: Sequence[str] = ("table",), *, duration: float | None = None, plot_dir=None,
-                    progress: bool = False) -> list[Report]:
+def run_comparisons(names: Sequence[str] = ("table",), *, duration: float | None = None, plot_dir=None, progress: bool = False) -> list[Report]:
     """Run the comparisons ``names`` (or "all") sharing their runs; ``duration`` [s] overrides the missions' 30 s
     (not the payload drop's); ``plot_dir`` (an existing folder) receives the figures."""
     names = list(COMPARISONS) if "all" in names else list(names)

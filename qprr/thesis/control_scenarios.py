@@ -77,8 +77,13 @@ def thrust_margins(result: SimResult, platform) -> dict[str, float]:
     tau_d = np.hstack([f, result.arm_effort]) @ np.array(platform.actuation_matrix).T + result.unallocated
     asked = tau_d[:, rows] @ np.linalg.pinv(Omega[rows]).T
     asked_margin = float(np.min(np.minimum(asked - f_lo, f_hi - asked))) if asked.size else float("nan")
-    return {"applied_margin_N": applied, "asked_margin_N": asked_margin, "saturated_fraction": result.saturation_fraction(),
-            "asked_min_N": float(asked.min()), "asked_max_N": float(asked.max())}
+    return {
+        "applied_margin_N": applied,
+        "asked_margin_N": asked_margin,
+        "saturated_fraction": result.saturation_fraction(),
+        "asked_min_N": float(asked.min()),
+        "asked_max_N": float(asked.max()),
+    }
 
 
 def _with_margins(res: SimResult, platform) -> SimResult:
@@ -91,21 +96,29 @@ def margin_summary(res: SimResult) -> list[str]:
     m = res.metrics
     lines = []
     if "thrust_applied_margin_N" in m:
-        lines.append(f"rotor bounds: applied thrust margin {m['thrust_applied_margin_N']:.3g} N, asked-for thrusts "
-                     f"[{m['thrust_asked_min_N']:.3g}, {m['thrust_asked_max_N']:.3g}] N (margin {m['thrust_asked_margin_N']:.3g} N), "
-                     f"a bound active on {100 * m['thrust_saturated_fraction']:.2f} % of the ticks")
+        lines.append(
+            f"rotor bounds: applied thrust margin {m['thrust_applied_margin_N']:.3g} N, asked-for thrusts "
+            f"[{m['thrust_asked_min_N']:.3g}, {m['thrust_asked_max_N']:.3g}] N (margin {m['thrust_asked_margin_N']:.3g} N), "
+            f"a bound active on {100 * m['thrust_saturated_fraction']:.2f} % of the ticks"
+        )
     if "mpc_solves" in m:
-        lines.append(f"mpc: {m['mpc_solves']:.0f} solves, wall median {1e3 * m['mpc_median_solve_s']:.1f} ms, p95 "
-                     f"{1e3 * m['mpc_p95_solve_s']:.1f} ms (CPU median {1e3 * m['mpc_median_solve_cpu_s']:.1f} ms, p95 "
-                     f"{1e3 * m['mpc_p95_solve_cpu_s']:.1f} ms); {m['mpc_converged']:.0f} converged, {m['mpc_iteration_limit']:.0f} "
-                     f"at the iteration limit, {m['mpc_failed']:.0f} failed ({m['mpc_fallbacks']:.0f} fallbacks); smallest planned "
-                     f"thrust margin {m['mpc_min_plan_thrust_margin_N']:.3g} N")
+        lines.append(
+            f"mpc: {m['mpc_solves']:.0f} solves, wall median {1e3 * m['mpc_median_solve_s']:.1f} ms, p95 "
+            f"{1e3 * m['mpc_p95_solve_s']:.1f} ms (CPU median {1e3 * m['mpc_median_solve_cpu_s']:.1f} ms, p95 "
+            f"{1e3 * m['mpc_p95_solve_cpu_s']:.1f} ms); {m['mpc_converged']:.0f} converged, {m['mpc_iteration_limit']:.0f} "
+            f"at the iteration limit, {m['mpc_failed']:.0f} failed ({m['mpc_fallbacks']:.0f} fallbacks); smallest planned "
+            f"thrust margin {m['mpc_min_plan_thrust_margin_N']:.3g} N"
+        )
     if "wind_speed_mean" in m:
-        lines.append(f"wind: mean speed {m['wind_speed_mean']:.2f} m/s, turbulence std {m['wind_turbulence_std']:.2f} m/s; rotor "
-                     f"speeds {m['rotor_speed_min']:.0f}..{m['rotor_speed_max']:.0f} rad/s")
+        lines.append(
+            f"wind: mean speed {m['wind_speed_mean']:.2f} m/s, turbulence std {m['wind_turbulence_std']:.2f} m/s; rotor "
+            f"speeds {m['rotor_speed_min']:.0f}..{m['rotor_speed_max']:.0f} rad/s"
+        )
     if "final_position_error" in m:
-        lines.append(f"final |p_b - p_b^d| = {m['final_position_error']:.3g} m; 2 % settling times x, y, z: "
-                     f"{m['settling_x']:.2f}, {m['settling_y']:.2f}, {m['settling_z']:.2f} s")
+        lines.append(
+            f"final |p_b - p_b^d| = {m['final_position_error']:.3g} m; 2 % settling times x, y, z: "
+            f"{m['settling_x']:.2f}, {m['settling_y']:.2f}, {m['settling_z']:.2f} s"
+        )
     return lines
 
 
@@ -120,8 +133,18 @@ def _settling_time(t: np.ndarray, x: np.ndarray, target: float, start: float, to
     return float(t[k + 1]) if k + 1 < t.shape[0] else float("inf")
 
 
-def point_to_point(platform=None, controller: str = "idc", progress: bool = False, *, target=POINT_TARGET, duration: float = 10.0,
-                   actuation: str = "ideal", dt: float = SimConfig.dt, integrator: str = "midpoint", seed: int = 0) -> SimResult:
+def point_to_point(
+    platform=None,
+    controller: str = "idc",
+    progress: bool = False,
+    *,
+    target=POINT_TARGET,
+    duration: float = 10.0,
+    actuation: str = "ideal",
+    dt: float = SimConfig.dt,
+    integrator: str = "midpoint",
+    seed: int = 0,
+) -> SimResult:
     """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``target`` [m], IDC with K_P = 30 I_9,
     K_D = 18 I_9 (module docstring for ``actuation``)."""
     platform = _q_prr(platform)
@@ -135,8 +158,19 @@ def point_to_point(platform=None, controller: str = "idc", progress: bool = Fals
     elif actuation != "rotors":
         raise UnknownNameError("actuation", actuation, ("ideal", "rotors"))
     ctrl = InverseDynamicsController(platform, POINT_GAINS)
-    res = simulate(platform, ctrl, Hold((*target, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)), duration, dt=dt, integrator=integrator,
-                   xi0=np.zeros(9), allocator=allocator, seed=seed, progress=progress, scenario="point-to-point")
+    res = simulate(
+        platform,
+        ctrl,
+        Hold((*target, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
+        duration,
+        dt=dt,
+        integrator=integrator,
+        xi0=np.zeros(9),
+        allocator=allocator,
+        seed=seed,
+        progress=progress,
+        scenario="point-to-point",
+    )
     res.metrics["final_position_error"] = float(np.linalg.norm(res.xi[-1, 0:3] - np.array(target)))
     for i, name in enumerate("xyz"):
         res.metrics[f"settling_{name}"] = _settling_time(res.t, res.xi[:, i], target[i], 0.0)
@@ -168,8 +202,17 @@ def _aggressive(platform, controller, progress, duration, climb, forward, dt, in
     ctrl = flight_controller(controller, platform)
     res = None
     try:
-        res = simulate(platform, ctrl, aggressive_reach(climb=climb, forward=forward), duration, dt=dt, integrator=integrator, seed=seed,
-                       progress=progress, scenario="aggressive-reach")
+        res = simulate(
+            platform,
+            ctrl,
+            aggressive_reach(climb=climb, forward=forward),
+            duration,
+            dt=dt,
+            integrator=integrator,
+            seed=seed,
+            progress=progress,
+            scenario="aggressive-reach",
+        )
     except Exception as err:  # a diverged run still reports its margins
         res = getattr(err, "result", None)
         if res is None:
@@ -183,20 +226,34 @@ def _aggressive(platform, controller, progress, duration, climb, forward, dt, in
 MISSIONS = ("static", "spiral", "hover")
 
 
-def _realistic(platform, controller, progress, duration, dt, integrator, seed, law, mission, motors, drag, friction, mean_wind, w20,
-               gust, time_constant):
+def _realistic(
+    platform, controller, progress, duration, dt, integrator, seed, law, mission, motors, drag, friction, mean_wind, w20, gust, time_constant
+):
     platform = _q_prr(platform)
     if mission not in MISSIONS:
         raise UnknownNameError("mission", mission, MISSIONS)
-    trajectory = {"static": lambda: static_mission(law=law), "spiral": lambda: Spiral(),
-                  "hover": lambda: Hold((0.0, 0.0, 10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))}[mission]()
+    trajectory = {
+        "static": lambda: static_mission(law=law),
+        "spiral": lambda: Spiral(),
+        "hover": lambda: Hold((0.0, 0.0, 10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
+    }[mission]()
     xi0 = np.array([0.0, 0.0, 10.0, 0, 0, 0, 0, 0, 0]) if mission == "hover" else None
-    env = realistic(platform, motors=motors, drag=drag, friction=friction, mean_wind=mean_wind, w20=w20, gust=gust,
-                    time_constant=time_constant)
+    env = realistic(platform, motors=motors, drag=drag, friction=friction, mean_wind=mean_wind, w20=w20, gust=gust, time_constant=time_constant)
     ctrl = flight_controller(controller, platform)
     try:
-        res = simulate(platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, xi0=xi0, seed=seed, progress=progress,
-                       scenario="realistic", **env.simulate_kwargs())
+        res = simulate(
+            platform,
+            ctrl,
+            trajectory,
+            duration,
+            dt=dt,
+            integrator=integrator,
+            xi0=xi0,
+            seed=seed,
+            progress=progress,
+            scenario="realistic",
+            **env.simulate_kwargs(),
+        )
     except Exception as err:
         if getattr(err, "result", None) is not None:
             _realistic_metrics(err.result, platform)
@@ -254,34 +311,87 @@ def _runner(fn):
     return run
 
 
-_REALISTIC = {**_FLIGHT, "mission": Option("static", "static (Sec. 6.3.1.4), spiral (6.25) or hover (at 10 m)"),
-              "motors": Option(True, "rotor speeds with a first-order lag (qprr.sim.actuators)"),
-              "drag": Option(True, "aerodynamic drag D of (5.36) with the wind"), "friction": Option(True, "arm joint friction F_v of (5.36)"),
-              "mean_wind": Option(MEAN_WIND, "mean wind, world axes [m/s]"),
-              "w20": Option(W20, "wind speed at 20 ft for the Dryden intensities [m/s] (0: no turbulence)"),
-              "gust": Option(True, "a 1 - cosine gust of 2 m/s along y at 18-21 s"),
-              "time_constant": Option(TIME_CONSTANT, "motor time constant [s]")}
+_REALISTIC = {
+    **_FLIGHT,
+    "mission": Option("static", "static (Sec. 6.3.1.4), spiral (6.25) or hover (at 10 m)"),
+    "motors": Option(True, "rotor speeds with a first-order lag (qprr.sim.actuators)"),
+    "drag": Option(True, "aerodynamic drag D of (5.36) with the wind"),
+    "friction": Option(True, "arm joint friction F_v of (5.36)"),
+    "mean_wind": Option(MEAN_WIND, "mean wind, world axes [m/s]"),
+    "w20": Option(W20, "wind speed at 20 ft for the Dryden intensities [m/s] (0: no turbulence)"),
+    "gust": Option(True, "a 1 - cosine gust of 2 m/s along y at 18-21 s"),
+    "time_constant": Option(TIME_CONSTANT, "motor time constant [s]"),
+}
 
 SCENARIOS = (
-    Scenario("point-to-point", "regulation to p_b = [5, 5, 10] without trajectory, IDC K_P = 30 I, K_D = 18 I", _runner(point_to_point),
-             ("idc",), {"target": Option(POINT_TARGET, "p_b set point [m]"), "duration": Option(10.0, "run length [s]"),
-                        "actuation": Option("ideal", "ideal (the thesis's u applied as is) or rotors (the Q-PRR's four bounded rotors)"),
-                        "dt": Option(SimConfig.dt, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"),
-                        "seed": Option(0, "seed")},
-             ("q-prr",), plot_point_to_point, "Sec. 6.3.1.1, Fig. 6.4", margin_summary),
-    Scenario("annex-a", "dynamic-manipulator mission (BSG + MFC) to p_b = [10, 6, 10]",
-             _flight("annex-a", lambda law: dynamic_mission(ANNEX_TARGET, law=law), bsg=True), _BSG_CONTROLLERS, _FLIGHT, ("q-prr",),
-             _plot_flight, "Annex A, Figs. A.9-A.13"),
-    Scenario("aggressive-reach", "climb 2 m and reach 0.6 m forward in 1 s: the IDC saturates the rotors, the MPC plans within them",
-             _runner(_aggressive), ("mpc", *[c for c in _FLIGHT_CONTROLLERS if c != "mpc"]),
-             {"duration": Option(3.0, "run length [s]"), "climb": Option(2.0, "climb [m] in 1 s"), "forward": Option(0.6, "reach along x [m]"),
-              "dt": Option(SimConfig.dt, "integration step [s]"), "integrator": Option("midpoint", "midpoint, rk4 or euler"),
-              "seed": Option(0, "seed")},
-             ("q-prr",), _plot_flight, "", margin_summary),
-    Scenario("realistic", "a mission with motor lag, air drag in wind (mean + Dryden + gust) and joint friction", _runner(_realistic),
-             _FLIGHT_CONTROLLERS, _REALISTIC, ("q-prr",), plot_realistic, "(5.36) F_v and D, not simulated in the thesis", margin_summary),
+    Scenario(
+        "point-to-point",
+        "regulation to p_b = [5, 5, 10] without trajectory, IDC K_P = 30 I, K_D = 18 I",
+        _runner(point_to_point),
+        ("idc",),
+        {
+            "target": Option(POINT_TARGET, "p_b set point [m]"),
+            "duration": Option(10.0, "run length [s]"),
+            "actuation": Option("ideal", "ideal (the thesis's u applied as is) or rotors (the Q-PRR's four bounded rotors)"),
+            "dt": Option(SimConfig.dt, "integration step [s]"),
+            "integrator": Option("midpoint", "midpoint, rk4 or euler"),
+            "seed": Option(0, "seed"),
+        },
+        ("q-prr",),
+        plot_point_to_point,
+        "Sec. 6.3.1.1, Fig. 6.4",
+        margin_summary,
+    ),
+    Scenario(
+        "annex-a",
+        "dynamic-manipulator mission (BSG + MFC) to p_b = [10, 6, 10]",
+        _flight("annex-a", lambda law: dynamic_mission(ANNEX_TARGET, law=law), bsg=True),
+        _BSG_CONTROLLERS,
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Annex A, Figs. A.9-A.13",
+    ),
+    Scenario(
+        "aggressive-reach",
+        "climb 2 m and reach 0.6 m forward in 1 s: the IDC saturates the rotors, the MPC plans within them",
+        _runner(_aggressive),
+        ("mpc", *[c for c in _FLIGHT_CONTROLLERS if c != "mpc"]),
+        {
+            "duration": Option(3.0, "run length [s]"),
+            "climb": Option(2.0, "climb [m] in 1 s"),
+            "forward": Option(0.6, "reach along x [m]"),
+            "dt": Option(SimConfig.dt, "integration step [s]"),
+            "integrator": Option("midpoint", "midpoint, rk4 or euler"),
+            "seed": Option(0, "seed"),
+        },
+        ("q-prr",),
+        _plot_flight,
+        "",
+        margin_summary,
+    ),
+    Scenario(
+        "realistic",
+        "a mission with motor lag, air drag in wind (mean + Dryden + gust) and joint friction",
+        _runner(_realistic),
+        _FLIGHT_CONTROLLERS,
+        _REALISTIC,
+        ("q-prr",),
+        plot_realistic,
+        "(5.36) F_v and D, not simulated in the thesis",
+        margin_summary,
+    ),
 )
 """The scenarios of this module (registered in :data:`qprr.scenarios.SCENARIOS`)."""
 
-__all__ = ["ANNEX_TARGET", "POINT_GAINS", "POINT_TARGET", "SCENARIOS", "margin_summary", "plot_point_to_point", "plot_realistic",
-           "point_to_point", "thrust_margins"]
+__all__ = [
+    "ANNEX_TARGET",
+    "POINT_GAINS",
+    "POINT_TARGET",
+    "SCENARIOS",
+    "margin_summary",
+    "plot_point_to_point",
+    "plot_realistic",
+    "point_to_point",
+    "thrust_margins",
+]

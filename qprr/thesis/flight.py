@@ -28,10 +28,26 @@ from .scenarios import NOISE_AMPLITUDE, PULSES, flight_controller
 __all__ = ["FLIGHT_DEFAULTS", "flight"]
 
 FLIGHT_DEFAULTS = {
-    "mission": "static", "controller": "idc", "bsg": None, "duration": 30.0, "time_scale": 1.0, "law": "septic",
-    "x": 3.0, "y": 6.0, "z": 10.0, "psi": 0.0, "r0": 0.04, "theta2": 0.2, "theta3": 0.6, "theta2_d": -0.5,
-    "noise": 0.0, "pulses": 0.0, "dt": 1e-3,
-    "bandwidth.position": 1.0, "bandwidth.attitude": 1.0, "bandwidth.arm": 1.0,
+    "mission": "static",
+    "controller": "idc",
+    "bsg": None,
+    "duration": 30.0,
+    "time_scale": 1.0,
+    "law": "septic",
+    "x": 3.0,
+    "y": 6.0,
+    "z": 10.0,
+    "psi": 0.0,
+    "r0": 0.04,
+    "theta2": 0.2,
+    "theta3": 0.6,
+    "theta2_d": -0.5,
+    "noise": 0.0,
+    "pulses": 0.0,
+    "dt": 1e-3,
+    "bandwidth.position": 1.0,
+    "bandwidth.attitude": 1.0,
+    "bandwidth.arm": 1.0,
 }
 """Parameters of :func:`flight` and their defaults (the Sec. 6.3.1.4 static mission with IDC)."""
 
@@ -51,8 +67,7 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
     * ``model.*``: model errors of the plant (:class:`qprr.sim.mismatch.ModelError`).
     """
     if not isinstance(params, Mapping):
-        raise InputError(f"params must be a mapping of parameter name -> value (qprr.thesis.flight.FLIGHT_DEFAULTS), "
-                         f"got {type(params).__name__}")
+        raise InputError(f"params must be a mapping of parameter name -> value (qprr.thesis.flight.FLIGHT_DEFAULTS), got {type(params).__name__}")
     for k in params:
         if k not in FLIGHT_DEFAULTS and not k.startswith(MODEL_PREFIX):
             raise UnknownNameError("parameter of qprr.thesis.flight.flight", k, tuple(FLIGHT_DEFAULTS))
@@ -62,8 +77,10 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
     if not ts > 0:
         raise InputError(f"time_scale must be > 0, got {ts!r}")
     if p["mission"] == "static":
-        phases = {k: (a * ts, b * ts) for k, (a, b) in
-                  {"z_phase": (0.0, 5.0), "x_phase": (5.0, 10.0), "y_phase": (10.0, 15.0), "arm_phase": (15.0, 25.0)}.items()}
+        phases = {
+            k: (a * ts, b * ts)
+            for k, (a, b) in {"z_phase": (0.0, 5.0), "x_phase": (5.0, 10.0), "y_phase": (10.0, 15.0), "arm_phase": (15.0, 25.0)}.items()
+        }
         target = tuple(float(p[k]) for k in ("x", "y", "z", "psi", "r0", "theta2", "theta3"))
         trajectory = static_mission(target, law=p["law"], **phases)
     elif p["mission"] == "dynamic":
@@ -90,5 +107,14 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
     disturbance = Disturbances(tuple(parts)) if parts else None
     err = model_error(params)
     plant = None if err is None or err.is_nominal else perturbed(platform, err)
-    return simulate(platform, ctrl, trajectory, float(p["duration"]), dt=float(p["dt"]), disturbance=disturbance, seed=seed,
-                    plant=plant, scenario=f"flight-{p['mission']}")
+    return simulate(
+        platform,
+        ctrl,
+        trajectory,
+        float(p["duration"]),
+        dt=float(p["dt"]),
+        disturbance=disturbance,
+        seed=seed,
+        plant=plant,
+        scenario=f"flight-{p['mission']}",
+    )

@@ -31,8 +31,11 @@ def table_6_2() -> IDCGains:
     Its attitude PIDs are unstable under exact linearisation (k_D k_P < k_I for phi (60 < 70),
     theta (6.6 < 14) and psi (0.3 < 1.7)).
     """
-    return IDCGains(kp=(1.4, 1.4, 1.4, 20.0, 6.0, 1.5, 16.0, 16.0, 16.0), kd=(0.3, 0.3, 0.3, 3.0, 1.1, 0.2, 3.0, 3.0, 3.0),
-                    ki=(0.0, 0.0, 0.0, 70.0, 14.0, 1.7, 0.0, 0.0, 0.0))
+    return IDCGains(
+        kp=(1.4, 1.4, 1.4, 20.0, 6.0, 1.5, 16.0, 16.0, 16.0),
+        kd=(0.3, 0.3, 0.3, 3.0, 1.1, 0.2, 3.0, 3.0, 3.0),
+        ki=(0.0, 0.0, 0.0, 70.0, 14.0, 1.7, 0.0, 0.0, 0.0),
+    )
 
 
 def idc() -> IDCGains:
@@ -43,8 +46,9 @@ def idc() -> IDCGains:
     """
     base = table_6_2()
     kp_a, kd_a, ki_a = _cubed(10.0)
-    return IDCGains(kp=base.kp[0:3] + (kp_a,) * 3 + base.kp[6:9], kd=base.kd[0:3] + (kd_a,) * 3 + base.kd[6:9],
-                    ki=(0.0,) * 3 + (ki_a,) * 3 + (0.0,) * 3)
+    return IDCGains(
+        kp=base.kp[0:3] + (kp_a,) * 3 + base.kp[6:9], kd=base.kd[0:3] + (kd_a,) * 3 + base.kd[6:9], ki=(0.0,) * 3 + (ki_a,) * 3 + (0.0,) * 3
+    )
 
 
 def desired_state() -> IDCGains:
@@ -78,8 +82,12 @@ def annex_a3() -> IDCGains:
 
 # ------------------------------------------------------------------- Sec. 6.4, Tables 6.5, 6.7
 def _groups(kp_pos, kd_pos, ki_pos, kp_att, kd_att, ki_att, kp_arm, kd_arm, ki_arm, **kwargs) -> IDCGains:
-    return IDCGains(kp=tuple(kp_pos) + tuple(kp_att) + tuple(kp_arm), kd=tuple(kd_pos) + tuple(kd_att) + tuple(kd_arm),
-                    ki=tuple(ki_pos) + tuple(ki_att) + tuple(ki_arm), **kwargs)
+    return IDCGains(
+        kp=tuple(kp_pos) + tuple(kp_att) + tuple(kp_arm),
+        kd=tuple(kd_pos) + tuple(kd_att) + tuple(kd_arm),
+        ki=tuple(ki_pos) + tuple(ki_att) + tuple(ki_arm),
+        **kwargs,
+    )
 
 
 def table_6_5() -> IDCGains:
@@ -89,8 +97,7 @@ def table_6_5() -> IDCGains:
     every k_I > 0.  The 9x9 K_P = 48 I9, K_D = 25 I9 of the table belong to the generic form (6.54)
     of which the layers are the per-group instances; they are not used on top of the layer gains.
     """
-    return _groups((20.0,) * 3, (2.0,) * 3, (0.0,) * 3, (20.0, 40.0, 20.0), (0.0,) * 3, (5.0, 2.0, 2.0),
-                   (10.0,) * 3, (2.0,) * 3, (15.0,) * 3)
+    return _groups((20.0,) * 3, (2.0,) * 3, (0.0,) * 3, (20.0, 40.0, 20.0), (0.0,) * 3, (5.0, 2.0, 2.0), (10.0,) * 3, (2.0,) * 3, (15.0,) * 3)
 
 
 def payload() -> IDCGains:
@@ -106,14 +113,12 @@ def payload() -> IDCGains:
     base = table_6_5()
     kp_a, kd_a, ki_a = _cubed(15.0)
     kp_q, kd_q, ki_q = _cubed(10.0)
-    return _groups(base.kp[0:3], base.kd[0:3], base.ki[0:3], (kp_a,) * 3, (kd_a,) * 3, (ki_a,) * 3,
-                   (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3)
+    return _groups(base.kp[0:3], base.kd[0:3], base.ki[0:3], (kp_a,) * 3, (kd_a,) * 3, (ki_a,) * 3, (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3)
 
 
 def table_6_7() -> IDCGains:
     """Thesis Table 6.7 as printed: position PD (6, 5), attitude PD (5, 2; 5, 2; 25, 4.5), arm PI (8, 2) (no rate term)."""
-    return _groups((6.0,) * 3, (5.0,) * 3, (0.0,) * 3, (5.0, 5.0, 25.0), (2.0, 2.0, 4.5), (0.0,) * 3,
-                   (8.0,) * 3, (0.0,) * 3, (2.0,) * 3)
+    return _groups((6.0,) * 3, (5.0,) * 3, (0.0,) * 3, (5.0, 5.0, 25.0), (2.0, 2.0, 4.5), (0.0,) * 3, (8.0,) * 3, (0.0,) * 3, (2.0,) * 3)
 
 
 def impedance() -> IDCGains:
@@ -129,14 +134,14 @@ def impedance() -> IDCGains:
     base = table_6_7()
     w = 15.0
     kp_q, kd_q, ki_q = _cubed(5.0)
-    return _groups(base.kp[0:3], base.kd[0:3], base.ki[0:3], (w * w,) * 3, (2 * w,) * 3, (0.0,) * 3,
-                   (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3, filter_omega=20.0)
+    return _groups(
+        base.kp[0:3], base.kd[0:3], base.ki[0:3], (w * w,) * 3, (2 * w,) * 3, (0.0,) * 3, (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3, filter_omega=20.0
+    )
 
 
 def impedance_table_6_7() -> ImpedanceGains:
     """Thesis Table 6.7: M_D = 0.1 I4, D_D = I4, K_P = 0.5 I4; M_D^q = 0.02 I3, D_D^q = I3, K_P^q = 0.08 I3."""
-    return ImpedanceGains(M_base=(0.1,) * 4, D_base=(1.0,) * 4, K_base=(0.5,) * 4, M_arm=(0.02,) * 3, D_arm=(1.0,) * 3,
-                          K_arm=(0.08,) * 3)
+    return ImpedanceGains(M_base=(0.1,) * 4, D_base=(1.0,) * 4, K_base=(0.5,) * 4, M_arm=(0.02,) * 3, D_arm=(1.0,) * 3, K_arm=(0.08,) * 3)
 
 
 def impedance_filters() -> ImpedanceGains:

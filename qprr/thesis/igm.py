@@ -215,9 +215,7 @@ def _balanced_theta2(K: ArmConstants, s23: float, c23: float, lo2: float, hi2: f
     if violation(g0) == 0.0:
         return g0
     cands = [g0, lo2, hi2]
-    for base in (math.pi / 2, -math.pi / 2) + tuple(
-        v for s in (smin, smax) if -1.0 <= s <= 1.0 for v in (math.asin(s), math.pi - math.asin(s))
-    ):
+    for base in (math.pi / 2, -math.pi / 2) + tuple(v for s in (smin, smax) if -1.0 <= s <= 1.0 for v in (math.asin(s), math.pi - math.asin(s))):
         for k in (-2, -1, 0, 1, 2):
             t2 = base + k * TWO_PI - delta
             if lo2 <= t2 <= hi2:
@@ -301,8 +299,6 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
     return [xb, yb, zb, 0.0, 0.0, psi, r0, th2, t23 - th2], it, "converged", ""
 
 
-
-
 OPTIONS = {"igm": IGMOptions, **_GENERIC_OPTIONS}
 _IGM_BALANCE = IGMOptions(theta2="balance")
 
@@ -339,8 +335,10 @@ def solve_igm(platform: Platform, data: pin.Data, target, xi0=None, options=None
     tilt = _tilt(R_d)
     if tilt > opts.orientation_tol:
         status = "unreachable"
-        reason = (f"the target orientation is not reachable in hover: its y axis is tilted {tilt:.3g} rad out of the "
-                  "horizontal plane, which needs a base roll/pitch (Algorithm 3 assumes phi = theta = 0)")
+        reason = (
+            f"the target orientation is not reachable in hover: its y axis is tilted {tilt:.3g} rad out of the "
+            "horizontal plane, which needs a base roll/pitch (Algorithm 3 assumes phi = theta = 0)"
+        )
     xi = np.array(xi_l)
     ctx = SolveContext(platform, data, "igm", p_d, R_d, opts, t0, init, True)
     return finish(ctx, hover_q(platform, xi_l), Ending(status, reason, it), xi)

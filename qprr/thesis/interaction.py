@@ -50,7 +50,6 @@ def generalized_wrench_6_59(xi, h, d) -> np.ndarray:
     return np.concatenate([h[0:3], T.T @ pin.skew(p_eb) @ h[0:3] + T.T @ h[3:6], Jeb[0:3].T @ h[0:3] + Jeb[3:6].T @ h[3:6]])
 
 
-
 @dataclass(frozen=True)
 class PushState:
     """Derivative of the planar push model's state [x, x_dot, theta, theta_dot]."""
@@ -70,8 +69,7 @@ def push_model_6_66(theta: float, T1: float, T3: float, F_oj: float, M_G: float,
     return PushState((-F_oj + math.sin(theta) * (T1 + T3)) / M_G, (F_oj * p_cb_z + 0.5 * L * (T3 - T1)) / I_yy)
 
 
-def push_model(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy: float, l: float,
-               contact_b, com_b=(0.0, 0.0, 0.0)) -> PushState:
+def push_model(theta: float, T1: float, T3: float, F_oj: float, M_G: float, I_yy: float, l: float, contact_b, com_b=(0.0, 0.0, 0.0)) -> PushState:
     """Thesis (6.66) corrected: planar model of pushing along world x with the thrust, arm locked (z up, "+" rotors).
 
     Rotors 1 (at -l x_B) and 3 (at +l x_B) give the thrust T1 + T3 along z_B (rotors 2, 4 off or

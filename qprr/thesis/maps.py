@@ -45,6 +45,8 @@ def analysis_reference(map_name: str, platform: Platform, result) -> MapReferenc
         i = int(np.argmin(np.abs(r0_axis - r0)))
         model = np.moveaxis(np.take(det, i, axis=a_r0), a_t2 - (a_t2 > a_r0), 0)  # theta2 first
         gap = float(np.abs(model - y.reshape((-1,) + (1,) * (model.ndim - 1))).max())
-        lines.append(f"  thesis {eq}, det(J J^T) printed for r0 = {r0:g} m: max |printed - model| {gap:.2g} "
-                     f"(model at r0 = {r0_axis[i]:.4g} m, every theta2, theta3 of the grid)")
+        lines.append(
+            f"  thesis {eq}, det(J J^T) printed for r0 = {r0:g} m: max |printed - model| {gap:.2g} "
+            f"(model at r0 = {r0_axis[i]:.4g} m, every theta2, theta3 of the grid)"
+        )
     return MapReference(curves=curves, lines=tuple(lines))

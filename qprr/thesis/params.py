@@ -144,8 +144,7 @@ class QPRRParams:
         if unknown:
             raise InputError(f"unknown parameter field(s) {sorted(unknown)}; valid: {sorted(self.__dataclass_fields__)}")
         if "links" not in changes and changes.keys() & {"d1", "d2", "d3"}:
-            changes["links"] = tuple(replace(link, length=changes.get(d, link.length))
-                                     for link, d in zip(self.links, ("d1", "d2", "d3")))
+            changes["links"] = tuple(replace(link, length=changes.get(d, link.length)) for link, d in zip(self.links, ("d1", "d2", "d3")))
         return replace(self, **changes)
 
 
@@ -163,8 +162,7 @@ def check_params(p: QPRRParams) -> None:
         raise InputError(f"nonphysical must be a tuple of body names, got {p.nonphysical!r}")
     if not (_finite([p.g]) and p.g >= 0.0):
         raise NonPhysicalError(f"gravity g must be a finite number >= 0 m/s^2, got {p.g!r}")
-    check_rigid_body("multirotor", p.multirotor_mass, (0.0, 0.0, 0.0), p.multirotor_inertia,
-                     check_triangle="multirotor" not in p.nonphysical)
+    check_rigid_body("multirotor", p.multirotor_mass, (0.0, 0.0, 0.0), p.multirotor_inertia, check_triangle="multirotor" not in p.nonphysical)
     if len(p.links) != 3 or not all(isinstance(link, Link) for link in p.links):
         raise InputError(f"links must be three Link objects, got {p.links!r}")
     bodies = list(p.links) + ([p.rail] if p.rail is not None else [])
@@ -179,8 +177,10 @@ def check_params(p: QPRRParams) -> None:
             raise NonPhysicalError(f"{link.name}: length must be a positive finite number of m, got {link.length!r}")
     for link, d_name in zip(p.links, ("d1", "d2", "d3")):  # the model reads d1..d3: a link length that differs is a trap
         if _finite([getattr(p, d_name)]) and link.length != getattr(p, d_name):
-            raise InputError(f"{link.name}.length = {link.length!r} m contradicts {d_name} = {getattr(p, d_name)!r} m (the joint "
-                             f"offsets d1, d2, d3 are the link lengths; change both)")
+            raise InputError(
+                f"{link.name}.length = {link.length!r} m contradicts {d_name} = {getattr(p, d_name)!r} m (the joint "
+                f"offsets d1, d2, d3 are the link lengths; change both)"
+            )
     if p.rail is not None and not (_finite([p.rail.length]) and p.rail.length >= 0.0):
         raise NonPhysicalError(f"{p.rail.name}: length must be a finite number >= 0 m, got {p.rail.length!r}")
     if not (_finite([p.d0]) and p.d0 >= 0.0):

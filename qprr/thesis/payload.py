@@ -154,17 +154,19 @@ def G_c_6_52(xi, m_c: float, d, g: float) -> np.ndarray:
     pz = d0 + d1 + c2 * d2 + c23 * d3
     px_printed = r0 + s2 * d2 + s23 * d2
     mg = m_c * g
-    return np.array([
-        0.0,
-        mg,
-        0.0,
-        -mg * (cf * cs + sf * ss * st) * pz,
-        -mg * (ss * st * px_printed - cf * ct * ss * pz),
-        mg * ((sf * ss + cf * cs * st) * pz + cs * ct * px_printed),
-        mg * ct * ss,
-        mg * ((cs * sf - cf * ss * st) * (s2 * d2 + s23 * d3) + ct * ss * (c2 * d2 + c23 * d3)),
-        0.5 * mg * d3 * (s23 * (cs * sf - cf * ss * st) + ct * ss * c23),
-    ])
+    return np.array(
+        [
+            0.0,
+            mg,
+            0.0,
+            -mg * (cf * cs + sf * ss * st) * pz,
+            -mg * (ss * st * px_printed - cf * ct * ss * pz),
+            mg * ((sf * ss + cf * cs * st) * pz + cs * ct * px_printed),
+            mg * ct * ss,
+            mg * ((cs * sf - cf * ss * st) * (s2 * d2 + s23 * d3) + ct * ss * (c2 * d2 + c23 * d3)),
+            0.5 * mg * d3 * (s23 * (cs * sf - cf * ss * st) + ct * ss * c23),
+        ]
+    )
 
 
 def B_c_6_51(xi, m_c: float, I_c, d, corrected: bool = False) -> np.ndarray:

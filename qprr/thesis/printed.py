@@ -597,9 +597,22 @@ def det_JJt_4_44(r0: float, theta2: float, d) -> float:
     d0, d1, d2, _ = _lengths(d)
     s2, c2 = np.sin(theta2), np.cos(theta2)
     return float(
-        4 * d0 * d1 + 2 * d2**2 * c2**2 + 4 * d2**2 * s2**2 + 2 * d0**2 + 2 * d1**2 + 4 * r0**2 + 4 * d2 * r0 * s2
-        + d2**2 * r0**2 * c2**2 + d0**2 * d2**2 * s2**2 + d1**2 * d2**2 * s2**2 + 2 * d0 * d2 * c2 + 2 * d1 * d2 * c2
-        + 2 * d0 * d1 * d2**2 * s2**2 - d0 * d2**2 * r0 * 2 * s2 * c2 - d1 * d2**2 * r0 * 2 * s2 * c2 + 6
+        4 * d0 * d1
+        + 2 * d2**2 * c2**2
+        + 4 * d2**2 * s2**2
+        + 2 * d0**2
+        + 2 * d1**2
+        + 4 * r0**2
+        + 4 * d2 * r0 * s2
+        + d2**2 * r0**2 * c2**2
+        + d0**2 * d2**2 * s2**2
+        + d1**2 * d2**2 * s2**2
+        + 2 * d0 * d2 * c2
+        + 2 * d1 * d2 * c2
+        + 2 * d0 * d1 * d2**2 * s2**2
+        - d0 * d2**2 * r0 * 2 * s2 * c2
+        - d1 * d2**2 * r0 * 2 * s2 * c2
+        + 6
     )
 
 
@@ -1144,8 +1157,9 @@ def theta_e_6_34(theta: float, theta2: float, theta3: float) -> float:
     return float(theta) + float(theta2) + float(theta3)
 
 
-def ipid_thesis_printed(F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float,
-                        kp: float, ki: float, kd: float) -> float:
+def ipid_thesis_printed(
+    F_est: float, y_ddot_ref: float, e: float, e_int: float, e_dot: float, alpha: float, kp: float, ki: float, kd: float
+) -> float:
     """(6.37) exactly as printed: u = (F_est - y*_ddot - K_P e - K_I int e - K_D e_dot) / alpha (wrong sign, see module docstring)."""
     return (F_est - y_ddot_ref - kp * e - ki * e_int - kd * e_dot) / alpha
 

@@ -84,8 +84,17 @@ class Realistic:
         return {"actuators": self.actuators, "disturbance": self.disturbance}
 
 
-def realistic(platform: Platform | None = None, *, motors: bool = True, drag: bool = True, friction: bool = True,
-              mean_wind=MEAN_WIND, w20: float = W20, gust: bool = True, time_constant: float = TIME_CONSTANT) -> Realistic:
+def realistic(
+    platform: Platform | None = None,
+    *,
+    motors: bool = True,
+    drag: bool = True,
+    friction: bool = True,
+    mean_wind=MEAN_WIND,
+    w20: float = W20,
+    gust: bool = True,
+    time_constant: float = TIME_CONSTANT,
+) -> Realistic:
     """Every stage of the module table, each switchable (all on by default)."""
     platform = load() if platform is None else check_platform(platform)
     mean_wind = as_vector(mean_wind, 3, "mean_wind")

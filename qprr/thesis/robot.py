@@ -59,10 +59,16 @@ def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_p
         urdf = URDF_PATH
     else:
         urdf = build_urdf(params, layout=layout)
-    platform = from_urdf(urdf, rotor_set(params, layout), ee_frame=EE_FRAME, g=params.g,
-                         name=f"Q-PRR ({params.variant}, {layout})", params=params,
-                         provenance={"parameters": "qprr.thesis.params (Tables 3.1-3.3 and chosen values, each with its provenance)"},
-                         allow_nonphysical=bool(params.nonphysical))
+    platform = from_urdf(
+        urdf,
+        rotor_set(params, layout),
+        ee_frame=EE_FRAME,
+        g=params.g,
+        name=f"Q-PRR ({params.variant}, {layout})",
+        params=params,
+        provenance={"parameters": "qprr.thesis.params (Tables 3.1-3.3 and chosen values, each with its provenance)"},
+        allow_nonphysical=bool(params.nonphysical),
+    )
     _check_agrees(platform, params)
     return platform
 
@@ -90,12 +96,15 @@ def _check_agrees(platform: Platform, params: QPRRParams) -> None:
         ("links[1].mass (link2)", params.links[1].mass, float(model.inertias[j["theta2"]].mass), "kg"),
         ("links[2].mass (link3)", params.links[2].mass, float(model.inertias[j["theta3"]].mass), "kg"),
     ]
-    for k, (name, lim) in enumerate((("r0_limits", params.r0_limits), ("theta2_limits", params.theta2_limits),
-                                     ("theta3_limits", params.theta3_limits))):
+    for k, (name, lim) in enumerate(
+        (("r0_limits", params.r0_limits), ("theta2_limits", params.theta2_limits), ("theta3_limits", params.theta3_limits))
+    ):
         joint = platform.arm[k]
         quantities += [(f"{name}[0]", lim[0], joint.lower, ""), (f"{name}[1]", lim[1], joint.upper, "")]
-        quantities += [(f"effort_limits[{k}]", params.effort_limits[k], joint.effort, ""),
-                       (f"velocity_limits[{k}]", params.velocity_limits[k], joint.velocity, "")]
+        quantities += [
+            (f"effort_limits[{k}]", params.effort_limits[k], joint.effort, ""),
+            (f"velocity_limits[{k}]", params.velocity_limits[k], joint.velocity, ""),
+        ]
     for layout in LAYOUTS:
         for i, rotor in enumerate(params.rotors(layout), start=1):
             frame = f"rotor_{layout}_{i}"
@@ -106,8 +115,10 @@ def _check_agrees(platform: Platform, params: QPRRParams) -> None:
                     quantities += [(f"arm_length (rotor {frame} at x, y)", math.hypot(*rotor.position[:2]), math.hypot(p[0], p[1]), "m")]
     for name, value, in_urdf, unit in quantities:
         if not abs(value - in_urdf) <= 1e-9 * max(1.0, abs(value)):
-            raise InputError(f"params.{name} = {value!r}{' ' + unit if unit else ''} contradicts {source}, which has {in_urdf!r}: "
-                             "give parameters that describe this URDF (or no urdf_path: the URDF is then generated from them)")
+            raise InputError(
+                f"params.{name} = {value!r}{' ' + unit if unit else ''} contradicts {source}, which has {in_urdf!r}: "
+                "give parameters that describe this URDF (or no urdf_path: the URDF is then generated from them)"
+            )
     if abs(platform.total_mass - params.total_mass) > 1e-9 * params.total_mass:
         raise InputError(f"{source}: total mass {platform.total_mass!r} kg differs from the parameters' {params.total_mass!r} kg")
 

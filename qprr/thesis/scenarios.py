@@ -125,8 +125,19 @@ def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = 
         if bsg:
             ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
         dist = disturbance() if disturbance is not None else None
-        return simulate(platform, ctrl, trajectory(law), duration, dt=dt, integrator=integrator, disturbance=dist, seed=seed,
-                        progress=progress, scenario=scenario, plant=plant)
+        return simulate(
+            platform,
+            ctrl,
+            trajectory(law),
+            duration,
+            dt=dt,
+            integrator=integrator,
+            disturbance=dist,
+            seed=seed,
+            progress=progress,
+            scenario=scenario,
+            plant=plant,
+        )
 
     return runner
 
@@ -150,24 +161,76 @@ def _plot_flight(result: SimResult, path) -> Path:
 
 
 FLIGHT_SCENARIOS = (
-    Scenario("static-idc", "static manipulator mission, inverse-dynamics control", _flight("static-idc", lambda law: static_mission(law=law)),
-             _reordered("idc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.1.4, Table 6.3 IDC, Fig. 6.7-6.13"),
-    Scenario("static-dsid", "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
-             _flight("static-dsid", lambda law: static_mission(law=law)), _reordered("dsid"), _FLIGHT, ("q-prr",), _plot_flight,
-             "Annex A.2, Table 6.3 MPC, Fig. 6.19-6.21"),
-    Scenario("static-mfc", "static manipulator mission, model-free control (iPID)", _flight("static-mfc", lambda law: static_mission(law=law)),
-             _reordered("mfc"), _FLIGHT, ("q-prr",), _plot_flight, "Sec. 6.3.3.2, Table 6.3 MFC, Fig. 6.19-6.21"),
-    Scenario("spiral", "climb then spiral (6.25) from t_f = 5 s, IDC", _flight("spiral", lambda law: Spiral()), _reordered("idc"), _FLIGHT,
-             ("q-prr",), _plot_flight, "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18"),
-    Scenario("noise", "static mission with white noise on the generalised forces, IDC",
-             _flight("noise", lambda law: static_mission(law=law), lambda: WhiteNoise(NOISE_AMPLITUDE)), _reordered("idc"), _FLIGHT,
-             ("q-prr",), _plot_flight, "Sec. 6.3.2.1, (6.27), Fig. 6.23-6.27"),
-    Scenario("pulses", "static mission with finite pulses in the three phases, IDC",
-             _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)), _reordered("idc"), _FLIGHT,
-             ("q-prr",), _plot_flight, "Sec. 6.3.2.2, (6.28), Fig. 6.28-6.29"),
-    Scenario("dynamic-bsg", "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
-             _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True), _BSG_CONTROLLERS, _FLIGHT, ("q-prr",),
-             _plot_flight, "Sec. 6.3.3.3, Fig. 6.37-6.45"),
+    Scenario(
+        "static-idc",
+        "static manipulator mission, inverse-dynamics control",
+        _flight("static-idc", lambda law: static_mission(law=law)),
+        _reordered("idc"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.1.4, Table 6.3 IDC, Fig. 6.7-6.13",
+    ),
+    Scenario(
+        "static-dsid",
+        "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
+        _flight("static-dsid", lambda law: static_mission(law=law)),
+        _reordered("dsid"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Annex A.2, Table 6.3 MPC, Fig. 6.19-6.21",
+    ),
+    Scenario(
+        "static-mfc",
+        "static manipulator mission, model-free control (iPID)",
+        _flight("static-mfc", lambda law: static_mission(law=law)),
+        _reordered("mfc"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.3.2, Table 6.3 MFC, Fig. 6.19-6.21",
+    ),
+    Scenario(
+        "spiral",
+        "climb then spiral (6.25) from t_f = 5 s, IDC",
+        _flight("spiral", lambda law: Spiral()),
+        _reordered("idc"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.1.4, (6.25), Fig. 6.14-6.18",
+    ),
+    Scenario(
+        "noise",
+        "static mission with white noise on the generalised forces, IDC",
+        _flight("noise", lambda law: static_mission(law=law), lambda: WhiteNoise(NOISE_AMPLITUDE)),
+        _reordered("idc"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.2.1, (6.27), Fig. 6.23-6.27",
+    ),
+    Scenario(
+        "pulses",
+        "static mission with finite pulses in the three phases, IDC",
+        _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)),
+        _reordered("idc"),
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.2.2, (6.28), Fig. 6.28-6.29",
+    ),
+    Scenario(
+        "dynamic-bsg",
+        "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
+        _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True),
+        _BSG_CONTROLLERS,
+        _FLIGHT,
+        ("q-prr",),
+        _plot_flight,
+        "Sec. 6.3.3.3, Fig. 6.37-6.45",
+    ),
 )
 
 
@@ -200,8 +263,16 @@ class Recovery:
     reason: str
 
 
-def recovery(result: SimResult, release_time: float, total_mass: float, g: float, *, tol_position: float = 1e-3,
-             tol_angle: float = 1e-3, tol_thrust: float = 0.01) -> Recovery:
+def recovery(
+    result: SimResult,
+    release_time: float,
+    total_mass: float,
+    g: float,
+    *,
+    tol_position: float = 1e-3,
+    tol_angle: float = 1e-3,
+    tol_thrust: float = 0.01,
+) -> Recovery:
     """Measure :class:`Recovery` on a logged run (no-payload weight ``total_mass`` g)."""
     t = result.t
     after = t >= release_time
@@ -218,10 +289,26 @@ def recovery(result: SimResult, release_time: float, total_mass: float, g: float
         return Recovery(release_time, 0.0, tol_position, tol_angle, tol_thrust, *peaks, "recovered", "within tolerance at the release")
     last = bad[-1]
     if last == idx[-1]:
-        return Recovery(release_time, math.inf, tol_position, tol_angle, tol_thrust, *peaks, "not recovered",
-                        f"still out of tolerance at the end of the run (t = {t[last]:.3f} s)")
-    return Recovery(release_time, float(t[last + 1] - release_time), tol_position, tol_angle, tol_thrust, *peaks, "recovered",
-                    "every tolerance holds from then to the end of the run")
+        return Recovery(
+            release_time,
+            math.inf,
+            tol_position,
+            tol_angle,
+            tol_thrust,
+            *peaks,
+            "not recovered",
+            f"still out of tolerance at the end of the run (t = {t[last]:.3f} s)",
+        )
+    return Recovery(
+        release_time,
+        float(t[last + 1] - release_time),
+        tol_position,
+        tol_angle,
+        tol_thrust,
+        *peaks,
+        "recovered",
+        "every tolerance holds from then to the end of the run",
+    )
 
 
 def applied_generalized_forces(result: SimResult, platform=None) -> np.ndarray:
@@ -233,8 +320,16 @@ def applied_generalized_forces(result: SimResult, platform=None) -> np.ndarray:
 
 def _contact_series(res: SimResult, obj) -> None:
     c = obj.history()
-    res.series.update({"contact_t": c.t, "contact_force": c.force, "contact_wrench": c.wrench, "contact_position": c.position,
-                       "contact_velocity": c.velocity, "contact_penetration": c.penetration})
+    res.series.update(
+        {
+            "contact_t": c.t,
+            "contact_force": c.force,
+            "contact_wrench": c.wrench,
+            "contact_position": c.position,
+            "contact_velocity": c.velocity,
+            "contact_penetration": c.penetration,
+        }
+    )
 
 
 def contact_history(result: SimResult):
@@ -242,17 +337,30 @@ def contact_history(result: SimResult):
     from ..sim import ContactHistory
 
     s = result.series
-    return ContactHistory(s["contact_t"], s["contact_force"], s["contact_wrench"], s["contact_position"], s["contact_velocity"],
-                          s["contact_penetration"])
+    return ContactHistory(
+        s["contact_t"], s["contact_force"], s["contact_wrench"], s["contact_position"], s["contact_velocity"], s["contact_penetration"]
+    )
 
 
 # ============================================================================ payload-drop
 PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc", "decoupled", "mpc")
 
 
-def payload_drop(platform=None, controller: str = "payload-idc", progress: bool = False, *, mass: float = 0.1,
-                 release_time: float = 18.0, duration: float = 25.0, mission: str = "thesis", arm_target=(-0.04, 0.3, 0.5),
-                 arm_phase=(15.0, 17.0), noise: float = 0.0, seed: int = SEED, plant=None) -> SimResult:
+def payload_drop(
+    platform=None,
+    controller: str = "payload-idc",
+    progress: bool = False,
+    *,
+    mass: float = 0.1,
+    release_time: float = 18.0,
+    duration: float = 25.0,
+    mission: str = "thesis",
+    arm_target=(-0.04, 0.3, 0.5),
+    arm_phase=(15.0, 17.0),
+    noise: float = 0.0,
+    seed: int = SEED,
+    plant=None,
+) -> SimResult:
     """Carry ``mass`` at the end effector and release it at ``release_time`` (Thesis Sec. 6.4.2.3).
 
     ``mission="thesis"``: climb/x/y flight of Sec. 6.3.1.4 to (3, 6, 10) m, arm to ``arm_target``
@@ -301,19 +409,34 @@ def payload_drop(platform=None, controller: str = "payload-idc", progress: bool 
     ctrl = builders[controller]()
     schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
     disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
-    res = simulate(platform, ctrl, trajectory, duration, payload=schedule, disturbance=disturbance, seed=seed,
-                   progress=progress, scenario="payload-drop", plant=plant)
+    res = simulate(
+        platform,
+        ctrl,
+        trajectory,
+        duration,
+        payload=schedule,
+        disturbance=disturbance,
+        seed=seed,
+        progress=progress,
+        scenario="payload-drop",
+        plant=plant,
+    )
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
     if getattr(ctrl, "mode", None) == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
         window = min(1.0, 0.5 * release_time)  # the last second before the release (half the carry time if shorter)
         before = (res.t >= release_time - window) & (res.t < release_time)
-        res.metrics["mass_estimate_error"] = (float(np.max(np.abs(res.series["mass_estimate"][before] - mass)))
-                                              if before.any() else math.nan)
+        res.metrics["mass_estimate_error"] = float(np.max(np.abs(res.series["mass_estimate"][before] - mass))) if before.any() else math.nan
     res.metrics["release_time"] = float(release_time)
     rec = recovery(res, release_time, (platform if plant is None else plant).total_mass, platform.g)  # the real robot's weight
-    res.metrics.update({"recovery_time": rec.time, "recovery_peak_position": rec.peak_position,
-                        "recovery_peak_angle": rec.peak_angle, "recovery_peak_thrust": rec.peak_thrust})
+    res.metrics.update(
+        {
+            "recovery_time": rec.time,
+            "recovery_peak_position": rec.peak_position,
+            "recovery_peak_angle": rec.peak_angle,
+            "recovery_peak_thrust": rec.peak_thrust,
+        }
+    )
     return res
 
 
@@ -340,7 +463,7 @@ holds a steady force (docs/notes-spikes.md, tests/test_phase_switches.py)."""
 
 
 def _push_controller(name: str, platform, contact):
-    """"layered-idc-ft": layered IDC cancelling the contact wrench its wrist sensor read at the previous step
+    """ "layered-idc-ft": layered IDC cancelling the contact wrench its wrist sensor read at the previous step
     ((6.76)), filtered at :data:`SENSOR_FILTER`; "layered-idc": the same without force feedback (the arm
     buckles under the compressive contact force); "idc": Sec. 6.3.1's controller."""
     g = gains.payload()
@@ -354,9 +477,20 @@ def _push_controller(name: str, platform, contact):
     return builders[name]()
 
 
-def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: bool = False, *, distance: float = 0.5,
-                push=(2.0, 7.0), duration: float = 12.0, object_mass: float = 0.5, friction: float = 0.3,
-                stiffness: float = PUSH_STIFFNESS, damping: float = 20.0, seed: int = SEED) -> SimResult:
+def push_thrust(
+    platform=None,
+    controller: str = "layered-idc-ft",
+    progress: bool = False,
+    *,
+    distance: float = 0.5,
+    push=(2.0, 7.0),
+    duration: float = 12.0,
+    object_mass: float = 0.5,
+    friction: float = 0.3,
+    stiffness: float = PUSH_STIFFNESS,
+    damping: float = 20.0,
+    seed: int = SEED,
+) -> SimResult:
     """Push an object along x with the thrust, arm locked (Thesis Sec. 6.4.3.1).
 
     The Q-PRR hovers at (0, 0, 1) m with the arm at :data:`ARM_PUSH`, its end effector
@@ -370,31 +504,36 @@ def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: boo
     push = as_interval(push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
     trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
-    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
-                 seed)
+    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
 
 
-def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: bool = False, *, push=(2.0, 7.0),
-                   duration: float = 10.0, object_mass: float = 0.2, friction: float = 0.3, stiffness: float = PUSH_STIFFNESS,
-                   damping: float = 20.0, seed: int = SEED) -> SimResult:
+def push_prismatic(
+    platform=None,
+    controller: str = "layered-idc-ft",
+    progress: bool = False,
+    *,
+    push=(2.0, 7.0),
+    duration: float = 10.0,
+    object_mass: float = 0.2,
+    friction: float = 0.3,
+    stiffness: float = PUSH_STIFFNESS,
+    damping: float = 20.0,
+    seed: int = SEED,
+) -> SimResult:
     """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2)."""
     platform = _q_prr(platform)
     push = as_interval(push, "push", lo=0.0)
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
-    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
-                 seed)
+    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
 
 
-def _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping,
-          seed) -> SimResult:
+def _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed) -> SimResult:
     """The pushing flight of Thesis Sec. 6.4.3 from ``xi0`` along ``trajectory`` (named after it), the object at the end effector."""
-    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping,
-                     friction=friction)
+    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping, friction=friction)
     ctrl = _push_controller(controller, platform, obj)
-    res = simulate(platform, ctrl, trajectory, duration, external_wrench=obj, seed=seed, progress=progress,
-                   scenario=trajectory.name)
+    res = simulate(platform, ctrl, trajectory, duration, external_wrench=obj, seed=seed, progress=progress, scenario=trajectory.name)
     _contact_series(res, obj)
     res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
     return res
@@ -404,9 +543,20 @@ def _push(platform, controller, progress, xi0, trajectory, push, duration, objec
 IMPEDANCE_CONTROLLERS = ("impedance", "impedance-table-6.7", "idc")
 
 
-def impedance(platform=None, controller: str = "impedance", progress: bool = False, *, h_b=(0.2, 0.0, 0.0, 0.0),
-              h_q=(0.05, 0.01, 0.05), t_on: float = 0.0, t_off: float = 18.0, duration: float = 25.0, arm=ARM_PUSH,
-              impedance_gains=None, seed: int = SEED) -> SimResult:
+def impedance(
+    platform=None,
+    controller: str = "impedance",
+    progress: bool = False,
+    *,
+    h_b=(0.2, 0.0, 0.0, 0.0),
+    h_q=(0.05, 0.01, 0.05),
+    t_on: float = 0.0,
+    t_off: float = 18.0,
+    duration: float = 25.0,
+    arm=ARM_PUSH,
+    impedance_gains=None,
+    seed: int = SEED,
+) -> SimResult:
     """Interaction forces from ``t_on`` to ``t_off`` on a hovering Q-PRR under impedance control (Thesis Sec. 6.4.3.4).
 
     ``h_b`` = generalised force on [x, y, z, psi] of the base (N, N, N, N m), applied as the
@@ -431,22 +581,23 @@ def impedance(platform=None, controller: str = "impedance", progress: bool = Fal
     imp = gains.impedance_filters() if impedance_gains is None else impedance_gains
     builders = {
         "impedance": lambda: ImpedanceController(platform, gains.impedance(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
-        "impedance-table-6.7": lambda: ImpedanceController(platform, gains.impedance(), gains.impedance_table_6_7(),
-                                                           ee_sensor=ee.measured, base_sensor=base_sensor),
+        "impedance-table-6.7": lambda: ImpedanceController(
+            platform, gains.impedance(), gains.impedance_table_6_7(), ee_sensor=ee.measured, base_sensor=base_sensor
+        ),
         "idc": lambda: InverseDynamicsController(platform, gains.idc()),
     }
     if controller not in builders:
         raise UnknownNameError("controller", controller, IMPEDANCE_CONTROLLERS)
     ctrl = builders[controller]()
-    res = simulate(platform, ctrl, Hold(xi0), duration, external_wrench=ee, disturbance=pulse, seed=seed,
-                   progress=progress, scenario="impedance")
+    res = simulate(platform, ctrl, Hold(xi0), duration, external_wrench=ee, disturbance=pulse, seed=seed, progress=progress, scenario="impedance")
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
     res.metrics["t_off"] = float(t_off)
     if hasattr(ctrl, "history"):
         h = ctrl.history()
-        res.series.update({"impedance_t": h["t"], "impedance_delta_eta": h["delta_eta"], "impedance_delta_q": h["delta_q"],
-                           "impedance_u_e": h["u_e"]})
+        res.series.update(
+            {"impedance_t": h["t"], "impedance_delta_eta": h["delta_eta"], "impedance_delta_q": h["delta_q"], "impedance_u_e": h["u_e"]}
+        )
         K_arm = ctrl.impedance.arm(platform.n_arm)[2]
         res.series["impedance_K"] = np.concatenate([np.asarray(ctrl.impedance.K_base, dtype=float), K_arm])
         res.metrics["saturated_steps"] = float(ctrl.saturated_steps)
@@ -475,18 +626,41 @@ def impedance_steady_state(result: SimResult, at: float) -> dict[str, np.ndarray
 
 # ============================================================================ figures
 FIGURES = {
-    "static-idc": {"position": "6.7", "attitude": "6.8", "arm": "6.9", "errors_position": "6.10", "errors_angle": "6.10",
-                   "thrust": "6.11", "torques": "6.12", "arm_efforts": "6.12", "path": "6.13"},
+    "static-idc": {
+        "position": "6.7",
+        "attitude": "6.8",
+        "arm": "6.9",
+        "errors_position": "6.10",
+        "errors_angle": "6.10",
+        "thrust": "6.11",
+        "torques": "6.12",
+        "arm_efforts": "6.12",
+        "path": "6.13",
+    },
     "static-dsid": {"position": "6.19", "errors_position": "6.20", "errors_angle": "6.21"},
     "static-mfc": {"position": "6.19", "errors_position": "6.20", "errors_angle": "6.21"},
-    "spiral": {"path": "6.14", "position": "6.15", "attitude": "6.16", "arm": "6.17", "errors_position": "6.18",
-               "errors_angle": "6.18"},
-    "noise": {"disturbance": "6.23", "position": "6.24", "attitude": "6.25", "arm": "6.26", "thrust": "6.27a",
-              "torques": "6.27b", "arm_efforts": "6.27c"},
-    "pulses": {"thrust": "6.28a", "torques": "6.28b", "arm_efforts": "6.28c", "position": "6.29", "attitude": "6.29",
-               "arm": "6.29"},
-    "dynamic-bsg": {"position": "6.37", "attitude": "6.38", "arm": "6.39", "thrust": "6.40a", "torques": "6.40b",
-                    "arm_efforts": "6.40c", "errors_position": "6.41", "errors_angle": "6.41", "cog": "6.42-6.43"},
+    "spiral": {"path": "6.14", "position": "6.15", "attitude": "6.16", "arm": "6.17", "errors_position": "6.18", "errors_angle": "6.18"},
+    "noise": {
+        "disturbance": "6.23",
+        "position": "6.24",
+        "attitude": "6.25",
+        "arm": "6.26",
+        "thrust": "6.27a",
+        "torques": "6.27b",
+        "arm_efforts": "6.27c",
+    },
+    "pulses": {"thrust": "6.28a", "torques": "6.28b", "arm_efforts": "6.28c", "position": "6.29", "attitude": "6.29", "arm": "6.29"},
+    "dynamic-bsg": {
+        "position": "6.37",
+        "attitude": "6.38",
+        "arm": "6.39",
+        "thrust": "6.40a",
+        "torques": "6.40b",
+        "arm_efforts": "6.40c",
+        "errors_position": "6.41",
+        "errors_angle": "6.41",
+        "cog": "6.42-6.43",
+    },
     "payload-drop": {"attitude": "6.49", "arm": "6.50", "thrust": "6.51a", "torques": "6.51b", "arm_efforts": "6.51c"},
     "push-thrust": {"attitude": "6.54", "arm": "6.55", "thrust": "6.56", "torques": "6.57", "arm_efforts": "6.58"},
     "push-prismatic": {"attitude": "6.60", "arm": "6.61", "thrust": "6.62", "torques": "6.63", "arm_efforts": "6.64"},
@@ -554,8 +728,9 @@ def _deflection_panel(ax, result: SimResult) -> None:
 def _interaction_panel(ax, result: SimResult) -> None:
     s, t = result.series, result.t
     w, hb = s["ee_wrench"], s["base_wrench"]
-    for k, (y, lab) in enumerate(((hb[:, 0], "$h_{b,x}$ on the base"), (w[:, 0], "$h_{q,x}$ at the end effector"),
-                                  (w[:, 1], "$h_{q,y}$"), (w[:, 2], "$h_{q,z}$"))):
+    for k, (y, lab) in enumerate(
+        ((hb[:, 0], "$h_{b,x}$ on the base"), (w[:, 0], "$h_{q,x}$ at the end effector"), (w[:, 1], "$h_{q,y}$"), (w[:, 2], "$h_{q,z}$"))
+    ):
         ax.plot(t, y, color=f"C{k}", lw=1.2, label=lab)
     ax.set_ylabel("interaction force [N]")
     robust_limits(ax, [hb[:, 0], w[:, 0:3]], min_span=0.01, mark=False)
@@ -571,22 +746,21 @@ INTERACTION_PANEL = Panel("interaction", "interaction forces (world x, y, z)", _
 
 def plot_payload_drop(result: SimResult, path) -> Path:
     """The Sec. 6.4.2.3 figures of ``payload-drop`` (Fig. 6.49-6.51) with the payload mass (true, estimated) and the release."""
-    return plot_result(result, path, panels=_SEC_6_4_PANELS + (PAYLOAD_PANEL, "rotors", "cog"),
-                       events=((result.metrics["release_time"], "release"),))
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (PAYLOAD_PANEL, "rotors", "cog"), events=((result.metrics["release_time"], "release"),))
 
 
 def plot_push(result: SimResult, path) -> Path:
     """The Sec. 6.4.3 figures of a push scenario (Fig. 6.54-6.58 or 6.60-6.64) with the contact force and the object's motion."""
     m = result.metrics
     events = tuple((m[k], k.replace("_", " ")) for k in ("push_start", "push_end") if k in m)
-    return plot_result(result, path, panels=_SEC_6_4_PANELS + (CONTACT_PANEL, "rotors", "cog"),
-                       events=events)
+    return plot_result(result, path, panels=_SEC_6_4_PANELS + (CONTACT_PANEL, "rotors", "cog"), events=events)
 
 
 def plot_impedance(result: SimResult, path) -> Path:
     """The Sec. 6.4.3.4 figures of ``impedance`` (Fig. 6.66-6.70) with the interaction forces and the compliant deflections."""
-    return plot_result(result, path, panels=_SEC_6_4_PANELS + (INTERACTION_PANEL, DEFLECTION_PANEL, "rotors"),
-                       events=((result.metrics["t_off"], "forces off"),))
+    return plot_result(
+        result, path, panels=_SEC_6_4_PANELS + (INTERACTION_PANEL, DEFLECTION_PANEL, "rotors"), events=((result.metrics["t_off"], "forces off"),)
+    )
 
 
 def summary(result: SimResult) -> list[str]:
@@ -595,9 +769,11 @@ def summary(result: SimResult) -> list[str]:
     m, s = result.metrics, result.series
     if "recovery_time" in m:
         r = recovery_of(result)
-        lines.append(f"recovery after release at {r.release_time:g} s: {r.time:.3f} s ({r.status}; |p_d - p| <= {r.tol_position:g} m, "
-                     f"|q_d - q| <= {r.tol_angle:g} rad, thrust within {100 * r.tol_thrust:g} % of m g); peaks after release: "
-                     f"position {r.peak_position:.4f} m, angle {r.peak_angle:.4f} rad, thrust {100 * r.peak_thrust:.2f} %")
+        lines.append(
+            f"recovery after release at {r.release_time:g} s: {r.time:.3f} s ({r.status}; |p_d - p| <= {r.tol_position:g} m, "
+            f"|q_d - q| <= {r.tol_angle:g} rad, thrust within {100 * r.tol_thrust:g} % of m g); peaks after release: "
+            f"position {r.peak_position:.4f} m, angle {r.peak_angle:.4f} rad, thrust {100 * r.peak_thrust:.2f} %"
+        )
     if "mass_estimate_error" in m:
         lines.append(f"mass estimate: max |m_hat - m| over the last second before the release = {m['mass_estimate_error']:.3e} kg")
     if "contact_force" in s:
@@ -606,8 +782,11 @@ def summary(result: SimResult) -> list[str]:
     if "impedance_K" in s:
         d = impedance_steady_state(result, min(result.t[-1], m["t_off"] - result.dt))
         names = ("x", "y", "z", "psi", "r0", "theta2", "theta3")
-        parts = [f"{n} {v:+.5f} (filter {f:+.5f}, h/K {p:+.5f})" for n, v, f, p in zip(names, d["measured"], d["filter"], d["predicted"])
-                 if abs(p) > 0 or abs(v) > 1e-6]
+        parts = [
+            f"{n} {v:+.5f} (filter {f:+.5f}, h/K {p:+.5f})"
+            for n, v, f, p in zip(names, d["measured"], d["filter"], d["predicted"])
+            if abs(p) > 0 or abs(v) > 1e-6
+        ]
         lines.append(f"deflection at t = {d['t']:.3f} s: " + ", ".join(parts))
         lines.append(f"arm reference saturated on {int(m['saturated_steps'])} steps")
     return lines
@@ -622,32 +801,82 @@ def _interaction(fn: Callable) -> Callable:
 
 
 INTERACTION_SCENARIOS = (
-    Scenario("payload-drop", "carry 0.1 kg at the end effector, release it at 18 s (payload IDC)", _interaction(payload_drop),
-             PAYLOAD_CONTROLLERS,
-             {"mass": Option(0.1, "payload mass [kg]"), "release_time": Option(18.0, "release time [s]"),
-              "duration": Option(25.0, "run length [s]"), "mission": Option("thesis", "thesis (the flight of Sec. 6.3.1.4) or hover"),
-              "noise": Option(0.0, "white-noise amplitude on x, y, z [N] (6.27)"), "seed": Option(SEED, "noise seed")},
-             ("q-prr",), plot_payload_drop, "Sec. 6.4.2.3, Fig. 6.49-6.51", summary),
-    Scenario("push-thrust", "push a 0.5 kg object 0.5 m with the thrust, arm locked", _interaction(push_thrust), PUSH_CONTROLLERS,
-             {"distance": Option(0.5, "push distance [m]"), "duration": Option(12.0, "run length [s]"),
-              "object_mass": Option(0.5, "object mass [kg]"), "friction": Option(0.3, "Coulomb friction coefficient"),
-              "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"), "damping": Option(20.0, "contact damping [N s/m]"),
-              "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_push, "Sec. 6.4.3.1, (6.65)-(6.67), Fig. 6.52-6.58", summary),
-    Scenario("push-prismatic", "push a 0.2 kg object with the slider while hovering", _interaction(push_prismatic), PUSH_CONTROLLERS,
-             {"duration": Option(10.0, "run length [s]"), "object_mass": Option(0.2, "object mass [kg]"),
-              "friction": Option(0.3, "Coulomb friction coefficient"), "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"),
-              "damping": Option(20.0, "contact damping [N s/m]"), "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_push, "Sec. 6.4.3.2, Fig. 6.59-6.64", summary),
-    Scenario("impedance", "interaction forces on a hovering Q-PRR under impedance control", _interaction(impedance),
-             IMPEDANCE_CONTROLLERS,
-             {"t_on": Option(0.0, "forces on [s]"), "t_off": Option(18.0, "forces off [s]"), "duration": Option(25.0, "run length [s]"),
-              "seed": Option(SEED, "seed")},
-             ("q-prr",), plot_impedance, "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7, Fig. 6.65-6.70", summary),
+    Scenario(
+        "payload-drop",
+        "carry 0.1 kg at the end effector, release it at 18 s (payload IDC)",
+        _interaction(payload_drop),
+        PAYLOAD_CONTROLLERS,
+        {
+            "mass": Option(0.1, "payload mass [kg]"),
+            "release_time": Option(18.0, "release time [s]"),
+            "duration": Option(25.0, "run length [s]"),
+            "mission": Option("thesis", "thesis (the flight of Sec. 6.3.1.4) or hover"),
+            "noise": Option(0.0, "white-noise amplitude on x, y, z [N] (6.27)"),
+            "seed": Option(SEED, "noise seed"),
+        },
+        ("q-prr",),
+        plot_payload_drop,
+        "Sec. 6.4.2.3, Fig. 6.49-6.51",
+        summary,
+    ),
+    Scenario(
+        "push-thrust",
+        "push a 0.5 kg object 0.5 m with the thrust, arm locked",
+        _interaction(push_thrust),
+        PUSH_CONTROLLERS,
+        {
+            "distance": Option(0.5, "push distance [m]"),
+            "duration": Option(12.0, "run length [s]"),
+            "object_mass": Option(0.5, "object mass [kg]"),
+            "friction": Option(0.3, "Coulomb friction coefficient"),
+            "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"),
+            "damping": Option(20.0, "contact damping [N s/m]"),
+            "seed": Option(SEED, "seed"),
+        },
+        ("q-prr",),
+        plot_push,
+        "Sec. 6.4.3.1, (6.65)-(6.67), Fig. 6.52-6.58",
+        summary,
+    ),
+    Scenario(
+        "push-prismatic",
+        "push a 0.2 kg object with the slider while hovering",
+        _interaction(push_prismatic),
+        PUSH_CONTROLLERS,
+        {
+            "duration": Option(10.0, "run length [s]"),
+            "object_mass": Option(0.2, "object mass [kg]"),
+            "friction": Option(0.3, "Coulomb friction coefficient"),
+            "stiffness": Option(PUSH_STIFFNESS, "contact stiffness [N/m]"),
+            "damping": Option(20.0, "contact damping [N s/m]"),
+            "seed": Option(SEED, "seed"),
+        },
+        ("q-prr",),
+        plot_push,
+        "Sec. 6.4.3.2, Fig. 6.59-6.64",
+        summary,
+    ),
+    Scenario(
+        "impedance",
+        "interaction forces on a hovering Q-PRR under impedance control",
+        _interaction(impedance),
+        IMPEDANCE_CONTROLLERS,
+        {
+            "t_on": Option(0.0, "forces on [s]"),
+            "t_off": Option(18.0, "forces off [s]"),
+            "duration": Option(25.0, "run length [s]"),
+            "seed": Option(SEED, "seed"),
+        },
+        ("q-prr",),
+        plot_impedance,
+        "Sec. 6.4.3.4, (6.68)-(6.81), Table 6.7, Fig. 6.65-6.70",
+        summary,
+    ),
 )
 
-FLIGHT_SCENARIOS, INTERACTION_SCENARIOS = (tuple(replace(s, figures=FIGURES[s.name]) if s.name in FIGURES else s for s in group)
-                                           for group in (FLIGHT_SCENARIOS, INTERACTION_SCENARIOS))
+FLIGHT_SCENARIOS, INTERACTION_SCENARIOS = (
+    tuple(replace(s, figures=FIGURES[s.name]) if s.name in FIGURES else s for s in group) for group in (FLIGHT_SCENARIOS, INTERACTION_SCENARIOS)
+)
 SCENARIOS = FLIGHT_SCENARIOS + INTERACTION_SCENARIOS
 """The thesis's scenarios (registered in :data:`qprr.scenarios.SCENARIOS`), with their figure numbers (:data:`FIGURES`)."""
 
@@ -700,8 +929,9 @@ class Comparison:
         return "\n".join(lines)
 
 
-def compare(*, platform=None, controllers=("idc", "dsid", "mfc"), duration: float = 30.0, dt: float = SimConfig.dt,
-            progress: bool = False) -> Comparison:
+def compare(
+    *, platform=None, controllers=("idc", "dsid", "mfc"), duration: float = 30.0, dt: float = SimConfig.dt, progress: bool = False
+) -> Comparison:
     """Run the three controllers on the static mission (Sec. 6.3.1.4) and collect RMSE and wall times."""
     platform = _q_prr(platform)
     by_name = {s.name: s for s in FLIGHT_SCENARIOS}

@@ -42,9 +42,7 @@ try:
     import sympy as sp
     from sympy.printing.pycode import PythonCodePrinter
 except ImportError as exc:  # pragma: no cover - exercised only without the test extra
-    raise ImportError(
-        'qprr.thesis.symbolic needs sympy, which is in the test extra: pip install "qprr[test]"'
-    ) from exc
+    raise ImportError('qprr.thesis.symbolic needs sympy, which is in the test extra: pip install "qprr[test]"') from exc
 
 from ..charts import EULER_TOL
 from ..errors import EulerSingularityError, InputError
@@ -112,9 +110,7 @@ def _bodies(p: QPRRParams, q, qd, omega_b):
     ey = sp.Matrix([0, 1, 0])
     out.append((_num(l1.mass), j1 + _nvec(l1.com), omega_b, _nmat(l1.inertia_matrix())))
     out.append((_num(l2.mass), j2 + R2 * _nvec(l2.com), R2.T * omega_b + ey * t2d, _nmat(l2.inertia_matrix())))
-    out.append(
-        (_num(l3.mass), j3 + R3 * _nvec(l3.com), R3.T * omega_b + ey * (t2d + t3d), _nmat(l3.inertia_matrix()))
-    )
+    out.append((_num(l3.mass), j3 + R3 * _nvec(l3.com), R3.T * omega_b + ey * (t2d + t3d), _nmat(l3.inertia_matrix())))
     return out
 
 
@@ -124,11 +120,7 @@ def _derive(p: QPRRParams) -> _Derivation:
     phi, theta, psi = q[3:6]
     Rb = _rz(psi) * _ry(theta) * _rx(phi)  # Thesis (3.4)
     # Thesis (3.22)-(3.24): omega_body = Rx^T Ry^T [0,0,psi_dot] + Rx^T [0,theta_dot,0] + [phi_dot,0,0]
-    omega_b = (
-        _rx(phi).T * _ry(theta).T * sp.Matrix([0, 0, qd[5]])
-        + _rx(phi).T * sp.Matrix([0, qd[4], 0])
-        + sp.Matrix([qd[3], 0, 0])
-    )
+    omega_b = _rx(phi).T * _ry(theta).T * sp.Matrix([0, 0, qd[5]]) + _rx(phi).T * sp.Matrix([0, qd[4], 0]) + sp.Matrix([qd[3], 0, 0])
     p_dot = sp.Matrix(qd[0:3])
     g = _num(p.g)
 
@@ -356,9 +348,7 @@ class SymbolicModel:
         w = as_vector(xi_dot, 9, "xi_dot")
         u = as_vector(u, 9, "u")
         if abs(math.cos(x[4])) < EULER_TOL:
-            raise EulerSingularityError(
-                f"forward_dynamics: B(xi) is singular at pitch theta = {x[4]!r} rad (|cos theta| < {EULER_TOL:g})"
-            )
+            raise EulerSingularityError(f"forward_dynamics: B(xi) is singular at pitch theta = {x[4]!r} rad (|cos theta| < {EULER_TOL:g})")
         B, C, G = self.dynamics(x, w)
         return np.linalg.solve(B, u - C @ w - G)
 

@@ -52,8 +52,7 @@ def _visuals(p: QPRRParams, layout: str) -> dict[str, str]:
     }
     y_axis = (math.pi / 2.0, 0.0, 0.0)  # a cylinder about y_B
     for name, length, radius in (("link2", p.d2, 0.008), ("link3", p.d3, 0.007)):
-        vis[name] = ug.cylinder_visual(0.014, 0.03, rpy=y_axis, rgba=_JOINT) + ug.cylinder_visual(
-            radius, length, (0.0, 0.0, length / 2.0), rgba=_ARM)
+        vis[name] = ug.cylinder_visual(0.014, 0.03, rpy=y_axis, rgba=_JOINT) + ug.cylinder_visual(radius, length, (0.0, 0.0, length / 2.0), rgba=_ARM)
     vis["end_effector"] = ug.sphere_visual(0.012, rgba=_EE)
     pitch = min(math.dist(a.position, b.position) for a, b in itertools.combinations(p.rotors(layout), 2))
     disc_r = min(PROPELLER_RADIUS, 0.45 * pitch)

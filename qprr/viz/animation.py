@@ -67,8 +67,9 @@ def _check_inputs(platform: Platform, t, xi, f, contact):
         raise InputError("t must be finite and non-decreasing [s]")
     xi = as_array(xi, "xi")
     if xi.shape != (n, platform.n_xi):
-        raise ShapeError(f"xi must have shape ({n}, {platform.n_xi}) for platform {platform.name!r} "
-                         f"(6 + {platform.n_arm} arm joints), got {xi.shape}")
+        raise ShapeError(
+            f"xi must have shape ({n}, {platform.n_xi}) for platform {platform.name!r} (6 + {platform.n_arm} arm joints), got {xi.shape}"
+        )
     out = [t, xi]
     for name, a, width in (("f", f, platform.n_rotors), ("contact_force_world", contact, 3)):
         if a is not None:
@@ -154,8 +155,27 @@ class _FfmpegWriter:
 
     def __init__(self, path: Path, fps: float, size: tuple[int, int], exe: str):
         w, h = size
-        cmd = [exe, "-loglevel", "error", "-y", "-f", "rawvideo", "-pix_fmt", "rgba", "-s", f"{w}x{h}", "-r", f"{fps:g}", "-i", "-",
-               "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt", "yuv420p", str(path)]
+        cmd = [
+            exe,
+            "-loglevel",
+            "error",
+            "-y",
+            "-f",
+            "rawvideo",
+            "-pix_fmt",
+            "rgba",
+            "-s",
+            f"{w}x{h}",
+            "-r",
+            f"{fps:g}",
+            "-i",
+            "-",
+            "-vf",
+            "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+            "-pix_fmt",
+            "yuv420p",
+            str(path),
+        ]
         self.proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stderr=subprocess.PIPE)
 
     def add(self, rgba: np.ndarray) -> None:
@@ -352,10 +372,12 @@ def animate(
     (axis_line,) = ax.plot([], [], [], "--", color=_AXIS, lw=1.0)
     (ee_trail,) = ax.plot([], [], [], "-", color=_EE_TRAIL, lw=1.0, alpha=0.8)
     (base_trail,) = ax.plot([], [], [], "-", color=_BASE_TRAIL, lw=1.0, alpha=0.8)
-    handles = [Line2D([], [], color=_ARM, lw=3, marker="o", ms=3, mfc="#f5f5f5", label="arm (joint origins)"),
-               Line2D([], [], color=_COG, marker="X", lw=0, label="CoG"),
-               Line2D([], [], color=_AXIS, ls="--", label="thrust axis"),
-               Line2D([], [], color=_EE_TRAIL, label="end-effector trail")]
+    handles = [
+        Line2D([], [], color=_ARM, lw=3, marker="o", ms=3, mfc="#f5f5f5", label="arm (joint origins)"),
+        Line2D([], [], color=_COG, marker="X", lw=0, label="CoG"),
+        Line2D([], [], color=_AXIS, ls="--", label="thrust axis"),
+        Line2D([], [], color=_EE_TRAIL, label="end-effector trail"),
+    ]
     if f is not None:
         handles.append(Line2D([], [], color=cmap(0.5), lw=2, label="thrust (colour: f / f_max)"))
     if contact is not None:
@@ -375,8 +397,13 @@ def animate(
     ee_hist = np.array([p.ee_world for p in poses])
     base_hist = np.array([p.p_base_world for p in poses])
     keep = None if trail is None else max(1, int(round(trail * fps / speed)) + 1)
-    swatch = np.array([cmap(x)[:3] for x in np.linspace(0, 1, 24)] + [
-        tuple(int(c[i:i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]) * 255
+    swatch = (
+        np.array(
+            [cmap(x)[:3] for x in np.linspace(0, 1, 24)]
+            + [tuple(int(c[i : i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]
+        )
+        * 255
+    )
 
     # the title and the legend never change: draw them once, then only the axes and the two text lines
     ax.set_visible(False)
@@ -407,8 +434,8 @@ def animate(
             ends = np.array([pose.axis_point_world - 1.2 * L * pose.axis_dir_world, pose.axis_point_world + 1.5 * L * pose.axis_dir_world])
             axis_line.set_data_3d(ends[:, 0], ends[:, 1], ends[:, 2])
             start = 0 if keep is None else max(0, k + 1 - keep)
-            ee_trail.set_data_3d(ee_hist[start:k + 1, 0], ee_hist[start:k + 1, 1], ee_hist[start:k + 1, 2])
-            base_trail.set_data_3d(base_hist[start:k + 1, 0], base_hist[start:k + 1, 1], base_hist[start:k + 1, 2])
+            ee_trail.set_data_3d(ee_hist[start : k + 1, 0], ee_hist[start : k + 1, 1], ee_hist[start : k + 1, 2])
+            base_trail.set_data_3d(base_hist[start : k + 1, 0], base_hist[start : k + 1, 1], base_hist[start : k + 1, 2])
             line = f"t = {times[k]:6.2f} s   CoG to axis {1000 * _cog_distance(pose):5.1f} mm"
             if f is not None:
                 fk = f[i]
@@ -444,8 +471,9 @@ def animate_result(platform: Platform, result, path: str | Path, **options) -> A
 
     run = as_run(result)
     if run.xi.shape[1] != platform.n_xi:
-        raise ShapeError(f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); "
-                         f"platform {platform.name!r} has {platform.n_xi}")
+        raise ShapeError(
+            f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); platform {platform.name!r} has {platform.n_xi}"
+        )
     if run.f is not None and run.f.shape[1] != platform.n_rotors:
         raise ShapeError(f"the run logs {run.f.shape[1]} rotor thrusts per sample; platform {platform.name!r} has {platform.n_rotors} rotors")
     contact = None if run.contact_wrench_world is None else run.contact_wrench_world[:, 0:3]

@@ -20,9 +20,19 @@ import urllib.request
 
 from ..errors import MissingDependencyError, QprrError
 
-FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--enable-unsafe-swiftshader", "--remote-allow-origins=*",
-         "--remote-debugging-port=0")
+FLAGS = (
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--enable-unsafe-swiftshader",
+    "--remote-allow-origins=*",
+    "--remote-debugging-port=0",
+)
 """Command-line flags of the headless browser (plus ``--user-data-dir`` and ``--window-size``)."""
 
 

@@ -21,8 +21,10 @@ def animate_to_file(platform, result, path: str | Path, *, progress: bool = True
     from .animation import animate_result
 
     info = animate_result(platform, result, path, progress=progress, **options)
-    print(f"animation: {info.path} ({info.frames} frames at {info.fps:g} fps for {info.duration:.1f} s of run, "
-          f"{info.writer}, written in {info.wall_time:.1f} s)")
+    print(
+        f"animation: {info.path} ({info.frames} frames at {info.fps:g} fps for {info.duration:.1f} s of run, "
+        f"{info.writer}, written in {info.wall_time:.1f} s)"
+    )
     return info
 
 
@@ -49,8 +51,10 @@ def check_run_platform(run, platform, path) -> None:
     from ..errors import InputError
 
     if run.platform and run.platform != platform.name:
-        raise InputError(f"run {str(path)!r} was recorded on platform {run.platform!r}, not on {platform.name!r}: name its platform "
-                         "(--platform NAME [--layout plus|x], or --urdf FILE --rotors FILE.toml for your own)")
+        raise InputError(
+            f"run {str(path)!r} was recorded on platform {run.platform!r}, not on {platform.name!r}: name its platform "
+            "(--platform NAME [--layout plus|x], or --urdf FILE --rotors FILE.toml for your own)"
+        )
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
@@ -97,8 +101,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
         else:
             run = load_run(args.run)
             check_run_platform(run, platform, args.run)
-        animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size),
-                        progress=not args.quiet)
+        animate_to_file(platform, run, args.output, fps=args.fps, speed=args.speed, view=args.view, size=tuple(args.size), progress=not args.quiet)
     except QprrError as exc:
         print(f"qprr animate: error: {exc}", file=sys.stderr)
         return 2
@@ -109,8 +112,11 @@ def register_cli(sub) -> None:
     """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
     from ..cli_common import PLATFORM_HELP, add_platform_options, integer, real
 
-    p = sub.add_parser("view", help="interactive 3-D viewer in the browser (127.0.0.1): joint sliders, IK target, hover thrusts, run player",
-                       description="Start the viewer (needs: pip install 'qprr[viewer]'); Ctrl-C stops it.")
+    p = sub.add_parser(
+        "view",
+        help="interactive 3-D viewer in the browser (127.0.0.1): joint sliders, IK target, hover thrusts, run player",
+        description="Start the viewer (needs: pip install 'qprr[viewer]'); Ctrl-C stops it.",
+    )
     p.add_argument("platform", nargs="?", default=None, help=PLATFORM_HELP)
     add_platform_options(p, name_option=False)
     p.add_argument("--port", type=integer(lo=0, hi=65535), default=8080, help="TCP port on 127.0.0.1 (default 8080; 0: any free port)")
@@ -120,8 +126,11 @@ def register_cli(sub) -> None:
     p.add_argument("--open", action="store_true", help="open the page in the default browser")
     p.set_defaults(func=_cmd_view)
 
-    p = sub.add_parser("animate", help="3-D animation of a saved run (or of a demo IK path) to GIF or MP4, headless",
-                       description="Animate a result file (written by qprr simulate NAME --save RUN.npz); without RUN, a 30 s demo IK path.")
+    p = sub.add_parser(
+        "animate",
+        help="3-D animation of a saved run (or of a demo IK path) to GIF or MP4, headless",
+        description="Animate a result file (written by qprr simulate NAME --save RUN.npz); without RUN, a 30 s demo IK path.",
+    )
     p.add_argument("run", nargs="?", default=None, metavar="RUN.npz", help="the run (default: the demo IK path)")
     p.add_argument("-o", "--output", default="animation.gif", help="output .gif (Pillow) or .mp4 (ffmpeg), folder must exist; default animation.gif")
     add_platform_options(p)

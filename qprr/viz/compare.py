@@ -33,8 +33,9 @@ def _check(results: Mapping[str, SimResult]) -> None:
         raise InputError("results must be a non-empty mapping label -> SimResult")
 
 
-def plot_overlay(results: Mapping[str, SimResult], path, *, rows: Sequence[str] = ("position", "position error", "arm error"),
-                 title: str = "", time_window=None) -> Path:
+def plot_overlay(
+    results: Mapping[str, SimResult], path, *, rows: Sequence[str] = ("position", "position error", "arm error"), title: str = "", time_window=None
+) -> Path:
     """One row per entry of ``rows`` (3 columns each), every run overlaid (Figs. 6.19-6.21).
 
     ``rows``: "position" (x, y, z with the reference dashed, Fig. 6.19), "position error" (x_d - x ..., Fig. 6.20),

@@ -110,8 +110,14 @@ def primitive_visual_model(platform: Platform) -> pin.GeometryModel:
         length = float(np.linalg.norm(p))
         if length > hub_r:
             d = -p / length
-            add(f"rotor_{k}_boom", 1, base, pin.SE3(_along(d), p + 0.5 * (length - hub_r) * d),
-                coal.Cylinder(0.04 * hub_r + 0.004, length - hub_r), _BOOM)
+            add(
+                f"rotor_{k}_boom",
+                1,
+                base,
+                pin.SE3(_along(d), p + 0.5 * (length - hub_r) * d),
+                coal.Cylinder(0.04 * hub_r + 0.004, length - hub_r),
+                _BOOM,
+            )
     chain = [j for j in model.supports[model.frames[platform.ee_frame].parentJoint] if j >= 2]
     ends = [model.jointPlacements[c].translation for c in chain[1:]] + [model.frames[platform.ee_frame].placement.translation]
     link_r = 0.02 * size + 0.002

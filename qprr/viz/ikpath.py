@@ -45,8 +45,7 @@ def ik_levels(platform: Platform, target, q_arm_posture, *, hover: bool = True, 
     return levels
 
 
-def ik_solve(platform: Platform, data: pin.Data, target, xi0=None, *, hover: bool = True, cog: bool = True,
-             posture=None) -> IKResult:
+def ik_solve(platform: Platform, data: pin.Data, target, xi0=None, *, hover: bool = True, cog: bool = True, posture=None) -> IKResult:
     """Strict task-priority IK of ``target`` with the levels of :func:`ik_levels` (from ``xi0``, default the solver's guess).
 
     ``posture``: q_arm of the posture level (default: that of ``xi0``, else the neutral arm).
@@ -58,8 +57,7 @@ def ik_solve(platform: Platform, data: pin.Data, target, xi0=None, *, hover: boo
     if not isinstance(target, pin.SE3):
         target = as_vector(target, 3, "target")
     if posture is None:
-        posture = platform.neutral_q()[7:] if xi0 is None else np.clip(np.asarray(xi0, dtype=float)[6:], platform.arm_lower,
-                                                                            platform.arm_upper)
+        posture = platform.neutral_q()[7:] if xi0 is None else np.clip(np.asarray(xi0, dtype=float)[6:], platform.arm_lower, platform.arm_upper)
     levels = ik_levels(platform, target, posture, hover=hover, cog=cog)
     solver = IKSolver(platform, "qp", QPOptions(levels=levels, require_hover=bool(hover)))
     return solver.solve(data, target, xi0)

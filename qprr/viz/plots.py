@@ -163,8 +163,9 @@ def time_axis(ax, res: SimResult) -> None:
     ax.grid(alpha=0.3)
 
 
-def robust_limits(ax, arrays: Sequence[np.ndarray], *, min_span: float, t=None, fraction: float = ROBUST_FRACTION,
-                  mark: bool = True) -> tuple[float, float]:
+def robust_limits(
+    ax, arrays: Sequence[np.ndarray], *, min_span: float, t=None, fraction: float = ROBUST_FRACTION, mark: bool = True
+) -> tuple[float, float]:
     """Set the y limits of ``ax`` from the quantiles of ``arrays`` so that short spikes do not set the scale.
 
     The limits span the [``fraction``, 1 - ``fraction``] quantiles of all values, widened by 8 %
@@ -203,8 +204,7 @@ def robust_limits(ax, arrays: Sequence[np.ndarray], *, min_span: float, t=None, 
             peak = 0.0
             for side, tt, vv in clipped:
                 y = hi if side == "top" else lo
-                ax.plot(tt, np.full(tt.shape, y), "v" if side == "top" else "^", color="tab:red", ms=5, clip_on=False,
-                        zorder=5)
+                ax.plot(tt, np.full(tt.shape, y), "v" if side == "top" else "^", color="tab:red", ms=5, clip_on=False, zorder=5)
                 peak = max(peak, float(np.max(np.abs(vv))))
             ax.plot([], [], "v", color="tab:red", ms=5, label=f"clipped spike (peak |{peak:.3g}|)")
     return lo, hi
@@ -228,9 +228,17 @@ def legend(ax, *others, **kwargs) -> None:
         labels += lab
     if handles:
         drop = ScaledTranslation(0.0, -LEGEND_DROP / 72.0, ax.figure.dpi_scale_trans)
-        opts = {"fontsize": 7.5, "framealpha": 0.85, "loc": "upper center", "bbox_to_anchor": (0.5, 0.0),
-                "bbox_transform": ax.transAxes + drop, "ncol": min(len(handles), 4), "handlelength": 1.8,
-                "borderaxespad": 0.0, "columnspacing": 1.2}
+        opts = {
+            "fontsize": 7.5,
+            "framealpha": 0.85,
+            "loc": "upper center",
+            "bbox_to_anchor": (0.5, 0.0),
+            "bbox_transform": ax.transAxes + drop,
+            "ncol": min(len(handles), 4),
+            "handlelength": 1.8,
+            "borderaxespad": 0.0,
+            "columnspacing": 1.2,
+        }
         opts.update(kwargs)
         top = max((ax, *others), key=lambda a: a.get_zorder())  # drawn last: nothing covers its legend
         leg = top.legend(handles, labels, **opts)
@@ -294,8 +302,16 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
             unit, scale = "m or rad", 1.0
         vals, refs = [scale * v for v in raw], [scale * r for r in raw_refs]
         tag = f" [{unit}]" if two else ""
-        _draw_signals(a, t, vals, [pretty(res.names[i]) + tag for i in group], colors=[colors[i] for i in group], refs=refs,
-                      lw=1.1 if errors else 1.4, ref_label=ref_label)
+        _draw_signals(
+            a,
+            t,
+            vals,
+            [pretty(res.names[i]) + tag for i in group],
+            colors=[colors[i] for i in group],
+            refs=refs,
+            lw=1.1 if errors else 1.4,
+            ref_label=ref_label,
+        )
         ref_label = None if refs else ref_label
         if errors:
             a.axhline(0.0, color="0.4", lw=0.6, zorder=1)
@@ -340,8 +356,15 @@ def _force_panel(ax, res, idx, ylabel: str, labels) -> None:
         gap = [np.max(np.abs(res.u[:, i] - u_app[:, i])) if res.n else 0.0 for i in group]
         scale = max([np.max(np.abs(v)) for v in vals] + [1e-9])
         commanded = [res.u[:, i] if d > 0.005 * scale else None for i, d in zip(group, gap)]  # visible gaps only
-        _draw_signals(a, t, vals, [labels[i] + (f" [{unit}]" if len(groups) > 1 else "") for i in group],
-                      colors=[colors[i] for i in group], commanded=commanded, lw=1.2)
+        _draw_signals(
+            a,
+            t,
+            vals,
+            [labels[i] + (f" [{unit}]" if len(groups) > 1 else "") for i in group],
+            colors=[colors[i] for i in group],
+            commanded=commanded,
+            lw=1.2,
+        )
         if any(c is not None for c in commanded):
             a.plot([], [], color="0.3", label="commanded (where not produced)", **COMMANDED_STYLE)
         a.set_ylabel(f"{ylabel} [{unit}]" if len(groups) == 1 else f"{'forces' if unit == 'N' else 'torques'} [{unit}]")
@@ -384,14 +407,12 @@ def _arm(ax, res):
 
 def _errors_position(ax, res):
     kinds = coordinate_kinds(res)
-    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] != "angle"], what="reference - measured",
-                      errors=True)
+    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] != "angle"], what="reference - measured", errors=True)
 
 
 def _errors_angle(ax, res):
     kinds = coordinate_kinds(res)
-    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] == "angle"], what="reference - measured",
-                      errors=True)
+    _coordinate_panel(ax, res, [i for i in range(res.xi.shape[1]) if kinds[i] == "angle"], what="reference - measured", errors=True)
 
 
 def _thrust(ax, res):
@@ -420,8 +441,7 @@ def _rotors(ax, res, thrust_bounds=None):
         for b in shown:
             ax.axhline(b, color="0.3", ls=":", lw=1.0, zorder=1)
         off = [f"{b:g}" for b in thrust_bounds if b not in shown]
-        ax.plot([], [], color="0.3", ls=":", lw=1.0,
-                label="bounds" + (f" ({', '.join(off)} N: off scale)" if off else ""))
+        ax.plot([], [], color="0.3", ls=":", lw=1.0, label="bounds" + (f" ({', '.join(off)} N: off scale)" if off else ""))
     if sat.any():
         ax.plot(t[sat], np.full(int(sat.sum()), hi), "|", color="tab:red", ms=6, clip_on=False, label="a bound active")
     ax.set_ylabel("rotor thrust [N]")
@@ -460,8 +480,14 @@ def _disturbance(ax, res):
         if g:
             _under(ax, a)
         for i in group:
-            a.step(t[sel], u[sel, i], where="post", color=f"C{idx.index(i) % 10}", lw=0.9,
-                   label=f"{pretty(res.names[i])}" + (f" [{unit}]" if len(groups) > 1 else ""))
+            a.step(
+                t[sel],
+                u[sel, i],
+                where="post",
+                color=f"C{idx.index(i) % 10}",
+                lw=0.9,
+                label=f"{pretty(res.names[i])}" + (f" [{unit}]" if len(groups) > 1 else ""),
+            )
         a.set_ylabel(f"{'forces' if unit == 'N' else 'torques' if unit == 'N m' else 'disturbance'} [{unit}]")
         robust_limits(a, [u[sel][:, group]], min_span=1e-3, mark=False)
         axes.append(a)
@@ -497,8 +523,15 @@ def _path(ax, res):
         ax.set_xlabel("x - x0 [mm]")
         ax.set_ylabel("y - y0 [mm]")
         ax.set_zlabel("z - z0 [mm]")
-        ax.text2D(1.0, 1.0, f"about the start\n(x0, y0, z0) =\n({origin[0]:.3f}, {origin[1]:.3f}, {origin[2]:.3f}) m",
-                  transform=ax.transAxes, fontsize=7.5, ha="right", va="top")
+        ax.text2D(
+            1.0,
+            1.0,
+            f"about the start\n(x0, y0, z0) =\n({origin[0]:.3f}, {origin[1]:.3f}, {origin[2]:.3f}) m",
+            transform=ax.transAxes,
+            fontsize=7.5,
+            ha="right",
+            va="top",
+        )
     else:
         ax.set_xlabel("x [m]")
         ax.set_ylabel("y [m]")
@@ -533,8 +566,20 @@ PANELS: dict[str, Panel] = {
 }
 """Every panel by name (see the module docstring)."""
 
-DEFAULT_PANELS = ("position", "attitude", "arm", "errors_position", "errors_angle", "thrust", "torques", "arm_efforts",
-                  "rotors", "path", "cog", "disturbance")
+DEFAULT_PANELS = (
+    "position",
+    "attitude",
+    "arm",
+    "errors_position",
+    "errors_angle",
+    "thrust",
+    "torques",
+    "arm_efforts",
+    "rotors",
+    "path",
+    "cog",
+    "disturbance",
+)
 """The panels of the full page (``disturbance`` only when the run had one)."""
 
 
@@ -581,9 +626,19 @@ def _events(ax, events, label: bool) -> None:
             ax.text(te, 0.98, f" {name}", transform=tr, fontsize=7.5, color="0.25", rotation=90, va="top", ha="right")
 
 
-def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, ax=None, title: str | None = None,
-                figures: Mapping[str, str] | None = None, thrust_bounds: tuple[float, float] | None = None,
-                events: Sequence[tuple[float, str]] = (), ncols: int | None = None, dpi: int = 90):
+def plot_result(
+    res: SimResult,
+    path: str | Path | None = None,
+    *,
+    panels=None,
+    ax=None,
+    title: str | None = None,
+    figures: Mapping[str, str] | None = None,
+    thrust_bounds: tuple[float, float] | None = None,
+    events: Sequence[tuple[float, str]] = (),
+    ncols: int | None = None,
+    dpi: int = 90,
+):
     """Draw ``panels`` of ``res``; save to ``path`` (.png, .pdf, .svg) or return the Figure, or draw into ``ax``.
 
     Parameters
@@ -690,6 +745,24 @@ def default_title(res: SimResult) -> str:
     return head + "\nRMSE (6.26): " + ", ".join(parts)
 
 
-__all__ = ["DEFAULT_PANELS", "PANELS", "Panel", "applied_forces", "coordinate_kinds", "default_title", "effort_label", "figure_path",
-           "legend", "new_figure", "plain", "plot_result", "pretty", "robust_limits", "save_figure", "scenario_figures", "tidy_3d",
-           "time_axis", "wrap_title"]
+__all__ = [
+    "DEFAULT_PANELS",
+    "PANELS",
+    "Panel",
+    "applied_forces",
+    "coordinate_kinds",
+    "default_title",
+    "effort_label",
+    "figure_path",
+    "legend",
+    "new_figure",
+    "plain",
+    "plot_result",
+    "pretty",
+    "robust_limits",
+    "save_figure",
+    "scenario_figures",
+    "tidy_3d",
+    "time_axis",
+    "wrap_title",
+]

@@ -81,8 +81,10 @@ def as_run(result) -> RunLog:
         return result
     missing = [k for k in ("t", "xi") if getattr(result, k, None) is None]
     if missing:
-        raise InputError(f"result must be a run (a SimResult, a RunLog, or an object with the attributes t and xi); "
-                         f"{type(result).__name__} lacks {', '.join(missing)}")
+        raise InputError(
+            f"result must be a run (a SimResult, a RunLog, or an object with the attributes t and xi); "
+            f"{type(result).__name__} lacks {', '.join(missing)}"
+        )
     arrays = {k: getattr(result, k, None) for k in ARRAYS}
     series = getattr(result, "series", None)
     if arrays["contact_wrench_world"] is None and isinstance(series, dict):

@@ -82,8 +82,9 @@ def check_port_free(port: int) -> None:
         try:
             s.bind((HOST, port))
         except OSError as exc:
-            raise PortInUseError(f"port {port} on {HOST} is already in use ({exc.strerror}); "
-                                 f"stop the program using it or choose another with --port") from None
+            raise PortInUseError(
+                f"port {port} on {HOST} is already in use ({exc.strerror}); stop the program using it or choose another with --port"
+            ) from None
 
 
 class Viewer:
@@ -100,8 +101,9 @@ class Viewer:
     verbose : print the address.
     """
 
-    def __init__(self, platform: Platform, *, port: int = 8080, xi=None, run=None, hover: bool = True, cog: bool = True,
-                 verbose: bool = True) -> None:
+    def __init__(
+        self, platform: Platform, *, port: int = 8080, xi=None, run=None, hover: bool = True, cog: bool = True, verbose: bool = True
+    ) -> None:
         if not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
@@ -136,8 +138,7 @@ class Viewer:
         self.port = int(self.server.get_port())
         if port != 0 and self.port != port:
             self.server.stop()
-            raise PortInUseError(f"port {port} on {HOST} was taken while the viewer started (viser moved to {self.port}); "
-                                 "choose another with --port")
+            raise PortInUseError(f"port {port} on {HOST} was taken while the viewer started (viser moved to {self.port}); choose another with --port")
         try:
             self._build_scene()
             self._build_gui(hover, cog)
@@ -164,8 +165,7 @@ class Viewer:
         self.visualizer.loadViewerModel(rootNodeName="/robot")
         scene.set_up_direction("+z")
         scene.add_grid("/ground", width=6.0, height=6.0, cell_size=0.25, plane="xy")
-        look_at, position = camera_framing(robot_pose(p, self._data, ch.xi_to_q(self._xi), self._chain), rotor_radius(p),
-                                           CAMERA_FOV)
+        look_at, position = camera_framing(robot_pose(p, self._data, ch.xi_to_q(self._xi), self._chain), rotor_radius(p), CAMERA_FOV)
         self.server.initial_camera.fov = CAMERA_FOV
         self.server.initial_camera.look_at = tuple(look_at)
         self.server.initial_camera.position = tuple(position)
@@ -173,12 +173,13 @@ class Viewer:
         self._cog_label = scene.add_label("/markers/cog/label", "CoG")
         self._axis = scene.add_line_segments("/markers/thrust_axis", np.zeros((1, 2, 3)), (90, 90, 90), thickness=0.004)
         n = p.n_rotors
-        self._thrusts = scene.add_arrows("/markers/thrusts", np.zeros((n, 2, 3)), np.tile(_THRUST_OK, (n, 1)),
-                                         shaft_radius=0.01, head_radius=0.025, head_length=0.05)
-        self._contact = scene.add_arrows("/markers/contact", np.zeros((1, 2, 3)), (142, 68, 173), shaft_radius=0.01,
-                                         head_radius=0.025, head_length=0.05, visible=False)
-        self._trail = scene.add_line_segments("/markers/run_trail", np.zeros((1, 2, 3)), (230, 126, 34), thickness=0.006,
-                                              visible=False)
+        self._thrusts = scene.add_arrows(
+            "/markers/thrusts", np.zeros((n, 2, 3)), np.tile(_THRUST_OK, (n, 1)), shaft_radius=0.01, head_radius=0.025, head_length=0.05
+        )
+        self._contact = scene.add_arrows(
+            "/markers/contact", np.zeros((1, 2, 3)), (142, 68, 173), shaft_radius=0.01, head_radius=0.025, head_length=0.05, visible=False
+        )
+        self._trail = scene.add_line_segments("/markers/run_trail", np.zeros((1, 2, 3)), (230, 126, 34), thickness=0.006, visible=False)
         self._target = scene.add_transform_controls("/target", scale=0.6 * L, depth_test=False)
         self._target.on_update(self._on_target)
 
@@ -187,8 +188,7 @@ class Viewer:
         gui.configure_theme(control_width="large")
         self._sliders = []
         with gui.add_folder("Configuration (FK)"):
-            ranges = [(-2.0, 2.0, "m"), (-2.0, 2.0, "m"), (0.0, 3.0, "m"), (-1.5, 1.5, "rad"), (-1.5, 1.5, "rad"),
-                      (-math.pi, math.pi, "rad")]
+            ranges = [(-2.0, 2.0, "m"), (-2.0, 2.0, "m"), (0.0, 3.0, "m"), (-1.5, 1.5, "rad"), (-1.5, 1.5, "rad"), (-math.pi, math.pi, "rad")]
             for j in p.arm:
                 if j.kind == "prismatic":
                     lo, hi = (j.lower, j.upper) if math.isfinite(j.lower) and math.isfinite(j.upper) else (-1.0, 1.0)
@@ -202,11 +202,11 @@ class Viewer:
                 s.on_update(self._slider_callback(k))
                 self._sliders.append(s)
         with gui.add_folder("End-effector target (IK)"):
-            self._hover_box = gui.add_checkbox("hover level", initial_value=bool(hover),
-                                               hint="level 2: thrust axis vertical (roll = pitch = 0)")
+            self._hover_box = gui.add_checkbox("hover level", initial_value=bool(hover), hint="level 2: thrust axis vertical (roll = pitch = 0)")
             self._cog_box = gui.add_checkbox("CoG level", initial_value=bool(cog), hint="level 3: CoG on the thrust axis")
-            self._orient_box = gui.add_checkbox("match orientation", initial_value=False,
-                                                hint="level 1: the target's orientation too, not only its position")
+            self._orient_box = gui.add_checkbox(
+                "match orientation", initial_value=False, hint="level 1: the target's orientation too, not only its position"
+            )
             reset = gui.add_button("target to end effector")
             reset.on_click(lambda _: self._move_target_to_ee())
             self._ik_md = gui.add_markdown("IK: drag the target gizmo")
@@ -230,6 +230,7 @@ class Viewer:
             with self._lock:
                 self._xi[k] = float(self._sliders[k].value)
                 self._apply(move_target=True)
+
         return cb
 
     # ------------------------------------------------------------------ state
@@ -358,8 +359,10 @@ class Viewer:
         """Load a run in the player: a :class:`RunLog`, a ``SimResult`` or the path of a result file (:func:`qprr.viz.load_run`)."""
         run = load_run(run) if isinstance(run, (str, os.PathLike)) else as_run(run)
         if run.xi.shape[1] != self.platform.n_xi:
-            raise ShapeError(f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); "
-                             f"{self.platform.name!r} has {self.platform.n_xi}")
+            raise ShapeError(
+                f"the run has {run.xi.shape[1]} coordinates per sample (platform {run.platform or '?'!r}); "
+                f"{self.platform.name!r} has {self.platform.n_xi}"
+            )
         if run.f is not None and run.f.shape[1] != self.platform.n_rotors:
             raise ShapeError(f"the run logs {run.f.shape[1]} thrusts per sample; {self.platform.name!r} has {self.platform.n_rotors} rotors")
         self.stop_playing()  # outside the lock: the player thread may be waiting for it
@@ -381,7 +384,8 @@ class Viewer:
                 self._syncing = False
             name = f" of {run.platform}" if run.platform else ""
             self._run_md.content = f"run{name}: {run.n} samples, {t0:g} to {t1:g} s" + (
-                "" if run.f is not None else " (no thrusts logged: arrows show hover thrusts)")
+                "" if run.f is not None else " (no thrusts logged: arrows show hover thrusts)"
+            )
             self.show_time(t0)
         return run
 
@@ -550,10 +554,12 @@ def _ik_markdown(res: IKResult, pose: bool, hover: bool, cog: bool) -> str:
     head = f"**IK {res.status}** ({res.iterations} it, {1000 * res.wall_time:.1f} ms), levels {levels}"
     if res.xi is None:
         return f"{head}  \n{res.reason}"
-    lines = [head,
-             f"position error {res.position_error:.2e} m, orientation error {res.orientation_error:.2e} rad",
-             f"CoG offset ({_f(1000 * res.x_cm, 2)}, {_f(1000 * res.y_cm, 2)}) mm, roll {_f(math.degrees(res.roll), 2)} deg, "
-             f"pitch {_f(math.degrees(res.pitch), 2)} deg"]
+    lines = [
+        head,
+        f"position error {res.position_error:.2e} m, orientation error {res.orientation_error:.2e} rad",
+        f"CoG offset ({_f(1000 * res.x_cm, 2)}, {_f(1000 * res.y_cm, 2)}) mm, roll {_f(math.degrees(res.roll), 2)} deg, "
+        f"pitch {_f(math.degrees(res.pitch), 2)} deg",
+    ]
     if not res.success and res.reason:
         lines.append(res.reason)
     return "  \n".join(lines)
@@ -568,4 +574,3 @@ def _hover_markdown(platform: Platform, r: HoverReport, x_cm: np.ndarray, logged
     if logged is not None:
         text += "\n\narrows: logged thrusts [" + ", ".join(f"{v:.2f}" for v in logged) + "] N"
     return text
-

@@ -17,6 +17,22 @@ from .robots import ROBOTS, TYPE_EXAMPLES, get_robot, tricycle_exercise
 from .sim import WheeledSimResult, simulate
 from .wheels import CentredSteerableWheel, FixedWheel, OffCentredSteerableWheel, SwedishWheel
 
-__all__ = ["ICR", "ROBOTS", "TYPE_EXAMPLES", "AckermannSteering", "CentredSteerableWheel", "FixedWheel", "KinematicModel",
-           "Mobility", "OffCentredSteerableWheel", "SwedishWheel", "WheeledRobot", "WheeledSimResult", "admissible_types",
-           "get_robot", "simulate", "tricycle_exercise", "wheel_at"]
+__all__ = [
+    "ICR",
+    "ROBOTS",
+    "TYPE_EXAMPLES",
+    "AckermannSteering",
+    "CentredSteerableWheel",
+    "FixedWheel",
+    "KinematicModel",
+    "Mobility",
+    "OffCentredSteerableWheel",
+    "SwedishWheel",
+    "WheeledRobot",
+    "WheeledSimResult",
+    "admissible_types",
+    "get_robot",
+    "simulate",
+    "tricycle_exercise",
+    "wheel_at",
+]

@@ -191,8 +191,7 @@ def admissible_types() -> list[tuple[int, int]]:
     delta_s <= 3 - delta_m (the rows of C1s are rows of C1*, so rank C1s <= rank C1*).
     Lecture: "Manœuvrabilité d'un robot" (table of the five couples).
     """
-    out = [(dm, ds) for dm in range(3, -1, -1) for ds in range(4)
-           if 1 <= dm <= 3 and 0 <= ds <= 2 and 2 <= dm + ds <= 3 and ds <= 3 - dm]
+    out = [(dm, ds) for dm in range(3, -1, -1) for ds in range(4) if 1 <= dm <= 3 and 0 <= ds <= 2 and 2 <= dm + ds <= 3 and ds <= 3 - dm]
     return out
 
 
@@ -303,8 +302,11 @@ class WheeledRobot:
 
     def J2(self) -> np.ndarray:
         """Lecture: J2 = diag(r_1, ..., r_N) over the standard wheels, in the order of :meth:`J1`."""
-        order = ([w for w in self.wheels if w.kind is WheelKind.FIXED] + list(self.steered_wheels)
-                 + [w for w in self.wheels if w.kind is WheelKind.OFF_CENTRED_STEERABLE])
+        order = (
+            [w for w in self.wheels if w.kind is WheelKind.FIXED]
+            + list(self.steered_wheels)
+            + [w for w in self.wheels if w.kind is WheelKind.OFF_CENTRED_STEERABLE]
+        )
         return np.diag([w.r for w in order])
 
     # ------------------------------------------------------------ Pfaffian form
@@ -381,8 +383,12 @@ class WheeledRobot:
         elif t in admissible_types():
             status, reason = MobilityStatus.ADMISSIBLE, f"type ({dm}, {ds})"
         else:
-            status, reason = MobilityStatus.NOT_ADMISSIBLE, f"({dm}, {ds}) violates the lecture's conditions (delta_M = {dm + ds} < 2)" \
-                if dm + ds < 2 else f"({dm}, {ds}) is not one of the five admissible types"
+            status, reason = (
+                MobilityStatus.NOT_ADMISSIBLE,
+                f"({dm}, {ds}) violates the lecture's conditions (delta_M = {dm + ds} < 2)"
+                if dm + ds < 2
+                else f"({dm}, {ds}) is not one of the five admissible types",
+            )
         return Mobility(dm, ds, dm + ds, rank_c1s, t, status, reason)
 
     def icr(self, sigma=None, twist=None, pose=None, *, tol: float = 1e-9) -> ICR:
@@ -417,8 +423,9 @@ class WheeledRobot:
             return ICR(ICRStatus.AT_INFINITY, None, None, None, "only rotations about no finite point: the ICR line is at infinity")
         p0 = -n[2] * np.array([a, b]) / nn**2
         direction = np.array([-b, a]) / nn
-        return ICR(ICRStatus.LINE, p0, _to_world(p0, pose), direction,
-                   "delta_m = 2: the ICR lies on this line (the common wheel axis), placed by the inputs")
+        return ICR(
+            ICRStatus.LINE, p0, _to_world(p0, pose), direction, "delta_m = 2: the ICR lies on this line (the common wheel axis), placed by the inputs"
+        )
 
 
 def _empty(m, n: int = 3):
@@ -451,5 +458,19 @@ def generic_steering(n: int) -> np.ndarray:
     return 0.37 + 0.22 * np.arange(n, dtype=float)
 
 
-__all__ = ["ICR", "AckermannSteering", "ICRStatus", "Mobility", "MobilityStatus", "NamedSteering", "SynchroSteering", "WheeledRobot",
-           "admissible_types", "generic_steering", "kernel", "rank", "rotation", "wheel_at"]
+__all__ = [
+    "ICR",
+    "AckermannSteering",
+    "ICRStatus",
+    "Mobility",
+    "MobilityStatus",
+    "NamedSteering",
+    "SynchroSteering",
+    "WheeledRobot",
+    "admissible_types",
+    "generic_steering",
+    "kernel",
+    "rank",
+    "rotation",
+    "wheel_at",
+]

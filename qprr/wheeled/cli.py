@@ -44,10 +44,12 @@ def register_cli(subparsers) -> None:
 
     lines = [f"  {n:24s} {d}" for n, d in catalogue().items()]
     p = subparsers.add_parser(
-        "wheeled", help="wheeled mobile robots of the lecture: robots, exercises, control, mobile manipulation",
+        "wheeled",
+        help="wheeled mobile robots of the lecture: robots, exercises, control, mobile manipulation",
         description="Run a robot or an exercise of the mobile-robots lecture (prints the checks; optional figure).\n\n"
-                    "robots and exercises:\n" + "\n".join(lines),
-        formatter_class=argparse.RawDescriptionHelpFormatter)
+        "robots and exercises:\n" + "\n".join(lines),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     p.add_argument("name", metavar="ROBOT-OR-EXERCISE", help="one of the names listed above")
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure to FILE.png")
     p.set_defaults(func=_cmd_wheeled)

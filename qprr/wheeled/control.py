@@ -86,8 +86,12 @@ class Circle:
         t = as_real(t, "t", unit="s")
         R, w = self.R, self.w
         s, c = math.sin(w * t), math.cos(w * t)
-        return (np.array([self.center[0] + R * c, self.center[1] + R * s]), np.array([-R * w * s, R * w * c]),
-                np.array([-R * w * w * c, -R * w * w * s]), np.array([R * w**3 * s, -R * w**3 * c]))
+        return (
+            np.array([self.center[0] + R * c, self.center[1] + R * s]),
+            np.array([-R * w * s, R * w * c]),
+            np.array([-R * w * w * c, -R * w * w * s]),
+            np.array([R * w**3 * s, -R * w**3 * c]),
+        )
 
 
 def _check_path(path, size: str) -> None:
@@ -305,5 +309,4 @@ class SinusoidalParking:
         return np.array([u1, psi_dot])
 
 
-__all__ = ["CarTracking", "Circle", "KanayamaTracking", "Lemniscate", "PointTracking", "PosturePolar", "SinusoidalParking",
-           "reference_posture"]
+__all__ = ["CarTracking", "Circle", "KanayamaTracking", "Lemniscate", "PointTracking", "PosturePolar", "SinusoidalParking", "reference_posture"]

@@ -56,8 +56,10 @@ def _frobenius_lines(model) -> list[str]:
     except MissingDependencyError as exc:  # pragma: no cover - sympy missing: the line says how to install it
         return [f"Lie brackets: {exc}"]
     forms = "; ".join(str(list(f)) for f in r.integrable_forms) or "none"
-    return [f"Lie brackets (Frobenius): dim of the distribution by bracket depth {list(r.growth)} of n = {r.n}: "
-            f"{r.status.value} ({r.n_integrable} of {r.k} constraints integrable; integrable forms: {forms})"]
+    return [
+        f"Lie brackets (Frobenius): dim of the distribution by bracket depth {list(r.growth)} of n = {r.n}: "
+        f"{r.status.value} ({r.n_integrable} of {r.k} constraints integrable; integrable forms: {forms})"
+    ]
 
 
 # ============================================================================ robots
@@ -82,22 +84,28 @@ def _robot_demo(name: str) -> Demo:
     mob = model.robot.mobility()
     sig = np.full(model.robot.n_steering, 0.3)
     icr = model.robot.icr(sig)
-    lines = [f"{model.name}: {model.description}  [Lecture: {model.lecture}]",
-             f"q = {list(model.coordinates)}, u = {[f'{n} [{u}]' for n, u in zip(model.inputs, model.input_units)]}",
-             f"degrees: delta_m = {mob.delta_m}, delta_s = {mob.delta_s}, delta_M = {mob.delta_M} -> {mob.status.value} "
-             f"({mob.reason}); rank C1s = {mob.rank_C1s}",
-             f"ICR at steering {sig.tolist() or 'none'}: {icr.status.value}"
-             + (f" at {_fmt(icr.point_R)} m (robot frame)" if icr.point_R is not None else "")
-             + (f", direction {_fmt(icr.direction)}" if icr.direction is not None else "")]
+    lines = [
+        f"{model.name}: {model.description}  [Lecture: {model.lecture}]",
+        f"q = {list(model.coordinates)}, u = {[f'{n} [{u}]' for n, u in zip(model.inputs, model.input_units)]}",
+        f"degrees: delta_m = {mob.delta_m}, delta_s = {mob.delta_s}, delta_M = {mob.delta_M} -> {mob.status.value} "
+        f"({mob.reason}); rank C1s = {mob.rank_C1s}",
+        f"ICR at steering {sig.tolist() or 'none'}: {icr.status.value}"
+        + (f" at {_fmt(icr.point_R)} m (robot frame)" if icr.point_R is not None else "")
+        + (f", direction {_fmt(icr.direction)}" if icr.direction is not None else ""),
+    ]
     lines += _frobenius_lines(model)
-    lines.append(f"simulation, 20 s, input program of qprr.wheeled.demos: {res.status.value} ({res.reason}); "
-                 f"final q = {_fmt(res.q[-1])}; max |A^T q_dot| = {res.residual.max():.2e}")
+    lines.append(
+        f"simulation, 20 s, input program of qprr.wheeled.demos: {res.status.value} ({res.reason}); "
+        f"final q = {_fmt(res.q[-1])}; max |A^T q_dot| = {res.residual.max():.2e}"
+    )
     if name == "unicycle":
         u = Unicycle()
         pd, pg = differential_drive_inverse(0.5, 0.3, u.r, u.L)
-        lines.append(f"differential drive (slide convention): v = 0.5 m/s, omega = 0.3 rad/s <- phi_dot_d = {pd:.4g}, "
-                     f"phi_dot_g = {pg:.4g} rad/s; back: {differential_drive(pd, pg, u.r, u.L)}; rho = {icr_offset(pd, pg, u.L):.4g} m "
-                     f"(= v/omega = {0.5 / 0.3:.4g})")
+        lines.append(
+            f"differential drive (slide convention): v = 0.5 m/s, omega = 0.3 rad/s <- phi_dot_d = {pd:.4g}, "
+            f"phi_dot_g = {pg:.4g} rad/s; back: {differential_drive(pd, pg, u.r, u.L)}; rho = {icr_offset(pd, pg, u.L):.4g} m "
+            f"(= v/omega = {0.5 / 0.3:.4g})"
+        )
         lines += _integrator_lines()
 
     def plot(path):
@@ -106,7 +114,7 @@ def _robot_demo(name: str) -> Demo:
         ax[0, 0].set_title(f"{model.name}: path (exact flow), robot every {res.t[-1] / 6:.3g} s", fontsize=9)
         k = len(res.t) // 2
         tw = model.body_twist(res.q[k], res.u[k])
-        sig_k = res.q[k, 3:3 + model.robot.n_steering]
+        sig_k = res.q[k, 3 : 3 + model.robot.n_steering]
         plots.plot_icr(ax[0, 1], model.robot, sig_k, tw)
         ax[0, 1].set_title(f"ICR at t = {res.t[k]:.3g} s ({model.robot.icr(sig_k, tw).status.value})", fontsize=9)
         plots.plot_wheel_speeds(ax[1, 0], res)
@@ -125,28 +133,39 @@ def _integrator_lines() -> list[str]:
     slip = dict.fromkeys(q, 0.0)
     for k in range(n):
         u = np.array([1.0, math.sin(k * dt)])
-        for name, step in (("exact", m.flow), ("rk4", lambda q_, u_, h: rk4_step(m, q_, u_, h)),
-                           ("euler", lambda q_, u_, h: euler_step(m, q_, u_, h))):
+        for name, step in (
+            ("exact", m.flow),
+            ("rk4", lambda q_, u_, h: rk4_step(m, q_, u_, h)),
+            ("euler", lambda q_, u_, h: euler_step(m, q_, u_, h)),
+        ):
             nxt = step(q[name], u, dt)
             slip[name] = max(slip[name], abs(chord_slip(q[name], nxt)))
             q[name] = nxt
-    return [f"integrators, unicycle, v = 1 m/s, omega = sin t, dt = {dt} s, {n * dt:g} s: max lateral slip per step "
-            + ", ".join(f"{k} {v:.1e} m" for k, v in slip.items())
-            + f"; final position error vs exact: rk4 {np.linalg.norm(q['rk4'][:2] - q['exact'][:2]):.1e} m, "
-              f"euler {np.linalg.norm(q['euler'][:2] - q['exact'][:2]):.1e} m"]
+    return [
+        f"integrators, unicycle, v = 1 m/s, omega = sin t, dt = {dt} s, {n * dt:g} s: max lateral slip per step "
+        + ", ".join(f"{k} {v:.1e} m" for k, v in slip.items())
+        + f"; final position error vs exact: rk4 {np.linalg.norm(q['rk4'][:2] - q['exact'][:2]):.1e} m, "
+        f"euler {np.linalg.norm(q['euler'][:2] - q['exact'][:2]):.1e} m"
+    ]
 
 
 # ============================================================================ exercises
 def _tricycle_demo() -> Demo:
     runs = {(d, c): tricycle_exercise(c, d) for d in ("rear", "front") for c in TRICYCLE_CASES}
-    lines = ["Exercise (tricycle), point 3: q0 = [0, 0, pi/4, 0], D = 0.3 m, 30 s; "
-             + ", ".join(f"{c}) u1 = {u[0]:g} m/s, u2 = {u[1]:.4g} rad/s" for c, u in TRICYCLE_CASES.items())]
+    lines = [
+        "Exercise (tricycle), point 3: q0 = [0, 0, pi/4, 0], D = 0.3 m, 30 s; "
+        + ", ".join(f"{c}) u1 = {u[0]:g} m/s, u2 = {u[1]:.4g} rad/s" for c, u in TRICYCLE_CASES.items())
+    ]
     for (d, c), r in runs.items():
-        lines.append(f"  {d:5s}-driven, case {c}: {r.status.value:8s} t_end = {r.t[-1]:6.2f} s, q_end = {_fmt(r.q[-1])}"
-                     + ("" if r.status.value == "ok" else f"  <- {r.reason}"))
-    lines.append("Point 2: the rear-driven model B(q) (tan psi / D) is undefined at psi = +-pi/2: in case a the steering "
-                 "reaches pi/2 at t = 3 s and the motion cannot continue (theta_dot -> infinity); the front-driven model "
-                 "(sin psi / D) is valid everywhere.  In case c (u1 = 0) both robots stay in place while the wheel turns.")
+        lines.append(
+            f"  {d:5s}-driven, case {c}: {r.status.value:8s} t_end = {r.t[-1]:6.2f} s, q_end = {_fmt(r.q[-1])}"
+            + ("" if r.status.value == "ok" else f"  <- {r.reason}")
+        )
+    lines.append(
+        "Point 2: the rear-driven model B(q) (tan psi / D) is undefined at psi = +-pi/2: in case a the steering "
+        "reaches pi/2 at t = 3 s and the motion cannot continue (theta_dot -> infinity); the front-driven model "
+        "(sin psi / D) is valid everywhere.  In case c (u1 = 0) both robots stay in place while the wheel turns."
+    )
 
     def plot(path):
         fig, ax = plots.figure(2, 3, size=(4.2, 3.8))
@@ -157,8 +176,7 @@ def _tricycle_demo() -> Demo:
                 a = ax[i, j]
                 plots.plot_path(a, r, models[d], n_robots=5 if c != "b" else 4)
                 u = TRICYCLE_CASES[c]
-                a.set_title(f"{d}-driven, case {c}: u1 = {u[0]:g} m/s, u2 = {u[1]:.3g} rad/s\n{r.status.value}, t_end = {r.t[-1]:.3g} s",
-                            fontsize=9)
+                a.set_title(f"{d}-driven, case {c}: u1 = {u[0]:g} m/s, u2 = {u[1]:.3g} rad/s\n{r.status.value}, t_end = {r.t[-1]:.3g} s", fontsize=9)
         return plots.save(fig, path)
 
     return Demo("tricycle-exercise", lines, plot)
@@ -167,12 +185,17 @@ def _tricycle_demo() -> Demo:
 def _bicycle_demo() -> Demo:
     ex = bicycle_exercise()
     lines = ["Bicycles in the lecture's frame (front wheel alpha = 0, rear alpha = pi, ell = 0.5 m):"]
-    for label, mob in (("Example 2, both wheels fixed", ex.fixed), ("Exercise 1, front wheel steerable", ex.front_steered),
-                       ("Exercise 2, rear wheel steerable", ex.rear_steered)):
+    for label, mob in (
+        ("Example 2, both wheels fixed", ex.fixed),
+        ("Exercise 1, front wheel steerable", ex.front_steered),
+        ("Exercise 2, rear wheel steerable", ex.rear_steered),
+    ):
         lines.append(f"  {label:36s} delta_m = {mob.delta_m}, delta_s = {mob.delta_s}, delta_M = {mob.delta_M}: {mob.reason}")
-    lines.append("Steering one wheel turns the fixed bicycle (delta_M = 1: it can only roll along its line) into a type "
-                 "(1, 1) robot like the tricycle and the car; steering the rear wheel gives the same degrees (delta_M = 2): "
-                 "the same manoeuvrability, harder to drive.")
+    lines.append(
+        "Steering one wheel turns the fixed bicycle (delta_M = 1: it can only roll along its line) into a type "
+        "(1, 1) robot like the tricycle and the car; steering the rear wheel gives the same degrees (delta_M = 2): "
+        "the same manoeuvrability, harder to drive."
+    )
 
     def plot(path):
         from .robots import _bicycle_lecture
@@ -192,8 +215,10 @@ def _types_demo() -> Demo:
     lines = [f"admissible (delta_m, delta_s) from the lecture's conditions a), b), c): {adm}"]
     for t, robot in TYPE_EXAMPLES.items():
         mob = robot.mobility()
-        lines.append(f"  {robot.name:36s} wheels: {', '.join(w.kind.value for w in robot.wheels)} -> computed type "
-                     f"{mob.type} (lecture: {t}), delta_M = {mob.delta_M}")
+        lines.append(
+            f"  {robot.name:36s} wheels: {', '.join(w.kind.value for w in robot.wheels)} -> computed type "
+            f"{mob.type} (lecture: {t}), delta_M = {mob.delta_M}"
+        )
 
     def plot(path):
         fig, ax = plots.figure(1, 5, size=(3.4, 3.6))
@@ -213,10 +238,12 @@ def _ackermann_demo() -> Demo:
         pl, pr = car.front_angles(psi)
         pi_, po = (pl, pr) if psi > 0 else (pr, pl)
         icr = car.robot.icr([psi])
-        lines.append(f"  psi = {psi:.2f}: psi_i = {pi_:.4f}, psi_o = {po:.4f}; cot psi_o - cot psi_i - 2L/D = "
-                     f"{1 / math.tan(po) - 1 / math.tan(pi_) - 2 * car.L / car.D:.1e}; cot psi - cot psi_i - L/D = "
-                     f"{1 / math.tan(psi) - 1 / math.tan(pi_) - car.L / car.D:.1e}; ICR {icr.status.value} at y_R = "
-                     f"{icr.point_R[1]:.4f} m = D cot psi = {car.D / math.tan(psi):.4f} m")
+        lines.append(
+            f"  psi = {psi:.2f}: psi_i = {pi_:.4f}, psi_o = {po:.4f}; cot psi_o - cot psi_i - 2L/D = "
+            f"{1 / math.tan(po) - 1 / math.tan(pi_) - 2 * car.L / car.D:.1e}; cot psi - cot psi_i - L/D = "
+            f"{1 / math.tan(psi) - 1 / math.tan(pi_) - car.L / car.D:.1e}; ICR {icr.status.value} at y_R = "
+            f"{icr.point_R[1]:.4f} m = D cot psi = {car.D / math.tan(psi):.4f} m"
+        )
     from .chassis import WheeledRobot
 
     parallel = WheeledRobot("parallel steering", car.robot.wheels)  # both front wheels at the same angle
@@ -244,12 +271,16 @@ def _brackets_demo() -> Demo:
     lines = ["Frobenius test, generic rank of the distribution spanned by B and its Lie brackets:"]
     for name in ROBOTS:
         r = frobenius(get_robot(name))
-        lines.append(f"  {name:16s} n = {r.n}, k = {r.k}, dims {list(r.growth)}: {r.status.value}"
-                     + (f", integrable: {'; '.join(str(list(f)) for f in r.integrable_forms)}" if r.integrable_forms else ""))
+        lines.append(
+            f"  {name:16s} n = {r.n}, k = {r.k}, dims {list(r.growth)}: {r.status.value}"
+            + (f", integrable: {'; '.join(str(list(f)) for f in r.integrable_forms)}" if r.integrable_forms else "")
+        )
     for name in ("unicycle", "omni", "synchro"):
         r = frobenius(WithWheelAngles(get_robot(name)))
-        lines.append(f"  {r.model:28s} n = {r.n}, k = {r.k}, dims {list(r.growth)}: {r.status.value}, integrable: "
-                     f"{'; '.join(str(list(f)) for f in r.integrable_forms)}")
+        lines.append(
+            f"  {r.model:28s} n = {r.n}, k = {r.k}, dims {list(r.growth)}: {r.status.value}, integrable: "
+            f"{'; '.join(str(list(f)) for f in r.integrable_forms)}"
+        )
     cases = [(get_robot("unicycle"), np.zeros(3)), (get_robot("car"), np.zeros(4))]
 
     def plot(path):
@@ -263,17 +294,24 @@ def _brackets_demo() -> Demo:
             br = np.array(sp.lambdify(list(qs), lie_bracket(B[:, 0], B[:, 1], qs))(*q0), dtype=float).ravel()
             for eps, c in zip((0.4, 0.3, 0.2), ("tab:blue", "tab:orange", "tab:green")):
                 pts = commutator_motion(m, q0, 0, 1, eps)
-                legs = [m.flow(pts[i], s * np.eye(2)[k], tau) for i, (k, s) in enumerate(((0, 1), (1, 1), (0, -1), (1, -1)))
-                        for tau in np.linspace(0, eps, 20)]
+                legs = [
+                    m.flow(pts[i], s * np.eye(2)[k], tau)
+                    for i, (k, s) in enumerate(((0, 1), (1, 1), (0, -1), (1, -1)))
+                    for tau in np.linspace(0, eps, 20)
+                ]
                 P = np.array(legs)
                 a.plot(P[:, 0], P[:, 1], color=c, lw=1, label=f"eps = {eps}: net {_fmt((pts[-1] - q0)[:3] / eps**2)} / eps^2")
                 a.plot(pts[-1, 0], pts[-1, 1], "o", color=c, ms=4)
                 h = 0.06 * np.array([math.cos(pts[-1, 2]), math.sin(pts[-1, 2])])
-                a.annotate("", xy=(pts[-1, 0] + h[0], pts[-1, 1] + h[1]), xytext=(pts[-1, 0], pts[-1, 1]),
-                           arrowprops={"arrowstyle": "->", "color": c})
+                a.annotate(
+                    "", xy=(pts[-1, 0] + h[0], pts[-1, 1] + h[1]), xytext=(pts[-1, 0], pts[-1, 1]), arrowprops={"arrowstyle": "->", "color": c}
+                )
             a.annotate("", xy=(0.2 * br[0], 0.2 * br[1]), xytext=(0, 0), arrowprops={"arrowstyle": "->", "color": "k"})
-            a.set_title(f"{m.name}: legs b1, b2, -b1, -b2 of eps s each (end: dot, heading arrow)\n"
-                        f"[b1, b2](0) = {_fmt(br)} (black arrow: its x, y part x 0.2)", fontsize=8)
+            a.set_title(
+                f"{m.name}: legs b1, b2, -b1, -b2 of eps s each (end: dot, heading arrow)\n"
+                f"[b1, b2](0) = {_fmt(br)} (black arrow: its x, y part x 0.2)",
+                fontsize=8,
+            )
             a.set_aspect("equal", adjustable="datalim")
             a.legend(fontsize=6)
             a.grid(alpha=0.3)
@@ -286,8 +324,10 @@ def _brackets_demo() -> Demo:
 def _unicycle_tracking_demo() -> Demo:
     ref = ctl.Lemniscate()
     m = get_robot("unicycle")
-    runs = {"Kanayama": simulate(m, [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 60.0, 0.01),
-            "point offset b = 0.2 m": simulate(m, [0.5, -0.6, 0.4], ctl.PointTracking(ref), 60.0, 0.01)}
+    runs = {
+        "Kanayama": simulate(m, [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 60.0, 0.01),
+        "point offset b = 0.2 m": simulate(m, [0.5, -0.6, 0.4], ctl.PointTracking(ref), 60.0, 0.01),
+    }
     errs = {}
     for k, r in runs.items():
         off = 0.2 if "point" in k else 0.0
@@ -339,9 +379,11 @@ def _car_tracking_demo() -> Demo:
     car = Car()
     r = simulate(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 60.0, 0.01)
     e = np.linalg.norm(r.q[:, :2] - np.array([ref.derivatives(t)[0] for t in r.t]), axis=1)
-    lines = [f"car (D = {car.D} m) on a figure-eight (a = {ref.a} m), dynamic feedback linearisation, poles at -1.5 1/s:",
-             f"  {r.status.value}; position error start {e[0]:.3f} m, max over the last 10 s {e[-1000:].max():.2e} m; "
-             f"max |psi| = {np.abs(r.q[:, 3]).max():.3f} rad (after 5 s: {np.abs(r.q[500:, 3]).max():.3f})"]
+    lines = [
+        f"car (D = {car.D} m) on a figure-eight (a = {ref.a} m), dynamic feedback linearisation, poles at -1.5 1/s:",
+        f"  {r.status.value}; position error start {e[0]:.3f} m, max over the last 10 s {e[-1000:].max():.2e} m; "
+        f"max |psi| = {np.abs(r.q[:, 3]).max():.3f} rad (after 5 s: {np.abs(r.q[500:, 3]).max():.3f})",
+    ]
 
     def plot(path):
         fig, ax = plots.figure(1, 2, size=(5.2, 4.2))
@@ -365,9 +407,11 @@ def _car_parking_demo() -> Demo:
     goal = np.array([0.0, 1.0, 0.0, 0.0])
     pk = ctl.SinusoidalParking(goal, car.D)
     r = simulate(car, [0.0, 0.0, 0.0, 0.0], pk, pk.duration, 0.01)
-    lines = [f"parallel parking of the car 1 m to the left by sinusoids in chained form (3 phases of {pk.T:g} s), dt = 0.01 s:",
-             f"  {r.status.value}; final q = {_fmt(r.q[-1])}, posture error {np.linalg.norm(r.q[-1] - goal):.1e}; "
-             f"max |psi| = {np.abs(r.q[:, 3]).max():.3f} rad, max |theta| = {np.abs(r.q[:, 2]).max():.3f} rad"]
+    lines = [
+        f"parallel parking of the car 1 m to the left by sinusoids in chained form (3 phases of {pk.T:g} s), dt = 0.01 s:",
+        f"  {r.status.value}; final q = {_fmt(r.q[-1])}, posture error {np.linalg.norm(r.q[-1] - goal):.1e}; "
+        f"max |psi| = {np.abs(r.q[:, 3]).max():.3f} rad, max |theta| = {np.abs(r.q[:, 2]).max():.3f} rad",
+    ]
 
     def plot(path):
         fig, ax = plots.figure(1, 2, size=(5.2, 4.2))
@@ -392,9 +436,11 @@ def _manipulation_demo(arm: str) -> Demo:
     res = {True: solve_ik(sc.robot, sc.target, sc.z0), False: solve_ik(sc.robot, sc.target, sc.z0, {"respect_constraint": False})}
     lines = [sc.description + f"; target {_fmt(sc.target)} m"]
     for k, r in res.items():
-        lines.append(f"  {'Pfaffian imposed' if k else 'constraint ignored':18s}: {r.status.value} in {r.iterations} iterations "
-                     f"({r.reason}); base travel {r.base_travel:.3f} m; max |A^T dq| of the QP {r.qp_residual.max():.1e}, of the "
-                     f"applied motion {r.applied_residual.max():.1e}; total slip {r.slip:.3g} m; final z = {_fmt(r.z)}")
+        lines.append(
+            f"  {'Pfaffian imposed' if k else 'constraint ignored':18s}: {r.status.value} in {r.iterations} iterations "
+            f"({r.reason}); base travel {r.base_travel:.3f} m; max |A^T dq| of the QP {r.qp_residual.max():.1e}, of the "
+            f"applied motion {r.applied_residual.max():.1e}; total slip {r.slip:.3g} m; final z = {_fmt(r.z)}"
+        )
 
     def plot(path):
         fig, ax = plots.figure(1, 2, size=(5.4, 4.6))
@@ -417,8 +463,13 @@ def _manipulation_demo(arm: str) -> Demo:
         for (k, r), c in zip(res.items(), ("tab:blue", "tab:red")):
             lab = "imposed" if k else "ignored"
             b.semilogy(np.arange(len(r.ee_error)), np.maximum(r.ee_error, 1e-12), color=c, label=f"EE error [m], {lab}")
-            b.semilogy(np.arange(1, len(r.applied_residual) + 1), np.maximum(r.applied_residual, 1e-18), color=c, ls=":",
-                       label=f"|A^T dq| of the base step [m], {lab}")
+            b.semilogy(
+                np.arange(1, len(r.applied_residual) + 1),
+                np.maximum(r.applied_residual, 1e-18),
+                color=c,
+                ls=":",
+                label=f"|A^T dq| of the base step [m], {lab}",
+            )
         b.set_xlabel("IK iteration")
         b.legend(fontsize=6)
         b.grid(alpha=0.3)
@@ -439,10 +490,8 @@ EXERCISES: dict[str, tuple[str, Callable[[], Demo]]] = {
     "unicycle-posture": ("unicycle posture regulation in polar coordinates (Aicardi et al. 1995)", _unicycle_posture_demo),
     "car-tracking": ("car trajectory tracking by dynamic feedback linearisation (De Luca, Oriolo, Samson 1998)", _car_tracking_demo),
     "car-parking": ("car parallel parking by sinusoids in chained form (Murray and Sastry 1993)", _car_parking_demo),
-    "mobile-manipulation": ("Q-PRR arm on a car: task-priority IK with the Pfaffian constraint vs without",
-                            lambda: _manipulation_demo("qprr")),
-    "mobile-manipulation-3r": ("3R arm on a car: task-priority IK with the Pfaffian constraint vs without",
-                               lambda: _manipulation_demo("3r")),
+    "mobile-manipulation": ("Q-PRR arm on a car: task-priority IK with the Pfaffian constraint vs without", lambda: _manipulation_demo("qprr")),
+    "mobile-manipulation-3r": ("3R arm on a car: task-priority IK with the Pfaffian constraint vs without", lambda: _manipulation_demo("3r")),
 }
 """Exercises, control laws and mobile manipulation: name -> (description, runner)."""
 

@@ -108,8 +108,7 @@ class KinematicModel(ABC):
             return {}
         qv = self.check_q(q)
         xi = self.body_twist(qv, u)
-        angles = dict(zip((id(w) for w in self.robot.steered_wheels),
-                          self.robot.steering_angles(qv[3:3 + self.robot.n_steering])))
+        angles = dict(zip((id(w) for w in self.robot.steered_wheels), self.robot.steering_angles(qv[3 : 3 + self.robot.n_steering])))
         out = {}
         for w in self.robot.wheels:
             if w.kind is WheelKind.OFF_CENTRED_STEERABLE:

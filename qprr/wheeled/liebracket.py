@@ -174,8 +174,8 @@ def frobenius(model: KinematicModel, *, max_depth: int | None = None, n_points: 
     while len(basis) < n and depth < max_depth and frontier:
         depth += 1
         new = []
-        for (na, fa) in frontier:
-            for (nb, fb) in zip(names, cols):
+        for na, fa in frontier:
+            for nb, fb in zip(names, cols):
                 if na == nb:
                     continue
                 br = lie_bracket(fb, fa, q)  # [b, f]: brackets of the inputs' fields with the last level
@@ -207,8 +207,9 @@ def frobenius(model: KinematicModel, *, max_depth: int | None = None, n_points: 
         status, reason = Integrability.NONHOLONOMIC, f"the brackets span all {n} directions: none of the {k} constraints integrates"
     else:
         status, reason = Integrability.PARTIAL, f"{h} of the {k} constraints integrate (the forms in integrable_forms), {k - h} do not"
-    return FrobeniusResult(model.name, tuple(model.coordinates), n, k, tuple(growth), dim, h, k - h, status, forms, tuple(alone),
-                           tuple(found), reason)
+    return FrobeniusResult(
+        model.name, tuple(model.coordinates), n, k, tuple(growth), dim, h, k - h, status, forms, tuple(alone), tuple(found), reason
+    )
 
 
 class WithWheelAngles(KinematicModel):
@@ -241,7 +242,7 @@ class WithWheelAngles(KinematicModel):
 
         base = self.base
         nb = base.n
-        sig = list(q[3:3 + base.robot.n_steering])
+        sig = list(q[3 : 3 + base.robot.n_steering])
         angles = dict(zip((id(w) for w in base.robot.steered_wheels), base.robot.steering_angles(sig, m)))
         Rt = rotation(q[2], m).T
         rows = []

@@ -91,8 +91,9 @@ class MobileManipulator:
     ``psi_max`` when it has one (the car), else ``steering_limit`` [rad].
     """
 
-    def __init__(self, base: KinematicModel, arm: pin.Model, ee_frame: str = "end_effector", mount: pin.SE3 | None = None,
-                 *, steering_limit: float = 1.2):
+    def __init__(
+        self, base: KinematicModel, arm: pin.Model, ee_frame: str = "end_effector", mount: pin.SE3 | None = None, *, steering_limit: float = 1.2
+    ):
         if not isinstance(base, KinematicModel):
             raise InputError(f"base must be a wheeled KinematicModel, got {type(base).__name__}")
         if tuple(base.coordinates[:3]) != ("x", "y", "theta"):
@@ -134,7 +135,7 @@ class MobileManipulator:
                 lo[iv] = self.model.lowerPositionLimit[jm.idx_q]
                 up[iv] = self.model.upperPositionLimit[jm.idx_q]
         psi_max = float(getattr(base, "psi_max", steering_limit))
-        lo[3:self.n_base], up[3:self.n_base] = -psi_max, psi_max
+        lo[3 : self.n_base], up[3 : self.n_base] = -psi_max, psi_max
         lo[lo < -1e300], up[up > 1e300] = -np.inf, np.inf
         self.lower, self.upper = lo, up
 
@@ -143,7 +144,7 @@ class MobileManipulator:
         """z with the base at ``base_pose`` (x, y, theta), steering 0 and the arm at Pinocchio's neutral."""
         z = np.zeros(self.n_base + self.nq_arm)
         z[0:3] = as_vector(base_pose, 3, "base_pose")
-        z[self.n_base:] = pin.neutral(self.model)[3:]
+        z[self.n_base :] = pin.neutral(self.model)[3:]
         return z
 
     def check_z(self, z, name: str = "z") -> np.ndarray:
@@ -151,7 +152,7 @@ class MobileManipulator:
 
     def pin_q(self, z) -> np.ndarray:
         """Pinocchio configuration [x, y, theta, q_arm] of z."""
-        return np.concatenate([z[0:3], z[self.n_base:]])
+        return np.concatenate([z[0:3], z[self.n_base :]])
 
     def ee_position(self, z) -> np.ndarray:
         """End-effector position in the world frame [m]."""
@@ -167,7 +168,7 @@ class MobileManipulator:
         J6 = pin.getFrameJacobian(self.model, self.data, self.ee_frame, pin.LOCAL_WORLD_ALIGNED)
         J = np.zeros((3, self.nz))
         J[:, 0:3] = J6[0:3, 0:3]
-        J[:, self.n_base:] = J6[0:3, 3:]
+        J[:, self.n_base :] = J6[0:3, 3:]
         return J
 
     def within_limits(self, z, tol: float = 1e-9) -> bool:
@@ -178,7 +179,7 @@ class MobileManipulator:
     def _config_as_tangent(self, z) -> np.ndarray:
         """The bounded coordinates of z laid out like dz (arm joints with nq = nv = 1)."""
         out = np.zeros(self.nz)
-        out[0:self.n_base] = z[0:self.n_base]
+        out[0 : self.n_base] = z[0 : self.n_base]
         for j in range(4, self.model.njoints):
             jm = self.model.joints[j]
             if jm.nq == 1 and jm.nv == 1:
@@ -254,8 +255,9 @@ class MobileIKOptions:
 
     def qp_settings(self) -> QPSettings:
         """The :class:`~qprr.optim.QPSettings` of these options."""
-        return QPSettings(eps_abs=self.eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, eps_duality_gap=self.eps_duality_gap,
-                          max_iter=self.max_qp_iter)
+        return QPSettings(
+            eps_abs=self.eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, eps_duality_gap=self.eps_duality_gap, max_iter=self.max_qp_iter
+        )
 
 
 def make_options(options=None) -> MobileIKOptions:
@@ -314,8 +316,14 @@ def step_solver(robot: MobileManipulator, options=None) -> Lexicographic:
     inputs only).  A level it cannot solve raises :class:`~qprr.errors.SolverError`.
     """
     opts = make_options(options)
-    return Lexicographic(robot.nz, settings=opts.qp_settings(), regularization=opts.regularization, rank_tol=opts.rank_tol,
-                         polish=opts.polish, exact_fallback=opts.exact_fallback)
+    return Lexicographic(
+        robot.nz,
+        settings=opts.qp_settings(),
+        regularization=opts.regularization,
+        rank_tol=opts.rank_tol,
+        polish=opts.polish,
+        exact_fallback=opts.exact_fallback,
+    )
 
 
 def lookahead_solver(robot: MobileManipulator, options=None) -> Lexicographic:
@@ -323,12 +331,27 @@ def lookahead_solver(robot: MobileManipulator, options=None) -> Lexicographic:
     with ``options``' QP settings and a damping of 1e-12 (the smallest minimiser; the residual it compares is
     unaffected)."""
     opts = make_options(options)
-    return Lexicographic(1 + robot.nv_arm, settings=opts.qp_settings(), regularization=1e-12, rank_tol=opts.rank_tol,
-                         polish=opts.polish, exact_fallback=opts.exact_fallback)
+    return Lexicographic(
+        1 + robot.nv_arm,
+        settings=opts.qp_settings(),
+        regularization=1e-12,
+        rank_tol=opts.rank_tol,
+        polish=opts.polish,
+        exact_fallback=opts.exact_fallback,
+    )
 
 
-def lookahead_steering(robot: MobileManipulator, z, J: np.ndarray, e: np.ndarray, lo: np.ndarray, up: np.ndarray,
-                       n_candidates: int = 13, *, solver: Lexicographic | None = None) -> float:
+def lookahead_steering(
+    robot: MobileManipulator,
+    z,
+    J: np.ndarray,
+    e: np.ndarray,
+    lo: np.ndarray,
+    up: np.ndarray,
+    n_candidates: int = 13,
+    *,
+    solver: Lexicographic | None = None,
+) -> float:
     """Steering angle under which the end-effector task would progress most (one-step lookahead).
 
     The end-effector position does not depend on the steering angle psi, so its task cannot
@@ -345,8 +368,7 @@ def lookahead_steering(robot: MobileManipulator, z, J: np.ndarray, e: np.ndarray
     if solver is None:
         solver = lookahead_solver(robot)
     elif not (isinstance(solver, Lexicographic) and solver.n == 1 + robot.nv_arm):
-        raise InputError(f"solver must be a qprr.optim.Lexicographic over {1 + robot.nv_arm} variables "
-                         f"(drive input and arm rates), got {solver!r}")
+        raise InputError(f"solver must be a qprr.optim.Lexicographic over {1 + robot.nv_arm} variables (drive input and arm rates), got {solver!r}")
     psi_max = float(robot.upper[3])
     cands = np.unique(np.concatenate([np.linspace(-psi_max, psi_max, n_candidates), [np.clip(z[3], -psi_max, psi_max)]]))
     arm = slice(nb, robot.nz)
@@ -479,9 +501,24 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
             status, reason = IKStatus.CONVERGED, f"end-effector error {errs[-1]:.2g} m <= {opts.tol:g} m"
     P = np.array(path)
     travel = float(np.sum(np.hypot(np.diff(P[:, 0]), np.diff(P[:, 1]))))
-    return MobileIKResult(status is IKStatus.CONVERGED, status, reason, len(path) - 1, z, P, np.array(errs), np.array(qp_res),
-                          np.array(app_res), slip, travel, robot.within_limits(z), opts.respect_constraint, p_t,
-                          time.perf_counter() - t0, np.array(inputs).reshape(-1, base.n_inputs))
+    return MobileIKResult(
+        status is IKStatus.CONVERGED,
+        status,
+        reason,
+        len(path) - 1,
+        z,
+        P,
+        np.array(errs),
+        np.array(qp_res),
+        np.array(app_res),
+        slip,
+        travel,
+        robot.within_limits(z),
+        opts.respect_constraint,
+        p_t,
+        time.perf_counter() - t0,
+        np.array(inputs).reshape(-1, base.n_inputs),
+    )
 
 
 # ============================================================================ scenario
@@ -512,10 +549,23 @@ def car_scenario(arm: str = "qprr") -> Scenario:
         raise UnknownNameError("arm", arm, tuple(arms))
     make, frame = arms[arm]
     mm = MobileManipulator(Car(), make(), frame, pin.SE3(np.eye(3), np.array([0.6, 0.0, 0.3])))
-    return Scenario(mm, mm.neutral(), np.array([1.0, 1.2, 0.5]),
-                    f"car + {arm} arm: target 1.2 m to the left of the chassis, beyond the arm's reach")
+    return Scenario(mm, mm.neutral(), np.array([1.0, 1.2, 0.5]), f"car + {arm} arm: target 1.2 m to the left of the chassis, beyond the arm's reach")
 
 
-__all__ = ["IKStatus", "MobileIKOptions", "MobileIKResult", "MobileManipulator", "Scenario", "StepProblem", "car_scenario",
-           "lookahead_solver", "lookahead_steering", "make_options", "qprr_arm", "solve_ik", "step_problem", "step_solver",
-           "three_r_arm"]
+__all__ = [
+    "IKStatus",
+    "MobileIKOptions",
+    "MobileIKResult",
+    "MobileManipulator",
+    "Scenario",
+    "StepProblem",
+    "car_scenario",
+    "lookahead_solver",
+    "lookahead_steering",
+    "make_options",
+    "qprr_arm",
+    "solve_ik",
+    "step_problem",
+    "step_solver",
+    "three_r_arm",
+]

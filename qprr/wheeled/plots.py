@@ -22,8 +22,7 @@ from .kinematics import KinematicModel
 from .sim import WheeledSimResult
 from .wheels import WheelKind
 
-COLORS = {WheelKind.FIXED: "k", WheelKind.CENTRED_STEERABLE: "tab:red", WheelKind.OFF_CENTRED_STEERABLE: "tab:gray",
-          WheelKind.SWEDISH: "tab:blue"}
+COLORS = {WheelKind.FIXED: "k", WheelKind.CENTRED_STEERABLE: "tab:red", WheelKind.OFF_CENTRED_STEERABLE: "tab:gray", WheelKind.SWEDISH: "tab:blue"}
 
 
 def _wheel_geometry(robot: WheeledRobot, sigma):
@@ -40,8 +39,12 @@ def _wheel_geometry(robot: WheeledRobot, sigma):
     return out
 
 
-WHEEL_NAMES = {WheelKind.FIXED: "fixed wheel", WheelKind.CENTRED_STEERABLE: "centred steerable wheel",
-               WheelKind.OFF_CENTRED_STEERABLE: "off-centred steerable wheel", WheelKind.SWEDISH: "Swedish wheel"}
+WHEEL_NAMES = {
+    WheelKind.FIXED: "fixed wheel",
+    WheelKind.CENTRED_STEERABLE: "centred steerable wheel",
+    WheelKind.OFF_CENTRED_STEERABLE: "off-centred steerable wheel",
+    WheelKind.SWEDISH: "Swedish wheel",
+}
 """What each wheel colour of :data:`COLORS` means (the legend of :func:`wheel_legend`)."""
 VISIBLE = 12.0
 """A path longer than this many robot sizes draws the robot enlarged (by a stated factor) so that it can be seen."""
@@ -59,8 +62,9 @@ def robot_size(robot: WheeledRobot) -> float:
     return max(float(np.ptp(pts[:, 0])), float(np.ptp(pts[:, 1])), 0.1)
 
 
-def draw_robot(ax, robot: WheeledRobot, pose=(0.0, 0.0, 0.0), sigma=None, *, color: str = "0.4", alpha: float = 1.0,
-               scale: float = 1.0, label: str | None = None) -> None:
+def draw_robot(
+    ax, robot: WheeledRobot, pose=(0.0, 0.0, 0.0), sigma=None, *, color: str = "0.4", alpha: float = 1.0, scale: float = 1.0, label: str | None = None
+) -> None:
     """Chassis outline (convex hull of the wheels and O_R) and wheels (segments along their
     planes, length 2 r) of ``robot`` at world ``pose`` = (x, y, theta) and steering ``sigma``,
     drawn ``scale`` times its size about the pose (``scale`` > 1 shows a robot on a long path)."""
@@ -79,8 +83,7 @@ def draw_robot(ax, robot: WheeledRobot, pose=(0.0, 0.0, 0.0), sigma=None, *, col
     for w, p, d, _ in geo:
         c = (R @ p) + [x, y]
         dw = R @ d * w.r
-        ax.plot([c[0] - dw[0], c[0] + dw[0]], [c[1] - dw[1], c[1] + dw[1]], color=COLORS[w.kind], lw=3, alpha=alpha,
-                solid_capstyle="butt")
+        ax.plot([c[0] - dw[0], c[0] + dw[0]], [c[1] - dw[1], c[1] + dw[1]], color=COLORS[w.kind], lw=3, alpha=alpha, solid_capstyle="butt")
         if w.kind is WheelKind.OFF_CENTRED_STEERABLE:
             ax.plot(*c, "o", ms=3, color=COLORS[w.kind], alpha=alpha)
     h = R @ np.array([span * 0.25, 0.0])
@@ -130,8 +133,7 @@ def plot_icr(ax, robot: WheeledRobot, sigma=None, twist=None, *, extent: float |
         ax.plot(*icr.point_R, "*", ms=12, color="tab:green", label="ICR")
     elif icr.status is ICRStatus.LINE:
         p0, d = icr.point_R, icr.direction
-        ax.plot([p0[0] - L * d[0], p0[0] + L * d[0]], [p0[1] - L * d[1], p0[1] + L * d[1]], color="tab:green", lw=2, alpha=0.5,
-                label="ICR line")
+        ax.plot([p0[0] - L * d[0], p0[0] + L * d[0]], [p0[1] - L * d[1], p0[1] + L * d[1]], color="tab:green", lw=2, alpha=0.5, label="ICR line")
     ax.set_title(f"{robot.name}: ICR {icr.status.value}", fontsize=9)
     ax.set_xlabel("x_R [m]")
     ax.set_ylabel("y_R [m]")
@@ -141,8 +143,9 @@ def plot_icr(ax, robot: WheeledRobot, sigma=None, twist=None, *, extent: float |
     ax.grid(alpha=0.3)
 
 
-def plot_path(ax, result: WheeledSimResult, model: KinematicModel | None = None, *, n_robots: int = 6, color: str = "tab:blue",
-              label: str | None = None) -> None:
+def plot_path(
+    ax, result: WheeledSimResult, model: KinematicModel | None = None, *, n_robots: int = 6, color: str = "tab:blue", label: str | None = None
+) -> None:
     """(x, y) path of ``result``; with ``model``, its robot drawn at ``n_robots`` instants (enlarged, with the
     factor in the legend, when the path is longer than :data:`VISIBLE` robot sizes) and a legend of its wheels."""
     q = result.q
@@ -154,8 +157,16 @@ def plot_path(ax, result: WheeledSimResult, model: KinematicModel | None = None,
         extent = max(float(np.ptp(q[:, 0])), float(np.ptp(q[:, 1])))
         scale = max(1.0, float(np.round(extent / (VISIBLE * size))))
         for j, k in enumerate(np.linspace(0, len(q) - 1, n_robots).astype(int)):
-            draw_robot(ax, model.robot, q[k, 0:3], q[k, 3:3 + model.robot.n_steering], color=color, alpha=0.7, scale=scale,
-                       label=f"robot, drawn x{scale:g} (to be seen)" if scale > 1 and j == 0 else None)
+            draw_robot(
+                ax,
+                model.robot,
+                q[k, 0:3],
+                q[k, 3 : 3 + model.robot.n_steering],
+                color=color,
+                alpha=0.7,
+                scale=scale,
+                label=f"robot, drawn x{scale:g} (to be seen)" if scale > 1 and j == 0 else None,
+            )
         wheel_legend(ax, model.robot)
     legend(ax, ncol=2)
     ax.set_aspect("equal", adjustable="datalim")
@@ -214,5 +225,18 @@ def save(fig, path: str | Path, *, dpi: int = 80) -> Path:
     return path
 
 
-__all__ = ["COLORS", "VISIBLE", "WHEEL_NAMES", "draw_robot", "figure", "plot_icr", "plot_path", "plot_residual", "plot_states",
-           "plot_wheel_speeds", "robot_size", "save", "wheel_legend"]
+__all__ = [
+    "COLORS",
+    "VISIBLE",
+    "WHEEL_NAMES",
+    "draw_robot",
+    "figure",
+    "plot_icr",
+    "plot_path",
+    "plot_residual",
+    "plot_states",
+    "plot_wheel_speeds",
+    "robot_size",
+    "save",
+    "wheel_legend",
+]

@@ -135,11 +135,14 @@ class Unicycle(KinematicModel):
 
     def __init__(self, r: float = 0.05, L: float = 0.15, castor: float = 0.12):
         self.r, self.L = _positive("r", r), _positive("L", L)
-        self.robot = WheeledRobot("unicycle", (
-            wheel_at(FixedWheel, 0.0, -self.L, self.r, name="right"),
-            wheel_at(FixedWheel, 0.0, self.L, self.r, name="left"),
-            wheel_at(OffCentredSteerableWheel, -_positive("castor", castor), 0.0, 0.3 * self.r, d=0.03, name="castor"),
-        ))
+        self.robot = WheeledRobot(
+            "unicycle",
+            (
+                wheel_at(FixedWheel, 0.0, -self.L, self.r, name="right"),
+                wheel_at(FixedWheel, 0.0, self.L, self.r, name="left"),
+                wheel_at(OffCentredSteerableWheel, -_positive("castor", castor), 0.0, 0.3 * self.r, d=0.03, name="castor"),
+            ),
+        )
 
     def B(self, q, m=math):
         c, s = _cos_sin(q if is_symbolic(m) else self.check_q(q), m)
@@ -152,8 +155,11 @@ class Unicycle(KinematicModel):
 
 # ============================================================================ tricycles
 def _tricycle_wheels(D: float, L: float, r: float, name: str):
-    rear = (wheel_at(FixedWheel, 0.0, -L, r, name="rear right"), wheel_at(FixedWheel, 0.0, L, r, name="rear left")) if L > 0 \
+    rear = (
+        (wheel_at(FixedWheel, 0.0, -L, r, name="rear right"), wheel_at(FixedWheel, 0.0, L, r, name="rear left"))
+        if L > 0
         else (wheel_at(FixedWheel, 0.0, 0.0, r, name="rear"),)
+    )
     return WheeledRobot(name, rear + (wheel_at(CentredSteerableWheel, D, 0.0, r, name="front"),), steering=NamedSteering(("psi",)))
 
 
@@ -265,8 +271,7 @@ class RearTricycle(KinematicModel):
         k0, k1 = math.floor((psi - math.pi / 2) / math.pi), math.floor((psi + u2 * h - math.pi / 2) / math.pi)
         if k0 != k1 or abs(c1) < self.COS_TOL:
             t_s = ((math.pi / 2 + (k0 + 1 if u2 > 0 else k0) * math.pi) - psi) / u2
-            raise KinematicSingularityError(
-                f"{self.name}: psi reaches {psi + u2 * t_s:.6g} rad (cos psi = 0) {t_s:.6g} s into the step")
+            raise KinematicSingularityError(f"{self.name}: psi reaches {psi + u2 * t_s:.6g} rad (cos psi = 0) {t_s:.6g} s into the step")
         tan0 = math.tan(psi)
 
         def heading(t):  # theta0 - u1/(D u2) ln(cos psi(t)/cos psi0), written with log1p (regular as u2 -> 0)
@@ -303,12 +308,16 @@ class Car(RearTricycle):
             raise InputError(f"psi_max must be < pi/2 rad, got {psi_max!r}")
         Lr = self.L if rear_L is None else _positive("rear_L", rear_L)
         self.rear_L = Lr
-        self.robot = WheeledRobot("car", (
-            wheel_at(FixedWheel, 0.0, -Lr, self.r, name="rear right"),
-            wheel_at(FixedWheel, 0.0, Lr, self.r, name="rear left"),
-            wheel_at(CentredSteerableWheel, self.D, self.L, self.r, name="front left"),
-            wheel_at(CentredSteerableWheel, self.D, -self.L, self.r, name="front right"),
-        ), steering=AckermannSteering(self.D, self.L))
+        self.robot = WheeledRobot(
+            "car",
+            (
+                wheel_at(FixedWheel, 0.0, -Lr, self.r, name="rear right"),
+                wheel_at(FixedWheel, 0.0, Lr, self.r, name="rear left"),
+                wheel_at(CentredSteerableWheel, self.D, self.L, self.r, name="front left"),
+                wheel_at(CentredSteerableWheel, self.D, -self.L, self.r, name="front right"),
+            ),
+            steering=AckermannSteering(self.D, self.L),
+        )
         self.virtual = RearTricycle(self.D, Lr, self.r)
 
     @checked_args
@@ -330,9 +339,11 @@ class Bicycle(RearTricycle):
 
     def __init__(self, D: float = 1.0, r: float = 0.35):
         super().__init__(D=D, L=0.0, r=r)
-        self.robot = WheeledRobot("bicycle", (wheel_at(FixedWheel, 0.0, 0.0, self.r, name="rear"),
-                                              wheel_at(CentredSteerableWheel, self.D, 0.0, self.r, name="front")),
-                                  steering=NamedSteering(("psi",)))
+        self.robot = WheeledRobot(
+            "bicycle",
+            (wheel_at(FixedWheel, 0.0, 0.0, self.r, name="rear"), wheel_at(CentredSteerableWheel, self.D, 0.0, self.r, name="front")),
+            steering=NamedSteering(("psi",)),
+        )
 
 
 # ============================================================================ omnidirectional
@@ -355,9 +366,13 @@ class Omnidirectional(KinematicModel):
 
     def __init__(self, ell: float = 0.2, r: float = 0.05, gamma: float = 0.0, robot: WheeledRobot | None = None):
         ell, r = _positive("ell", ell), _positive("r", r)
-        self.robot = robot or WheeledRobot("omni", tuple(
-            SwedishWheel(alpha=a, beta=0.0, ell=ell, r=r, gamma=gamma, name=f"wheel {i + 1}")
-            for i, a in enumerate((0.0, 2 * math.pi / 3, 4 * math.pi / 3))))
+        self.robot = robot or WheeledRobot(
+            "omni",
+            tuple(
+                SwedishWheel(alpha=a, beta=0.0, ell=ell, r=r, gamma=gamma, name=f"wheel {i + 1}")
+                for i, a in enumerate((0.0, 2 * math.pi / 3, 4 * math.pi / 3))
+            ),
+        )
 
     def A(self, q, m=math):
         return m.zeros(3, 0) if is_symbolic(m) else np.zeros((3, 0))
@@ -379,8 +394,12 @@ class Mecanum(Omnidirectional):
     def __init__(self, a: float = 0.25, b: float = 0.2, r: float = 0.05):
         a, b, r = _positive("a", a), _positive("b", b), _positive("r", r)
         wheels = []
-        for name, (x, y), g in (("front left", (a, b), -math.pi / 4), ("front right", (a, -b), math.pi / 4),
-                                ("rear left", (-a, b), math.pi / 4), ("rear right", (-a, -b), -math.pi / 4)):
+        for name, (x, y), g in (
+            ("front left", (a, b), -math.pi / 4),
+            ("front right", (a, -b), math.pi / 4),
+            ("rear left", (-a, b), math.pi / 4),
+            ("rear right", (-a, -b), -math.pi / 4),
+        ):
             w = wheel_at(FixedWheel, x, y, r)
             wheels.append(SwedishWheel(alpha=w.alpha, beta=w.beta, ell=w.ell, r=r, gamma=g, name=name))
         super().__init__(robot=WheeledRobot("mecanum", tuple(wheels)))
@@ -405,8 +424,10 @@ class SynchroDrive(KinematicModel):
 
     def __init__(self, ell: float = 0.2, r: float = 0.05):
         ell, r = _positive("ell", ell), _positive("r", r)
-        wheels = tuple(wheel_at(CentredSteerableWheel, ell * math.cos(a), ell * math.sin(a), r, name=f"wheel {i + 1}")
-                       for i, a in enumerate((0.0, 2 * math.pi / 3, 4 * math.pi / 3)))
+        wheels = tuple(
+            wheel_at(CentredSteerableWheel, ell * math.cos(a), ell * math.sin(a), r, name=f"wheel {i + 1}")
+            for i, a in enumerate((0.0, 2 * math.pi / 3, 4 * math.pi / 3))
+        )
         self.robot = WheeledRobot("synchro", wheels, steering=SynchroSteering(3))
 
     def B(self, q, m=math):
@@ -463,13 +484,19 @@ def _castor(x: float, y: float, name: str) -> OffCentredSteerableWheel:
 TYPE_EXAMPLES: dict[tuple[int, int], WheeledRobot] = {
     (3, 0): Omnidirectional().robot,
     (2, 0): Unicycle().robot,
-    (2, 1): WheeledRobot("one steerable wheel, two castors", (
-        wheel_at(CentredSteerableWheel, 0.3, 0.0, 0.05, name="front"), _castor(0.0, 0.15, "castor left"),
-        _castor(0.0, -0.15, "castor right"))),
+    (2, 1): WheeledRobot(
+        "one steerable wheel, two castors",
+        (wheel_at(CentredSteerableWheel, 0.3, 0.0, 0.05, name="front"), _castor(0.0, 0.15, "castor left"), _castor(0.0, -0.15, "castor right")),
+    ),
     (1, 1): FrontTricycle().robot,
-    (1, 2): WheeledRobot("two steerable wheels, one castor", (
-        wheel_at(CentredSteerableWheel, 0.3, 0.0, 0.05, name="front"), wheel_at(CentredSteerableWheel, -0.3, 0.0, 0.05, name="rear"),
-        _castor(0.0, 0.15, "castor"))),
+    (1, 2): WheeledRobot(
+        "two steerable wheels, one castor",
+        (
+            wheel_at(CentredSteerableWheel, 0.3, 0.0, 0.05, name="front"),
+            wheel_at(CentredSteerableWheel, -0.3, 0.0, 0.05, name="rear"),
+            _castor(0.0, 0.15, "castor"),
+        ),
+    ),
 }
 """Three-wheel robots of the five admissible types (Lecture: "Robots à 3 roues pour chaque type
 admissible"; Campion et al. 1996); the key is the type the lecture assigns, the tests compute it."""
@@ -489,9 +516,11 @@ def bicycle_exercise(ell: float = 0.5) -> BicycleExercise:
     """Lecture: Exemple 2 (vélo à roues fixes: delta_m = 1, delta_s = 0, delta_M = 1) and the
     Exercise (vélo avec roue avant orientable: delta_m = delta_s = 1; roue arrière orientable)."""
     ell = _positive("ell", ell)
-    return BicycleExercise(_bicycle_lecture("fixed", "fixed", ell).mobility(),
-                           _bicycle_lecture("steerable", "fixed", ell).mobility(),
-                           _bicycle_lecture("fixed", "steerable", ell).mobility())
+    return BicycleExercise(
+        _bicycle_lecture("fixed", "fixed", ell).mobility(),
+        _bicycle_lecture("steerable", "fixed", ell).mobility(),
+        _bicycle_lecture("fixed", "steerable", ell).mobility(),
+    )
 
 
 # ============================================================================ tricycle exercise
@@ -521,6 +550,25 @@ def tricycle_exercise(case: str, drive: str = "rear", *, duration: float = 30.0,
     return res
 
 
-__all__ = ["ROBOTS", "TRICYCLE_CASES", "TRICYCLE_Q0", "TYPE_EXAMPLES", "Bicycle", "BicycleExercise", "Car", "FixedWheelModel",
-           "FrontTricycle", "Mecanum", "Omnidirectional", "RearTricycle", "SynchroDrive", "Unicycle", "bicycle_exercise",
-           "differential_drive", "differential_drive_inverse", "get_robot", "icr_offset", "tricycle_exercise"]
+__all__ = [
+    "ROBOTS",
+    "TRICYCLE_CASES",
+    "TRICYCLE_Q0",
+    "TYPE_EXAMPLES",
+    "Bicycle",
+    "BicycleExercise",
+    "Car",
+    "FixedWheelModel",
+    "FrontTricycle",
+    "Mecanum",
+    "Omnidirectional",
+    "RearTricycle",
+    "SynchroDrive",
+    "Unicycle",
+    "bicycle_exercise",
+    "differential_drive",
+    "differential_drive_inverse",
+    "get_robot",
+    "icr_offset",
+    "tricycle_exercise",
+]

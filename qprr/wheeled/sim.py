@@ -155,8 +155,10 @@ def _input_source(model: KinematicModel, inputs, n_steps: int):
         if not np.all(np.isfinite(arr)):
             raise NonFiniteError("inputs must be finite")
         return lambda k, t, q, dt: arr[k]
-    raise InputError(f"inputs must be a vector of {model.n_inputs} inputs {list(model.inputs)}, an array of shape "
-                     f"({n_steps}, {model.n_inputs}), a callable f(t, q) or a controller; got an array of shape {arr.shape}")
+    raise InputError(
+        f"inputs must be a vector of {model.n_inputs} inputs {list(model.inputs)}, an array of shape "
+        f"({n_steps}, {model.n_inputs}), a callable f(t, q) or a controller; got an array of shape {arr.shape}"
+    )
 
 
 def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.01, *, progress: bool = False) -> WheeledSimResult:
@@ -206,9 +208,20 @@ def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.0
         Q[k + 1] = q
         bar.update()
     bar.close()
-    return WheeledSimResult(model.name, model.coordinates, model.inputs, t[: done + 1], Q[: done + 1], U[:done], res[:done],
-                            {k: np.array(v[:done]) for k, v in speeds.items()}, dt, status, reason, time.perf_counter() - t0)
+    return WheeledSimResult(
+        model.name,
+        model.coordinates,
+        model.inputs,
+        t[: done + 1],
+        Q[: done + 1],
+        U[:done],
+        res[:done],
+        {k: np.array(v[:done]) for k, v in speeds.items()},
+        dt,
+        status,
+        reason,
+        time.perf_counter() - t0,
+    )
 
 
-__all__ = ["SimStatus", "WheeledSimResult", "chord_slip", "euler_step", "heading_quadrature", "rk4_step", "se2_flow",
-           "simulate", "sinc"]
+__all__ = ["SimStatus", "WheeledSimResult", "chord_slip", "euler_step", "heading_quadrature", "rk4_step", "se2_flow", "simulate", "sinc"]

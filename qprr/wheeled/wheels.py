@@ -66,8 +66,12 @@ class Constraint:
 
     def value(self, xi_R, beta_dot: float = 0.0, phi_dot: float = 0.0, roller_dot: float = 0.0) -> float:
         """The residual of the constraint for the given rates (0 when it holds)."""
-        return float(np.dot(np.asarray(self.xi, dtype=float), np.asarray(xi_R, dtype=float))
-                     + float(self.beta_dot) * beta_dot + float(self.phi_dot) * phi_dot + float(self.roller_dot) * roller_dot)
+        return float(
+            np.dot(np.asarray(self.xi, dtype=float), np.asarray(xi_R, dtype=float))
+            + float(self.beta_dot) * beta_dot
+            + float(self.phi_dot) * phi_dot
+            + float(self.roller_dot) * roller_dot
+        )
 
 
 def _check(name: str, value: float, *, positive: bool = False, nonneg: bool = False) -> float:
@@ -317,8 +321,7 @@ class SwedishWheel(Wheel):
         """
         A, lsb, _ = self._geometry(s, m)
         g = exact(self.gamma, m, angle=True)
-        return Constraint(f"{self.name} no-slip", (m.cos(A), m.sin(A), lsb), phi_dot=exact(self.r, m) * m.sin(g),
-                          roller_dot=-exact(self.r_sw, m))
+        return Constraint(f"{self.name} no-slip", (m.cos(A), m.sin(A), lsb), phi_dot=exact(self.r, m) * m.sin(g), roller_dot=-exact(self.r_sw, m))
 
     def no_slip_printed(self, s=0.0, m=math) -> Constraint:
         """The no-slip row as printed in the lecture: ... - r phi_dot sin g - r_sw phi_sw_dot = 0 (sign error)."""

@@ -37,8 +37,15 @@ def read_table(path: str | Path) -> Results:
     return read_results(path)
 
 
-def evaluate(backend: Backend, fn: Callable, spec_dict: dict, points: Iterable[dict], key: str, on_row: Callable[[dict], None],
-             on_error: Callable[[dict, Exception], dict]) -> None:
+def evaluate(
+    backend: Backend,
+    fn: Callable,
+    spec_dict: dict,
+    points: Iterable[dict],
+    key: str,
+    on_row: Callable[[dict], None],
+    on_error: Callable[[dict, Exception], dict],
+) -> None:
     """Submit ``fn(spec_dict, point)`` for every point, calling ``on_row(row)`` as each finishes
     (``on_error(point, exc)`` gives the row of a task that could not run)."""
     futures = {backend.submit(fn, spec_dict, p, key=f"qprr-design-{key}-{p['run']}"): p for p in points}

@@ -47,9 +47,16 @@ class DesignRun:
 
 
 def meta_of(spec: DesignSpec) -> dict:
-    return {"name": spec.name, "fingerprint": spec.fingerprint, "design_spec": spec.to_dict(), "kind": "design",
-            "params": [*ID_COLUMNS[2:], *PARAMETERS], "metrics": ["status", "reason", *METRICS, TAIL_COLUMNS[1]],
-            "names": [], "n_runs": n_points(spec)}
+    return {
+        "name": spec.name,
+        "fingerprint": spec.fingerprint,
+        "design_spec": spec.to_dict(),
+        "kind": "design",
+        "params": [*ID_COLUMNS[2:], *PARAMETERS],
+        "metrics": ["status", "reason", *METRICS, TAIL_COLUMNS[1]],
+        "names": [],
+        "n_runs": n_points(spec),
+    }
 
 
 def _error_row(spec: DesignSpec, p: dict, exc: Exception) -> dict:
@@ -97,8 +104,9 @@ class _Session:
             if self.be is None:
                 self.be, self.owned = io.open_backend(self.backend_arg, self.workers, self.scheduler)
                 self.bar.message(f"{self.bar.total - self.bar.done} designs to evaluate on {self.be.describe()}")
-            io.evaluate(self.be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row,
-                        lambda p, exc: _error_row(self.spec, p, exc))
+            io.evaluate(
+                self.be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row, lambda p, exc: _error_row(self.spec, p, exc)
+            )
         return [self.rows[p["run"]] for p in points]
 
     def close(self) -> None:
@@ -113,26 +121,43 @@ def _nsga2(session: _Session) -> None:
     low = [spec.parameters[k].low for k in names]
     high = [spec.parameters[k].high for k in names]
     base = fixed_params(spec)
-    opts = [make_optimiser(s.optimiser, low, high, len(spec.objectives), 1 + len(spec.constraints), s.population,
-                           int(np.random.SeedSequence(spec.seed, spawn_key=(2**20, a)).generate_state(1)[0]))
-            for a in range(len(spec.architectures))]
+    opts = [
+        make_optimiser(
+            s.optimiser,
+            low,
+            high,
+            len(spec.objectives),
+            1 + len(spec.constraints),
+            s.population,
+            int(np.random.SeedSequence(spec.seed, spawn_key=(2**20, a)).generate_state(1)[0]),
+        )
+        for a in range(len(spec.architectures))
+    ]
     start = len(spec.references)
     for g in range(s.generations):
         pts = []
         for a, (arch, opt) in enumerate(zip(spec.architectures, opts)):
             X = opt.ask()
             first = start + (a * s.generations + g) * s.population
-            pts.append([point(spec, first + k, "nsga2", arch, {**base, **{n: float(v) for n, v in zip(names, x)}}, g)
-                        for k, x in enumerate(X)])
+            pts.append([point(spec, first + k, "nsga2", arch, {**base, **{n: float(v) for n, v in zip(names, x)}}, g) for k, x in enumerate(X)])
         rows = session.evaluate([p for group in pts for p in group])
         for a, opt in enumerate(opts):
-            F, G = told(spec, rows[a * s.population:(a + 1) * s.population])
+            F, G = told(spec, rows[a * s.population : (a + 1) * s.population])
             opt.tell(F, G)
         session.bar.message(f"generation {g + 1}/{s.generations} done")
 
 
-def run_design(spec: DesignSpec, output, *, backend="local", workers: int | None = None, scheduler: str | None = None,
-               fresh: bool = False, progress: bool = True, stream=None) -> DesignRun:
+def run_design(
+    spec: DesignSpec,
+    output,
+    *,
+    backend="local",
+    workers: int | None = None,
+    scheduler: str | None = None,
+    fresh: bool = False,
+    progress: bool = True,
+    stream=None,
+) -> DesignRun:
     """Run ``spec``, saving rows to ``output`` (.csv or .parquet) as they arrive; resume what is there.
 
     ``backend``: "local" (process pool, default), "dask" (``scheduler`` address or a LocalCluster

@@ -58,13 +58,16 @@ def build_candidate(candidate: Candidate, mass: MassModel):
     if mass.mode == "equal-total":
         body = p["total_mass"] - m_arm
         if body <= 0.0:
-            raise InputError(f"{candidate.architecture}: the arm ({m_arm:.3f} kg) leaves no body mass within total_mass = "
-                             f"{p['total_mass']!r} kg; raise total_mass or shorten the arm")
+            raise InputError(
+                f"{candidate.architecture}: the arm ({m_arm:.3f} kg) leaves no body mass within total_mass = "
+                f"{p['total_mass']!r} kg; raise total_mass or shorten the arm"
+            )
     else:
         body = mass.body
     total = body + m_arm
     # build() sizes f_max on its own total mass: scale so that the thrust is the study's, the same for every design
     ttw = p["thrust_to_weight"] * p["total_mass"] / total
     arm_len = p["rotor_arm_length"] or None
-    return build(candidate.architecture, links=links, body_mass=body, arm_length=arm_len, mount_xyz=(0.0, 0.0, p["mount_height"]),
-                 thrust_to_weight=ttw, g=G)
+    return build(
+        candidate.architecture, links=links, body_mass=body, arm_length=arm_len, mount_xyz=(0.0, 0.0, p["mount_height"]), thrust_to_weight=ttw, g=G
+    )

@@ -33,8 +33,10 @@ def _legend(fig, axes, colours, vehicles) -> int:
 
     h = [Line2D([], [], ls="", marker="o", color=c, label=f"arm {a}") for a, c in colours.items()]
     h += [Line2D([], [], ls="", marker=MARKERS.get(v, "o"), color="0.4", label=f"{v} vehicle") for v in vehicles]
-    h += [Line2D([], [], ls="", marker="*", markersize=12, color="k", label="thesis Q-PRR (stored)"),
-          Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor="none", markeredgecolor="k", label="Pareto front (all objectives)")]
+    h += [
+        Line2D([], [], ls="", marker="*", markersize=12, color="k", label="thesis Q-PRR (stored)"),
+        Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor="none", markeredgecolor="k", label="Pareto front (all objectives)"),
+    ]
     fig.legend(handles=h, loc="lower center", ncol=min(6, len(h)), fontsize=8, frameon=False)
     return len(h)
 

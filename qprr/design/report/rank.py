@@ -59,7 +59,14 @@ def markdown_table(rows: list[dict], objectives, params=(), limit: int | None = 
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for i, r in enumerate(rows[:limit] if limit else rows, start=1):
         mark = {1: "**1**", 0: "infeasible" if r["status"] == "ok" else r["status"]}.get(r["level"], str(r["level"]))
-        cells = [str(i), r["name"], str(r["run"]), mark, _fmt(r["score"]), *[_fmt(r[p]) for p in params],
-                 *[f"**{_fmt(r[k])}**" if k in objectives else _fmt(r[k]) for k in cols]]
+        cells = [
+            str(i),
+            r["name"],
+            str(r["run"]),
+            mark,
+            _fmt(r["score"]),
+            *[_fmt(r[p]) for p in params],
+            *[f"**{_fmt(r[k])}**" if k in objectives else _fmt(r[k]) for k in cols],
+        ]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)

@@ -29,20 +29,36 @@ def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, 
         return []
     be, owned = io.open_backend(backend, workers, scheduler)
     try:
-        io.evaluate(be, fly_design, spec.to_dict(), rows, f"{spec.fingerprint}-flight", lambda r: out.__setitem__(r["run"], r),
-                    lambda p, exc: {"run": p["run"], "name": p["name"], "status": "error", "reason": f"{type(exc).__name__}: {exc}"})
+        io.evaluate(
+            be,
+            fly_design,
+            spec.to_dict(),
+            rows,
+            f"{spec.fingerprint}-flight",
+            lambda r: out.__setitem__(r["run"], r),
+            lambda p, exc: {"run": p["run"], "name": p["name"], "status": "error", "reason": f"{type(exc).__name__}: {exc}"},
+        )
     finally:
         io.close_backend(be, owned)
     return [out[r["run"]] for r in rows]
 
 
 def _flight_table(rows: list[dict], fl: list[dict]) -> str:
-    lines = ["| design (2.1) | run | status | position RMSE [mm] | max CoG offset [mm] | rotor saturation [% of ticks] |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        "| design (2.1) | run | status | position RMSE [mm] | max CoG offset [mm] | rotor saturation [% of ticks] |",
+        "|---|---|---|---|---|---|",
+    ]
     for r, f in zip(rows, fl):
         ok = f["status"] == "ok"
-        lines.append(f"| {r['name']} | {r['run']} | {f['status']} | " + (" | ".join([f"{1000 * f['rmse_position']:.3f}",
-                     f"{1000 * f['x_cm_max']:.2f}", f"{100 * f['saturation']:.2f}"]) if ok else f"{f.get('reason', '')[:60]} | -- | --") + " |")
+        lines.append(
+            f"| {r['name']} | {r['run']} | {f['status']} | "
+            + (
+                " | ".join([f"{1000 * f['rmse_position']:.3f}", f"{1000 * f['x_cm_max']:.2f}", f"{100 * f['saturation']:.2f}"])
+                if ok
+                else f"{f.get('reason', '')[:60]} | -- | --"
+            )
+            + " |"
+        )
     return "\n".join(lines)
 
 
@@ -58,16 +74,22 @@ def report(results, out=None, *, top: int | None = None, fly: bool = True, backe
     n_ok = sum(r["status"] == "ok" for r in rows)
     n_feas = sum(r["level"] >= 1 for r in rk)
     n_front = sum(r["level"] == 1 for r in rk)
-    head = (f"design study {spec.name}: {len(rows)} designs evaluated, {n_ok} ok, {n_feas} feasible, {n_front} on the Pareto front "
-            f"of ({', '.join(spec.objectives)})")
+    head = (
+        f"design study {spec.name}: {len(rows)} designs evaluated, {n_ok} ok, {n_feas} feasible, {n_front} on the Pareto front "
+        f"of ({', '.join(spec.objectives)})"
+    )
     text = [head, "", markdown_table(rk, spec.objectives, params)]
     figures: list[str] = []
     k = spec.closed_loop.top if top is None else top
     chosen = [r for r in rk if r["level"] >= 1 and r["kind"] != "reference"][:k] + [r for r in rk if r["kind"] == "reference"]
     fl = flights(spec, chosen, backend, workers, scheduler) if fly and chosen else []
     if fl:
-        text += ["", f"closed-loop check: {spec.closed_loop.scenario} with {spec.closed_loop.controller}, "
-                 f"{spec.closed_loop.duration:g} s", "", _flight_table(chosen, fl)]
+        text += [
+            "",
+            f"closed-loop check: {spec.closed_loop.scenario} with {spec.closed_loop.controller}, {spec.closed_loop.duration:g} s",
+            "",
+            _flight_table(chosen, fl),
+        ]
     if out is not None:
         d = Path(out)
         if d.exists() and not d.is_dir():

@@ -49,7 +49,7 @@ class PymooNSGA2(Optimiser):
             from pymoo.core.problem import Problem
             from pymoo.problems.static import StaticProblem
         except ImportError as exc:
-            raise MissingDependencyError("pymoo", "the NSGA-II design search (search.optimiser = \"pymoo\")", INSTALL["pymoo"]) from exc
+            raise MissingDependencyError("pymoo", 'the NSGA-II design search (search.optimiser = "pymoo")', INSTALL["pymoo"]) from exc
         self._static, self._evaluator = StaticProblem, Evaluator
         self._problem = Problem(n_var=len(self.low), n_obj=n_obj, n_ieq_constr=max(n_constr, 1), xl=self.low, xu=self.high)
         self._alg = NSGA2(pop_size=population)
@@ -74,7 +74,7 @@ class OptunaNSGA2(Optimiser):
         try:
             import optuna
         except ImportError as exc:
-            raise MissingDependencyError("optuna", "the NSGA-II design search (search.optimiser = \"optuna\")", INSTALL["optuna"]) from exc
+            raise MissingDependencyError("optuna", 'the NSGA-II design search (search.optimiser = "optuna")', INSTALL["optuna"]) from exc
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         cons = _violations if n_constr else None
         with warnings.catch_warnings():
@@ -85,8 +85,7 @@ class OptunaNSGA2(Optimiser):
 
     def ask(self) -> np.ndarray:
         self._trials = [self._study.ask() for _ in range(self.population)]
-        return np.array([[t.suggest_float(f"x{i}", lo, hi) for i, (lo, hi) in enumerate(zip(self.low, self.high))]
-                         for t in self._trials])
+        return np.array([[t.suggest_float(f"x{i}", lo, hi) for i, (lo, hi) in enumerate(zip(self.low, self.high))] for t in self._trials])
 
     def tell(self, F, G) -> None:
         for t, f, g in zip(self._trials, np.asarray(F, dtype=float), np.asarray(G, dtype=float).reshape(len(F), -1)):

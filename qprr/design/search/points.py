@@ -28,8 +28,15 @@ def run_seed(spec: DesignSpec) -> int:
 def point(spec: DesignSpec, index: int, kind: str, architecture: str, params: dict, generation: int = -1) -> dict:
     """A design point as plain data (the task's argument)."""
     name = REFERENCE_NAMES[architecture] if kind == "reference" else architecture
-    return {"run": index, "seed": run_seed(spec), "kind": kind, "architecture": architecture, "name": name,
-            "generation": generation, "params": dict(params)}
+    return {
+        "run": index,
+        "seed": run_seed(spec),
+        "kind": kind,
+        "architecture": architecture,
+        "name": name,
+        "generation": generation,
+        "params": dict(params),
+    }
 
 
 def reference_points(spec: DesignSpec) -> list[dict]:

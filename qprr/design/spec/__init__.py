@@ -5,5 +5,17 @@ from .metrics import METRICS
 from .parameters import PARAMETERS, Parameter
 from .study import OPTIMISERS, SEARCH_METHODS, ClosedLoop, DesignSpec, Effort, Search
 
-__all__ = ["MATERIALS", "METRICS", "MODES", "OPTIMISERS", "PARAMETERS", "SEARCH_METHODS", "ClosedLoop", "DesignSpec", "Effort", "MassModel",
-           "Parameter", "Search"]
+__all__ = [
+    "MATERIALS",
+    "METRICS",
+    "MODES",
+    "OPTIMISERS",
+    "PARAMETERS",
+    "SEARCH_METHODS",
+    "ClosedLoop",
+    "DesignSpec",
+    "Effort",
+    "MassModel",
+    "Parameter",
+    "Search",
+]

@@ -65,5 +65,11 @@ class MassModel:
         return cls(**out)
 
     def to_dict(self) -> dict:
-        return {"mode": self.mode, "body": self.body, "link_density": self.link_density, "revolute_actuator": self.revolute_actuator,
-                "prismatic_actuator": self.prismatic_actuator, "rail_density": self.rail_density}
+        return {
+            "mode": self.mode,
+            "body": self.body,
+            "link_density": self.link_density,
+            "revolute_actuator": self.revolute_actuator,
+            "prismatic_actuator": self.prismatic_actuator,
+            "rail_density": self.rail_density,
+        }

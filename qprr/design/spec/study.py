@@ -43,8 +43,20 @@ OPTIMISERS = ("pymoo", "optuna")
 SEARCH_METHODS = ("grid", "nsga2")
 REFERENCES = ("q-prr",)
 """Stored platforms a study may evaluate as they are (the thesis's Q-PRR)."""
-_KEYS = ("name", "description", "seed", "architectures", "references", "objectives", "parameters", "mass", "constraints", "effort",
-         "search", "closed_loop")
+_KEYS = (
+    "name",
+    "description",
+    "seed",
+    "architectures",
+    "references",
+    "objectives",
+    "parameters",
+    "mass",
+    "constraints",
+    "effort",
+    "search",
+    "closed_loop",
+)
 
 
 @dataclass(frozen=True)
@@ -139,11 +151,20 @@ class DesignSpec:
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
     def to_dict(self) -> dict:
-        return {"name": self.name, "description": self.description, "seed": self.seed, "architectures": list(self.architectures),
-                "references": list(self.references), "objectives": list(self.objectives),
-                "parameters": {k: p.to_dict() for k, p in self.parameters.items()}, "mass": self.mass.to_dict(),
-                "constraints": {k: {n: v for n, v in zip(("min", "max"), b) if v is not None} for k, b in self.constraints.items()},
-                "effort": vars(self.effort).copy(), "search": vars(self.search).copy(), "closed_loop": vars(self.closed_loop).copy()}
+        return {
+            "name": self.name,
+            "description": self.description,
+            "seed": self.seed,
+            "architectures": list(self.architectures),
+            "references": list(self.references),
+            "objectives": list(self.objectives),
+            "parameters": {k: p.to_dict() for k, p in self.parameters.items()},
+            "mass": self.mass.to_dict(),
+            "constraints": {k: {n: v for n, v in zip(("min", "max"), b) if v is not None} for k, b in self.constraints.items()},
+            "effort": vars(self.effort).copy(),
+            "search": vars(self.search).copy(),
+            "closed_loop": vars(self.closed_loop).copy(),
+        }
 
     @classmethod
     def load(cls, path) -> DesignSpec:
@@ -187,15 +208,19 @@ class DesignSpec:
         closed = _closed_loop(d.get("closed_loop", {}))
         ranged = [k for k, p in params.items() if p.optimised]
         if search.method == "grid" and ranged:
-            fail(f"parameters.{ranged[0]}", params[ranged[0]].to_dict(), "a number or a list for search.method = \"grid\" "
-                 "(ranges need search.method = \"nsga2\")")
+            fail(
+                f"parameters.{ranged[0]}",
+                params[ranged[0]].to_dict(),
+                'a number or a list for search.method = "grid" (ranges need search.method = "nsga2")',
+            )
         if search.method == "nsga2" and not ranged:
-            fail("search.method", "nsga2", "give at least one parameter as a range {low, high}, or use method = \"grid\"")
+            fail("search.method", "nsga2", 'give at least one parameter as a range {low, high}, or use method = "grid"')
         desc = d.get("description", "")
         if not isinstance(desc, str):
             fail("description", desc, "a string")
-        return cls(name.strip(), archs, objectives, params, seed, refs, MassModel.from_mapping(d.get("mass", {})), constraints, effort,
-                   search, closed, desc)
+        return cls(
+            name.strip(), archs, objectives, params, seed, refs, MassModel.from_mapping(d.get("mass", {})), constraints, effort, search, closed, desc
+        )
 
 
 def _names(value, key: str, valid: tuple[str, ...], need: int = 0) -> tuple[str, ...]:
@@ -213,7 +238,7 @@ def _architectures(value) -> tuple[str, ...]:
     from ...nomenclature import UAV_ROTORS, parse
 
     if not isinstance(value, (list, tuple)) or not value:
-        fail("architectures", value, "a non-empty list of (2.1) names such as [\"Q-PRR\", \"HEX-RRR\"]")
+        fail("architectures", value, 'a non-empty list of (2.1) names such as ["Q-PRR", "HEX-RRR"]')
     out = []
     for a in value:
         try:
@@ -221,8 +246,12 @@ def _architectures(value) -> tuple[str, ...]:
         except QprrError as exc:
             fail("architectures", a, f"a (2.1) name ({exc})")
         if d.n_uav != 1 or d.n_arms != 1 or d.uav not in UAV_ROTORS or set(d.joints) - set("RP") or "R" not in d.joints:
-            fail("architectures", a, "one multirotor (Q, HEX, OCT) and one arm of R and P joints with at least one R "
-                 "(qprr.build makes no other; several vehicles or arms, cables and helicopters are not built)")
+            fail(
+                "architectures",
+                a,
+                "one multirotor (Q, HEX, OCT) and one arm of R and P joints with at least one R "
+                "(qprr.build makes no other; several vehicles or arms, cables and helicopters are not built)",
+            )
         if d.joints.count("P") > 1:
             fail("architectures", a, "at most one P joint (the slider parameters describe one)")
         out.append(d.name.strip().upper())

@@ -15,8 +15,9 @@ class PostureTask(Task):
     dim = 0
 
     def __init__(self, platform, q_arm_ref, weights=None, name: str = "posture"):
-        self.ref = check_platform(platform).check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"),
-                                             "PostureTask q_arm_ref").copy()
+        self.ref = (
+            check_platform(platform).check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"), "PostureTask q_arm_ref").copy()
+        )
         self.dim = platform.n_arm
         self._sw = sqrt_weights(weights, platform.n_arm, "PostureTask weights")
         self.name = task_name(name)
