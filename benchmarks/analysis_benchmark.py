@@ -117,7 +117,15 @@ def main(argv=None) -> int:
     ap.add_argument("--samples", type=int, default=1_000_000)
     ap.add_argument("--loop", type=int, default=5000)
     ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--quick", action="store_true", help="small sizes (seconds): the smoke run of tests/test_benchmarks.py")
     args = ap.parse_args(argv)
+    if args.quick:
+        args.samples, args.loop, args.reps = 20_000, 300, 1
+    scale = 0.02 if args.quick else 1.0
+
+    def sized(m: int) -> int:
+        return max(2_000, int(m * scale))
+
     for line in machine_lines(("scipy",)):
         print(line)
     p = qprr.build(args.platform) if args.platform.isupper() else qprr.load(args.platform)
@@ -132,6 +140,7 @@ def main(argv=None) -> int:
     print(f"kernels: {grid.size} configurations batched, {len(sub)} in the Pinocchio loop (rate extrapolated)\n")
     print("| map | batched [s] | batched [configs/s] | Pinocchio loop [configs/s] | ratio | max difference |")
     print("|---|---:|---:|---:|---:|---:|")
+    ratios = []
     for what in ("workspace", "cog", "singularity", "hover", "capacity"):
         ref = looped(p, sub, fid, what, W, eff)
         # same configurations batched, to compare values
@@ -160,6 +169,8 @@ def main(argv=None) -> int:
         t_b = best_time(lambda w=what: batched(chain, grid, fid, w, W, eff, p.g), args.reps)
         rb, rl = grid.size / t_b, len(sub) / t_loop
         print(f"| {what} | {t_b:.3f} | {rb:,.0f} | {rl:,.0f} | {rb / rl:.1f} | {diff:.1e} |")
+        ratios.append(rb / rl)
+    print(f"\nratio batched / Pinocchio loop (configurations per second): {min(ratios):.1f} to {max(ratios):.1f}")
     print("\nend-to-end maps (default options of `qprr analyze`, one run each):\n")
     print("| map | configurations | wall [s] | where the time goes |")
     print("|---|---:|---:|---|")
@@ -188,11 +199,11 @@ def main(argv=None) -> int:
         f"{t_fk:.2f} s, measure in B {t_area:.2f} s, hover volume {t_vol:.2f} s |"
     )
     for name, fn, nn in [
-        ("cog regions (2 payloads)", lambda: cog_regions(p, n_samples=200_000, payload_masses=[0.0, 0.5]), 200_000),
-        ("singularity", lambda: singularity(p, n_samples=200_000), 200_000),
-        ("hover (6 payloads)", lambda: hover(p, n_samples=100_000, payload_masses=[0, 0.25, 0.5, 1, 1.5, 2]), 100_000),
-        ("capacity", lambda: capacity_map(p, n_samples=200_000), 200_000),
-        ("opspace (Pinocchio per configuration)", lambda: opspace_map(p, n_samples=10_000), 10_000),
+        ("cog regions (2 payloads)", lambda: cog_regions(p, n_samples=sized(200_000), payload_masses=[0.0, 0.5]), sized(200_000)),
+        ("singularity", lambda: singularity(p, n_samples=sized(200_000)), sized(200_000)),
+        ("hover (6 payloads)", lambda: hover(p, n_samples=sized(100_000), payload_masses=[0, 0.25, 0.5, 1, 1.5, 2]), sized(100_000)),
+        ("capacity", lambda: capacity_map(p, n_samples=sized(200_000)), sized(200_000)),
+        ("opspace (Pinocchio per configuration)", lambda: opspace_map(p, n_samples=sized(10_000)), sized(10_000)),
     ]:
         t0 = time.perf_counter()
         fn()

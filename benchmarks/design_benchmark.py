@@ -81,6 +81,7 @@ def throughput(args) -> None:
             be.close()
     print(f"designs per second per core at {args.samples} samples per map: {rates[1]:.3f} (1 worker), {rates[2] / 2:.3f} (2 workers)")
     print(f"parallel efficiency on 2 workers: {rates[2] / (2 * rates[1]):.3f} (target >= 0.85)")
+    print(f"ratio of the 2-worker to the 1-worker throughput: {rates[2] / rates[1]:.2f} (ideal 2)")
 
 
 def split(args) -> None:
@@ -217,7 +218,10 @@ def main() -> int:
     ap.add_argument("--no-throughput", action="store_true")
     ap.add_argument("--seeds", type=int, default=5, help="optimiser comparison: seeds per engine")
     ap.add_argument("--generations", type=int, default=8, help="optimiser comparison: generations of 8")
+    ap.add_argument("--quick", action="store_true", help="4 designs at 400 samples, one round (the smoke run of the tests)")
     args = ap.parse_args()
+    if args.quick:
+        args.designs, args.samples, args.repeat = 4, 400, 1
     print(f"load average before: {os.getloadavg()}")
     split(args)
     fixed_cost(args)
