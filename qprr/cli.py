@@ -52,6 +52,11 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             options[key] = option_value(value, sc.options[key].default, key)
         except ValueError as exc:
             return fail(prog, f"--set {key}={value}: {exc}")
+    if args.thesis_as_printed:
+        if "as_printed" not in sc.options:
+            takes = ", ".join(n for n, s in SCENARIOS.items() if "as_printed" in s.options)
+            return fail(prog, f"--thesis-as-printed does not apply to scenario {sc.name!r}; scenarios that take it: {takes}")
+        options["as_printed"] = True
     if args.controller is not None and args.controller not in sc.controllers:
         return fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controllers)}")
     try:
@@ -248,6 +253,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="transition law: septic (default, jerk-continuous), quintic, or thesis (the printed (6.16))",
     )
     p.add_argument("--set", action="append", metavar="NAME=VALUE", help="any scenario option (listed above), repeatable")
+    p.add_argument(
+        "--thesis-as-printed",
+        action="store_true",
+        help="the thesis's settings as printed, where they are stable (static-dsid, static-mfc: quintic law, printed gains; "
+        "static-idc is refused: Table 6.2 is unstable as printed)",
+    )
     p.add_argument(
         "--gains",
         default=None,

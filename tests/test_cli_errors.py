@@ -31,6 +31,8 @@ BAD = [
     (["simulate", "static-idc", "--dt", "0.003", "--duration", "0.001"], "0.001"),
     (["simulate", "static-idc", "--seed", "1.5"], "1.5"),
     (["simulate", "static-idc", "--set", "foo=1"], "foo"),
+    (["simulate", "hover-reach", "--thesis-as-printed"], "static-dsid"),
+    (["simulate", "static-idc", "--thesis-as-printed"], "Routh-Hurwitz"),
     (["simulate", "static-idc", "--set", "duration=abc"], "abc"),
     (["simulate", "static-idc", "--set", "noequals"], "NAME=VALUE"),
     (["simulate", "static-idc", "--set", "law=foo"], "foo"),

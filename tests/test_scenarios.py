@@ -149,3 +149,28 @@ def test_cli_simulate_help_lists_scenarios_and_writes_files(tmp_path, capsys):
     assert main(["simulate", "static-idc", "--duration", "2", "--plot", str(png), "--save", str(npz), "-q"]) == 0
     out = capsys.readouterr().out
     assert "RMSE (6.26)" in out and png.stat().st_size > 10_000 and npz.exists()
+
+
+def test_as_printed_flies_the_printed_law_and_gains_bit_for_bit(robot):
+    """static-dsid with as_printed is the quintic law (6.16) with the printed position K_D = 18 of (A.3), nothing else;
+    it departs from the default (septic law, critically damped K_D)."""
+    from qprr.control import DesiredStateInverseDynamics
+    from qprr.sim import simulate
+    from qprr.thesis import gains
+    from qprr.thesis.missions import static_mission
+
+    res = run("static-dsid", platform=robot, duration=6.0, as_printed=True)
+    ref = simulate(robot, DesiredStateInverseDynamics(robot, gains.desired_state_as_printed()), static_mission(law="quintic"), 6.0)
+    assert np.array_equal(res.xi, ref.xi) and np.array_equal(res.u, ref.u)
+    assert gains.desired_state_as_printed().kd[0:3] == (18.0, 18.0, 18.0)
+    default = run("static-dsid", platform=robot, duration=6.0)
+    assert np.abs(default.xi - res.xi).max() > 1e-6
+
+
+def test_as_printed_refuses_what_is_unstable_as_printed(robot):
+    from qprr.errors import InputError
+
+    with pytest.raises(InputError, match="Routh-Hurwitz"):
+        run("static-idc", platform=robot, duration=1.0, as_printed=True)
+    with pytest.raises(InputError, match="quintic"):
+        run("static-mfc", platform=robot, duration=1.0, as_printed=True, law="thesis")

@@ -75,6 +75,13 @@ def desired_state() -> IDCGains:
     return IDCGains(kp=kp, kd=kd, ki=base.ki, filter_omega=20.0, max_tilt=base.max_tilt)
 
 
+def desired_state_as_printed() -> IDCGains:
+    """:func:`desired_state` with the position K_D = 18 printed with (A.3) (Table 6.2) instead of 2 sqrt(30): stable,
+    but its roll/pitch ring at 3 Hz (docs/control.md, Table 6.3 cell by cell)."""
+    base = desired_state()
+    return replace(base, kd=(18.0,) * 3 + tuple(base.kd[3:]))
+
+
 def annex_a3() -> IDCGains:
     """(A.3) with Table 6.2's K_P = 30 I9, K_D = 18 I9 (no integral), as printed for the desired-state controller."""
     return IDCGains(kp=(30.0,) * 9, kd=(18.0,) * 9, ki=(0.0,) * 9)

@@ -61,7 +61,7 @@ from ..sim import (
     WhiteNoise,
     simulate,
 )
-from ..trajectory import Hold, MultiPhase, Phase, Spiral
+from ..trajectory import DEFAULT_LAW, Hold, MultiPhase, Phase, Spiral
 from ..validation import as_interval, as_vector, checked_module
 from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
@@ -96,9 +96,27 @@ that the system does not diverge"); these values displace the arm by a few centi
 hundredths of a radian with the Table 6.2 arm gains."""
 
 
-def flight_controller(name: str, platform):
+AS_PRINTED_UNSTABLE = (
+    "Table 6.2's attitude PIDs fail Routh-Hurwitz as printed (k_D k_P < k_I on all three angles; flown as printed the "
+    "static mission diverges at t = 29.4 s): there are no stable as-printed settings for {name}; run without "
+    "--thesis-as-printed (its (s + 10)^3 attitude retuning, docs/control.md, 'Table 6.3 cell by cell')"
+)
+
+
+def flight_controller(name: str, platform, as_printed: bool = False):
     """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`), the decoupled scheme of Sec. 6.2.2
-    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl)."""
+    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl).
+
+    ``as_printed``: the thesis's settings as printed where they are stable: the desired-state controller with the
+    position K_D = 18 of (A.3); the MFC's gains are those printed already.  IDC and the decoupled scheme have none
+    (:data:`AS_PRINTED_UNSTABLE`), and the MPC is not the thesis's: both raise :class:`~qprr.errors.InputError`."""
+    if as_printed:
+        if name in ("idc", "decoupled"):
+            raise InputError(AS_PRINTED_UNSTABLE.format(name=name))
+        if name == "mpc":
+            raise InputError("the receding-horizon MPC is not the thesis's controller (its 'MPC' is dsid): no as-printed settings")
+        if name == "dsid":
+            return DesiredStateInverseDynamics(platform, gains.desired_state_as_printed())
     if name == "idc":
         return InverseDynamicsController(platform, gains.idc())
     if name == "dsid":
@@ -119,9 +137,13 @@ def _q_prr(platform):
 
 
 def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = None, bsg: bool = False):
-    def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None):
+    def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None, as_printed=False):
         platform = _q_prr(platform)
-        ctrl = flight_controller(controller, platform)
+        if as_printed:  # the transition law (6.16) as printed: the quintic
+            if law not in (DEFAULT_LAW, "quintic"):
+                raise InputError(f"as_printed flies the quintic law (6.16) as printed; law = {law!r} contradicts it")
+            law = "quintic"
+        ctrl = flight_controller(controller, platform, as_printed)
         if bsg:
             ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
         dist = disturbance() if disturbance is not None else None
@@ -143,6 +165,10 @@ def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = 
 
 
 _FLIGHT = {**COMMON_OPTIONS, "duration": Option(30.0, "run length [s]")}
+_STATIC = {
+    **_FLIGHT,
+    "as_printed": Option(False, "the thesis's settings as printed where stable: quintic law (6.16), dsid K_D = 18 of (A.3) (idc: refused, unstable)"),
+}
 _FLIGHT_CONTROLLERS = ("idc", "dsid", "mfc", "decoupled", "mpc")
 """Controllers of the Sec. 6.3 flight scenarios: the thesis's three, the decoupled scheme (Sec. 6.2.2) and the MPC."""
 
@@ -166,7 +192,7 @@ FLIGHT_SCENARIOS = (
         "static manipulator mission, inverse-dynamics control",
         _flight("static-idc", lambda law: static_mission(law=law)),
         _reordered("idc"),
-        _FLIGHT,
+        _STATIC,
         ("q-prr",),
         _plot_flight,
         "Sec. 6.3.1.4, Table 6.3 IDC, Fig. 6.7-6.13",
@@ -176,7 +202,7 @@ FLIGHT_SCENARIOS = (
         "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
         _flight("static-dsid", lambda law: static_mission(law=law)),
         _reordered("dsid"),
-        _FLIGHT,
+        _STATIC,
         ("q-prr",),
         _plot_flight,
         "Annex A.2, Table 6.3 MPC, Fig. 6.19-6.21",
@@ -186,7 +212,7 @@ FLIGHT_SCENARIOS = (
         "static manipulator mission, model-free control (iPID)",
         _flight("static-mfc", lambda law: static_mission(law=law)),
         _reordered("mfc"),
-        _FLIGHT,
+        _STATIC,
         ("q-prr",),
         _plot_flight,
         "Sec. 6.3.3.2, Table 6.3 MFC, Fig. 6.19-6.21",
