@@ -48,6 +48,15 @@ LOG_FORMAT = "{desc}: {n_fmt}/{total_fmt} ({percentage:.0f}%), elapsed {elapsed}
 """One progress line in a log (tqdm's ``bar_format`` fields)."""
 
 
+def default_stream() -> TextIO:
+    """Where progress goes when no stream is given: standard error, except when only the standard output is
+    redirected (``qprr simulate ... > log`` from a terminal): then the log gets the progress lines too, since the
+    run's output is being kept there.  A pipe or file on both (CI, ``2>&1``) keeps them on standard error."""
+    if is_terminal(sys.stderr) and not is_terminal(sys.stdout):
+        return sys.stdout
+    return sys.stderr
+
+
 class _Lines:
     """A text stream seen by tqdm, handing the stream under it whole lines instead of ``\\r`` redraws."""
 
@@ -72,7 +81,7 @@ def is_terminal(stream) -> bool:
 
 
 class Progress:
-    """Progress of ``total`` units of work, shown on ``stream`` (default: ``sys.stderr`` when constructed).
+    """Progress of ``total`` units of work, shown on ``stream`` (default: :func:`default_stream` when constructed).
 
     ``label``: what is shown before the counts.  ``quiet``: show nothing.  ``initial``: units
     already done (a resumed campaign).  ``unit``: the name of a unit in the rate (``step/s``).
@@ -97,7 +106,7 @@ class Progress:
             raise InputError(f"total must be an integer >= 0, got {total!r}: the number of units of work")
         if interval is not None and not interval > 0:
             raise InputError(f"interval must be > 0 seconds, got {interval!r}: e.g. interval=2.0")
-        self.stream = sys.stderr if stream is None else stream
+        self.stream = default_stream() if stream is None else stream
         self.quiet = bool(quiet)
         self.tty = is_terminal(self.stream)
         if self.tty:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import re
+import sys
 import time
 
 import pytest
@@ -164,3 +165,27 @@ def test_status_progress_counts_failures_and_prints_messages():
     quiet = io.StringIO()
     StatusProgress("c", 2, quiet=True, stream=quiet).message("nothing")
     assert quiet.getvalue() == ""
+
+
+class _Stream(io.StringIO):
+    def __init__(self, tty: bool) -> None:
+        super().__init__()
+        self.tty = tty
+
+    def isatty(self) -> bool:
+        return self.tty
+
+
+@pytest.mark.parametrize("err_tty, out_tty, expected", [(True, False, "out"), (True, True, "err"), (False, False, "err"), (False, True, "err")])
+def test_progress_follows_the_output_into_a_log(monkeypatch, err_tty, out_tty, expected):
+    """``qprr simulate ... > log`` from a terminal: the lines go to the log with the output; otherwise to stderr."""
+    from qprr.progress import Progress, default_stream
+
+    out, err = _Stream(out_tty), _Stream(err_tty)
+    monkeypatch.setattr(sys, "stdout", out)
+    monkeypatch.setattr(sys, "stderr", err)
+    assert default_stream() is (out if expected == "out" else err)
+    if expected == "out":  # a log: plain lines, no carriage return
+        with Progress(10, "run", unit="tick") as bar:
+            bar.update_to(10)
+        assert "run: 10/10 (100%)" in out.getvalue() and "\r" not in out.getvalue() and err.getvalue() == ""
