@@ -473,6 +473,8 @@ def ratios_report(methods) -> list[str]:
     if not peers:
         out.append("- peers not measured (--no-peers, or pip install 'qprr[peers]')")
     pink = by.get("pink FrameTask (proxqp)")
+    if pink is None or pink.unavailable:
+        out.append("- no ratio to pink: pink is not installed (pip install pin-pink, or pip install 'qprr[peers]')")
     for name in ("qp (IGM start)", "qp (cold start)"):
         m = by.get(name)
         if m is not None and pink is not None:

@@ -45,14 +45,15 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
     """Scatter panels of ``objectives[0]`` against each other objective (or ``pairs``): every feasible
     design coloured by architecture, the study's Pareto front (all objectives) ringed in black, each
     panel's own 2-D front as a step line, references as stars."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
     ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
     pairs = pairs or [(objectives[0], k) for k in objectives[1:]]
     n = len(pairs)
     ncol = min(n, 2)
     nrow = int(np.ceil(n / ncol))
-    fig, axes = plt.subplots(nrow, ncol, figsize=(6.4 * ncol, 4.6 * nrow), squeeze=False)
+    fig = Figure(figsize=(6.4 * ncol, 4.6 * nrow))
+    axes = fig.subplots(nrow, ncol, squeeze=False)
     col = _colours(ok)
     vehicles = sorted({_vehicle(r) for r in ok} - {"reference"})
     for ax, (kx, ky) in zip(axes.flat, pairs):
@@ -76,14 +77,13 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
     nh = _legend(fig, axes, col, vehicles)
     fig.tight_layout(rect=(0, 0.035 * int(np.ceil(nh / 6)), 1, 1))
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return str(path)
 
 
 def parallel_coordinates(rows: list[dict], objectives, path) -> str:
     """One line per feasible design across the objectives (each axis from its worst to its best value seen):
     the Pareto front coloured by arm (solid: Q, dash-dot: HEX), the other designs grey, references dashed black."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
     ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
     F = np.array([[r[k] for k in objectives] for r in ok], dtype=float)
@@ -91,7 +91,8 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
     span = np.where(hi > lo, hi - lo, 1.0)
     worst = np.where([METRICS[k][1] == "max" for k in objectives], lo, hi)
     Z = np.abs(F - worst) / span  # 0 worst, 1 best
-    fig, ax = plt.subplots(figsize=(2.1 * len(objectives) + 2.5, 5.0))
+    fig = Figure(figsize=(2.1 * len(objectives) + 2.5, 5.0))
+    ax = fig.subplots()
     col = {a: c for a, c in _colours(ok).items()}
     xs = np.arange(len(objectives))
     for z, r in zip(Z, ok):
@@ -116,5 +117,4 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
     ax.set_title("designs across the objectives (grey: dominated)")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return str(path)
