@@ -455,12 +455,17 @@ def _summary(rotors: Sequence[Rotor], weight: float, com_body, optimal_margin: b
         # variables [f (n), s]; maximise s
         A_ub = np.vstack([np.hstack([-np.eye(n), np.ones((n, 1))]), np.hstack([np.eye(n)[fin], np.ones((int(fin.sum()), 1))])])
         b_ub = np.concatenate([-lo, hi[fin]])
+        # equality rows equilibrated to unit norm: HiGHS's feasibility tolerance is absolute, and a nearly coplanar
+        # set's lateral-force rows (tilt 1e-5: entries 1e-5 f) would otherwise be met only to ~1 % of their scale;
+        # all-zero rows hold for every f (the least-squares check above found w there zero) and are dropped
+        row = np.linalg.norm(Omega, axis=1)
+        keep = row > 1e-12 * row.max()
         res = linprog(
             np.r_[np.zeros(n), -1.0],
             A_ub=A_ub,
             b_ub=b_ub,
-            A_eq=np.hstack([Omega, np.zeros((6, 1))]),
-            b_eq=w,
+            A_eq=np.hstack([Omega[keep], np.zeros((int(keep.sum()), 1))]) / row[keep, None],
+            b_eq=w[keep] / row[keep],
             bounds=[(None, None)] * n + [(None, max(weight, 1e-9))],
             method="highs",
         )

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import qprr
@@ -121,6 +121,8 @@ def _rotate_z(rotor: Rotor, angle: float) -> Rotor:
 
 @settings(max_examples=40, deadline=None)
 @given(_valid_rings, st.floats(-math.pi, math.pi), st.floats(5.0, 30.0))
+# found by hypothesis: tilt 1e-5, the lateral-force rows of the hover LP met only to ~1 % until they were equilibrated
+@example(ring(6, 0.5, kappa=0.03125, tilt=1e-5, f_max=10.0), 1e-5, 5.0)
 def test_rotating_a_valid_set_about_z_keeps_it_valid_with_the_same_numbers(rotors, angle, weight):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ActuationWarning)
