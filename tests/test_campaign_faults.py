@@ -255,14 +255,13 @@ def test_a_full_disk_stops_the_campaign_at_once_and_resume_completes_it(referenc
 
     spec, data, table, rows, names, ref_dir = reference
     out = tmp_path / "full-disk.csv"
-    calls, failed_at = {"n": 0}, []
+    calls = {"n": 0}
     real = store_mod._write_all
 
     def failing(fd, chunk):
         calls["n"] += 1
         if calls["n"] == 5:  # header, three records, then the disk is full in the middle of the fourth
             os.write(fd, chunk[:17])
-            failed_at.append(time.time())
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
         real(fd, chunk)
 
@@ -272,9 +271,9 @@ def test_a_full_disk_stops_the_campaign_at_once_and_resume_completes_it(referenc
     with pytest.raises(ResultsWriteError, match=rf"cannot write campaign results '{out}': \[Errno 28\] No space left"):
         run_campaign(spec, out, backend="local", workers=1, progress=False)
     starts = [float(line.split()[1]) for line in (tmp_path / "started.log").read_text().splitlines()]
-    # the 4 runs that reached the store and at most the next one, which the worker took as it handed over the 4th
-    # (within a few ms of the failure; a run takes 0.5 s): stopped, not computed to its end
-    assert len(starts) <= 5 and max(starts) < failed_at[0] + 0.25
+    # the 4 runs that reached the store and at most the next one, which the worker took as it handed over the 4th:
+    # no run is started after the failure (counted, not timed: the machine's load cannot move it)
+    assert len(starts) <= 5
     assert len(read_results(out)) == 3  # what was saved is kept; the cut fourth record is not read
     monkeypatch.setattr(store_mod, "_write_all", real)  # space returns
     monkeypatch.setenv("QPRR_TEST_DELAY", "0")

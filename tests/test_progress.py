@@ -51,18 +51,23 @@ def test_lines_are_rate_limited():
 def test_a_line_at_least_every_interval_while_it_runs():
     log = io.StringIO()
     interval = 0.05
-    stamps = []
+    stamps, late_without_line = [], []
     with Progress(40, "work", stream=log, unit="step", interval=interval) as bar:
         for _ in range(40):
             time.sleep(0.01)
             before = log.getvalue().count("\n")
+            t = time.perf_counter()
             bar.update()
             if log.getvalue().count("\n") > before:
-                stamps.append(time.perf_counter())
+                stamps.append(t)
+            elif stamps and t - stamps[-1] > 1.2 * interval:
+                late_without_line.append(t - stamps[-1])
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
     assert len(stamps) >= 3
     assert min(gaps) >= interval * 0.9  # never more often than the interval
-    assert max(gaps) < interval + 0.5  # and again soon after it, as long as updates come (0.5 s: a loaded machine)
+    # and every update that comes more than an interval after the last line writes one: load can only lengthen the
+    # gaps between updates, which makes lines due, never skipped (no wall-clock bound on the machine's speed)
+    assert not late_without_line, late_without_line
 
 
 def test_quiet_writes_nothing_and_still_counts():
