@@ -202,3 +202,18 @@ __all__ = [
     "real",
     "reals",
 ]
+
+
+def add_store_options(parser: argparse.ArgumentParser) -> None:
+    """The options of a command that evaluates many runs into a results file (``campaign run``, ``design run``):
+    ``-o/--output``, ``--backend`` (local, dask, inline), ``--workers``, ``--scheduler``, ``--fresh``."""
+    parser.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
+    parser.add_argument(
+        "--backend",
+        default="local",
+        choices=("local", "dask", "inline"),
+        help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)",
+    )
+    parser.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
+    parser.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
+    parser.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")

@@ -14,8 +14,8 @@ import argparse
 import sys
 import time
 
+from ..cli_common import add_store_options, integer
 from ..cli_common import fail as _fail
-from ..cli_common import integer
 from ..errors import QprrError
 
 
@@ -123,16 +123,7 @@ def register_cli(sub) -> None:
 
     r = csub.add_parser("run", help="run a campaign specification (.toml/.json); resumes an interrupted one")
     r.add_argument("spec", help="campaign specification (.toml or .json), e.g. examples/campaigns/quickstart.toml")
-    r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
-    r.add_argument(
-        "--backend",
-        default="local",
-        choices=("local", "dask", "inline"),
-        help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)",
-    )
-    r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
-    r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
-    r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
+    add_store_options(r)
     r.add_argument("--limit", type=integer(lo=0), default=None, help="run at most this many of the missing runs")
     r.add_argument("--report", default=None, metavar="DIR", help="then write the report (summary.md + figures) into DIR")
     r.add_argument("--quiet", action="store_true", help="no progress line")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..cli_common import integer
+from ..cli_common import add_store_options, integer
 from ..errors import QprrError
 
 
@@ -114,16 +114,7 @@ def register_cli(sub) -> None:
 
     r = dsub.add_parser("run", help="run a design study (.toml/.json); resumes an interrupted one")
     r.add_argument("spec", help="design study, e.g. examples/design/thesis_architectures.toml")
-    r.add_argument("-o", "--output", default=None, help="results file, .csv (default: NAME.csv) or .parquet (needs pyarrow)")
-    r.add_argument(
-        "--backend",
-        default="local",
-        choices=("local", "dask", "inline"),
-        help="local process pool (default), dask (LocalCluster or --scheduler), inline (this process)",
-    )
-    r.add_argument("--workers", type=integer(lo=1), default=None, help="worker processes (default: one per core)")
-    r.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT", help="a running Dask scheduler (implies --backend dask)")
-    r.add_argument("--fresh", action="store_true", help="discard existing results in the output instead of resuming")
+    add_store_options(r)
     r.add_argument("--report", default=None, metavar="DIR", help="then write the report (summary.md, ranking, figures) into DIR")
     r.add_argument("--quiet", action="store_true", help="no progress lines")
     _report_args(r)
