@@ -418,6 +418,8 @@ class Platform:
         from .validation import as_vector
 
         q_arm = as_vector(q_arm, self.n_arm, name)
+        if bool(np.all(q_arm >= self.arm_lower - 1e-12)) and bool(np.all(q_arm <= self.arm_upper + 1e-12)):
+            return q_arm
         bad = [k for k, j in enumerate(self.arm) if not j.lower - 1e-12 <= q_arm[k] <= j.upper + 1e-12]
         if bad:
             parts = [f"{self.arm[k].name} = {float(q_arm[k])!r} not in [{self.arm[k].lower!r}, {self.arm[k].upper!r}]" for k in bad]

@@ -166,3 +166,29 @@ def test_fully_actuated_platform_holds_a_tilted_base():
     check(p, data, res, M)
     assert res.roll == pytest.approx(0.25, abs=1e-7) and res.pitch == pytest.approx(-0.2, abs=1e-7)
     assert not res.hover_feasible
+
+
+def test_kept_tasks_retargeted_match_a_fresh_solver(case):
+    """Method "qp" keeps its default tasks and retargets them per solve: pose and position-only targets mixed in one
+    solver give bit-identical configurations to a new solver per target."""
+    name, p, data, targets = case
+    solver = IKSolver(p, "qp")
+    mixed = [M if k % 2 else M.translation.copy() for k, M in enumerate(targets)]
+    kept = [solver.solve(data, t).q for t in mixed]
+    for t, q in zip(mixed, kept):
+        np.testing.assert_array_equal(q, IKSolver(p, "qp").solve(p.data(), t).q)
+
+
+def test_retargeting_a_task_checks_its_target():
+    p = qprr.thesis.load()
+    pose = tasks.PoseTask(p, pin.SE3.Identity())
+    with pytest.raises(qprr.errors.InputError, match="PoseTask target must be a pinocchio.SE3"):
+        pose.set_target(np.zeros(3))
+    with pytest.raises(qprr.errors.InputError, match="PoseTask target must be finite"):
+        pose.set_target(pin.SE3(np.eye(3), np.array([0.0, np.nan, 0.0])))
+    posture = tasks.PostureTask(p, np.zeros(p.n_arm))
+    with pytest.raises(qprr.errors.LimitError, match="PostureTask q_arm_ref"):
+        posture.set_reference(np.full(p.n_arm, 10.0))
+    position = tasks.PositionTask(p, np.zeros(3))
+    with pytest.raises(qprr.errors.ShapeError, match="PositionTask p_world"):
+        position.set_target(np.zeros(2))

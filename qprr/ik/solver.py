@@ -313,18 +313,24 @@ def pose_errors(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[fl
         p_d = as_vector(p_d, 3, "p_d")
     if R_d is not None and not (isinstance(R_d, np.ndarray) and R_d.shape == (3, 3) and R_d.dtype.kind == "f"):
         R_d = as_matrix(R_d, (3, 3), "R_d")
+    if not math.isfinite(float(p_d.sum())):
+        raise NonFiniteError(f"p_d must be finite, got {p_d.tolist()}")
+    if R_d is not None:
+        dev = _rotation_deviation(R_d)  # R_d a rotation: unit orthogonal columns, right-handed
+        if not dev < 1e-9:
+            raise InputError(f"R_d must be a rotation matrix (R^T R = I, det = +1): deviation {dev:.3g}")
+    return pose_error_values(M, p_d, R_d)
+
+
+def pose_error_values(M: pin.SE3, p_d: np.ndarray, R_d: np.ndarray | None) -> tuple[float, float]:
+    """:func:`pose_errors` of a target already checked (:func:`parse_target`): the IK's loop checks it once per solve."""
     x, y, z = M.translation.tolist()
     px, py, pz = p_d.tolist()
-    if not math.isfinite(px + py + pz):
-        raise NonFiniteError(f"p_d must be finite, got {[px, py, pz]}")
     pos = math.sqrt((x - px) ** 2 + (y - py) ** 2 + (z - pz) ** 2)
     if R_d is None:
         return pos, 0.0
     (a, b, c), (d, e, f), (g, h, i) = M.rotation.tolist()
     (A, B, C), (D, E, F), (G, H, I) = R_d.tolist()
-    dev = _rotation_deviation(R_d)  # R_d a rotation: unit orthogonal columns, right-handed
-    if not dev < 1e-9:
-        raise InputError(f"R_d must be a rotation matrix (R^T R = I, det = +1): deviation {dev:.3g}")
     n21_12 = (C * b + F * e + I * h) - (B * c + E * f + H * i)
     n02_20 = (A * c + D * f + G * i) - (C * a + F * d + I * g)
     n10_01 = (B * a + E * d + H * g) - (A * b + D * e + G * h)
@@ -371,8 +377,8 @@ def default_guess(platform: Platform, data: pin.Data, p_world, R_world, q_arm=No
 @dataclass(frozen=True, slots=True)
 class SolveContext:
     """What one solve is about, shared by the method and :func:`finish`: the platform and its data, the method's name,
-    the parsed target (p_d, R_d; R_d None for a position), the options, the start time t0 (perf_counter), the label of
-    the initial guess, whether success needs hover, and ``unreachable_hint(R_d) -> str``, a platform-specific
+    the parsed and checked target (p_d, R_d; R_d None for a position: :func:`parse_target`), the options, the start
+    time t0 (perf_counter), the label of the initial guess, whether success needs hover, and ``unreachable_hint(R_d) -> str``, a platform-specific
     explanation of why a target is not reachable in hover (the Q-PRR: its end-effector y axis must be horizontal),
     "" if it is (None: no explanation)."""
 
@@ -391,13 +397,15 @@ class SolveContext:
 @dataclass(frozen=True, slots=True)
 class Ending:
     """How a method's iteration ended: ``status``, ``reason`` (non-empty: a failure whatever the errors),
-    ``iterations``, the levels' errors (method "qp"), and whether ``data`` already holds FK, frames and CoM at q."""
+    ``iterations``, the levels' errors (method "qp"), whether ``data`` already holds FK, frames and CoM at q, and
+    the pose errors at q when the method measured them there (else :func:`finish` measures them)."""
 
     status: str
     reason: str = ""
     iterations: int = 0
     level_errors: tuple = ()
     kinematics_ready: bool = False
+    pose_errors: tuple | None = None  # (position [m], angle [rad]) already measured at q with ``data``'s kinematics
 
 
 def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
@@ -410,7 +418,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     else:
         c = pin.centerOfMass(platform.model, data, q, False)
         M = pin.updateFramePlacement(platform.model, data, platform.ee_frame)
-    pos_err, rot_err = pose_errors(M, ctx.p_d, ctx.R_d)
+    pos_err, rot_err = pose_error_values(M, ctx.p_d, ctx.R_d) if end.pose_errors is None else end.pose_errors
     base = data.oMi[1]
     Rb = base.rotation
     off = platform.thrust_axis_basis @ (base.actInv(c) - platform.thrust_axis[0])
@@ -599,7 +607,7 @@ def solve_dls(ctx: SolveContext, xi: np.ndarray) -> IKResult:
     lam = opts.damping
     status, it, slow = "max_iterations", 0, 0  # finish() words the reason from the measured errors
     while True:
-        pos_err, rot_err = pose_errors(Me, p_d, R_d)
+        pos_err, rot_err = pose_error_values(Me, p_d, R_d)
         if pos_err < opts.position_tol and rot_err < opts.orientation_tol:
             status = "converged"
             break
@@ -677,6 +685,28 @@ def _levels(platform: Platform, target, q_arm_posture: np.ndarray, base_yaw: flo
     return [[first], [second], [ComTask()], [PostureTask(platform, q_arm_posture)]]
 
 
+class _DefaultLevels:
+    """The tasks of :func:`default_levels`, built once per solver and retargeted per solve (building four tasks
+    cost about a tenth of a solve started at the answer)."""
+
+    def __init__(self, platform: Platform) -> None:
+        self.platform = platform
+        self.by_kind: dict[str, list[list[Task]]] = {}
+
+    def levels(self, target, q_arm_posture: np.ndarray, base_yaw: float) -> list[list[Task]]:
+        """The hierarchy aimed at ``target`` (a ``pin.SE3`` or a position), posture ``q_arm_posture``, base yaw [rad]."""
+        kind = "pose" if isinstance(target, pin.SE3) else "position"
+        levels = self.by_kind.get(kind)
+        if levels is None:
+            levels = self.by_kind[kind] = _levels(self.platform, target, q_arm_posture, base_yaw)
+            return levels
+        levels[0][0].set_target(target)
+        if self.platform.fully_actuated:
+            levels[1][0].set_target(ch.euler_to_rotation([0.0, 0.0, base_yaw]))
+        levels[3][0].set_reference(q_arm_posture)
+        return levels
+
+
 class IKSolver:
     """An IK method bound to a platform, with the solver state it needs (QPs, warm starts).
 
@@ -700,6 +730,7 @@ class IKSolver:
         self.initial_guess = initial_guess
         self.unreachable_hint = unreachable_hint
         self._engine = None
+        self._default_levels = _DefaultLevels(platform)
         self._collision = None
         if self.options.collision_free:
             from ..collision import collision_model
@@ -777,14 +808,14 @@ class IKSolver:
         q = ch.xi_to_q(xi)
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-        levels = opts.levels if opts.levels is not None else _levels(platform, target, posture, float(xi[5]))
+        levels = opts.levels if opts.levels is not None else self._default_levels.levels(target, posture, float(xi[5]))
         self._engine.reset()
         it, step, end = 0, None, Ending("max_iterations")
         shaper = _StepShaper(opts)
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
-                pos_err, rot_err = pose_errors(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
+                pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
                 it += 1
                 step = self._engine.solve(platform, data, q, levels, validate=it == 1 and opts.levels is not None)
@@ -793,12 +824,15 @@ class IKSolver:
                     q = pin.integrate(platform.model, q, dv)
                     np.clip(q[7:], self._engine.lower, self._engine.upper, out=q[7:])  # remove the QP's bound slack
                 if stop:
-                    end = Ending(stop if pose_ok or stop != "converged_stationary" else "stalled", kinematics_ready=dv is None)
+                    ready = dv is None
+                    status = stop if pose_ok or stop != "converged_stationary" else "stalled"
+                    end = Ending(status, kinematics_ready=ready, pose_errors=(pos_err, rot_err) if ready else None)
                     break
         except SolverError as exc:
             return finish(ctx, q, Ending("solver_error", str(exc), it))
         status = "converged" if end.status == "converged_stationary" else end.status
-        return finish(ctx, q, Ending(status, "", it, _level_errors(platform, data, q, levels, end.kinematics_ready, step), end.kinematics_ready))
+        levels_out = _level_errors(platform, data, q, levels, end.kinematics_ready, step)
+        return finish(ctx, q, Ending(status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
 class _StepShaper:
@@ -823,7 +857,8 @@ class _StepShaper:
         # the lower levels may converge only linearly (damped, unsatisfiable): once the pose holds, stop when their
         # errors no longer decrease, compared in priority order (the first level that moved decides: a posture error
         # rising while the hover error falls is progress)
-        lower = step.errors[1:]
+        errors = step.errors
+        lower = errors[1:]
         self.flat = self.flat + 1 if (pose_ok and not _lexicographic_progress(lower, self.lower_prev)) else 0
         self.lower_prev = lower
         if self.flat >= 3:
@@ -831,7 +866,7 @@ class _StepShaper:
         # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
         # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
         # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
-        e1 = step.errors[0]
+        e1 = errors[0]
         if not pose_ok and e1 > 0.5 * self.e1_prev:
             self.rest_scale *= 0.5
         elif self.rest_scale < 1.0:

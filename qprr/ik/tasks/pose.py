@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ...charts import check_rotation
 from ...errors import InputError
 from ...model import Platform, check_platform
 from ...validation import as_vector
@@ -22,15 +23,19 @@ class PoseTask(Task):
 
     def __init__(self, platform: Platform, target: pin.SE3, frame=None, weights=None, name: str = "pose"):
         check_platform(platform)
-        if not isinstance(target, pin.SE3):
-            raise InputError(f"PoseTask target must be a pinocchio.SE3, got {type(target).__name__}")
-        if not (np.all(np.isfinite(target.translation)) and np.all(np.isfinite(target.rotation))):
-            raise InputError(f"PoseTask target must be finite, got {target}")
+        self.set_target(target)
         self.frame = platform.ee_frame if frame is None else platform.frame_id(frame)
-        self.target = target
-        self._target_inv = target.inverse()
         self._sw = sqrt_weights(weights, 6, "PoseTask weights")
         self.name = task_name(name)
+
+    def set_target(self, target: pin.SE3) -> None:
+        """Aim the task at another world placement (a solver keeps its tasks and retargets them per solve)."""
+        if not isinstance(target, pin.SE3):
+            raise InputError(f"PoseTask target must be a pinocchio.SE3, got {type(target).__name__}")
+        if not (np.isfinite(target.translation.sum()) and np.isfinite(target.rotation.sum())):
+            raise InputError(f"PoseTask target must be finite, got {target}")
+        self.target = target
+        self._target_inv = target.inverse()
 
     def linearize(self, platform, data, q):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL)
@@ -56,12 +61,14 @@ class BaseOrientationTask(Task):
     dim = 3
 
     def __init__(self, platform: Platform, R_target, weights=None, name: str = "base_orientation"):
-        from ...charts import check_rotation
-
         check_platform(platform)
-        self.target = check_rotation(R_target, "BaseOrientationTask R_target").copy()
+        self.set_target(R_target)
         self._sw = sqrt_weights(weights, 3, "BaseOrientationTask weights")
         self.name = task_name(name)
+
+    def set_target(self, R_target) -> None:
+        """Another world orientation of the base (a solver keeps its tasks and retargets them per solve)."""
+        self.target = check_rotation(R_target, "BaseOrientationTask R_target").copy()
 
     def linearize(self, platform, data, q):
         Rerr = self.target.T @ data.oMi[1].rotation
@@ -80,9 +87,13 @@ class PositionTask(Task):
 
     def __init__(self, platform: Platform, p_world, frame=None, weights=None, name: str = "position"):
         self.frame = check_platform(platform).ee_frame if frame is None else platform.frame_id(frame)
-        self.target = as_vector(p_world, 3, "PositionTask p_world").copy()
+        self.set_target(p_world)
         self._sw = sqrt_weights(weights, 3, "PositionTask weights")
         self.name = task_name(name)
+
+    def set_target(self, p_world) -> None:
+        """Aim the task at another world position [m] (a solver keeps its tasks and retargets them per solve)."""
+        self.target = as_vector(p_world, 3, "PositionTask p_world").copy()
 
     def linearize(self, platform, data, q):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL_WORLD_ALIGNED)[0:3]

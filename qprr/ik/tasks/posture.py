@@ -15,14 +15,17 @@ class PostureTask(Task):
     dim = 0
 
     def __init__(self, platform, q_arm_ref, weights=None, name: str = "posture"):
-        self.ref = (
-            check_platform(platform).check_arm_limits(as_vector(q_arm_ref, platform.n_arm, "PostureTask q_arm_ref"), "PostureTask q_arm_ref").copy()
-        )
+        self.platform = check_platform(platform)
+        self.set_reference(q_arm_ref)
         self.dim = platform.n_arm
         self._sw = sqrt_weights(weights, platform.n_arm, "PostureTask weights")
         self.name = task_name(name)
         self._J = np.zeros((platform.n_arm, platform.nv))
         self._J[:, 6:] = np.eye(platform.n_arm)
+
+    def set_reference(self, q_arm_ref) -> None:
+        """Another preferred arm configuration (inside the joint limits; a solver retargets its task per solve)."""
+        self.ref = self.platform.check_arm_limits(as_vector(q_arm_ref, self.platform.n_arm, "PostureTask q_arm_ref"), "PostureTask q_arm_ref").copy()
 
     def linearize(self, platform, data, q):
         return scaled(self._sw, self._J, self.ref - q[7:])
