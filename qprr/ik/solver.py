@@ -753,7 +753,7 @@ class IKSolver:
         p_d, R_d = parse_target(target)
         opts = self.options
         check_resolvable(p_d, opts.position_tol)
-        hover = getattr(opts, "hover", False)
+        hover = isinstance(opts, (ClikaOptions, DLSOptions)) and opts.hover  # method "qp" reaches hover as its level 2
         if xi0 is not None:
             xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
         else:
