@@ -27,13 +27,11 @@ class HoverTask(Task):
         self.name = task_name(name)
 
     def linearize(self, platform, data, q):
-        R = data.oMi[1].rotation
-        # dw = -R hat(e3) omega_body = -R[:, 1] omega_x + R[:, 0] omega_y
-        J_w = np.zeros((3, platform.nv))
-        J_w[:, 3] = -R[:, 1]
-        J_w[:, 4] = R[:, 0]
-        w_xy, wz = R[0:2, 2], R[2, 2]
-        s = math.hypot(w_xy[0], w_xy[1])
+        (r00, r01, wx), (r10, r11, wy), (r20, r21, wz) = data.oMi[1].rotation.tolist()
+        # dw = -R hat(e3) omega_body = -R[:, 1] omega_x + R[:, 0] omega_y: rows of dw_x, dw_y, dw_z over (omega_x, omega_y)
+        jx, jy, jz = (-r01, r00), (-r11, r10), (-r21, r20)
+        J = np.zeros((2, platform.nv))
+        s = math.hypot(wx, wy)
         if s > 1e-4 or (wz < 0.0 and s > 1e-6):
             a = math.atan2(s, wz)
             g = a / s
@@ -41,8 +39,10 @@ class HoverTask(Task):
         elif wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3 - s^2/5
             g, c = 1.0 + s * s / 6.0, -2.0 / 3.0 - 0.2 * s * s
         else:  # within 1e-6 rad of upside down the tilt direction is undefined: tilt about body x, |e| = the angle
-            u = R[0:2, 1] / max(math.hypot(R[0, 1], R[1, 1]), 1e-300)
-            return J_w[0:2], -math.atan2(s, wz) * u
+            n = max(math.hypot(r01, r11), 1e-300)
+            J[:, 3:5] = (jx, jy)
+            return J, -math.atan2(s, wz) * np.array([r01 / n, r11 / n])
         # e = g(s, wz) w_xy: de = g dw_xy + w_xy (c s ds - dwz) with s ds = w_xy . dw_xy (dg/dwz = -1 on |w| = 1)
-        J = g * J_w[0:2] + np.outer(w_xy, c * (w_xy @ J_w[0:2]) - J_w[2])
-        return J, -g * w_xy
+        v = [c * (wx * jx[k] + wy * jy[k]) - jz[k] for k in (0, 1)]
+        J[:, 3:5] = ((g * jx[0] + wx * v[0], g * jx[1] + wx * v[1]), (g * jy[0] + wy * v[0], g * jy[1] + wy * v[1]))
+        return J, np.array([-g * wx, -g * wy])
