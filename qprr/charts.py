@@ -111,7 +111,8 @@ def euler_to_rotation_batch(euler: np.ndarray) -> np.ndarray:
     return np.stack(entries, axis=-1).reshape(-1, 3, 3)
 
 
-def _check_pitch(theta: float, what: str) -> None:
+def check_pitch(theta: float, what: str) -> None:
+    """Raise :class:`EulerSingularityError` naming ``what`` when the ZYX pitch ``theta`` [rad] is at the Euler singularity."""
     if abs(cos(theta)) < EULER_TOL:
         raise EulerSingularityError(
             f"{what}: ZYX Euler angles are singular at pitch theta = {theta!r} rad "
@@ -138,7 +139,7 @@ def rotation_to_euler(R) -> np.ndarray:
     """
     R = check_rotation(R, "R", 1e-6)
     theta = atan2(-R[2, 0], hypot(R[2, 1], R[2, 2]))
-    _check_pitch(theta, "rotation_to_euler")
+    check_pitch(theta, "rotation_to_euler")
     return np.array([atan2(R[2, 1], R[2, 2]), theta, atan2(R[1, 0], R[0, 0])])
 
 
@@ -241,7 +242,7 @@ def v_to_xi_dot(xi, v) -> np.ndarray:
     """Thesis rates xi_dot = S(xi)^-1 v (raises at the Euler singularity)."""
     xi = as_xi(xi)
     v = as_vector(v, xi.shape[0], "v")
-    _check_pitch(xi[4], "v_to_xi_dot")
+    check_pitch(xi[4], "v_to_xi_dot")
     S = rate_map(xi)
     out = np.empty(xi.shape[0])
     out[0:3] = S[0:3, 0:3].T @ v[0:3]
@@ -272,7 +273,7 @@ def a_to_xi_ddot(xi, xi_dot, a) -> np.ndarray:
     """Thesis accelerations xi_ddot = S^-1 (a - S_dot xi_dot) (raises at the Euler singularity)."""
     xi = as_xi(xi)
     xi_dot = as_vector(xi_dot, xi.shape[0], "xi_dot")
-    _check_pitch(xi[4], "a_to_xi_ddot")
+    check_pitch(xi[4], "a_to_xi_ddot")
     rhs = as_vector(a, xi.shape[0], "a") - rate_map_dot(xi, xi_dot) @ xi_dot
     return np.linalg.solve(rate_map(xi), rhs)
 
@@ -286,7 +287,7 @@ def force_to_xi(xi, tau) -> np.ndarray:
 def force_from_xi(xi, u) -> np.ndarray:
     """Pinocchio generalised force tau = S^-T u of a thesis one (raises at the Euler singularity)."""
     xi = as_xi(xi)
-    _check_pitch(xi[4], "force_from_xi")
+    check_pitch(xi[4], "force_from_xi")
     return np.linalg.solve(rate_map(xi).T, as_vector(u, xi.shape[0], "u"))
 
 

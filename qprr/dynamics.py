@@ -37,7 +37,7 @@ def dynamics_xi(platform: Platform, data: pin.Data, xi, xi_dot) -> tuple[np.ndar
     check_model_data(platform, data)
     xi = ch.as_xi(xi, "xi", platform.n_xi)
     w = as_vector(xi_dot, platform.n_xi, "xi_dot")
-    ch._check_pitch(xi[4], "dynamics_xi")
+    ch.check_pitch(xi[4], "dynamics_xi")
     model = platform.model
     q = ch.xi_to_q(xi)
     S = ch.rate_map(xi)
@@ -74,7 +74,7 @@ def forward_dynamics_xi(platform: Platform, data: pin.Data, xi, xi_dot, u) -> np
     xi = ch.as_xi(xi, "xi", platform.n_xi)
     xi_dot = as_vector(xi_dot, platform.n_xi, "xi_dot")
     u = as_vector(u, platform.n_xi, "u")
-    ch._check_pitch(xi[4], "forward_dynamics_xi")
+    ch.check_pitch(xi[4], "forward_dynamics_xi")
     q, v = ch.xi_to_qv(xi, xi_dot)
     tau = np.linalg.solve(ch.rate_map(xi).T, u)
     a = pin.aba(platform.model, data, q, v, tau, pin.Convention.LOCAL)

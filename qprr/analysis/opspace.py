@@ -205,7 +205,7 @@ def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=
     n_xi = platform.n_xi
     xi = ch.as_xi(xi, "xi", n_xi)
     w = np.zeros(n_xi) if xi_dot is None else as_vector(xi_dot, n_xi, "xi_dot")
-    ch._check_pitch(xi[4], "opspace_model_xi")
+    ch.check_pitch(xi[4], "opspace_model_xi")
     rows = _check_selection(rows, 6, "rows", ROWS)
     cols = tuple(range(n_xi)) if coordinates is None else _check_selection(coordinates, n_xi, "coordinates")
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)

@@ -173,11 +173,11 @@ class MobileManipulator:
 
     def within_limits(self, z, tol: float = 1e-9) -> bool:
         z = self.check_z(z)
-        v = self._config_as_tangent(z)
+        v = self.config_as_tangent(z)
         return bool(np.all(v >= self.lower - tol) and np.all(v <= self.upper + tol))
 
-    def _config_as_tangent(self, z) -> np.ndarray:
-        """The bounded coordinates of z laid out like dz (arm joints with nq = nv = 1)."""
+    def config_as_tangent(self, z) -> np.ndarray:
+        """The bounded coordinates of z laid out like dz (arm joints with nq = nv = 1): what the limits bound."""
         out = np.zeros(self.nz)
         out[0 : self.n_base] = z[0 : self.n_base]
         for j in range(4, self.model.njoints):
@@ -416,7 +416,7 @@ def step_problem(robot: MobileManipulator, z, target, options=None, *, lookahead
     step[3:nb] = opts.step_steer
     J = robot.ee_jacobian(z)
     e = p_t - robot.ee_position(z)
-    cur = robot._config_as_tangent(z)
+    cur = robot.config_as_tangent(z)
     lo = np.minimum(np.maximum(-step, robot.lower - cur), 0.0)
     up = np.maximum(np.minimum(step, robot.upper - cur), 0.0)
     levels = [(J, e)]
