@@ -394,10 +394,8 @@ def polish_box_qp(
     lo: np.ndarray,
     up: np.ndarray,
     z: np.ndarray,
-    Aeq: np.ndarray | None = None,
-    beq: np.ndarray | None = None,
 ) -> np.ndarray | None:
-    """The exact optimum of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq) from an approximate ``z``.
+    """The exact optimum of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up from an approximate ``z``.
 
     ProxQP stops within its tolerance, at a point that also depends in its last digits on
     memory alignment (the same QP on fresh objects returned answers 1e-9 apart, proxsuite
@@ -411,14 +409,13 @@ def polish_box_qp(
     where the objective is nearly flat (a damping of 1e-7), where ProxQP's answer can be off by
     1e-7 within its tolerance.
     """
-    n_eq = 0 if Aeq is None else Aeq.shape[0]
     fin_lo, fin_up = np.isfinite(lo), np.isfinite(up)
     scale = _bound_scale(lo, up, fin_lo, fin_up)
     ftol = 1e-10 * scale
     Cz = C @ z
     at_lo = fin_lo & (Cz - lo <= 1e-6 * scale)
     at_up = fin_up & (up - Cz <= 1e-6 * scale) & ~at_lo
-    if n_eq == 0 and not at_lo.any() and not at_up.any():  # the usual case: no bound active, one linear solve
+    if not at_lo.any() and not at_up.any():  # the usual case: no bound active, one linear solve
         try:
             zp = np.linalg.solve(H, -g)
         except np.linalg.LinAlgError:
@@ -427,7 +424,7 @@ def polish_box_qp(
             Czp = C @ zp
             if not (np.any(Czp < lo - ftol) or np.any(Czp > up + ftol)):
                 return zp
-    out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up, Aeq, beq)
+    out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
     return None if out is None else out[0]
 
 
@@ -435,92 +432,83 @@ def _bound_scale(lo, up, fin_lo, fin_up) -> float:
     return 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
 
 
-def kkt_on_active_set(
-    H: np.ndarray,
-    g: np.ndarray,
-    C: np.ndarray,
-    lo: np.ndarray,
-    up: np.ndarray,
-    at_lo: np.ndarray,
-    at_up: np.ndarray,
-    Aeq: np.ndarray | None = None,
-    beq: np.ndarray | None = None,
-):
-    """(z, at_lo, at_up): the exact KKT point of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (and Aeq z = beq), found
-    by active-set steps from the guessed active bounds ``at_lo``, ``at_up`` (boolean masks over the rows of C); None
-    when the steps run out or a KKT system is not solved accurately.
+def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, at_lo: np.ndarray, at_up: np.ndarray):
+    """(z, at_lo, at_up): the exact KKT point of min 1/2 z^T H z + g^T z s.t. lo <= C z <= up, found by active-set steps
+    from the guessed active bounds ``at_lo``, ``at_up`` (boolean masks over the rows of C); None when the steps run out
+    or a KKT system is not solved accurately.
 
     A returned point satisfies the KKT conditions (stationarity, primal feasibility within 1e-10 of the bound scale,
     multipliers of the right sign), so it is the global optimum of the convex QP.  Started from the active set of the
     previous call it usually ends after one linear solve: the IK's levels change little between iterations.
     """
-    n = H.shape[0]
-    n_eq = 0 if Aeq is None else Aeq.shape[0]
     at_lo = at_lo & np.isfinite(lo)
     at_up = at_up & np.isfinite(up) & ~at_lo
     scale = _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
-    ftol = 1e-10 * scale  # bounds nearly implied by the equalities make K ill-conditioned (cond 1e11 seen)
+    ftol = 1e-10 * scale  # bounds nearly implied by each other make the KKT matrix ill-conditioned (cond 1e11 seen)
     gscale0 = 1.0 + float(np.abs(g).max(initial=0.0))
     hmax = float(np.abs(H).max(initial=0.0))
-    bound = np.where(at_lo, lo, up)
     seen: set[bytes] = set()
     for _ in range(2 * C.shape[0] + 2):
-        at = at_lo | at_up
         key = at_lo.tobytes() + at_up.tobytes()
         cycling = key in seen  # a degenerate vertex: a bound with a ~0 multiplier is dropped and re-added
         seen.add(key)
-        idx = np.flatnonzero(at)
-        k = idx.size + n_eq
-        if k == 0:
-            A = np.zeros((0, n))
-            zp = _spd_solve(H, -g)
-            if zp is None:
-                zp = np.linalg.lstsq(H, -g, rcond=1e-13)[0]
-            mu = np.zeros(0)
-            res_x = H @ zp + g
-            res_b = np.zeros(0)
-        else:
-            A = C[idx] if not n_eq else np.vstack([C[idx], Aeq])
-            b = bound[idx] if not n_eq else np.concatenate([bound[idx], beq])
-            K = np.zeros((n + k, n + k))
-            K[:n, :n] = H
-            K[:n, n:] = A.T
-            K[n:, :n] = A
-            rhs = np.concatenate([-g, b])
-            try:
-                sol = np.linalg.solve(K, rhs)
-            except np.linalg.LinAlgError:  # dependent active bounds, or a flat direction left free: minimum norm
-                sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
-            zp, mu = sol[:n], -sol[n:]  # H zp + g = A^T mu; mu >= 0 on lower bounds, <= 0 on upper ones
-            r = K @ sol - rhs
-            res_x, res_b = r[:n], r[n:]
+        idx = np.flatnonzero(at_lo | at_up)
+        zp, mu, res_x, res_b = _kkt_solve(H, g, C[idx], np.where(at_lo, lo, up)[idx])
         gscale = gscale0 + hmax * (1.0 + float(np.abs(zp).max(initial=0.0)))
         if float(np.abs(res_x).max(initial=0.0)) > 1e-10 * gscale or float(np.abs(res_b).max(initial=0.0)) > ftol:
             return None  # not solved accurately
         # > 0: the bound pulls the wrong way (a lower bound's multiplier must be >= 0, an upper one's <= 0)
-        wrong = np.where(at_lo[idx], -mu[: idx.size], mu[: idx.size])
+        wrong = np.where(at_lo[idx], -mu, mu)
         Czp = C @ zp
         viol_lo = lo - Czp > ftol  # (an infinite bound is never violated)
         viol_up = (Czp - up > ftol) & ~viol_lo
         release = wrong > (1e-9 if cycling else 1e-12) * gscale
-        any_release = bool(release.any())
-        if not any_release and not viol_lo.any() and not viol_up.any():
+        if not release.any() and not viol_lo.any() and not viol_up.any():
             return zp, at_lo, at_up
-        if any_release:  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
+        if release.any():  # release the worst wrong-signed bound (one at a time: the others' multipliers change)
             i = idx[int(np.argmax(wrong))]
             at_lo[i] = at_up[i] = False
-        elif not cycling:  # add every violated bound
-            at_lo |= viol_lo
-            at_up |= viol_up
-        else:  # add the most violated one only
-            gap = np.maximum(np.where(viol_lo, lo - Czp, -np.inf), np.where(viol_up, Czp - up, -np.inf))
-            i = int(np.argmax(gap))
-            if viol_lo[i]:
-                at_lo[i] = True
-            else:
-                at_up[i] = True
-        bound = np.where(at_lo, lo, up)
+        else:
+            _add_violated(at_lo, at_up, (viol_lo, viol_up), (lo - Czp, Czp - up), cycling)
     return None
+
+
+def _kkt_solve(H: np.ndarray, g: np.ndarray, A: np.ndarray, b: np.ndarray):
+    """(z, mu, stationarity residual, constraint residual) of min 1/2 z^T H z + g^T z s.t. A z = b, with
+    H z + g = A^T mu (minimum-norm solution when the active rows are dependent or a flat direction is left free)."""
+    n, k = H.shape[0], A.shape[0]
+    if k == 0:
+        z = _spd_solve(H, -g)
+        if z is None:
+            z = np.linalg.lstsq(H, -g, rcond=1e-13)[0]
+        return z, np.zeros(0), H @ z + g, np.zeros(0)
+    K = np.zeros((n + k, n + k))
+    K[:n, :n] = H
+    K[:n, n:] = A.T
+    K[n:, :n] = A
+    rhs = np.concatenate([-g, b])
+    try:
+        sol = np.linalg.solve(K, rhs)
+    except np.linalg.LinAlgError:
+        sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
+    r = K @ sol - rhs
+    return sol[:n], -sol[n:], r[:n], r[n:]
+
+
+def _add_violated(at_lo: np.ndarray, at_up: np.ndarray, violated: tuple, gaps: tuple, cycling: bool) -> None:
+    """Add the violated bounds to the active set in place: all of them, or (``cycling``) the most violated one only.
+    ``violated`` = (masks of violated lower, upper bounds), ``gaps`` = (lo - Cz, Cz - up)."""
+    viol_lo, viol_up = violated
+    if not cycling:
+        at_lo |= viol_lo
+        at_up |= viol_up
+        return
+    gap = np.maximum(np.where(viol_lo, gaps[0], -np.inf), np.where(viol_up, gaps[1], -np.inf))
+    i = int(np.argmax(gap))
+    if viol_lo[i]:
+        at_lo[i] = True
+    else:
+        at_up[i] = True
 
 
 def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, max_iter: int = 1000) -> np.ndarray | None:
