@@ -241,6 +241,24 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     Unknown keys raise :class:`~qprr.errors.UnknownNameError`; a position farther than 10 m from B
     or an axis whose norm is not 1 (to 1e-3) raises :class:`~qprr.errors.InputError` (units, typos).
     """
+    defaults, entries = _checked_description(desc)
+    out = []
+    for i, entry in enumerate(entries):
+        if not isinstance(entry, Mapping):
+            raise InputError(f"rotor {i + 1} of the description must be a table (mapping), got {entry!r}")
+        bad = set(entry) - _ROTOR_KEYS
+        if bad:
+            raise UnknownNameError(f"key of rotor {i + 1}", sorted(bad)[0], tuple(sorted(_ROTOR_KEYS)))
+        e = {**defaults, **entry}
+        spin = _entry_spin(e, i)
+        pos, axis = _entry_placement(e, i, frame_positions)
+        name = str(e.get("name", e.get("frame", f"rotor_{i + 1}")))
+        out.append(Rotor(tuple(pos), tuple(axis), spin, e.get("kappa", 0.0), e.get("f_min", 0.0), e.get("f_max", math.inf), name, e.get("radius")))
+    return tuple(out)
+
+
+def _checked_description(desc) -> tuple[dict, Sequence]:
+    """(defaults, rotor entries) of a rotor description, its top-level keys checked (:func:`rotors_from_mapping`)."""
     if not isinstance(desc, Mapping):
         raise InputError(f"a rotor description must be a mapping, got {type(desc).__name__}")
     unknown = set(desc) - {"base_link", "defaults", "rotor", "motor"}  # "motor": the actuator stage's data (qprr.sim.actuators)
@@ -258,62 +276,51 @@ def rotors_from_mapping(desc: Mapping, frame_positions: Mapping[str, tuple] | No
     entries = desc.get("rotor")
     if not entries or isinstance(entries, Mapping) or not isinstance(entries, (list, tuple)):
         raise InputError(f"a rotor description needs a non-empty list 'rotor' of tables (in TOML: one [[rotor]] per rotor), got {entries!r}")
-    out = []
-    for i, entry in enumerate(entries):
-        if not isinstance(entry, Mapping):
-            raise InputError(f"rotor {i + 1} of the description must be a table (mapping), got {entry!r}")
-        bad = set(entry) - _ROTOR_KEYS
-        if bad:
-            raise UnknownNameError(f"key of rotor {i + 1}", sorted(bad)[0], tuple(sorted(_ROTOR_KEYS)))
-        e = {**defaults, **entry}
-        if "spin" not in e:
-            raise InputError(f'rotor {i + 1} needs \'spin\': "cw" (+1: reaction torque along +axis) or "ccw" (-1)')
-        spin = e.get("spin")
-        if isinstance(spin, str):
-            if spin.lower() not in ("cw", "ccw"):
-                raise UnknownNameError(f"spin of rotor {i + 1}", spin, ("cw", "ccw", "+1", "-1"))
-            spin = 1 if spin.lower() == "cw" else -1
-        if "frame" in e:
-            if frame_positions is None or e["frame"] not in frame_positions:
-                valid = tuple(frame_positions) if frame_positions else ()
-                raise UnknownNameError(f"frame of rotor {i + 1}", e["frame"], valid)
-            pos, axis = frame_positions[e["frame"]]
-        else:
-            if "position" not in e:
-                raise InputError(f"rotor {i + 1} needs 'position' (or 'frame')")
-            pos = _listed3(e["position"], f"rotor {i + 1} position [m]")
-            distance = math.hypot(*pos)
-            if distance > _MAX_ROTOR_DISTANCE:
-                raise InputError(
-                    f"rotor {i + 1} position {list(pos)} is {distance:.4g} m from B: positions are in metres "
-                    "(millimetres divided by 1000), in the frame of the URDF's root link"
-                )
-            if "quaternion_xyzw" in e and "axis" in e:
-                raise InputError(f"rotor {i + 1}: give 'axis' or 'quaternion_xyzw', not both")
-            if "quaternion_xyzw" in e:
-                q = e["quaternion_xyzw"]
-                if isinstance(q, (str, bytes, Mapping)) or not isinstance(q, Sequence) or len(q) != 4:
-                    raise InputError(f"rotor {i + 1} quaternion_xyzw must be a list of 4 numbers [x, y, z, w], got {q!r}")
-                axis = _quat_axis(q)
-            else:
-                axis = _listed3(e.get("axis", (0.0, 0.0, 1.0)), f"rotor {i + 1} axis")
-                norm = math.hypot(*axis)
-                if abs(norm - 1.0) > _AXIS_NORM_TOL:
-                    unit = [round(x / norm, 6) for x in axis] if norm > 0 else "a non-zero vector"
-                    raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction in B (here {unit})")
-        out.append(
-            Rotor(
-                tuple(pos),
-                tuple(axis),
-                spin,
-                e.get("kappa", 0.0),
-                e.get("f_min", 0.0),
-                e.get("f_max", math.inf),
-                str(e.get("name", e.get("frame", f"rotor_{i + 1}"))),
-                e.get("radius"),
-            )
+    return defaults, entries
+
+
+def _entry_spin(e: Mapping, i: int) -> int:
+    """The spin of rotor entry ``e`` (number i + 1): +1/-1 or "cw"/"ccw" (cw = +1)."""
+    if "spin" not in e:
+        raise InputError(f'rotor {i + 1} needs \'spin\': "cw" (+1: reaction torque along +axis) or "ccw" (-1)')
+    spin = e.get("spin")
+    if isinstance(spin, str):
+        if spin.lower() not in ("cw", "ccw"):
+            raise UnknownNameError(f"spin of rotor {i + 1}", spin, ("cw", "ccw", "+1", "-1"))
+        spin = 1 if spin.lower() == "cw" else -1
+    return spin
+
+
+def _entry_placement(e: Mapping, i: int, frame_positions: Mapping | None) -> tuple[tuple, tuple]:
+    """(position [m], unit thrust axis) in B of rotor entry ``e``: from its URDF frame, or its position with an axis or
+    a quaternion (:func:`rotors_from_mapping`)."""
+    if "frame" in e:
+        if frame_positions is None or e["frame"] not in frame_positions:
+            valid = tuple(frame_positions) if frame_positions else ()
+            raise UnknownNameError(f"frame of rotor {i + 1}", e["frame"], valid)
+        return frame_positions[e["frame"]]
+    if "position" not in e:
+        raise InputError(f"rotor {i + 1} needs 'position' (or 'frame')")
+    pos = _listed3(e["position"], f"rotor {i + 1} position [m]")
+    distance = math.hypot(*pos)
+    if distance > _MAX_ROTOR_DISTANCE:
+        raise InputError(
+            f"rotor {i + 1} position {list(pos)} is {distance:.4g} m from B: positions are in metres "
+            "(millimetres divided by 1000), in the frame of the URDF's root link"
         )
-    return tuple(out)
+    if "quaternion_xyzw" in e and "axis" in e:
+        raise InputError(f"rotor {i + 1}: give 'axis' or 'quaternion_xyzw', not both")
+    if "quaternion_xyzw" in e:
+        q = e["quaternion_xyzw"]
+        if isinstance(q, (str, bytes, Mapping)) or not isinstance(q, Sequence) or len(q) != 4:
+            raise InputError(f"rotor {i + 1} quaternion_xyzw must be a list of 4 numbers [x, y, z, w], got {q!r}")
+        return pos, _quat_axis(q)
+    axis = _listed3(e.get("axis", (0.0, 0.0, 1.0)), f"rotor {i + 1} axis")
+    norm = math.hypot(*axis)
+    if abs(norm - 1.0) > _AXIS_NORM_TOL:
+        unit = [round(x / norm, 6) for x in axis] if norm > 0 else "a non-zero vector"
+        raise InputError(f"rotor {i + 1} axis {list(axis)} has norm {norm:.6g}: give the unit thrust direction in B (here {unit})")
+    return pos, axis
 
 
 def read_rotor_file(path: str | Path) -> dict:
