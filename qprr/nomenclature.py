@@ -156,6 +156,58 @@ def _cylinder_inertia(mass: float, radius: float, length: float) -> tuple[float,
     return (ixx, ixx, 0.5 * mass * radius**2, 0.0, 0.0, 0.0)
 
 
+def _body(n_rot: int, body_mass, body_inertia, arm_length, body_height) -> tuple:
+    """(mass [kg], rotor distance l [m], inertia (ixx, iyy, izz, ixy, ixz, iyz) [kg m^2], height [m]) of the multirotor
+    body of :func:`build`: the given values checked, the defaults of its rotor count otherwise (a solid disc)."""
+    body_height = as_real(body_height, "body_height", positive=True, unit="m")
+    default_mass, default_l = _UAV_DEFAULTS[n_rot]
+    m_body = default_mass if body_mass is None else as_real(body_mass, "body_mass", positive=True, unit="kg")
+    l_rot = default_l if arm_length is None else as_real(arm_length, "arm_length", positive=True, unit="m")
+    if body_inertia is None:
+        ixx = m_body * (3.0 * l_rot**2 + body_height**2) / 12.0
+        return m_body, l_rot, (ixx, ixx, 0.5 * m_body * l_rot**2, 0.0, 0.0, 0.0), body_height
+    return m_body, l_rot, tuple(as_vector(body_inertia, 6, "body_inertia").tolist()), body_height
+
+
+def _arm(name: str, d, links, joint_names, link_names) -> list[tuple]:
+    """(LinkSpec, joint name, link name) per joint of the arm of :func:`build`, checked against the name's joints."""
+    n = len(d.joints)
+    if links is not None and (isinstance(links, str) or not all(isinstance(k, LinkSpec) for k in links)):
+        raise InputError(f"links must be a sequence of LinkSpec, got {links!r:.80}")
+    links = [LinkSpec(k) for k in d.joints] if links is None else list(links)
+    if len(links) != n or any(spec.kind != k for spec, k in zip(links, d.joints)):
+        raise InputError(f"{name!r} needs {n} links of kinds {d.joints!r}, got {[s.kind for s in links]}")
+    joint_names = list(joint_names) if joint_names is not None else [f"joint{i + 1}" for i in range(n)]
+    link_names = list(link_names) if link_names is not None else [f"link{i + 1}" for i in range(n)]
+    if len(joint_names) != n or len(link_names) != n:
+        raise InputError(f"joint_names and link_names need {n} entries each")
+    return list(zip(links, joint_names, link_names))
+
+
+def _arm_parts(arm: list[tuple], base_name: str, ee_name: str, mount_xyz: tuple, sign: float) -> list[str]:
+    """URDF links and joints of the arm (:func:`_arm`) from B's ``mount_xyz``, along +z (``sign`` 1) or -z, and the
+    end-effector frame at its tip."""
+    parts = []
+    parent, origin = base_name, tuple(mount_xyz)
+    for spec, jn, ln in arm:
+        lo, hi, eff, vel = _JOINT_DEFAULTS[spec.kind]
+        lo = lo if spec.lower is None else spec.lower
+        hi = hi if spec.upper is None else spec.upper
+        eff = eff if spec.effort is None else spec.effort
+        vel = vel if spec.velocity is None else spec.velocity
+        axis = spec.axis or ((1.0, 0.0, 0.0) if spec.kind == "P" else (0.0, 1.0, 0.0))
+        inertia = spec.inertia or _cylinder_inertia(spec.mass, spec.radius, spec.length)
+        com = spec.com or (0.0, 0.0, sign * spec.length / 2.0)
+        visual = ug.cylinder_visual(spec.radius, spec.length, (0.0, 0.0, sign * spec.length / 2.0), rgba=(0.3, 0.3, 0.3, 1.0))
+        parts.append(ug.link(ln, ug.inertial(spec.mass, com, inertia) + visual))
+        kind = "prismatic" if spec.kind == "P" else "revolute"
+        parts.append(ug.joint(jn, kind, parent, ln, origin, axis, (lo, hi, eff, vel)))
+        parent, origin = ln, (0.0, 0.0, sign * spec.length)
+    parts.append(ug.link(ee_name, ug.sphere_visual(0.015)))
+    parts.append(ug.joint(f"{ee_name}_fixed", "fixed", parent, ee_name, origin))
+    return parts
+
+
 def build(
     name: str = "Q-PRR",
     *,
@@ -205,76 +257,36 @@ def build(
     if layout is not None:
         as_name(layout, "layout", LAYOUTS, "rotor layout")
     layout = layout or d.layout or "plus"
-    body_height = as_real(body_height, "body_height", positive=True, unit="m")
+    if d.layout is not None and layout != d.layout:
+        raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
+    body = _body(n_rot, body_mass, body_inertia, arm_length, body_height)
     mount_xyz = tuple(as_vector(mount_xyz, 3, "mount_xyz").tolist())
     kappa = as_real(kappa, "kappa", nonnegative=True, unit="m")
     thrust_to_weight = as_real(thrust_to_weight, "thrust_to_weight", positive=True)
     f_min = as_real(f_min, "f_min", nonnegative=True, unit="N")
     tilt = as_real(tilt, "tilt", unit="rad")
     g = as_real(g, "g", positive=True, unit="m/s^2")
-    if body_mass is not None:
-        body_mass = as_real(body_mass, "body_mass", positive=True, unit="kg")
-    if arm_length is not None:
-        arm_length = as_real(arm_length, "arm_length", positive=True, unit="m")
-    if body_inertia is not None:
-        body_inertia = tuple(as_vector(body_inertia, 6, "body_inertia").tolist())
     if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
         raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
     base_name, ee_name = ug.xml_name(base_name, "base_name"), ug.xml_name(ee_name, "ee_name")
     if platform_name is not None:
         ug.xml_name(platform_name, "platform_name")
-    if links is not None and (isinstance(links, str) or not all(isinstance(k, LinkSpec) for k in links)):
-        raise InputError(f"links must be a sequence of LinkSpec, got {links!r:.80}")
-    if d.layout is not None and layout != d.layout:
-        raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
     if arm_direction not in ("up", "down"):
         raise InputError(f"arm_direction must be 'up' or 'down', got {arm_direction!r}")
-    n = len(d.joints)
-    if links is None:
-        links = [LinkSpec(k) for k in d.joints]
-    links = list(links)
-    if len(links) != n or any(spec.kind != k for spec, k in zip(links, d.joints)):
-        raise InputError(f"{name!r} needs {n} links of kinds {d.joints!r}, got {[s.kind for s in links]}")
-    default_mass, default_l = _UAV_DEFAULTS[n_rot]
-    m_body = default_mass if body_mass is None else float(body_mass)
-    l_rot = default_l if arm_length is None else float(arm_length)
-    if body_inertia is None:
-        ixx = m_body * (3.0 * l_rot**2 + body_height**2) / 12.0
-        body_inertia = (ixx, ixx, 0.5 * m_body * l_rot**2, 0.0, 0.0, 0.0)
-    joint_names = list(joint_names) if joint_names is not None else [f"joint{i + 1}" for i in range(n)]
-    link_names = list(link_names) if link_names is not None else [f"link{i + 1}" for i in range(n)]
-    if len(joint_names) != n or len(link_names) != n:
-        raise InputError(f"joint_names and link_names need {n} entries each")
-    sign = 1.0 if arm_direction == "up" else -1.0
-
+    arm = _arm(name, d, links, joint_names, link_names)
     parts = [
         ug.link(
             base_name,
-            ug.inertial(m_body, (0.0, 0.0, 0.0), body_inertia) + ug.cylinder_visual(0.3 * l_rot, 0.4 * body_height, rgba=(0.55, 0.63, 0.75, 1.0)),
+            ug.inertial(body[0], (0.0, 0.0, 0.0), body[2]) + ug.cylinder_visual(0.3 * body[1], 0.4 * body[3], rgba=(0.55, 0.63, 0.75, 1.0)),
         )
     ]
-    parent, origin = base_name, tuple(mount_xyz)
-    total_mass = m_body
-    for spec, jn, ln in zip(links, joint_names, link_names):
-        lo, hi, eff, vel = _JOINT_DEFAULTS[spec.kind]
-        lo = lo if spec.lower is None else spec.lower
-        hi = hi if spec.upper is None else spec.upper
-        eff = eff if spec.effort is None else spec.effort
-        vel = vel if spec.velocity is None else spec.velocity
-        axis = spec.axis or ((1.0, 0.0, 0.0) if spec.kind == "P" else (0.0, 1.0, 0.0))
-        inertia = spec.inertia or _cylinder_inertia(spec.mass, spec.radius, spec.length)
-        com = spec.com or (0.0, 0.0, sign * spec.length / 2.0)
-        visual = ug.cylinder_visual(spec.radius, spec.length, (0.0, 0.0, sign * spec.length / 2.0), rgba=(0.3, 0.3, 0.3, 1.0))
-        parts.append(ug.link(ln, ug.inertial(spec.mass, com, inertia) + visual))
-        kind = "prismatic" if spec.kind == "P" else "revolute"
-        parts.append(ug.joint(jn, kind, parent, ln, origin, axis, (lo, hi, eff, vel)))
-        parent, origin = ln, (0.0, 0.0, sign * spec.length)
+    total_mass = body[0]
+    for spec, _, _ in arm:  # summed in this order: f_max below is the same to the last bit as before
         total_mass += spec.mass
-    parts.append(ug.link(ee_name, ug.sphere_visual(0.015)))
-    parts.append(ug.joint(f"{ee_name}_fixed", "fixed", parent, ee_name, origin))
+    parts += _arm_parts(arm, base_name, ee_name, mount_xyz, 1.0 if arm_direction == "up" else -1.0)
     if rotors is None:
         f_max = thrust_to_weight * total_mass * g / n_rot
-        rotors = layout_rotors(n_rot, l_rot, layout, kappa=kappa, f_min=f_min, f_max=f_max, tilt=tilt)
+        rotors = layout_rotors(n_rot, body[1], layout, kappa=kappa, f_min=f_min, f_max=f_max, tilt=tilt)
     for k, r in enumerate(rotors):
         rn = f"rotor_{k + 1}"
         parts.append(ug.link(rn, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))))
