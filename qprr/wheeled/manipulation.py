@@ -434,6 +434,27 @@ def step_problem(robot: MobileManipulator, z, target, options=None, *, lookahead
     return StepProblem(levels, E, lo, up)
 
 
+def _apply_step(robot: MobileManipulator, z: np.ndarray, dz: np.ndarray, respect_constraint: bool):
+    """(z after the step dz, |A^T dq_base|_max of the QP's step, (|A^T applied|_max, |A^T applied|) of the step taken,
+    the base inputs u or None): with ``respect_constraint`` the base moves by the flow of the inputs that realise its
+    step (the constraint holds exactly), else by dz itself (the QP's rounding slips)."""
+    base, nb = robot.base, robot.n_base
+    A = base.A(z[0:nb])
+    dq_base = dz[0:nb]
+    r_qp = float(np.max(np.abs(A.T @ dq_base))) if A.size else 0.0
+    u = None
+    if respect_constraint:
+        u = base.inputs_of(z[0:nb], dq_base)
+        applied = base.B(z[0:nb]) @ u
+        z_base = base.flow(z[0:nb], u, 1.0)
+    else:
+        applied = dq_base
+        z_base = z[0:nb] + dq_base
+    r_app = (float(np.max(np.abs(A.T @ applied))), float(np.linalg.norm(A.T @ applied))) if A.size else (0.0, 0.0)
+    q_pin = pin.integrate(robot.model, robot.pin_q(z), np.concatenate([np.zeros(3), dz[nb:]]))
+    return np.concatenate([z_base, q_pin[3:]]), r_qp, r_app, u
+
+
 def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResult:
     """Move the end effector to ``target`` (world position [m]) from z0 (see the module docstring).
 
@@ -449,7 +470,7 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
     z = robot.check_z(z0, "z0").copy()
     if not robot.within_limits(z):
         raise LimitError(f"z0 {z.tolist()} is outside the limits (steering and arm joints)")
-    base, nb = robot.base, robot.n_base
+    base = robot.base
     solver, lookahead = step_solver(robot, opts), lookahead_solver(robot, opts)
     t0 = time.perf_counter()
     path, errs, qp_res, app_res, inputs = [z.copy()], [], [], [], []
@@ -469,23 +490,12 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
         except SolverError as err:
             status, reason, it = IKStatus.SOLVER_ERROR, str(err), it - 1
             break
-        A = base.A(z[0:nb])
-        dq_base = dz[0:nb]
-        r_qp = float(np.max(np.abs(A.T @ dq_base))) if A.size else 0.0
-        if opts.respect_constraint:
-            u = base.inputs_of(z[0:nb], dq_base)
-            applied = base.B(z[0:nb]) @ u
-            z_base = base.flow(z[0:nb], u, 1.0)
+        z, r_qp, r_app, u = _apply_step(robot, z, dz, opts.respect_constraint)
+        if u is not None:
             inputs.append(u)
-        else:
-            applied = dq_base
-            z_base = z[0:nb] + dq_base
-        r_app = float(np.max(np.abs(A.T @ applied))) if A.size else 0.0
-        slip += float(np.linalg.norm(A.T @ applied)) if A.size else 0.0
-        q_pin = pin.integrate(robot.model, robot.pin_q(z), np.concatenate([np.zeros(3), dz[nb:]]))
-        z = np.concatenate([z_base, q_pin[3:]])
+        slip += r_app[1]
         qp_res.append(r_qp)
-        app_res.append(r_app)
+        app_res.append(r_app[0])
         path.append(z.copy())
         p = robot.ee_position(z)
         errs.append(float(np.linalg.norm(p_t - p)))
