@@ -208,6 +208,46 @@ def _arm_parts(arm: list[tuple], base_name: str, ee_name: str, mount_xyz: tuple,
     return parts
 
 
+def _layout(name: str, d, layout) -> str:
+    """The rotor layout of :func:`build`: the one given (checked against the name's), else the name's, else "plus"."""
+    if layout is not None:
+        as_name(layout, "layout", LAYOUTS, "rotor layout")
+    layout = layout or d.layout or "plus"
+    if d.layout is not None and layout != d.layout:
+        raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
+    return layout
+
+
+def _ring_settings(kappa, thrust_to_weight, f_min, tilt, g) -> tuple[float, float, float, float, float]:
+    """The rotor ring's settings of :func:`build` checked: kappa [m], thrust-to-weight ratio, f_min [N], tilt [rad],
+    g [m/s^2]."""
+    return (
+        as_real(kappa, "kappa", nonnegative=True, unit="m"),
+        as_real(thrust_to_weight, "thrust_to_weight", positive=True),
+        as_real(f_min, "f_min", nonnegative=True, unit="N"),
+        as_real(tilt, "tilt", unit="rad"),
+        as_real(g, "g", positive=True, unit="m/s^2"),
+    )
+
+
+def _names_and_direction(base_name: str, ee_name: str, platform_name, arm_direction: str) -> tuple[str, str, float]:
+    """(base name, end-effector name, +1 for an arm along +z "up" or -1 "down") of :func:`build`, checked."""
+    base_name, ee_name = ug.xml_name(base_name, "base_name"), ug.xml_name(ee_name, "ee_name")
+    if platform_name is not None:
+        ug.xml_name(platform_name, "platform_name")
+    if arm_direction not in ("up", "down"):
+        raise InputError(f"arm_direction must be 'up' or 'down', got {arm_direction!r}")
+    return base_name, ee_name, 1.0 if arm_direction == "up" else -1.0
+
+
+def _rotor_parts(name: str, rotor: Rotor, base_name: str) -> list[str]:
+    """URDF link (a propeller disc) and fixed joint of one rotor frame in B, its z axis along the thrust."""
+    return [
+        ug.link(name, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))),
+        ug.joint(f"{name}_fixed", "fixed", base_name, name, rotor.position_body, rpy=ug.rpy_of_axis(rotor.axis_body)),
+    ]
+
+
 def build(
     name: str = "Q-PRR",
     *,
@@ -254,25 +294,13 @@ def build(
     d = parse(name)
     _check_buildable(d)
     n_rot = UAV_ROTORS[d.uav]
-    if layout is not None:
-        as_name(layout, "layout", LAYOUTS, "rotor layout")
-    layout = layout or d.layout or "plus"
-    if d.layout is not None and layout != d.layout:
-        raise InputError(f"{name!r} names the {d.layout!r} layout but layout={layout!r} was given")
+    layout = _layout(name, d, layout)
     body = _body(n_rot, body_mass, body_inertia, arm_length, body_height)
     mount_xyz = tuple(as_vector(mount_xyz, 3, "mount_xyz").tolist())
-    kappa = as_real(kappa, "kappa", nonnegative=True, unit="m")
-    thrust_to_weight = as_real(thrust_to_weight, "thrust_to_weight", positive=True)
-    f_min = as_real(f_min, "f_min", nonnegative=True, unit="N")
-    tilt = as_real(tilt, "tilt", unit="rad")
-    g = as_real(g, "g", positive=True, unit="m/s^2")
+    kappa, thrust_to_weight, f_min, tilt, g = _ring_settings(kappa, thrust_to_weight, f_min, tilt, g)
     if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
         raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
-    base_name, ee_name = ug.xml_name(base_name, "base_name"), ug.xml_name(ee_name, "ee_name")
-    if platform_name is not None:
-        ug.xml_name(platform_name, "platform_name")
-    if arm_direction not in ("up", "down"):
-        raise InputError(f"arm_direction must be 'up' or 'down', got {arm_direction!r}")
+    base_name, ee_name, sign = _names_and_direction(base_name, ee_name, platform_name, arm_direction)
     arm = _arm(name, d, links, joint_names, link_names)
     parts = [
         ug.link(
@@ -283,14 +311,12 @@ def build(
     total_mass = body[0]
     for spec, _, _ in arm:  # summed in this order: f_max below is the same to the last bit as before
         total_mass += spec.mass
-    parts += _arm_parts(arm, base_name, ee_name, mount_xyz, 1.0 if arm_direction == "up" else -1.0)
+    parts += _arm_parts(arm, base_name, ee_name, mount_xyz, sign)
     if rotors is None:
         f_max = thrust_to_weight * total_mass * g / n_rot
         rotors = layout_rotors(n_rot, body[1], layout, kappa=kappa, f_min=f_min, f_max=f_max, tilt=tilt)
-    for k, r in enumerate(rotors):
-        rn = f"rotor_{k + 1}"
-        parts.append(ug.link(rn, ug.cylinder_visual(0.127, 0.005, rgba=(0.2, 0.6, 0.2, 0.5))))
-        parts.append(ug.joint(f"{rn}_fixed", "fixed", base_name, rn, r.position_body, rpy=ug.rpy_of_axis(r.axis_body)))
+    for k, r in enumerate(rotors):  # a frame per rotor: its z axis is the thrust axis
+        parts += _rotor_parts(f"rotor_{k + 1}", r, base_name)
     text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
     prov = {
         "design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
