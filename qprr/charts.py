@@ -393,7 +393,7 @@ class State:
 
     Attributes (set by :meth:`update` / :meth:`set_from_xi`; read them, do not assign them): ``t`` [s];
     ``q`` (7 + n,), ``v`` (6 + n,) Pinocchio; ``xi``, ``xi_dot`` (6 + n,) thesis; ``sf``, ``cf``, ``st``,
-    ``ct``: sin/cos of phi and theta; ``n_arm`` arm joints (default 3, the Q-PRR's); and, for controllers
+    ``ct``: sin/cos of phi and theta; ``n_arm`` arm joints (``State(platform.n_arm)``); and, for controllers
     that compute on plain floats, the same values as tuples of Python floats: ``xi_floats``,
     ``xi_dot_floats``, ``rotation_floats`` (R_b row-major: r00, r01, r02, r10, ..., r22) and
     ``u_applied_floats``.
@@ -434,9 +434,9 @@ class State:
         "_wv",
     )
 
-    def __init__(self, n_arm: int = 3) -> None:
+    def __init__(self, n_arm: int) -> None:
         if not (isinstance(n_arm, (int, np.integer)) and n_arm >= 0):
-            raise InputError(f"n_arm must be an integer >= 0, got {n_arm!r}")
+            raise InputError(f"n_arm must be an integer >= 0 (the platform's platform.n_arm), got {n_arm!r}")
         n = 6 + int(n_arm)
         self.n_arm = int(n_arm)
         self.t = 0.0

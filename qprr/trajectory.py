@@ -349,9 +349,9 @@ class Spiral:
 
 @dataclass(frozen=True)
 class Hold:
-    """Constant reference ``xi`` (6 + n_arm values; hover tests)."""
+    """Constant reference ``xi`` (6 + n_arm values, e.g. ``Hold(platform.neutral_xi())``: hover tests)."""
 
-    xi: tuple[float, ...] = (0.0,) * 9
+    xi: tuple[float, ...]
     name: str = field(default="hold", compare=False)
 
     def __post_init__(self) -> None:

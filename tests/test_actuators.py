@@ -50,7 +50,7 @@ def test_motor_lag_step_response_has_the_stated_time_constant():
     w0 = np.full(4, 400.0)
     f_c = np.array([9.0, 10.0, 11.0, 12.0])
     act = RotorDynamics.for_rotors(PLATFORM.rotors, B, T, initial=tuple(w0))
-    res = simulate(PLATFORM, _Thrusts(PLATFORM, f_c), Hold(), 0.05, dt=1e-4, integrator="rk4", actuators=act, joint_stops=False)
+    res = simulate(PLATFORM, _Thrusts(PLATFORM, f_c), Hold((0.0,) * 9), 0.05, dt=1e-4, integrator="rk4", actuators=act, joint_stops=False)
     w = res.series["rotor_speed"]
     w_c = np.sqrt(f_c / B)
     exact = act.step_response(res.t, w0, w_c)
@@ -68,7 +68,7 @@ def test_speed_saturation_caps_the_thrust():
     res = simulate(
         PLATFORM,
         _Thrusts(PLATFORM, np.array([19.0, 19.0, 19.0, 19.0])),
-        Hold(),
+        Hold((0.0,) * 9),
         0.1,
         dt=1e-4,
         integrator="rk4",
@@ -83,7 +83,7 @@ def test_speed_saturation_caps_the_thrust():
 def test_start_at_the_command_is_steady():
     """initial="command": the rotors start at the first command, so a constant command leaves them there."""
     f_c = np.full(4, 8.0)
-    res = simulate(PLATFORM, _Thrusts(PLATFORM, f_c), Hold(), 0.02, actuators=rotor_dynamics("q-prr"), joint_stops=False)
+    res = simulate(PLATFORM, _Thrusts(PLATFORM, f_c), Hold((0.0,) * 9), 0.02, actuators=rotor_dynamics("q-prr"), joint_stops=False)
     np.testing.assert_allclose(res.series["rotor_speed"], np.sqrt(8.0 / B), rtol=1e-14)
 
 
@@ -91,7 +91,9 @@ def test_start_hovering_holds_the_initial_configuration():
     """initial="hover": the rotors start at the speeds whose thrusts b w^2 carry the weight (CoG on the thrust axis: m g / 4
     each), whatever the controller's first command."""
     act = rotor_dynamics("q-prr", initial="hover")
-    res = simulate(PLATFORM, _Thrusts(PLATFORM, np.zeros(4)), Hold(), 0.003, actuators=act, joint_stops=False, xi0=np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0])
+    res = simulate(
+        PLATFORM, _Thrusts(PLATFORM, np.zeros(4)), Hold((0.0,) * 9), 0.003, actuators=act, joint_stops=False, xi0=np.r_[0, 0, 5, 0, 0, 0, 0, 0, 0]
+    )
     np.testing.assert_allclose(res.f[0], PLATFORM.total_mass * PLATFORM.g / 4, rtol=1e-12)
     assert res.series["rotor_speed"][1, 0] < res.series["rotor_speed"][0, 0]  # then they spin down to the zero command
 
@@ -112,9 +114,9 @@ def test_validation():
             actuators=rotor_dynamics("q-prr"),
         )
     with pytest.raises(InputError, match="motor time constant"):
-        simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(), 0.1, dt=1e-2, actuators=rotor_dynamics("q-prr"))
+        simulate(PLATFORM, make_controller("idc", PLATFORM), Hold((0.0,) * 9), 0.1, dt=1e-2, actuators=rotor_dynamics("q-prr"))
     with pytest.raises(InputError, match="RotorDynamics"):
-        simulate(PLATFORM, make_controller("idc", PLATFORM), Hold(), 0.1, actuators="on")
+        simulate(PLATFORM, make_controller("idc", PLATFORM), Hold((0.0,) * 9), 0.1, actuators="on")
     with pytest.raises(InputError, match="no motor data"):
         rotor_dynamics("hextilt_flying_arm_5")
     with pytest.raises(UnknownNameError, match="motor key"):

@@ -326,3 +326,20 @@ def test_state_rejects_bad_sizes():
         co.State(-1)
     with pytest.raises(ShapeError, match="u_applied"):
         co.State(2).u_applied = np.zeros(9)
+
+
+def test_state_and_hold_need_the_platform_size():
+    """No Q-PRR-sized defaults: State and Hold take the arm size / the reference from the platform."""
+    import qprr
+    from qprr.trajectory import Hold
+
+    p = qprr.build("HEX-RRR")
+    state = co.State(p.n_arm)
+    assert state.xi.shape == (p.n_xi,)
+    assert np.array_equal(Hold(p.neutral_xi()).sample(0.5).xi[0], p.neutral_xi())
+    with pytest.raises(TypeError):
+        co.State()
+    with pytest.raises(TypeError):
+        Hold()
+    with pytest.raises(InputError, match="platform.n_arm"):
+        co.State(-1)

@@ -38,7 +38,7 @@ from tests.conftest import random_xi
 # ----------------------------------------------------------------------------- coordinate maps
 def test_state_maps_match_coordinates(robot):
     rng = np.random.default_rng(1)
-    st = State()
+    st = State(3)
     for _ in range(200):
         xi = random_xi(rng, robot)
         xi_dot, xi_ddot, tau = rng.normal(size=(3, 9))
@@ -50,7 +50,7 @@ def test_state_maps_match_coordinates(robot):
         S = co.rate_map(xi)
         np.testing.assert_allclose(st.force_to_xi(tau), S.T @ tau, atol=1e-10)
         np.testing.assert_allclose(st.force_from_xi(S.T @ tau), tau, atol=1e-8)
-        st2 = State()
+        st2 = State(3)
         st2.update_xi(0.0, xi, xi_dot)
         np.testing.assert_allclose(st2.v, v, atol=1e-10)
         np.testing.assert_allclose(pin.difference(robot.model, st2.q, q), 0.0, atol=1e-10)
@@ -121,7 +121,7 @@ def test_mfc_alpha_choice_and_the_naive_one(robot):
 
 
 def _state_at(xi, xi_dot=None):
-    st = State()
+    st = State(3)
     q, v = co.xi_to_qv(xi, np.zeros(9) if xi_dot is None else xi_dot)
     st.update(0.0, q, v)
     return st

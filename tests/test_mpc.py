@@ -143,7 +143,7 @@ def _node(ctrl, backend: str, terminal: bool = False):
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_node_derivatives_match_finite_differences_on_the_manifold(platform, backend):
     """Fx, Fu (semi-implicit Euler of ABA) and Lx, Lu of one node against central differences (every residual active)."""
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, integrator="euler"), weights=WITH_COG)
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2, integrator="euler"), weights=WITH_COG)
     dam, refs, st = _node(ctrl, backend)
     iam = crocoddyl.IntegratedActionModelEuler(dam, ctrl.h)
     rng = np.random.default_rng(3)
@@ -254,7 +254,7 @@ def test_native_node_equals_the_python_reference_at_random_states(name, terminal
 def test_native_cog_residual_equals_the_thesis_offset():
     """The native CoG term: its residual is cog_offset_body (Thesis (3.78)) and its Jacobian the finite difference on the manifold."""
     pf = qprr.load()
-    ctrl = mpc.MPCController(pf, Hold(), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
+    ctrl = mpc.MPCController(pf, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2), weights=WITH_COG)
     node = NativeNode(crocoddyl.StateMultibody(ctrl.model), ctrl.actuation, ctrl.node_spec(False))
     d = node.dam.createData()
     st = LieState(ctrl.model)
@@ -276,15 +276,15 @@ def test_native_cog_residual_equals_the_thesis_offset():
 def test_backend_follows_the_self_test(platform):
     """auto: native when crocoddyl's compiled models passed their self-test, else the Python models; 'native' on an
     inconsistent pair raises with the fix command; 'python' always works.  The self-test itself: gravity at rest."""
-    auto = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2))
+    auto = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2))
     assert auto.backend == ("python" if mpc.NATIVE_PROBLEM else "native")
-    assert mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="python")).backend == "python"
+    assert mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2, backend="python")).backend == "python"
     if mpc.NATIVE_PROBLEM:
         assert "not gravity" in mpc.NATIVE_PROBLEM
         with pytest.raises(InputError, match=r"pin==4\.0"):
-            mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native"))
+            mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2, backend="native"))
     else:
-        assert mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2, backend="native")).backend == "native"
+        assert mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2, backend="native")).backend == "native"
     assert auto.problem.nthreads == 1  # the default: one thread
     with pytest.raises(UnknownNameError, match="backend"):
         mpc.MPCSettings(backend="cpp")
@@ -303,7 +303,7 @@ with warnings.catch_warnings(record=True) as caught:
     import qprr.control.mpc as mpc_again
 import qprr
 from qprr.trajectory import Hold
-ctrl = mpc.MPCController(qprr.load(), Hold(), settings=mpc.MPCSettings(horizon=2))
+ctrl = mpc.MPCController(qprr.load(), Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2))
 msgs = [str(w.message) for w in caught if issubclass(w.category, RuntimeWarning)]
 print(len(msgs), ctrl.backend, ctrl.stats().backend)
 print(msgs[0])
@@ -384,7 +384,7 @@ def test_mpc_first_control_agrees_with_lqr_when_no_bound_is_active(platform):
     linearly with s (halving s halves it) and is below 1 % here.
     """
     settings = mpc.MPCSettings(horizon=15, integrator="euler", first_max_iter=200, th_stop=1e-16)
-    ctrl = mpc.MPCController(platform, Hold(), settings=settings)
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=settings)
     x_eq = np.concatenate([platform.neutral_q(), np.zeros(9)])
     u_eq = np.r_[Allocator(platform).hover_thrusts(), 0.0, 0.0, 0.0]
     np.testing.assert_allclose(
@@ -410,7 +410,7 @@ def test_mpc_first_control_agrees_with_lqr_when_no_bound_is_active(platform):
 def test_mpc_tracks_like_the_exact_inverse_dynamics_at_hover(platform):
     """Near hover with no bound active the MPC's first control, like the ID reference u_ref = W^+ RNEA(x_ref, a_ref),
     gives the reference acceleration when the state is on the reference: u_0 = u_ref to the solver tolerance."""
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=10, th_stop=1e-14, first_max_iter=100))
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=10, th_stop=1e-14, first_max_iter=100))
     xi = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
     ctrl.set_preview(Hold(tuple(xi)))
     q, v = xi_to_qv(xi, np.zeros(9))
@@ -448,7 +448,7 @@ def test_planned_thrusts_never_leave_the_bounds_and_the_allocator_applies_them(p
 
 
 def test_zero_order_hold_between_solves(platform):
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=50.0, horizon=5))
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(rate=50.0, horizon=5))
     q = platform.neutral_q()
     q[2] = 0.1
     s = _state(q, np.zeros(9))
@@ -477,7 +477,7 @@ class _FailingSolver:
 
 def test_failed_solves_fall_back_to_the_previous_plan_then_hover(platform):
     N = 6
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=N))
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=N))
     q = platform.neutral_q()
     q[0] = 0.05
     q[8] = 0.2
@@ -500,7 +500,7 @@ def test_failed_solves_fall_back_to_the_previous_plan_then_hover(platform):
 
 
 def test_a_nan_measurement_is_a_failed_solve_not_a_crash(platform):
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=5))
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=5))
     q = platform.neutral_q()
     s = _state(q, np.zeros(9))
     ctrl.reset(s, Reference(), 1e-2)
@@ -518,10 +518,10 @@ def test_a_nan_measurement_is_a_failed_solve_not_a_crash(platform):
 # ------------------------------------------------------------------------------ validation
 def test_bad_platform_and_settings_are_rejected(platform):
     with pytest.raises(InputError, match="qprr Platform"):
-        mpc.MPCController(object(), Hold())
+        mpc.MPCController(object(), Hold((0.0,) * 9))
     unbounded = platform.replace(rotors=tuple(dataclasses.replace(r, f_max=float("inf")) for r in platform.rotors))
     with pytest.raises(InputError, match="finite f_max"):
-        mpc.MPCController(unbounded, Hold())
+        mpc.MPCController(unbounded, Hold((0.0,) * 9))
     with pytest.raises(InputError, match="sample"):
         mpc.MPCController(platform, object())
     with pytest.raises(UnknownNameError, match="integrator"):
@@ -532,11 +532,11 @@ def test_bad_platform_and_settings_are_rejected(platform):
         mpc.MPCSettings(threads=0)
     with pytest.raises(InputError, match="cog"):
         mpc.MPCWeights(cog=-1.0)
-    ctrl = mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(rate=300.0, horizon=2))
+    ctrl = mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(rate=300.0, horizon=2))
     with pytest.raises(InputError, match="whole number of simulator steps"):
-        ctrl.reset(State(), Reference(), 1e-3)
+        ctrl.reset(State(3), Reference(), 1e-3)
     with pytest.raises(InputError, match="before step"):
-        mpc.MPCController(platform, Hold(), settings=mpc.MPCSettings(horizon=2)).step(0.0, State(), Reference())
+        mpc.MPCController(platform, Hold((0.0,) * 9), settings=mpc.MPCSettings(horizon=2)).step(0.0, State(3), Reference())
 
 
 def test_cli_simulate_prints_the_solve_statistics(capsys):

@@ -286,7 +286,9 @@ def test_runaway_names_the_state(free_robot):
     """No gravity, no input, 10 m/s along x: the position bound stops the run and says which coordinate."""
     zero = OpenLoop(np.zeros(9))
     with pytest.raises(DivergenceError, match=r"t = 2\.0\d\d s: position x") as err:
-        simulate(free_robot, zero, Hold(), 5.0, xi_dot0=np.r_[10.0, 0, 0, 0, 0, 0, 0, 0, 0], limits=Limits(position=20.0), integrator="midpoint")
+        simulate(
+            free_robot, zero, Hold((0.0,) * 9), 5.0, xi_dot0=np.r_[10.0, 0, 0, 0, 0, 0, 0, 0, 0], limits=Limits(position=20.0), integrator="midpoint"
+        )
     assert err.value.result.status == "diverged"
 
 
@@ -297,7 +299,7 @@ def test_velocity_runaway_is_reported_at_the_tick_it_happened(free_robot):
     m = free_robot.params.total_mass
     push = OpenLoop(np.r_[0, 0, 2.0 * m, 0, 0, 0, 0, 0, 0])  # about 2 m/s^2 up
     with pytest.raises(DivergenceError, match=r"diverged at t = (\d\.\d{3}) s: velocity v_z = ") as err:
-        simulate(free_robot, push, Hold(), 3.0, limits=Limits(linear_velocity=1.0), integrator="midpoint")
+        simulate(free_robot, push, Hold((0.0,) * 9), 3.0, limits=Limits(linear_velocity=1.0), integrator="midpoint")
     t_report = float(err.value.args[0].split("t = ")[1].split(" s")[0])
     res = err.value.result
     assert res.status == "diverged" and t_report == pytest.approx(res.n * 1e-3, abs=1e-9)
@@ -459,15 +461,15 @@ def test_noise_is_seeded_and_bounded_and_pulses_are_timed():
 def test_bad_simulation_arguments(robot):
     ctrl = OpenLoop(np.zeros(9))
     with pytest.raises(UnknownNameError, match="midpoint"):
-        simulate(robot, ctrl, Hold(), 1.0, integrator="verlet")
+        simulate(robot, ctrl, Hold((0.0,) * 9), 1.0, integrator="verlet")
     with pytest.raises(InputError):
-        simulate(robot, ctrl, Hold(), 1.0, dt=-1.0, integrator="midpoint")
+        simulate(robot, ctrl, Hold((0.0,) * 9), 1.0, dt=-1.0, integrator="midpoint")
     with pytest.raises(InputError):
-        simulate(robot, object(), Hold(), 1.0, integrator="midpoint")
+        simulate(robot, object(), Hold((0.0,) * 9), 1.0, integrator="midpoint")
 
 
 def test_progress_bar_on_stderr(robot, capsys):
-    simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold(), 0.2, progress=True, integrator="midpoint")
+    simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold((0.0,) * 9), 0.2, progress=True, integrator="midpoint")
     err = capsys.readouterr().err  # capsys's stderr is no terminal: plain lines, the last at 100 %
     assert "\r" not in err and "custom/open-loop: 200/200 (100%)" in err.splitlines()[-1]
 
@@ -520,11 +522,11 @@ def test_a_run_whose_logs_cannot_fit_is_refused_before_allocating(robot):
     size, at once (no MemoryError); the same with an explicit, small bound on the logs."""
     ctrl = OpenLoop(np.zeros(9))
     with pytest.raises(InputError, match=r"duration = 1000000000000\.0 s .*dt = 0\.001 s.* 1e\+15 control ticks.* EiB") as err:
-        simulate(robot, ctrl, Hold(), 1e12)
+        simulate(robot, ctrl, Hold((0.0,) * 9), 1e12)
     assert "max_log_bytes" in str(err.value)
     with pytest.raises(InputError, match=r"duration = 20\.0 s .*control period of 0\.004 s.*MiB, more than the 1 MiB allowed"):
-        simulate(robot, ctrl, Hold(), 20.0, control_period=4e-3, max_log_bytes=2**20)
-    res = simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold(), 0.1, max_log_bytes=2**20)  # 100 ticks fit
+        simulate(robot, ctrl, Hold((0.0,) * 9), 20.0, control_period=4e-3, max_log_bytes=2**20)
+    res = simulate(robot, OpenLoop(_hover_u(robot, np.zeros(9))), Hold((0.0,) * 9), 0.1, max_log_bytes=2**20)  # 100 ticks fit
     assert res.n == 100
     with pytest.raises(InputError, match="duration must be a number of seconds >= the control period"):
-        simulate(robot, ctrl, Hold(), 1e-4)
+        simulate(robot, ctrl, Hold((0.0,) * 9), 1e-4)

@@ -128,7 +128,7 @@ def test_runaway_rate_names_time_and_variable():
     I_zz = data.Ig.inertia[2, 2]
     t_star = 2.0 * I_zz / 0.5
     with pytest.raises(DivergenceError) as err:
-        simulate(free, OpenLoop(np.zeros(9)), Hold(), 1.0, disturbance=_Spin(0.5), limits=Limits(angular_velocity=2.0))
+        simulate(free, OpenLoop(np.zeros(9)), Hold((0.0,) * 9), 1.0, disturbance=_Spin(0.5), limits=Limits(angular_velocity=2.0))
     m = re.fullmatch(r"diverged at t = (\d+\.\d{3}) s: velocity omega_z = (\S+) \(bound 2\.0\)", str(err.value))
     assert m, str(err.value)
     t_stop, omega = float(m.group(1)), float(m.group(2))

@@ -197,7 +197,7 @@ def test_friction_dissipates_energy_of_a_free_swinging_arm():
     res = simulate(
         pf,
         _Off(),
-        Hold(),
+        Hold((0.0,) * 9),
         0.3,
         xi0=np.r_[0, 0, 100, 0, 0, 0, 0.0, 0.2, -0.2],
         xi_dot0=np.r_[0, 0, 0, 0, 0, 0, 0.02, 1.0, -2.0],
