@@ -667,3 +667,46 @@ def test_exact_active_set_step_equals_the_proxqp_step(seed):
     b = qprr.ik.HierarchySolver(rob, active_set_first=False, max_qp_iter=100000)
     sa, sb = a.solve(rob, dat, q, full), b.solve(rob, dat, q, full)
     assert np.abs(sa.dv - sb.dv).max() <= 1e-7 * (1 + np.abs(sb.dv).max())
+
+
+def test_task_error_equals_the_linearized_error(rob, dat):
+    """Task.error (asked first by the hierarchy's first step) is bit for bit the e of Task.linearize, for every built-in
+    task, weighted or not, at tilted, level and near upside-down configurations."""
+    rng = np.random.default_rng(21)
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(random_hover_xi(rng, rob)))
+    made = [
+        tasks.PoseTask(rob, M_d),
+        tasks.PoseTask(rob, M_d, weights=(1, 2, 3, 4, 5, 6)),
+        tasks.PositionTask(rob, M_d.translation, weights=(2, 1, 3)),
+        tasks.BaseOrientationTask(rob, M_d.rotation),
+        tasks.HoverTask(),
+        tasks.ComTask((0.001, -0.002), weights=(1, 4)),
+        tasks.PostureTask(rob, [0.0, 0.1, -0.1]),
+    ]
+    for k in range(30):
+        xi = random_hover_xi(rng, rob)
+        xi[3:5] = (0.0, 0.0) if k % 3 == 0 else ((math.pi - 1e-7, 1e-8) if k % 3 == 1 else rng.uniform(-1.0, 1.0, 2))
+        q = co.xi_to_q(xi)
+        tasks.update_kinematics(rob, dat, q)
+        for task in made:
+            np.testing.assert_array_equal(task.error(rob, dat, q), task.linearize(rob, dat, q)[1])
+
+
+def test_custom_task_is_linearized_once_per_step(rob, dat):
+    """A task without its own ``error`` is linearised once per hierarchy step, not twice (custom levels are validated at
+    the first step, where the error-first shortcut is not taken)."""
+    calls = []
+
+    class Counted(tasks.PostureTask):
+        def linearize(self, platform, data, q):
+            calls.append(1)
+            return super().linearize(platform, data, q)
+
+        error = tasks.Task.error
+
+    rng = np.random.default_rng(5)
+    M_d = kin.ee_placement(rob, dat, co.xi_to_q(random_hover_xi(rng, rob)))
+    levels = [[tasks.PoseTask(rob, M_d)], [tasks.HoverTask()], [tasks.ComTask()], [Counted(rob, [0.0, 0.0, 0.0])]]
+    res = qprr.ik.IKSolver(rob, "qp", {"levels": levels}).solve(dat, M_d)
+    assert res.success and res.iterations >= 2
+    assert len(calls) <= res.iterations + 1  # one per step, and the level errors at the returned q

@@ -30,7 +30,8 @@ MET = 1e-14
 
 @dataclass(frozen=True)
 class HierarchyStep:
-    """One solve of the hierarchy: the step dv, the linearised levels (J_k, e_k), ProxQP iterations,
+    """One solve of the hierarchy: the step dv, the linearised levels (J_k, e_k; J_k None when every level was met
+    and dv = 0 needed no Jacobian), ProxQP iterations,
     ``dv_levels[k]`` the optimum of levels 1..k (``dv_first`` = ``dv_levels[0]``, the step of level 1
     alone), ``damping[k]`` the damping each level's QP added to the regularisation."""
 
@@ -47,7 +48,7 @@ class HierarchyStep:
     @property
     def residuals(self) -> tuple[float, ...]:
         """||J_k dv - e_k|| per level: what is left of each task after the step (linear model)."""
-        return tuple(math.sqrt(float((J @ self.dv - e) @ (J @ self.dv - e))) for J, e in self.linearized)
+        return tuple(math.sqrt(float(e @ e)) if J is None else math.sqrt(float((J @ self.dv - e) @ (J @ self.dv - e))) for J, e in self.linearized)
 
     @property
     def errors(self) -> tuple[float, ...]:
@@ -112,10 +113,12 @@ class HierarchySolver:
             warm_start=True,
             active_set_first=bool(active_set_first),
         )
+        self._first = True  # the first step of a solve asks the tasks for their errors first (Task.error)
 
     def reset(self) -> None:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
         self._lex.reset()
+        self._first = True
 
     def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
         """The hierarchical step dv at q for ``levels`` (a sequence of sequences of tasks).
@@ -125,6 +128,12 @@ class HierarchySolver:
         at its first iteration and afterwards only that they are finite (a task's shapes do not change).
         """
         nv = self.nv
+        first, self._first = self._first, False
+        if first and not validate:  # started at the answer (every level met): dv = 0, no Jacobian needed
+            errors = [np.concatenate([t.error(platform, data, q) for t in tasks]) for tasks in levels]
+            if all(float(np.abs(e).max(initial=0.0)) <= MET for e in errors):
+                dv = np.zeros(nv)
+                return HierarchyStep(dv, [(None, e) for e in errors], 0, (dv,) * len(levels), (0.0,) * len(levels))
         if validate:
             lin = []
             for tasks in levels:

@@ -12,7 +12,9 @@ task                    what it asks
 :class:`PostureTask`    the arm at a preferred configuration (n_arm)
 ======================  =====================================================================
 
-Write your own by subclassing :class:`Task` and implementing ``linearize``.
+Write your own by subclassing :class:`Task` and implementing ``linearize`` (and ``error``, when e alone costs less:
+the first step of a solve asks for it to find a start that is already the answer). The default tasks of a solver
+are built once and aimed per solve (``set_target``, ``set_reference``).
 """
 
 from .base import Task, update_kinematics

@@ -39,6 +39,11 @@ class Task(ABC):
     def linearize(self, platform: Platform, data: pin.Data, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(J, e): J of shape (dim, nv) and the wanted change e of shape (dim,)."""
 
+    def error(self, platform: Platform, data: pin.Data, q: np.ndarray) -> np.ndarray:
+        """The wanted change e alone, equal to the second value of :meth:`linearize` (a solver asks for it first: at a
+        configuration where every level is met it needs no Jacobian).  Override it when e costs less than (J, e)."""
+        return self.linearize(platform, data, q)[1]
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, dim={self.dim})"
 
@@ -81,3 +86,8 @@ def sqrt_weights(weights, n: int, name: str) -> np.ndarray | None:
 def scaled(sw, J, e):
     """Rows of (J, e) scaled by the square-root weights ``sw`` (None: unchanged)."""
     return (J, e) if sw is None else (sw[:, None] * J, sw * e)
+
+
+def scaled_error(sw, e):
+    """e scaled by the square-root weights ``sw`` (None: unchanged), as :func:`scaled` scales it."""
+    return e if sw is None else sw * e

@@ -6,7 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...validation import as_vector
-from .base import Task, scaled, sqrt_weights, task_name
+from .base import Task, scaled, scaled_error, sqrt_weights, task_name
 
 
 class ComTask(Task):
@@ -34,3 +34,9 @@ class ComTask(Task):
         J_b[:, 0:3] -= np.eye(3)
         J_b[:, 3:6] += pin.skew(c_b)
         return scaled(self._sw, E @ J_b, self.target - E @ (c_b - point))
+
+    def error(self, platform, data, q):
+        point, E = platform.thrust_axis[0], platform.thrust_axis_basis
+        base = data.oMi[1]
+        c_b = base.rotation.T @ (data.com[0] - base.translation)
+        return scaled_error(self._sw, self.target - E @ (c_b - point))

@@ -32,17 +32,37 @@ class HoverTask(Task):
         jx, jy, jz = (-r01, r00), (-r11, r10), (-r21, r20)
         J = np.zeros((2, platform.nv))
         s = math.hypot(wx, wy)
-        if s > 1e-4 or (wz < 0.0 and s > 1e-6):
-            a = math.atan2(s, wz)
-            g = a / s
-            c = (wz * s - a) / s**3  # d(a/s)/ds / s
-        elif wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3 - s^2/5
-            g, c = 1.0 + s * s / 6.0, -2.0 / 3.0 - 0.2 * s * s
-        else:  # within 1e-6 rad of upside down the tilt direction is undefined: tilt about body x, |e| = the angle
-            n = max(math.hypot(r01, r11), 1e-300)
+        gc = _gain(s, wz)
+        if gc is None:  # within 1e-6 rad of upside down the tilt direction is undefined: tilt about body x, |e| = the angle
             J[:, 3:5] = (jx, jy)
-            return J, -math.atan2(s, wz) * np.array([r01 / n, r11 / n])
+            return J, _upside_down_error(r01, r11, s, wz)
+        g, c = gc
         # e = g(s, wz) w_xy: de = g dw_xy + w_xy (c s ds - dwz) with s ds = w_xy . dw_xy (dg/dwz = -1 on |w| = 1)
         v = [c * (wx * jx[k] + wy * jy[k]) - jz[k] for k in (0, 1)]
         J[:, 3:5] = ((g * jx[0] + wx * v[0], g * jx[1] + wx * v[1]), (g * jy[0] + wy * v[0], g * jy[1] + wy * v[1]))
         return J, np.array([-g * wx, -g * wy])
+
+    def error(self, platform, data, q):
+        (_, r01, wx), (_, r11, wy), (_, _, wz) = data.oMi[1].rotation.tolist()
+        s = math.hypot(wx, wy)
+        gc = _gain(s, wz)
+        if gc is None:
+            return _upside_down_error(r01, r11, s, wz)
+        return np.array([-gc[0] * wx, -gc[0] * wy])
+
+
+def _gain(s: float, wz: float) -> tuple[float, float] | None:
+    """(g, c) of e = g w_xy at |w_xy| = s, w_z = wz: g = a / s with the tilt a = atan2(s, wz) and c = (dg/ds) / s;
+    None within 1e-6 rad of upside down (no tilt direction)."""
+    if s > 1e-4 or (wz < 0.0 and s > 1e-6):
+        a = math.atan2(s, wz)
+        return a / s, (wz * s - a) / s**3
+    if wz > 0.0:  # series of asin(s)/s about upright (|w| = 1): 1 + s^2/6, and c -> -2/3 - s^2/5
+        return 1.0 + s * s / 6.0, -2.0 / 3.0 - 0.2 * s * s
+    return None
+
+
+def _upside_down_error(r01: float, r11: float, s: float, wz: float) -> np.ndarray:
+    """e near upside down: the tilt angle about body x (the horizontal part of y_B, normalised)."""
+    n = max(math.hypot(r01, r11), 1e-300)
+    return -math.atan2(s, wz) * np.array([r01 / n, r11 / n])

@@ -9,7 +9,7 @@ from ...charts import check_rotation
 from ...errors import InputError
 from ...model import Platform, check_platform
 from ...validation import as_vector
-from .base import Task, scaled, sqrt_weights, task_name
+from .base import Task, scaled, scaled_error, sqrt_weights, task_name
 
 
 class PoseTask(Task):
@@ -41,6 +41,9 @@ class PoseTask(Task):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL)
         M = self._target_inv * data.oMf[self.frame]
         return scaled(self._sw, pin.Jlog6(M) @ J, -pin.log6(M).vector)
+
+    def error(self, platform, data, q):
+        return scaled_error(self._sw, -pin.log6(self._target_inv * data.oMf[self.frame]).vector)
 
 
 class BasePoseTask(PoseTask):
@@ -76,6 +79,9 @@ class BaseOrientationTask(Task):
         J[:, 3:6] = pin.Jlog3(Rerr)
         return scaled(self._sw, J, -pin.log3(Rerr))
 
+    def error(self, platform, data, q):
+        return scaled_error(self._sw, -pin.log3(self.target.T @ data.oMi[1].rotation))
+
 
 class PositionTask(Task):
     """Frame position only: p(q) -> ``p_world`` (world axes), the orientation left free.
@@ -98,3 +104,6 @@ class PositionTask(Task):
     def linearize(self, platform, data, q):
         J = pin.getFrameJacobian(platform.model, data, self.frame, pin.LOCAL_WORLD_ALIGNED)[0:3]
         return scaled(self._sw, J, self.target - data.oMf[self.frame].translation)
+
+    def error(self, platform, data, q):
+        return scaled_error(self._sw, self.target - data.oMf[self.frame].translation)

@@ -6,7 +6,7 @@ import numpy as np
 
 from ...model import check_platform
 from ...validation import as_vector
-from .base import Task, scaled, sqrt_weights, task_name
+from .base import Task, scaled, scaled_error, sqrt_weights, task_name
 
 
 class PostureTask(Task):
@@ -29,3 +29,6 @@ class PostureTask(Task):
 
     def linearize(self, platform, data, q):
         return scaled(self._sw, self._J, self.ref - q[7:])
+
+    def error(self, platform, data, q):
+        return scaled_error(self._sw, self.ref - q[7:])
