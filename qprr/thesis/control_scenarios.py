@@ -33,6 +33,7 @@ import numpy as np
 from ..actuation import IdealAllocator
 from ..control import IDCGains, InverseDynamicsController
 from ..errors import UnknownNameError
+from ..missions import mission, phase_tables
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..sim import SimConfig, SimResult, simulate
@@ -42,7 +43,7 @@ from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
 from .robot import load, params_of
-from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, _flight, _plot_flight, flight_controller
+from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, Instance, _flight, _plot_flight, flight_controller
 
 POINT_TARGET = (5.0, 5.0, 10.0)
 """p_b of Sec. 6.3.1.1 [m]."""
@@ -50,6 +51,8 @@ POINT_GAINS = IDCGains((30.0,) * 9, (18.0,) * 9, (0.0,) * 9)
 """K_P = 30 I_9, K_D = 18 I_9 (Sec. 6.3.1.1), no integral action."""
 ANNEX_TARGET = (10.0, 6.0, 10.0)
 """p_b of Annex A, Fig. A.11 [m]."""
+ANNEX_MISSION = Instance(mission, {"mission": {"phase": tuple(phase_tables(dynamic_mission(ANNEX_TARGET).phases))}})
+"""``annex-a``: the generic ``mission`` given the dynamic mission of Sec. 6.3.3.3 to :data:`ANNEX_TARGET` as data (under the BSG)."""
 IDEAL_FORCE_MAX, IDEAL_TORQUE_MAX = 1e4, 1e3
 """Bounds of the idealised actuation [N], [N m]: far above what the step asks (1.1 kN at t = 0)."""
 
@@ -345,7 +348,7 @@ SCENARIOS = (
     Scenario(
         "annex-a",
         "dynamic-manipulator mission (BSG + MFC) to p_b = [10, 6, 10]",
-        _flight("annex-a", lambda law: dynamic_mission(ANNEX_TARGET, law=law), bsg=True),
+        _flight("annex-a", ANNEX_MISSION, bsg=True),
         _BSG_CONTROLLERS,
         _FLIGHT,
         ("q-prr",),

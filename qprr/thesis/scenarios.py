@@ -29,20 +29,19 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from .. import kinematics as kin
+from .. import missions as generic
 from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..control import (
     DecoupledController,
-    DesiredStateInverseDynamics,
     InverseDynamicsController,
     LayeredIDC,
-    ModelFreeController,
     PayloadIDC,
     make_controller,
 )
@@ -50,7 +49,6 @@ from ..control.impedance import ImpedanceController
 from ..errors import InputError, QprrError, UnknownNameError
 from ..scenarios import COMMON_OPTIONS, Option, Scenario
 from ..sim import (
-    Disturbances,
     PayloadChange,
     PayloadSchedule,
     PrescribedWrench,
@@ -67,7 +65,7 @@ from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains
 from .bsg import CogStabilizer
-from .missions import NAMES, dynamic_mission, static_mission
+from .missions import DYNAMIC_MISSION, NAMES, STATIC_MISSION, static_mission
 from .robot import load, params_of
 
 SEED = 0
@@ -103,9 +101,14 @@ AS_PRINTED_UNSTABLE = (
 )
 
 
-def flight_controller(name: str, platform, as_printed: bool = False):
-    """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`), the decoupled scheme of Sec. 6.2.2
-    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl).
+FLIGHT_GAINS = {"idc": gains.idc, "dsid": gains.desired_state, "mfc": gains.mfc, "decoupled": gains.idc}
+"""The thesis's gain set of each Sec. 6.3 flight controller (:mod:`qprr.thesis.gains`): Table 6.2 retuned for IDC and
+the decoupled scheme, (A.3) with the 6.2 attitude retuning for the desired-state controller, the iPID's for the MFC."""
+
+
+def flight_gains(name: str, as_printed: bool = False):
+    """The gains (:data:`FLIGHT_GAINS`, or the as-printed ones) the Sec. 6.3 flights give controller ``name``: a gains
+    object for :func:`qprr.missions.controller_for` ("class" for the MPC, not the thesis's: its own defaults).
 
     ``as_printed``: the thesis's settings as printed where they are stable: the desired-state controller with the
     position K_D = 18 of (A.3); the MFC's gains are those printed already.  IDC and the decoupled scheme have none
@@ -116,18 +119,18 @@ def flight_controller(name: str, platform, as_printed: bool = False):
         if name == "mpc":
             raise InputError("the receding-horizon MPC is not the thesis's controller (its 'MPC' is dsid): no as-printed settings")
         if name == "dsid":
-            return DesiredStateInverseDynamics(platform, gains.desired_state_as_printed())
-    if name == "idc":
-        return InverseDynamicsController(platform, gains.idc())
-    if name == "dsid":
-        return DesiredStateInverseDynamics(platform, gains.desired_state())
-    if name == "mfc":
-        return ModelFreeController(platform, gains.mfc())
-    if name == "decoupled":
-        return DecoupledController(platform, gains.idc())
+            return gains.desired_state_as_printed()
     if name == "mpc":
-        return make_controller("mpc", platform)
-    raise UnknownNameError("controller", name, _FLIGHT_CONTROLLERS)
+        return "class"
+    if name not in FLIGHT_GAINS:
+        raise UnknownNameError("controller", name, _FLIGHT_CONTROLLERS)
+    return FLIGHT_GAINS[name]()
+
+
+def flight_controller(name: str, platform, as_printed: bool = False):
+    """The Sec. 6.3 controllers with the thesis's gains (:func:`flight_gains`), the decoupled scheme of Sec. 6.2.2
+    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl)."""
+    return generic.controller_for(name, platform, flight_gains(name, as_printed))
 
 
 def _q_prr(platform):
@@ -136,32 +139,47 @@ def _q_prr(platform):
     return platform
 
 
-def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = None, bsg: bool = False):
+@dataclass(frozen=True)
+class Instance:
+    """A thesis flight as an instance of a generic mission of :mod:`qprr.missions`: ``generic`` (``mission``, ``noise``,
+    ``pulses``) called with the thesis's ``settings`` (options and keywords: the mission as data, noise amplitudes,
+    the pulse train) and, when not phases, the ``reference`` flown (law -> trajectory, :class:`~qprr.missions.MissionSettings`)."""
+
+    generic: Callable
+    settings: Mapping[str, object]
+    reference: Callable[[str], object] | None = None
+
+
+def _flight(scenario: str, instance: Instance, bsg: bool = False):
+    """The runner of a Sec. 6.3 flight: ``instance`` with the thesis's gains (:func:`flight_gains`), under the CoG
+    stabiliser (BSG) if ``bsg``, named ``scenario``."""
+
     def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None, as_printed=False):
         platform = _q_prr(platform)
         if as_printed:  # the transition law (6.16) as printed: the quintic
             if law not in (DEFAULT_LAW, "quintic"):
                 raise InputError(f"as_printed flies the quintic law (6.16) as printed; law = {law!r} contradicts it")
             law = "quintic"
-        ctrl = flight_controller(controller, platform, as_printed)
-        if bsg:
-            ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
-        dist = disturbance() if disturbance is not None else None
-        return simulate(
-            platform,
-            ctrl,
-            trajectory(law),
-            duration,
-            dt=dt,
-            integrator=integrator,
-            disturbance=dist,
-            seed=seed,
-            progress=progress,
-            scenario=scenario,
-            plant=plant,
-        )
+        g = flight_gains(controller, as_printed)
+        ctrl = CogStabilizer(platform, generic.controller_for(controller, platform, g), theta_e_d=0.0) if bsg else None
+        reference = instance.reference(law) if instance.reference is not None else None
+        settings = generic.MissionSettings(trajectory=reference, controller=ctrl, plant=plant, name=scenario)
+        options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": g}
+        return instance.generic(platform, controller, progress, settings, **options, **instance.settings)
 
     return runner
+
+
+STATIC = Instance(generic.mission, {"mission": STATIC_MISSION})
+"""``static-*``: the generic ``mission`` given the mission of Sec. 6.3.1.4 as data."""
+SPIRAL = Instance(generic.mission, {"mission": ""}, lambda law: Spiral())
+"""``spiral``: the generic ``mission`` flying the spiral (6.25) (not phases: the reference is given)."""
+NOISE = Instance(generic.noise, {"amplitude": NOISE_AMPLITUDE}, lambda law: static_mission(law=law))
+"""``noise``: the generic ``hover-noise`` with the amplitudes :data:`NOISE_AMPLITUDE`, along the static mission."""
+PULSE_TRAIN = Instance(generic.pulses, {"train": PULSES}, lambda law: static_mission(law=law))
+"""``pulses``: the generic ``hover-pulses`` with the pulses :data:`PULSES`, along the static mission."""
+DYNAMIC = Instance(generic.mission, {"mission": DYNAMIC_MISSION})
+"""``dynamic-bsg``: the generic ``mission`` given the mission of Sec. 6.3.3.3 as data (under the BSG)."""
 
 
 _FLIGHT = {**COMMON_OPTIONS, "duration": Option(30.0, "run length [s]")}
@@ -190,7 +208,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-idc",
         "static manipulator mission, inverse-dynamics control",
-        _flight("static-idc", lambda law: static_mission(law=law)),
+        _flight("static-idc", STATIC),
         _reordered("idc"),
         _STATIC,
         ("q-prr",),
@@ -200,7 +218,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-dsid",
         "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
-        _flight("static-dsid", lambda law: static_mission(law=law)),
+        _flight("static-dsid", STATIC),
         _reordered("dsid"),
         _STATIC,
         ("q-prr",),
@@ -210,7 +228,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-mfc",
         "static manipulator mission, model-free control (iPID)",
-        _flight("static-mfc", lambda law: static_mission(law=law)),
+        _flight("static-mfc", STATIC),
         _reordered("mfc"),
         _STATIC,
         ("q-prr",),
@@ -220,7 +238,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "spiral",
         "climb then spiral (6.25) from t_f = 5 s, IDC",
-        _flight("spiral", lambda law: Spiral()),
+        _flight("spiral", SPIRAL),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -230,7 +248,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "noise",
         "static mission with white noise on the generalised forces, IDC",
-        _flight("noise", lambda law: static_mission(law=law), lambda: WhiteNoise(NOISE_AMPLITUDE)),
+        _flight("noise", NOISE),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -240,7 +258,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "pulses",
         "static mission with finite pulses in the three phases, IDC",
-        _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)),
+        _flight("pulses", PULSE_TRAIN),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -250,7 +268,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "dynamic-bsg",
         "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
-        _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True),
+        _flight("dynamic-bsg", DYNAMIC, bsg=True),
         _BSG_CONTROLLERS,
         _FLIGHT,
         ("q-prr",),
