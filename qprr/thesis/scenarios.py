@@ -49,8 +49,6 @@ from ..control.impedance import ImpedanceController
 from ..errors import InputError, QprrError, UnknownNameError
 from ..scenarios import COMMON_OPTIONS, Option, Scenario
 from ..sim import (
-    PayloadChange,
-    PayloadSchedule,
     PrescribedWrench,
     Pulse,
     PushedMass,
@@ -390,6 +388,29 @@ def contact_history(result: SimResult):
 PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc", "decoupled", "mpc")
 
 
+def _payload_controller(name: str, platform, mass: float, release_time: float):
+    """The controller ``name`` of :data:`PAYLOAD_CONTROLLERS` with the thesis's gains (:func:`payload_drop`)."""
+
+    class _Told(PayloadIDC):
+        def step(self, t, state, ref):
+            if t >= release_time:
+                self.set_known_mass(0.0)
+            return super().step(t, state, ref)
+
+    g = gains.payload()
+    builders = {
+        "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
+        "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
+        "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
+        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+        "decoupled": lambda: DecoupledController(platform, gains.idc()),
+        "mpc": lambda: make_controller("mpc", platform),
+    }
+    if name not in builders:
+        raise UnknownNameError("controller", name, PAYLOAD_CONTROLLERS)
+    return builders[name]()
+
+
 def payload_drop(
     platform=None,
     controller: str = "payload-idc",
@@ -426,45 +447,19 @@ def payload_drop(
     if not 0.0 < release_time < duration:
         raise InputError(f"release_time must lie inside the run, 0 < release_time < duration = {duration!r} s, got {release_time!r}")
     arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
+    data = {"payload": ({"time": 0.0, "mass": mass}, {"time": release_time, "mass": 0.0})}
+    trajectory = None
     if mission == "thesis":
         phases = (Phase("z", 0.0, 5.0, 10.0), Phase("x", 5.0, 10.0, 3.0), Phase("y", 10.0, 15.0, 6.0))
         phases += tuple(Phase(c, *arm_phase, v) for c, v in (("r0", r0), ("theta2", t2), ("theta3", t3)) if v != 0.0)
-        trajectory = MultiPhase(phases, name="payload-drop", names=NAMES)
+        data["phase"] = tuple(generic.phase_tables(phases))
     else:
         trajectory = Hold((0.0, 0.0, 1.0, 0.0, 0.0, 0.0, r0, t2, t3))
-
-    class _Told(PayloadIDC):
-        def step(self, t, state, ref):
-            if t >= release_time:
-                self.set_known_mass(0.0)
-            return super().step(t, state, ref)
-
-    g = gains.payload()
-    builders = {
-        "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
-        "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
-        "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
-        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
-        "decoupled": lambda: DecoupledController(platform, gains.idc()),
-        "mpc": lambda: make_controller("mpc", platform),
-    }
-    if controller not in builders:
-        raise UnknownNameError("controller", controller, PAYLOAD_CONTROLLERS)
-    ctrl = builders[controller]()
-    schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
+    ctrl = _payload_controller(controller, platform, mass, release_time)
     disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
-    res = simulate(
-        platform,
-        ctrl,
-        trajectory,
-        duration,
-        payload=schedule,
-        disturbance=disturbance,
-        seed=seed,
-        progress=progress,
-        scenario="payload-drop",
-        plant=plant,
-    )
+    settings = generic.MissionSettings(trajectory=trajectory, controller=ctrl, disturbance=disturbance, plant=plant, name="payload-drop")
+    options = {"duration": duration, "dt": SimConfig.dt, "integrator": SimConfig.integrator, "seed": seed, "law": DEFAULT_LAW}
+    res = generic.mission(platform, controller, progress, settings, mission=data, **options)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
     if getattr(ctrl, "mode", None) == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
