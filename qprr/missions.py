@@ -361,20 +361,28 @@ def wind(platform=None, controller="idc", progress=False, settings: MissionSetti
     return res
 
 
-def motor_lag(platform=None, controller="idc", progress=False, **o):
-    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``)."""
+def motor_lag(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
+
+    ``settings`` (:class:`MissionSettings`): another reference (the options ``target`` and ``reach_fraction`` are then
+    not read), a built controller, a disturbance, the result's name."""
     platform = _platform(platform)
     actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
+    traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "motor-lag", settings, actuators=actuators)
+    _errors(res)
+    return res
+
+
+def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
+    """The reference of :func:`motor_lag`: from hover at ``target``'s height, to ``target`` with the arm out (10-60 %)."""
     D = o["duration"]
     x, y, z = (float(v) for v in o["target"])
     xi0 = np.concatenate([[0.0, 0.0, z, 0.0, 0.0, 0.0], platform.neutral_q()[7:]])
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
     phases += [Phase(n, 0.1 * D, 0.6 * D, float(v)) for n, v in zip(platform.arm_names, q)]
-    traj = MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
-    res = fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "motor-lag", actuators=actuators)
-    _errors(res)
-    return res
+    return MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
 
 
 def noise(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, *, amplitude=None, **o):
