@@ -22,6 +22,15 @@ name                what
 
 Registered in :data:`qprr.scenarios.SCENARIOS`.  Results carry ``metrics`` on the rotor bounds
 (:func:`thrust_margins`) and, for the MPC, its solve statistics (``mpc_*``).
+
+Built on the generic missions of :mod:`qprr.missions` (bit-identical to their earlier own machinery):
+``annex-a`` is ``mission`` with the dynamic mission to :data:`ANNEX_TARGET` as data under the CoG
+stabiliser; ``aggressive-reach`` is ``mission`` flying :func:`~qprr.thesis.missions.aggressive_reach`;
+``realistic`` is ``motor-lag`` with the Q-PRR's rotor stage (thrust factor of its parameters, time constant
+``time_constant``), its mission as the reference and drag in wind and joint friction as the disturbance
+(``mission`` when ``motors=False``).  ``point-to-point`` has no generic counterpart: a step of the set point
+(no trajectory) flown by idealised, unbounded actuators (:class:`qprr.actuation.IdealAllocator`, arm efforts
+unclipped) from rest at the origin, where ``fly-to`` flies a smooth reference through the platform's rotors.
 """
 
 from __future__ import annotations

@@ -96,7 +96,7 @@ def aggressive_reach(
 
 STATIC_MISSION = {"phase": tuple(phase_tables(static_mission().phases))}
 """The mission of Sec. 6.3.1.4 (:func:`static_mission`) as data (:func:`qprr.missions.read_mission`): the
-``static-*``, ``noise`` and ``pulses`` scenarios fly it through the generic ``mission`` (from the ground, yaw 0)."""
+``static-*`` scenarios fly it through the generic ``mission`` (from the ground, yaw 0)."""
 DYNAMIC_MISSION = {"phase": tuple(phase_tables(dynamic_mission().phases))}
 """The mission of Sec. 6.3.3.3 (:func:`dynamic_mission`) as data, flown by ``dynamic-bsg``."""
 

@@ -23,6 +23,30 @@ default.  The transition law is the minimum-snap septic (``law="septic"``): jerk
 references, which a multirotor's tilt needs (docs/notes-spikes.md).  ``law="quintic"`` is the
 order-5 polynomial the text names and ``law="thesis"`` the rational formula printed as (6.16)
 (a 1.55 g deceleration on the 10 m climb: the rotors saturate at zero thrust).
+
+Built on the generic missions of :mod:`qprr.missions` (any platform) with the thesis's settings
+(bit-identical to the scenarios' earlier own machinery; tests/test_thesis_thin.py):
+
+==================  ==========================================================================
+thesis scenario     generic scenario + the thesis's settings (:class:`Instance`)
+==================  ==========================================================================
+``static-*``        ``mission``: Sec. 6.3.1.4 as data (:data:`~qprr.thesis.missions.STATIC_MISSION`),
+                    gains :func:`flight_gains` (``q-prr:idc``, ``q-prr:desired-state``, ``q-prr:mfc``)
+``spiral``          ``mission`` flying the spiral (6.25) given as the reference
+``noise``           ``hover-noise`` along the static mission, amplitudes :data:`NOISE_AMPLITUDE`
+``pulses``          ``hover-pulses`` along the static mission, the train :data:`PULSES`
+``dynamic-bsg``     ``mission``: Sec. 6.3.3.3 as data, the controller under the CoG stabiliser
+``payload-drop``    ``mission``: the flight and the payload events (carry ``mass``, release) as data,
+                    the payload controllers of Sec. 6.4.2, the noise and the plant
+==================  ==========================================================================
+
+No generic counterpart, on :func:`qprr.sim.simulate` directly: ``push-thrust`` and ``push-prismatic``
+push a free object (a mass with Coulomb friction on its line, :class:`qprr.sim.PushedMass`; the contact
+opens when the robot decelerates) under the layered IDC with wrist force feedback, where ``ee-push``
+presses into a fixed compliant wall under operational-space impedance: another experiment.
+``impedance`` applies prescribed wrenches on the base (x, y, z, psi) and at the end effector, measured
+exactly, to the joint-space impedance filters (6.68)-(6.81); ``ee-impedance`` is the operational-space
+law (6.72)-(6.73) with one end-effector wrench and no base wrench.
 """
 
 from __future__ import annotations
