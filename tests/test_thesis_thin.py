@@ -16,6 +16,8 @@ from qprr.scenarios import SCENARIOS
 from qprr.sim import SimConfig
 from qprr.thesis import gains, load
 from qprr.thesis.missions import STATIC_MISSION, static_mission
+from qprr.thesis.realistic import TIME_CONSTANT, realistic
+from qprr.thesis.robot import params_of
 from qprr.thesis.scenarios import NOISE_AMPLITUDE, PULSES
 from qprr.trajectory import Hold
 
@@ -83,3 +85,18 @@ def test_payload_drop_is_the_generic_mission_with_payload_events(qprr):
     m_hat = np.asarray(ctrl.mass_log)
     before = (mine.t > 0.5) & (mine.t < 1.0)
     assert np.all(np.abs(m_hat[before] - 0.1) < 0.01)
+
+
+def test_realistic_is_motor_lag_with_the_qprr_rotor_stage(qprr):
+    """realistic (static mission) = generic ``motor-lag`` with the Q-PRR's thrust factor and 5 ms lag, the static mission as
+    the reference and the drag in wind and joint friction of qprr.thesis.realistic as the disturbance."""
+    ours = SCENARIOS["realistic"].run(platform=qprr, duration=1.5)
+    env = realistic(qprr)
+    settings = missions.MissionSettings(trajectory=static_mission(), disturbance=env.disturbance, name="realistic")
+    b = params_of(qprr).thrust_factor
+    mine = missions.motor_lag(qprr, "idc", False, settings, tau=TIME_CONSTANT, thrust_factor=b, gains=gains.idc(), duration=1.5, **COMMON)
+    same_run(ours, mine)
+    # the actuator stage: applied thrusts are b w^2 of the lagged rotor speeds, which differ from the commanded ones
+    w = mine.series["rotor_speed"]
+    np.testing.assert_allclose(mine.f, b * w**2, rtol=1e-12, atol=1e-12)
+    assert np.max(np.abs(mine.f - mine.series["thrust_command"])) > 1e-6
