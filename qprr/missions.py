@@ -100,7 +100,7 @@ class MissionSettings:
     name: str = ""
 
     def __post_init__(self) -> None:
-        if self.trajectory is not None and not callable(getattr(type(self.trajectory), "sample", None)):
+        if self.trajectory is not None and not hasattr(self.trajectory, "sample"):
             raise InputError(f"MissionSettings.trajectory must have sample(t) (a qprr.trajectory object), got {type(self.trajectory).__name__}")
         if self.controller is not None and not isinstance(self.controller, Controller):
             raise InputError(f"MissionSettings.controller must be a qprr Controller (make_controller), got {type(self.controller).__name__}")
@@ -188,7 +188,8 @@ def _controller(name: str, platform: Platform, o: dict, settings: MissionSetting
 
 
 def _errors(res) -> None:
-    """Record the final position and arm errors against the reference's last xi and the largest position error."""
+    """Record the final position and arm errors against the reference at the run's last tick (the mission's end when
+    its phases end within the run, as every registered mission's do) and the largest position error."""
     e = res.xi[-1] - res.xi_d[-1]
     res.metrics["final_position_error"] = float(np.linalg.norm(e[0:3]))
     res.metrics["final_arm_error"] = float(np.max(np.abs(e[6:]))) if e.shape[0] > 6 else 0.0
