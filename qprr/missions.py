@@ -28,11 +28,19 @@ scenario            what (check in ``result.metrics``)
 ==================  ==========================================================================
 
 The option ``gains``: ``"platform"`` (derived, the default), ``"class"`` (the controller class's
-own defaults), a name of :data:`qprr.registry.GAIN_TABLES` or a TOML file (:func:`qprr.control.gains.load_gains`).
+own defaults), a name of :data:`qprr.registry.GAIN_TABLES` or a TOML file (:func:`qprr.control.gains.load_gains`);
+from Python also a gains object (``IDCGains``, ``MFCGains``, ``ImpedanceGains``, ``EndEffectorImpedance``).
+
+Plug-ins reproduce a study's runs as instances of these scenarios: the functions take, besides the
+options, a :class:`MissionSettings` (the reference flown, a built controller, a disturbance, the
+plant, the result's name), :func:`noise` absolute ``amplitude`` s and :func:`pulses` a ``train`` of
+pulses; :func:`phase_tables` turns phases into the data :func:`mission` reads.  The thesis's
+Chapter 6 flights on the Q-PRR are built so (:mod:`qprr.thesis.scenarios`).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +51,7 @@ except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency the
     import tomli as tomllib
 
 from .control import make_controller
+from .control.base import Controller
 from .control.gains import load_gains as load_gain_file
 from .control.gains import platform_gains
 from .control.impedance import ImpedanceGains
@@ -59,7 +68,7 @@ from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
 from .sim.wind import AerodynamicDrag, Gust, Wind
 from .trajectory import Hold, MultiPhase, Phase
-from .validation import as_real
+from .validation import as_real, as_vector
 
 PHASE_KEYS = ("coordinate", "start", "end", "target")
 """Keys of one phase of a mission given as data (``[[phase]]`` tables of a TOML file)."""
@@ -67,11 +76,52 @@ PAYLOAD_KEYS = ("time", "mass")
 """Keys of one payload event of a mission (``[[payload]]`` tables): from ``time`` [s] the end effector carries ``mass`` [kg]."""
 
 
+_GAIN_TYPES = (IDCGains, MFCGains, ImpedanceGains, EndEffectorImpedance)
+
+
+@dataclass(frozen=True)
+class MissionSettings:
+    """What a Python caller (a plug-in reproducing a study) sets on a generic mission beyond its options.
+
+    ``trajectory``: the reference flown instead of the scenario's own (an object with ``sample(t)``,
+    :mod:`qprr.trajectory`); the recorded errors are then measured against it.  ``controller``: a built
+    :class:`~qprr.control.base.Controller` flown instead of ``controller_for(name, platform, gains)``
+    (a wrapper such as a CoG stabiliser, a variant); the option ``gains`` is then not read.
+    ``disturbance``: a generalised-force disturbance (:mod:`qprr.sim.disturbances`); a scenario that has
+    its own (hover-noise, hover-pulses, hover-wind) refuses it.  ``plant``: the robot flown when it
+    differs from the controller's model (:func:`qprr.sim.simulate`).  ``name``: the result's scenario
+    name ("" keeps the scenario's own).  None everywhere: the scenario as registered.
+    """
+
+    trajectory: object = None
+    controller: Controller | None = None
+    disturbance: object = None
+    plant: Platform | None = None
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        if self.trajectory is not None and not hasattr(self.trajectory, "sample"):
+            raise InputError(f"MissionSettings.trajectory must have sample(t) (a qprr.trajectory object), got {type(self.trajectory).__name__}")
+        if self.controller is not None and not isinstance(self.controller, Controller):
+            raise InputError(f"MissionSettings.controller must be a qprr Controller (make_controller), got {type(self.controller).__name__}")
+        if self.plant is not None and not isinstance(self.plant, Platform):
+            raise InputError(f"MissionSettings.plant must be a qprr Platform, got {type(self.plant).__name__}")
+        if not isinstance(self.name, str):
+            raise InputError(f"MissionSettings.name must be a string, got {self.name!r}")
+
+
+_AS_REGISTERED = MissionSettings()
+
+
 # ------------------------------------------------------------------------- building blocks
 def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str, object]:
-    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none)."""
+    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none).
+
+    A gains object (:data:`_GAIN_TYPES`) is passed as is: ``gains=`` or, for impedance gains, ``impedance=``."""
+    if isinstance(gains, _GAIN_TYPES):
+        return {"impedance" if isinstance(gains, (ImpedanceGains, EndEffectorImpedance)) else "gains": gains}
     if not isinstance(gains, str):
-        raise InputError(f"gains must be 'platform', 'class', a registered gain table or a TOML file, got {gains!r}")
+        raise InputError(f"gains must be 'platform', 'class', a registered gain table, a TOML file or a gains object of qprr.control, got {gains!r}")
     if gains == "platform":
         return platform_gains(name, platform)
     if gains.endswith(".toml"):
@@ -81,9 +131,9 @@ def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str,
     from .registry import GAIN_TABLES
 
     table = GAIN_TABLES[gains]()
-    if not isinstance(table, (IDCGains, MFCGains, ImpedanceGains, EndEffectorImpedance)):
+    if not isinstance(table, _GAIN_TYPES):
         raise InputError(f"gain table {gains!r} gives a {type(table).__name__}, not gains of qprr.control")
-    return {"impedance" if isinstance(table, (ImpedanceGains, EndEffectorImpedance)) else "gains": table}
+    return gain_arguments(name, platform, table)
 
 
 def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
@@ -107,23 +157,63 @@ def _platform(platform: Platform | None) -> Platform:
     return load() if platform is None else platform
 
 
-def _fly(platform, ctrl, trajectory, o: dict, progress: bool, name: str, **extra):
+def fly(platform: Platform, ctrl, trajectory, o: dict, progress: bool, name: str, settings: MissionSettings = _AS_REGISTERED, **inputs):
+    """:func:`qprr.sim.simulate` of a mission: options ``o`` (``duration``, ``dt``, ``integrator``, ``seed``), the
+    result named ``name`` unless ``settings`` names it, ``settings.disturbance`` and ``settings.plant`` added to
+    ``inputs`` (:class:`qprr.sim.SimInputs` fields; one the scenario sets itself cannot be replaced)."""
+    if not isinstance(settings, MissionSettings):
+        raise InputError(f"settings must be a MissionSettings, got {type(settings).__name__}")
+    for key, value in (("disturbance", settings.disturbance), ("plant", settings.plant)):
+        if value is not None:
+            if inputs.get(key) is not None:
+                raise InputError(f"scenario {name!r} sets its own {key}: MissionSettings.{key} cannot replace it (leave it None)")
+            inputs[key] = value
     return simulate(
-        platform, ctrl, trajectory, o["duration"], dt=o["dt"], integrator=o["integrator"], seed=o["seed"], progress=progress, scenario=name, **extra
+        platform,
+        ctrl,
+        trajectory,
+        o["duration"],
+        dt=o["dt"],
+        integrator=o["integrator"],
+        seed=o["seed"],
+        progress=progress,
+        scenario=settings.name or name,
+        **inputs,
     )
 
 
-def _errors(res, final: np.ndarray) -> None:
-    """Record the final position and arm errors against ``final`` (the reference's last xi) and the largest position error."""
-    e = res.xi[-1] - final
+def _controller(name: str, platform: Platform, o: dict, settings: MissionSettings, **kwargs):
+    """``settings.controller`` if given, else ``controller_for(name, platform, o["gains"], **kwargs)``."""
+    return settings.controller if settings.controller is not None else controller_for(name, platform, o["gains"], **kwargs)
+
+
+def _errors(res) -> None:
+    """Record the final position and arm errors against the reference at the run's last tick (the mission's end when
+    its phases end within the run, as every registered mission's do) and the largest position error."""
+    e = res.xi[-1] - res.xi_d[-1]
     res.metrics["final_position_error"] = float(np.linalg.norm(e[0:3]))
     res.metrics["final_arm_error"] = float(np.max(np.abs(e[6:]))) if e.shape[0] > 6 else 0.0
     res.metrics["max_position_error"] = float(np.max(np.linalg.norm(res.xi[:, 0:3] - res.xi_d[:, 0:3], axis=1)))
 
 
-def _hover(platform, o: dict) -> tuple[np.ndarray, Hold]:
-    xi = np.concatenate([[0.0, 0.0, float(o["z"]), 0.0, 0.0, 0.0], reach_posture(platform, o["reach_fraction"])])
-    return xi, Hold(tuple(xi))
+def _hover_xi(platform, o: dict) -> np.ndarray:
+    return np.concatenate([[0.0, 0.0, float(o["z"]), 0.0, 0.0, 0.0], reach_posture(platform, o["reach_fraction"])])
+
+
+def _hover(platform, o: dict, settings: MissionSettings):
+    """The reference of a hovering scenario: ``settings.trajectory`` if given, else a hold at ``z`` with the arm out."""
+    return settings.trajectory if settings.trajectory is not None else Hold(tuple(_hover_xi(platform, o)))
+
+
+def phase_tables(phases) -> list[dict]:
+    """The tables of :func:`read_mission` (keys :data:`PHASE_KEYS`) of ``phases`` (:class:`qprr.trajectory.Phase`): a mission
+    built in Python, as data (a TOML file's ``[[phase]]`` tables, or ``mission(..., mission={"phase": phase_tables(...)})``)."""
+    out = []
+    for p in phases:
+        if not isinstance(p, Phase):
+            raise InputError(f"phase_tables takes qprr.trajectory.Phase objects, got {type(p).__name__}")
+        out.append({"coordinate": p.coordinate, "start": p.t1, "end": p.t2, "target": p.value})
+    return out
 
 
 # ------------------------------------------------------------------------- the scenarios
@@ -133,8 +223,8 @@ def takeoff_hover(platform=None, controller="idc", progress=False, **o):
     xi0 = platform.neutral_xi()
     D = o["duration"]
     traj = MultiPhase((Phase("z", 0.0, 0.4 * D, o["z"]),), tuple(xi0), name="takeoff-hover", law=o["law"], names=platform.xi_names)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "takeoff-hover")
-    _errors(res, traj.final())
+    res = fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "takeoff-hover")
+    _errors(res)
     return res
 
 
@@ -148,18 +238,19 @@ def point_to_point(platform=None, controller="idc", progress=False, **o):
     phases = [Phase("z", 0.0, 0.3 * D, z), Phase("x", 0.3 * D, 0.7 * D, x), Phase("y", 0.3 * D, 0.7 * D, y)]
     phases += [Phase(n, 0.3 * D, 0.7 * D, float(v)) for n, v in zip(platform.arm_names, q)]
     traj = MultiPhase(tuple(phases), tuple(xi0), name="fly-to", law=o["law"], names=platform.xi_names)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "fly-to")
-    _errors(res, traj.final())
+    res = fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "fly-to")
+    _errors(res)
     return res
 
 
-def read_mission(source) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
+def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
     """Phases and payload events of a mission given as data.
 
     ``source``: a TOML file (``[[phase]]`` tables with :data:`PHASE_KEYS`, optional ``[[payload]]``
     tables with :data:`PAYLOAD_KEYS`) or a mapping ``{"phase": [...], "payload": [...]}`` of the same
     tables.  A phase moves ``coordinate`` (a name of the platform's xi: "z", "psi", an arm joint's
-    name) to ``target`` between ``start`` and ``end`` [s]."""
+    name) to ``target`` between ``start`` and ``end`` [s].  ``phases_required=False`` accepts payload
+    events alone (a mission whose reference is given otherwise, :class:`MissionSettings`)."""
     if isinstance(source, (str, Path)):
         path = Path(source)
         if not path.is_file():
@@ -183,7 +274,7 @@ def read_mission(source) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
         if set(table) != set(PAYLOAD_KEYS):
             raise InputError(f"mission payload event {k + 1} has keys {sorted(table)}; an event needs exactly {list(PAYLOAD_KEYS)}")
         events.append(PayloadChange(float(table["time"]), float(table["mass"])))
-    if not phases:
+    if phases_required and not phases:
         raise InputError("a mission needs at least one [[phase]] table")
     return tuple(phases), (PayloadSchedule(tuple(events)) if events else None)
 
@@ -199,28 +290,36 @@ def default_mission(platform: Platform, duration: float) -> dict:
     return {"phase": phases}
 
 
-def mission(platform=None, controller="idc", progress=False, **o):
-    """The phases of ``o["mission"]`` (file or mapping; "" for :func:`default_mission`) from the neutral posture on the ground."""
+def mission(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+    """The phases of ``o["mission"]`` (file or mapping; "" for :func:`default_mission`) from the neutral posture on the ground.
+
+    With ``settings.trajectory`` the mission data gives the payload events only (phases there are refused)."""
     platform = _platform(platform)
-    phases, payload = read_mission(o["mission"] or default_mission(platform, o["duration"]))
-    traj = MultiPhase(phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "mission", payload=payload)
-    _errors(res, traj.final())
+    if settings.trajectory is None:
+        phases, payload = read_mission(o["mission"] or default_mission(platform, o["duration"]))
+        traj = MultiPhase(phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
+    else:
+        phases, payload = read_mission(o["mission"], phases_required=False) if o["mission"] else ((), None)
+        if phases:
+            raise InputError("mission: phases in the mission data and MissionSettings.trajectory both give the reference; give one")
+        traj = settings.trajectory
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "mission", settings, payload=payload)
+    _errors(res)
     return res
 
 
-def payload(platform=None, controller="idc", progress=False, **o):
+def payload(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Hover with the arm out; a mass ``mass_fraction`` of the platform's mass attaches at the end effector at 25 % of
     the run (grasp) and drops at 55 %."""
     platform = _platform(platform)
-    xi, traj = _hover(platform, o)
+    traj = _hover(platform, o, settings)
     if not 0.0 < o["mass_fraction"] < 1.0:
         raise InputError(f"mass_fraction must be in (0, 1), got {o['mass_fraction']!r}")
     m = o["mass_fraction"] * platform.total_mass
     D = o["duration"]
     schedule = PayloadSchedule((PayloadChange(0.25 * D, m), PayloadChange(0.55 * D, 0.0)))
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "grasp-drop", payload=schedule)
-    _errors(res, xi)
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "grasp-drop", settings, payload=schedule)
+    _errors(res)
     res.metrics.update({"payload_mass": m, "t_grasp": 0.25 * D, "t_drop": 0.55 * D})
     return res
 
@@ -229,7 +328,7 @@ def push(platform=None, controller="opspace-impedance", progress=False, **o):
     """The end effector pressed ``penetration`` into a compliant wall ``gap`` ahead (world x) between 20 % and 50 % of
     the run, held: impedance K (derived: m w_pos^2) and wall k in series give F = penetration K k / (K + k)."""
     platform = _platform(platform)
-    xi0, _ = _hover(platform, o)
+    xi0 = _hover_xi(platform, o)
     p_e0, _ = ee_pose_xi(platform, platform.data(), xi0)
     wall = CompliantWall(
         platform, point=p_e0 + np.array([o["gap"], 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=o["wall_stiffness"], damping=o["wall_damping"]
@@ -238,7 +337,7 @@ def push(platform=None, controller="opspace-impedance", progress=False, **o):
     traj = MultiPhase((Phase("x", 0.2 * D, 0.5 * D, o["gap"] + o["penetration"]),), tuple(xi0), name="ee-push", law=o["law"], names=platform.xi_names)
     sensor = {"ee_sensor": wall.measured} if controller == "opspace-impedance" else {}
     ctrl = controller_for(controller, platform, o["gains"], **sensor)
-    res = _fly(platform, ctrl, traj, o, progress, "ee-push", external_wrench=wall)
+    res = fly(platform, ctrl, traj, o, progress, "ee-push", external_wrench=wall)
     force = wall.history().wrench[:, 0:3]
     res.series["ee_force"] = force
     tail = res.t >= 0.85 * D
@@ -250,71 +349,105 @@ def push(platform=None, controller="opspace-impedance", progress=False, **o):
     return res
 
 
-def wind(platform=None, controller="idc", progress=False, **o):
+def wind(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Hover under base drag (``drag`` [N s/m] linear per axis) in a mean wind ``mean_wind`` [m/s] plus a 1 - cos gust
     ``gust`` [m/s] peaking at 50 % of the run (lasting 20 %)."""
     platform = _platform(platform)
-    xi, traj = _hover(platform, o)
+    traj = _hover(platform, o, settings)
     D = o["duration"]
     air = Wind(mean=o["mean_wind"], gusts=(Gust(0.4 * D, 0.2 * D, o["gust"]),))
     drag = AerodynamicDrag(linear=o["drag"], wind=air)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "hover-wind", disturbance=drag)
-    _errors(res, xi)
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "hover-wind", settings, disturbance=drag)
+    _errors(res)
     return res
 
 
-def motor_lag(platform=None, controller="idc", progress=False, **o):
-    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``)."""
+def motor_lag(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
+
+    ``settings`` (:class:`MissionSettings`): another reference (the options ``target`` and ``reach_fraction`` are then
+    not read), a built controller, a disturbance, the result's name."""
     platform = _platform(platform)
     actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
+    traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "motor-lag", settings, actuators=actuators)
+    _errors(res)
+    return res
+
+
+def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
+    """The reference of :func:`motor_lag`: from hover at ``target``'s height, to ``target`` with the arm out (10-60 %)."""
     D = o["duration"]
     x, y, z = (float(v) for v in o["target"])
     xi0 = np.concatenate([[0.0, 0.0, z, 0.0, 0.0, 0.0], platform.neutral_q()[7:]])
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
     phases += [Phase(n, 0.1 * D, 0.6 * D, float(v)) for n, v in zip(platform.arm_names, q)]
-    traj = MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "motor-lag", actuators=actuators)
-    _errors(res, traj.final())
-    return res
+    return MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
 
 
-def noise(platform=None, controller="idc", progress=False, **o):
+def noise(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, *, amplitude=None, **o):
     """Hover under uniform white noise on every generalised force (Thesis (6.27)), new each tick: ``fraction`` of each
-    coordinate's authority (the thrust margin on x, y, z, the rotors' torques on the angles, the effort limits on the arm)."""
-    from .control.gains import Authority
+    coordinate's authority (the thrust margin on x, y, z, the rotors' torques on the angles, the effort limits on the arm).
 
+    ``amplitude`` (Python): the noise's half-width per generalised force instead (6 + n_arm values, N or N m, >= 0);
+    the option ``fraction`` is then not read."""
     platform = _platform(platform)
-    xi, traj = _hover(platform, o)
-    a = Authority.from_platform(platform)
-    amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])
-    res = _fly(
+    traj = _hover(platform, o, settings)
+    res = fly(
         platform,
-        controller_for(controller, platform, o["gains"]),
+        _controller(controller, platform, o, settings),
         traj,
         o,
         progress,
         "hover-noise",
-        disturbance=WhiteNoise(tuple(o["fraction"] * amp)),
+        settings,
+        disturbance=WhiteNoise(_noise_amplitude(platform, o, amplitude)),
     )
-    _errors(res, xi)
+    _errors(res)
     return res
 
 
-def pulses(platform=None, controller="idc", progress=False, **o):
-    """Hover hit by pulses (Thesis (6.28)), each 5 % of the run: ``force`` [N] on z at 10 %, on x and y at 40 %,
-    ``torque`` [N m or N] on every arm joint at 70 %; the run ends 25 % after the last."""
-    platform = _platform(platform)
-    xi, traj = _hover(platform, o)
-    D, n = o["duration"], platform.n_xi
+def _noise_amplitude(platform: Platform, o: dict, amplitude) -> tuple[float, ...]:
+    if amplitude is not None:
+        amp = as_vector(amplitude, platform.n_xi, "amplitude")
+        if not np.all(amp >= 0.0):
+            raise InputError(f"amplitude must be >= 0 (the noise's half-width per generalised force, N or N m), got {amplitude!r}")
+        return tuple(amp.tolist())
+    from .control.gains import Authority
+
+    a = Authority.from_platform(platform)
+    amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])
+    return tuple(o["fraction"] * amp)
+
+
+def pulse_train(platform: Platform, duration: float, force: float, torque: float) -> tuple[Pulse, ...]:
+    """The pulses (Thesis (6.28)) of :func:`pulses`, each 5 % of ``duration``: ``force`` [N] on z at 10 %, on x and y at
+    40 %, ``torque`` [N m or N] on every arm joint at 70 %."""
+    n = platform.n_xi
     shots = []
-    for start, idx, value in ((0.1, (2,), o["force"]), (0.4, (0, 1), o["force"]), (0.7, tuple(range(6, n)), o["torque"])):
+    for start, idx, value in ((0.1, (2,), force), (0.4, (0, 1), force), (0.7, tuple(range(6, n)), torque)):
         if idx:
             g = np.zeros(n)
             g[list(idx)] = value
-            shots.append(Pulse(start * D, (start + 0.05) * D, tuple(g)))
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "hover-pulses", disturbance=Disturbances(tuple(shots)))
-    _errors(res, xi)
+            shots.append(Pulse(start * duration, (start + 0.05) * duration, tuple(g)))
+    return tuple(shots)
+
+
+def pulses(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, *, train=None, **o):
+    """Hover hit by the pulses of :func:`pulse_train` (options ``force``, ``torque``); the run ends 25 % after the last.
+
+    ``train`` (Python): the pulses instead (:class:`qprr.sim.Pulse`, each Gamma of 6 + n_arm values); the options
+    ``force`` and ``torque`` are then not read."""
+    platform = _platform(platform)
+    traj = _hover(platform, o, settings)
+    if train is None:
+        train = pulse_train(platform, o["duration"], o["force"], o["torque"])
+    elif not (isinstance(train, (tuple, list)) and train and all(isinstance(p, Pulse) for p in train)):
+        raise InputError(f"train must be a non-empty tuple of qprr.sim.Pulse, got {train!r}")
+    ctrl = _controller(controller, platform, o, settings)
+    res = fly(platform, ctrl, traj, o, progress, "hover-pulses", settings, disturbance=Disturbances(tuple(train)))
+    _errors(res)
     return res
 
 
@@ -338,14 +471,18 @@ def summary(result) -> list[str]:
 __all__ = [
     "PAYLOAD_KEYS",
     "PHASE_KEYS",
+    "MissionSettings",
     "controller_for",
     "default_mission",
+    "fly",
     "gain_arguments",
     "mission",
     "motor_lag",
     "noise",
     "payload",
+    "phase_tables",
     "point_to_point",
+    "pulse_train",
     "pulses",
     "push",
     "reach_posture",

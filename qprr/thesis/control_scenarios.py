@@ -22,6 +22,15 @@ name                what
 
 Registered in :data:`qprr.scenarios.SCENARIOS`.  Results carry ``metrics`` on the rotor bounds
 (:func:`thrust_margins`) and, for the MPC, its solve statistics (``mpc_*``).
+
+Built on the generic missions of :mod:`qprr.missions` (bit-identical to their earlier own machinery):
+``annex-a`` is ``mission`` with the dynamic mission to :data:`ANNEX_TARGET` as data under the CoG
+stabiliser; ``aggressive-reach`` is ``mission`` flying :func:`~qprr.thesis.missions.aggressive_reach`;
+``realistic`` is ``motor-lag`` with the Q-PRR's rotor stage (thrust factor of its parameters, time constant
+``time_constant``), its mission as the reference and drag in wind and joint friction as the disturbance
+(``mission`` when ``motors=False``).  ``point-to-point`` has no generic counterpart: a step of the set point
+(no trajectory) flown by idealised, unbounded actuators (:class:`qprr.actuation.IdealAllocator`, arm efforts
+unclipped) from rest at the origin, where ``fly-to`` flies a smooth reference through the platform's rotors.
 """
 
 from __future__ import annotations
@@ -30,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import missions as generic
 from ..actuation import IdealAllocator
 from ..control import IDCGains, InverseDynamicsController
 from ..errors import UnknownNameError
@@ -42,7 +52,7 @@ from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
 from .robot import load, params_of
-from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, _flight, _plot_flight, flight_controller
+from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, Instance, _flight, _plot_flight, flight_gains
 
 POINT_TARGET = (5.0, 5.0, 10.0)
 """p_b of Sec. 6.3.1.1 [m]."""
@@ -50,6 +60,8 @@ POINT_GAINS = IDCGains((30.0,) * 9, (18.0,) * 9, (0.0,) * 9)
 """K_P = 30 I_9, K_D = 18 I_9 (Sec. 6.3.1.1), no integral action."""
 ANNEX_TARGET = (10.0, 6.0, 10.0)
 """p_b of Annex A, Fig. A.11 [m]."""
+ANNEX_MISSION = Instance(generic.mission, {"mission": {"phase": tuple(generic.phase_tables(dynamic_mission(ANNEX_TARGET).phases))}})
+"""``annex-a``: the generic ``mission`` given the dynamic mission of Sec. 6.3.3.3 to :data:`ANNEX_TARGET` as data (under the BSG)."""
 IDEAL_FORCE_MAX, IDEAL_TORQUE_MAX = 1e4, 1e3
 """Bounds of the idealised actuation [N], [N m]: far above what the step asks (1.1 kN at t = 0)."""
 
@@ -114,7 +126,7 @@ def margin_summary(res: SimResult) -> list[str]:
             f"wind: mean speed {m['wind_speed_mean']:.2f} m/s, turbulence std {m['wind_turbulence_std']:.2f} m/s; rotor "
             f"speeds {m['rotor_speed_min']:.0f}..{m['rotor_speed_max']:.0f} rad/s"
         )
-    if "final_position_error" in m:
+    if "settling_x" in m:  # point-to-point (the generic missions' final_position_error has no settling times)
         lines.append(
             f"final |p_b - p_b^d| = {m['final_position_error']:.3g} m; 2 % settling times x, y, z: "
             f"{m['settling_x']:.2f}, {m['settling_y']:.2f}, {m['settling_z']:.2f} s"
@@ -199,20 +211,10 @@ def plot_point_to_point(result: SimResult, path) -> Path:
 # ------------------------------------------------------------------------ aggressive reach
 def _aggressive(platform, controller, progress, duration, climb, forward, dt, integrator, seed):
     platform = _q_prr(platform)
-    ctrl = flight_controller(controller, platform)
-    res = None
+    settings = generic.MissionSettings(trajectory=aggressive_reach(climb=climb, forward=forward), name="aggressive-reach")
+    options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "gains": flight_gains(controller), "mission": ""}
     try:
-        res = simulate(
-            platform,
-            ctrl,
-            aggressive_reach(climb=climb, forward=forward),
-            duration,
-            dt=dt,
-            integrator=integrator,
-            seed=seed,
-            progress=progress,
-            scenario="aggressive-reach",
-        )
+        res = generic.mission(platform, controller, progress, settings, **options)
     except Exception as err:  # a diverged run still reports its margins
         res = getattr(err, "result", None)
         if res is None:
@@ -237,23 +239,15 @@ def _realistic(
         "spiral": lambda: Spiral(),
         "hover": lambda: Hold((0.0, 0.0, 10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
     }[mission]()
-    xi0 = np.array([0.0, 0.0, 10.0, 0, 0, 0, 0, 0, 0]) if mission == "hover" else None
     env = realistic(platform, motors=motors, drag=drag, friction=friction, mean_wind=mean_wind, w20=w20, gust=gust, time_constant=time_constant)
-    ctrl = flight_controller(controller, platform)
+    settings = generic.MissionSettings(trajectory=trajectory, disturbance=env.disturbance, name="realistic")
+    options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": flight_gains(controller)}
     try:
-        res = simulate(
-            platform,
-            ctrl,
-            trajectory,
-            duration,
-            dt=dt,
-            integrator=integrator,
-            xi0=xi0,
-            seed=seed,
-            progress=progress,
-            scenario="realistic",
-            **env.simulate_kwargs(),
-        )
+        if motors:  # the generic motor-lag with the Q-PRR's rotor stage (thrust factor of its parameters, time constant)
+            b = params_of(platform).thrust_factor
+            res = generic.motor_lag(platform, controller, progress, settings, tau=time_constant, thrust_factor=b, **options)
+        else:
+            res = generic.mission(platform, controller, progress, settings, mission="", **options)
     except Exception as err:
         if getattr(err, "result", None) is not None:
             _realistic_metrics(err.result, platform)
@@ -345,7 +339,7 @@ SCENARIOS = (
     Scenario(
         "annex-a",
         "dynamic-manipulator mission (BSG + MFC) to p_b = [10, 6, 10]",
-        _flight("annex-a", lambda law: dynamic_mission(ANNEX_TARGET, law=law), bsg=True),
+        _flight("annex-a", ANNEX_MISSION, bsg=True),
         _BSG_CONTROLLERS,
         _FLIGHT,
         ("q-prr",),

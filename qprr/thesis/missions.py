@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from ..errors import InputError, UnknownNameError
+from ..missions import phase_tables
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
 from ..validation import as_interval, as_real, as_vector, checked_module
 
@@ -92,5 +93,11 @@ def aggressive_reach(
     )
     return MultiPhase(phases, xi0=(0.0, 0.0, z0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0), name="aggressive-reach", law=law, names=NAMES)
 
+
+STATIC_MISSION = {"phase": tuple(phase_tables(static_mission().phases))}
+"""The mission of Sec. 6.3.1.4 (:func:`static_mission`) as data (:func:`qprr.missions.read_mission`): the
+``static-*`` scenarios fly it through the generic ``mission`` (from the ground, yaw 0)."""
+DYNAMIC_MISSION = {"phase": tuple(phase_tables(dynamic_mission().phases))}
+"""The mission of Sec. 6.3.3.3 (:func:`dynamic_mission`) as data, flown by ``dynamic-bsg``."""
 
 checked_module(globals())

@@ -23,26 +23,49 @@ default.  The transition law is the minimum-snap septic (``law="septic"``): jerk
 references, which a multirotor's tilt needs (docs/notes-spikes.md).  ``law="quintic"`` is the
 order-5 polynomial the text names and ``law="thesis"`` the rational formula printed as (6.16)
 (a 1.55 g deceleration on the 10 m climb: the rotors saturate at zero thrust).
+
+Built on the generic missions of :mod:`qprr.missions` (any platform) with the thesis's settings
+(bit-identical to the scenarios' earlier own machinery; tests/test_thesis_thin.py):
+
+==================  ==========================================================================
+thesis scenario     generic scenario + the thesis's settings (:class:`Instance`)
+==================  ==========================================================================
+``static-*``        ``mission``: Sec. 6.3.1.4 as data (:data:`~qprr.thesis.missions.STATIC_MISSION`),
+                    gains :func:`flight_gains` (``q-prr:idc``, ``q-prr:desired-state``, ``q-prr:mfc``)
+``spiral``          ``mission`` flying the spiral (6.25) given as the reference
+``noise``           ``hover-noise`` along the static mission, amplitudes :data:`NOISE_AMPLITUDE`
+``pulses``          ``hover-pulses`` along the static mission, the train :data:`PULSES`
+``dynamic-bsg``     ``mission``: Sec. 6.3.3.3 as data, the controller under the CoG stabiliser
+``payload-drop``    ``mission``: the flight and the payload events (carry ``mass``, release) as data,
+                    the payload controllers of Sec. 6.4.2, the noise and the plant
+==================  ==========================================================================
+
+No generic counterpart, on :func:`qprr.sim.simulate` directly: ``push-thrust`` and ``push-prismatic``
+push a free object (a mass with Coulomb friction on its line, :class:`qprr.sim.PushedMass`; the contact
+opens when the robot decelerates) under the layered IDC with wrist force feedback, where ``ee-push``
+presses into a fixed compliant wall under operational-space impedance: another experiment.
+``impedance`` applies prescribed wrenches on the base (x, y, z, psi) and at the end effector, measured
+exactly, to the joint-space impedance filters (6.68)-(6.81); ``ee-impedance`` is the operational-space
+law (6.72)-(6.73) with one end-effector wrench and no base wrench.
 """
 
 from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
 from .. import kinematics as kin
+from .. import missions as generic
 from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..control import (
     DecoupledController,
-    DesiredStateInverseDynamics,
     InverseDynamicsController,
     LayeredIDC,
-    ModelFreeController,
     PayloadIDC,
     make_controller,
 )
@@ -50,9 +73,6 @@ from ..control.impedance import ImpedanceController
 from ..errors import InputError, QprrError, UnknownNameError
 from ..scenarios import COMMON_OPTIONS, Option, Scenario
 from ..sim import (
-    Disturbances,
-    PayloadChange,
-    PayloadSchedule,
     PrescribedWrench,
     Pulse,
     PushedMass,
@@ -67,7 +87,7 @@ from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains
 from .bsg import CogStabilizer
-from .missions import NAMES, dynamic_mission, static_mission
+from .missions import DYNAMIC_MISSION, NAMES, STATIC_MISSION, static_mission
 from .robot import load, params_of
 
 SEED = 0
@@ -103,9 +123,14 @@ AS_PRINTED_UNSTABLE = (
 )
 
 
-def flight_controller(name: str, platform, as_printed: bool = False):
-    """The Sec. 6.3 controllers with the thesis's gains (:mod:`qprr.thesis.gains`), the decoupled scheme of Sec. 6.2.2
-    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl).
+FLIGHT_GAINS = {"idc": gains.idc, "dsid": gains.desired_state, "mfc": gains.mfc, "decoupled": gains.idc}
+"""The thesis's gain set of each Sec. 6.3 flight controller (:mod:`qprr.thesis.gains`): Table 6.2 retuned for IDC and
+the decoupled scheme, (A.3) with the 6.2 attitude retuning for the desired-state controller, the iPID's for the MFC."""
+
+
+def flight_gains(name: str, as_printed: bool = False):
+    """The gains (:data:`FLIGHT_GAINS`, or the as-printed ones) the Sec. 6.3 flights give controller ``name``: a gains
+    object for :func:`qprr.missions.controller_for` ("class" for the MPC, not the thesis's: its own defaults).
 
     ``as_printed``: the thesis's settings as printed where they are stable: the desired-state controller with the
     position K_D = 18 of (A.3); the MFC's gains are those printed already.  IDC and the decoupled scheme have none
@@ -116,18 +141,18 @@ def flight_controller(name: str, platform, as_printed: bool = False):
         if name == "mpc":
             raise InputError("the receding-horizon MPC is not the thesis's controller (its 'MPC' is dsid): no as-printed settings")
         if name == "dsid":
-            return DesiredStateInverseDynamics(platform, gains.desired_state_as_printed())
-    if name == "idc":
-        return InverseDynamicsController(platform, gains.idc())
-    if name == "dsid":
-        return DesiredStateInverseDynamics(platform, gains.desired_state())
-    if name == "mfc":
-        return ModelFreeController(platform, gains.mfc())
-    if name == "decoupled":
-        return DecoupledController(platform, gains.idc())
+            return gains.desired_state_as_printed()
     if name == "mpc":
-        return make_controller("mpc", platform)
-    raise UnknownNameError("controller", name, _FLIGHT_CONTROLLERS)
+        return "class"
+    if name not in FLIGHT_GAINS:
+        raise UnknownNameError("controller", name, _FLIGHT_CONTROLLERS)
+    return FLIGHT_GAINS[name]()
+
+
+def flight_controller(name: str, platform, as_printed: bool = False):
+    """The Sec. 6.3 controllers with the thesis's gains (:func:`flight_gains`), the decoupled scheme of Sec. 6.2.2
+    at the IDC's gains, and the receding-horizon MPC (``mpc``, needs crocoddyl)."""
+    return generic.controller_for(name, platform, flight_gains(name, as_printed))
 
 
 def _q_prr(platform):
@@ -136,32 +161,47 @@ def _q_prr(platform):
     return platform
 
 
-def _flight(scenario: str, trajectory: Callable, disturbance: Callable | None = None, bsg: bool = False):
+@dataclass(frozen=True)
+class Instance:
+    """A thesis flight as an instance of a generic mission of :mod:`qprr.missions`: ``generic`` (``mission``, ``noise``,
+    ``pulses``) called with the thesis's ``settings`` (options and keywords: the mission as data, noise amplitudes,
+    the pulse train) and, when not phases, the ``reference`` flown (law -> trajectory, :class:`~qprr.missions.MissionSettings`)."""
+
+    generic: Callable
+    settings: Mapping[str, object]
+    reference: Callable[[str], object] | None = None
+
+
+def _flight(scenario: str, instance: Instance, bsg: bool = False):
+    """The runner of a Sec. 6.3 flight: ``instance`` with the thesis's gains (:func:`flight_gains`), under the CoG
+    stabiliser (BSG) if ``bsg``, named ``scenario``."""
+
     def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None, as_printed=False):
         platform = _q_prr(platform)
         if as_printed:  # the transition law (6.16) as printed: the quintic
             if law not in (DEFAULT_LAW, "quintic"):
                 raise InputError(f"as_printed flies the quintic law (6.16) as printed; law = {law!r} contradicts it")
             law = "quintic"
-        ctrl = flight_controller(controller, platform, as_printed)
-        if bsg:
-            ctrl = CogStabilizer(platform, ctrl, theta_e_d=0.0)
-        dist = disturbance() if disturbance is not None else None
-        return simulate(
-            platform,
-            ctrl,
-            trajectory(law),
-            duration,
-            dt=dt,
-            integrator=integrator,
-            disturbance=dist,
-            seed=seed,
-            progress=progress,
-            scenario=scenario,
-            plant=plant,
-        )
+        g = flight_gains(controller, as_printed)
+        ctrl = CogStabilizer(platform, generic.controller_for(controller, platform, g), theta_e_d=0.0) if bsg else None
+        reference = instance.reference(law) if instance.reference is not None else None
+        settings = generic.MissionSettings(trajectory=reference, controller=ctrl, plant=plant, name=scenario)
+        options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": g}
+        return instance.generic(platform, controller, progress, settings, **options, **instance.settings)
 
     return runner
+
+
+STATIC = Instance(generic.mission, {"mission": STATIC_MISSION})
+"""``static-*``: the generic ``mission`` given the mission of Sec. 6.3.1.4 as data."""
+SPIRAL = Instance(generic.mission, {"mission": ""}, lambda law: Spiral())
+"""``spiral``: the generic ``mission`` flying the spiral (6.25) (not phases: the reference is given)."""
+NOISE = Instance(generic.noise, {"amplitude": NOISE_AMPLITUDE}, lambda law: static_mission(law=law))
+"""``noise``: the generic ``hover-noise`` with the amplitudes :data:`NOISE_AMPLITUDE`, along the static mission."""
+PULSE_TRAIN = Instance(generic.pulses, {"train": PULSES}, lambda law: static_mission(law=law))
+"""``pulses``: the generic ``hover-pulses`` with the pulses :data:`PULSES`, along the static mission."""
+DYNAMIC = Instance(generic.mission, {"mission": DYNAMIC_MISSION})
+"""``dynamic-bsg``: the generic ``mission`` given the mission of Sec. 6.3.3.3 as data (under the BSG)."""
 
 
 _FLIGHT = {**COMMON_OPTIONS, "duration": Option(30.0, "run length [s]")}
@@ -190,7 +230,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-idc",
         "static manipulator mission, inverse-dynamics control",
-        _flight("static-idc", lambda law: static_mission(law=law)),
+        _flight("static-idc", STATIC),
         _reordered("idc"),
         _STATIC,
         ("q-prr",),
@@ -200,7 +240,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-dsid",
         "static manipulator mission, desired-state inverse dynamics (thesis: MPC)",
-        _flight("static-dsid", lambda law: static_mission(law=law)),
+        _flight("static-dsid", STATIC),
         _reordered("dsid"),
         _STATIC,
         ("q-prr",),
@@ -210,7 +250,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "static-mfc",
         "static manipulator mission, model-free control (iPID)",
-        _flight("static-mfc", lambda law: static_mission(law=law)),
+        _flight("static-mfc", STATIC),
         _reordered("mfc"),
         _STATIC,
         ("q-prr",),
@@ -220,7 +260,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "spiral",
         "climb then spiral (6.25) from t_f = 5 s, IDC",
-        _flight("spiral", lambda law: Spiral()),
+        _flight("spiral", SPIRAL),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -230,7 +270,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "noise",
         "static mission with white noise on the generalised forces, IDC",
-        _flight("noise", lambda law: static_mission(law=law), lambda: WhiteNoise(NOISE_AMPLITUDE)),
+        _flight("noise", NOISE),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -240,7 +280,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "pulses",
         "static mission with finite pulses in the three phases, IDC",
-        _flight("pulses", lambda law: static_mission(law=law), lambda: Disturbances(PULSES)),
+        _flight("pulses", PULSE_TRAIN),
         _reordered("idc"),
         _FLIGHT,
         ("q-prr",),
@@ -250,7 +290,7 @@ FLIGHT_SCENARIOS = (
     Scenario(
         "dynamic-bsg",
         "dynamic manipulator: theta2_d = -0.5, theta_e^d = 0, BSG + MFC keep x_cm near 0",
-        _flight("dynamic-bsg", lambda law: dynamic_mission(law=law), bsg=True),
+        _flight("dynamic-bsg", DYNAMIC, bsg=True),
         _BSG_CONTROLLERS,
         _FLIGHT,
         ("q-prr",),
@@ -372,6 +412,29 @@ def contact_history(result: SimResult):
 PAYLOAD_CONTROLLERS = ("payload-idc", "payload-idc-known", "payload-idc-none", "idc", "decoupled", "mpc")
 
 
+def _payload_controller(name: str, platform, mass: float, release_time: float):
+    """The controller ``name`` of :data:`PAYLOAD_CONTROLLERS` with the thesis's gains (:func:`payload_drop`)."""
+
+    class _Told(PayloadIDC):
+        def step(self, t, state, ref):
+            if t >= release_time:
+                self.set_known_mass(0.0)
+            return super().step(t, state, ref)
+
+    g = gains.payload()
+    builders = {
+        "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
+        "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
+        "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
+        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
+        "decoupled": lambda: DecoupledController(platform, gains.idc()),
+        "mpc": lambda: make_controller("mpc", platform),
+    }
+    if name not in builders:
+        raise UnknownNameError("controller", name, PAYLOAD_CONTROLLERS)
+    return builders[name]()
+
+
 def payload_drop(
     platform=None,
     controller: str = "payload-idc",
@@ -408,45 +471,19 @@ def payload_drop(
     if not 0.0 < release_time < duration:
         raise InputError(f"release_time must lie inside the run, 0 < release_time < duration = {duration!r} s, got {release_time!r}")
     arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
+    data = {"payload": ({"time": 0.0, "mass": mass}, {"time": release_time, "mass": 0.0})}
+    trajectory = None
     if mission == "thesis":
         phases = (Phase("z", 0.0, 5.0, 10.0), Phase("x", 5.0, 10.0, 3.0), Phase("y", 10.0, 15.0, 6.0))
         phases += tuple(Phase(c, *arm_phase, v) for c, v in (("r0", r0), ("theta2", t2), ("theta3", t3)) if v != 0.0)
-        trajectory = MultiPhase(phases, name="payload-drop", names=NAMES)
+        data["phase"] = tuple(generic.phase_tables(phases))
     else:
         trajectory = Hold((0.0, 0.0, 1.0, 0.0, 0.0, 0.0, r0, t2, t3))
-
-    class _Told(PayloadIDC):
-        def step(self, t, state, ref):
-            if t >= release_time:
-                self.set_known_mass(0.0)
-            return super().step(t, state, ref)
-
-    g = gains.payload()
-    builders = {
-        "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
-        "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
-        "payload-idc-none": lambda: PayloadIDC(platform, g, payload="none"),
-        "idc": lambda: InverseDynamicsController(platform, gains.idc()),
-        "decoupled": lambda: DecoupledController(platform, gains.idc()),
-        "mpc": lambda: make_controller("mpc", platform),
-    }
-    if controller not in builders:
-        raise UnknownNameError("controller", controller, PAYLOAD_CONTROLLERS)
-    ctrl = builders[controller]()
-    schedule = PayloadSchedule((PayloadChange(0.0, mass), PayloadChange(release_time, 0.0)))
+    ctrl = _payload_controller(controller, platform, mass, release_time)
     disturbance = WhiteNoise(noise, components=(0, 1, 2)) if noise > 0.0 else None
-    res = simulate(
-        platform,
-        ctrl,
-        trajectory,
-        duration,
-        payload=schedule,
-        disturbance=disturbance,
-        seed=seed,
-        progress=progress,
-        scenario="payload-drop",
-        plant=plant,
-    )
+    settings = generic.MissionSettings(trajectory=trajectory, controller=ctrl, disturbance=disturbance, plant=plant, name="payload-drop")
+    options = {"duration": duration, "dt": SimConfig.dt, "integrator": SimConfig.integrator, "seed": seed, "law": DEFAULT_LAW}
+    res = generic.mission(platform, controller, progress, settings, mission=data, **options)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
     if getattr(ctrl, "mode", None) == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
