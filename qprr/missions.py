@@ -217,18 +217,18 @@ def phase_tables(phases) -> list[dict]:
 
 
 # ------------------------------------------------------------------------- the scenarios
-def takeoff_hover(platform=None, controller="idc", progress=False, **o):
+def takeoff_hover(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Climb from z = 0 to ``z`` over the first 40 % of the run (transition law ``law``), then hold."""
     platform = _platform(platform)
     xi0 = platform.neutral_xi()
     D = o["duration"]
     traj = MultiPhase((Phase("z", 0.0, 0.4 * D, o["z"]),), tuple(xi0), name="takeoff-hover", law=o["law"], names=platform.xi_names)
-    res = fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "takeoff-hover")
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "takeoff-hover", settings)
     _errors(res)
     return res
 
 
-def point_to_point(platform=None, controller="idc", progress=False, **o):
+def point_to_point(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Climb to ``target``'s height (first 30 %), then fly to ``target`` while the arm reaches out (30-70 %), hold."""
     platform = _platform(platform)
     D = o["duration"]
@@ -238,7 +238,7 @@ def point_to_point(platform=None, controller="idc", progress=False, **o):
     phases = [Phase("z", 0.0, 0.3 * D, z), Phase("x", 0.3 * D, 0.7 * D, x), Phase("y", 0.3 * D, 0.7 * D, y)]
     phases += [Phase(n, 0.3 * D, 0.7 * D, float(v)) for n, v in zip(platform.arm_names, q)]
     traj = MultiPhase(tuple(phases), tuple(xi0), name="fly-to", law=o["law"], names=platform.xi_names)
-    res = fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "fly-to")
+    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "fly-to", settings)
     _errors(res)
     return res
 
@@ -324,7 +324,7 @@ def payload(platform=None, controller="idc", progress=False, settings: MissionSe
     return res
 
 
-def push(platform=None, controller="opspace-impedance", progress=False, **o):
+def push(platform=None, controller="opspace-impedance", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """The end effector pressed ``penetration`` into a compliant wall ``gap`` ahead (world x) between 20 % and 50 % of
     the run, held: impedance K (derived: m w_pos^2) and wall k in series give F = penetration K k / (K + k)."""
     platform = _platform(platform)
@@ -337,7 +337,7 @@ def push(platform=None, controller="opspace-impedance", progress=False, **o):
     traj = MultiPhase((Phase("x", 0.2 * D, 0.5 * D, o["gap"] + o["penetration"]),), tuple(xi0), name="ee-push", law=o["law"], names=platform.xi_names)
     sensor = {"ee_sensor": wall.measured} if controller == "opspace-impedance" else {}
     ctrl = controller_for(controller, platform, o["gains"], **sensor)
-    res = fly(platform, ctrl, traj, o, progress, "ee-push", external_wrench=wall)
+    res = fly(platform, ctrl, traj, o, progress, "ee-push", settings, external_wrench=wall)
     force = wall.history().wrench[:, 0:3]
     res.series["ee_force"] = force
     tail = res.t >= 0.85 * D

@@ -192,12 +192,14 @@ GENERIC = (
 
 
 def _mission_runner(name: str) -> Callable[..., SimResult]:
-    """A runner of :mod:`qprr.missions` (imported on first use)."""
+    """A runner of :mod:`qprr.missions` (imported on first use); ``plant``: the robot flown when it differs from the
+    controller's model (model errors of a campaign, :func:`qprr.sim.mismatch.perturbed`), on any platform."""
 
-    def runner(platform, controller, progress, **options):
+    def runner(platform, controller, progress, plant=None, **options):
         from . import missions
 
-        return getattr(missions, name)(platform, controller, progress, **options)
+        settings = missions.MissionSettings(plant=plant)
+        return getattr(missions, name)(platform, controller, progress, settings=settings, **options)
 
     runner.__name__ = name
     return runner

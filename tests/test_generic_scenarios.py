@@ -91,3 +91,24 @@ def test_mission_unknown_coordinate_names_the_platforms_own():
 def test_every_mission_takes_any_platform_and_the_gains_option():
     for s in MISSIONS:
         assert s.platforms is None and "gains" in s.options and s.options["gains"].default == "platform"
+
+
+@pytest.mark.parametrize("name", [s.name for s in MISSIONS])
+def test_every_mission_flies_a_perturbed_plant(name):
+    """Every generic mission takes a plant other than the controller's model (campaign model errors on any platform)."""
+    assert SCENARIOS[name].takes_plant
+
+
+def test_heavier_plant_sags_below_the_hover_height():
+    """borinot under IDC (no integral action) flying a plant 10 % heavier than its model: the thrust feedforward is 10 %
+    short, so the base settles below the reference, by far more than the nominal run's error; the nominal run reaches it."""
+    from qprr.sim.mismatch import ModelError, perturbed
+
+    p = qprr.load("borinot_flying_arm_2")
+    sc = SCENARIOS["takeoff-hover"]
+    nominal = sc.run(platform=p, controller="idc", duration=4.0)
+    heavy = sc.run(platform=p, controller="idc", duration=4.0, plant=perturbed(p, ModelError(mass=1.1)))
+    dz_nominal = nominal.xi[-1, 2] - nominal.xi_d[-1, 2]
+    dz_heavy = heavy.xi[-1, 2] - heavy.xi_d[-1, 2]
+    assert abs(dz_nominal) < 1e-3
+    assert dz_heavy < -10.0 * max(abs(dz_nominal), 1e-4)
