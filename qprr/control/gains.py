@@ -112,7 +112,7 @@ class Authority:
         if not margin > 0.0:
             raise InputError(
                 f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
-                "its authority; raise f_max in the rotor file"
+                "its authority; raise f_max in the rotor file (or give the controller its gains= explicitly)"
             )
         hover = np.zeros(6)
         hover[2] = m * platform.g
@@ -198,7 +198,19 @@ def derive(controller: str, authority: Authority, targets: Targets) -> dict[str,
     raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
 
 
-DERIVED = ("idc", "dsid", "mfc", "layered-idc", "payload-idc", "decoupled", "impedance", "opspace-impedance")
+GAIN_ARGUMENTS = {
+    "idc": ("gains",),
+    "dsid": ("gains",),
+    "mfc": ("gains",),
+    "layered-idc": ("gains",),
+    "payload-idc": ("gains",),
+    "decoupled": ("gains",),
+    "impedance": ("gains", "impedance"),
+    "opspace-impedance": ("impedance",),
+}
+"""Constructor arguments :func:`derive` returns, per controller (``make_controller`` derives only those not given)."""
+
+DERIVED = tuple(GAIN_ARGUMENTS)
 """Controllers :func:`platform_gains` derives gains for (``mpc`` has cost weights, not gains)."""
 
 
@@ -285,4 +297,4 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
     return lines
 
 
-__all__ = ["DERIVED", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]
+__all__ = ["DERIVED", "GAIN_ARGUMENTS", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]
