@@ -264,8 +264,18 @@ def wind(platform=None, controller="idc", progress=False, **o):
 
 
 def motor_lag(platform=None, controller="idc", progress=False, **o):
-    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``)."""
+    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
+
+    With ``gains="platform"`` the gains are derived knowing the rotor time constant
+    (``Targets(rotor_time_constant=tau)``: the attitude loop and the roll/pitch reference filter bounded
+    by the rotors' bandwidth, :mod:`qprr.control.gains`, "Rotor lag")."""
     platform = _platform(platform)
+    if o["gains"] == "platform":
+        from .control.gains import Targets
+
+        ctrl = make_controller(controller, platform, **platform_gains(controller, platform, Targets(rotor_time_constant=o["tau"])))
+    else:
+        ctrl = controller_for(controller, platform, o["gains"])
     actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
     D = o["duration"]
     x, y, z = (float(v) for v in o["target"])
@@ -274,7 +284,7 @@ def motor_lag(platform=None, controller="idc", progress=False, **o):
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
     phases += [Phase(n, 0.1 * D, 0.6 * D, float(v)) for n, v in zip(platform.arm_names, q)]
     traj = MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
-    res = _fly(platform, controller_for(controller, platform, o["gains"]), traj, o, progress, "motor-lag", actuators=actuators)
+    res = _fly(platform, ctrl, traj, o, progress, "motor-lag", actuators=actuators)
     _errors(res, traj.final())
     return res
 

@@ -65,7 +65,9 @@ class Targets:
 
     ``position_error`` [m], ``attitude_error`` [rad], ``arm_error`` [m or rad] (> 0); ``ratio``
     (>= 1): attitude bandwidth over position bandwidth; ``cap`` [rad/s]: the largest bandwidth of any
-    loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05).
+    loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05);
+    ``rotor_time_constant`` T [s] (>= 0) of first-order rotors (0: instantaneous or unknown): when
+    known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag").
     """
 
     position_error: float = 1.0
@@ -73,8 +75,12 @@ class Targets:
     arm_error: float = 0.5
     ratio: float = 5.0
     cap: float = 40.0
+    rotor_time_constant: float = 0.0
 
     def __post_init__(self) -> None:
+        T = self.rotor_time_constant
+        if not (isinstance(T, (int, float)) and math.isfinite(T) and T >= 0.0):
+            raise InputError(f"gain target rotor_time_constant must be a finite number >= 0 s (0: instantaneous rotors), got {T!r}")
         for name in ("position_error", "attitude_error", "arm_error", "cap"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0.0):
@@ -150,11 +156,28 @@ def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray
 
     w_lift = w_of(a.thrust_margin, a.mass, t.position_error)
     w_tilt = min(w_of(a.torque[k], a.inertia[k], t.attitude_error) for k in (0, 1))
-    w_pos = min(w_lift, w_tilt / t.ratio, t.cap / t.ratio)
+    w_pos = min(w_lift, w_tilt / t.ratio, t.cap / t.ratio, rotor_bound(ROTOR_LAG_ATTITUDE, t) / t.ratio)
     w_att = t.ratio * w_pos
     w_yaw = min(w_att, w_of(a.torque[2], a.inertia[2], t.attitude_error))
     w_arm = [min(w_of(e, i, t.arm_error), w_att) for e, i in zip(a.arm_effort, a.arm_inertia)]
     return np.array([w_pos] * 3 + [w_att, w_att, w_yaw] + w_arm)
+
+
+ROTOR_LAG_ATTITUDE = 0.1
+"""w_att T <= 0.1 when the rotor time constant T is known (module docstring, "Rotor lag")."""
+ROTOR_LAG_FILTER = 0.075
+"""omega_f T <= 0.075 for the roll/pitch reference filter when T is known (module docstring, "Rotor lag")."""
+
+
+def rotor_bound(c: float, targets: Targets) -> float:
+    """c / T [rad/s] with T the rotor time constant of ``targets`` (inf when T = 0: instantaneous rotors)."""
+    T = targets.rotor_time_constant
+    return c / T if T > 0.0 else math.inf
+
+
+def tilt_filter(default: float, targets: Targets) -> float:
+    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T."""
+    return min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
 
 
 def idc_gains(w: np.ndarray, **kwargs) -> IDCGains:
@@ -181,16 +204,17 @@ def impedance_gains(authority: Authority, w: np.ndarray) -> ImpedanceGains:
 def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
     """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
     w = bandwidths(authority, targets)
+    f_idc = tilt_filter(IDCGains.filter_omega, targets)  # the class's 50 rad/s unless the rotors lag
     if controller in ("idc", "layered-idc", "payload-idc", "decoupled"):
-        return {"gains": idc_gains(w)}
+        return {"gains": idc_gains(w, filter_omega=f_idc)}
     if controller == "dsid":  # the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap
         w_d = w.copy()
         w_d[6:] = targets.cap
-        return {"gains": idc_gains(w_d, filter_omega=20.0)}
+        return {"gains": idc_gains(w_d, filter_omega=tilt_filter(20.0, targets))}
     if controller == "mfc":  # iPID (6.37): the same error polynomial (s + w)^3 on every coordinate
-        return {"gains": MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3))}
+        return {"gains": MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), filter_omega=tilt_filter(MFCGains.filter_omega, targets))}
     if controller == "impedance":
-        return {"gains": idc_gains(w), "impedance": impedance_gains(authority, w)}
+        return {"gains": idc_gains(w, filter_omega=f_idc), "impedance": impedance_gains(authority, w)}
     if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
         # borinot_flying_arm_2: derived posture loops at w_att with the end-effector task diverge in contact)
         m_d = authority.mass / targets.ratio**2  # K = m w_pos^2 with M_d = m / ratio^2: the impedance's own frequency is w_att
