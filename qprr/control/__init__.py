@@ -40,6 +40,7 @@ from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
+from .gains import GAIN_ARGUMENTS, platform_gains
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
     DesiredStateInverseDynamics,
@@ -48,7 +49,6 @@ from .inverse_dynamics import (
     LayeredIDC,
     PayloadIDC,
 )
-from .gains import GAIN_ARGUMENTS, platform_gains
 from .mfc import MFCGains, ModelFreeController, ipid
 from .mpc_stats import INSTALL as _MPC_INSTALL
 from .opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance

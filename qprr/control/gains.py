@@ -39,6 +39,7 @@ thesis's printed tables are registered gain sets (:data:`qprr.registry.GAIN_TABL
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +52,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
     import tomli as tomllib
 
+from ..charts import rate_map
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
 from .impedance import ImpedanceGains
@@ -67,7 +69,9 @@ class Targets:
     (>= 1): attitude bandwidth over position bandwidth; ``cap`` [rad/s]: the largest bandwidth of any
     loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05);
     ``rotor_time_constant`` T [s] (>= 0) of first-order rotors (0: instantaneous or unknown): when
-    known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag").
+    known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag");
+    ``control_period`` [s] (> 0): the period the MFC's estimator differences the rates over (the
+    simulator's default step, 1 ms; module docstring, "MFC").
     """
 
     position_error: float = 1.0
@@ -76,12 +80,13 @@ class Targets:
     ratio: float = 5.0
     cap: float = 40.0
     rotor_time_constant: float = 0.0
+    control_period: float = 1e-3
 
     def __post_init__(self) -> None:
         T = self.rotor_time_constant
         if not (isinstance(T, (int, float)) and math.isfinite(T) and T >= 0.0):
             raise InputError(f"gain target rotor_time_constant must be a finite number >= 0 s (0: instantaneous rotors), got {T!r}")
-        for name in ("position_error", "attitude_error", "arm_error", "cap"):
+        for name in ("position_error", "attitude_error", "arm_error", "cap", "control_period"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0.0):
                 raise InputError(f"gain target {name} must be a finite number > 0, got {v!r}")
@@ -95,7 +100,11 @@ class Authority:
 
     ``mass`` m [kg]; ``inertia`` (3,) diagonal of the base's rotational inertia at B, body axes [kg m^2];
     ``thrust_margin`` [N] (sum f_max a_z - m g); ``torque`` (3,) [N m] about the body axes around hover;
-    ``arm_inertia`` (n_arm,) [kg m^2 or kg]; ``arm_effort`` (n_arm,) [N m or N] (inf: unlimited).
+    ``arm_inertia`` (n_arm,) [kg m^2 or kg]; ``arm_effort`` (n_arm,) [N m or N] (inf: unlimited);
+    ``inverse_inertia`` ((min, max), ...) per coordinate of xi: the range of (B^-1)_ii over the arm's
+    workspace at level attitude (B = S^T M S, Thesis (5.53); x, y, z averaged as the MFC's alpha is)
+    [1/kg or 1/(kg m^2)]; () when not measured (the MFC's gains need it); ``coupling``: the largest
+    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`).
     """
 
     mass: float
@@ -104,6 +113,8 @@ class Authority:
     torque: tuple[float, float, float]
     arm_inertia: tuple[float, ...]
     arm_effort: tuple[float, ...]
+    inverse_inertia: tuple[tuple[float, float], ...] = ()
+    coupling: float = 1.0
 
     @classmethod
     def from_platform(cls, platform: Platform) -> Authority:
@@ -133,6 +144,7 @@ class Authority:
             tuple(float(v) for v in torque),
             tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
             tuple(float(v) for v in platform.arm_effort_limits),
+            *workspace_inverse_inertia(platform),
         )
 
     def scaled(self, k: float) -> Authority:
@@ -144,7 +156,42 @@ class Authority:
             tuple(k * v for v in self.torque),
             tuple(k * v for v in self.arm_inertia),
             tuple(k * v for v in self.arm_effort),
+            tuple((lo / k, hi / k) for lo, hi in self.inverse_inertia),
+            self.coupling,
         )
+
+
+WORKSPACE_SAMPLES = 256
+"""Arm configurations (a grid, at most this many) over which :func:`workspace_inverse_inertia` reads B^-1."""
+
+
+def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
+    """The MFC's inputs over a grid of the arm's joint ranges at level attitude (B = S^T M S, Thesis (5.53)).
+
+    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
+    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).  Each joint takes
+    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi
+    where unlimited) and its neutral value.
+    """
+    n = platform.n_arm
+    q0 = platform.neutral_q()
+    k = max(2, int(math.floor(WORKSPACE_SAMPLES ** (1.0 / n)))) if n else 1
+    axes = [  # the neutral value too: a folded arm (the inertia about a joint smallest) is often there
+        np.unique(np.append(np.linspace(lo if math.isfinite(lo) else c - math.pi, hi if math.isfinite(hi) else c + math.pi, k), c))
+        for lo, hi, c in zip(platform.arm_lower, platform.arm_upper, q0[7:])
+    ]
+    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
+    data = platform.data()
+    inverses = []
+    for q_arm in itertools.product(*axes) if n else [()]:
+        q = q0.copy()
+        q[7:] = q_arm
+        inverses.append(np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S))
+    d = np.array([np.diag(Bi) for Bi in inverses])
+    d[:, 0:3] = d[:, 0:3].mean(axis=1, keepdims=True)
+    lo, hi = d.min(axis=0), d.max(axis=0)
+    lam = max(float(np.linalg.eigvals(Bi / hi[:, None]).real.max()) for Bi in inverses)
+    return tuple((float(a), float(b)) for a, b in zip(lo, hi)), lam
 
 
 def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
@@ -201,6 +248,27 @@ def impedance_gains(authority: Authority, w: np.ndarray) -> ImpedanceGains:
     )
 
 
+MFC_EIGENVALUE = 1.5
+"""The MFC's alpha puts the estimator's largest eigenvalue at 1.5 (< 2: contraction; module docstring, "MFC")."""
+MFC_ESTIMATOR = 4.0
+"""w_i <= g_i / 4 with g_i the slowest rate of the MFC's estimator (module docstring, "MFC")."""
+
+
+def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains:
+    """iPID (6.37): (s + w_i)^3 per coordinate, w_i bounded by its estimator's rate; alpha from the workspace (module docstring, "MFC")."""
+    if len(authority.inverse_inertia) != w.shape[0]:
+        raise InputError(
+            f"MFC gains need the inverse-inertia range of all {w.shape[0]} coordinates (Authority.from_platform reads it), "
+            f"got {len(authority.inverse_inertia)}"
+        )
+    lo, hi = (np.array(v) for v in zip(*authority.inverse_inertia))
+    alpha = (authority.coupling / MFC_EIGENVALUE) * hi
+    g = lo / (alpha * targets.control_period)  # slowest estimator rate [rad/s], at the largest inertia
+    w = np.minimum(w, g / MFC_ESTIMATOR)  # the iPID no faster than a quarter of its estimator
+    f = tilt_filter(MFCGains.filter_omega, targets)
+    return MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), alpha=tuple(alpha), filter_omega=f)
+
+
 def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
     """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
     w = bandwidths(authority, targets)
@@ -211,8 +279,8 @@ def derive(controller: str, authority: Authority, targets: Targets) -> dict[str,
         w_d = w.copy()
         w_d[6:] = targets.cap
         return {"gains": idc_gains(w_d, filter_omega=tilt_filter(20.0, targets))}
-    if controller == "mfc":  # iPID (6.37): the same error polynomial (s + w)^3 on every coordinate
-        return {"gains": MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), filter_omega=tilt_filter(MFCGains.filter_omega, targets))}
+    if controller == "mfc":
+        return {"gains": mfc_gains(authority, w, targets)}
     if controller == "impedance":
         return {"gains": idc_gains(w, filter_omega=f_idc), "impedance": impedance_gains(authority, w)}
     if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
@@ -321,4 +389,24 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
     return lines
 
 
-__all__ = ["DERIVED", "GAIN_ARGUMENTS", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]
+__all__ = [
+    "DERIVED",
+    "GAIN_ARGUMENTS",
+    "MFC_ESTIMATOR",
+    "MFC_EIGENVALUE",
+    "ROTOR_LAG_ATTITUDE",
+    "ROTOR_LAG_FILTER",
+    "Authority",
+    "Targets",
+    "bandwidths",
+    "derive",
+    "gain_lines",
+    "idc_gains",
+    "impedance_gains",
+    "load_gains",
+    "mfc_gains",
+    "platform_gains",
+    "rotor_bound",
+    "tilt_filter",
+    "workspace_inverse_inertia",
+]
