@@ -30,8 +30,45 @@ each coordinate moves: ``M = m`` (or ``I_z``, ``M_jj``), ``K = M w^2``, ``D = 2 
 damped); the end-effector impedance (``opspace-impedance``) has ``K = m w_pos^2`` with the desired
 mass ``M_d = m / ratio^2`` (its own frequency is then ``w_att``; with ``M_d = m`` it was too slow to
 reach a wall on borinot_flying_arm_2), critically damped, so scaling the masses, inertias and actuators by k scales them by k and leaves the
-acceleration gains unchanged.  :func:`platform_gains` returns the constructor keyword arguments
-of a controller (``make_controller(name, platform, **platform_gains(name, platform))``);
+acceleration gains unchanged.
+
+**Rotor lag.**  First-order rotors (``Targets.rotor_time_constant`` T > 0, e.g. ``qprr simulate
+motor-lag``) bound two loops: ``w_att <= 0.1 / T`` (the attitude crossover, about 3 w_att for
+(s + w)^3, then sees at most atan(0.3) = 17 deg of rotor lag; w_pos follows as w_att / ratio) and
+the roll/pitch reference filter of (6.17) ``omega_f <= 0.075 / T`` (the controller's own default,
+50 rad/s for the IDC family, is kept when smaller).  The filter is what diverged: its output's
+acceleration feeds the attitude command with a gain up to omega_f^2, and the IDC's arm torques,
+applied at once, react on the base while the rotors' counter-wrench lags, so the arm and the
+attitude drive each other (measured, motor-lag on examples/my_platform at T = 5 ms: the error grows
+by x2.4 every 2 ms from the first arm motion; on a 4 s run omega_f = 20 settles, 25 and 50 diverge;
+at T = 10 ms 10 settles, 15 leaves 2.4 m errors).  With the bounds, motor-lag settles at T = 5, 10 and 20 ms on the Q-PRR,
+borinot_flying_arm_2, HEX-RRR and examples/my_platform.  T = 0 (the default): no bound.
+
+**MFC.**  The iPID (6.37) realises y'' = v only through its estimate F_est = y''_meas - alpha u_prev,
+which a constant alpha makes a loop of its own: with beta = (B^-1)_ii the true inverse inertia and
+T_c the control period, alpha u integrates (v - y'') at the rate g = beta / (alpha T_c), and the
+error polynomial becomes s^4 + g s^3 + g k_D s^2 + g k_P s + g k_I, Hurwitz for (s + w)^3 gains only
+when g > 9 w / 8.  beta changes with the arm's posture (examples/my_platform's turret: 116 to 34 500
+kg^-1 m^-2 between the arm reached out and folded along the turret axis), so:
+
+* ``alpha_i = (lambda / 1.5) max_q beta_i(q)``, lambda the largest eigenvalue of
+  diag(1 / max beta) B^-1(q) over the workspace (:func:`workspace_inverse_inertia`, a grid of the
+  joint ranges): the estimator's step matrix I - diag(1/alpha) B^-1 keeps its eigenvalues in
+  (-0.5, 1) everywhere (contraction needs < 2; the class's rule reads alpha = 3 beta at the initial
+  state only);
+* ``w_i <= g_i / 4`` with ``g_i = min_q beta_i(q) / (alpha_i T_c)`` (``Targets.control_period``, 1 ms:
+  the simulator's default step), on top of the bandwidths above.
+
+On examples/my_platform the turret's g is 2.4 rad/s at 1 ms: its loop runs at 0.60 rad/s and
+hover-reach tracks it to 0.20 rad RMSE (the class's K_P = 60, K_I = 8, K_D = 35: 0.24 rad, on the
+edge of the quartic's stability; the previous derived (s + 9.6)^3: 1.2 rad, unstable); the limit
+is the control period, 0.08 rad at 0.5 ms and 0.018 rad at 0.25 ms (``Targets(control_period=...)``
+with ``simulate(..., dt=...)``).  On hover-reach the arm joints of the Q-PRR, borinot_flying_arm_2,
+HEX-RRR and examples/my_platform (but its turret) track 10 to 60 times better than with the class's gains.
+
+:func:`platform_gains` returns the constructor keyword arguments
+of a controller (``make_controller(name, platform, **platform_gains(name, platform))``, which is
+also :func:`qprr.control.make_controller`'s default);
 :func:`load_gains` reads overrides from a TOML file; :func:`gain_lines` prints them.  The
 thesis's printed tables are registered gain sets (:data:`qprr.registry.GAIN_TABLES`).
 """
