@@ -64,7 +64,7 @@ hover-reach tracks it to 0.20 rad RMSE (the class's K_P = 60, K_I = 8, K_D = 35:
 edge of the quartic's stability; the previous derived (s + 9.6)^3: 1.2 rad, unstable); the limit
 is the control period, 0.08 rad at 0.5 ms and 0.018 rad at 0.25 ms (``Targets(control_period=...)``
 with ``simulate(..., dt=...)``).  On hover-reach the arm joints of the Q-PRR, borinot_flying_arm_2,
-HEX-RRR and examples/my_platform (but its turret) track 10 to 60 times better than with the class's gains.
+HEX-RRR and examples/my_platform (but its turret) track 5 to 75 times better (RMSE) than with the class's gains.
 
 :func:`platform_gains` returns the constructor keyword arguments
 of a controller (``make_controller(name, platform, **platform_gains(name, platform))``, which is
