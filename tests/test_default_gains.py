@@ -116,7 +116,15 @@ def test_hover_from_a_base_and_arm_offset_converges(platform):
 
 # ------------------------------------------------------------------------------------------- motor lag
 MOTOR_LAG = dict(
-    duration=10.0, dt=1e-3, integrator="midpoint", seed=0, law="septic", gains="platform", target=(1.0, 0.5, 2.0), reach_fraction=0.6, thrust_factor=1e-5
+    duration=10.0,
+    dt=1e-3,
+    integrator="midpoint",
+    seed=0,
+    law="septic",
+    gains="platform",
+    target=(1.0, 0.5, 2.0),
+    reach_fraction=0.6,
+    thrust_factor=1e-5,
 )
 
 
