@@ -12,8 +12,8 @@ from qprr import charts as ch
 from qprr.analysis import opspace_model_xi
 from qprr.charts import State
 from qprr.control import InverseDynamicsController, make_controller
-from qprr.control.gains import platform_gains
 from qprr.control.base import Reference
+from qprr.control.gains import platform_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from qprr.errors import InputError, UnknownNameError
 from qprr.joint_friction import JointFriction
