@@ -83,7 +83,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         except QprrError as exc:
             return fail(prog, f"--platform {name!r}: {exc}" if args.platform and not args.urdf else str(exc))
     if args.print_gains:
-        return _print_gains(sc, platform, args.controller or sc.controllers[0], options.get("gains"))
+        return _print_gains(sc, platform, args.controller or sc.controllers[0], options)
     progress = not args.quiet
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
@@ -108,16 +108,18 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return code
 
 
-def _print_gains(sc, platform, controller: str, gains: str | None) -> int:
-    """Print the gains ``controller`` gets in scenario ``sc`` on ``platform`` (``--print-gains``), without running."""
+def _print_gains(sc, platform, controller: str, options: dict) -> int:
+    """Print the gains ``controller`` gets in scenario ``sc`` on ``platform`` with the run's ``options``
+    (``--print-gains``), without running."""
     from .control.gains import gain_lines
-    from .missions import gain_arguments
+    from .missions import flown_gain_arguments
     from .platforms import load as load_platform
 
     platform = platform or load_platform()
-    spec = gains or (sc.options["gains"].default if "gains" in sc.options else "class")
+    spec = options.get("gains") or (sc.options["gains"].default if "gains" in sc.options else "class")
+    values = {**{k: o.default for k, o in sc.options.items()}, **options}
     try:
-        kwargs = gain_arguments(controller, platform, spec)
+        kwargs = flown_gain_arguments(sc.name, controller, platform, spec, values)
     except QprrError as exc:
         return fail("qprr simulate", f"--gains {spec!r}: {exc}")
     print(f"gains of {controller} in {sc.name} on {platform.name} ({spec})")

@@ -365,12 +365,19 @@ def wind(platform=None, controller="idc", progress=False, settings: MissionSetti
 def motor_lag(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
 
-    ``settings`` (:class:`MissionSettings`): another reference (the options ``target`` and ``reach_fraction`` are then
-    not read), a built controller, a disturbance, the result's name."""
+    With ``gains="platform"`` the gains are derived knowing the rotor time constant
+    (``Targets(rotor_time_constant=tau)``: the attitude loop and the roll/pitch reference filter bounded
+    by the rotors' bandwidth, :mod:`qprr.control.gains`, "Rotor lag").  ``settings`` (:class:`MissionSettings`):
+    another reference (the options ``target`` and ``reach_fraction`` are then not read), a built controller, a
+    disturbance, the result's name."""
     platform = _platform(platform)
+    if o["gains"] == "platform" and settings.controller is None:
+        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, o["tau"]))
+    else:
+        ctrl = _controller(controller, platform, o, settings)
     actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
     traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
-    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "motor-lag", settings, actuators=actuators)
+    res = fly(platform, ctrl, traj, o, progress, "motor-lag", settings, actuators=actuators)
     _errors(res)
     return res
 
@@ -384,6 +391,23 @@ def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
     phases += [Phase(n, 0.1 * D, 0.6 * D, float(v)) for n, v in zip(platform.arm_names, q)]
     return MultiPhase(tuple(phases), tuple(xi0), name="motor-lag", law=o["law"], names=platform.xi_names)
+
+
+def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gains, options: dict) -> dict[str, object]:
+    """The gain arguments ``controller`` is built with in the generic ``scenario`` (``--print-gains``): those of
+    :func:`gain_arguments`, except motor-lag's derived gains, which know its rotor time constant (:func:`lag_gains`;
+    ``options`` the run's, missing ones at the scenario's defaults)."""
+    if scenario == "motor-lag" and gains == "platform":
+        return lag_gains(controller, platform, options["tau"])
+    return gain_arguments(controller, platform, gains)
+
+
+def lag_gains(controller: str, platform: Platform, tau: float) -> dict[str, object]:
+    """The derived gains of ``controller`` for rotors of time constant ``tau`` [s] (motor-lag's default, and what
+    ``--print-gains`` shows for it): :func:`qprr.control.gains.platform_gains` with ``Targets(rotor_time_constant=tau)``."""
+    from .control.gains import Targets
+
+    return platform_gains(controller, platform, Targets(rotor_time_constant=tau))
 
 
 def noise(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, *, amplitude=None, **o):

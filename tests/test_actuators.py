@@ -16,7 +16,7 @@ import pytest
 
 import qprr
 from qprr.charts import xi_to_qv
-from qprr.control import make_controller
+from qprr.control import IDCGains, make_controller
 from qprr.control.base import Controller
 from qprr.errors import InputError, ShapeError, UnknownNameError
 from qprr.platforms import rotor_dynamics
@@ -161,7 +161,7 @@ def _final(name: str, integrator: str, substeps: int):
     kw = CASES[name]()
     res = simulate(
         PLATFORM,
-        make_controller("idc", PLATFORM),
+        make_controller("idc", PLATFORM, gains=IDCGains.default(PLATFORM.n_arm)),  # the fixed (s + 6)^2 arm, (s + 10)^3 attitude gains
         Hold(tuple(XI_REF)),
         0.5,
         dt=T_C / substeps,

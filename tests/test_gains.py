@@ -133,3 +133,14 @@ def test_print_gains_names_the_platforms_coordinates(capsys):
     assert main(["simulate", "takeoff-hover", "--platform", "borinot_flying_arm_2", "--gains", "q-prr:idc", "--print-gains"]) == 0
     assert "kp" in capsys.readouterr().out  # a registered table prints; running it on borinot would fail on its size
     assert main(["simulate", "static-idc", "--gains", "x.toml"]) == 2
+
+
+def test_print_gains_of_motor_lag_are_the_flown_ones(capsys):
+    """motor-lag derives its gains knowing the rotor time constant: --print-gains shows those, for the tau of the run
+    (the roll/pitch reference filter at 0.075 / tau)."""
+    from qprr.missions import lag_gains
+
+    assert main(["simulate", "motor-lag", "--set", "tau=0.02", "--print-gains"]) == 0
+    out = capsys.readouterr().out
+    assert "filter_omega = 3.75" in out
+    assert lag_gains("idc", qprr.load(), 0.02)["gains"].filter_omega == pytest.approx(3.75, rel=1e-12)

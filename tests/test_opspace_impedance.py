@@ -13,6 +13,7 @@ from qprr.analysis import opspace_model_xi
 from qprr.charts import State
 from qprr.control import InverseDynamicsController, make_controller
 from qprr.control.base import Reference
+from qprr.control.gains import platform_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from qprr.errors import InputError, UnknownNameError
 from qprr.joint_friction import JointFriction
@@ -275,7 +276,14 @@ def test_input_errors():
         OperationalSpaceImpedance(p, at="desired")
     c = OperationalSpaceImpedance(p, tilt="single", output="xi", name="ops-single")  # options of the core pass on
     assert (c.tilt_mode, c.output, c.name, c.realizable) == ("single", "xi", "ops-single", True)
-    assert make_controller("opspace-impedance", p).impedance.mass is None
+    assert OperationalSpaceImpedance(p).impedance.mass is None  # the class's default: the natural inertia, no sensor
+    # make_controller's default is the platform-derived impedance, whose desired mass needs the contact force
+    with pytest.raises(InputError, match="ee_sensor"):
+        make_controller("opspace-impedance", p)
+    derived = platform_gains("opspace-impedance", p)["impedance"]
+    c = make_controller("opspace-impedance", p, ee_sensor=lambda t: np.zeros(6))
+    np.testing.assert_array_equal(c.impedance.stiffness, derived.stiffness)
+    np.testing.assert_array_equal(c.impedance.mass, derived.mass)
 
 
 # ------------------------------------------------------------------------------ scenario

@@ -22,7 +22,10 @@ name             controller                                              thesis
 impedance``      impedance as a task on the inverse-dynamics core)
 ===============  ======================================================  ================================
 
-The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
+Default gains: :func:`make_controller` derives them from the platform (:func:`qprr.control.gains.platform_gains`:
+critically damped poles (s + w)^2, (s + w)^3 with bandwidths w from the thrust, torque and joint effort
+authority); the classes' own defaults (``IDCGains.default`` ...) apply only when a class is built
+directly.  The thesis's gain tables are in :mod:`qprr.thesis.gains`; its CoG stabiliser (BSG) in
 :mod:`qprr.thesis.bsg`.  ``mpc`` is registered only when crocoddyl can be imported (the
 ``mpc`` extra, docs/mpc.md); otherwise :func:`make_controller` raises
 :class:`~qprr.errors.MissingDependencyError` with the install command.
@@ -37,6 +40,7 @@ from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
+from .gains import GAIN_ARGUMENTS, platform_gains
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
     DesiredStateInverseDynamics,
@@ -80,7 +84,19 @@ if find_spec("crocoddyl") is not None:  # registered only when the optional depe
 
 
 def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
-    """A new controller by name (see :data:`CONTROLLERS`); keyword arguments go to its constructor.
+    """A new controller by name (see :data:`CONTROLLERS`) with gains derived from ``platform``; keyword arguments
+    go to its constructor.
+
+    Default gains: for every controller of :data:`qprr.control.gains.GAIN_ARGUMENTS` (all but ``mpc``, which has
+    cost weights), ``platform_gains(name, platform)``: each coordinate of xi gets a bandwidth w from the
+    platform's actuator authority at its neutral configuration and a critically damped error polynomial,
+    (s + w)^3 on roll, pitch, yaw (k_D = 3 w, k_P = 3 w^2, k_I = w^3) and (s + w)^2 on position and arm
+    (k_D = 2 w, k_P = w^2); the impedance filters get M = the moved inertia, K = M w^2, D = 2 M w (the
+    formulas for w: :mod:`qprr.control.gains`).  An explicit ``gains=`` or ``impedance=`` replaces that
+    argument only (the other stays derived); ``gains=IDCGains.default(n_arm)`` gives the class's fixed
+    defaults, ``qprr.thesis.gains`` the thesis's tables.  ``opspace-impedance``'s derived impedance has a
+    desired mass (m / ratio^2), so it needs ``ee_sensor`` (the contact force).  A platform whose rotors cannot hover it has no
+    derived gains: :class:`~qprr.errors.InputError` (pass ``gains=`` explicitly).
 
     An optional controller whose dependency is missing raises :class:`~qprr.errors.MissingDependencyError`
     with the install command.
@@ -89,6 +105,10 @@ def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
         if name in OPTIONAL:
             raise MissingDependencyError(*OPTIONAL[name])
         raise UnknownNameError("controller", name, tuple(CONTROLLERS))
+    missing = [arg for arg in GAIN_ARGUMENTS.get(name, ()) if arg not in kwargs]
+    if missing:
+        derived = platform_gains(name, platform)
+        kwargs = {**{arg: derived[arg] for arg in missing}, **kwargs}
     return CONTROLLERS[name](platform, **kwargs)
 
 

@@ -30,8 +30,45 @@ each coordinate moves: ``M = m`` (or ``I_z``, ``M_jj``), ``K = M w^2``, ``D = 2 
 damped); the end-effector impedance (``opspace-impedance``) has ``K = m w_pos^2`` with the desired
 mass ``M_d = m / ratio^2`` (its own frequency is then ``w_att``; with ``M_d = m`` it was too slow to
 reach a wall on borinot_flying_arm_2), critically damped, so scaling the masses, inertias and actuators by k scales them by k and leaves the
-acceleration gains unchanged.  :func:`platform_gains` returns the constructor keyword arguments
-of a controller (``make_controller(name, platform, **platform_gains(name, platform))``);
+acceleration gains unchanged.
+
+**Rotor lag.**  First-order rotors (``Targets.rotor_time_constant`` T > 0, e.g. ``qprr simulate
+motor-lag``) bound two loops: ``w_att <= 0.1 / T`` (the attitude crossover, about 3 w_att for
+(s + w)^3, then sees at most atan(0.3) = 17 deg of rotor lag; w_pos follows as w_att / ratio) and
+the roll/pitch reference filter of (6.17) ``omega_f <= 0.075 / T`` (the controller's own default,
+50 rad/s for the IDC family, is kept when smaller).  The filter is what diverged: its output's
+acceleration feeds the attitude command with a gain up to omega_f^2, and the IDC's arm torques,
+applied at once, react on the base while the rotors' counter-wrench lags, so the arm and the
+attitude drive each other (measured, motor-lag on examples/my_platform at T = 5 ms: the error grows
+by x2.4 every 2 ms from the first arm motion; on a 4 s run omega_f = 20 settles, 25 and 50 diverge;
+at T = 10 ms 10 settles, 15 leaves 2.4 m errors).  With the bounds, motor-lag settles at T = 5, 10 and 20 ms on the Q-PRR,
+borinot_flying_arm_2, HEX-RRR and examples/my_platform.  T = 0 (the default): no bound.
+
+**MFC.**  The iPID (6.37) realises y'' = v only through its estimate F_est = y''_meas - alpha u_prev,
+which a constant alpha makes a loop of its own: with beta = (B^-1)_ii the true inverse inertia and
+T_c the control period, alpha u integrates (v - y'') at the rate g = beta / (alpha T_c), and the
+error polynomial becomes s^4 + g s^3 + g k_D s^2 + g k_P s + g k_I, Hurwitz for (s + w)^3 gains only
+when g > 9 w / 8.  beta changes with the arm's posture (examples/my_platform's turret: 116 to 34 500
+kg^-1 m^-2 between the arm reached out and folded along the turret axis), so:
+
+* ``alpha_i = (lambda / 1.5) max_q beta_i(q)``, lambda the largest eigenvalue of
+  diag(1 / max beta) B^-1(q) over the workspace (:func:`workspace_inverse_inertia`, a grid of the
+  joint ranges): the estimator's step matrix I - diag(1/alpha) B^-1 keeps its eigenvalues in
+  (-0.5, 1) everywhere (contraction needs < 2; the class's rule reads alpha = 3 beta at the initial
+  state only);
+* ``w_i <= g_i / 4`` with ``g_i = min_q beta_i(q) / (alpha_i T_c)`` (``Targets.control_period``, 1 ms:
+  the simulator's default step), on top of the bandwidths above.
+
+On examples/my_platform the turret's g is 2.4 rad/s at 1 ms: its loop runs at 0.60 rad/s and
+hover-reach tracks it to 0.20 rad RMSE (the class's K_P = 60, K_I = 8, K_D = 35: 0.24 rad, on the
+edge of the quartic's stability; the previous derived (s + 9.6)^3: 1.2 rad, unstable); the limit
+is the control period, 0.08 rad at 0.5 ms and 0.018 rad at 0.25 ms (``Targets(control_period=...)``
+with ``simulate(..., dt=...)``).  On hover-reach the arm joints of the Q-PRR, borinot_flying_arm_2,
+HEX-RRR and examples/my_platform (but its turret) track 5 to 75 times better (RMSE) than with the class's gains.
+
+:func:`platform_gains` returns the constructor keyword arguments
+of a controller (``make_controller(name, platform, **platform_gains(name, platform))``, which is
+also :func:`qprr.control.make_controller`'s default);
 :func:`load_gains` reads overrides from a TOML file; :func:`gain_lines` prints them.  The
 thesis's printed tables are registered gain sets (:data:`qprr.registry.GAIN_TABLES`).
 """
@@ -39,6 +76,7 @@ thesis's printed tables are registered gain sets (:data:`qprr.registry.GAIN_TABL
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -51,6 +89,7 @@ try:
 except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
     import tomli as tomllib
 
+from ..charts import rate_map
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
 from .impedance import ImpedanceGains
@@ -65,7 +104,11 @@ class Targets:
 
     ``position_error`` [m], ``attitude_error`` [rad], ``arm_error`` [m or rad] (> 0); ``ratio``
     (>= 1): attitude bandwidth over position bandwidth; ``cap`` [rad/s]: the largest bandwidth of any
-    loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05).
+    loop (a fraction of the control rate; 1 kHz control: 40 rad/s keeps w dt < 0.05);
+    ``rotor_time_constant`` T [s] (>= 0) of first-order rotors (0: instantaneous or unknown): when
+    known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag");
+    ``control_period`` [s] (> 0): the period the MFC's estimator differences the rates over (the
+    simulator's default step, 1 ms; module docstring, "MFC").
     """
 
     position_error: float = 1.0
@@ -73,9 +116,14 @@ class Targets:
     arm_error: float = 0.5
     ratio: float = 5.0
     cap: float = 40.0
+    rotor_time_constant: float = 0.0
+    control_period: float = 1e-3
 
     def __post_init__(self) -> None:
-        for name in ("position_error", "attitude_error", "arm_error", "cap"):
+        T = self.rotor_time_constant
+        if not (isinstance(T, (int, float)) and math.isfinite(T) and T >= 0.0):
+            raise InputError(f"gain target rotor_time_constant must be a finite number >= 0 s (0: instantaneous rotors), got {T!r}")
+        for name in ("position_error", "attitude_error", "arm_error", "cap", "control_period"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0.0):
                 raise InputError(f"gain target {name} must be a finite number > 0, got {v!r}")
@@ -89,7 +137,11 @@ class Authority:
 
     ``mass`` m [kg]; ``inertia`` (3,) diagonal of the base's rotational inertia at B, body axes [kg m^2];
     ``thrust_margin`` [N] (sum f_max a_z - m g); ``torque`` (3,) [N m] about the body axes around hover;
-    ``arm_inertia`` (n_arm,) [kg m^2 or kg]; ``arm_effort`` (n_arm,) [N m or N] (inf: unlimited).
+    ``arm_inertia`` (n_arm,) [kg m^2 or kg]; ``arm_effort`` (n_arm,) [N m or N] (inf: unlimited);
+    ``inverse_inertia`` ((min, max), ...) per coordinate of xi: the range of (B^-1)_ii over the arm's
+    workspace at level attitude (B = S^T M S, Thesis (5.53); x, y, z averaged as the MFC's alpha is)
+    [1/kg or 1/(kg m^2)]; () when not measured (the MFC's gains need it); ``coupling``: the largest
+    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`).
     """
 
     mass: float
@@ -98,6 +150,8 @@ class Authority:
     torque: tuple[float, float, float]
     arm_inertia: tuple[float, ...]
     arm_effort: tuple[float, ...]
+    inverse_inertia: tuple[tuple[float, float], ...] = ()
+    coupling: float = 1.0
 
     @classmethod
     def from_platform(cls, platform: Platform) -> Authority:
@@ -112,7 +166,7 @@ class Authority:
         if not margin > 0.0:
             raise InputError(
                 f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
-                "its authority; raise f_max in the rotor file"
+                "its authority; raise f_max in the rotor file (or give the controller its gains= explicitly)"
             )
         hover = np.zeros(6)
         hover[2] = m * platform.g
@@ -127,6 +181,7 @@ class Authority:
             tuple(float(v) for v in torque),
             tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
             tuple(float(v) for v in platform.arm_effort_limits),
+            *workspace_inverse_inertia(platform),
         )
 
     def scaled(self, k: float) -> Authority:
@@ -138,7 +193,42 @@ class Authority:
             tuple(k * v for v in self.torque),
             tuple(k * v for v in self.arm_inertia),
             tuple(k * v for v in self.arm_effort),
+            tuple((lo / k, hi / k) for lo, hi in self.inverse_inertia),
+            self.coupling,
         )
+
+
+WORKSPACE_SAMPLES = 256
+"""Arm configurations (a grid, at most this many) over which :func:`workspace_inverse_inertia` reads B^-1."""
+
+
+def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
+    """The MFC's inputs over a grid of the arm's joint ranges at level attitude (B = S^T M S, Thesis (5.53)).
+
+    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
+    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).  Each joint takes
+    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi
+    where unlimited) and its neutral value.
+    """
+    n = platform.n_arm
+    q0 = platform.neutral_q()
+    k = max(2, int(math.floor(WORKSPACE_SAMPLES ** (1.0 / n)))) if n else 1
+    axes = [  # the neutral value too: a folded arm (the inertia about a joint smallest) is often there
+        np.unique(np.append(np.linspace(lo if math.isfinite(lo) else c - math.pi, hi if math.isfinite(hi) else c + math.pi, k), c))
+        for lo, hi, c in zip(platform.arm_lower, platform.arm_upper, q0[7:])
+    ]
+    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
+    data = platform.data()
+    inverses = []
+    for q_arm in itertools.product(*axes) if n else [()]:
+        q = q0.copy()
+        q[7:] = q_arm
+        inverses.append(np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S))
+    d = np.array([np.diag(Bi) for Bi in inverses])
+    d[:, 0:3] = d[:, 0:3].mean(axis=1, keepdims=True)
+    lo, hi = d.min(axis=0), d.max(axis=0)
+    lam = max(float(np.linalg.eigvals(Bi / hi[:, None]).real.max()) for Bi in inverses)
+    return tuple((float(a), float(b)) for a, b in zip(lo, hi)), lam
 
 
 def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
@@ -150,11 +240,28 @@ def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray
 
     w_lift = w_of(a.thrust_margin, a.mass, t.position_error)
     w_tilt = min(w_of(a.torque[k], a.inertia[k], t.attitude_error) for k in (0, 1))
-    w_pos = min(w_lift, w_tilt / t.ratio, t.cap / t.ratio)
+    w_pos = min(w_lift, w_tilt / t.ratio, t.cap / t.ratio, rotor_bound(ROTOR_LAG_ATTITUDE, t) / t.ratio)
     w_att = t.ratio * w_pos
     w_yaw = min(w_att, w_of(a.torque[2], a.inertia[2], t.attitude_error))
     w_arm = [min(w_of(e, i, t.arm_error), w_att) for e, i in zip(a.arm_effort, a.arm_inertia)]
     return np.array([w_pos] * 3 + [w_att, w_att, w_yaw] + w_arm)
+
+
+ROTOR_LAG_ATTITUDE = 0.1
+"""w_att T <= 0.1 when the rotor time constant T is known (module docstring, "Rotor lag")."""
+ROTOR_LAG_FILTER = 0.075
+"""omega_f T <= 0.075 for the roll/pitch reference filter when T is known (module docstring, "Rotor lag")."""
+
+
+def rotor_bound(c: float, targets: Targets) -> float:
+    """c / T [rad/s] with T the rotor time constant of ``targets`` (inf when T = 0: instantaneous rotors)."""
+    T = targets.rotor_time_constant
+    return c / T if T > 0.0 else math.inf
+
+
+def tilt_filter(default: float, targets: Targets) -> float:
+    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T."""
+    return min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
 
 
 def idc_gains(w: np.ndarray, **kwargs) -> IDCGains:
@@ -178,19 +285,41 @@ def impedance_gains(authority: Authority, w: np.ndarray) -> ImpedanceGains:
     )
 
 
+MFC_EIGENVALUE = 1.5
+"""The MFC's alpha puts the estimator's largest eigenvalue at 1.5 (< 2: contraction; module docstring, "MFC")."""
+MFC_ESTIMATOR = 4.0
+"""w_i <= g_i / 4 with g_i the slowest rate of the MFC's estimator (module docstring, "MFC")."""
+
+
+def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains:
+    """iPID (6.37): (s + w_i)^3 per coordinate, w_i bounded by its estimator's rate; alpha from the workspace (module docstring, "MFC")."""
+    if len(authority.inverse_inertia) != w.shape[0]:
+        raise InputError(
+            f"MFC gains need the inverse-inertia range of all {w.shape[0]} coordinates (Authority.from_platform reads it), "
+            f"got {len(authority.inverse_inertia)}"
+        )
+    lo, hi = (np.array(v) for v in zip(*authority.inverse_inertia))
+    alpha = (authority.coupling / MFC_EIGENVALUE) * hi
+    g = lo / (alpha * targets.control_period)  # slowest estimator rate [rad/s], at the largest inertia
+    w = np.minimum(w, g / MFC_ESTIMATOR)  # the iPID no faster than a quarter of its estimator
+    f = tilt_filter(MFCGains.filter_omega, targets)
+    return MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), alpha=tuple(alpha), filter_omega=f)
+
+
 def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
     """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
     w = bandwidths(authority, targets)
+    f_idc = tilt_filter(IDCGains.filter_omega, targets)  # the class's 50 rad/s unless the rotors lag
     if controller in ("idc", "layered-idc", "payload-idc", "decoupled"):
-        return {"gains": idc_gains(w)}
+        return {"gains": idc_gains(w, filter_omega=f_idc)}
     if controller == "dsid":  # the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap
         w_d = w.copy()
         w_d[6:] = targets.cap
-        return {"gains": idc_gains(w_d, filter_omega=20.0)}
-    if controller == "mfc":  # iPID (6.37): the same error polynomial (s + w)^3 on every coordinate
-        return {"gains": MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3))}
+        return {"gains": idc_gains(w_d, filter_omega=tilt_filter(20.0, targets))}
+    if controller == "mfc":
+        return {"gains": mfc_gains(authority, w, targets)}
     if controller == "impedance":
-        return {"gains": idc_gains(w), "impedance": impedance_gains(authority, w)}
+        return {"gains": idc_gains(w, filter_omega=f_idc), "impedance": impedance_gains(authority, w)}
     if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
         # borinot_flying_arm_2: derived posture loops at w_att with the end-effector task diverge in contact)
         m_d = authority.mass / targets.ratio**2  # K = m w_pos^2 with M_d = m / ratio^2: the impedance's own frequency is w_att
@@ -198,7 +327,19 @@ def derive(controller: str, authority: Authority, targets: Targets) -> dict[str,
     raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
 
 
-DERIVED = ("idc", "dsid", "mfc", "layered-idc", "payload-idc", "decoupled", "impedance", "opspace-impedance")
+GAIN_ARGUMENTS = {
+    "idc": ("gains",),
+    "dsid": ("gains",),
+    "mfc": ("gains",),
+    "layered-idc": ("gains",),
+    "payload-idc": ("gains",),
+    "decoupled": ("gains",),
+    "impedance": ("gains", "impedance"),
+    "opspace-impedance": ("impedance",),
+}
+"""Constructor arguments :func:`derive` returns, per controller (``make_controller`` derives only those not given)."""
+
+DERIVED = tuple(GAIN_ARGUMENTS)
 """Controllers :func:`platform_gains` derives gains for (``mpc`` has cost weights, not gains)."""
 
 
@@ -285,4 +426,24 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
     return lines
 
 
-__all__ = ["DERIVED", "Authority", "Targets", "bandwidths", "derive", "gain_lines", "idc_gains", "impedance_gains", "load_gains", "platform_gains"]
+__all__ = [
+    "DERIVED",
+    "GAIN_ARGUMENTS",
+    "MFC_ESTIMATOR",
+    "MFC_EIGENVALUE",
+    "ROTOR_LAG_ATTITUDE",
+    "ROTOR_LAG_FILTER",
+    "Authority",
+    "Targets",
+    "bandwidths",
+    "derive",
+    "gain_lines",
+    "idc_gains",
+    "impedance_gains",
+    "load_gains",
+    "mfc_gains",
+    "platform_gains",
+    "rotor_bound",
+    "tilt_filter",
+    "workspace_inverse_inertia",
+]

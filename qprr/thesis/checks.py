@@ -1360,8 +1360,9 @@ def _c_6_34(ctx: Context) -> Evidence:
 def _c_6_35(ctx: Context) -> Evidence:
     from ..control import make_controller
     from .bsg import CogStabilizer
+    from .gains import mfc
 
-    bsg = CogStabilizer(ctx.platform, make_controller("mfc", ctx.platform))
+    bsg = CogStabilizer(ctx.platform, make_controller("mfc", ctx.platform, gains=mfc()))  # the thesis's MFC gains
     rng = np.random.default_rng(SEED + 35)
     p = ctx.params
     err = e_roll = 0.0
