@@ -31,7 +31,7 @@ from .backends import BACKENDS, Backend, make_backend
 from .metrics import metric_columns
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
-from .worker import make_payload, nan_row, param_columns, run_one, xi_names_of
+from .worker import make_payload, nan_row, param_columns, platform_of, run_one
 
 
 @dataclass
@@ -182,7 +182,8 @@ def run_campaign(
         as_name(backend, "backend", BACKENDS, kind="campaign backend")
     elif not isinstance(backend, Backend):
         raise InputError(f"backend must be one of {', '.join(BACKENDS)} or a Backend, got {type(backend).__name__}")
-    names = xi_names_of(spec)
+    platform = platform_of(spec)
+    names = platform.xi_names
     columns = columns_of(spec, names)
     check_success(spec, names)
     meta = {
@@ -192,6 +193,7 @@ def run_campaign(
         "params": list(param_columns(spec)),
         "metrics": list(metric_columns(spec.metrics, names, spec.extras)),
         "names": list(names),
+        "platform": platform.name,
         "n_runs": spec.n_runs,
         "kinds": kinds_of(spec, names),
     }

@@ -728,6 +728,60 @@ def wrap_title(title: str, width_in: float, fontsize: float) -> str:
     return "\n".join(textwrap.fill(line, chars, break_long_words=False, break_on_hyphens=False) for line in title.split("\n"))
 
 
+def _wrap_at(text: str, chars: int) -> str:
+    """``text`` with each line broken at spaces to at most ``chars`` characters, a word longer than that broken after
+    its underscores (``rmse_shoulder_pitch_joint``), never inside a run of letters."""
+    import re
+    import textwrap
+
+    out = []
+    for line in text.split("\n"):
+        for piece in textwrap.wrap(line, chars, break_long_words=False, break_on_hyphens=False) or [""]:
+            cur = ""
+            for token in re.split(r"(?<=_)", piece):
+                if cur and len(cur) + len(token) > chars:
+                    out.append(cur)
+                    cur = ""
+                cur += token
+            out.append(cur)
+    return "\n".join(out)
+
+
+def fit_texts(fig, rounds: int = 3) -> None:
+    """Re-wrap the titles, axis labels and figure texts of ``fig`` that leave the page, measured on the rendered page.
+
+    A centred text (title, axis label, suptitle) is wrapped to twice the room from its centre to the nearer page edge
+    (vertical for a rotated label); its layout is drawn again and checked, at most ``rounds`` times."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    texts = list(fig.texts)
+    for a in fig.axes:
+        texts += [a.title, a.xaxis.label, a.yaxis.label]
+    texts = [t for t in texts if t.get_text() and "$" not in t.get_text()]  # mathtext is never broken apart
+    original = {id(t): t.get_text() for t in texts}
+    for _ in range(rounds):
+        canvas.draw()
+        renderer, page = canvas.get_renderer(), fig.bbox
+        moved = False
+        for t in texts:
+            bb = t.get_window_extent(renderer)
+            vertical = abs(t.get_rotation() % 180 - 90) < 1.0
+            lo, hi, page_lo, page_hi = (bb.y0, bb.y1, page.y0, page.y1) if vertical else (bb.x0, bb.x1, page.x0, page.x1)
+            if lo >= page_lo - 0.5 and hi <= page_hi + 0.5:
+                continue
+            centre = 0.5 * (lo + hi)
+            room = 2.0 * min(centre - page_lo, page_hi - centre)
+            longest = max(len(line) for line in t.get_text().split("\n"))
+            chars = max(8, int(0.95 * longest * room / (hi - lo)))
+            if chars >= longest:
+                chars = longest - 1
+            t.set_text(_wrap_at(original[id(t)], chars))
+            moved = True
+        if not moved:
+            return
+
+
 def default_title(res: SimResult) -> str:
     """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in
     radians, as on the command line)."""
@@ -754,6 +808,7 @@ __all__ = [
     "default_title",
     "effort_label",
     "figure_path",
+    "fit_texts",
     "legend",
     "new_figure",
     "plain",
