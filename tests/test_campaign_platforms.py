@@ -276,3 +276,22 @@ def test_the_report_names_the_platform_it_flew_and_no_other(tmp_path):
     run_campaign(spec, tmp_path / "b.csv", backend="inline", progress=False)
     text, _ = report(tmp_path / "b.csv")
     assert "on borinot_flying_arm_2 (registered platform), " in text and not re.search("q-prr", text, re.IGNORECASE)
+
+
+def test_report_units_follow_the_arm_joint_types(tmp_path):
+    """On a built HEX-PRR (a prismatic, then two revolute joints) the joints' RMSE columns are in m, rad, rad, from the
+    joint types the campaign recorded; the header names the (2.1) designation."""
+    from qprr.campaign.report import box_plot, column_units, format_table, report, summarize
+
+    spec = {"name": "pr", "scenario": "hover-reach", "platform": "HEX-PRR", "seed": 1, "samples": 1, "options": {"duration": 0.05}}
+    spec = CampaignSpec.from_mapping({**spec, "grid": {"controller": ["idc", "mfc"]}})
+    res = run_campaign(spec, tmp_path / "pr.csv", backend="inline", progress=False).results
+    kinds = [j.kind for j in platform_of(spec).arm]
+    assert kinds == ["prismatic", "revolute", "revolute"] and res.meta["arm_kinds"] == kinds
+    arm = res.names[6:]
+    assert column_units(res) == {f"rmse_{arm[0]}": "m", f"rmse_{arm[1]}": "rad", f"rmse_{arm[2]}": "rad"}
+    table = format_table(summarize(res, metrics=[f"rmse_{n}" for n in arm]))
+    assert f"rmse_{arm[0]} median [m]" in table and f"rmse_{arm[1]} median [rad]" in table
+    assert box_plot(res, f"rmse_{arm[0]}", None).axes[0].get_ylabel() == f"rmse_{arm[0]} [m]"
+    text, _ = report(res)
+    assert "on HEX-PRR ((2.1) designation), " in text

@@ -24,7 +24,7 @@ rate is the mean of the ``success`` column (completed and within the specificati
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -69,9 +69,18 @@ def column(results: Results, name: str) -> np.ndarray:
     return t[name]
 
 
-def _unit(name: str) -> str | None:
-    """The unit of a column (:data:`UNITS`; other ``rmse_*`` columns are angles, ``model.*`` factors on the nominal value)."""
-    u = UNITS.get(name)
+def column_units(results: Results) -> dict[str, str]:
+    """The units of the arm joints' ``rmse_<joint>`` columns from the joint types the campaign recorded ("m" prismatic,
+    "rad" revolute); empty for results that record none (then :func:`_unit`'s defaults apply)."""
+    names, kinds = tuple(results.meta.get("names", ())), tuple(results.meta.get("arm_kinds", ()))
+    unit = {"prismatic": "m", "revolute": "rad"}
+    return {f"rmse_{n}": unit[k] for n, k in zip(names[6:], kinds) if k in unit}
+
+
+def _unit(name: str, units: dict[str, str] | None = None) -> str | None:
+    """The unit of a column (``units`` of :func:`column_units`, :data:`UNITS`; other ``rmse_*`` columns are angles,
+    ``model.*`` factors on the nominal value)."""
+    u = (units or {}).get(name) or UNITS.get(name)
     if u is None and name.startswith("rmse_"):
         u = "rad"
     if u is None and name.startswith("model."):
@@ -79,9 +88,9 @@ def _unit(name: str) -> str | None:
     return u
 
 
-def _label(name: str, stat: str = "") -> str:
+def _label(name: str, stat: str = "", units: dict[str, str] | None = None) -> str:
     """``name [unit]`` (``name stat [unit]`` with a statistic), or the name alone for a column without unit."""
-    u = _unit(name)
+    u = _unit(name, units)
     name = f"{name} {stat}" if stat else name
     return f"{name} [{u}]" if u else name
 
@@ -155,11 +164,13 @@ def default_metrics(results: Results) -> tuple[str, ...]:
 
 @dataclass
 class Summary:
-    """Per-group statistics: ``groups`` (column names), ``rows`` (one dict per group), ``metrics``."""
+    """Per-group statistics: ``groups`` (column names), ``rows`` (one dict per group), ``metrics``, ``units`` (of the
+    arm joints' columns, :func:`column_units`)."""
 
     groups: tuple[str, ...]
     metrics: tuple[str, ...]
     rows: list[dict]
+    units: dict = field(default_factory=dict)
 
 
 def summarize(results: Results, by=None, metrics=None) -> Summary:
@@ -195,7 +206,7 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
             else:
                 row[m] = None
         rows.append(row)
-    return Summary(by, metrics, rows)
+    return Summary(by, metrics, rows, column_units(results))
 
 
 def _num(x: float) -> str:
@@ -208,9 +219,9 @@ def _num(x: float) -> str:
 
 def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90")) -> str:
     """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics, with units."""
-    head = [*(_label(g) for g in summary.groups), "n", "completed", "success"]
+    head = [*(_label(g, units=summary.units) for g in summary.groups), "n", "completed", "success"]
     for m in summary.metrics:
-        head += [_label(m, s) for s in stats]
+        head += [_label(m, s, summary.units) for s in stats]
     lines = []
     for row in summary.rows:
         cells = [str(row[g]) if not isinstance(row[g], float) else _num(row[g]) for g in summary.groups]
@@ -249,6 +260,7 @@ def _order(values) -> list:
 def box_plot(results: Results, metric: str, path, by: str = "controller", title: str | None = None, log: bool | None = None) -> Path | Figure:
     """Box plot of ``metric`` over the successful runs, one box per value of ``by`` (n and success rate under each)."""
     path = None if path is None else figure_path(path)
+    units = column_units(results)
     y = np.asarray(column(results, metric), dtype=float)
     keys = column(results, by)
     ok = _ok(results)
@@ -268,8 +280,8 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
         log = finite.size > 0 and finite.min() > 0 and finite.max() / finite.min() > 100
     if log:
         ax.set_yscale("log")
-    ax.set_ylabel(_label(metric))
-    ax.set_xlabel(_label(by))
+    ax.set_ylabel(_label(metric, units=units))
+    ax.set_xlabel(_label(by, units=units))
     ax.grid(alpha=0.3, axis="y")
     ax.set_title(title or f"{_head(results)}: {metric} per {by} (completed runs)")
     return _save(fig, path)
@@ -280,6 +292,7 @@ def heat_map(
 ) -> Path | Figure:
     """Median of ``metric`` (or the success rate, ``metric="success"``) over the grid of ``x`` and ``y``, one panel per ``by`` value."""
     path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs, ys = column(results, x), column(results, y)
     xv, yv = _order(xs), _order(ys)
     if len(xv) > 40 or len(yv) > 40:
@@ -317,8 +330,8 @@ def heat_map(
         im = ax.imshow(Z, origin="lower", aspect="auto", cmap="viridis" if vals is not None else "RdYlGn", norm=norm)
         ax.set_xticks(range(len(xv)), [_num(v) if isinstance(v, float) else str(v) for v in xv], rotation=45)
         ax.set_yticks(range(len(yv)), [_num(v) if isinstance(v, float) else str(v) for v in yv])
-        ax.set_xlabel(_label(x))
-        ax.set_ylabel(_label(y))
+        ax.set_xlabel(_label(x, units=units))
+        ax.set_ylabel(_label(y, units=units))
         ax.set_title(str(p) if p is not None else "")
         for i in range(len(yv)):
             for j in range(len(xv)):
@@ -332,7 +345,7 @@ def heat_map(
                         fontsize=7,
                         color="w" if norm(Z[i, j]) < 0.5 else "k",
                     )
-    fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric)}")
+    fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric, units=units)}")
     fig.suptitle(title or f"{_head(results)}: {'success rate' if vals is None else 'median ' + metric} over {x} x {y}")
     return _save(fig, path, tight=True)
 
@@ -340,6 +353,7 @@ def heat_map(
 def success_curve(results: Results, x: str, path, by: str | None = "controller", bins: int = 8, title: str | None = None) -> Path | Figure:
     """Success rate against ``x``, one curve per ``by`` value (a parameter with many values is binned by quantiles)."""
     path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ok = _success(results)
     values = np.unique(xs)
@@ -358,7 +372,7 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
         rate = [ok[sel_p & (idx == k)].mean() if np.any(sel_p & (idx == k)) else np.nan for k in range(centers.size)]
         ax.plot(centers, rate, "o-", label=str(p) if p is not None else None)
     ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(_label(x))
+    ax.set_xlabel(_label(x, units=units))
     ax.set_ylabel("success rate")
     ax.grid(alpha=0.3)
     if by:
@@ -374,6 +388,7 @@ def metric_curve(
 
     Completed runs only; ``inf`` values (e.g. never recovered) are drawn at the top edge as crosses."""
     path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ys = np.asarray(column(results, metric), dtype=float)
     ok = _ok(results)
@@ -409,8 +424,8 @@ def metric_curve(
         ax.plot([], [], "kx", label="inf (e.g. never recovered)")
     if log:
         ax.set_yscale("log")
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(f"median {_label(metric)}")
+    ax.set_xlabel(_label(x, units=units))
+    ax.set_ylabel(f"median {_label(metric, units=units)}")
     ax.grid(alpha=0.3)
     if by:
         ax.legend(title=by, fontsize=8)
@@ -423,6 +438,7 @@ def scatter_plot(
 ) -> Path | Figure:
     """``metric`` against any parameter ``x`` (e.g. a random one), one colour per ``by`` value; completed runs."""
     path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ys = np.asarray(column(results, metric), dtype=float)
     ok = _ok(results) & np.isfinite(ys)
@@ -437,8 +453,8 @@ def scatter_plot(
         log = y.size > 0 and y.min() > 0 and y.max() / y.min() > 100
     if log:
         ax.set_yscale("log")
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(_label(metric))
+    ax.set_xlabel(_label(x, units=units))
+    ax.set_ylabel(_label(metric, units=units))
     ax.grid(alpha=0.3)
     if by:
         ax.legend(fontsize=8)

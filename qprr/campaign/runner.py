@@ -204,7 +204,7 @@ def run_campaign(
 
 def _meta(spec: CampaignSpec, platform) -> dict:
     """What the results' ``.meta.json`` keeps beside the table: the specification, the columns' roles and kinds, the
-    platform's model name."""
+    platform's model name and its arm joints' types (the units of their columns)."""
     names = platform.xi_names
     return {
         "name": spec.name,
@@ -214,6 +214,7 @@ def _meta(spec: CampaignSpec, platform) -> dict:
         "metrics": list(metric_columns(spec.metrics, names, spec.extras)),
         "names": list(names),
         "platform": platform.name,
+        "arm_kinds": [j.kind for j in platform.arm],
         "n_runs": spec.n_runs,
         "kinds": kinds_of(spec, names),
     }
