@@ -302,6 +302,13 @@ def _swatch(cmap) -> np.ndarray:
     return np.array(colours) * 255
 
 
+def _fixed_box(poses: list[RobotPose], L: float) -> tuple[np.ndarray, float]:
+    """(centre [m, world], half-width [m]) of the cube holding every rotor and arm point of the run, with 0.3 ``L`` margin."""
+    pts = np.concatenate([np.concatenate([p.rotor_world, p.arm_world]) for p in poses])
+    lo, hi = pts.min(axis=0) - 0.3 * L, pts.max(axis=0) + 0.3 * L
+    return 0.5 * (lo + hi), 0.5 * float((hi - lo).max())
+
+
 class _Scene:
     """The figure of an animation on its Agg canvas (no display, no backend switch): a 3-D axes with the artists each
     frame moves, the title and legend drawn once, two text lines that change."""
@@ -318,7 +325,8 @@ class _Scene:
         self.ax = self.fig.add_axes((0.0, 0.0, 1.0, 0.88), projection="3d")
         self.ax.view_init(elev=22, azim=-58)
         self.ax.set_box_aspect((1.0, 1.0, 1.0))
-        self.half = self._fixed_box(poses) if look.view == "fixed" else look.radius
+        # "fixed": the cube framing the whole run; "follow": a cube of half-width radius moved onto the base each frame
+        self.centre, self.half = _fixed_box(poses, look.L) if look.view == "fixed" else (None, look.radius)
         self.step = _grid_step(self.half)
         self._bare_axes()
         self.cmap = LinearSegmentedColormap.from_list("thrust", _CMAP)
@@ -326,14 +334,6 @@ class _Scene:
         self.disc_r = rotor_radius(platform)
         self.hub_r = 0.25 * min(math.hypot(*r.position_body[0:2]) for r in platform.rotors) or 0.05
         self._artists()
-
-    def _fixed_box(self, poses: list[RobotPose]) -> float:
-        """The half-width of the cube framing the whole run (its centre kept in ``self.centre``)."""
-        L = self.look.L
-        pts = np.concatenate([np.concatenate([p.rotor_world, p.arm_world]) for p in poses])
-        lo, hi = pts.min(axis=0) - 0.3 * L, pts.max(axis=0) + 0.3 * L
-        self.centre = 0.5 * (lo + hi)
-        return 0.5 * float((hi - lo).max())
 
     def _bare_axes(self) -> None:
         """No ticks (they are most of a 3-D frame's drawing time): a floor grid every ``step`` metres instead."""
