@@ -223,10 +223,23 @@ def _scenario_help() -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``qprr`` command line: ``simulate``, ``compare``, ``check``, then the plug-ins' and the packages' command groups."""
     parser = Parser(prog="qprr", description="qprr: aerial manipulators on Pinocchio (the thesis's Q-PRR as flagship).")
     parser.add_argument("--version", action="version", version=f"qprr {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
 
+    _add_simulate(sub)
+    _add_compare(sub)
+    _add_check(sub)
+    for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
+        register_cli(sub)
+    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli, design_cli):  # optional packages load when a command runs
+        group.register_cli(sub)
+    return parser
+
+
+def _add_simulate(sub) -> None:
+    """``qprr simulate SCENARIO``: a named scenario on any platform or the thesis's."""
     p = sub.add_parser(
         "simulate",
         help="run a named scenario (prints RMSE; optional figure, .npz, animation)",
@@ -272,6 +285,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_simulate)
 
+
+def _add_compare(sub) -> None:
+    """``qprr compare [NAME ...]``: the Chapter 6 comparisons."""
     p = sub.add_parser(
         "compare",
         help="the Chapter 6 comparisons: Table 6.3 (default), overlays, noise, sweeps, decoupled, mpc, ...",
@@ -286,6 +302,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_compare)
 
+
+def _add_check(sub) -> None:
+    """``qprr check``: the model against the thesis's closed forms."""
     p = sub.add_parser(
         "check",
         help="check the model against the thesis's closed forms (table of verdicts)",
@@ -302,12 +321,6 @@ def build_parser() -> argparse.ArgumentParser:
         help="folder of the sympy model's cache (default: $QPRR_CACHE_DIR or ~/.cache/qprr); made if its parent exists",
     )
     p.set_defaults(func=_cmd_check)
-
-    for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
-        register_cli(sub)
-    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli, design_cli):  # optional packages load when a command runs
-        group.register_cli(sub)
-    return parser
 
 
 def main(argv: list[str] | None = None) -> int:

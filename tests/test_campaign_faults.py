@@ -577,3 +577,46 @@ def test_any_text_round_trips_through_a_record_on_one_line():
         assert store_parse(bytes(flipped))[1] is False
 
     check()
+
+
+def test_a_session_releases_only_what_it_opened(tmp_path):
+    """The session a campaign and a design study share: a backend it made is closed (or aborted after an interruption,
+    its pending futures cancelled); a caller's backend is left open."""
+    from qprr.campaign.backends import InlineBackend
+    from qprr.campaign.session import BackendChoice, Session
+
+    class Recording(InlineBackend):
+        def __init__(self) -> None:
+            self.calls = []
+
+        def close(self) -> None:
+            self.calls.append("close")
+
+        def abort(self) -> None:
+            self.calls.append("abort")
+
+    class Future:
+        cancelled = False
+
+        def cancel(self) -> None:
+            self.cancelled = True
+
+    meta = {"fingerprint": "f"}
+    theirs = Recording()
+    s = Session(tmp_path / "a.csv", ("run", "x"), meta, BackendChoice(theirs))
+    assert s.be is None and s.backend() is theirs and s.backend() is theirs
+    s.stop(clean=False, futures=[Future()])
+    s.close()
+    assert theirs.calls == []  # the caller's: neither closed nor aborted
+    for clean, expected in ((True, ["close"]), (False, ["abort"])):
+        s = Session(tmp_path / "a.csv", ("run", "x"), meta, BackendChoice("inline"), fresh=True)
+        s.progress("t", 1, 0, quiet=True, stream=None, unit="run")
+        s.be = Recording()  # as if opened by backend()
+        futures = [Future(), Future()]
+        s.stop(clean=clean, futures=futures)
+        s.close()
+        assert s.be.calls == expected and all(f.cancelled for f in futures) == (not clean)
+    with pytest.raises(UnknownNameError, match="campaign backend.*'lokal'"):
+        Session(tmp_path / "b.csv", ("run", "x"), meta, BackendChoice("lokal"))
+    with pytest.raises(InputError, match="backend must be one of .* or a Backend, got object"):
+        Session(tmp_path / "b.csv", ("run", "x"), meta, BackendChoice(object()))

@@ -233,3 +233,65 @@ def test_campaign_show_names_the_platform_and_its_columns(tmp_path, capsys):
     spec = _write_spec(specs, platform="borinot_flying_arm_2")
     assert main(["campaign", "show", str(spec)]) == 0
     assert "on borinot_flying_arm_2;" in capsys.readouterr().out
+
+
+def test_the_report_names_the_platform_it_flew_and_no_other(tmp_path):
+    """A report on a URDF platform names it (its model name, the files as written and their SHA-256) in the header,
+    summary.md and every figure's title, and holds no Q-PRR name anywhere."""
+    import hashlib
+    import re
+
+    from qprr.campaign.report import box_plot, heat_map, metric_curve, platform_label, report, scatter_plot, success_curve
+
+    robot, specs = _user_robot(tmp_path)
+    path = _write_spec(specs, samples=1, grid={"controller": ["idc", "mfc"], "z": [1.0, 1.5]}, options={"duration": 0.1})
+    run_campaign(CampaignSpec.load(path), tmp_path / "u.csv", backend="inline", progress=False)
+    res = read_results(tmp_path / "u.csv")
+    sha = {f: hashlib.sha256((robot / f"quad_rrr.{f}").read_bytes()).hexdigest()[:12] for f in ("urdf", "rotors.toml")}
+    expected = (
+        f"quad_rrr (URDF ../robot/quad_rrr.urdf sha256 {sha['urdf']}, rotors ../robot/quad_rrr.rotors.toml sha256 "
+        f"{sha['rotors.toml']}, ee_frame gripper)"
+    )
+    assert platform_label(res) == expected
+    text, figures = report(res, tmp_path / "rep", metrics=["rmse_position", "rmse_shoulder"], scatter=[("model.mass", "rmse_elbow")])
+    md = (tmp_path / "rep" / "summary.md").read_text()
+    assert f"4 runs of hover-reach on {expected}, " in text.splitlines()[0] and expected in md
+    assert len(figures) >= 6
+    for out in (text, md, *(f.name for f in figures)):
+        assert not re.search("q-prr", out, re.IGNORECASE), out
+    figs = [
+        box_plot(res, "rmse_shoulder", None),
+        success_curve(res, "z", None),
+        metric_curve(res, "z", "rmse_elbow", None),
+        scatter_plot(res, "model.mass", "rmse_elbow", None),
+        heat_map(res, "z", "controller", None, by=None),
+    ]
+    for fig in figs:
+        titles = [a.get_title() for a in fig.axes] + [t.get_text() for t in fig.texts]
+        title = " ".join(t for t in titles if t).replace("\n", " ")
+        assert title.startswith("user on quad_rrr: "), title
+        assert not re.search("q-prr", title, re.IGNORECASE)
+    # a registered platform says so; a (2.1) designation is named as one
+    spec = CampaignSpec.load(_write_spec(specs, platform="borinot_flying_arm_2", samples=1, options={"duration": 0.05}))
+    run_campaign(spec, tmp_path / "b.csv", backend="inline", progress=False)
+    text, _ = report(tmp_path / "b.csv")
+    assert "on borinot_flying_arm_2 (registered platform), " in text and not re.search("q-prr", text, re.IGNORECASE)
+
+
+def test_report_units_follow_the_arm_joint_types(tmp_path):
+    """On a built HEX-PRR (a prismatic, then two revolute joints) the joints' RMSE columns are in m, rad, rad, from the
+    joint types the campaign recorded; the header names the (2.1) designation."""
+    from qprr.campaign.report import box_plot, column_units, format_table, report, summarize
+
+    spec = {"name": "pr", "scenario": "hover-reach", "platform": "HEX-PRR", "seed": 1, "samples": 1, "options": {"duration": 0.05}}
+    spec = CampaignSpec.from_mapping({**spec, "grid": {"controller": ["idc", "mfc"]}})
+    res = run_campaign(spec, tmp_path / "pr.csv", backend="inline", progress=False).results
+    kinds = [j.kind for j in platform_of(spec).arm]
+    assert kinds == ["prismatic", "revolute", "revolute"] and res.meta["arm_kinds"] == kinds
+    arm = res.names[6:]
+    assert column_units(res) == {f"rmse_{arm[0]}": "m", f"rmse_{arm[1]}": "rad", f"rmse_{arm[2]}": "rad"}
+    table = format_table(summarize(res, metrics=[f"rmse_{n}" for n in arm]))
+    assert f"rmse_{arm[0]} median [m]" in table and f"rmse_{arm[1]} median [rad]" in table
+    assert box_plot(res, f"rmse_{arm[0]}", None).axes[0].get_ylabel() == f"rmse_{arm[0]} [m]"
+    text, _ = report(res)
+    assert "on HEX-PRR ((2.1) designation), " in text

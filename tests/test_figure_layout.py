@@ -27,7 +27,7 @@ from qprr.wheeled import plots as wheeled_plots
 from qprr.wheeled.robots import get_robot, tricycle_exercise
 
 UNIT = re.compile(r"\[[^\]]+\]|\([^)]*(m|N|rad|s|kg|%)[^)]*\)")
-DIMENSIONLESS = ("log10", "det(J J^T)", "share", "count")
+DIMENSIONLESS = ("log10", "det(J J^T)", "share", "count", "controller", "success rate", "fraction")
 """Axis labels of quantities without a unit, recognised by name."""
 SLACK = 1.0  # [px] rounding of the renderer's extents
 
@@ -174,6 +174,65 @@ def test_wheeled_straight_line_shows_the_robot():
     labels = [t.get_text() for t in axs[0].get_legend().get_texts()]
     assert any(lab.startswith("robot, drawn x") for lab in labels)  # enlarged, and says so
     assert {"fixed wheel", "centred steerable wheel"} <= set(labels)
+
+
+# ============================================================================ campaign reports
+@pytest.fixture(scope="module")
+def borinot_campaign(tmp_path_factory):
+    """A tiny campaign on borinot_flying_arm_2, whose arm columns are long (``rmse_flying_arm_2__j_link1_link2``)."""
+    from qprr.campaign import CampaignSpec, run_campaign
+
+    spec = CampaignSpec.from_mapping(
+        {
+            "name": "borinot-layout",
+            "scenario": "hover-reach",
+            "platform": "borinot_flying_arm_2",
+            "seed": 3,
+            "samples": 2,
+            "options": {"duration": 0.1},
+            "grid": {"controller": ["idc", "mfc"], "z": [1.0, 1.5], "reach_fraction": [0.3, 0.6]},
+            "random": {"model.mass": {"dist": "uniform", "low": 0.9, "high": 1.1}},
+        }
+    )
+    return run_campaign(spec, tmp_path_factory.mktemp("campaign") / "b.csv", backend="inline", progress=False).results
+
+
+def test_campaign_report_figures_with_long_column_names(borinot_campaign):
+    """Every report figure on the page: titles naming the campaign, its platform and a long column are wrapped, not cut."""
+    from qprr.campaign import report as rep
+
+    res = borinot_campaign
+    long = "rmse_flying_arm_2__j_link1_link2"
+    figs = {
+        "box": rep.box_plot(res, long, None),
+        "success": rep.success_curve(res, "model.mass", None),
+        "curve": rep.metric_curve(res, "z", long, None),
+        "scatter": rep.scatter_plot(res, "model.mass", long, None),
+        "heat success": rep.heat_map(res, "z", "reach_fraction", None),
+        "heat metric": rep.heat_map(res, "z", "reach_fraction", None, metric=long),
+    }
+    for what, fig in figs.items():
+        check_layout(fig, f"campaign {what}")
+        titles = " ".join(a.get_title() for a in fig.axes) + " ".join(t.get_text() for t in fig.texts)
+        assert "borinot_flying_arm_2" in titles.replace("\n", ""), what
+    box_title = figs["box"].axes[0].get_title()
+    assert "\n" in box_title and box_title.replace("\n", " ").replace("_ ", "_") == (
+        f"borinot-layout on borinot_flying_arm_2: {long} per controller (completed runs)"
+    )  # wrapped at spaces (and, for a word too long for the page, after underscores): nothing lost
+
+
+def test_fit_texts_wraps_a_long_word_after_its_underscores():
+    from qprr.viz import fit_texts
+
+    fig = new_figure((2.5, 2.0))
+    ax = fig.subplots()
+    ax.set_title("rmse_a_very_long_shoulder_pitch_joint_name_of_some_robot")
+    ax.set_ylabel("median rmse_a_very_long_shoulder_pitch_joint_name [rad]")
+    fit_texts(fig)
+    check_layout(fig, "narrow page")
+    lines = ax.get_title().split("\n")
+    assert len(lines) > 1 and all(line.endswith("_") for line in lines[:-1])
+    assert "".join(lines) == "rmse_a_very_long_shoulder_pitch_joint_name_of_some_robot"
 
 
 # ============================================================================ the viewer's camera

@@ -9,8 +9,11 @@ module                          what
 :mod:`qprr.campaign.backends`   local process pool (default), Dask distributed, inline
 :mod:`qprr.campaign.store`      results appended as they arrive (one checksummed CSV record per
                                 line, or Parquet parts); resume after a cut; validated reads
+:mod:`qprr.campaign.session`    :class:`~qprr.campaign.session.Session`: results store, progress
+                                line and backend of one run (shared with :mod:`qprr.design`)
 :mod:`qprr.campaign.runner`     :func:`run_campaign`: the one loop, with a progress line
-:mod:`qprr.campaign.report`     summary statistics per group, box plots, heat maps, success curves
+:mod:`qprr.campaign.report`     summary statistics per group, box plots, heat maps, success
+                                curves; the platform named in the header and titles
 :mod:`qprr.campaign.targets`    :func:`~qprr.campaign.targets.scale_bandwidth`: one factor on a
                                 loop's bandwidth (the thesis's flight as a target with its
                                 mission, gains and disturbances as parameters:
@@ -52,6 +55,10 @@ Public API for other packages (e.g. a design search that runs its evaluations he
   :data:`~qprr.campaign.store.KINDS`), ``n_runs`` and ``spec`` validate the rows.  ``columns``
   must include ``run``.  ``read_results(path) -> Results`` (validated; ``table``, a numpy
   structured array sorted by run), ``read_meta(path)``.
+* ``Session(output, columns, meta, BackendChoice(backend, workers, scheduler), fresh)``
+  (:mod:`qprr.campaign.session`): the store, ``progress(...)`` (the progress line),
+  ``backend()`` (opened at the first call), ``stop(clean, futures)`` (progress line and
+  workers released), ``close()`` (the file).
 """
 
 from .backends import BACKENDS, Backend, DaskBackend, InlineBackend, LocalBackend, make_backend

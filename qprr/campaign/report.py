@@ -10,6 +10,11 @@
   parameter is binned by quantiles), :func:`scatter_plot` (a metric against any parameter).
   Figures go through :func:`qprr.viz.new_figure` (no pyplot).
 * :func:`report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
+* :func:`platform_label`: the platform the campaign flew and where it came from (a registered
+  name, a (2.1) designation, or a URDF and rotor file with their SHA-256), named in the report's
+  header and the figures' titles.  Titles and axis labels are re-wrapped to the page
+  (:func:`qprr.viz.fit_texts`), so long column names (``rmse_shoulder_pitch_joint``) are not clipped.
+  A figure function given ``path=None`` returns the Figure instead of saving it.
 
 Statistics of a metric are taken over the completed runs (status ``ok``), skipping NaN;
 ``inf`` (e.g. a payload that never recovers) counts in medians and percentiles.  The success
@@ -19,14 +24,18 @@ rate is the mean of the ``success`` column (completed and within the specificati
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..errors import InputError, UnknownNameError
-from ..viz import figure_path, new_figure
+from ..viz import figure_path, fit_texts, new_figure
 from .store import Results, read_results
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 UNITS = {
     "rmse_x": "m",
@@ -60,9 +69,18 @@ def column(results: Results, name: str) -> np.ndarray:
     return t[name]
 
 
-def _unit(name: str) -> str | None:
-    """The unit of a column (:data:`UNITS`; other ``rmse_*`` columns are angles, ``model.*`` factors on the nominal value)."""
-    u = UNITS.get(name)
+def column_units(results: Results) -> dict[str, str]:
+    """The units of the arm joints' ``rmse_<joint>`` columns from the joint types the campaign recorded ("m" prismatic,
+    "rad" revolute); empty for results that record none (then :func:`_unit`'s defaults apply)."""
+    names, kinds = tuple(results.meta.get("names", ())), tuple(results.meta.get("arm_kinds", ()))
+    unit = {"prismatic": "m", "revolute": "rad"}
+    return {f"rmse_{n}": unit[k] for n, k in zip(names[6:], kinds) if k in unit}
+
+
+def _unit(name: str, units: dict[str, str] | None = None) -> str | None:
+    """The unit of a column (``units`` of :func:`column_units`, :data:`UNITS`; other ``rmse_*`` columns are angles,
+    ``model.*`` factors on the nominal value)."""
+    u = (units or {}).get(name) or UNITS.get(name)
     if u is None and name.startswith("rmse_"):
         u = "rad"
     if u is None and name.startswith("model."):
@@ -70,11 +88,60 @@ def _unit(name: str) -> str | None:
     return u
 
 
-def _label(name: str, stat: str = "") -> str:
+def _label(name: str, stat: str = "", units: dict[str, str] | None = None) -> str:
     """``name [unit]`` (``name stat [unit]`` with a statistic), or the name alone for a column without unit."""
-    u = _unit(name)
+    u = _unit(name, units)
     name = f"{name} {stat}" if stat else name
     return f"{name} [{u}]" if u else name
+
+
+def _platform(results: Results):
+    """The ``platform`` of the results' specification (a name or a table), None for a store without one."""
+    return results.spec.get("platform") if isinstance(results.spec, dict) else None
+
+
+def platform_name(results: Results) -> str:
+    """The platform's short name: its registered name or (2.1) designation, the model name a URDF gave it (recorded by
+    :func:`~qprr.campaign.run_campaign`; else the URDF file's stem); "" when the results record no platform."""
+    p = _platform(results)
+    if isinstance(p, str):
+        return p
+    if isinstance(p, dict) and "urdf" in p:
+        return str(results.meta.get("platform") or Path(str(p["urdf"])).stem)
+    return ""
+
+
+def platform_label(results: Results) -> str:
+    """The platform and where it came from: ``NAME (registered platform)``, ``NAME ((2.1) designation)`` or
+    ``NAME (URDF FILE sha256 HEX12, rotors FILE sha256 HEX12, ee_frame F)``; "" when the results record none."""
+    from ..platforms import NAMES
+
+    p = _platform(results)
+    if isinstance(p, str):
+        return f"{p} ({'registered platform' if p in NAMES else '(2.1) designation'})"
+    if not isinstance(p, dict) or "urdf" not in p:
+        return ""
+    sha = p.get("sha256") if isinstance(p.get("sha256"), dict) else {}
+    files = [f"{'URDF' if k == 'urdf' else k} {p[k]}" + (f" sha256 {str(sha[k])[:12]}" if k in sha else "") for k in ("urdf", "rotors") if k in p]
+    if "ee_frame" in p:
+        files.append(f"ee_frame {p['ee_frame']}")
+    return f"{platform_name(results)} ({', '.join(files)})"
+
+
+def _head(results: Results) -> str:
+    """The start of every figure's title: the campaign's name and, when recorded, its platform."""
+    name, platform = results.spec.get("name", ""), platform_name(results)
+    return f"{name} on {platform}" if platform else name
+
+
+def _save(fig, path: Path | None, tight: bool = False):
+    """Wrap the texts to the page, then save ``fig`` to ``path`` (returned; ``tight``: cropped to what is drawn), or
+    return ``fig`` when ``path`` is None."""
+    fit_texts(fig)
+    if path is None:
+        return fig
+    fig.savefig(path, dpi=90, **({"bbox_inches": "tight"} if tight else {}))
+    return path
 
 
 def default_groups(results: Results) -> tuple[str, ...]:
@@ -97,11 +164,13 @@ def default_metrics(results: Results) -> tuple[str, ...]:
 
 @dataclass
 class Summary:
-    """Per-group statistics: ``groups`` (column names), ``rows`` (one dict per group), ``metrics``."""
+    """Per-group statistics: ``groups`` (column names), ``rows`` (one dict per group), ``metrics``, ``units`` (of the
+    arm joints' columns, :func:`column_units`)."""
 
     groups: tuple[str, ...]
     metrics: tuple[str, ...]
     rows: list[dict]
+    units: dict = field(default_factory=dict)
 
 
 def summarize(results: Results, by=None, metrics=None) -> Summary:
@@ -137,7 +206,7 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
             else:
                 row[m] = None
         rows.append(row)
-    return Summary(by, metrics, rows)
+    return Summary(by, metrics, rows, column_units(results))
 
 
 def _num(x: float) -> str:
@@ -150,9 +219,9 @@ def _num(x: float) -> str:
 
 def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90")) -> str:
     """The summary as aligned text (or a Markdown table): group columns, n, success, then metric statistics, with units."""
-    head = [*(_label(g) for g in summary.groups), "n", "completed", "success"]
+    head = [*(_label(g, units=summary.units) for g in summary.groups), "n", "completed", "success"]
     for m in summary.metrics:
-        head += [_label(m, s) for s in stats]
+        head += [_label(m, s, summary.units) for s in stats]
     lines = []
     for row in summary.rows:
         cells = [str(row[g]) if not isinstance(row[g], float) else _num(row[g]) for g in summary.groups]
@@ -188,9 +257,10 @@ def _order(values) -> list:
         return u
 
 
-def box_plot(results: Results, metric: str, path, by: str = "controller", title: str | None = None, log: bool | None = None) -> Path:
+def box_plot(results: Results, metric: str, path, by: str = "controller", title: str | None = None, log: bool | None = None) -> Path | Figure:
     """Box plot of ``metric`` over the successful runs, one box per value of ``by`` (n and success rate under each)."""
-    path = figure_path(path)
+    path = None if path is None else figure_path(path)
+    units = column_units(results)
     y = np.asarray(column(results, metric), dtype=float)
     keys = column(results, by)
     ok = _ok(results)
@@ -210,17 +280,19 @@ def box_plot(results: Results, metric: str, path, by: str = "controller", title:
         log = finite.size > 0 and finite.min() > 0 and finite.max() / finite.min() > 100
     if log:
         ax.set_yscale("log")
-    ax.set_ylabel(_label(metric))
-    ax.set_xlabel(_label(by))
+    ax.set_ylabel(_label(metric, units=units))
+    ax.set_xlabel(_label(by, units=units))
     ax.grid(alpha=0.3, axis="y")
-    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} per {by} (completed runs)")
-    fig.savefig(path, dpi=90)
-    return path
+    ax.set_title(title or f"{_head(results)}: {metric} per {by} (completed runs)")
+    return _save(fig, path)
 
 
-def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by: str | None = "controller", title: str | None = None) -> Path:
+def heat_map(
+    results: Results, x: str, y: str, path, metric: str = "success", by: str | None = "controller", title: str | None = None
+) -> Path | Figure:
     """Median of ``metric`` (or the success rate, ``metric="success"``) over the grid of ``x`` and ``y``, one panel per ``by`` value."""
-    path = figure_path(path)
+    path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs, ys = column(results, x), column(results, y)
     xv, yv = _order(xs), _order(ys)
     if len(xv) > 40 or len(yv) > 40:
@@ -258,8 +330,8 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
         im = ax.imshow(Z, origin="lower", aspect="auto", cmap="viridis" if vals is not None else "RdYlGn", norm=norm)
         ax.set_xticks(range(len(xv)), [_num(v) if isinstance(v, float) else str(v) for v in xv], rotation=45)
         ax.set_yticks(range(len(yv)), [_num(v) if isinstance(v, float) else str(v) for v in yv])
-        ax.set_xlabel(_label(x))
-        ax.set_ylabel(_label(y))
+        ax.set_xlabel(_label(x, units=units))
+        ax.set_ylabel(_label(y, units=units))
         ax.set_title(str(p) if p is not None else "")
         for i in range(len(yv)):
             for j in range(len(xv)):
@@ -273,15 +345,15 @@ def heat_map(results: Results, x: str, y: str, path, metric: str = "success", by
                         fontsize=7,
                         color="w" if norm(Z[i, j]) < 0.5 else "k",
                     )
-    fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric)}")
-    fig.suptitle(title or f"{results.spec.get('name', '')}: {'success rate' if vals is None else 'median ' + metric} over {x} x {y}")
-    fig.savefig(path, dpi=90, bbox_inches="tight")
-    return path
+    fig.colorbar(im, ax=list(axes), label="success rate" if vals is None else f"median {_label(metric, units=units)}")
+    fig.suptitle(title or f"{_head(results)}: {'success rate' if vals is None else 'median ' + metric} over {x} x {y}")
+    return _save(fig, path, tight=True)
 
 
-def success_curve(results: Results, x: str, path, by: str | None = "controller", bins: int = 8, title: str | None = None) -> Path:
+def success_curve(results: Results, x: str, path, by: str | None = "controller", bins: int = 8, title: str | None = None) -> Path | Figure:
     """Success rate against ``x``, one curve per ``by`` value (a parameter with many values is binned by quantiles)."""
-    path = figure_path(path)
+    path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ok = _success(results)
     values = np.unique(xs)
@@ -300,23 +372,23 @@ def success_curve(results: Results, x: str, path, by: str | None = "controller",
         rate = [ok[sel_p & (idx == k)].mean() if np.any(sel_p & (idx == k)) else np.nan for k in range(centers.size)]
         ax.plot(centers, rate, "o-", label=str(p) if p is not None else None)
     ax.set_ylim(-0.03, 1.03)
-    ax.set_xlabel(_label(x))
+    ax.set_xlabel(_label(x, units=units))
     ax.set_ylabel("success rate")
     ax.grid(alpha=0.3)
     if by:
         ax.legend(title=by)
-    ax.set_title(title or f"{results.spec.get('name', '')}: success rate against {x}")
-    fig.savefig(path, dpi=90)
-    return path
+    ax.set_title(title or f"{_head(results)}: success rate against {x}")
+    return _save(fig, path)
 
 
 def metric_curve(
     results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None, log: bool | None = None
-) -> Path:
+) -> Path | Figure:
     """Median of ``metric`` against the swept parameter ``x`` (band: 25th-75th percentile), one curve per ``by`` value.
 
     Completed runs only; ``inf`` values (e.g. never recovered) are drawn at the top edge as crosses."""
-    path = figure_path(path)
+    path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ys = np.asarray(column(results, metric), dtype=float)
     ok = _ok(results)
@@ -352,21 +424,21 @@ def metric_curve(
         ax.plot([], [], "kx", label="inf (e.g. never recovered)")
     if log:
         ax.set_yscale("log")
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(f"median {_label(metric)}")
+    ax.set_xlabel(_label(x, units=units))
+    ax.set_ylabel(f"median {_label(metric, units=units)}")
     ax.grid(alpha=0.3)
     if by:
         ax.legend(title=by, fontsize=8)
-    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
-    fig.savefig(path, dpi=90)
-    return path
+    ax.set_title(title or f"{_head(results)}: {metric} against {x} (completed runs)", fontsize=10)
+    return _save(fig, path)
 
 
 def scatter_plot(
     results: Results, x: str, metric: str, path, by: str | None = "controller", title: str | None = None, log: bool | None = None
-) -> Path:
+) -> Path | Figure:
     """``metric`` against any parameter ``x`` (e.g. a random one), one colour per ``by`` value; completed runs."""
-    path = figure_path(path)
+    path = None if path is None else figure_path(path)
+    units = column_units(results)
     xs = np.asarray(column(results, x), dtype=float)
     ys = np.asarray(column(results, metric), dtype=float)
     ok = _ok(results) & np.isfinite(ys)
@@ -381,14 +453,13 @@ def scatter_plot(
         log = y.size > 0 and y.min() > 0 and y.max() / y.min() > 100
     if log:
         ax.set_yscale("log")
-    ax.set_xlabel(_label(x))
-    ax.set_ylabel(_label(metric))
+    ax.set_xlabel(_label(x, units=units))
+    ax.set_ylabel(_label(metric, units=units))
     ax.grid(alpha=0.3)
     if by:
         ax.legend(fontsize=8)
-    ax.set_title(title or f"{results.spec.get('name', '')}: {metric} against {x} (completed runs)", fontsize=10)
-    fig.savefig(path, dpi=90)
-    return path
+    ax.set_title(title or f"{_head(results)}: {metric} against {x} (completed runs)", fontsize=10)
+    return _save(fig, path)
 
 
 def _numeric(results: Results, name: str) -> bool:
@@ -411,8 +482,10 @@ def report(
     text = format_table(summ, markdown=markdown)
     bounds = res.spec.get("success") or {}
     crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
+    platform = platform_label(res)
+    on = f" on {platform}" if platform else ""
     head = (
-        f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}, "
+        f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}{on}, "
         f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
         f"({100 * _success(res).mean():.1f} %){crit}"
         if len(res)

@@ -26,12 +26,13 @@ from pathlib import Path
 
 from ..errors import InputError, UnknownNameError
 from ..progress import StatusProgress
-from ..validation import as_int, as_name
-from .backends import BACKENDS, Backend, make_backend
+from ..validation import as_int
+from .backends import Backend
 from .metrics import metric_columns
+from .session import BackendChoice, Session, check_backend
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
-from .worker import make_payload, nan_row, param_columns, run_one, xi_names_of
+from .worker import make_payload, nan_row, param_columns, platform_of, run_one
 
 
 @dataclass
@@ -140,17 +141,6 @@ def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultSt
         bar.update(str(row["status"]))
 
 
-def _stop_backend(be: Backend | None, own: bool, runs: dict, clean: bool) -> None:
-    """Release the workers: normally (``clean``) or at once (pending futures cancelled, running tasks stopped)."""
-    if be is None:
-        return
-    if not clean:
-        for fut in runs:
-            fut.cancel()
-    if own:
-        be.close() if clean else be.abort()
-
-
 def run_campaign(
     spec: CampaignSpec,
     output: str | Path,
@@ -178,32 +168,20 @@ def run_campaign(
     if limit is not None:
         limit = as_int(limit, "limit", lo=0)
     output = check_output(output, "output")  # before any run
-    if isinstance(backend, str):
-        as_name(backend, "backend", BACKENDS, kind="campaign backend")
-    elif not isinstance(backend, Backend):
-        raise InputError(f"backend must be one of {', '.join(BACKENDS)} or a Backend, got {type(backend).__name__}")
-    names = xi_names_of(spec)
-    columns = columns_of(spec, names)
+    check_backend(backend)
+    platform = platform_of(spec)
+    names = platform.xi_names
     check_success(spec, names)
-    meta = {
-        "name": spec.name,
-        "fingerprint": spec.fingerprint,
-        "spec": spec.to_dict(),
-        "params": list(param_columns(spec)),
-        "metrics": list(metric_columns(spec.metrics, names, spec.extras)),
-        "names": list(names),
-        "n_runs": spec.n_runs,
-        "kinds": kinds_of(spec, names),
-    }
+    meta = _meta(spec, platform)
     payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts
-    store = ResultStore(output, columns, meta, fresh=fresh)
+    session = Session(output, columns_of(spec, names), meta, BackendChoice(backend, workers, scheduler), fresh)
+    store = session.store
     todo = [i for i in range(spec.n_runs) if i not in store.done]
     if limit is not None:
         todo = todo[:limit]
-    own = not isinstance(backend, Backend)
     t0 = time.perf_counter()
-    tally, be, runs, clean = _Tally(skipped=len(store.done)), None, {}, False
-    bar = StatusProgress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
+    tally, runs, clean = _Tally(skipped=len(store.done)), {}, False
+    bar = session.progress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
     if store.dropped and progress:
         print(
             f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: its run is done again",
@@ -213,28 +191,48 @@ def run_campaign(
         with _Signals():
             try:
                 if todo:
-                    be = make_backend(backend, workers, scheduler) if own else backend
-                    if progress:
-                        print(
-                            f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}",
-                            file=bar.stream,
-                        )
-                    pending = [spec.run(i) for i in todo]
-                    while pending:  # retried on a restarted backend while a round saves rows
-                        saved_before = tally.executed
-                        runs.update({be.submit(run_one, payload, r, key=f"qprr-{spec.fingerprint}-{r.index}"): r for r in pending})
-                        _collect(spec, names, be, runs, store, bar, tally)
-                        retry = bool(tally.lost) and tally.executed > saved_before and be.restart()
-                        pending, tally.lost = (tally.lost, []) if retry else ([], tally.lost)
+                    _run_missing(spec, names, session, payload, todo, runs, tally, progress)
                 clean = True
             except KeyboardInterrupt as exc:
                 tally.interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
             finally:
-                bar.close()
-                _stop_backend(be, own, runs, clean)
+                session.stop(clean, runs)
     finally:
-        store.close()
-    return _finish(spec, store, be, backend, tally, time.perf_counter() - t0, bar.stream if progress else None)
+        session.close()
+    return _finish(spec, store, session.be, backend, tally, time.perf_counter() - t0, bar.stream if progress else None)
+
+
+def _meta(spec: CampaignSpec, platform) -> dict:
+    """What the results' ``.meta.json`` keeps beside the table: the specification, the columns' roles and kinds, the
+    platform's model name and its arm joints' types (the units of their columns)."""
+    names = platform.xi_names
+    return {
+        "name": spec.name,
+        "fingerprint": spec.fingerprint,
+        "spec": spec.to_dict(),
+        "params": list(param_columns(spec)),
+        "metrics": list(metric_columns(spec.metrics, names, spec.extras)),
+        "names": list(names),
+        "platform": platform.name,
+        "arm_kinds": [j.kind for j in platform.arm],
+        "n_runs": spec.n_runs,
+        "kinds": kinds_of(spec, names),
+    }
+
+
+def _run_missing(spec: CampaignSpec, names, session: Session, payload, todo: list[int], runs: dict, tally: _Tally, progress: bool) -> None:
+    """Submit the runs ``todo`` and save their rows; runs lost with their worker are retried on a restarted backend while
+    a round of retries saves rows."""
+    be, store, bar = session.backend(), session.store, session.bar
+    if progress:
+        print(f"campaign {spec.name}: {len(todo)} runs to do ({tally.skipped} already in {store.path}) on {be.describe()}", file=bar.stream)
+    pending = [spec.run(i) for i in todo]
+    while pending:
+        saved_before = tally.executed
+        runs.update({be.submit(run_one, payload, r, key=f"qprr-{spec.fingerprint}-{r.index}"): r for r in pending})
+        _collect(spec, names, be, runs, store, bar, tally)
+        retry = bool(tally.lost) and tally.executed > saved_before and be.restart()
+        pending, tally.lost = (tally.lost, []) if retry else ([], tally.lost)
 
 
 def _finish(spec, store, be, backend, tally: _Tally, wall: float, stream) -> CampaignRun:

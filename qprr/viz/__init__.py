@@ -3,7 +3,7 @@
 * :func:`plot_result`: any panels of a run (Chapter 6 figures, titled with the thesis's figure
   numbers of its scenario), on a page saved to a file, as a returned Figure or into your Axes
   (:mod:`qprr.viz.plots`); :func:`new_figure`, :func:`figure_path` for your own (matplotlib
-  Figures, no pyplot, no backend chosen);
+  Figures, no pyplot, no backend chosen); :func:`fit_texts` re-wraps titles and labels that leave the page;
 
 * :func:`animate` / :func:`animate_result`: a run (or an IK solution path, :func:`ik_path`) to
   GIF or MP4 with matplotlib, no display needed (:mod:`qprr.viz.animation`);
@@ -19,7 +19,7 @@
 from .animation import AnimationInfo, animate, animate_result
 from .geometry import primitive_visual_model, visual_model
 from .ikpath import IKPath, ik_levels, ik_path, ik_solve
-from .plots import figure_path, new_figure, plot_result
+from .plots import figure_path, fit_texts, new_figure, plot_result
 from .run import RunLog, load_run
 from .scene import HoverReport, RobotPose, hover_report, robot_pose
 
@@ -32,6 +32,7 @@ __all__ = [
     "animate",
     "animate_result",
     "figure_path",
+    "fit_texts",
     "hover_report",
     "ik_levels",
     "ik_path",

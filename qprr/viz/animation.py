@@ -257,6 +257,240 @@ def _cog_distance(pose: RobotPose) -> float:
 
 
 # ============================================================================ animation
+@dataclass(frozen=True)
+class _Look:
+    """The sizes of a drawing: the robot's size ``L`` [m], the "follow" cube's half-width ``radius`` [m], the arrows'
+    ``thrust_scale`` and ``force_scale`` [m/N], the camera ``view`` and the trail's length ``keep`` in frames (None:
+    the whole past)."""
+
+    L: float
+    radius: float
+    thrust_scale: float
+    force_scale: float
+    view: str
+    keep: int | None
+
+
+def _pixels(size) -> tuple[int, int]:
+    """(width, height) [px] of the video, each between 16 and 4096."""
+    try:
+        width, height = (int(size[0]), int(size[1]))
+    except (TypeError, ValueError, IndexError):
+        raise InputError(f"size must be (width, height) in pixels, got {size!r}") from None
+    if not (16 <= width <= 4096 and 16 <= height <= 4096):
+        raise InputError(f"size must be between 16 and 4096 pixels per side, got {size!r}")
+    return width, height
+
+
+def _look(platform: Platform, fps: float, speed: float, view: str, radius, trail, thrust_scale, force_scale) -> _Look:
+    """The checked sizes of :func:`animate` (defaults from the platform's size and hover thrust)."""
+    L = characteristic_length(platform)
+    radius = 1.3 * L if radius is None else _positive("radius", radius)
+    hover = platform.total_mass * platform.g / platform.n_rotors
+    thrust_scale = 0.6 * L / hover if thrust_scale is None else _positive("thrust_scale", thrust_scale)
+    force_scale = thrust_scale if force_scale is None else _positive("force_scale", force_scale)
+    if trail is not None and not (isinstance(trail, (int, float)) and math.isfinite(trail) and trail >= 0):
+        raise InputError(f"trail must be None or a number of seconds >= 0, got {trail!r}")
+    keep = None if trail is None else max(1, int(round(trail * fps / speed)) + 1)
+    return _Look(L, radius, thrust_scale, force_scale, view, keep)
+
+
+def _swatch(cmap) -> np.ndarray:
+    """Every colour the artists draw (RGB, 0-255): the GIF palette keeps them."""
+    colours = [cmap(x)[:3] for x in np.linspace(0, 1, 24)]
+    colours += [tuple(int(c[i : i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]
+    return np.array(colours) * 255
+
+
+def _fixed_box(poses: list[RobotPose], L: float) -> tuple[np.ndarray, float]:
+    """(centre [m, world], half-width [m]) of the cube holding every rotor and arm point of the run, with 0.3 ``L`` margin."""
+    pts = np.concatenate([np.concatenate([p.rotor_world, p.arm_world]) for p in poses])
+    lo, hi = pts.min(axis=0) - 0.3 * L, pts.max(axis=0) + 0.3 * L
+    return 0.5 * (lo + hi), 0.5 * float((hi - lo).max())
+
+
+class _Scene:
+    """The figure of an animation on its Agg canvas (no display, no backend switch): a 3-D axes with the artists each
+    frame moves, the title and legend drawn once, two text lines that change."""
+
+    def __init__(self, platform: Platform, poses: list[RobotPose], look: _Look, size: tuple[int, int]) -> None:
+        from matplotlib.backends.backend_agg import FigureCanvasAgg
+        from matplotlib.colors import LinearSegmentedColormap
+        from matplotlib.figure import Figure
+
+        self.look, self.platform = look, platform
+        dpi = 100
+        self.fig = Figure(figsize=(size[0] / dpi, size[1] / dpi), dpi=dpi)
+        self.canvas = FigureCanvasAgg(self.fig)
+        self.ax = self.fig.add_axes((0.0, 0.0, 1.0, 0.88), projection="3d")
+        self.ax.view_init(elev=22, azim=-58)
+        self.ax.set_box_aspect((1.0, 1.0, 1.0))
+        # "fixed": the cube framing the whole run; "follow": a cube of half-width radius moved onto the base each frame
+        self.centre, self.half = _fixed_box(poses, look.L) if look.view == "fixed" else (None, look.radius)
+        self.step = _grid_step(self.half)
+        self._bare_axes()
+        self.cmap = LinearSegmentedColormap.from_list("thrust", _CMAP)
+        self.unit = _circle()
+        self.disc_r = rotor_radius(platform)
+        self.hub_r = 0.25 * min(math.hypot(*r.position_body[0:2]) for r in platform.rotors) or 0.05
+        self._artists()
+
+    def _bare_axes(self) -> None:
+        """No ticks (they are most of a 3-D frame's drawing time): a floor grid every ``step`` metres instead."""
+        from matplotlib.ticker import NullLocator
+
+        ax = self.ax
+        for axis, label in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x", "y", "z")):
+            axis.set_pane_color((0.96, 0.96, 0.97, 1.0))
+            axis.set_major_locator(NullLocator())
+            axis.set_label_text(label)
+            axis.labelpad = -12
+        ax.grid(False)
+
+    def _artists(self) -> None:
+        from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
+
+        ax = self.ax
+        nothing = [np.zeros((2, 3))]  # placeholders until the first frame sets the geometry
+        self.hub = Poly3DCollection(nothing, facecolor=_BODY, edgecolor=_BODY, alpha=0.9)
+        self.discs = Poly3DCollection(nothing, facecolor=_DISC, edgecolor=_DISC, alpha=0.3, linewidths=0.5)
+        self.booms = Line3DCollection(nothing, colors=_BODY, linewidths=2.0)
+        self.thrusts = Line3DCollection(nothing, linewidths=2.2)
+        self.force = Line3DCollection(nothing, colors=_FORCE, linewidths=2.4)
+        self.floor = Line3DCollection(nothing, colors="#c8c8cc", linewidths=0.6)
+        for artist in (self.floor, self.hub, self.discs, self.booms, self.thrusts, self.force):
+            ax.add_collection3d(artist, autolim=False)
+        (self.arm_line,) = ax.plot([], [], [], "-o", color=_ARM, lw=3.0, ms=3.5, mfc="#f5f5f5", mec="#1f3a5f", zorder=5)
+        (self.ee_dot,) = ax.plot([], [], [], "o", color="#c0392b", ms=5)
+        (self.cog_dot,) = ax.plot([], [], [], "X", color=_COG, ms=8, mec="white", mew=0.6, zorder=6)
+        (self.axis_line,) = ax.plot([], [], [], "--", color=_AXIS, lw=1.0)
+        (self.ee_trail,) = ax.plot([], [], [], "-", color=_EE_TRAIL, lw=1.0, alpha=0.8)
+        (self.base_trail,) = ax.plot([], [], [], "-", color=_BASE_TRAIL, lw=1.0, alpha=0.8)
+
+    def texts(self, thrusts: bool, contact: bool, title: str) -> None:
+        """The legend (thrust and contact entries when drawn), the title, the grid spacing and the two changing lines."""
+        from matplotlib.lines import Line2D
+
+        handles = [
+            Line2D([], [], color=_ARM, lw=3, marker="o", ms=3, mfc="#f5f5f5", label="arm (joint origins)"),
+            Line2D([], [], color=_COG, marker="X", lw=0, label="CoG"),
+            Line2D([], [], color=_AXIS, ls="--", label="thrust axis"),
+            Line2D([], [], color=_EE_TRAIL, label="end-effector trail"),
+        ]
+        if thrusts:
+            handles.append(Line2D([], [], color=self.cmap(0.5), lw=2, label="thrust (colour: f / f_max)"))
+        if contact:
+            handles.append(Line2D([], [], color=_FORCE, lw=2, label="contact force"))
+        fig = self.fig
+        fig.legend(handles=handles, loc="upper right", ncols=2, fontsize=6.5, framealpha=0.8, borderaxespad=0.3)
+        fig.text(0.01, 0.975, title, fontsize=9, va="top")
+        fig.text(0.99, 0.01, f"grid {self.step:g} m", fontsize=7, ha="right", color="#555555")
+        self.head = fig.text(0.01, 0.93, "", fontsize=7.5, va="top", family="monospace")
+        self.foot = fig.text(0.01, 0.02, "", fontsize=7.5, family="monospace", color="#333333")
+
+    def _frame_box(self, centre: np.ndarray) -> None:
+        """The cube of half-width ``self.half`` about ``centre`` and its floor grid."""
+        half = self.half
+        self.ax.set_xlim(centre[0] - half, centre[0] + half)
+        self.ax.set_ylim(centre[1] - half, centre[1] + half)
+        self.ax.set_zlim(centre[2] - half, centre[2] + half)
+        self.floor.set_segments(_floor_grid(centre, half, self.step))
+
+    def freeze(self) -> None:
+        """Fix a "fixed" view's box, then draw the title and legend once: each frame redraws only the axes and the lines."""
+        if self.look.view == "fixed":
+            self._frame_box(self.centre)
+        self.ax.set_visible(False)
+        self.canvas.draw()
+        self.background = self.canvas.copy_from_bbox(self.fig.bbox)
+        self.ax.set_visible(True)
+
+    def robot(self, pose: RobotPose) -> None:
+        """The multirotor, the arm, the end effector, the CoG and the thrust axis at ``pose``."""
+        p, R, L = pose.p_base_world, pose.R_base_world, self.look.L
+        if self.look.view == "follow":
+            self._frame_box(p)
+        self.hub.set_verts([_disc(p, R[:, 2], self.hub_r, self.unit)])
+        self.discs.set_verts([_disc(c, a, self.disc_r, self.unit) for c, a in zip(pose.rotor_world, pose.rotor_axis_world)])
+        self.booms.set_segments([[p, c] for c in pose.rotor_world])
+        a = pose.arm_world
+        self.arm_line.set_data_3d(a[:, 0], a[:, 1], a[:, 2])
+        self.ee_dot.set_data_3d([a[-1, 0]], [a[-1, 1]], [a[-1, 2]])
+        c = pose.com_world
+        self.cog_dot.set_data_3d([c[0]], [c[1]], [c[2]])
+        ends = np.array([pose.axis_point_world - 1.2 * L * pose.axis_dir_world, pose.axis_point_world + 1.5 * L * pose.axis_dir_world])
+        self.axis_line.set_data_3d(ends[:, 0], ends[:, 1], ends[:, 2])
+
+    def trails(self, ee_hist: np.ndarray, base_hist: np.ndarray, k: int) -> None:
+        """The end effector's and the base's paths up to frame ``k`` (the last ``keep`` frames)."""
+        start = 0 if self.look.keep is None else max(0, k + 1 - self.look.keep)
+        self.ee_trail.set_data_3d(ee_hist[start : k + 1, 0], ee_hist[start : k + 1, 1], ee_hist[start : k + 1, 2])
+        self.base_trail.set_data_3d(base_hist[start : k + 1, 0], base_hist[start : k + 1, 1], base_hist[start : k + 1, 2])
+
+    def thrust_arrows(self, pose: RobotPose, fk: np.ndarray, f_ref: np.ndarray) -> None:
+        """Rotor thrusts ``fk`` [N] as arrows along the rotor axes, coloured by ``fk / f_ref``; their values in the foot line."""
+        R, L = pose.R_base_world, self.look.L
+        self.thrusts.set_segments(_arrows(pose.rotor_world, fk[:, None] * self.look.thrust_scale * pose.rotor_axis_world, R[:, 0], 0.12 * L))
+        self.thrusts.set_color(np.repeat([self.cmap(x) for x in np.clip(fk / f_ref, 0.0, 1.0)], 3, axis=0))
+        self.foot.set_text("f [N] " + " ".join(f"{v:.2f}" for v in fk))
+
+    def contact_arrow(self, pose: RobotPose, fc_world: np.ndarray) -> None:
+        """The contact force ``fc_world`` [N, world axes] as an arrow at the end effector."""
+        arrow = (self.look.force_scale * fc_world)[None, :]
+        self.force.set_segments(_arrows(pose.ee_world[None, :], arrow, pose.R_base_world[:, 2], 0.12 * self.look.L))
+
+    def image(self, line: str) -> np.ndarray:
+        """The frame's pixels (RGBA) with ``line`` as its head line: the axes and the two lines over the background."""
+        self.head.set_text(line)
+        self.canvas.restore_region(self.background)
+        self.fig.draw_artist(self.ax)
+        self.fig.draw_artist(self.head)
+        self.fig.draw_artist(self.foot)
+        return np.asarray(self.canvas.buffer_rgba())
+
+
+@dataclass
+class _Series:
+    """What the frames show: ``times`` [s], the sample index ``idx`` of each, its ``poses``, the thrusts ``f`` [N] and the
+    end-effector contact force ``contact`` [N, world] per sample (or None), and the thrust of a full colour ``f_ref`` [N]."""
+
+    times: np.ndarray
+    idx: np.ndarray
+    poses: list
+    f: np.ndarray | None
+    contact: np.ndarray | None
+    f_ref: np.ndarray
+
+
+def _series(platform: Platform, t, xi, f, contact, fps: float, speed: float) -> _Series:
+    """Every frame's geometry first (Pinocchio: microseconds per frame)."""
+    times, idx = frame_indices(t, fps, speed)
+    data = platform.data()
+    chain = arm_chain(platform)
+    poses = [robot_pose(platform, data, ch.xi_to_q(xi[k]), chain) for k in idx]
+    hover = platform.total_mass * platform.g / platform.n_rotors
+    f_max = platform.thrust_max
+    return _Series(times, idx, poses, f, contact, np.where(np.isfinite(f_max), f_max, 2.0 * hover))
+
+
+def _write_frames(scene: _Scene, series: _Series, writer, bar) -> None:
+    """Draw each frame and hand it to ``writer``."""
+    ee_hist = np.array([p.ee_world for p in series.poses])
+    base_hist = np.array([p.p_base_world for p in series.poses])
+    for k, (pose, i) in enumerate(zip(series.poses, series.idx)):
+        scene.robot(pose)
+        scene.trails(ee_hist, base_hist, k)
+        line = f"t = {series.times[k]:6.2f} s   CoG to axis {1000 * _cog_distance(pose):5.1f} mm"
+        if series.f is not None:
+            scene.thrust_arrows(pose, series.f[i], series.f_ref)
+        if series.contact is not None:
+            fc = series.contact[i]
+            scene.contact_arrow(pose, fc)
+            line += f"   |F| {np.linalg.norm(fc):.2f} N"
+        writer.add(scene.image(line))
+        bar.update()
+
+
 def animate(
     platform: Platform,
     t,
@@ -300,159 +534,21 @@ def animate(
         from ..errors import UnknownNameError
 
         raise UnknownNameError("view", view, VIEWS)
-    try:
-        width, height = (int(size[0]), int(size[1]))
-    except (TypeError, ValueError, IndexError):
-        raise InputError(f"size must be (width, height) in pixels, got {size!r}") from None
-    if not (16 <= width <= 4096 and 16 <= height <= 4096):
-        raise InputError(f"size must be between 16 and 4096 pixels per side, got {size!r}")
+    size = _pixels(size)
     path = Path(path)
-    L = characteristic_length(platform)
-    radius = 1.3 * L if radius is None else _positive("radius", radius)
-    hover = platform.total_mass * platform.g / platform.n_rotors
-    thrust_scale = 0.6 * L / hover if thrust_scale is None else _positive("thrust_scale", thrust_scale)
-    force_scale = thrust_scale if force_scale is None else _positive("force_scale", force_scale)
-    if trail is not None and not (isinstance(trail, (int, float)) and math.isfinite(trail) and trail >= 0):
-        raise InputError(f"trail must be None or a number of seconds >= 0, got {trail!r}")
+    look = _look(platform, fps, speed, view, radius, trail, thrust_scale, force_scale)
     t0 = time.perf_counter()
-
-    # ---- every frame's geometry first (Pinocchio: microseconds per frame)
-    times, idx = frame_indices(t, fps, speed)
-    data = platform.data()
-    chain = arm_chain(platform)
-    poses = [robot_pose(platform, data, ch.xi_to_q(xi[k]), chain) for k in idx]
-    f_max = platform.thrust_max
-    f_ref = np.where(np.isfinite(f_max), f_max, 2.0 * hover)
-
-    # ---- figure (Agg canvas: no display, no backend switch)
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.colors import LinearSegmentedColormap
-    from matplotlib.figure import Figure
-    from matplotlib.lines import Line2D
-    from matplotlib.ticker import NullLocator
-    from mpl_toolkits.mplot3d.art3d import Line3DCollection, Poly3DCollection
-
-    dpi = 100
-    fig = Figure(figsize=(width / dpi, height / dpi), dpi=dpi)
-    canvas = FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.0, 0.0, 1.0, 0.88), projection="3d")
-    ax.view_init(elev=22, azim=-58)
-    ax.set_box_aspect((1.0, 1.0, 1.0))
-    if view == "fixed":
-        pts = np.concatenate([np.concatenate([p.rotor_world, p.arm_world]) for p in poses])
-        lo, hi = pts.min(axis=0) - 0.3 * L, pts.max(axis=0) + 0.3 * L
-        centre, half = 0.5 * (lo + hi), 0.5 * float((hi - lo).max())
-    else:
-        half = radius
-    step = _grid_step(half)
-    for axis, label in zip((ax.xaxis, ax.yaxis, ax.zaxis), ("x", "y", "z")):
-        # no ticks (they are most of a 3-D frame's drawing time): a floor grid every `step` metres instead
-        axis.set_pane_color((0.96, 0.96, 0.97, 1.0))
-        axis.set_major_locator(NullLocator())
-        axis.set_label_text(label)
-        axis.labelpad = -12
-    ax.grid(False)
-    cmap = LinearSegmentedColormap.from_list("thrust", _CMAP)
-    unit = _circle()
-    disc_r = rotor_radius(platform)
-    hub_r = 0.25 * min(math.hypot(*r.position_body[0:2]) for r in platform.rotors) or 0.05
-
-    nothing = [np.zeros((2, 3))]  # placeholders until the first frame sets the geometry
-    hub = Poly3DCollection(nothing, facecolor=_BODY, edgecolor=_BODY, alpha=0.9)
-    discs = Poly3DCollection(nothing, facecolor=_DISC, edgecolor=_DISC, alpha=0.3, linewidths=0.5)
-    booms = Line3DCollection(nothing, colors=_BODY, linewidths=2.0)
-    thrusts = Line3DCollection(nothing, linewidths=2.2)
-    force = Line3DCollection(nothing, colors=_FORCE, linewidths=2.4)
-    floor = Line3DCollection(nothing, colors="#c8c8cc", linewidths=0.6)
-    for artist in (floor, hub, discs, booms, thrusts, force):
-        ax.add_collection3d(artist, autolim=False)
-    (arm_line,) = ax.plot([], [], [], "-o", color=_ARM, lw=3.0, ms=3.5, mfc="#f5f5f5", mec="#1f3a5f", zorder=5)
-    (ee_dot,) = ax.plot([], [], [], "o", color="#c0392b", ms=5)
-    (cog_dot,) = ax.plot([], [], [], "X", color=_COG, ms=8, mec="white", mew=0.6, zorder=6)
-    (axis_line,) = ax.plot([], [], [], "--", color=_AXIS, lw=1.0)
-    (ee_trail,) = ax.plot([], [], [], "-", color=_EE_TRAIL, lw=1.0, alpha=0.8)
-    (base_trail,) = ax.plot([], [], [], "-", color=_BASE_TRAIL, lw=1.0, alpha=0.8)
-    handles = [
-        Line2D([], [], color=_ARM, lw=3, marker="o", ms=3, mfc="#f5f5f5", label="arm (joint origins)"),
-        Line2D([], [], color=_COG, marker="X", lw=0, label="CoG"),
-        Line2D([], [], color=_AXIS, ls="--", label="thrust axis"),
-        Line2D([], [], color=_EE_TRAIL, label="end-effector trail"),
-    ]
-    if f is not None:
-        handles.append(Line2D([], [], color=cmap(0.5), lw=2, label="thrust (colour: f / f_max)"))
-    if contact is not None:
-        handles.append(Line2D([], [], color=_FORCE, lw=2, label="contact force"))
-    fig.legend(handles=handles, loc="upper right", ncols=2, fontsize=6.5, framealpha=0.8, borderaxespad=0.3)
-    name = platform.name if title is None else str(title)
-    fig.text(0.01, 0.975, name, fontsize=9, va="top")
-    fig.text(0.99, 0.01, f"grid {step:g} m", fontsize=7, ha="right", color="#555555")
-    head = fig.text(0.01, 0.93, "", fontsize=7.5, va="top", family="monospace")
-    foot = fig.text(0.01, 0.02, "", fontsize=7.5, family="monospace", color="#333333")
-
-    if view == "fixed":
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
-        ax.set_zlim(centre[2] - half, centre[2] + half)
-        floor.set_segments(_floor_grid(centre, half, step))
-    ee_hist = np.array([p.ee_world for p in poses])
-    base_hist = np.array([p.p_base_world for p in poses])
-    keep = None if trail is None else max(1, int(round(trail * fps / speed)) + 1)
-    swatch = (
-        np.array(
-            [cmap(x)[:3] for x in np.linspace(0, 1, 24)]
-            + [tuple(int(c[i : i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]
-        )
-        * 255
-    )
-
-    # the title and the legend never change: draw them once, then only the axes and the two text lines
-    ax.set_visible(False)
-    canvas.draw()
-    background = canvas.copy_from_bbox(fig.bbox)
-    ax.set_visible(True)
+    series = _series(platform, t, xi, f, contact, fps, speed)
+    scene = _Scene(platform, series.poses, look, size)
+    scene.texts(f is not None, contact is not None, platform.name if title is None else str(title))
+    scene.freeze()
 
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(path.stem + ".partial" + path.suffix)
-    writer, kind = _writer_for(partial, fps, (width, height), swatch)
-    bar = Progress(len(poses), f"animating {path.name}", quiet=not progress, unit="frame")
+    writer, kind = _writer_for(partial, fps, size, _swatch(scene.cmap))
+    bar = Progress(len(series.poses), f"animating {path.name}", quiet=not progress, unit="frame")
     try:
-        for k, (pose, i) in enumerate(zip(poses, idx)):
-            p, R = pose.p_base_world, pose.R_base_world
-            if view == "follow":
-                ax.set_xlim(p[0] - radius, p[0] + radius)
-                ax.set_ylim(p[1] - radius, p[1] + radius)
-                ax.set_zlim(p[2] - radius, p[2] + radius)
-                floor.set_segments(_floor_grid(p, radius, step))
-            hub.set_verts([_disc(p, R[:, 2], hub_r, unit)])
-            discs.set_verts([_disc(c, a, disc_r, unit) for c, a in zip(pose.rotor_world, pose.rotor_axis_world)])
-            booms.set_segments([[p, c] for c in pose.rotor_world])
-            a = pose.arm_world
-            arm_line.set_data_3d(a[:, 0], a[:, 1], a[:, 2])
-            ee_dot.set_data_3d([a[-1, 0]], [a[-1, 1]], [a[-1, 2]])
-            c = pose.com_world
-            cog_dot.set_data_3d([c[0]], [c[1]], [c[2]])
-            ends = np.array([pose.axis_point_world - 1.2 * L * pose.axis_dir_world, pose.axis_point_world + 1.5 * L * pose.axis_dir_world])
-            axis_line.set_data_3d(ends[:, 0], ends[:, 1], ends[:, 2])
-            start = 0 if keep is None else max(0, k + 1 - keep)
-            ee_trail.set_data_3d(ee_hist[start : k + 1, 0], ee_hist[start : k + 1, 1], ee_hist[start : k + 1, 2])
-            base_trail.set_data_3d(base_hist[start : k + 1, 0], base_hist[start : k + 1, 1], base_hist[start : k + 1, 2])
-            line = f"t = {times[k]:6.2f} s   CoG to axis {1000 * _cog_distance(pose):5.1f} mm"
-            if f is not None:
-                fk = f[i]
-                thrusts.set_segments(_arrows(pose.rotor_world, fk[:, None] * thrust_scale * pose.rotor_axis_world, R[:, 0], 0.12 * L))
-                thrusts.set_color(np.repeat([cmap(x) for x in np.clip(fk / f_ref, 0.0, 1.0)], 3, axis=0))
-                foot.set_text("f [N] " + " ".join(f"{v:.2f}" for v in fk))
-            if contact is not None:
-                fc = contact[i]
-                force.set_segments(_arrows(pose.ee_world[None, :], (force_scale * fc)[None, :], R[:, 2], 0.12 * L))
-                line += f"   |F| {np.linalg.norm(fc):.2f} N"
-            head.set_text(line)
-            canvas.restore_region(background)
-            fig.draw_artist(ax)
-            fig.draw_artist(head)
-            fig.draw_artist(foot)
-            writer.add(np.asarray(canvas.buffer_rgba()))
-            bar.update()
+        _write_frames(scene, series, writer, bar)
         writer.close()
         partial.replace(path)
     except BaseException:
@@ -461,7 +557,8 @@ def animate(
         raise
     finally:
         bar.close()
-    return AnimationInfo(path, len(poses), fps, float(times[-1] - times[0]), time.perf_counter() - t0, kind)
+    times = series.times
+    return AnimationInfo(path, len(series.poses), fps, float(times[-1] - times[0]), time.perf_counter() - t0, kind)
 
 
 def animate_result(platform: Platform, result, path: str | Path, **options) -> AnimationInfo:

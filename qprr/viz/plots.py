@@ -663,6 +663,27 @@ def plot_result(
     """
     _check_res(res)
     dpi = as_int(dpi, "dpi", lo=1)
+    chosen = _chosen_panels(res, panels)
+    figures = scenario_figures(res) if figures is None else dict(figures)
+    draw = _PanelDrawer(res, figures, thrust_bounds, tuple((float(te), str(name)) for te, name in events))
+    if ax is not None:
+        if path is not None:
+            raise InputError("plot_result: give either ax (draw into your Axes) or path (save a new figure), not both")
+        return _draw_into(ax, chosen, draw)
+    fig = _page(chosen, draw, ncols)
+    if title is None:
+        title = default_title(res)
+    if title:  # wrapped to the page: a single panel's page is narrower than the RMSE line
+        n = len(chosen)
+        fig.suptitle(wrap_title(title, fig.get_figwidth(), 10.5 if n > 1 else 9), fontsize=10.5 if n > 1 else 9)
+    if path is None:
+        return fig
+    return save_figure(fig, path, dpi)
+
+
+def _chosen_panels(res: SimResult, panels) -> list[Panel]:
+    """The panels to draw: ``panels`` (a name, a :class:`Panel` or a sequence of them), default :data:`DEFAULT_PANELS`
+    without the disturbance panel of a run that has none."""
     explicit = panels is not None
     if panels is None:
         panels = DEFAULT_PANELS
@@ -672,35 +693,44 @@ def plot_result(
     chosen = [_panel(s) for s in specs]
     if not explicit and not np.any(res.u_ext):
         chosen = [p for p in chosen if p.name != "disturbance"]
-    figures = scenario_figures(res) if figures is None else dict(figures)
+    return chosen
 
-    events = tuple((float(te), str(name)) for te, name in events)
-    labelled = []
 
-    def draw(p: Panel, a) -> None:
+class _PanelDrawer:
+    """Draws one panel of ``res`` into an Axes: its curves, its title (with the thesis figure number) and the event
+    lines (their names written on the first time panel only)."""
+
+    def __init__(self, res: SimResult, figures: Mapping[str, str], thrust_bounds, events: tuple) -> None:
+        self.res, self.figures, self.thrust_bounds, self.events = res, figures, thrust_bounds, events
+        self.labelled: list[str] = []
+
+    def __call__(self, p: Panel, a) -> None:
         if p.name == "rotors" and p.draw is _rotors:
-            _rotors(a, res, thrust_bounds)
+            _rotors(a, self.res, self.thrust_bounds)
         else:
-            p.draw(a, res)
-        a.set_title(_title(p, figures), fontsize=10)
-        if events and p.projection is None:
-            _events(a, events, label=not labelled)
-            labelled.append(p.name)
+            p.draw(a, self.res)
+        a.set_title(_title(p, self.figures), fontsize=10)
+        if self.events and p.projection is None:
+            _events(a, self.events, label=not self.labelled)
+            self.labelled.append(p.name)
 
-    if ax is not None:
-        if path is not None:
-            raise InputError("plot_result: give either ax (draw into your Axes) or path (save a new figure), not both")
-        axes = list(ax) if isinstance(ax, (list, tuple, np.ndarray)) else [ax]
-        axes = list(np.ravel(axes))
-        if len(axes) != len(chosen):
-            raise InputError(f"plot_result: {len(chosen)} panel(s) for {len(axes)} Axes")
-        for p, a in zip(chosen, axes):
-            if (p.projection == "3d") != (getattr(a, "name", "") == "3d"):
-                need = "an Axes with projection='3d'" if p.projection == "3d" else "a 2-D Axes"
-                raise InputError(f"panel {p.name!r} needs {need}")
-            draw(p, a)
-        return axes[0].figure
 
+def _draw_into(ax, chosen: list[Panel], draw: _PanelDrawer):
+    """The panels drawn into the caller's Axes (one per panel; 3-D panels need 3-D Axes); returns their Figure."""
+    axes = list(ax) if isinstance(ax, (list, tuple, np.ndarray)) else [ax]
+    axes = list(np.ravel(axes))
+    if len(axes) != len(chosen):
+        raise InputError(f"plot_result: {len(chosen)} panel(s) for {len(axes)} Axes")
+    for p, a in zip(chosen, axes):
+        if (p.projection == "3d") != (getattr(a, "name", "") == "3d"):
+            need = "an Axes with projection='3d'" if p.projection == "3d" else "a 2-D Axes"
+            raise InputError(f"panel {p.name!r} needs {need}")
+        draw(p, a)
+    return axes[0].figure
+
+
+def _page(chosen: list[Panel], draw: _PanelDrawer, ncols: int | None):
+    """A new Figure with the panels on a grid of ``ncols`` columns (default 3, or fewer panels)."""
     n = len(chosen)
     ncols = min(3, n) if ncols is None else int(ncols)
     if ncols < 1:
@@ -710,13 +740,7 @@ def plot_result(
     for k, p in enumerate(chosen):
         a = fig.add_subplot(nrows, ncols, k + 1, projection=p.projection)
         draw(p, a)
-    if title is None:
-        title = default_title(res)
-    if title:  # wrapped to the page: a single panel's page is narrower than the RMSE line
-        fig.suptitle(wrap_title(title, fig.get_figwidth(), 10.5 if n > 1 else 9), fontsize=10.5 if n > 1 else 9)
-    if path is None:
-        return fig
-    return save_figure(fig, path, dpi)
+    return fig
 
 
 def wrap_title(title: str, width_in: float, fontsize: float) -> str:
@@ -726,6 +750,60 @@ def wrap_title(title: str, width_in: float, fontsize: float) -> str:
 
     chars = max(20, int(0.95 * width_in * 72.0 / (0.62 * fontsize)))
     return "\n".join(textwrap.fill(line, chars, break_long_words=False, break_on_hyphens=False) for line in title.split("\n"))
+
+
+def _wrap_at(text: str, chars: int) -> str:
+    """``text`` with each line broken at spaces to at most ``chars`` characters, a word longer than that broken after
+    its underscores (``rmse_shoulder_pitch_joint``), never inside a run of letters."""
+    import re
+    import textwrap
+
+    out = []
+    for line in text.split("\n"):
+        for piece in textwrap.wrap(line, chars, break_long_words=False, break_on_hyphens=False) or [""]:
+            cur = ""
+            for token in re.split(r"(?<=_)", piece):
+                if cur and len(cur) + len(token) > chars:
+                    out.append(cur)
+                    cur = ""
+                cur += token
+            out.append(cur)
+    return "\n".join(out)
+
+
+def fit_texts(fig, rounds: int = 3) -> None:
+    """Re-wrap the titles, axis labels and figure texts of ``fig`` that leave the page, measured on the rendered page.
+
+    A centred text (title, axis label, suptitle) is wrapped to twice the room from its centre to the nearer page edge
+    (vertical for a rotated label); its layout is drawn again and checked, at most ``rounds`` times."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    canvas = FigureCanvasAgg(fig)
+    texts = list(fig.texts)
+    for a in fig.axes:
+        texts += [a.title, a.xaxis.label, a.yaxis.label]
+    texts = [t for t in texts if t.get_text() and "$" not in t.get_text()]  # mathtext is never broken apart
+    original = {id(t): t.get_text() for t in texts}
+    for _ in range(rounds):
+        canvas.draw()
+        renderer, page = canvas.get_renderer(), fig.bbox
+        moved = False
+        for t in texts:
+            bb = t.get_window_extent(renderer)
+            vertical = abs(t.get_rotation() % 180 - 90) < 1.0
+            lo, hi, page_lo, page_hi = (bb.y0, bb.y1, page.y0, page.y1) if vertical else (bb.x0, bb.x1, page.x0, page.x1)
+            if lo >= page_lo - 0.5 and hi <= page_hi + 0.5:
+                continue
+            centre = 0.5 * (lo + hi)
+            room = 2.0 * min(centre - page_lo, page_hi - centre)
+            longest = max(len(line) for line in t.get_text().split("\n"))
+            chars = max(8, int(0.95 * longest * room / (hi - lo)))
+            if chars >= longest:
+                chars = longest - 1
+            t.set_text(_wrap_at(original[id(t)], chars))
+            moved = True
+        if not moved:
+            return
 
 
 def default_title(res: SimResult) -> str:
@@ -754,6 +832,7 @@ __all__ = [
     "default_title",
     "effort_label",
     "figure_path",
+    "fit_texts",
     "legend",
     "new_figure",
     "plain",

@@ -1,8 +1,9 @@
 """The one place the design search touches the campaign package (its public API only).
 
-Backends (:func:`qprr.campaign.make_backend`: local process pool, Dask, inline), the results
-store (:class:`qprr.campaign.store.ResultStore`: CSV/Parquet appended as rows arrive, fingerprint
-checked on resume, a lock per file), the reader (:func:`qprr.campaign.read_results`) and the flight
+Backends (:func:`qprr.campaign.make_backend`: local process pool, Dask, inline), the session a
+campaign runs in (:class:`qprr.campaign.session.Session`: the results store, CSV/Parquet appended as
+rows arrive, fingerprint checked on resume, a lock per file; the progress line; the backend opened
+at the first task and released in order), the reader (:func:`qprr.campaign.read_results`) and the flight
 metrics (:func:`qprr.campaign.metrics_of`) of the closed-loop check.  If the
 campaign package changes these, only this module changes.
 """
@@ -13,7 +14,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from ...campaign import BACKENDS, Backend, Results, make_backend, metrics_of, read_results
-from ...campaign.store import ResultStore
+from ...campaign.session import BackendChoice, Session
 
 
 def open_backend(backend: str | Backend, workers: int | None, scheduler: str | None) -> tuple[Backend, bool]:
@@ -26,11 +27,6 @@ def open_backend(backend: str | Backend, workers: int | None, scheduler: str | N
 def close_backend(backend: Backend, owned: bool) -> None:
     if owned:
         backend.close()
-
-
-def open_store(path: str | Path, columns: tuple[str, ...], meta: dict, fresh: bool) -> ResultStore:
-    """The results file (resumed unless ``fresh``; another study's results are refused)."""
-    return ResultStore(path, columns, meta, fresh=fresh)
 
 
 def read_table(path: str | Path) -> Results:
@@ -57,4 +53,15 @@ def evaluate(
         on_row(row)
 
 
-__all__ = ["BACKENDS", "Backend", "Results", "close_backend", "evaluate", "metrics_of", "open_backend", "open_store", "read_table"]
+__all__ = [
+    "BACKENDS",
+    "Backend",
+    "BackendChoice",
+    "Results",
+    "Session",
+    "close_backend",
+    "evaluate",
+    "metrics_of",
+    "open_backend",
+    "read_table",
+]

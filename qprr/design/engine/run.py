@@ -11,6 +11,7 @@ designs are evaluated.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -19,7 +20,6 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
-from ...progress import StatusProgress
 from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design
 from ..search.optimiser import make_optimiser
 from ..search.points import fixed_params, grid_points, n_points, point, reference_points
@@ -82,16 +82,16 @@ def told(spec: DesignSpec, rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     return F, G
 
 
-class _Session:
-    """One call of :func:`run_design`: the store, the rows known, the backend (opened at the first design to evaluate)."""
+class _Study:
+    """One call of :func:`run_design`: its campaign :class:`~qprr.campaign.session.Session` (the results file, the
+    progress line, the backend opened at the first design to evaluate) and the rows known."""
 
-    def __init__(self, spec, store, done, backend, workers, scheduler, bar) -> None:
-        self.spec, self.store, self.rows, self.bar = spec, store, done, bar
-        self.backend_arg, self.workers, self.scheduler = backend, workers, scheduler
-        self.be, self.owned, self.executed, self.failed = None, False, 0, 0
+    def __init__(self, spec: DesignSpec, session: io.Session, done: dict[int, dict]) -> None:
+        self.spec, self.session, self.rows, self.bar = spec, session, done, session.bar
+        self.executed, self.failed = 0, 0
 
     def on_row(self, row: dict) -> None:
-        self.store.append(row)
+        self.session.store.append(row)
         self.rows[int(row["run"])] = row
         self.executed += 1
         self.failed += row["status"] != "ok"
@@ -101,21 +101,17 @@ class _Session:
         """The rows of ``points`` (evaluated now when not saved before)."""
         todo = [p for p in points if p["run"] not in self.rows or self.rows[p["run"]]["status"] == "error"]
         if todo:
-            if self.be is None:
-                self.be, self.owned = io.open_backend(self.backend_arg, self.workers, self.scheduler)
-                self.bar.message(f"{self.bar.total - self.bar.done} designs to evaluate on {self.be.describe()}")
-            io.evaluate(
-                self.be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row, lambda p, exc: _error_row(self.spec, p, exc)
-            )
+            be = self.session.be
+            if be is None:
+                be = self.session.backend()
+                self.bar.message(f"{self.bar.total - self.bar.done} designs to evaluate on {be.describe()}")
+            on_error = functools.partial(_error_row, self.spec)
+            io.evaluate(be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row, on_error)
         return [self.rows[p["run"]] for p in points]
 
-    def close(self) -> None:
-        if self.be is not None:
-            io.close_backend(self.be, self.owned)
 
-
-def _nsga2(session: _Session) -> None:
-    spec = session.spec
+def _nsga2(study: _Study) -> None:
+    spec = study.spec
     s = spec.search
     names = spec.optimised
     low = [spec.parameters[k].low for k in names]
@@ -140,11 +136,11 @@ def _nsga2(session: _Session) -> None:
             X = opt.ask()
             first = start + (a * s.generations + g) * s.population
             pts.append([point(spec, first + k, "nsga2", arch, {**base, **{n: float(v) for n, v in zip(names, x)}}, g) for k, x in enumerate(X)])
-        rows = session.evaluate([p for group in pts for p in group])
+        rows = study.evaluate([p for group in pts for p in group])
         for a, opt in enumerate(opts):
             F, G = told(spec, rows[a * s.population : (a + 1) * s.population])
             opt.tell(F, G)
-        session.bar.message(f"generation {g + 1}/{s.generations} done")
+        study.bar.message(f"generation {g + 1}/{s.generations} done")
 
 
 def run_design(
@@ -166,33 +162,33 @@ def run_design(
     """
     if not isinstance(spec, DesignSpec):
         raise InputError(f"spec must be a DesignSpec (DesignSpec.load(path)), got {type(spec).__name__}")
-    if isinstance(backend, str) and backend not in io.BACKENDS:
-        raise InputError(f"backend {backend!r} is not one of {', '.join(io.BACKENDS)}")
-    store = io.open_store(output, columns(), meta_of(spec), fresh)
+    session = io.Session(output, columns(), meta_of(spec), io.BackendChoice(backend, workers, scheduler), fresh)
     done: dict[int, dict] = {}
-    if store.rows_before:
-        t = io.read_table(store.path).table
+    if session.store.rows_before:
+        t = io.read_table(session.store.path).table
         done = {int(r["run"]): {k: r[k].item() for k in t.dtype.names} for r in t}
     total = n_points(spec)
     skipped = sum(1 for r in done.values() if r["status"] != "error")
-    bar = StatusProgress(f"design {spec.name}", total, skipped, quiet=not progress, stream=stream, unit="design")
-    session = _Session(spec, store, done, backend, workers, scheduler, bar)
+    bar = session.progress(f"design {spec.name}", total, skipped, quiet=not progress, stream=stream, unit="design")
+    study = _Study(spec, session, done)
     t0 = time.perf_counter()
     interrupted = False
     try:
-        session.evaluate(reference_points(spec))
+        study.evaluate(reference_points(spec))
         if spec.search.method == "grid":
-            session.evaluate(grid_points(spec))
+            study.evaluate(grid_points(spec))
         else:
-            _nsga2(session)
+            _nsga2(study)
     except KeyboardInterrupt:
         interrupted = True
     finally:
-        store.close()
-        bar.close()
-        session.close()
+        try:
+            session.stop()  # the workers released normally (a design's running evaluations finish)
+        finally:
+            session.close()
     wall = time.perf_counter() - t0
     if interrupted:
-        bar.message(f"interrupted after {session.executed} designs; run the same command again to resume")
+        bar.message(f"interrupted after {study.executed} designs; run the same command again to resume")
     name = backend if isinstance(backend, str) else backend.name
-    return DesignRun(store.path, session.executed, skipped, session.failed, wall, name, io.read_table(store.path), interrupted)
+    path = session.store.path
+    return DesignRun(path, study.executed, skipped, study.failed, wall, name, io.read_table(path), interrupted)
