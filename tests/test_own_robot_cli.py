@@ -2,7 +2,7 @@
 examples/my_platform alone: the gains printed, the multi-phase mission with a payload grasped and released (the sag
 it causes is the payload's weight over m k_P, with the printed k_P), a gains file, the animation, a small robustness
 campaign with model errors (show, run, report) whose columns carry the URDF's joint names, and no Q-PRR name in
-anything printed or written.
+anything printed or written.  Also ee-impedance on the three platforms of the generic missions' tests where it was not run.
 """
 
 from __future__ import annotations
@@ -12,7 +12,13 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
+import pytest
+
+import qprr
+from qprr import scenarios
 from qprr.cli import main
+from qprr.impedance_scenario import steady_state
 
 try:
     import tomllib
@@ -142,3 +148,17 @@ def test_the_page_shows_the_example_files():
     assert shown == spec
     for needed in ("--gains examples/my_platform/gains.toml", "campaign run examples/my_platform/robustness.toml", "--save out/mission.npz"):
         assert needed in text, needed
+
+
+# ---------------------------------------------------------------------------------- coverage of the generic scenarios
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5"])
+def test_ee_impedance_on_the_other_platforms(name):
+    """ee-impedance, tested on HEX-RRR in tests/test_opspace_impedance.py, on the three other platforms of the generic
+    missions' tests: the wall stops the end effector where the impedance K e = h (two springs in series), within 0.2 %.
+    Frictionless arms: hextilt_flying_arm_5's URDF joint friction holds its arm 20 % short of K^-1 h."""
+    platform = qprr.load(name).without_joint_friction()
+    res = scenarios.run("ee-impedance", platform=platform, t_on=0.5, t_off=3.5, duration=5.5)
+    assert res.status == "ok" and tuple(res.names) == platform.xi_names
+    d = steady_state(res, 3.5 - res.dt)
+    assert d["h"][0] < -0.5  # in contact
+    assert np.abs(d["e"] - d["predicted"]).max() < 2e-3 * np.abs(d["predicted"]).max()
