@@ -77,7 +77,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     if any(x is not None for x in (args.platform, args.layout, args.urdf, args.rotors, args.ee_frame)):
         name = args.platform or ("q-prr" if args.urdf is None else args.urdf)
         if sc.platforms is not None and name not in sc.platforms:
-            return fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}")
+            generic = ", ".join(n for n, s in SCENARIOS.items() if s.platforms is None)
+            return fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}; scenarios for any platform: {generic}")
         try:
             platform = platform_from_args(args)
         except QprrError as exc:
@@ -104,7 +105,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         plot = sc.plot if (sc.plot is not None and code == 0) else plot_result
         print(f"figure {plot(res, plot_path)}")
     if anim_path is not None:
-        _animate(res, platform, anim_path)
+        _animate(res, platform, anim_path, progress)
     return code
 
 
@@ -128,10 +129,11 @@ def _print_gains(sc, platform, controller: str, options: dict) -> int:
     return 0
 
 
-def _animate(res, platform, path: Path) -> None:
+def _animate(res, platform, path: Path, progress: bool) -> None:
+    """Animate ``res`` to ``path``; :func:`qprr.viz.cli.animate_to_file` prints where it went (one line)."""
     from .platforms import load as load_platform
 
-    print(f"animation {viz_cli.animate_to_file(platform or load_platform(), res, path)}")
+    viz_cli.animate_to_file(platform or load_platform(), res, path, progress=progress)
 
 
 def _summary(res) -> str:
