@@ -262,3 +262,21 @@ def test_viewer_camera_frames_any_platform(name):
     centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0)) - position
     assert np.arccos(min(1.0, centre @ axis / np.linalg.norm(centre))) < np.radians(1.0)  # the box's centre in the middle of the view
     assert np.linalg.norm(look_at - pose.p_base_world) < 2.0 * np.ptp(pts, axis=0).max()  # aimed at the robot, not the origin
+
+
+def test_viewer_camera_frames_a_run_path():
+    """With a run's path (extra points far from the robot's start) every path point is inside the camera's cone too."""
+    viewer = pytest.importorskip("qprr.viz.viewer", reason="pip install 'qprr[viewer]'", exc_type=qprr.errors.MissingDependencyError)
+    from qprr.charts import xi_to_q
+    from qprr.viz.geometry import rotor_radius
+    from qprr.viz.scene import robot_pose
+
+    platform = qprr.load("borinot_flying_arm_2")
+    xi = np.zeros(platform.n_xi)
+    pose = robot_pose(platform, platform.data(), xi_to_q(xi))
+    path = np.column_stack([np.linspace(0.0, 3.0, 50), np.linspace(0.0, -1.0, 50), np.linspace(0.0, 2.0, 50)])
+    look_at, position = viewer.camera_framing(pose, rotor_radius(platform), extra_world=path)
+    axis = (look_at - position) / np.linalg.norm(look_at - position)
+    rel = np.vstack([path, pose.ee_world[None, :]]) - position
+    angle = np.arccos(np.clip(rel @ axis / np.linalg.norm(rel, axis=1), -1.0, 1.0))
+    assert angle.max() < 0.9 * viewer.CAMERA_FOV / 2

@@ -374,6 +374,7 @@ class Viewer:
             if len(ee) >= 2:
                 self._trail.points = np.stack([ee[:-1], ee[1:]], axis=1)
                 self._trail.visible = True
+            self._frame_camera(robot_pose(self.platform, data, ch.xi_to_q(run.xi[0]), self._chain), ee)
             t0, t1 = float(run.t[0]), float(run.t[-1])
             self._syncing = True
             try:
@@ -388,6 +389,15 @@ class Viewer:
             )
             self.show_time(t0)
         return run
+
+    def _frame_camera(self, pose: RobotPose, extra_world) -> None:
+        """Aim the camera of new and connected clients at the robot at ``pose`` and the points ``extra_world`` (a run's path)."""
+        look_at, position = camera_framing(pose, rotor_radius(self.platform), CAMERA_FOV, extra_world=extra_world)
+        self.server.initial_camera.look_at = tuple(look_at)
+        self.server.initial_camera.position = tuple(position)
+        for client in self.server.get_clients().values():
+            client.camera.look_at = tuple(look_at)
+            client.camera.position = tuple(position)
 
     def _load_from_gui(self) -> None:
         try:
@@ -508,8 +518,9 @@ CAMERA_DIRECTION = np.array([1.7, -2.2, 1.3]) / np.linalg.norm([1.7, -2.2, 1.3])
 """Unit vector from the robot towards the initial camera (front right, above), world frame."""
 
 
-def camera_framing(pose: RobotPose, rotor_r: float, fov: float = CAMERA_FOV, margin: float = 1.15):
-    """(look_at, position) [m, world] of a camera that sees the whole robot at ``pose``.
+def camera_framing(pose: RobotPose, rotor_r: float, fov: float = CAMERA_FOV, margin: float = 1.15, extra_world=None):
+    """(look_at, position) [m, world] of a camera that sees the whole robot at ``pose`` (and the points ``extra_world``,
+    (m, 3) [m], e.g. a run's end-effector path).
 
     The robot's bounding box (rotor centres widened by the rotor radius ``rotor_r``, the arm's joint
     origins, the end effector, the CoG) has a bounding sphere of radius rho about its centre c; a
@@ -517,7 +528,8 @@ def camera_framing(pose: RobotPose, rotor_r: float, fov: float = CAMERA_FOV, mar
     c, holds that sphere in its view for any aspect ratio wider than tall (any platform's size).
     """
     discs = [pose.rotor_world + sign * rotor_r * e for e in np.eye(3) for sign in (1.0, -1.0)]
-    pts = np.vstack([*discs, pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :]])
+    extra = np.zeros((0, 3)) if extra_world is None else np.asarray(extra_world, dtype=float).reshape(-1, 3)
+    pts = np.vstack([*discs, pose.arm_world, pose.ee_world[None, :], pose.com_world[None, :], extra])
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     centre = 0.5 * (lo + hi)
     rho = max(0.5 * float(np.linalg.norm(hi - lo)), 0.05)
