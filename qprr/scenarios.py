@@ -39,10 +39,15 @@ from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 
 @dataclass(frozen=True)
 class Option:
-    """A scenario parameter settable by name (and from the command line): ``default`` gives its type."""
+    """A scenario parameter settable by name (and from the command line): ``default`` gives its type.
+
+    ``file``: the value may be a TOML file's path whose parsed content the scenario also takes (a campaign
+    specification reads the file, relative to its own folder, and carries the content: its fingerprint then covers
+    the file and its workers need no copy)."""
 
     default: object
     help: str
+    file: bool = False
 
 
 @dataclass(frozen=True)
@@ -257,7 +262,9 @@ MISSIONS = (
             **COMMON_OPTIONS,
             "gains": GAINS_OPTION,
             "mission": Option(
-                "", "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables; empty: climb, fly 1 m, reach out"
+                "",
+                "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables; empty: climb, fly 1 m, reach out",
+                file=True,
             ),
         },
         summary=_mission_summary,

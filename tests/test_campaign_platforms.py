@@ -17,7 +17,7 @@ from qprr.campaign.spec import platform_names
 from qprr.campaign.worker import platform_of
 from qprr.errors import InputError, UnknownNameError
 from qprr.platforms import NAMES
-from qprr.scenarios import run
+from qprr.scenarios import SCENARIOS, run
 from qprr.sim.mismatch import ModelError, check_plant, perturbed
 
 MY_PLATFORM = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
@@ -295,3 +295,26 @@ def test_report_units_follow_the_arm_joint_types(tmp_path):
     assert box_plot(res, f"rmse_{arm[0]}", None).axes[0].get_ylabel() == f"rmse_{arm[0]} [m]"
     text, _ = report(res)
     assert "on HEX-PRR ((2.1) designation), " in text
+
+
+def test_mission_file_of_a_campaign_is_read_from_the_spec_folder(tmp_path, monkeypatch):
+    """options.mission = "FILE.toml" is read relative to the specification's folder (whatever the working directory),
+    carried as data (the fingerprint follows the file's content) and a missing file is refused at load, naming it."""
+    from qprr.campaign import CampaignSpec
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    (folder / "m.toml").write_text('[[phase]]\ncoordinate = "z"\nstart = 0.0\nend = 1.0\ntarget = 1.0\n')
+    (folder / "spec.toml").write_text('name = "m"\nscenario = "mission"\nplatform = "HEX-RRR"\n[options]\nmission = "m.toml"\nduration = 1.5\n')
+    monkeypatch.chdir(tmp_path)
+    spec = CampaignSpec.load(folder / "spec.toml")
+    assert spec.options["mission"] == {"phase": [{"coordinate": "z", "start": 0.0, "end": 1.0, "target": 1.0}]}
+    before = spec.fingerprint
+    (folder / "m.toml").write_text('[[phase]]\ncoordinate = "z"\nstart = 0.0\nend = 1.0\ntarget = 2.0\n')
+    assert CampaignSpec.load(folder / "spec.toml").fingerprint != before
+    assert CampaignSpec.from_mapping(spec.to_dict()).options == spec.options  # the data reads back
+    res = SCENARIOS["mission"].run(platform=qprr.build("HEX-RRR"), **spec.options)
+    assert res.xi_d[-1, 2] == pytest.approx(1.0)  # the file's phase was flown
+    (folder / "m.toml").unlink()
+    with pytest.raises(InputError, match="m.toml"):
+        CampaignSpec.load(folder / "spec.toml")

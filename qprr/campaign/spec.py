@@ -391,6 +391,7 @@ class CampaignSpec:
                     raise UnknownNameError("model-error parameter", k, MODEL_PARAMS)
         if self.scenario is not None:
             self._check_scenario()
+            self._embed_option_files()
         elif not isinstance(self.callable, str) or ":" not in self.callable:
             raise InputError(f'callable must be "package.module:function" or "file.py:function", got {self.callable!r}')
         # every model-error combination must be valid (fails here, not in a worker)
@@ -424,6 +425,23 @@ class CampaignSpec:
         for c in self._values("controller"):
             if c not in sc.controllers:
                 raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controllers)
+
+    def _embed_option_files(self) -> None:
+        """Options that name a TOML file (``Option.file``) replaced by the file's content, read relative to the
+        specification's folder; a missing or unreadable file is refused here, not in a worker."""
+        from ..scenarios import SCENARIOS
+
+        sc = SCENARIOS[self.scenario]
+        options = dict(self.options)
+        for k, value in self.options.items():
+            if k in sc.options and sc.options[k].file and isinstance(value, str) and value:
+                path = Path(value) if Path(value).is_absolute() else Path(self.base_dir) / value
+                if not path.is_file():
+                    raise InputError(
+                        f"options.{k} = {value!r}: no file {str(path)!r} (paths are relative to the specification's folder {self.base_dir!r})"
+                    )
+                options[k] = toml_loads(path.read_text(), f"options.{k} = {value!r}")
+        object.__setattr__(self, "options", options)
 
     def _values(self, name: str) -> tuple:
         if name in self.options:
