@@ -137,8 +137,10 @@ def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str,
 
 
 def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
-    """``make_controller(name, platform)`` with the gain set ``gains`` (:func:`gain_arguments`); ``kwargs`` to the constructor."""
-    return make_controller(name, platform, **{**gain_arguments(name, platform, gains), **kwargs})
+    """``make_controller(name, platform)`` with the gain set ``gains`` (:func:`gain_arguments`; "class": the class's own
+    defaults, nothing derived); ``kwargs`` to the constructor."""
+    defaults = "class" if gains == "class" else "platform"
+    return make_controller(name, platform, defaults=defaults, **{**gain_arguments(name, platform, gains), **kwargs})
 
 
 def reach_posture(platform: Platform, fraction: float) -> np.ndarray:

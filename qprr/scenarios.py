@@ -118,20 +118,25 @@ COMMON_OPTIONS = {
 """Options every flight scenario takes."""
 
 
-def _hover_reach(platform, controller, progress, duration, dt, integrator, seed, law, z, reach_fraction, plant=None):
+GAINS_OPTION = Option(
+    "platform",
+    "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
+    "class (the controller's own defaults), a registered gain table, or FILE.toml",
+)
+"""The ``gains`` option of the missions (:func:`qprr.missions.controller_for`)."""
+
+
+def _hover_reach(platform, controller, progress, plant=None, **o):
+    from .missions import controller_for, reach_posture
     from .platforms import load
 
     platform = load() if platform is None else platform
-    q0 = platform.neutral_q()[7:]
-    import numpy as np
-
-    hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q0 + 1.0)
-    q_arm = q0 + reach_fraction * (hi - q0)
-    trajectory = hover_and_reach(platform, (0.0, 0.0, z), q_arm, law=law)
-    ctrl = make_controller(controller, platform)
-    return simulate(
-        platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, progress=progress, scenario="hover-reach", plant=plant
-    )
+    q_arm = reach_posture(platform, o["reach_fraction"])
+    trajectory = hover_and_reach(platform, (0.0, 0.0, o["z"]), q_arm, law=o["law"])
+    # "platform": make_controller's own default (derived gains; a controller they do not cover, e.g. mpc, its class's)
+    ctrl = make_controller(controller, platform) if o["gains"] == "platform" else controller_for(controller, platform, o["gains"])
+    sim = {k: o[k] for k in ("dt", "integrator", "seed")}
+    return simulate(platform, ctrl, trajectory, o["duration"], progress=progress, scenario="hover-reach", plant=plant, **sim)
 
 
 def _ee_impedance(platform, controller, progress, **options):
@@ -160,6 +165,7 @@ GENERIC = (
         ("idc", "dsid", "mfc", "decoupled", "mpc"),
         {
             **COMMON_OPTIONS,
+            "gains": GAINS_OPTION,
             "z": Option(2.0, "hover height [m]"),
             "reach_fraction": Option(0.6, "fraction of the way from the neutral posture to the upper joint limits"),
         },
@@ -216,12 +222,6 @@ def _mission_summary(result: SimResult) -> list[str]:
     return summary(result)
 
 
-GAINS_OPTION = Option(
-    "platform",
-    "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
-    "class (the controller's own defaults), a registered gain table, or FILE.toml",
-)
-"""The ``gains`` option of the missions (:func:`qprr.missions.controller_for`)."""
 _FLIGHT = ("idc", "dsid", "decoupled")
 _HOVER = {
     **COMMON_OPTIONS,

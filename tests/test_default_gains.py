@@ -227,3 +227,15 @@ def test_workspace_grid_holds_the_neutral_posture_and_the_limits(quad):
         corners.append(np.linalg.inv(S.T @ pin.crba(quad.model, quad.data(), q) @ S)[6, 6])
     assert a.inverse_inertia[6][0] <= min(corners) * (1 + 1e-12)
     assert a.inverse_inertia[6][1] / a.inverse_inertia[6][0] > 100.0  # why a constant alpha limits the MFC here
+
+
+def test_class_defaults_on_request():
+    """make_controller(defaults="class") builds the class's own fixed gains, nothing derived; anything else is refused."""
+    from qprr.control import InverseDynamicsController, make_controller
+    from qprr.errors import UnknownNameError
+
+    p = qprr.load("borinot_flying_arm_2")
+    assert make_controller("idc", p, defaults="class").gains == InverseDynamicsController(p).gains
+    assert make_controller("idc", p).gains != InverseDynamicsController(p).gains
+    with pytest.raises(UnknownNameError, match="class"):
+        make_controller("idc", p, defaults="thesis")

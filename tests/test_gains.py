@@ -15,6 +15,7 @@ from qprr.control.gains import Authority, Targets, bandwidths, derive, idc_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance
 from qprr.errors import QprrError, UnknownNameError
 from qprr.model import max_lift
+from qprr.scenarios import run
 from qprr.sim import simulate
 from qprr.trajectory import Hold
 
@@ -144,3 +145,14 @@ def test_print_gains_of_motor_lag_are_the_flown_ones(capsys):
     out = capsys.readouterr().out
     assert "filter_omega = 3.75" in out
     assert lag_gains("idc", qprr.load(), 0.02)["gains"].filter_omega == pytest.approx(3.75, rel=1e-12)
+
+
+def test_hover_reach_takes_the_gains_option(capsys):
+    """hover-reach flies the derived gains by default and any gain set by name, like the generic missions."""
+    assert main(["simulate", "hover-reach", "--platform", "borinot_flying_arm_2", "--print-gains"]) == 0
+    assert "IDCGains" in capsys.readouterr().out
+    p = qprr.load("borinot_flying_arm_2")
+    derived = run("hover-reach", "idc", platform=p, duration=1.0)
+    fixed = run("hover-reach", "idc", platform=p, duration=1.0, gains="class")
+    assert not np.array_equal(derived.xi, fixed.xi)  # two gain sets, two flights
+    assert abs(derived.xi[-1, 2] - derived.xi_d[-1, 2]) < 0.05

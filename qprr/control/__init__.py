@@ -83,7 +83,7 @@ if find_spec("crocoddyl") is not None:  # registered only when the optional depe
     CONTROLLERS["mpc"] = _mpc
 
 
-def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
+def make_controller(name: str, platform: Platform, *, defaults: str = "platform", **kwargs) -> Controller:
     """A new controller by name (see :data:`CONTROLLERS`) with gains derived from ``platform``; keyword arguments
     go to its constructor.
 
@@ -98,6 +98,9 @@ def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
     desired mass (m / ratio^2), so it needs ``ee_sensor`` (the contact force).  A platform whose rotors cannot hover it has no
     derived gains: :class:`~qprr.errors.InputError` (pass ``gains=`` explicitly).
 
+    ``defaults="class"``: the gains not given are the controller class's own fixed defaults instead (tuned for the
+    Q-PRR), nothing derived.
+
     An optional controller whose dependency is missing raises :class:`~qprr.errors.MissingDependencyError`
     with the install command.
     """
@@ -105,7 +108,9 @@ def make_controller(name: str, platform: Platform, **kwargs) -> Controller:
         if name in OPTIONAL:
             raise MissingDependencyError(*OPTIONAL[name])
         raise UnknownNameError("controller", name, tuple(CONTROLLERS))
-    missing = [arg for arg in GAIN_ARGUMENTS.get(name, ()) if arg not in kwargs]
+    if defaults not in ("platform", "class"):
+        raise UnknownNameError("gain defaults of make_controller", defaults, ("platform", "class"))
+    missing = [arg for arg in GAIN_ARGUMENTS.get(name, ()) if arg not in kwargs] if defaults == "platform" else []
     if missing:
         derived = platform_gains(name, platform)
         kwargs = {**{arg: derived[arg] for arg in missing}, **kwargs}
