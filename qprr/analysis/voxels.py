@@ -187,6 +187,13 @@ class Zonotopes:
         return self.centre - self.half, self.centre + self.half
 
     @functools.cached_property
+    def columns(self) -> tuple[np.ndarray, ...]:
+        """(low (d, m), high (d, m), centre (d, m), normals (f, d, m), offset (f, m)): the bounding boxes' corners and the
+        facets as contiguous rows, what every shift's count reads (the same numbers as the fields, transposed)."""
+        low, high = self.corners
+        return tuple(np.ascontiguousarray(a) for a in (low.T, high.T, self.centre.T, self.normals.transpose(1, 2, 0), self.offset.T))
+
+    @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lowest, highest) corner of the union of the bounding boxes (d,), computed once for every shift's count."""
         lo = np.array([float((self.centre[:, k] - self.half[:, k]).min()) for k in range(self.centre.shape[1])])
@@ -234,85 +241,114 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
 
 
 def covered_cells(
-    z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072, out: np.ndarray | None = None
+    z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 1 << 20, out: np.ndarray | None = None
 ) -> np.ndarray:
     """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
-    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set)."""
+    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set).
+
+    A candidate cell is one whose centre lies in a zonotope's bounding box; it is covered when
+    |n_j . (x - centre)| <= offset_j for every facet j, evaluated as the projection of the box's first
+    candidate centre plus h n_j . (its offset in cells).  The occupancy is an OR over the zonotopes, so a
+    candidate cell already covered needs no test: the boxes holding one candidate are tested in rounds (a
+    sample spread over the set first), each round skipping the cells the earlier ones covered (a redundant
+    map covers each cell many times over).  ``chunk``: candidates tested per batch (memory only)."""
     d = z.centre.shape[1]
-    f = z.normals.shape[1]
     occ = np.zeros(shape, dtype=bool) if out is None else out
-    started = out is not None and bool(out.any())
-    dims = np.array(shape)
-    for s in range(0, z.size, chunk):
-        centre, N, off = z.centre[s : s + chunk], z.normals[s : s + chunk], z.offset[s : s + chunk]
-        low, high = z.corners
-        lo = np.maximum(np.ceil((low[s : s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
-        hi = np.minimum(np.floor((high[s : s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
-        span = hi - lo + 1
-        ok = span[:, 0] > 0
-        for k in range(1, d):
-            ok &= span[:, k] > 0
-        if not ok.all():
-            centre, N, off, lo, span = centre[ok], N[ok], off[ok], lo[ok], span[ok]
-        counts = span[:, 0].copy()
-        for k in range(1, d):
-            counts *= span[:, k]
-        if s or started:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
-            new = _box_sums(_integral(occ), lo, span) < counts
-            if not new.all():
-                centre, N, off, lo, span, counts = centre[new], N[new], off[new], lo[new], span[new], counts[new]
-        m = centre.shape[0]
-        if m == 0:
-            continue
-        # projection of the first candidate centre (lo + 1/2) relative to the zonotope centre, per facet
-        rel = origin + (lo + 0.5) * h - centre
-        base = N[:, :, 0] * rel[:, 0:1]
-        for k in range(1, d):
-            base += N[:, :, k] * rel[:, k : k + 1]
-        rep = np.repeat(np.arange(m), counts)
-        local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
-        offs = []
-        for k in range(d - 1, -1, -1):  # unravel local in the box span[rep] (last axis fastest)
-            sk = span[rep, k]
-            offs.append(local % sk)
-            local //= sk
-        offs = offs[::-1]
-        # a candidate cell already covered (by an earlier chunk) needs no test: the occupancy is an OR over the
-        # zonotopes, the same in any order; the cells of a redundant map are covered many times over
-        todo = ~occ[tuple(lo[rep, k] + offs[k] for k in range(d))]
-        if not todo.all():
-            rep = rep[todo]
-            offs = [o[todo] for o in offs]
-        hit = np.ones(rep.size, dtype=bool)
-        for j in range(f):  # facet by facet: |base + h N . off| <= offset
-            proj = base[rep, j] + (h * N[rep, j, 0]) * offs[0]
-            for k in range(1, d):
-                proj += (h * N[rep, j, k]) * offs[k]
-            hit &= np.abs(proj) <= off[rep, j]
-        sel = rep[hit]
-        idx = tuple(lo[sel, k] + offs[k][hit] for k in range(d))
-        occ[idx] = True
+    flat_occ = occ.reshape(-1)  # a view: occ is C-contiguous
+    which, lo, span = _candidate_boxes(z, h, origin, shape)
+    counts = span[0].copy()
+    for k in range(1, d):
+        counts *= span[k]
+    multi = np.flatnonzero(counts > 1)
+    ends = np.cumsum(counts[multi])
+    start = 0
+    while start < multi.size:  # boxes of several candidates, in batches of about ``chunk`` candidates
+        stop = max(int(np.searchsorted(ends, ends[start] - counts[multi[start]] + chunk, side="right")), start + 1)
+        sel = multi[start:stop]
+        _cover(z, h, origin, which[sel], lo[:, sel], span[:, sel], counts[sel], occ)
+        start = stop
+    single = np.flatnonzero(counts == 1)
+    cell = lo[0][single]
+    for k in range(1, d):
+        cell = cell * shape[k] + lo[k][single]
+    todo = np.ones(single.size, dtype=bool)
+    for stride in (16, 4, 1):
+        part = np.flatnonzero(todo)[::stride]
+        if stride < 16:  # skip the cells covered already
+            part = part[~flat_occ[cell[part]]]
+        todo[part] = False
+        for s in range(0, part.size, chunk):
+            sel = single[part[s : s + chunk]]
+            _cover(z, h, origin, which[sel], lo[:, sel], span[:, sel], counts[sel], occ)
     return occ
 
 
-def _integral(occ: np.ndarray) -> np.ndarray:
-    """Summed-area table of a boolean grid: S[i_1, ..., i_d] = number of True cells in occ[:i_1, ..., :i_d]."""
-    S = np.zeros(tuple(n + 1 for n in occ.shape), dtype=np.int64)
-    S[tuple(slice(1, None) for _ in occ.shape)] = occ
-    for ax in range(occ.ndim):
-        np.cumsum(S, axis=ax, out=S)
-    return S
+def _candidate_boxes(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...]):
+    """(zonotope indices (m,), first candidate cell lo (d, m), cells per axis span (d, m)) of the zonotopes whose
+    bounding box holds at least one cell centre: lo = ceil((low - origin) / h - 1/2) clipped to the grid, likewise
+    the last one from the box's high corner."""
+    low, high = z.columns[:2]
+    d = low.shape[0]
+    los, spans, ok = [], [], None
+    for k in range(d):
+        a = np.subtract(low[k], origin[k])
+        a /= h
+        a -= 0.5
+        np.ceil(a, out=a)
+        np.maximum(a, 0.0, out=a)
+        b = np.subtract(high[k], origin[k])
+        b /= h
+        b -= 0.5
+        np.floor(b, out=b)
+        np.minimum(b, float(shape[k] - 1), out=b)
+        b -= a
+        b += 1.0  # the span, exact in floating point (small integers)
+        ok = b > 0.0 if ok is None else ok & (b > 0.0)
+        los.append(a)
+        spans.append(b)
+    which = np.flatnonzero(ok)
+    lo = np.empty((d, which.size), dtype=np.int64)
+    span = np.empty((d, which.size), dtype=np.int64)
+    for k in range(d):
+        lo[k] = los[k][which]
+        span[k] = spans[k][which]
+    return which, lo, span
 
 
-def _box_sums(S: np.ndarray, lo: np.ndarray, span: np.ndarray) -> np.ndarray:
-    """Number of True cells in each box [lo, lo + span) (rows of lo, span) from the summed-area table S."""
-    d = lo.shape[1]
-    out = np.zeros(lo.shape[0], dtype=np.int64)
-    for corner in itertools.product((0, 1), repeat=d):
-        idx = tuple(lo[:, k] + corner[k] * span[:, k] for k in range(d))
-        sign = 1 if (d - sum(corner)) % 2 == 0 else -1
-        out += sign * S[idx]
-    return out
+def _cover(z: Zonotopes, h: float, origin: np.ndarray, which, lo, span, counts, occ: np.ndarray) -> None:
+    """Mark in ``occ`` the candidate cells of the boxes ``which`` (see :func:`_candidate_boxes`) whose centre passes
+    every facet test |base_j + h n_j . off| <= offset_j, base_j = n_j . (origin + (lo + 1/2) h - centre)."""
+    d = lo.shape[0]
+    centre, normals, offset = z.columns[2:]
+    single = not counts.size or int(counts.max()) == 1
+    if single:  # one candidate per box (offset 0)
+        rep = slice(None)
+        offs = [0.0] * d
+    else:
+        rep = np.repeat(np.arange(which.size), counts)
+        local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        offs = [None] * d
+        for k in range(d - 1, -1, -1):  # unravel local in the box span[rep] (last axis fastest)
+            sk = span[k][rep]
+            offs[k] = (local % sk).astype(float)
+            local //= sk
+    rel = [origin[k] + (lo[k] + 0.5) * h - centre[k][which] for k in range(d)]
+    hit = None
+    for j in range(normals.shape[0]):  # facet by facet
+        n = [normals[j][k][which] for k in range(d)]
+        base = n[0] * rel[0]
+        for k in range(1, d):
+            base += n[k] * rel[k]
+        proj = base[rep] + (h * n[0])[rep] * offs[0]
+        for k in range(1, d):
+            proj += (h * n[k])[rep] * offs[k]
+        test = np.abs(proj) <= offset[j][which][rep]
+        hit = test if hit is None else hit & test
+    if single:
+        occ[tuple(lo[k][hit] for k in range(d))] = True
+    else:
+        sel = rep[hit]
+        occ[tuple(lo[k][sel] + offs[k][hit].astype(np.int64) for k in range(d))] = True
 
 
 def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> tuple[np.ndarray, tuple[int, ...]]:
