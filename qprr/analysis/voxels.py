@@ -211,9 +211,8 @@ class Zonotopes:
     @staticmethod
     def of_rows(centre: np.ndarray, normals: np.ndarray, offset: np.ndarray, half: np.ndarray) -> Zonotopes:
         """From per-zonotope arrays (m, d), (m, f, d), (m, f), (m, d)."""
-        return Zonotopes(
-            np.ascontiguousarray(centre.T), np.ascontiguousarray(normals.transpose(1, 2, 0)), np.ascontiguousarray(offset.T), np.ascontiguousarray(half.T)
-        )
+        cols = (centre.T, normals.transpose(1, 2, 0), offset.T, half.T)
+        return Zonotopes(*(np.ascontiguousarray(a) for a in cols))
 
     @property
     def centre(self) -> np.ndarray:
@@ -297,6 +296,11 @@ def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products (3, m) of the columns of a, b (3, m), with the products and differences of ``np.cross``."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> tuple[Zonotopes, np.ndarray]:
     """(:func:`prepare` of the cells of :func:`_cell_columns`, the indices of the cells kept): the same arithmetic,
     operation for operation, on contiguous coordinate rows (tests compare the two bit for bit)."""
@@ -330,12 +334,7 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
     elif d == 2:
         N = np.stack([np.stack([-gens[j, 1], gens[j, 0]]) for j in range(K)])
     else:  # numpy's cross product, term for term
-        N = np.stack(
-            [
-                np.stack([gens[i, 1] * gens[j, 2] - gens[i, 2] * gens[j, 1], gens[i, 2] * gens[j, 0] - gens[i, 0] * gens[j, 2], gens[i, 0] * gens[j, 1] - gens[i, 1] * gens[j, 0]])
-                for i, j in itertools.combinations(range(K), 2)
-            ]
-        )
+        N = np.stack([_cross(gens[i], gens[j]) for i, j in itertools.combinations(range(K), 2)])
     offset = np.empty((N.shape[0], kept.size))
     for f in range(N.shape[0]):
         offset[f] = grow * np.sqrt(_coldot(N[f], N[f]))

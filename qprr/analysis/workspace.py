@@ -44,7 +44,7 @@ from ._common import (
     resolve_collision,
 )
 from .chain import ArmChain
-from .voxels import MeasureEstimate, display_occupancy, estimate_measure
+from .voxels import CellImage, MeasureEstimate, display_occupancy
 
 
 @dataclass(frozen=True)
@@ -240,10 +240,11 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
             pts[start : start + len(q)] = chain.frame_position(chain.pose(q), fid)
             if progress:
                 progress((i + (start + len(q)) / grid.size * 0.3) / len(sets), f"workspace [{i}] {_label(lk)}")
-        region, why = _region(pts, grid, lk, hover, n_shifts, seed)
+        mask = None
         if cmodel is not None:
             sub = (lambda f, m, i=i: progress((i + 0.3 + 0.4 * f) / len(sets), f"workspace [{i}] collisions")) if progress else None
-            region = _free_measures(region, collision_mask(cmodel, grid, sub), n_shifts, seed)
+            mask = collision_mask(cmodel, grid, sub)
+        region, why = _region(pts, grid, lk, hover, n_shifts, seed, mask)
         if why:
             reasons.append(f"[{i}] {why}")
         regions.append(region)
@@ -269,32 +270,32 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     )
 
 
-def _free_measures(region: WorkspaceRegion, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
-    """``region`` with its collision-free mask and the measures of the image of the cells whose corners are all free."""
+def _free_measures(region: WorkspaceRegion, images: tuple, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
+    """``region`` with its collision-free mask and the measures of the image of the cells whose corners are all free
+    (``images``: the :class:`~qprr.analysis.voxels.CellImage` of the region in B and of its hover profile, or None)."""
     free = mask.free
-    shape = tuple(n for n in region.grid.shape if n > 1)
-    valid = free.reshape(shape)
-    measure = hover_volume = None
-    if region.measure is not None and free.any():
-        try:
-            measure = estimate_measure(region.coords.reshape(*shape, region.dim), n_shifts=n_shifts, seed=seed, valid=valid)
-        except InputError:  # no cell with all corners free: nothing to measure
-            measure = None
-    if region.hover_volume is not None and free.any():
-        try:
-            hover_volume = estimate_measure(region.profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True, valid=valid)
-        except InputError:
-            hover_volume = None
-    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measure, free_hover_volume=hover_volume)
+    valid = free.reshape(tuple(n for n in region.grid.shape if n > 1))
+    measures = []
+    for image, full in zip(images, (region.measure, region.hover_volume)):
+        m = None
+        if image is not None and full is not None and free.any():
+            try:
+                m = image.estimate(n_shifts=n_shifts, seed=seed, valid=valid)
+            except InputError:  # no cell with all corners free: nothing to measure
+                m = None
+        measures.append(m)
+    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measures[0], free_hover_volume=measures[1])
 
 
-def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int):
+def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
+    """The region of the points ``pts`` (n, 3) of ``grid`` and why a measure is missing; with ``mask``, also its
+    collision-free measures (:func:`_free_measures`, from the same cell zonotopes)."""
     origin, basis = affine_span(pts)
     coords = (pts - origin) @ basis.T if basis.shape[0] else np.zeros((pts.shape[0], 0))
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = outline = None
+    measure = occ = outline = image = hover_image = None
     boundary: list = []
     dim = basis.shape[0]
     if dim == 0:
@@ -302,7 +303,8 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     elif free < dim:
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
-        measure, occ = estimate_measure(coords.reshape(*shape, dim), n_shifts=n_shifts, seed=seed, return_occupancy=True)
+        image = CellImage(coords.reshape(*shape, dim))
+        measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
         outline = occ
         if free > dim:  # redundant: the samples outline the set more finely than the counting cells
             fine = display_occupancy(coords)
@@ -313,13 +315,17 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     if hover:
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
-            hv, hocc = estimate_measure(profile.reshape(*shape, 2), n_shifts=n_shifts, seed=seed, revolve=True, return_occupancy=True)
+            hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
+            hv, hocc = hover_image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
             if free > 2:
                 fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
                 hocc = fine if fine[2] < hocc[2] else hocc
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
-    return WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc, outline), why
+    region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc, outline)
+    if mask is not None:
+        region = _free_measures(region, (image, hover_image), mask, n_shifts, seed)
+    return region, why
 
 
 def hover_profile(pts: np.ndarray, origin: np.ndarray, basis: np.ndarray) -> np.ndarray:
