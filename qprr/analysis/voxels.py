@@ -247,7 +247,14 @@ class Zonotopes:
 
     def take(self, index: np.ndarray) -> Zonotopes:
         """The zonotopes ``index`` (integer array) of this set, numbers unchanged."""
-        return Zonotopes(self.centre_cols[:, index], self.normal_cols[:, :, index], self.offset_cols[:, index], self.half_cols[:, index])
+        def rows(a: np.ndarray) -> np.ndarray:  # row by row: numpy's gather along a contiguous row is the fast one
+            flat = a.reshape(-1, a.shape[-1])
+            out = np.empty((flat.shape[0], index.size))
+            for r in range(flat.shape[0]):
+                np.take(flat[r], index, out=out[r])
+            return out.reshape(a.shape[:-1] + (index.size,))
+
+        return Zonotopes(rows(self.centre_cols), rows(self.normal_cols), rows(self.offset_cols), rows(self.half_cols))
 
     def mirrored(self) -> Zonotopes:
         """The zonotopes mirrored about the plane x_0 = 0, exactly (negations): what :func:`prepare` gives for the
@@ -332,7 +339,9 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
     if d == 1:
         N = np.ones((1, 1, kept.size))
     elif d == 2:
-        N = np.stack([np.stack([-gens[j, 1], gens[j, 0]]) for j in range(K)])
+        N = np.empty((K, 2, kept.size))
+        np.negative(gens[:, 1], out=N[:, 0])
+        N[:, 1] = gens[:, 0]
     else:  # numpy's cross product, term for term
         N = np.stack([_cross(gens[i], gens[j]) for i, j in itertools.combinations(range(K), 2)])
     offset = np.empty((N.shape[0], kept.size))
