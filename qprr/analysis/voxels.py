@@ -295,11 +295,12 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     return Zonotopes.of_rows(centre, N, offset, half)
 
 
-def _coldot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Sum over the first (short) axis of a * b: :func:`_rowdot` of the transposed arrays, term for term."""
-    out = a[0] * b[0]
+def _coldot(a: np.ndarray, b: np.ndarray, out: np.ndarray | None = None, tmp: np.ndarray | None = None) -> np.ndarray:
+    """Sum over the first (short) axis of a * b: :func:`_rowdot` of the transposed arrays, term for term
+    (``out``, ``tmp``: buffers of one row's shape to write into, fewer fresh arrays)."""
+    out = np.multiply(a[0], b[0], out=out)
     for k in range(1, a.shape[0]):
-        out += a[k] * b[k]
+        out += np.multiply(a[k], b[k], out=tmp)
     return out
 
 
@@ -314,19 +315,22 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
     K, d, m = gens.shape
     if K < d:  # no cell spans R^d
         return Zonotopes(np.empty((d, 0)), np.empty((0, d, 0)), np.empty((0, 0)), np.empty((d, 0))), np.empty(0, dtype=np.int64)
-    scale2 = _coldot(gens[0], gens[0])
+    tmp, buf = np.empty(m), np.empty(m)
+    scale2 = _coldot(gens[0], gens[0], tmp=tmp)
     for j in range(1, K):
-        scale2 = np.maximum(scale2, _coldot(gens[j], gens[j]))
-    gram = {(a, b): _coldot(gens[:, a], gens[:, b]) for a in range(d) for b in range(a, d)}
+        np.maximum(scale2, _coldot(gens[j], gens[j], buf, tmp), out=scale2)
+    gram = {(a, b): _coldot(gens[:, a], gens[:, b], tmp=tmp) for a in range(d) for b in range(a, d)}
     if d == 1:
         det = gram[0, 0]
-    elif d == 2:
-        det = gram[0, 0] * gram[1, 1] - gram[0, 1] ** 2
+    elif d == 2:  # g00 g11 - g01^2, in place
+        det = np.multiply(gram[0, 0], gram[1, 1], out=gram[0, 0])
+        det -= np.multiply(gram[0, 1], gram[0, 1], out=gram[0, 1])
     else:
         G = np.empty((m, d, d))
         for (a, b), v in gram.items():
             G[:, a, b] = G[:, b, a] = v
         det = np.linalg.det(G)
+    del gram
     keep = det > (1e-9 * np.maximum(scale2, 1e-300)) ** d
     kept = np.flatnonzero(keep)
     if kept.size < m:
@@ -335,7 +339,8 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
     for k in range(1, K):
         gsum += gens[k]
         gabs += np.abs(gens[k])
-    centre = corner + 0.5 * gsum
+    gsum *= 0.5
+    centre = np.add(corner, gsum, out=gsum)
     if d == 1:
         N = np.ones((1, 1, kept.size))
     elif d == 2:
@@ -345,12 +350,18 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
     else:  # numpy's cross product, term for term
         N = np.stack([_cross(gens[i], gens[j]) for i, j in itertools.combinations(range(K), 2)])
     offset = np.empty((N.shape[0], kept.size))
-    for f in range(N.shape[0]):
-        offset[f] = grow * np.sqrt(_coldot(N[f], N[f]))
+    tmp, buf = tmp[: kept.size], buf[: kept.size]
+    for f in range(N.shape[0]):  # grow |n_f| + sum_k |n_f . g_k| / 2
+        np.sqrt(_coldot(N[f], N[f], buf, tmp), out=buf)
+        np.multiply(grow, buf, out=offset[f])
         for k in range(K):
-            offset[f] += 0.5 * np.abs(_coldot(N[f], gens[k]))
-    half = 0.5 * gabs + grow
-    return Zonotopes(centre, N, offset, half), kept
+            _coldot(N[f], gens[k], buf, tmp)
+            np.abs(buf, out=buf)
+            buf *= 0.5
+            offset[f] += buf
+    gabs *= 0.5
+    gabs += grow
+    return Zonotopes(centre, N, offset, gabs), kept
 
 
 def covered_cells(
