@@ -365,7 +365,13 @@ def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> 
 
 
 def covered_cells(
-    z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 1 << 20, out: np.ndarray | None = None
+    z: Zonotopes,
+    h: float,
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    chunk: int = 1 << 20,
+    out: np.ndarray | None = None,
+    scratch: np.ndarray | None = None,
 ) -> np.ndarray:
     """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
     (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set).
@@ -375,11 +381,12 @@ def covered_cells(
     candidate centre plus h n_j . (its offset in cells).  The occupancy is an OR over the zonotopes, so a
     candidate cell already covered needs no test: the boxes holding one candidate are tested in rounds (a
     sample spread over the set first), each round skipping the cells the earlier ones covered (a redundant
-    map covers each cell many times over).  ``chunk``: candidates tested per batch (memory only)."""
+    map covers each cell many times over).  ``chunk``: candidates tested per batch (memory only); ``scratch``: a float
+    buffer (2 d, >= z.size) to work in (the same one for every shift's count: fewer fresh arrays)."""
     d = z.centre.shape[1]
     occ = np.zeros(shape, dtype=bool) if out is None else out
     flat_occ = occ.reshape(-1)  # a view: occ is C-contiguous
-    which, lo, span = _candidate_boxes(z, h, origin, shape)
+    which, lo, span = _candidate_boxes(z, h, origin, shape, scratch)
     counts = span[0].copy()
     for k in range(1, d):
         counts *= span[k]
@@ -407,20 +414,22 @@ def covered_cells(
     return occ
 
 
-def _candidate_boxes(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...]):
+def _candidate_boxes(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], scratch: np.ndarray | None = None):
     """(zonotope indices (m,), first candidate cell lo (d, m), cells per axis span (d, m)) of the zonotopes whose
     bounding box holds at least one cell centre: lo = ceil((low - origin) / h - 1/2) clipped to the grid, likewise
     the last one from the box's high corner."""
     low, high = z.box
-    d = low.shape[0]
+    d, m = low.shape
+    if scratch is None or scratch.shape[0] < 2 * d or scratch.shape[1] < m:
+        scratch = np.empty((2 * d, m))
     los, spans, ok = [], [], None
     for k in range(d):
-        a = np.subtract(low[k], origin[k])
+        a = np.subtract(low[k], origin[k], out=scratch[2 * k, :m])
         a /= h
         a -= 0.5
         np.ceil(a, out=a)
         np.maximum(a, 0.0, out=a)
-        b = np.subtract(high[k], origin[k])
+        b = np.subtract(high[k], origin[k], out=scratch[2 * k + 1, :m])
         b /= h
         b -= 0.5
         np.floor(b, out=b)
@@ -482,8 +491,9 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
     return lo, shape
 
 
-def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``."""
+def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool, scratch=None) -> tuple[float, np.ndarray, np.ndarray]:
+    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``
+    (``scratch``: see :func:`covered_cells`)."""
     d = parts[0].centre.shape[1]
     if sum(z.size for z in parts) == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
@@ -493,7 +503,7 @@ def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: b
     occ = np.zeros(shape, dtype=bool)
     for z in parts:
         if z.size:
-            covered_cells(z, h, origin, shape, out=occ)
+            covered_cells(z, h, origin, shape, out=occ, scratch=scratch)
     if revolve:
         x = origin[0] + (np.arange(shape[0]) + 0.5) * h
         w = math.pi * np.abs(x) * h * h
@@ -559,9 +569,10 @@ class CellImage:
         if not (math.isfinite(h) and h > 0.0):
             raise InputError(f"cell must be a positive length in m, got {cell!r}")
         shifts = np.random.default_rng(seed).uniform(0.0, 1.0, (n_shifts, d))
+        scratch = np.empty((2 * d, max(z.size for z in fine)))  # one work buffer for every count below
         values, first = [], None
         for i, s in enumerate(shifts):
-            v, occ, origin = _count(fine, h, s, revolve)
+            v, occ, origin = _count(fine, h, s, revolve, scratch)
             values.append(v)
             if i == 0:
                 first = (occ, origin, h)
@@ -572,7 +583,7 @@ class CellImage:
             coarse = raw
         else:
             coarse_z = self.zonotopes(valid, coarse=True)
-            coarse = float(np.mean([_count(coarse_z, h, s, revolve)[0] for s in shifts]))
+            coarse = float(np.mean([_count(coarse_z, h, s, revolve, scratch)[0] for s in shifts]))
         est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
         return (est, first) if return_occupancy else est
 
