@@ -109,7 +109,6 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *, 
     return corner, gens, grow
 
 
-
 def _valid_cells(valid: np.ndarray, axes: list[int]) -> np.ndarray:
     """(m,) bool: the cells (C order) of a grid whose 2^k corners are all True in the boolean grid ``valid``."""
     V = np.asarray(valid, dtype=bool)[..., None]
@@ -118,6 +117,7 @@ def _valid_cells(valid: np.ndarray, axes: list[int]) -> np.ndarray:
         for sub in itertools.combinations(axes, r):
             keep &= _shifted(V, axes, set(sub))
     return keep.reshape(-1)
+
 
 def _growth(P: np.ndarray, axes: list[int]) -> np.ndarray:
     """E (m,) of every cell of the grid ``P`` (see the module docstring), in the cells' C order."""
@@ -247,6 +247,7 @@ class Zonotopes:
 
     def take(self, index: np.ndarray) -> Zonotopes:
         """The zonotopes ``index`` (integer array) of this set, numbers unchanged."""
+
         def rows(a: np.ndarray) -> np.ndarray:  # row by row: numpy's gather along a contiguous row is the fast one
             flat = a.reshape(-1, a.shape[-1])
             out = np.empty((flat.shape[0], index.size))
