@@ -167,8 +167,10 @@ def end_to_end(p, n: int, name: str) -> None:
     """The default command against the 5 s target, with and without the collision-free part, and the stage split."""
     import os
 
-    print(f"\nend to end: `qprr analyze workspace --platform {name} --samples {n}` (child process, imports included; target {TARGET_S:g} s "
-          "on an idle 2-core machine; on a loaded machine the CPU time is the closer estimate of the idle wall time):\n")
+    print(
+        f"\nend to end: `qprr analyze workspace --platform {name} --samples {n}` (child process, imports included; target {TARGET_S:g} s "
+        "on an idle 2-core machine; on a loaded machine the CPU time is the closer estimate of the idle wall time):\n"
+    )
     print("| collision-free part | wall [s] | CPU [s] | CPU / target | load average |")
     print("|---|---:|---:|---:|---:|")
     for choice in ("auto", "off"):
