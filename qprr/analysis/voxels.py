@@ -150,15 +150,16 @@ def _cell_columns(P: np.ndarray, grow_cells: bool) -> tuple[np.ndarray, np.ndarr
     if not axes:
         raise InputError("the grid has no free axis: its image is a point")
     d = P.shape[-1]
-    base = _shifted(P, axes, set())
-    cells = base.shape[:-1]
+    cells = _shifted(P, axes, set()).shape[:-1]
     m = int(np.prod(cells))
     corner = np.empty((d, m))
     gens = np.empty((len(axes), d, m))
     for c in range(d):
-        corner[c].reshape(cells)[...] = base[..., c]
+        Pc = np.ascontiguousarray(P[..., c])  # one coordinate, contiguous: the differences below read it along its axes
+        base = _shifted(Pc, axes, set())
+        corner[c].reshape(cells)[...] = base
         for j, a in enumerate(axes):
-            np.subtract(_shifted(P, axes, {a})[..., c], base[..., c], out=gens[j, c].reshape(cells))
+            np.subtract(_shifted(Pc, axes, {a}), base, out=gens[j, c].reshape(cells))
     grow = _growth(P, axes) if grow_cells else np.zeros(m)
     return corner, gens, grow
 
