@@ -150,8 +150,8 @@ def register_cli(sub) -> None:
         default="auto",
         help="also measure the collision-free part (workspace, hover): auto (default) when the platform has a collision model "
         "(its URDF's <collision> geometry), on (required), off. On the Q-PRR's default workspace (1e6 configurations per "
-        "region) the check and the collision-free measures roughly double the time (about 9-10 s of CPU time instead of "
-        "about 4.5 s, docs/analysis.md#speed): the default keeps them because the reachable workspace without self-collision "
+        "region) the check and the collision-free measures roughly double the time (about 8.5 s instead of about 4.3 s "
+        "on an idle 2-core machine, docs/analysis.md#speed): the default keeps them because the reachable workspace without self-collision "
         "is 27%% smaller than the joint box's image, the number a design is judged by",
     )
     p.add_argument("--tol", type=real(nonnegative=True, unit="m"), default=1e-6, help="CoG offset counted as balanced [m] (cog)")

@@ -188,7 +188,7 @@ class WorkspaceOptions:
     measure estimator (:mod:`qprr.analysis.voxels`); ``collision``: also measure the collision-free part of each
     region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
     required; False: off).  Cost: the collision check and the two collision-free measures about double the
-    map's time (Q-PRR, 1e6 configurations per region: ~9.5 s against ~4.5 s; docs/analysis.md, Speed).
+    map's time (Q-PRR, 1e6 configurations per region: ~8.5 s against ~4.3 s; docs/analysis.md, Speed).
     """
 
     n_samples: int = 1_000_000
