@@ -271,32 +271,26 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     )
 
 
-def _free_measures(region: WorkspaceRegion, images: tuple, mask: CollisionMask, n_shifts: int, seed: int) -> WorkspaceRegion:
-    """``region`` with its collision-free mask and the measures of the image of the cells whose corners are all free
-    (``images``: the :class:`~qprr.analysis.voxels.CellImage` of the region in B and of its hover profile, or None)."""
-    free = mask.free
-    valid = free.reshape(tuple(n for n in region.grid.shape if n > 1))
-    measures = []
-    for image, full in zip(images, (region.measure, region.hover_volume)):
-        m = None
-        if image is not None and full is not None and free.any():
-            try:
-                m = image.estimate(n_shifts=n_shifts, seed=seed, valid=valid)
-            except InputError:  # no cell with all corners free: nothing to measure
-                m = None
-        measures.append(m)
-    return replace(region, collision_free=free, collision_check=mask.describe(), free_measure=measures[0], free_hover_volume=measures[1])
+def _free_measure(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int) -> MeasureEstimate | None:
+    """The measure of ``image`` over the cells whose corners are all collision-free (None: no mask, or no such cell)."""
+    if mask is None or not mask.free.any():
+        return None
+    try:
+        return image.estimate(n_shifts=n_shifts, seed=seed, valid=mask.free.reshape(shape))
+    except InputError:  # no cell with all corners free: nothing to measure
+        return None
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
     """The region of the points ``pts`` (n, 3) of ``grid`` and why a measure is missing; with ``mask``, also its
-    collision-free measures (:func:`_free_measures`, from the same cell zonotopes)."""
+    collision-free measures (:func:`_free_measure`: from the cell zonotopes of the whole region's measure, each
+    image dropped once both of its measures are taken)."""
     origin, basis = affine_span(pts)
     coords = (pts - origin) @ basis.T if basis.shape[0] else np.zeros((pts.shape[0], 0))
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = outline = image = hover_image = None
+    measure = occ = outline = free_measure = free_hover = None
     boundary: list = []
     dim = basis.shape[0]
     if dim == 0:
@@ -306,6 +300,8 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     else:
         image = CellImage(coords.reshape(*shape, dim))
         measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
+        free_measure = _free_measure(image, mask, shape, n_shifts, seed)
+        del image
         outline = occ
         if free > dim:  # redundant: the samples outline the set more finely than the counting cells
             fine = display_occupancy(coords)
@@ -318,6 +314,8 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         if pdim == 2 and free >= 2:
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
             hv, hocc = hover_image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
+            free_hover = _free_measure(hover_image, mask, shape, n_shifts, seed)
+            del hover_image
             if free > 2:
                 fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
                 hocc = fine if fine[2] < hocc[2] else hocc
@@ -325,7 +323,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
     region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc, outline)
     if mask is not None:
-        region = _free_measures(region, (image, hover_image), mask, n_shifts, seed)
+        region = replace(region, collision_free=mask.free, collision_check=mask.describe(), free_measure=free_measure, free_hover_volume=free_hover)
     return region, why
 
 
