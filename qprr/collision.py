@@ -154,6 +154,20 @@ class CollisionModel:
                 progress(i + 1, Q.shape[0])
         return out
 
+    def colliding_batch(self, q_arm) -> np.ndarray:
+        """:meth:`colliding_arm` without the progress callback, the loop in C++: the same checks in the same order
+        with one fresh ``pin.GeometryData`` for the batch (``pin.computeCollisionsInParallel`` with one thread over a
+        one-element ``pin.GeometryPool``), so the same answers, configuration for configuration (Pinocchio lets coal
+        start each pair's GJK from its previous answer, so a batch's answers near contact depend on the order)."""
+        Q = np.atleast_2d(np.asarray(q_arm, dtype=float))
+        if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
+            raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
+        full = np.empty((self.model.nq, Q.shape[0]), order="F")
+        full[:7] = self.neutral_q[:7, None]
+        full[7:] = Q.T
+        pool = pin.GeometryPool(self.model, self.geometry, 1)
+        return np.asarray(pin.computeCollisionsInParallel(1, pool, full, True), dtype=bool)
+
     def summary(self) -> str:
         """The geometries, the pairs checked and the pairs excluded, in a few lines."""
         names = [g.name for g in self.geometry.geometryObjects]

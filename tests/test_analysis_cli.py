@@ -35,6 +35,21 @@ def test_designations_and_unknown_names(capsys):
         resolve_platform("ZZ-TOP")
 
 
+@pytest.mark.parametrize("what", ["workspace", "hover"])
+def test_collision_option(what, capsys):
+    """--collision off leaves the collision-free part out, auto (default) and on report it for the Q-PRR (its URDF has
+    collision geometry); the numbers over every configuration are the same either way."""
+    lines = {}
+    for choice in ("off", "auto", "on"):
+        assert main(["analyze", what, "--samples", "3000", "-q", "--collision", choice]) == 0
+        lines[choice] = capsys.readouterr().out.splitlines()[:-1]  # the last line is the time taken
+    assert not any("collision-free" in ln for ln in lines["off"])
+    assert lines["auto"] == lines["on"]
+    assert any("collision-free" in ln for ln in lines["on"])
+    if what == "workspace":
+        assert [ln for ln in lines["on"] if "in B" in ln and "collision-free" not in ln][:2] == [ln for ln in lines["off"] if "in B" in ln][:2]
+
+
 def test_registered_in_the_qprr_command():
     """``python -m qprr analyze`` (the qprr command line) reaches the maps; run in a child process, whose imports
     (qprr.cli also tries the simulator's commands) stay out of this test session."""

@@ -202,23 +202,97 @@ def test_mirrored_zonotopes_are_those_of_the_mirrored_grid(qprr_platform):
             assert np.array_equal(a, b)
 
 
-def test_covered_cells_do_not_depend_on_the_chunks(qprr_platform):
-    """Skipping the cells and zonotopes already covered by earlier chunks leaves the occupancy unchanged."""
+def _image_grids(platform, n: int, locked=None):
+    """(points in B (x, z), hover profile (s, z)) of the end effector over the joint grid, one axis per free joint."""
     from qprr.analysis import ArmChain, make_grid
-    from qprr.analysis.voxels import _grid_frame, _zonotopes_of, covered_cells, default_cell
 
-    chain = ArmChain(qprr_platform)
-    for locked in ({}, {"r0": 0.0}):  # redundant (3 joints onto a plane) and not
-        grid = make_grid(qprr_platform, 20_000, locked)
-        pts = np.concatenate([chain.frame_position(chain.pose(q), qprr_platform.ee_frame) for _, q in grid.chunks()])
-        P = pts[:, [0, 2]].reshape(*(n for n in grid.shape if n > 1), 2)
-        (z,) = _zonotopes_of(P, False)
-        h = default_cell(z)
-        origin, shape = _grid_frame(np.vstack(z.bounds), h, np.array([0.37, 0.81]), 0.0)
-        whole = covered_cells(z, h, origin, shape, chunk=z.size)  # one chunk: nothing skipped
-        assert whole.any()
-        for chunk in (97, 1000, 4096):
-            assert np.array_equal(covered_cells(z, h, origin, shape, chunk=chunk), whole)
+    chain = ArmChain(platform)
+    grid = make_grid(platform, n, locked)
+    pts = np.concatenate([chain.frame_position(chain.pose(q), platform.ee_frame) for _, q in grid.chunks()])
+    shape = tuple(k for k in grid.shape if k > 1)
+    prof = np.column_stack([np.hypot(pts[:, 0], pts[:, 1]) * np.sign(pts[:, 0]), pts[:, 2]])
+    return pts, prof.reshape(*shape, 2), shape
+
+
+def _reference_cells(z, h, origin, shape):
+    """The occupancy of :func:`covered_cells` by its definition, zonotope by zonotope and cell by cell: a cell is covered
+    when its centre, written as the box's first candidate centre (lo + 1/2) h plus its offset in cells, passes every
+    facet test |n . (x - centre)| <= offset."""
+    import itertools
+
+    occ = np.zeros(shape, dtype=bool)
+    d = z.centre.shape[1]
+    for i in range(z.size):
+        c, N, off, half = z.centre[i], z.normals[i], z.offset[i], z.half[i]
+        lo = [max(int(np.ceil((c[k] - half[k] - origin[k]) / h - 0.5)), 0) for k in range(d)]
+        hi = [min(int(np.floor((c[k] + half[k] - origin[k]) / h - 0.5)), shape[k] - 1) for k in range(d)]
+        rel = [origin[k] + (lo[k] + 0.5) * h - c[k] for k in range(d)]
+        for cell in itertools.product(*[range(lo[k], hi[k] + 1) for k in range(d)]):
+            inside = True
+            for j in range(N.shape[0]):
+                base = N[j, 0] * rel[0]
+                for k in range(1, d):
+                    base += N[j, k] * rel[k]
+                proj = base + (h * N[j, 0]) * float(cell[0] - lo[0])
+                for k in range(1, d):
+                    proj += (h * N[j, k]) * float(cell[k] - lo[k])
+                inside &= bool(abs(proj) <= off[j])
+            occ[cell] |= inside
+    return occ
+
+
+@pytest.mark.parametrize("locked", [{}, {"r0": 0.0}], ids=["redundant", "planar-2R"])
+def test_covered_cells_are_those_of_the_cell_by_cell_definition(qprr_platform, locked):
+    """The batched count (candidate boxes by coordinate rows, one-candidate boxes in rounds skipping covered cells,
+    any batching) marks exactly the cells the zonotope-by-zonotope definition marks."""
+    from qprr.analysis.voxels import CellImage, _grid_frame, covered_cells, default_cell
+
+    _, P, _ = _image_grids(qprr_platform, 6000, locked)
+    for revolve in (False, True):
+        for z in CellImage(P, revolve).zonotopes():
+            h = default_cell(z)
+            origin, shape = _grid_frame(np.vstack(z.bounds), h, np.array([0.37, 0.81]), 0.0)
+            ref = _reference_cells(z, h, origin, shape)
+            assert ref.any()
+            for chunk in (97, 4096, 1 << 20):
+                assert np.array_equal(covered_cells(z, h, origin, shape, chunk=chunk), ref)
+
+
+@pytest.mark.parametrize("name,locked", [("q-prr", {}), ("q-prr", {"r0": 0.0}), ("hextilt_flying_arm_5", {})])
+def test_zonotope_rows_are_those_of_cell_zonotopes_and_prepare(name, locked):
+    """The zonotopes the measures use (built by coordinate rows, the collision-free subset taken from the whole grid's)
+    equal, bit for bit, those of cell_zonotopes + prepare on the grid, with and without a valid mask: redundant
+    (3 joints onto a plane, no growth), planar 2R (growth), a spatial 5-joint arm (cross-product normals)."""
+    from qprr.analysis._common import affine_span
+    from qprr.analysis.voxels import CellImage, cell_zonotopes, prepare
+
+    p = qprr.load(name)
+    pts, prof, shape = _image_grids(p, 4000, locked)
+    origin, basis = affine_span(pts)
+    dim = basis.shape[0]
+    P = ((pts - origin) @ basis.T).reshape(*shape, dim)
+    valid = np.random.default_rng(3).uniform(size=shape) > 0.03  # a cell keeps its 2^k corners valid often enough
+    grow = len(shape) <= dim
+    for grid in (P, prof) if dim == 2 else (P,):
+        image = CellImage(grid)
+        for mask in (None, valid):
+            (got,) = image.zonotopes(mask)
+            ref = prepare(*cell_zonotopes(grid, mask, grow_cells=grow))
+            assert got.size == ref.size > 0
+            for a, b in ((got.centre, ref.centre), (got.normals, ref.normals), (got.offset, ref.offset), (got.half, ref.half)):
+                assert np.array_equal(a, b)
+
+
+def test_collision_free_measures_are_those_of_the_measure_with_a_valid_mask(qprr_platform):
+    """The free measures of the workspace (cell zonotopes shared with the whole region's) equal estimate_measure over
+    the cells whose corners are all collision-free, computed on its own."""
+    res = workspace(qprr_platform, n_samples=20_000, collision=True)
+    for r in res.regions:
+        shape = tuple(k for k in r.grid.shape if k > 1)
+        valid = r.collision_free.reshape(shape)
+        assert 0 < valid.sum() < valid.size
+        assert r.free_measure == estimate_measure(r.coords.reshape(*shape, r.dim), valid=valid)
+        assert r.free_hover_volume == estimate_measure(r.profile.reshape(*shape, 2), revolve=True, valid=valid)
 
 
 def test_options_object_and_keywords_agree(qprr_platform):

@@ -71,6 +71,23 @@ def test_pendulum_collision_matches_the_closed_form(pendulum_cm):
     assert got.any() and not got.all()
 
 
+@pytest.mark.parametrize("name", ["q-prr", "HEX-RRR"])
+def test_batched_check_answers_as_the_python_loop(name):
+    """colliding_batch (Pinocchio's C++ loop) gives colliding_arm's answers configuration for configuration, in grid
+    order and shuffled, the configurations near contact included (both start from a fresh GeometryData and keep it
+    through the batch)."""
+    p = qprr.platforms.resolve(name)
+    cm = collision_model(p)
+    grid = make_grid(p, 200_000)
+    rng = np.random.default_rng(5)
+    for q in (grid.configurations(50_000, 58_000), grid.configurations_at(rng.choice(grid.size, 8000, replace=False))):
+        ref = cm.colliding_arm(q)
+        assert ref.any() and not ref.all()
+        assert np.array_equal(cm.colliding_batch(q), ref)
+    with pytest.raises(InputError, match="q_arm"):
+        cm.colliding_batch(np.zeros((4, p.n_arm + 1)))
+
+
 def test_pendulum_distance_is_the_closed_form_gap(pendulum_cm):
     for theta in (1.0, 1.6, 2.0):  # the cylinder above the body top: the gap is the lowest point's height above H
         gap = A + min(0.0, L * math.cos(theta)) - R * abs(math.sin(theta)) - H

@@ -403,14 +403,14 @@ def collision_mask(model, grid: JointGrid, progress=None, label: str = "collisio
     audited = mismatches = 0
     if inferred.size and audit:
         pick = np.random.default_rng(seed).choice(inferred, size=min(audit, inferred.size), replace=False)
-        truth = ~model.colliding_arm(grid.configurations_at(pick))
+        truth = ~model.colliding_batch(grid.configurations_at(pick))
         audited, mismatches = int(pick.size), int(np.count_nonzero(truth != free[pick]))
         free[pick] = truth
         evaluated[pick] = True
         if mismatches > COLLISION_AUDIT_TOLERANCE * audited:
             rest = np.flatnonzero(~evaluated)
             for k in range(0, rest.size, CHUNK):
-                free[rest[k : k + CHUNK]] = ~model.colliding_arm(grid.configurations_at(rest[k : k + CHUNK]))
+                free[rest[k : k + CHUNK]] = ~model.colliding_batch(grid.configurations_at(rest[k : k + CHUNK]))
                 if progress:
                     progress(min(1.0, (k + CHUNK) / rest.size), f"{label} (every configuration)")
             evaluated[:] = True
@@ -423,7 +423,7 @@ def _free_coarse_to_fine(model, grid: JointGrid, progress, label: str) -> tuple[
     if grid.size < COLLISION_EXACT_BELOW or all(n < 3 for n in shape) or any(n >= 3 and n % 2 == 0 for n in shape):
         free = np.empty(grid.size, dtype=bool)
         for start, q in grid.chunks():
-            free[start : start + len(q)] = ~model.colliding_arm(q)
+            free[start : start + len(q)] = ~model.colliding_batch(q)
             if progress:
                 progress((start + len(q)) / grid.size, label)
         return free, np.ones(grid.size, dtype=bool)
@@ -442,7 +442,7 @@ def _free_coarse_to_fine(model, grid: JointGrid, progress, label: str) -> tuple[
     todo = np.flatnonzero((any_free & ~all_free).reshape(-1))
     for k in range(0, todo.size, CHUNK):
         sel = todo[k : k + CHUNK]
-        free[sel] = ~model.colliding_arm(grid.configurations_at(sel))
+        free[sel] = ~model.colliding_batch(grid.configurations_at(sel))
         if progress:
             progress(min(1.0, (k + sel.size) / todo.size), label)
     evaluated = np.zeros(grid.size, dtype=bool)

@@ -95,13 +95,8 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *, 
     if not axes:
         raise InputError("the grid has no free axis: its image is a point")
     if valid is not None:
-        V = np.asarray(valid, dtype=bool)[..., None]
-        keep = np.ones(_shifted(V, axes, set()).shape, dtype=bool)
-        for r in range(len(axes) + 1):
-            for sub in itertools.combinations(axes, r):
-                keep &= _shifted(V, axes, set(sub))
+        keep = _valid_cells(valid, axes)
         c, g, e = cell_zonotopes(P, grow_cells=grow_cells)
-        keep = keep.reshape(-1)
         return c[keep], g[keep], e[keep]
     d = P.shape[-1]
     base = _shifted(P, axes, set())
@@ -110,9 +105,24 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *, 
     by_cell = gens.reshape(base.shape[:-1] + (len(axes), d))  # a view: each generator written in place
     for j, a in enumerate(axes):
         np.subtract(_shifted(P, axes, {a}), base, out=by_cell[..., j, :])
-    grow = np.zeros(corner.shape[0])
-    if not grow_cells:
-        return corner, gens, grow
+    grow = _growth(P, axes) if grow_cells else np.zeros(corner.shape[0])
+    return corner, gens, grow
+
+
+def _valid_cells(valid: np.ndarray, axes: list[int]) -> np.ndarray:
+    """(m,) bool: the cells (C order) of a grid whose 2^k corners are all True in the boolean grid ``valid``."""
+    V = np.asarray(valid, dtype=bool)[..., None]
+    keep = np.ones(_shifted(V, axes, set()).shape, dtype=bool)
+    for r in range(len(axes) + 1):
+        for sub in itertools.combinations(axes, r):
+            keep &= _shifted(V, axes, set(sub))
+    return keep.reshape(-1)
+
+
+def _growth(P: np.ndarray, axes: list[int]) -> np.ndarray:
+    """E (m,) of every cell of the grid ``P`` (see the module docstring), in the cells' C order."""
+    d = P.shape[-1]
+    grow = np.zeros(_shifted(P[..., 0], axes, set()).size)
     for a, b in itertools.combinations(axes, 2):
         mixed = _shifted(P, axes, {a, b}) - _shifted(P, axes, {a}) - _shifted(P, axes, {b}) + _shifted(P, axes, set())
         mixed = mixed.reshape(-1, d)
@@ -130,6 +140,27 @@ def cell_zonotopes(points_grid: np.ndarray, valid: np.ndarray | None = None, *, 
             if ax != a:
                 sl[ax] = slice(0, -1)
         grow += cellmag[tuple(sl)].reshape(-1) / 8.0
+    return grow
+
+
+def _cell_columns(P: np.ndarray, grow_cells: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`cell_zonotopes` (no ``valid``) by columns: (corner (d, m), generators (k, d, m), growth (m,)), the same
+    numbers laid out for contiguous per-coordinate arithmetic."""
+    axes = [a for a in range(P.ndim - 1) if P.shape[a] > 1]
+    if not axes:
+        raise InputError("the grid has no free axis: its image is a point")
+    d = P.shape[-1]
+    cells = _shifted(P, axes, set()).shape[:-1]
+    m = int(np.prod(cells))
+    corner = np.empty((d, m))
+    gens = np.empty((len(axes), d, m))
+    for c in range(d):
+        Pc = np.ascontiguousarray(P[..., c])  # one coordinate, contiguous: the differences below read it along its axes
+        base = _shifted(Pc, axes, set())
+        corner[c].reshape(cells)[...] = base
+        for j, a in enumerate(axes):
+            np.subtract(_shifted(Pc, axes, {a}), base, out=gens[j, c].reshape(cells))
+    grow = _growth(P, axes) if grow_cells else np.zeros(m)
     return corner, gens, grow
 
 
@@ -168,42 +199,75 @@ def _spanning(gens: np.ndarray, rel: float = 1e-9) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Zonotopes:
-    """Grown cell zonotopes ready for point tests: ``centre`` (m, d), facet normals ``normals``
-    (m, f, d) with offsets ``offset`` (m, f) (x is inside iff |n . (x - centre)| <= offset for
-    every facet), bounding-box half-widths ``half`` (m, d)."""
+    """Grown cell zonotopes ready for point tests, stored by coordinate (contiguous rows for the counts):
+    ``centre_cols`` (d, m), facet normals ``normal_cols`` (f, d, m) with offsets ``offset_cols`` (f, m) (x is inside
+    iff |n . (x - centre)| <= offset for every facet), bounding-box half-widths ``half_cols`` (d, m).  ``centre``,
+    ``normals``, ``offset``, ``half`` are the same numbers per zonotope ((m, d), (m, f, d), (m, f), (m, d) views)."""
 
-    centre: np.ndarray
-    normals: np.ndarray
-    offset: np.ndarray
-    half: np.ndarray
+    centre_cols: np.ndarray
+    normal_cols: np.ndarray
+    offset_cols: np.ndarray
+    half_cols: np.ndarray
+
+    @staticmethod
+    def of_rows(centre: np.ndarray, normals: np.ndarray, offset: np.ndarray, half: np.ndarray) -> Zonotopes:
+        """From per-zonotope arrays (m, d), (m, f, d), (m, f), (m, d)."""
+        cols = (centre.T, normals.transpose(1, 2, 0), offset.T, half.T)
+        return Zonotopes(*(np.ascontiguousarray(a) for a in cols))
+
+    @property
+    def centre(self) -> np.ndarray:
+        return self.centre_cols.T
+
+    @property
+    def normals(self) -> np.ndarray:
+        return self.normal_cols.transpose(2, 0, 1)
+
+    @property
+    def offset(self) -> np.ndarray:
+        return self.offset_cols.T
+
+    @property
+    def half(self) -> np.ndarray:
+        return self.half_cols.T
 
     @property
     def size(self) -> int:
-        return int(self.centre.shape[0])
+        return int(self.centre_cols.shape[1])
 
     @functools.cached_property
-    def corners(self) -> tuple[np.ndarray, np.ndarray]:
-        """(centre - half, centre + half): the bounding boxes' corners (m, d), the same for every shift's count."""
-        return self.centre - self.half, self.centre + self.half
+    def box(self) -> tuple[np.ndarray, np.ndarray]:
+        """(centre - half, centre + half) (d, m): the bounding boxes' corners, the same for every shift's count."""
+        return self.centre_cols - self.half_cols, self.centre_cols + self.half_cols
 
     @functools.cached_property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """(lowest, highest) corner of the union of the bounding boxes (d,), computed once for every shift's count."""
-        lo = np.array([float((self.centre[:, k] - self.half[:, k]).min()) for k in range(self.centre.shape[1])])
-        hi = np.array([float((self.centre[:, k] + self.half[:, k]).max()) for k in range(self.centre.shape[1])])
-        return lo, hi
+        low, high = self.box
+        return np.array([float(r.min()) for r in low]), np.array([float(r.max()) for r in high])
+
+    def take(self, index: np.ndarray) -> Zonotopes:
+        """The zonotopes ``index`` (integer array) of this set, numbers unchanged."""
+
+        def rows(a: np.ndarray) -> np.ndarray:  # row by row: numpy's gather along a contiguous row is the fast one
+            flat = a.reshape(-1, a.shape[-1])
+            out = np.empty((flat.shape[0], index.size))
+            for r in range(flat.shape[0]):
+                np.take(flat[r], index, out=out[r])
+            return out.reshape(a.shape[:-1] + (index.size,))
+
+        return Zonotopes(rows(self.centre_cols), rows(self.normal_cols), rows(self.offset_cols), rows(self.half_cols))
 
     def mirrored(self) -> Zonotopes:
         """The zonotopes mirrored about the plane x_0 = 0, exactly (negations): what :func:`prepare` gives for the
         cells of the mirrored grid (2-D normals (-g_1, g_0) become (n_0, -n_1); offsets and half-widths unchanged)."""
-        c = self.centre.copy()
-        c[:, 0] *= -1.0
-        N = self.normals.copy()
-        if N.shape[2] == 2:
-            N[:, :, 1] *= -1.0
-        else:
+        if self.normal_cols.shape[1] != 2:
             raise InputError("mirrored zonotopes are implemented for profiles (d = 2) only")
-        return Zonotopes(c, N, self.offset, self.half)
+        c = self.centre_cols.copy()
+        c[0] *= -1.0
+        N = self.normal_cols.copy()
+        N[:, 1] *= -1.0
+        return Zonotopes(c, N, self.offset_cols, self.half_cols)
 
 
 def _rowdot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -230,89 +294,196 @@ def prepare(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> Zonotopes
     for k in range(gens.shape[1]):
         offset += 0.5 * np.abs(_rowdot(N, gens[:, None, k, :]))
     half = 0.5 * gabs + grow[:, None]
-    return Zonotopes(centre, N, offset, half)
+    return Zonotopes.of_rows(centre, N, offset, half)
+
+
+def _coldot(a: np.ndarray, b: np.ndarray, out: np.ndarray | None = None, tmp: np.ndarray | None = None) -> np.ndarray:
+    """Sum over the first (short) axis of a * b: :func:`_rowdot` of the transposed arrays, term for term
+    (``out``, ``tmp``: buffers of one row's shape to write into, fewer fresh arrays)."""
+    out = np.multiply(a[0], b[0], out=out)
+    for k in range(1, a.shape[0]):
+        out += np.multiply(a[k], b[k], out=tmp)
+    return out
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products (3, m) of the columns of a, b (3, m), with the products and differences of ``np.cross``."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _prepare_columns(corner: np.ndarray, gens: np.ndarray, grow: np.ndarray) -> tuple[Zonotopes, np.ndarray]:
+    """(:func:`prepare` of the cells of :func:`_cell_columns`, the indices of the cells kept): the same arithmetic,
+    operation for operation, on contiguous coordinate rows (tests compare the two bit for bit)."""
+    K, d, m = gens.shape
+    if K < d:  # no cell spans R^d
+        return Zonotopes(np.empty((d, 0)), np.empty((0, d, 0)), np.empty((0, 0)), np.empty((d, 0))), np.empty(0, dtype=np.int64)
+    tmp, buf = np.empty(m), np.empty(m)
+    scale2 = _coldot(gens[0], gens[0], tmp=tmp)
+    for j in range(1, K):
+        np.maximum(scale2, _coldot(gens[j], gens[j], buf, tmp), out=scale2)
+    gram = {(a, b): _coldot(gens[:, a], gens[:, b], tmp=tmp) for a in range(d) for b in range(a, d)}
+    if d == 1:
+        det = gram[0, 0]
+    elif d == 2:  # g00 g11 - g01^2, in place
+        det = np.multiply(gram[0, 0], gram[1, 1], out=gram[0, 0])
+        det -= np.multiply(gram[0, 1], gram[0, 1], out=gram[0, 1])
+    else:
+        G = np.empty((m, d, d))
+        for (a, b), v in gram.items():
+            G[:, a, b] = G[:, b, a] = v
+        det = np.linalg.det(G)
+    del gram
+    keep = det > (1e-9 * np.maximum(scale2, 1e-300)) ** d
+    kept = np.flatnonzero(keep)
+    if kept.size < m:
+        corner, gens, grow = corner[:, kept], gens[:, :, kept], grow[kept]
+    gsum, gabs = gens[0].copy(), np.abs(gens[0])
+    for k in range(1, K):
+        gsum += gens[k]
+        gabs += np.abs(gens[k])
+    gsum *= 0.5
+    centre = np.add(corner, gsum, out=gsum)
+    if d == 1:
+        N = np.ones((1, 1, kept.size))
+    elif d == 2:
+        N = np.empty((K, 2, kept.size))
+        np.negative(gens[:, 1], out=N[:, 0])
+        N[:, 1] = gens[:, 0]
+    else:  # numpy's cross product, term for term
+        N = np.stack([_cross(gens[i], gens[j]) for i, j in itertools.combinations(range(K), 2)])
+    offset = np.empty((N.shape[0], kept.size))
+    tmp, buf = tmp[: kept.size], buf[: kept.size]
+    for f in range(N.shape[0]):  # grow |n_f| + sum_k |n_f . g_k| / 2
+        np.sqrt(_coldot(N[f], N[f], buf, tmp), out=buf)
+        np.multiply(grow, buf, out=offset[f])
+        for k in range(K):
+            _coldot(N[f], gens[k], buf, tmp)
+            np.abs(buf, out=buf)
+            buf *= 0.5
+            offset[f] += buf
+    gabs *= 0.5
+    gabs += grow
+    return Zonotopes(centre, N, offset, gabs), kept
 
 
 def covered_cells(
-    z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], chunk: int = 131072, out: np.ndarray | None = None
+    z: Zonotopes,
+    h: float,
+    origin: np.ndarray,
+    shape: tuple[int, ...],
+    chunk: int = 1 << 20,
+    out: np.ndarray | None = None,
+    scratch: np.ndarray | None = None,
 ) -> np.ndarray:
     """Boolean grid of the cells of side ``h`` (lower corner ``origin``) whose centre lies in a grown zonotope
-    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set)."""
+    (``out``: a grid of that shape to add them to, e.g. the cells of other zonotopes of the same set).
+
+    A candidate cell is one whose centre lies in a zonotope's bounding box; it is covered when
+    |n_j . (x - centre)| <= offset_j for every facet j, evaluated as the projection of the box's first
+    candidate centre plus h n_j . (its offset in cells).  The occupancy is an OR over the zonotopes, so a
+    candidate cell already covered needs no test: the boxes holding one candidate are tested in rounds (a
+    sample spread over the set first), each round skipping the cells the earlier ones covered (a redundant
+    map covers each cell many times over).  ``chunk``: candidates tested per batch (memory only); ``scratch``: a float
+    buffer (2 d, >= z.size) to work in (the same one for every shift's count: fewer fresh arrays)."""
     d = z.centre.shape[1]
-    f = z.normals.shape[1]
     occ = np.zeros(shape, dtype=bool) if out is None else out
-    started = out is not None and bool(out.any())
-    dims = np.array(shape)
-    for s in range(0, z.size, chunk):
-        centre, N, off = z.centre[s : s + chunk], z.normals[s : s + chunk], z.offset[s : s + chunk]
-        low, high = z.corners
-        lo = np.maximum(np.ceil((low[s : s + chunk] - origin) / h - 0.5).astype(np.int64), 0)
-        hi = np.minimum(np.floor((high[s : s + chunk] - origin) / h - 0.5).astype(np.int64), dims - 1)
-        span = hi - lo + 1
-        ok = span[:, 0] > 0
-        for k in range(1, d):
-            ok &= span[:, k] > 0
-        if not ok.all():
-            centre, N, off, lo, span = centre[ok], N[ok], off[ok], lo[ok], span[ok]
-        counts = span[:, 0].copy()
-        for k in range(1, d):
-            counts *= span[:, k]
-        if s or started:  # a zonotope whose candidate cells are all covered already adds nothing (the occupancy is an OR)
-            new = _box_sums(_integral(occ), lo, span) < counts
-            if not new.all():
-                centre, N, off, lo, span, counts = centre[new], N[new], off[new], lo[new], span[new], counts[new]
-        m = centre.shape[0]
-        if m == 0:
-            continue
-        # projection of the first candidate centre (lo + 1/2) relative to the zonotope centre, per facet
-        rel = origin + (lo + 0.5) * h - centre
-        base = N[:, :, 0] * rel[:, 0:1]
-        for k in range(1, d):
-            base += N[:, :, k] * rel[:, k : k + 1]
-        rep = np.repeat(np.arange(m), counts)
-        local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
-        offs = []
-        for k in range(d - 1, -1, -1):  # unravel local in the box span[rep] (last axis fastest)
-            sk = span[rep, k]
-            offs.append(local % sk)
-            local //= sk
-        offs = offs[::-1]
-        # a candidate cell already covered (by an earlier chunk) needs no test: the occupancy is an OR over the
-        # zonotopes, the same in any order; the cells of a redundant map are covered many times over
-        todo = ~occ[tuple(lo[rep, k] + offs[k] for k in range(d))]
-        if not todo.all():
-            rep = rep[todo]
-            offs = [o[todo] for o in offs]
-        hit = np.ones(rep.size, dtype=bool)
-        for j in range(f):  # facet by facet: |base + h N . off| <= offset
-            proj = base[rep, j] + (h * N[rep, j, 0]) * offs[0]
-            for k in range(1, d):
-                proj += (h * N[rep, j, k]) * offs[k]
-            hit &= np.abs(proj) <= off[rep, j]
-        sel = rep[hit]
-        idx = tuple(lo[sel, k] + offs[k][hit] for k in range(d))
-        occ[idx] = True
+    flat_occ = occ.reshape(-1)  # a view: occ is C-contiguous
+    which, lo, span = _candidate_boxes(z, h, origin, shape, scratch)
+    counts = span[0].copy()
+    for k in range(1, d):
+        counts *= span[k]
+    multi = np.flatnonzero(counts > 1)
+    ends = np.cumsum(counts[multi])
+    start = 0
+    while start < multi.size:  # boxes of several candidates, in batches of about ``chunk`` candidates
+        stop = max(int(np.searchsorted(ends, ends[start] - counts[multi[start]] + chunk, side="right")), start + 1)
+        sel = multi[start:stop]
+        _cover(z, h, origin, which[sel], lo[:, sel], span[:, sel], counts[sel], occ)
+        start = stop
+    single = np.flatnonzero(counts == 1)
+    cell = lo[0][single]
+    for k in range(1, d):
+        cell = cell * shape[k] + lo[k][single]
+    todo = np.ones(single.size, dtype=bool)
+    for stride in (16, 4, 1):
+        part = np.flatnonzero(todo)[::stride]
+        if stride < 16:  # skip the cells covered already
+            part = part[~flat_occ[cell[part]]]
+        todo[part] = False
+        for s in range(0, part.size, chunk):
+            sel = single[part[s : s + chunk]]
+            _cover(z, h, origin, which[sel], lo[:, sel], span[:, sel], counts[sel], occ)
     return occ
 
 
-def _integral(occ: np.ndarray) -> np.ndarray:
-    """Summed-area table of a boolean grid: S[i_1, ..., i_d] = number of True cells in occ[:i_1, ..., :i_d]."""
-    S = np.zeros(tuple(n + 1 for n in occ.shape), dtype=np.int64)
-    S[tuple(slice(1, None) for _ in occ.shape)] = occ
-    for ax in range(occ.ndim):
-        np.cumsum(S, axis=ax, out=S)
-    return S
+def _candidate_boxes(z: Zonotopes, h: float, origin: np.ndarray, shape: tuple[int, ...], scratch: np.ndarray | None = None):
+    """(zonotope indices (m,), first candidate cell lo (d, m), cells per axis span (d, m)) of the zonotopes whose
+    bounding box holds at least one cell centre: lo = ceil((low - origin) / h - 1/2) clipped to the grid, likewise
+    the last one from the box's high corner."""
+    low, high = z.box
+    d, m = low.shape
+    if scratch is None or scratch.shape[0] < 2 * d or scratch.shape[1] < m:
+        scratch = np.empty((2 * d, m))
+    los, spans, ok = [], [], None
+    for k in range(d):
+        a = np.subtract(low[k], origin[k], out=scratch[2 * k, :m])
+        a /= h
+        a -= 0.5
+        np.ceil(a, out=a)
+        np.maximum(a, 0.0, out=a)
+        b = np.subtract(high[k], origin[k], out=scratch[2 * k + 1, :m])
+        b /= h
+        b -= 0.5
+        np.floor(b, out=b)
+        np.minimum(b, float(shape[k] - 1), out=b)
+        b -= a
+        b += 1.0  # the span, exact in floating point (small integers)
+        ok = b > 0.0 if ok is None else ok & (b > 0.0)
+        los.append(a)
+        spans.append(b)
+    which = np.flatnonzero(ok)
+    lo = np.empty((d, which.size), dtype=np.int64)
+    span = np.empty((d, which.size), dtype=np.int64)
+    for k in range(d):
+        lo[k] = los[k][which]
+        span[k] = spans[k][which]
+    return which, lo, span
 
 
-def _box_sums(S: np.ndarray, lo: np.ndarray, span: np.ndarray) -> np.ndarray:
-    """Number of True cells in each box [lo, lo + span) (rows of lo, span) from the summed-area table S."""
-    d = lo.shape[1]
-    out = np.zeros(lo.shape[0], dtype=np.int64)
-    for corner in itertools.product((0, 1), repeat=d):
-        idx = tuple(lo[:, k] + corner[k] * span[:, k] for k in range(d))
-        sign = 1 if (d - sum(corner)) % 2 == 0 else -1
-        out += sign * S[idx]
-    return out
+def _cover(z: Zonotopes, h: float, origin: np.ndarray, which, lo, span, counts, occ: np.ndarray) -> None:
+    """Mark in ``occ`` the candidate cells of the boxes ``which`` (see :func:`_candidate_boxes`) whose centre passes
+    every facet test |base_j + h n_j . off| <= offset_j, base_j = n_j . (origin + (lo + 1/2) h - centre)."""
+    d = lo.shape[0]
+    centre, normals, offset = z.centre_cols, z.normal_cols, z.offset_cols
+    single = not counts.size or int(counts.max()) == 1
+    if single:  # one candidate per box (offset 0)
+        rep = slice(None)
+        offs = [0.0] * d
+    else:
+        rep = np.repeat(np.arange(which.size), counts)
+        local = np.arange(rep.size) - np.repeat(np.cumsum(counts) - counts, counts)
+        offs = [None] * d
+        for k in range(d - 1, -1, -1):  # unravel local in the box span[rep] (last axis fastest)
+            sk = span[k][rep]
+            offs[k] = (local % sk).astype(float)
+            local //= sk
+    rel = [origin[k] + (lo[k] + 0.5) * h - centre[k][which] for k in range(d)]
+    hit = None
+    for j in range(normals.shape[0]):  # facet by facet
+        n = [normals[j][k][which] for k in range(d)]
+        base = n[0] * rel[0]
+        for k in range(1, d):
+            base += n[k] * rel[k]
+        proj = base[rep] + (h * n[0])[rep] * offs[0]
+        for k in range(1, d):
+            proj += (h * n[k])[rep] * offs[k]
+        test = np.abs(proj) <= offset[j][which][rep]
+        hit = test if hit is None else hit & test
+    if single:
+        occ[tuple(lo[k][hit] for k in range(d))] = True
+    else:
+        sel = rep[hit]
+        occ[tuple(lo[k][sel] + offs[k][hit].astype(np.int64) for k in range(d))] = True
 
 
 def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> tuple[np.ndarray, tuple[int, ...]]:
@@ -322,8 +493,9 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
     return lo, shape
 
 
-def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool) -> tuple[float, np.ndarray, np.ndarray]:
-    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``."""
+def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool, scratch=None) -> tuple[float, np.ndarray, np.ndarray]:
+    """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``
+    (``scratch``: see :func:`covered_cells`)."""
     d = parts[0].centre.shape[1]
     if sum(z.size for z in parts) == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
@@ -333,7 +505,7 @@ def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: b
     occ = np.zeros(shape, dtype=bool)
     for z in parts:
         if z.size:
-            covered_cells(z, h, origin, shape, out=occ)
+            covered_cells(z, h, origin, shape, out=occ, scratch=scratch)
     if revolve:
         x = origin[0] + (np.arange(shape[0]) + 0.5) * h
         w = math.pi * np.abs(x) * h * h
@@ -343,15 +515,79 @@ def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: b
     return value, occ, origin
 
 
-def _zonotopes_of(points_grid: np.ndarray, revolve: bool, valid=None) -> tuple[Zonotopes, ...]:
-    k = sum(1 for n in points_grid.shape[:-1] if n > 1)
-    # redundant (more free joints than dimensions): the cells overlap, the union closes itself, no growth
-    corner, gens, grow = cell_zonotopes(points_grid, valid, grow_cells=k <= points_grid.shape[-1])
-    z = prepare(corner, gens, grow)
-    # the profile and its mirror (s -> -s): the mirror's zonotopes are this one's with the signs flipped, exactly as
-    # cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two); counted as two
-    # parts of one union (no concatenated copy)
-    return (z, z.mirrored()) if revolve else (z,)
+class CellImage:
+    """The cell zonotopes of a joint grid's image, on the grid and on the twice-coarser one, built once for every
+    measure of it: :meth:`estimate` over the whole grid or over the cells whose corners are all valid (a subset of
+    the same zonotopes, numbers unchanged).  ``points_grid``, ``revolve``: see :func:`estimate_measure`."""
+
+    def __init__(self, points_grid, revolve: bool = False):
+        P = np.asarray(points_grid, dtype=float)
+        if P.ndim < 2 or P.shape[-1] not in (1, 2, 3):
+            raise InputError(f"points_grid must have shape (n_1, ..., n_k, d) with d in 1..3, got {P.shape}")
+        if not np.all(np.isfinite(P)):
+            raise InputError("points_grid must be finite")
+        if revolve and P.shape[-1] != 2:
+            raise InputError("revolve=True needs (s, z) profile points (d = 2)")
+        self.points_grid, self.revolve = P, bool(revolve)
+        self._parts: dict[bool, tuple] = {}
+
+    def _zonotopes(self, coarse: bool) -> tuple[tuple[Zonotopes, ...], np.ndarray, list[int]]:
+        """(the zonotopes (with the mirrored ones when revolving), the grid cells they come from, the free axes)."""
+        if coarse not in self._parts:
+            P = _coarsen(self.points_grid) if coarse else self.points_grid
+            axes = [a for a in range(P.ndim - 1) if P.shape[a] > 1]
+            # redundant (more free joints than dimensions): the cells overlap, the union closes itself, no growth
+            z, kept = _prepare_columns(*_cell_columns(P, len(axes) <= P.shape[-1]))
+            # the profile and its mirror (s -> -s): the mirror's zonotopes are this one's with the signs flipped, exactly
+            # as cell_zonotopes + prepare would compute them from the mirrored grid (tests compare the two); counted as
+            # two parts of one union (no concatenated copy)
+            self._parts[coarse] = ((z, z.mirrored()) if self.revolve else (z,)), kept, axes
+        return self._parts[coarse]
+
+    def zonotopes(self, valid=None, coarse: bool = False) -> tuple[Zonotopes, ...]:
+        """The zonotopes of the cells (of the grid, or of the twice-coarser one) whose corners are all ``valid``."""
+        parts, kept, axes = self._zonotopes(coarse)
+        if valid is None:
+            return parts
+        V = _coarsen(valid, 0) if coarse else valid
+        index = np.flatnonzero(_valid_cells(V, axes)[kept])
+        return tuple(z.take(index) for z in parts)
+
+    def estimate(self, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, valid=None, return_occupancy: bool = False):
+        """:func:`estimate_measure` of this image (same arguments)."""
+        P, revolve = self.points_grid, self.revolve
+        d = P.shape[-1]
+        if n_shifts < 2:
+            raise InputError(f"n_shifts must be >= 2 (the error bar needs a spread), got {n_shifts!r}")
+        if valid is not None:
+            valid = np.asarray(valid, dtype=bool)
+            if valid.shape != P.shape[:-1]:
+                raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
+        fine = self.zonotopes(valid)
+        n_fine = sum(z.size for z in fine)
+        if n_fine == 0:
+            raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
+        h = _default_cell(fine) if cell is None else float(cell)
+        if not (math.isfinite(h) and h > 0.0):
+            raise InputError(f"cell must be a positive length in m, got {cell!r}")
+        shifts = np.random.default_rng(seed).uniform(0.0, 1.0, (n_shifts, d))
+        scratch = np.empty((2 * d, max(z.size for z in fine)))  # one work buffer for every count below
+        values, first = [], None
+        for i, s in enumerate(shifts):
+            v, occ, origin = _count(fine, h, s, revolve, scratch)
+            values.append(v)
+            if i == 0:
+                first = (occ, origin, h)
+        values = np.array(values)
+        raw = float(values.mean())
+        se = float(values.std(ddof=1) / math.sqrt(n_shifts))
+        if _coarsen(P).shape == P.shape:  # nothing to coarsen (every free axis has <= 2 values)
+            coarse = raw
+        else:
+            coarse_z = self.zonotopes(valid, coarse=True)
+            coarse = float(np.mean([_count(coarse_z, h, s, revolve, scratch)[0] for s in shifts]))
+        est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
+        return (est, first) if return_occupancy else est
 
 
 def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
@@ -367,7 +603,7 @@ def default_cell(z: Zonotopes) -> float:
 
 
 def _default_cell(parts: tuple[Zonotopes, ...]) -> float:
-    sides = np.concatenate([2.0 * z.half.max(axis=1) for z in parts])
+    sides = np.concatenate([2.0 * functools.reduce(np.maximum, z.half_cols) for z in parts])
     return float(max(np.median(sides), 1e-12))
 
 
@@ -391,46 +627,8 @@ def estimate_measure(
     -------
     MeasureEstimate (and the occupancy tuple when asked).
     """
-    P = np.asarray(points_grid, dtype=float)
-    if P.ndim < 2 or P.shape[-1] not in (1, 2, 3):
-        raise InputError(f"points_grid must have shape (n_1, ..., n_k, d) with d in 1..3, got {P.shape}")
-    if not np.all(np.isfinite(P)):
-        raise InputError("points_grid must be finite")
-    d = P.shape[-1]
-    if revolve and d != 2:
-        raise InputError("revolve=True needs (s, z) profile points (d = 2)")
-    if n_shifts < 2:
-        raise InputError(f"n_shifts must be >= 2 (the error bar needs a spread), got {n_shifts!r}")
-    if valid is not None:
-        valid = np.asarray(valid, dtype=bool)
-        if valid.shape != P.shape[:-1]:
-            raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
-    fine = _zonotopes_of(P, revolve, valid)
-    n_fine = sum(z.size for z in fine)
-    if n_fine == 0:
-        raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
-    h = _default_cell(fine) if cell is None else float(cell)
-    if not (math.isfinite(h) and h > 0.0):
-        raise InputError(f"cell must be a positive length in m, got {cell!r}")
-    rng = np.random.default_rng(seed)
-    shifts = rng.uniform(0.0, 1.0, (n_shifts, d))
-    values, first = [], None
-    for i, s in enumerate(shifts):
-        v, occ, origin = _count(fine, h, s, revolve)
-        values.append(v)
-        if i == 0:
-            first = (occ, origin, h)
-    values = np.array(values)
-    raw = float(values.mean())
-    se = float(values.std(ddof=1) / math.sqrt(n_shifts))
-    Pc = _coarsen(P)
-    if Pc.shape == P.shape:  # nothing to coarsen (every free axis has <= 2 values)
-        coarse = raw
-    else:
-        coarse_z = _zonotopes_of(Pc, revolve, None if valid is None else _coarsen(valid, 0))
-        coarse = float(np.mean([_count(coarse_z, h, s, revolve)[0] for s in shifts]))
-    est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
-    return (est, first) if return_occupancy else est
+    image = CellImage(points_grid, revolve)
+    return image.estimate(cell=cell, n_shifts=n_shifts, seed=seed, valid=valid, return_occupancy=return_occupancy)
 
 
 def occupancy(points: np.ndarray, h: float, bounds: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
