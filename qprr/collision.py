@@ -17,7 +17,8 @@ excluded pairs are kept on the model (``adjacent``, ``neutral_contacts``) so tha
 The pairs are checked the most often colliding first (counted over a few random arm configurations), so that a
 colliding configuration is found early.  Collisions do not depend on the base pose (every geometry moves with the vehicle), so the arm configuration
 ``q_arm`` decides: :meth:`CollisionModel.colliding_arm` evaluates a batch of them (``pin.computeCollisions``
-per configuration, stopping at the first colliding pair).
+per configuration, stopping at the first colliding pair).  Near contact a pair of two convex shapes is decided by
+its signed distance, not by coal's collision test alone, which can miss a penetration (:data:`CONTACT_MARGIN`).
 """
 
 from __future__ import annotations
@@ -37,6 +38,16 @@ from .rotors import Rotor
 
 DISC_THICKNESS = 0.01
 """Thickness [m] of the propeller disc cylinder qprr adds for a rotor (blades and their flapping, ~1 cm)."""
+
+CONTACT_MARGIN = 0.01
+"""[m] Pairs that coal's collision test finds closer than this are decided by their signed distance instead.
+
+coal's GJK in collision mode can call two penetrating convex shapes apart: a 14 mm-radius arm link reaching up to
+3.7 mm into a 4 mm-thick propeller disc of the Q-PRR was reported free, in 3 of 2e4 random arm configurations
+checked each on its own (a volume sampling of the link confirms the penetration; tests/test_collision.py keeps
+such cases).  Its answer "in collision" was never wrong.  So every pair within this margin (coal's
+``security_margin``) is decided by ``pin.computeDistance`` (GJK run to convergence, then EPA): in contact when its
+signed distance is < 0.  The answers then depend on the configuration alone, not on what was checked before."""
 
 
 def default_disc_radius(rotors: Sequence[Rotor]) -> float:
@@ -107,8 +118,8 @@ class CollisionModel:
     discs: tuple[tuple[str, float, str], ...]
 
     def new_data(self) -> tuple[pin.Data, pin.GeometryData]:
-        """Fresh (pin.Data, pin.GeometryData) for the calls below (one pair per thread)."""
-        return self.model.createData(), pin.GeometryData(self.geometry)
+        """Fresh (pin.Data, pin.GeometryData) for the calls below (one pair per thread; :data:`CONTACT_MARGIN` set)."""
+        return self.model.createData(), margin_data(self.geometry)
 
     def _q(self, q) -> np.ndarray:
         q = np.asarray(q, dtype=float)
@@ -121,15 +132,15 @@ class CollisionModel:
         raise InputError(f"q must be a configuration ({self.model.nq},) or an arm configuration ({self.model.nq - 7},), got shape {q.shape}")
 
     def colliding(self, q, data: tuple | None = None) -> bool:
-        """Whether configuration ``q`` (nq,) or arm configuration (n_arm,) puts some checked pair in contact."""
+        """Whether configuration ``q`` (nq,) or arm configuration (n_arm,) puts some checked pair in contact
+        (``data``: a pair from :meth:`new_data`)."""
         d, gd = self.new_data() if data is None else data
-        return bool(pin.computeCollisions(self.model, d, self.geometry, gd, self._q(q), True))
+        return bool(contacts(self.model, self.geometry, (d, gd), self._q(q), first=True))
 
     def colliding_pairs(self, q, data: tuple | None = None) -> list[tuple[str, str]]:
         """The checked pairs in contact at ``q`` (every pair evaluated)."""
         d, gd = self.new_data() if data is None else data
-        pin.computeCollisions(self.model, d, self.geometry, gd, self._q(q), False)
-        return [self.pairs[k] for k, r in enumerate(gd.collisionResults) if r.isCollision()]
+        return [self.pairs[k] for k in contacts(self.model, self.geometry, (d, gd), self._q(q), first=False)]
 
     def min_distance(self, q, data: tuple | None = None) -> tuple[float, tuple[str, str]]:
         """(smallest distance [m] over the checked pairs (<= 0 in contact), the pair) at ``q``."""
@@ -145,20 +156,19 @@ class CollisionModel:
         if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
         out = np.empty(Q.shape[0], dtype=bool)
-        d, gd = self.new_data()
+        data = self.new_data()
         q = self.neutral_q.copy()
         for i in range(Q.shape[0]):
             q[7:] = Q[i]
-            out[i] = pin.computeCollisions(self.model, d, self.geometry, gd, q, True)
+            out[i] = bool(contacts(self.model, self.geometry, data, q, first=True))
             if progress is not None and (i + 1) % 4096 == 0:
                 progress(i + 1, Q.shape[0])
         return out
 
     def colliding_batch(self, q_arm) -> np.ndarray:
-        """:meth:`colliding_arm` without the progress callback, the loop in C++: the same checks in the same order
-        with one fresh ``pin.GeometryData`` for the batch (``pin.computeCollisionsInParallel`` with one thread over a
-        one-element ``pin.GeometryPool``), so the same answers, configuration for configuration (Pinocchio lets coal
-        start each pair's GJK from its previous answer, so a batch's answers near contact depend on the order)."""
+        """:meth:`colliding_arm` without the progress callback, the same answers: the screening loop in C++ (which
+        configurations have some pair within :data:`CONTACT_MARGIN`: ``pin.computeCollisionsInParallel`` with one
+        thread over a one-element ``pin.GeometryPool``), then those few decided pair by pair as :meth:`colliding`."""
         Q = np.atleast_2d(np.asarray(q_arm, dtype=float))
         if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
@@ -166,7 +176,15 @@ class CollisionModel:
         full[:7] = self.neutral_q[:7, None]
         full[7:] = Q.T
         pool = pin.GeometryPool(self.model, self.geometry, 1)
-        return np.asarray(pin.computeCollisionsInParallel(1, pool, full, True), dtype=bool)
+        set_margin(self.geometry, pool.getGeometryData(0))
+        near = np.asarray(pin.computeCollisionsInParallel(1, pool, full, True), dtype=bool)
+        if not any(r.security_margin > 0.0 for r in pool.getGeometryData(0).collisionRequests):
+            return near  # no pair of two convex shapes: coal's answers are final
+        data = self.new_data()
+        out = np.zeros(Q.shape[0], dtype=bool)
+        for i in np.flatnonzero(near):
+            out[i] = bool(contacts(self.model, self.geometry, data, np.ascontiguousarray(full[:, i]), first=True))
+        return out
 
     def summary(self) -> str:
         """The geometries, the pairs checked and the pairs excluded, in a few lines."""
@@ -233,6 +251,47 @@ def _add_discs(platform: Platform, geom: pin.GeometryModel) -> tuple[tuple[str, 
     return tuple(out)
 
 
+def set_margin(geom: pin.GeometryModel, gdata: pin.GeometryData) -> pin.GeometryData:
+    """``gdata`` (of ``geom``) with the collision request of every pair of two convex shapes asking for contact within
+    :data:`CONTACT_MARGIN` (returned).  A pair with a triangle mesh keeps coal's exact test (margin 0): a mesh has
+    no signed distance (its distance stays >= 0 through an intersection), and the mesh test is not GJK's."""
+    import coal
+
+    objs = geom.geometryObjects
+    for cp, request in zip(geom.collisionPairs, gdata.collisionRequests):
+        convex = isinstance(objs[cp.first].geometry, coal.ShapeBase) and isinstance(objs[cp.second].geometry, coal.ShapeBase)
+        request.security_margin = CONTACT_MARGIN if convex else 0.0
+    return gdata
+
+
+def margin_data(geom: pin.GeometryModel) -> pin.GeometryData:
+    """A fresh ``pin.GeometryData`` of ``geom`` for :func:`contacts` (:func:`set_margin`)."""
+    return set_margin(geom, pin.GeometryData(geom))
+
+
+def contacts(model: pin.Model, geom: pin.GeometryModel, data: tuple, q: np.ndarray, first: bool) -> list[int]:
+    """Indices of the collision pairs of ``geom`` in contact at ``q`` (all of them, or the first found when ``first``).
+
+    ``data``: (pin.Data, pin.GeometryData from :func:`margin_data`).  coal screens every pair (one pass, stopping at
+    the first pair reported, when none is); a pair of convex shapes reported within :data:`CONTACT_MARGIN` is then in
+    contact when its signed distance (``pin.computeDistance``) is < 0, a pair with a mesh when coal reports it."""
+    d, gd = data
+    if not pin.computeCollisions(model, d, geom, gd, q, True):
+        return []
+    # the pass stopped at the first pair reported (the pairs before it were found clear); the placements are set
+    results, requests = gd.collisionResults, gd.collisionRequests
+    k0 = next(k for k, res in enumerate(results) if res.isCollision())
+    out = []
+    for k in range(k0, len(results)):
+        if k > k0 and not pin.computeCollision(geom, gd, k):
+            continue
+        if requests[k].security_margin == 0.0 or pin.computeDistance(geom, gd, k).min_distance < 0.0:
+            out.append(k)
+            if first:
+                break
+    return out
+
+
 ORDER_SAMPLES = 256
 """Random arm configurations (seed 0) over which the pairs are counted to check the most often colliding first."""
 
@@ -243,13 +302,12 @@ def _order_pairs(platform: Platform, geom: pin.GeometryModel) -> None:
     model = platform.model
     lo, hi = np.maximum(platform.arm_lower, -math.pi), np.minimum(platform.arm_upper, math.pi)
     rng = np.random.default_rng(0)
-    data, gdata = model.createData(), pin.GeometryData(geom)
+    data = (model.createData(), margin_data(geom))
     counts = np.zeros(len(geom.collisionPairs))
     q = platform.neutral_q()
     for _ in range(ORDER_SAMPLES):
         q[7:] = rng.uniform(lo, hi)
-        pin.computeCollisions(model, data, geom, gdata, q, False)
-        counts += [r.isCollision() for r in gdata.collisionResults]
+        counts[contacts(model, geom, data, q, first=False)] += 1.0
     ordered = [geom.collisionPairs[int(k)] for k in np.argsort(-counts, kind="stable")]
     ordered = [pin.CollisionPair(cp.first, cp.second) for cp in ordered]
     geom.removeAllCollisionPairs()
@@ -270,12 +328,11 @@ def _select_pairs(platform: Platform, geom: pin.GeometryModel):
             adjacent.append((objs[i].name, objs[j].name))
             continue
         geom.addCollisionPair(pin.CollisionPair(i, j))
-    data, gdata = model.createData(), pin.GeometryData(geom)
-    pin.computeCollisions(model, data, geom, gdata, platform.neutral_q(), False)
-    touching = [cp for cp, r in zip(list(geom.collisionPairs), gdata.collisionResults) if r.isCollision()]
-    contacts = tuple((objs[cp.first].name, objs[cp.second].name) for cp in touching)
+    all_pairs = list(geom.collisionPairs)
+    touching = [all_pairs[k] for k in contacts(model, geom, (model.createData(), margin_data(geom)), platform.neutral_q(), first=False)]
+    in_contact = tuple((objs[cp.first].name, objs[cp.second].name) for cp in touching)
     for cp in touching:
         geom.removeCollisionPair(cp)
     _order_pairs(platform, geom)
     pairs = tuple((objs[cp.first].name, objs[cp.second].name) for cp in geom.collisionPairs)
-    return pairs, tuple(adjacent), contacts
+    return pairs, tuple(adjacent), in_contact

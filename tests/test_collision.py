@@ -260,3 +260,53 @@ def test_ik_collision_option_is_checked():
         IKSolver(p, "qp", {"collision_free": 1})
     with pytest.raises(InputError, match="collision_restarts"):
         IKSolver(p, "qp", {"collision_free": True, "collision_restarts": -1})
+
+
+# Q-PRR arm configurations (r0 [m], theta2, theta3 [rad]) where coal's GJK alone (collision mode, default guess)
+# calls the last link and a propeller disc apart although the link reaches 0.5-2.6 mm into the disc
+GJK_MISSES = ((0.007885441985879739, 1.9256624217308995, -1.9942442761016572), (-0.03538405342134774, 1.938090894693676, -1.9833160617986358))
+
+
+def _sampled_penetration(cm, q, pair_names, rng, n=400000):
+    """Deepest point [m] of the first geometry's cylinder inside the second's, by sampling its volume (independent of
+    coal); 0 when no sample is inside."""
+    data, gdata = cm.model.createData(), pin.GeometryData(cm.geometry)
+    pin.updateGeometryPlacements(cm.model, data, cm.geometry, gdata, q)
+    ia, ib = (cm.geometry.getGeometryId(name) for name in pair_names)
+    A, B = cm.geometry.geometryObjects[ia].geometry, cm.geometry.geometryObjects[ib].geometry
+    MA, MB = gdata.oMg[ia], gdata.oMg[ib]
+    rho, th = A.radius * np.sqrt(rng.uniform(0, 1, n)), rng.uniform(0, 2 * np.pi, n)
+    P = np.column_stack([rho * np.cos(th), rho * np.sin(th), rng.uniform(-A.halfLength, A.halfLength, n)])
+    L = (P @ MA.rotation.T + MA.translation - MB.translation) @ MB.rotation
+    depth = np.minimum(B.halfLength - np.abs(L[:, 2]), B.radius - np.hypot(L[:, 0], L[:, 1]))
+    return float(max(depth.max(), 0.0))
+
+
+@pytest.mark.parametrize("q_arm", GJK_MISSES)
+def test_penetration_that_gjk_misses_is_found(q_arm):
+    """Every check (one configuration, the Python loop, the C++ batch, the pairs) finds the contact, and the pair it
+    names really interpenetrates: a volume sampling of the link finds points inside the disc."""
+    cm = collision_model(qprr.load())
+    q = cm.neutral_q.copy()
+    q[7:] = q_arm
+    assert cm.colliding(q)
+    assert cm.colliding_arm(np.array([q_arm]))[0] and cm.colliding_batch(np.array([q_arm]))[0]
+    pairs = cm.colliding_pairs(q)
+    assert pairs
+    assert _sampled_penetration(cm, q, pairs[0], np.random.default_rng(0)) > 1e-4
+
+
+def test_check_does_not_depend_on_what_was_checked_before():
+    """The answers near contact are the configuration's own: checked alone, in a batch, in reverse order, all agree,
+    and agree with the sign of the smallest signed distance wherever it is clear of rounding (|d| > 1e-6 m)."""
+    p = qprr.load()
+    cm = collision_model(p)
+    rng = np.random.default_rng(1)
+    Q = rng.uniform(p.arm_lower, p.arm_upper, (3000, p.n_arm))
+    Q[:2] = GJK_MISSES
+    batch = cm.colliding_batch(Q)
+    np.testing.assert_array_equal(batch, cm.colliding_batch(Q[::-1])[::-1])
+    np.testing.assert_array_equal(batch, [cm.colliding(q) for q in Q])
+    dist = np.array([cm.min_distance(q)[0] for q in Q])
+    clear = np.abs(dist) > 1e-6
+    np.testing.assert_array_equal(batch[clear], dist[clear] < 0.0)

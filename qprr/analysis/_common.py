@@ -359,7 +359,7 @@ def resolve_collision(platform: Platform, collision) -> tuple[object, str]:
 class CollisionMask:
     """Which configurations of a joint grid are free of self-collision (:func:`collision_mask`).
 
-    ``free`` (n,) bool; ``evaluated``: how many configurations ``pin.computeCollisions`` checked (the others took
+    ``free`` (n,) bool; ``evaluated``: how many configurations :meth:`qprr.collision.CollisionModel.colliding_batch` checked (the others took
     the value on which the corners of their cell of the twice-coarser grid agree); ``audited``, ``mismatches``: a
     random sample of the inferred configurations checked afterwards, and how many of them were wrong (the error bar of
     the inference: a collision set thinner than a coarse cell could hide between agreeing corners)."""
@@ -394,7 +394,7 @@ def collision_mask(model, grid: JointGrid, progress=None, label: str = "collisio
     so the ends are kept; else, and below :data:`COLLISION_EXACT_BELOW` configurations, every one is checked) is done
     first (recursively); a configuration whose cell of that grid has all its corners free (or
     all colliding) takes that value; the others (cells that straddle the boundary) are checked with
-    ``pin.computeCollisions``.  ``audit`` inferred configurations, drawn with ``seed``, are then checked too; their
+    :meth:`qprr.collision.CollisionModel.colliding_batch`.  ``audit`` inferred configurations, drawn with ``seed``, are then checked too; their
     mismatches are reported (:class:`CollisionMask`) and corrected.  When more than :data:`COLLISION_AUDIT_TOLERANCE`
     of the audited ones are wrong (collision sets thinner than the coarse cells: a coarse grid in many joints), every
     configuration is checked instead."""

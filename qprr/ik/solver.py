@@ -28,7 +28,8 @@ configuration free of self-collision (:mod:`qprr.collision`: the arm against the
 itself).  A solve whose answer collides is restarted from other arm postures (``collision_restarts`` of them, drawn
 uniformly in the joint limits with a fixed seed, the base placed so the end effector starts on the target); when
 every answer collides the result is a failure with status "collision" naming the pairs in contact.  The check is
-exact at the returned configuration (``pin.computeCollisions``); the path to it is not checked.
+exact at the returned configuration (:meth:`qprr.collision.CollisionModel.colliding_pairs`); the path to it is not
+checked.
 
 Position error: ||p_e - p_d|| [m]; orientation error: ||log3(R_d^T R_e)|| [rad], both from
 Pinocchio's forward kinematics at the returned configuration.
