@@ -461,9 +461,9 @@ def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _Ba
         reason = (
             "no configuration balances the CoG within tol"
             if not ok.any()
-            else "the balanced configurations cover no full grid cell on which the balancing slider position is resolved "
-            "(a curve or isolated points in the workspace, or a band too thin for the grid): no measure at this "
-            "tol and n_samples"
+            else "the balanced configurations cover no full grid cell (with a slider: none on which its balancing "
+            "position is resolved): a curve or isolated points in the workspace, or a band too thin for the grid; no "
+            "measure at this tol and n_samples"
         )
         return None, ws_m, None, reason
     if bal_m.coarse == 0.0 < bal_m.raw:
