@@ -237,86 +237,135 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     if not isinstance(o, HoverOptions):
         raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_platform(platform)
-    masses = np.array(o.payload_masses)
     cmodel, note = resolve_collision(platform, o.collision)
-    torque_reserve = check_reserve(o.torque_reserve)
-    payload = make_payload(platform, o.payload_offset)
+    setup = _Setup(
+        platform,
+        np.array(o.payload_masses),
+        wrench_set(platform),
+        Allocator(platform),
+        ArmChain(platform),
+        make_payload(platform, o.payload_offset),
+        np.array(platform.arm_effort_limits),
+        check_reserve(o.torque_reserve),
+    )
     progress = check_progress(progress)
     grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
-    W = wrench_set(platform)
-    alloc = Allocator(platform)
-    chain = ArmChain(platform)
-    n, nm, nr, na = grid.size, len(masses), platform.n_rotors, platform.n_arm
-    full = W.rank == 6
-    ee = np.empty((n, 3))
-    thrusts = np.empty((n, nr))
-    tau_arm = np.empty((n, na))
-    margin = np.empty((nm, n))
-    auth = np.empty((nm, n, 3))
-    fauth = np.empty((nm, n, 3)) if full else None
-    rot_ok = np.empty((nm, n), dtype=bool)
-    eff_ok = np.empty((nm, n), dtype=bool)
-    w_hover = np.empty((n, 6))
-    lim_rot, lim_eff, lim_joint = np.empty(n), np.empty(n), np.empty(n, dtype=np.int64)
-    lim_per = np.empty((n, na))
-    collective = None
-    eff_lim = np.array(platform.arm_effort_limits)
+    n, masses, W = grid.size, setup.masses, setup.W
+    arr = _Arrays.empty(n, len(masses), platform.n_rotors, platform.n_arm, W.rank == 6)
     for start, q in grid.chunks():
-        sl = slice(start, start + len(q))
-        pose = chain.pose(q)
-        st = chain.statics(pose, payload.frame, payload.offset_frame)
-        ee[sl] = chain.frame_position(pose, platform.ee_frame)
-        w0 = st.wrench(masses[0])
-        w_hover[sl] = w0
-        thrusts[sl] = w0[:, alloc.rows] @ alloc.Omega_P_inv.T
-        tau_arm[sl] = st.tau_arm(masses[0])
-        for k, m in enumerate(masses):
-            w = st.wrench(m)
-            rot_ok[k, sl] = W.contains(w)
-            eff_ok[k, sl] = np.all(np.abs(st.tau_arm(m)) <= eff_lim * (1 + 1e-12), axis=1)
-            margin[k, sl] = W.thrust_margin(w) if W.equal_bounds else np.where(rot_ok[k, sl], _alloc_margin(w, alloc, W), -np.inf)
-            a = W.authority(w, (3, 4, 5))
-            auth[k, sl] = a.min(axis=2)
-            if full:
-                fauth[k, sl] = W.authority(w, (0, 1, 2)).min(axis=2)
-        pl = payload_limits(st, W, eff_lim, platform.g, torque_reserve)
-        lim_rot[sl], lim_eff[sl], lim_joint[sl], lim_per[sl] = pl.rotors, pl.effort, pl.effort_joint, pl.effort_per_joint
-        collective = pl.collective
+        _fill(setup, arr, start, q)
         if progress:
             progress((start + len(q)) / n, "hover map")
-    rmargin = np.minimum(thrusts - W.thrust_min, W.thrust_max - thrusts)
-    feasible = rot_ok & eff_ok
-    frac = feasible.mean(axis=1)
-    worst = margin.argmin(axis=1)
-    allq = grid.configurations(0, n)
+    rmargin = np.minimum(arr.thrusts - W.thrust_min, W.thrust_max - arr.thrusts)
+    feasible = arr.rot_ok & arr.eff_ok
+    worst = arr.margin.argmin(axis=1)
     status, reason = Status.OK, ""
     if not feasible.any():
         status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
+    limits = PayloadLimits(arr.lim_rot, arr.lim_eff, arr.lim_joint, float(arr.collective), arr.lim_per)
     result = HoverResult(
         platform.name,
         grid,
         masses,
-        ee,
-        thrusts,
+        arr.ee,
+        arr.thrusts,
         rmargin,
-        tau_arm,
-        margin,
-        auth,
-        fauth,
-        rot_ok,
-        eff_ok,
+        arr.tau_arm,
+        arr.margin,
+        arr.auth,
+        arr.fauth,
+        arr.rot_ok,
+        arr.eff_ok,
         feasible,
-        PayloadLimits(lim_rot, lim_eff, lim_joint, float(collective), lim_per),
+        limits,
         W,
-        w_hover,
-        frac,
-        margin[np.arange(nm), worst],
-        allq[worst],
+        arr.w_hover,
+        feasible.mean(axis=1),
+        arr.margin[np.arange(len(masses)), worst],
+        grid.configurations(0, n)[worst],
         status,
         reason,
         collision_note=note,
     )
     return _with_collisions(result, cmodel, progress)
+
+
+@dataclass(frozen=True)
+class _Setup:
+    """What every chunk of the hover map uses: the platform, payload masses [kg], rotor wrench set, allocator, arm
+    chain, payload point, joint effort limits and the torque reserve."""
+
+    platform: Platform
+    masses: np.ndarray
+    W: WrenchSet
+    alloc: Allocator
+    chain: ArmChain
+    payload: object
+    eff_lim: np.ndarray
+    torque_reserve: object
+
+
+@dataclass
+class _Arrays:
+    """The hover map's per-configuration arrays (filled chunk by chunk, :func:`_fill`)."""
+
+    ee: np.ndarray
+    thrusts: np.ndarray
+    tau_arm: np.ndarray
+    margin: np.ndarray
+    auth: np.ndarray
+    fauth: np.ndarray | None
+    rot_ok: np.ndarray
+    eff_ok: np.ndarray
+    w_hover: np.ndarray
+    lim_rot: np.ndarray
+    lim_eff: np.ndarray
+    lim_joint: np.ndarray
+    lim_per: np.ndarray
+    collective: float | None = None
+
+    @classmethod
+    def empty(cls, n: int, nm: int, nr: int, na: int, full: bool) -> _Arrays:
+        """Arrays for n configurations, nm payload masses, nr rotors, na arm joints (``full``: force authority too)."""
+        return cls(
+            np.empty((n, 3)),
+            np.empty((n, nr)),
+            np.empty((n, na)),
+            np.empty((nm, n)),
+            np.empty((nm, n, 3)),
+            np.empty((nm, n, 3)) if full else None,
+            np.empty((nm, n), dtype=bool),
+            np.empty((nm, n), dtype=bool),
+            np.empty((n, 6)),
+            np.empty(n),
+            np.empty(n),
+            np.empty(n, dtype=np.int64),
+            np.empty((n, na)),
+        )
+
+
+def _fill(setup: _Setup, arr: _Arrays, start: int, q: np.ndarray) -> None:
+    """The hover map's values at the configurations ``q`` (rows ``start`` onwards)."""
+    platform, masses, W, alloc = setup.platform, setup.masses, setup.W, setup.alloc
+    sl = slice(start, start + len(q))
+    pose = setup.chain.pose(q)
+    st = setup.chain.statics(pose, setup.payload.frame, setup.payload.offset_frame)
+    arr.ee[sl] = setup.chain.frame_position(pose, platform.ee_frame)
+    w0 = st.wrench(masses[0])
+    arr.w_hover[sl] = w0
+    arr.thrusts[sl] = w0[:, alloc.rows] @ alloc.Omega_P_inv.T
+    arr.tau_arm[sl] = st.tau_arm(masses[0])
+    for k, m in enumerate(masses):
+        w = st.wrench(m)
+        arr.rot_ok[k, sl] = W.contains(w)
+        arr.eff_ok[k, sl] = np.all(np.abs(st.tau_arm(m)) <= setup.eff_lim * (1 + 1e-12), axis=1)
+        arr.margin[k, sl] = W.thrust_margin(w) if W.equal_bounds else np.where(arr.rot_ok[k, sl], _alloc_margin(w, alloc, W), -np.inf)
+        arr.auth[k, sl] = W.authority(w, (3, 4, 5)).min(axis=2)
+        if arr.fauth is not None:
+            arr.fauth[k, sl] = W.authority(w, (0, 1, 2)).min(axis=2)
+    pl = payload_limits(st, W, setup.eff_lim, platform.g, setup.torque_reserve)
+    arr.lim_rot[sl], arr.lim_eff[sl], arr.lim_joint[sl], arr.lim_per[sl] = pl.rotors, pl.effort, pl.effort_joint, pl.effort_per_joint
+    arr.collective = pl.collective
 
 
 def _with_collisions(result: HoverResult, cmodel, progress) -> HoverResult:
