@@ -29,7 +29,7 @@ from .control import InverseDynamicsController
 from .control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
-from .sim import SimConfig, SimResult, simulate
+from .sim import SimResult, simulate
 from .sim.contact import CompliantWall, PrescribedWrench
 from .trajectory import Hold, MultiPhase, Phase
 from .validation import as_vector
@@ -40,69 +40,64 @@ CONTROLLERS = ("opspace-impedance", "idc")
 CONTACTS = ("wall", "wrench")
 
 
-def run_ee_impedance(
-    platform=None,
-    controller: str = "opspace-impedance",
-    progress: bool = False,
-    *,
-    contact: str = "wall",
-    duration: float = 10.0,
-    dt: float = SimConfig.dt,
-    integrator: str = "midpoint",
-    seed: int = 0,
-    z: float = 2.0,
-    reach_fraction: float = 0.3,
-    omega_n: float = 4.0,
-    zeta: float = 1.0,
-    mass: float = 1.0,
-    gap: float = 0.05,
-    penetration: float = 0.05,
-    wall_stiffness: float = 2000.0,
-    wall_damping: float = 20.0,
-    force=(0.5, 0.0, 0.3),
-    t_on: float = 1.0,
-    t_off: float = 6.0,
-) -> SimResult:
-    """Run the scenario (module docstring); options as in :data:`qprr.scenarios.SCENARIOS` ``["ee-impedance"]``."""
+def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progress: bool = False, **o) -> SimResult:
+    """Run the scenario (module docstring); ``o``: every option of :data:`qprr.scenarios.SCENARIOS` ``["ee-impedance"]``
+    (their one home; ``qprr.scenarios.run("ee-impedance", ...)`` fills the defaults)."""
     from .platforms import load
 
-    if contact not in CONTACTS:
-        raise UnknownNameError("contact", contact, CONTACTS)
-    if controller not in CONTROLLERS:
-        raise UnknownNameError("controller", controller, CONTROLLERS)
-    if not (isinstance(reach_fraction, (int, float)) and 0.0 <= reach_fraction <= 1.0):
-        raise InputError(f"reach_fraction must be in [0, 1], got {reach_fraction!r}")
-    if not (0.0 <= t_on < t_off <= duration):
-        raise InputError(f"need 0 <= t_on < t_off <= duration, got {t_on!r}, {t_off!r}, {duration!r}")
+    _check_options(controller, o)
     platform = load() if platform is None else platform
     q0 = platform.neutral_q()[7:]
     hi = np.where(np.isfinite(platform.arm_upper), platform.arm_upper, q0 + 1.0)
-    q_arm = q0 + reach_fraction * (hi - q0)
-    xi0 = np.concatenate([[0.0, 0.0, float(z), 0.0, 0.0, 0.0], q_arm])
-    p_e0, _ = ee_pose_xi(platform, platform.data(), xi0)
-    if contact == "wall":
-        if not (gap >= 0.0 and penetration > 0.0):
-            raise InputError(f"need gap >= 0 and penetration > 0 m, got {gap!r}, {penetration!r}")
-        env = CompliantWall(platform, point=p_e0 + np.array([gap, 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=wall_stiffness, damping=wall_damping)
-        d = gap + penetration
-        phases = (Phase("x", t_on, t_on + 2.0, d), Phase("x", t_off, t_off + 2.0, 0.0))
-        if t_off < t_on + 2.0 or t_off + 2.0 > duration:
-            raise InputError(f"the wall scenario needs t_off >= t_on + 2 s and duration >= t_off + 2 s, got {t_on!r}, {t_off!r}, {duration!r}")
-        trajectory = MultiPhase(phases, tuple(xi0), name="ee-impedance-wall")
-        sensor = env.measured
-    else:
-        h = np.concatenate([as_vector(force, 3, "force"), np.zeros(3)])
-        env = PrescribedWrench(h, t_on, t_off)
-        trajectory = Hold(tuple(xi0))
-        sensor = env.measured
-    imp = EndEffectorImpedance.from_frequency(omega_n, zeta, mass)
+    q_arm = q0 + o["reach_fraction"] * (hi - q0)
+    xi0 = np.concatenate([[0.0, 0.0, float(o["z"]), 0.0, 0.0, 0.0], q_arm])
+    env, trajectory = _environment(platform, xi0, o)
+    imp = EndEffectorImpedance.from_frequency(o["omega_n"], o["zeta"], o["mass"])
     if controller == "opspace-impedance":
-        ctrl = OperationalSpaceImpedance(platform, imp, ee_sensor=sensor)
+        ctrl = OperationalSpaceImpedance(platform, imp, ee_sensor=env.measured)
     else:
         ctrl = InverseDynamicsController(platform)
-    res = simulate(
-        platform, ctrl, trajectory, duration, dt=dt, integrator=integrator, seed=seed, external_wrench=env, progress=progress, scenario="ee-impedance"
+    sim = {k: o[k] for k in ("dt", "integrator", "seed")}
+    res = simulate(platform, ctrl, trajectory, o["duration"], external_wrench=env, progress=progress, scenario="ee-impedance", **sim)
+    _record(res, platform, env, ctrl, imp)
+    res.metrics.update({"t_on": float(o["t_on"]), "t_off": float(o["t_off"]), "contact_wall": float(o["contact"] == "wall")})
+    return res
+
+
+def _check_options(controller: str, o: dict) -> None:
+    if o["contact"] not in CONTACTS:
+        raise UnknownNameError("contact", o["contact"], CONTACTS)
+    if controller not in CONTROLLERS:
+        raise UnknownNameError("controller", controller, CONTROLLERS)
+    fraction = o["reach_fraction"]
+    if not (isinstance(fraction, (int, float)) and 0.0 <= fraction <= 1.0):
+        raise InputError(f"reach_fraction must be in [0, 1], got {fraction!r}")
+    t_on, t_off, duration = o["t_on"], o["t_off"], o["duration"]
+    if not (0.0 <= t_on < t_off <= duration):
+        raise InputError(f"need 0 <= t_on < t_off <= duration, got {t_on!r}, {t_off!r}, {duration!r}")
+
+
+def _environment(platform, xi0: np.ndarray, o: dict):
+    """(the contact: a compliant wall ``gap`` ahead of the end effector or a prescribed wrench, the reference)."""
+    t_on, t_off, duration = o["t_on"], o["t_off"], o["duration"]
+    if o["contact"] != "wall":
+        h = np.concatenate([as_vector(o["force"], 3, "force"), np.zeros(3)])
+        return PrescribedWrench(h, t_on, t_off), Hold(tuple(xi0))
+    gap, penetration = o["gap"], o["penetration"]
+    if not (gap >= 0.0 and penetration > 0.0):
+        raise InputError(f"need gap >= 0 and penetration > 0 m, got {gap!r}, {penetration!r}")
+    p_e0, _ = ee_pose_xi(platform, platform.data(), xi0)
+    env = CompliantWall(
+        platform, point=p_e0 + np.array([gap, 0.0, 0.0]), normal=(-1.0, 0.0, 0.0), stiffness=o["wall_stiffness"], damping=o["wall_damping"]
     )
+    phases = (Phase("x", t_on, t_on + 2.0, gap + penetration), Phase("x", t_off, t_off + 2.0, 0.0))
+    if t_off < t_on + 2.0 or t_off + 2.0 > duration:
+        raise InputError(f"the wall scenario needs t_off >= t_on + 2 s and duration >= t_off + 2 s, got {t_on!r}, {t_off!r}, {duration!r}")
+    return env, MultiPhase(phases, tuple(xi0), name="ee-impedance-wall")
+
+
+def _record(res: SimResult, platform, env, ctrl, imp: EndEffectorImpedance) -> None:
+    """The contact force, the end effector's position, reference and error, and the impedance, into ``res.series``."""
     s = res.series
     s["ee_force"] = _wrenches(env, res)[:, 0:3]
     if isinstance(ctrl, OperationalSpaceImpedance):
@@ -115,8 +110,6 @@ def run_ee_impedance(
     if imp.mass is not None:
         s["impedance_M"] = imp.mass
         s["ee_ideal"] = imp.response(res.t, s["ee_force"])[0]
-    res.metrics.update({"t_on": float(t_on), "t_off": float(t_off), "contact_wall": float(contact == "wall")})
-    return res
 
 
 def _wrenches(env, res: SimResult) -> np.ndarray:
