@@ -450,7 +450,9 @@ def _noise_amplitude(platform: Platform, o: dict, amplitude) -> tuple[float, ...
 def pulse_train(platform: Platform, duration: float, force: float, torque: float) -> tuple[Pulse, ...]:
     """The pulses (Thesis (6.28)) of :func:`pulses`, each 5 % of ``duration``: ``force`` [N] on z at 10 %, on x and y at
     40 %, ``torque`` [N m or N] on every arm joint at 70 %."""
-    n = platform.n_xi
+    n = check_platform(platform).n_xi
+    duration = as_real(duration, "duration", positive=True, unit="s")
+    force, torque = as_real(force, "force", unit="N"), as_real(torque, "torque", unit="N m or N")
     shots = []
     for start, idx, value in ((0.1, (2,), force), (0.4, (0, 1), force), (0.7, tuple(range(6, n)), torque)):
         if idx:

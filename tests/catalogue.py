@@ -677,6 +677,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
 INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.sim.result.SimResult": lambda c: c.sim_result(),
     "qprr.model.Platform": lambda c: c.platform,
+    "qprr.charts.State": lambda c: importlib.import_module("qprr.charts").State(c.platform.n_arm),
     "qprr.thesis.params.QPRRParams": lambda c: importlib.import_module("qprr.thesis.params").thesis_params(),
     "qprr.mdh.MDHRow": lambda c: importlib.import_module("qprr.mdh").MDHRow(0, 0.1, 0.2, 0.3, 0.4),
     "qprr.thesis.params.Link": lambda c: importlib.import_module("qprr.thesis.params").thesis_params().links[0],
@@ -857,6 +858,8 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.model.Platform", "params", "*"): "params is an opaque record of what built the platform: the library never reads it",
     ("qprr.ik.tasks.*.linearize", "*", "*"): HOT + "IKSolver.solve (linearize runs in every iteration on a configuration the "
     "solver validated; its output is checked: qprr.ik.tasks.base.check_linearized)",
+    ("qprr.ik.tasks.*.error", "*", "*"): HOT + "IKSolver.solve (the first step of a solve asks for the errors alone at a "
+    "configuration the solver validated)",
     ("qprr.ik.tasks.base.update_kinematics", "*", "*"): HOT + "IKSolver.solve (once per iteration, before the tasks)",
     ("qprr.ik.hierarchy.HierarchySolver.solve", "*", "*"): HOT + "IKSolver.solve (one hierarchical step per iteration)",
     ("qprr.ik.solver.pose_errors", "R_d", "None"): "R_d None: a position target (orientation error 0 by definition)",

@@ -41,7 +41,7 @@ BAD = [
     (["simulate", "static-idc", "--layout", "y"], "'y'"),
     (["simulate", "hover-reach", "--platform", "HEX-RQ"], "HEX-RQ"),
     (["simulate", "hover-reach", "--set", "z=nan"], "finite"),
-    (["simulate", "hover-reach", "--set", "reach_fraction=5"], "limits|not in"),
+    (["simulate", "hover-reach", "--set", "reach_fraction=5"], r"reach_fraction must be in \[0, 1\], got 5"),
     (["simulate", "payload-drop", "--set", "mass=-1"], "mass"),
     (["simulate", "payload-drop", "--set", "release_time=-5"], "time"),
     (["simulate", "payload-drop", "--set", "mission=foo"], "foo"),

@@ -39,6 +39,13 @@ class BackendChoice:
     workers: int | None = None
     scheduler: str | None = None
 
+    def __post_init__(self) -> None:
+        check_backend(self.backend)
+        if self.workers is not None and (isinstance(self.workers, bool) or not isinstance(self.workers, int) or self.workers < 1):
+            raise InputError(f"workers must be None (one per core) or an integer >= 1, got {self.workers!r}")
+        if self.scheduler is not None and not isinstance(self.scheduler, str):
+            raise InputError(f"scheduler must be None or a Dask scheduler address (a string), got {self.scheduler!r}")
+
     @property
     def owned(self) -> bool:
         """Whether the session makes (and so releases) the backend."""

@@ -210,6 +210,7 @@ def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, fl
     ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi
     where unlimited) and its neutral value.
     """
+    platform = check_platform(platform)
     n = platform.n_arm
     q0 = platform.neutral_q()
     k = max(2, int(math.floor(WORKSPACE_SAMPLES ** (1.0 / n)))) if n else 1
