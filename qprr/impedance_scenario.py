@@ -38,6 +38,11 @@ CONTROLLERS = ("opspace-impedance", "idc")
 """Controllers of the scenario: the operational-space impedance with a wrist sensor, the plain IDC (no compliance law)."""
 
 CONTACTS = ("wall", "wrench")
+OPTION_NAMES = (
+    "contact", "duration", "dt", "integrator", "seed", "z", "reach_fraction", "omega_n", "zeta", "mass", "gap", "penetration",
+    "wall_stiffness", "wall_damping", "force", "t_on", "t_off",
+)  # fmt: skip
+"""The options :func:`run_ee_impedance` reads (their defaults: the scenario's Option table in :mod:`qprr.scenarios`)."""
 
 
 def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progress: bool = False, **o) -> SimResult:
@@ -45,6 +50,9 @@ def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progr
     (their one home; ``qprr.scenarios.run("ee-impedance", ...)`` fills the defaults)."""
     from .platforms import load
 
+    missing = sorted(set(OPTION_NAMES) - set(o))
+    if missing:
+        raise InputError(f"ee-impedance needs every option, missing {missing}: run it as qprr.scenarios.run('ee-impedance', ...)")
     _check_options(controller, o)
     platform = load() if platform is None else platform
     q0 = platform.neutral_q()[7:]

@@ -52,8 +52,8 @@ except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency the
 
 from .control import make_controller
 from .control.base import Controller
+from .control.gains import GAIN_ARGUMENTS, platform_gains
 from .control.gains import load_gains as load_gain_file
-from .control.gains import platform_gains
 from .control.impedance import ImpedanceGains
 from .control.inverse_dynamics import IDCGains
 from .control.mfc import MFCGains
@@ -114,12 +114,17 @@ _AS_REGISTERED = MissionSettings()
 
 
 # ------------------------------------------------------------------------- building blocks
-def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str, object]:
+def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
     """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none).
 
-    A gains object (:data:`_GAIN_TYPES`) is passed as is: ``gains=`` or, for impedance gains, ``impedance=``."""
+    A gains object (:data:`_GAIN_TYPES`) is passed as is: ``gains=`` or, for impedance gains, ``impedance=`` (refused
+    when controller ``name`` takes no such argument, :data:`qprr.control.gains.GAIN_ARGUMENTS`)."""
     if isinstance(gains, _GAIN_TYPES):
-        return {"impedance" if isinstance(gains, (ImpedanceGains, EndEffectorImpedance)) else "gains": gains}
+        arg = "impedance" if isinstance(gains, (ImpedanceGains, EndEffectorImpedance)) else "gains"
+        takes = GAIN_ARGUMENTS.get(name, ())
+        if arg not in takes:
+            raise InputError(f"gains {type(gains).__name__} do not fit controller {name!r} (it takes {', '.join(takes) or 'no gains'})")
+        return {arg: gains}
     if not isinstance(gains, str):
         raise InputError(f"gains must be 'platform', 'class', a registered gain table, a TOML file or a gains object of qprr.control, got {gains!r}")
     if gains == "platform":
@@ -136,7 +141,7 @@ def gain_arguments(name: str, platform: Platform, gains="platform") -> dict[str,
     return gain_arguments(name, platform, table)
 
 
-def controller_for(name: str, platform: Platform, gains="platform", **kwargs):
+def controller_for(name: str, platform: Platform, gains, **kwargs):
     """``make_controller(name, platform)`` with the gain set ``gains`` (:func:`gain_arguments`; "class": the class's own
     defaults, nothing derived); ``kwargs`` to the constructor."""
     defaults = "class" if gains == "class" else "platform"
@@ -224,7 +229,9 @@ def takeoff_hover(platform=None, controller="idc", progress=False, settings: Mis
     platform = _platform(platform)
     xi0 = platform.neutral_xi()
     D = o["duration"]
-    traj = MultiPhase((Phase("z", 0.0, 0.4 * D, o["z"]),), tuple(xi0), name="takeoff-hover", law=o["law"], names=platform.xi_names)
+    traj = settings.trajectory
+    if traj is None:
+        traj = MultiPhase((Phase("z", 0.0, 0.4 * D, o["z"]),), tuple(xi0), name="takeoff-hover", law=o["law"], names=platform.xi_names)
     res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "takeoff-hover", settings)
     _errors(res)
     return res
@@ -233,6 +240,10 @@ def takeoff_hover(platform=None, controller="idc", progress=False, settings: Mis
 def point_to_point(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Climb to ``target``'s height (first 30 %), then fly to ``target`` while the arm reaches out (30-70 %), hold."""
     platform = _platform(platform)
+    if settings.trajectory is not None:
+        res = fly(platform, _controller(controller, platform, o, settings), settings.trajectory, o, progress, "fly-to", settings)
+        _errors(res)
+        return res
     D = o["duration"]
     x, y, z = (float(v) for v in o["target"])
     xi0 = platform.neutral_xi()
@@ -328,8 +339,16 @@ def payload(platform=None, controller="idc", progress=False, settings: MissionSe
 
 def push(platform=None, controller="opspace-impedance", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """The end effector pressed ``penetration`` into a compliant wall ``gap`` ahead (world x) between 20 % and 50 % of
-    the run, held: impedance K (derived: m w_pos^2) and wall k in series give F = penetration K k / (K + k)."""
+    the run, held: impedance K (derived: m w_pos^2) and wall k in series give F = penetration K k / (K + k).
+
+    Its reference comes from the wall's place and its controller reads the wall's force sensor: a
+    ``MissionSettings.trajectory`` or ``.controller`` is refused."""
     platform = _platform(platform)
+    if settings.trajectory is not None or settings.controller is not None:
+        raise InputError(
+            "ee-push builds its own reference and controller around the wall (its place, its force sensor): "
+            "MissionSettings.trajectory and MissionSettings.controller must be None"
+        )
     xi0 = _hover_xi(platform, o)
     p_e0, _ = ee_pose_xi(platform, platform.data(), xi0)
     wall = CompliantWall(
@@ -399,6 +418,8 @@ def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gai
     """The gain arguments ``controller`` is built with in the generic ``scenario`` (``--print-gains``): those of
     :func:`gain_arguments`, except motor-lag's derived gains, which know its rotor time constant (:func:`lag_gains`;
     ``options`` the run's, missing ones at the scenario's defaults)."""
+    if gains == "platform" and controller not in GAIN_ARGUMENTS:  # e.g. mpc: cost weights, make_controller's own
+        return {}
     if scenario == "motor-lag" and gains == "platform":
         return lag_gains(controller, platform, options["tau"])
     return gain_arguments(controller, platform, gains)

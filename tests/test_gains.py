@@ -156,3 +156,16 @@ def test_hover_reach_takes_the_gains_option(capsys):
     fixed = run("hover-reach", "idc", platform=p, duration=1.0, gains="class")
     assert not np.array_equal(derived.xi, fixed.xi)  # two gain sets, two flights
     assert abs(derived.xi[-1, 2] - derived.xi_d[-1, 2]) < 0.05
+
+
+def test_print_gains_of_a_controller_without_derived_gains(capsys):
+    """mpc has cost weights, not gains: --print-gains says it flies its class's own settings (what the run uses)."""
+    assert main(["simulate", "hover-reach", "--controller", "mpc", "--print-gains"]) == 0
+    assert "the defaults of the mpc class" in capsys.readouterr().out
+
+
+def test_ee_impedance_called_directly_names_the_missing_options():
+    from qprr.impedance_scenario import run_ee_impedance
+
+    with pytest.raises(QprrError, match="missing .*'contact'.*qprr.scenarios.run"):
+        run_ee_impedance(None, "idc", False, duration=1.0)

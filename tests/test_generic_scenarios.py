@@ -93,12 +93,6 @@ def test_every_mission_takes_any_platform_and_the_gains_option():
         assert s.platforms is None and "gains" in s.options and s.options["gains"].default == "platform"
 
 
-@pytest.mark.parametrize("name", [s.name for s in MISSIONS])
-def test_every_mission_flies_a_perturbed_plant(name):
-    """Every generic mission takes a plant other than the controller's model (campaign model errors on any platform)."""
-    assert SCENARIOS[name].takes_plant
-
-
 def test_heavier_plant_sags_below_the_hover_height():
     """borinot under IDC (no integral action) flying a plant 10 % heavier than its model: the thrust feedforward is 10 %
     short, so the base settles below the reference, by far more than the nominal run's error; the nominal run reaches it."""
