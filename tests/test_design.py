@@ -147,6 +147,25 @@ def test_grid_reproduces_the_analysis_maps(tmp_path):
     assert rows["Q-RR"]["thrust_margin"] > rows["HEX-RRR"]["thrust_margin"]
 
 
+def test_collision_free_hover_volume_when_a_study_names_it(tmp_path):
+    """free_hover_volume is the workspace map's collision-free hover volume (the same number as the map run directly),
+    at most the hover volume; a study that does not name it leaves it NaN (no collision check)."""
+    spec = DesignSpec.from_mapping(tiny(architectures=["Q-RR", "HEX-RRR"], objectives=["free_hover_volume", "arm_mass"]))
+    run = run_design(spec, tmp_path / "f.csv", backend="inline", progress=False)
+    rows = {r["name"]: r for r in rows_of(run.results.table)}
+    for r in rows.values():
+        assert r["status"] == "ok", r["reason"]
+        assert 0.0 < r["free_hover_volume"] <= r["hover_volume"]
+    m, d2, d3 = spec.mass, 0.3 / 1.6, 0.3 * 0.6 / 1.6  # the Q-RR of the study, built by hand (as above)
+    links = [LinkSpec("R", length=L, mass=m.revolute_actuator + m.link_density * L) for L in (d2, d3)]
+    p = qprr.build("Q-RR", links=links, body_mass=3.0 - sum(k.mass for k in links), thrust_to_weight=2.0)
+    r = rows["Q-RR"]
+    ws = workspace(p, n_samples=SAMPLES, variants=[], n_shifts=4, seed=int(r["seed"]), collision=True)
+    assert r["free_hover_volume"] == ws.regions[0].free_hover_volume.measure
+    plain = run_design(DesignSpec.from_mapping(tiny(architectures=["Q-RR"])), tmp_path / "p.csv", backend="inline", progress=False)
+    assert all(math.isnan(r["free_hover_volume"]) for r in rows_of(plain.results.table))
+
+
 def test_an_arm_heavier_than_the_budget_is_a_failed_row(tmp_path):
     spec = DesignSpec.from_mapping(tiny(architectures=["Q-RRR"], parameters={"reach": 1.9, "total_mass": 0.3}))
     row = rows_of(run_design(spec, tmp_path / "t.csv", backend="inline", progress=False).results.table)[0]

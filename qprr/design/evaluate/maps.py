@@ -54,13 +54,15 @@ def balanced_share(region, bal) -> float:
     return len(hit & cells) / len(cells)
 
 
-def evaluate_platform(platform, effort: Effort, seed: int) -> dict[str, float]:
-    """Every metric of :data:`METRICS` for ``platform`` at ``effort`` (``seed``: the measure's counting-grid shifts)."""
+def evaluate_platform(platform, effort: Effort, seed: int, collision: bool = False) -> dict[str, float]:
+    """Every metric of :data:`METRICS` for ``platform`` at ``effort`` (``seed``: the measure's counting-grid shifts).
+
+    ``collision``: check self-collision (:mod:`qprr.collision`) and give ``free_hover_volume`` (NaN without: the
+    check costs time, so a study asks for it only when it names that metric)."""
     n = effort.samples
-    # no metric reads the collision-free measures yet: the self-collision check (qprr.collision) is off, as the maps
-    # were when the studies of docs/design.md were measured
-    ws = workspace(platform, n_samples=n, variants=[], hover=True, n_shifts=effort.shifts, seed=seed, collision=False)
+    ws = workspace(platform, n_samples=n, variants=[], hover=True, n_shifts=effort.shifts, seed=seed, collision=bool(collision))
     hv = ws.regions[0].hover_volume
+    free = ws.regions[0].free_hover_volume if collision else None
     bal = balance(platform, slider=slider_of(platform), n_samples=n, tol=effort.balance_tol, n_shifts=effort.shifts)
     hov = hover(platform, n_samples=n, collision=False)
     cap = capacity(platform, n_samples=n)
@@ -70,6 +72,7 @@ def evaluate_platform(platform, effort: Effort, seed: int) -> dict[str, float]:
     m_arm = m_total - float(platform.model.inertias[1].mass)  # every body but the base's (joint 1: the free flyer)
     out = {
         "hover_volume": float(hv.measure) if hv is not None else 0.0,
+        "free_hover_volume": (float(free.measure) if free is not None else 0.0) if collision else float("nan"),
         "balance_fraction": balanced_share(ws.regions[0], bal),
         "thrust_margin": float(hov.min_thrust_margin[0]),
         "payload_at_reach": float(cap.capacity[far].max()) if far.any() else 0.0,

@@ -71,7 +71,8 @@ def evaluate_design(spec_dict: dict, point: dict) -> dict:
     status, reason = "ok", ""
     values = dict.fromkeys(METRICS, math.nan)
     try:
-        values = evaluate_platform(_platform(spec, point), spec.effort, point["seed"])
+        collision = "free_hover_volume" in spec.objectives or "free_hover_volume" in spec.constraints
+        values = evaluate_platform(_platform(spec, point), spec.effort, point["seed"], collision=collision)
     except QprrError as exc:
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
     except Exception as exc:  # a bug must not lose the study: recorded, visible in the table, re-run on resume

@@ -5,6 +5,10 @@ name                        unit    better     map (qprr.analysis) and what is t
 ==========================  ======  =========  ==================================================================
 ``hover_volume``            m^3     max        :func:`~qprr.analysis.workspace`: volume swept under hover, yaw
                                                free (W_eb of Thesis (3.3))
+``free_hover_volume``       m^3     max        the same over the configurations free of self-collision (the arm
+                                               against the body, the propeller discs and itself:
+                                               :mod:`qprr.collision`); computed only for a study that names it
+                                               (an objective or a constraint: the check costs time), else NaN
 ``balance_fraction``        --      max        :func:`~qprr.analysis.balance`: share of the workspace cells (in
                                                B) reached by a configuration with the CoG within ``balance_tol``
                                                of the thrust axis (Thesis (3.79); with a slider, at the slider
@@ -25,6 +29,7 @@ from __future__ import annotations
 
 METRICS = {
     "hover_volume": ("m^3", "max", "hover workspace volume"),
+    "free_hover_volume": ("m^3", "max", "collision-free hover workspace volume"),
     "balance_fraction": ("", "max", "workspace share with the CoG balanced"),
     "thrust_margin": ("N", "max", "minimum thrust margin"),
     "payload_at_reach": ("kg", "max", "payload at reach"),
