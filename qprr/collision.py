@@ -39,9 +39,6 @@ from .rotors import Rotor
 DISC_THICKNESS = 0.01
 """Thickness [m] of the propeller disc cylinder qprr adds for a rotor (blades and their flapping, ~1 cm)."""
 
-BATCH_THREADS = 2
-"""Threads of :meth:`CollisionModel.colliding_batch`'s C++ screening loop (the machines this targets have 2 cores)."""
-
 CONTACT_MARGIN = 0.01
 """[m] Pairs that coal's collision test finds closer than this are decided by their signed distance instead.
 
@@ -170,21 +167,17 @@ class CollisionModel:
 
     def colliding_batch(self, q_arm) -> np.ndarray:
         """:meth:`colliding_arm` without the progress callback, the same answers: the screening loop in C++ (which
-        configurations have some pair within :data:`CONTACT_MARGIN`: ``pin.computeCollisionsInParallel`` on
-        :data:`BATCH_THREADS` threads), then those few decided pair by pair as :meth:`colliding`.  How the
-        configurations are split between threads changes where coal's GJK starts, not the answers: a pair near
-        contact is decided by its signed distance."""
+        configurations have some pair within :data:`CONTACT_MARGIN`: ``pin.computeCollisionsInParallel`` with one
+        thread over a one-element ``pin.GeometryPool``), then those few decided pair by pair as :meth:`colliding`."""
         Q = np.atleast_2d(np.asarray(q_arm, dtype=float))
         if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
         full = np.empty((self.model.nq, Q.shape[0]), order="F")
         full[:7] = self.neutral_q[:7, None]
         full[7:] = Q.T
-        threads = min(BATCH_THREADS, Q.shape[0])
-        pool = pin.GeometryPool(self.model, self.geometry, threads)
-        for k in range(threads):
-            set_margin(self.geometry, pool.getGeometryData(k))
-        near = np.asarray(pin.computeCollisionsInParallel(threads, pool, full, True), dtype=bool)
+        pool = pin.GeometryPool(self.model, self.geometry, 1)
+        set_margin(self.geometry, pool.getGeometryData(0))
+        near = np.asarray(pin.computeCollisionsInParallel(1, pool, full, True), dtype=bool)
         if not any(r.security_margin > 0.0 for r in pool.getGeometryData(0).collisionRequests):
             return near  # no pair of two convex shapes: coal's answers are final
         data = self.new_data()

@@ -310,18 +310,3 @@ def test_check_does_not_depend_on_what_was_checked_before():
     dist = np.array([cm.min_distance(q)[0] for q in Q])
     clear = np.abs(dist) > 1e-6
     np.testing.assert_array_equal(batch[clear], dist[clear] < 0.0)
-
-
-@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2"])
-def test_batch_answers_do_not_depend_on_the_threads(name, monkeypatch):
-    """The C++ screening split over 1 or 2 threads (coal's GJK then starts from other guesses) gives the same answers."""
-    import qprr.collision as collision
-
-    p = qprr.platforms.resolve(name)
-    cm = collision_model(p)
-    q = np.random.default_rng(4).uniform(np.maximum(p.arm_lower, -np.pi), np.minimum(p.arm_upper, np.pi), (12_000, p.n_arm))
-    monkeypatch.setattr(collision, "BATCH_THREADS", 1)
-    one = cm.colliding_batch(q)
-    monkeypatch.setattr(collision, "BATCH_THREADS", 2)
-    assert one.any() and not one.all()
-    np.testing.assert_array_equal(cm.colliding_batch(q), one)
