@@ -27,8 +27,10 @@ from qprr.wheeled import plots as wheeled_plots
 from qprr.wheeled.robots import get_robot, tricycle_exercise
 
 UNIT = re.compile(r"\[[^\]]+\]|\([^)]*(m|N|rad|s|kg|%)[^)]*\)")
-DIMENSIONLESS = ("log10", "det(J J^T)", "share", "count", "controller", "success rate", "fraction")
-"""Axis labels of quantities without a unit, recognised by name."""
+DIMENSIONLESS = ("log10", "det(J J^T)", "share", "count", "fraction")
+"""Axis labels of quantities without a unit, recognised by a word they contain."""
+CATEGORICAL = ("controller", "success rate")
+"""Whole axis labels without a unit (a category axis, a ratio): matched exactly, so "controller gain" still needs one."""
 SLACK = 1.0  # [px] rounding of the renderer's extents
 
 
@@ -98,7 +100,7 @@ def check_legend(fig, box, what: str) -> None:
 def check_units(a, what: str) -> None:
     labels = [a.get_xlabel(), a.get_ylabel()] + ([a.get_zlabel()] if getattr(a, "name", "") == "3d" else [])
     for lab in labels:
-        if lab.strip() and not any(w in lab for w in DIMENSIONLESS):
+        if lab.strip() and lab.strip() not in CATEGORICAL and not any(w in lab for w in DIMENSIONLESS):
             assert UNIT.search(lab), f"{what}: axis label {lab!r} of {a.get_title()!r} has no unit"
 
 

@@ -150,8 +150,11 @@ def test_print_gains_of_motor_lag_are_the_flown_ones(capsys):
 def test_hover_reach_takes_the_gains_option(capsys):
     """hover-reach flies the derived gains by default and any gain set by name, like the generic missions."""
     assert main(["simulate", "hover-reach", "--platform", "borinot_flying_arm_2", "--print-gains"]) == 0
-    assert "IDCGains" in capsys.readouterr().out
+    rows = {line.split()[0]: line.split()[1:] for line in capsys.readouterr().out.splitlines() if line.startswith("  ")}
     p = qprr.load("borinot_flying_arm_2")
+    g = platform_gains("idc", p)["gains"]
+    for k, name in enumerate(p.xi_names):  # the printed kp, kd are the derived ones (5 significant digits)
+        assert float(rows[name][0]) == pytest.approx(g.kp[k], rel=1e-4) and float(rows[name][1]) == pytest.approx(g.kd[k], rel=1e-4)
     derived = run("hover-reach", "idc", platform=p, duration=1.0)
     fixed = run("hover-reach", "idc", platform=p, duration=1.0, gains="class")
     assert not np.array_equal(derived.xi, fixed.xi)  # two gain sets, two flights

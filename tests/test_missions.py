@@ -9,7 +9,7 @@ import pytest
 import qprr
 from qprr import missions
 from qprr.control import IDCGains
-from qprr.errors import InputError, QprrError
+from qprr.errors import InputError
 from qprr.scenarios import SCENARIOS
 from qprr.sim import Pulse, WhiteNoise
 from qprr.trajectory import Hold, Phase
@@ -51,7 +51,7 @@ def test_noise_amplitude_bounds_the_disturbance(borinot):
 @pytest.mark.parametrize("amplitude", [(0.1,) * 3, (-0.1,) * 8])
 def test_noise_amplitude_refused(borinot, amplitude):
     assert borinot.n_xi == 8
-    with pytest.raises(QprrError, match="amplitude"):
+    with pytest.raises(InputError, match="amplitude must"):
         missions.noise(borinot, "idc", False, amplitude=amplitude, **options("hover-noise", duration=0.5))
 
 
