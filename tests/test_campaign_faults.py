@@ -511,7 +511,8 @@ def test_a_lost_scheduler_saves_no_placeholder_and_exits_non_zero(reference, tmp
         cwd=ROOT,
         stdout=subprocess.PIPE,
         text=True,
-        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        # the runs execute on this cluster's worker: the delay must reach it, or all of them can end before the kill
+        env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.5"},
         start_new_session=True,
     )
     try:
