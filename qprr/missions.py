@@ -45,11 +45,6 @@ from pathlib import Path
 
 import numpy as np
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
-    import tomli as tomllib
-
 from .control import make_controller
 from .control.base import Controller
 from .control.gains import GAIN_ARGUMENTS, platform_gains
@@ -68,7 +63,7 @@ from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
 from .sim.wind import AerodynamicDrag, Gust, Wind
 from .trajectory import Hold, MultiPhase, Phase
-from .validation import as_real, as_vector
+from .validation import as_real, as_vector, read_toml
 
 PHASE_KEYS = ("coordinate", "start", "end", "target")
 """Keys of one phase of a mission given as data (``[[phase]]`` tables of a TOML file)."""
@@ -265,14 +260,7 @@ def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, 
     name) to ``target`` between ``start`` and ``end`` [s].  ``phases_required=False`` accepts payload
     events alone (a mission whose reference is given otherwise, :class:`MissionSettings`)."""
     if isinstance(source, (str, Path)):
-        path = Path(source)
-        if not path.is_file():
-            raise InputError(f"mission file {str(path)!r} does not exist (a TOML file of [[phase]] tables: {', '.join(PHASE_KEYS)})")
-        with path.open("rb") as fh:
-            try:
-                source = tomllib.load(fh)
-            except tomllib.TOMLDecodeError as exc:
-                raise InputError(f"mission file {str(path)!r}: not valid TOML ({exc})") from exc
+        source = read_toml(source, "mission file", f"a TOML file of [[phase]] tables: {', '.join(PHASE_KEYS)}")
     if not hasattr(source, "get"):
         raise InputError(f"a mission is a TOML file or a mapping of 'phase' (and 'payload') tables, got {type(source).__name__}")
     for key in source:

@@ -160,6 +160,23 @@ def as_file(x, name: str, *, what: str = "file") -> Path:
     return path
 
 
+def read_toml(path, what: str, hint: str) -> dict:
+    """The parsed TOML file at ``path``; a missing file or invalid TOML raises an :class:`InputError` naming ``what``
+    (e.g. "mission file") and the path, with ``hint`` (what the file should hold) when it is missing."""
+    try:
+        import tomllib
+    except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
+        import tomli as tomllib
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{what} {str(path)!r} does not exist ({hint})")
+    with path.open("rb") as fh:
+        try:
+            return tomllib.load(fh)
+        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+            raise InputError(f"{what} {str(path)!r}: not valid TOML ({exc})") from exc
+
+
 def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
     """``x`` as the Path of a file to write: not a directory, its parent a directory or creatable (not under a file),
     its suffix one of ``suffixes`` when given.  Checked before the work that produces the file."""

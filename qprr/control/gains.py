@@ -84,14 +84,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10: the tomli backport, a dependency there
-    import tomli as tomllib
-
 from ..charts import rate_map
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
+from ..validation import read_toml
 from .impedance import ImpedanceGains
 from .inverse_dynamics import IDCGains
 from .mfc import MFCGains
@@ -385,13 +381,7 @@ def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[st
 
     A file for another controller's tables only raises (it would silently change nothing)."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"gains file {str(path)!r} does not exist (a TOML file: [targets] and [<controller>.gains] tables)")
-    with path.open("rb") as fh:
-        try:
-            table = tomllib.load(fh)
-        except tomllib.TOMLDecodeError as exc:
-            raise InputError(f"gains file {str(path)!r}: not valid TOML ({exc})") from exc
+    table = read_toml(path, "gains file", "a TOML file: [targets] and [<controller>.gains] tables")
     extra = [k for k in table if k not in ("targets", *DERIVED)]
     if extra:
         raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *DERIVED))
