@@ -62,6 +62,8 @@ import pinocchio as pin
 import qprr
 from qprr import ik
 from qprr import kinematics as kin
+from qprr.ik.solver import IKSolver
+from qprr.ik.tasks import HoverTask, PoseTask
 from qprr.thesis import igm
 from qprr.thesis.urdf import build_urdf
 from qprr.viz import new_figure
@@ -159,7 +161,22 @@ def qprr_methods(robot, data):
         Method("clika (hover, W: r0 x1e4)", "hover, 7 dof", guess, make("clika", {"hover": True, "weights": w})),
         Method("dls (LM on log6)", "hover, 7 dof", guess, make("dls")),
         Method("qp (cold start)", "free flyer 9 dof, hover = level 2", guess, make("qp", init="guess")),
+        Method("qp (cold start, pose > hover)", "free flyer 9 dof, 2 levels: pose, hover", guess, pose_over_hover(robot, data)),
     ]
+
+
+def pose_over_hover(robot, data):
+    """The QP IK on pink's problem: two levels only (end-effector pose, then hover; no CoG or posture level), from the
+    thesis guess: how much of the cold start's time the two lower levels of the default hierarchy cost."""
+    pose = PoseTask(robot, pin.SE3.Identity())
+    solver = IKSolver(robot, "qp", {"levels": [[pose], [HoverTask()]]})
+
+    def run(M):
+        pose.set_target(M)
+        r = solver.solve(data, M, igm.default_guess(robot.params, M.translation, M.rotation))
+        return Outcome(r.xi, r.success, r.iterations)
+
+    return run
 
 
 def hover_chain_urdf(params) -> str:
@@ -484,7 +501,36 @@ def ratios_report(methods) -> list[str]:
                 f"- ratio to pink, {name}: pink's median time / qprr's = {np.median(pink.times) / np.median(m.times):.2f} "
                 f"(target >= 2; success {100 * rate:.1f} % vs pink's {100 * prate:.1f} %)"
             )
+    cold = by.get("qp (cold start)")
+    if cold is not None and qp is not None and pink is not None:
+        out += cold_start_why(cold, qp, pink, by.get("qp (cold start, pose > hover)"))
     return out
+
+
+def cold_start_why(cold, qp, pink, two_levels) -> list[str]:
+    """Where the cold start's time goes, from this run's numbers: the fixed cost of a solve (the IGM start's time: the
+    IGM and one check of its answer, no Newton step) and the cost of a Newton iteration of the hierarchy."""
+    n_cold = float(np.median([o.iterations for o, _ in cold.results]))
+    n_pink = float(np.median([o.iterations for o, _ in pink.results]))
+    t_cold, t_fixed, t_pink = (float(np.median(m.times)) for m in (cold, qp, pink))
+    per_it = (t_cold - t_fixed) / max(n_cold - 1.0, 1.0)
+    lines = [
+        f"- why the cold start is {t_cold / t_pink:.1f}x pink's time: {n_cold:.0f} Newton iterations (median; the last "
+        f"one finds the step below step_tol) of the four-level hierarchy at about {_fmt_us(per_it)} us each, on top of "
+        f"the {_fmt_us(t_fixed)} us of a solve whose start is already the answer (the IGM start, the IGM included); pink takes "
+        f"{n_pink:.0f} full steps of one weighted QP over the 7 hover coordinates at {_fmt_us(t_pink / max(n_pink, 1.0))} us "
+        f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve: less than the fixed cost plus one iteration "
+        "of the hierarchy driven from Python (small dense linear algebra: null spaces, active sets), so it needs the "
+        "hierarchy in compiled code"
+    ]
+    if two_levels is not None and two_levels.times:
+        t2 = float(np.median(two_levels.times))
+        n2 = float(np.median([o.iterations for o, _ in two_levels.results]))
+        lines.append(
+            f"- on pink's own problem (two levels, pose then hover): {_fmt_us(t2)} us, {n2:.0f} iterations, "
+            f"{t_pink / t2:.2f}x pink's speed: the CoG and posture levels cost {100 * (1 - t2 / t_cold):.0f} % of the cold start"
+        )
+    return lines
 
 
 def plot(methods, path: Path) -> None:
