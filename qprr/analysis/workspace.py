@@ -271,20 +271,21 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     )
 
 
-def _free_measure(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int) -> MeasureEstimate | None:
-    """The measure of ``image`` over the cells whose corners are all collision-free (None: no mask, or no such cell)."""
+def _measures(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int):
+    """(measure of ``image``, occupancy of its first counting grid, measure over the cells whose corners are all
+    collision-free or None: no mask, or no such cell), the two from one counting pass on one counting grid
+    (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the whole image's cell side and frame)."""
     if mask is None or not mask.free.any():
-        return None
-    try:
-        return image.estimate(n_shifts=n_shifts, seed=seed, valid=mask.free.reshape(shape))
-    except InputError:  # no cell with all corners free: nothing to measure
-        return None
+        measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
+        return measure, occ, None
+    measure, free, occ = image.estimate_pair(mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True)
+    return measure, occ, free
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
     """The region of the points ``pts`` (n, 3) of ``grid`` and why a measure is missing; with ``mask``, also its
-    collision-free measures (:func:`_free_measure`: from the cell zonotopes of the whole region's measure, each
-    image dropped once both of its measures are taken)."""
+    collision-free measures (:func:`_measures`: both measures of an image from one counting pass over its cell
+    zonotopes, each image dropped once they are taken)."""
     origin, basis = affine_span(pts)
     coords = (pts - origin) @ basis.T if basis.shape[0] else np.zeros((pts.shape[0], 0))
     free = sum(1 for n in grid.shape if n > 1)
@@ -299,8 +300,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
         image = CellImage(coords.reshape(*shape, dim))
-        measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-        free_measure = _free_measure(image, mask, shape, n_shifts, seed)
+        measure, occ, free_measure = _measures(image, mask, shape, n_shifts, seed)
         del image
         outline = occ
         if free > dim:  # redundant: the samples outline the set more finely than the counting cells
@@ -313,8 +313,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
-            hv, hocc = hover_image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-            free_hover = _free_measure(hover_image, mask, shape, n_shifts, seed)
+            hv, hocc, free_hover = _measures(hover_image, mask, shape, n_shifts, seed)
             del hover_image
             if free > 2:
                 fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
