@@ -15,7 +15,8 @@ Fig. 3.14/3.15: with and without the slider r0); the gain of the free joints is 
 ratio and a difference, with error bars.  With a collision model (:mod:`qprr.collision`: the arm
 against the body, the propeller discs and itself) every region is measured twice: over the whole
 joint box, and over its collision-free configurations only (the image of the grid cells whose
-corners are all collision-free); both numbers are reported.  Measures come from :mod:`qprr.analysis.voxels`
+corners are all collision-free, counted in the same pass on the same counting grid as the whole
+region: :meth:`qprr.analysis.voxels.CellImage.estimate_pair`); both numbers are reported.  Measures come from :mod:`qprr.analysis.voxels`
 (cell counting over the linearised images of the joint-grid cells, error bar from the
 convergence in the grid size).  A planar arm (all joints moving the end effector in one
 plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover.
@@ -79,7 +80,8 @@ class WorkspaceRegion:
     ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
-    ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only.
+    ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
+    grid of ``measure`` / ``hover_volume``: same cell side and frame).
     """
 
     label: str
@@ -187,8 +189,9 @@ class WorkspaceOptions:
     the volume swept under hover (yaw free about z_B); ``n_shifts``, ``seed``: counting-grid shifts of the
     measure estimator (:mod:`qprr.analysis.voxels`); ``collision``: also measure the collision-free part of each
     region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
-    required; False: off).  Cost: the collision check and the two collision-free measures about double the
-    map's time (Q-PRR, 1e6 configurations per region: ~8.5 s against ~4.3 s; docs/analysis.md, Speed).
+    required; False: off).  Cost: the collision check and the collision-free measures (counted with the whole
+    ones, in one pass) make the map about 1.9x slower (Q-PRR, 1e6 configurations per region: ~7.6 s against ~4.0 s;
+    docs/analysis.md, Speed).
     """
 
     n_samples: int = 1_000_000
