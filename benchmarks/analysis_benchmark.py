@@ -135,7 +135,7 @@ def command_time(argv: list[str]) -> tuple[float, float]:
 def workspace_stages(p, n: int) -> dict[str, float]:
     """CPU time [s] of each stage of the default workspace map, summed over its regions: the same calls as
     :func:`qprr.analysis.workspace` (forward kinematics, measure in B, hover volume, collision check, the two
-    collision-free measures), timed one by one (what is left: the affine hull, outlines and boundaries)."""
+    collision-free measures, taken with the whole ones in one pass), timed one by one (what is left: the affine hull, outlines and boundaries)."""
     from qprr.analysis._common import affine_span, collision_mask, resolve_collision
     from qprr.analysis.voxels import CellImage
     from qprr.analysis.workspace import default_variants, hover_profile
@@ -157,12 +157,13 @@ def workspace_stages(p, n: int) -> dict[str, float]:
         shape = tuple(s for s in g.shape if s > 1)
         image = CellImage(((pts - o) @ B.T).reshape(*shape, B.shape[0]))
         hover_image = CellImage(hover_profile(pts, o, B).reshape(*shape, 2), revolve=True)
-        timed("measure in B", image.estimate, return_occupancy=True)
-        timed("hover volume", hover_image.estimate, return_occupancy=True)
-        if cmodel is not None:
+        if cmodel is None:
+            timed("measure in B", image.estimate, return_occupancy=True)
+            timed("hover volume", hover_image.estimate, return_occupancy=True)
+        else:  # each image's two measures (all configurations, collision-free) from one counting pass, as the map does
             valid = timed("collision check", collision_mask, cmodel, g).free.reshape(shape)
-            timed("collision-free measure in B", image.estimate, valid=valid)
-            timed("collision-free hover volume", hover_image.estimate, valid=valid)
+            timed("measure in B (all + collision-free)", image.estimate_pair, valid, return_occupancy=True)
+            timed("hover volume (all + collision-free)", hover_image.estimate_pair, valid, return_occupancy=True)
     return out
 
 
@@ -184,7 +185,8 @@ def end_to_end(p, n: int, name: str) -> None:
     total = sum(stages.values())
     print(
         f"\nstages of the map (CPU time of this process, every region; imports and the summary not included): {total:.2f} s "
-        "(measure in B and hover volume include building the grid's cell zonotopes, which the collision-free measures reuse)\n"
+        "(measure in B and hover volume include building the grid's cell zonotopes and, with a collision model, the collision-free "
+        "measure counted on the same grids)\n"
     )
     print("| stage | CPU [s] | share |")
     print("|---|---:|---:|")

@@ -284,15 +284,101 @@ def test_zonotope_rows_are_those_of_cell_zonotopes_and_prepare(name, locked):
 
 
 def test_collision_free_measures_are_those_of_the_measure_with_a_valid_mask(qprr_platform):
-    """The free measures of the workspace (cell zonotopes shared with the whole region's) equal estimate_measure over
-    the cells whose corners are all collision-free, computed on its own."""
+    """The measures of the workspace (each image's two from one counting pass) equal estimate_measure of the whole image
+    and, over the cells whose corners are all collision-free, the estimate on the whole image's counting grid (its
+    cell side, its frame), computed on their own."""
+    from qprr.analysis.voxels import CellImage
+
     res = workspace(qprr_platform, n_samples=20_000, collision=True)
     for r in res.regions:
         shape = tuple(k for k in r.grid.shape if k > 1)
         valid = r.collision_free.reshape(shape)
         assert 0 < valid.sum() < valid.size
-        assert r.free_measure == estimate_measure(r.coords.reshape(*shape, r.dim), valid=valid)
-        assert r.free_hover_volume == estimate_measure(r.profile.reshape(*shape, 2), revolve=True, valid=valid)
+        P, prof = r.coords.reshape(*shape, r.dim), r.profile.reshape(*shape, 2)
+        assert r.measure == estimate_measure(P)
+        assert r.hover_volume == estimate_measure(prof, revolve=True)
+        assert r.free_measure == CellImage(P).estimate(cell=r.measure.cell, valid=valid, shared_grid=True)
+        assert r.free_hover_volume == CellImage(prof, revolve=True).estimate(cell=r.hover_volume.cell, valid=valid, shared_grid=True)
+
+
+def _spherical_grid(n: int) -> np.ndarray:
+    """(n, n, n, 3) points [m] of a non-redundant 3-joint map onto a spherical-shell sector (radius 0.5..1 m, polar
+    angle 0.3..1.4 rad, azimuth -1..2 rad): a 3-D image whose cell zonotopes are grown."""
+    r, th, ph = np.meshgrid(np.linspace(0.5, 1.0, n), np.linspace(0.3, 1.4, n), np.linspace(-1.0, 2.0, n), indexing="ij")
+    return np.stack([r * np.sin(th) * np.cos(ph), r * np.sin(th) * np.sin(ph), r * np.cos(th)], axis=-1)
+
+
+def _pair_images(platform, name: str):
+    """(label, joint grid of image points, revolve) of the images estimate_pair is checked on."""
+    from qprr.analysis._common import affine_span
+
+    if name == "sphere":
+        return [("sphere, d = 3, grown cells", _spherical_grid(15), False)]
+    locked = {"r0": 0.0} if name == "q-prr-2R" else {}
+    pts, prof, shape = _image_grids(platform if name.startswith("q-prr") else qprr.load(name), 4000, locked)
+    origin, basis = affine_span(pts)
+    P = ((pts - origin) @ basis.T).reshape(*shape, basis.shape[0])
+    out = [(f"{name} in B, d = {basis.shape[0]}", P, False)]
+    if basis.shape[0] == 2:
+        out.append((f"{name} hover profile", prof, True))
+    return out
+
+
+def _masks(shape: tuple) -> dict:
+    """Valid masks of a joint grid: random (about half the cells keep all 2^k corners), all valid, none, and a
+    checkerboard (half the points valid, but every cell has an invalid corner: no valid cell)."""
+    p = 0.5 ** (1.0 / 2 ** len(shape))
+    idx = np.indices(shape).sum(axis=0)
+    return {
+        "random": np.random.default_rng(5).uniform(size=shape) < p,
+        "all": np.ones(shape, dtype=bool),
+        "none": np.zeros(shape, dtype=bool),
+        "checkerboard": idx % 2 == 0,
+    }
+
+
+@pytest.mark.parametrize("name", ["q-prr", "q-prr-2R", "hextilt_flying_arm_5", "sphere"])
+def test_estimate_pair_is_the_two_estimates_bit_for_bit(qprr_platform, name):
+    """One counting pass for both measures gives, bit for bit, the whole image's estimate() (and its occupancy) and
+    the valid cells' estimate on the whole image's counting grid; its cells are a subset of the whole image's (so the
+    counts are ordered shift by shift), and it agrees with the estimate on a grid fitted to the valid cells within
+    their error bars (both unbiased).  No valid cell: None, where estimate() refuses."""
+    from qprr.analysis.voxels import CellImage
+
+    for label, grid, revolve in _pair_images(qprr_platform, name):
+        shape = grid.shape[:-1]
+        ref, ref_occ = CellImage(grid, revolve).estimate(return_occupancy=True)
+        for kind, valid in _masks(shape).items():
+            whole, free, occ = CellImage(grid, revolve).estimate_pair(valid, return_occupancy=True)
+            assert whole == ref, (label, kind)
+            assert all(np.array_equal(a, b) for a, b in zip(occ, ref_occ)) and occ[2] == ref_occ[2]
+            if kind in ("none", "checkerboard"):
+                assert free is None, (label, kind)
+                with pytest.raises(InputError):
+                    CellImage(grid, revolve).estimate(valid=valid)
+                continue
+            alone = CellImage(grid, revolve).estimate(cell=whole.cell, valid=valid, shared_grid=True)
+            assert free == alone, (label, kind)
+            assert free.cell == whole.cell and free.raw <= whole.raw and free.coarse <= whole.coarse
+            if kind == "all":
+                assert free == whole  # the same zonotopes on the same grid
+                continue
+            assert 0 < free.n_cells < whole.n_cells
+            fitted = CellImage(grid, revolve).estimate(valid=valid)
+            assert abs(free.measure - fitted.measure) <= free.error + fitted.error, (label, free, fitted)
+
+
+def test_estimate_pair_refuses_bad_masks(qprr_platform):
+    from qprr.analysis.voxels import CellImage
+
+    _, P, _ = _pair_images(qprr_platform, "q-prr")[1]
+    image = CellImage(P, True)
+    with pytest.raises(InputError, match="valid must have the grid's shape"):
+        image.estimate_pair(np.ones(P.shape[:-1])[:-1])
+    with pytest.raises(InputError, match="valid mask"):
+        image.estimate_pair(None)
+    with pytest.raises(InputError, match="n_shifts"):
+        image.estimate_pair(np.ones(P.shape[:-1], dtype=bool), n_shifts=1)
 
 
 def test_options_object_and_keywords_agree(qprr_platform):

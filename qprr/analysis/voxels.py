@@ -493,32 +493,73 @@ def _grid_frame(points: np.ndarray, h: float, shift: np.ndarray, pad: float) -> 
     return lo, shape
 
 
-def _count(parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool, scratch=None) -> tuple[float, np.ndarray, np.ndarray]:
+def _union_bounds(parts: tuple[Zonotopes, ...]) -> tuple[np.ndarray, np.ndarray] | None:
+    """(lowest, highest) corner (d,) [m] of the bounding boxes of every zonotope of ``parts`` (None: no zonotope)."""
+    if sum(z.size for z in parts) == 0:
+        return None
+    return np.min([z.bounds[0] for z in parts if z.size], axis=0), np.max([z.bounds[1] for z in parts if z.size], axis=0)
+
+
+def _value(occ: np.ndarray, origin: np.ndarray, h: float, revolve: bool) -> float:
+    """The measure of the covered cells ``occ`` of side ``h`` [m] (lower corner ``origin`` [m]): count h^d, or with
+    ``revolve`` the sum of pi |x| h^2 over the covered centres x (the volume of revolution, Pappus) [m^3]."""
+    if revolve:
+        x = origin[0] + (np.arange(occ.shape[0]) + 0.5) * h
+        w = math.pi * np.abs(x) * h * h
+        return float((occ * w.reshape((-1,) + (1,) * (occ.ndim - 1))).sum())
+    return float(occ.sum()) * h**occ.ndim
+
+
+def _count(
+    parts: tuple[Zonotopes, ...], h: float, shift: np.ndarray, revolve: bool, scratch=None, bounds=None
+) -> tuple[float, np.ndarray, np.ndarray]:
     """(measure, occupancy, origin) of the union of the zonotope sets ``parts`` counted on the grid shifted by ``shift``
-    (``scratch``: see :func:`covered_cells`)."""
+    (``scratch``: see :func:`covered_cells`; ``bounds``: the (low, high) corners [m] framing the counting grid, default
+    :func:`_union_bounds` of ``parts``)."""
     d = parts[0].centre.shape[1]
     if sum(z.size for z in parts) == 0:
         return 0.0, np.zeros((1,) * d, dtype=bool), np.zeros(d)
-    lo_pt = np.min([z.bounds[0] for z in parts if z.size], axis=0)
-    hi_pt = np.max([z.bounds[1] for z in parts if z.size], axis=0)
-    origin, shape = _grid_frame(np.vstack([lo_pt, hi_pt]), h, shift, 0.0)
+    origin, shape = _grid_frame(np.vstack(_union_bounds(parts) if bounds is None else bounds), h, shift, 0.0)
     occ = np.zeros(shape, dtype=bool)
     for z in parts:
         if z.size:
             covered_cells(z, h, origin, shape, out=occ, scratch=scratch)
-    if revolve:
-        x = origin[0] + (np.arange(shape[0]) + 0.5) * h
-        w = math.pi * np.abs(x) * h * h
-        value = float((occ * w.reshape((-1,) + (1,) * (d - 1))).sum())
-    else:
-        value = float(occ.sum()) * h**d
-    return value, occ, origin
+    return _value(occ, origin, h, revolve), occ, origin
+
+
+def _count_pair(free: tuple[Zonotopes, ...], rest: tuple[Zonotopes, ...], bounds, h: float, shift: np.ndarray, revolve: bool, scratch):
+    """(measure of free + rest, measure of free, occupancy of free + rest, origin): one counting grid (framed by
+    ``bounds``, the union's), the zonotopes ``free`` covered first, their cells copied and the ``rest`` covered on
+    top (:func:`covered_cells` skips the cells the free ones covered).  The occupancy is an OR, whatever the order:
+    each value is that of :func:`_count` of its set on this grid, bit for bit."""
+    origin, shape = _grid_frame(np.vstack(bounds), h, shift, 0.0)
+    occ = np.zeros(shape, dtype=bool)
+    for z in free:
+        if z.size:
+            covered_cells(z, h, origin, shape, out=occ, scratch=scratch)
+    v_free = _value(occ, origin, h, revolve)
+    occ = occ.copy()
+    for z in rest:
+        if z.size:
+            covered_cells(z, h, origin, shape, out=occ, scratch=scratch)
+    return _value(occ, origin, h, revolve), v_free, occ, origin
+
+
+def _result(values, coarse: float | None, h: float, n: int, d: int, revolve: bool) -> MeasureEstimate:
+    """The estimate from the counts ``values`` over the shifts and the mean count on the coarse grid (None: nothing
+    to coarsen, the fine count stands for it)."""
+    values = np.array(values)
+    raw = float(values.mean())
+    se = float(values.std(ddof=1) / math.sqrt(values.size))
+    coarse = raw if coarse is None else coarse
+    return MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n)
 
 
 class CellImage:
     """The cell zonotopes of a joint grid's image, on the grid and on the twice-coarser one, built once for every
     measure of it: :meth:`estimate` over the whole grid or over the cells whose corners are all valid (a subset of
-    the same zonotopes, numbers unchanged).  ``points_grid``, ``revolve``: see :func:`estimate_measure`."""
+    the same zonotopes, numbers unchanged), :meth:`estimate_pair` both from one counting pass.  ``points_grid``,
+    ``revolve``: see :func:`estimate_measure`."""
 
     def __init__(self, points_grid, revolve: bool = False):
         P = np.asarray(points_grid, dtype=float)
@@ -546,48 +587,123 @@ class CellImage:
 
     def zonotopes(self, valid=None, coarse: bool = False) -> tuple[Zonotopes, ...]:
         """The zonotopes of the cells (of the grid, or of the twice-coarser one) whose corners are all ``valid``."""
-        parts, kept, axes = self._zonotopes(coarse)
         if valid is None:
-            return parts
-        V = _coarsen(valid, 0) if coarse else valid
-        index = np.flatnonzero(_valid_cells(V, axes)[kept])
-        return tuple(z.take(index) for z in parts)
+            return self._zonotopes(coarse)[0]
+        return self._split(valid, coarse)[0]
 
-    def estimate(self, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, valid=None, return_occupancy: bool = False):
-        """:func:`estimate_measure` of this image (same arguments)."""
-        P, revolve = self.points_grid, self.revolve
-        d = P.shape[-1]
+    def _split(self, valid, coarse: bool, rest: bool = False) -> tuple[tuple[Zonotopes, ...], tuple[Zonotopes, ...] | None]:
+        """(the zonotopes of the cells whose corners are all ``valid``, the others' if ``rest`` else None)."""
+        parts, kept, axes = self._zonotopes(coarse)
+        V = _coarsen(valid, 0) if coarse else valid
+        inside = _valid_cells(V, axes)[kept]
+        free = tuple(z.take(np.flatnonzero(inside)) for z in parts)
+        return free, (tuple(z.take(np.flatnonzero(~inside)) for z in parts) if rest else None)
+
+    def _checked(self, n_shifts: int, valid) -> np.ndarray | None:
+        """``valid`` as a boolean grid of the grid's shape (None stays None), after checking it and ``n_shifts``."""
         if n_shifts < 2:
             raise InputError(f"n_shifts must be >= 2 (the error bar needs a spread), got {n_shifts!r}")
-        if valid is not None:
-            valid = np.asarray(valid, dtype=bool)
-            if valid.shape != P.shape[:-1]:
-                raise InputError(f"valid must have the grid's shape {P.shape[:-1]}, got {valid.shape}")
+        if valid is None:
+            return None
+        valid = np.asarray(valid, dtype=bool)
+        if valid.shape != self.points_grid.shape[:-1]:
+            raise InputError(f"valid must have the grid's shape {self.points_grid.shape[:-1]}, got {valid.shape}")
+        return valid
+
+    def _has_coarse(self) -> bool:
+        """Whether the twice-coarser grid differs from the grid (some free axis has more than 2 values)."""
+        return _coarsen(self.points_grid).shape != self.points_grid.shape
+
+    def estimate(
+        self, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, valid=None, return_occupancy: bool = False, shared_grid: bool = False
+    ):
+        """:func:`estimate_measure` of this image (same arguments).
+
+        ``shared_grid`` (with ``valid``): count on the counting grid of the whole image, the one :meth:`estimate_pair`
+        shares between its two measures: framed by the bounding boxes of every cell zonotope (not only the valid
+        ones'), with the whole image's default cell side h unless ``cell`` is given.  False: the grid and h are fitted
+        to the valid cells.  Both are unbiased; their numbers differ by the position of the shifted grid."""
+        P, revolve = self.points_grid, self.revolve
+        d = P.shape[-1]
+        valid = self._checked(n_shifts, valid)
         fine = self.zonotopes(valid)
         n_fine = sum(z.size for z in fine)
         if n_fine == 0:
             raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
-        h = _default_cell(fine) if cell is None else float(cell)
-        if not (math.isfinite(h) and h > 0.0):
-            raise InputError(f"cell must be a positive length in m, got {cell!r}")
+        h = _cell_side(self.zonotopes() if shared_grid else fine, cell)
+        bounds = {c: (_union_bounds(self.zonotopes(coarse=c)) if shared_grid else None) for c in (False, True)}
         shifts = np.random.default_rng(seed).uniform(0.0, 1.0, (n_shifts, d))
         scratch = np.empty((2 * d, max(z.size for z in fine)))  # one work buffer for every count below
         values, first = [], None
         for i, s in enumerate(shifts):
-            v, occ, origin = _count(fine, h, s, revolve, scratch)
+            v, occ, origin = _count(fine, h, s, revolve, scratch, bounds[False])
             values.append(v)
             if i == 0:
                 first = (occ, origin, h)
-        values = np.array(values)
-        raw = float(values.mean())
-        se = float(values.std(ddof=1) / math.sqrt(n_shifts))
-        if _coarsen(P).shape == P.shape:  # nothing to coarsen (every free axis has <= 2 values)
-            coarse = raw
-        else:
+        coarse = None
+        if self._has_coarse():
             coarse_z = self.zonotopes(valid, coarse=True)
-            coarse = float(np.mean([_count(coarse_z, h, s, revolve, scratch)[0] for s in shifts]))
-        est = MeasureEstimate(d, raw, abs(raw - coarse) / 2.0 + 2.0 * se, UNITS[3 if revolve else d], raw, se, coarse, h, n_fine)
+            coarse = float(np.mean([_count(coarse_z, h, s, revolve, scratch, bounds[True])[0] for s in shifts]))
+        est = _result(values, coarse, h, n_fine, d, revolve)
         return (est, first) if return_occupancy else est
+
+    def estimate_pair(self, valid, *, cell: float | None = None, n_shifts: int = 4, seed: int = 0, return_occupancy: bool = False):
+        """The measure of the whole image and of its valid cells, from one counting pass on one counting grid.
+
+        On each shifted counting grid (and on the twice-coarser joint grid's) the zonotopes of the valid cells are
+        covered first, then the others on a copy of their cells: the whole image's cells are those of the valid ones
+        plus the rest, and :func:`covered_cells` skips the cells already covered.
+
+        Parameters
+        ----------
+        valid : boolean grid of the joint grid's shape (n_1, ..., n_k): a cell is valid when its 2^k corners are
+            all True (e.g. the collision-free configurations).
+        cell : side h [m] of the counting cells of both measures (default: :func:`default_cell` of every cell
+            zonotope of the image, the h of :meth:`estimate`).
+        n_shifts, seed : random shifts of the counting grid (>= 2) and their seed, as in :meth:`estimate`.
+        return_occupancy : also return (occupancy grid, origin [m], h [m]) of the whole image at the first shift.
+
+        Returns
+        -------
+        whole : MeasureEstimate [m, m^2 or m^3], bit for bit ``estimate(cell=cell, n_shifts=n_shifts, seed=seed)``.
+        free : MeasureEstimate of the valid cells, bit for bit ``estimate(cell=whole.cell, valid=valid,
+            shared_grid=True, ...)``; None when no valid cell spans the dimension (nothing to measure).
+        occupancy : the tuple of ``return_occupancy``, when asked.
+        """
+        P, revolve = self.points_grid, self.revolve
+        d = P.shape[-1]
+        valid = self._checked(n_shifts, valid)
+        if valid is None:
+            raise InputError("estimate_pair needs a valid mask (a boolean grid of the grid's shape); without one use estimate()")
+        everything = self.zonotopes()
+        if sum(z.size for z in everything) == 0:
+            raise InputError("every grid cell maps to a flat set (the map has rank < d everywhere): the measure is 0")
+        h = _cell_side(everything, cell)
+        shifts = np.random.default_rng(seed).uniform(0.0, 1.0, (n_shifts, d))
+        scratch = np.empty((2 * d, max(z.size for z in everything)))  # one work buffer for every count below
+        fine, n_free, first = self._pair_counts(valid, False, h, shifts, scratch)
+        coarse = self._pair_counts(valid, True, h, shifts, scratch)[0] if self._has_coarse() else None
+        # each column reduced as a 1-D array of its own, as estimate() reduces its list of counts (the same sums)
+        means = [None if coarse is None else float(np.mean(np.array(coarse[:, j]))) for j in (0, 1)]
+        whole = _result(np.array(fine[:, 0]), means[0], h, sum(z.size for z in everything), d, revolve)
+        free = _result(np.array(fine[:, 1]), means[1], h, n_free, d, revolve) if n_free else None
+        return (whole, free, first) if return_occupancy else (whole, free)
+
+    def _pair_counts(self, valid: np.ndarray, coarse: bool, h: float, shifts: np.ndarray, scratch) -> tuple[np.ndarray, int, tuple]:
+        """(values (n_shifts, 2): measure of every cell zonotope and of the valid ones per shift, the number of valid
+        zonotopes, (occupancy, origin, h) of the whole set at the first shift) on the grid or the coarse one."""
+        free, rest = self._split(valid, coarse, rest=True)
+        bounds = _union_bounds(self.zonotopes(coarse=coarse))
+        n_free = sum(z.size for z in free)
+        values, first = np.empty((len(shifts), 2)), None
+        for i, s in enumerate(shifts):
+            if bounds is None:  # no zonotope at all on this grid (the coarse one may have none): both counts are 0
+                values[i] = 0.0
+                continue
+            values[i, 0], values[i, 1], occ, origin = _count_pair(free, rest, bounds, h, s, self.revolve, scratch)
+            if i == 0:
+                first = (occ, origin, h)
+        return values, n_free, first
 
 
 def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
@@ -600,6 +716,14 @@ def _coarsen(points_grid: np.ndarray, extra_axes: int = 1) -> np.ndarray:
 def default_cell(z: Zonotopes) -> float:
     """Counting cell side: the median bounding-box side of the grown cell zonotopes (a few candidate centres per cell)."""
     return _default_cell((z,))
+
+
+def _cell_side(parts: tuple[Zonotopes, ...], cell: float | None) -> float:
+    """The counting cell side h [m]: ``cell``, checked, or :func:`_default_cell` of ``parts``."""
+    h = _default_cell(parts) if cell is None else float(cell)
+    if not (math.isfinite(h) and h > 0.0):
+        raise InputError(f"cell must be a positive length in m, got {cell!r}")
+    return h
 
 
 def _default_cell(parts: tuple[Zonotopes, ...]) -> float:

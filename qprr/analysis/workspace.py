@@ -15,7 +15,8 @@ Fig. 3.14/3.15: with and without the slider r0); the gain of the free joints is 
 ratio and a difference, with error bars.  With a collision model (:mod:`qprr.collision`: the arm
 against the body, the propeller discs and itself) every region is measured twice: over the whole
 joint box, and over its collision-free configurations only (the image of the grid cells whose
-corners are all collision-free); both numbers are reported.  Measures come from :mod:`qprr.analysis.voxels`
+corners are all collision-free, counted in the same pass on the same counting grid as the whole
+region: :meth:`qprr.analysis.voxels.CellImage.estimate_pair`); both numbers are reported.  Measures come from :mod:`qprr.analysis.voxels`
 (cell counting over the linearised images of the joint-grid cells, error bar from the
 convergence in the grid size).  A planar arm (all joints moving the end effector in one
 plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover.
@@ -79,7 +80,8 @@ class WorkspaceRegion:
     ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
-    ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only.
+    ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
+    grid of ``measure`` / ``hover_volume``: same cell side and frame).
     """
 
     label: str
@@ -187,8 +189,9 @@ class WorkspaceOptions:
     the volume swept under hover (yaw free about z_B); ``n_shifts``, ``seed``: counting-grid shifts of the
     measure estimator (:mod:`qprr.analysis.voxels`); ``collision``: also measure the collision-free part of each
     region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
-    required; False: off).  Cost: the collision check and the two collision-free measures about double the
-    map's time (Q-PRR, 1e6 configurations per region: ~8.5 s against ~4.3 s; docs/analysis.md, Speed).
+    required; False: off).  Cost: the collision check and the collision-free measures (counted with the whole
+    ones, in one pass) make the map about 1.9x slower (Q-PRR, 1e6 configurations per region: ~7.6 s against ~4.0 s;
+    docs/analysis.md, Speed).
     """
 
     n_samples: int = 1_000_000
@@ -271,20 +274,21 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     )
 
 
-def _free_measure(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int) -> MeasureEstimate | None:
-    """The measure of ``image`` over the cells whose corners are all collision-free (None: no mask, or no such cell)."""
+def _measures(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int):
+    """(measure of ``image``, occupancy of its first counting grid, measure over the cells whose corners are all
+    collision-free or None: no mask, or no such cell), the two from one counting pass on one counting grid
+    (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the whole image's cell side and frame)."""
     if mask is None or not mask.free.any():
-        return None
-    try:
-        return image.estimate(n_shifts=n_shifts, seed=seed, valid=mask.free.reshape(shape))
-    except InputError:  # no cell with all corners free: nothing to measure
-        return None
+        measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
+        return measure, occ, None
+    measure, free, occ = image.estimate_pair(mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True)
+    return measure, occ, free
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
     """The region of the points ``pts`` (n, 3) of ``grid`` and why a measure is missing; with ``mask``, also its
-    collision-free measures (:func:`_free_measure`: from the cell zonotopes of the whole region's measure, each
-    image dropped once both of its measures are taken)."""
+    collision-free measures (:func:`_measures`: both measures of an image from one counting pass over its cell
+    zonotopes, each image dropped once they are taken)."""
     origin, basis = affine_span(pts)
     coords = (pts - origin) @ basis.T if basis.shape[0] else np.zeros((pts.shape[0], 0))
     free = sum(1 for n in grid.shape if n > 1)
@@ -299,8 +303,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
         image = CellImage(coords.reshape(*shape, dim))
-        measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-        free_measure = _free_measure(image, mask, shape, n_shifts, seed)
+        measure, occ, free_measure = _measures(image, mask, shape, n_shifts, seed)
         del image
         outline = occ
         if free > dim:  # redundant: the samples outline the set more finely than the counting cells
@@ -313,8 +316,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
-            hv, hocc = hover_image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-            free_hover = _free_measure(hover_image, mask, shape, n_shifts, seed)
+            hv, hocc, free_hover = _measures(hover_image, mask, shape, n_shifts, seed)
             del hover_image
             if free > 2:
                 fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
