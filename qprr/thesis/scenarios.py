@@ -172,21 +172,39 @@ class Instance:
     reference: Callable[[str], object] | None = None
 
 
+@dataclass(frozen=True)
+class FlightSettings:
+    """The options of a Sec. 6.3 flight (defaults and help: the scenario's :attr:`~qprr.scenarios.Scenario.options`):
+    run ``duration`` [s], integration step ``dt`` [s], ``integrator``, ``seed``, transition ``law`` and ``as_printed``
+    (the ``static-*`` flights only; False for the others, which have no such option)."""
+
+    duration: float
+    dt: float
+    integrator: str
+    seed: int
+    law: str
+    as_printed: bool = False
+
+
 def _flight(scenario: str, instance: Instance, bsg: bool = False):
     """The runner of a Sec. 6.3 flight: ``instance`` with the thesis's gains (:func:`flight_gains`), under the CoG
-    stabiliser (BSG) if ``bsg``, named ``scenario``."""
+    stabiliser (BSG) if ``bsg``, named ``scenario``.  The options :meth:`Scenario.run <qprr.scenarios.Scenario.run>`
+    passes by name are gathered into :class:`FlightSettings`; ``plant`` stays a parameter of the runner
+    (:attr:`~qprr.scenarios.Scenario.takes_plant` reads it from the signature)."""
 
-    def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None, as_printed=False):
+    def runner(platform, controller, progress, plant=None, **values):
+        o = FlightSettings(**values)
         platform = _q_prr(platform)
-        if as_printed:  # the transition law (6.16) as printed: the quintic
+        law = o.law
+        if o.as_printed:  # the transition law (6.16) as printed: the quintic
             if law not in (DEFAULT_LAW, "quintic"):
                 raise InputError(f"as_printed flies the quintic law (6.16) as printed; law = {law!r} contradicts it")
             law = "quintic"
-        g = flight_gains(controller, as_printed)
+        g = flight_gains(controller, o.as_printed)
         ctrl = CogStabilizer(platform, generic.controller_for(controller, platform, g), theta_e_d=0.0) if bsg else None
         reference = instance.reference(law) if instance.reference is not None else None
         settings = generic.MissionSettings(trajectory=reference, controller=ctrl, plant=plant, name=scenario)
-        options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": g}
+        options = {"duration": o.duration, "dt": o.dt, "integrator": o.integrator, "seed": o.seed, "law": law, "gains": g}
         return instance.generic(platform, controller, progress, settings, **options, **instance.settings)
 
     return runner
