@@ -335,18 +335,18 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
 
 
 # ================================================================================ hover / capacity
-def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, reducer="max"):
-    """The best value per cell; a field that is the same in every cell is drawn in one colour with its value
-    in the title (a colour bar over a constant reads as "no data"); returns the image."""
+def _workspace_map(ax, coords, values, h, cmap, label):
+    """The largest of ``values`` per cell of side ``h`` of the points ``coords`` (a 3-D map projected onto x-z, the
+    largest over y), coloured by ``cmap`` with a colour bar named ``label`` (none if empty); a field that is the same
+    in every cell is drawn in one colour with its value in a legend entry (a colour bar over a constant reads as
+    "no data"); returns the image."""
     from ._common import best_per_cell
 
-    best, _, o = best_per_cell(coords, values if reducer == "max" else -values, h)
-    if reducer != "max":
-        best = -best
+    best, _, o = best_per_cell(coords, values, h)
     if best.ndim == 3:  # project a 3-D map onto x-z: best over y (columns without a sample stay NaN)
         with np.errstate(invalid="ignore"), warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            best = np.nanmax(best, axis=1) if reducer == "max" else np.nanmin(best, axis=1)
+            best = np.nanmax(best, axis=1)
         o = o[[0, 2]]
     extent = (o[0], o[0] + best.shape[0] * h, o[1], o[1] + best.shape[1] * h)
     finite = best[np.isfinite(best)]
@@ -365,7 +365,7 @@ def _workspace_map(ax, coords, values, h, cmap, label, vmin=None, vmax=None, red
         ax.fill([], [], color="tab:cyan", alpha=0.6, label=f"{label}: {hi:.4g} in every cell (constant)")
         _legend_below(ax)
     else:
-        im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, vmin=vmin, vmax=vmax, interpolation="nearest")
+        im = ax.imshow(best.T, origin="lower", extent=extent, cmap=cmap, interpolation="nearest")
         if label:
             ax.figure.colorbar(im, ax=ax, label=label)
     ax.set_aspect("equal")

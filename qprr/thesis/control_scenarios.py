@@ -35,6 +35,7 @@ unclipped) from rest at the origin, where ``fly-to`` flies a smooth reference th
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -209,12 +210,27 @@ def plot_point_to_point(result: SimResult, path) -> Path:
 
 
 # ------------------------------------------------------------------------ aggressive reach
-def _aggressive(platform, controller, progress, duration, climb, forward, dt, integrator, seed):
+@dataclass(frozen=True)
+class AggressiveReachSettings:
+    """The options of ``aggressive-reach`` (defaults and help: the scenario's :attr:`~qprr.scenarios.Scenario.options`):
+    run ``duration`` [s], ``climb`` [m] and ``forward`` reach along x [m] in 1 s
+    (:func:`~qprr.thesis.missions.aggressive_reach`), integration step ``dt`` [s], ``integrator``, ``seed``."""
+
+    duration: float
+    climb: float
+    forward: float
+    dt: float
+    integrator: str
+    seed: int
+
+
+def _aggressive(platform, controller, progress, settings: AggressiveReachSettings):
     platform = _q_prr(platform)
-    settings = generic.MissionSettings(trajectory=aggressive_reach(climb=climb, forward=forward), name="aggressive-reach")
-    options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "gains": flight_gains(controller), "mission": ""}
+    o = settings
+    mission = generic.MissionSettings(trajectory=aggressive_reach(climb=o.climb, forward=o.forward), name="aggressive-reach")
+    options = {"duration": o.duration, "dt": o.dt, "integrator": o.integrator, "seed": o.seed, "gains": flight_gains(controller), "mission": ""}
     try:
-        res = generic.mission(platform, controller, progress, settings, **options)
+        res = generic.mission(platform, controller, progress, mission, **options)
     except Exception as err:  # a diverged run still reports its margins
         res = getattr(err, "result", None)
         if res is None:
@@ -228,26 +244,51 @@ def _aggressive(platform, controller, progress, duration, climb, forward, dt, in
 MISSIONS = ("static", "spiral", "hover")
 
 
-def _realistic(
-    platform, controller, progress, duration, dt, integrator, seed, law, mission, motors, drag, friction, mean_wind, w20, gust, time_constant
-):
+@dataclass(frozen=True)
+class RealisticSettings:
+    """The options of ``realistic`` (defaults and help: the scenario's :attr:`~qprr.scenarios.Scenario.options`).
+
+    The flight: run ``duration`` [s], integration step ``dt`` [s], ``integrator``, ``seed``, transition ``law`` and
+    ``mission`` (one of :data:`MISSIONS`).  The stages of :func:`qprr.thesis.realistic.realistic`, each switchable:
+    ``motors`` (first-order lag, time constant ``time_constant`` [s]), ``drag`` in the wind (mean ``mean_wind``, world
+    axes [m/s]; Dryden turbulence of wind speed ``w20`` at 20 ft [m/s]; the ``gust``) and joint ``friction``."""
+
+    duration: float
+    dt: float
+    integrator: str
+    seed: int
+    law: str
+    mission: str
+    motors: bool
+    drag: bool
+    friction: bool
+    mean_wind: tuple[float, float, float]
+    w20: float
+    gust: bool
+    time_constant: float
+
+
+def _realistic(platform, controller, progress, settings: RealisticSettings):
     platform = _q_prr(platform)
-    if mission not in MISSIONS:
-        raise UnknownNameError("mission", mission, MISSIONS)
+    o = settings
+    if o.mission not in MISSIONS:
+        raise UnknownNameError("mission", o.mission, MISSIONS)
     trajectory = {
-        "static": lambda: static_mission(law=law),
+        "static": lambda: static_mission(law=o.law),
         "spiral": lambda: Spiral(),
         "hover": lambda: Hold((0.0, 0.0, 10.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
-    }[mission]()
-    env = realistic(platform, motors=motors, drag=drag, friction=friction, mean_wind=mean_wind, w20=w20, gust=gust, time_constant=time_constant)
-    settings = generic.MissionSettings(trajectory=trajectory, disturbance=env.disturbance, name="realistic")
-    options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": flight_gains(controller)}
+    }[o.mission]()
+    env = realistic(
+        platform, motors=o.motors, drag=o.drag, friction=o.friction, mean_wind=o.mean_wind, w20=o.w20, gust=o.gust, time_constant=o.time_constant
+    )
+    mission = generic.MissionSettings(trajectory=trajectory, disturbance=env.disturbance, name="realistic")
+    options = {"duration": o.duration, "dt": o.dt, "integrator": o.integrator, "seed": o.seed, "law": o.law, "gains": flight_gains(controller)}
     try:
-        if motors:  # the generic motor-lag with the Q-PRR's rotor stage (thrust factor of its parameters, time constant)
+        if o.motors:  # the generic motor-lag with the Q-PRR's rotor stage (thrust factor of its parameters, time constant)
             b = params_of(platform).thrust_factor
-            res = generic.motor_lag(platform, controller, progress, settings, tau=time_constant, thrust_factor=b, **options)
+            res = generic.motor_lag(platform, controller, progress, mission, tau=o.time_constant, thrust_factor=b, **options)
         else:
-            res = generic.mission(platform, controller, progress, settings, mission="", **options)
+            res = generic.mission(platform, controller, progress, mission, mission="", **options)
     except Exception as err:
         if getattr(err, "result", None) is not None:
             _realistic_metrics(err.result, platform)
@@ -305,6 +346,16 @@ def _runner(fn):
     return run
 
 
+def _settings_runner(fn, settings_type):
+    """The registry's runner of ``fn(platform, controller, progress, settings)``: the options :meth:`Scenario.run
+    <qprr.scenarios.Scenario.run>` passes by name, gathered into ``settings_type`` (a field per option)."""
+
+    def run(platform, controller, progress, **options):
+        return fn(platform, controller, progress, settings_type(**options))
+
+    return run
+
+
 _REALISTIC = {
     **_FLIGHT,
     "mission": Option("static", "static (Sec. 6.3.1.4), spiral (6.25) or hover (at 10 m)"),
@@ -349,7 +400,7 @@ SCENARIOS = (
     Scenario(
         "aggressive-reach",
         "climb 2 m and reach 0.6 m forward in 1 s: the IDC saturates the rotors, the MPC plans within them",
-        _runner(_aggressive),
+        _settings_runner(_aggressive, AggressiveReachSettings),
         ("mpc", *[c for c in _FLIGHT_CONTROLLERS if c != "mpc"]),
         {
             "duration": Option(3.0, "run length [s]"),
@@ -367,7 +418,7 @@ SCENARIOS = (
     Scenario(
         "realistic",
         "a mission with motor lag, air drag in wind (mean + Dryden + gust) and joint friction",
-        _runner(_realistic),
+        _settings_runner(_realistic, RealisticSettings),
         _FLIGHT_CONTROLLERS,
         _REALISTIC,
         ("q-prr",),

@@ -88,15 +88,7 @@ def annex_a3() -> IDCGains:
 
 
 # ------------------------------------------------------------------- Sec. 6.4, Tables 6.5, 6.7
-def _groups(kp_pos, kd_pos, ki_pos, kp_att, kd_att, ki_att, kp_arm, kd_arm, ki_arm, **kwargs) -> IDCGains:
-    return IDCGains(
-        kp=tuple(kp_pos) + tuple(kp_att) + tuple(kp_arm),
-        kd=tuple(kd_pos) + tuple(kd_att) + tuple(kd_arm),
-        ki=tuple(ki_pos) + tuple(ki_att) + tuple(ki_arm),
-        **kwargs,
-    )
-
-
+# (k_P, k_D, k_I) per group (position, attitude, arm): IDCGains.from_groups
 def table_6_5() -> IDCGains:
     """Thesis Table 6.5 as printed: position PD (20, 2), attitude PI (6.56) (k_P = 20, 40, 20; k_I = 5, 2, 2), arm PID (10, 2, 15).
 
@@ -104,7 +96,7 @@ def table_6_5() -> IDCGains:
     every k_I > 0.  The 9x9 K_P = 48 I9, K_D = 25 I9 of the table belong to the generic form (6.54)
     of which the layers are the per-group instances; they are not used on top of the layer gains.
     """
-    return _groups((20.0,) * 3, (2.0,) * 3, (0.0,) * 3, (20.0, 40.0, 20.0), (0.0,) * 3, (5.0, 2.0, 2.0), (10.0,) * 3, (2.0,) * 3, (15.0,) * 3)
+    return IDCGains.from_groups(3, position=(20.0, 2.0, 0.0), attitude=((20.0, 40.0, 20.0), 0.0, (5.0, 2.0, 2.0)), arm=(10.0, 2.0, 15.0))
 
 
 def payload() -> IDCGains:
@@ -118,14 +110,12 @@ def payload() -> IDCGains:
     the estimate follows) needs the faster arm loop.
     """
     base = table_6_5()
-    kp_a, kd_a, ki_a = _cubed(15.0)
-    kp_q, kd_q, ki_q = _cubed(10.0)
-    return _groups(base.kp[0:3], base.kd[0:3], base.ki[0:3], (kp_a,) * 3, (kd_a,) * 3, (ki_a,) * 3, (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3)
+    return IDCGains.from_groups(3, position=(base.kp[0:3], base.kd[0:3], base.ki[0:3]), attitude=_cubed(15.0), arm=_cubed(10.0))
 
 
 def table_6_7() -> IDCGains:
     """Thesis Table 6.7 as printed: position PD (6, 5), attitude PD (5, 2; 5, 2; 25, 4.5), arm PI (8, 2) (no rate term)."""
-    return _groups((6.0,) * 3, (5.0,) * 3, (0.0,) * 3, (5.0, 5.0, 25.0), (2.0, 2.0, 4.5), (0.0,) * 3, (8.0,) * 3, (0.0,) * 3, (2.0,) * 3)
+    return IDCGains.from_groups(3, position=(6.0, 5.0, 0.0), attitude=((5.0, 5.0, 25.0), (2.0, 2.0, 4.5), 0.0), arm=(8.0, 0.0, 2.0))
 
 
 def impedance() -> IDCGains:
@@ -140,10 +130,8 @@ def impedance() -> IDCGains:
     """
     base = table_6_7()
     w = 15.0
-    kp_q, kd_q, ki_q = _cubed(5.0)
-    return _groups(
-        base.kp[0:3], base.kd[0:3], base.ki[0:3], (w * w,) * 3, (2 * w,) * 3, (0.0,) * 3, (kp_q,) * 3, (kd_q,) * 3, (ki_q,) * 3, filter_omega=20.0
-    )
+    position = (base.kp[0:3], base.kd[0:3], base.ki[0:3])
+    return IDCGains.from_groups(3, position=position, attitude=(w * w, 2 * w, 0.0), arm=_cubed(5.0), filter_omega=20.0)
 
 
 def impedance_table_6_7() -> ImpedanceGains:

@@ -172,21 +172,39 @@ class Instance:
     reference: Callable[[str], object] | None = None
 
 
+@dataclass(frozen=True)
+class FlightSettings:
+    """The options of a Sec. 6.3 flight (defaults and help: the scenario's :attr:`~qprr.scenarios.Scenario.options`):
+    run ``duration`` [s], integration step ``dt`` [s], ``integrator``, ``seed``, transition ``law`` and ``as_printed``
+    (the ``static-*`` flights only; False for the others, which have no such option)."""
+
+    duration: float
+    dt: float
+    integrator: str
+    seed: int
+    law: str
+    as_printed: bool = False
+
+
 def _flight(scenario: str, instance: Instance, bsg: bool = False):
     """The runner of a Sec. 6.3 flight: ``instance`` with the thesis's gains (:func:`flight_gains`), under the CoG
-    stabiliser (BSG) if ``bsg``, named ``scenario``."""
+    stabiliser (BSG) if ``bsg``, named ``scenario``.  The options :meth:`Scenario.run <qprr.scenarios.Scenario.run>`
+    passes by name are gathered into :class:`FlightSettings`; ``plant`` stays a parameter of the runner
+    (:attr:`~qprr.scenarios.Scenario.takes_plant` reads it from the signature)."""
 
-    def runner(platform, controller, progress, duration, dt, integrator, seed, law, plant=None, as_printed=False):
+    def runner(platform, controller, progress, plant=None, **values):
+        o = FlightSettings(**values)
         platform = _q_prr(platform)
-        if as_printed:  # the transition law (6.16) as printed: the quintic
+        law = o.law
+        if o.as_printed:  # the transition law (6.16) as printed: the quintic
             if law not in (DEFAULT_LAW, "quintic"):
                 raise InputError(f"as_printed flies the quintic law (6.16) as printed; law = {law!r} contradicts it")
             law = "quintic"
-        g = flight_gains(controller, as_printed)
+        g = flight_gains(controller, o.as_printed)
         ctrl = CogStabilizer(platform, generic.controller_for(controller, platform, g), theta_e_d=0.0) if bsg else None
         reference = instance.reference(law) if instance.reference is not None else None
         settings = generic.MissionSettings(trajectory=reference, controller=ctrl, plant=plant, name=scenario)
-        options = {"duration": duration, "dt": dt, "integrator": integrator, "seed": seed, "law": law, "gains": g}
+        options = {"duration": o.duration, "dt": o.dt, "integrator": o.integrator, "seed": o.seed, "law": law, "gains": g}
         return instance.generic(platform, controller, progress, settings, **options, **instance.settings)
 
     return runner
@@ -567,7 +585,8 @@ def push_thrust(
     push = as_interval(push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
     trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
-    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    experiment = PushExperiment(xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    return _push(platform, controller, progress, experiment)
 
 
 def push_prismatic(
@@ -589,16 +608,38 @@ def push_prismatic(
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
-    return _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    experiment = PushExperiment(xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    return _push(platform, controller, progress, experiment)
 
 
-def _push(platform, controller, progress, xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed) -> SimResult:
-    """The pushing flight of Thesis Sec. 6.4.3 from ``xi0`` along ``trajectory`` (named after it), the object at the end effector."""
-    obj = PushedMass(platform, mass=object_mass, origin=_ee_world(platform, xi0), stiffness=stiffness, damping=damping, friction=friction)
+@dataclass(frozen=True)
+class PushExperiment:
+    """The settings of one pushing flight of Thesis Sec. 6.4.3 (:func:`push_thrust`, :func:`push_prismatic`).
+
+    The robot starts at rest at ``xi0`` (thesis coordinates) and follows ``trajectory`` (named after the scenario) for
+    ``duration`` [s]; ``push`` = (start, end) [s] of the pushing phase.  The object touches the end effector at the
+    start: ``object_mass`` [kg], Coulomb ``friction`` coefficient on its line, contact ``stiffness`` [N/m] and
+    ``damping`` [N s/m] (:class:`qprr.sim.PushedMass`).  ``seed``: the run's seed."""
+
+    xi0: np.ndarray
+    trajectory: MultiPhase
+    push: tuple[float, float]
+    duration: float
+    object_mass: float
+    friction: float
+    stiffness: float
+    damping: float
+    seed: int
+
+
+def _push(platform, controller, progress, experiment: PushExperiment) -> SimResult:
+    """The pushing flight of Thesis Sec. 6.4.3 set by ``experiment``, the object at the end effector."""
+    e = experiment
+    obj = PushedMass(platform, mass=e.object_mass, origin=_ee_world(platform, e.xi0), stiffness=e.stiffness, damping=e.damping, friction=e.friction)
     ctrl = _push_controller(controller, platform, obj)
-    res = simulate(platform, ctrl, trajectory, duration, external_wrench=obj, seed=seed, progress=progress, scenario=trajectory.name)
+    res = simulate(platform, ctrl, e.trajectory, e.duration, external_wrench=obj, seed=e.seed, progress=progress, scenario=e.trajectory.name)
     _contact_series(res, obj)
-    res.metrics.update({"object_mass": float(object_mass), "push_start": float(push[0]), "push_end": float(push[1])})
+    res.metrics.update({"object_mass": float(e.object_mass), "push_start": float(e.push[0]), "push_end": float(e.push[1])})
     return res
 
 

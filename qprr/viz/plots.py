@@ -251,16 +251,19 @@ def _under(host, twin) -> None:
     host.patch.set_visible(False)
 
 
-def _draw_signals(ax, t, values, labels, *, colors, refs=None, commanded=None, lw=1.4, ref_label="reference"):
-    """Measured curves (solid, colored), commanded curves (dotted) and references (black dashed, on top)."""
+def _draw_signals(ax, t, values, labels, *, colors, commanded=None, lw=1.4):
+    """Measured curves (solid, colored) and, where ``commanded[k]`` is not None, the commanded ones (dotted, same color)."""
     for k, (y, lab) in enumerate(zip(values, labels)):
         ax.plot(t, y, color=colors[k], lw=lw, label=lab, zorder=2)
         if commanded is not None and commanded[k] is not None:
             ax.plot(t, commanded[k], color=colors[k], **COMMANDED_STYLE)
-    for r in refs or ():
-        if r is not None:
-            ax.plot(t, r, label=ref_label, **REFERENCE_STYLE)
-            ref_label = None
+
+
+def _draw_references(ax, t, refs, label) -> None:
+    """References (black dashed, on top of the curves); the first one carries ``label`` (None: no legend entry)."""
+    for r in refs:
+        ax.plot(t, r, label=label, **REFERENCE_STYLE)
+        label = None
 
 
 def length_unit(arrays) -> tuple[str, float]:
@@ -308,10 +311,9 @@ def _coordinate_panel(ax, res, idx, *, what: str, errors: bool = False) -> None:
             vals,
             [pretty(res.names[i]) + tag for i in group],
             colors=[colors[i] for i in group],
-            refs=refs,
             lw=1.1 if errors else 1.4,
-            ref_label=ref_label,
         )
+        _draw_references(a, t, refs, ref_label)
         ref_label = None if refs else ref_label
         if errors:
             a.axhline(0.0, color="0.4", lw=0.6, zorder=1)
