@@ -90,7 +90,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
         code = 0
     except QprrError as err:
-        res = getattr(err, "result", None)
+        res = err.result
         if res is None:
             return fail(prog, f"{type(err).__name__}: {err}")
         print(f"{prog}: {type(err).__name__}: {err}", file=sys.stderr)

@@ -9,7 +9,14 @@ from __future__ import annotations
 
 
 class QprrError(Exception):
-    """Base class of every error raised by qprr."""
+    """Base class of every error raised by qprr.
+
+    ``result``: the partial :class:`~qprr.sim.result.SimResult` of a simulation the error stopped (set by
+    :func:`qprr.sim.simulate` on the error it raises: the log up to the failure, status DIVERGED or FAILED); None for
+    every other error.
+    """
+
+    result = None
 
 
 class InputError(QprrError, ValueError):

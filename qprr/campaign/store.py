@@ -160,7 +160,7 @@ def _writes(path: Path, fn, *args):
     except ResultsWriteError:
         raise
     except OSError as exc:
-        raise ResultsWriteError(getattr(exc, "filename", None) or path, exc) from exc
+        raise ResultsWriteError(exc.filename or path, exc) from exc
 
 
 def _write_all(fd: int, data: bytes) -> None:

@@ -185,7 +185,7 @@ def execute(ctx: Context, run: Run) -> dict[str, object]:
                 ),
             )
     except QprrError as err:
-        result = getattr(err, "result", None)
+        result = err.result
         status = None if result is not None else "failed"
         reason = f"{type(err).__name__}: {err}"
     except Exception as err:  # a bug in a target must not lose the campaign: recorded, then visible in the table

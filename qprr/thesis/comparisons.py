@@ -76,7 +76,7 @@ class _Runs:
             try:
                 res = sc.run(controller=controller, progress=self.progress, **options)
             except QprrError as err:
-                res = getattr(err, "result", None)
+                res = err.result
                 if res is None:
                     raise
             res.metrics.setdefault("comparison_wall_s", time.perf_counter() - t0)
@@ -194,7 +194,7 @@ def _bsg_run(theta_e: float, theta2: float, duration: float, progress: bool) -> 
     try:
         return simulate(platform, ctrl, dynamic_mission(theta2_d=theta2), duration, progress=progress, scenario="dynamic-bsg")
     except QprrError as err:
-        if getattr(err, "result", None) is None:
+        if err.result is None:
             raise
         return err.result
 
@@ -426,7 +426,7 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
                     platform, flight_controller(c, platform), static_mission(), duration, actuators=act, progress=runs.progress, scenario="lag"
                 )
             except QprrError as err:
-                r = getattr(err, "result", None)
+                r = err.result
                 if r is None:
                     raise
             table[c].append((T, str(r.status), max(r.rmse()[n] for n in "xyz") if r.status == "ok" else float(r.t[-1])))

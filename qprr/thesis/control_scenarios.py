@@ -43,7 +43,7 @@ import numpy as np
 from .. import missions as generic
 from ..actuation import IdealAllocator
 from ..control import IDCGains, InverseDynamicsController
-from ..errors import UnknownNameError
+from ..errors import QprrError, UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..sim import SimConfig, SimResult, simulate
@@ -231,8 +231,8 @@ def _aggressive(platform, controller, progress, settings: AggressiveReachSetting
     options = {"duration": o.duration, "dt": o.dt, "integrator": o.integrator, "seed": o.seed, "gains": flight_gains(controller), "mission": ""}
     try:
         res = generic.mission(platform, controller, progress, mission, **options)
-    except Exception as err:  # a diverged run still reports its margins
-        res = getattr(err, "result", None)
+    except QprrError as err:  # a diverged run still reports its margins
+        res = err.result
         if res is None:
             raise
         _with_margins(res, platform)
@@ -289,8 +289,8 @@ def _realistic(platform, controller, progress, settings: RealisticSettings):
             res = generic.motor_lag(platform, controller, progress, mission, tau=o.time_constant, thrust_factor=b, **options)
         else:
             res = generic.mission(platform, controller, progress, mission, mission="", **options)
-    except Exception as err:
-        if getattr(err, "result", None) is not None:
+    except QprrError as err:
+        if err.result is not None:
             _realistic_metrics(err.result, platform)
         raise
     return _realistic_metrics(res, platform)

@@ -1046,7 +1046,7 @@ def compare(
         try:
             res = by_name[f"static-{c}"].run(platform=platform, controller=c, progress=progress, duration=duration, dt=dt)
         except QprrError as err:
-            res = getattr(err, "result", None)
+            res = err.result
             if res is None:
                 raise
         rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, str(res.status), res.reason
