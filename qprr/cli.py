@@ -62,7 +62,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     try:
         plot_path = output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
         save_path = output_path(args.save, (".npz",), "save")
-        anim_path = output_path(getattr(args, "animate", None), (".gif", ".mp4"), "animate")
+        anim_path = output_path(args.animate, (".gif", ".mp4"), "animate")
     except ValueError as exc:
         return fail(prog, str(exc))
     if args.gains is not None:
