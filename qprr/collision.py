@@ -187,6 +187,7 @@ class CollisionModel:
         gdata = set_margin(self.geometry, pool.getGeometryData(0))
         final = not any(r.security_margin > 0.0 for r in gdata.collisionRequests)  # no convex pair: coal decides
         data = self.new_data()
+        rows_q = np.ascontiguousarray(full.T)  # row i: the configuration of rows[i], contiguous for Pinocchio
         packed = np.packbits(near, axis=1)
         keys = np.ascontiguousarray(packed).view(np.dtype((np.void, packed.shape[1]))).reshape(-1)
         _, first, group = np.unique(keys, return_index=True, return_inverse=True)
@@ -200,7 +201,7 @@ class CollisionModel:
                 gdata.activateCollisionPair(int(k))
             flagged = members[np.asarray(pin.computeCollisionsInParallel(1, pool, np.asfortranarray(full[:, members]), True), dtype=bool)]
             for i in flagged:
-                out[rows[i]] = final or decide(self.model, self.geometry, data, np.ascontiguousarray(full[:, i]), active)
+                out[rows[i]] = final or decide(self.model, self.geometry, data, rows_q[i], active)
         return out
 
     def summary(self) -> str:
@@ -376,7 +377,7 @@ SCREEN_TOLERANCE = 1e-3
 """[m] A pair is skipped by :class:`PairScreen` only when its distance is proved larger than :data:`CONTACT_MARGIN`
 plus this (rounding of the numpy kinematics and of coal's GJK, both far below it)."""
 
-SCREEN_CELL = 0.02
+SCREEN_CELL = 0.04
 """[m] How far the geometries may move inside a cell of :class:`PairScreen`'s finest level (the slack its bound
 gives away): smaller cells prove more pairs far and cost more cells."""
 
@@ -460,6 +461,8 @@ class PairScreen:
         self.first = np.array([int(cp.first) for cp in geom.collisionPairs], dtype=np.int64)
         self.second = np.array([int(cp.second) for cp in geom.collisionPairs], dtype=np.int64)
         self.unbounded = ~np.isfinite(self.radius[self.first] + self.radius[self.second])
+        self.local = np.concatenate([self.ends, self.slab_centre[:, None], self.slab_normal[:, None]], axis=1)  # (G, 4, 3)
+        self.by_joint = [(int(j), np.flatnonzero(self.joint == j)) for j in np.unique(self.joint)]
         self.prismatic = np.array([j.kind == "prismatic" for j in platform.arm])
         self.lever0, self.lever_q = self._levers(platform.model, [j.joint_id for j in platform.arm])
 
@@ -492,35 +495,41 @@ class PairScreen:
                         lever_q[p, k, column[jj]] += 1.0 if self.prismatic[column[jj]] else 0.0
         return lever0, lever_q
 
-    def _world(self, C: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """At arm configurations ``C`` (n, n_arm): capsule ends (n, G, 2, 3), slab normals and centres (n, G, 3) in B."""
+    def _world(self, C: np.ndarray) -> np.ndarray:
+        """(n, G, 4, 3): at arm configurations ``C`` (n, n_arm), per geometry its capsule's two ends, its slab's
+        centre and its slab's normal, in B (the rotation entries of :meth:`qprr.analysis.ArmChain.pose` that are
+        exact zeros are skipped)."""
         pose = self.chain.pose(C)
-        n, G = C.shape[0], len(self.joint)
-        ends, normal, centre = np.empty((n, G, 2, 3)), np.empty((n, G, 3)), np.empty((n, G, 3))
-        for j in np.unique(self.joint):
-            R, p = np.empty((n, 3, 3)), np.empty((n, 3))
+        n = C.shape[0]
+        out = np.empty((n, len(self.joint), 4, 3))
+        translate = np.array([1.0, 1.0, 1.0, 0.0])  # the normal is a direction
+        for j, g in self.by_joint:
+            X = self.local[g]  # (k, 4, 3)
+            coords = []
             for a in range(3):
-                p[:, a] = pose.p[int(j)][a]
+                acc = np.multiply.outer(np.broadcast_to(pose.p[j][a], (n,)), translate)[:, None, :]
                 for b in range(3):
-                    R[:, a, b] = pose.R[int(j)][a][b]
-            g = np.flatnonzero(self.joint == j)
-            ends[:, g] = np.einsum("nab,geb->ngea", R, self.ends[g]) + p[:, None, None, :]
-            normal[:, g] = np.einsum("nab,gb->nga", R, self.slab_normal[g])
-            centre[:, g] = np.einsum("nab,gb->nga", R, self.slab_centre[g]) + p[:, None, :]
-        return ends, normal, centre
+                    e = pose.R[j][a][b]
+                    if not isinstance(e, float):
+                        acc = acc + e[:, None, None] * X[None, :, :, b]
+                    elif e != 0.0:
+                        acc = acc + e * X[None, :, :, b]
+                coords.append(np.broadcast_to(acc, (n, g.size, 4)))
+            out[:, g] = np.stack(coords, axis=-1)
+        return out
 
     def lower_bounds(self, C: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
         """(K,) lower bounds [m] of the distance of pair ``pairs[k]`` at configuration ``C[cells[k]]`` (-inf for a
         pair with an unbounded shape)."""
-        ends, normal, centre = self._world(C)
+        world = self._world(C)
         a, b = self.first[pairs], self.second[pairs]
-        ea, eb = ends[cells, a], ends[cells, b]
+        ea, eb = world[cells, a, :2], world[cells, b, :2]
         with np.errstate(invalid="ignore"):
             bound = _segment_distance(ea[:, 0], ea[:, 1], eb[:, 0], eb[:, 1]) - self.radius[a] - self.radius[b]
             for x, y, ey in ((a, b, eb), (b, a, ea)):
                 k = np.flatnonzero(self.slab[x])
                 if k.size:
-                    n, c = normal[cells[k], x[k]], centre[cells[k], x[k]]
+                    c, n = world[cells[k], x[k], 2], world[cells[k], x[k], 3]
                     h1 = np.einsum("ka,ka->k", ey[k, 0] - c, n)
                     h2 = np.einsum("ka,ka->k", ey[k, 1] - c, n)
                     gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x[k]] - self.radius[y[k]]
