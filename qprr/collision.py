@@ -382,31 +382,33 @@ SCREEN_CELL = 0.04
 gives away): smaller cells prove more pairs far and cost more cells."""
 
 
-def _hull(obj: pin.GeometryObject) -> tuple[np.ndarray, float, tuple | None]:
-    """(segment ends (2, 3), radius) of a capsule containing the geometry, in its joint's frame, and (normal, centre,
-    half-thickness) of a slab containing it (a cylinder's: between its end caps) or None.  A shape other than a
-    sphere, cylinder, capsule or box gets the sphere around its local AABB (infinite for a plane: never skipped)."""
+def _hull(obj: pin.GeometryObject) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, np.ndarray]:
+    """Enclosures of a geometry in its joint's frame: (segment ends (2, 3), radius) of a capsule containing it, and
+    three slabs containing it: (normals (3, 3) as rows, centre (3,), half-thicknesses (3,); inf for no slab).  A
+    cylinder's slab lies between its end caps, a box's slabs between its faces; a shape other than a sphere,
+    cylinder, capsule or box is taken as its local AABB (a box; infinite for a plane: never skipped)."""
     import coal
 
     shape, M = obj.geometry, obj.placement
     R, t = np.array(M.rotation), np.array(M.translation)
+    none = np.full(3, math.inf)
     if isinstance(shape, coal.Sphere):
-        return np.array([t, t]), float(shape.radius), None
+        return np.array([t, t]), float(shape.radius), R.T, t, none
     if isinstance(shape, (coal.Cylinder, coal.Capsule)):
         h, axis = float(shape.halfLength), R[:, 2]
-        slab = (axis, t, h) if isinstance(shape, coal.Cylinder) else None
-        return np.array([t - h * axis, t + h * axis]), float(shape.radius), slab
+        half = np.array([math.inf, math.inf, h]) if isinstance(shape, coal.Cylinder) else none
+        return np.array([t - h * axis, t + h * axis]), float(shape.radius), R.T, t, half
     if isinstance(shape, coal.Box):
-        half = np.array(shape.halfSide, dtype=float)
-        k, thin = int(np.argmax(half)), int(np.argmin(half))
-        ends = np.array([t - half[k] * R[:, k], t + half[k] * R[:, k]])
-        return ends, float(np.linalg.norm(np.delete(half, k))), (R[:, thin], t, float(half[thin]))
-    shape.computeLocalAABB()
-    lo, hi = np.array(shape.aabb_local.min_), np.array(shape.aabb_local.max_)
-    if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
-        return np.array([t, t]), math.inf, None
-    c = R @ (0.5 * (lo + hi)) + t
-    return np.array([c, c]), 0.5 * float(np.linalg.norm(hi - lo)), None
+        c, half = t, np.array(shape.halfSide, dtype=float)
+    else:
+        shape.computeLocalAABB()
+        lo, hi = np.array(shape.aabb_local.min_), np.array(shape.aabb_local.max_)
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            return np.array([t, t]), math.inf, R.T, t, none
+        c, half = R @ (0.5 * (lo + hi)) + t, 0.5 * (hi - lo)
+    k = int(np.argmax(half))  # the capsule along the box's longest side
+    ends = np.array([c - half[k] * R[:, k], c + half[k] * R[:, k]])
+    return ends, float(np.linalg.norm(np.delete(half, k))), R.T, c, half
 
 
 def _segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -433,10 +435,11 @@ class PairScreen:
     """Which collision pairs of a batch of arm configurations may be within :data:`CONTACT_MARGIN`: a conservative
     numpy bound, so that :meth:`CollisionModel.colliding_batch` asks coal about the others only.
 
-    Each geometry is enclosed in a capsule (and a cylinder or box also in the slab between two parallel faces):
-    the distance of a pair is at least that of the capsules, and at least the gap between one's slab and the
-    other's capsule.  The bound is evaluated at the centres of cells of joint space: moving joint j by dq_j moves a
-    point x of a geometry by at most |x - o_j| |dq_j| (revolute, o_j on its axis) or |dq_j| (prismatic), and
+    Each geometry is enclosed in a capsule and up to three slabs (a cylinder's between its end caps, a box's or a
+    mesh's AABB's between opposite faces): the distance of a pair is at least that of the capsules, and at least the
+    gap between one's slab and the other's capsule.  The bound is evaluated at the centres of cells of joint space:
+    moving joint j by dq_j moves a point x of a geometry by at most |x - o_j| |dq_j| (revolute, o_j on its axis) or
+    |dq_j| (prismatic), and
     |x - o_j| is at most the lengths of the joint offsets down to the geometry, the prismatic strokes among them and
     the geometry's extent in its joint frame (a lever per pair and joint, joints that move both geometries not
     counted).  So over a cell of half-widths w_j the distance falls by at most sum_j lever_j w_j from the centre's.
@@ -454,14 +457,12 @@ class PairScreen:
         self.joint = np.array([int(o.parentJoint) for o in objs])
         self.ends = np.array([h[0] for h in hulls])
         self.radius = np.array([h[1] for h in hulls])
-        self.slab = np.array([h[2] is not None for h in hulls])
-        self.slab_normal = np.array([h[2][0] if h[2] else np.zeros(3) for h in hulls])
-        self.slab_centre = np.array([h[2][1] if h[2] else np.zeros(3) for h in hulls])
-        self.slab_half = np.array([h[2][2] if h[2] else 0.0 for h in hulls])
+        self.slab_half = np.array([h[4] for h in hulls])  # (G, 3)
+        normals, centres = np.array([h[2] for h in hulls]), np.array([h[3] for h in hulls])
         self.first = np.array([int(cp.first) for cp in geom.collisionPairs], dtype=np.int64)
         self.second = np.array([int(cp.second) for cp in geom.collisionPairs], dtype=np.int64)
         self.unbounded = ~np.isfinite(self.radius[self.first] + self.radius[self.second])
-        self.local = np.concatenate([self.ends, self.slab_centre[:, None], self.slab_normal[:, None]], axis=1)  # (G, 4, 3)
+        self.local = np.concatenate([self.ends, centres[:, None], normals], axis=1)  # (G, 6, 3): ends, centre, normals
         self.by_joint = [(int(j), np.flatnonzero(self.joint == j)) for j in np.unique(self.joint)]
         self.prismatic = np.array([j.kind == "prismatic" for j in platform.arm])
         self.lever0, self.lever_q = self._levers(platform.model, [j.joint_id for j in platform.arm])
@@ -496,15 +497,15 @@ class PairScreen:
         return lever0, lever_q
 
     def _world(self, C: np.ndarray) -> np.ndarray:
-        """(n, G, 4, 3): at arm configurations ``C`` (n, n_arm), per geometry its capsule's two ends, its slab's
-        centre and its slab's normal, in B (the rotation entries of :meth:`qprr.analysis.ArmChain.pose` that are
+        """(n, G, 6, 3): at arm configurations ``C`` (n, n_arm), per geometry its capsule's two ends, its slabs'
+        centre and their three normals, in B (the rotation entries of :meth:`qprr.analysis.ArmChain.pose` that are
         exact zeros are skipped)."""
         pose = self.chain.pose(C)
         n = C.shape[0]
-        out = np.empty((n, len(self.joint), 4, 3))
-        translate = np.array([1.0, 1.0, 1.0, 0.0])  # the normal is a direction
+        out = np.empty((n, len(self.joint), 6, 3))
+        translate = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])  # the normals are directions
         for j, g in self.by_joint:
-            X = self.local[g]  # (k, 4, 3)
+            X = self.local[g]  # (k, 6, 3)
             coords = []
             for a in range(3):
                 acc = np.multiply.outer(np.broadcast_to(pose.p[j][a], (n,)), translate)[:, None, :]
@@ -514,25 +515,28 @@ class PairScreen:
                         acc = acc + e[:, None, None] * X[None, :, :, b]
                     elif e != 0.0:
                         acc = acc + e * X[None, :, :, b]
-                coords.append(np.broadcast_to(acc, (n, g.size, 4)))
+                coords.append(np.broadcast_to(acc, (n, g.size, 6)))
             out[:, g] = np.stack(coords, axis=-1)
         return out
 
     def lower_bounds(self, C: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-        """(K,) lower bounds [m] of the distance of pair ``pairs[k]`` at configuration ``C[cells[k]]`` (-inf for a
-        pair with an unbounded shape)."""
+        """(K,) lower bounds [m] of the distance of pair ``pairs[k]`` at configuration ``C[cells[k]]``: the larger of
+        the capsules' distance and the gaps between one's slabs and the other's capsule (-inf for a pair with an
+        unbounded shape)."""
         world = self._world(C)
         a, b = self.first[pairs], self.second[pairs]
         ea, eb = world[cells, a, :2], world[cells, b, :2]
         with np.errstate(invalid="ignore"):
             bound = _segment_distance(ea[:, 0], ea[:, 1], eb[:, 0], eb[:, 1]) - self.radius[a] - self.radius[b]
             for x, y, ey in ((a, b, eb), (b, a, ea)):
-                k = np.flatnonzero(self.slab[x])
-                if k.size:
-                    c, n = world[cells[k], x[k], 2], world[cells[k], x[k], 3]
-                    h1 = np.einsum("ka,ka->k", ey[k, 0] - c, n)
-                    h2 = np.einsum("ka,ka->k", ey[k, 1] - c, n)
-                    gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x[k]] - self.radius[y[k]]
+                for s in range(3):
+                    k = np.flatnonzero(np.isfinite(self.slab_half[x, s]))
+                    if k.size == 0:
+                        continue
+                    c, normal = world[cells[k], x[k], 2], world[cells[k], x[k], 3 + s]
+                    h1 = np.einsum("ka,ka->k", ey[k, 0] - c, normal)
+                    h2 = np.einsum("ka,ka->k", ey[k, 1] - c, normal)
+                    gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x[k], s] - self.radius[y[k]]
                     bound[k] = np.maximum(bound[k], gap)
         return np.where(self.unbounded[pairs], -math.inf, bound)
 
