@@ -167,18 +167,24 @@ class CollisionModel:
                 progress(i + 1, Q.shape[0])
         return out
 
-    def colliding_batch(self, q_arm) -> np.ndarray:
+    def colliding_batch(self, q_arm, screen: bool = True) -> np.ndarray:
         """:meth:`colliding_arm` without the progress callback, the same answers, faster: the pairs that
         :attr:`screen` proves farther than :data:`CONTACT_MARGIN` are skipped (a configuration with none left is
-        free), the others are screened in C++ (``pin.computeCollisionsInParallel`` with one thread over a
-        one-element ``pin.GeometryPool``, only those pairs active; configurations grouped by their set of pairs) and
-        the configurations with a pair within the margin are decided pair by pair as :meth:`colliding`."""
+        free; ``screen=False``: no pair skipped, the reference), the others are screened in C++
+        (``pin.computeCollisionsInParallel`` with one thread over a one-element ``pin.GeometryPool``, only those
+        pairs active; configurations grouped by their set of pairs) and the configurations with a pair within the
+        margin are decided pair by pair as :meth:`colliding` (:func:`decide`)."""
         Q = np.atleast_2d(np.asarray(q_arm, dtype=float))
         if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
+        if screen not in (True, False):
+            raise InputError(f"screen must be True (skip the pairs proved far) or False (check every pair), got {screen!r}")
         out = np.zeros(Q.shape[0], dtype=bool)
-        rows, near = self.screen.near_pairs(Q)
-        if rows.size == 0:
+        if screen:
+            rows, near = self.screen.near_pairs(Q)
+        else:
+            rows, near = np.arange(Q.shape[0]), np.ones((Q.shape[0], len(self.pairs)), dtype=bool)
+        if rows.size == 0 or not self.pairs:
             return out
         full = np.empty((self.model.nq, rows.size), order="F")
         full[:7] = self.neutral_q[:7, None]
@@ -525,19 +531,14 @@ class PairScreen:
         unbounded shape)."""
         world = self._world(C)
         a, b = self.first[pairs], self.second[pairs]
-        ea, eb = world[cells, a, :2], world[cells, b, :2]
+        wa, wb = world[cells, a], world[cells, b]  # (K, 6, 3)
         with np.errstate(invalid="ignore"):
-            bound = _segment_distance(ea[:, 0], ea[:, 1], eb[:, 0], eb[:, 1]) - self.radius[a] - self.radius[b]
-            for x, y, ey in ((a, b, eb), (b, a, ea)):
-                for s in range(3):
-                    k = np.flatnonzero(np.isfinite(self.slab_half[x, s]))
-                    if k.size == 0:
-                        continue
-                    c, normal = world[cells[k], x[k], 2], world[cells[k], x[k], 3 + s]
-                    h1 = np.einsum("ka,ka->k", ey[k, 0] - c, normal)
-                    h2 = np.einsum("ka,ka->k", ey[k, 1] - c, normal)
-                    gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x[k], s] - self.radius[y[k]]
-                    bound[k] = np.maximum(bound[k], gap)
+            bound = _segment_distance(wa[:, 0], wa[:, 1], wb[:, 0], wb[:, 1]) - self.radius[a] - self.radius[b]
+            for x, wx, wy, y in ((a, wa, wb, b), (b, wb, wa, a)):
+                h1 = np.einsum("ka,ksa->ks", wy[:, 0] - wx[:, 2], wx[:, 3:])  # (K, 3): the capsule's ends over the slabs
+                h2 = np.einsum("ka,ksa->ks", wy[:, 1] - wx[:, 2], wx[:, 3:])
+                gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x]
+                bound = np.maximum(bound, gap.max(axis=1) - self.radius[y])
         return np.where(self.unbounded[pairs], -math.inf, bound)
 
     def _cells(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
@@ -558,7 +559,9 @@ class PairScreen:
 
     def near_pairs(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(rows (k,), near (k, P) bool): the rows of the arm configurations ``Q`` (m, n_arm) where some pair is not
-        proved farther apart than :data:`CONTACT_MARGIN`, and those pairs; no pair is in contact at the other rows."""
+        proved farther apart than :data:`CONTACT_MARGIN`, and those pairs; no pair is in contact at the other rows.
+        The descent stops at a level whose cells would hold fewer than two configurations each on average (an arm
+        of many joints on a small batch): the near pairs are then those of the level above."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
         n_pairs = len(self.first)
         if Q.shape[0] == 0 or n_pairs == 0:
@@ -569,13 +572,16 @@ class PairScreen:
             key = index[todo] >> level
             flat = np.ravel_multi_index(tuple(key.T), tuple((index.max(axis=0) >> level) + 1))
             _, first, inv = np.unique(flat, return_index=True, return_inverse=True)
-            active = near[parent[first]]
-            cells, pairs = np.nonzero(active)
+            inv = inv.reshape(-1)
+            if 2 * first.size > todo.size:  # cells of one configuration or two: the bound costs as much as coal
+                break
             centre = lo + (key[first] + 0.5) * (width * 2.0**level)
             slack = lever @ (width * 2.0 ** (level - 1))
+            active = near[parent[first]]
+            cells, pairs = np.nonzero(active)
             bound = self.lower_bounds(centre, cells, pairs) - slack[pairs]
             near = np.zeros_like(active)
             near[cells, pairs] = bound <= CONTACT_MARGIN + SCREEN_TOLERANCE
-            keep = near.any(axis=1)[inv.reshape(-1)]
-            todo, parent = todo[keep], inv.reshape(-1)[keep]
+            keep = near.any(axis=1)[inv]
+            todo, parent = todo[keep], inv[keep]
         return todo, near[parent]
