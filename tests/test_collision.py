@@ -75,9 +75,9 @@ def test_pendulum_collision_matches_the_closed_form(pendulum_cm):
 
 @pytest.mark.parametrize("name", ["q-prr", "HEX-RRR"])
 def test_batched_check_answers_as_the_python_loop(name):
-    """colliding_batch (Pinocchio's C++ loop) gives colliding_arm's answers configuration for configuration, in grid
-    order and shuffled, the configurations near contact included (both start from a fresh GeometryData and keep it
-    through the batch)."""
+    """colliding_batch (Pinocchio's C++ loop, the pair screen on or off) gives colliding_arm's answers configuration
+    for configuration, in grid order and shuffled, the configurations near contact included (both start from a
+    fresh GeometryData and keep it through the batch)."""
     p = qprr.platforms.resolve(name)
     cm = collision_model(p)
     grid = make_grid(p, 200_000)
@@ -86,8 +86,12 @@ def test_batched_check_answers_as_the_python_loop(name):
         ref = cm.colliding_arm(q)
         assert ref.any() and not ref.all()
         assert np.array_equal(cm.colliding_batch(q), ref)
+        assert np.array_equal(cm.colliding_batch(q, screen=False), ref)
     with pytest.raises(InputError, match="q_arm"):
         cm.colliding_batch(np.zeros((4, p.n_arm + 1)))
+    with pytest.raises(InputError, match="screen"):
+        cm.colliding_batch(q, screen="yes")
+    assert cm.colliding_batch(np.zeros((0, p.n_arm))).shape == (0,)
 
 
 @pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2"])
