@@ -179,6 +179,8 @@ class CollisionModel:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
         if screen not in (True, False):
             raise InputError(f"screen must be True (skip the pairs proved far) or False (check every pair), got {screen!r}")
+        if not np.all(np.isfinite(Q)):
+            raise InputError(f"q_arm must be finite: rows {np.flatnonzero(~np.isfinite(Q).all(axis=1))[:5].tolist()} are not")
         out = np.zeros(Q.shape[0], dtype=bool)
         if screen:
             rows, near = self.screen.near_pairs(Q)
@@ -563,6 +565,8 @@ class PairScreen:
         The descent stops at a level whose cells would hold fewer than two configurations each on average (an arm
         of many joints on a small batch): the near pairs are then those of the level above."""
         Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        if Q.ndim != 2 or Q.shape[1] != self.chain.n_arm or not np.all(np.isfinite(Q)):
+            raise InputError(f"Q must be a finite (m, {self.chain.n_arm}) array of arm configurations, got shape {Q.shape}")
         n_pairs = len(self.first)
         if Q.shape[0] == 0 or n_pairs == 0:
             return np.zeros(0, dtype=np.int64), np.zeros((0, n_pairs), dtype=bool)

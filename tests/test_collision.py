@@ -91,6 +91,8 @@ def test_batched_check_answers_as_the_python_loop(name):
         cm.colliding_batch(np.zeros((4, p.n_arm + 1)))
     with pytest.raises(InputError, match="screen"):
         cm.colliding_batch(q, screen="yes")
+    with pytest.raises(InputError, match="finite"):
+        cm.colliding_batch(np.full((2, p.n_arm), np.nan))
     assert cm.colliding_batch(np.zeros((0, p.n_arm))).shape == (0,)
 
 
