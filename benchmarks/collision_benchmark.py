@@ -3,10 +3,12 @@
     python benchmarks/collision_benchmark.py [N_SAMPLES]     (default 100000; --quick: 3000, the tests' smoke run)
 
 Per shipped platform: the collision model (pairs checked), the time of the workspace map without the filter and of
-the collision check (``pin.computeCollisions`` per configuration of the same joint grid, early exit), both measured
-in this run, their ratio, the cost per configuration, and the collision-free fraction; for grids up to 300000
-configurations also the check of every configuration (the reference of the coarse-to-fine inference) and how many
-configurations the two disagree on.  Exits 0.
+the collision check (the coarse-to-fine mask over the same joint grid, ``CollisionModel.colliding_batch``), both
+measured in this run, their ratio, the cost per configuration, and the collision-free fraction; the same mask with
+the pair screen off (``colliding_batch(..., screen=False)``: every pair of every configuration checked by coal), its
+CPU time against the screened one's (measured alternately, best of two each) and whether the two masks are
+identical; for grids up to 300000 configurations also the check of every configuration (the reference of the
+coarse-to-fine inference) and how many configurations the two disagree on.  Exits 0.
 """
 
 from __future__ import annotations
@@ -15,12 +17,38 @@ import os
 import sys
 import time
 
+import numpy as np
+
 import qprr
 from qprr.analysis import workspace
 from qprr.analysis._common import collision_mask, make_grid
 from qprr.collision import collision_model
 
 PLATFORMS = ("q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
+
+
+class Unscreened:
+    """A collision model whose batched check has the pair screen off (the reference of the screened check)."""
+
+    def __init__(self, model) -> None:
+        self.model = model
+
+    def colliding_batch(self, q_arm):
+        return self.model.colliding_batch(q_arm, screen=False)
+
+
+def screen_ratio(cm, grid) -> str:
+    """CPU time of the coarse-to-fine mask with the pair screen off and on (best of two each, alternated)."""
+    times: dict[str, list[float]] = {"off": [], "on": []}
+    masks = {}
+    for _ in range(2):
+        for label, model in (("off", Unscreened(cm)), ("on", cm)):
+            t = time.process_time()
+            masks[label] = collision_mask(model, grid).free
+            times[label].append(time.process_time() - t)
+    off, on = min(times["off"]), min(times["on"])
+    same = "identical" if np.array_equal(masks["off"], masks["on"]) else f"{int((masks['off'] != masks['on']).sum())} configurations DIFFER"
+    return f"    pair screen: CPU {off:.2f} s off, {on:.2f} s on (x{off / on:.1f}); masks {same}"
 
 
 def main(n_samples: int, exact_max: int = 300_000) -> int:
@@ -46,6 +74,7 @@ def main(n_samples: int, exact_max: int = 300_000) -> int:
             f"collision-free {100 * mask.free.mean():.2f}%; {mask.describe()}",
             flush=True,
         )
+        print(screen_ratio(cm, grid), flush=True)
         if exact is not None:
             print(
                 f"    every configuration checked: {t_exact:.2f} s (x{t_exact / t_coll:.1f} the coarse-to-fine check); "

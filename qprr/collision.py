@@ -105,7 +105,8 @@ class CollisionModel:
     ``geometry``: the ``pin.GeometryModel`` (its ``collisionPairs`` are the pairs checked); ``model``: the platform's
     Pinocchio model; ``pairs``, ``adjacent``, ``neutral_contacts``: (name, name) of the pairs checked, of those
     skipped because their bodies are adjacent, and of those skipped because they touch at the neutral configuration;
-    ``discs``: (rotor name, radius [m], "rotor file" or "default") of every disc qprr added.
+    ``discs``: (rotor name, radius [m], "rotor file" or "default") of every disc qprr added; ``screen``: the
+    :class:`PairScreen` of these pairs (which pairs :meth:`colliding_batch` may skip).
     """
 
     platform_name: str
@@ -116,6 +117,7 @@ class CollisionModel:
     adjacent: tuple[tuple[str, str], ...]
     neutral_contacts: tuple[tuple[str, str], ...]
     discs: tuple[tuple[str, float, str], ...]
+    screen: PairScreen
 
     def new_data(self) -> tuple[pin.Data, pin.GeometryData]:
         """Fresh (pin.Data, pin.GeometryData) for the calls below (one pair per thread; :data:`CONTACT_MARGIN` set)."""
@@ -165,25 +167,49 @@ class CollisionModel:
                 progress(i + 1, Q.shape[0])
         return out
 
-    def colliding_batch(self, q_arm) -> np.ndarray:
-        """:meth:`colliding_arm` without the progress callback, the same answers: the screening loop in C++ (which
-        configurations have some pair within :data:`CONTACT_MARGIN`: ``pin.computeCollisionsInParallel`` with one
-        thread over a one-element ``pin.GeometryPool``), then those few decided pair by pair as :meth:`colliding`."""
+    def colliding_batch(self, q_arm, screen: bool = True) -> np.ndarray:
+        """:meth:`colliding_arm` without the progress callback, the same answers, faster: the pairs that
+        :attr:`screen` proves farther than :data:`CONTACT_MARGIN` are skipped (a configuration with none left is
+        free; ``screen=False``: no pair skipped, the reference), the others are screened in C++
+        (``pin.computeCollisionsInParallel`` with one thread over a one-element ``pin.GeometryPool``, only those
+        pairs active; configurations grouped by their set of pairs) and the configurations with a pair within the
+        margin are decided pair by pair as :meth:`colliding` (:func:`decide`)."""
         Q = np.atleast_2d(np.asarray(q_arm, dtype=float))
         if Q.ndim != 2 or Q.shape[1] != self.model.nq - 7:
             raise InputError(f"q_arm must be (m, {self.model.nq - 7}), got shape {Q.shape}")
-        full = np.empty((self.model.nq, Q.shape[0]), order="F")
-        full[:7] = self.neutral_q[:7, None]
-        full[7:] = Q.T
-        pool = pin.GeometryPool(self.model, self.geometry, 1)
-        set_margin(self.geometry, pool.getGeometryData(0))
-        near = np.asarray(pin.computeCollisionsInParallel(1, pool, full, True), dtype=bool)
-        if not any(r.security_margin > 0.0 for r in pool.getGeometryData(0).collisionRequests):
-            return near  # no pair of two convex shapes: coal's answers are final
-        data = self.new_data()
+        if screen not in (True, False):
+            raise InputError(f"screen must be True (skip the pairs proved far) or False (check every pair), got {screen!r}")
+        if not np.all(np.isfinite(Q)):
+            raise InputError(f"q_arm must be finite: rows {np.flatnonzero(~np.isfinite(Q).all(axis=1))[:5].tolist()} are not")
         out = np.zeros(Q.shape[0], dtype=bool)
-        for i in np.flatnonzero(near):
-            out[i] = bool(contacts(self.model, self.geometry, data, np.ascontiguousarray(full[:, i]), first=True))
+        if screen:
+            rows, near = self.screen.near_pairs(Q)
+        else:
+            rows, near = np.arange(Q.shape[0]), np.ones((Q.shape[0], len(self.pairs)), dtype=bool)
+        if rows.size == 0 or not self.pairs:
+            return out
+        full = np.empty((self.model.nq, rows.size), order="F")
+        full[:7] = self.neutral_q[:7, None]
+        full[7:] = Q[rows].T
+        pool = pin.GeometryPool(self.model, self.geometry, 1)
+        gdata = set_margin(self.geometry, pool.getGeometryData(0))
+        final = not any(r.security_margin > 0.0 for r in gdata.collisionRequests)  # no convex pair: coal decides
+        data = self.new_data()
+        rows_q = np.ascontiguousarray(full.T)  # row i: the configuration of rows[i], contiguous for Pinocchio
+        packed = np.packbits(near, axis=1)
+        keys = np.ascontiguousarray(packed).view(np.dtype((np.void, packed.shape[1]))).reshape(-1)
+        _, first, group = np.unique(keys, return_index=True, return_inverse=True)
+        order = np.argsort(group.reshape(-1), kind="stable")
+        bounds = np.searchsorted(group.reshape(-1)[order], np.arange(first.size + 1))
+        for s, row in enumerate(first):
+            members = order[bounds[s] : bounds[s + 1]]
+            active = np.flatnonzero(near[row])
+            gdata.deactivateAllCollisionPairs()
+            for k in active:
+                gdata.activateCollisionPair(int(k))
+            flagged = members[np.asarray(pin.computeCollisionsInParallel(1, pool, np.asfortranarray(full[:, members]), True), dtype=bool)]
+            for i in flagged:
+                out[rows[i]] = final or decide(self.model, self.geometry, data, rows_q[i], active)
         return out
 
     def summary(self) -> str:
@@ -228,7 +254,8 @@ def collision_model(platform: Platform, *, package_dirs: Sequence[str] | None = 
         )
     discs = _add_discs(platform, geom)
     pairs, adjacent, contacts = _select_pairs(platform, geom)
-    return CollisionModel(platform.name, model, geom, platform.neutral_q(), pairs, adjacent, contacts, discs)
+    screen = PairScreen(platform, geom)
+    return CollisionModel(platform.name, model, geom, platform.neutral_q(), pairs, adjacent, contacts, discs, screen)
 
 
 def _add_discs(platform: Platform, geom: pin.GeometryModel) -> tuple[tuple[str, float, str], ...]:
@@ -292,6 +319,21 @@ def contacts(model: pin.Model, geom: pin.GeometryModel, data: tuple, q: np.ndarr
     return out
 
 
+def decide(model: pin.Model, geom: pin.GeometryModel, data: tuple, q: np.ndarray, pairs) -> bool:
+    """Whether some pair of ``pairs`` (indices into ``geom.collisionPairs``) is in contact at ``q``, by the rule of
+    :func:`contacts` (coal's test within the pair's security margin, then for two convex shapes the signed
+    distance < 0): the same answer as ``bool(contacts(..., first=True))`` when the other pairs are farther apart
+    than :data:`CONTACT_MARGIN` (:class:`PairScreen`)."""
+    d, gd = data
+    pin.updateGeometryPlacements(model, d, geom, gd, q)
+    requests = gd.collisionRequests
+    for k in pairs:
+        k = int(k)
+        if pin.computeCollision(geom, gd, k) and (requests[k].security_margin == 0.0 or pin.computeDistance(geom, gd, k).min_distance < 0.0):
+            return True
+    return False
+
+
 ORDER_SAMPLES = 256
 """Random arm configurations (seed 0) over which the pairs are counted to check the most often colliding first."""
 
@@ -336,3 +378,214 @@ def _select_pairs(platform: Platform, geom: pin.GeometryModel):
     _order_pairs(platform, geom)
     pairs = tuple((objs[cp.first].name, objs[cp.second].name) for cp in geom.collisionPairs)
     return pairs, tuple(adjacent), in_contact
+
+
+# ------------------------------------------------------------------------------ screening of far pairs
+SCREEN_TOLERANCE = 1e-3
+"""[m] A pair is skipped by :class:`PairScreen` only when its distance is proved larger than :data:`CONTACT_MARGIN`
+plus this (rounding of the numpy kinematics and of coal's GJK, both far below it)."""
+
+SCREEN_CELL = 0.04
+"""[m] How far the geometries may move inside a cell of :class:`PairScreen`'s finest level (the slack its bound
+gives away): smaller cells prove more pairs far and cost more cells."""
+
+
+def _hull(obj: pin.GeometryObject) -> tuple[np.ndarray, float, np.ndarray, np.ndarray, np.ndarray]:
+    """Enclosures of a geometry in its joint's frame: (segment ends (2, 3), radius) of a capsule containing it, and
+    three slabs containing it: (normals (3, 3) as rows, centre (3,), half-thicknesses (3,); inf for no slab).  A
+    cylinder's slab lies between its end caps, a box's slabs between its faces; a shape other than a sphere,
+    cylinder, capsule or box is taken as its local AABB (a box; infinite for a plane: never skipped)."""
+    import coal
+
+    shape, M = obj.geometry, obj.placement
+    R, t = np.array(M.rotation), np.array(M.translation)
+    none = np.full(3, math.inf)
+    if isinstance(shape, coal.Sphere):
+        return np.array([t, t]), float(shape.radius), R.T, t, none
+    if isinstance(shape, (coal.Cylinder, coal.Capsule)):
+        h, axis = float(shape.halfLength), R[:, 2]
+        half = np.array([math.inf, math.inf, h]) if isinstance(shape, coal.Cylinder) else none
+        return np.array([t - h * axis, t + h * axis]), float(shape.radius), R.T, t, half
+    if isinstance(shape, coal.Box):
+        c, half = t, np.array(shape.halfSide, dtype=float)
+    else:
+        shape.computeLocalAABB()
+        lo, hi = np.array(shape.aabb_local.min_), np.array(shape.aabb_local.max_)
+        if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi))):
+            return np.array([t, t]), math.inf, R.T, t, none
+        c, half = R @ (0.5 * (lo + hi)) + t, 0.5 * (hi - lo)
+    k = int(np.argmax(half))  # the capsule along the box's longest side
+    ends = np.array([c - half[k] * R[:, k], c + half[k] * R[:, k]])
+    return ends, float(np.linalg.norm(np.delete(half, k))), R.T, c, half
+
+
+def _segment_distance(p1: np.ndarray, q1: np.ndarray, p2: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """(K,) distances between the segments [p1, q1] and [p2, q2] (each (K, 3)): the closest points by clamped
+    parameters (Ericson, Real-Time Collision Detection, 5.1.9); nearly parallel segments (sin^2 of the angle below
+    1e-12) take s = 0 first, which overestimates the distance by less than 1e-6 times the segments' length."""
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a, e = np.einsum("ij,ij->i", d1, d1), np.einsum("ij,ij->i", d2, d2)
+    b, c, f = np.einsum("ij,ij->i", d1, d2), np.einsum("ij,ij->i", d1, r), np.einsum("ij,ij->i", d2, r)
+    point1, point2 = a <= 1e-18, e <= 1e-18
+    a1, e1 = np.where(point1, 1.0, a), np.where(point2, 1.0, e)
+    denom = a * e - b * b
+    general = ~(point1 | point2) & (denom > 1e-12 * a * e)
+    s = np.where(general, np.clip((b * f - c * e) / np.where(general, denom, 1.0), 0.0, 1.0), 0.0)
+    s = np.where(point2 & ~point1, np.clip(-c / a1, 0.0, 1.0), s)
+    t = np.where(point2, 0.0, (b * s + f) / e1)
+    tc = np.clip(t, 0.0, 1.0)
+    s = np.where((t != tc) & ~point1, np.clip((b * tc - c) / a1, 0.0, 1.0), s)
+    x = r + s[:, None] * d1 - tc[:, None] * d2
+    return np.sqrt(np.einsum("ij,ij->i", x, x))
+
+
+class PairScreen:
+    """Which collision pairs of a batch of arm configurations may be within :data:`CONTACT_MARGIN`: a conservative
+    numpy bound, so that :meth:`CollisionModel.colliding_batch` asks coal about the others only.
+
+    Each geometry is enclosed in a capsule and up to three slabs (a cylinder's between its end caps, a box's or a
+    mesh's AABB's between opposite faces): the distance of a pair is at least that of the capsules, and at least the
+    gap between one's slab and the other's capsule.  The bound is evaluated at the centres of cells of joint space:
+    moving joint j by dq_j moves a point x of a geometry by at most |x - o_j| |dq_j| (revolute, o_j on its axis) or
+    |dq_j| (prismatic), and
+    |x - o_j| is at most the lengths of the joint offsets down to the geometry, the prismatic strokes among them and
+    the geometry's extent in its joint frame (a lever per pair and joint, joints that move both geometries not
+    counted).  So over a cell of half-widths w_j the distance falls by at most sum_j lever_j w_j from the centre's.
+    Cells come in levels (each half the size of the one above, the finest moving a geometry by about
+    :data:`SCREEN_CELL`); a cell whose pairs are all proved farther than :data:`CONTACT_MARGIN` plus
+    :data:`SCREEN_TOLERANCE` settles its configurations (free), the others go down a level with their near pairs.
+    """
+
+    def __init__(self, platform: Platform, geom: pin.GeometryModel) -> None:
+        from .analysis.chain import ArmChain
+
+        self.chain = ArmChain(platform)
+        objs = geom.geometryObjects
+        hulls = [_hull(o) for o in objs]
+        self.joint = np.array([int(o.parentJoint) for o in objs])
+        self.ends = np.array([h[0] for h in hulls])
+        self.radius = np.array([h[1] for h in hulls])
+        self.slab_half = np.array([h[4] for h in hulls])  # (G, 3)
+        normals, centres = np.array([h[2] for h in hulls]), np.array([h[3] for h in hulls])
+        self.first = np.array([int(cp.first) for cp in geom.collisionPairs], dtype=np.int64)
+        self.second = np.array([int(cp.second) for cp in geom.collisionPairs], dtype=np.int64)
+        self.unbounded = ~np.isfinite(self.radius[self.first] + self.radius[self.second])
+        self.local = np.concatenate([self.ends, centres[:, None], normals], axis=1)  # (G, 6, 3): ends, centre, normals
+        self.by_joint = [(int(j), np.flatnonzero(self.joint == j)) for j in np.unique(self.joint)]
+        self.prismatic = np.array([j.kind == "prismatic" for j in platform.arm])
+        self.lever0, self.lever_q = self._levers(platform.model, [j.joint_id for j in platform.arm])
+
+    def _levers(self, model: pin.Model, arm_ids: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """(P, n_arm) constant part and (P, n_arm, n_arm) part per unit |q_i| of prismatic joint i of the levers."""
+        extent = np.linalg.norm(self.ends, axis=2).max(axis=1) + np.where(np.isfinite(self.radius), self.radius, 0.0)
+        column = {jid: k for k, jid in enumerate(arm_ids)}
+        n_pairs, n = len(self.first), len(arm_ids)
+        lever0, lever_q = np.zeros((n_pairs, n)), np.zeros((n_pairs, n, n))
+
+        def ancestors(j: int) -> list[int]:
+            out = []
+            while j > 0:
+                out.append(j)
+                j = int(model.parents[j])
+            return out
+
+        for p in range(n_pairs):
+            chains = [ancestors(int(self.joint[g])) for g in (self.first[p], self.second[p])]
+            common = next(j for j in chains[0] if j in chains[1])
+            for g, chain in zip((self.first[p], self.second[p]), chains):
+                below = chain[: chain.index(common)]  # the joints that move g relative to the other, deepest first
+                for i, j in enumerate(below):
+                    k = column[j]
+                    if self.prismatic[k]:
+                        lever0[p, k] += 1.0
+                        continue
+                    lever0[p, k] += extent[g] + sum(float(np.linalg.norm(model.jointPlacements[jj].translation)) for jj in below[:i])
+                    for jj in below[:i]:
+                        lever_q[p, k, column[jj]] += 1.0 if self.prismatic[column[jj]] else 0.0
+        return lever0, lever_q
+
+    def _world(self, C: np.ndarray) -> np.ndarray:
+        """(n, G, 6, 3): at arm configurations ``C`` (n, n_arm), per geometry its capsule's two ends, its slabs'
+        centre and their three normals, in B (the rotation entries of :meth:`qprr.analysis.ArmChain.pose` that are
+        exact zeros are skipped)."""
+        pose = self.chain.pose(C)
+        n = C.shape[0]
+        out = np.empty((n, len(self.joint), 6, 3))
+        translate = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])  # the normals are directions
+        for j, g in self.by_joint:
+            X = self.local[g]  # (k, 6, 3)
+            coords = []
+            for a in range(3):
+                acc = np.multiply.outer(np.broadcast_to(pose.p[j][a], (n,)), translate)[:, None, :]
+                for b in range(3):
+                    e = pose.R[j][a][b]
+                    if not isinstance(e, float):
+                        acc = acc + e[:, None, None] * X[None, :, :, b]
+                    elif e != 0.0:
+                        acc = acc + e * X[None, :, :, b]
+                coords.append(np.broadcast_to(acc, (n, g.size, 6)))
+            out[:, g] = np.stack(coords, axis=-1)
+        return out
+
+    def lower_bounds(self, C: np.ndarray, cells: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+        """(K,) lower bounds [m] of the distance of pair ``pairs[k]`` at configuration ``C[cells[k]]``: the larger of
+        the capsules' distance and the gaps between one's slabs and the other's capsule (-inf for a pair with an
+        unbounded shape)."""
+        world = self._world(C)
+        a, b = self.first[pairs], self.second[pairs]
+        wa, wb = world[cells, a], world[cells, b]  # (K, 6, 3)
+        with np.errstate(invalid="ignore"):
+            bound = _segment_distance(wa[:, 0], wa[:, 1], wb[:, 0], wb[:, 1]) - self.radius[a] - self.radius[b]
+            for x, wx, wy, y in ((a, wa, wb, b), (b, wb, wa, a)):
+                h1 = np.einsum("ka,ksa->ks", wy[:, 0] - wx[:, 2], wx[:, 3:])  # (K, 3): the capsule's ends over the slabs
+                h2 = np.einsum("ka,ksa->ks", wy[:, 1] - wx[:, 2], wx[:, 3:])
+                gap = np.where(h1 * h2 > 0.0, np.minimum(np.abs(h1), np.abs(h2)), 0.0) - self.slab_half[x]
+                bound = np.maximum(bound, gap.max(axis=1) - self.radius[y])
+        return np.where(self.unbounded[pairs], -math.inf, bound)
+
+    def _cells(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, np.ndarray]:
+        """(lowest q (n_arm,), finest cell widths (n_arm,), cell indices of Q (m, n_arm), number of levels above the
+        finest, (P, n_arm) levers over the cells) of the batch ``Q``."""
+        lo, hi = Q.min(axis=0), Q.max(axis=0)
+        span = hi - lo
+        moving = span > 0.0
+        lever = self.lever0 + self.lever_q @ np.maximum(np.abs(lo), np.abs(hi))
+        reach = lever.max(axis=0, initial=0.0) * max(int(moving.sum()), 1)
+        width = np.where(moving, np.minimum(span, 2.0 * SCREEN_CELL / np.where(reach > 0.0, reach, 1.0)), 0.0)
+        width = np.where(moving & (reach == 0.0), span, width)
+        index = np.zeros(Q.shape, dtype=np.int64)
+        index[:, moving] = np.floor((Q[:, moving] - lo[moving]) / width[moving]).astype(np.int64)
+        top = int(index.max(initial=0)).bit_length()
+        lever = self.lever0 + self.lever_q @ (np.maximum(np.abs(lo), np.abs(hi)) + 2.0**top * width)  # cells overhang Q
+        return lo, width, index, top, lever
+
+    def near_pairs(self, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(rows (k,), near (k, P) bool): the rows of the arm configurations ``Q`` (m, n_arm) where some pair is not
+        proved farther apart than :data:`CONTACT_MARGIN`, and those pairs; no pair is in contact at the other rows.
+        The descent stops at a level whose cells would hold fewer than two configurations each on average (an arm
+        of many joints on a small batch): the near pairs are then those of the level above."""
+        Q = np.atleast_2d(np.asarray(Q, dtype=float))
+        if Q.ndim != 2 or Q.shape[1] != self.chain.n_arm or not np.all(np.isfinite(Q)):
+            raise InputError(f"Q must be a finite (m, {self.chain.n_arm}) array of arm configurations, got shape {Q.shape}")
+        n_pairs = len(self.first)
+        if Q.shape[0] == 0 or n_pairs == 0:
+            return np.zeros(0, dtype=np.int64), np.zeros((0, n_pairs), dtype=bool)
+        lo, width, index, top, lever = self._cells(Q)
+        todo, parent, near = np.arange(Q.shape[0]), np.zeros(Q.shape[0], dtype=np.int64), np.ones((1, n_pairs), dtype=bool)
+        for level in range(top, -1, -1):
+            key = index[todo] >> level
+            flat = np.ravel_multi_index(tuple(key.T), tuple((index.max(axis=0) >> level) + 1))
+            _, first, inv = np.unique(flat, return_index=True, return_inverse=True)
+            inv = inv.reshape(-1)
+            if 2 * first.size > todo.size:  # cells of one configuration or two: the bound costs as much as coal
+                break
+            centre = lo + (key[first] + 0.5) * (width * 2.0**level)
+            slack = lever @ (width * 2.0 ** (level - 1))
+            active = near[parent[first]]
+            cells, pairs = np.nonzero(active)
+            bound = self.lower_bounds(centre, cells, pairs) - slack[pairs]
+            near = np.zeros_like(active)
+            near[cells, pairs] = bound <= CONTACT_MARGIN + SCREEN_TOLERANCE
+            keep = near.any(axis=1)[inv]
+            todo, parent = todo[keep], inv[keep]
+        return todo, near[parent]

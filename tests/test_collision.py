@@ -7,13 +7,15 @@ import math
 import numpy as np
 import pinocchio as pin
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import qprr
 from qprr import urdfgen as ug
 from qprr.analysis import workspace
 from qprr.analysis._common import COLLISION_AUDIT_TOLERANCE, collision_mask, make_grid
 from qprr.analysis.hover import hover
-from qprr.collision import DISC_THICKNESS, collision_model, default_disc_radius
+from qprr.collision import CONTACT_MARGIN, DISC_THICKNESS, collision_model, contacts, default_disc_radius
 from qprr.errors import InputError
 from qprr.ik import IKSolver
 from qprr.model import from_model
@@ -73,9 +75,9 @@ def test_pendulum_collision_matches_the_closed_form(pendulum_cm):
 
 @pytest.mark.parametrize("name", ["q-prr", "HEX-RRR"])
 def test_batched_check_answers_as_the_python_loop(name):
-    """colliding_batch (Pinocchio's C++ loop) gives colliding_arm's answers configuration for configuration, in grid
-    order and shuffled, the configurations near contact included (both start from a fresh GeometryData and keep it
-    through the batch)."""
+    """colliding_batch (Pinocchio's C++ loop, the pair screen on or off) gives colliding_arm's answers configuration
+    for configuration, in grid order and shuffled, the configurations near contact included (both start from a
+    fresh GeometryData and keep it through the batch)."""
     p = qprr.platforms.resolve(name)
     cm = collision_model(p)
     grid = make_grid(p, 200_000)
@@ -84,8 +86,81 @@ def test_batched_check_answers_as_the_python_loop(name):
         ref = cm.colliding_arm(q)
         assert ref.any() and not ref.all()
         assert np.array_equal(cm.colliding_batch(q), ref)
+        assert np.array_equal(cm.colliding_batch(q, screen=False), ref)
     with pytest.raises(InputError, match="q_arm"):
         cm.colliding_batch(np.zeros((4, p.n_arm + 1)))
+    with pytest.raises(InputError, match="screen"):
+        cm.colliding_batch(q, screen="yes")
+    with pytest.raises(InputError, match="finite"):
+        cm.colliding_batch(np.full((2, p.n_arm), np.nan))
+    assert cm.colliding_batch(np.zeros((0, p.n_arm))).shape == (0,)
+
+
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2"])
+def test_screened_check_of_the_default_map_answers_as_every_pair(name, monkeypatch):
+    """The default workspace map (10^6 configurations per region, every region): each configuration the coarse-to-fine
+    mask sends to the screened colliding_batch gets the answer of checking every pair one configuration at a time
+    (colliding_arm), on a sample of 3000 of them, half from the later batches (the cells straddling the collision
+    boundary), contacts included; so the map's masks are those of the unscreened check."""
+    from qprr.analysis.workspace import default_variants
+    from qprr.collision import CollisionModel
+
+    p = qprr.platforms.resolve(name)
+    cm = collision_model(p)
+    screened = CollisionModel.colliding_batch
+    seen: list[tuple[np.ndarray, np.ndarray]] = []
+
+    def recorded(self, q_arm):
+        out = screened(self, q_arm)
+        seen.append((np.array(q_arm), out))
+        return out
+
+    monkeypatch.setattr(CollisionModel, "colliding_batch", recorded)
+    for locked in [{}] + default_variants(p):
+        collision_mask(cm, make_grid(p, 1_000_000, locked))
+    rng = np.random.default_rng(3)
+    Q, got = (np.concatenate(x) for x in zip(*seen[:1]))
+    Q2, got2 = (np.concatenate(x) for x in zip(*seen[1:]))
+    pick, pick2 = rng.choice(len(Q), 1500, replace=False), rng.choice(len(Q2), 1500, replace=False)
+    Q, got = np.concatenate([Q[pick], Q2[pick2]]), np.concatenate([got[pick], got2[pick2]])
+    assert got.any() and not got.all()
+    np.testing.assert_array_equal(got, cm.colliding_arm(Q))
+
+
+@pytest.fixture(scope="module")
+def two_models(pendulum, pendulum_cm):
+    """(platform, collision model) of the pendulum and of the Q-PRR."""
+    p = qprr.load()
+    return [(pendulum, pendulum_cm), (p, collision_model(p))]
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), size=st.integers(1, 400), locked=st.booleans())
+def test_screen_never_drops_a_pair_in_contact(two_models, seed, size, locked):
+    """On random batches (a random sub-box of the joint limits, a joint locked or not) of the pendulum and the Q-PRR:
+    the screen's lower bound never exceeds coal's distance, every pair in contact (and every pair coal finds within
+    CONTACT_MARGIN) is among the screen's near pairs, and the screened batch answers as every pair checked."""
+    rng = np.random.default_rng(seed)
+    p, cm = two_models[seed % 2]
+    lo, hi = np.maximum(p.arm_lower, -math.pi), np.minimum(p.arm_upper, math.pi)
+    a, b = np.sort(rng.uniform(lo, hi, (2, lo.size)), axis=0)
+    Q = rng.uniform(a, b, (size, lo.size))
+    if locked:
+        Q[:, rng.integers(lo.size)] = rng.uniform(a[0], b[0])
+    rows, near = cm.screen.near_pairs(Q)
+    allowed = np.zeros((size, len(cm.pairs)), dtype=bool)
+    allowed[rows] = near
+    data = cm.new_data()
+    for i in rng.choice(size, min(size, 40), replace=False):
+        q = cm.neutral_q.copy()
+        q[7:] = Q[i]
+        pin.computeDistances(cm.model, data[0], cm.geometry, data[1], q)
+        dist = np.array([r.min_distance for r in data[1].distanceResults])
+        bound = cm.screen.lower_bounds(Q[i : i + 1], np.zeros(dist.size, dtype=np.int64), np.arange(dist.size))
+        assert np.all(bound <= np.maximum(dist, 0.0) + 1e-6)
+        assert np.all(allowed[i][dist <= CONTACT_MARGIN])
+        assert np.all(allowed[i][contacts(cm.model, cm.geometry, data, q, first=False)])
+    np.testing.assert_array_equal(cm.colliding_batch(Q), cm.colliding_arm(Q))
 
 
 def test_pendulum_distance_is_the_closed_form_gap(pendulum_cm):
