@@ -24,6 +24,7 @@ plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
@@ -72,12 +73,12 @@ class WorkspaceRegion:
     ``origin``, ``basis`` (dim, 3): the affine hull of the set in B (a planar arm: basis (x_B,
     z_B)); ``coords`` (n, dim) the points in that basis; ``measure`` its length/area/volume in B;
     ``hover_volume`` the volume swept under hover (yaw about z_B), None if not asked;
-    ``boundary``: closed polylines (m, 3) in B of the region's outline (planar sets) or the
-    centres (m, 3) of its boundary cells (3-D sets); ``occupancy``: (cells covered, origin, cell
-    side) in ``coords``: the cells the measure counted (the set :func:`reachable` tests);
-    ``outline``: the same or, for a redundant arm, the finer cells its samples fill without
-    holes (:func:`qprr.analysis.voxels.display_occupancy`), which ``boundary`` follows;
-    ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_occupancy`` its section's cells.
+    ``occupancy``: (cells covered, origin, cell side) in ``coords``: the cells the measure counted (the set
+    :func:`reachable` tests); ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_counted`` the cells its
+    volume counted.  For drawing, computed when first read: ``outline``, the same cells as ``occupancy`` or, for a
+    redundant arm, the finer cells its samples fill without holes (:func:`qprr.analysis.voxels.display_occupancy`);
+    ``boundary``, closed polylines (m, 3) in B along ``outline`` (planar sets) or the centres (m, 3) of its boundary
+    cells (3-D sets), [] without a measure; ``hover_occupancy``, the profile's section drawn the same way.
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
@@ -93,11 +94,9 @@ class WorkspaceRegion:
     coords: np.ndarray
     measure: MeasureEstimate | None
     hover_volume: MeasureEstimate | None
-    boundary: list
     occupancy: tuple | None
     profile: np.ndarray
-    hover_occupancy: tuple | None
-    outline: tuple | None = None
+    hover_counted: tuple | None
     collision_free: np.ndarray | None = None
     collision_check: str = ""
     free_measure: MeasureEstimate | None = None
@@ -106,6 +105,34 @@ class WorkspaceRegion:
     @property
     def dim(self) -> int:
         return int(self.basis.shape[0])
+
+    @property
+    def free_joints(self) -> int:
+        """The joints the grid moves (axes with more than one value)."""
+        return sum(1 for n in self.grid.shape if n > 1)
+
+    @property
+    def redundant(self) -> bool:
+        """More free joints than the set's dimension (the cells of the joint grid overlap)."""
+        return self.free_joints > self.dim
+
+    @functools.cached_property
+    def outline(self) -> tuple | None:
+        if self.occupancy is None or not self.redundant:
+            return self.occupancy
+        fine = display_occupancy(self.coords)
+        return fine if fine[2] < self.occupancy[2] else self.occupancy
+
+    @functools.cached_property
+    def boundary(self) -> list:
+        return [] if self.outline is None else _boundary(self.outline, self.origin, self.basis)
+
+    @functools.cached_property
+    def hover_occupancy(self) -> tuple | None:
+        if self.hover_counted is None or self.free_joints <= 2:
+            return self.hover_counted
+        fine = display_occupancy(np.vstack([self.profile, self.profile * np.array([-1.0, 1.0])]))
+        return fine if fine[2] < self.hover_counted[2] else self.hover_counted
 
 
 @dataclass(frozen=True)
@@ -294,8 +321,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = outline = free_measure = free_hover = None
-    boundary: list = []
+    measure = occ = free_measure = free_hover = None
     dim = basis.shape[0]
     if dim == 0:
         why = "the frame does not move (a point)"
@@ -305,11 +331,6 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         image = CellImage(coords.reshape(*shape, dim))
         measure, occ, free_measure = _measures(image, mask, shape, n_shifts, seed)
         del image
-        outline = occ
-        if free > dim:  # redundant: the samples outline the set more finely than the counting cells
-            fine = display_occupancy(coords)
-            outline = fine if fine[2] < occ[2] else occ
-        boundary = _boundary(outline, origin, basis)
     profile = hover_profile(pts, origin, basis)
     hv = hocc = None
     if hover:
@@ -318,12 +339,9 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
             hv, hocc, free_hover = _measures(hover_image, mask, shape, n_shifts, seed)
             del hover_image
-            if free > 2:
-                fine = display_occupancy(np.vstack([profile, profile * np.array([-1.0, 1.0])]))
-                hocc = fine if fine[2] < hocc[2] else hocc
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
-    region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, boundary, occ, profile, hocc, outline)
+    region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, occ, profile, hocc)
     if mask is not None:
         region = replace(region, collision_free=mask.free, collision_check=mask.describe(), free_measure=free_measure, free_hover_volume=free_hover)
     return region, why
