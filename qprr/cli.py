@@ -13,17 +13,25 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from importlib import import_module
 from pathlib import Path
 
-from .analysis import cli as analysis_cli
-from .campaign import cli as campaign_cli
 from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
-from .design import cli as design_cli
 from .errors import QprrError
 from .registry import CHECKS, COMMANDS, COMPARISONS
 from .version import __version__
-from .viz import cli as viz_cli
-from .wheeled import cli as wheeled_cli
+
+GROUP_MODULES = {
+    "view": "qprr.viz.cli",
+    "animate": "qprr.viz.cli",
+    "wheeled": "qprr.wheeled.cli",
+    "analyze": "qprr.analysis.cli",
+    "campaign": "qprr.campaign.cli",
+    "design": "qprr.design.cli",
+}
+"""The packages' command groups: command -> the module whose ``register_cli(subparsers)`` adds it.  A command line
+that names one of them builds that group's parser alone (:func:`build_parser`), so ``qprr analyze ...`` does not import
+the viewer, the campaigns or the scenario table."""
 
 
 # ------------------------------------------------------------------------------ simulate
@@ -132,6 +140,7 @@ def _print_gains(sc, platform, controller: str, options: dict) -> int:
 def _animate(res, platform, path: Path, progress: bool) -> None:
     """Animate ``res`` to ``path``; :func:`qprr.viz.cli.animate_to_file` prints where it went (one line)."""
     from .platforms import load as load_platform
+    from .viz import cli as viz_cli
 
     viz_cli.animate_to_file(platform or load_platform(), res, path, progress=progress)
 
@@ -224,19 +233,25 @@ def _scenario_help() -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``qprr`` command line: ``simulate``, ``compare``, ``check``, then the plug-ins' and the packages' command groups."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``qprr`` command line: ``simulate``, ``compare``, ``check``, then the plug-ins' and the packages' command groups.
+
+    ``command``: a command of :data:`GROUP_MODULES` to build the parser of that group alone (what :func:`main` does
+    when the command line names one); None: every command (``qprr --help`` lists them all).
+    """
     parser = Parser(prog="qprr", description="qprr: aerial manipulators on Pinocchio (the thesis's Q-PRR as flagship).")
     parser.add_argument("--version", action="version", version=f"qprr {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-
+    if command in GROUP_MODULES:
+        import_module(GROUP_MODULES[command]).register_cli(sub)
+        return parser
     _add_simulate(sub)
     _add_compare(sub)
     _add_check(sub)
     for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
         register_cli(sub)
-    for group in (viz_cli, wheeled_cli, analysis_cli, campaign_cli, design_cli):  # optional packages load when a command runs
-        group.register_cli(sub)
+    for module in dict.fromkeys(GROUP_MODULES.values()):  # optional packages load when a command runs
+        import_module(module).register_cli(sub)
     return parser
 
 
@@ -326,7 +341,9 @@ def _add_check(sub) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    command = argv[0] if argv else None  # the command comes first (the top level has --help and --version only)
+    parser = build_parser(command)
     args = parser.parse_args(argv)
     prog = f"qprr {args.command}"
     try:

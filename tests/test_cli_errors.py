@@ -6,6 +6,8 @@ The invocations of issue 10 (item 5) and their neighbours, through ``qprr.cli.ma
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 
 import pytest
 
@@ -163,3 +165,33 @@ def test_the_converters_are_the_charts_checks():
             check(text)
         assert str(cli_err.value) == str(py_err.value)
     assert real(positive=True)("1e-3") == 1e-3 and integer(lo=0, hi=9)("7") == 7 and reals(nonnegative=True)("0, 0.5,") == [0.0, 0.5]
+
+
+def test_a_group_command_builds_its_own_parser_alone():
+    """``qprr analyze ...`` builds the analysis group's parser only (GROUP_MODULES): the same sub-parser as in the full
+    command line (same options and help), and the full command line has every group."""
+    from qprr.cli import GROUP_MODULES
+
+    def commands(parser):
+        return next(a for a in parser._actions if a.dest == "command").choices
+
+    full = commands(build_parser())
+    assert set(GROUP_MODULES) <= set(full)
+    for name in GROUP_MODULES:
+        alone = commands(build_parser(name))
+        assert set(alone) == {n for n, m in GROUP_MODULES.items() if m == GROUP_MODULES[name]}  # its module's commands
+        assert alone[name].format_help() == full[name].format_help()
+
+
+def test_a_group_command_runs_without_the_other_groups():
+    """A fresh interpreter running ``qprr analyze --help`` imports neither the viewer, the campaigns, the design studies,
+    the wheeled robots nor the scenario table."""
+    code = (
+        "import sys, contextlib, io\n"
+        "from qprr.cli import main\n"
+        "with contextlib.suppress(SystemExit), contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['analyze', '--help'])\n"
+        "print(sorted(m for m in ('qprr.viz', 'qprr.campaign', 'qprr.design', 'qprr.wheeled', 'qprr.scenarios') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, check=True)
+    assert out.stdout.strip() == "[]", out.stdout
