@@ -638,8 +638,9 @@ class CellImage:
         if inside is None:
             low, high = (a.copy() for a in z.bounds)  # copies: the cached bounds stay the set's
         else:
-            box = z.box
-            low, high = (np.array([float(fn(r, where=inside, initial=init)) for r in rows]) for fn, rows, init in zip((np.min, np.max), box, (np.inf, -np.inf)))
+            box_low, box_high = z.box
+            low = np.array([float(np.min(r, where=inside, initial=np.inf)) for r in box_low])
+            high = np.array([float(np.max(r, where=inside, initial=-np.inf)) for r in box_high])
         if self.revolve:
             low[0], high[0] = min(low[0], -high[0]), max(high[0], -low[0])
         return sides, (low, high)
