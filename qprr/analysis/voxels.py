@@ -25,7 +25,9 @@ Estimator (:func:`estimate_measure`), "voxel counting" made unbiased:
    of order log2(3) ~ 1.6; O(dq^2) is expected).  The estimate is the count on the full grid;
    its error bar is that discretisation error plus twice the standard error over the shifts.
    Tested against closed forms (the planar 2R and 2R + P arm of the Q-PRR, and the solid of
-   revolution of the 2R one) from 1e4 to 1e6 samples: the error bar held every time.
+   revolution of the 2R one) from 1e4 to 1e6 samples.  For the solid, over 40 seeds, the error
+   bar held 39 times at 2e5 samples and 37 times at 1e6 (misses up to 1.6 bars: with 4 shifts,
+   2 standard errors is about a 86 % interval, and there the shifts' spread makes most of it).
 
 Generic in the joint count k >= d (redundant arms such as the Q-PRR with its slider included:
 the zonotopes of all cells overlap); cells whose edge vectors do not span d dimensions (at a
