@@ -133,7 +133,9 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     r = result.regions[region]
     if r.hover_occupancy is None:
         return ax
-    grid, o, h = r.hover_occupancy
+    # two free joints: the cells the volume counted (the half section s >= 0, what turns about z); more: the finer
+    # section drawn from the samples
+    grid, o, h = r.hover_counted if r.free_joints <= 2 else r.hover_occupancy
     import contourpy
 
     x = o[0] + (np.arange(grid.shape[0]) + 0.5) * h

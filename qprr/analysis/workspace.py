@@ -75,10 +75,11 @@ class WorkspaceRegion:
     ``hover_volume`` the volume swept under hover (yaw about z_B), None if not asked;
     ``occupancy``: (cells covered, origin, cell side) in ``coords``: the cells the measure counted (the set
     :func:`reachable` tests); ``profile``: (s, z) (n, 2) of the hover workspace, ``hover_counted`` the cells its
-    volume counted.  For drawing, computed when first read: ``outline``, the same cells as ``occupancy`` or, for a
+    volume counted (the half section s >= 0).  For drawing, computed when first read: ``outline``, the same cells as ``occupancy`` or, for a
     redundant arm, the finer cells its samples fill without holes (:func:`qprr.analysis.voxels.display_occupancy`);
     ``boundary``, closed polylines (m, 3) in B along ``outline`` (planar sets) or the centres (m, 3) of its boundary
-    cells (3-D sets), [] without a measure; ``hover_occupancy``, the profile's section drawn the same way.
+    cells (3-D sets), [] without a measure; ``hover_occupancy``, the profile's whole
+    section (s of either sign) drawn from its samples and their mirror image.
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
@@ -129,10 +130,11 @@ class WorkspaceRegion:
 
     @functools.cached_property
     def hover_occupancy(self) -> tuple | None:
-        if self.hover_counted is None or self.free_joints <= 2:
-            return self.hover_counted
-        fine = display_occupancy(np.vstack([self.profile, self.profile * np.array([-1.0, 1.0])]))
-        return fine if fine[2] < self.hover_counted[2] else self.hover_counted
+        if self.hover_counted is None:
+            return None
+        # the volume counts the half section s >= 0 only (qprr.analysis.voxels): the whole section is drawn from the
+        # profile's samples and their mirror image
+        return display_occupancy(np.vstack([self.profile, self.profile * np.array([-1.0, 1.0])]))
 
 
 @dataclass(frozen=True)
