@@ -150,7 +150,7 @@ def register_cli(sub) -> None:
         default="auto",
         help="also measure the collision-free part (workspace, hover): auto (default) when the platform has a collision model "
         "(its URDF's <collision> geometry), on (required), off. On the Q-PRR's default workspace (1e6 configurations per "
-        "region) the check and the collision-free measures roughly double the time (about 8.5 s instead of about 4.3 s "
+        "region) the check and the collision-free measures add about 40%% to the time (about 3.8 s instead of about 2.8 s "
         "on an idle 2-core machine, docs/analysis.md#speed): the default keeps them because the reachable workspace without self-collision "
         "is 27%% smaller than the joint box's image, the number a design is judged by",
     )

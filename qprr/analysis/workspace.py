@@ -219,7 +219,7 @@ class WorkspaceOptions:
     measure estimator (:mod:`qprr.analysis.voxels`); ``collision``: also measure the collision-free part of each
     region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
     required; False: off).  Cost: the collision check and the collision-free measures (counted with the whole
-    ones, in one pass) make the map about 1.9x slower (Q-PRR, 1e6 configurations per region: ~7.6 s against ~4.0 s;
+    ones, in one pass) make the map about 1.4x slower (Q-PRR, 1e6 configurations per region: ~3.8 s against ~2.8 s;
     docs/analysis.md, Speed).
     """
 
