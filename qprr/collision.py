@@ -574,8 +574,7 @@ class PairScreen:
         todo, parent, near = np.arange(Q.shape[0]), np.zeros(Q.shape[0], dtype=np.int64), np.ones((1, n_pairs), dtype=bool)
         for level in range(top, -1, -1):
             key = index[todo] >> level
-            flat = np.ravel_multi_index(tuple(key.T), tuple((index.max(axis=0) >> level) + 1))
-            _, first, inv = np.unique(flat, return_index=True, return_inverse=True)
+            _, first, inv = np.unique(_cell_ids(key, (index.max(axis=0) >> level) + 1), return_index=True, return_inverse=True)
             inv = inv.reshape(-1)
             if 2 * first.size > todo.size:  # cells of one configuration or two: the bound costs as much as coal
                 break
@@ -589,3 +588,12 @@ class PairScreen:
             keep = near.any(axis=1)[inv]
             todo, parent = todo[keep], inv[keep]
         return todo, near[parent]
+
+
+def _cell_ids(key: np.ndarray, dims: np.ndarray) -> np.ndarray:
+    """One integer per row of the cell indices ``key`` (m, n), equal for equal rows: the flat index in a grid of
+    ``dims`` cells per axis when that grid's size fits in int64, else the rank of the row among the distinct rows
+    (an arm of many joints: 8 revolute joints exceed 2^63 cells at the finest level)."""
+    if float(np.prod(dims.astype(float))) < 2.0**62:
+        return np.ravel_multi_index(tuple(key.T), tuple(dims))
+    return np.unique(key, axis=0, return_inverse=True)[1].reshape(-1)

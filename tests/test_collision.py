@@ -146,7 +146,8 @@ def test_screen_never_drops_a_pair_in_contact(two_models, seed, size, locked):
     a, b = np.sort(rng.uniform(lo, hi, (2, lo.size)), axis=0)
     Q = rng.uniform(a, b, (size, lo.size))
     if locked:
-        Q[:, rng.integers(lo.size)] = rng.uniform(a[0], b[0])
+        k = rng.integers(lo.size)
+        Q[:, k] = rng.uniform(a[k], b[k])
     rows, near = cm.screen.near_pairs(Q)
     allowed = np.zeros((size, len(cm.pairs)), dtype=bool)
     allowed[rows] = near
@@ -385,3 +386,13 @@ def test_check_does_not_depend_on_what_was_checked_before():
     dist = np.array([cm.min_distance(q)[0] for q in Q])
     clear = np.abs(dist) > 1e-6
     np.testing.assert_array_equal(batch[clear], dist[clear] < 0.0)
+
+
+def test_screen_of_an_eight_joint_arm_on_a_dense_batch():
+    """A straight joint-space path over the whole box of an 8-revolute arm: the finest screening level has more cells
+    than int64 counts (about 1e19); the screened answers are those of checking every pair."""
+    p = qprr.build("Q-RRRRRRRR")
+    cm = collision_model(p)
+    lo, hi = np.maximum(p.arm_lower, -math.pi), np.minimum(p.arm_upper, math.pi)
+    Q = lo + (hi - lo) * np.linspace(0.0, 1.0, 20_000)[:, None]
+    assert np.array_equal(cm.colliding_batch(Q), cm.colliding_batch(Q, screen=False))
