@@ -388,3 +388,24 @@ def test_options_object_and_keywords_agree(qprr_platform):
     b = workspace(qprr_platform, n_samples=5000, variants=[], hover=False)
     c = workspace(qprr_platform, WorkspaceOptions(n_samples=9000), variants=[], hover=False, n_samples=5000)
     assert a.regions[0].measure == b.regions[0].measure == c.regions[0].measure
+
+
+def test_drawing_data_are_computed_when_read_and_travel_with_the_region(ws):
+    """outline, boundary and hover_occupancy: computed on first read from the region's samples (the redundant Q-PRR:
+    the finer cells its samples fill), the same after a pickle round trip and on a dataclasses.replace copy."""
+    import dataclasses
+    import pickle
+
+    from qprr.analysis.voxels import display_occupancy
+
+    r = dataclasses.replace(ws.regions[0])  # a copy nothing has read yet (the fixture is shared)
+    assert r.redundant and not {"outline", "boundary", "hover_occupancy"} & set(vars(r))
+    fine = display_occupancy(r.coords)
+    expected = fine if fine[2] < r.occupancy[2] else r.occupancy
+    assert r.outline[2] == expected[2] and np.array_equal(r.outline[0], expected[0])
+    assert len(r.boundary) > 0 and all(ln.shape[1] == 3 for ln in r.boundary)
+    hover = display_occupancy(np.vstack([r.profile, r.profile * np.array([-1.0, 1.0])]))
+    assert np.array_equal(r.hover_occupancy[0], hover[0])
+    for copy in (pickle.loads(pickle.dumps(r)), dataclasses.replace(r, label="copy")):
+        assert np.array_equal(copy.outline[0], r.outline[0]) and np.array_equal(copy.hover_occupancy[0], r.hover_occupancy[0])
+        assert all(np.array_equal(a, b) for a, b in zip(copy.boundary, r.boundary))
