@@ -46,6 +46,10 @@ LOG_INTERVAL = 2.0
 """Seconds between two progress lines written to a non-terminal (a log file, a pipe)."""
 LOG_FORMAT = "{desc}: {n_fmt}/{total_fmt} ({percentage:.0f}%), elapsed {elapsed}, ETA {remaining}, {rate_fmt}{postfix}"
 """One progress line in a log (tqdm's ``bar_format`` fields)."""
+PERCENT_LOG_FORMAT = "{desc}: {percentage:.0f}%, elapsed {elapsed}, ETA {remaining}{postfix}"
+"""One line in a log of work measured as a fraction (:class:`FractionProgress`): no unit counts, no rate."""
+PERCENT_BAR_FORMAT = "{desc}: {percentage:3.0f}%|{bar}| elapsed {elapsed}, ETA {remaining}{postfix}"
+"""The bar on a terminal of work measured as a fraction."""
 
 
 def default_stream() -> TextIO:
@@ -84,7 +88,8 @@ class Progress:
     """Progress of ``total`` units of work, shown on ``stream`` (default: :func:`default_stream` when constructed).
 
     ``label``: what is shown before the counts.  ``quiet``: show nothing.  ``initial``: units
-    already done (a resumed campaign).  ``unit``: the name of a unit in the rate (``step/s``).
+    already done (a resumed campaign).  ``unit``: the name of a unit in the rate (``step/s``); ``"%"``: the work
+    is a fraction (``total`` = 100), shown as a percentage without counts or rate (:data:`PERCENT_LOG_FORMAT`).
     ``interval``: seconds between two lines on a non-terminal (default :data:`LOG_INTERVAL`).
     :meth:`update` adds units, :meth:`update_to` sets the count, :meth:`set_postfix` appends a
     text (``3 failed``), :meth:`write` prints a message without breaking the bar, :meth:`close`
@@ -109,15 +114,18 @@ class Progress:
         self.stream = default_stream() if stream is None else stream
         self.quiet = bool(quiet)
         self.tty = is_terminal(self.stream)
+        percent = unit == "%"
         if self.tty:
             options = {"file": self.stream, "mininterval": TTY_INTERVAL if interval is None else interval, "dynamic_ncols": True}
+            if percent:
+                options["bar_format"] = PERCENT_BAR_FORMAT
         else:
             options = {
                 "file": _Lines(self.stream),
                 "mininterval": LOG_INTERVAL if interval is None else interval,
                 "miniters": 1,
                 "ascii": True,
-                "bar_format": LOG_FORMAT,
+                "bar_format": PERCENT_LOG_FORMAT if percent else LOG_FORMAT,
             }
         self._done, self._total = initial, total  # kept here too: a disabled tqdm does not count
         self._bar = tqdm(total=total, desc=label, initial=initial, unit=unit, disable=self.quiet, leave=True, **options)
@@ -231,4 +239,14 @@ class FractionProgress:
         self._bar, self._message = None, None
 
 
-__all__ = ["LOG_FORMAT", "LOG_INTERVAL", "TTY_INTERVAL", "FractionProgress", "Progress", "StatusProgress", "is_terminal"]
+__all__ = [
+    "LOG_FORMAT",
+    "LOG_INTERVAL",
+    "PERCENT_BAR_FORMAT",
+    "PERCENT_LOG_FORMAT",
+    "TTY_INTERVAL",
+    "FractionProgress",
+    "Progress",
+    "StatusProgress",
+    "is_terminal",
+]

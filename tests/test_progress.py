@@ -117,7 +117,9 @@ def test_fraction_progress_one_display_per_message():
     lines = log.getvalue().splitlines()
     assert "\r" not in log.getvalue()
     assert [s.split(":")[0] for s in lines] == ["workspace map"] * 2 + ["CoG balance"] * 2
-    assert lines[1].startswith("workspace map: 100/100 (100%)") and lines[3].startswith("CoG balance: 100/100")
+    # a fraction: the percentage with elapsed time and ETA, no unit counts and no rate
+    assert lines[1].startswith("workspace map: 100%, elapsed ") and lines[3].startswith("CoG balance: 100%, elapsed ")
+    assert all("/100" not in s and "/s" not in s for s in lines)
 
 
 @pytest.mark.parametrize("kwargs", [{"total": -1}, {"total": 2.5}, {"total": True}, {"total": 3, "interval": 0.0}])
@@ -139,7 +141,7 @@ def test_analyze_shows_progress_in_a_log_by_default_and_quiet_silences_it(quiet,
     else:
         assert "\r" not in captured.err  # capsys's stderr is no terminal: plain lines
         # the label carries the map's current stage (e.g. "hover map: collisions: ..."), the count runs to 100 %
-        assert lines[0].startswith("hover map: 0/100 (0%)") and "100/100 (100%)" in lines[-1]
+        assert lines[0].startswith("hover map: 0%,") and ": 100%, elapsed " in lines[-1]
 
 
 def test_wheeled_simulate_reports_its_steps_only_when_asked(capsys):
