@@ -49,7 +49,7 @@ from .. import charts as ch
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
 from ..model import Platform, check_data, check_model_data, check_platform
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
-from .hierarchy import HierarchySolver
+from .hierarchy import MET, HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 METHODS = ("clika", "dls", "qp")
@@ -819,7 +819,8 @@ class IKSolver:
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
                 it += 1
-                step = self._engine.solve(platform, data, q, levels, validate=it == 1 and opts.levels is not None)
+                active = levels if shaper.kept is None else levels[: shaper.kept]  # frozen levels are not solved
+                step = self._engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
                 dv, stop = shaper.shape(step, pose_ok)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
@@ -832,7 +833,7 @@ class IKSolver:
         except SolverError as exc:
             return finish(ctx, q, Ending("solver_error", str(exc), it))
         status = "converged" if end.status == "converged_stationary" else end.status
-        levels_out = _level_errors(platform, data, q, levels, end.kinematics_ready, step)
+        levels_out = _level_errors(platform, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
         return finish(ctx, q, Ending(status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
@@ -848,6 +849,7 @@ class _StepShaper:
         self.opts = opts
         self.lower_prev, self.flat = None, 0
         self.e1_prev, self.rest_scale = math.inf, 1.0
+        self.kept = None  # None: every level steps; k: levels 1..k only, the levels after them are frozen
 
     def shape(self, step, pose_ok: bool):
         opts = self.opts
@@ -859,7 +861,7 @@ class _StepShaper:
         # errors no longer decrease, compared in priority order (the first level that moved decides: a posture error
         # rising while the hover error falls is progress)
         errors = step.errors
-        lower = errors[1:]
+        lower = errors[1 : self.kept]
         self.flat = self.flat + 1 if (pose_ok and not _lexicographic_progress(lower, self.lower_prev)) else 0
         self.lower_prev = lower
         if self.flat >= 3:
@@ -874,6 +876,12 @@ class _StepShaper:
             self.rest_scale = min(1.0, 2.0 * self.rest_scale)
         self.e1_prev = e1
         dv = step.dv
+        if self.rest_scale <= 0.25:
+            self._freeze(step)
+        if self.kept is not None:
+            dv = step.dv_levels[self.kept - 1]
+            largest = float(np.abs(dv).max())
+            small = largest < opts.step_tol
         if largest > opts.max_step or self.rest_scale < 1.0:
             d1 = step.dv_first
             rest = (dv - d1) * self.rest_scale
@@ -881,6 +889,28 @@ class _StepShaper:
             dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
         # small: stationary, every level settled; the last (tiny) Newton step is kept
         return dv, ("converged_stationary" if small else "")
+
+    def _freeze(self, step) -> None:
+        """Level 1 failed twice in a row to halve its error although the lower share was halved: the lower levels hold
+        it off.  A level the linearisation cannot meet keeps a Gauss-Newton step that ignores the curvature its
+        residual carries (its own task's and the levels' above it): the iteration may cycle around its constrained
+        optimum instead of converging to it.  The lowest level still stepping is frozen where it is (never one of the
+        leading levels the linearisation meets: :func:`_satisfiable_prefix`) and the step control starts afresh."""
+        n = len(step.errors) if self.kept is None else self.kept
+        kept = max(n - 1, _satisfiable_prefix(step))
+        if kept < n:
+            self.kept, self.rest_scale, self.e1_prev, self.lower_prev = kept, 1.0, math.inf, None
+
+
+def _satisfiable_prefix(step, ratio: float = 0.5) -> int:
+    """How many leading levels the linearisation meets: level 1 always, then each level whose error the step's
+    linear model at least halves (||J_k dv - e_k|| <= ratio ||e_k||) or which is met (MET), up to the first that is not."""
+    kept = 1
+    for e, r in zip(step.errors[1:], step.residuals[1:]):
+        if not (e <= MET or r <= ratio * e):
+            break
+        kept += 1
+    return kept
 
 
 def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
