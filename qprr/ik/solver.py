@@ -843,6 +843,7 @@ class _StepShaper:
     ``shape(step, pose_ok) -> (dv or None, stop)``: dv the step to take (None: none, q is the answer and ``data``
     holds its kinematics), stop "" to go on, else "converged_stationary" (the step vanished: converged if the pose
     holds, stalled otherwise) or "converged" (the pose holds and the lower levels stopped improving).
+    ``kept``: None, or the number of leading levels still solved once the lower ones were frozen (:meth:`_freeze`).
     """
 
     def __init__(self, opts: QPOptions) -> None:
