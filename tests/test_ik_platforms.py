@@ -73,10 +73,6 @@ def check(p, data, res, target, position_only=False):
     np.testing.assert_allclose(np.linalg.norm(res.q[3:7]), 1.0, atol=1e-12)
 
 
-# LEAD: on hextilt_flying_arm_5, method "qp" fails these two tests (core behaviour, assertions kept): 11/12 pose
-# targets (one stops at max_iterations with 1.6e-6 m / 2.2e-5 rad) and 0/12 position-only targets (max_iterations
-# at 1.4e-5 m: the CoG and posture levels, unsatisfiable there, make the steps cycle).  QPOptions(regularization=1e-4)
-# reaches 12/12 position-only targets.
 @pytest.mark.parametrize("method", ["qp", "dls", "clika"])
 def test_reachable_targets_are_reached(case, method):
     name, p, data, targets = case
