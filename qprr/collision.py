@@ -306,13 +306,13 @@ def contacts(model: pin.Model, geom: pin.GeometryModel, data: tuple, q: np.ndarr
     if not pin.computeCollisions(model, d, geom, gd, q, True):
         return []
     # the pass stopped at the first pair reported (the pairs before it were found clear); the placements are set
-    results, requests = gd.collisionResults, gd.collisionRequests
+    results = gd.collisionResults
     k0 = next(k for k, res in enumerate(results) if res.isCollision())
     out = []
     for k in range(k0, len(results)):
         if k > k0 and not pin.computeCollision(geom, gd, k):
             continue
-        if requests[k].security_margin == 0.0 or pin.computeDistance(geom, gd, k).min_distance < 0.0:
+        if _reported_in_contact(geom, gd, k):
             out.append(k)
             if first:
                 break
@@ -326,12 +326,13 @@ def decide(model: pin.Model, geom: pin.GeometryModel, data: tuple, q: np.ndarray
     than :data:`CONTACT_MARGIN` (:class:`PairScreen`)."""
     d, gd = data
     pin.updateGeometryPlacements(model, d, geom, gd, q)
-    requests = gd.collisionRequests
-    for k in pairs:
-        k = int(k)
-        if pin.computeCollision(geom, gd, k) and (requests[k].security_margin == 0.0 or pin.computeDistance(geom, gd, k).min_distance < 0.0):
-            return True
-    return False
+    return any(pin.computeCollision(geom, gd, int(k)) and _reported_in_contact(geom, gd, int(k)) for k in pairs)
+
+
+def _reported_in_contact(geom: pin.GeometryModel, gd: pin.GeometryData, k: int) -> bool:
+    """Whether pair ``k``, which coal reported within its security margin, is in contact: a pair with a mesh (margin
+    0) as coal says, a pair of two convex shapes when its signed distance is < 0 (:func:`set_margin`)."""
+    return gd.collisionRequests[k].security_margin == 0.0 or pin.computeDistance(geom, gd, k).min_distance < 0.0
 
 
 ORDER_SAMPLES = 256
@@ -482,12 +483,8 @@ class PairScreen:
         n_pairs, n = len(self.first), len(arm_ids)
         lever0, lever_q = np.zeros((n_pairs, n)), np.zeros((n_pairs, n, n))
 
-        def ancestors(j: int) -> list[int]:
-            out = []
-            while j > 0:
-                out.append(j)
-                j = int(model.parents[j])
-            return out
+        def ancestors(j: int) -> list[int]:  # j and the joints above it, deepest first (the universe, 0, left out)
+            return [int(a) for a in reversed(model.supports[j]) if a > 0]
 
         for p in range(n_pairs):
             chains = [ancestors(int(self.joint[g])) for g in (self.first[p], self.second[p])]

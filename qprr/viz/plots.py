@@ -719,12 +719,16 @@ class _PanelDrawer:
 
 def _draw_into(ax, chosen: list[Panel], draw: _PanelDrawer):
     """The panels drawn into the caller's Axes (one per panel; 3-D panels need 3-D Axes); returns their Figure."""
+    from matplotlib.axes import Axes
+
     axes = list(ax) if isinstance(ax, (list, tuple, np.ndarray)) else [ax]
     axes = list(np.ravel(axes))
     if len(axes) != len(chosen):
         raise InputError(f"plot_result: {len(chosen)} panel(s) for {len(axes)} Axes")
     for p, a in zip(chosen, axes):
-        if (p.projection == "3d") != (getattr(a, "name", "") == "3d"):
+        if not isinstance(a, Axes):
+            raise InputError(f"plot_result: ax must be a matplotlib Axes or a sequence of them, got {type(a).__name__}")
+        if (p.projection == "3d") != (a.name == "3d"):
             need = "an Axes with projection='3d'" if p.projection == "3d" else "a 2-D Axes"
             raise InputError(f"panel {p.name!r} needs {need}")
         draw(p, a)
