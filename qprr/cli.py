@@ -28,6 +28,9 @@ GROUP_MODULES = {
     "analyze": "qprr.analysis.cli",
     "campaign": "qprr.campaign.cli",
     "design": "qprr.design.cli",
+    "export": "qprr.flightstack.cli",
+    "import": "qprr.flightstack.cli",
+    "log": "qprr.flightlog.cli",
 }
 """The packages' command groups: command -> the module whose ``register_cli(subparsers)`` adds it.  A command line
 that names one of them builds that group's parser alone (:func:`build_parser`), so ``qprr analyze ...`` does not import
