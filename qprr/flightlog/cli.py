@@ -1,0 +1,52 @@
+"""FRONT END: ``qprr log show | replay | identify FILE.ulg`` (PX4 flight logs, :mod:`qprr.flightlog`).
+
+Exit codes: 0 done; 1 the log cannot answer (no flight, a topic missing: one line naming it); 2 bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ..cli_common import fail
+
+
+def register_cli(sub) -> None:
+    """Add the ``log`` command group to the subparsers ``sub`` of the qprr command line."""
+    p = sub.add_parser("log", help="PX4 flight logs (ULog): show, replay through PX4's mix and a platform, identify the robot")
+    group = p.add_subparsers(dest="log_command", required=True, parser_class=type(p))
+    _add_show(group)
+    _add_replay(group)
+    _add_identify(group)
+
+
+# ------------------------------------------------------------------------------ show (owned by the show/replay work)
+def _add_show(group) -> None:
+    p = group.add_parser("show", help="the vehicle, the phases, the topics and rates of a log; a summary figure")
+    p.add_argument("log", metavar="FILE.ulg")
+    p.set_defaults(func=_cmd_show)
+
+
+def _cmd_show(args: argparse.Namespace) -> int:
+    return fail("qprr log show", "not built yet")
+
+
+# ------------------------------------------------------------------------------ replay (owned by the show/replay work)
+def _add_replay(group) -> None:
+    p = group.add_parser("replay", help="PX4's mix rebuilt from the log's CA_* parameters; the IMU predicted through a platform")
+    p.add_argument("log", metavar="FILE.ulg")
+    p.set_defaults(func=_cmd_replay)
+
+
+def _cmd_replay(args: argparse.Namespace) -> int:
+    return fail("qprr log replay", "not built yet")
+
+
+# ------------------------------------------------------------------------------ identify (owned by the identification work)
+def _add_identify(group) -> None:
+    p = group.add_parser("identify", help="thrust coefficient, hover command, mass, CoG offset, inertia, motor time constant")
+    p.add_argument("log", metavar="FILE.ulg")
+    p.set_defaults(func=_cmd_identify)
+
+
+def _cmd_identify(args: argparse.Namespace) -> int:
+    return fail("qprr log identify", "not built yet")
