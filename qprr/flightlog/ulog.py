@@ -268,16 +268,27 @@ def _from_actuator_motors(log: FlightLog, needed_for: str) -> Series:
 
 
 def _pwm_limits(log: FlightLog, channel: int) -> tuple[float, float, str]:
-    """PWM range [us] of output ``channel`` (0-based): PWM_MAIN_MINn/MAXn (PX4 >= 1.13), else PWM_MAIN_MIN/MAX
-    (older), else PX4's defaults 1000/2000 us."""
+    """PWM range [us] of output ``channel`` (0-based), the first set pair of: PWM_MAIN_MINn/MAXn (PX4 >= 1.11; -1 means
+    unset), PWM_MAIN_MIN/MAX, PWM_MIN/MAX (PX4 <= 1.7), else PX4's defaults 1000/2000 us."""
     k = channel + 1
-    lo, hi = log.parameter(f"PWM_MAIN_MIN{k}"), log.parameter(f"PWM_MAIN_MAX{k}")
-    if lo is not None and hi is not None:
-        return float(lo), float(hi), "PWM_MAIN_MINn/MAXn"
-    lo, hi = log.parameter("PWM_MAIN_MIN"), log.parameter("PWM_MAIN_MAX")
-    if lo is not None and hi is not None:
-        return float(lo), float(hi), "PWM_MAIN_MIN/MAX"
-    return PWM_DEFAULT_MIN_US, PWM_DEFAULT_MAX_US, "PX4's default range 1000-2000 us (no PWM_MAIN_MIN/MAX in the log)"
+    for lo_name, hi_name, label in (
+        (f"PWM_MAIN_MIN{k}", f"PWM_MAIN_MAX{k}", "PWM_MAIN_MINn/MAXn"),
+        ("PWM_MAIN_MIN", "PWM_MAIN_MAX", "PWM_MAIN_MIN/MAX"),
+        ("PWM_MIN", "PWM_MAX", "PWM_MIN/MAX"),
+    ):
+        lo, hi = log.parameter(lo_name, -1), log.parameter(hi_name, -1)
+        if 0 < lo < hi:
+            return float(lo), float(hi), label
+    return PWM_DEFAULT_MIN_US, PWM_DEFAULT_MAX_US, "PX4's default range 1000-2000 us (no PWM range in the log)"
+
+
+def _pwm_disarmed(log: FlightLog) -> float:
+    """The disarmed PWM value [us]: PWM_MAIN_DISARM, PWM_DISARMED (PX4 <= 1.7), else PX4's default 900 us."""
+    for name in ("PWM_MAIN_DISARM", "PWM_DISARMED"):
+        value = log.parameter(name, -1)
+        if value >= 0:
+            return float(value)
+    return PWM_DEFAULT_DISARMED_US
 
 
 def _motor_channels(log: FlightLog, pwm: np.ndarray, disarmed: float) -> tuple[list[int], str]:
@@ -304,7 +315,7 @@ def _from_actuator_outputs(log: FlightLog, needed_for: str) -> Series:
     value (PWM_MAIN_DISARM, default 900 us) and anything below min - 1 us becomes NaN (stopped)."""
     fields = [f for f in log.fields("actuator_outputs") if f.startswith("output[")]
     raw = log.series("actuator_outputs", fields, needed_for=needed_for)
-    disarmed = float(log.parameter("PWM_MAIN_DISARM", log.parameter("PWM_MAIN_DISARMED", PWM_DEFAULT_DISARMED_US)))
+    disarmed = _pwm_disarmed(log)
     chans, how = _motor_channels(log, raw.values, disarmed)
     cols, ranges = [], set()
     for c in chans:
