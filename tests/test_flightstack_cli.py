@@ -61,8 +61,7 @@ def test_import_refuses_a_vehicle_too_heavy(tmp_path, capsys):
 
 
 def test_import_ulog_parameters(tmp_path, capsys):
-    pytest.importorskip("qprr.flightlog.ulog")
-    pyulog = pytest.importorskip("pyulog")
+    pyulog = pytest.importorskip("pyulog", reason="pyulog is not installed: pip install 'qprr[flightlog]'")
     if not LOG.exists():
         pytest.skip("the SITL log is not in ../shared/data/flightlogs")
     toml = tmp_path / "iris.toml"

@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import argparse
 import time
-from importlib import import_module
 from pathlib import Path
 
 import numpy as np
 
 from ..cli_common import Parser, add_platform_options, fail, integer, output_path, platform_from_args, real, reals
 from ..errors import InputError
+from ..flightlog.ulog import FlightLog
 from ..rotors import check_rotor_set, rotors_to_toml
 from ..version import __version__
 from .ardupilot import dynamic_script, frame_script, write_script
@@ -31,17 +31,9 @@ G = 9.81
 
 
 def ulog_parameters(path: Path) -> dict:
-    """The parameters stored in a ULog file, read by the flight-log package's reader
-    (``qprr.flightlog.ulog.FlightLog.read(path).parameters``; needs its ``flightlog`` extra, pyulog)."""
-    try:
-        ulog = import_module("qprr.flightlog.ulog")
-    except ModuleNotFoundError as exc:
-        if exc.name != "qprr.flightlog.ulog":
-            raise
-        raise InputError(
-            f"{str(path)!r}: this qprr has no ULog reader (qprr.flightlog.ulog); export the parameters from QGroundControl as a .params file"
-        ) from None
-    return dict(ulog.FlightLog.read(path).parameters)
+    """The parameters stored in a ULog file, read by the one ULog reader (:class:`qprr.flightlog.ulog.FlightLog`;
+    needs the ``flightlog`` extra, pyulog)."""
+    return dict(FlightLog.read(path).parameters)
 
 
 PARAMETER_READERS = {".params": read_params, ".ulg": ulog_parameters}
