@@ -77,6 +77,23 @@ class MissingDependencyError(QprrError, ImportError):
         super().__init__(f"{package} is needed for {purpose}: {install}")
 
 
+class MissingTopicError(QprrError, LookupError):
+    """A flight log lacks a topic (or a field of it) that a computation needs; the message names the topic, what
+    needs it and the PX4 logging profile (the ``SDLOG_PROFILE`` bit) that adds it."""
+
+    def __init__(self, message: str, topic: str = "") -> None:
+        self.topic = topic
+        super().__init__(message)
+
+    def __str__(self) -> str:  # LookupError would otherwise show the bare message
+        return str(self.args[0])
+
+
+class NoFlightError(QprrError, RuntimeError):
+    """A flight log holds no flight (never armed, or armed but never airborne) where a computation needs one; the
+    one-line message says which."""
+
+
 class PortInUseError(QprrError, OSError):
     """A network port the caller asked for is already taken (e.g. by another ``qprr view``)."""
 
