@@ -30,7 +30,7 @@ from ..model import Platform
 from ..validation import as_int, as_output_path, as_real
 from .inertial import identify_inertial
 from .record import FlightRecord, read_joint_csv, record_from_log
-from .samples import Estimate, Samples, not_identifiable, prepare
+from .samples import Estimate, Samples, not_identifiable, prepare_samples
 from .stats import least_squares
 from .ulog import FlightLog
 
@@ -102,7 +102,8 @@ class Identification:
         for f in self.folds:
             vals = ", ".join(f"{k} {v:.5g}" for k, v in f.values.items())
             lines.append(
-                f"  fold {f.index + 1}: held out {f.t_start_s:.1f}-{f.t_end_s:.1f} s: {vals}; rms fit {f.rms_fit:.3g}, held out {f.rms_held_out:.3g} m/s^2"
+                f"  fold {f.index + 1}: held out {f.t_start_s:.1f}-{f.t_end_s:.1f} s: {vals}; "
+                f"rms fit {f.rms_fit:.3g}, held out {f.rms_held_out:.3g} m/s^2"
             )
         return "\n".join(lines)
 
@@ -263,14 +264,14 @@ def cross_validate(
 def rotor_axes_body(record: FlightRecord, platform: Platform | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(positions (n, 3) [m], unit axes (n, 3), km (n,) [m]) of the rotors in B: the platform's when one is given (an
     aerial manipulator: positions from B's origin), else the log's CA_* geometry (FRD -> FLU; positions from the
-    centre of gravity PX4 was told)."""
+    centre of gravity PX4 was told, shifted to the IMU, the origin of the rigid model)."""
     if platform is not None:
         p = np.array([r.position_body for r in platform.rotors])
         a = np.array([r.axis_body for r in platform.rotors])
         km = np.array([-r.spin * r.kappa for r in platform.rotors])
         return p, a, km
     g = record.geometry
-    p = body_from_frd(np.array([r.position_frd for r in g.rotors]))
+    p = body_from_frd(np.array([r.position_frd for r in g.rotors])) - np.array(record.imu_position_body)
     a = body_from_frd(np.array([r.axis_frd for r in g.rotors]))
     a /= np.linalg.norm(a, axis=1)[:, None]
     return p, a, np.array([r.km for r in g.rotors])
@@ -288,7 +289,7 @@ def identify(record: FlightRecord, options: IdentifyOptions | None = None, platf
         raise InputError(f"platform {platform.name!r} has arm joints {', '.join(platform.arm_names)}: give their angles (joints CSV)")
     if platform is not None and platform.n_rotors != record.commands.shape[1]:
         raise InputError(f"platform {platform.name!r} has {platform.n_rotors} rotors, the log {record.commands.shape[1]} motor commands")
-    samples = prepare(record, options)
+    samples = prepare_samples(record, options)
     rotors = rotor_axes_body(record, platform)
     axis_z = rotors[1][:, 2]
     lag, T = profile_time_constant(samples, axis_z, record.command_rate_hz)

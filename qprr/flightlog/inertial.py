@@ -80,7 +80,7 @@ def stacked_regressor(model: pin.Model, samples: Samples, wrench_columns: np.nda
     return Y, W
 
 
-def solve(Y: np.ndarray, W: np.ndarray, known: dict, names: tuple[str, ...]) -> RegressorFit:
+def solve_regressor(Y: np.ndarray, W: np.ndarray, known: dict, names: tuple[str, ...]) -> RegressorFit:
     """Least squares of Y pi - ct W = 0 with the ``known`` unknowns (name -> value; "ct" or "mass_total" with the
     index list of the mass columns) moved to the right-hand side; rows weighted per kind (force, moment) by their
     first-pass residual rms; minimum-norm solution in the regressor's row space (SVD)."""
@@ -234,7 +234,7 @@ def identify_inertial(
     mass_total = known.get("mass", 1.0 if "ct" not in known else None)
     if mass_total is not None:
         solve_known["mass_total"] = (mass_total, [10 * i for i in range(len(bodies))])
-    fit = solve(Y, W, solve_known, names)
+    fit = solve_regressor(Y, W, solve_known, names)
     fixed = {}
     if mass_total is not None:
         others = [fit.names.index(f"{b}.m") for b in bodies[1:]]

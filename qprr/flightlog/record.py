@@ -41,7 +41,8 @@ class FlightRecord:
     t_imu_s (n,) [s]; specific_force_body (n, 3) [m/s^2] (the accelerometer: acceleration minus gravity);
     gyro_body (n, 3) [rad/s]; t_command_s (m,) [s]; commands (m, n_rotors) normalised motor commands [0, 1];
     geometry: PX4's rotor geometry from the log's CA_* parameters (FRD; only its positions, axes and KM are used,
-    never its CT); thr_mdl_fac: PX4's THR_MDL_FAC (thrust = ct (f u^2 + (1 - f) u)); airborne: (start, end) [s]
+    never its CT); imu_position_body: the IMU relative to the centre of gravity PX4 was told [m] (PX4's
+    EKF2_IMU_POS_X/Y/Z, FRD -> B); thr_mdl_fac: PX4's THR_MDL_FAC (thrust = ct (f u^2 + (1 - f) u)); airborne: (start, end) [s]
     intervals; joints: the arm's angles (None for a rigid multirotor); source: the file name.
     """
 
@@ -55,6 +56,7 @@ class FlightRecord:
     airborne: tuple[tuple[float, float], ...]
     joints: JointSeries | None = None
     source: str = ""
+    imu_position_body: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     @property
     def command_rate_hz(self) -> float:
@@ -90,6 +92,7 @@ def record_from_log(log: FlightLog, joints: JointSeries | None = None) -> Flight
         phases.airborne,
         joints,
         log.path.name,
+        tuple(float(x) for x in body_from_frd(np.array([float(log.parameter(f"EKF2_IMU_POS_{k}", 0.0)) for k in "XYZ"]))),
     )
 
 
@@ -110,7 +113,8 @@ def read_joint_csv(path: str | Path, platform: Platform) -> JointSeries:
     missing = [n for n in platform.arm_names if n not in header]
     if missing or len(set(header)) != len(header):
         raise InputError(
-            f"joints: {path.name} must give every arm joint once; missing {missing}, header {header}; the URDF's joints: {', '.join(platform.arm_names)}"
+            f"joints: {path.name} must give every arm joint once; missing {missing}, header {header}; "
+            f"the URDF's joints: {', '.join(platform.arm_names)}"
         )
     try:
         data = np.array([[float(x) for x in r] for r in rows[1:] if r], dtype=float)

@@ -1,5 +1,5 @@
 """The samples identification fits and the estimates it gives: :class:`Estimate` (value, std, unit, status,
-reason), :class:`Samples` (the airborne part of a flight, low-passed and on a common grid, :func:`prepare`).
+reason), :class:`Samples` (the airborne part of a flight, low-passed and on a common grid, :func:`prepare_samples`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from .record import FlightRecord
-from .stats import lowpass, motor_lag
+from .stats import lowpass, lag_response
 
 GRID_RATE_HZ = 50.0
 """The rate the filtered signals are fitted at [Hz]."""
@@ -70,13 +70,13 @@ class Samples:
         """g(lag_T(u)) low-passed and sampled on the grid (n, n_rotors)."""
         out = []
         for _t, u_imu, dt, rate, fac, pick in self.pieces:
-            lagged = motor_lag(u_imu, dt, time_constant)
+            lagged = lag_response(u_imu, dt, time_constant)
             thrust = fac * lagged**2 + (1.0 - fac) * lagged
             out.append(lowpass(thrust, rate, self.cutoff_hz)[pick])
         return np.concatenate(out)
 
 
-def prepare(record: FlightRecord, options) -> Samples:
+def prepare_samples(record: FlightRecord, options) -> Samples:
     """:class:`Samples` of ``record``: each airborne interval (less ``margin_s`` at both ends) on the IMU's grid, the
     commands interpolated to it, everything low-passed (module docstring) and sampled at GRID_RATE_HZ."""
     t = record.t_imu_s

@@ -34,7 +34,7 @@ def lowpass(x: np.ndarray, rate_hz: float, cutoff_hz: float) -> np.ndarray:
     return filtfilt(b, a, x, axis=0, padlen=min(3 * max(len(a), len(b)), x.shape[0] - 1))
 
 
-def motor_lag(u: np.ndarray, dt: float, time_constant: float) -> np.ndarray:
+def lag_response(u: np.ndarray, dt: float, time_constant: float) -> np.ndarray:
     """The output of the first-order lag T du_f/dt = u - u_f (jMAVSim's Rotor.java, qprr.sim.actuators) driven by
     ``u`` (rows: samples ``dt`` [s] apart, linear in between: the exact discrete update of a ramp), started at u[0];
     ``time_constant`` = 0: ``u`` itself."""
