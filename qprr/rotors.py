@@ -527,13 +527,14 @@ def _why_no_attitude(rotors: Sequence[Rotor], d: np.ndarray) -> str:
     return "; ".join(reasons) if reasons else "the rotor axes and positions are degenerate"
 
 
-def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set") -> None:
+def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set", *, hover: bool = True) -> None:
     """Nothing for a rotor set that can hover and control its attitude, else an :class:`~qprr.errors.ActuationError`
     naming ``source`` (the rotor file) and the rotors (:func:`actuation_summary` reports the numbers).
 
     Refused: a rotor written twice (:func:`duplicate_rotors`); an attitude map [d^T Omega_F; Omega_tau] of rank < 4
     (every flight controller needs collective thrust and three independent torques: same spins, zero kappa, rotors on
-    a line or at the centre, fewer than four rotors); no hover thrusts strictly inside the bounds.  Warned about
+    a line or at the centre, fewer than four rotors); no hover thrusts strictly inside the bounds (``hover=False``
+    skips this one: a rotor set read without the vehicle's mass, e.g. ``qprr import px4`` without ``--mass``).  Warned about
     (:class:`~qprr.errors.ActuationWarning`): a condition number above :data:`CONDITION_WARN`."""
     import warnings
 
@@ -555,7 +556,7 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
             f"pitch and yaw torque) every flight controller needs (wrench rank {summary.rank}, directions "
             f"{', '.join(summary.directions) or 'none'}): {_why_no_attitude(rotors, summary.thrust_axis_body)}"
         )
-    if not summary.can_hover:
+    if hover and not summary.can_hover:
         why = (
             "no thrusts give the hover wrench m g [d; c x d] (CoG outside what the rotors can balance)"
             if np.isnan(summary.hover_thrusts).any()
@@ -573,3 +574,35 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
             ActuationWarning,
             stacklevel=3,
         )
+
+
+def rotors_to_toml(rotors: Sequence[Rotor], header: Sequence[str] = ()) -> str:
+    """The TOML text of a rotor description of ``rotors`` (read back by :func:`read_rotor_file` and
+    :func:`rotors_from_mapping` to the same float64 numbers): one ``[[rotor]]`` per rotor with ``name``, ``position``
+    [m], ``axis``, ``spin`` (+1/-1), ``kappa`` [m], ``f_min`` and ``f_max`` [N] (and ``radius`` [m] when given), after
+    ``#`` comment lines ``header``.  An infinite f_max is left out (the description's default)."""
+    if not isinstance(rotors, (tuple, list)) or not rotors or not all(isinstance(r, Rotor) for r in rotors):
+        raise InputError(f"rotors must be a non-empty sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
+
+    def vec(v) -> str:
+        return "[" + ", ".join(repr(float(x)) for x in v) + "]"
+
+    lines = [f"# {h}" if h else "#" for h in header]
+    for r in rotors:
+        lines += ["", "[[rotor]]"]
+        if r.name:
+            lines.append(f"name = {_toml_string(r.name)}")
+        lines += [f"position = {vec(r.position_body)}", f"axis = {vec(r.axis_body)}", f"spin = {r.spin}", f"kappa = {float(r.kappa)!r}"]
+        lines.append(f"f_min = {float(r.f_min)!r}")
+        if math.isfinite(r.f_max):
+            lines.append(f"f_max = {float(r.f_max)!r}")
+        if r.radius is not None:
+            lines.append(f"radius = {float(r.radius)!r}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string of ``text`` (backslash and double quote escaped, control characters refused)."""
+    if any(ord(ch) < 32 for ch in text):
+        raise InputError(f"rotor name {text!r} contains a control character")
+    return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'

@@ -262,8 +262,8 @@ def geometry_from_rotors(rotors: Sequence[Rotor], com_body=(0.0, 0.0, 0.0), *, c
                 f"{source}: rotor {i + 1} ({r.name or 'unnamed'}) has f_max = inf, but PX4's CA_ROTOR{i}_CT is the thrust "
                 "at full command [N]: give f_max in the rotor file (the rotor's measured or rated maximum thrust)"
             )
-        p = frd_from_body(np.asarray(r.position_body) - c)
-        a = frd_from_body(r.axis_body)
+        p = frd_from_body(np.asarray(r.position_body) - c) + 0.0  # + 0.0: no negative zeros in the file
+        a = frd_from_body(r.axis_body) + 0.0
         out.append(Px4Rotor(tuple(float(x) for x in p), _unit_f32(a), r.f_max, -r.spin * r.kappa + 0.0))
     geometry = Px4Geometry(tuple(out), AIRFRAME_MULTIROTOR)
     if check:
@@ -279,6 +279,21 @@ def com_body_at(platform: Platform, q_arm=None) -> np.ndarray:
     if q_arm is not None:
         q[7:] = platform.check_arm_limits(q_arm, "q_arm")
     return np.array(pin.centerOfMass(platform.model, platform.model.createData(), q))
+
+
+def coms_body_at(platform: Platform, Q) -> np.ndarray:
+    """Centres of gravity (N, 3) [m] in B of the whole robot at the arm configurations ``Q`` (N, n_arm) (not checked
+    against the limits: the callers build Q inside them)."""
+    platform = check_platform(platform)
+    Q = np.asarray(Q, dtype=float).reshape(-1, platform.n_arm)
+    model = platform.model
+    data = model.createData()
+    q = platform.neutral_q()
+    out = np.empty((len(Q), 3))
+    for k, qa in enumerate(Q):
+        q[7:] = qa
+        out[k] = pin.centerOfMass(model, data, q)
+    return out
 
 
 def geometry_from_platform(platform: Platform, q_arm=None, *, check: bool = True) -> Px4Geometry:
@@ -306,8 +321,8 @@ def rotors_from_geometry(geometry: Px4Geometry) -> tuple[Rotor, ...]:
                 f"CA_ROTOR{i}_AX/AY/AZ = {list(r.axis_frd)}: a zero axis, PX4 ignores the rotor; give its thrust direction (FRD, e.g. 0, 0, -1)"
             )
         spin = -1 if r.km > 0.0 else 1
-        p = body_from_frd(r.position_frd)
-        a = body_from_frd(r.axis_frd)
+        p = body_from_frd(r.position_frd) + 0.0
+        a = body_from_frd(r.axis_frd) + 0.0
         out.append(Rotor(tuple(float(x) for x in p), tuple(float(x) for x in a), spin, abs(r.km), 0.0, r.ct, f"CA_ROTOR{i}"))
     return tuple(out)
 
