@@ -8,10 +8,15 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..cli_common import fail
-from ..errors import MissingTopicError, NoFlightError, QprrError
+from ..cli_common import PLATFORM_HELP, add_platform_options, fail, output_path, platform_from_args
+from ..errors import InputError, MissingDependencyError, MissingTopicError, NoFlightError, QprrError, UnknownNameError
 from ..model import from_urdf
 from .identify import IdentifyOptions, identify_log
+from .phases import find_phases
+from .plots import summary_figure
+from .replay import replay
+from .show import show_lines
+from .ulog import FlightLog
 
 
 def register_cli(sub) -> None:
@@ -27,22 +32,72 @@ def register_cli(sub) -> None:
 def _add_show(group) -> None:
     p = group.add_parser("show", help="the vehicle, the phases, the topics and rates of a log; a summary figure")
     p.add_argument("log", metavar="FILE.ulg")
+    p.add_argument("--plot", default=None, metavar="FILE.png", help="save the summary figure (.png, .pdf or .svg)")
     p.set_defaults(func=_cmd_show)
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    return fail("qprr log show", "not built yet")
+    prog = "qprr log show"
+    try:
+        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+    except ValueError as exc:
+        return fail(prog, str(exc))
+    try:
+        log = FlightLog.read(args.log)
+        phases = find_phases(log)
+    except (InputError, MissingDependencyError) as exc:
+        return fail(prog, str(exc))
+    except QprrError as exc:
+        return _cannot(prog, exc)
+    print("\n".join(show_lines(log, phases)))
+    if args.plot:
+        fig = summary_figure(log, phases)
+        fig.savefig(args.plot, dpi=110)
+        print(f"saved {args.plot}")
+    return 0
+
+
+def _cannot(prog: str, exc: Exception) -> int:
+    """The log cannot answer (no flight, a missing topic): one line, exit code 1."""
+    print(f"{prog}: {exc}", file=sys.stderr)
+    return 1
 
 
 # ------------------------------------------------------------------------------ replay (owned by the show/replay work)
 def _add_replay(group) -> None:
     p = group.add_parser("replay", help="PX4's mix rebuilt from the log's CA_* parameters; the IMU predicted through a platform")
     p.add_argument("log", metavar="FILE.ulg")
+    p.add_argument(
+        "--platform",
+        default=None,
+        help="the platform the IMU is predicted through (default: the log's CA_* rotors on a rigid body); " + PLATFORM_HELP,
+    )
+    add_platform_options(p, name_option=False)
+    p.add_argument("--plot", default=None, metavar="FILE.png", help="save the replay figure (.png, .pdf or .svg)")
     p.set_defaults(func=_cmd_replay)
 
 
 def _cmd_replay(args: argparse.Namespace) -> int:
-    return fail("qprr log replay", "not built yet")
+    prog = "qprr log replay"
+    try:
+        output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
+    except ValueError as exc:
+        return fail(prog, str(exc))
+    try:
+        log = FlightLog.read(args.log)
+        custom = args.platform is not None or args.urdf is not None or args.layout is not None
+        platform = platform_from_args(args) if custom else None
+    except (InputError, MissingDependencyError, UnknownNameError) as exc:
+        return fail(prog, str(exc))
+    try:
+        result = replay(log, find_phases(log), platform)
+    except QprrError as exc:
+        return _cannot(prog, exc)
+    print(result.summary())
+    if args.plot:
+        result.plot(args.plot)
+        print(f"saved {args.plot}")
+    return 0
 
 
 # ------------------------------------------------------------------------------ identify (owned by the identification work)

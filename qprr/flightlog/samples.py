@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from .record import FlightRecord
-from .stats import lowpass, lag_response
+from .stats import lag_response, lowpass
 
 GRID_RATE_HZ = 50.0
 """The rate the filtered signals are fitted at [Hz]."""
