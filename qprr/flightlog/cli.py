@@ -9,7 +9,9 @@ import argparse
 import sys
 
 from ..cli_common import PLATFORM_HELP, add_platform_options, fail, output_path, platform_from_args
-from ..errors import InputError, MissingDependencyError, QprrError, UnknownNameError
+from ..errors import InputError, MissingDependencyError, MissingTopicError, NoFlightError, QprrError, UnknownNameError
+from ..model import from_urdf
+from .identify import IdentifyOptions, identify_log
 from .phases import find_phases
 from .plots import summary_figure
 from .replay import replay
@@ -102,8 +104,35 @@ def _cmd_replay(args: argparse.Namespace) -> int:
 def _add_identify(group) -> None:
     p = group.add_parser("identify", help="thrust coefficient, hover command, mass, CoG offset, inertia, motor time constant")
     p.add_argument("log", metavar="FILE.ulg")
+    known = p.add_mutually_exclusive_group()
+    known.add_argument("--mass", type=float, metavar="KG", help="the vehicle's mass: ct is identified")
+    known.add_argument("--ct", type=float, metavar="N", help="the thrust per rotor at full command: the mass is identified")
+    p.add_argument("--joints", metavar="FILE.csv", help="joint angles (header: time, the URDF's joint names)")
+    p.add_argument("--urdf", metavar="FILE.urdf", help="the aerial manipulator's URDF (with --rotors and --joints)")
+    p.add_argument("--rotors", metavar="FILE.toml", help="its rotor file")
+    p.add_argument("--folds", type=int, default=5, metavar="K", help="cross-validation over K time blocks (default 5)")
+    p.add_argument("--json", metavar="FILE.json", help="write every value as {value, std}")
+    p.add_argument("--plot", metavar="FILE.png", help="measured against predicted, held-out folds shaded")
     p.set_defaults(func=_cmd_identify)
 
 
 def _cmd_identify(args: argparse.Namespace) -> int:
-    return fail("qprr log identify", "not built yet")
+    what = "qprr log identify"
+    if (args.urdf is None) != (args.rotors is None) or (args.joints is not None and args.urdf is None):
+        return fail(what, "--joints needs --urdf and --rotors, and --urdf and --rotors go together")
+    try:
+        options = IdentifyOptions(mass=args.mass, ct=args.ct, folds=args.folds)
+        platform = from_urdf(args.urdf, args.rotors) if args.urdf is not None else None
+    except QprrError as exc:
+        return fail(what, str(exc))
+    try:
+        result = identify_log(args.log, options, platform, args.joints)
+    except (NoFlightError, MissingTopicError, QprrError) as exc:  # the log cannot answer: one line, exit 1
+        print(f"{what}: {exc}", file=sys.stderr)
+        return 1
+    print(result.summary())
+    if args.json:
+        print(f"wrote {result.to_json(args.json)}")
+    if args.plot:
+        print(f"wrote {result.plot(args.plot)}")
+    return 0

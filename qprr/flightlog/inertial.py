@@ -1,0 +1,253 @@
+"""The inertial parameters from a flight, through Pinocchio's joint-torque regressor.
+
+Pinocchio's ``computeJointTorqueRegressor(model, data, q, v, a)`` gives Y (nv x 10 n_bodies) with tau = Y pi, pi the
+bodies' dynamic parameters [m, m c, I (about the joint frame's origin: xx, xy, yy, xz, yz, zz)]
+(``Inertia.toDynamicParameters``).  The free flyer's rows are the base wrench [f; tau] in B at B's origin: the rotor
+wrench ct sum_i g_i [a_i; p_i x a_i - km_i a_i] (PX4's ActuatorEffectivenessRotors.cpp, in FLU).  The arm's rows
+equal the joint torques, which a PX4 log does not hold: only the base rows are used.
+
+The base's motion: with gravity set to zero in the model, the base at the origin with zero linear velocity and the
+linear acceleration equal to the IMU's specific force, the regressor equals the true one (the Newton-Euler
+equations depend on the classical accelerations only, and the specific force is the classical acceleration of B's
+origin minus gravity, in B); the attitude is not needed.
+
+Only what the flight determines is reported: the stacked, row-weighted and column-scaled regressor is decomposed
+(SVD); a derived quantity (a centre of gravity, an inertia about it, a ratio) is identifiable when its gradient lies
+in the row space of the regressor (structurally) and its std is small against its scale (excitation).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ..model import Platform
+from .samples import RELATIVE_STD_MAX, Estimate, Samples, not_identifiable
+from .stats import autocorrelation_time
+
+RANK_RTOL = 1e-7
+"""Singular values of the scaled regressor below this fraction of the largest are structural zeros."""
+
+ROW_SPACE_TOL = 1e-6
+"""A gradient whose part outside the regressor's row space exceeds this fraction of its norm is not identifiable."""
+
+
+def rigid_model() -> pin.Model:
+    """A free-flyer model of one rigid body (its parameters to identify), gravity zero (module docstring)."""
+    model = pin.Model()
+    j = model.addJoint(0, pin.JointModelFreeFlyer(), pin.SE3.Identity(), "base")
+    model.appendBodyToJoint(j, pin.Inertia(1.0, np.zeros(3), np.eye(3) * 1e-2), pin.SE3.Identity())
+    model.gravity = pin.Motion.Zero()
+    return model
+
+
+@dataclass(frozen=True)
+class RegressorFit:
+    """The solution of Y pi = ct W (module docstring): x the unknowns (scaled back), cov their covariance, V_r the
+    row space (in scaled coordinates), scale the column scales, names of the unknowns, and the fixed values."""
+
+    x: np.ndarray
+    cov: np.ndarray
+    row_space: np.ndarray
+    scale: np.ndarray
+    names: tuple[str, ...]
+    tau: float
+    condition: float
+
+
+def stacked_regressor(model: pin.Model, samples: Samples, wrench_columns: np.ndarray, thrust: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(Y (6 n, 10 n_bodies) the base rows of every sample, W (6 n,) the rotor wrench per unit ct)."""
+    data = model.createData()
+    n = samples.t_s.shape[0]
+    na = model.nv - 6
+    q = pin.neutral(model)
+    v = np.zeros(model.nv)
+    a = np.zeros(model.nv)
+    Y = np.empty((6 * n, 10 * (model.njoints - 1)))
+    for k in range(n):
+        v[3:6] = samples.gyro_body[k]
+        a[0:3] = samples.specific_force_body[k]
+        a[3:6] = samples.omega_dot_body[k]
+        if na:
+            q[7:] = samples.joints[0][k]
+            v[6:] = samples.joints[1][k]
+            a[6:] = samples.joints[2][k]
+        Y[6 * k : 6 * k + 6] = pin.computeJointTorqueRegressor(model, data, q, v, a)[0:6]
+    W = (thrust @ wrench_columns.T).reshape(-1)
+    return Y, W
+
+
+def solve_regressor(Y: np.ndarray, W: np.ndarray, known: dict, names: tuple[str, ...]) -> RegressorFit:
+    """Least squares of Y pi - ct W = 0 with the ``known`` unknowns (name -> value; "ct" or "mass_total" with the
+    index list of the mass columns) moved to the right-hand side; rows weighted per kind (force, moment) by their
+    first-pass residual rms; minimum-norm solution in the regressor's row space (SVD)."""
+    A = np.hstack([Y, -W[:, None]])
+    cols = list(names) + ["ct"]
+    b = np.zeros(A.shape[0])
+    if "ct" in known:
+        b += W * known["ct"]
+        A, cols = A[:, :-1], cols[:-1]
+    if "mass_total" in known:  # the first mass column (the base's) = m_total - the others
+        m_total, mass_cols = known["mass_total"]
+        base = mass_cols[0]
+        for j in mass_cols[1:]:
+            A[:, j] -= A[:, base]
+        b -= A[:, base] * m_total
+        A = np.delete(A, base, axis=1)
+        cols.pop(base)
+    w = np.ones(A.shape[0])
+    for _ in range(2):
+        x, V, s, sc, r = _svd_solve(A * w[:, None], b * w)
+        res = (b - A @ x).reshape(-1, 6)
+        rms = np.sqrt(np.mean(res**2, axis=0))
+        rms_f, rms_m = max(float(np.mean(rms[0:3])), 1e-12), max(float(np.mean(rms[3:6])), 1e-12)
+        w = np.tile(np.r_[np.full(3, 1.0 / rms_f), np.full(3, 1.0 / rms_m)], res.shape[0])
+    Aw, bw = A * w[:, None], b * w
+    x, V, s, sc, r = _svd_solve(Aw, bw)
+    resid = bw - Aw @ x
+    dof = max(Aw.shape[0] - V.shape[1], 1)
+    s2 = float(resid @ resid) / dof
+    tau = autocorrelation_time(resid.reshape(-1, 6))
+    cov_z = (V / s**2) @ V.T * s2 * tau
+    cov = cov_z / np.outer(sc, sc)
+    return RegressorFit(x, cov, V, sc, tuple(cols), tau, float(s[0] / s[-1]) if s.size else math.inf)
+
+
+def _svd_solve(A: np.ndarray, b: np.ndarray):
+    """(x, V_r, s_r, column scales, rank) of the minimum-norm least-squares solution of A x = b, columns scaled to unit
+    norm, singular values below RANK_RTOL of the largest dropped."""
+    sc = np.linalg.norm(A, axis=0)
+    sc = np.where(sc > 0.0, sc, 1.0)
+    U, s, Vt = np.linalg.svd(A / sc, full_matrices=False)
+    r = int(np.sum(s > RANK_RTOL * s[0]))
+    U, s, V = U[:, :r], s[:r], Vt[:r].T
+    z = V @ ((U.T @ b) / s)
+    return z / sc, V, s, sc, r
+
+
+def derived(fit: RegressorFit, fn, unit: str, scale: float, what: str) -> Estimate:
+    """The estimate of ``fn(x)`` (a scalar of the unknowns): structurally identifiable when its gradient lies in the row
+    space, then identified when its std <= RELATIVE_STD_MAX x ``scale``."""
+    x = fit.x
+    value = float(fn(x))
+    if not math.isfinite(value):
+        return not_identifiable(unit, f"{what} is undefined at the fitted values")
+    grad = np.empty(x.size)
+    for j in range(x.size):
+        h = 1e-6 * max(abs(x[j]), 1e-3)
+        xp, xm = x.copy(), x.copy()
+        xp[j] += h
+        xm[j] -= h
+        grad[j] = (fn(xp) - fn(xm)) / (2 * h)
+    gz = grad / fit.scale  # the gradient in scaled coordinates
+    outside = gz - fit.row_space @ (fit.row_space.T @ gz)
+    if np.linalg.norm(outside) > ROW_SPACE_TOL * max(np.linalg.norm(gz), 1e-300):
+        return not_identifiable(unit, f"{what} appears only in combination with other parameters (the flight's motion does not separate it)")
+    std = float(math.sqrt(max(grad @ fit.cov @ grad, 0.0)))
+    if not std <= RELATIVE_STD_MAX * scale:
+        return not_identifiable(
+            unit, f"too little excitation: {what} = {value:.3g} ± {std:.2g} {unit}, std above {RELATIVE_STD_MAX:.0%} of {scale:.3g} {unit}"
+        )
+    return Estimate(value, std, unit)
+
+
+def _param(fit: RegressorFit, name: str, fixed: dict):
+    """A getter x -> the unknown called ``name`` (or its fixed value)."""
+    if name in fit.names:
+        j = fit.names.index(name)
+        return lambda x: x[j]
+    return lambda x: fixed[name](x)
+
+
+def body_quantities(fit: RegressorFit, body: str, fixed: dict, length: float) -> dict:
+    """Mass, centre of gravity (in the body's frame) and the principal-axis inertia about it of ``body`` (the unknowns
+    ``body.m``, ``body.mc_*``, ``body.I_*``), identifiable or not (:func:`derived`)."""
+    get = {k: _param(fit, f"{body}.{k}", fixed) for k in ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")}
+
+    def com(k: str):
+        return lambda x: get["mc" + k](x) / get["m"](x)
+
+    def inertia_about_com(a: str):
+        i = "xyz".index(a)
+
+        def fn(x):
+            c = np.array([com(k)(x) for k in "xyz"])
+            return get[f"I{a}{a}"](x) - get["m"](x) * (c @ c - c[i] ** 2)
+
+        return fn
+
+    out = {}
+    mass_scale = abs(get["m"](fit.x)) if math.isfinite(get["m"](fit.x)) else 1.0
+    out["mass"] = derived(fit, get["m"], "kg", mass_scale, f"{body} mass")
+    for k in "xyz":
+        out[f"cog_{k}"] = derived(fit, com(k), "m", 0.1 * length, f"{body} centre of gravity {k}")
+    for a in "xyz":
+        f = inertia_about_com(a)
+        out[f"inertia_{a}{a}"] = derived(fit, f, "kg m^2", abs(f(fit.x)), f"{body} inertia {a}{a}")
+    ixx = inertia_about_com("x")
+    for a in "yz":
+        f = inertia_about_com(a)
+        out[f"inertia_ratio_{a}{a}_xx"] = derived(
+            fit, lambda x, f=f: f(x) / ixx(x), "", abs(f(fit.x) / ixx(fit.x)), f"{body} inertia ratio {a}{a}/xx"
+        )
+    return out
+
+
+PARAMETER_NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", "Izz")
+"""Pinocchio's dynamic parameters of a body (Inertia.toDynamicParameters), in order."""
+
+
+def body_names(model: pin.Model, platform: Platform | None) -> list[str]:
+    """The name of each moving body: "base" for the free flyer, the URDF link each arm joint moves."""
+    out = ["base"]
+    for j in range(2, model.njoints):
+        links = [f.name for f in model.frames if f.parentJoint == j and f.type == pin.FrameType.BODY]
+        out.append(links[0] if links else model.names[j])
+    return out
+
+
+def identify_inertial(
+    samples: Samples, rotors: tuple, ct_thrust: np.ndarray, platform: Platform | None, known: dict
+) -> tuple[dict, RegressorFit, pin.Model]:
+    """The inertial estimates of the flight (module docstring): for a rigid multirotor its centre of gravity (from the
+    point PX4's CA_* positions are measured from), its inertia about it and the inertia ratios; for an aerial
+    manipulator the same of the base and each arm link (mass, centre of gravity in the link frame, inertia).
+
+    ``rotors``: (positions, axes, km) in B; ``ct_thrust``: g(lag_T(u)) on the samples (n, n_rotors); ``known``:
+    {"ct": value} or {"mass": total mass} (neither: mass 1 kg, only the scale-free values are meaningful)."""
+    p, a, km = rotors
+    wrench = np.vstack([a.T, (np.cross(p, a) - km[:, None] * a).T])  # (6, n_rotors), per unit ct
+    if platform is None:
+        model = rigid_model()
+    else:
+        model = pin.Model(platform.model)
+        model.gravity = pin.Motion.Zero()
+    bodies = body_names(model, platform)
+    names = tuple(f"{b}.{k}" for b in bodies for k in PARAMETER_NAMES)
+    Y, W = stacked_regressor(model, samples, wrench, ct_thrust)
+    solve_known = {}
+    if "ct" in known:
+        solve_known["ct"] = known["ct"]
+    mass_total = known.get("mass", 1.0 if "ct" not in known else None)
+    if mass_total is not None:
+        solve_known["mass_total"] = (mass_total, [10 * i for i in range(len(bodies))])
+    fit = solve_regressor(Y, W, solve_known, names)
+    fixed = {}
+    if mass_total is not None:
+        others = [fit.names.index(f"{b}.m") for b in bodies[1:]]
+        fixed["base.m"] = lambda x, o=others, m=mass_total: m - sum(x[j] for j in o)
+    length = float(np.max(np.linalg.norm(p, axis=1)))
+    out = {}
+    for b in bodies:
+        for k, e in body_quantities(fit, b, fixed, length).items():
+            if b == "base" and k == "mass" and platform is None:
+                continue
+            out[k if b == "base" and platform is None else f"{b}.{k}"] = e
+    if "ct" not in known and mass_total == 1.0:
+        for k in list(out):
+            if "inertia_" in k and "ratio" not in k or k.endswith("mass"):
+                out[k] = not_identifiable(out[k].unit, "give the mass (--mass) or the thrust (--ct): without either the flight gives only ratios")
+    return out, fit, model
