@@ -31,8 +31,9 @@ from qprr.errors import MissingDependencyError
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "docs").glob("*.md")) + ["README.md"]
-REQUIRES = {"docs/mpc.md": "crocoddyl", "docs/wheeled.md": "sympy"}
-"""Optional extras a page's blocks need (the test is skipped, naming it, where the extra is missing)."""
+REQUIRES = {"docs/mpc.md": ("crocoddyl", "mpc"), "docs/wheeled.md": ("sympy", "symbolic"), "docs/flightstack.md": ("pyulog", "flightlog")}
+"""Optional extras a page's blocks need: page -> (module, extra); the test is skipped with the install command where the
+extra is missing."""
 
 NOT_RUN = re.compile(r"<!--\s*not run:\s*(.*?)\s*-->\s*$")
 
@@ -64,7 +65,8 @@ if _outside:
 @pytest.mark.parametrize("page", [p for p in PAGES if "```python" in read(p)])
 def test_blocks_run(page, tmp_path):
     if page in REQUIRES:
-        pytest.importorskip(REQUIRES[page], reason=f"{page} needs {REQUIRES[page]}")
+        module, extra = REQUIRES[page]
+        pytest.importorskip(module, reason=f"{page} needs {module}: pip install -e '.[{extra}]'")
     blocks = python_blocks(read(page))
     for code, reason in blocks:
         assert reason or not code.lstrip().startswith("<!--"), page
