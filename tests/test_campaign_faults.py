@@ -404,6 +404,58 @@ def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, t
     _same(again.results.table, table)
 
 
+def _flock_free(lock: Path) -> bool:
+    import fcntl
+
+    with lock.open("a") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return False
+        fcntl.flock(fh, fcntl.LOCK_UN)
+    return True
+
+
+@pytest.mark.slow
+def test_sigterm_to_the_whole_process_group_ends_the_campaign_cleanly_and_the_same_command_resumes(reference, tmp_path):
+    """What ``timeout 20 qprr campaign run ...`` and a job scheduler's time limit send: SIGTERM to the runner and its
+    workers at once.  The runner ends (the timeout is a safety limit, not a speed requirement) with exit code 1, its
+    one-line message last on stderr, the lock released, every finished run saved; the same command then completes the
+    table.  (It used to wait forever on a shared event that only live workers acknowledge.)"""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
+    out = tmp_path / "g.csv"
+    command = [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--workers", "2"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.6"}
+    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    try:
+        _wait_rows(out, 2, proc)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:  # the old runner: still waiting; end it so that the test reports instead of hanging
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 1, stderr
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith("campaign faults: stopped by SIGTERM after ") and last.endswith("run the same command again to resume"), stderr
+    assert "Traceback" not in stderr and "Warning" not in stderr, stderr
+    assert "stopped by SIGTERM" in stdout
+    assert _flock_free(tmp_path / "g.lock")
+    t0 = time.monotonic()
+    while any(_alive(k) for k in kids) and time.monotonic() - t0 < 10:
+        time.sleep(0.1)
+    assert not [k for k in kids if _alive(k)], "processes outlived the runner"
+    saved = read_results(out).table
+    assert 2 <= len(saved) < spec.n_runs
+    _same(saved, table[np.isin(table["run"], saved["run"])])
+    again = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, env={**env, "QPRR_TEST_DELAY": "0"}, timeout=300)
+    assert again.returncode == 0, again.stderr
+    _same(read_results(out).table, table)
+
+
 @pytest.mark.slow
 def test_a_local_worker_killed_midway_is_retried_on_a_new_pool(reference, tmp_path, monkeypatch):
     """A pool worker killed once (out of memory, kill -9): the runs the broken pool had are lost, not rows, and
@@ -593,8 +645,9 @@ def test_a_session_releases_only_what_it_opened(tmp_path):
         def close(self) -> None:
             self.calls.append("close")
 
-        def abort(self) -> None:
+        def abort(self, futures=()) -> None:
             self.calls.append("abort")
+            self.cancel(futures)
 
     class Future:
         cancelled = False
