@@ -180,7 +180,7 @@ def test_a_bad_row_is_named_with_file_line_and_column_and_refused(reference, tmp
         body = _edit(lines[2], columns.index(name), value.encode(), columns)  # line 3 of the file: run 1
         if "checksum" in case:
             body = body[: body.rfind(b",") + 1]
-            body += b"%08x" % zlib.crc32(body)
+            body += b"%08x" % zlib.crc32(body, zlib.crc32(spec.fingerprint.encode()))  # format 3: fingerprint + line
         lines[2] = body
     out = tmp_path / "bad.csv"
     out.write_bytes(b"\n".join(lines))
@@ -226,6 +226,114 @@ def test_bad_metadata_is_named_with_its_file_and_key(reference, tmp_path, meta, 
     with pytest.raises(ResultsFileError, match=match) as err:
         read_results(out)
     assert str(tmp_path / "m.meta.json") in str(err.value)
+
+
+# ---------------------------------------------------------------------------- rows and metadata of another campaign, damaged metadata
+def _other(reference, tmp_path: Path, **changes):
+    """The reference campaign's results in ``tmp_path`` (a.csv) and those of a specification that differs by ``changes``
+    (b.csv, run here), side by side."""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "a.csv").write_bytes(data)
+    _copy_meta(ref_dir, tmp_path / "a.csv")
+    other = CampaignSpec.from_mapping({**spec.to_dict(), **changes}, base_dir=tmp_path)
+    run_campaign(other, tmp_path / "b.csv", backend="inline", progress=False)
+    return other
+
+
+def test_a_row_of_a_campaign_that_differs_only_in_duration_is_refused_with_what_differs(reference, tmp_path, capsys):
+    """Its fields are those of the real row (the duration is no column, the seed is the same): only the fingerprint in
+    its checksum tells it apart.  Resume and report refuse it, naming the file, the line, the other campaign and what
+    differs; they used to count it as done (or let it replace the real row)."""
+    from qprr.cli import main
+
+    spec = reference[0]
+    _other(reference, tmp_path, options={"duration": 5.0})
+    a, b = (tmp_path / "a.csv").read_bytes().split(b"\n"), (tmp_path / "b.csv").read_bytes().split(b"\n")
+    assert a[2].split(b",")[:2] == b[2].split(b",")[:2]  # run 1, its seed: the same (and its parameters, its metrics)
+    a[2] = b[2]
+    (tmp_path / "a.csv").write_bytes(b"\n".join(a))
+    where = f"'{tmp_path / 'a.csv'}', line 3: it is a record of another campaign"
+    for attempt in (lambda: read_results(tmp_path / "a.csv"), lambda: run_campaign(spec, tmp_path / "a.csv", backend="inline", progress=False)):
+        with pytest.raises(ResultsFileError) as err:
+            attempt()
+        assert where in str(err.value) and f"'{tmp_path / 'b.meta.json'}'" in str(err.value), err.value
+        assert "options.duration (5.0 -> None)" in str(err.value) and "delete the line" in str(err.value), err.value
+    assert main(["campaign", "report", str(tmp_path / "a.csv")]) == 2
+    assert where in capsys.readouterr().err
+
+
+def test_a_row_without_the_fingerprint_in_its_check_is_refused_and_format_2_files_stay_usable(reference, tmp_path):
+    """A record checksummed over its line alone (format 2) in a file of format 3 is refused with the reason; a whole file
+    of format 2 (written by qprr before) is read, and resumed in its own format."""
+    import zlib
+
+    spec, data, table, rows, names, ref_dir = reference
+    lines = data.split(b"\n")
+    old = [lines[0]] + [line[: line.rfind(b",") + 1] + b"%08x" % zlib.crc32(line[: line.rfind(b",") + 1]) for line in lines[1:-1]] + [b""]
+    mixed = tmp_path / "mixed.csv"
+    mixed.write_bytes(b"\n".join([*lines[:4], old[4], *lines[5:]]))
+    _copy_meta(ref_dir, mixed)
+    with pytest.raises(ResultsFileError, match="line 5: its checksum covers the line without this campaign's fingerprint"):
+        read_results(mixed)
+    v2 = tmp_path / "v2.csv"
+    v2.write_bytes(b"\n".join(old[:5]) + b"\n" + old[5][:20])  # format 2, four runs and a cut record
+    meta = json.loads((ref_dir / "full.meta.json").read_text())
+    (tmp_path / "v2.meta.json").write_text(json.dumps({**meta, "format_version": 2}))
+    assert len(read_results(v2)) == 4
+    again = run_campaign(spec, v2, backend="inline", progress=False)
+    assert again.remaining == 0 and json.loads((tmp_path / "v2.meta.json").read_text())["format_version"] == 2
+    _same(again.results.table, table)
+    last = v2.read_bytes().split(b"\n")[-2]
+    assert int(last[-8:], 16) == zlib.crc32(last[:-8])  # the records appended on resume are of format 2 too
+
+
+def test_a_damaged_fingerprint_in_the_metadata_is_named_as_damage_and_the_advice_keeps_the_saved_runs(reference, tmp_path):
+    spec, data, table, rows, names, ref_dir = reference
+    out = tmp_path / "r.csv"
+    out.write_bytes(data)
+    meta = json.loads((ref_dir / "full.meta.json").read_text())
+    flipped = spec.fingerprint[:5] + ("0" if spec.fingerprint[5] != "0" else "1") + spec.fingerprint[6:]  # one character
+    (tmp_path / "r.meta.json").write_text(json.dumps({**meta, "fingerprint": flipped}))
+    with pytest.raises(ResultsFileError) as err:
+        run_campaign(spec, out, backend="inline", progress=False)
+    text = str(err.value)
+    assert str(tmp_path / "r.meta.json") in text and f"'fingerprint' {flipped!r} was damaged" in text, text
+    assert f'set "fingerprint": "{spec.fingerprint}"' in text and "another specification" not in text and "(--fresh)" not in text
+    (tmp_path / "r.meta.json").write_text(json.dumps(meta))  # the advice followed: every saved run is kept
+    again = run_campaign(spec, out, backend="inline", progress=False)
+    assert (again.skipped, again.executed, again.remaining) == (spec.n_runs - 3, 3, 0)  # only the error rows run again
+    _same(again.results.table, table)
+
+
+@pytest.mark.parametrize("damage", ["truncated", "spec", "no records: spec"])
+def test_damaged_metadata_is_never_blamed_on_another_specification(reference, tmp_path, damage):
+    """Metadata that is no JSON, or whose 'spec' was damaged too: the message says so and how to write it again; it never
+    advises --fresh (which discards every saved run)."""
+    spec, data, table, rows, names, ref_dir = reference
+    out = tmp_path / "r.csv"
+    out.write_bytes(data if "no records" not in damage else data.split(b"\n")[0] + b"\n")
+    text = (ref_dir / "full.meta.json").read_text()
+    meta = json.loads(text)
+    if damage == "truncated":
+        text = text[: len(text) // 2]
+    else:
+        meta["spec"]["seed"] += 1
+        text = json.dumps({**meta, "fingerprint": "f" * 16})
+    (tmp_path / "r.meta.json").write_text(text)
+    with pytest.raises(ResultsFileError) as err:
+        run_campaign(spec, out, backend="inline", progress=False)
+    message = str(err.value)
+    assert str(tmp_path / "r.meta.json") in message and "damaged" in message or "corrupted" in message, message
+    assert "the saved runs are kept" in message and "qprr campaign run SPEC -o NEW.csv --limit 0" in message, message
+    assert "another specification" not in message and "(--fresh)" not in message and "delete the line (file)" not in message
+
+
+def test_results_of_a_genuinely_other_specification_are_refused_with_what_differs(reference, tmp_path):
+    other = _other(reference, tmp_path, options={"duration": 5.0})
+    with pytest.raises(InputError, match=r"holds results of another specification .*options\.duration \(5\.0 -> None\)") as err:
+        run_campaign(reference[0], tmp_path / "b.csv", backend="inline", progress=False)
+    assert not isinstance(err.value, ResultsFileError) and other.fingerprint in str(err.value)
 
 
 @pytest.mark.parametrize("metric", ["rmse_x", "rmse_position", "x_cm_max", "saturation", "recovery_time", "t_end"])
