@@ -349,6 +349,55 @@ def test_a_success_bound_on_no_metric_is_refused(reference, tmp_path):
         run_campaign(spec, tmp_path / "s.csv", backend="inline", progress=False)
 
 
+def test_quiet_still_says_that_an_incomplete_last_record_was_dropped(reference, tmp_path, capsys):
+    from qprr.cli import main
+
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
+    out = tmp_path / "q.csv"
+    out.write_bytes(data[: data.index(b"\n", data.index(b"\n") + 1) + 1 + 30])  # the header, one record, 30 bytes of the next
+    _copy_meta(ref_dir, out)
+    assert main(["campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "inline", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert f"campaign faults: dropped an incomplete last record (30 bytes, a cut write) of {out}: its run is done again" in err
+    _same(read_results(out).table, table)
+
+
+def test_show_into_a_reader_that_stops_early_ends_without_a_traceback(reference, tmp_path):
+    """``qprr campaign show SPEC | head -1``: more lines than a pipe holds, the reader gone after the first one."""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps({**spec.to_dict(), "samples": 4000}))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "qprr", "campaign", "show", str(tmp_path / "s.json"), "--first", "30000"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    first = proc.stdout.readline()
+    proc.stdout.close()  # what head does after its line
+    stderr = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0, stderr
+    assert first.startswith(b"faults: callable") and stderr == "", stderr
+
+
+def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path):
+    """3 records saved and a fourth cut: "3 of 9 runs done, 6 missing", the rates over the 9 runs (it said "3 runs",
+    "100 %" of what was there)."""
+    from qprr.campaign.report import report
+
+    spec, data, table, rows, names, ref_dir = reference
+    ends = [i + 1 for i, b in enumerate(data) if b == ord("\n")]
+    out = tmp_path / "cut.csv"
+    out.write_bytes(data[: ends[3] + 25])
+    _copy_meta(ref_dir, out)
+    head = report(out)[0].splitlines()[0]
+    ok = int((table["status"][:3] == "ok").sum())
+    assert head.startswith("faults: 3 of 9 runs done, 6 missing, of target.py:target") and f"{ok} completed ({100 * ok / 9:.1f} %)" in head, head
+
+
 # ---------------------------------------------------------------------------- full disk, read-only folder
 def _tmpfs(path: Path, size: str, ro: bool = False) -> bool:
     path.mkdir()
@@ -390,7 +439,10 @@ def test_a_full_disk_stops_the_campaign_at_once_and_resume_completes_it(referenc
     _same(again.results.table, table)
 
 
-def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path):
+@pytest.mark.parametrize("backend", [["--backend", "inline"], ["--backend", "local", "--workers", "2"]])
+def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path, backend):
+    """One line on stderr and nothing after it: with workers stopped midway too (their resource tracker used to warn
+    of leaked semaphores after the runner's last line)."""
     spec, data, table, rows, names, ref_dir = reference
     mnt = tmp_path / "small"
     if not _tmpfs(mnt, "8k"):
@@ -405,11 +457,11 @@ def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path
             except OSError:
                 pass
         proc = subprocess.run(
-            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "inline", "--quiet"],
+            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), *backend, "--quiet"],
             capture_output=True,
             text=True,
             cwd=ROOT,
-            env={**os.environ, "PYTHONPATH": str(ROOT)},
+            env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.3" if "local" in backend else "0"},
         )
         assert proc.returncode == 3, proc.stderr
         err = proc.stderr.strip().splitlines()

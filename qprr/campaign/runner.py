@@ -187,7 +187,7 @@ def run_campaign(
     t0 = time.perf_counter()
     tally, runs, clean = _Tally(skipped=len(store.done)), {}, False
     bar = session.progress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
-    if store.dropped and progress:
+    if store.dropped:  # shown even without the progress line (--quiet): a cut write is never repaired silently
         print(
             f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: its run is done again",
             file=bar.stream,
