@@ -180,7 +180,7 @@ def test_a_bad_row_is_named_with_file_line_and_column_and_refused(reference, tmp
         body = _edit(lines[2], columns.index(name), value.encode(), columns)  # line 3 of the file: run 1
         if "checksum" in case:
             body = body[: body.rfind(b",") + 1]
-            body += b"%08x" % zlib.crc32(body)
+            body += b"%08x" % zlib.crc32(body, zlib.crc32(spec.fingerprint.encode()))  # format 3: fingerprint + line
         lines[2] = body
     out = tmp_path / "bad.csv"
     out.write_bytes(b"\n".join(lines))
@@ -228,6 +228,114 @@ def test_bad_metadata_is_named_with_its_file_and_key(reference, tmp_path, meta, 
     assert str(tmp_path / "m.meta.json") in str(err.value)
 
 
+# ---------------------------------------------------------------------------- rows and metadata of another campaign, damaged metadata
+def _other(reference, tmp_path: Path, **changes):
+    """The reference campaign's results in ``tmp_path`` (a.csv) and those of a specification that differs by ``changes``
+    (b.csv, run here), side by side."""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "a.csv").write_bytes(data)
+    _copy_meta(ref_dir, tmp_path / "a.csv")
+    other = CampaignSpec.from_mapping({**spec.to_dict(), **changes}, base_dir=tmp_path)
+    run_campaign(other, tmp_path / "b.csv", backend="inline", progress=False)
+    return other
+
+
+def test_a_row_of_a_campaign_that_differs_only_in_duration_is_refused_with_what_differs(reference, tmp_path, capsys):
+    """Its fields are those of the real row (the duration is no column, the seed is the same): only the fingerprint in
+    its checksum tells it apart.  Resume and report refuse it, naming the file, the line, the other campaign and what
+    differs; they used to count it as done (or let it replace the real row)."""
+    from qprr.cli import main
+
+    spec = reference[0]
+    _other(reference, tmp_path, options={"duration": 5.0})
+    a, b = (tmp_path / "a.csv").read_bytes().split(b"\n"), (tmp_path / "b.csv").read_bytes().split(b"\n")
+    assert a[2].split(b",")[:2] == b[2].split(b",")[:2]  # run 1, its seed: the same (and its parameters, its metrics)
+    a[2] = b[2]
+    (tmp_path / "a.csv").write_bytes(b"\n".join(a))
+    where = f"'{tmp_path / 'a.csv'}', line 3: it is a record of another campaign"
+    for attempt in (lambda: read_results(tmp_path / "a.csv"), lambda: run_campaign(spec, tmp_path / "a.csv", backend="inline", progress=False)):
+        with pytest.raises(ResultsFileError) as err:
+            attempt()
+        assert where in str(err.value) and f"'{tmp_path / 'b.meta.json'}'" in str(err.value), err.value
+        assert "options.duration (5.0 -> None)" in str(err.value) and "delete the line" in str(err.value), err.value
+    assert main(["campaign", "report", str(tmp_path / "a.csv")]) == 2
+    assert where in capsys.readouterr().err
+
+
+def test_a_row_without_the_fingerprint_in_its_check_is_refused_and_format_2_files_stay_usable(reference, tmp_path):
+    """A record checksummed over its line alone (format 2) in a file of format 3 is refused with the reason; a whole file
+    of format 2 (written by qprr before) is read, and resumed in its own format."""
+    import zlib
+
+    spec, data, table, rows, names, ref_dir = reference
+    lines = data.split(b"\n")
+    old = [lines[0]] + [line[: line.rfind(b",") + 1] + b"%08x" % zlib.crc32(line[: line.rfind(b",") + 1]) for line in lines[1:-1]] + [b""]
+    mixed = tmp_path / "mixed.csv"
+    mixed.write_bytes(b"\n".join([*lines[:4], old[4], *lines[5:]]))
+    _copy_meta(ref_dir, mixed)
+    with pytest.raises(ResultsFileError, match="line 5: its checksum covers the line without this campaign's fingerprint"):
+        read_results(mixed)
+    v2 = tmp_path / "v2.csv"
+    v2.write_bytes(b"\n".join(old[:5]) + b"\n" + old[5][:20])  # format 2, four runs and a cut record
+    meta = json.loads((ref_dir / "full.meta.json").read_text())
+    (tmp_path / "v2.meta.json").write_text(json.dumps({**meta, "format_version": 2}))
+    assert len(read_results(v2)) == 4
+    again = run_campaign(spec, v2, backend="inline", progress=False)
+    assert again.remaining == 0 and json.loads((tmp_path / "v2.meta.json").read_text())["format_version"] == 2
+    _same(again.results.table, table)
+    last = v2.read_bytes().split(b"\n")[-2]
+    assert int(last[-8:], 16) == zlib.crc32(last[:-8])  # the records appended on resume are of format 2 too
+
+
+def test_a_damaged_fingerprint_in_the_metadata_is_named_as_damage_and_the_advice_keeps_the_saved_runs(reference, tmp_path):
+    spec, data, table, rows, names, ref_dir = reference
+    out = tmp_path / "r.csv"
+    out.write_bytes(data)
+    meta = json.loads((ref_dir / "full.meta.json").read_text())
+    flipped = spec.fingerprint[:5] + ("0" if spec.fingerprint[5] != "0" else "1") + spec.fingerprint[6:]  # one character
+    (tmp_path / "r.meta.json").write_text(json.dumps({**meta, "fingerprint": flipped}))
+    with pytest.raises(ResultsFileError) as err:
+        run_campaign(spec, out, backend="inline", progress=False)
+    text = str(err.value)
+    assert str(tmp_path / "r.meta.json") in text and f"'fingerprint' {flipped!r} was damaged" in text, text
+    assert f'set "fingerprint": "{spec.fingerprint}"' in text and "another specification" not in text and "(--fresh)" not in text
+    (tmp_path / "r.meta.json").write_text(json.dumps(meta))  # the advice followed: every saved run is kept
+    again = run_campaign(spec, out, backend="inline", progress=False)
+    assert (again.skipped, again.executed, again.remaining) == (spec.n_runs - 3, 3, 0)  # only the error rows run again
+    _same(again.results.table, table)
+
+
+@pytest.mark.parametrize("damage", ["truncated", "spec", "no records: spec"])
+def test_damaged_metadata_is_never_blamed_on_another_specification(reference, tmp_path, damage):
+    """Metadata that is no JSON, or whose 'spec' was damaged too: the message says so and how to write it again; it never
+    advises --fresh (which discards every saved run)."""
+    spec, data, table, rows, names, ref_dir = reference
+    out = tmp_path / "r.csv"
+    out.write_bytes(data if "no records" not in damage else data.split(b"\n")[0] + b"\n")
+    text = (ref_dir / "full.meta.json").read_text()
+    meta = json.loads(text)
+    if damage == "truncated":
+        text = text[: len(text) // 2]
+    else:
+        meta["spec"]["seed"] += 1
+        text = json.dumps({**meta, "fingerprint": "f" * 16})
+    (tmp_path / "r.meta.json").write_text(text)
+    with pytest.raises(ResultsFileError) as err:
+        run_campaign(spec, out, backend="inline", progress=False)
+    message = str(err.value)
+    assert str(tmp_path / "r.meta.json") in message and "damaged" in message or "corrupted" in message, message
+    assert "the saved runs are kept" in message and "qprr campaign run SPEC -o NEW.csv --limit 0" in message, message
+    assert "another specification" not in message and "(--fresh)" not in message and "delete the line (file)" not in message
+
+
+def test_results_of_a_genuinely_other_specification_are_refused_with_what_differs(reference, tmp_path):
+    other = _other(reference, tmp_path, options={"duration": 5.0})
+    with pytest.raises(InputError, match=r"holds results of another specification .*options\.duration \(5\.0 -> None\)") as err:
+        run_campaign(reference[0], tmp_path / "b.csv", backend="inline", progress=False)
+    assert not isinstance(err.value, ResultsFileError) and other.fingerprint in str(err.value)
+
+
 @pytest.mark.parametrize("metric", ["rmse_x", "rmse_position", "x_cm_max", "saturation", "recovery_time", "t_end"])
 def test_a_success_bound_no_run_can_meet_is_refused(reference, tmp_path, metric):
     with pytest.raises(InputError, match=rf"{metric} = -0.1: no run can meet it \({metric} is >= 0"):
@@ -239,6 +347,55 @@ def test_a_success_bound_on_no_metric_is_refused(reference, tmp_path):
     spec = CampaignSpec.from_mapping({**reference[0].to_dict(), "success": {"seed": 3.0}}, base_dir=reference[5])
     with pytest.raises(UnknownNameError, match="metric of \\[success\\]"):  # a parameter is no success criterion
         run_campaign(spec, tmp_path / "s.csv", backend="inline", progress=False)
+
+
+def test_quiet_still_says_that_an_incomplete_last_record_was_dropped(reference, tmp_path, capsys):
+    from qprr.cli import main
+
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
+    out = tmp_path / "q.csv"
+    out.write_bytes(data[: data.index(b"\n", data.index(b"\n") + 1) + 1 + 30])  # the header, one record, 30 bytes of the next
+    _copy_meta(ref_dir, out)
+    assert main(["campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "inline", "--quiet"]) == 0
+    err = capsys.readouterr().err
+    assert f"campaign faults: dropped an incomplete last record (30 bytes, a cut write) of {out}: its run is done again" in err
+    _same(read_results(out).table, table)
+
+
+def test_show_into_a_reader_that_stops_early_ends_without_a_traceback(reference, tmp_path):
+    """``qprr campaign show SPEC | head -1``: more lines than a pipe holds, the reader gone after the first one."""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps({**spec.to_dict(), "samples": 4000}))
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "qprr", "campaign", "show", str(tmp_path / "s.json"), "--first", "30000"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+    )
+    first = proc.stdout.readline()
+    proc.stdout.close()  # what head does after its line
+    stderr = proc.stderr.read().decode()
+    assert proc.wait(timeout=120) == 0, stderr
+    assert first.startswith(b"faults: callable") and stderr == "", stderr
+
+
+def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path):
+    """3 records saved and a fourth cut: "3 of 9 runs done, 6 missing", the rates over the 9 runs (it said "3 runs",
+    "100 %" of what was there)."""
+    from qprr.campaign.report import report
+
+    spec, data, table, rows, names, ref_dir = reference
+    ends = [i + 1 for i, b in enumerate(data) if b == ord("\n")]
+    out = tmp_path / "cut.csv"
+    out.write_bytes(data[: ends[3] + 25])
+    _copy_meta(ref_dir, out)
+    head = report(out)[0].splitlines()[0]
+    ok = int((table["status"][:3] == "ok").sum())
+    assert head.startswith("faults: 3 of 9 runs done, 6 missing, of target.py:target") and f"{ok} completed ({100 * ok / 9:.1f} %)" in head, head
 
 
 # ---------------------------------------------------------------------------- full disk, read-only folder
@@ -282,7 +439,10 @@ def test_a_full_disk_stops_the_campaign_at_once_and_resume_completes_it(referenc
     _same(again.results.table, table)
 
 
-def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path):
+@pytest.mark.parametrize("backend", [["--backend", "inline"], ["--backend", "local", "--workers", "2"]])
+def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path, backend):
+    """One line on stderr and nothing after it: with workers stopped midway too (their resource tracker used to warn
+    of leaked semaphores after the runner's last line)."""
     spec, data, table, rows, names, ref_dir = reference
     mnt = tmp_path / "small"
     if not _tmpfs(mnt, "8k"):
@@ -297,11 +457,11 @@ def test_a_full_tmpfs_gives_one_line_and_exit_3_then_resumes(reference, tmp_path
             except OSError:
                 pass
         proc = subprocess.run(
-            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--backend", "inline", "--quiet"],
+            [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), *backend, "--quiet"],
             capture_output=True,
             text=True,
             cwd=ROOT,
-            env={**os.environ, "PYTHONPATH": str(ROOT)},
+            env={**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.3" if "local" in backend else "0"},
         )
         assert proc.returncode == 3, proc.stderr
         err = proc.stderr.strip().splitlines()
@@ -402,6 +562,58 @@ def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, t
     again = run_campaign(spec, out, backend="inline", progress=False)
     assert again.skipped + again.executed >= spec.n_runs and again.remaining == 0
     _same(again.results.table, table)
+
+
+def _flock_free(lock: Path) -> bool:
+    import fcntl
+
+    with lock.open("a") as fh:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            return False
+        fcntl.flock(fh, fcntl.LOCK_UN)
+    return True
+
+
+@pytest.mark.slow
+def test_sigterm_to_the_whole_process_group_ends_the_campaign_cleanly_and_the_same_command_resumes(reference, tmp_path):
+    """What ``timeout 20 qprr campaign run ...`` and a job scheduler's time limit send: SIGTERM to the runner and its
+    workers at once.  The runner ends (the timeout is a safety limit, not a speed requirement) with exit code 1, its
+    one-line message last on stderr, the lock released, every finished run saved; the same command then completes the
+    table.  (It used to wait forever on a shared event that only live workers acknowledge.)"""
+    spec, data, table, rows, names, ref_dir = reference
+    shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
+    (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))
+    out = tmp_path / "g.csv"
+    command = [sys.executable, "-m", "qprr", "campaign", "run", str(tmp_path / "s.json"), "-o", str(out), "--workers", "2"]
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "QPRR_TEST_DELAY": "0.6"}
+    proc = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, start_new_session=True)
+    try:
+        _wait_rows(out, 2, proc)
+        kids = _children(proc.pid)
+        os.killpg(proc.pid, signal.SIGTERM)
+        stdout, stderr = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:  # the old runner: still waiting; end it so that the test reports instead of hanging
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+    assert proc.returncode == 1, stderr
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith("campaign faults: stopped by SIGTERM after ") and last.endswith("run the same command again to resume"), stderr
+    assert "Traceback" not in stderr and "Warning" not in stderr, stderr
+    assert "stopped by SIGTERM" in stdout
+    assert _flock_free(tmp_path / "g.lock")
+    t0 = time.monotonic()
+    while any(_alive(k) for k in kids) and time.monotonic() - t0 < 10:
+        time.sleep(0.1)
+    assert not [k for k in kids if _alive(k)], "processes outlived the runner"
+    saved = read_results(out).table
+    assert 2 <= len(saved) < spec.n_runs
+    _same(saved, table[np.isin(table["run"], saved["run"])])
+    again = subprocess.run(command, cwd=ROOT, capture_output=True, text=True, env={**env, "QPRR_TEST_DELAY": "0"}, timeout=300)
+    assert again.returncode == 0, again.stderr
+    _same(read_results(out).table, table)
 
 
 @pytest.mark.slow
@@ -593,8 +805,9 @@ def test_a_session_releases_only_what_it_opened(tmp_path):
         def close(self) -> None:
             self.calls.append("close")
 
-        def abort(self) -> None:
+        def abort(self, futures=()) -> None:
             self.calls.append("abort")
+            self.cancel(futures)
 
     class Future:
         cancelled = False

@@ -6,8 +6,9 @@ so a campaign has one code path:
 
 * :class:`LocalBackend`: :class:`concurrent.futures.ProcessPoolExecutor` with the ``spawn``
   start method (no fork of a process holding Pinocchio objects), one process per core by
-  default; each worker ignores SIGINT (the runner stops the campaign) and exits by itself within
-  0.25 s when the runner dies (even by SIGKILL) or aborts;
+  default; each worker ignores SIGINT and SIGTERM (the runner stops the campaign, also when
+  ``timeout`` or a job scheduler signals the whole process group) and exits at once when the
+  runner aborts or dies (even by SIGKILL): it watches a pipe only the runner writes to;
 * :class:`DaskBackend`: a :class:`dask.distributed.Client` on a running scheduler
   (``tcp://host:port``, the workers must have qprr installed) or on a
   :class:`dask.distributed.LocalCluster` started here, listening on the loopback interface
@@ -32,6 +33,8 @@ import signal
 import threading
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Iterable, Iterator
+
+from tqdm import tqdm
 
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 
@@ -72,8 +75,15 @@ class Backend(ABC):
     def close(self) -> None:
         """Release the workers (pending tasks are cancelled, running ones finish)."""
 
-    def abort(self) -> None:
-        """Stop at once (interrupt, failed write): pending tasks cancelled, running ones stopped, workers released."""
+    def cancel(self, futures: Iterable) -> None:
+        """Cancel the tasks of ``futures`` that have not started (running ones go on)."""
+        for fut in futures:
+            fut.cancel()
+
+    def abort(self, futures: Iterable = ()) -> None:
+        """Stop at once (interrupt, failed write): the pending tasks of ``futures`` cancelled, running ones stopped, the
+        workers released."""
+        self.cancel(futures)
         self.close()
 
     def is_lost(self, exc: BaseException) -> bool:
@@ -95,15 +105,25 @@ class Backend(ABC):
 
 
 def _watch(parent: int, stop) -> None:
-    """A worker's watchdog thread: end the worker when the runner is gone (re-parented) or has set ``stop`` (abort)."""
-    while not stop.wait(0.25) and os.getppid() == parent:
+    """A worker's watchdog thread: end the worker when the runner is gone (re-parented) or has closed ``stop`` (abort).
+
+    ``stop`` is the reading end of a pipe whose only writing end the runner holds: closing it (or the runner's death)
+    wakes every worker at once, and nothing waits for the workers to answer (a dead worker cannot hold the runner)."""
+    while not stop.poll(0.25) and os.getppid() == parent:
         pass
-    os.kill(os.getpid(), signal.SIGTERM)  # the default action: the process ends, whatever its main thread is computing
+    os.kill(os.getpid(), signal.SIGKILL)  # the process ends, whatever its main thread is computing
 
 
 def _init_worker(parent: int, stop) -> None:
-    """Initializer of a local pool's worker: Ctrl-C is the runner's to handle; the watchdog of :func:`_watch`."""
+    """Initializer of a local pool's worker: Ctrl-C and SIGTERM are the runner's to handle (``timeout`` and job
+    schedulers signal the whole process group); the watchdog of :func:`_watch`.
+
+    tqdm's lock (the progress line of :func:`qprr.sim.simulate`) is a thread lock here: its default, a multiprocessing
+    lock, registers a semaphore with the runner's resource tracker, which a worker stopped by its watchdog never
+    unregisters, and the tracker would print a warning about it after the runner's last line."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    tqdm.set_lock(threading.RLock())
     threading.Thread(target=_watch, args=(parent, stop), name="qprr-campaign-watchdog", daemon=True).start()
 
 
@@ -118,12 +138,14 @@ class LocalBackend(Backend):
 
     def _new_pool(self) -> cf.ProcessPoolExecutor:
         ctx = multiprocessing.get_context("spawn")
-        self._stop = ctx.Event()
-        return cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(), self._stop))
+        reader, self._stop = ctx.Pipe(duplex=False)  # the workers get the reading end; closing the writing end stops them
+        pool = cf.ProcessPoolExecutor(max_workers=self.workers, mp_context=ctx, initializer=_init_worker, initargs=(os.getpid(), reader))
+        self._reader = reader  # kept open until the pool is replaced: a worker spawned later still gets a copy
+        return pool
 
     def restart(self) -> bool:
         """A new pool in place of a broken one (a worker died: out of memory, killed)."""
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        self.abort()  # what is left of the broken pool's workers ends with it
         self._pool = self._new_pool()
         return True
 
@@ -138,11 +160,20 @@ class LocalBackend(Backend):
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
+        self._close_pipe()
 
-    def abort(self) -> None:
-        """Pending tasks cancelled, the workers told to exit at once (their running tasks are dropped)."""
-        self._stop.set()
+    def abort(self, futures: Iterable = ()) -> None:
+        """The workers told to exit at once (their running tasks are dropped), the pending tasks cancelled by the pool.
+
+        ``futures`` are not cancelled from this thread: the pool's own thread marks every pending task failed when its
+        workers die, and a task cancelled here at that moment breaks that thread (Python 3.11's ProcessPoolExecutor
+        raises InvalidStateError there and prints it).  Nothing here waits for an answer from a worker."""
+        self._close_pipe()
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+    def _close_pipe(self) -> None:
+        self._stop.close()  # every worker's watchdog reads the end of the pipe: they exit now
+        self._reader.close()
 
 
 class _Deferred(cf.Future):

@@ -11,12 +11,24 @@ the error; the rows saved before are kept).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
 from ..cli_common import add_store_options, integer
 from ..cli_common import fail as _fail
 from ..errors import QprrError
+
+
+def _print(lines) -> None:
+    """Print ``lines`` on stdout; a reader that has gone (``qprr campaign show SPEC | head -1``) ends the output quietly:
+    stdout then points to the null device, so that neither this nor the interpreter's last flush raises BrokenPipeError."""
+    try:
+        for line in lines:
+            print(line)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
@@ -54,17 +66,17 @@ def _cmd_run(args: argparse.Namespace) -> int:
     ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
     lost = f", {done.lost} lost (not saved)" if done.lost else ""
     lost += f", stopped by {done.interrupted}" if done.interrupted else ""
-    print(
-        f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
-        f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}"
+    _print(
+        [
+            f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
+            f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}"
+        ]
     )
     if done.interrupted or done.lost:
         return 1
     if args.report:
         text, figures = report(res, args.report)
-        print(text)
-        for f in figures:
-            print(f"figure {f}")
+        _print([text, *(f"figure {f}" for f in figures)])
     return 0
 
 
@@ -84,9 +96,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
         )
     except (QprrError, KeyError, ValueError) as exc:
         return _fail("qprr campaign report", f"{type(exc).__name__}: {exc}")
-    print(text)
-    for f in figures:
-        print(f"figure {f}")
+    _print([text, *(f"figure {f}" for f in figures)])
     return 0
 
 
@@ -102,13 +112,18 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _fail("qprr campaign show", f"{type(exc).__name__}: {exc}")
     target = f"scenario {spec.scenario}" if spec.scenario else f"callable {spec.callable}"
     given = "" if spec.platform_label == platform.name else f" ({spec.platform_label})"
-    print(
+    head = (
         f"{spec.name}: {target} on {platform.name}{given}; {spec.n_points} grid points x {spec.samples} samples = "
         f"{spec.n_runs} runs; seed {spec.seed}; fingerprint {spec.fingerprint}"
     )
-    print(f"  metrics: {', '.join(metric_columns(spec.metrics, platform.xi_names, spec.extras))}")
-    for run in (spec.run(i) for i in range(min(args.first, spec.n_runs))):
-        print(f"  run {run.index}: seed {run.seed}, " + ", ".join(f"{k}={v!r}" for k, v in run.params.items()))
+    runs = (spec.run(i) for i in range(min(args.first, spec.n_runs)))
+    _print(
+        [
+            head,
+            f"  metrics: {', '.join(metric_columns(spec.metrics, platform.xi_names, spec.extras))}",
+            *(f"  run {run.index}: seed {run.seed}, " + ", ".join(f"{k}={v!r}" for k, v in run.params.items()) for run in runs),
+        ]
+    )
     return 0
 
 

@@ -484,11 +484,16 @@ def report(
     crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
     platform = platform_label(res)
     on = f" on {platform}" if platform else ""
+    total = max(int(res.meta.get("n_runs", len(res))), len(res))  # the campaign's runs: those not saved count as missing
+    missing = total - len(res)
+    runs = f"{len(res)} of {total} runs done, {missing} missing, of" if missing else f"{len(res)} runs of"
     head = (
-        f"{res.spec.get('name', '')}: {len(res)} runs of {res.spec.get('scenario') or res.spec.get('callable')}{on}, "
-        f"{int(_ok(res).sum())} completed ({100 * _ok(res).mean():.1f} %), {int(_success(res).sum())} successful "
-        f"({100 * _success(res).mean():.1f} %){crit}"
+        f"{res.spec.get('name', '')}: {runs} {res.spec.get('scenario') or res.spec.get('callable')}{on}, "
+        f"{int(_ok(res).sum())} completed ({100 * _ok(res).sum() / total:.1f} %), {int(_success(res).sum())} successful "
+        f"({100 * _success(res).sum() / total:.1f} %){crit}"
         if len(res)
+        else f"no runs ({total} missing)"
+        if total
         else "no runs"
     )
     text = head + "\n" + text

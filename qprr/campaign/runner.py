@@ -88,29 +88,34 @@ def check_success(spec: CampaignSpec, names) -> None:
 
 
 class _Stop(KeyboardInterrupt):
-    """SIGTERM, raised in the main thread like Ctrl-C's KeyboardInterrupt."""
+    """SIGINT or SIGTERM, raised in the main thread while the campaign's loop runs (its argument: the signal's name)."""
 
 
 class _Signals:
-    """SIGTERM handled like SIGINT while a campaign runs (main thread only); a second signal is ignored."""
+    """SIGINT and SIGTERM while a campaign runs (main thread only; ``timeout`` and job schedulers send SIGTERM to the
+    whole process group, the workers ignore it).  The first one is noted in :attr:`fired` and, while :attr:`armed`,
+    raised as :class:`_Stop`; once the workers are being released (``armed`` False) it is only noted, so that their
+    release is never cut short; later signals are ignored."""
 
     def __init__(self) -> None:
-        self.previous = None
-        self.fired = False
+        self.previous: dict = {}
+        self.fired = ""
+        self.armed = True
 
     def _handle(self, signum, frame) -> None:
         if not self.fired:
-            self.fired = True
-            raise _Stop("SIGTERM")
+            self.fired = signal.Signals(signum).name
+            if self.armed:
+                raise _Stop(self.fired)
 
     def __enter__(self) -> _Signals:
         if threading.current_thread() is threading.main_thread():
-            self.previous = signal.signal(signal.SIGTERM, self._handle)
+            self.previous = {sig: signal.signal(sig, self._handle) for sig in (signal.SIGINT, signal.SIGTERM)}
         return self
 
     def __exit__(self, *exc) -> None:
-        if self.previous is not None:
-            signal.signal(signal.SIGTERM, self.previous)
+        for sig, handler in self.previous.items():
+            signal.signal(sig, handler)
 
 
 @dataclass
@@ -182,21 +187,25 @@ def run_campaign(
     t0 = time.perf_counter()
     tally, runs, clean = _Tally(skipped=len(store.done)), {}, False
     bar = session.progress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
-    if store.dropped and progress:
+    if store.dropped:  # shown even without the progress line (--quiet): a cut write is never repaired silently
         print(
             f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: its run is done again",
             file=bar.stream,
         )
     try:
-        with _Signals():
+        with _Signals() as signals:
             try:
-                if todo:
-                    _run_missing(spec, names, session, payload, todo, runs, tally, progress)
-                clean = True
-            except KeyboardInterrupt as exc:
-                tally.interrupted = "SIGTERM" if isinstance(exc, _Stop) else "SIGINT"
+                try:
+                    if todo:
+                        _run_missing(spec, names, session, payload, todo, runs, tally, progress)
+                    clean = True
+                finally:
+                    signals.armed = False  # from here on a signal is noted, not raised: the workers' release runs to its end
+            except KeyboardInterrupt:  # _Stop, or Ctrl-C where no handler could be set (not the main thread)
+                signals.fired = signals.fired or "SIGINT"
             finally:
-                session.stop(clean, runs)
+                session.stop(clean and not signals.fired, runs)
+            tally.interrupted = signals.fired
     finally:
         session.close()
     return _finish(spec, store, session.be, backend, tally, time.perf_counter() - t0, bar.stream if progress else None)

@@ -78,17 +78,18 @@ class Session:
         return self.be
 
     def stop(self, clean: bool = True, futures: Iterable = ()) -> None:
-        """Close the progress line and release the workers: normally (``clean``) or at once (``futures`` cancelled,
-        running tasks stopped); a caller's backend is left open."""
+        """Close the progress line and release the workers: normally (``clean``) or at once (:meth:`Backend.abort`: the
+        pending ``futures`` cancelled, running tasks stopped); a caller's backend is left open (only ``futures`` cancelled)."""
         if self.bar is not None:
             self.bar.close()
         if self.be is None:
             return
-        if not clean:
-            for fut in futures:
-                fut.cancel()
-        if self.choice.owned:
-            self.be.close() if clean else self.be.abort()
+        if clean and self.choice.owned:
+            self.be.close()
+        elif self.choice.owned:
+            self.be.abort(futures)
+        elif not clean:
+            self.be.cancel(futures)
 
     def close(self) -> None:
         """Close the results file (its lock released)."""

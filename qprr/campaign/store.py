@@ -59,10 +59,17 @@ from ..errors import InputError, MissingDependencyError, QprrError
 from ..validation import as_file, as_output_path
 
 FORMATS = (".csv", ".parquet")
-META_VERSION = 2
-"""Format of the results files: 2 = one checksummed record per line (1: plain CSV, read only)."""
+PART_KEY = b"qprr.fingerprint"
+"""Key of a Parquet part's schema metadata (format 3): the fingerprint of the campaign that wrote it."""
+META_VERSION = 3
+"""Format of the results files written now: 3 = one record per line whose checksum covers the campaign's fingerprint and
+the line (a row of another campaign is refused); 2 = the same records, checksummed over the line alone (still read, and
+resumed in format 2); 1 = plain CSV (read only)."""
+VERSIONS = (1, 2, META_VERSION)
+"""The formats qprr reads."""
 CHECK = "crc32"
-"""The last column of a CSV results file: CRC-32 of the line's bytes before it (8 hex digits)."""
+"""The last column of a CSV results file: CRC-32 of the campaign's fingerprint followed by the line's bytes before it
+(8 hex digits; format 2: of the line's bytes alone)."""
 KINDS = ("run", "int", "float", "flag", "status", "text")
 """Kinds of column: ``run`` (integer index within the campaign), ``int``, ``float`` (NaN and inf
 allowed), ``flag`` (0 or 1), ``status`` (one of :data:`~qprr.campaign.metrics.STATUSES`), ``text``."""
@@ -143,14 +150,21 @@ def _field(s: str) -> str:
     return '"' + s.replace('"', '""') + '"' if ("," in s or '"' in s) else s
 
 
-def record(values) -> bytes:
-    """One line of a CSV results file: the escaped fields, then the CRC-32 of the bytes before it, then a newline."""
+@functools.lru_cache(maxsize=64)
+def _salt(fingerprint: str) -> int:
+    """CRC-32 of ``fingerprint``: the start value of a record's checksum, which then covers fingerprint + line (0 for "")."""
+    return zlib.crc32(fingerprint.encode())
+
+
+def record(values, fingerprint: str = "") -> bytes:
+    """One line of a CSV results file: the escaped fields, then the CRC-32 of the campaign's ``fingerprint`` followed by
+    the bytes before it (format 3; ``""``: of those bytes alone, format 2), then a newline."""
     parts = []
     for v in values:
         t = type(v)
         parts.append(repr(v) if t is float else str(v) if t is int else _field(_fmt(v)))  # numbers need no quoting
     body = (",".join(parts) + ",").encode()
-    return body + b"%08x\n" % zlib.crc32(body)
+    return body + b"%08x\n" % zlib.crc32(body, _salt(fingerprint))
 
 
 def _writes(path: Path, fn, *args):
@@ -231,19 +245,8 @@ class ResultStore:
         self.rows_before = self.dropped = 0
         if self.path.exists() and not fresh:
             old = read_meta(self.path)
-            if old.get("fingerprint") != meta.get("fingerprint"):
-                raise InputError(
-                    f"{str(self.path)!r} holds results of another specification (fingerprint {old.get('fingerprint')!r}, "
-                    f"this one {meta.get('fingerprint')!r}{_spec_difference(old.get('spec'), meta.get('spec'))}): "
-                    f"choose another output or start afresh (--fresh)"
-                )
-            if list(old["columns"]) != list(columns):
-                raise InputError(f"{str(self.path)!r} has other columns than this campaign's: choose another output or --fresh")
-            if old["format_version"] != META_VERSION:
-                raise InputError(
-                    f"{str(self.path)!r} was written in format {old['format_version']} (a cut record could corrupt it); "
-                    f"qprr reads it (qprr campaign report) but resumes only format {META_VERSION}: --fresh or another output"
-                )
+            _check_resume(self.path, old, meta)
+            meta["format_version"] = old["format_version"]  # a file of format 2 goes on in format 2 (its records lack the fingerprint)
             if not self.parquet:
                 self.dropped = _writes(self.path, _drop_incomplete, self.path)
             table = read_results(self.path).table  # every row validated: a bad one refuses the resume
@@ -251,6 +254,7 @@ class ResultStore:
             self.done = {int(r) for r, s in zip(table["run"], table["status"]) if s != "error"}
         elif self.path.exists():
             _writes(self.path, _remove, self.path)
+        self._fingerprint = str(meta.get("fingerprint", "")) if meta["format_version"] >= 3 else ""  # in every record's check
         _writes(self.path, _write_meta, self.path, meta)
         self._buffer: list[dict] = []
         self._last_flush = time.monotonic()
@@ -284,13 +288,15 @@ class ResultStore:
             if len(self._buffer) >= 50 or time.monotonic() - self._last_flush > 10.0:
                 self.flush()
         else:
-            self._write(record(row[c] for c in self.columns))
+            self._write(record((row[c] for c in self.columns), self._fingerprint))
 
     def flush(self) -> None:
         """Write the Parquet rows of the batch in progress as one part (CSV rows are written by :meth:`append`)."""
         if self.parquet and self._buffer and not self._failed:
             pa, pq = _require_pyarrow()
             table = pa.table({c: pa.array([_plain(r[c]) for r in self._buffer]) for c in self.columns})
+            if self._fingerprint:  # a part knows its campaign: one copied from another campaign's folder is refused
+                table = table.replace_schema_metadata({PART_KEY: self._fingerprint})
             tmp = self.path / f".part-{self._part:05d}.tmp"
             try:
                 _writes(tmp, pq.write_table, table, tmp)
@@ -323,6 +329,70 @@ class ResultStore:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _check_resume(path: Path, old: dict, meta: dict) -> None:
+    """Refuse to resume results ``path`` (metadata ``old``) with the campaign of ``meta`` when they are another campaign's,
+    when their metadata is damaged (:func:`_meta_damage`: never blamed on another specification) or of format 1."""
+    fingerprint = meta.get("fingerprint")
+    if old["fingerprint"] != fingerprint:
+        damage = _meta_damage(path, old, fingerprint)
+        if damage:
+            raise ResultsFileError(f"{str(_meta_path(path))!r}: {damage}")
+        raise InputError(
+            f"{str(path)!r} holds results of another specification (fingerprint {old['fingerprint']!r}, "
+            f"this one {fingerprint!r}{_spec_difference(old.get('spec'), meta.get('spec'))}): "
+            f"choose another output (its runs stay in {str(path)!r}) or start afresh (--fresh discards them)"
+        )
+    if list(old["columns"]) != list(meta["columns"]):
+        raise InputError(f"{str(path)!r} has other columns than this campaign's: choose another output or --fresh")
+    if old["format_version"] == 1:
+        raise InputError(
+            f"{str(path)!r} was written in format 1 (a cut record could corrupt it); qprr reads it (qprr campaign report) "
+            f"but resumes only formats 2 and {META_VERSION}: choose another output (it stays readable) or --fresh"
+        )
+
+
+def _meta_damage(path: Path, old: dict, fingerprint) -> str:
+    """Why the metadata ``old`` of ``path``, whose fingerprint is not ``fingerprint``, is damaged rather than another
+    campaign's ("" when nothing says so): its 'spec' does not give the fingerprint it records, or its records carry
+    ``fingerprint``.  A 'spec' that is no specification raises :class:`ResultsFileError`."""
+    spec, own = _recomputed(old, _meta_path(path))
+    carried = _records_fingerprint(path, old, (fingerprint, old["fingerprint"]))
+    if carried != fingerprint and (own is None or own == old["fingerprint"]):
+        return ""  # consistent metadata (and records): another campaign's results
+    if own == fingerprint or (own is None and carried == fingerprint):
+        return (
+            f"its 'fingerprint' {old['fingerprint']!r} was damaged: its {'spec' if own == fingerprint else 'records'} "
+            f"{'is' if own == fingerprint else 'carry'} this specification's ({fingerprint!r}); the saved runs are this "
+            f'campaign\'s: set "fingerprint": "{fingerprint}" in it (or restore it from a copy) and run the same command '
+            f"again (not --fresh, which would discard them)"
+        )
+    why = f"its 'spec' has fingerprint {own!r}, not the {old['fingerprint']!r} it records" if own is not None else "it does not match its records"
+    mine = "; its records carry this specification's fingerprint" if carried == fingerprint else ""
+    return f"the campaign metadata was damaged ({why}{mine}): {_META_FIX}"
+
+
+def _records_fingerprint(path: Path, meta: dict, candidates) -> str | None:
+    """Which of the fingerprints ``candidates`` the first record of ``path`` carries in its check (format 3 only; None:
+    none, or nothing to tell by)."""
+    if meta["format_version"] < 3 or not path.exists():
+        return None
+    if path.is_dir():
+        parts = sorted(path.glob("part-*.parquet"))
+        if not parts:
+            return None
+        pa, pq = _require_pyarrow()
+        try:
+            carried = (pq.read_schema(parts[0]).metadata or {}).get(PART_KEY, b"").decode()
+        except (OSError, pa.ArrowException, UnicodeDecodeError):
+            return None
+        return next((c for c in candidates if isinstance(c, str) and c == carried), None)
+    lines = path.read_bytes().split(b"\n")
+    if len(lines) < 3:
+        return None
+    body, crc = _split_check(lines[1])
+    return next((c for c in candidates if isinstance(c, str) and crc is not None and zlib.crc32(body, _salt(c)) == crc), None)
 
 
 def _lock(path: Path):
@@ -365,6 +435,12 @@ def _remove(path: Path) -> None:
 
 
 _FIX = "restore it, or delete the line (file) to run its runs again on resume"
+_FOREIGN_FIX = "delete the line (part) to run its run again on resume, or move it to the results of its own campaign"
+_META_FIX = (
+    "the saved runs are kept: restore it from a copy, or write it again from the campaign's specification "
+    "(qprr campaign run SPEC -o NEW.csv --limit 0 writes NEW.meta.json and runs nothing: copy it over this file; "
+    "set its format_version to 2 for results written before format 3); not --fresh, which would discard them"
+)
 
 
 def read_meta(path: str | Path) -> dict:
@@ -375,31 +451,39 @@ def read_meta(path: str | Path) -> dict:
     try:
         meta = json.loads(mp.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ResultsFileError(f"{str(mp)!r}: corrupted campaign metadata ({exc}): {_FIX}") from exc
+        raise ResultsFileError(f"{str(mp)!r}: corrupted campaign metadata ({exc}): {_META_FIX}") from exc
     if not isinstance(meta, dict):
-        raise ResultsFileError(f"{str(mp)!r}: campaign metadata is a JSON object, this file holds a {type(meta).__name__}: {_FIX}")
+        raise ResultsFileError(f"{str(mp)!r}: campaign metadata is a JSON object, this file holds a {type(meta).__name__}: {_META_FIX}")
     for key, typ in META_KEYS.items():
         if key not in meta:
-            raise ResultsFileError(f"{str(mp)!r}: key {key!r} is missing (campaign metadata has {', '.join(META_KEYS)}): {_FIX}")
+            raise ResultsFileError(f"{str(mp)!r}: key {key!r} is missing (campaign metadata has {', '.join(META_KEYS)}): {_META_FIX}")
         if not isinstance(meta[key], typ) or isinstance(meta[key], bool):
-            raise ResultsFileError(f"{str(mp)!r}: key {key!r} must be a JSON {typ.__name__}, got {meta[key]!r}: {_FIX}")
+            raise ResultsFileError(f"{str(mp)!r}: key {key!r} must be a JSON {typ.__name__}, got {meta[key]!r}: {_META_FIX}")
     cols = meta["columns"]
     if not cols or not all(isinstance(c, str) and c for c in cols) or len(set(cols)) != len(cols) or "run" not in cols:
-        raise ResultsFileError(f"{str(mp)!r}: 'columns' must be distinct names including 'run', got {cols!r}: {_FIX}")
-    if meta["format_version"] not in (1, META_VERSION):
-        raise ResultsFileError(f"{str(mp)!r}: format_version {meta['format_version']!r} is not one qprr knows (1, {META_VERSION})")
+        raise ResultsFileError(f"{str(mp)!r}: 'columns' must be distinct names including 'run', got {cols!r}: {_META_FIX}")
+    if meta["format_version"] not in VERSIONS:
+        raise ResultsFileError(
+            f"{str(mp)!r}: format_version {meta['format_version']!r} is not one qprr knows {VERSIONS}: results of a newer qprr? read them with it"
+        )
     for key, typ in (("params", list), ("metrics", list), ("names", list), ("spec", dict), ("kinds", dict), ("n_runs", int)):
         if key in meta and (not isinstance(meta[key], typ) or isinstance(meta[key], bool)):
-            raise ResultsFileError(f"{str(mp)!r}: key {key!r} must be a JSON {typ.__name__}, got {meta[key]!r}: {_FIX}")
+            raise ResultsFileError(f"{str(mp)!r}: key {key!r} must be a JSON {typ.__name__}, got {meta[key]!r}: {_META_FIX}")
     for c, k in meta.get("kinds", {}).items():
         if c not in cols or k not in KINDS:
-            raise ResultsFileError(f"{str(mp)!r}: 'kinds' gives column {c!r} the kind {k!r} (columns {cols}, kinds {list(KINDS)}): {_FIX}")
+            raise ResultsFileError(f"{str(mp)!r}: 'kinds' gives column {c!r} the kind {k!r} (columns {cols}, kinds {list(KINDS)}): {_META_FIX}")
     return meta
 
 
 _SPECS: dict[str, object] = {}
 """Specifications read from metadata in this process, keyed by their JSON text (a report after a run reads it once)."""
 _BY_FINGERPRINT: dict[str, object] = {}
+
+
+def _short(value) -> str:
+    """``value``'s repr, cut to 40 characters."""
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
 
 
 def _spec_difference(old, new) -> str:
@@ -425,25 +509,38 @@ def _spec_difference(old, new) -> str:
                     for f in changed
                 ]
                 continue
+        if isinstance(o or {}, dict) and isinstance(n or {}, dict):  # a table (or none): name its entries that differ, with their values
+            o, n = o or {}, n or {}
+            parts += [f"{k}.{f} ({_short(o.get(f))} -> {_short(n.get(f))})" for f in sorted(set(o) | set(n)) if o.get(f) != n.get(f)]
+            continue
         parts.append(k)
     return f"; it differs in {', '.join(parts)}" if parts else ""
 
 
-def _campaign_spec(meta: dict, mp: Path):
-    """The specification of campaign metadata (None for a plain store), checked against its fingerprint."""
+def _recomputed(meta: dict, mp: Path):
+    """The specification of campaign metadata and its fingerprint recomputed ((None, None) for a plain store);
+    :class:`ResultsFileError` when its 'spec' is no valid specification."""
     if "spec" not in meta:
-        return None
+        return None, None
     from .spec import CampaignSpec
 
     key = json.dumps(meta["spec"], sort_keys=True, default=str)
     try:
         spec = _SPECS.get(key) or _SPECS.setdefault(key, CampaignSpec.from_mapping(meta["spec"]))
-        fingerprint = spec.fingerprint
+        return spec, spec.fingerprint
     except (QprrError, TypeError, ValueError) as exc:
-        raise ResultsFileError(f"{str(mp)!r}: key 'spec' is not a valid campaign specification ({exc}): {_FIX}") from exc
+        raise ResultsFileError(f"{str(mp)!r}: key 'spec' is not a valid campaign specification ({exc}): {_META_FIX}") from exc
+
+
+def _campaign_spec(meta: dict, mp: Path):
+    """The specification of campaign metadata (None for a plain store), checked against its fingerprint."""
+    spec, fingerprint = _recomputed(meta, mp)
+    if spec is None:
+        return None
     if fingerprint != meta["fingerprint"]:
         raise ResultsFileError(
-            f"{str(mp)!r}: its 'spec' has fingerprint {fingerprint!r}, not the {meta['fingerprint']!r} it records (the file was edited): {_FIX}"
+            f"{str(mp)!r}: its 'spec' has fingerprint {fingerprint!r}, not the {meta['fingerprint']!r} it records "
+            f"(the file was damaged or edited): {_META_FIX}"
         )
     _BY_FINGERPRINT[fingerprint] = spec
     return spec
@@ -458,6 +555,8 @@ class _Rows:
         self.kinds = [kinds[c] for c in self.columns]
         self.spec = _campaign_spec(meta, mp)
         self.fingerprint = meta["fingerprint"]
+        self.version = meta["format_version"]
+        self.spec_dict = meta.get("spec")
         self.n_runs = self.spec.n_runs if self.spec is not None else meta.get("n_runs")
         self.i_run = self.columns.index("run")
         self.rows: dict[int, list[str]] = {}
@@ -499,7 +598,8 @@ class _Rows:
         for c, k, f in zip(self.columns, self.kinds, fields):
             self._check(where, c, k, f)
         if checksum_ok is False:
-            raise self._bad(where, CHECK, "the checksum does not match the line (it was edited or damaged)")
+            fp = "this campaign's fingerprint and " if self.version >= 3 else ""
+            raise self._bad(where, CHECK, f"the checksum does not match {fp}the line (it was edited or damaged)")
         run = int(fields[self.i_run])
         if self.spec is not None:
             self._check_run(where, run, fields)
@@ -522,13 +622,21 @@ def _expected(fingerprint: str, run: int) -> dict[str, str]:
     return {"seed": str(r.seed), **{k: _fmt(v) for k, v in params_row(spec, r.params).items()}}
 
 
-def _parse(raw: bytes) -> tuple[list[str], bool]:
-    """Fields and checksum verdict of one record (the bytes of a line without its newline)."""
+def _split_check(raw: bytes) -> tuple[bytes, int | None]:
+    """The bytes a record's checksum covers (up to its last comma) and the checksum (None if it is no 8 hex digits)."""
     i = raw.rfind(b",")
-    try:
-        ok = i >= 0 and len(raw) - i - 1 == 8 and zlib.crc32(raw[: i + 1]) == int(raw[i + 1 :], 16)
-    except ValueError:
-        ok = False
+    text = raw[i + 1 :]
+    if i < 0 or len(text) != 8 or not all(c in b"0123456789abcdefABCDEF" for c in text):
+        return raw, None
+    return raw[: i + 1], int(text, 16)
+
+
+def _parse(raw: bytes, fingerprint: str = "") -> tuple[list[str], bool]:
+    """Fields and checksum verdict of one record (the bytes of a line without its newline) of the campaign of
+    ``fingerprint`` (format 3; ``""``: format 2, a checksum of the line alone)."""
+    i = raw.rfind(b",")
+    covered, crc = _split_check(raw)
+    ok = crc is not None and zlib.crc32(covered, _salt(fingerprint)) == crc
     body = raw[:i] if i >= 0 else raw
     try:
         text = body.decode()
@@ -536,6 +644,32 @@ def _parse(raw: bytes) -> tuple[list[str], bool]:
     except (UnicodeDecodeError, csv.Error):
         return [body.decode(errors="replace")], False
     return [_unescape(f) for f in fields], ok
+
+
+def _foreign(path: Path, raw: bytes, rows: _Rows) -> str:
+    """Why record ``raw`` of ``path``, whose checksum does not match its campaign's fingerprint, is no record of that
+    campaign: its checksum covers the line alone, or another campaign's fingerprint (one of the results' metadata in the
+    same folder: what differs is named).  "" when nothing tells (the line was edited or damaged)."""
+    body, crc = _split_check(raw)
+    if crc is None:
+        return ""
+    if zlib.crc32(body) == crc:
+        return (
+            "its checksum covers the line without this campaign's fingerprint (a record of format 2, or written by hand): "
+            "it is not known to be this campaign's"
+        )
+    for mp in sorted(path.parent.glob("*.meta.json")):
+        try:
+            other = json.loads(mp.read_text()) if mp != _meta_path(path) else None
+        except (OSError, ValueError):
+            continue
+        fp = other.get("fingerprint") if isinstance(other, dict) else None
+        if isinstance(fp, str) and fp and zlib.crc32(body, _salt(fp)) == crc:
+            return (
+                f"it is a record of another campaign (fingerprint {fp!r}, of {str(mp)!r}; this one's {rows.fingerprint!r}"
+                f"{_spec_difference(other.get('spec'), rows.spec_dict)})"
+            )
+    return ""
 
 
 def _csv_rows(path: Path, rows: _Rows) -> None:
@@ -548,9 +682,14 @@ def _csv_rows(path: Path, rows: _Rows) -> None:
         raise ResultsFileError(
             f"{str(path)!r}, line 1: header {lines[0].decode(errors='replace')!r} differs from its metadata's columns ({header.decode()!r}): {_FIX}"
         )
+    fingerprint = rows.fingerprint if rows.version >= 3 else ""
     for n, raw in enumerate(lines[1:-1], start=2):
-        fields, ok = _parse(raw)
-        rows.add(f"{str(path)!r}, line {n}", fields, ok)
+        fields, ok = _parse(raw, fingerprint)
+        where = f"{str(path)!r}, line {n}"
+        foreign = "" if ok or not fingerprint else _foreign(path, raw, rows)
+        if foreign:
+            raise ResultsFileError(f"{where}: {foreign}: {_FOREIGN_FIX}")
+        rows.add(where, fields, ok)
 
 
 def _csv_v1_rows(path: Path, rows: _Rows) -> None:
@@ -576,6 +715,10 @@ def _parquet_rows(path: Path, rows: _Rows) -> None:
             raise ResultsFileError(f"{str(part)!r}: not a readable Parquet part ({exc}): {_FIX}") from exc
         if list(t) != rows.columns:
             raise ResultsFileError(f"{str(part)!r}: columns {list(t)} differ from its metadata's {rows.columns}: {_FIX}")
+        carried = (pq.read_schema(part).metadata or {}).get(PART_KEY, b"").decode(errors="replace")
+        if rows.version >= 3 and carried != rows.fingerprint:
+            whose = f"another campaign's (fingerprint {carried!r})" if carried else "without a campaign's fingerprint"
+            raise ResultsFileError(f"{str(part)!r}: a part {whose}, not this campaign's ({rows.fingerprint!r}): {_FOREIGN_FIX}")
         for i in range(len(t["run"])):
             rows.add(f"{str(part)!r}, row {i + 1}", [_fmt(t[c][i]) for c in rows.columns])
 
