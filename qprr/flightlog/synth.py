@@ -37,6 +37,7 @@ from ..sim import simulate
 from ..sim.actuators import RotorDynamics
 from ..trajectory import MultiPhase, Phase
 from ..validation import as_int, as_real
+from .inertial import parameter_values
 from .record import JointSeries, write_joint_csv
 
 PX4_GRAVITY = 9.80665
@@ -181,6 +182,7 @@ def truth(platform: Platform, options: SynthOptions) -> dict:
         out[name] = {"mass": float(Y.mass), "com": np.array(Y.lever).tolist(), "inertia": np.diag(I_c).tolist()}
     data = model.createData()
     pin.ccrba(model, data, platform.neutral_q(), np.zeros(model.nv))
+    out["parameters"] = parameter_values(model, out["ct"])
     out["rigid"] = {"cog": com_body_at(platform).tolist(), "inertia": np.diag(data.Ig.inertia).tolist()}
     return out
 
