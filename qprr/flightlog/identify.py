@@ -122,8 +122,14 @@ class Identification:
                 out[k]["reason"] = e.reason
         folds = [{"held_out_s": [f.t_start_s, f.t_end_s], **f.values, "rms_fit": f.rms_fit, "rms_held_out": f.rms_held_out} for f in self.folds]
         combos = [
-            {"label": c.label, "coefficients": c.coefficients, "value": c.estimate.value if c.estimate.identified else None,
-             "std": c.estimate.std if c.estimate.identified else None, "status": c.estimate.status.value, "reason": c.estimate.reason}
+            {
+                "label": c.label,
+                "coefficients": c.coefficients,
+                "value": c.estimate.value if c.estimate.identified else None,
+                "std": c.estimate.std if c.estimate.identified else None,
+                "status": c.estimate.status.value,
+                "reason": c.estimate.reason,
+            }
             for c in self.combinations
         ]
         path.write_text(json.dumps({"source": self.source, "estimates": out, "combinations": combos, "folds": folds}, indent=2))

@@ -194,6 +194,19 @@ def body_quantities(fit: RegressorFit, body: str, fixed: dict, length: float) ->
     for a in "xyz":
         f = inertia_about_com(a)
         out[f"inertia_{a}{a}"] = derived(fit, f, "kg m^2", abs(f(fit.x)), f"{body} inertia {a}{a}")
+
+    def product_about_com(a: str, b: str):
+        i, k = "xyz".index(a), "xyz".index(b)
+
+        def fn(x):  # I_c = I_o - m (|c|^2 E - c c^T): off the diagonal I_c,ab = I_o,ab + m c_a c_b
+            c = np.array([com(n)(x) for n in "xyz"])
+            return get[f"I{a}{b}"](x) + get["m"](x) * c[i] * c[k]
+
+        return fn
+
+    diag_scale = float(np.mean([abs(inertia_about_com(a)(fit.x)) for a in "xyz"]))
+    for a, b in ("xy", "xz", "yz"):
+        out[f"inertia_{a}{b}"] = derived(fit, product_about_com(a, b), "kg m^2", diag_scale, f"{body} inertia {a}{b}")
     ixx = inertia_about_com("x")
     for a in "yz":
         f = inertia_about_com(a)
@@ -370,7 +383,9 @@ def identifiable_combinations(fit: RegressorFit, mass: float, length: float) -> 
         if std <= RELATIVE_STD_MAX * scale:
             est = Estimate(float(beta[i]), std, "")
         else:
-            est = not_identifiable("", f"too little excitation: {label} = {beta[i]:.3g} ± {std:.2g}, std above {RELATIVE_STD_MAX:.0%} of its scale {scale:.3g}")
+            est = not_identifiable(
+                "", f"too little excitation: {label} = {beta[i]:.3g} ± {std:.2g}, std above {RELATIVE_STD_MAX:.0%} of its scale {scale:.3g}"
+            )
         out.append(Combination(label, coef, est))
     return tuple(out)
 
