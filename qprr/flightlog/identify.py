@@ -136,8 +136,9 @@ class Identification:
         return path
 
     def plot(self, path) -> Path:
-        """Measured against predicted specific force along z_B and angular acceleration (the regressor's prediction,
-        where it was fitted), the held-out blocks shaded."""
+        """Measured against predicted specific force along z_B (the vertical model) and angular acceleration in B (the
+        regressor's prediction on each block by the parameters fitted on the others: cross-validated; not drawn, with
+        the reason, when the flight does not determine the base's rotational inertia), the held-out blocks shaded."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -152,10 +153,16 @@ class Identification:
         ax.plot(s["t_s"], s["predicted_z"], ".", ms=2, label="predicted")
         ax.set_ylabel("specific force z [m/s^2]")
         if rows == 2:
+            ax = axes[1, 0]
+            notes = s.get("omega_dot_notes", {})
             for k, name in enumerate("xyz"):
-                axes[1, 0].plot(s["t_s"], s["omega_dot_body"][:, k], ".", ms=1, label=f"measured {name}")
-                axes[1, 0].plot(s["t_s"], s["omega_dot_predicted"][:, k], "-", lw=0.8, label=f"predicted {name}")
-            axes[1, 0].set_ylabel("angular acceleration [rad/s^2]")
+                ax.plot(s["t_s"], s["omega_dot_body"][:, k], ".", ms=2, color=f"C{k}", label=f"measured {name} (B)")
+                if name not in notes:
+                    ax.plot(s["t_s"], s["omega_dot_predicted"][:, k], "-", lw=1.0, color=f"C{k}", label=f"predicted {name}, held out")
+            if notes:
+                text = "\n".join(f"{a}: not predicted, {why[:150]}" for a, why in notes.items())
+                ax.text(0.01, 0.03, text, transform=ax.transAxes, fontsize=6)
+            ax.set_ylabel("angular acceleration [rad/s^2]")
         for f in self.folds:
             for a in axes[:, 0]:
                 a.axvspan(f.t_start_s, f.t_end_s, color=f"C{f.index % 10}", alpha=0.08)
@@ -332,8 +339,20 @@ def identify(record: FlightRecord, options: IdentifyOptions | None = None, platf
         "predicted_z": vf.theta * x,
         "omega_dot_body": samples.omega_dot_body,
         "omega_dot_predicted": inertial.held_out[:, 3:6],
+        "omega_dot_notes": rotational_notes(inertial.combinations),
     }
     return Identification(estimates, folds, record.source, series, inertial.combinations)
+
+
+def rotational_notes(combinations: tuple) -> dict:
+    """{axis: why its angular acceleration is not predicted} for the axes x, y, z of B whose diagonal inertia
+    (the combination holding base.Ixx, base.Iyy or base.Izz) the flight does not determine."""
+    notes = {}
+    for axis in "xyz":
+        for c in combinations:
+            if f"base.I{axis}{axis}" in c.coefficients and not c.estimate.identified:
+                notes[axis] = f"{c.label}: {c.estimate.reason}"
+    return notes
 
 
 def regressor_thrust_to_mass(inertial: InertialResult, options: IdentifyOptions) -> Estimate:
