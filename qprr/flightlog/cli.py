@@ -112,6 +112,7 @@ def _add_identify(group) -> None:
     p.add_argument("--joints", metavar="FILE.csv", help="joint angles (header: time, the URDF's joint names)")
     p.add_argument("--urdf", metavar="FILE.urdf", help="the aerial manipulator's URDF (with --rotors and --joints)")
     p.add_argument("--rotors", metavar="FILE.toml", help="its rotor file")
+    p.add_argument("--ee-frame", default=None, metavar="NAME", help="its end-effector frame (needed by a URDF without arm joints)")
     p.add_argument("--folds", type=int, default=5, metavar="K", help="cross-validation over K time blocks (default 5)")
     p.add_argument("--json", metavar="FILE.json", help="write every value as {value, std}")
     p.add_argument("--plot", metavar="FILE.png", help="measured against predicted, held-out folds shaded")
@@ -128,7 +129,7 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         return fail(what, "--write-inertials needs the robot's --urdf and --rotors (the overrides name its links)")
     try:
         options = IdentifyOptions(mass=args.mass, ct=args.ct, folds=args.folds)
-        platform = from_urdf(args.urdf, args.rotors) if args.urdf is not None else None
+        platform = from_urdf(args.urdf, args.rotors, ee_frame=args.ee_frame) if args.urdf is not None else None
         for option, path in (("--write-rotors", args.write_rotors), ("--write-inertials", args.write_inertials)):
             output_path(path, (".toml",), option)
     except (QprrError, ValueError) as exc:

@@ -14,8 +14,13 @@ behind the first-order motor lag of :class:`qprr.sim.actuators.RotorDynamics`.  
 * two seconds armed on the ground before the flight and after it.
 
 The specific force is the classical acceleration of B's origin minus gravity, from Pinocchio's ``aba`` at each tick
-with the thrusts the rotors produce there.  The ULog file is written with the format of PX4's ULog specification
-(docs.px4.io, "ULog File Format": header, flag bits, 'F' formats, 'P' parameters, 'A' subscriptions, 'D' data).
+with the thrusts the rotors produce there.
+
+The ULog bytes are written here (:func:`write_ulog`), not by pyulog: pyulog's writer (``ULog.write_ulog``) only
+re-writes a log it has read (it serialises a parsed ``ULog`` object), it cannot make one from arrays.  The format is
+PX4's ULog specification (docs.px4.io/main/en/dev_log/ulog_file_format.html, "ULog File Format": the 16-byte
+header with magic ``ULog\x01\x12\x35``, version and start time; the 'B' flag bits; 'F' formats; 'P' parameters;
+'A' subscriptions; 'D' data, each message a uint16 size and a uint8 type before its payload, little-endian).
 """
 
 from __future__ import annotations
