@@ -97,6 +97,9 @@ def add_platform_options(p: argparse.ArgumentParser, *, name_option: bool = True
     p.add_argument("--urdf", default=None, metavar="FILE.urdf", help="your own platform: its URDF (docs/platforms.md); with --rotors")
     p.add_argument("--rotors", default=None, metavar="FILE.toml", help="the rotor description of --urdf")
     p.add_argument("--ee-frame", default=None, metavar="NAME", help="end-effector frame of --urdf (default: the last frame of the arm)")
+    p.add_argument(
+        "--inertials", default=None, metavar="FILE.toml", help="inertial overrides of the platform's links (qprr log identify --write-inertials)"
+    )
 
 
 def platform_from_args(args: argparse.Namespace):
@@ -112,7 +115,7 @@ def platform_from_args(args: argparse.Namespace):
         raise InputError(f"--urdf {args.urdf!r} needs --rotors FILE.toml (the URDF format has no rotors; docs/platforms.md)")
     if args.urdf is not None and (args.platform is not None or layout is not None):
         raise InputError("--urdf names your own platform: leave out --platform and --layout")
-    return resolve(args.platform, layout=layout, urdf=args.urdf, rotors=args.rotors, ee_frame=args.ee_frame)
+    return resolve(args.platform, layout=layout, urdf=args.urdf, rotors=args.rotors, ee_frame=args.ee_frame, inertials=args.inertials)
 
 
 def _argument_error(exc: InputError) -> argparse.ArgumentTypeError:

@@ -10,11 +10,17 @@ inequality; platforms (:mod:`qprr.model`) and parameter sets (:mod:`qprr.thesis.
 from __future__ import annotations
 
 import math
+import sys
 
 import numpy as np
 
 from .errors import InputError, NonPhysicalError
-from .validation import as_array, as_vector
+from .validation import as_array, as_file, as_vector
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # Python 3.10: the same parser, a dependency of the package there (pyproject.toml)
+    import tomli as tomllib
 
 TRIANGLE_RTOL = 1e-12
 """Relative tolerance (of the largest principal moment) of the triangle inequalities: a body on the boundary
@@ -97,3 +103,47 @@ def check_rigid_body(body: str, mass: float, com, inertia, *, check_triangle: bo
             f"{names[k]} <= {names[i]} + {names[j]}: {moments[k]:.6g} > {moments[i] + moments[j]:.6g} by {-2.0 * sigma[k]:.4g} kg m^2, "
             f"a negative second moment of mass along {axes[k]} ({sigma[k]:.4g} kg m^2)"
         )
+
+
+# ------------------------------------------------------------------ inertial overrides (a TOML file)
+INERTIAL_KEYS = ("mass", "com", "inertia")
+"""The keys of a link's table in an inertial-overrides file: mass [kg], com [m] (3), inertia [kg m^2] (6)."""
+
+
+def read_inertials(path) -> dict:
+    """Parse an inertial-overrides TOML file: one table ``[link.NAME]`` per moving body, with any of ``mass = m``
+    [kg], ``com = [x, y, z]`` [m] (the centre of mass in the link's frame) and ``inertia = [ixx, ixy, ixz, iyy,
+    iyz, izz]`` [kg m^2] (about the centre of mass, the link frame's axes; the order of URDF's <inertia>).  Returns
+    {NAME: {key: value}}; every value checked for its shape and finiteness (``mass`` > 0); the physics of the whole
+    body (the triangle inequalities) is checked when it is applied (:func:`qprr.model.apply_inertials`)."""
+    path = as_file(path, "inertials", what="inertial-overrides TOML file")
+    try:
+        desc = tomllib.loads(path.read_text())
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InputError(f"inertials: {str(path)!r} is not valid TOML: {exc}") from None
+    links = desc.get("link")
+    if set(desc) != {"link"} or not isinstance(links, dict) or not links:
+        raise InputError(f"inertials: {str(path)!r} must hold only [link.NAME] tables (got the keys {sorted(desc)})")
+    out = {}
+    for name, entry in links.items():
+        where = f"inertials {path.name}: link {name!r}"
+        if not isinstance(entry, dict) or not entry or set(entry) - set(INERTIAL_KEYS):
+            raise InputError(f"{where} must be a table of {', '.join(INERTIAL_KEYS)}, got {entry!r}")
+        values = {}
+        if "mass" in entry:
+            m = entry["mass"]
+            if not (_finite([m]) and m > 0.0):
+                raise NonPhysicalError(f"{where}: mass must be finite and > 0 kg, got {m!r}")
+            values["mass"] = float(m)
+        if "com" in entry:
+            values["com"] = as_vector(entry["com"], 3, f"{where} com [m]")
+        if "inertia" in entry:
+            values["inertia"] = as_vector(entry["inertia"], 6, f"{where} inertia [ixx, ixy, ixz, iyy, iyz, izz] [kg m^2]")
+        out[str(name)] = values
+    return out
+
+
+def inertia_matrix(ixx_ixy_ixz_iyy_iyz_izz) -> np.ndarray:
+    """The 3x3 matrix of URDF's six inertia values (ixx, ixy, ixz, iyy, iyz, izz)."""
+    xx, xy, xz, yy, yz, zz = (float(v) for v in ixx_ixy_ixz_iyy_iyz_izz)
+    return np.array([[xx, xy, xz], [xy, yy, yz], [xz, yz, zz]])

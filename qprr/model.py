@@ -36,7 +36,7 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
-from .inertia import check_rigid_body
+from .inertia import check_rigid_body, inertia_matrix, read_inertials
 from .plausibility import DEFAULT as _PLAUSIBLE
 from .plausibility import check_plausibility_setting
 from .plausibility import check_rotors as _check_rotor_ranges
@@ -844,6 +844,7 @@ def from_urdf(
     provenance: Mapping[str, str] | None = None,
     allow_nonphysical: bool = False,
     plausibility=_PLAUSIBLE,
+    inertials: str | Path | None = None,
 ) -> Platform:
     """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
 
@@ -853,7 +854,9 @@ def from_urdf(
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
     to the last frame of the last arm joint of a serial arm.  The XML is checked first
     (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
-    ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).
+    ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).  ``inertials``: a TOML file of
+    inertial overrides (:func:`qprr.inertia.read_inertials`, e.g. written by ``qprr log identify --write-inertials``)
+    applied to the model before its checks (:func:`apply_inertials`).
     """
     from .validation import as_real
 
@@ -869,6 +872,8 @@ def from_urdf(
     except ValueError as exc:  # urdfdom prints its reason on stderr
         raise InputError(f"{source}: Pinocchio's URDF parser rejected it ({exc})") from exc
     model.gravity = pin.Motion(np.array([0.0, 0.0, -float(g)]), np.zeros(3))
+    if inertials is not None:
+        model = apply_inertials(model, read_inertials(inertials), f"inertials {Path(inertials).name}")
     rotor_source = None
     if isinstance(rotors, (str, Path)):
         from .rotors import read_rotor_file
@@ -881,6 +886,8 @@ def from_urdf(
     prov = {"model": source, **(provenance or {})}
     if rotor_source is not None:
         prov.setdefault("rotors", rotor_source)
+    if inertials is not None:
+        prov["inertials"] = str(inertials)
     return from_model(
         model,
         rotors,
@@ -894,6 +901,31 @@ def from_urdf(
         rotor_source=rotor_source,
         plausibility=plausibility,
     )
+
+
+def apply_inertials(model: pin.Model, overrides: Mapping[str, Mapping], source: str = "inertials") -> pin.Model:
+    """A copy of ``model`` with the inertial ``overrides`` ({link: {"mass", "com", "inertia"}},
+    :func:`qprr.inertia.read_inertials`) applied: each names a link a joint moves (its frame is the joint's; a link
+    fixed to another is merged into it by Pinocchio's parser: give the values of that one); the values replace the
+    moving body's (the link and what is fixed to it), the others are kept (the centre of mass in the link's frame, the
+    inertia about it in the link's axes).  Unknown links raise :class:`~qprr.errors.UnknownNameError`, a body that
+    cannot exist :class:`~qprr.errors.NonPhysicalError` naming the link and the value."""
+    model = pin.Model(model)
+    moving = {}
+    for f in model.frames:
+        if f.type == pin.FrameType.BODY and f.parentJoint > 0 and f.placement.isIdentity() and f.parentJoint not in moving.values():
+            moving[f.name] = f.parentJoint
+    for name, values in overrides.items():
+        if name not in moving:
+            raise UnknownNameError(f"link of {source}", name, tuple(moving))
+        j = moving[name]
+        Y = model.inertias[j]
+        mass = values.get("mass", float(Y.mass))
+        com = np.asarray(values.get("com", np.array(Y.lever)), dtype=float)
+        inertia = inertia_matrix(values["inertia"]) if "inertia" in values else np.array(Y.inertia)
+        check_rigid_body(f"{source}: link {name!r}", mass, com, inertia)
+        model.inertias[j] = pin.Inertia(mass, com, inertia)
+    return model
 
 
 def _urdf_text(urdf: str | Path) -> tuple[str, str]:

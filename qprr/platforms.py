@@ -25,7 +25,8 @@ from pathlib import Path
 import pinocchio as pin
 
 from .errors import InputError, QprrError, UnknownNameError
-from .model import Platform, from_urdf
+from .inertia import read_inertials
+from .model import Platform, apply_inertials, check_flight, from_urdf
 from .registry import Registry
 from .rotors import read_rotor_file
 
@@ -124,6 +125,7 @@ def resolve(
     urdf: str | Path | None = None,
     rotors: str | Path | None = None,
     ee_frame: str | None = None,
+    inertials: str | Path | None = None,
 ) -> Platform:
     """The platform a command line names: one of :data:`NAMES`, a (2.1) name, or a user's URDF.
 
@@ -131,10 +133,9 @@ def resolve(
     (then ``name`` and ``layout`` must be None).  Otherwise ``name`` (default ``"q-prr"``):
     :func:`load` for a name of :data:`NAMES`, :func:`qprr.build` for a name of formula (2.1) such
     as ``"HEX-RRR"``; ``layout`` ("plus" or "x") for the Q-PRR or a built platform.  An unknown
-    name raises :class:`UnknownNameError` listing the valid ones.
+    name raises :class:`UnknownNameError` listing the valid ones.  ``inertials``: a TOML file of inertial overrides
+    (:func:`qprr.inertia.read_inertials`) applied to the platform's model, its physics checked again.
     """
-    from .nomenclature import build, parse
-
     if urdf is not None:
         if name is not None or layout is not None:
             raise InputError(
@@ -144,7 +145,19 @@ def resolve(
             )
         if rotors is None:
             raise InputError(f"the URDF {str(urdf)!r} needs its rotor description: a TOML file (docs/platforms.md)")
-        return from_urdf(urdf, rotors if isinstance(rotors, Path) else Path(rotors), ee_frame=ee_frame)
+        return from_urdf(urdf, rotors if isinstance(rotors, Path) else Path(rotors), ee_frame=ee_frame, inertials=inertials)
+    platform = _named(name, layout, rotors, ee_frame)
+    if inertials is None:
+        return platform
+    platform = platform.with_model(apply_inertials(platform.model, read_inertials(inertials), f"inertials {Path(inertials).name}"))
+    check_flight(platform, f"platform {platform.name!r} with the inertials of {str(inertials)!r}")
+    return platform
+
+
+def _named(name: str | None, layout: str | None, rotors, ee_frame) -> Platform:
+    """The named platform of :func:`resolve`."""
+    from .nomenclature import build, parse
+
     if rotors is not None or ee_frame is not None:
         given = ", ".join(f"{k} = {v!r}" for k, v in (("rotors", rotors), ("ee_frame", ee_frame)) if v is not None)
         raise InputError(

@@ -11,12 +11,14 @@ import sys
 from ..cli_common import PLATFORM_HELP, add_platform_options, fail, output_path, platform_from_args
 from ..errors import InputError, MissingDependencyError, MissingTopicError, NoFlightError, QprrError, UnknownNameError
 from ..model import from_urdf
-from .identify import IdentifyOptions, identify_log
+from .identify import IdentifyOptions, identify
 from .phases import find_phases
 from .plots import summary_figure
+from .record import read_joint_csv, record_from_log
 from .replay import replay
 from .show import show_lines
 from .ulog import FlightLog
+from .writeback import write_inertials, write_rotors
 
 
 def register_cli(sub) -> None:
@@ -110,9 +112,12 @@ def _add_identify(group) -> None:
     p.add_argument("--joints", metavar="FILE.csv", help="joint angles (header: time, the URDF's joint names)")
     p.add_argument("--urdf", metavar="FILE.urdf", help="the aerial manipulator's URDF (with --rotors and --joints)")
     p.add_argument("--rotors", metavar="FILE.toml", help="its rotor file")
+    p.add_argument("--ee-frame", default=None, metavar="NAME", help="its end-effector frame (needed by a URDF without arm joints)")
     p.add_argument("--folds", type=int, default=5, metavar="K", help="cross-validation over K time blocks (default 5)")
     p.add_argument("--json", metavar="FILE.json", help="write every value as {value, std}")
     p.add_argument("--plot", metavar="FILE.png", help="measured against predicted, held-out folds shaded")
+    p.add_argument("--write-rotors", metavar="FILE.toml", help="a rotor file with the identified ct as every rotor's f_max")
+    p.add_argument("--write-inertials", metavar="FILE.toml", help="the identified inertial values as overrides of --urdf (--inertials)")
     p.set_defaults(func=_cmd_identify)
 
 
@@ -120,17 +125,30 @@ def _cmd_identify(args: argparse.Namespace) -> int:
     what = "qprr log identify"
     if (args.urdf is None) != (args.rotors is None) or (args.joints is not None and args.urdf is None):
         return fail(what, "--joints needs --urdf and --rotors, and --urdf and --rotors go together")
+    if args.write_inertials is not None and args.urdf is None:
+        return fail(what, "--write-inertials needs the robot's --urdf and --rotors (the overrides name its links)")
     try:
         options = IdentifyOptions(mass=args.mass, ct=args.ct, folds=args.folds)
-        platform = from_urdf(args.urdf, args.rotors) if args.urdf is not None else None
-    except QprrError as exc:
+        platform = from_urdf(args.urdf, args.rotors, ee_frame=args.ee_frame) if args.urdf is not None else None
+        for option, path in (("--write-rotors", args.write_rotors), ("--write-inertials", args.write_inertials)):
+            output_path(path, (".toml",), option)
+    except (QprrError, ValueError) as exc:
         return fail(what, str(exc))
     try:
-        result = identify_log(args.log, options, platform, args.joints)
+        log = FlightLog.read(args.log)
+        record = record_from_log(log, read_joint_csv(args.joints, platform) if args.joints is not None else None)
+        result = identify(record, options, platform)
+        written = []
+        if args.write_rotors:
+            written.append(write_rotors(result, args.write_rotors, record, platform))
+        if args.write_inertials:
+            written.append(write_inertials(result, args.write_inertials, platform))
     except (NoFlightError, MissingTopicError, QprrError) as exc:  # the log cannot answer: one line, exit 1
         print(f"{what}: {exc}", file=sys.stderr)
         return 1
     print(result.summary())
+    for path in written:
+        print(f"wrote {path}")
     if args.json:
         print(f"wrote {result.to_json(args.json)}")
     if args.plot:

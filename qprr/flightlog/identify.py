@@ -28,7 +28,7 @@ from ..errors import InputError
 from ..flightstack.frames import body_from_frd
 from ..model import Platform
 from ..validation import as_int, as_output_path, as_real
-from .inertial import identify_inertial
+from .inertial import InertialResult, derived, identify_inertial
 from .record import FlightRecord, read_joint_csv, record_from_log
 from .samples import Estimate, Samples, not_identifiable, prepare_samples
 from .stats import least_squares
@@ -89,6 +89,7 @@ class Identification:
     folds: tuple[Fold, ...]
     source: str = ""
     series: dict = field(default_factory=dict, repr=False)
+    combinations: tuple = ()
 
     def __getitem__(self, key: str) -> Estimate:
         if key not in self.estimates:
@@ -99,6 +100,9 @@ class Identification:
         """One line per value (value ± std unit, or "not identifiable: reason"), then one per fold."""
         lines = [f"identification of {self.source or 'the flight'}"]
         lines += ["  " + e.line(k) for k, e in self.estimates.items()]
+        if self.combinations:
+            lines.append("  the combinations of the inertial parameters this flight determines (the regressor's row space):")
+            lines += ["    " + c.estimate.line(c.label) for c in self.combinations]
         for f in self.folds:
             vals = ", ".join(f"{k} {v:.5g}" for k, v in f.values.items())
             lines.append(
@@ -117,12 +121,24 @@ class Identification:
             if not e.identified:
                 out[k]["reason"] = e.reason
         folds = [{"held_out_s": [f.t_start_s, f.t_end_s], **f.values, "rms_fit": f.rms_fit, "rms_held_out": f.rms_held_out} for f in self.folds]
-        path.write_text(json.dumps({"source": self.source, "estimates": out, "folds": folds}, indent=2))
+        combos = [
+            {
+                "label": c.label,
+                "coefficients": c.coefficients,
+                "value": c.estimate.value if c.estimate.identified else None,
+                "std": c.estimate.std if c.estimate.identified else None,
+                "status": c.estimate.status.value,
+                "reason": c.estimate.reason,
+            }
+            for c in self.combinations
+        ]
+        path.write_text(json.dumps({"source": self.source, "estimates": out, "combinations": combos, "folds": folds}, indent=2))
         return path
 
     def plot(self, path) -> Path:
-        """Measured against predicted specific force along z_B and angular acceleration (the regressor's prediction,
-        where it was fitted), the held-out blocks shaded."""
+        """Measured against predicted specific force along z_B (the vertical model) and angular acceleration in B (the
+        regressor's prediction on each block by the parameters fitted on the others: cross-validated; not drawn, with
+        the reason, when the flight does not determine the base's rotational inertia), the held-out blocks shaded."""
         import matplotlib
 
         matplotlib.use("Agg")
@@ -137,10 +153,16 @@ class Identification:
         ax.plot(s["t_s"], s["predicted_z"], ".", ms=2, label="predicted")
         ax.set_ylabel("specific force z [m/s^2]")
         if rows == 2:
+            ax = axes[1, 0]
+            notes = s.get("omega_dot_notes", {})
             for k, name in enumerate("xyz"):
-                axes[1, 0].plot(s["t_s"], s["omega_dot_body"][:, k], ".", ms=1, label=f"measured {name}")
-                axes[1, 0].plot(s["t_s"], s["omega_dot_predicted"][:, k], "-", lw=0.8, label=f"predicted {name}")
-            axes[1, 0].set_ylabel("angular acceleration [rad/s^2]")
+                ax.plot(s["t_s"], s["omega_dot_body"][:, k], ".", ms=2, color=f"C{k}", label=f"measured {name} (B)")
+                if name not in notes:
+                    ax.plot(s["t_s"], s["omega_dot_predicted"][:, k], "-", lw=1.0, color=f"C{k}", label=f"predicted {name}, held out")
+            if notes:
+                text = "\n".join(f"{a}: not predicted, {why[:150]}" for a, why in notes.items())
+                ax.text(0.01, 0.03, text, transform=ax.transAxes, fontsize=6)
+            ax.set_ylabel("angular acceleration [rad/s^2]")
         for f in self.folds:
             for a in axes[:, 0]:
                 a.axvspan(f.t_start_s, f.t_end_s, color=f"C{f.index % 10}", alpha=0.08)
@@ -281,7 +303,9 @@ def identify(record: FlightRecord, options: IdentifyOptions | None = None, platf
     """Identify the vehicle that flew ``record`` (module docstring): the vertical model (ct, mass or ct given the
     other, hover command, motor time constant), its k-fold cross-validation, and the inertial parameters through
     Pinocchio's regressor (:mod:`qprr.flightlog.inertial`; ``platform``: the aerial manipulator whose URDF and rotor
-    file give the bodies and the rotor positions from B, with ``record.joints`` its joint angles)."""
+    file give the bodies and the rotor positions from B, with ``record.joints`` its joint angles).  With an arm, ct
+    (or the mass) is taken from the regressor, jointly with the inertial parameters: the vertical model of a rigid
+    body would read the arm's reaction on the base as thrust."""
     options = IdentifyOptions() if options is None else options
     if not isinstance(options, IdentifyOptions):
         raise InputError(f"options must be an IdentifyOptions, got {type(options).__name__}")
@@ -292,18 +316,55 @@ def identify(record: FlightRecord, options: IdentifyOptions | None = None, platf
     samples = prepare_samples(record, options)
     rotors = rotor_axes_body(record, platform)
     axis_z = rotors[1][:, 2]
+    axis_sum = float(np.sum(axis_z))
     lag, T = profile_time_constant(samples, axis_z, record.command_rate_hz)
     thrust = samples.commands(T)
     y, x = samples.specific_force_body[:, 2], thrust @ axis_z
     vf = fit_vertical(y, x, T)
-    estimates = vertical_estimates(vf.theta, vf.theta_std, record, float(np.sum(axis_z)), options)
-    estimates["motor_time_constant"] = lag
+    folds = cross_validate(samples, y, x, record, axis_sum, options)
+    estimates = vertical_estimates(vf.theta, vf.theta_std, record, axis_sum, options)
     known = {"mass": options.mass} if options.mass is not None else {"ct": options.ct} if options.ct is not None else {}
-    inertial, fit, _ = identify_inertial(samples, rotors, thrust, platform, known)
-    estimates.update(inertial)
-    folds = cross_validate(samples, y, x, record, float(np.sum(axis_z)), options)
-    series = {"t_s": samples.t_s, "measured_z": y, "predicted_z": vf.theta * x}
-    return Identification(estimates, folds, record.source, series)
+    mass_scale = estimates["mass"].value if estimates["mass"].identified else 1.0
+    blocks = fold_blocks(y.shape[0], options.folds)
+    inertial = identify_inertial(samples, rotors, thrust, platform, known, mass_scale, blocks)
+    if platform is not None and platform.n_arm:
+        theta = regressor_thrust_to_mass(inertial, options)
+        if theta.identified:
+            estimates = vertical_estimates(theta.value, theta.std, record, axis_sum, options)
+    estimates["motor_time_constant"] = lag
+    estimates.update(inertial.estimates)
+    series = {
+        "t_s": samples.t_s,
+        "measured_z": y,
+        "predicted_z": vf.theta * x,
+        "omega_dot_body": samples.omega_dot_body,
+        "omega_dot_predicted": inertial.held_out[:, 3:6],
+        "omega_dot_notes": rotational_notes(inertial.combinations),
+    }
+    return Identification(estimates, folds, record.source, series, inertial.combinations)
+
+
+def rotational_notes(combinations: tuple) -> dict:
+    """{axis: why its angular acceleration is not predicted} for the axes x, y, z of B whose diagonal inertia
+    (the combination holding base.Ixx, base.Iyy or base.Izz) the flight does not determine."""
+    notes = {}
+    for axis in "xyz":
+        for c in combinations:
+            if f"base.I{axis}{axis}" in c.coefficients and not c.estimate.identified:
+                notes[axis] = f"{c.label}: {c.estimate.reason}"
+    return notes
+
+
+def regressor_thrust_to_mass(inertial: InertialResult, options: IdentifyOptions) -> Estimate:
+    """theta = ct / m [N/kg] from the joint fit of the regressor: ct / M with the mass M given (or 1 kg: the ratio), or
+    ct / (the sum of the bodies' masses) with ct given; not identifiable outside the regressor's row space."""
+    fit = inertial.fit
+    if options.ct is not None:
+        cols = [fit.names.index(f"{b}.m") for b in inertial.bodies]
+        return derived(fit, lambda x: options.ct / sum(x[j] for j in cols), "N/kg", 1.0, "thrust_to_mass")
+    mass = options.mass if options.mass is not None else 1.0
+    j = fit.names.index("ct")
+    return derived(fit, lambda x: x[j] / mass, "N/kg", abs(fit.x[j] / mass), "thrust_to_mass")
 
 
 def identify_log(path, options: IdentifyOptions | None = None, platform: Platform | None = None, joints_csv=None) -> Identification:

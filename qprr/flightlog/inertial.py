@@ -19,7 +19,7 @@ in the row space of the regressor (structurally) and its std is small against it
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
@@ -56,6 +56,8 @@ class RegressorFit:
     names: tuple[str, ...]
     tau: float
     condition: float
+    A: np.ndarray = field(repr=False, default=None)
+    b: np.ndarray = field(repr=False, default=None)
 
 
 def stacked_regressor(model: pin.Model, samples: Samples, wrench_columns: np.ndarray, thrust: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -113,7 +115,7 @@ def solve_regressor(Y: np.ndarray, W: np.ndarray, known: dict, names: tuple[str,
     tau = autocorrelation_time(resid.reshape(-1, 6))
     cov_z = (V / s**2) @ V.T * s2 * tau
     cov = cov_z / np.outer(sc, sc)
-    return RegressorFit(x, cov, V, sc, tuple(cols), tau, float(s[0] / s[-1]) if s.size else math.inf)
+    return RegressorFit(x, cov, V, sc, tuple(cols), tau, float(s[0] / s[-1]) if s.size else math.inf, Aw, bw)
 
 
 def _svd_solve(A: np.ndarray, b: np.ndarray):
@@ -121,10 +123,11 @@ def _svd_solve(A: np.ndarray, b: np.ndarray):
     norm, singular values below RANK_RTOL of the largest dropped."""
     sc = np.linalg.norm(A, axis=0)
     sc = np.where(sc > 0.0, sc, 1.0)
-    U, s, Vt = np.linalg.svd(A / sc, full_matrices=False)
+    Qa, Ra = np.linalg.qr(A / sc)  # A / sc = Qa Ra, then the SVD of the small Ra (the same singular values, faster)
+    U, s, Vt = np.linalg.svd(Ra)
     r = int(np.sum(s > RANK_RTOL * s[0]))
     U, s, V = U[:, :r], s[:r], Vt[:r].T
-    z = V @ ((U.T @ b) / s)
+    z = V @ ((U.T @ (Qa.T @ b)) / s)
     return z / sc, V, s, sc, r
 
 
@@ -145,7 +148,11 @@ def derived(fit: RegressorFit, fn, unit: str, scale: float, what: str) -> Estima
     gz = grad / fit.scale  # the gradient in scaled coordinates
     outside = gz - fit.row_space @ (fit.row_space.T @ gz)
     if np.linalg.norm(outside) > ROW_SPACE_TOL * max(np.linalg.norm(gz), 1e-300):
-        return not_identifiable(unit, f"{what} appears only in combination with other parameters (the flight's motion does not separate it)")
+        return not_identifiable(
+            unit,
+            f"{what} enters the base wrench only within the combinations listed (the regressor's row space): the joint "
+            "torques that would separate it are not in a PX4 log, and this flight's motion does not",
+        )
     std = float(math.sqrt(max(grad @ fit.cov @ grad, 0.0)))
     if not std <= RELATIVE_STD_MAX * scale:
         return not_identifiable(
@@ -187,6 +194,19 @@ def body_quantities(fit: RegressorFit, body: str, fixed: dict, length: float) ->
     for a in "xyz":
         f = inertia_about_com(a)
         out[f"inertia_{a}{a}"] = derived(fit, f, "kg m^2", abs(f(fit.x)), f"{body} inertia {a}{a}")
+
+    def product_about_com(a: str, b: str):
+        i, k = "xyz".index(a), "xyz".index(b)
+
+        def fn(x):  # I_c = I_o - m (|c|^2 E - c c^T): off the diagonal I_c,ab = I_o,ab + m c_a c_b
+            c = np.array([com(n)(x) for n in "xyz"])
+            return get[f"I{a}{b}"](x) + get["m"](x) * c[i] * c[k]
+
+        return fn
+
+    diag_scale = float(np.mean([abs(inertia_about_com(a)(fit.x)) for a in "xyz"]))
+    for a, b in ("xy", "xz", "yz"):
+        out[f"inertia_{a}{b}"] = derived(fit, product_about_com(a, b), "kg m^2", diag_scale, f"{body} inertia {a}{b}")
     ixx = inertia_about_com("x")
     for a in "yz":
         f = inertia_about_com(a)
@@ -209,15 +229,31 @@ def body_names(model: pin.Model, platform: Platform | None) -> list[str]:
     return out
 
 
+@dataclass(frozen=True)
+class InertialResult:
+    """What :func:`identify_inertial` finds: ``estimates`` (key -> Estimate), the ``fit``, the ``combinations`` the
+    flight determines (:func:`identifiable_combinations`), the model fitted, the body names, and ``held_out`` (n, 6)
+    the base's acceleration predicted on each held-out block (:func:`held_out_predictions`)."""
+
+    estimates: dict
+    fit: RegressorFit
+    combinations: tuple
+    model: pin.Model
+    bodies: tuple
+    held_out: np.ndarray
+
+
 def identify_inertial(
-    samples: Samples, rotors: tuple, ct_thrust: np.ndarray, platform: Platform | None, known: dict
-) -> tuple[dict, RegressorFit, pin.Model]:
+    samples: Samples, rotors: tuple, ct_thrust: np.ndarray, platform: Platform | None, known: dict, mass_scale: float, blocks: list
+) -> InertialResult:
     """The inertial estimates of the flight (module docstring): for a rigid multirotor its centre of gravity (from the
     point PX4's CA_* positions are measured from), its inertia about it and the inertia ratios; for an aerial
-    manipulator the same of the base and each arm link (mass, centre of gravity in the link frame, inertia).
+    manipulator the same of the base and each arm link (mass, centre of gravity in the link frame, inertia); the
+    identifiable combinations; the cross-validated prediction of the base's acceleration over ``blocks``.
 
     ``rotors``: (positions, axes, km) in B; ``ct_thrust``: g(lag_T(u)) on the samples (n, n_rotors); ``known``:
-    {"ct": value} or {"mass": total mass} (neither: mass 1 kg, only the scale-free values are meaningful)."""
+    {"ct": value} or {"mass": total mass} (neither: mass 1 kg, only the scale-free values are meaningful);
+    ``mass_scale`` [kg]: the vehicle's mass (given or from the vertical fit), the scale of the combinations."""
     p, a, km = rotors
     wrench = np.vstack([a.T, (np.cross(p, a) - km[:, None] * a).T])  # (6, n_rotors), per unit ct
     if platform is None:
@@ -235,19 +271,185 @@ def identify_inertial(
     if mass_total is not None:
         solve_known["mass_total"] = (mass_total, [10 * i for i in range(len(bodies))])
     fit = solve_regressor(Y, W, solve_known, names)
-    fixed = {}
-    if mass_total is not None:
-        others = [fit.names.index(f"{b}.m") for b in bodies[1:]]
-        fixed["base.m"] = lambda x, o=others, m=mass_total: m - sum(x[j] for j in o)
     length = float(np.max(np.linalg.norm(p, axis=1)))
-    out = {}
-    for b in bodies:
-        for k, e in body_quantities(fit, b, fixed, length).items():
-            if b == "base" and k == "mass" and platform is None:
-                continue
-            out[k if b == "base" and platform is None else f"{b}.{k}"] = e
+    out = _body_estimates(fit, bodies, mass_total, length, platform is None)
     if "ct" not in known and mass_total == 1.0:
         for k in list(out):
             if "inertia_" in k and "ratio" not in k or k.endswith("mass"):
                 out[k] = not_identifiable(out[k].unit, "give the mass (--mass) or the thrust (--ct): without either the flight gives only ratios")
-    return out, fit, model
+    combos = identifiable_combinations(fit, mass_scale, length)
+    held = held_out_predictions(acceleration_maps(model, samples), (Y, W), solve_known, names, bodies, blocks)
+    return InertialResult(out, fit, combos, model, tuple(bodies), held)
+
+
+def _body_estimates(fit: RegressorFit, bodies: list[str], mass_total: float | None, length: float, rigid: bool) -> dict:
+    """:func:`body_quantities` of every body, keyed "<body>.<quantity>" (a rigid multirotor: "<quantity>", no mass)."""
+    fixed = {}
+    if mass_total is not None:
+        others = [fit.names.index(f"{b}.m") for b in bodies[1:]]
+        fixed["base.m"] = lambda x, o=others, m=mass_total: m - sum(x[j] for j in o)
+    out = {}
+    for b in bodies:
+        for k, e in body_quantities(fit, b, fixed, length).items():
+            if b == "base" and k == "mass" and rigid:
+                continue
+            out[k if b == "base" and rigid else f"{b}.{k}"] = e
+    return out
+
+
+# ------------------------------------------------------------------------ the identifiable combinations (base parameters)
+COMBINATION_TOL = 1e-6
+"""A (unit-norm, scaled) regressor column whose part outside the span of the columns before it is below this is a
+structural combination of them (Gautier, "Numerical calculation of the base inertial parameters of robots", J. of
+Robotic Systems 8(4), 1991: the same test by QR, columns in a fixed order)."""
+
+COMBINATION_SCALE = 0.1
+"""The fraction of its physical scale (ct; the mass M; M L; M L^2) an unknown must be resolved to."""
+
+
+@dataclass(frozen=True)
+class Combination:
+    """One identifiable combination of the unknowns (a base parameter): sum_k coefficients[k] x_k with x the unknowns
+    of the fit ("ct" [N], "<body>.m" [kg], "<body>.mcx" = m c_x [kg m] with c in the body's joint frame, "<body>.Ixx"
+    ... [kg m^2] about the joint frame's origin, Pinocchio's ``Inertia.toDynamicParameters``), its ``estimate``,
+    and the ``label`` that writes it out."""
+
+    label: str
+    coefficients: dict
+    estimate: Estimate
+
+    def value_of(self, values: dict) -> float:
+        """The combination evaluated at ``values`` (name -> value, e.g. the truth of a simulated flight)."""
+        return float(sum(c * values[k] for k, c in self.coefficients.items()))
+
+
+def _kind_scale(name: str, mass: float, length: float, ct: float) -> float:
+    """The resolution an unknown must be known to (COMBINATION_SCALE of its physical scale): of ct itself, of the
+    vehicle's mass M, of M L for a first moment, of M L^2 for a second moment (L: the largest rotor distance)."""
+    kind = name.split(".")[-1]
+    physical = ct if name == "ct" else mass if kind == "m" else mass * length if kind.startswith("mc") else mass * length**2
+    return COMBINATION_SCALE * physical
+
+
+def _label(coefficients: dict) -> str:
+    terms = []
+    for k, c in coefficients.items():
+        sign = "-" if c < 0 else "+"
+        mag = "" if abs(abs(c) - 1.0) < 1e-9 else f"{abs(c):.4g} "
+        terms.append(f"{sign} {mag}{k}")
+    text = " ".join(terms)
+    return text[2:] if text.startswith("+ ") else text
+
+
+def identifiable_combinations(fit: RegressorFit, mass: float, length: float) -> tuple[Combination, ...]:
+    """A basis of what the flight determines (the row space of the weighted regressor of :func:`solve_regressor`),
+    each vector written as one unknown plus the unknowns that enter the base wrench only together with it: the
+    columns are taken in order (ct, then the bodies from the base out), a column in the span of those before it
+    (COMBINATION_TOL) is regrouped into them, A_d = sum_i K_id A_i, so A x = A_I beta with beta_i = x_i + sum_d K_id
+    x_d (Gautier 1991).  beta is fitted by least squares on A_I (full column rank), its covariance inflated for the
+    residuals' autocorrelation (:mod:`qprr.flightlog.stats`); a combination is identified when its std is at most
+    RELATIVE_STD_MAX of the scale of its largest term (|coefficient_k| x :func:`_kind_scale`): a scale fixed by the
+    vehicle, never by the estimate (a noisy large value does not make itself identified)."""
+    A, b = fit.A, fit.b
+    sc = np.linalg.norm(A, axis=0)
+    sc = np.where(sc > 0.0, sc, 1.0)
+    As = A / sc
+    order = ([fit.names.index("ct")] if "ct" in fit.names else []) + [j for j, n in enumerate(fit.names) if n != "ct"]
+    Q = np.zeros((A.shape[0], 0))
+    indep = []
+    for j in order:
+        r = As[:, j] - Q @ (Q.T @ As[:, j])
+        r -= Q @ (Q.T @ r)  # re-orthogonalised (classical Gram-Schmidt twice)
+        if np.linalg.norm(r) > COMBINATION_TOL:
+            indep.append(j)
+            Q = np.column_stack([Q, r / np.linalg.norm(r)])
+    dep = [j for j in order if j not in indep]
+    K = np.linalg.lstsq(As[:, indep], As[:, dep], rcond=None)[0] if dep else np.zeros((len(indep), 0))
+    K = K * sc[dep][None, :] / sc[indep][:, None]  # unscaled: A_d = sum_i K_id A_i
+    AI = A[:, indep]
+    beta = np.linalg.lstsq(AI, b, rcond=None)[0]
+    resid = b - AI @ beta
+    s2 = float(resid @ resid) / max(A.shape[0] - len(indep), 1)
+    tau = autocorrelation_time(resid.reshape(-1, 6))
+    cov = np.linalg.inv(AI.T @ AI) * s2 * tau
+    ct = abs(float(beta[0])) if "ct" in fit.names and indep[0] == fit.names.index("ct") else 1.0
+    out = []
+    for i, j in enumerate(indep):
+        coef = {fit.names[j]: 1.0}
+        coef.update({fit.names[d]: float(K[i, m]) for m, d in enumerate(dep) if abs(K[i, m]) > 1e-9})
+        std = float(math.sqrt(max(cov[i, i], 0.0)))
+        scale = max(abs(c) * _kind_scale(k, mass, length, ct) for k, c in coef.items())
+        label = _label(coef)
+        if std <= RELATIVE_STD_MAX * scale:
+            est = Estimate(float(beta[i]), std, "")
+        else:
+            est = not_identifiable(
+                "", f"too little excitation: {label} = {beta[i]:.3g} ± {std:.2g}, std above {RELATIVE_STD_MAX:.0%} of its scale {scale:.3g}"
+            )
+        out.append(Combination(label, coef, est))
+    return tuple(out)
+
+
+def parameter_values(model: pin.Model, ct: float, known: dict | None = None) -> dict:
+    """The unknowns of :func:`identify_inertial` (name -> value) of a Pinocchio ``model`` (its bodies' dynamic
+    parameters) and a thrust ``ct`` [N]: the truth a simulated flight's combinations are checked against."""
+    out = {"ct": float(ct)}
+    for b, j in zip(body_names(model, None), range(1, model.njoints)):
+        for k, v in zip(PARAMETER_NAMES, model.inertias[j].toDynamicParameters()):
+            out[f"{b}.{k}"] = float(v)
+    return out
+
+
+def full_parameters(fit: RegressorFit, x: np.ndarray, bodies: list[str], fixed: dict) -> tuple[np.ndarray, float]:
+    """(pi (10 n_bodies,), ct) of the unknowns ``x`` of ``fit`` with the ``fixed`` ones ("ct": its value;
+    "mass_total": the base's mass = the total - the others)."""
+    values = dict(zip(fit.names, x))
+    if "mass_total" in fixed:
+        values[f"{bodies[0]}.m"] = fixed["mass_total"] - sum(values[f"{b}.m"] for b in bodies[1:])
+    if "ct" in fixed:
+        values["ct"] = fixed["ct"]
+    return np.array([values[f"{b}.{k}"] for b in bodies for k in PARAMETER_NAMES]), float(values["ct"])
+
+
+def acceleration_maps(model: pin.Model, samples: Samples) -> tuple[np.ndarray, np.ndarray]:
+    """(H (n, 6, P), M (n, 6, 6, P)): the base rows of the regressor at the samples' (q, v) with the base's
+    acceleration zero (H) and at v = 0 with a unit base acceleration along each axis (M[:, :, i]), so that the base
+    wrench of parameters pi is Y pi = H pi + (M pi) a_b (the Newton-Euler equations are affine in a_b)."""
+    data = model.createData()
+    n, P = samples.t_s.shape[0], 10 * (model.njoints - 1)
+    H, M = np.empty((n, 6, P)), np.empty((n, 6, 6, P))
+    q, zero = pin.neutral(model), np.zeros(model.nv)
+    for k in range(n):
+        v, a = zero.copy(), zero.copy()
+        v[3:6] = samples.gyro_body[k]
+        if model.nv > 6:
+            q[7:], v[6:], a[6:] = samples.joints[0][k], samples.joints[1][k], samples.joints[2][k]
+        H[k] = pin.computeJointTorqueRegressor(model, data, q, v, a)[0:6]
+        for i in range(6):
+            e = zero.copy()
+            e[i] = 1.0
+            M[k, :, i] = pin.computeJointTorqueRegressor(model, data, q, zero, e)[0:6]
+    return H, M
+
+
+def predicted_base_acceleration(maps: tuple, pi: np.ndarray, wrench: np.ndarray) -> np.ndarray:
+    """The base's acceleration [specific force; angular acceleration] (n, 6) in B that the parameters ``pi`` predict
+    under the rotor wrench ``wrench`` (n, 6) [N, N m]: a_b = (M pi)^-1 (wrench - H pi) (:func:`acceleration_maps`)."""
+    H, M = maps
+    return np.linalg.solve(M @ pi, (wrench - H @ pi)[..., None])[..., 0]
+
+
+def held_out_predictions(maps: tuple, system: tuple, known: dict, names: tuple, bodies: list[str], blocks: list) -> np.ndarray:
+    """The base's acceleration (n, 6) predicted on each time block of ``blocks`` by the parameters fitted on the other
+    blocks (:func:`solve_regressor` on their rows of ``system`` = (Y, W)): a cross-validated prediction."""
+    Y, W = system
+    n = Y.shape[0] // 6
+    out = np.full((n, 6), np.nan)
+    wrench = W.reshape(n, 6)
+    for held in blocks:
+        train = np.setdiff1d(np.arange(n), held)
+        rows = (6 * train[:, None] + np.arange(6)).reshape(-1)
+        fit = solve_regressor(Y[rows], W[rows], known, names)
+        pi, ct = full_parameters(fit, fit.x, bodies, {"ct": known["ct"]} if "ct" in known else {"mass_total": known["mass_total"][0]})
+        out[held] = predicted_base_acceleration((maps[0][held], maps[1][held]), pi, ct * wrench[held])
+    return out

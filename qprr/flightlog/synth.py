@@ -14,8 +14,13 @@ behind the first-order motor lag of :class:`qprr.sim.actuators.RotorDynamics`.  
 * two seconds armed on the ground before the flight and after it.
 
 The specific force is the classical acceleration of B's origin minus gravity, from Pinocchio's ``aba`` at each tick
-with the thrusts the rotors produce there.  The ULog file is written with the format of PX4's ULog specification
-(docs.px4.io, "ULog File Format": header, flag bits, 'F' formats, 'P' parameters, 'A' subscriptions, 'D' data).
+with the thrusts the rotors produce there.
+
+The ULog bytes are written here (:func:`write_ulog`), not by pyulog: pyulog's writer (``ULog.write_ulog``) only
+re-writes a log it has read (it serialises a parsed ``ULog`` object), it cannot make one from arrays.  The format is
+PX4's ULog specification (docs.px4.io/main/en/dev_log/ulog_file_format.html, "ULog File Format": the 16-byte
+header with magic ``ULog\x01\x12\x35``, version and start time; the 'B' flag bits; 'F' formats; 'P' parameters;
+'A' subscriptions; 'D' data, each message a uint16 size and a uint8 type before its payload, little-endian).
 """
 
 from __future__ import annotations
@@ -37,6 +42,7 @@ from ..sim import simulate
 from ..sim.actuators import RotorDynamics
 from ..trajectory import MultiPhase, Phase
 from ..validation import as_int, as_real
+from .inertial import parameter_values
 from .record import JointSeries, write_joint_csv
 
 PX4_GRAVITY = 9.80665
@@ -46,7 +52,8 @@ PX4_GRAVITY = 9.80665
 class SynthOptions:
     """duration_s of the flight; motor_time_constant [s]; accel_noise [m/s^2] and gyro_noise [rad/s]: std of the white
     noise on each IMU sample; command_rate_hz (PX4's default profile: 10); imu_rate_hz (250); arm_sweep: the fraction
-    of the arm's range the mission sweeps; seed."""
+    of the arm's range the mission sweeps; seed; steps: the largest step of x, y [m] and yaw [rad] (0: a hover, no
+    excitation)."""
 
     duration_s: float = 20.0
     motor_time_constant: float = 0.005
@@ -56,11 +63,12 @@ class SynthOptions:
     imu_rate_hz: float = 250.0
     arm_sweep: float = 0.6
     seed: int = 0
+    steps: float = 0.6
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "duration_s", as_real(self.duration_s, "duration_s", positive=True, unit="s"))
         object.__setattr__(self, "motor_time_constant", as_real(self.motor_time_constant, "motor_time_constant", positive=True, unit="s"))
-        for name in ("accel_noise", "gyro_noise", "arm_sweep"):
+        for name in ("accel_noise", "gyro_noise", "arm_sweep", "steps"):
             object.__setattr__(self, name, as_real(getattr(self, name), name, nonnegative=True))
         for name in ("command_rate_hz", "imu_rate_hz"):
             object.__setattr__(self, name, as_real(getattr(self, name), name, positive=True, unit="Hz"))
@@ -79,9 +87,9 @@ class SynthLog:
     truth: dict = field(default_factory=dict)
 
 
-def excitation_mission(platform: Platform, duration: float, sweep: float, seed: int) -> MultiPhase:
-    """Climb to 1.5 m (first 12 %), steps of x, y and yaw of random sizes, the arm swept ``sweep`` of its range back and
-    forth, a descent to 0.2 m (last 12 %)."""
+def excitation_mission(platform: Platform, duration: float, sweep: float, seed: int, steps: float = 0.6) -> MultiPhase:
+    """Climb to 1.5 m (first 12 %), steps of x, y and yaw of random sizes up to ``steps`` [m, rad], the arm swept
+    ``sweep`` of its range back and forth, a descent to 0.2 m (last 12 %)."""
     rng = np.random.default_rng(seed)
     D = duration
     phases = [Phase("z", 0.0, 0.12 * D, 1.5)]
@@ -89,7 +97,7 @@ def excitation_mission(platform: Platform, duration: float, sweep: float, seed: 
     edges = np.linspace(0.15 * D, 0.85 * D, n + 1)
     for k in range(n):
         a, b = float(edges[k]), float(edges[k + 1])
-        phases.append(Phase("xyz"[k % 2] if k % 3 else "psi", a, b, float(rng.uniform(-0.6, 0.6))))
+        phases.append(Phase("xyz"[k % 2] if k % 3 else "psi", a, b, float(rng.uniform(-steps, steps))))
     lo, hi = platform.arm_lower, platform.arm_upper
     q0 = platform.neutral_q()[7:]
     for j, name in enumerate(platform.arm_names):
@@ -107,7 +115,7 @@ def fly_excitation(platform: Platform, options: SynthOptions):
     T = options.motor_time_constant
     rotors = RotorDynamics.for_rotors(platform.rotors, 1e-5, T, initial="hover")
     ctrl = make_controller("idc", platform, **lag_gains("idc", platform, T))
-    traj = excitation_mission(platform, options.duration_s, options.arm_sweep, options.seed)
+    traj = excitation_mission(platform, options.duration_s, options.arm_sweep, options.seed, options.steps)
     return simulate(platform, ctrl, traj, options.duration_s, dt=1e-3, control_period=2e-3, actuators=rotors, seed=options.seed)
 
 
@@ -181,6 +189,7 @@ def truth(platform: Platform, options: SynthOptions) -> dict:
         out[name] = {"mass": float(Y.mass), "com": np.array(Y.lever).tolist(), "inertia": np.diag(I_c).tolist()}
     data = model.createData()
     pin.ccrba(model, data, platform.neutral_q(), np.zeros(model.nv))
+    out["parameters"] = parameter_values(model, out["ct"])
     out["rigid"] = {"cog": com_body_at(platform).tolist(), "inertia": np.diag(data.Ig.inertia).tolist()}
     return out
 
