@@ -10,7 +10,7 @@ pytest.importorskip("pyulog", reason="pyulog is not installed: pip install 'qprr
 from pyulog import ULog
 
 import qprr
-from qprr.flightlog.synth import PX4_GRAVITY, SynthOptions, synth_log
+from qprr.flightlog.synth import SynthOptions, synth_log
 from qprr.flightlog.ulog import FlightLog
 from qprr.flightstack.px4 import geometry_from_platform
 
@@ -35,7 +35,7 @@ def test_pyulog_reads_the_topics_and_the_parameters(flight):
 
 
 def test_flightlog_rates_and_imu_noise_at_rest(flight):
-    _, s = flight
+    platform, s = flight
     log = FlightLog.read(s.path)
     rates = {t.name: t.rate_hz for t in log.topics()}
     assert rates["actuator_motors"] == pytest.approx(OPTIONS.command_rate_hz, rel=0.02)
@@ -44,8 +44,8 @@ def test_flightlog_rates_and_imu_noise_at_rest(flight):
     rest = imu.values[imu.t_s < 1.9]  # two seconds armed on the ground before the flight
     n = rest.shape[0]
     assert n > 400
-    # the mean: 1 g up (FRD: -g along z), the std: the noise given; bounds at 5 standard errors
-    np.testing.assert_allclose(rest[:, 0:3].mean(axis=0), [0.0, 0.0, -PX4_GRAVITY], atol=5 * OPTIONS.accel_noise / np.sqrt(n))
+    # the mean: 1 g up (FRD: -g along z, the plant's g), the std: the noise given; bounds at 5 standard errors
+    np.testing.assert_allclose(rest[:, 0:3].mean(axis=0), [0.0, 0.0, -platform.g], atol=5 * OPTIONS.accel_noise / np.sqrt(n))
     np.testing.assert_allclose(rest[:, 3:6].mean(axis=0), 0.0, atol=5 * OPTIONS.gyro_noise / np.sqrt(n))
     rel = 5 / np.sqrt(2 * n)  # the standard error of a sample std, relative
     np.testing.assert_allclose(rest[:, 0:3].std(axis=0, ddof=1), OPTIONS.accel_noise, rtol=rel)

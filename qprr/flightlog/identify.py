@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..flightstack.frames import body_from_frd
+from ..flightstack.px4 import STANDARD_GRAVITY
 from ..model import Platform
 from ..validation import as_int, as_output_path, as_real
 from .inertial import InertialResult, derived, identify_inertial
@@ -33,9 +34,6 @@ from .record import FlightRecord, read_joint_csv, record_from_log
 from .samples import Estimate, Samples, not_identifiable, prepare_samples
 from .stats import least_squares
 from .ulog import FlightLog
-
-STANDARD_GRAVITY = 9.80665
-"""g0 [m/s^2]: PX4's CONSTANTS_ONE_G (src/lib/geo/geo.h), jMAVSim's SimpleEnvironment.G."""
 
 LAG_GRID_S = np.concatenate([[0.0], np.geomspace(2e-3, 0.4, 40)])
 """The motor time constants profiled [s]."""

@@ -24,7 +24,7 @@ import pinocchio as pin
 
 from ..errors import InputError
 from ..flightstack.frames import body_from_frd, frd_from_body
-from ..flightstack.px4 import Px4Geometry, rotors_from_geometry
+from ..flightstack.px4 import STANDARD_GRAVITY, Px4Geometry, rotors_from_geometry
 from ..model import Platform, from_model
 from ..platforms import multirotor_model
 from ..viz.plots import new_figure
@@ -32,7 +32,6 @@ from .phases import Phases
 from .ulog import FlightLog, Series, motor_commands
 
 IMU_WINDOW_S = 0.02  # half-width of the window the IMU is averaged (and the gyro differentiated) over [s]
-G = 9.80665  # standard gravity [m/s^2]
 
 
 @dataclass(frozen=True)
@@ -94,11 +93,11 @@ def platform_from_log(log: FlightLog, hover_command: float) -> Platform:
     necessarily the simulated plant's."""
     geometry = Px4Geometry.from_parameters(log.parameters)
     rotors = rotors_from_geometry(geometry)
-    mass = float(sum(r.ct for r in geometry.rotors) * hover_command / G)
+    mass = float(sum(r.ct for r in geometry.rotors) * hover_command / STANDARD_GRAVITY)
     model = multirotor_model("iris")
     body = model.inertias[1]
     model.inertias[1] = pin.Inertia(mass, np.zeros(3), body.inertia * (mass / body.mass))
-    model.gravity.linear = np.array([0.0, 0.0, -G])
+    model.gravity.linear = np.array([0.0, 0.0, -STANDARD_GRAVITY])
     return from_model(
         model, rotors, ee_frame="iris__base_link", name=f"{log.path.name} CA_* rotors", rotor_source=f"{log.path.name} (CA_* parameters)"
     )

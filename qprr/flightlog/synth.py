@@ -45,8 +45,6 @@ from ..validation import as_int, as_real
 from .inertial import parameter_values
 from .record import JointSeries, write_joint_csv
 
-PX4_GRAVITY = 9.80665
-
 
 @dataclass(frozen=True)
 class SynthOptions:
@@ -212,7 +210,7 @@ def _topics(platform: Platform, res, options: SynthOptions, imu_data, f_max: np.
     # the IMU: on the ground before and after (1 g up, at rest), the flight between
     k = _every(res, options.imu_rate_hz)
     g_pre, g_post = _ground(0.0, t0, options.imu_rate_hz), _ground(t0 + res.t[-1] + 1e-3, t_end, options.imu_rate_hz)
-    rest = np.array([0.0, 0.0, PX4_GRAVITY])
+    rest = np.array([0.0, 0.0, platform.g])  # at rest on the ground: 1 g up, the plant's own g
     t_imu = np.concatenate([g_pre, t0 + res.t[k], g_post])
     acc = np.vstack([np.tile(rest, (g_pre.size, 1)), f_spec[k], np.tile(rest, (g_post.size, 1))])
     gyr = np.vstack([np.zeros((g_pre.size, 3)), omega[k], np.zeros((g_post.size, 3))])

@@ -24,10 +24,16 @@ from ..rotors import check_rotor_set, rotors_to_toml
 from ..version import __version__
 from .ardupilot import dynamic_script, frame_script, write_script
 from .mixer import mixer_error
-from .px4 import AIRFRAME_MULTIROTOR, Px4Geometry, check_geometry, geometry_from_platform, read_params, rotors_from_geometry, write_params
-
-G = 9.81
-"""Gravity [m/s^2] of the hover check of ``qprr import px4 --mass`` (qprr's platforms' default)."""
+from .px4 import (
+    AIRFRAME_MULTIROTOR,
+    STANDARD_GRAVITY,
+    Px4Geometry,
+    check_geometry,
+    geometry_from_platform,
+    read_params,
+    rotors_from_geometry,
+    write_params,
+)
 
 
 def ulog_parameters(path: Path) -> dict:
@@ -115,7 +121,7 @@ def _cmd_import_px4(args: argparse.Namespace) -> int:
         return fail(prog, f"{args.file}: CA_AIRFRAME = {geometry.airframe}, not a multirotor (0): qprr's platforms are multirotors")
     check_geometry(geometry, source=str(source))
     rotors = rotors_from_geometry(geometry)
-    weight = 0.0 if args.mass is None else args.mass * G
+    weight = 0.0 if args.mass is None else args.mass * STANDARD_GRAVITY
     check_rotor_set(rotors, weight, (0.0, 0.0, 0.0), source=str(source), hover=args.mass is not None)
     header = [
         f"rotor file written by qprr {__version__} (qprr import px4) from {source.name}",

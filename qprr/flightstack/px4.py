@@ -51,6 +51,9 @@ CONDITION_MAX = 1e4
 """Largest accepted condition number of the rows a multirotor needs (roll, pitch, yaw torque, Fz; all six for a fully
 actuated set), torques divided by the rotor span: PX4 inverts in float32 (eps 1.2e-7), so a condition of 1e4 already
 costs ~1e-3 relative error in the mix, the size of entry PX4 sets to zero (:data:`MIX_ZERO`)."""
+STANDARD_GRAVITY = 9.80665
+"""g0 [m/s^2]: PX4's CONSTANTS_ONE_G (src/lib/geo/geo.h), the gravity of its hover-thrust and allocation models (and of
+jMAVSim's plant); the one home of this value in qprr's flight-stack code."""
 AXES = ("Mx", "My", "Mz", "Fx", "Fy", "Fz")
 """Rows of PX4's effectiveness matrix (columns of the mix): torques then thrusts, FRD, normalised setpoints."""
 AXIS_MEANING = {
