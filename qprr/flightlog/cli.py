@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..cli_common import PLATFORM_HELP, add_platform_options, fail, output_path, platform_from_args
+from ..cli_common import PLATFORM_HELP, add_platform_options, fail, integer, output_path, platform_from_args, real
 from ..errors import InputError, MissingDependencyError, MissingTopicError, NoFlightError, QprrError, UnknownNameError
 from ..model import from_urdf
 from .identify import IdentifyOptions, identify
@@ -107,13 +107,13 @@ def _add_identify(group) -> None:
     p = group.add_parser("identify", help="thrust coefficient, hover command, mass, CoG offset, inertia, motor time constant")
     p.add_argument("log", metavar="FILE.ulg")
     known = p.add_mutually_exclusive_group()
-    known.add_argument("--mass", type=float, metavar="KG", help="the vehicle's mass: ct is identified")
-    known.add_argument("--ct", type=float, metavar="N", help="the thrust per rotor at full command: the mass is identified")
+    known.add_argument("--mass", type=real(positive=True, unit="kg"), metavar="KG", help="the vehicle's mass: ct is identified")
+    known.add_argument("--ct", type=real(positive=True, unit="N"), metavar="N", help="the thrust per rotor at full command: the mass is identified")
     p.add_argument("--joints", metavar="FILE.csv", help="joint angles (header: time, the URDF's joint names)")
     p.add_argument("--urdf", metavar="FILE.urdf", help="the aerial manipulator's URDF (with --rotors and --joints)")
     p.add_argument("--rotors", metavar="FILE.toml", help="its rotor file")
     p.add_argument("--ee-frame", default=None, metavar="NAME", help="its end-effector frame (needed by a URDF without arm joints)")
-    p.add_argument("--folds", type=int, default=5, metavar="K", help="cross-validation over K time blocks (default 5)")
+    p.add_argument("--folds", type=integer(lo=2), default=5, metavar="K", help="cross-validation over K time blocks (default 5)")
     p.add_argument("--json", metavar="FILE.json", help="write every value as {value, std}")
     p.add_argument("--plot", metavar="FILE.png", help="measured against predicted, held-out folds shaded")
     p.add_argument("--write-rotors", metavar="FILE.toml", help="a rotor file with the identified ct as every rotor's f_max")
