@@ -64,7 +64,7 @@ def test_sitl_angular_values_covered_or_not_identifiable(sitl):
 
 
 def test_sitl_json_and_summary(sitl, tmp_path):
-    out = json.loads(sitl.to_json(tmp_path / "out.json").read_text())["estimates"]
+    out = json.loads(sitl.to_json(tmp_path / "out.json").read_text())
     assert set(out["ct"]) >= {"value", "std"} and out["hover_command"]["value"] == pytest.approx(sitl["hover_command"].value)
     assert out["motor_time_constant"]["value"] is None
     text = sitl.summary()
@@ -143,7 +143,7 @@ def test_simulated_hexarotor_identified_and_written_back(hexa, tmp_path):
     ]
     argv += ["--json", str(js), "--write-rotors", str(rot_out), "--write-inertials", str(inert_out)]
     assert main(argv) == 0
-    est = json.loads(js.read_text())["estimates"]
+    est = json.loads(js.read_text())
     text = inert_out.read_text()
     assert "# ±" in text and "[link." in text
     flown = qprr.from_urdf(urdf, rot_out, ee_frame=ee, inertials=inert_out)

@@ -110,8 +110,10 @@ class Identification:
         return "\n".join(lines)
 
     def to_json(self, path) -> Path:
-        """Write every value as {"value": ..., "std": ..., "unit": ..., "status": ...} (null where not identifiable, with
-        its "reason"), and the folds."""
+        """Write every value at the top level as ``{"value": ..., "std": ..., "unit": ..., "status": ...}`` (null where not
+        identifiable, with its "reason"): ``ct`` [N], ``hover_command``, ``mass`` [kg]...; and, under keys starting with
+        an underscore (not values), the log ``_source``, the inertial ``_combinations`` and the cross-validation
+        ``_folds``."""
         path = as_output_path(path, "json", suffixes=(".json",))
         out = {}
         for k, e in self.estimates.items():
@@ -130,7 +132,7 @@ class Identification:
             }
             for c in self.combinations
         ]
-        path.write_text(json.dumps({"source": self.source, "estimates": out, "combinations": combos, "folds": folds}, indent=2))
+        path.write_text(json.dumps({**out, "_source": self.source, "_combinations": combos, "_folds": folds}, indent=2))
         return path
 
     def plot(self, path) -> Path:
