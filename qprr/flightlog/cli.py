@@ -9,7 +9,7 @@ import argparse
 import sys
 
 from ..cli_common import PLATFORM_HELP, add_platform_options, fail, integer, output_path, platform_from_args, real
-from ..errors import InputError, MissingDependencyError, MissingTopicError, NoFlightError, QprrError, UnknownNameError
+from ..errors import InputError, MissingDependencyError, QprrError, UnknownNameError
 from ..model import from_urdf
 from .identify import IdentifyOptions, identify
 from .phases import find_phases
@@ -136,16 +136,19 @@ def _cmd_identify(args: argparse.Namespace) -> int:
         return fail(what, str(exc))
     try:
         log = FlightLog.read(args.log)
-        record = record_from_log(log, read_joint_csv(args.joints, platform) if args.joints is not None else None)
+        joints = read_joint_csv(args.joints, platform) if args.joints is not None else None
+    except (InputError, MissingDependencyError) as exc:  # the files given: exit 2
+        return fail(what, str(exc))
+    try:
+        record = record_from_log(log, joints)
         result = identify(record, options, platform)
         written = []
         if args.write_rotors:
             written.append(write_rotors(result, args.write_rotors, record, platform))
         if args.write_inertials:
             written.append(write_inertials(result, args.write_inertials, platform))
-    except (NoFlightError, MissingTopicError, QprrError) as exc:  # the log cannot answer: one line, exit 1
-        print(f"{what}: {exc}", file=sys.stderr)
-        return 1
+    except QprrError as exc:  # the log cannot answer (no flight, a missing topic): one line, exit 1
+        return _cannot(what, exc)
     print(result.summary())
     for path in written:
         print(f"wrote {path}")

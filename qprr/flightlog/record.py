@@ -21,7 +21,7 @@ from ..validation import as_file
 from .phases import find_phases
 from .ulog import FlightLog, motor_commands
 
-IDENTIFY = "qprr log identify"
+IDENTIFY = "the identification"
 
 
 @dataclass(frozen=True)

@@ -229,7 +229,7 @@ class ReplayResult:
 
 def replay(log: FlightLog, phases: Phases, platform: Platform | None = None) -> ReplayResult:
     """PX4's mix and the IMU replayed (:func:`replay_mix`, :func:`replay_imu`); needs a flight."""
-    phases.require_flight("qprr log replay")
+    phases.require_flight("replaying PX4's mix")
     return ReplayResult(log.path.name, replay_mix(log, phases), replay_imu(log, phases, platform))
 
 
