@@ -101,7 +101,7 @@ def summary_figure(log: FlightLog, phases: Phases):
     axes[-1].set_xlabel("time since the log start [s]")
     vehicle = log.info.get("sys_name", "vehicle")
     fig.suptitle(
-        f"{log.path.name}: {vehicle} {log.info.get('ver_hw', '')}, airframe {log.airframe}, {phases.status.value} "
+        f"{log.path.name}: {vehicle} {log.info.get('ver_hw', '')}, airframe {log.airframe}, {phases.status.value}\n"
         "(shaded: airborne; dashed: armed, disarmed)",
         fontsize=11,
     )
