@@ -16,25 +16,47 @@ Thesis (5.36) for the viscous part (in the thesis's coordinates the arm rows of 
 The force is stiff on light links: its Jacobian K(v) = -dtau_f/dv = diag(d_i + F_i / v_s sech^2(v_i / v_s))
 over the joint-space inertia M gives rates up to :meth:`JointFriction.max_rate` [1/s] (hextilt_flying_arm_5:
 9.3e3 1/s from the damping alone, its last link has 1.1e-5 kg m^2), and an explicit integrator is stable only for
-dt * rate below about 2 (midpoint) or 2.8 (rk4) (:meth:`JointFriction.stable_step`).  With ``step`` = h > 0 the plant
-takes the friction linearly implicitly, as MuJoCo does for joint damping: the acceleration is
+dt * rate below about 2 (euler, midpoint) or 2.8 (rk4) (:data:`STABILITY`, :meth:`JointFriction.stable_step`).
 
-    a = (M + h K(v))^-1 (tau + tau_f(v) - h(q, v))                        (one Rosenbrock-Euler step on tau_f)
+Each joint is taken one of two ways (:class:`Treatment`), chosen once per run by :meth:`JointFriction.choose` from its
+stiffness at the run's first configuration: joint i's rate is r_i = K_i(0) (M^-1)_ii (K at v = 0, the largest; 1 /
+(M^-1)_ii <= M_ii is the joint's inertia with the other joints free), the joints are added to the explicit set in the
+order of r_i while dt times the largest eigenvalue of (M^-1)_EE K_E over the explicit set E stays at or below
+:data:`STIFF` = 1 (half the stability bound of euler and midpoint: a margin for the changes of M(q) during a run);
+the others are implicit.
 
-(:meth:`JointFriction.apply`: K(v) h is written into the plant's ``model.armature``, a model copy the simulator
-owns).  This is stable at any dt (the friction's rate becomes K/(M + h K) < 1/h) and converges to the exact
-dynamics at first order in h where the friction acts (and at the integrator's order where it does not); with h = 0
-the force is explicit and the integrator keeps its order while dt * max_rate stays inside its stability interval.
+* **explicit**: tau_f(V) at each stage's velocity V, an ordinary term of the right-hand side.  The integrator keeps its
+  order (1, 2, 4 for euler, midpoint, rk4: tests/test_friction_orders.py measures them).
+* **implicit**: every stage takes the friction of the implicit joints S over the whole step dt from the step's start
+  velocity v0 (:meth:`JointFriction.start`), by backward Euler: at a stage (t, q, V) the acceleration is
+
+      a = a0 + (M^-1)_{:,S} tau_f,S(x),   a0 = M^-1 (tau + tau_f,E(V) - h(q, V)),                    (1)
+
+  where x, the implicit joints' velocity at the end of the step, solves x = v0_S + dt a_S, i.e.
+  x = c + dt W tau_f,S(x) with c = v0_S + dt a0_S and W = (M^-1)_SS.  As tau_f = -grad Phi with the convex
+  Phi(x) = sum d x^2 / 2 + F v_s log cosh(x / v_s), x is the minimiser of the strictly convex
+  (x - c)^T W^-1 (x - c) / 2 + dt Phi(x): :meth:`JointFriction.solve` finds it by Newton's method with a backtracking
+  line search, which converges from any start on such a function (Boyd & Vandenberghe, *Convex Optimization*,
+  Sec. 9.5).  A linearisation of tanh at V (one Newton step, a Rosenbrock-Euler step) is not enough: from
+  V = 0.32 rad/s, where tanh is flat, it jumps to -0.32 and back (a two-cycle where the joint sticks).  Every stage
+  of every integrator estimates the same increment (x - v0) / dt and their weights sum to 1, so on v' = -lambda v
+  all three give v+ = v0 / (1 + lambda dt): L-stable, monotone (the rate of a stiff joint never changes sign
+  spuriously), and a state at rest under tau + tau_f = h stays there (no spurious fixed point).  The stage's own
+  fraction of the step instead of dt (dt / 2 at midpoint's first stage) would not be: rk4's weights then give
+  v+ -> -v0 / 2 as lambda dt -> inf; and the earlier form, the linearisation at V taken from V instead of v0, had
+  a fixed point of midpoint at -0.645 rad/s where the exact motion settles at +1 rad/s (issue 34).  The implicit
+  joints are first order in dt (measured against MuJoCo on the hextilt's stiff wrist, tests/test_friction_orders.py).
 """
 
 from __future__ import annotations
 
 import math
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError
+from .errors import InputError, UnknownNameError
 
 VELOCITY_SCALE = 1e-2
 """v_s [rad/s or m/s]: the velocity over which the Coulomb term of :class:`JointFriction` goes from 0 to ~F (tanh)."""
@@ -43,11 +65,25 @@ STABILITY = {"euler": 2.0, "midpoint": 2.0, "rk4": 2.785}
 """|lambda dt| bounds of the explicit integrators on a real negative eigenvalue lambda (the stability intervals of
 forward Euler and explicit midpoint, [-2, 0], and of RK4, [-2.785, 0])."""
 
+STIFF = 1.0
+"""dt x rate above which a joint's friction is taken implicitly (:meth:`JointFriction.choose`): half the stability
+bound of euler and midpoint (:data:`STABILITY`)."""
+
+
+class Treatment(Enum):
+    """How the plant integrates one joint's friction (the module docstring)."""
+
+    EXPLICIT = "explicit"
+    IMPLICIT = "implicit"
+
 
 class JointFriction:
-    """The joint friction of a Pinocchio model (see the module docstring); build with :meth:`from_model`."""
+    """The joint friction of a Pinocchio model (see the module docstring); build with :meth:`from_model`.
 
-    def __init__(self, damping, friction, velocity_scale: float = VELOCITY_SCALE, step: float = 0.0, armature=None) -> None:
+    ``step`` > 0 with ``implicit`` None takes every joint with friction implicitly over ``step``; ``implicit`` (nv,)
+    booleans choose the joints (:meth:`choose` picks them from the stiffness); ``step`` = 0: all explicit."""
+
+    def __init__(self, damping, friction, velocity_scale: float = VELOCITY_SCALE, step: float = 0.0, implicit=None) -> None:
         d = np.array(damping, dtype=float).ravel()
         F = np.array(friction, dtype=float).ravel()
         if d.shape != F.shape or not (np.all(np.isfinite(d)) and np.all(np.isfinite(F))) or np.any(d < 0.0) or np.any(F < 0.0):
@@ -57,13 +93,19 @@ class JointFriction:
         if not (isinstance(step, (int, float)) and math.isfinite(step) and step >= 0.0):
             raise InputError(f"step (h of the implicit friction) must be a number >= 0 [s], got {step!r}")
         self.damping, self.friction, self.velocity_scale, self.step = d, F, float(velocity_scale), float(step)
-        self.armature = np.zeros(d.shape[0]) if armature is None else np.array(armature, dtype=float).ravel()
         self._idx = np.flatnonzero((d > 0.0) | (F > 0.0))
+        mask = np.full(d.shape[0], self.step > 0.0) if implicit is None else np.array(implicit, dtype=bool).ravel()
+        if mask.shape != d.shape:
+            raise InputError(f"implicit must hold one boolean per velocity coordinate ({d.shape[0]}), got {mask.shape[0]}")
+        self._imp = self._idx[mask[self._idx]] if self.step > 0.0 else self._idx[:0]
+        self._exp = np.setdiff1d(self._idx, self._imp)
+        self._v0 = None
 
     @classmethod
-    def from_model(cls, model: pin.Model, step: float = 0.0, velocity_scale: float = VELOCITY_SCALE) -> JointFriction | None:
-        """The friction of ``model`` (``model.damping``, ``model.friction``), None when every entry is zero; ``step``: h of
-        the implicit treatment (0: explicit); the model's own ``armature`` is kept as the base of :meth:`apply`."""
+    def from_model(cls, model: pin.Model, step: float = 0.0, velocity_scale: float = VELOCITY_SCALE, q=None) -> JointFriction | None:
+        """The friction of ``model`` (``model.damping``, ``model.friction``), None when every entry is zero; ``step``: the
+        integration step dt (0: every joint explicit), the implicit joints chosen by :meth:`choose` at ``q`` (default the
+        neutral configuration)."""
         if not isinstance(model, pin.Model):
             raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__}")
         d, F = np.array(model.damping), np.array(model.friction)
@@ -74,7 +116,36 @@ class JointFriction:
                 f"the free-flyer joint of {model.name!r} has damping {d[:6].tolist()} / friction {F[:6].tolist()}: "
                 "joint friction applies to the arm joints only"
             )
-        return cls(d, F, velocity_scale, step, np.array(model.armature))
+        out = cls(d, F, velocity_scale)
+        if step > 0.0:
+            implicit = [t is Treatment.IMPLICIT for t in out.choose(model, pin.neutral(model) if q is None else q, step)]
+            out = cls(d, F, velocity_scale, step, implicit)
+        return out
+
+    def choose(self, model: pin.Model, q, dt: float) -> list[Treatment]:
+        """The treatment of each velocity coordinate at the step ``dt`` (module docstring): the joints with friction in
+        the order of their rates K_i(0) (M^-1)_ii join the explicit set while dt x the largest eigenvalue of
+        (M^-1)_EE K_E stays <= :data:`STIFF`; the rest are implicit (coordinates without friction: explicit)."""
+        Minv = np.linalg.inv(self._inertia(model, q))
+        K = self.damping + self.friction / self.velocity_scale
+        explicit: list[int] = []
+        for j in sorted(self._idx.tolist(), key=lambda i: K[i] * Minv[i, i]):
+            trial = [*explicit, j]
+            if dt * float(np.max(np.linalg.eigvals(Minv[np.ix_(trial, trial)] * K[trial]).real)) > STIFF:
+                break
+            explicit = trial
+        out = [Treatment.EXPLICIT] * self.damping.shape[0]
+        for j in set(self._idx.tolist()) - set(explicit):
+            out[j] = Treatment.IMPLICIT
+        return out
+
+    @property
+    def treatments(self) -> list[Treatment]:
+        """The treatment of each velocity coordinate in :meth:`apply` (nv,)."""
+        out = [Treatment.EXPLICIT] * self.damping.shape[0]
+        for j in self._imp.tolist():
+            out[j] = Treatment.IMPLICIT
+        return out
 
     def add_generalized_force(self, v, out: np.ndarray) -> np.ndarray:
         """``out += tau_f(v)`` in place (``v``: Pinocchio's generalised velocity, ``out``: a generalised force); returns ``out``."""
@@ -88,12 +159,56 @@ class JointFriction:
         x = np.asarray(v, dtype=float) / self.velocity_scale
         return self.damping + self.friction / np.cosh(np.clip(x, -350.0, 350.0)) ** 2 / self.velocity_scale
 
-    def apply(self, model: pin.Model, v, out: np.ndarray) -> np.ndarray:
-        """The plant's friction at one stage: ``out += tau_f(v)`` and, with ``step`` h > 0, ``model.armature = armature +
-        h K(v)`` (the linearly implicit form of the module docstring; ``model`` must be the simulator's own copy)."""
-        if self.step > 0.0:
-            model.armature = self.armature + self.step * self.stiffness(v)
-        return self.add_generalized_force(v, out)
+    def start(self, v) -> None:
+        """Set v0, the velocity at the start of the integration step (the implicit joints' (1) is taken from there)."""
+        self._v0 = np.array(v, dtype=float)[self._imp]
+
+    def apply(self, v, out: np.ndarray) -> np.ndarray:
+        """The explicit joints' friction at one stage of velocity ``v``: ``out += tau_f,E(v)``; returns ``out`` (the implicit
+        joints' comes after the forward dynamics, from :meth:`solve`)."""
+        i = self._exp
+        vi = np.asarray(v)[i]
+        out[i] -= self.damping[i] * vi + self.friction[i] * np.tanh(vi / self.velocity_scale)
+        return out
+
+    def solve(self, model: pin.Model, data: pin.Data, q, v, a: np.ndarray) -> np.ndarray:
+        """Equation (1) of the module docstring at a stage (q, v): ``a`` (a0, the forward dynamics without the implicit
+        joints' friction) += (M^-1)_{:,S} tau_f,S(x), x the implicit joints' end-of-step velocity; returns ``a``."""
+        i = self._imp
+        if not i.size:
+            return a
+        Minv = pin.computeMinverse(model, data, np.asarray(q, dtype=float))
+        Minv = np.triu(Minv) + np.triu(Minv, 1).T
+        B = Minv[:, i]
+        v0 = np.asarray(v, dtype=float)[i] if self._v0 is None else self._v0
+        x = self._end_velocity(B[i], v0 + self.step * a[i], np.asarray(v, dtype=float)[i])
+        a += B @ -(self.damping[i] * x + self.friction[i] * np.tanh(x / self.velocity_scale))
+        return a
+
+    def _end_velocity(self, W: np.ndarray, c: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """argmin (x - c)^T W^-1 (x - c) / 2 + dt Phi(x) (module docstring) by Newton's method with backtracking (Boyd &
+        Vandenberghe, Convex Optimization, Algorithm 9.5), from ``x``, until the Newton decrement is at the objective's
+        round-off (or the step below 1e-12 (1 + |x|) [rad/s])."""
+        i, h, vs = self._imp, self.step, self.velocity_scale
+        d, F = self.damping[i], self.friction[i]
+        Winv = np.linalg.inv(W)
+        Winv = 0.5 * (Winv + Winv.T)
+
+        def objective(y: np.ndarray) -> float:
+            e, s = y - c, np.abs(y) / vs
+            return 0.5 * float(e @ Winv @ e) + h * float(np.sum(0.5 * d * y * y + F * vs * (s + np.log1p(np.exp(-2.0 * s)))))
+
+        for _ in range(100):
+            grad = Winv @ (x - c) + h * (d * x + F * np.tanh(x / vs))
+            hess = Winv + np.diag(h * (d + F / np.cosh(np.clip(x / vs, -350.0, 350.0)) ** 2 / vs))
+            dx = -np.linalg.solve(hess, grad)
+            f0, slope, s = objective(x), float(grad @ dx), 1.0
+            if -slope <= 1e-15 * abs(f0) or np.max(np.abs(dx)) <= 1e-12 * (1.0 + np.max(np.abs(x))):
+                return x + dx  # the decrease left (the Newton decrement) is at the objective's round-off
+            while objective(x + s * dx) > f0 + 1e-4 * s * slope and s > 1e-12:
+                s *= 0.5
+            x = x + s * dx
+        raise ArithmeticError(f"the implicit joint friction did not converge (c = {c.tolist()}, x = {x.tolist()})")
 
     def generalized_force(self, v) -> np.ndarray:
         """tau_f(v) (nv,) [N m or N]."""
@@ -104,21 +219,22 @@ class JointFriction:
         the arm's xi_dot entries are its joint rates), the ``coefficients`` of :class:`qprr.sim.wind.ViscousFriction`."""
         return self.damping.copy()
 
+    @staticmethod
+    def _inertia(model: pin.Model, q) -> np.ndarray:
+        M = pin.crba(model, model.createData(), np.asarray(q, dtype=float))
+        return np.triu(M) + np.triu(M, 1).T
+
     def max_rate(self, model: pin.Model, q) -> float:
         """Largest eigenvalue [1/s] of M(q)^-1 K with K = diag(d_i + F_i / v_s), the friction's Jacobian at v = 0."""
-        M = pin.crba(model, model.createData(), np.asarray(q, dtype=float))
-        M = np.triu(M) + np.triu(M, 1).T
         K = np.diag(self.damping + self.friction / self.velocity_scale)
-        return float(np.max(np.linalg.eigvals(np.linalg.solve(M, K)).real))
+        return float(np.max(np.linalg.eigvals(np.linalg.solve(self._inertia(model, q), K)).real))
 
     def stable_step(self, model: pin.Model, q, integrator: str = "midpoint") -> float:
         """The largest step [s] for which ``integrator`` is stable on the friction alone at ``q``: STABILITY / max_rate."""
         if integrator not in STABILITY:
-            from .errors import UnknownNameError
-
             raise UnknownNameError("integrator", integrator, tuple(STABILITY))
         rate = self.max_rate(model, q)
         return math.inf if rate <= 0.0 else STABILITY[integrator] / rate
 
 
-__all__ = ["STABILITY", "VELOCITY_SCALE", "JointFriction"]
+__all__ = ["STABILITY", "STIFF", "VELOCITY_SCALE", "JointFriction", "Treatment"]

@@ -1,15 +1,13 @@
 """Issue 22 class 3: the URDF's joint <dynamics damping friction> is simulated (qprr.joint_friction) and compensated.
 
 Physics checked: the friction law and its Jacobian (finite differences), the energy balance of a free-floating robot
-(dE/dt = -v^T tau_f... = the friction's power) at the integrator's order, the difference a damped hextilt run makes,
-MuJoCo's joint damping on the same model (an MJCF built from the Pinocchio model) at first order in dt (the plant takes
-the friction linearly implicitly, as MuJoCo's Euler integrator does), and the controller's compensation.
+(dE/dt = -v^T tau_f... = the friction's power) at the integrator's order, the difference a damped hextilt run makes, and
+the controller's compensation (the comparisons with MuJoCo: tests/test_friction_orders.py).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pinocchio as pin
@@ -118,8 +116,8 @@ def _energy(p, res) -> np.ndarray:
 def test_damping_dissipates_the_energy_it_should_at_first_order():
     """g = 0, rotors off: the kinetic energy changes only by the friction's power, dE/dt = v . tau_f(v) (damping only here).
 
-    Without damping E is conserved to the integrator's order; with it, E(T) - E(0) = int v . tau_f dt, and the error of
-    the linearly implicit plant shrinks at first order (halves with dt)."""
+    Without damping E is conserved to the integrator's order; with it, E(T) - E(0) = int v . tau_f dt, and the error
+    shrinks at least at first order (the implicit joints') and at most at the midpoint's second."""
     free = _hextilt(damping=False, friction=False, g=0.0)
     E = _energy(free, _float(free, 2e-4))
     assert abs(E[-1] - E[0]) < 1e-6 * E[0]
@@ -133,8 +131,10 @@ def test_damping_dissipates_the_energy_it_should_at_first_order():
         dissipated = float(np.sum(0.5 * (power[1:] + power[:-1]) * np.diff(res.t)))
         assert np.all(np.diff(E) <= 1e-12 * E[0])  # never gains energy
         errors.append(abs((E[-1] - E[0]) - dissipated))
+    # the explicit joints are second order (midpoint), the wrist (dt x rate 3.7 at 4e-4 s, 0.93 at 1e-4 s) is implicit and
+    # first order down to 2e-4 s: the error falls between the two orders (measured 2.72 and 2.73 per halving)
     r1, r2 = errors[0] / errors[1], errors[1] / errors[2]
-    assert 1.6 < r1 < 2.6 and 1.6 < r2 < 2.6, errors
+    assert 1.8 < r1 < 4.2 and 1.8 < r2 < 4.2, errors
 
 
 def test_the_controller_compensates_the_nominal_friction():
@@ -159,65 +159,4 @@ def test_the_controller_compensates_the_nominal_friction():
         np.testing.assert_allclose(taus[0] - taus[1], -jf.generalized_force(xi_dot_ref), atol=1e-12)
 
 
-# ------------------------------------------------------------------------------------------------- MuJoCo
-def _mjcf(model: pin.Model, timestep: float) -> str:
-    """An MJCF of a free-flyer Pinocchio model with hinge joints: the same bodies, inertias, axes and damping."""
-
-    def fmt(a) -> str:
-        return " ".join(f"{x:.17g}" for x in np.ravel(a))
-
-    def inertial(Y) -> str:
-        I = Y.inertia
-        return (
-            f'<inertial pos="{fmt(Y.lever)}" mass="{Y.mass:.17g}" fullinertia="{I[0, 0]:.17g} {I[1, 1]:.17g} {I[2, 2]:.17g} '
-            f'{I[0, 1]:.17g} {I[0, 2]:.17g} {I[1, 2]:.17g}"/>'
-        )
-
-    children = {j: [k for k in range(2, model.njoints) if model.parents[k] == j] for j in range(model.njoints)}
-    axes = {"JointModelRX": (1, 0, 0), "JointModelRY": (0, 1, 0), "JointModelRZ": (0, 0, 1)}
-
-    def body(j: int) -> str:
-        M, jm = model.jointPlacements[j], model.joints[j]
-        q = pin.Quaternion(M.rotation)
-        axis = axes[jm.shortname()] if jm.shortname() in axes else jm.extract().axis
-        inner = (
-            f'<joint name="{model.names[j]}" type="hinge" axis="{fmt(axis)}" damping="{model.damping[jm.idx_v]:.17g}"/>'
-            + inertial(model.inertias[j])
-            + "".join(body(c) for c in children[j])
-        )
-        return f'<body name="b{j}" pos="{fmt(M.translation)}" quat="{q.w:.17g} {q.x:.17g} {q.y:.17g} {q.z:.17g}">{inner}</body>'
-
-    return (
-        f'<mujoco><option gravity="{fmt(model.gravity.linear)}" integrator="RK4" timestep="{timestep!r}"/><worldbody>'
-        f'<body name="base"><freejoint/>{inertial(model.inertias[1])}{"".join(body(c) for c in children[1])}</body>'
-        "</worldbody></mujoco>"
-    )
-
-
-def test_damping_agrees_with_mujoco_at_first_order():
-    """Free-floating hextilt, rotors off, arm joints started at QD0: MuJoCo (RK4, 1e-5 s, damping explicit: converged,
-    checked against 5e-6 s) against qprr's plant (midpoint, damping linearly implicit) at dt = 4e-4 ... 5e-5 s: the
-    difference in the arm angles and the base position halves with dt (first order, the order of the implicit friction)."""
-    mujoco = pytest.importorskip("mujoco", reason="MuJoCo cross-check: pip install mujoco")
-    p = _hextilt(friction=False)  # MuJoCo's frictionloss is a constraint, not the smooth law: damping only
-
-    def reference(h: float) -> np.ndarray:
-        m = mujoco.MjModel.from_xml_string(_mjcf(p.model, h))
-        d = mujoco.MjData(m)
-        d.qvel[6:] = QD0
-        for _ in range(int(round(T / h))):
-            mujoco.mj_step(m, d)
-        return d.qpos.copy()
-
-    ref = reference(1e-5)
-    assert np.abs(ref - reference(5e-6)).max() < 1e-10
-    errors = []
-    for dt in (4e-4, 2e-4, 1e-4, 5e-5):
-        xi = _float(p, dt).xi[-1]
-        errors.append(max(np.abs(xi[6:] - ref[7:]).max(), np.abs(xi[0:3] - ref[0:3]).max()))
-    ratios = [errors[k] / errors[k + 1] for k in range(3)]
-    assert all(1.9 < r < 2.1 for r in ratios), (errors, ratios)
-    assert errors[-1] < 2e-4  # rad, against an arm that moved 0.16 rad less than undamped
-    undamped = _float(_hextilt(damping=False, friction=False), 5e-5).xi[-1]
-    assert np.abs(undamped[6:] - ref[7:]).max() > 500 * errors[-1]
-    assert math.isfinite(errors[0])
+# MuJoCo: tests/test_friction_orders.py (orders with damping, the stiff hextilt, the Coulomb reversal)

@@ -55,7 +55,7 @@ from ..actuation import Allocator
 from ..charts import State
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
-from ..joint_friction import JointFriction
+from ..joint_friction import JointFriction, Treatment
 from ..model import Platform
 from ..progress import Progress
 from ..validation import as_int, as_vector
@@ -229,7 +229,7 @@ def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs
     controller.reset(state, reference, config.period)
     tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
     plant = _Plant(model, data, tau, platform.ee_frame, inputs.external_wrench, state_dist, rotors, platform.rotor_matrix)
-    plant.add_joint_friction(JointFriction.from_model(model, config.dt))
+    plant.add_joint_friction(JointFriction.from_model(model, config.dt, q=q))  # implicit joints chosen at the first state
     logs = _Logs.empty(n, platform, rotors is not None)
     stage = None if rotors is None else _RotorStage(rotors, platform, plant, alloc, logs, controller.uses_applied_force)
     lim = config.limits
@@ -315,6 +315,8 @@ def _stepper(config: SimConfig, plant: _Plant):
     """One integration step of the configured integrator, followed by the environment's discrete events at its end
     (:meth:`~qprr.sim.environment.Environment.settle`) when the environment has a state."""
     step = make_stepper(config.integrator, plant.model, config.dt)
+    if plant.friction is not None and plant.friction.treatments.count(Treatment.IMPLICIT):
+        step = _from_step_start(step, plant.friction)
     if plant.env is None or not plant.n_env:
         return step
     settle = plant.settle
@@ -324,6 +326,17 @@ def _stepper(config: SimConfig, plant: _Plant):
         return q1, v1, settle(t, z, z1)
 
     return step_and_settle
+
+
+def _from_step_start(step, friction: JointFriction):
+    """``step`` that first hands the friction the step's start velocity v0 (its implicit joints are taken from there)."""
+    start = friction.start
+
+    def step_from_v0(f, t, q, v, z, first):
+        start(v)
+        return step(f, t, q, v, z, first)
+
+    return step_from_v0
 
 
 class _RotorStage:
@@ -582,7 +595,7 @@ class _Plant:
         base[0:6] += self.Omega @ self.rotors.thrust(w)
         tau, zd = self._force(t, q, v, z[:ne] if ne else None, base)
         wd = self.rotors.rate(w)
-        return pin.aba(self.model, self.data, q, v, tau), (wd if not ne else np.concatenate([np.asarray(zd, dtype=float), wd]))
+        return self._solve(q, v, pin.aba(self.model, self.data, q, v, tau)), (wd if not ne else np.concatenate([np.asarray(zd, dtype=float), wd]))
 
     def _force(self, t: float, q, v, z, tau=None) -> tuple[np.ndarray, np.ndarray | None]:
         """(tau + J_e^T h + state disturbances, z_dot) at one stage (``tau``: the held force, default a copy of the buffer)."""
@@ -591,7 +604,7 @@ class _Plant:
         for d in self.state_dist:
             tau += np.asarray(d.generalized_force(t, q, v), dtype=float)
         if self.friction is not None:
-            self.friction.apply(self.model, v, tau)  # implicit in v: writes h K(v) into the plant model's armature
+            self.friction.apply(v, tau)  # the explicit joints' (the implicit joints': self._solve after ABA)
         if self.env is not None or self.fn is not None:
             J = pin.computeFrameJacobian(self.model, self.data, q, self.ee, pin.LOCAL_WORLD_ALIGNED)
             if self.env is not None:
@@ -608,14 +621,20 @@ class _Plant:
 
     def _rhs(self, t: float, q, v):
         tau, _ = self._force(t, q, v, None)
-        return pin.aba(self.model, self.data, q, v, tau)
+        return self._solve(q, v, pin.aba(self.model, self.data, q, v, tau))
 
     def _rhs_z(self, t: float, q, v, z):
         tau, zd = self._force(t, q, v, z)
-        return pin.aba(self.model, self.data, q, v, tau), np.asarray(zd, dtype=float)
+        return self._solve(q, v, pin.aba(self.model, self.data, q, v, tau)), np.asarray(zd, dtype=float)
+
+    def _solve(self, q, v, a):
+        """``a`` with the implicit joint friction (:meth:`qprr.joint_friction.JointFriction.solve`; none: ``a``)."""
+        return a if self.friction is None else self.friction.solve(self.model, self.data, q, v, a)
 
     def first_stage(self, t: float, q, v, z):
         """The right-hand side at a control tick (the stepper's ``first``); an Environment observes the tick."""
+        if self.friction is not None:
+            self.friction.start(v)  # the first stage of a step: v0 = v
         if self.env is None:
             return self.rhs(t, q, v) if z is None else self.rhs(t, q, v, z)
         self.env.on_tick(t)
