@@ -40,6 +40,7 @@ Chapter 6 flights on the Q-PRR are built so (:mod:`qprr.thesis.scenarios`).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,7 +56,7 @@ from .control.mfc import MFCGains
 from .control.opspace_impedance import EndEffectorImpedance
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
-from .model import Platform, check_platform
+from .model import Platform, check_platform, max_lift
 from .sim import simulate
 from .sim.actuators import RotorDynamics
 from .sim.contact import CompliantWall
@@ -240,7 +241,7 @@ def point_to_point(platform=None, controller="idc", progress=False, settings: Mi
         _errors(res)
         return res
     D = o["duration"]
-    x, y, z = (float(v) for v in o["target"])
+    x, y, z = _target(o["target"])
     xi0 = platform.neutral_xi()
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("z", 0.0, 0.3 * D, z), Phase("x", 0.3 * D, 0.7 * D, x), Phase("y", 0.3 * D, 0.7 * D, y)]
@@ -249,6 +250,55 @@ def point_to_point(platform=None, controller="idc", progress=False, settings: Mi
     res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "fly-to", settings)
     _errors(res)
     return res
+
+
+def _target(value) -> tuple[float, float, float]:
+    """The option ``target``: the base position (x, y, z) [m] to reach, world frame."""
+    if isinstance(value, (str, bytes)) or np.ndim(value) != 1 or np.size(value) != 3:
+        raise InputError(f"target must be the base position (x, y, z) [m] to reach, three numbers, got {value!r}; e.g. target=(1.0, 0.5, 2.0)")
+    x, y, z = as_vector(value, 3, "target").tolist()
+    return x, y, z
+
+
+def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule | None, duration: float) -> None:
+    """Refuse what a run of ``duration`` [s] would silently skip or cannot carry: a phase that starts at or after the end
+    (never flown), a payload event at or after the end (never applied), a payload the rotors cannot lift with the
+    platform (a mass in grams?); warn about a phase that ends after the run (flown in part, the errors measured
+    against an unfinished reference).  Each message names the phase or event, its value and the fix."""
+    platform = check_platform(platform)
+    D = as_real(duration, "duration", positive=True, unit="s")
+    for k, p in enumerate(phases):
+        if not isinstance(p, Phase):
+            raise InputError(f"mission phase {k + 1} must be a qprr.trajectory.Phase, got {type(p).__name__}")
+        if p.t1 >= D:
+            raise InputError(
+                f"mission phase {k + 1} ({p.coordinate!r} to {p.value:g}) has start = {p.t1:g} s, at or after the run's end "
+                f"(duration = {D:g} s): it would never be flown; lengthen the run (duration > {p.t2:g} s) or move the phase"
+            )
+        if p.t2 > D:
+            warnings.warn(
+                f"mission phase {k + 1} ({p.coordinate!r} to {p.value:g}) has end = {p.t2:g} s, after the run's end "
+                f"(duration = {D:g} s): it is flown in part and the final errors are measured against an unfinished "
+                f"reference; lengthen the run to at least {p.t2:g} s",
+                UserWarning,
+                stacklevel=3,
+            )
+    changes = payload.changes if payload is not None else ()
+    lift = max_lift(platform)
+    for k, ev in enumerate(changes):
+        if ev.time >= D:
+            raise InputError(
+                f"mission payload event {k + 1} (mass = {ev.mass:g} kg) has time = {ev.time:g} s, at or after the run's end "
+                f"(duration = {D:g} s): it would never be applied; lengthen the run or move the event"
+            )
+        weight = (platform.total_mass + ev.mass) * platform.g
+        if weight > lift:
+            raise InputError(
+                f"mission payload event {k + 1} (time = {ev.time:g} s): mass = {ev.mass:g} kg with the platform's "
+                f"{platform.total_mass:.4g} kg weighs {weight:.4g} N, more than its rotors lift ({lift:.4g} N along z_B, "
+                f"{lift / platform.g - platform.total_mass:.4g} kg of payload at most); the mass is in kg (grams? "
+                f"{ev.mass:g} g = {ev.mass / 1000:g} kg)"
+            )
 
 
 def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
@@ -298,11 +348,13 @@ def mission(platform=None, controller="idc", progress=False, settings: MissionSe
     platform = _platform(platform)
     if settings.trajectory is None:
         phases, payload = read_mission(o["mission"] or default_mission(platform, o["duration"]))
+        check_mission_schedule(platform, phases, payload, o["duration"])
         traj = MultiPhase(phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
     else:
         phases, payload = read_mission(o["mission"], phases_required=False) if o["mission"] else ((), None)
         if phases:
             raise InputError("mission: phases in the mission data and MissionSettings.trajectory both give the reference; give one")
+        check_mission_schedule(platform, (), payload, o["duration"])
         traj = settings.trajectory
     res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "mission", settings, payload=payload)
     _errors(res)
@@ -394,7 +446,7 @@ def motor_lag(platform=None, controller="idc", progress=False, settings: Mission
 def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
     """The reference of :func:`motor_lag`: from hover at ``target``'s height, to ``target`` with the arm out (10-60 %)."""
     D = o["duration"]
-    x, y, z = (float(v) for v in o["target"])
+    x, y, z = _target(o["target"])
     xi0 = np.concatenate([[0.0, 0.0, z, 0.0, 0.0, 0.0], platform.neutral_q()[7:]])
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
@@ -453,7 +505,13 @@ def _noise_amplitude(platform: Platform, o: dict, amplitude) -> tuple[float, ...
 
     a = Authority.from_platform(platform)
     amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])
-    return tuple(o["fraction"] * amp)
+    fraction = o["fraction"]
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0.0 <= fraction <= 1.0:
+        raise InputError(
+            f"fraction must be a number in [0, 1] (the noise's half-width as a fraction of each coordinate's actuator "
+            f"authority; 0.02 is 2 %), got {fraction!r}"
+        )
+    return tuple(fraction * amp)
 
 
 def pulse_train(platform: Platform, duration: float, force: float, torque: float) -> tuple[Pulse, ...]:
@@ -509,6 +567,7 @@ __all__ = [
     "PAYLOAD_KEYS",
     "PHASE_KEYS",
     "MissionSettings",
+    "check_mission_schedule",
     "controller_for",
     "default_mission",
     "fly",

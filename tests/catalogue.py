@@ -1217,3 +1217,97 @@ def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float, hooks: _Ho
             report.outcomes.append(Outcome(qual, p.name, label, verdict, detail))
             if hooks.on_outcome is not None:
                 hooks.on_outcome(hooks.index, report.outcomes[-1])
+
+
+# ============================================================================ issue 34: cases on the new surfaces
+@dataclass(frozen=True)
+class Case:
+    """One bad input on a surface the introspection above cannot feed (a scenario option, a mission, a rotor file, a
+    controller, a study): ``call()`` must raise a :class:`qprr.errors.QprrError` - or, with ``warns``, emit a warning -
+    whose message contains every string of ``names`` (the argument, the value, the fix)."""
+
+    label: str
+    call: Callable[[], object]
+    names: tuple[str, ...]
+    warns: bool = False
+
+
+_EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
+
+
+def example_platform():
+    """examples/my_platform's quad_rrr (the platform docs/platforms.md builds), loaded once."""
+    import qprr
+
+    if "quad" not in _CASE_CACHE:
+        _CASE_CACHE["quad"] = qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _EXAMPLE / "quad_rrr.rotors.toml", ee_frame="gripper")
+    return _CASE_CACHE["quad"]
+
+
+_CASE_CACHE: dict[str, object] = {}
+
+
+def _scenario(name: str, **options):
+    from qprr.scenarios import run as run_scenario
+
+    return lambda: run_scenario(name, platform=example_platform(), duration=0.05, **options)
+
+
+def _z_phase(end: float = 0.02) -> dict:
+    return {"coordinate": "z", "start": 0.0, "end": end, "target": 1.0}
+
+
+def mission_cases() -> list[Case]:
+    """Issue 34, items 2 and 3: missions, scenario options."""
+    late = {"coordinate": "x", "start": 0.5, "end": 0.8, "target": 1.0}
+    return [
+        Case("mission phase after the run's end", _scenario("mission", mission={"phase": [_z_phase(), late]}), ("phase 2", "start = 0.5", "duration")),
+        Case(
+            "mission payload event after the run's end",
+            _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.5, "mass": 0.1}]}),
+            ("payload event 1", "time = 0.5", "duration"),
+        ),
+        Case(
+            "mission payload of 150 kg (grams?)",
+            _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.01, "mass": 150.0}]}),
+            ("payload event 1", "mass = 150", "grams"),
+        ),
+        Case(
+            "mission phase ending after the run's end (flown in part)",
+            _scenario("mission", mission={"phase": [_z_phase(0.08)]}),
+            ("phase 1", "end = 0.08", "duration"),
+            warns=True,
+        ),
+        Case("fly-to target of two numbers", _scenario("fly-to", target=(1.0, 0.5)), ("target", "(1.0, 0.5)", "(x, y, z)")),
+        Case("hover-noise fraction NaN", _scenario("hover-noise", fraction=math.nan), ("fraction", "nan")),
+        Case("hover-noise fraction text", _scenario("hover-noise", fraction="2%"), ("fraction", "'2%'")),
+    ]
+
+
+def cases() -> list[Case]:
+    """Every :class:`Case` (issue 34)."""
+    return mission_cases()
+
+
+def run_cases(selected: list[Case] | None = None) -> list[Outcome]:
+    """Each case's outcome: ``good`` (a qprr error, or a warning for ``warns``, naming every string), ``unclear`` (it
+    does not name them, or another exception), ``silent`` (nothing said)."""
+    errors = importlib.import_module("qprr.errors")
+    out = []
+    for case in cases() if selected is None else selected:
+        with warnings.catch_warnings(record=True) as caught, contextlib.redirect_stderr(io.StringIO()):
+            warnings.simplefilter("always")
+            try:
+                case.call()
+            except errors.QprrError as exc:
+                said, kind = str(exc), type(exc).__name__
+            except Exception as exc:
+                out.append(Outcome(case.label, "", "", "unclear", f"{type(exc).__name__}: {exc}"[:300]))
+                continue
+            else:
+                said = "\n".join(str(w.message) for w in caught) if case.warns else ""
+                kind = "warning"
+        missing = [n for n in case.names if n not in said]
+        verdict = "silent" if not said else ("unclear" if missing else "good")
+        out.append(Outcome(case.label, "", "", verdict, f"{kind}: {said[:300]}" + (f" (does not name {missing})" if missing and said else "")))
+    return out
