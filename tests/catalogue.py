@@ -1261,7 +1261,9 @@ def mission_cases() -> list[Case]:
     """Issue 34, items 2 and 3: missions, scenario options."""
     late = {"coordinate": "x", "start": 0.5, "end": 0.8, "target": 1.0}
     return [
-        Case("mission phase after the run's end", _scenario("mission", mission={"phase": [_z_phase(), late]}), ("phase 2", "start = 0.5", "duration")),
+        Case(
+            "mission phase after the run's end", _scenario("mission", mission={"phase": [_z_phase(), late]}), ("phase 2", "start = 0.5", "duration")
+        ),
         Case(
             "mission payload event after the run's end",
             _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.5, "mass": 0.1}]}),
