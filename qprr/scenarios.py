@@ -35,6 +35,7 @@ from .model import Platform
 from .registry import SCENARIOS
 from .sim import SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
+from .validation import as_bool
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,9 @@ class Scenario:
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         values = {k: o.default for k, o in self.options.items()}
         values.update(options)
+        for key in options:
+            if isinstance(self.options[key].default, bool):  # a flag: "no", "false", 0 are False, never a truthy text
+                values[key] = as_bool(options[key], f"option {key!r} of scenario {self.name!r}")
         if "law" in values and values["law"] not in LAWS:  # checked here: a trajectory may not use it (the spiral)
             raise UnknownNameError("transition law", values["law"], LAWS)
         if plant is not None:

@@ -1283,7 +1283,14 @@ def mission_cases() -> list[Case]:
         Case("fly-to target of two numbers", _scenario("fly-to", target=(1.0, 0.5)), ("target", "(1.0, 0.5)", "(x, y, z)")),
         Case("hover-noise fraction NaN", _scenario("hover-noise", fraction=math.nan), ("fraction", "nan")),
         Case("hover-noise fraction text", _scenario("hover-noise", fraction="2%"), ("fraction", "'2%'")),
+        Case("thesis flag as_printed = 'maybe'", lambda: _thesis_run(as_printed="maybe"), ("as_printed", "'maybe'", "true or false")),
     ]
+
+
+def _thesis_run(**options):
+    from qprr.scenarios import run as run_scenario
+
+    return run_scenario("static-dsid", duration=0.01, **options)
 
 
 def cases() -> list[Case]:
