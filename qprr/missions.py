@@ -261,36 +261,29 @@ def _target(value) -> tuple[float, float, float]:
 
 
 def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule | None, duration: float) -> None:
-    """Refuse what a run of ``duration`` [s] would silently skip or cannot carry: a phase that starts at or after the end
-    (never flown), a payload event at or after the end (never applied), a payload the rotors cannot lift with the
-    platform (a mass in grams?); warn about a phase that ends after the run (flown in part, the errors measured
-    against an unfinished reference).  Each message names the phase or event, its value and the fix."""
+    """Say what a run of ``duration`` [s] would silently skip or cannot carry.
+
+    Refused: a payload the rotors cannot lift with the platform (the mass in grams?).  Warned about, once per run: the
+    phases that start at or after the end (never flown), end after it (flown in part: the final errors are measured
+    against an unfinished reference) and the payload events at or after it (never applied) - a run shorter than its
+    mission is legal (the first seconds of a long mission), a mission file longer than the run by mistake is not
+    noticed otherwise.  Each message names the phase or event, its time and the duration that flies it all."""
     platform = check_platform(platform)
     D = as_real(duration, "duration", positive=True, unit="s")
+    skipped, cut = [], []
     for k, p in enumerate(phases):
         if not isinstance(p, Phase):
             raise InputError(f"mission phase {k + 1} must be a qprr.trajectory.Phase, got {type(p).__name__}")
         if p.t1 >= D:
-            raise InputError(
-                f"mission phase {k + 1} ({p.coordinate!r} to {p.value:g}) has start = {p.t1:g} s, at or after the run's end "
-                f"(duration = {D:g} s): it would never be flown; lengthen the run (duration > {p.t2:g} s) or move the phase"
-            )
-        if p.t2 > D:
-            warnings.warn(
-                f"mission phase {k + 1} ({p.coordinate!r} to {p.value:g}) has end = {p.t2:g} s, after the run's end "
-                f"(duration = {D:g} s): it is flown in part and the final errors are measured against an unfinished "
-                f"reference; lengthen the run to at least {p.t2:g} s",
-                UserWarning,
-                stacklevel=3,
-            )
+            skipped.append(f"phase {k + 1} ({p.coordinate!r} to {p.value:g}, start = {p.t1:g} s)")
+        elif p.t2 > D:
+            cut.append(f"phase {k + 1} ({p.coordinate!r} to {p.value:g}, end = {p.t2:g} s)")
     changes = payload.changes if payload is not None else ()
     lift = max_lift(platform)
     for k, ev in enumerate(changes):
         if ev.time >= D:
-            raise InputError(
-                f"mission payload event {k + 1} (mass = {ev.mass:g} kg) has time = {ev.time:g} s, at or after the run's end "
-                f"(duration = {D:g} s): it would never be applied; lengthen the run or move the event"
-            )
+            skipped.append(f"payload event {k + 1} (mass = {ev.mass:g} kg, time = {ev.time:g} s)")
+            continue
         weight = (platform.total_mass + ev.mass) * platform.g
         if weight > lift:
             raise InputError(
@@ -299,6 +292,15 @@ def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule 
                 f"{lift / platform.g - platform.total_mass:.4g} kg of payload at most); the mass is in kg (grams? "
                 f"{ev.mass:g} g = {ev.mass / 1000:g} kg)"
             )
+    if skipped or cut:
+        end = max([p.t2 for p in phases] + [ev.time for ev in changes])
+        said = ([f"never flown or applied: {', '.join(skipped)}"] if skipped else []) + ([f"flown in part: {', '.join(cut)}"] if cut else [])
+        warnings.warn(
+            f"mission longer than the run (duration = {D:g} s): {'; '.join(said)}; the run reports only what it flew. "
+            f"Give duration > {end:g} s to fly the whole mission",
+            UserWarning,
+            stacklevel=3,
+        )
 
 
 def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:

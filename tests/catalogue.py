@@ -1262,12 +1262,16 @@ def mission_cases() -> list[Case]:
     late = {"coordinate": "x", "start": 0.5, "end": 0.8, "target": 1.0}
     return [
         Case(
-            "mission phase after the run's end", _scenario("mission", mission={"phase": [_z_phase(), late]}), ("phase 2", "start = 0.5", "duration")
+            "mission phase after the run's end",
+            _scenario("mission", mission={"phase": [_z_phase(), late]}),
+            ("phase 2", "start = 0.5", "duration = 0.05", "never flown"),
+            warns=True,
         ),
         Case(
             "mission payload event after the run's end",
             _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.5, "mass": 0.1}]}),
-            ("payload event 1", "time = 0.5", "duration"),
+            ("payload event 1", "time = 0.5", "duration", "never flown or applied"),
+            warns=True,
         ),
         Case(
             "mission payload of 150 kg (grams?)",
@@ -1277,7 +1281,7 @@ def mission_cases() -> list[Case]:
         Case(
             "mission phase ending after the run's end (flown in part)",
             _scenario("mission", mission={"phase": [_z_phase(0.08)]}),
-            ("phase 1", "end = 0.08", "duration"),
+            ("phase 1", "end = 0.08", "duration", "flown in part"),
             warns=True,
         ),
         Case("fly-to target of two numbers", _scenario("fly-to", target=(1.0, 0.5)), ("target", "(1.0, 0.5)", "(x, y, z)")),

@@ -20,7 +20,7 @@ from ..errors import QprrError
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .report import report
+    from .report import not_ok_reasons, report
     from .runner import run_campaign
     from .spec import CampaignSpec
     from .store import ResultsWriteError
@@ -58,6 +58,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
         f"{spec.name}: {done.executed} runs now ({done.skipped} resumed{lost}), {len(res)}/{spec.n_runs} saved in {done.path}; "
         f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}"
     )
+    for line in not_ok_reasons(res):
+        print(line)
     if done.interrupted or done.lost:
         return 1
     if args.report:
