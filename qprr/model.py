@@ -41,7 +41,7 @@ from .plausibility import DEFAULT as _PLAUSIBLE
 from .plausibility import check_plausibility_setting
 from .plausibility import check_rotors as _check_rotor_ranges
 from .plausibility import check_urdf as _check_urdf_ranges
-from .rotors import ActuationSummary, Rotor, actuation_summary, check_rotor_set, rotor_matrix, rotors_from_mapping
+from .rotors import ActuationSummary, Rotor, actuation_summary, check_hover_solution, check_rotor_set, rotor_matrix, rotors_from_mapping
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -763,6 +763,7 @@ def from_model(
         source = f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}"
         _check_thrust_to_weight(platform, plausibility, source)
         check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
+        check_hover_solution(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
     return platform
 
 

@@ -1297,9 +1297,39 @@ def _thesis_run(**options):
     return run_scenario("static-dsid", duration=0.01, **options)
 
 
+def _rotor_file(text: str) -> Path:
+    folder = Path(tempfile.mkdtemp(prefix="qprr-case-"))
+    path = folder / "case.rotors.toml"
+    path.write_text(text)
+    return path
+
+
+def _load_with_rotors(text: str):
+    import qprr
+
+    return lambda: qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _rotor_file(text), ee_frame="gripper")
+
+
+def rotor_cases() -> list[Case]:
+    """Issue 34, item 2: rotor sets that loaded and flew wrong (the file variants of tests/catalogue_files.py: the rest)."""
+    from tests.catalogue_files import coaxial
+
+    x8 = coaxial((_EXAMPLE / "quad_rrr.rotors.toml").read_text())
+    head, *tables = x8.split("[[rotor]]")
+    flipped = tables[:-1] + [tables[-1].replace('"cw"', '"x"').replace('"ccw"', '"cw"').replace('"x"', '"ccw"')]
+    return [
+        Case(
+            "a coaxial rotor spinning the wrong way",
+            _load_with_rotors(head + "[[rotor]]" + "[[rotor]]".join(flipped)),
+            ("spins do not balance the yaw", "rotor 8", "cw, spin +1", "case.rotors.toml"),
+            warns=True,
+        ),
+    ]
+
+
 def cases() -> list[Case]:
     """Every :class:`Case` (issue 34)."""
-    return mission_cases()
+    return mission_cases() + rotor_cases()
 
 
 def run_cases(selected: list[Case] | None = None) -> list[Outcome]:

@@ -34,3 +34,19 @@ def test_the_reasons_of_failed_runs_are_on_the_terminal(tmp_path, capsys):
     main(["campaign", "run", str(spec), "-o", str(tmp_path / "typo.csv"), "--backend", "inline"])
     out = capsys.readouterr().out
     assert "not completed (1 run(s))" in out and "unknown integrator 'rk5'" in out, out
+
+
+def test_the_actuation_summary_never_prints_a_thrust_outside_the_bounds_beside_a_positive_margin():
+    """A coaxial set with the last rotor's axis down: the least-norm hover needs -1.84 N there (refused at load); the
+    summary of the set reports thrusts inside the bounds with its positive margin."""
+    from qprr.rotors import Rotor, actuation_summary, ring
+
+    low = ring(4, 0.2, kappa=0.016, f_max=8.0, start_angle=0.785)
+    high = tuple(
+        Rotor((r.position_body[0], r.position_body[1], 0.08), (0.0, 0.0, -1.0 if k == 3 else 1.0), -r.spin, 0.016, 0.0, 8.0, f"up_{k + 1}")
+        for k, r in enumerate(low)
+    )
+    s = actuation_summary(low + high, 14.715)
+    assert s.hover_margin > 0.0
+    assert s.hover_thrusts.min() >= -1e-9 and s.hover_thrusts.max() <= 8.0 + 1e-9, str(s)
+    assert "-" not in str(s).split("hover thrusts")[1].split("]")[0], str(s)
