@@ -57,8 +57,9 @@ from .control.opspace_impedance import EndEffectorImpedance
 from .errors import InputError, UnknownNameError
 from .kinematics import ee_pose_xi
 from .model import Platform, check_platform, max_lift
+from .plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
 from .sim import simulate
-from .sim.actuators import RotorDynamics
+from .sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
 from .sim.contact import CompliantWall
 from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
@@ -86,7 +87,8 @@ class MissionSettings:
     ``disturbance``: a generalised-force disturbance (:mod:`qprr.sim.disturbances`); a scenario that has
     its own (hover-noise, hover-pulses, hover-wind) refuses it.  ``plant``: the robot flown when it
     differs from the controller's model (:func:`qprr.sim.simulate`).  ``name``: the result's scenario
-    name ("" keeps the scenario's own).  None everywhere: the scenario as registered.
+    name ("" keeps the scenario's own).  None everywhere: the scenario as registered.  ``plausibility``: the ranges
+    the inputs a mission adds are checked against (the motor time constant of ``motor-lag``; None: no range check).
     """
 
     trajectory: object = None
@@ -94,6 +96,7 @@ class MissionSettings:
     disturbance: object = None
     plant: Platform | None = None
     name: str = ""
+    plausibility: Plausibility | None = DEFAULT
 
     def __post_init__(self) -> None:
         if self.trajectory is not None and not hasattr(self.trajectory, "sample"):
@@ -104,6 +107,7 @@ class MissionSettings:
             raise InputError(f"MissionSettings.plant must be a qprr Platform, got {type(self.plant).__name__}")
         if not isinstance(self.name, str):
             raise InputError(f"MissionSettings.name must be a string, got {self.name!r}")
+        check_plausibility_setting(self.plausibility)
 
 
 _AS_REGISTERED = MissionSettings()
@@ -426,7 +430,9 @@ def wind(platform=None, controller="idc", progress=False, settings: MissionSetti
 
 
 def motor_lag(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
-    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
+    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2
+    (``thrust_factor``); the stage of :func:`motor_stage` (the platform's ``[motor]`` table where ``tau`` and
+    ``thrust_factor`` are 0, their defaults).
 
     With ``gains="platform"`` the gains are derived knowing the rotor time constant
     (``Targets(rotor_time_constant=tau)``: the attitude loop and the roll/pitch reference filter bounded
@@ -434,15 +440,42 @@ def motor_lag(platform=None, controller="idc", progress=False, settings: Mission
     another reference (the options ``target`` and ``reach_fraction`` are then not read), a built controller, a
     disturbance, the result's name."""
     platform = _platform(platform)
+    actuators = motor_stage(platform, o["tau"], o["thrust_factor"], settings.plausibility)
     if o["gains"] == "platform" and settings.controller is None:
-        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, o["tau"]))
+        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, float(np.max(actuators.time_constant))))
     else:
         ctrl = _controller(controller, platform, o, settings)
-    actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
     traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
     res = fly(platform, ctrl, traj, o, progress, "motor-lag", settings, actuators=actuators)
     _errors(res)
     return res
+
+
+MOTOR_DEFAULTS = {"time_constant": 0.005, "thrust_factor": 1e-5}
+"""The motor stage ``motor-lag`` flies on a platform whose rotor file has no ``[motor]`` table (tau 5 ms, b 1e-5 N s^2)."""
+
+
+def motor_stage(platform: Platform, tau: float = 0.0, thrust_factor: float = 0.0, plausibility: Plausibility | None = DEFAULT) -> RotorDynamics:
+    """The actuator stage ``motor-lag`` flies, starting at hover: the platform's ``[motor]`` table (its rotor file's,
+    :attr:`qprr.model.Platform.motor`), with ``tau`` [s] and ``thrust_factor`` [N s^2] replacing its time constant and
+    thrust factor when > 0 (0: the table's, else :data:`MOTOR_DEFAULTS`).  The time constants are checked against
+    ``plausibility`` (milliseconds written as seconds: ``tau = 5``)."""
+    platform = check_platform(platform)
+    given = {}
+    for key, value in (("time_constant", tau), ("thrust_factor", thrust_factor)):
+        name = "tau" if key == "time_constant" else key
+        v = as_real(value, name, nonnegative=True, unit="s" if name == "tau" else "N s^2")
+        if v > 0.0:
+            given[key] = v
+    table = {**MOTOR_DEFAULTS, **platform.motor} if platform.motor else dict(MOTOR_DEFAULTS)
+    source = f"the [motor] table of {platform.provenance.get('rotors', 'the rotor file')!r}" if platform.motor else "motor-lag's default"
+    try:
+        stage = rotor_dynamics_from_mapping({"motor": table}, platform.rotors, initial="hover", **given)
+    except (InputError, UnknownNameError) as exc:  # named where the values come from, the error's kind kept
+        exc.args = (f"motor-lag on platform {platform.name!r}, {source}: {exc}", *exc.args[1:])
+        raise
+    check_time_constant(stage.time_constant, plausibility, "tau" if "time_constant" in given else f"time_constant ({source})")
+    return stage
 
 
 def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
@@ -463,7 +496,8 @@ def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gai
     if gains == "platform" and controller not in GAIN_ARGUMENTS:  # e.g. mpc: cost weights, make_controller's own
         return {}
     if scenario == "motor-lag" and gains == "platform":
-        return lag_gains(controller, platform, options["tau"])
+        stage = motor_stage(platform, options["tau"], options["thrust_factor"])
+        return lag_gains(controller, platform, float(np.max(stage.time_constant)))
     return gain_arguments(controller, platform, gains)
 
 
@@ -574,8 +608,10 @@ __all__ = [
     "default_mission",
     "fly",
     "gain_arguments",
+    "MOTOR_DEFAULTS",
     "mission",
     "motor_lag",
+    "motor_stage",
     "noise",
     "payload",
     "phase_tables",

@@ -295,6 +295,8 @@ class Platform:
     ``params`` keeps what the platform was built from (for the thesis's Q-PRR its parameter set
     :class:`qprr.thesis.params.QPRRParams`, for :func:`qprr.build` the parsed (2.1) name); library
     code never reads it, only :mod:`qprr.thesis` does.  ``provenance`` says where each value comes from.
+    ``motor``: the ``[motor]`` table of the rotor description (thrust factor, time constant, speed limits: the actuator
+    stage :mod:`qprr.sim.actuators` builds, what ``motor-lag`` flies); empty when it has none.
     ``urdf``: the URDF text the model was read from (None for :func:`from_model`), kept for its
     visual geometry (:func:`qprr.viz.visual_model`).
     """
@@ -309,6 +311,7 @@ class Platform:
     params: object = None
     provenance: Mapping[str, str] = field(default_factory=dict)
     urdf: str | None = field(default=None, repr=False)
+    motor: Mapping[str, object] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         model = self.model
@@ -741,6 +744,7 @@ def from_model(
         check_model_inertias(model)
     arm = _arm_joints(model)
     base = _base_frame(model)
+    rotors_given = rotors
     rotors = _resolve_rotors(model, base, rotors, rotor_source)
     _check_rotor_ranges(rotors, plausibility, f"rotor file {rotor_source!r}" if rotor_source else "rotors")
     ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
@@ -756,6 +760,7 @@ def from_model(
         params=params,
         provenance=dict(provenance or {}),
         urdf=urdf,
+        motor=_motor_table(rotors_given, rotor_source),
     )
     _check_mass_matrix(platform)
     _check_lift(platform, rotor_source)
@@ -765,6 +770,16 @@ def from_model(
         check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
         check_hover_solution(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
     return platform
+
+
+def _motor_table(rotors, rotor_source: str | None) -> dict:
+    """The ``[motor]`` table of a rotor description mapping (its values checked where the stage is built), else {}."""
+    if not isinstance(rotors, Mapping) or "motor" not in rotors:
+        return {}
+    if not isinstance(rotors["motor"], Mapping):
+        where = f"rotor file {rotor_source!r}: " if rotor_source else ""
+        raise InputError(f"{where}[motor] must be a table (thrust_factor, time_constant, w_min, w_max), got {rotors['motor']!r}")
+    return dict(rotors["motor"])
 
 
 def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> None:

@@ -259,6 +259,7 @@ def check_time_constant(time_constant, plausibility: Plausibility | None, source
     if plausibility is None:
         return
     values = [float(time_constant)] if isinstance(time_constant, (int, float)) else [float(v) for v in time_constant]
+    values = values[:1] if len(set(values)) == 1 else values  # one value for every rotor: named once
     for k, tau in enumerate(values):
         if tau > plausibility.rotor_time_constant_max:
             which = f"{source}" if len(values) == 1 else f"{source} of rotor {k + 1}"

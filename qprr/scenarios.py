@@ -313,7 +313,11 @@ MISSIONS = (
         "any platform: point-to-point at height through first-order rotor dynamics",
         _mission_runner("motor_lag"),
         _FLIGHT,
-        {**_MOVE, "tau": Option(0.005, "rotor time constant [s]"), "thrust_factor": Option(1e-5, "rotor thrust factor b [N s^2] (f = b w^2)")},
+        {
+            **_MOVE,
+            "tau": Option(0.0, "rotor time constant [s]; 0: the rotor file's [motor] time_constant, else 0.005"),
+            "thrust_factor": Option(0.0, "rotor thrust factor b [N s^2] (f = b w^2); 0: the rotor file's [motor] thrust_factor, else 1e-5"),
+        },
         summary=_mission_summary,
     ),
     Scenario(

@@ -1327,9 +1327,42 @@ def rotor_cases() -> list[Case]:
     ]
 
 
+def _motor_lag_with(motor_table: str):
+    import qprr
+    from qprr.scenarios import run as run_scenario
+
+    text = (_EXAMPLE / "quad_rrr.rotors.toml").read_text() + "\n" + motor_table
+
+    def call():
+        platform = qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _rotor_file(text), ee_frame="gripper")
+        return run_scenario("motor-lag", platform=platform, duration=0.05)
+
+    return call
+
+
+def motor_cases() -> list[Case]:
+    """Issue 34, item 2: the motor stage motor-lag flies (its tau, the rotor file's [motor] table)."""
+    return [
+        Case(
+            "motor-lag tau = 5 (milliseconds as seconds)", _scenario("motor-lag", tau=5.0), ("tau", "5.0", "milliseconds", "rotor_time_constant_max")
+        ),
+        Case(
+            "a [motor] time_constant of 5 (milliseconds as seconds)",
+            _motor_lag_with("[motor]\nthrust_factor = 1e-5\ntime_constant = 5.0\n"),
+            ("time_constant", "case.rotors.toml", "5.0", "milliseconds"),
+        ),
+        Case("a [motor] table with an unknown key", _motor_lag_with("[motor]\ntau = 0.005\n"), ("motor key", "'tau'", "case.rotors.toml")),
+        Case(
+            "a [motor] table with a text value",
+            _motor_lag_with('[motor]\nthrust_factor = "1e-5"\ntime_constant = 0.005\n'),
+            ("thrust_factor", "case.rotors.toml", "strings"),
+        ),
+    ]
+
+
 def cases() -> list[Case]:
     """Every :class:`Case` (issue 34)."""
-    return mission_cases() + rotor_cases()
+    return mission_cases() + rotor_cases() + motor_cases()
 
 
 def run_cases(selected: list[Case] | None = None) -> list[Outcome]:

@@ -50,3 +50,18 @@ def test_the_actuation_summary_never_prints_a_thrust_outside_the_bounds_beside_a
     assert s.hover_margin > 0.0
     assert s.hover_thrusts.min() >= -1e-9 and s.hover_thrusts.max() <= 8.0 + 1e-9, str(s)
     assert "-" not in str(s).split("hover thrusts")[1].split("]")[0], str(s)
+
+
+def test_motor_lag_flies_the_rotor_file_s_motor_table():
+    """borinot's rotor file gives b = 4.511e-6 N s^2, T = 5 ms, w_max = 2236 rad/s: motor-lag's stage is that one (it
+    flew b = 1e-5 and w_max from the thrust bounds); a tau given replaces the table's time constant only."""
+    import qprr
+    from qprr.missions import motor_stage
+
+    borinot = qprr.load("borinot_flying_arm_2")
+    assert borinot.motor["thrust_factor"] == 4.511e-6
+    stage = motor_stage(borinot)
+    assert set(stage.thrust_factor) == {4.511e-6} and set(stage.time_constant) == {0.005} and set(stage.w_max) == {2236.0}
+    slower = motor_stage(borinot, tau=0.02)
+    assert set(slower.time_constant) == {0.02} and set(slower.thrust_factor) == {4.511e-6}
+    assert set(motor_stage(qprr.load()).time_constant) == {0.005}  # no table: motor-lag's defaults
