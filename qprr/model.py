@@ -181,13 +181,19 @@ def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[s
                 v = _attr_numbers(limit, attr, 1, where, required=True)
                 if v[0] < 0.0:
                     raise InputError(f"{where}: <limit {attr}> = {v[0]!r} must be >= 0 (the largest |{attr}|)")
+    dyn = joint.find("dynamics")
+    if dyn is not None:
+        for attr in ("damping", "friction"):
+            v = _attr_numbers(dyn, attr, 1, where)
+            if v is not None and v[0] < 0.0:
+                raise InputError(f"{where}: <dynamics {attr}> = {v[0]!r} must be >= 0 (a passive joint {attr}, SI per radian or metre)")
     return ends[0], ends[1]
 
 
 def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
     """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
     duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
-    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>`` or ``<limit>``, a zero joint axis, a missing
+    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>``, ``<limit>`` or ``<dynamics>``, a zero joint axis, a missing
     ``effort`` or ``velocity``.  Raises
     :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
     if not isinstance(xml_text, str):

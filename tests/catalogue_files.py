@@ -87,6 +87,11 @@ def _urdf_variants(text: str) -> Iterator[tuple[str, str, str]]:
                 yield f"joint {name!r} <limit {attr}> missing", name, _edit_attr(text, "joint", name, "limit", attr, None)
                 yield f"joint {name!r} <limit {attr}> NaN", name, _edit_attr(text, "joint", name, "limit", attr, "nan")
                 yield f"joint {name!r} <limit {attr}> negative", name, _edit_attr(text, "joint", name, "limit", attr, "-1")
+            for bad, what in (("nan", "NaN"), ("stiff", "text"), ("0.1 0.2", "two numbers"), ("-0.1", "negative")):
+                dyn = ET.fromstring(text)
+                j = next(e for e in dyn.findall("joint") if e.get("name") == name)
+                ET.SubElement(j, "dynamics", damping=bad, friction="0.1")
+                yield f"joint {name!r} <dynamics damping> {what}", name, ET.tostring(dyn, encoding="unicode")
             yield (
                 f"joint {name!r} <limit effort> in N mm",
                 name,
