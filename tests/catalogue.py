@@ -1360,9 +1360,36 @@ def motor_cases() -> list[Case]:
     ]
 
 
+def _controller_returning(bad: Callable):
+    """simulate() with an IDC whose step's output goes through ``bad`` (a user's controller with a bug)."""
+    import qprr
+    from qprr.control import make_controller
+    from qprr.sim import simulate
+    from qprr.trajectory import Hold
+
+    def call():
+        platform = qprr.load()
+        ctrl = make_controller("idc", platform)
+        own = ctrl.step
+        ctrl.step = lambda t, state, ref: bad(own(t, state, ref))
+        return simulate(platform, ctrl, Hold(tuple(platform.neutral_xi())), 0.01)
+
+    return call
+
+
+def controller_cases() -> list[Case]:
+    """Issue 34, item 3: a controller's output of the wrong shape, named as the controller's."""
+    return [
+        Case(
+            "a controller returning 8 values", _controller_returning(lambda u: u[:8]), ("controller 'idc'", "step returned shape (8,)", "shape (9,)")
+        ),
+        Case("a controller returning None", _controller_returning(lambda u: None), ("controller 'idc'", "step returned NoneType None", "shape (9,)")),
+    ]
+
+
 def cases() -> list[Case]:
     """Every :class:`Case` (issue 34)."""
-    return mission_cases() + rotor_cases() + motor_cases()
+    return mission_cases() + rotor_cases() + motor_cases() + controller_cases()
 
 
 def run_cases(selected: list[Case] | None = None) -> list[Outcome]:
