@@ -1387,9 +1387,28 @@ def controller_cases() -> list[Case]:
     ]
 
 
+def _study(constraints: dict):
+    from qprr.design.spec import DesignSpec
+
+    study = {"name": "case", "architectures": ["Q-RR"], "objectives": ["hover_volume", "arm_mass"], "constraints": constraints}
+    return lambda: DesignSpec.from_mapping(study)
+
+
+def design_cases() -> list[Case]:
+    """Issue 34, item 2: a design constraint no design can meet."""
+    return [
+        Case("a design constraint arm_mass max = -1", _study({"arm_mass": {"max": -1}}), ("constraints.arm_mass.max", "-1", "excludes every design")),
+        Case(
+            "a design constraint balance_fraction min = 50 (a percentage)",
+            _study({"balance_fraction": {"min": 50}}),
+            ("constraints.balance_fraction.min", "50", "never above 1"),
+        ),
+    ]
+
+
 def cases() -> list[Case]:
     """Every :class:`Case` (issue 34)."""
-    return mission_cases() + rotor_cases() + motor_cases() + controller_cases()
+    return mission_cases() + rotor_cases() + motor_cases() + controller_cases() + design_cases()
 
 
 def run_cases(selected: list[Case] | None = None) -> list[Outcome]:

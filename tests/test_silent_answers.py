@@ -65,3 +65,19 @@ def test_motor_lag_flies_the_rotor_file_s_motor_table():
     slower = motor_stage(borinot, tau=0.02)
     assert set(slower.time_constant) == {0.02} and set(slower.thrust_factor) == {4.511e-6}
     assert set(motor_stage(qprr.load()).time_constant) == {0.005}  # no table: motor-lag's defaults
+
+
+def test_a_study_with_no_feasible_design_says_which_constraint_excluded_how_many(tmp_path, capsys):
+    from qprr.cli import main
+    from qprr.design.report import report as design_report
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'name = "none"\narchitectures = ["Q-RR", "Q-RRR"]\nobjectives = ["hover_volume", "arm_mass"]\n'
+        "[constraints]\narm_mass = { max = 1e-6 }\n[effort]\nsamples = 300\n"
+    )
+    assert main(["design", "run", str(spec), "-o", str(tmp_path / "r.csv"), "--backend", "inline"]) == 0
+    out = capsys.readouterr().out
+    assert "not feasible: 2 of 2 design(s)" in out and "constraint arm_mass <= 1e-06 excludes 2 of the 2 evaluated design(s)" in out, out
+    text, _ = design_report(tmp_path / "r.csv", fly=False)
+    assert "0 feasible" in text and "arm_mass <= 1e-06 excludes 2" in text, text
