@@ -54,7 +54,7 @@ from .control.impedance import ImpedanceGains
 from .control.inverse_dynamics import IDCGains
 from .control.mfc import MFCGains
 from .control.opspace_impedance import EndEffectorImpedance
-from .errors import InputError, UnknownNameError
+from .errors import InputError, ScheduleWarning, UnknownNameError
 from .kinematics import ee_pose_xi
 from .model import Platform, check_platform, max_lift
 from .plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
@@ -302,7 +302,7 @@ def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule 
         warnings.warn(
             f"mission longer than the run (duration = {D:g} s): {'; '.join(said)}; the run reports only what it flew. "
             f"Give duration > {end:g} s to fly the whole mission",
-            UserWarning,
+            ScheduleWarning,
             stacklevel=3,
         )
 
