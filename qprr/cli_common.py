@@ -15,7 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .errors import InputError
-from .validation import as_int, as_real
+from .validation import as_bool, as_int, as_real
 
 
 class Parser(argparse.ArgumentParser):
@@ -174,11 +174,7 @@ def option_value(text: str, default, name: str):
     floats or string), numbers by :func:`qprr.validation.as_real` / :func:`qprr.validation.as_int`; raises
     :class:`~qprr.errors.InputError` naming ``name`` and the text."""
     if isinstance(default, bool):
-        if text.lower() in ("1", "true", "yes", "on"):
-            return True
-        if text.lower() in ("0", "false", "no", "off"):
-            return False
-        raise InputError(f"{name} must be true or false, got {text!r}")
+        return as_bool(text, name)
     kind = int if isinstance(default, int) else float if isinstance(default, (float, tuple)) else None
     if kind is None:
         return text

@@ -117,3 +117,8 @@ class PlausibilityError(InputError):
 
 class ActuationWarning(UserWarning):
     """A rotor set that can fly but is badly conditioned (one wrench direction far weaker than the others)."""
+
+
+class ScheduleWarning(UserWarning):
+    """A mission longer than its run: phases or payload events at or after the end are never flown, a phase ending after
+    it is flown in part (a short run of a long mission on purpose: filter this category)."""

@@ -40,6 +40,7 @@ Chapter 6 flights on the Q-PRR are built so (:mod:`qprr.thesis.scenarios`).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -53,11 +54,12 @@ from .control.impedance import ImpedanceGains
 from .control.inverse_dynamics import IDCGains
 from .control.mfc import MFCGains
 from .control.opspace_impedance import EndEffectorImpedance
-from .errors import InputError, UnknownNameError
+from .errors import InputError, ScheduleWarning, UnknownNameError
 from .kinematics import ee_pose_xi
-from .model import Platform, check_platform
+from .model import Platform, check_platform, max_lift
+from .plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
 from .sim import simulate
-from .sim.actuators import RotorDynamics
+from .sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
 from .sim.contact import CompliantWall
 from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
@@ -85,7 +87,8 @@ class MissionSettings:
     ``disturbance``: a generalised-force disturbance (:mod:`qprr.sim.disturbances`); a scenario that has
     its own (hover-noise, hover-pulses, hover-wind) refuses it.  ``plant``: the robot flown when it
     differs from the controller's model (:func:`qprr.sim.simulate`).  ``name``: the result's scenario
-    name ("" keeps the scenario's own).  None everywhere: the scenario as registered.
+    name ("" keeps the scenario's own).  None everywhere: the scenario as registered.  ``plausibility``: the ranges
+    the inputs a mission adds are checked against (the motor time constant of ``motor-lag``; None: no range check).
     """
 
     trajectory: object = None
@@ -93,6 +96,7 @@ class MissionSettings:
     disturbance: object = None
     plant: Platform | None = None
     name: str = ""
+    plausibility: Plausibility | None = DEFAULT
 
     def __post_init__(self) -> None:
         if self.trajectory is not None and not hasattr(self.trajectory, "sample"):
@@ -103,6 +107,7 @@ class MissionSettings:
             raise InputError(f"MissionSettings.plant must be a qprr Platform, got {type(self.plant).__name__}")
         if not isinstance(self.name, str):
             raise InputError(f"MissionSettings.name must be a string, got {self.name!r}")
+        check_plausibility_setting(self.plausibility)
 
 
 _AS_REGISTERED = MissionSettings()
@@ -240,7 +245,7 @@ def point_to_point(platform=None, controller="idc", progress=False, settings: Mi
         _errors(res)
         return res
     D = o["duration"]
-    x, y, z = (float(v) for v in o["target"])
+    x, y, z = _target(o["target"])
     xi0 = platform.neutral_xi()
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("z", 0.0, 0.3 * D, z), Phase("x", 0.3 * D, 0.7 * D, x), Phase("y", 0.3 * D, 0.7 * D, y)]
@@ -249,6 +254,57 @@ def point_to_point(platform=None, controller="idc", progress=False, settings: Mi
     res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "fly-to", settings)
     _errors(res)
     return res
+
+
+def _target(value) -> tuple[float, float, float]:
+    """The option ``target``: the base position (x, y, z) [m] to reach, world frame."""
+    if isinstance(value, (str, bytes)) or np.ndim(value) != 1 or np.size(value) != 3:
+        raise InputError(f"target must be the base position (x, y, z) [m] to reach, three numbers, got {value!r}; e.g. target=(1.0, 0.5, 2.0)")
+    x, y, z = as_vector(value, 3, "target").tolist()
+    return x, y, z
+
+
+def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule | None, duration: float) -> None:
+    """Say what a run of ``duration`` [s] would silently skip or cannot carry.
+
+    Refused: a payload the rotors cannot lift with the platform (the mass in grams?).  Warned about, once per run: the
+    phases that start at or after the end (never flown), end after it (flown in part: the final errors are measured
+    against an unfinished reference) and the payload events at or after it (never applied) - a run shorter than its
+    mission is legal (the first seconds of a long mission), a mission file longer than the run by mistake is not
+    noticed otherwise.  Each message names the phase or event, its time and the duration that flies it all."""
+    platform = check_platform(platform)
+    D = as_real(duration, "duration", positive=True, unit="s")
+    skipped, cut = [], []
+    for k, p in enumerate(phases):
+        if not isinstance(p, Phase):
+            raise InputError(f"mission phase {k + 1} must be a qprr.trajectory.Phase, got {type(p).__name__}")
+        if p.t1 >= D:
+            skipped.append(f"phase {k + 1} ({p.coordinate!r} to {p.value:g}, start = {p.t1:g} s)")
+        elif p.t2 > D:
+            cut.append(f"phase {k + 1} ({p.coordinate!r} to {p.value:g}, end = {p.t2:g} s)")
+    changes = payload.changes if payload is not None else ()
+    lift = max_lift(platform)
+    for k, ev in enumerate(changes):
+        if ev.time >= D:
+            skipped.append(f"payload event {k + 1} (mass = {ev.mass:g} kg, time = {ev.time:g} s)")
+            continue
+        weight = (platform.total_mass + ev.mass) * platform.g
+        if weight > lift:
+            raise InputError(
+                f"mission payload event {k + 1} (time = {ev.time:g} s): mass = {ev.mass:g} kg with the platform's "
+                f"{platform.total_mass:.4g} kg weighs {weight:.4g} N, more than its rotors lift ({lift:.4g} N along z_B, "
+                f"{lift / platform.g - platform.total_mass:.4g} kg of payload at most); the mass is in kg (grams? "
+                f"{ev.mass:g} g = {ev.mass / 1000:g} kg)"
+            )
+    if skipped or cut:
+        end = max([p.t2 for p in phases] + [ev.time for ev in changes])
+        said = ([f"never flown or applied: {', '.join(skipped)}"] if skipped else []) + ([f"flown in part: {', '.join(cut)}"] if cut else [])
+        warnings.warn(
+            f"mission longer than the run (duration = {D:g} s): {'; '.join(said)}; the run reports only what it flew. "
+            f"Give duration > {end:g} s to fly the whole mission",
+            ScheduleWarning,
+            stacklevel=3,
+        )
 
 
 def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
@@ -298,11 +354,13 @@ def mission(platform=None, controller="idc", progress=False, settings: MissionSe
     platform = _platform(platform)
     if settings.trajectory is None:
         phases, payload = read_mission(o["mission"] or default_mission(platform, o["duration"]))
+        check_mission_schedule(platform, phases, payload, o["duration"])
         traj = MultiPhase(phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
     else:
         phases, payload = read_mission(o["mission"], phases_required=False) if o["mission"] else ((), None)
         if phases:
             raise InputError("mission: phases in the mission data and MissionSettings.trajectory both give the reference; give one")
+        check_mission_schedule(platform, (), payload, o["duration"])
         traj = settings.trajectory
     res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "mission", settings, payload=payload)
     _errors(res)
@@ -372,7 +430,9 @@ def wind(platform=None, controller="idc", progress=False, settings: MissionSetti
 
 
 def motor_lag(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
-    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2 (``thrust_factor``).
+    """:func:`point_to_point` (at height) through first-order rotor dynamics: time constant ``tau`` [s], thrust b w^2
+    (``thrust_factor``); the stage of :func:`motor_stage` (the platform's ``[motor]`` table where ``tau`` and
+    ``thrust_factor`` are 0, their defaults).
 
     With ``gains="platform"`` the gains are derived knowing the rotor time constant
     (``Targets(rotor_time_constant=tau)``: the attitude loop and the roll/pitch reference filter bounded
@@ -380,21 +440,48 @@ def motor_lag(platform=None, controller="idc", progress=False, settings: Mission
     another reference (the options ``target`` and ``reach_fraction`` are then not read), a built controller, a
     disturbance, the result's name."""
     platform = _platform(platform)
+    actuators = motor_stage(platform, o["tau"], o["thrust_factor"], settings.plausibility)
     if o["gains"] == "platform" and settings.controller is None:
-        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, o["tau"]))
+        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, float(np.max(actuators.time_constant))))
     else:
         ctrl = _controller(controller, platform, o, settings)
-    actuators = RotorDynamics.for_rotors(platform.rotors, o["thrust_factor"], o["tau"], initial="hover")
     traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
     res = fly(platform, ctrl, traj, o, progress, "motor-lag", settings, actuators=actuators)
     _errors(res)
     return res
 
 
+MOTOR_DEFAULTS = {"time_constant": 0.005, "thrust_factor": 1e-5}
+"""The motor stage ``motor-lag`` flies on a platform whose rotor file has no ``[motor]`` table (tau 5 ms, b 1e-5 N s^2)."""
+
+
+def motor_stage(platform: Platform, tau: float = 0.0, thrust_factor: float = 0.0, plausibility: Plausibility | None = DEFAULT) -> RotorDynamics:
+    """The actuator stage ``motor-lag`` flies, starting at hover: the platform's ``[motor]`` table (its rotor file's,
+    :attr:`qprr.model.Platform.motor`), with ``tau`` [s] and ``thrust_factor`` [N s^2] replacing its time constant and
+    thrust factor when > 0 (0: the table's, else :data:`MOTOR_DEFAULTS`).  The time constants are checked against
+    ``plausibility`` (milliseconds written as seconds: ``tau = 5``)."""
+    platform = check_platform(platform)
+    given = {}
+    for key, value in (("time_constant", tau), ("thrust_factor", thrust_factor)):
+        name = "tau" if key == "time_constant" else key
+        v = as_real(value, name, nonnegative=True, unit="s" if name == "tau" else "N s^2")
+        if v > 0.0:
+            given[key] = v
+    table = {**MOTOR_DEFAULTS, **platform.motor} if platform.motor else dict(MOTOR_DEFAULTS)
+    source = f"the [motor] table of {platform.provenance.get('rotors', 'the rotor file')!r}" if platform.motor else "motor-lag's default"
+    try:
+        stage = rotor_dynamics_from_mapping({"motor": table}, platform.rotors, initial="hover", **given)
+    except (InputError, UnknownNameError) as exc:  # named where the values come from, the error's kind kept
+        exc.args = (f"motor-lag on platform {platform.name!r}, {source}: {exc}", *exc.args[1:])
+        raise
+    check_time_constant(stage.time_constant, plausibility, "tau" if "time_constant" in given else f"time_constant ({source})")
+    return stage
+
+
 def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
     """The reference of :func:`motor_lag`: from hover at ``target``'s height, to ``target`` with the arm out (10-60 %)."""
     D = o["duration"]
-    x, y, z = (float(v) for v in o["target"])
+    x, y, z = _target(o["target"])
     xi0 = np.concatenate([[0.0, 0.0, z, 0.0, 0.0, 0.0], platform.neutral_q()[7:]])
     q = reach_posture(platform, o["reach_fraction"])
     phases = [Phase("x", 0.1 * D, 0.6 * D, x), Phase("y", 0.1 * D, 0.6 * D, y)]
@@ -409,7 +496,8 @@ def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gai
     if gains == "platform" and controller not in GAIN_ARGUMENTS:  # e.g. mpc: cost weights, make_controller's own
         return {}
     if scenario == "motor-lag" and gains == "platform":
-        return lag_gains(controller, platform, options["tau"])
+        stage = motor_stage(platform, options["tau"], options["thrust_factor"])
+        return lag_gains(controller, platform, float(np.max(stage.time_constant)))
     return gain_arguments(controller, platform, gains)
 
 
@@ -453,7 +541,13 @@ def _noise_amplitude(platform: Platform, o: dict, amplitude) -> tuple[float, ...
 
     a = Authority.from_platform(platform)
     amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])
-    return tuple(o["fraction"] * amp)
+    fraction = o["fraction"]
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float)) or not 0.0 <= fraction <= 1.0:
+        raise InputError(
+            f"fraction must be a number in [0, 1] (the noise's half-width as a fraction of each coordinate's actuator "
+            f"authority; 0.02 is 2 %), got {fraction!r}"
+        )
+    return tuple(fraction * amp)
 
 
 def pulse_train(platform: Platform, duration: float, force: float, torque: float) -> tuple[Pulse, ...]:
@@ -509,12 +603,15 @@ __all__ = [
     "PAYLOAD_KEYS",
     "PHASE_KEYS",
     "MissionSettings",
+    "check_mission_schedule",
     "controller_for",
     "default_mission",
     "fly",
     "gain_arguments",
+    "MOTOR_DEFAULTS",
     "mission",
     "motor_lag",
+    "motor_stage",
     "noise",
     "payload",
     "phase_tables",

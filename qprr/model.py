@@ -41,7 +41,7 @@ from .plausibility import DEFAULT as _PLAUSIBLE
 from .plausibility import check_plausibility_setting
 from .plausibility import check_rotors as _check_rotor_ranges
 from .plausibility import check_urdf as _check_urdf_ranges
-from .rotors import ActuationSummary, Rotor, actuation_summary, check_rotor_set, rotor_matrix, rotors_from_mapping
+from .rotors import ActuationSummary, Rotor, actuation_summary, check_hover_solution, check_rotor_set, rotor_matrix, rotors_from_mapping
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -181,13 +181,19 @@ def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[s
                 v = _attr_numbers(limit, attr, 1, where, required=True)
                 if v[0] < 0.0:
                     raise InputError(f"{where}: <limit {attr}> = {v[0]!r} must be >= 0 (the largest |{attr}|)")
+    dyn = joint.find("dynamics")
+    if dyn is not None:
+        for attr in ("damping", "friction"):
+            v = _attr_numbers(dyn, attr, 1, where)
+            if v is not None and v[0] < 0.0:
+                raise InputError(f"{where}: <dynamics {attr}> = {v[0]!r} must be >= 0 (a passive joint {attr}, SI per radian or metre)")
     return ends[0], ends[1]
 
 
 def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
     """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
     duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
-    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>`` or ``<limit>``, a zero joint axis, a missing
+    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>``, ``<limit>`` or ``<dynamics>``, a zero joint axis, a missing
     ``effort`` or ``velocity``.  Raises
     :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
     if not isinstance(xml_text, str):
@@ -295,6 +301,8 @@ class Platform:
     ``params`` keeps what the platform was built from (for the thesis's Q-PRR its parameter set
     :class:`qprr.thesis.params.QPRRParams`, for :func:`qprr.build` the parsed (2.1) name); library
     code never reads it, only :mod:`qprr.thesis` does.  ``provenance`` says where each value comes from.
+    ``motor``: the ``[motor]`` table of the rotor description (thrust factor, time constant, speed limits: the actuator
+    stage :mod:`qprr.sim.actuators` builds, what ``motor-lag`` flies); empty when it has none.
     ``urdf``: the URDF text the model was read from (None for :func:`from_model`), kept for its
     visual geometry (:func:`qprr.viz.visual_model`).
     """
@@ -309,6 +317,7 @@ class Platform:
     params: object = None
     provenance: Mapping[str, str] = field(default_factory=dict)
     urdf: str | None = field(default=None, repr=False)
+    motor: Mapping[str, object] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         model = self.model
@@ -741,6 +750,7 @@ def from_model(
         check_model_inertias(model)
     arm = _arm_joints(model)
     base = _base_frame(model)
+    rotors_given = rotors
     rotors = _resolve_rotors(model, base, rotors, rotor_source)
     _check_rotor_ranges(rotors, plausibility, f"rotor file {rotor_source!r}" if rotor_source else "rotors")
     ee = _default_ee_frame(model, arm) if ee_frame is None else frame_id(model, ee_frame, "ee_frame")
@@ -756,6 +766,7 @@ def from_model(
         params=params,
         provenance=dict(provenance or {}),
         urdf=urdf,
+        motor=_motor_table(rotors_given, rotor_source),
     )
     _check_mass_matrix(platform)
     _check_lift(platform, rotor_source)
@@ -763,7 +774,18 @@ def from_model(
         source = f"rotor file {rotor_source!r}" if rotor_source else f"platform {platform.name!r}"
         _check_thrust_to_weight(platform, plausibility, source)
         check_rotor_set(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
+        check_hover_solution(platform.rotors, platform.total_mass * platform.g, platform.com_neutral_body, source)
     return platform
+
+
+def _motor_table(rotors, rotor_source: str | None) -> dict:
+    """The ``[motor]`` table of a rotor description mapping (its values checked where the stage is built), else {}."""
+    if not isinstance(rotors, Mapping) or "motor" not in rotors:
+        return {}
+    if not isinstance(rotors["motor"], Mapping):
+        where = f"rotor file {rotor_source!r}: " if rotor_source else ""
+        raise InputError(f"{where}[motor] must be a table (thrust_factor, time_constant, w_min, w_max), got {rotors['motor']!r}")
+    return dict(rotors["motor"])
 
 
 def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> None:

@@ -26,6 +26,11 @@ class Plausibility:
 
     rotor_distance_max : rotor centre to B [m] (the largest multirotors span a few metres).
     kappa_max : drag/thrust ratio c/b of a rotor [m] (propellers: 0.005-0.06 m).
+    kappa_min : the smallest non-zero drag/thrust ratio [m] (a lower bound: a raw drag coefficient c [N m s^2], ~1e-7,
+        written for c/b gives a yaw torque a thousand times too weak; kappa = 0 stays allowed: no drag model).
+    rotor_radius_max : propeller radius [m] (the largest multirotor propellers reach about 1 m).
+    rotor_time_constant_max : first-order motor time constant [s] (electric motors: 5-100 ms; milliseconds written as
+        seconds give 1000x).
     rotor_thrust_max : f_max of one rotor [N] (heavy-lift rotors give a few hundred N).
     thrust_to_weight_max : sum of the rotors' f_max along z_B over the weight m g (racing drones reach 10-15).
     length_max : joint origin offsets and inertial origins of a URDF [m].
@@ -41,6 +46,9 @@ class Plausibility:
 
     rotor_distance_max: float = 10.0
     kappa_max: float = 0.1
+    kappa_min: float = 1e-4
+    rotor_radius_max: float = 2.0
+    rotor_time_constant_max: float = 0.5
     rotor_thrust_max: float = 1000.0
     thrust_to_weight_max: float = 20.0
     length_max: float = 10.0
@@ -83,7 +91,7 @@ def _refuse(what: str, value: float, field_name: str, bound: float, slip: str) -
 
 
 def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: str = "the rotor set") -> None:
-    """Rotor positions, drag/thrust ratios and thrust bounds within ``plausibility`` (None: no check)."""
+    """Rotor positions, drag/thrust ratios, propeller radii and thrust bounds within ``plausibility`` (None: no check)."""
     if plausibility is None:
         return
     P = plausibility
@@ -101,6 +109,22 @@ def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: st
                 "kappa_max",
                 P.kappa_max,
                 f"a drag/thrust ratio in millimetres? {r.kappa:g} mm = {r.kappa / 1000:g} m (propellers: 0.005-0.06 m)",
+            )
+        if 0.0 < r.kappa < P.kappa_min:
+            raise PlausibilityError(
+                f"{label} kappa [m] = {r.kappa!r} is below the plausible range for an aerial robot (>= {P.kappa_min:g}, "
+                f"propellers: 0.005-0.06 m): kappa is the drag/thrust ratio c/b that gives the rotors' yaw torque; a raw "
+                f"drag coefficient c [N m s^2]? kappa = c / b with b the thrust coefficient [N s^2] (e.g. 1.4e-7 / 8.5e-6 "
+                f"= 0.016 m). With it the yaw torque is {P.kappa_min / r.kappa:.3g}x weaker than it should be. If you mean "
+                f"it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, kappa_min=...)"
+            )
+        if r.radius is not None and r.radius > P.rotor_radius_max:
+            _refuse(
+                f"{label} radius [m]",
+                r.radius,
+                "rotor_radius_max",
+                P.rotor_radius_max,
+                f"a propeller radius in millimetres? {r.radius:g} mm = {r.radius / 1000:g} m",
             )
         if math.isfinite(r.f_max) and r.f_max > P.rotor_thrust_max:
             _refuse(
@@ -230,4 +254,22 @@ def check_urdf(root: ET.Element, plausibility: Plausibility | None, source: str 
         _check_link(link, plausibility, source)
 
 
-__all__ = ["DEFAULT", "Plausibility", "check_plausibility_setting", "check_rotors", "check_urdf"]
+def check_time_constant(time_constant, plausibility: Plausibility | None, source: str = "motor time constant") -> None:
+    """Every motor time constant [s] (one value or one per rotor) within ``plausibility.rotor_time_constant_max``."""
+    if plausibility is None:
+        return
+    values = [float(time_constant)] if isinstance(time_constant, (int, float)) else [float(v) for v in time_constant]
+    values = values[:1] if len(set(values)) == 1 else values  # one value for every rotor: named once
+    for k, tau in enumerate(values):
+        if tau > plausibility.rotor_time_constant_max:
+            which = f"{source}" if len(values) == 1 else f"{source} of rotor {k + 1}"
+            _refuse(
+                f"{which} [s]",
+                tau,
+                "rotor_time_constant_max",
+                plausibility.rotor_time_constant_max,
+                f"milliseconds written as seconds? {tau:g} ms = {tau / 1000:g} s (electric motors: 0.005-0.1 s)",
+            )
+
+
+__all__ = ["DEFAULT", "Plausibility", "check_plausibility_setting", "check_rotors", "check_time_constant", "check_urdf"]

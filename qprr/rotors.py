@@ -18,13 +18,14 @@ same structure in Python) so a user can describe any vehicle.
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, UnknownNameError
+from .errors import ActuationError, ActuationWarning, InputError, UnknownNameError
 from .validation import as_file, as_int, as_real, as_vector
 
 
@@ -376,7 +377,9 @@ class ActuationSummary:
     condition : sigma_max / sigma_min of that 4-row map with the torques divided by ``length`` (inf if rank < 4).
     length : the length [m] torques are divided by (the largest rotor distance to B, or kappa if larger; 1 if both 0).
     hover_wrench : [f; tau] (6,) the rotors apply at hover with d vertical: m g [d; c x d].
-    hover_thrusts : (n,) the least-norm thrusts that give ``hover_wrench`` [N] (NaN if no thrusts give it).
+    hover_thrusts : (n,) thrusts that give ``hover_wrench`` [N]: the least-norm ones, or, when those leave the bounds and
+        the margin is positive, the thrusts of the largest margin (never a thrust outside the bounds beside a positive
+        margin); NaN if no thrusts give it.
     hover_margin : the largest s [N] such that some thrusts give ``hover_wrench`` with f_min + s <= f <= f_max - s
         (a linear programme; <= 0: the set cannot hover with every thrust strictly inside its bounds; capped at m g).
     can_hover, can_control_attitude : hover_margin > 0; attitude_rank == 4.
@@ -477,6 +480,8 @@ def _summary(rotors: Sequence[Rotor], weight: float, com_body, optimal_margin: b
             method="highs",
         )
         margin = float(-res.fun) if res.status == 0 else -math.inf
+        if margin > 0.0 and not (np.all(f_ls >= lo) and np.all(f_ls <= hi)):
+            f_ls = res.x[:n]  # the least-norm thrusts leave the bounds: report thrusts that hover inside them
     return ActuationSummary(
         rank, directions, _ro(basis), rank == 6, _ro(d), att_rank, condition, float(length), _ro(w), _ro(np.asarray(f_ls, dtype=float)), margin
     )
@@ -527,6 +532,54 @@ def _why_no_attitude(rotors: Sequence[Rotor], d: np.ndarray) -> str:
     return "; ".join(reasons) if reasons else "the rotor axes and positions are degenerate"
 
 
+def _names(rotors: Sequence[Rotor], idx) -> str:
+    return ", ".join(f"{rotors[k].name or f'rotor_{k + 1}'!r} (rotor {k + 1})" for k in idx)
+
+
+def check_hover_solution(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set") -> None:
+    """Refuse a rotor set whose hover solution - the least-norm thrusts that give the hover wrench m g [d; c x d], what
+    an allocator starts from - needs a thrust outside a rotor's bounds (a negative one: a rotor whose axis points
+    against the others', e.g. the lower rotor of a coaxial pair written [0, 0, -1]); warn when the spins do not balance
+    the yaw drag at hover (equal thrusts leave a yaw torque: the hover thrusts become unequal), naming the rotors.
+    An :class:`~qprr.errors.ActuationError` / :class:`~qprr.errors.ActuationWarning` naming ``source`` and the rotors."""
+    Omega = rotor_matrix(rotors)
+    weight = as_real(weight, "weight", nonnegative=True, unit="N")
+    c = as_vector(com_body, 3, "com_body")
+    F = Omega[0:3].sum(axis=1)
+    d = F / np.linalg.norm(F) if np.linalg.norm(F) > 1e-9 else np.array([0.0, 0.0, 1.0])
+    f, *_ = np.linalg.lstsq(Omega, weight * np.concatenate([d, np.cross(c, d)]), rcond=None)
+    lo, hi = np.array([r.f_min for r in rotors]), np.array([r.f_max for r in rotors])
+    tol = 1e-9 * max(weight, 1.0)
+    out = [k for k in range(len(rotors)) if not lo[k] - tol <= f[k] <= hi[k] + tol]
+    if out:
+        against = [k for k in out if float(np.dot(rotors[k].axis_body, d)) < 0.0]
+        hint = (
+            f"the axis of {_names(rotors, against)} points against the collective thrust {np.round(d, 6).tolist()}: a "
+            "propeller pushes along its axis, the direction the vehicle is pushed (a lower coaxial rotor blowing down "
+            "still pushes up: axis [0, 0, 1])"
+            if against
+            else "check the axes (the direction each rotor pushes), the positions (frame B, metres) and the bounds"
+        )
+        thrusts = ", ".join(f"{rotors[k].name or f'rotor_{k + 1}'!r} {f[k]:.4g} N in [{lo[k]:g}, {hi[k]:g}]" for k in out)
+        raise ActuationError(
+            f"{source}: the hover solution (least-norm thrusts giving the weight {weight:.6g} N) needs thrusts outside "
+            f"the rotors' bounds: {thrusts}; {hint}"
+        )
+    drag = np.array([r.spin * r.kappa * float(np.dot(r.axis_body, d)) for r in rotors])
+    scale = float(np.sum(np.abs(drag)))
+    if scale > 0.0 and abs(float(drag.sum())) > 1e-6 * scale:
+        cw = [k for k, r in enumerate(rotors) if r.spin > 0]
+        ccw = [k for k, r in enumerate(rotors) if r.spin < 0]
+        warnings.warn(
+            f"{source}: the spins do not balance the yaw drag at hover: at equal thrusts the drag torques leave "
+            f"{float(drag.sum()) / len(rotors):+.3g} N m per newton about the thrust axis (cw, spin +1: {_names(rotors, cw) or 'none'}; "
+            f"ccw, spin -1: {_names(rotors, ccw) or 'none'}), so the hover thrusts are unequal "
+            f"({float(f.min()):.4g}-{float(f.max()):.4g} N) and yaw authority is lost; check the spins (coaxial pairs turn opposite ways)",
+            ActuationWarning,
+            stacklevel=3,
+        )
+
+
 def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 0.0), source: str = "the rotor set", *, hover: bool = True) -> None:
     """Nothing for a rotor set that can hover and control its attitude, else an :class:`~qprr.errors.ActuationError`
     naming ``source`` (the rotor file) and the rotors (:func:`actuation_summary` reports the numbers).
@@ -536,10 +589,6 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
     a line or at the centre, fewer than four rotors); no hover thrusts strictly inside the bounds (``hover=False``
     skips this one: a rotor set read without the vehicle's mass, e.g. ``qprr import px4`` without ``--mass``).  Warned about
     (:class:`~qprr.errors.ActuationWarning`): a condition number above :data:`CONDITION_WARN`."""
-    import warnings
-
-    from .errors import ActuationError, ActuationWarning
-
     dup = duplicate_rotors(rotors)
     names = [r.name or f"rotor_{k + 1}" for k, r in enumerate(rotors)]
     if dup:
@@ -570,7 +619,7 @@ def check_rotor_set(rotors: Sequence[Rotor], weight: float, com_body=(0.0, 0.0, 
     if summary.condition > CONDITION_WARN:
         warnings.warn(
             f"{source}: the rotors' attitude map is badly conditioned (condition {summary.condition:.3g} > "
-            f"{CONDITION_WARN:g}): one of thrust, roll, pitch, yaw is far weaker than the others",
+            f"{CONDITION_WARN:g}): {_weakest(rotors, summary)}",
             ActuationWarning,
             stacklevel=3,
         )
@@ -606,3 +655,22 @@ def _toml_string(text: str) -> str:
     if any(ord(ch) < 32 for ch in text):
         raise InputError(f"rotor name {text!r} contains a control character")
     return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _weakest(rotors: Sequence[Rotor], summary: ActuationSummary) -> str:
+    """Which of thrust, roll, pitch, yaw torque the set hardly produces, and why when it is yaw (small kappa)."""
+    Omega = rotor_matrix(rotors)
+    d = summary.thrust_axis_body
+    att = np.vstack([d @ Omega[0:3], Omega[3:6] / summary.length])
+    U, _, _ = np.linalg.svd(att)
+    axis_of = np.vstack([np.r_[1.0, 0.0, 0.0, 0.0], np.hstack([np.zeros((3, 1)), np.eye(3)])])
+    weak = int(np.argmax(np.abs(axis_of @ U[:, -1])))
+    name = ("collective thrust", "roll torque (about x_B)", "pitch torque (about y_B)", "yaw torque (about z_B)")[weak]
+    if weak == 3 or abs(float(U[3, -1])) > 0.5:
+        kappas = sorted({r.kappa for r in rotors})
+        return (
+            f"the yaw torque is far weaker than thrust, roll and pitch: it comes from the drag/thrust ratios kappa "
+            f"{', '.join(f'{k:g}' for k in kappas)} m (propellers: 0.005-0.06 m); a raw drag coefficient c [N m s^2] "
+            "written for kappa = c / b? Yaw errors and saturated rotors follow"
+        )
+    return f"the {name} is far weaker than the others"

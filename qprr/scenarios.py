@@ -35,6 +35,7 @@ from .model import Platform
 from .registry import SCENARIOS
 from .sim import SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
+from .validation import as_bool
 
 
 @dataclass(frozen=True)
@@ -95,6 +96,9 @@ class Scenario:
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         values = {k: o.default for k, o in self.options.items()}
         values.update(options)
+        for key in options:
+            if isinstance(self.options[key].default, bool):  # a flag: "no", "false", 0 are False, never a truthy text
+                values[key] = as_bool(options[key], f"option {key!r} of scenario {self.name!r}")
         if "law" in values and values["law"] not in LAWS:  # checked here: a trajectory may not use it (the spiral)
             raise UnknownNameError("transition law", values["law"], LAWS)
         if plant is not None:
@@ -309,7 +313,11 @@ MISSIONS = (
         "any platform: point-to-point at height through first-order rotor dynamics",
         _mission_runner("motor_lag"),
         _FLIGHT,
-        {**_MOVE, "tau": Option(0.005, "rotor time constant [s]"), "thrust_factor": Option(1e-5, "rotor thrust factor b [N s^2] (f = b w^2)")},
+        {
+            **_MOVE,
+            "tau": Option(0.0, "rotor time constant [s]; 0: the rotor file's [motor] time_constant, else 0.005"),
+            "thrust_factor": Option(0.0, "rotor thrust factor b [N s^2] (f = b w^2); 0: the rotor file's [motor] thrust_factor, else 1e-5"),
+        },
         summary=_mission_summary,
     ),
     Scenario(

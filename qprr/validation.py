@@ -140,6 +140,23 @@ def as_int(x, name: str, *, lo: int | None = None, hi: int | None = None) -> int
     return v
 
 
+BOOL_WORDS = {"true": True, "yes": True, "1": True, "false": False, "no": False, "0": False}
+"""The texts :func:`as_bool` reads as a boolean (case and surrounding spaces ignored)."""
+
+
+def as_bool(x, name: str) -> bool:
+    """``x`` as a bool: a bool, the integers 0 and 1, or one of the texts of :data:`BOOL_WORDS` (true/false, yes/no,
+    1/0); anything else (``"maybe"``, ``"on"``, 2, None) raises an :class:`InputError` naming ``name`` - a non-empty
+    text such as ``"no"`` is never taken for True."""
+    if isinstance(x, (bool, np.bool_)):
+        return bool(x)
+    if isinstance(x, (int, np.integer)) and int(x) in (0, 1):
+        return bool(int(x))
+    if isinstance(x, str) and x.strip().lower() in BOOL_WORDS:
+        return BOOL_WORDS[x.strip().lower()]
+    raise InputError(f"{name} must be true or false (true/false, yes/no or 1/0), got {_preview(x)}")
+
+
 def as_name(x, name: str, valid, kind: str | None = None) -> str:
     """``x`` if it is one of the strings ``valid``, else :class:`UnknownNameError` listing them (``kind`` names
     the thing in the message, default ``name``)."""

@@ -1217,3 +1217,219 @@ def _feed(pl: Plan, ctx: Ctx, report: Report, errors, timeout: float, hooks: _Ho
             report.outcomes.append(Outcome(qual, p.name, label, verdict, detail))
             if hooks.on_outcome is not None:
                 hooks.on_outcome(hooks.index, report.outcomes[-1])
+
+
+# ============================================================================ issue 34: cases on the new surfaces
+@dataclass(frozen=True)
+class Case:
+    """One bad input on a surface the introspection above cannot feed (a scenario option, a mission, a rotor file, a
+    controller, a study): ``call()`` must raise a :class:`qprr.errors.QprrError` - or, with ``warns``, emit a warning -
+    whose message contains every string of ``names`` (the argument, the value, the fix)."""
+
+    label: str
+    call: Callable[[], object]
+    names: tuple[str, ...]
+    warns: bool = False
+
+
+_EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
+
+
+def example_platform():
+    """examples/my_platform's quad_rrr (the platform docs/platforms.md builds), loaded once."""
+    import qprr
+
+    if "quad" not in _CASE_CACHE:
+        _CASE_CACHE["quad"] = qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _EXAMPLE / "quad_rrr.rotors.toml", ee_frame="gripper")
+    return _CASE_CACHE["quad"]
+
+
+_CASE_CACHE: dict[str, object] = {}
+
+
+def _scenario(name: str, **options):
+    from qprr.scenarios import run as run_scenario
+
+    return lambda: run_scenario(name, platform=example_platform(), duration=0.05, **options)
+
+
+def _z_phase(end: float = 0.02) -> dict:
+    return {"coordinate": "z", "start": 0.0, "end": end, "target": 1.0}
+
+
+def mission_cases() -> list[Case]:
+    """Issue 34, items 2 and 3: missions, scenario options."""
+    late = {"coordinate": "x", "start": 0.5, "end": 0.8, "target": 1.0}
+    return [
+        Case(
+            "mission phase after the run's end",
+            _scenario("mission", mission={"phase": [_z_phase(), late]}),
+            ("phase 2", "start = 0.5", "duration = 0.05", "never flown"),
+            warns=True,
+        ),
+        Case(
+            "mission payload event after the run's end",
+            _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.5, "mass": 0.1}]}),
+            ("payload event 1", "time = 0.5", "duration", "never flown or applied"),
+            warns=True,
+        ),
+        Case(
+            "mission payload of 150 kg (grams?)",
+            _scenario("mission", mission={"phase": [_z_phase()], "payload": [{"time": 0.01, "mass": 150.0}]}),
+            ("payload event 1", "mass = 150", "grams"),
+        ),
+        Case(
+            "mission phase ending after the run's end (flown in part)",
+            _scenario("mission", mission={"phase": [_z_phase(0.08)]}),
+            ("phase 1", "end = 0.08", "duration", "flown in part"),
+            warns=True,
+        ),
+        Case("fly-to target of two numbers", _scenario("fly-to", target=(1.0, 0.5)), ("target", "(1.0, 0.5)", "(x, y, z)")),
+        Case("hover-noise fraction NaN", _scenario("hover-noise", fraction=math.nan), ("fraction", "nan")),
+        Case("hover-noise fraction text", _scenario("hover-noise", fraction="2%"), ("fraction", "'2%'")),
+        Case("thesis flag as_printed = 'maybe'", lambda: _thesis_run(as_printed="maybe"), ("as_printed", "'maybe'", "true or false")),
+    ]
+
+
+def _thesis_run(**options):
+    from qprr.scenarios import run as run_scenario
+
+    return run_scenario("static-dsid", duration=0.01, **options)
+
+
+def _rotor_file(text: str) -> Path:
+    folder = Path(tempfile.mkdtemp(prefix="qprr-case-"))
+    path = folder / "case.rotors.toml"
+    path.write_text(text)
+    return path
+
+
+def _load_with_rotors(text: str):
+    import qprr
+
+    return lambda: qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _rotor_file(text), ee_frame="gripper")
+
+
+def rotor_cases() -> list[Case]:
+    """Issue 34, item 2: rotor sets that loaded and flew wrong (the file variants of tests/catalogue_files.py: the rest)."""
+    from tests.catalogue_files import coaxial
+
+    x8 = coaxial((_EXAMPLE / "quad_rrr.rotors.toml").read_text())
+    head, *tables = x8.split("[[rotor]]")
+    flipped = tables[:-1] + [tables[-1].replace('"cw"', '"x"').replace('"ccw"', '"cw"').replace('"x"', '"ccw"')]
+    return [
+        Case(
+            "a coaxial rotor spinning the wrong way",
+            _load_with_rotors(head + "[[rotor]]" + "[[rotor]]".join(flipped)),
+            ("spins do not balance the yaw", "rotor 8", "cw, spin +1", "case.rotors.toml"),
+            warns=True,
+        ),
+    ]
+
+
+def _motor_lag_with(motor_table: str):
+    import qprr
+    from qprr.scenarios import run as run_scenario
+
+    text = (_EXAMPLE / "quad_rrr.rotors.toml").read_text() + "\n" + motor_table
+
+    def call():
+        platform = qprr.from_urdf(_EXAMPLE / "quad_rrr.urdf", _rotor_file(text), ee_frame="gripper")
+        return run_scenario("motor-lag", platform=platform, duration=0.05)
+
+    return call
+
+
+def motor_cases() -> list[Case]:
+    """Issue 34, item 2: the motor stage motor-lag flies (its tau, the rotor file's [motor] table)."""
+    return [
+        Case(
+            "motor-lag tau = 5 (milliseconds as seconds)", _scenario("motor-lag", tau=5.0), ("tau", "5.0", "milliseconds", "rotor_time_constant_max")
+        ),
+        Case(
+            "a [motor] time_constant of 5 (milliseconds as seconds)",
+            _motor_lag_with("[motor]\nthrust_factor = 1e-5\ntime_constant = 5.0\n"),
+            ("time_constant", "case.rotors.toml", "5.0", "milliseconds"),
+        ),
+        Case("a [motor] table with an unknown key", _motor_lag_with("[motor]\ntau = 0.005\n"), ("motor key", "'tau'", "case.rotors.toml")),
+        Case(
+            "a [motor] table with a text value",
+            _motor_lag_with('[motor]\nthrust_factor = "1e-5"\ntime_constant = 0.005\n'),
+            ("thrust_factor", "case.rotors.toml", "strings"),
+        ),
+    ]
+
+
+def _controller_returning(bad: Callable):
+    """simulate() with an IDC whose step's output goes through ``bad`` (a user's controller with a bug)."""
+    import qprr
+    from qprr.control import make_controller
+    from qprr.sim import simulate
+    from qprr.trajectory import Hold
+
+    def call():
+        platform = qprr.load()
+        ctrl = make_controller("idc", platform)
+        own = ctrl.step
+        ctrl.step = lambda t, state, ref: bad(own(t, state, ref))
+        return simulate(platform, ctrl, Hold(tuple(platform.neutral_xi())), 0.01)
+
+    return call
+
+
+def controller_cases() -> list[Case]:
+    """Issue 34, item 3: a controller's output of the wrong shape, named as the controller's."""
+    return [
+        Case(
+            "a controller returning 8 values", _controller_returning(lambda u: u[:8]), ("controller 'idc'", "step returned shape (8,)", "shape (9,)")
+        ),
+        Case("a controller returning None", _controller_returning(lambda u: None), ("controller 'idc'", "step returned NoneType None", "shape (9,)")),
+    ]
+
+
+def _study(constraints: dict):
+    from qprr.design.spec import DesignSpec
+
+    study = {"name": "case", "architectures": ["Q-RR"], "objectives": ["hover_volume", "arm_mass"], "constraints": constraints}
+    return lambda: DesignSpec.from_mapping(study)
+
+
+def design_cases() -> list[Case]:
+    """Issue 34, item 2: a design constraint no design can meet."""
+    return [
+        Case("a design constraint arm_mass max = -1", _study({"arm_mass": {"max": -1}}), ("constraints.arm_mass.max", "-1", "excludes every design")),
+        Case(
+            "a design constraint balance_fraction min = 50 (a percentage)",
+            _study({"balance_fraction": {"min": 50}}),
+            ("constraints.balance_fraction.min", "50", "never above 1"),
+        ),
+    ]
+
+
+def cases() -> list[Case]:
+    """Every :class:`Case` (issue 34)."""
+    return mission_cases() + rotor_cases() + motor_cases() + controller_cases() + design_cases()
+
+
+def run_cases(selected: list[Case] | None = None) -> list[Outcome]:
+    """Each case's outcome: ``good`` (a qprr error, or a warning for ``warns``, naming every string), ``unclear`` (it
+    does not name them, or another exception), ``silent`` (nothing said)."""
+    errors = importlib.import_module("qprr.errors")
+    out = []
+    for case in cases() if selected is None else selected:
+        with warnings.catch_warnings(record=True) as caught, contextlib.redirect_stderr(io.StringIO()):
+            warnings.simplefilter("always")
+            try:
+                case.call()
+            except errors.QprrError as exc:
+                said, kind = str(exc), type(exc).__name__
+            except Exception as exc:
+                out.append(Outcome(case.label, "", "", "unclear", f"{type(exc).__name__}: {exc}"[:300]))
+                continue
+            else:
+                said = "\n".join(str(w.message) for w in caught) if case.warns else ""
+                kind = "warning"
+        missing = [n for n in case.names if n not in said]
+        verdict = "silent" if not said else ("unclear" if missing else "good")
+        out.append(Outcome(case.label, "", "", verdict, f"{kind}: {said[:300]}" + (f" (does not name {missing})" if missing and said else "")))
+    return out

@@ -87,6 +87,11 @@ def _urdf_variants(text: str) -> Iterator[tuple[str, str, str]]:
                 yield f"joint {name!r} <limit {attr}> missing", name, _edit_attr(text, "joint", name, "limit", attr, None)
                 yield f"joint {name!r} <limit {attr}> NaN", name, _edit_attr(text, "joint", name, "limit", attr, "nan")
                 yield f"joint {name!r} <limit {attr}> negative", name, _edit_attr(text, "joint", name, "limit", attr, "-1")
+            for bad, what in (("nan", "NaN"), ("stiff", "text"), ("0.1 0.2", "two numbers"), ("-0.1", "negative")):
+                dyn = ET.fromstring(text)
+                j = next(e for e in dyn.findall("joint") if e.get("name") == name)
+                ET.SubElement(j, "dynamics", damping=bad, friction="0.1")
+                yield f"joint {name!r} <dynamics damping> {what}", name, ET.tostring(dyn, encoding="unicode")
             yield (
                 f"joint {name!r} <limit effort> in N mm",
                 name,
@@ -141,6 +146,13 @@ def _rotor_variants(text: str) -> Iterator[tuple[str, str, str]]:
         re.sub(r"position = \[([-\d.]+), ([-\d.]+), ([-\d.]+)\]", lambda m: f"position = [{m.group(1)}, 0.0, {m.group(3)}]", text),
     )
     yield "positions in millimetres", "rotor 1", re.sub(r"position = \[([-\d., ]+)\]", _mm, text)
+    raw = re.sub(r"^kappa = [\d.]+", "kappa = 1.3677728e-7", text, count=1, flags=re.M)
+    yield "kappa a raw drag coefficient (N m s^2)", "kappa_min", raw
+    yield "radius in millimetres", "radius", text.replace("[[rotor]]", "[[rotor]]\nradius = 120.0", 1)
+    x8 = coaxial(text)
+    head, *tables = x8.split("[[rotor]]")
+    down = tables[:-1] + [tables[-1].replace("spin =", "axis = [0.0, 0.0, -1.0]\nspin =", 1)]
+    yield "a coaxial lower rotor pointing down", "against the collective thrust", head + "[[rotor]]" + "[[rotor]]".join(down)
 
 
 def variants() -> list[Variant]:
@@ -180,9 +192,8 @@ def run_files() -> list[FileOutcome]:
     return [judge_file(v, load) for v in variants()]
 
 
-def valid_variants() -> list[Variant]:
-    """The first three entries of :data:`VALID_BY_DESIGN`, as files."""
-    urdf, rotors = URDF.read_text(), ROTORS.read_text()
+def coaxial(rotors: str) -> str:
+    """The rotor file ``rotors`` made an X8: every rotor table repeated 8 cm higher with the other spin."""
     head, *tables = rotors.split("[[rotor]]")
     upper = [
         re.sub(
@@ -191,7 +202,13 @@ def valid_variants() -> list[Variant]:
         for t in tables
     ]
     upper = [t.replace('"cw"', '"x"').replace('"ccw"', '"cw"').replace('"x"', '"ccw"') for t in upper]
-    x8 = rotors + "\n[[rotor]]" + "[[rotor]]".join(upper)
+    return rotors + "\n[[rotor]]" + "[[rotor]]".join(upper)
+
+
+def valid_variants() -> list[Variant]:
+    """The first three entries of :data:`VALID_BY_DESIGN`, as files."""
+    urdf, rotors = URDF.read_text(), ROTORS.read_text()
+    x8 = coaxial(rotors)
     root = ET.fromstring(urdf)
     base = root.find("link")
     body = ET.SubElement(root, "link", name="body_mass")

@@ -384,7 +384,7 @@ def test_show_into_a_reader_that_stops_early_ends_without_a_traceback(reference,
 
 
 def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path):
-    """3 records saved and a fourth cut: "3 of 9 runs done, 6 missing", the rates over the 9 runs (it said "3 runs",
+    """3 records saved and a fourth cut: "3 of 9 runs ... (6 missing ...)", the rates over the 9 runs (it said "3 runs",
     "100 %" of what was there)."""
     from qprr.campaign.report import report
 
@@ -395,7 +395,7 @@ def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path)
     _copy_meta(ref_dir, out)
     head = report(out)[0].splitlines()[0]
     ok = int((table["status"][:3] == "ok").sum())
-    assert head.startswith("faults: 3 of 9 runs done, 6 missing, of target.py:target") and f"{ok} completed ({100 * ok / 9:.1f} %)" in head, head
+    assert head.startswith("faults: 3 of 9 runs of target.py:target (6 missing") and f"{ok} completed ({100 * ok / 9:.1f} % of 9)" in head, head
 
 
 # ---------------------------------------------------------------------------- full disk, read-only folder

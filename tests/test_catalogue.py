@@ -105,3 +105,13 @@ def test_the_near_mistakes_that_are_legitimate_load(tmp_path):
             p = qprr.from_urdf(v.urdf, path, ee_frame=catalogue_files.EE)
         assert p.total_mass == pytest.approx(1.5, rel=1e-12), v.label
         assert p.actuation_summary().can_hover
+
+
+# ----------------------------------------------------------------------------------- new surfaces (issue 34)
+def test_every_issue_34_case_is_refused_or_warned_naming_the_input():
+    """Missions, scenario options, rotor files, motor stages, controllers, studies (tests/catalogue.py, :func:`cases`):
+    each ends in a qprr error (or a warning where the input is legal but suspicious) naming the input, its value and the fix."""
+    outcomes = catalogue.run_cases()
+    bad = [o for o in outcomes if o.verdict != "good"]
+    assert len(outcomes) >= 7
+    assert not bad, "\n".join(f"{o.verdict:8s} {o.target}: {o.detail}" for o in bad)

@@ -539,3 +539,35 @@ def test_the_ik_answer_does_not_depend_on_the_call_history(history, k):
 def test_every_error_above_is_a_qprr_error():
     for cls in (InputError, ShapeError, NonFiniteError, LimitError, NonPhysicalError, DivergenceError):
         assert issubclass(cls, QprrError)
+
+
+# ------------------------------------------------------------------- booleans from text (issue 34)
+@pytest.mark.parametrize(
+    "given, value", [(True, True), (False, False), (1, True), (0, False), ("true", True), ("No", False), (" yes ", True), ("0", False)]
+)
+def test_a_boolean_is_read_strictly(given, value):
+    from qprr.validation import as_bool
+
+    assert as_bool(given, "flag") is value
+
+
+@pytest.mark.parametrize("given", ["maybe", "on", "", 2, None, 0.5, "Falsch"])
+def test_anything_else_is_refused_naming_the_flag(given):
+    from qprr.validation import as_bool
+
+    with pytest.raises(InputError, match=r"flag must be true or false"):
+        as_bool(given, "flag")
+
+
+def test_a_scenario_flag_given_as_text_no_is_false():
+    """``as_printed="no"`` (a campaign's TOML, a Python call) was taken as True (a non-empty string)."""
+    from qprr.scenarios import Option, Scenario
+
+    seen = {}
+    sc = Scenario("flag-probe", "", lambda platform, controller, progress, **o: seen.update(o), ("idc",), {"as_printed": Option(False, "")})
+    sc.run(as_printed="no")
+    assert seen["as_printed"] is False
+    sc.run(as_printed="yes")
+    assert seen["as_printed"] is True
+    with pytest.raises(InputError, match="as_printed.*'maybe'"):
+        sc.run(as_printed="maybe")

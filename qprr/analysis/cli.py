@@ -20,6 +20,8 @@ from ._common import MapReference
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
 COLLISION = {"auto": None, "on": True, "off": False}
 """``--collision`` to the maps' ``collision`` option (auto: check when the platform has a collision model)."""
+COLLISION_MAPS = ("workspace", "hover")
+"""The maps that measure a collision-free part (their ``collision`` option); the others sample the joint box only."""
 DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000, "opspace": 10_000}
 
 
@@ -53,6 +55,12 @@ def run(args: argparse.Namespace) -> int:
         output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
     except ValueError as exc:
         return fail("qprr analyze", str(exc))
+    if args.collision != "auto" and args.map not in COLLISION_MAPS:
+        return fail(
+            "qprr analyze",
+            f"--collision {args.collision} does not apply to the {args.map} map: it samples the whole joint box and "
+            f"measures no collision-free part; the maps that do: {', '.join(COLLISION_MAPS)} (leave --collision out here)",
+        )
     platform = platform_from_args(args)
     n = args.samples or DEFAULT_SAMPLES[args.map]
     progress = FractionProgress(quiet=args.quiet)  # stderr: a bar on a terminal, plain lines in a log

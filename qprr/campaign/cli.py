@@ -32,7 +32,7 @@ def _print(lines) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .report import report
+    from .report import not_ok_reasons, report
     from .runner import run_campaign
     from .spec import CampaignSpec
     from .store import ResultsWriteError
@@ -72,6 +72,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             f"{ok} ok, {len(res) - ok} not ok; {wall:.1f} s, {done.runs_per_second:.2f} runs/s on {done.where}"
         ]
     )
+    for line in not_ok_reasons(res):
+        print(line)
     if done.interrupted or done.lost:
         return 1
     if args.report:

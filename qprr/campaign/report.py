@@ -466,6 +466,46 @@ def _numeric(results: Results, name: str) -> bool:
     return results.table[name].dtype.kind in "fiu"
 
 
+def planned_runs(results: Results) -> int:
+    """The number of runs the campaign has (its ``.meta.json``'s ``n_runs``; the rows read when it does not say)."""
+    n = results.meta.get("n_runs")
+    return n if isinstance(n, int) and not isinstance(n, bool) and n >= len(results) else len(results)
+
+
+def _headline(res: Results, on: str, crit: str) -> str:
+    """The first line, "NAME: 3 of 4 runs of SCENARIO (1 missing ...), 3 completed (75.0 % of 4) ...": percentages of the campaign's
+    runs, a missing run (never run, or its record cut) counted as missing, not as completed."""
+    n = planned_runs(res)
+    what = f"{res.spec.get('name', '')}: {len(res)} of {n} runs of {res.spec.get('scenario') or res.spec.get('callable')}{on}"
+    if not n:
+        return f"{what}: no runs"
+    missing = n - len(res)
+    if missing:
+        what += (
+            f" ({missing} missing: not run yet, or a record cut by an interrupted write; `qprr campaign run` with the "
+            f"same specification and output runs them)"
+        )
+    ok, good = int(_ok(res).sum()) if len(res) else 0, int(_success(res).sum()) if len(res) else 0
+    return f"{what}, {ok} completed ({100 * ok / n:.1f} % of {n}), {good} successful ({100 * good / n:.1f} %){crit}"
+
+
+def not_ok_reasons(results: Results, limit: int = 3) -> list[str]:
+    """One line per distinct reason of the runs that did not complete (most frequent first, at most ``limit``): what
+    the ``reason`` column of the table says, on the terminal (a typo in an option fails every run with one reason)."""
+    if not len(results) or "reason" not in results.table.dtype.names:
+        return []
+    status, reason = results.table["status"], results.table["reason"]
+    bad = status != "ok"
+    if not bad.any():
+        return []
+    keys, counts = np.unique(np.char.add(np.char.add(status[bad], ": "), reason[bad]), return_counts=True)
+    order = np.argsort(-counts, kind="stable")
+    lines = [f"  {counts[k]} run(s) {keys[k]}" for k in order[:limit]]
+    if len(order) > limit:
+        lines.append(f"  ... and {int(counts[order[limit:]].sum())} run(s) with {len(order) - limit} other reason(s) (the table's reason column)")
+    return [f"not completed ({int(bad.sum())} run(s)):", *lines]
+
+
 def report(
     path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None, markdown: bool = False
 ) -> tuple[str, list[Path]]:
@@ -484,18 +524,7 @@ def report(
     crit = ("; success: completed and " + ", ".join(f"{k} <= {v:g}" for k, v in bounds.items())) if bounds else ""
     platform = platform_label(res)
     on = f" on {platform}" if platform else ""
-    total = max(int(res.meta.get("n_runs", len(res))), len(res))  # the campaign's runs: those not saved count as missing
-    missing = total - len(res)
-    runs = f"{len(res)} of {total} runs done, {missing} missing, of" if missing else f"{len(res)} runs of"
-    head = (
-        f"{res.spec.get('name', '')}: {runs} {res.spec.get('scenario') or res.spec.get('callable')}{on}, "
-        f"{int(_ok(res).sum())} completed ({100 * _ok(res).sum() / total:.1f} %), {int(_success(res).sum())} successful "
-        f"({100 * _success(res).sum() / total:.1f} %){crit}"
-        if len(res)
-        else f"no runs ({total} missing)"
-        if total
-        else "no runs"
-    )
+    head = "\n".join([_headline(res, on, crit), *not_ok_reasons(res)])
     text = head + "\n" + text
     figures: list[Path] = []
     if out is None or not len(res):

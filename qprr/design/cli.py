@@ -28,7 +28,7 @@ def _print_report(results, out, args) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .engine import run_design
+    from .engine import infeasible_reasons, run_design
     from .spec import DesignSpec
 
     prog = "qprr design run"
@@ -48,6 +48,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
             f"{spec.name}: {done.executed} designs evaluated now ({done.skipped} resumed), {n} saved in {done.path}; "
             f"{done.failed} failed; {done.wall_time:.1f} s on {done.backend}"
         )
+        for line in infeasible_reasons(done.results, spec):
+            print(line)
         if args.report and not done.interrupted:
             _print_report(done.results, args.report, args)
     except (QprrError, KeyError, ValueError) as exc:

@@ -404,13 +404,14 @@ def _loop(run: _Run, bar: Progress) -> tuple[int, QprrError | None, np.ndarray, 
                     k += 1
                 update(tk, q, v)  # no entry beyond its own bound: go on
             ref.xi, ref.xi_dot, ref.xi_ddot = xi_d[k], xi_dot_d[k], xi_ddot_d[k]
-            if pin_out:
-                tau_d = step(tk, state, ref)
-                u_log[k] = tau_d  # converted to u = S^T tau_d after the loop
-            else:
-                u = step(tk, state, ref)
-                u_log[k] = u
-                tau_d = force_from_xi(u, tau_d_buf)
+            out = step(tk, state, ref)
+            if out is None:  # numpy would store it as NaN
+                raise _bad_shape(platform, controller, out, pin_out)
+            try:
+                u_log[k] = out  # a Pinocchio tau_d is converted to u = S^T tau_d after the loop
+            except (TypeError, ValueError):  # a wrong length, text: the controller's output, not the simulator
+                raise _bad_shape(platform, controller, out, pin_out) from None
+            tau_d = out if pin_out else force_from_xi(out, tau_d_buf)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
                 if fl < 0:  # the screened allocation refused tau_d: NaN, inf or absurd controller output
@@ -685,6 +686,21 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
 
 
 _BASE_F = ("f_x", "f_y", "f_z", "tau_x", "tau_y", "tau_z")
+
+
+def _bad_shape(platform: Platform, controller, out, pin_out: bool) -> ShapeError:
+    """ShapeError: the controller's ``step`` returned something that is not one generalised force of the platform."""
+    n = platform.nv
+    what = (
+        f"tau, the Pinocchio generalised force: {n} numbers (6 base wrench entries, then the {platform.n_arm} arm efforts)"
+        if pin_out
+        else f"u, the generalised force in the thesis coordinates xi = {list(platform.xi_names)}: {n} numbers"
+    )
+    shape = f"shape {np.shape(out)}" if isinstance(out, (np.ndarray, list, tuple)) else type(out).__name__
+    return ShapeError(
+        f"the controller {controller.name!r} ({type(controller).__name__}).step returned {shape} "
+        f"{' '.join(repr(out).split())[:80]}: it must return {what}, an array of shape ({n},); fix the controller's step"
+    )
 
 
 def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) -> QprrError:

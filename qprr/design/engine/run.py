@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import InputError
-from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design
+from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design, exclusions
 from ..search.optimiser import make_optimiser
 from ..search.points import fixed_params, grid_points, n_points, point, reference_points
 from ..spec.metrics import METRICS, sign
@@ -192,3 +192,10 @@ def run_design(
     name = backend if isinstance(backend, str) else backend.name
     path = session.store.path
     return DesignRun(path, study.executed, skipped, study.failed, wall, name, io.read_table(path), interrupted)
+
+
+def infeasible_reasons(results, spec: DesignSpec) -> list[str]:
+    """Why designs of a study's table are not feasible (:func:`~qprr.design.evaluate.task.exclusions`), for the terminal:
+    the failed evaluations' reasons and what each constraint excludes, otherwise only in the table's columns."""
+    table = results.table
+    return exclusions(({k: r[k].item() for k in table.dtype.names} for r in table), spec.constraints)

@@ -2,6 +2,6 @@
 
 from ..spec.metrics import METRICS, label, sign
 from .maps import evaluate_platform
-from .task import columns, evaluate_design, feasible
+from .task import columns, evaluate_design, exclusions, feasible
 
-__all__ = ["METRICS", "columns", "evaluate_design", "evaluate_platform", "feasible", "label", "sign"]
+__all__ = ["METRICS", "columns", "evaluate_design", "evaluate_platform", "exclusions", "feasible", "label", "sign"]

@@ -42,6 +42,27 @@ def feasible(row: Mapping, constraints: Mapping) -> int:
     return 1
 
 
+def exclusions(rows, constraints: Mapping, limit: int = 3) -> list[str]:
+    """Why designs are not feasible, on the terminal: the failed evaluations per reason (the ``limit`` most frequent), then
+    each constraint ``{metric: (min, max)}`` with the number of evaluated designs it excludes (one may be excluded by
+    several); [] when every design is feasible."""
+    rows = list(rows)
+    failed: dict[str, int] = {}
+    for r in rows:
+        if r["status"] != "ok":
+            key = f"{r['status']}: {r.get('reason', '')}"
+            failed[key] = failed.get(key, 0) + 1
+    ok = [r for r in rows if r["status"] == "ok"]
+    lines = [f"  {n} design(s) {why}" for why, n in sorted(failed.items(), key=lambda kv: -kv[1])[:limit]]
+    for k, (lo, hi) in constraints.items():
+        bound = " and ".join(b for b in ((f"{k} >= {lo:g}" if lo is not None else ""), (f"{k} <= {hi:g}" if hi is not None else "")) if b)
+        out = sum(1 for r in ok if (lo is not None and not r[k] >= lo) or (hi is not None and not r[k] <= hi))
+        if out:
+            lines.append(f"  constraint {bound} excludes {out} of the {len(ok)} evaluated design(s)")
+    n_feasible = sum(feasible(r, constraints) for r in rows)
+    return [f"not feasible: {len(rows) - n_feasible} of {len(rows)} design(s):", *lines] if lines else []
+
+
 def _platform(spec: DesignSpec, point: Mapping):
     if point["kind"] == "reference":
         from ...platforms import load

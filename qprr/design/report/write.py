@@ -8,6 +8,7 @@ from pathlib import Path
 from ...errors import InputError
 from ..engine import campaign_io as io
 from ..evaluate.flight import FLIGHT_COLUMNS, fly_design
+from ..evaluate.task import exclusions
 from ..spec.study import DesignSpec
 from .figures import parallel_coordinates, pareto_2d
 from .rank import markdown_table, ranked, rows_of
@@ -78,7 +79,7 @@ def report(results, out=None, *, top: int | None = None, fly: bool = True, backe
         f"design study {spec.name}: {len(rows)} designs evaluated, {n_ok} ok, {n_feas} feasible, {n_front} on the Pareto front "
         f"of ({', '.join(spec.objectives)})"
     )
-    text = [head, "", markdown_table(rk, spec.objectives, params)]
+    text = [head, *exclusions(rows, spec.constraints), "", markdown_table(rk, spec.objectives, params)]
     figures: list[str] = []
     k = spec.closed_loop.top if top is None else top
     chosen = [r for r in rk if r["level"] >= 1 and r["kind"] != "reference"][:k] + [r for r in rk if r["kind"] == "reference"]

@@ -39,6 +39,18 @@ METRICS = {
 }
 """name -> (unit, "max" or "min", label)."""
 
+RANGES = {
+    "hover_volume": (0.0, None),
+    "free_hover_volume": (0.0, None),
+    "balance_fraction": (0.0, 1.0),
+    "thrust_margin": (None, None),
+    "payload_at_reach": (0.0, None),
+    "manipulability": (0.0, None),
+    "arm_mass": (0.0, None),
+    "mass": (0.0, None),
+}
+"""name -> (lowest, highest) value the metric can take (None: unbounded); a constraint outside it excludes every design."""
+
 
 def sign(name: str) -> float:
     """+1 for a metric to minimise, -1 for one to maximise (objectives in minimisation form)."""

@@ -34,7 +34,7 @@ from ...errors import QprrError
 from ...validation import as_file
 from ._check import fail, integer, number, table_keys
 from .mass import MassModel
-from .metrics import METRICS
+from .metrics import METRICS, RANGES
 from .parameters import Parameter, default_parameters, parse_parameter
 
 OPTIMISERS = ("pymoo", "optuna")
@@ -270,6 +270,12 @@ def _constraints(value) -> dict:
         hi = number(b["max"], f"constraints.{k}.max") if "max" in b else None
         if lo is not None and hi is not None and not lo <= hi:
             fail(f"constraints.{k}", v, "min <= max")
+        low, high = RANGES[k]
+        unit = METRICS[k][0]
+        if hi is not None and low is not None and hi < low:
+            fail(f"constraints.{k}.max", hi, f"a bound >= {low:g} {unit}: {k} is never below {low:g}, so max = {hi:g} excludes every design")
+        if lo is not None and high is not None and lo > high:
+            fail(f"constraints.{k}.min", lo, f"a bound <= {high:g}: {k} is never above {high:g}, so min = {lo:g} excludes every design")
         out[k] = (lo, hi)
     return out
 
