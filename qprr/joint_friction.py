@@ -27,25 +27,40 @@ the others are implicit.
 
 * **explicit**: tau_f(V) at each stage's velocity V, an ordinary term of the right-hand side.  The integrator keeps its
   order (1, 2, 4 for euler, midpoint, rk4: tests/test_friction_orders.py measures them).
-* **implicit**: every stage takes the friction of the implicit joints S over the whole step dt from the step's start
-  velocity v0 (:meth:`JointFriction.start`), by backward Euler: at a stage (t, q, V) the acceleration is
+* **implicit**: every stage takes the implicit joints S over the whole step dt from the step's start velocity v0
+  (:meth:`JointFriction.start`): at a stage (t, q, V), with a0 = M^-1 (tau + tau_f,E(V) - h(q, V)) the forward dynamics
+  without the implicit joints' friction and W = (M^-1)_SS, the acceleration is
 
-      a = a0 + (M^-1)_{:,S} tau_f,S(x),   a0 = M^-1 (tau + tau_f,E(V) - h(q, V)),                    (1)
+      a = a0 + (M^-1)_{:,S} W^-1 ((x - v0_S) / dt - a0_S)                                               (1)
 
-  where x, the implicit joints' velocity at the end of the step, solves x = v0_S + dt a_S, i.e.
-  x = c + dt W tau_f,S(x) with c = v0_S + dt a0_S and W = (M^-1)_SS.  As tau_f = -grad Phi with the convex
-  Phi(x) = sum d x^2 / 2 + F v_s log cosh(x / v_s), x is the minimiser of the strictly convex
-  (x - c)^T W^-1 (x - c) / 2 + dt Phi(x): :meth:`JointFriction.solve` finds it by Newton's method with a backtracking
-  line search, which converges from any start on such a function (Boyd & Vandenberghe, *Convex Optimization*,
-  Sec. 9.5).  A linearisation of tanh at V (one Newton step, a Rosenbrock-Euler step) is not enough: from
-  V = 0.32 rad/s, where tanh is flat, it jumps to -0.32 and back (a two-cycle where the joint sticks).  Every stage
-  of every integrator estimates the same increment (x - v0) / dt and their weights sum to 1, so on v' = -lambda v
-  all three give v+ = v0 / (1 + lambda dt): L-stable, monotone (the rate of a stiff joint never changes sign
-  spuriously), and a state at rest under tau + tau_f = h stays there (no spurious fixed point).  The stage's own
-  fraction of the step instead of dt (dt / 2 at midpoint's first stage) would not be: rk4's weights then give
-  v+ -> -v0 / 2 as lambda dt -> inf; and the earlier form, the linearisation at V taken from V instead of v0, had
-  a fixed point of midpoint at -0.645 rad/s where the exact motion settles at +1 rad/s (issue 34).  The implicit
-  joints are first order in dt (measured against MuJoCo on the hextilt's stiff wrist, tests/test_friction_orders.py).
+  (a_S = (x - v0_S) / dt: the stage's estimate of the step's increment), where x, the implicit joints' velocity at
+  the end of the step, is that of v' = a0_S + W tau_f,S over [0, dt] from v0_S with a0 and W held, the damping
+  -D v exact and the Coulomb force at x (exponential Euler for the linear part, Hochbruck & Ostermann, "Exponential
+  integrators", Acta Numerica 19, 2010, Sec. 2.1; backward Euler for the Coulomb part):
+
+      x = exp(-dt W D) v0_S + dt phi1(-dt W D) (a0_S + W tau_c(x)),   phi1(z) = (exp(z) - 1) / z,         (2)
+
+  tau_c(x) = -F tanh(x / v_s).  This is exact for damping plus a constant force (v0 -> v_inf along
+  exp(-dt W D), the 0.1 ms transient of the hextilt's wrist included, where backward Euler's 1 / (1 + dt d / M) lagged
+  it by 15 % at 1 ms).  With W = L L^T and L^T D L = U diag(lam) U^T, f(W D) = L U f(lam) (L U)^-1, so
+  Q = phi1(-dt W D) W = L U phi1(-dt lam) (L U)^T is symmetric positive definite, and as tau_c = -grad Psi with the
+  convex Psi(x) = sum F v_s log cosh(x / v_s), x is the minimiser of the strictly convex
+
+      (x - b)^T Q^-1 (x - b) / 2 + dt Psi(x),   b = exp(-dt W D) v0_S + dt phi1(-dt W D) a0_S:           (3)
+
+  :meth:`JointFriction.solve` finds it by Newton's method with a backtracking line search, which converges from any
+  start on such a function (Boyd & Vandenberghe, *Convex Optimization*, Sec. 9.5).  A linearisation of tanh at V
+  (one Newton step, a Rosenbrock-Euler step) is not enough: from V = 0.32 rad/s, where tanh is flat, it jumps to
+  -0.32 and back (a two-cycle where the joint sticks).  Every stage of every integrator estimates the increment from
+  v0 over the whole dt and the weights sum to 1, so on v' = -lambda v all three give v+ = exp(-lambda dt) v0:
+  L-stable, monotone (the rate of a stiff joint never changes sign spuriously), and a state at rest under
+  tau + tau_f = h stays there (x = v0 solves (2): no spurious fixed point).  The stage's own fraction of the step
+  instead of dt (dt / 2 at midpoint's first stage) would not be: rk4's weights then give v+ -> -v0 / 2 as
+  lambda dt -> inf with backward Euler; and the earlier form, the linearisation at V taken from V instead of v0, had
+  a fixed point of midpoint at -0.645 rad/s where the exact motion settles at +1 rad/s (issue 34).  Measured against
+  MuJoCo on the hextilt's stiff wrist (tests/test_friction_orders.py): first order with euler (its position
+  q+ = q + dt v+ takes the end rate over the whole step), 1.7-2.4 per halving with midpoint and rk4 (their stages
+  at t + dt / 2 make (2) the exponential midpoint rule; the Coulomb part, taken at the step's end, is first order).
 """
 
 from __future__ import annotations
@@ -173,7 +188,8 @@ class JointFriction:
 
     def solve(self, model: pin.Model, data: pin.Data, q, v, a: np.ndarray) -> np.ndarray:
         """Equation (1) of the module docstring at a stage (q, v): ``a`` (a0, the forward dynamics without the implicit
-        joints' friction) += (M^-1)_{:,S} tau_f,S(x), x the implicit joints' end-of-step velocity; returns ``a``."""
+        joints' friction) becomes a0 + (M^-1)_{:,S} W^-1 ((x - v0) / dt - a0_S), x the implicit joints' end-of-step
+        velocity (2); returns ``a``."""
         i = self._imp
         if not i.size:
             return a
@@ -181,26 +197,39 @@ class JointFriction:
         Minv = np.triu(Minv) + np.triu(Minv, 1).T
         B = Minv[:, i]
         v0 = np.asarray(v, dtype=float)[i] if self._v0 is None else self._v0
-        x = self._end_velocity(B[i], v0 + self.step * a[i], np.asarray(v, dtype=float)[i])
-        a += B @ -(self.damping[i] * x + self.friction[i] * np.tanh(x / self.velocity_scale))
+        b, Qinv = self._exponential(B[i], v0, a[i])
+        x = self._end_velocity(b, Qinv, np.asarray(v, dtype=float)[i])
+        a += B @ np.linalg.solve(B[i], (x - v0) / self.step - a[i])
         return a
 
-    def _end_velocity(self, W: np.ndarray, c: np.ndarray, x: np.ndarray) -> np.ndarray:
-        """argmin (x - c)^T W^-1 (x - c) / 2 + dt Phi(x) (module docstring) by Newton's method with backtracking (Boyd &
+    def _exponential(self, W: np.ndarray, v0: np.ndarray, a0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(b, Q^-1) of (2): b = exp(-dt W D) v0 + dt phi1(-dt W D) a0, the exact end velocity under the damping and the
+        constant a0, and Q = phi1(-dt W D) W, symmetric positive definite, through W = L L^T and L^T D L = U diag(lam) U^T:
+        f(W D) = L U f(lam) U^T L^-1 (Hochbruck & Ostermann, Acta Numerica 19, 2010, Sec. 2.1)."""
+        L = np.linalg.cholesky(W)
+        lam, U = np.linalg.eigh(L.T @ (self.damping[self._imp, None] * L))  # the rates of the damping: W D = L U lam (L U)^-1
+        z = self.step * np.maximum(lam, 0.0)  # dt lam >= 0 (L^T D L is positive semidefinite; round-off)
+        phi = np.ones_like(z)  # phi1(-z) = (1 - exp(-z)) / z, 1 at z = 0
+        np.divide(-np.expm1(-z), z, out=phi, where=z > 0.0)
+        LU = L @ U
+        G = np.linalg.inv(LU)  # U^T L^-1
+        b = LU @ (np.exp(-z) * (G @ v0) + self.step * phi * (G @ a0))
+        return b, G.T @ (G / phi[:, None])  # Q^-1 = (L U)^-T phi1(-dt lam)^-1 (L U)^-1
+
+    def _end_velocity(self, b: np.ndarray, Qinv: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """argmin (x - b)^T Q^-1 (x - b) / 2 + dt Psi(x) (module docstring, (3)) by Newton's method with backtracking (Boyd &
         Vandenberghe, Convex Optimization, Algorithm 9.5), from ``x``, until the Newton decrement is at the objective's
         round-off (or the step below 1e-12 (1 + |x|) [rad/s])."""
-        i, h, vs = self._imp, self.step, self.velocity_scale
-        d, F = self.damping[i], self.friction[i]
-        Winv = np.linalg.inv(W)
-        Winv = 0.5 * (Winv + Winv.T)
+        h, vs, F = self.step, self.velocity_scale, self.friction[self._imp]
+        Qinv = 0.5 * (Qinv + Qinv.T)
 
         def objective(y: np.ndarray) -> float:
-            e, s = y - c, np.abs(y) / vs
-            return 0.5 * float(e @ Winv @ e) + h * float(np.sum(0.5 * d * y * y + F * vs * (s + np.log1p(np.exp(-2.0 * s)))))
+            e, s = y - b, np.abs(y) / vs
+            return 0.5 * float(e @ Qinv @ e) + h * float(np.sum(F * vs * (s + np.log1p(np.exp(-2.0 * s)))))
 
         for _ in range(100):
-            grad = Winv @ (x - c) + h * (d * x + F * np.tanh(x / vs))
-            hess = Winv + np.diag(h * (d + F / np.cosh(np.clip(x / vs, -350.0, 350.0)) ** 2 / vs))
+            grad = Qinv @ (x - b) + h * F * np.tanh(x / vs)
+            hess = Qinv + np.diag(h * F / np.cosh(np.clip(x / vs, -350.0, 350.0)) ** 2 / vs)
             dx = -np.linalg.solve(hess, grad)
             f0, slope, s = objective(x), float(grad @ dx), 1.0
             if -slope <= 1e-15 * abs(f0) or np.max(np.abs(dx)) <= 1e-12 * (1.0 + np.max(np.abs(x))):
@@ -208,7 +237,7 @@ class JointFriction:
             while objective(x + s * dx) > f0 + 1e-4 * s * slope and s > 1e-12:
                 s *= 0.5
             x = x + s * dx
-        raise ArithmeticError(f"the implicit joint friction did not converge (c = {c.tolist()}, x = {x.tolist()})")
+        raise ArithmeticError(f"the implicit joint friction did not converge (b = {b.tolist()}, x = {x.tolist()})")
 
     def generalized_force(self, v) -> np.ndarray:
         """tau_f(v) (nv,) [N m or N]."""
