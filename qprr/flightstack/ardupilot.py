@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import ActuationError, InputError
 from ..model import Platform, check_platform
 from ..validation import as_int
-from .mixer import joint_box, map_joint_indices
+from .mixer import arm_grid, map_joint_indices
 from .px4 import PINV_RCOND, Px4Geometry, com_body_at, coms_body_at, geometry_from_rotors
 
 PARALLEL_TOL = 1e-6
@@ -182,13 +182,7 @@ def factor_table(platform: Platform, q0=None, *, joints=None, resolution: int = 
     platform = check_platform(platform)
     mj = map_joint_indices(platform, joints)
     resolution = as_int(resolution, "resolution", lo=2, hi=101)
-    q0 = platform.neutral_q()[7:] if q0 is None else platform.check_arm_limits(q0, "q0")
-    lo, hi = joint_box(platform)
-    axes = tuple(np.linspace(lo[j], hi[j], resolution) for j in mj)
-    mesh = np.meshgrid(*axes, indexing="ij")
-    Q = np.tile(q0, (mesh[0].size, 1))
-    for k, j in enumerate(mj):
-        Q[:, j] = mesh[k].ravel()
+    q0, axes, Q = arm_grid(platform, q0, mj, resolution)
     coms = coms_body_at(platform, Q)
     roll, pitch, yaw, throttle = [], [], [], []
     order = ()
@@ -202,7 +196,7 @@ def factor_table(platform: Platform, q0=None, *, joints=None, resolution: int = 
         pitch.append(f.pitch)
         yaw.append(f.yaw)
         throttle.append(f.throttle)
-    shape = mesh[0].shape + (len(platform.rotors),)
+    shape = tuple(a.size for a in axes) + (len(platform.rotors),)
     r, p, y, t = (np.array(v).reshape(shape) for v in (roll, pitch, yaw, throttle))
     return FactorTable(platform.arm_names, mj, axes, r, p, y, t, np.array(q0), order)
 

@@ -193,6 +193,26 @@ def joint_box(platform: Platform) -> tuple[np.ndarray, np.ndarray]:
     return lo, hi
 
 
+def neutral_arm(platform: Platform) -> np.ndarray:
+    """The arm joints of :meth:`~qprr.model.Platform.neutral_q` (n_arm,): the default export pose."""
+    return platform.neutral_q()[platform.nq - platform.n_arm :]
+
+
+def arm_grid(platform: Platform, q0, joints: tuple[int, ...], resolution: int) -> tuple[np.ndarray, tuple[np.ndarray, ...], np.ndarray]:
+    """(q0, axes, Q): the arm pose ``q0`` (default neutral, else checked against the limits), the ``resolution`` values
+    of each of the map's ``joints`` (indices of :func:`map_joint_indices`) across :func:`joint_box`, and the arm
+    configurations Q (resolution^len(joints), n_arm) of that grid, the other joints at q0 (the mixer map and
+    ArduPilot's factor table)."""
+    q0 = neutral_arm(platform) if q0 is None else platform.check_arm_limits(q0, "q0")
+    lo, hi = joint_box(platform)
+    axes = tuple(np.linspace(lo[j], hi[j], resolution) for j in joints)
+    mesh = np.meshgrid(*axes, indexing="ij")
+    Q = np.tile(q0, (mesh[0].size, 1))
+    for k, j in enumerate(joints):
+        Q[:, j] = mesh[k].ravel()
+    return q0, axes, Q
+
+
 def mixer_error(
     platform: Platform,
     q0=None,
@@ -214,13 +234,8 @@ def mixer_error(
     mj = map_joint_indices(platform, joints)
     resolution = as_int(resolution, "resolution", lo=2, hi=401)
     samples = as_int(samples, "samples", lo=0, hi=1_000_000)
-    q0 = platform.neutral_q()[7:] if q0 is None else platform.check_arm_limits(q0, "q0")
+    q0, axes, grid = arm_grid(platform, q0, mj, resolution)
     lo, hi = joint_box(platform)
-    axes = tuple(np.linspace(lo[j], hi[j], resolution) for j in mj)
-    mesh = np.meshgrid(*axes, indexing="ij")
-    grid = np.tile(q0, (mesh[0].size, 1))
-    for k, j in enumerate(mj):
-        grid[:, j] = mesh[k].ravel()
     rng = np.random.default_rng(as_int(seed, "seed", lo=0))
     extra = rng.uniform(lo, hi, (samples if platform.n_arm > len(mj) else 0, platform.n_arm))
     Q = np.vstack([grid, extra])
@@ -230,7 +245,7 @@ def mixer_error(
     err, span = _errors(platform, c0, coms, rows)
     k = int(np.argmax(err))
     hover = float(np.linalg.norm(np.cross(coms[k] - c0, [0.0, 0.0, platform.total_mass * platform.g])))
-    best_q0, best = _best_pose(platform, Q, coms, rows, (lo, hi), np.vstack([q0, platform.neutral_q()[7:]]))
+    best_q0, best = _best_pose(platform, Q, coms, rows, (lo, hi), np.vstack([q0, neutral_arm(platform)]))
     return MixerErrorResult(
         platform.name,
         platform.arm_names,
@@ -238,7 +253,7 @@ def mixer_error(
         tuple(platform.arm[j].kind for j in mj),
         np.array(q0, dtype=float),
         axes,
-        err[: grid.shape[0]].reshape(mesh[0].shape),
+        err[: grid.shape[0]].reshape(tuple(a.size for a in axes)),
         tuple(AXES[r] for r in rows),
         float(err[k]),
         Q[k].copy(),
