@@ -921,6 +921,7 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.control.impedance.ImpedanceGains.arm", "n_arm", "zero"): "n_arm = 0: a platform without an arm (empty filters)",
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
+    ("qprr.flightlog.stats.lag_response", "u", "2-D"): "samples in rows, one column per motor",
 }
 """(qualname pattern, parameter, bad label pattern) -> why returning a value is the right answer there."""
 

@@ -29,6 +29,7 @@ from ..flightstack.frames import body_from_frd
 from ..flightstack.px4 import STANDARD_GRAVITY
 from ..model import Platform
 from ..validation import as_int, as_output_path, as_real
+from ..viz.plots import new_figure
 from .inertial import InertialResult, derived, identify_inertial
 from .record import FlightRecord, read_joint_csv, record_from_log
 from .samples import Estimate, Samples, not_identifiable, prepare_samples
@@ -139,15 +140,11 @@ class Identification:
         """Measured against predicted specific force along z_B (the vertical model) and angular acceleration in B (the
         regressor's prediction on each block by the parameters fitted on the others: cross-validated; not drawn, with
         the reason, when the flight does not determine the base's rotational inertia), the held-out blocks shaded."""
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
         path = as_output_path(path, "plot", suffixes=(".png", ".pdf", ".svg"))
         s = self.series
         rows = 2 if "omega_dot_body" in s else 1
-        fig, axes = plt.subplots(rows, 1, figsize=(10, 3.2 * rows), sharex=True, squeeze=False)
+        fig = new_figure((10, 3.2 * rows))
+        axes = fig.subplots(rows, 1, sharex=True, squeeze=False)
         ax = axes[0, 0]
         ax.plot(s["t_s"], s["measured_z"], ".", ms=2, label="measured a_z (B)")
         ax.plot(s["t_s"], s["predicted_z"], ".", ms=2, label="predicted")
@@ -169,9 +166,7 @@ class Identification:
         axes[-1, 0].set_xlabel("time since log start [s] (shaded: held-out folds)")
         for a in axes[:, 0]:
             a.legend(fontsize=7, ncol=3)
-        fig.tight_layout()
         fig.savefig(path)
-        plt.close(fig)
         return path
 
 

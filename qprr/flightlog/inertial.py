@@ -24,7 +24,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
+from ..errors import InputError
 from ..model import Platform
+from ..validation import as_real
 from .samples import RELATIVE_STD_MAX, Estimate, Samples, not_identifiable
 from .stats import autocorrelation_time
 
@@ -220,8 +222,17 @@ PARAMETER_NAMES = ("m", "mcx", "mcy", "mcz", "Ixx", "Ixy", "Iyy", "Ixz", "Iyz", 
 """Pinocchio's dynamic parameters of a body (Inertia.toDynamicParameters), in order."""
 
 
-def body_names(model: pin.Model, platform: Platform | None) -> list[str]:
-    """The name of each moving body: "base" for the free flyer, the URDF link each arm joint moves."""
+def _checked_model(model) -> pin.Model:
+    """``model`` if it is a Pinocchio model with a free-flyer base, else an InputError naming it."""
+    if not isinstance(model, pin.Model) or model.njoints < 2 or model.joints[1].shortname() != "JointModelFreeFlyer":
+        raise InputError(f"model must be a pinocchio.Model with a free-flyer base (Platform.model), got {type(model).__name__}")
+    return model
+
+
+def body_names(model: pin.Model) -> list[str]:
+    """The name of each moving body of a free-flyer Pinocchio ``model``: "base" for the free flyer, the URDF link each
+    arm joint moves."""
+    model = _checked_model(model)
     out = ["base"]
     for j in range(2, model.njoints):
         links = [f.name for f in model.frames if f.parentJoint == j and f.type == pin.FrameType.BODY]
@@ -261,7 +272,7 @@ def identify_inertial(
     else:
         model = pin.Model(platform.model)
         model.gravity = pin.Motion.Zero()
-    bodies = body_names(model, platform)
+    bodies = body_names(model)
     names = tuple(f"{b}.{k}" for b in bodies for k in PARAMETER_NAMES)
     Y, W = stacked_regressor(model, samples, wrench, ct_thrust)
     solve_known = {}
@@ -393,8 +404,9 @@ def identifiable_combinations(fit: RegressorFit, mass: float, length: float) -> 
 def parameter_values(model: pin.Model, ct: float, known: dict | None = None) -> dict:
     """The unknowns of :func:`identify_inertial` (name -> value) of a Pinocchio ``model`` (its bodies' dynamic
     parameters) and a thrust ``ct`` [N]: the truth a simulated flight's combinations are checked against."""
-    out = {"ct": float(ct)}
-    for b, j in zip(body_names(model, None), range(1, model.njoints)):
+    model = _checked_model(model)
+    out = {"ct": as_real(ct, "ct", positive=True, unit="N")}
+    for b, j in zip(body_names(model), range(1, model.njoints)):
         for k, v in zip(PARAMETER_NAMES, model.inertias[j].toDynamicParameters()):
             out[f"{b}.{k}"] = float(v)
     return out

@@ -19,6 +19,7 @@ import numpy as np
 from scipy.signal import butter, filtfilt, lfilter
 
 from ..errors import InputError
+from ..validation import as_array, as_real
 
 SOKAL_WINDOW = 5.0
 """Sokal's window constant c: the autocorrelation is summed over lags M with M >= c tau(M)."""
@@ -38,7 +39,12 @@ def lag_response(u: np.ndarray, dt: float, time_constant: float) -> np.ndarray:
     """The output of the first-order lag T du_f/dt = u - u_f (jMAVSim's Rotor.java, qprr.sim.actuators) driven by
     ``u`` (rows: samples ``dt`` [s] apart, linear in between: the exact discrete update of a ramp), started at u[0];
     ``time_constant`` = 0: ``u`` itself."""
-    if time_constant <= 0.0:
+    u = as_array(u, "u", finite=True)
+    if u.ndim not in (1, 2) or u.shape[0] == 0:
+        raise InputError(f"u must be samples in rows (a 1-D or 2-D array with at least one row), got shape {u.shape}")
+    dt = as_real(dt, "dt", positive=True, unit="s")
+    time_constant = as_real(time_constant, "time_constant", nonnegative=True, unit="s")
+    if time_constant == 0.0:
         return u.copy()
     e = math.exp(-dt / time_constant)
     c1 = 1.0 - time_constant / dt * (1.0 - e)  # weight of the new sample for a ramp between samples

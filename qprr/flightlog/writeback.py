@@ -55,7 +55,7 @@ def inertial_overrides(result: Identification, platform: Platform) -> dict:
     (when its six are)."""
     model = platform.model
     out = {}
-    for body in body_names(model, platform):
+    for body in body_names(model):
         link = model.frames[platform.base_frame].name if body == "base" else body
         est = result.estimates
         entry = {}

@@ -184,6 +184,7 @@ def map_joint_indices(platform: Platform, joints) -> tuple[int, ...]:
 
 def joint_box(platform: Platform) -> tuple[np.ndarray, np.ndarray]:
     """The arm's joint box (lower, upper); an unbounded revolute joint spans [-pi, pi], an unbounded slider is refused."""
+    platform = check_platform(platform)
     lo, hi = platform.arm_lower.copy(), platform.arm_upper.copy()
     for k, j in enumerate(platform.arm):
         if not (math.isfinite(lo[k]) and math.isfinite(hi[k])):
@@ -195,6 +196,7 @@ def joint_box(platform: Platform) -> tuple[np.ndarray, np.ndarray]:
 
 def neutral_arm(platform: Platform) -> np.ndarray:
     """The arm joints of :meth:`~qprr.model.Platform.neutral_q` (n_arm,): the default export pose."""
+    platform = check_platform(platform)
     return platform.neutral_q()[platform.nq - platform.n_arm :]
 
 

@@ -70,8 +70,8 @@ _PARAM_SOURCE = "PX4 writes the CA_* parameters of the multirotor control alloca
 
 
 def f32(x: float) -> float:
-    """``x`` rounded to the nearest float32 (PX4's parameters are float32), as a Python float."""
-    return float(np.float32(x))
+    """``x`` (finite) rounded to the nearest float32 (PX4's parameters are float32), as a Python float."""
+    return float(np.float32(as_real(x, "x")))
 
 
 def _unit_f32(axis) -> tuple[float, float, float]:
@@ -387,8 +387,8 @@ _NAME = re.compile(r"^[A-Za-z0-9_]{1,16}$")
 
 def format_float32(x: float) -> str:
     """The shortest decimal text of float32(x) that reads back (as a double, then rounded to float32) to the same
-    float32 bits."""
-    v = np.float32(x)
+    float32 bits (``x`` finite)."""
+    v = np.float32(as_real(x, "x"))
     text = np.format_float_positional(v, unique=True, trim="-")
     if np.float32(float(text)) != v:
         text = repr(float(v))
