@@ -30,7 +30,7 @@ def register_cli(sub) -> None:
     _add_identify(group)
 
 
-# ------------------------------------------------------------------------------ show (owned by the show/replay work)
+# ------------------------------------------------------------------------------ show
 def _add_show(group) -> None:
     p = group.add_parser("show", help="the vehicle, the phases, the topics and rates of a log; a summary figure")
     p.add_argument("log", metavar="FILE.ulg")
@@ -65,7 +65,7 @@ def _cannot(prog: str, exc: Exception) -> int:
     return 1
 
 
-# ------------------------------------------------------------------------------ replay (owned by the show/replay work)
+# ------------------------------------------------------------------------------ replay
 def _add_replay(group) -> None:
     p = group.add_parser("replay", help="PX4's mix rebuilt from the log's CA_* parameters; the IMU predicted through a platform")
     p.add_argument("log", metavar="FILE.ulg")
@@ -102,7 +102,7 @@ def _cmd_replay(args: argparse.Namespace) -> int:
     return 0
 
 
-# ------------------------------------------------------------------------------ identify (owned by the identification work)
+# ------------------------------------------------------------------------------ identify
 def _add_identify(group) -> None:
     p = group.add_parser("identify", help="thrust coefficient, hover command, mass, CoG offset, inertia, motor time constant")
     p.add_argument("log", metavar="FILE.ulg")
