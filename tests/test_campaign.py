@@ -171,7 +171,7 @@ def test_same_table_inline_and_on_two_local_processes(tmp_path):
 
 
 def test_same_table_on_a_dask_local_cluster(tmp_path):
-    pytest.importorskip("distributed")
+    pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'qprr[dask]'")
     spec = CampaignSpec.from_mapping({**SMALL, "samples": 1})
     a = run_campaign(spec, tmp_path / "a.csv", backend="inline", progress=False)
     b = run_campaign(spec, tmp_path / "b.csv", backend="dask", workers=2, progress=False)
@@ -182,7 +182,7 @@ def test_same_table_on_a_dask_local_cluster(tmp_path):
 @pytest.mark.slow
 def test_same_table_on_a_running_scheduler_and_locally_for_a_larger_campaign(tmp_path):
     """40 runs of 2 s with random model errors: local processes, and a client on a scheduler address (--scheduler)."""
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'qprr[dask]'")
     import logging
 
     spec = CampaignSpec.from_mapping(
@@ -249,7 +249,7 @@ def test_failures_and_bugs_are_rows_with_their_reason(tmp_path):
 
 
 def test_parquet_results_read_like_csv(tmp_path):
-    pytest.importorskip("pyarrow")
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: pip install 'qprr[parquet]'")
     spec = CampaignSpec.from_mapping({**SMALL, "samples": 1})
     a = run_campaign(spec, tmp_path / "a.csv", backend="inline", progress=False)
     b = run_campaign(spec, tmp_path / "a.parquet", backend="inline", progress=False)

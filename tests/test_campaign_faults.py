@@ -657,7 +657,7 @@ def test_a_run_that_always_kills_its_worker_ends_lost_not_saved(reference, tmp_p
 
 
 def test_a_damaged_parquet_part_is_named(reference, tmp_path):
-    pytest.importorskip("pyarrow")
+    pytest.importorskip("pyarrow", reason="pyarrow is not installed: pip install 'qprr[parquet]'")
     spec, data, table, rows, names, ref_dir = reference
     out = tmp_path / "p.parquet"
     done = run_campaign(spec, out, backend="inline", progress=False)
@@ -672,7 +672,7 @@ def test_a_damaged_parquet_part_is_named(reference, tmp_path):
 # ---------------------------------------------------------------------------- Dask: a worker, the scheduler
 @pytest.mark.slow
 def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypatch):
-    distributed = pytest.importorskip("distributed")
+    distributed = pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'qprr[dask]'")
     import logging
 
     spec, data, table, rows, names, ref_dir = reference
@@ -709,7 +709,7 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
 
 @pytest.mark.slow
 def test_a_lost_scheduler_saves_no_placeholder_and_exits_non_zero(reference, tmp_path):
-    pytest.importorskip("distributed")
+    pytest.importorskip("distributed", reason="dask.distributed is not installed: pip install 'qprr[dask]'")
     spec, data, table, rows, names, ref_dir = reference
     shutil.copy(ref_dir / "target.py", tmp_path / "target.py")
     (tmp_path / "s.json").write_text(json.dumps(spec.to_dict()))

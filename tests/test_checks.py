@@ -111,7 +111,7 @@ def test_each_equation_reaches_its_verdict(results, key):
 
 @pytest.mark.parametrize("key", SYMBOLIC)
 def test_symbolic_rows_hold_when_sympy_is_installed(results, key):
-    pytest.importorskip("sympy")
+    pytest.importorskip("sympy", reason="sympy is not installed: pip install 'qprr[symbolic]'")
     row = _find(results, *key)
     assert (row.status, row.verdict) == ("pass", "correct"), row.reason
 

@@ -70,7 +70,7 @@ class _Recorder:
 
 def _run_lua(script: str, params: dict | None = None):
     """Run a generated script with mock ArduPilot bindings; returns the recorded calls and the script's results."""
-    lupa = pytest.importorskip("lupa")
+    lupa = pytest.importorskip("lupa", reason="lupa is not installed: pip install lupa (a Lua interpreter to run the generated scripts)")
     lua = lupa.LuaRuntime(unpack_returned_tuples=True)
     rec = _Recorder()
     params = params or {}

@@ -135,7 +135,7 @@ def test_mix_zeroes_small_entries():
 
 @pytest.mark.skipif(not LOG.exists(), reason="the SITL log is not in ../shared/data/flightlogs")
 def test_sitl_log_parameters_are_the_iris():
-    pyulog = pytest.importorskip("pyulog")
+    pyulog = pytest.importorskip("pyulog", reason="pyulog is not installed: pip install 'qprr[flightlog]'")
     params = pyulog.ULog(str(LOG), message_name_filter_list=[]).initial_parameters
     g = px4.Px4Geometry.from_parameters(params)
     assert g.n == 4 and g.airframe == 0

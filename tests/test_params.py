@@ -155,7 +155,7 @@ def test_link_objects_in_a_parameter_set_are_checked():
 
 def test_an_independent_engine_loads_the_default_urdf_and_refuses_the_printed_table():
     """MuJoCo checks A + B >= C on every body's principal moments when it compiles a model."""
-    mujoco = pytest.importorskip("mujoco")
+    mujoco = pytest.importorskip("mujoco", reason="mujoco is not installed: pip install 'qprr[mujoco]'")
     from qprr.thesis.urdf import URDF_PATH, build_urdf
 
     assert mujoco.MjModel.from_xml_path(str(URDF_PATH)).nbody == 4

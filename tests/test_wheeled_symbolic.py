@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-sp = pytest.importorskip("sympy")
+sp = pytest.importorskip("sympy", reason="sympy is not installed: pip install 'qprr[symbolic]'")
 
 from qprr.wheeled.kinematics import KinematicModel  # noqa: E402
 from qprr.wheeled.liebracket import (  # noqa: E402
