@@ -26,6 +26,8 @@ GROUP_MODULES = {
     "animate": "qprr.viz.cli",
     "wheeled": "qprr.wheeled.cli",
     "analyze": "qprr.analysis.cli",
+    "inspect": "qprr.analysis.cli",
+    "ik": "qprr.ik.cli",
     "campaign": "qprr.campaign.cli",
     "design": "qprr.design.cli",
     "export": "qprr.flightstack.cli",

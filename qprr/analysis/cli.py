@@ -167,6 +167,33 @@ def register_cli(sub) -> None:
         "-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, a line every few seconds in a log)"
     )
     p.set_defaults(func=run)
+    register_inspect(sub)
+
+
+def run_inspect(args: argparse.Namespace) -> int:
+    """``qprr inspect``: the platform's report (:func:`qprr.analysis.inspect.inspect_platform`)."""
+    from ..cli_common import platform_from_args
+    from .inspect import inspect_platform
+
+    print(inspect_platform(platform_from_args(args)).text())
+    return 0
+
+
+def register_inspect(sub) -> None:
+    """Add the ``inspect`` command: a platform's tree, inertias, joints, rotors, actuation and notes."""
+    from ..cli_common import add_platform_options
+
+    p = sub.add_parser(
+        "inspect",
+        help="print a platform: tree, masses, inertias, joint limits, rotors, actuation summary, notes",
+        description="Print what a platform is: its kinematic tree, the mass, CoM and principal moments of each body, the "
+        "arm's limits, efforts, damping and friction, the rotor table, what the rotors can do at the neutral pose (wrench "
+        "rank, producible directions, hover thrusts and margin) and notes (thrust-to-weight, CoG offset from the rotor "
+        "axis, the friction's stiffness). --platform NAME, a (2.1) designation such as HEX-RRR, or --urdf FILE --rotors "
+        "FILE.toml for your own.",
+    )
+    add_platform_options(p)
+    p.set_defaults(func=run_inspect)
 
 
 def main(argv: list[str] | None = None) -> int:

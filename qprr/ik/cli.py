@@ -1,0 +1,84 @@
+"""``qprr ik --target X Y Z [--rpy ROLL PITCH YAW] [--method qp|dls|clika] [platform options] [--json]``.
+
+Solves one end-effector target on any platform (:class:`qprr.ik.IKSolver`) and prints the configuration in the thesis
+coordinates (names and units from the platform), the status, the errors and, on failure, the solver's reason and what
+would help.  Exit code 0 when the target is reached in hover, 1 when it is not, 2 on bad arguments.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+
+import numpy as np
+import pinocchio as pin
+
+from ..cli_common import add_platform_options, fail, platform_from_args, real
+from ..errors import QprrError
+from .solver import METHODS, IKResult, IKSolver
+
+
+def _units(platform) -> list[str]:
+    """The unit of each thesis coordinate: base position [m], ZYX angles [rad], then each arm joint's."""
+    return ["m"] * 3 + ["rad"] * 3 + ["m" if joint.kind == "prismatic" else "rad" for joint in platform.arm]
+
+
+def advice(platform, result: IKResult, oriented: bool) -> str:
+    """What would help after a failed solve, from the status and the platform (empty after a success)."""
+    if result.success:
+        return ""
+    if oriented and not platform.fully_actuated:
+        return (
+            f"{platform.name} is under-actuated (wrench rank {platform.wrench_rank}): it hovers with its base nearly level, "
+            "so the end effector takes only the orientations its arm joints give; give the target without --rpy, or an "
+            "orientation the arm's joint axes can produce from a level base"
+        )
+    if result.status in ("limits", "collision"):
+        return "the arm would leave its joint limits or collide there: move the target closer to the base's hover height and in front of the arm"
+    if result.status in ("max_iterations", "stalled", "diverged"):
+        others = ", ".join(m for m in METHODS if m != result.method)
+        return f"the iteration stopped short: try --method {others.split(', ')[0]} (or {others}), or a target nearer the neutral reach"
+    return "check the target against `qprr inspect` (the arm's reach and limits)"
+
+
+def run(args: argparse.Namespace) -> int:
+    try:
+        platform = platform_from_args(args)
+        p_world = np.array(args.target, dtype=float)
+        target = p_world if args.rpy is None else (p_world, pin.rpy.rpyToMatrix(*args.rpy))
+        result = IKSolver(platform, args.method).solve(platform.model.createData(), target)
+    except QprrError as exc:
+        return fail("qprr ik", str(exc))
+    help_text = advice(platform, result, args.rpy is not None)
+    values = dict(zip(platform.xi_names, result.xi.tolist())) if result.xi is not None else {}
+    if args.json:
+        report = {"status": str(result.status), "success": result.success, "reason": result.reason, "advice": help_text}
+        report |= {"position_error_m": result.position_error, "orientation_error_rad": result.orientation_error, "xi": values}
+        print(json.dumps(report, indent=2))
+        return 0 if result.success else 1
+    print(f"ik on {platform.name}, method {result.method}: {result.status} ({'reached' if result.success else 'not reached'})")
+    width = max(map(len, platform.xi_names))
+    for (name, value), unit in zip(values.items(), _units(platform)):
+        print(f"  {name:>{width}} = {value: .6g} {unit}")
+    print(f"  position error {result.position_error:.3g} m, orientation error {result.orientation_error:.3g} rad")
+    print(f"  base roll {result.roll:.3g} rad, pitch {result.pitch:.3g} rad; hover feasible: {result.hover_feasible}")
+    if not result.success:
+        print(f"reason: {result.reason}")
+        print(f"what would help: {help_text}")
+    return 0 if result.success else 1
+
+
+def register_cli(sub) -> None:
+    """Add the ``ik`` command to the subparsers ``sub`` of the qprr command line."""
+    p = sub.add_parser(
+        "ik",
+        help="solve one end-effector target: configuration, status, and on failure what would help",
+        description="Inverse kinematics of one target on any platform (qprr.ik.IKSolver): the end effector at --target "
+        "(world, m), optionally with the orientation --rpy (roll, pitch, yaw in rad, fixed axes X, Y, Z) while hovering.",
+    )
+    p.add_argument("--target", type=real(unit="m"), nargs=3, required=True, metavar=("X", "Y", "Z"), help="end-effector position in the world [m]")
+    p.add_argument("--rpy", type=real(unit="rad"), nargs=3, default=None, metavar=("ROLL", "PITCH", "YAW"), help="end-effector orientation [rad]")
+    p.add_argument("--method", choices=METHODS, default="qp", help="qp (task priorities, default), dls or clika")
+    add_platform_options(p)
+    p.add_argument("--json", action="store_true", help="print the result as JSON")
+    p.set_defaults(func=run)
