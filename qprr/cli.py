@@ -42,6 +42,7 @@ the viewer, the campaigns or the scenario table."""
 # ------------------------------------------------------------------------------ simulate
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .scenarios import SCENARIOS
+    from .sim.export import save_table
     from .viz import plot_result
 
     prog = "qprr simulate"
@@ -74,7 +75,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         return fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controllers)}")
     try:
         plot_path = output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
-        save_path = output_path(args.save, (".npz",), "save")
+        save_path = output_path(args.save, (".npz", ".csv", ".parquet"), "save")
         anim_path = output_path(args.animate, (".gif", ".mp4"), "animate")
     except ValueError as exc:
         return fail(prog, str(exc))
@@ -113,7 +114,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         for line in sc.summary(res):
             print(line)
     if save_path is not None:
-        print(f"saved {res.save(save_path)}")
+        print(f"saved {res.save(save_path) if save_path.suffix == '.npz' else save_table(res, save_path)}")
     if plot_path is not None:
         plot = sc.plot if (sc.plot is not None and code == 0) else plot_result
         print(f"figure {plot(res, plot_path)}")
@@ -272,7 +273,13 @@ def _add_simulate(sub) -> None:
     p.add_argument("--controller", default=None, help="override the scenario's controller (see the list above)")
     add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save a figure of the run (the folder must exist)")
-    p.add_argument("--save", default=None, metavar="FILE.npz", help="save the logged run (the folder must exist)")
+    p.add_argument(
+        "--save",
+        default=None,
+        metavar="FILE.npz",
+        help="save the logged run: .npz (everything, for qprr), or .csv / .parquet (long format: time, series, value, unit; "
+        "parquet needs the parquet extra); the folder must exist",
+    )
     p.add_argument("--animate", default=None, metavar="FILE.gif", help="save a 3-D animation (.gif, or .mp4 with ffmpeg)")
     p.add_argument("--duration", type=real(positive=True, unit="s"), default=None, help="seconds (default: the scenario's)")
     p.add_argument("--dt", type=real(positive=True, unit="s"), default=None, help="integration step [s] (default 1e-3)")

@@ -227,6 +227,7 @@ def test_one_writer_per_results_file(tmp_path):
         ResultStore(tmp_path / "r.csv", ("run", "status"), {"fingerprint": "a"})
     first.close()
     ResultStore(tmp_path / "r.csv", ("run", "status"), {"fingerprint": "a"}).close()  # free again
+    assert not (tmp_path / "r.lock").exists()  # a finished writer leaves no lock file (issue 35)
 
 
 def test_failures_and_bugs_are_rows_with_their_reason(tmp_path):

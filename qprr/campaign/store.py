@@ -321,6 +321,7 @@ class ResultStore:
             os.close(self._fd)
             self._fd = None
         if self._lock is not None:
+            Path(self._lock.name).unlink(missing_ok=True)  # removed while held: no .lock is left after a finished run
             self._lock.close()
             self._lock = None
 
@@ -404,6 +405,9 @@ def _lock(path: Path):
     fh = path.with_name(path.stem + ".lock").open("a")
     try:
         fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        lock_file = Path(fh.name)
+        if not lock_file.exists() or os.fstat(fh.fileno()).st_ino != lock_file.stat().st_ino:  # removed by a writer that just ended
+            raise OSError("the lock file was replaced")
     except OSError as exc:
         fh.close()
         raise InputError(f"another campaign is writing to {str(path)!r} (lock {fh.name!r}): wait for it or choose another output") from exc
