@@ -29,7 +29,7 @@ import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .control import make_controller
+from .control import CONTROLLERS, make_controller
 from .errors import InputError, UnknownNameError
 from .model import Platform
 from .registry import SCENARIOS
@@ -55,7 +55,8 @@ class Option:
 class Scenario:
     """A named run: ``run(platform=None, controller=None, progress=False, **options) -> SimResult``.
 
-    ``controllers``: valid controller names (the first is the default); ``options``: the settable
+    ``controllers``: its controller names (the first is the default; :meth:`controller_names` adds the registered
+    controllers that name this scenario, :class:`qprr.control.ControllerEntry`); ``options``: the settable
     parameters with their defaults; ``platforms``: the platforms it runs on (None: any);
     ``plot``: ``(result, path) -> path`` drawing its figure; ``source``: the thesis section it
     reproduces ("" if none); ``summary``: extra report lines of a result; ``figures``: the
@@ -74,6 +75,13 @@ class Scenario:
     summary: Callable[[SimResult], list[str]] | None = None
     figures: Mapping[str, str] = field(default_factory=dict)
 
+    def controller_names(self) -> tuple[str, ...]:
+        """The controllers it flies: its own :attr:`controllers` (the first the default), then every registered
+        controller whose entry names this scenario (``ControllerEntry.scenarios``: a plug-in's controller flies a core
+        scenario without an edit of it)."""
+        more = tuple(n for n, e in CONTROLLERS.items() if self.name in e.scenarios and n not in self.controllers)
+        return (*self.controllers, *more)
+
     @property
     def takes_plant(self) -> bool:
         """Whether the runner can fly a plant other than the controller's model (a ``plant`` argument)."""
@@ -90,8 +98,8 @@ class Scenario:
         for key in options:
             if key not in self.options:
                 raise UnknownNameError(f"option of scenario {self.name!r}", key, tuple(self.options))
-        if controller is not None and controller not in self.controllers:
-            raise UnknownNameError(f"controller of scenario {self.name!r}", controller, self.controllers)
+        if controller is not None and controller not in self.controller_names():
+            raise UnknownNameError(f"controller of scenario {self.name!r}", controller, self.controller_names())
         if platform is not None and not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         values = {k: o.default for k, o in self.options.items()}

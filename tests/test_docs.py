@@ -246,7 +246,7 @@ def check_command(parser, argv: list[str]) -> str:
         if args.scenario not in SCENARIOS:
             return f"unknown scenario {args.scenario!r}"
         sc = SCENARIOS[args.scenario]
-        if args.controller is not None and args.controller not in sc.controllers:
+        if args.controller is not None and args.controller not in sc.controller_names():
             return f"{args.scenario} has no controller {args.controller!r}"
         for item in args.set or ():
             if item.split("=", 1)[0] not in sc.options:
