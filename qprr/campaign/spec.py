@@ -58,6 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, MissingDependencyError, UnknownNameError
+from ..platforms import DEFAULT_PLATFORM
 from ..sim.mismatch import ModelError
 from ..validation import as_file
 
@@ -328,7 +329,7 @@ class CampaignSpec:
     name: str
     scenario: str | None = None
     callable: str | None = None
-    platform: str | Mapping[str, object] = "q-prr"
+    platform: str | Mapping[str, object] = DEFAULT_PLATFORM
     seed: int = 0
     samples: int = 1
     options: Mapping[str, object] = field(default_factory=dict)
@@ -404,7 +405,7 @@ class CampaignSpec:
         from ..scenarios import SCENARIOS
 
         sc = SCENARIOS[self.scenario]  # UnknownNameError lists the scenarios
-        if self.platform != "q-prr" and sc.platforms is not None and self.platform not in sc.platforms:
+        if self.platform != DEFAULT_PLATFORM and sc.platforms is not None and self.platform not in sc.platforms:
             anywhere = ", ".join(n for n, x in SCENARIOS.items() if x.platforms is None)
             raise InputError(
                 f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform = {self.platform_label!r}: "
@@ -423,8 +424,8 @@ class CampaignSpec:
         if "seed" in self.parameter_names and "seed" not in sc.options:
             raise InputError(f"scenario {sc.name!r} takes no seed")
         for c in self._values("controller"):
-            if c not in sc.controllers:
-                raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controllers)
+            if c not in sc.controller_names():
+                raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controller_names())
 
     def _embed_option_files(self) -> None:
         """Options that name a TOML file (``Option.file``) replaced by the file's content, read relative to the
