@@ -20,6 +20,7 @@ from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, 
 from .errors import QprrError
 from .platforms import DEFAULT_PLATFORM
 from .registry import CHECKS, COMMANDS, COMPARISONS
+from .sim.integrators import INTEGRATORS
 from .version import __version__
 
 GROUP_MODULES = {
@@ -278,8 +279,8 @@ def _add_simulate(sub) -> None:
     p.add_argument(
         "--integrator",
         default=None,
-        choices=("midpoint", "rk4", "euler"),
-        help="midpoint (default, 2nd order), rk4 (4th) or euler (semi-implicit, 1st)",
+        choices=tuple(INTEGRATORS),
+        help="; ".join(f"{name}{' (default)' if name == INTEGRATORS.default else ''}: {entry.description}" for name, entry in INTEGRATORS.items()),
     )
     p.add_argument("--seed", type=integer(lo=0), default=None, help="noise seed (default 0)")
     p.add_argument(

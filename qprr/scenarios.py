@@ -33,7 +33,7 @@ from .control import CONTROLLERS, make_controller
 from .errors import InputError, UnknownNameError
 from .model import Platform
 from .registry import SCENARIOS
-from .sim import SimConfig, SimResult, simulate
+from .sim import INTEGRATORS, SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 from .validation import as_bool
 
@@ -123,7 +123,7 @@ class Scenario:
 COMMON_OPTIONS = {
     "duration": Option(10.0, "run length [s]"),
     "dt": Option(SimConfig.dt, "integration step [s]"),
-    "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
+    "integrator": Option(INTEGRATORS.default, "a name of qprr.sim.INTEGRATORS: midpoint (2nd order), rk4, euler (semi-implicit), a plug-in's"),
     "seed": Option(0, "noise seed"),
     "law": Option(DEFAULT_LAW, f"transition law: {', '.join(LAWS)}"),
 }
@@ -191,7 +191,7 @@ GENERIC = (
             "contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
             "duration": Option(10.0, "run length [s]"),
             "dt": Option(SimConfig.dt, "integration step [s]"),
-            "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
+            "integrator": COMMON_OPTIONS["integrator"],
             "seed": Option(0, "seed"),
             "z": Option(2.0, "hover height [m]"),
             "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
