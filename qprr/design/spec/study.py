@@ -35,7 +35,7 @@ from ...platforms import PLATFORMS
 from ...validation import as_file
 from ._check import fail, integer, number, table_keys
 from .mass import MassModel
-from .metrics import METRICS, RANGES
+from .metrics import DESIGN_METRICS, RANGES
 from .parameters import Parameter, default_parameters, parse_parameter
 
 OPTIMISERS = ("pymoo", "optuna")
@@ -197,7 +197,7 @@ class DesignSpec:
         seed = integer(d.get("seed", 0), "seed", lo=0)
         archs = _architectures(d.get("architectures"))
         refs = _names(d.get("references", []), "references", tuple(PLATFORMS))  # any registered platform, as it is
-        objectives = _names(d.get("objectives"), "objectives", tuple(METRICS), need=2)
+        objectives = _names(d.get("objectives"), "objectives", tuple(DESIGN_METRICS), need=2)
         params = default_parameters()
         for k, v in table_keys(d.get("parameters", {}), "parameters", tuple(params)).items():
             params[k] = parse_parameter(k, v)
@@ -261,7 +261,7 @@ def _architectures(value) -> tuple[str, ...]:
 
 def _constraints(value) -> dict:
     out = {}
-    for k, v in table_keys(value, "constraints", tuple(METRICS)).items():
+    for k, v in table_keys(value, "constraints", tuple(DESIGN_METRICS)).items():
         b = table_keys(v, f"constraints.{k}", ("min", "max"))
         if not b:
             fail(f"constraints.{k}", v, "{min = a} and/or {max = b}")
@@ -270,7 +270,7 @@ def _constraints(value) -> dict:
         if lo is not None and hi is not None and not lo <= hi:
             fail(f"constraints.{k}", v, "min <= max")
         low, high = RANGES[k]
-        unit = METRICS[k][0]
+        unit = DESIGN_METRICS[k].unit
         if hi is not None and low is not None and hi < low:
             fail(f"constraints.{k}.max", hi, f"a bound >= {low:g} {unit}: {k} is never below {low:g}, so max = {hi:g} excludes every design")
         if lo is not None and high is not None and lo > high:
