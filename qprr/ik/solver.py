@@ -124,6 +124,7 @@ class Tolerances:
     hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
     collision_free: bool = False  # success needs no self-collision (qprr.collision); restarts when the answer collides
     collision_restarts: int = 8  # other arm postures tried when the answer collides (collision_free)
+    require_hover: bool | None = None  # success needs roll = pitch = 0 within hover_tol (None: for under-actuated platforms)
 
     def __post_init__(self):
         self._check_tolerances()
@@ -133,6 +134,8 @@ class Tolerances:
             check_positive(name, getattr(self, name))
         _check_bool("collision_free", self.collision_free)
         as_int(self.collision_restarts, "option collision_restarts", lo=0)
+        if self.require_hover is not None:
+            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -149,7 +152,6 @@ class ClikaOptions(Tolerances):
     weights: tuple | None = None
     hover: bool = False
     max_iter: int = 2000
-    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
@@ -163,8 +165,6 @@ class ClikaOptions(Tolerances):
         check_positive("dt", self.dt)
         check_count("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -177,15 +177,12 @@ class DLSOptions(Tolerances):
     hover: bool = True
     damping: float = 1e-3
     max_iter: int = 100
-    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
         check_positive("damping", self.damping)
         check_count("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -197,7 +194,6 @@ class QPOptions(Tolerances):
     reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``: of
     :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
-    require_hover: bool | None = None
     posture: tuple | None = None
     levels: Sequence | None = None
     max_iter: int = 50
@@ -213,8 +209,6 @@ class QPOptions(Tolerances):
         for name in ("step_tol", "max_step", "eps_abs", "rank_tol"):
             check_positive(name, getattr(self, name))
         check_positive("regularization", self.regularization, strict=False)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
         if self.posture is not None:
             as_array(self.posture, "option posture")
         if self.levels is not None:
