@@ -27,6 +27,12 @@ registry                    name -> value
 :data:`COMMANDS`            command-group name -> ``register_cli(subparsers)`` (``qprr`` front end), from the
                             entry points ``qprr.commands`` (the thesis: ``qprr urdf``)
 ==========================  ==================================================================
+
+Beside the modules that own their kind (each a :class:`Registry` with a documented default, docs/extending.md):
+``qprr.control.CONTROLLERS`` (controllers with their gain derivation, default ``idc``),
+``qprr.ik.IK_METHODS`` (default ``qp``), ``qprr.sim.INTEGRATORS`` (default ``midpoint``),
+``qprr.campaign.METRICS`` (campaign metrics, default ``rmse``), ``qprr.design.DESIGN_METRICS`` (design metrics,
+default ``hover_volume``); ``qprr.platforms.PLATFORMS`` has the default ``qprr.platforms.DEFAULT_PLATFORM``.
 """
 
 from __future__ import annotations
