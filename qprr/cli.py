@@ -18,7 +18,9 @@ from pathlib import Path
 
 from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
 from .errors import QprrError
+from .platforms import DEFAULT_PLATFORM
 from .registry import CHECKS, COMMANDS, COMPARISONS
+from .sim.integrators import INTEGRATORS
 from .version import __version__
 
 GROUP_MODULES = {
@@ -71,8 +73,8 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
             takes = ", ".join(n for n, s in SCENARIOS.items() if "as_printed" in s.options)
             return fail(prog, f"--thesis-as-printed does not apply to scenario {sc.name!r}; scenarios that take it: {takes}")
         options["as_printed"] = True
-    if args.controller is not None and args.controller not in sc.controllers:
-        return fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controllers)}")
+    if args.controller is not None and args.controller not in sc.controller_names():
+        return fail(prog, f"unknown controller {args.controller!r} for {sc.name!r}; valid: {', '.join(sc.controller_names())}")
     try:
         plot_path = output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
         save_path = output_path(args.save, (".npz", ".csv", ".parquet"), "save")
@@ -89,7 +91,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         options["gains"] = args.gains
     platform = None
     if any(x is not None for x in (args.platform, args.layout, args.urdf, args.rotors, args.ee_frame)):
-        name = args.platform or ("q-prr" if args.urdf is None else args.urdf)
+        name = args.platform or (DEFAULT_PLATFORM if args.urdf is None else args.urdf)
         if sc.platforms is not None and name not in sc.platforms:
             generic = ", ".join(n for n, s in SCENARIOS.items() if s.platforms is None)
             return fail(prog, f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on {name!r}; scenarios for any platform: {generic}")
@@ -233,7 +235,7 @@ def _scenario_help() -> str:
             where = f" [{sc.source}]" if sc.source else ""
             on = f"; platforms: {', '.join(sc.platforms)}" if sc.platforms else ""
             lines.append(f"  {name:<15} {sc.description}{where}")
-            lines.append(f"  {'':<15} controllers: {', '.join(sc.controllers)}{on}")
+            lines.append(f"  {'':<15} controllers: {', '.join(sc.controller_names())}{on}")
             opts = ", ".join(f"{k}={o.default!r}" for k, o in sc.options.items())
             lines.append(f"  {'':<15} options: {opts}")
     return "\n".join(lines)
@@ -286,8 +288,8 @@ def _add_simulate(sub) -> None:
     p.add_argument(
         "--integrator",
         default=None,
-        choices=("midpoint", "rk4", "euler"),
-        help="midpoint (default, 2nd order), rk4 (4th) or euler (semi-implicit, 1st)",
+        choices=tuple(INTEGRATORS),
+        help="; ".join(f"{name}{' (default)' if name == INTEGRATORS.default else ''}: {entry.description}" for name, entry in INTEGRATORS.items()),
     )
     p.add_argument("--seed", type=integer(lo=0), default=None, help="noise seed (default 0)")
     p.add_argument(
@@ -307,7 +309,7 @@ def _add_simulate(sub) -> None:
         "--gains",
         default=None,
         metavar="FILE.toml|NAME",
-        help="gain set of a generic scenario: platform (derived, default), class, a registered table (q-prr:idc), "
+        help="gain set of a generic scenario: platform (derived, default), class, a registered table (PLATFORM:TABLE), "
         "or a TOML file ([targets], [<controller>.gains]; docs/simulation.md)",
     )
     p.add_argument("--print-gains", action="store_true", help="print the controller's gains on the platform and exit")

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from .errors import InputError
+from .platforms import DEFAULT_PLATFORM
 from .validation import as_bool, as_int, as_real
 
 
@@ -83,7 +84,8 @@ def cache_dir(path: str | None) -> Path | None:
 
 
 PLATFORM_HELP = (
-    "q-prr (default), borinot_flying_arm_2, hextilt_flying_arm_5 or a (2.1) name such as HEX-RRR; your own: --urdf FILE.urdf --rotors FILE.toml"
+    f"{DEFAULT_PLATFORM} (default), borinot_flying_arm_2, hextilt_flying_arm_5, a plug-in's platform or a (2.1) name such as HEX-RRR; "
+    "your own: --urdf FILE.urdf --rotors FILE.toml"
 )
 
 

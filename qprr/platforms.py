@@ -41,7 +41,9 @@ _BARE_MULTIROTORS = {
     "iris": "iris_description/robots/iris_simple.urdf",
 }
 DEFAULT_PLATFORM = "q-prr"
-"""The platform :func:`load` and :func:`resolve` give without a name: the thesis's Q-PRR (by name, through :data:`PLATFORMS`)."""
+"""The platform :func:`load`, :func:`resolve`, the command line and the campaigns give without a name: the thesis's
+Q-PRR, by name, through :data:`PLATFORMS` (its documented default, ``PLATFORMS.default``).  The one place the core
+names the thesis's platform: every other module reads this constant or the registry's default."""
 PLATFORMS: Registry = Registry("platform", default=DEFAULT_PLATFORM)
 """Platform name -> loader ``(**options) -> Platform``; the core registers the example-robot-data ones below."""
 ROTOR_DYNAMICS: Registry = Registry("rotor-dynamics set", default=DEFAULT_PLATFORM)
@@ -164,12 +166,8 @@ def _named(name: str | None, layout: str | None, rotors, ee_frame) -> Platform:
             f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...); named platforms have their own: got {given}"
         )
     name = DEFAULT_PLATFORM if name is None else name
-    if name == "q-prr":
-        return load("q-prr", layout=layout or "plus")
-    if name in NAMES:
-        if layout is not None:
-            raise InputError(f"layout {layout!r} applies to q-prr and to (2.1) names, not to {name!r}")
-        return load(name)
+    if name in NAMES:  # a registered platform; a layout goes to its loader, which refuses it if it has none
+        return load(name) if layout is None else load(name, layout=layout)
     try:
         parse(name)
     except InputError:

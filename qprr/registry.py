@@ -27,6 +27,12 @@ registry                    name -> value
 :data:`COMMANDS`            command-group name -> ``register_cli(subparsers)`` (``qprr`` front end), from the
                             entry points ``qprr.commands`` (the thesis: ``qprr urdf``)
 ==========================  ==================================================================
+
+Beside the modules that own their kind (each a :class:`Registry` with a documented default, docs/extending.md):
+``qprr.control.CONTROLLERS`` (controllers with their gain derivation, default ``idc``),
+``qprr.ik.IK_METHODS`` (default ``qp``), ``qprr.sim.INTEGRATORS`` (default ``midpoint``),
+``qprr.campaign.METRICS`` (campaign metrics, default ``rmse``), ``qprr.design.DESIGN_METRICS`` (design metrics,
+default ``hover_volume``); ``qprr.platforms.PLATFORMS`` has the default ``qprr.platforms.DEFAULT_PLATFORM``.
 """
 
 from __future__ import annotations
@@ -81,12 +87,15 @@ class Registry(Mapping[str, T], Generic[T]):
     (:func:`load_plugins`); a name still unknown raises :class:`~qprr.errors.UnknownNameError`
     listing the valid ones."""
 
-    def __init__(self, kind: str, group: str | None = None, *, default: str | None = None) -> None:
+    def __init__(self, kind: str, group: str | None = None, *, default: str | None = None, check: Callable[[str, T], None] | None = None) -> None:
         self.kind = kind
         self.group = group
         """An entry-point group whose entries are this registry's values (name -> the object it names), or None."""
         self.default = default
         """The name a caller gets without naming one (listed first), or None."""
+        self.check = check
+        """``check(name, value)`` run on every entry before it is added: raises :class:`~qprr.errors.InputError` saying
+        why a value is refused (a controller without its gain derivation...); None: any value."""
         self._entries: dict[str, T] = {}
         self._sources: list[Callable[[], Iterable[tuple[str, T]]]] = []
         if group is not None:
@@ -101,6 +110,8 @@ class Registry(Mapping[str, T], Generic[T]):
             raise InputError(f"a {self.kind} name must be a non-empty string, got {name!r}")
         if name in self._entries and self._entries[name] is not value:
             raise InputError(f"{self.kind} {name!r} is already registered (by {self._entries[name]!r}): choose another name")
+        if self.check is not None:
+            self.check(name, value)
         self._entries[name] = value
         return value
 
@@ -142,6 +153,13 @@ class Registry(Mapping[str, T], Generic[T]):
         self._complete()
         return len(self._entries)
 
+    def derived(self, part: Callable[[T], object], keep: Callable[[T], bool] | None = None) -> Mapping[str, object]:
+        """A read-only live view: name -> ``part(value)`` for the entries where ``keep(value)`` holds (None: all).
+
+        What other modules read of one registry (the orders of the integrators, the gain arguments of the
+        controllers), so each kind has one registry and the tables beside it follow it, plug-ins' entries included."""
+        return _View(self, part, keep)
+
     def _names(self) -> tuple[str, ...]:
         """The names in registration order, :attr:`default` first."""
         first = (self.default,) if self.default in self._entries else ()
@@ -154,6 +172,34 @@ class Registry(Mapping[str, T], Generic[T]):
 
     def __repr__(self) -> str:
         return f"Registry({self.kind!r}: {', '.join(self._entries) or 'empty'})"
+
+
+class _View(Mapping[str, object]):
+    """:meth:`Registry.derived`: a part of every (kept) entry of a registry, read when looked up."""
+
+    def __init__(self, registry: Registry, part: Callable, keep: Callable | None) -> None:
+        self.registry, self.part, self.keep = registry, part, keep
+
+    def _kept(self, value) -> bool:
+        return self.keep is None or bool(self.keep(value))
+
+    def __getitem__(self, name: str):
+        value = self.registry[name]
+        if not self._kept(value):
+            raise UnknownNameError(self.registry.kind, name, tuple(self))
+        return self.part(value)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.registry and self._kept(self.registry[name])
+
+    def __iter__(self) -> Iterator[str]:
+        return iter([n for n, v in self.registry.items() if self._kept(v)])
+
+    def __len__(self) -> int:
+        return sum(1 for _ in self)
+
+    def __repr__(self) -> str:
+        return f"{dict(self)!r}"
 
 
 SCENARIOS: Registry = Registry("scenario")

@@ -29,11 +29,11 @@ import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .control import make_controller
+from .control import CONTROLLERS, make_controller
 from .errors import InputError, UnknownNameError
 from .model import Platform
 from .registry import SCENARIOS
-from .sim import SimConfig, SimResult, simulate
+from .sim import INTEGRATORS, SimConfig, SimResult, simulate
 from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 from .validation import as_bool
 
@@ -55,7 +55,8 @@ class Option:
 class Scenario:
     """A named run: ``run(platform=None, controller=None, progress=False, **options) -> SimResult``.
 
-    ``controllers``: valid controller names (the first is the default); ``options``: the settable
+    ``controllers``: its controller names (the first is the default; :meth:`controller_names` adds the registered
+    controllers that name this scenario, :class:`qprr.control.ControllerEntry`); ``options``: the settable
     parameters with their defaults; ``platforms``: the platforms it runs on (None: any);
     ``plot``: ``(result, path) -> path`` drawing its figure; ``source``: the thesis section it
     reproduces ("" if none); ``summary``: extra report lines of a result; ``figures``: the
@@ -74,6 +75,13 @@ class Scenario:
     summary: Callable[[SimResult], list[str]] | None = None
     figures: Mapping[str, str] = field(default_factory=dict)
 
+    def controller_names(self) -> tuple[str, ...]:
+        """The controllers it flies: its own :attr:`controllers` (the first the default), then every registered
+        controller whose entry names this scenario (``ControllerEntry.scenarios``: a plug-in's controller flies a core
+        scenario without an edit of it)."""
+        more = tuple(n for n, e in CONTROLLERS.items() if self.name in e.scenarios and n not in self.controllers)
+        return (*self.controllers, *more)
+
     @property
     def takes_plant(self) -> bool:
         """Whether the runner can fly a plant other than the controller's model (a ``plant`` argument)."""
@@ -90,8 +98,8 @@ class Scenario:
         for key in options:
             if key not in self.options:
                 raise UnknownNameError(f"option of scenario {self.name!r}", key, tuple(self.options))
-        if controller is not None and controller not in self.controllers:
-            raise UnknownNameError(f"controller of scenario {self.name!r}", controller, self.controllers)
+        if controller is not None and controller not in self.controller_names():
+            raise UnknownNameError(f"controller of scenario {self.name!r}", controller, self.controller_names())
         if platform is not None and not isinstance(platform, Platform):
             raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
         values = {k: o.default for k, o in self.options.items()}
@@ -115,7 +123,7 @@ class Scenario:
 COMMON_OPTIONS = {
     "duration": Option(10.0, "run length [s]"),
     "dt": Option(SimConfig.dt, "integration step [s]"),
-    "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
+    "integrator": Option(INTEGRATORS.default, "a name of qprr.sim.INTEGRATORS: midpoint (2nd order), rk4, euler (semi-implicit), a plug-in's"),
     "seed": Option(0, "noise seed"),
     "law": Option(DEFAULT_LAW, f"transition law: {', '.join(LAWS)}"),
 }
@@ -183,7 +191,7 @@ GENERIC = (
             "contact": Option("wall", "wall (reference pressed 'penetration' into a wall 'gap' ahead) or wrench (force step)"),
             "duration": Option(10.0, "run length [s]"),
             "dt": Option(SimConfig.dt, "integration step [s]"),
-            "integrator": Option("midpoint", "midpoint (2nd order), rk4 or euler (semi-implicit)"),
+            "integrator": COMMON_OPTIONS["integrator"],
             "seed": Option(0, "seed"),
             "z": Option(2.0, "hover height [m]"),
             "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),

@@ -863,6 +863,10 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.ik.tasks.base.update_kinematics", "*", "*"): HOT + "IKSolver.solve (once per iteration, before the tasks)",
     ("qprr.ik.hierarchy.HierarchySolver.solve", "*", "*"): HOT + "IKSolver.solve (one hierarchical step per iteration)",
     ("qprr.ik.solver.pose_errors", "R_d", "None"): "R_d None: a position target (orientation error 0 by definition)",
+    ("qprr.ik.solver.pose_error_values", "*", "*"): HOT + "IKSolver.solve and the methods (once per iteration, on the target "
+    "parse_target checked once per solve); pose_errors is its checked form",
+    ("qprr.ik.solver.hover_q", "*", "*"): HOT + "the IK methods' last step (the IGM's answer as q: its speed is the IGM's point); "
+    "the configurations it gets come from the methods, on inputs IKSolver.solve checked",
     ("qprr.ik.solver.default_guess", "R_world", "None"): "R_world None: a position target (the orientation is free)",
     ("qprr.control.*.step", "*", "*"): HOT + "the simulator's per-tick call: reset checks the state and reference once per run",
     ("qprr.thesis.bsg.CogStabilizer.joint_references", "*", "*"): HOT + "CogStabilizer.step's per-tick part",

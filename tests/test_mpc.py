@@ -46,8 +46,13 @@ def test_missing_crocoddyl_gives_the_install_command(monkeypatch):
 
 def test_make_controller_without_crocoddyl_names_the_install_command(monkeypatch):
     import qprr.control as control
+    from qprr.registry import Registry
 
-    monkeypatch.delitem(control.CONTROLLERS, "mpc", raising=False)
+    without = Registry("controller", default="idc")  # the registry of a session where crocoddyl is not installed
+    for name, entry in control.CONTROLLERS.items():
+        if name != "mpc":
+            without.register(name, entry)
+    monkeypatch.setattr(control, "CONTROLLERS", without)
     with pytest.raises(MissingDependencyError, match=r"crocoddyl.*qprr\[mpc\]"):
         make_controller("mpc", qprr.load())
 

@@ -175,7 +175,7 @@ def test_cli_simulate_analyze_animate_with_a_urdf(tmp_path, capsys):
         (["simulate", "hover-reach", *OWN[:4], "--ee-frame", "grippr"], "unknown ee_frame 'grippr'"),
         (["analyze", "hover", "--ee-frame", "gripper"], "give its --urdf too"),
         (["analyze", "hover", "--platform", "quad"], "--urdf FILE --rotors FILE.toml"),
-        (["animate", "--platform", "borinot_flying_arm_2", "--layout", "x"], "layout 'x' applies to q-prr"),
+        (["animate", "--platform", "borinot_flying_arm_2", "--layout", "x"], "unknown option of platform 'borinot_flying_arm_2' 'layout'"),
     ],
 )
 def test_cli_platform_errors(argv, fragment, capsys):

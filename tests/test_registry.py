@@ -97,3 +97,22 @@ def test_the_thesis_fills_every_registry_of_the_core():
     assert {"table", "all"} - set(registry.COMPARISONS) == {"all"}
     assert list(registry.CHECKS) == ["thesis"] and list(registry.MAP_REFERENCES) == ["thesis"]
     assert list(registry.COMMANDS) == ["thesis"]
+
+
+def test_a_check_refuses_entries_with_the_reason_and_views_follow_the_registry():
+    def positive(name, value):
+        if not value > 0:
+            raise InputError(f"widget {name!r} must be > 0, got {value!r}")
+
+    r = Registry("widget", default="a", check=positive)
+    r.register("a", 1)
+    with pytest.raises(InputError, match="widget 'b' must be > 0, got -2"):
+        r.register("b", -2)
+    assert "b" not in r
+    doubled = r.derived(lambda v: 2 * v)
+    odd = r.derived(lambda v: v, keep=lambda v: v % 2 == 1)
+    r.register("c", 4)  # a view reads the registry when looked up: later entries are in it
+    assert dict(doubled) == {"a": 2, "c": 8} and list(odd) == ["a"] and len(odd) == 1
+    assert "c" in r and "c" not in odd and odd.get("c", "absent") == "absent"
+    with pytest.raises(UnknownNameError, match="unknown widget 'c'; valid: 'a'"):
+        odd["c"]

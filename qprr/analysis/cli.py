@@ -14,6 +14,7 @@ import argparse
 import sys
 import time
 
+from ..platforms import DEFAULT_PLATFORM
 from ..progress import FractionProgress
 from ._common import MapReference
 
@@ -141,7 +142,7 @@ def register_cli(sub) -> None:
         help="design maps: workspace, CoG, singularities, hover, payload capacity, operational space",
         description="Design maps of a platform: reachable workspace (with and without the slider), CoG balance, "
         "singularities, hover feasibility and thrust margins, payload capacity, operational-space inertia. "
-        "--platform takes a named platform (q-prr, borinot_flying_arm_2, hextilt_flying_arm_5) or a "
+        f"--platform takes a named platform ({DEFAULT_PLATFORM}, borinot_flying_arm_2, hextilt_flying_arm_5, a plug-in's) or a "
         "designation of the thesis nomenclature (2.1) such as HEX-RRR or QX-PRR; --urdf FILE --rotors "
         "FILE.toml your own platform (docs/platforms.md).",
     )

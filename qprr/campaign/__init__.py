@@ -4,7 +4,8 @@
 module                          what
 ==============================  ==================================================================
 :mod:`qprr.campaign.spec`       :class:`CampaignSpec` (TOML/JSON): target, grid, random draws, seeds
-:mod:`qprr.campaign.metrics`    the per-run columns: RMSE (6.26), max CoG offset, saturation, ...
+:mod:`qprr.campaign.metrics`    the per-run columns: RMSE (6.26), max CoG offset, saturation, ...; the
+                                registry :data:`METRICS` plug-ins add their metrics to
 :mod:`qprr.campaign.worker`     the task a worker runs (model built once per worker)
 :mod:`qprr.campaign.backends`   local process pool (default), Dask distributed, inline
 :mod:`qprr.campaign.store`      results appended as they arrive (one checksummed CSV record per
@@ -62,18 +63,20 @@ Public API for other packages (e.g. a design search that runs its evaluations he
 """
 
 from .backends import BACKENDS, Backend, DaskBackend, InlineBackend, LocalBackend, make_backend
-from .metrics import STATUSES, metric_columns, metrics_of
+from .metrics import DEFAULT_METRICS, METRICS, STATUSES, CampaignMetric, metric_columns, metrics_of
 from .runner import CampaignRun, run_campaign
-from .spec import METRICS, MODEL_PARAMS, CampaignSpec, Distribution, Run
+from .spec import MODEL_PARAMS, CampaignSpec, Distribution, Run
 from .store import KINDS, Results, ResultsFileError, ResultStore, ResultsWriteError, read_meta, read_results
 
 __all__ = [
     "BACKENDS",
+    "DEFAULT_METRICS",
     "KINDS",
     "METRICS",
     "MODEL_PARAMS",
     "STATUSES",
     "Backend",
+    "CampaignMetric",
     "CampaignRun",
     "CampaignSpec",
     "DaskBackend",

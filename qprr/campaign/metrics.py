@@ -1,5 +1,9 @@
 """The numbers a campaign keeps per run, from a :class:`qprr.sim.SimResult` (complete or cut by a divergence).
 
+The metric groups are the registry :data:`METRICS` (``rmse``, ``x_cm_max``, ``saturation``, ``recovery_time``, then the
+plug-ins' :class:`CampaignMetric` entries, docs/extending.md); a specification keeps :data:`DEFAULT_METRICS` unless
+its ``metrics`` names others.
+
 =================  =========================================================================
 column             meaning
 =================  =========================================================================
@@ -28,10 +32,13 @@ led to the divergence), but no RMSE: a cut run's RMSE would mix in the runaway.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InputError
+from ..registry import Registry
 from ..sim import SimResult, Status
 from ..validation import as_name, as_real
 
@@ -42,23 +49,114 @@ BASE_COLUMNS = ("status", "reason", "t_end", "wall_time")
 POSITION = ("x", "y", "z")
 
 
-def metric_columns(groups, names, extras=()) -> tuple[str, ...]:
-    """Column names of the metric ``groups`` (see :data:`qprr.campaign.spec.METRICS`) for xi ``names``, then ``extras``."""
-    from .spec import METRICS
+@dataclass(frozen=True)
+class CampaignMetric:
+    """A metric a campaign may keep per run (a name of ``metrics`` in a specification).
 
+    ``compute(result, names)``: the value from a :class:`qprr.sim.SimResult` (complete or cut by a divergence) and
+    the platform's coordinate names ``names`` (xi's): a number for a one-column metric (its column is the metric's
+    name), or ``{column: value}`` when ``columns(names)`` gives the metric's columns (``rmse``: one per coordinate).
+    ``complete_only``: NaN for a run that did not complete (a cut run's RMSE would mix in the runaway);
+    ``nonnegative``: every value is >= 0 (a negative ``[success]`` bound on it is refused: no run could meet it);
+    ``unit`` of the column(s) in the report's labels; ``description``: one line."""
+
+    compute: Callable[[SimResult, tuple[str, ...]], object]
+    description: str = ""
+    unit: str = ""
+    columns: Callable[[tuple[str, ...]], tuple[str, ...]] | None = None
+    complete_only: bool = False
+    nonnegative: bool = False
+
+    def __post_init__(self) -> None:
+        if not callable(self.compute):
+            raise InputError(f"CampaignMetric.compute must be a function (result, names) -> value, got {self.compute!r}")
+        if self.columns is not None and not callable(self.columns):
+            raise InputError(f"CampaignMetric.columns must be None or a function (names) -> column names, got {self.columns!r}")
+        for flag in ("complete_only", "nonnegative"):
+            if not isinstance(getattr(self, flag), bool):
+                raise InputError(f"CampaignMetric.{flag} must be True or False, got {getattr(self, flag)!r}")
+
+    def column_names(self, name: str, names: tuple[str, ...]) -> tuple[str, ...]:
+        """The columns of the metric registered as ``name`` for xi's ``names``."""
+        return (name,) if self.columns is None else tuple(self.columns(names))
+
+    def values(self, name: str, result: SimResult, names: tuple[str, ...], complete: bool) -> dict[str, float]:
+        """{column: value} of one run (``complete``: the run ended ok); NaN where :attr:`complete_only` and not complete."""
+        if self.complete_only and not complete:
+            return dict.fromkeys(self.column_names(name, names), math.nan)
+        out = self.compute(result, names)
+        if self.columns is None:
+            return {name: float(out)}
+        return {c: float(out.get(c, math.nan)) for c in self.column_names(name, names)}
+
+
+def _rmse_columns(names) -> tuple[str, ...]:
+    return (*(f"rmse_{n}" for n in names), *(("rmse_position",) if all(n in names for n in POSITION) else ()))
+
+
+def _rmse(result: SimResult, names) -> dict[str, float]:
+    e = result.rmse()
+    out = {f"rmse_{n}": e.get(n, math.nan) for n in names}
+    if all(n in names for n in POSITION):
+        out["rmse_position"] = math.sqrt(sum(e[n] ** 2 for n in POSITION))
+    return out
+
+
+def _x_cm_max(result: SimResult, names) -> float:
+    return float(np.max(np.hypot(result.x_cm[:, 0], result.x_cm[:, 1]))) if result.n else math.nan
+
+
+def _saturation(result: SimResult, names) -> float:
+    return result.saturation_fraction()
+
+
+def _recovery_time(result: SimResult, names) -> float:
+    return float(result.metrics.get("recovery_time", math.nan))
+
+
+def _check(name: str, entry: object) -> None:
+    if not isinstance(entry, CampaignMetric):
+        raise InputError(f"campaign metric {name!r}: register a qprr.campaign.metrics.CampaignMetric(compute, ...), got {type(entry).__name__}")
+    if name in (*BASE_COLUMNS, "success") or name.startswith("rmse_"):
+        raise InputError(f"campaign metric {name!r}: the name is a column the campaign keeps itself; choose another name")
+
+
+METRICS: Registry[CampaignMetric] = Registry("metric", default="rmse", check=_check)
+"""Campaign metric name -> :class:`CampaignMetric`: the four below, then the plug-ins' (docs/extending.md)."""
+METRICS.register(
+    "rmse",
+    CampaignMetric(_rmse, "Thesis (6.26) per coordinate, and of the position error norm", "", _rmse_columns, complete_only=True, nonnegative=True),
+)
+METRICS.register("x_cm_max", CampaignMetric(_x_cm_max, "largest horizontal CoG offset from the thrust axis", "m", nonnegative=True))
+METRICS.register(
+    "saturation", CampaignMetric(_saturation, "fraction of control ticks with a rotor bound active", "fraction of ticks", nonnegative=True)
+)
+METRICS.register("recovery_time", CampaignMetric(_recovery_time, "SimResult.metrics['recovery_time'] (payload-drop)", "s", nonnegative=True))
+
+DEFAULT_METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
+"""The metrics a specification keeps unless it names others: the core's (a plug-in's metric is kept when named)."""
+
+
+def is_nonnegative(column: str) -> bool:
+    """Whether a metric column is >= 0 in every run: ``t_end``, ``wall_time``, the ``rmse_*`` columns and the one-column
+    metrics registered ``nonnegative``."""
+    if not isinstance(column, str):
+        raise InputError(f"column must be a column name (str), got {column!r}")
+    if column in ("t_end", "wall_time") or column.startswith("rmse_"):
+        return True
+    return column in METRICS and METRICS[column].nonnegative and METRICS[column].columns is None
+
+
+def metric_columns(groups, names, extras=()) -> tuple[str, ...]:
+    """Column names of the metrics ``groups`` (names of :data:`METRICS`) for xi ``names``, then ``extras``."""
     for arg, values in (("groups", groups), ("names", names), ("extras", extras)):
         if isinstance(values, str) or not isinstance(values, (list, tuple)) or not all(isinstance(v, str) and v for v in values):
             raise InputError(f"{arg} must be a list of names, got {values!r}")
     for g in groups:
-        as_name(g, "groups", METRICS, kind="metric group")
+        as_name(g, "groups", tuple(METRICS), kind="metric group")
     out = list(BASE_COLUMNS)
     for g in groups:
-        if g == "rmse":
-            out += [f"rmse_{n}" for n in names]
-            if all(n in names for n in POSITION):
-                out.append("rmse_position")
-        else:
-            out.append(g)
+        out += METRICS[g].column_names(g, tuple(names))
     return (*out, *extras, "success")
 
 
@@ -87,20 +185,21 @@ def metrics_of(
         t_end=float(result.t[-1] + result.control_period) if result.n else 0.0,
     )
     for g in groups:
-        if g == "rmse":
-            if st == Status.OK.value:
-                e = result.rmse()
-                for n in names:
-                    row[f"rmse_{n}"] = e.get(n, math.nan)
-                if "rmse_position" in row:
-                    row["rmse_position"] = math.sqrt(sum(e[n] ** 2 for n in POSITION))
-        elif g == "x_cm_max":
-            row[g] = float(np.max(np.hypot(result.x_cm[:, 0], result.x_cm[:, 1]))) if result.n else math.nan
-        elif g == "saturation":
-            row[g] = result.saturation_fraction()
-        elif g == "recovery_time":
-            row[g] = float(result.metrics.get("recovery_time", math.nan))
+        row.update(METRICS[g].values(g, result, tuple(names), st == Status.OK.value))
     for k in extras:
         row[k] = float(result.metrics.get(k, math.nan))
     row["success"] = int(st == Status.OK.value and all(float(row[m]) <= bound for m, bound in (success or {}).items()))
     return row
+
+
+__all__ = [
+    "BASE_COLUMNS",
+    "DEFAULT_METRICS",
+    "METRICS",
+    "POSITION",
+    "STATUSES",
+    "CampaignMetric",
+    "is_nonnegative",
+    "metric_columns",
+    "metrics_of",
+]

@@ -32,6 +32,7 @@ import numpy as np
 
 from ..errors import InputError, UnknownNameError
 from ..viz import figure_path, fit_texts, new_figure
+from .metrics import DEFAULT_METRICS, METRICS
 from .store import Results, read_results
 
 if TYPE_CHECKING:
@@ -81,6 +82,8 @@ def _unit(name: str, units: dict[str, str] | None = None) -> str | None:
     """The unit of a column (``units`` of :func:`column_units`, :data:`UNITS`; other ``rmse_*`` columns are angles,
     ``model.*`` factors on the nominal value)."""
     u = (units or {}).get(name) or UNITS.get(name)
+    if u is None and name in METRICS and METRICS[name].unit:  # a one-column metric registered with its unit
+        u = METRICS[name].unit
     if u is None and name.startswith("rmse_"):
         u = "rad"
     if u is None and name.startswith("model."):
@@ -152,12 +155,14 @@ def default_groups(results: Results) -> tuple[str, ...]:
 
 
 def default_metrics(results: Results) -> tuple[str, ...]:
+    """rmse_position, then every one-column metric the specification kept (a plug-in's too) with a finite value."""
     out = []
     names = results.table.dtype.names
     if "rmse_position" in names:
         out.append("rmse_position")
-    for m in ("x_cm_max", "saturation", "recovery_time"):
-        if m in names and np.any(np.isfinite(np.asarray(results.table[m], dtype=float))):
+    kept = results.spec.get("metrics", DEFAULT_METRICS) if isinstance(results.spec, dict) else DEFAULT_METRICS
+    for m in kept:
+        if m != "rmse" and m in names and np.any(np.isfinite(np.asarray(results.table[m], dtype=float))):
             out.append(m)
     return tuple(out)
 

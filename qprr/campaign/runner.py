@@ -77,7 +77,7 @@ def kinds_of(spec: CampaignSpec, names) -> dict[str, str]:
 
 def check_success(spec: CampaignSpec, names) -> None:
     """Refuse ``[success]`` bounds on columns that are no metric of the campaign (the specification refuses the bounds no
-    run can meet, :data:`~qprr.campaign.spec.NONNEGATIVE`)."""
+    run can meet, :func:`~qprr.campaign.metrics.is_nonnegative`)."""
     if not isinstance(spec, CampaignSpec):
         raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
     metrics = metric_columns(spec.metrics, names, spec.extras)

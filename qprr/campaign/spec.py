@@ -21,7 +21,8 @@ A :class:`CampaignSpec` names a *target* and the parameters of its runs:
   the plant is a perturbed copy of the platform, the controller keeps the nominal model);
   ``seed`` (overrides the derived seed); any other name is a scenario option (or a parameter of
   the callable);
-* ``metrics`` kept per run (:mod:`qprr.campaign.metrics`) and ``extras`` (names of
+* ``metrics`` kept per run (names of the registry :data:`qprr.campaign.metrics.METRICS`, default
+  :data:`qprr.campaign.metrics.DEFAULT_METRICS`; a plug-in's metric too) and ``extras`` (names of
   ``SimResult.metrics`` entries to keep as columns); ``success``: upper bounds on metric
   columns (e.g. ``rmse_position = 0.5``) that a completed run must meet to count as a success.
 
@@ -58,18 +59,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError, MissingDependencyError, UnknownNameError
+from ..platforms import DEFAULT_PLATFORM
 from ..sim.mismatch import ModelError
 from ..validation import as_file
+from .metrics import DEFAULT_METRICS, METRICS, is_nonnegative
 
 MODEL_PREFIX = "model."
 MODEL_PARAMS = tuple(MODEL_PREFIX + f.name for f in fields(ModelError))
 """Parameters that perturb the plant (:class:`qprr.sim.mismatch.ModelError` fields)."""
 
-METRICS = ("rmse", "x_cm_max", "saturation", "recovery_time")
-"""Metric groups a specification may keep (:func:`qprr.campaign.metrics.metrics_of`); default: all."""
-
-NONNEGATIVE = ("t_end", "wall_time", "x_cm_max", "saturation", "recovery_time")
-"""Metric columns >= 0 in every run (with every ``rmse_*``): a negative ``[success]`` bound on one is met by no run."""
 
 DISTRIBUTIONS = ("uniform", "loguniform", "normal", "choice", "integers")
 
@@ -328,13 +326,13 @@ class CampaignSpec:
     name: str
     scenario: str | None = None
     callable: str | None = None
-    platform: str | Mapping[str, object] = "q-prr"
+    platform: str | Mapping[str, object] = DEFAULT_PLATFORM
     seed: int = 0
     samples: int = 1
     options: Mapping[str, object] = field(default_factory=dict)
     grid: Mapping[str, tuple] = field(default_factory=dict)
     random: Mapping[str, Distribution] = field(default_factory=dict)
-    metrics: tuple[str, ...] = METRICS
+    metrics: tuple[str, ...] = DEFAULT_METRICS
     extras: tuple[str, ...] = ()
     success: Mapping[str, float] = field(default_factory=dict)
     paired: bool = False
@@ -370,12 +368,12 @@ class CampaignSpec:
         object.__setattr__(self, "extras", tuple(self.extras))
         for m in self.metrics:
             if m not in METRICS:
-                raise UnknownNameError("metric", m, METRICS)
+                raise UnknownNameError("metric", m, tuple(METRICS))
         if not isinstance(self.success, Mapping):
             raise InputError(f"[success] must be a table metric = upper bound, got {self.success!r}")
         object.__setattr__(self, "success", {k: _number(v, f"success bound of {k!r}") for k, v in self.success.items()})
         for k, bound in self.success.items():
-            if bound < 0 and (k in NONNEGATIVE or k.startswith("rmse_")):
+            if bound < 0 and is_nonnegative(k):
                 raise InputError(
                     f"[success] {k} = {bound!r}: no run can meet it ({k} is >= 0 for every run, a success needs {k} <= the bound): give a bound >= 0"
                 )
@@ -404,7 +402,7 @@ class CampaignSpec:
         from ..scenarios import SCENARIOS
 
         sc = SCENARIOS[self.scenario]  # UnknownNameError lists the scenarios
-        if self.platform != "q-prr" and sc.platforms is not None and self.platform not in sc.platforms:
+        if self.platform != DEFAULT_PLATFORM and sc.platforms is not None and self.platform not in sc.platforms:
             anywhere = ", ".join(n for n, x in SCENARIOS.items() if x.platforms is None)
             raise InputError(
                 f"scenario {sc.name!r} runs on {', '.join(sc.platforms)}, not on platform = {self.platform_label!r}: "
@@ -423,8 +421,8 @@ class CampaignSpec:
         if "seed" in self.parameter_names and "seed" not in sc.options:
             raise InputError(f"scenario {sc.name!r} takes no seed")
         for c in self._values("controller"):
-            if c not in sc.controllers:
-                raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controllers)
+            if c not in sc.controller_names():
+                raise UnknownNameError(f"controller of scenario {sc.name!r}", c, sc.controller_names())
 
     def _embed_option_files(self) -> None:
         """Options that name a TOML file (``Option.file``) replaced by the file's content, read relative to the

@@ -22,6 +22,10 @@ name             controller                                              thesis
 impedance``      impedance as a task on the inverse-dynamics core)
 ===============  ======================================================  ================================
 
+The registry :data:`CONTROLLERS` (:mod:`qprr.control.registry`) holds these and the plug-ins' controllers, each with
+how its gains follow from a platform (:class:`DerivedGains`) or why it has none (:class:`NoGains`); adding a
+controller is one file (docs/extending.md).
+
 Default gains: :func:`make_controller` derives them from the platform (:func:`qprr.control.gains.platform_gains`:
 critically damped poles (s + w)^2, (s + w)^3 with bandwidths w from the thrust, torque and joint effort
 authority); the classes' own defaults (``IDCGains.default`` ...) apply only when a class is built
@@ -40,7 +44,7 @@ from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
-from .gains import GAIN_ARGUMENTS, platform_gains
+from .gains import derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
     DesiredStateInverseDynamics,
@@ -52,18 +56,7 @@ from .inverse_dynamics import (
 from .mfc import MFCGains, ModelFreeController, ipid
 from .mpc_stats import INSTALL as _MPC_INSTALL
 from .opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance
-
-CONTROLLERS = {
-    "idc": InverseDynamicsController,
-    "dsid": DesiredStateInverseDynamics,
-    "mfc": ModelFreeController,
-    "layered-idc": LayeredIDC,
-    "payload-idc": PayloadIDC,
-    "impedance": ImpedanceController,
-    "decoupled": DecoupledController,
-    "opspace-impedance": OperationalSpaceImpedance,
-}
-"""Controller classes (or factories) by name: ``CONTROLLERS[name](platform, **kwargs)``."""
+from .registry import CONTROLLERS, DEFAULT_CONTROLLER, GAIN_ARGUMENTS, ControllerEntry, DerivedGains, NoGains
 
 MPC_INSTALL = _MPC_INSTALL
 """Install command of the ``mpc`` extra (docs/mpc.md): crocoddyl with the pinocchio its wheel is built for."""
@@ -79,18 +72,37 @@ def _mpc(platform: Platform, **kwargs) -> Controller:
     return MPCController(platform, **kwargs)
 
 
+_IDC = DerivedGains(("gains",), derive_idc)
+_CORE = {
+    "idc": ControllerEntry(InverseDynamicsController, _IDC, "inverse dynamics (6.17)-(6.24)"),
+    "dsid": ControllerEntry(DesiredStateInverseDynamics, DerivedGains(("gains",), derive_dsid), "desired-state inverse dynamics (A.2)-(A.3)"),
+    "mfc": ControllerEntry(ModelFreeController, DerivedGains(("gains",), derive_mfc), "model-free control, iPID (6.36)-(6.39)"),
+    "layered-idc": ControllerEntry(LayeredIDC, _IDC, "layered IDC with force feedback (6.53)-(6.57), (6.76)"),
+    "payload-idc": ControllerEntry(PayloadIDC, _IDC, "IDC with an estimated payload mass (6.53)-(6.57)"),
+    "impedance": ControllerEntry(
+        ImpedanceController, DerivedGains(("gains", "impedance"), derive_impedance), "impedance filters on the IDC (6.71)-(6.81)"
+    ),
+    "decoupled": ControllerEntry(DecoupledController, _IDC, "multirotor + fixed-base arm controllers, coupling as a disturbance"),
+    "opspace-impedance": ControllerEntry(
+        OperationalSpaceImpedance, DerivedGains(("impedance",), derive_opspace_impedance), "end-effector impedance (6.72)-(6.73)"
+    ),
+}
+"""The core's controllers (registered into :data:`CONTROLLERS` below; ``mpc`` too when crocoddyl is installed)."""
 if find_spec("crocoddyl") is not None:  # registered only when the optional dependency is installed
-    CONTROLLERS["mpc"] = _mpc
+    _CORE["mpc"] = ControllerEntry(_mpc, NoGains("cost weights and a horizon of its own (MPCWeights), not gains"), "receding-horizon MPC")
+for _name, _entry in _CORE.items():
+    CONTROLLERS.register(_name, _entry)
+del _name, _entry
 
 
 def make_controller(name: str, platform: Platform, *, defaults: str = "platform", **kwargs) -> Controller:
     """A new controller by name (see :data:`CONTROLLERS`) with gains derived from ``platform``; keyword arguments
     go to its constructor.
 
-    Default gains: for every controller of :data:`qprr.control.gains.GAIN_ARGUMENTS` (all but ``mpc``, which has
-    cost weights), ``platform_gains(name, platform)``: each coordinate of xi gets a bandwidth w from the
-    platform's actuator authority at its neutral configuration and a critically damped error polynomial,
-    (s + w)^3 on roll, pitch, yaw (k_D = 3 w, k_P = 3 w^2, k_I = w^3) and (s + w)^2 on position and arm
+    Default gains: for every controller whose entry has :class:`DerivedGains` (:data:`GAIN_ARGUMENTS`: all the
+    core's but ``mpc``, which has cost weights), ``platform_gains(name, platform)``: each coordinate of xi gets a
+    bandwidth w from the platform's actuator authority at its neutral configuration and a critically damped error
+    polynomial, (s + w)^3 on roll, pitch, yaw (k_D = 3 w, k_P = 3 w^2, k_I = w^3) and (s + w)^2 on position and arm
     (k_D = 2 w, k_P = w^2); the impedance filters get M = the moved inertia, K = M w^2, D = 2 M w (the
     formulas for w: :mod:`qprr.control.gains`).  An explicit ``gains=`` or ``impedance=`` replaces that
     argument only (the other stays derived); ``gains=IDCGains.default(n_arm)`` gives the class's fixed
@@ -110,18 +122,23 @@ def make_controller(name: str, platform: Platform, *, defaults: str = "platform"
         raise UnknownNameError("controller", name, tuple(CONTROLLERS))
     if defaults not in ("platform", "class"):
         raise UnknownNameError("gain defaults of make_controller", defaults, ("platform", "class"))
-    missing = [arg for arg in GAIN_ARGUMENTS.get(name, ()) if arg not in kwargs] if defaults == "platform" else []
+    entry = CONTROLLERS[name]
+    missing = [arg for arg in entry.gain_arguments if arg not in kwargs] if defaults == "platform" else []
     if missing:
         derived = platform_gains(name, platform)
         kwargs = {**{arg: derived[arg] for arg in missing}, **kwargs}
-    return CONTROLLERS[name](platform, **kwargs)
+    return entry.factory(platform, **kwargs)
 
 
 __all__ = [
     "CONTROLLERS",
+    "DEFAULT_CONTROLLER",
+    "GAIN_ARGUMENTS",
     "CommandFilter",
     "Controller",
+    "ControllerEntry",
     "DecoupledController",
+    "DerivedGains",
     "DesiredStateInverseDynamics",
     "EndEffectorImpedance",
     "IDCGains",
@@ -132,6 +149,7 @@ __all__ = [
     "LayeredIDC",
     "MFCGains",
     "ModelFreeController",
+    "NoGains",
     "OperationalSpaceImpedance",
     "PayloadIDC",
     "Reference",

@@ -92,6 +92,7 @@ from .impedance import ImpedanceGains
 from .inverse_dynamics import IDCGains
 from .mfc import MFCGains
 from .opspace_impedance import EndEffectorImpedance
+from .registry import CONTROLLERS, GAIN_ARGUMENTS, has_derived_gains
 
 
 @dataclass(frozen=True)
@@ -303,41 +304,50 @@ def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains
     return MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), alpha=tuple(alpha), filter_omega=f)
 
 
-def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
-    """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed)."""
+def derive_idc(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``idc``, ``layered-idc``, ``payload-idc``, ``decoupled``: (s + w)^2 / (s + w)^3 on every coordinate; the roll/pitch
+    reference filter at the class's 50 rad/s unless the rotors lag."""
     w = bandwidths(authority, targets)
-    f_idc = tilt_filter(IDCGains.filter_omega, targets)  # the class's 50 rad/s unless the rotors lag
-    if controller in ("idc", "layered-idc", "payload-idc", "decoupled"):
-        return {"gains": idc_gains(w, filter_omega=f_idc)}
-    if controller == "dsid":  # the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap
-        w_d = w.copy()
-        w_d[6:] = targets.cap
-        return {"gains": idc_gains(w_d, filter_omega=tilt_filter(20.0, targets))}
-    if controller == "mfc":
-        return {"gains": mfc_gains(authority, w, targets)}
-    if controller == "impedance":
-        return {"gains": idc_gains(w, filter_omega=f_idc), "impedance": impedance_gains(authority, w)}
-    if controller == "opspace-impedance":  # the impedance only: its posture loops keep IDCGains.default (measured on
-        # borinot_flying_arm_2: derived posture loops at w_att with the end-effector task diverge in contact)
-        m_d = authority.mass / targets.ratio**2  # K = m w_pos^2 with M_d = m / ratio^2: the impedance's own frequency is w_att
-        return {"impedance": EndEffectorImpedance.from_frequency(w[3], 1.0, m_d)}
-    raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
+    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets))}
 
 
-GAIN_ARGUMENTS = {
-    "idc": ("gains",),
-    "dsid": ("gains",),
-    "mfc": ("gains",),
-    "layered-idc": ("gains",),
-    "payload-idc": ("gains",),
-    "decoupled": ("gains",),
-    "impedance": ("gains", "impedance"),
-    "opspace-impedance": ("impedance",),
-}
-"""Constructor arguments :func:`derive` returns, per controller (``make_controller`` derives only those not given)."""
+def derive_dsid(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``dsid``: the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap."""
+    w = bandwidths(authority, targets)
+    w[6:] = targets.cap
+    return {"gains": idc_gains(w, filter_omega=tilt_filter(20.0, targets))}
 
-DERIVED = tuple(GAIN_ARGUMENTS)
-"""Controllers :func:`platform_gains` derives gains for (``mpc`` has cost weights, not gains)."""
+
+def derive_mfc(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``mfc``: :func:`mfc_gains` (module docstring, "MFC")."""
+    return {"gains": mfc_gains(authority, bandwidths(authority, targets), targets)}
+
+
+def derive_impedance(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``impedance``: the IDC's gains and the impedance filters (6.74)-(6.75) of :func:`impedance_gains`."""
+    w = bandwidths(authority, targets)
+    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets)), "impedance": impedance_gains(authority, w)}
+
+
+def derive_opspace_impedance(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``opspace-impedance``: the impedance only, K = m w_pos^2 with M_d = m / ratio^2 (its own frequency is w_att);
+    its posture loops keep IDCGains.default (measured on borinot_flying_arm_2: derived posture loops at w_att with the
+    end-effector task diverge in contact)."""
+    w = bandwidths(authority, targets)
+    return {"impedance": EndEffectorImpedance.from_frequency(w[3], 1.0, authority.mass / targets.ratio**2)}
+
+
+def derive(controller: str, authority: Authority, targets: Targets) -> dict[str, object]:
+    """Constructor keyword arguments of ``controller`` from an :class:`Authority` (no platform needed): the
+    :class:`~qprr.control.registry.DerivedGains` of its entry in :data:`~qprr.control.registry.CONTROLLERS`."""
+    entry = CONTROLLERS[controller]
+    if not has_derived_gains(entry):
+        raise InputError(f"controller {controller!r} has no gains derived from a platform: {entry.gains.reason}")
+    kwargs = entry.gains.derive(authority, targets)
+    if not isinstance(kwargs, dict) or set(kwargs) != set(entry.gains.arguments):
+        got = sorted(kwargs) if isinstance(kwargs, dict) else type(kwargs).__name__
+        raise InputError(f"the gain derivation of controller {controller!r} returned {got}, not its declared arguments {list(entry.gains.arguments)}")
+    return kwargs
 
 
 def platform_gains(controller: str, platform: Platform, targets: Targets | None = None, overrides: dict | None = None) -> dict[str, object]:
@@ -347,8 +357,8 @@ def platform_gains(controller: str, platform: Platform, targets: Targets | None 
     replacing fields of the derived objects (e.g. ``{"gains": {"kp": [...]}}``; a number for a
     per-coordinate field applies to every coordinate).
     """
-    if controller not in DERIVED:
-        raise UnknownNameError("controller with platform-derived gains", controller, DERIVED)
+    if controller not in GAIN_ARGUMENTS:
+        raise UnknownNameError("controller with platform-derived gains", controller, tuple(GAIN_ARGUMENTS))
     targets = Targets() if targets is None else targets
     if not isinstance(targets, Targets):
         raise InputError(f"targets must be a qprr.control.gains.Targets, got {type(targets).__name__}")
@@ -382,9 +392,9 @@ def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[st
     A file for another controller's tables only raises (it would silently change nothing)."""
     path = Path(path)
     table = read_toml(path, "gains file", "a TOML file: [targets] and [<controller>.gains] tables")
-    extra = [k for k in table if k not in ("targets", *DERIVED)]
+    extra = [k for k in table if k not in ("targets", *GAIN_ARGUMENTS)]
     if extra:
-        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *DERIVED))
+        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *GAIN_ARGUMENTS))
     if set(table) - {"targets"} and controller not in table:
         raise InputError(
             f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
@@ -418,7 +428,6 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
 
 
 __all__ = [
-    "DERIVED",
     "GAIN_ARGUMENTS",
     "MFC_ESTIMATOR",
     "MFC_EIGENVALUE",
@@ -428,6 +437,11 @@ __all__ = [
     "Targets",
     "bandwidths",
     "derive",
+    "derive_dsid",
+    "derive_idc",
+    "derive_impedance",
+    "derive_mfc",
+    "derive_opspace_impedance",
     "gain_lines",
     "idc_gains",
     "impedance_gains",

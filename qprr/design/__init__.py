@@ -10,7 +10,7 @@ draws the Pareto front and flies the best ones.
 =================================  ==================================================================
 package                            what
 =================================  ==================================================================
-:mod:`qprr.design.spec`            :class:`DesignSpec`, :data:`PARAMETERS`, :data:`METRICS`,
+:mod:`qprr.design.spec`            :class:`DesignSpec`, :data:`PARAMETERS`, :data:`DESIGN_METRICS`,
                                    :class:`MassModel`
 :mod:`qprr.design.model`           :func:`build_candidate`: a design point as a platform
 :mod:`qprr.design.evaluate`        the maps of a design, the backend tasks, the closed-loop flight
@@ -30,10 +30,10 @@ from .evaluate import evaluate_platform
 from .model import Candidate, build_candidate
 from .report import front, ranked, report
 from .search import dominated, front_levels, make_optimiser
-from .spec import METRICS, PARAMETERS, DesignSpec, MassModel
+from .spec import DESIGN_METRICS, PARAMETERS, DesignSpec, MassModel
 
 __all__ = [
-    "METRICS",
+    "DESIGN_METRICS",
     "PARAMETERS",
     "Candidate",
     "DesignRun",

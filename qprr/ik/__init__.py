@@ -5,18 +5,21 @@
 
 or ``qprr.ik.solve(platform, data, target, method="qp")``; :func:`balance_prismatic` gives the value of a
 prismatic joint that puts the CoG on the thrust axis (closed form).  See :mod:`qprr.ik.solver` for the
-problem and the methods, :mod:`qprr.ik.tasks` for the tasks (write your own), and
-:mod:`qprr.thesis.igm` for the thesis's analytic IGM of the Q-PRR.
+problem and the methods (the registry :data:`IK_METHODS`: a plug-in adds its own, docs/extending.md),
+:mod:`qprr.ik.tasks` for the tasks (write your own), and :mod:`qprr.thesis.igm` for the thesis's analytic IGM of the Q-PRR.
 """
 
 from . import tasks
 from .balance import BalanceResult, balance_prismatic
 from .hierarchy import HierarchySolver, HierarchyStep
 from .solver import (
+    DEFAULT_METHOD,
+    IK_METHODS,
     METHODS,
     OPTIONS,
     ClikaOptions,
     DLSOptions,
+    IKMethod,
     IKResult,
     IKSolver,
     QPOptions,
@@ -29,6 +32,8 @@ from .solver import (
 )
 
 __all__ = [
+    "DEFAULT_METHOD",
+    "IK_METHODS",
     "BalanceResult",
     "METHODS",
     "OPTIONS",
@@ -36,6 +41,7 @@ __all__ = [
     "DLSOptions",
     "HierarchySolver",
     "HierarchyStep",
+    "IKMethod",
     "IKResult",
     "IKSolver",
     "QPOptions",

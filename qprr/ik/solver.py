@@ -10,7 +10,7 @@ the arm inside its joint limits and, unless an option says otherwise, the multir
 hover there (roll = pitch = 0: a multirotor whose rotors all push along z_B holds still only
 with its thrust vertical).  The CoG offset from the thrust axis is reported, never a failure.
 
-Methods (``METHODS``):
+Methods (the registry :data:`IK_METHODS`, default ``"qp"``; a plug-in adds its own, docs/extending.md):
 
 * ``"qp"``    strict task-priority QP IK: 1 end-effector pose (or position), 2 hover (thrust
   axis vertical; on a fully actuated platform: the base level, :class:`BaseOrientationTask`), 3 CoG
@@ -20,8 +20,15 @@ Methods (``METHODS``):
 * ``"dls"``   damped least squares (Levenberg-Marquardt) on the SE(3) error log6, joint limits by
   an active set.
 
-The thesis's analytic IGM (Algorithms 3-5) is the Q-PRR's own: :func:`qprr.thesis.igm.solve`
-adds it as method ``"igm"`` and uses it as the QP's initial guess.
+The thesis's analytic IGM (Algorithms 3-5) is the Q-PRR's own: the thesis plug-in registers it as method
+``"igm"`` (on the Q-PRR only) and :func:`qprr.thesis.igm.solve` uses it as the QP's initial guess.
+
+A method is an :class:`IKMethod`: its options class (a frozen dataclass deriving from :class:`Tolerances`) and
+``make(platform, options) -> run``, called once per :class:`IKSolver`, whose ``run(ctx, xi) -> IKResult`` solves from
+the start xi with the :class:`SolveContext` ``ctx``.  A method's parts are public, for methods written elsewhere:
+:func:`finish` (evaluate a configuration and decide success, from an :class:`Ending`), :func:`failed_result`,
+:func:`parse_target`, :func:`check_resolvable`, :func:`prepare_xi0`, :func:`hover_q`, :func:`pose_error_values`,
+and the option checks :func:`check_positive` and :func:`check_count`.
 
 Self-collision (option ``collision_free`` of every method, :class:`Tolerances`): success also needs the returned
 configuration free of self-collision (:mod:`qprr.collision`: the arm against the body, the propeller discs and
@@ -48,36 +55,57 @@ import pinocchio as pin
 from .. import charts as ch
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
 from ..model import Platform, check_data, check_model_data, check_platform
+from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import MET, HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
-METHODS = ("clika", "dls", "qp")
+DEFAULT_METHOD = "qp"
+"""The method of :class:`IKSolver` and :func:`solve` unless one is named: the strict task-priority QP."""
 
 __all__ = [
+    "DEFAULT_METHOD",
+    "IK_METHODS",
     "METHODS",
     "OPTIONS",
     "ClikaOptions",
     "DLSOptions",
+    "Ending",
+    "IKMethod",
     "IKResult",
     "IKSolver",
+    "QPMethod",
     "QPOptions",
+    "SolveContext",
+    "Tolerances",
+    "check_count",
+    "check_positive",
+    "check_resolvable",
     "default_guess",
     "default_levels",
+    "failed_result",
+    "finish",
+    "hover_q",
     "make_options",
     "parse_target",
+    "pose_error_values",
     "pose_errors",
+    "prepare_xi0",
     "solve",
+    "solve_clika",
+    "solve_dls",
 ]
-"""The public API; the other names (finish, solve_clika, ...) are the methods' parts, shared with qprr.thesis.igm."""
+"""The public API: the solver, the registry of methods, and the parts a method is written with (module docstring)."""
 
 
 # ============================================================================ options
-def _check_pos(name: str, value, strict: bool = True) -> None:
+def check_positive(name: str, value, strict: bool = True) -> None:
+    """An option's value checked: a finite number > 0 (``strict``) or >= 0; :class:`~qprr.errors.InputError` names ``name``."""
     as_real(value, f"option {name}", positive=strict, nonnegative=not strict)
 
 
-def _check_int(name: str, value) -> None:
+def check_count(name: str, value) -> None:
+    """An option's value checked: an integer >= 1 (an iteration count); :class:`~qprr.errors.InputError` names ``name``."""
     as_int(value, f"option {name}", lo=1)
 
 
@@ -88,20 +116,26 @@ def _check_bool(name: str, value) -> None:
 
 @dataclass(frozen=True)
 class Tolerances:
+    """What every method's options share: the success tolerances and the self-collision option (module docstring).
+    A method's own options class derives from it and calls ``self._check_tolerances()`` in its ``__post_init__``."""
+
     position_tol: float = 1e-6  # [m] success threshold on ||p_e - p_d||
     orientation_tol: float = 1e-6  # [rad] success threshold on ||log3(R_d^T R_e)||
     hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
     collision_free: bool = False  # success needs no self-collision (qprr.collision); restarts when the answer collides
     collision_restarts: int = 8  # other arm postures tried when the answer collides (collision_free)
+    require_hover: bool | None = None  # success needs roll = pitch = 0 within hover_tol (None: for under-actuated platforms)
 
     def __post_init__(self):
         self._check_tolerances()
 
     def _check_tolerances(self) -> None:
         for name in ("position_tol", "orientation_tol", "hover_tol"):
-            _check_pos(name, getattr(self, name))
+            check_positive(name, getattr(self, name))
         _check_bool("collision_free", self.collision_free)
         as_int(self.collision_restarts, "option collision_restarts", lo=0)
+        if self.require_hover is not None:
+            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -118,7 +152,6 @@ class ClikaOptions(Tolerances):
     weights: tuple | None = None
     hover: bool = False
     max_iter: int = 2000
-    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
@@ -129,11 +162,9 @@ class ClikaOptions(Tolerances):
             w = as_array(self.weights, "option weights")
             if w.ndim != 1 or w.shape[0] < 6 or np.any(~np.isfinite(w)) or np.any(w <= 0):
                 raise InputError(f"option weights must be 6 + n_arm positive numbers, got {np.asarray(self.weights).tolist()}")
-        _check_pos("dt", self.dt)
-        _check_int("max_iter", self.max_iter)
+        check_positive("dt", self.dt)
+        check_count("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -146,15 +177,12 @@ class DLSOptions(Tolerances):
     hover: bool = True
     damping: float = 1e-3
     max_iter: int = 100
-    require_hover: bool | None = None
 
     def __post_init__(self):
         self._check_tolerances()
-        _check_pos("damping", self.damping)
-        _check_int("max_iter", self.max_iter)
+        check_positive("damping", self.damping)
+        check_count("max_iter", self.max_iter)
         _check_bool("hover", self.hover)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
 
 
 @dataclass(frozen=True)
@@ -166,7 +194,6 @@ class QPOptions(Tolerances):
     reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``: of
     :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
-    require_hover: bool | None = None
     posture: tuple | None = None
     levels: Sequence | None = None
     max_iter: int = 50
@@ -178,12 +205,10 @@ class QPOptions(Tolerances):
 
     def __post_init__(self):
         self._check_tolerances()
-        _check_int("max_iter", self.max_iter)
+        check_count("max_iter", self.max_iter)
         for name in ("step_tol", "max_step", "eps_abs", "rank_tol"):
-            _check_pos(name, getattr(self, name))
-        _check_pos("regularization", self.regularization, strict=False)
-        if self.require_hover is not None:
-            _check_bool("require_hover", self.require_hover)
+            check_positive(name, getattr(self, name))
+        check_positive("regularization", self.regularization, strict=False)
         if self.posture is not None:
             as_array(self.posture, "option posture")
         if self.levels is not None:
@@ -192,11 +217,9 @@ class QPOptions(Tolerances):
                 raise InputError("option levels must be a non-empty sequence of non-empty sequences of qprr.ik.tasks.Task")
 
 
-OPTIONS = {"clika": ClikaOptions, "dls": DLSOptions, "qp": QPOptions}
-
-
 def make_options(method: str, options=None, table: Mapping | None = None):
-    """The options object of ``method`` from None, a dict of overrides or an options instance."""
+    """The options object of ``method`` from None, a dict of overrides or an options instance (``table``: method name
+    -> options class, default :data:`OPTIONS`, the classes of the registered methods)."""
     table = OPTIONS if table is None else table
     if method not in table:
         raise UnknownNameError("IK method", method, tuple(table))
@@ -500,6 +523,11 @@ def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
     ``position_tol``: at |p| = 1e17 m neighbouring doubles are 16 m apart and a "1e-16 m" error means nothing.
     Forward kinematics rounds to a few units in the last place of |p|: 16 of them must stay below a tenth of
     the tolerance (with the default 1e-6 m: |p| below 2^25 m, about 3.4e7 m)."""
+    if not (isinstance(p_d, np.ndarray) and p_d.shape == (3,) and p_d.dtype.kind == "f"):
+        p_d = as_vector(p_d, 3, "p_d")
+    if not math.isfinite(float(p_d.sum())):
+        raise NonFiniteError(f"p_d must be finite, got {p_d.tolist()}")
+    position_tol = as_real(position_tol, "position_tol", positive=True)
     pmax = float(np.abs(p_d).max())
     ulp = float(np.spacing(pmax))
     if 16.0 * ulp > 0.1 * position_tol:
@@ -718,7 +746,13 @@ class IKSolver:
     """
 
     def __init__(
-        self, platform: Platform, method: str = "qp", options=None, *, initial_guess: Callable | None = None, unreachable_hint: Callable | None = None
+        self,
+        platform: Platform,
+        method: str = DEFAULT_METHOD,
+        options=None,
+        *,
+        initial_guess: Callable | None = None,
+        unreachable_hint: Callable | None = None,
     ) -> None:
         check_platform(platform)
         if initial_guess is not None and not callable(initial_guess):
@@ -730,16 +764,12 @@ class IKSolver:
         self.options = make_options(method, options)
         self.initial_guess = initial_guess
         self.unreachable_hint = unreachable_hint
-        self._engine = None
-        self._default_levels = _DefaultLevels(platform)
+        self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
         self._collision = None
         if self.options.collision_free:
             from ..collision import collision_model
 
             self._collision = collision_model(platform)
-        if method == "qp":
-            o = self.options
-            self._engine = HierarchySolver(platform, eps_abs=o.eps_abs, regularization=o.regularization, rank_tol=o.rank_tol)
 
     def _guess(self, data, p_d, R_d, hover: bool):
         if self.initial_guess is not None:
@@ -768,11 +798,7 @@ class IKSolver:
         ctx = SolveContext(
             self.platform, data, self.method, p_d, R_d, self.options, t0, init, _require_hover(self.platform, self.options), self.unreachable_hint
         )
-        if self.method == "clika":
-            return solve_clika(ctx, xi)
-        if self.method == "dls":
-            return solve_dls(ctx, xi)
-        return self._solve_qp(ctx, xi)
+        return self._method_run(ctx, xi)
 
     def _collision_free(self, data: pin.Data, p_d, R_d, result: IKResult, t0: float) -> IKResult:
         """Restart from other arm postures while the answer collides (module docstring); a colliding answer never
@@ -804,13 +830,24 @@ class IKSolver:
             "restarts from other arm postures (collision_restarts)",
         )
 
-    def _solve_qp(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
-        platform, data, opts = self.platform, ctx.data, self.options
+
+class QPMethod:
+    """Method ``"qp"``: the strict task-priority QP IK (module docstring), with the state one :class:`IKSolver` keeps
+    between solves (its :class:`~qprr.ik.hierarchy.HierarchySolver`, the default levels).  ``QPMethod(platform, options)``
+    is the method's ``make``; calling it, ``run(ctx, xi)``, solves."""
+
+    def __init__(self, platform: Platform, options: QPOptions) -> None:
+        self.platform, self.options = platform, options
+        self.engine = HierarchySolver(platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol)
+        self.default_levels = _DefaultLevels(platform)
+
+    def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
+        platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
         q = ch.xi_to_q(xi)
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-        levels = opts.levels if opts.levels is not None else self._default_levels.levels(target, posture, float(xi[5]))
-        self._engine.reset()
+        levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
+        engine.reset()
         it, step, end = 0, None, Ending("max_iterations")
         shaper = _StepShaper(opts)
         try:
@@ -820,11 +857,11 @@ class IKSolver:
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
                 it += 1
                 active = levels if shaper.kept is None else levels[: shaper.kept]  # frozen levels are not solved
-                step = self._engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
+                step = engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
                 dv, stop = shaper.shape(step, pose_ok)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
-                    np.clip(q[7:], self._engine.lower, self._engine.upper, out=q[7:])  # remove the QP's bound slack
+                    np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
                 if stop:
                     ready = dv is None
                     status = stop if pose_ok or stop != "converged_stationary" else "stalled"
@@ -933,7 +970,53 @@ def _level_errors(platform, data, q, levels, ready, step) -> tuple[float, ...]:
     return tuple(math.sqrt(sum(float(e @ e) for e in (t.linearize(platform, data, q)[1] for t in level))) for level in levels)
 
 
-def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=None, options=None) -> IKResult:
+# ============================================================================ the registry
+@dataclass(frozen=True)
+class IKMethod:
+    """A registered IK method: its ``options`` class (a frozen dataclass deriving from :class:`Tolerances`: the
+    defaults, checked on construction) and ``make(platform, options) -> run``, called once per :class:`IKSolver`, with
+    ``run(ctx, xi) -> IKResult`` solving from the start configuration xi (thesis coordinates) for the
+    :class:`SolveContext` ``ctx`` (the parsed target, the options, the clock); a method ends with :func:`finish` (or
+    :func:`failed_result`).  ``description``: one line."""
+
+    options: type
+    make: Callable[..., Callable[[SolveContext, np.ndarray], IKResult]]
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.options, type) and issubclass(self.options, Tolerances)):
+            raise InputError(f"IKMethod.options must be an options class deriving from qprr.ik.solver.Tolerances, got {self.options!r}")
+        if not callable(self.make):
+            raise InputError(f"IKMethod.make must be a function (platform, options) -> run(ctx, xi), got {self.make!r}")
+
+
+def _stateless(run: Callable[[SolveContext, np.ndarray], IKResult]) -> Callable:
+    """The ``make`` of a method that keeps no state between solves: ``run`` itself."""
+
+    def make(platform: Platform, options) -> Callable:
+        return run
+
+    return make
+
+
+def _check_method(name: str, entry: object) -> None:
+    if not isinstance(entry, IKMethod):
+        raise InputError(f"IK method {name!r}: register a qprr.ik.solver.IKMethod(options, make, description), got {type(entry).__name__}")
+
+
+IK_METHODS: Registry[IKMethod] = Registry("IK method", default=DEFAULT_METHOD, check=_check_method)
+"""IK method name -> :class:`IKMethod`: ``qp``, ``clika``, ``dls`` here; the thesis plug-in adds ``igm`` (the Q-PRR's)."""
+IK_METHODS.register("qp", IKMethod(QPOptions, QPMethod, "strict task-priority QP: pose, hover, CoG, posture; joint limits hard"))
+IK_METHODS.register("clika", IKMethod(ClikaOptions, _stateless(solve_clika), "closed-loop inverse kinematics (4.38)-(4.41)"))
+IK_METHODS.register("dls", IKMethod(DLSOptions, _stateless(solve_dls), "damped least squares on log6, joint limits by an active set"))
+
+OPTIONS = IK_METHODS.derived(lambda entry: entry.options)
+"""IK method name -> its options class (a view of :data:`IK_METHODS`)."""
+METHODS = IK_METHODS.derived(lambda entry: entry.description)
+"""IK method name -> its description (a view of :data:`IK_METHODS`; ``name in METHODS``, ``list(METHODS)``)."""
+
+
+def solve(platform: Platform, data: pin.Data, target, method: str = DEFAULT_METHOD, xi0=None, options=None) -> IKResult:
     """Inverse kinematics: a configuration reaching ``target`` (see the module docstring).
 
     A new :class:`IKSolver` per call (its QPs are built each time); keep one

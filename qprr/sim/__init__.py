@@ -19,11 +19,11 @@ module                           what
 """
 
 from .actuators import RotorDynamics
-from .config import INTEGRATORS, Limits, SimConfig, SimInputs
+from .config import Limits, SimConfig, SimInputs
 from .contact import CompliantWall, ContactHistory, PrescribedWrench, PushedMass
 from .disturbances import BaseDrag, Disturbance, Disturbances, Pulse, StateDisturbance, WhiteNoise
 from .environment import Environment
-from .integrators import ORDERS, STEPPERS
+from .integrators import INTEGRATORS, ORDERS, STEPPERS, Integrator
 from .loop import simulate
 from .payload import PayloadChange, PayloadSchedule
 from .result import FORMAT_VERSION, SimResult, Status
@@ -32,6 +32,7 @@ from .wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
 __all__ = [
     "FORMAT_VERSION",
     "INTEGRATORS",
+    "Integrator",
     "ORDERS",
     "STEPPERS",
     "AerodynamicDrag",

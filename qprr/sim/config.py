@@ -16,9 +16,7 @@ from dataclasses import dataclass
 
 from ..errors import InputError, UnknownNameError
 from ..validation import as_int, as_real
-from .integrators import STEPPERS
-
-INTEGRATORS = tuple(STEPPERS)
+from .integrators import DEFAULT_INTEGRATOR, INTEGRATORS
 
 _GIB = 2.0**30
 
@@ -53,7 +51,8 @@ class SimConfig:
     ----------
     dt : integration step [s].
     integrator : ``"midpoint"`` (second order, the default), ``"rk4"`` (fourth order) or ``"euler"``
-        (semi-implicit, first order), all on the Lie group (:mod:`qprr.sim.integrators`).
+        (semi-implicit, first order), all on the Lie group, or a plug-in's: a name of the registry
+        :data:`qprr.sim.integrators.INTEGRATORS`.
     control_period : period of the digital controller [s], an integer multiple of ``dt``
         (default None: ``dt``).  The controller, the allocation, the disturbance samples and the
         payload changes act at the control ticks; the result has one row per tick.
@@ -70,7 +69,7 @@ class SimConfig:
     """
 
     dt: float = 1e-3
-    integrator: str = "midpoint"
+    integrator: str = DEFAULT_INTEGRATOR
     control_period: float | None = None
     seed: int | None = 0
     limits: Limits = Limits()
@@ -85,7 +84,7 @@ class SimConfig:
             raise InputError(f"dt must be a positive number of seconds, got {dt!r}")
         object.__setattr__(self, "dt", float(dt))
         if self.integrator not in INTEGRATORS:
-            raise UnknownNameError("integrator", self.integrator, INTEGRATORS)
+            raise UnknownNameError("integrator", self.integrator, tuple(INTEGRATORS))
         self._check_period()
         if self.seed is not None:
             object.__setattr__(self, "seed", as_int(self.seed, "seed", lo=0))

@@ -40,14 +40,24 @@ computed inside ``f``.
 Stages never straddle a discontinuity if the caller only changes inputs between steps (the
 simulator changes held inputs, payloads and noise samples at control ticks, which are step
 boundaries).
+
+The registry :data:`INTEGRATORS` (default ``"midpoint"``) holds the three as :class:`Integrator` entries (the
+stepper factory, the order, a description); :data:`STEPPERS` and :data:`ORDERS` are views of it, and
+:class:`qprr.sim.SimConfig`, the scenarios' ``integrator`` option and ``qprr simulate --integrator`` accept its names.
+A plug-in adds a scheme with ``INTEGRATORS.register(name, Integrator(factory, order, description))``
+(docs/extending.md): ``factory(model, dt)`` returns ``step(f, t, q, v, z=None, first=None) -> (q+, v+, z+)``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
+
+from ..errors import InputError
+from ..registry import Registry
 
 _integrate = pin.integrate
 _ddifference = pin.dDifference
@@ -61,11 +71,7 @@ def make_stepper(method: str, model: pin.Model, dt: float) -> Callable:
     implementation of each scheme; :func:`semi_implicit_euler`, :func:`explicit_midpoint`, :func:`rk4` build
     one per call).  ``f`` must not keep references to the arrays it is given (buffers are reused).
     """
-    if method not in _FACTORIES:
-        from ..errors import UnknownNameError
-
-        raise UnknownNameError("integrator", method, tuple(_FACTORIES))
-    return _FACTORIES[method](model, float(dt))
+    return INTEGRATORS[method].factory(model, float(dt))  # an unknown name: UnknownNameError listing the registered ones
 
 
 def _euler(model: pin.Model, dt: float) -> Callable:
@@ -145,7 +151,40 @@ def _rk4(model: pin.Model, dt: float) -> Callable:
     return step
 
 
-_FACTORIES: dict[str, Callable] = {"euler": _euler, "midpoint": _midpoint, "rk4": _rk4}
+@dataclass(frozen=True)
+class Integrator:
+    """A registered one-step scheme: ``factory(model, dt) -> step`` with ``step(f, t, q, v, z=None, first=None) ->
+    (q+, v+, z+)`` (the module docstring's contract: q on the model's configuration group, ``f`` evaluated at every
+    stage, ``first`` the value of f at (t, q, v[, z]) when the caller has it), its ``order`` of accuracy on smooth
+    problems (global error O(dt^order); the convergence tests measure it) and a one-line ``description``."""
+
+    factory: Callable[[pin.Model, float], Callable]
+    order: int
+    description: str = ""
+
+    def __post_init__(self) -> None:
+        if not callable(self.factory):
+            raise InputError(f"Integrator.factory must be a function (model, dt) -> step, got {self.factory!r}")
+        if isinstance(self.order, bool) or not isinstance(self.order, int) or self.order < 1:
+            raise InputError(f"Integrator.order must be an integer >= 1 (global error O(dt^order)), got {self.order!r}")
+
+    def step(self, model: pin.Model, f: Callable, t: float, q, v, dt: float, z=None, first=None):
+        """One step of length ``dt`` (a new stepper per call; :func:`make_stepper` keeps one for a fixed dt)."""
+        return self.factory(model, dt)(f, t, q, v, z, first)
+
+
+def _check(name: str, entry: object) -> None:
+    if not isinstance(entry, Integrator):
+        raise InputError(f"integrator {name!r}: register a qprr.sim.integrators.Integrator(factory, order, description), got {type(entry).__name__}")
+
+
+DEFAULT_INTEGRATOR = "midpoint"
+"""The scheme of :class:`qprr.sim.SimConfig` and of every scenario unless one is named: second order, two evaluations."""
+INTEGRATORS: Registry[Integrator] = Registry("integrator", default=DEFAULT_INTEGRATOR, check=_check)
+"""Integrator name -> :class:`Integrator`: ``midpoint``, ``rk4``, ``euler`` here; plug-ins add theirs."""
+INTEGRATORS.register("midpoint", Integrator(_midpoint, 2, "explicit midpoint, 2nd order, two evaluations"))
+INTEGRATORS.register("rk4", Integrator(_rk4, 4, "Runge-Kutta 4 in the tangent chart, 4th order, four evaluations"))
+INTEGRATORS.register("euler", Integrator(_euler, 1, "semi-implicit Euler, 1st order, one evaluation"))
 
 
 def semi_implicit_euler(
@@ -169,8 +208,9 @@ def rk4(
     return _rk4(model, dt)(f, t, q, v, z, first)
 
 
-STEPPERS: dict[str, Callable] = {"euler": semi_implicit_euler, "midpoint": explicit_midpoint, "rk4": rk4}
-"""Integrator name -> one-step function ``step(model, f, t, q, v, dt, z=None, first=None) -> (q, v, z)``."""
+STEPPERS = INTEGRATORS.derived(lambda entry: entry.step)
+"""Integrator name -> one-step function ``step(model, f, t, q, v, dt, z=None, first=None) -> (q, v, z)`` (a view of
+:data:`INTEGRATORS`)."""
 
-ORDERS: dict[str, int] = {"euler": 1, "midpoint": 2, "rk4": 4}
-"""Integrator name -> order of accuracy on smooth problems (global error O(dt^order))."""
+ORDERS = INTEGRATORS.derived(lambda entry: entry.order)
+"""Integrator name -> order of accuracy on smooth problems (global error O(dt^order)) (a view of :data:`INTEGRATORS`)."""

@@ -17,7 +17,7 @@ manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers refer to 
 
 The library (everything outside this package) never imports from here.  The thesis is a plug-in:
 :func:`register` (the ``qprr.plugins`` entry point ``thesis`` of the distribution's metadata) puts
-its platform, rotor dynamics, parameter sets, gain tables, scenarios, comparisons, checks and
+its platform, rotor dynamics, parameter sets, gain tables, scenarios, IK method (``igm``), comparisons, checks and
 design-map references into the core's registries (:mod:`qprr.registry`), which call it the first
 time they miss a name; it imports none of the modules it registers (each entry imports its module
 when used).  Its front end, ``qprr urdf`` (:mod:`qprr.thesis.cli`), is the entry point ``thesis`` of
@@ -62,6 +62,12 @@ def _gain_tables():
     return [(f"q-prr:{name}", fn) for name, fn in tables.items()]
 
 
+def _ik_methods():
+    from .igm import IGM
+
+    return [("igm", IGM)]  # Algorithms 3-5 on the Q-PRR
+
+
 def _comparisons():
     from .comparisons import COMPARISONS, run_comparisons
 
@@ -82,6 +88,7 @@ def _map_reference(map_name, platform, result):
 
 def register() -> None:
     """Register the thesis into the core's registries (the ``qprr.plugins`` entry point; called once, by the registries)."""
+    from ..ik.solver import IK_METHODS
     from ..platforms import PLATFORMS, ROTOR_DYNAMICS
     from ..registry import CHECKS, COMPARISONS, GAIN_TABLES, MAP_REFERENCES, PARAMETER_SETS, SCENARIOS
     from .params import VARIANTS
@@ -92,6 +99,7 @@ def register() -> None:
         PARAMETER_SETS.register(f"q-prr:{variant}", make)
     GAIN_TABLES.register_source(_gain_tables)
     SCENARIOS.register_source(_scenarios)
+    IK_METHODS.register_source(_ik_methods)
     COMPARISONS.register_source(_comparisons)
     CHECKS.register("thesis", _check)
     MAP_REFERENCES.register("thesis", _map_reference)

@@ -22,16 +22,15 @@ import pinocchio as pin
 from ..charts import check_rotation
 from ..errors import InputError, UnknownNameError
 from ..ik.solver import (
-    OPTIONS as _GENERIC_OPTIONS,
-)
-from ..ik.solver import (
+    OPTIONS,
     Ending,
+    IKMethod,
     IKResult,
     IKSolver,
     SolveContext,
     Tolerances,
-    _check_int,
-    _check_pos,
+    check_count,
+    check_positive,
     check_resolvable,
     failed_result,
     finish,
@@ -46,27 +45,30 @@ from .params import QPRRParams
 from .robot import params_of
 
 TWO_PI = 2.0 * math.pi
-METHODS = ("igm", "clika", "dls", "qp")
 
 
 @dataclass(frozen=True)
 class IGMOptions(Tolerances):
     """Thesis analytic IGM.  ``theta2``: "lm" (thesis: theta2 is what Algorithm 4 returns
     from the initial guess) or "balance" (extension: theta2 chosen so that the CoG can be
-    put on the thrust axis with r0 inside its range, closest to the guess)."""
+    put on the thrust axis with r0 inside its range, closest to the guess).  ``require_hover``: always (Algorithm 3
+    returns hover configurations only)."""
 
     theta2: str = "lm"
     lm_tol: float = 1e-10  # [m] stop Algorithm 4 when ||F|| <= lm_tol
     max_iter: int = 50
     damping: float = 1e-3  # initial lambda of (3.74)
+    require_hover: bool = True
 
     def __post_init__(self):
         self._check_tolerances()
         if self.theta2 not in ("lm", "balance"):
             raise UnknownNameError("IGM theta2 mode", self.theta2, ("lm", "balance"))
-        _check_pos("lm_tol", self.lm_tol)
-        _check_pos("damping", self.damping)
-        _check_int("max_iter", self.max_iter)
+        check_positive("lm_tol", self.lm_tol)
+        check_positive("damping", self.damping)
+        check_count("max_iter", self.max_iter)
+        if self.require_hover is not True:
+            raise InputError(f"option require_hover of the IGM is always True (Algorithm 3 returns hover configurations), got {self.require_hover!r}")
 
 
 def hover_yaw(R_world) -> float:
@@ -299,7 +301,6 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
     return [xb, yb, zb, 0.0, 0.0, psi, r0, th2, t23 - th2], it, "converged", ""
 
 
-OPTIONS = {"igm": IGMOptions, **_GENERIC_OPTIONS}
 _IGM_BALANCE = IGMOptions(theta2="balance")
 
 
@@ -329,9 +330,17 @@ def solve_igm(platform: Platform, data: pin.Data, target, xi0=None, options=None
         guess, init = prepare_xi0(platform, xi0, hover=False).tolist(), "xi0 (given)"
     else:  # (the guess's yaw is not used: psi comes from the target)
         guess, init = _guess_tuple(params, p_d), "hover below the target, arm straight"
-    xi_l, it, status, reason = _igm_core(_arm_constants(params), p_d, R_d, guess, opts)
+    return _igm_run(SolveContext(platform, data, "igm", p_d, R_d, opts, t0, init, True), guess)
+
+
+def _igm_run(ctx: SolveContext, guess) -> IKResult:
+    """Algorithms 3-5 from ``guess`` (xi, its yaw not used) for the target and options of ``ctx``: the method's run."""
+    p_d, R_d, opts = ctx.p_d, ctx.R_d, ctx.opts
+    if R_d is None:
+        raise InputError("method 'igm' needs a full pose target (p_world, R_world)")
+    xi_l, it, status, reason = _igm_core(_arm_constants(params_of(ctx.platform)), p_d, R_d, [float(v) for v in guess], opts)
     if xi_l is None:
-        return failed_result("igm", status, reason, it, t0, init)
+        return failed_result("igm", status, reason, it, ctx.t0, ctx.init)
     tilt = _tilt(R_d)
     if tilt > opts.orientation_tol:
         status = "unreachable"
@@ -339,9 +348,17 @@ def solve_igm(platform: Platform, data: pin.Data, target, xi0=None, options=None
             f"the target orientation is not reachable in hover: its y axis is tilted {tilt:.3g} rad out of the "
             "horizontal plane, which needs a base roll/pitch (Algorithm 3 assumes phi = theta = 0)"
         )
-    xi = np.array(xi_l)
-    ctx = SolveContext(platform, data, "igm", p_d, R_d, opts, t0, init, True)
-    return finish(ctx, hover_q(platform, xi_l), Ending(status, reason, it), xi)
+    return finish(ctx, hover_q(ctx.platform, xi_l), Ending(status, reason, it), np.array(xi_l))
+
+
+def _make_igm(platform: Platform, options: IGMOptions):
+    """The ``make`` of the registered method ``"igm"``: the Q-PRR only (:func:`qprr.thesis.params_of` refuses others)."""
+    params_of(platform)
+    return _igm_run
+
+
+IGM = IKMethod(IGMOptions, _make_igm, "the thesis's analytic IGM (Algorithms 3-5, corrected), the Q-PRR only")
+"""The method ``"igm"`` the thesis plug-in registers into :data:`qprr.ik.solver.IK_METHODS`."""
 
 
 def _thesis_guess(platform, data, p_d, R_d):
@@ -381,7 +398,7 @@ def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=No
     if method == "igm":
         return solve_igm(platform, data, target, xi0, options)
     if method not in OPTIONS:
-        raise UnknownNameError("IK method", method, METHODS)
+        raise UnknownNameError("IK method", method, tuple(OPTIONS))
     init = "igm"
     if isinstance(options, dict) and "init" in options:
         if method != "qp":

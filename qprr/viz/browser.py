@@ -19,6 +19,7 @@ import time
 import urllib.request
 
 from ..errors import MissingDependencyError, QprrError
+from ..platforms import DEFAULT_PLATFORM
 
 FLAGS = (
     "--headless",
@@ -146,7 +147,7 @@ DISMISS_NOTIFICATIONS = "document.querySelectorAll('.mantine-Notification-closeB
 """JavaScript closing viser's notifications (e.g. "software WebGL rendering detected")."""
 
 
-def viewer_screenshot(path: str, platform_name: str = "q-prr", *, width: int = 1280, height: int = 800, settle: float = 3.0) -> str:
+def viewer_screenshot(path: str, platform_name: str = DEFAULT_PLATFORM, *, width: int = 1280, height: int = 800, settle: float = 3.0) -> str:
     """Start a viewer of ``platform_name`` on a free port, solve an end-effector target, and save the page as a PNG."""
     import numpy as np
 

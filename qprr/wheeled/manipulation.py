@@ -53,12 +53,12 @@ def qprr_arm(urdf_path: str | Path | None = None) -> pin.Model:
 
     Joints r0 (prismatic along x), theta2, theta3 (about y), end-effector frame "end_effector";
     from ``urdf_path`` (a URDF without a free flyer) or :meth:`qprr.Platform.arm_model` of
-    ``qprr.load("q-prr")``.
+    ``qprr.load()`` (the default platform, :data:`qprr.platforms.DEFAULT_PLATFORM`: the Q-PRR).
     """
     if urdf_path is None:
-        from ..platforms import load
+        from ..platforms import DEFAULT_PLATFORM, load
 
-        return load("q-prr").arm_model()
+        return load(DEFAULT_PLATFORM).arm_model()
     return pin.buildModelFromUrdf(str(urdf_path))
 
 

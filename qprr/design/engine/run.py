@@ -23,7 +23,7 @@ from ...errors import InputError
 from ..evaluate.task import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design, exclusions
 from ..search.optimiser import make_optimiser
 from ..search.points import fixed_params, grid_points, n_points, point, reference_points
-from ..spec.metrics import METRICS, sign
+from ..spec.metrics import DESIGN_METRICS, sign
 from ..spec.parameters import PARAMETERS
 from ..spec.study import DesignSpec
 from . import campaign_io as io
@@ -53,7 +53,7 @@ def meta_of(spec: DesignSpec) -> dict:
         "design_spec": spec.to_dict(),
         "kind": "design",
         "params": [*ID_COLUMNS[2:], *PARAMETERS],
-        "metrics": ["status", "reason", *METRICS, TAIL_COLUMNS[1]],
+        "metrics": ["status", "reason", *DESIGN_METRICS, TAIL_COLUMNS[1]],
         "names": [],
         "n_runs": n_points(spec),
     }
@@ -62,7 +62,7 @@ def meta_of(spec: DesignSpec) -> dict:
 def _error_row(spec: DesignSpec, p: dict, exc: Exception) -> dict:
     row = {k: p[k] for k in ID_COLUMNS}
     row.update({k: float(p["params"].get(k, math.nan)) for k in PARAMETERS})
-    row.update(status="error", reason=f"{type(exc).__name__}: {exc}", **dict.fromkeys(METRICS, math.nan), feasible=0, wall_time=math.nan)
+    row.update(status="error", reason=f"{type(exc).__name__}: {exc}", **dict.fromkeys(DESIGN_METRICS, math.nan), feasible=0, wall_time=math.nan)
     return row
 
 

@@ -1,13 +1,15 @@
-"""Evaluate one platform on the design maps of :mod:`qprr.analysis` (the numbers of :data:`METRICS`)."""
+"""Evaluate one platform on the design maps of :mod:`qprr.analysis` (the numbers of :data:`DESIGN_METRICS`)."""
 
 from __future__ import annotations
+
+from functools import cached_property
 
 import numpy as np
 import pinocchio as pin
 
 from ...analysis import balance, capacity, hover, singularity, workspace
 from ...model import check_platform
-from ..spec.metrics import METRICS
+from ..spec.metrics import DESIGN_METRICS
 from ..spec.study import Effort
 
 
@@ -54,30 +56,64 @@ def balanced_share(region, bal) -> float:
     return len(hit & cells) / len(cells)
 
 
-def evaluate_platform(platform, effort: Effort, seed: int, collision: bool = False) -> dict[str, float]:
-    """Every metric of :data:`METRICS` for ``platform`` at ``effort`` (``seed``: the measure's counting-grid shifts).
+class DesignMaps:
+    """The maps of one design, each computed on first use and shared by the metrics (:class:`DesignMetric` ``compute``).
 
-    ``collision``: check self-collision (:mod:`qprr.collision`) and give ``free_hover_volume`` (NaN without: the
-    check costs time, so a study asks for it only when it names that metric)."""
-    n = effort.samples
-    ws = workspace(platform, n_samples=n, variants=[], hover=True, n_shifts=effort.shifts, seed=seed, collision=bool(collision))
-    hv = ws.regions[0].hover_volume
-    free = ws.regions[0].free_hover_volume if collision else None
-    bal = balance(platform, slider=slider_of(platform), n_samples=n, tol=effort.balance_tol, n_shifts=effort.shifts)
-    hov = hover(platform, n_samples=n, collision=False)
-    cap = capacity(platform, n_samples=n)
-    far = axis_distance(platform, cap.ee_body) >= effort.payload_reach
-    sing = singularity(platform, n_samples=n, task="position")
-    m_total = float(pin.computeTotalMass(platform.model))
-    m_arm = m_total - float(platform.model.inertias[1].mass)  # every body but the base's (joint 1: the free flyer)
-    out = {
-        "hover_volume": float(hv.measure) if hv is not None else 0.0,
-        "free_hover_volume": (float(free.measure) if free is not None else 0.0) if collision else float("nan"),
-        "balance_fraction": balanced_share(ws.regions[0], bal),
-        "thrust_margin": float(hov.min_thrust_margin[0]),
-        "payload_at_reach": float(cap.capacity[far].max()) if far.any() else 0.0,
-        "manipulability": float(np.median(sing.manipulability)),
-        "arm_mass": m_arm,
-        "mass": m_total,
-    }
-    return {k: out[k] for k in METRICS}
+    ``platform``, ``effort`` (:class:`~qprr.design.spec.study.Effort`), ``seed`` (the measure's counting-grid shifts),
+    ``collision`` (the workspace checks self-collision: ``free_hover_volume``); the maps: :attr:`workspace`,
+    :attr:`balance`, :attr:`hover`, :attr:`capacity`, :attr:`singularity` (:mod:`qprr.analysis`, ``effort.samples``
+    configurations each); the masses :attr:`mass` and :attr:`arm_mass` [kg]."""
+
+    def __init__(self, platform, effort: Effort, seed: int, collision: bool = False) -> None:
+        self.platform, self.effort, self.seed, self.collision = check_platform(platform), effort, seed, bool(collision)
+
+    @cached_property
+    def workspace(self):
+        e = self.effort
+        return workspace(self.platform, n_samples=e.samples, variants=[], hover=True, n_shifts=e.shifts, seed=self.seed, collision=self.collision)
+
+    @cached_property
+    def balance(self):
+        e = self.effort
+        return balance(self.platform, slider=slider_of(self.platform), n_samples=e.samples, tol=e.balance_tol, n_shifts=e.shifts)
+
+    @cached_property
+    def hover(self):
+        return hover(self.platform, n_samples=self.effort.samples, collision=False)
+
+    @cached_property
+    def capacity(self):
+        return capacity(self.platform, n_samples=self.effort.samples)
+
+    @cached_property
+    def singularity(self):
+        return singularity(self.platform, n_samples=self.effort.samples, task="position")
+
+    @property
+    def mass(self) -> float:
+        """The whole platform [kg] (the take-off mass)."""
+        return float(pin.computeTotalMass(self.platform.model))
+
+    @property
+    def arm_mass(self) -> float:
+        """Every body but the base's [kg] (joint 1: the free flyer)."""
+        return self.mass - float(self.platform.model.inertias[1].mass)
+
+    def balanced_share(self) -> float:
+        """:func:`balanced_share` of the workspace and the balance map."""
+        return balanced_share(self.workspace.regions[0], self.balance)
+
+    def payload_at_reach(self) -> float:
+        """The largest payload held with the end effector at least ``effort.payload_reach`` from the thrust axis [kg]."""
+        cap = self.capacity
+        far = axis_distance(self.platform, cap.ee_body) >= self.effort.payload_reach
+        return float(cap.capacity[far].max()) if far.any() else 0.0
+
+
+def evaluate_platform(platform, effort: Effort, seed: int, collision: bool = False) -> dict[str, float]:
+    """Every metric of :data:`DESIGN_METRICS` for ``platform`` at ``effort`` (``seed``: the measure's counting-grid shifts).
+
+    ``collision``: check self-collision (:mod:`qprr.collision`) and give the metrics that need it (``free_hover_volume``;
+    NaN without: the check costs time, so a study asks for it only when it names such a metric)."""
+    maps = DesignMaps(platform, effort, seed, collision)
+    return {k: m.compute(maps) if collision or not m.collision else float("nan") for k, m in DESIGN_METRICS.items()}

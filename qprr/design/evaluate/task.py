@@ -16,7 +16,7 @@ from collections.abc import Mapping
 
 from ...errors import QprrError
 from ..model.candidate import Candidate, build_candidate
-from ..spec.metrics import METRICS
+from ..spec.metrics import DESIGN_METRICS
 from ..spec.parameters import PARAMETERS
 from ..spec.study import DesignSpec
 from .maps import evaluate_platform
@@ -28,7 +28,7 @@ TAIL_COLUMNS = ("feasible", "wall_time")
 
 
 def columns() -> tuple[str, ...]:
-    return (*ID_COLUMNS, *PARAMETERS, "status", "reason", *METRICS, *TAIL_COLUMNS)
+    return (*ID_COLUMNS, *PARAMETERS, "status", "reason", *DESIGN_METRICS, *TAIL_COLUMNS)
 
 
 def feasible(row: Mapping, constraints: Mapping) -> int:
@@ -90,9 +90,10 @@ def evaluate_design(spec_dict: dict, point: dict) -> dict:
     spec = study_of(spec_dict)
     t0 = time.perf_counter()
     status, reason = "ok", ""
-    values = dict.fromkeys(METRICS, math.nan)
+    values = dict.fromkeys(DESIGN_METRICS, math.nan)
     try:
-        collision = "free_hover_volume" in spec.objectives or "free_hover_volume" in spec.constraints
+        named = {*spec.objectives, *spec.constraints}
+        collision = any(DESIGN_METRICS[k].collision for k in named)  # a metric the study names needs the self-collision check
         values = evaluate_platform(_platform(spec, point), spec.effort, point["seed"], collision=collision)
     except QprrError as exc:
         status, reason = "failed", f"{type(exc).__name__}: {exc}"

@@ -6,7 +6,7 @@ import numpy as np
 
 from ...nomenclature import parse
 from ..search.pareto import dominated
-from ..spec.metrics import METRICS, label, sign
+from ..spec.metrics import DESIGN_METRICS, label, sign
 
 MARKERS = {"Q": "o", "HEX": "s", "OCT": "D"}
 """Marker of each vehicle (Table 2.3 code); the colour is the arm's joint sequence."""
@@ -89,7 +89,7 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
     F = np.array([[r[k] for k in objectives] for r in ok], dtype=float)
     lo, hi = F.min(axis=0), F.max(axis=0)
     span = np.where(hi > lo, hi - lo, 1.0)
-    worst = np.where([METRICS[k][1] == "max" for k in objectives], lo, hi)
+    worst = np.where([DESIGN_METRICS[k].better == "max" for k in objectives], lo, hi)
     Z = np.abs(F - worst) / span  # 0 worst, 1 best
     fig = Figure(figsize=(2.1 * len(objectives) + 2.5, 5.0))
     ax = fig.subplots()
@@ -107,7 +107,7 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
             ls = "-" if _vehicle(r) == "Q" else "-." if _vehicle(r) == "HEX" else ":"
             ax.plot(xs, z, color=col[_arm(r)], ls=ls, lw=1.6, zorder=3, label=None if a in seen else a)
             seen.add(a)
-    best = np.where([METRICS[k][1] == "max" for k in objectives], hi, lo)
+    best = np.where([DESIGN_METRICS[k].better == "max" for k in objectives], hi, lo)
     ax.set_xticks(xs, [f"{label(k)}\nworst {w:.3g}\nbest {b:.3g}" for k, w, b in zip(objectives, worst, best)], fontsize=8)
     ax.set_ylabel("normalised: 0 worst, 1 best seen")
     ax.set_ylim(-0.03, 1.03)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..search.pareto import front_levels
-from ..spec.metrics import METRICS, sign
+from ..spec.metrics import DESIGN_METRICS, sign
 
 
 def rows_of(table: np.ndarray) -> list[dict]:
@@ -54,8 +54,16 @@ def _fmt(v: float) -> str:
 
 def markdown_table(rows: list[dict], objectives, params=(), limit: int | None = None) -> str:
     """A Markdown table: rank, (2.1) name, level, score, parameters, every metric."""
-    cols = [k for k in METRICS]
-    head = ["rank", "design (2.1)", "run", "front", "score", *params, *[f"{k} [{METRICS[k][0]}]" if METRICS[k][0] else k for k in cols]]
+    cols = [k for k in DESIGN_METRICS]
+    head = [
+        "rank",
+        "design (2.1)",
+        "run",
+        "front",
+        "score",
+        *params,
+        *[f"{k} [{DESIGN_METRICS[k].unit}]" if DESIGN_METRICS[k].unit else k for k in cols],
+    ]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for i, r in enumerate(rows[:limit] if limit else rows, start=1):
         mark = {1: "**1**", 0: "infeasible" if r["status"] == "ok" else r["status"]}.get(r["level"], str(r["level"]))

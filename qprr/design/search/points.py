@@ -16,9 +16,6 @@ import numpy as np
 
 from ..spec.study import DesignSpec
 
-REFERENCE_NAMES = {"q-prr": "Q-PRR (thesis)"}
-"""The (2.1) name of each stored platform a study may evaluate as a reference."""
-
 
 def run_seed(spec: DesignSpec) -> int:
     """The measurement seed of every design of ``spec`` (common random numbers, module docstring)."""
@@ -27,7 +24,7 @@ def run_seed(spec: DesignSpec) -> int:
 
 def point(spec: DesignSpec, index: int, kind: str, architecture: str, params: dict, generation: int = -1) -> dict:
     """A design point as plain data (the task's argument)."""
-    name = REFERENCE_NAMES[architecture] if kind == "reference" else architecture
+    name = f"{architecture} (reference)" if kind == "reference" else architecture  # a registered platform's name
     return {
         "run": index,
         "seed": run_seed(spec),

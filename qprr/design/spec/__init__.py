@@ -1,13 +1,13 @@
 """Design study specifications: :class:`DesignSpec` (TOML/JSON), parameters, mass model."""
 
 from .mass import MATERIALS, MODES, MassModel
-from .metrics import METRICS
+from .metrics import DESIGN_METRICS
 from .parameters import PARAMETERS, Parameter
 from .study import OPTIMISERS, SEARCH_METHODS, ClosedLoop, DesignSpec, Effort, Search
 
 __all__ = [
     "MATERIALS",
-    "METRICS",
+    "DESIGN_METRICS",
     "MODES",
     "OPTIMISERS",
     "PARAMETERS",

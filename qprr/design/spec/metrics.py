@@ -23,40 +23,120 @@ name                        unit    better     map (qprr.analysis) and what is t
 ``arm_mass``                kg      min        the arm's links
 ``mass``                    kg      min        the whole platform (the take-off mass)
 ==========================  ======  =========  ==================================================================
+
+The registry :data:`DESIGN_METRICS` holds them as :class:`DesignMetric` entries; a plug-in adds its own (a function
+of the design's maps, docs/extending.md), which every study then measures and may name as an objective or a
+constraint.  (The campaign metrics, numbers of a simulated run, are the other registry, :data:`qprr.campaign.METRICS`.)
 """
 
 from __future__ import annotations
 
-METRICS = {
-    "hover_volume": ("m^3", "max", "hover workspace volume"),
-    "free_hover_volume": ("m^3", "max", "collision-free hover workspace volume"),
-    "balance_fraction": ("", "max", "workspace share with the CoG balanced"),
-    "thrust_margin": ("N", "max", "minimum thrust margin"),
-    "payload_at_reach": ("kg", "max", "payload at reach"),
-    "manipulability": ("m^2", "max", "median manipulability"),
-    "arm_mass": ("kg", "min", "arm mass"),
-    "mass": ("kg", "min", "take-off mass"),
-}
-"""name -> (unit, "max" or "min", label)."""
+from collections.abc import Callable
+from dataclasses import dataclass
 
-RANGES = {
-    "hover_volume": (0.0, None),
-    "free_hover_volume": (0.0, None),
-    "balance_fraction": (0.0, 1.0),
-    "thrust_margin": (None, None),
-    "payload_at_reach": (0.0, None),
-    "manipulability": (0.0, None),
-    "arm_mass": (0.0, None),
-    "mass": (0.0, None),
-}
+import numpy as np
+
+from ...errors import InputError
+from ...registry import Registry
+
+BETTER = ("max", "min")
+"""The directions a design metric improves in."""
+
+
+@dataclass(frozen=True)
+class DesignMetric:
+    """A number a design is judged on: ``compute(maps) -> float`` from the design's maps
+    (:class:`qprr.design.evaluate.maps.DesignMaps`: the platform, the effort, and the maps of :mod:`qprr.analysis`,
+    each computed once on first use and shared by the metrics), its ``unit``, ``better`` ("max" or "min"), a short
+    ``label`` and the range it can take (``low``, ``high``; None: unbounded; a constraint outside it is refused).
+    ``collision``: it needs the workspace's self-collision check (:mod:`qprr.collision`), which costs time: measured
+    only for a study that names it (an objective or a constraint), else NaN."""
+
+    compute: Callable[[object], float]
+    unit: str
+    better: str
+    label: str
+    low: float | None = None
+    high: float | None = None
+    collision: bool = False
+
+    def __post_init__(self) -> None:
+        if not callable(self.compute):
+            raise InputError(f"DesignMetric.compute must be a function (maps) -> float, got {self.compute!r}")
+        if self.better not in BETTER:
+            raise InputError(f"DesignMetric.better must be 'max' or 'min', got {self.better!r}")
+        for what in ("unit", "label"):
+            if not isinstance(getattr(self, what), str):
+                raise InputError(f"DesignMetric.{what} must be a string, got {getattr(self, what)!r}")
+        if self.low is not None and self.high is not None and not self.low <= self.high:
+            raise InputError(f"DesignMetric range: low must be <= high, got {self.low!r}, {self.high!r}")
+
+
+def _hover_volume(maps) -> float:
+    hv = maps.workspace.regions[0].hover_volume
+    return float(hv.measure) if hv is not None else 0.0
+
+
+def _free_hover_volume(maps) -> float:
+    free = maps.workspace.regions[0].free_hover_volume
+    return float(free.measure) if free is not None else 0.0
+
+
+def _balance_fraction(maps) -> float:
+    return maps.balanced_share()
+
+
+def _thrust_margin(maps) -> float:
+    return float(maps.hover.min_thrust_margin[0])
+
+
+def _payload_at_reach(maps) -> float:
+    return maps.payload_at_reach()
+
+
+def _manipulability(maps) -> float:
+    return float(np.median(maps.singularity.manipulability))
+
+
+def _arm_mass(maps) -> float:
+    return maps.arm_mass
+
+
+def _mass(maps) -> float:
+    return maps.mass
+
+
+def _check(name: str, entry: object) -> None:
+    if not isinstance(entry, DesignMetric):
+        raise InputError(
+            f"design metric {name!r}: register a qprr.design.spec.metrics.DesignMetric(compute, unit, better, label), got {type(entry).__name__}"
+        )
+
+
+DESIGN_METRICS: Registry[DesignMetric] = Registry("design metric", default="hover_volume", check=_check)
+"""Design metric name -> :class:`DesignMetric`: the module table's, then the plug-ins' (the default: listed first)."""
+for _name, _metric in {
+    "hover_volume": DesignMetric(_hover_volume, "m^3", "max", "hover workspace volume", 0.0),
+    "free_hover_volume": DesignMetric(_free_hover_volume, "m^3", "max", "collision-free hover workspace volume", 0.0, collision=True),
+    "balance_fraction": DesignMetric(_balance_fraction, "", "max", "workspace share with the CoG balanced", 0.0, 1.0),
+    "thrust_margin": DesignMetric(_thrust_margin, "N", "max", "minimum thrust margin"),
+    "payload_at_reach": DesignMetric(_payload_at_reach, "kg", "max", "payload at reach", 0.0),
+    "manipulability": DesignMetric(_manipulability, "m^2", "max", "median manipulability", 0.0),
+    "arm_mass": DesignMetric(_arm_mass, "kg", "min", "arm mass", 0.0),
+    "mass": DesignMetric(_mass, "kg", "min", "take-off mass", 0.0),
+}.items():
+    DESIGN_METRICS.register(_name, _metric)
+del _name, _metric
+
+RANGES = DESIGN_METRICS.derived(lambda m: (m.low, m.high))
 """name -> (lowest, highest) value the metric can take (None: unbounded); a constraint outside it excludes every design."""
 
 
 def sign(name: str) -> float:
     """+1 for a metric to minimise, -1 for one to maximise (objectives in minimisation form)."""
-    return 1.0 if METRICS[name][1] == "min" else -1.0
+    return 1.0 if DESIGN_METRICS[name].better == "min" else -1.0
 
 
 def label(name: str) -> str:
-    unit, better, text = METRICS[name]
-    return f"{text} [{unit}] ({better})" if unit else f"{text} ({better})"
+    m = DESIGN_METRICS[name]
+    return f"{m.label} [{m.unit}] ({m.better})" if m.unit else f"{m.label} ({m.better})"

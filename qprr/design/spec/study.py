@@ -5,7 +5,7 @@ Example (``examples/design/thesis_architectures.toml``)::
     name = "thesis-architectures"
     seed = 2026
     architectures = ["Q-PRR", "Q-RR", "Q-RRR", "HEX-RRR"]   # (2.1) names qprr.build makes
-    references = ["q-prr"]                                  # stored platforms evaluated as they are
+    references = ["q-prr"]                                  # registered platforms evaluated as they are
     objectives = ["hover_volume", "balance_fraction", "thrust_margin", "arm_mass"]
     [parameters]            # a number, a list (grid) or {low, high} (optimised); see PARAMETERS
     reach = 0.28
@@ -31,18 +31,17 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from ...errors import QprrError
+from ...platforms import PLATFORMS
 from ...validation import as_file
 from ._check import fail, integer, number, table_keys
 from .mass import MassModel
-from .metrics import METRICS, RANGES
+from .metrics import DESIGN_METRICS, RANGES
 from .parameters import Parameter, default_parameters, parse_parameter
 
 OPTIMISERS = ("pymoo", "optuna")
 """Multi-objective optimisers (NSGA-II) a study may use; the first is the default (docs/design.md says why)."""
 
 SEARCH_METHODS = ("grid", "nsga2")
-REFERENCES = ("q-prr",)
-"""Stored platforms a study may evaluate as they are (the thesis's Q-PRR)."""
 _KEYS = (
     "name",
     "description",
@@ -110,8 +109,8 @@ class ClosedLoop:
         object.__setattr__(self, "top", integer(self.top, "closed_loop.top", lo=0))
         if not isinstance(self.scenario, str) or self.scenario not in SCENARIOS or SCENARIOS[self.scenario].platforms is not None:
             fail("closed_loop.scenario", self.scenario, "a generic scenario (any platform), e.g. hover-reach")
-        if self.controller not in SCENARIOS[self.scenario].controllers:
-            fail("closed_loop.controller", self.controller, f"one of {', '.join(SCENARIOS[self.scenario].controllers)}")
+        if self.controller not in SCENARIOS[self.scenario].controller_names():
+            fail("closed_loop.controller", self.controller, f"one of {', '.join(SCENARIOS[self.scenario].controller_names())}")
         object.__setattr__(self, "duration", number(self.duration, "closed_loop.duration", positive=True))
 
 
@@ -197,8 +196,8 @@ class DesignSpec:
             fail("name", name, "a non-empty study name without slashes")
         seed = integer(d.get("seed", 0), "seed", lo=0)
         archs = _architectures(d.get("architectures"))
-        refs = _names(d.get("references", []), "references", REFERENCES)
-        objectives = _names(d.get("objectives"), "objectives", tuple(METRICS), need=2)
+        refs = _names(d.get("references", []), "references", tuple(PLATFORMS))  # any registered platform, as it is
+        objectives = _names(d.get("objectives"), "objectives", tuple(DESIGN_METRICS), need=2)
         params = default_parameters()
         for k, v in table_keys(d.get("parameters", {}), "parameters", tuple(params)).items():
             params[k] = parse_parameter(k, v)
@@ -262,7 +261,7 @@ def _architectures(value) -> tuple[str, ...]:
 
 def _constraints(value) -> dict:
     out = {}
-    for k, v in table_keys(value, "constraints", tuple(METRICS)).items():
+    for k, v in table_keys(value, "constraints", tuple(DESIGN_METRICS)).items():
         b = table_keys(v, f"constraints.{k}", ("min", "max"))
         if not b:
             fail(f"constraints.{k}", v, "{min = a} and/or {max = b}")
@@ -271,7 +270,7 @@ def _constraints(value) -> dict:
         if lo is not None and hi is not None and not lo <= hi:
             fail(f"constraints.{k}", v, "min <= max")
         low, high = RANGES[k]
-        unit = METRICS[k][0]
+        unit = DESIGN_METRICS[k].unit
         if hi is not None and low is not None and hi < low:
             fail(f"constraints.{k}.max", hi, f"a bound >= {low:g} {unit}: {k} is never below {low:g}, so max = {hi:g} excludes every design")
         if lo is not None and high is not None and lo > high:
