@@ -12,6 +12,7 @@ import pytest
 
 import qprr
 import qprr.thesis
+from qprr.actuation import AllocationFlag
 from qprr.control.base import Controller
 from qprr.errors import DivergenceError, InputError, LimitError, ShapeError
 from qprr.scenarios import run
@@ -62,7 +63,7 @@ def test_hover_reach_with_the_generic_idc(platforms, name):
     rmse = list(res.rmse().values())
     assert max(rmse[0:6]) < 2e-4 and max(rmse[6:]) < 5e-3  # measured <= 1.4e-4 m (base) and <= 1.8e-3 rad (arm)
     # no saturation: every thrust strictly inside its bounds, no effort clipped
-    assert not (res.flags & 3).any() and res.saturation_fraction() == 0.0
+    assert not (res.flags & (AllocationFlag.ROTOR_SATURATED | AllocationFlag.ARM_SATURATED)).any() and res.saturation_fraction() == 0.0
     assert np.all(res.f > p.thrust_min) and np.all(res.f < p.thrust_max)
     assert np.all(np.abs(res.arm_effort) <= p.arm_effort_limits)
     # the reach: 60 % of the way from the neutral posture to the upper limits

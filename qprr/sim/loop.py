@@ -51,7 +51,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..actuation import Allocator
+from ..actuation import AllocationFlag, Allocator
 from ..charts import State
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
@@ -414,7 +414,7 @@ def _loop(run: _Run, bar: Progress) -> tuple[int, QprrError | None, np.ndarray, 
             tau_d = out if pin_out else force_from_xi(out, tau_d_buf)
             fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
             if fl:
-                if fl < 0:  # the screened allocation refused tau_d: NaN, inf or absurd controller output
+                if AllocationFlag.REFUSED in fl:  # the screened allocation refused tau_d: NaN, inf or absurd controller output
                     raise _bad_output(platform, controller, tk, u_log[k], pin_out)
                 flags[k] = fl
             if stage is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
@@ -438,7 +438,7 @@ def _loop(run: _Run, bar: Progress) -> tuple[int, QprrError | None, np.ndarray, 
                     for i in arm_range:
                         if not lo[i] <= qa[i] <= hi[i]:
                             q, v = apply_joint_stops(model, data, q, v, lo, hi)
-                            flags[k] |= 4
+                            flags[k] |= AllocationFlag.JOINT_STOP
                             break
             # v: screened every tick by the next update (and the final check); q, which integrates v, every 16 ticks
             if not (k & 15 or hypot(*q.tolist()) < q_bound):

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..actuation import AllocationFlag
 from ..charts import wrap_angle, xi_names
 from ..errors import InputError, ShapeError
 from ..validation import as_file, as_real
@@ -57,8 +58,9 @@ class SimResult:
     * u (m, n_xi) controller output, thesis generalised forces (u_fb world force [N], Euler
       torques [N m], arm efforts); f (m, n_rotors) rotor thrusts [N]; arm_effort (m, n_arm) applied;
     * x_cm (m, 3) system CoM in B [m] (Thesis (3.78)); unallocated (m, nv) tau_d - N f (Pinocchio
-      coordinates); flags (m,) bits: 1 rotor bound, 2 arm effort clipped, 4 an arm joint at its stop;
-      u_ext (m, n_xi) disturbance;
+      coordinates); flags (m,) the :class:`~qprr.actuation.AllocationFlag` bits of each tick (integers: 1
+      ROTOR_SATURATED a rotor bound, 2 ARM_SATURATED an arm effort clipped, 4 JOINT_STOP an arm joint at its
+      stop; read them as ``res.flags & AllocationFlag.ROTOR_SATURATED``); u_ext (m, n_xi) disturbance;
     * ``status`` (:class:`Status`) and ``reason``; ``series``: extra named arrays (e.g. the
       contact force, the payload mass estimate; time series have m rows); ``metrics``: extra
       named numbers (e.g. the recovery time of a payload drop).  Both are saved.
@@ -129,7 +131,7 @@ class SimResult:
 
     def saturation_fraction(self) -> float:
         """Fraction of ticks where a rotor thrust bound was active."""
-        return float(np.mean((self.flags & 1) != 0)) if self.n else 0.0
+        return float(np.mean((self.flags & AllocationFlag.ROTOR_SATURATED) != 0)) if self.n else 0.0
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:

@@ -43,6 +43,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..actuation import AllocationFlag
 from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..registry import SCENARIOS
@@ -434,7 +435,7 @@ def _rotors(ax, res, thrust_bounds=None):
     nr = res.f.shape[1]
     cols = [f"C{i % 10}" for i in range(nr)]
     _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
-    sat = (res.flags & 1) != 0
+    sat = (res.flags & AllocationFlag.ROTOR_SATURATED) != 0
     lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
     if thrust_bounds is None and res.rotor_bounds is not None:  # the bounds the run's allocation respected
         thrust_bounds = tuple(float(b) for b in np.unique(res.rotor_bounds))
