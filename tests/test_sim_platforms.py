@@ -16,7 +16,7 @@ from qprr.actuation import AllocationFlag
 from qprr.control.base import Controller
 from qprr.errors import DivergenceError, InputError, LimitError, ShapeError
 from qprr.scenarios import run
-from qprr.sim import Limits, Pulse, WhiteNoise, simulate
+from qprr.sim import Limits, Pulse, StateDisturbance, WhiteNoise, simulate
 from qprr.thesis.missions import NAMES
 from qprr.trajectory import Hold, MultiPhase, Phase
 
@@ -105,8 +105,8 @@ def test_initial_arm_state_beyond_a_limit_is_refused(platforms):
 
 
 # ------------------------------------------------------------------------------ divergence messages
-class _Spin:
-    """A body moment m_z about z_B (a StateDisturbance)."""
+class _Spin(StateDisturbance):
+    """A body moment m_z about z_B."""
 
     def __init__(self, m_z):
         self.m_z = m_z

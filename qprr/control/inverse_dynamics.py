@@ -51,7 +51,7 @@ The thesis's printed tables are in :mod:`qprr.thesis.gains`.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sized
 from dataclasses import dataclass
 
 import numpy as np
@@ -97,7 +97,7 @@ class IDCGains:
     max_tilt: float = 0.8
 
     def __post_init__(self) -> None:
-        n = len(self.kp) if hasattr(self.kp, "__len__") and not isinstance(self.kp, str) else -1
+        n = len(self.kp) if isinstance(self.kp, Sized) and not isinstance(self.kp, str) else -1
         if n < 6:
             raise InputError(f"kp must have 6 + n_arm entries, got {self.kp!r}")
         for name in ("kp", "kd", "ki"):

@@ -24,9 +24,9 @@ allocated thrusts of step 3 are then speed *commands* of rotors with a first-ord
 the rotor speeds are extra states integrated with the robot (and an environment's state) by
 the same integrator, and the base wrench Omega f(w) is evaluated at every stage.  The logged
 ``f`` is then the thrust the rotors produce at the tick (b w^2); ``series`` hold
-``thrust_command`` and ``rotor_speed``.  State-dependent disturbances with a
-``realize(t_ticks, rng, period)`` method (wind: :mod:`qprr.sim.wind`) are realized once per
-run from the run's seed.
+``thrust_command`` and ``rotor_speed``.  State-dependent disturbances
+(:class:`~qprr.sim.disturbances.StateDisturbance`) are realized once per run from the run's seed
+(:meth:`~qprr.sim.disturbances.StateDisturbance.realize`: the wind's turbulence, :mod:`qprr.sim.wind`).
 
 Integrators (``integrator=``, :mod:`qprr.sim.integrators`, all on the Lie group): ``"midpoint"``
 (default: explicit midpoint, two ABA per step, second order), ``"rk4"`` (Runge-Kutta 4 in the
@@ -58,6 +58,7 @@ from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, Qp
 from ..joint_friction import JointFriction, Treatment
 from ..model import Platform
 from ..progress import Progress
+from ..trajectory import Trajectory, TrajectorySample
 from ..validation import as_int, as_vector
 from . import disturbances as dist
 from .actuators import RotorDynamics
@@ -267,8 +268,8 @@ def _check_types(platform, controller, trajectory, inputs: SimInputs) -> None:
         raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
     if not isinstance(controller, Controller):
         raise InputError(f"controller must be a qprr.control Controller, got {type(controller).__name__}")
-    if not hasattr(trajectory, "sample"):
-        raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory), got {type(trajectory).__name__}")
+    if not isinstance(trajectory, Trajectory):
+        raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory.Trajectory), got {type(trajectory).__name__}")
     payload = inputs.payload
     if payload is not None and not isinstance(payload, PayloadSchedule):
         raise InputError(f"payload must be None or a qprr.sim.PayloadSchedule, got {type(payload).__name__} {payload!r:.60}")
@@ -308,7 +309,7 @@ def _disturbances(platform: Platform, config: SimConfig, disturbance, t: np.ndar
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
     # state-dependent disturbances drawn once per run (wind turbulence), after the timed ones (same seed, same draws)
-    return u_ext, [d.realize(t, rng, config.period) if hasattr(d, "realize") else d for d in state_dist]
+    return u_ext, [d.realize(t, rng, config.period) for d in state_dist]
 
 
 def _stepper(config: SimConfig, plant: _Plant):
@@ -500,18 +501,18 @@ def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimR
         res.series["rotor_speed"] = logs.rotor_speed[:m].copy()
         res.series["thrust_command"] = logs.thrust_command[:m].copy()
     for d in run.state_dist:
-        report = getattr(d, "report", None)
-        if callable(report):
-            res.series.update({k: v[:m] for k, v in report().items()})
+        res.series.update({k: v[:m] for k, v in d.report().items()})
     return res
 
 
 def _check_sample(sample, n: int, nxi: int) -> None:
-    """A trajectory sample must hold finite xi, xi_dot, xi_ddot of shape (n, 6 + n_arm)."""
+    """A trajectory sample must be a TrajectorySample holding finite xi, xi_dot, xi_ddot of shape (n, 6 + n_arm)."""
+    if not isinstance(sample, TrajectorySample):
+        raise InputError(f"trajectory.sample(t) must return a qprr.trajectory.TrajectorySample, got {type(sample).__name__}")
     for name in ("xi", "xi_dot", "xi_ddot"):
-        a = getattr(sample, name, None)
+        a = getattr(sample, name)  # the field of that name
         if not isinstance(a, np.ndarray) or a.shape != (n, nxi):
-            shape = getattr(a, "shape", None)
+            shape = a.shape if isinstance(a, np.ndarray) else type(a).__name__
             raise ShapeError(f"trajectory sample {name} must have shape ({n}, {nxi}) (the platform's 6 + n_arm), got {shape}")
         if not np.all(np.isfinite(a)):
             raise NonFiniteError(f"trajectory sample {name} must be finite")
@@ -660,17 +661,17 @@ def _check(platform: Platform, t: float, q: np.ndarray, v: np.ndarray, bounds) -
     names = platform.xi_names
     for i in range(3):
         if not abs(ql[i]) < pos_lim:
-            raise DivergenceError(f"diverged at t = {t:.3f} s: position {names[i]} = {ql[i]!r} m (bound {pos_lim} m)")
+            raise DivergenceError.at(t, f"position {names[i]} = {ql[i]!r} m (bound {pos_lim} m)")
     for i in range(7, len(ql)):
         if not math.isfinite(ql[i]):
-            raise DivergenceError(f"diverged at t = {t:.3f} s: joint {names[i - 1]} = {ql[i]!r}")
+            raise DivergenceError.at(t, f"joint {names[i - 1]} = {ql[i]!r}")
     if not all(math.isfinite(x) for x in ql[3:7]):
-        raise DivergenceError(f"diverged at t = {t:.3f} s: attitude quaternion is NaN")
+        raise DivergenceError.at(t, "attitude quaternion is NaN")
     for i, x in enumerate(vl):
         bound = vlin_lim if i < 3 else w_lim if i < 6 else qd_lim
         if not abs(x) < bound:
             label = _BASE_V[i] if i < 6 else f"{names[i]}_dot"
-            raise DivergenceError(f"diverged at t = {t:.3f} s: velocity {label} = {x!r} (bound {bound})")
+            raise DivergenceError.at(t, f"velocity {label} = {x!r} (bound {bound})")
 
 
 def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out: bool) -> DivergenceError:
@@ -679,9 +680,10 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
     k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
     what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
     label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
-    return DivergenceError(
-        f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
-        f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)"
+    return DivergenceError.at(
+        t,
+        f"the controller {controller.name!r} returned a non-finite or absurd (|x| >= 1e150) {what}: "
+        f"entry {label} = {float(u[k])!r} (the measured state was finite)",
     )
 
 
@@ -704,21 +706,20 @@ def _bad_shape(platform: Platform, controller, out, pin_out: bool) -> ShapeError
 
 
 def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) -> QprrError:
-    """The error to report: the runaway state if the state has diverged (the root cause), else ``err`` with the time."""
-    if isinstance(err, DivergenceError) and str(err).startswith("diverged at"):
+    """The error to report: the runaway state if the state has diverged (the root cause), else ``err`` naming the time.
+
+    An error that already names its time (:attr:`~qprr.errors.QprrError.time`: the loop's own state and output
+    checks) is reported as is; any other keeps its type and attributes and gets the time in front of its message
+    (:meth:`~qprr.errors.QprrError.with_time`)."""
+    if err.time is not None:
         return err
     try:
         _check(platform, t, q, v, bounds)
     except DivergenceError as div:
-        return DivergenceError(f"{div} (then: {type(err).__name__}: {err})")
-    if isinstance(err, DivergenceError):
-        return DivergenceError(f"diverged at t = {t:.3f} s: {err}")
-    new = type(err).__new__(type(err))
-    try:
-        new.__init__(f"at t = {t:.3f} s of the run: {err}")
-    except TypeError:  # an error class with another constructor: keep it
-        return err
-    return new
+        root = DivergenceError(f"{div} (then: {type(err).__name__}: {err})")
+        root.time = div.time
+        return root
+    return err.with_time(t)
 
 
 def check_sample(sample, n: int, nxi: int = 9) -> None:

@@ -506,7 +506,7 @@ def payload_drop(
     options = {"duration": duration, "dt": SimConfig.dt, "integrator": SimConfig.integrator, "seed": seed, "law": DEFAULT_LAW}
     res = generic.mission(platform, controller, progress, settings, mission=data, **options)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
-    if getattr(ctrl, "mode", None) == "estimate":
+    if isinstance(ctrl, PayloadIDC) and ctrl.mode == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
         window = min(1.0, 0.5 * release_time)  # the last second before the release (half the carry time if shorter)
         before = (res.t >= release_time - window) & (res.t < release_time)
@@ -700,7 +700,7 @@ def impedance(
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
     res.metrics["t_off"] = float(t_off)
-    if hasattr(ctrl, "history"):
+    if isinstance(ctrl, ImpedanceController):
         h = ctrl.history()
         res.series.update(
             {"impedance_t": h["t"], "impedance_delta_eta": h["delta_eta"], "impedance_delta_q": h["delta_q"], "impedance_u_e": h["u_e"]}

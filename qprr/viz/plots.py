@@ -144,7 +144,7 @@ def coordinate_kinds(res: SimResult) -> tuple[str, ...]:
     """Kind of each entry of xi: "length" (x, y, z, prismatic joints), "angle" (Euler angles, revolute joints) or "unknown"."""
     _check_res(res)
     kinds = ["length"] * 3 + ["angle"] * 3
-    arm = tuple(getattr(res, "arm_kinds", ()) or ())
+    arm = res.arm_kinds
     for k in range(res.n_arm):
         kind = arm[k] if k < len(arm) else ""
         kinds.append("length" if kind == "prismatic" else "angle" if kind == "revolute" else "unknown")
