@@ -122,3 +122,24 @@ def test_a_disturbance_is_known_by_its_class():
     with pytest.raises(qprr.errors.InputError, match="subclass one of them"):
         Disturbances((_Duck(),))
     assert isinstance(Disturbances((_Push(),)), Disturbance)
+
+
+def test_statuses_are_enums_equal_to_their_strings():
+    """Statuses are Enums (``str`` Enums: comparisons with the strings, printing and JSON keep the strings)."""
+    import json
+
+    from qprr.actuation import AllocationStatus, Allocator
+    from qprr.ik import BalanceStatus, IKOutcome, IKSolver, balance_prismatic
+    from qprr.payload import CapacityStatus, HoldingStatus, holding_efforts, payload_capacity
+
+    p = qprr.load()
+    data = p.data()
+    res = IKSolver(p, "qp").solve(data, np.array([0.3, 0.0, 1.0]))
+    assert isinstance(res.status, IKOutcome) and res.status == "converged" == str(res.status)
+    assert json.dumps({"status": res.status}) == '{"status": "converged"}' and f"{res.status}" == "converged"
+    assert isinstance(Allocator(p).allocate(np.zeros(p.nv)).status, AllocationStatus)
+    assert isinstance(balance_prismatic(p, data, [0.0, 0.4, -0.6]).status, BalanceStatus)
+    assert isinstance(holding_efforts(p, [0.0, 0.0, 0.0], 0.1).status, HoldingStatus)
+    assert isinstance(payload_capacity(p).status, CapacityStatus)
+    with pytest.raises(ValueError):
+        IKOutcome("convergd")  # a typo is not a status

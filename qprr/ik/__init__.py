@@ -10,13 +10,14 @@ problem and the methods, :mod:`qprr.ik.tasks` for the tasks (write your own), an
 """
 
 from . import tasks
-from .balance import BalanceResult, balance_prismatic
+from .balance import BalanceResult, BalanceStatus, balance_prismatic
 from .hierarchy import HierarchySolver, HierarchyStep
 from .solver import (
     METHODS,
     OPTIONS,
     ClikaOptions,
     DLSOptions,
+    IKOutcome,
     IKResult,
     IKSolver,
     QPOptions,
@@ -30,12 +31,14 @@ from .solver import (
 
 __all__ = [
     "BalanceResult",
+    "BalanceStatus",
     "METHODS",
     "OPTIONS",
     "ClikaOptions",
     "DLSOptions",
     "HierarchySolver",
     "HierarchyStep",
+    "IKOutcome",
     "IKResult",
     "IKSolver",
     "QPOptions",
