@@ -10,6 +10,12 @@
 
 from __future__ import annotations
 
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -19,6 +25,7 @@ from qprr.dynamics import dynamics_xi
 from qprr.errors import DivergenceError, MissingDependencyError, QprrError, UnknownNameError
 from qprr.sim import Disturbance, Disturbances, SimResult, StateDisturbance, Status, simulate
 from qprr.trajectory import Hold
+from qprr.validation import read_toml
 
 
 class _RaisesAt(Controller):
@@ -126,8 +133,6 @@ def test_a_disturbance_is_known_by_its_class():
 
 def test_statuses_are_enums_equal_to_their_strings():
     """Statuses are Enums (``str`` Enums: comparisons with the strings, printing and JSON keep the strings)."""
-    import json
-
     from qprr.actuation import AllocationStatus, Allocator
     from qprr.ik import BalanceStatus, IKOutcome, IKSolver, balance_prismatic
     from qprr.payload import CapacityStatus, HoldingStatus, holding_efforts, payload_capacity
@@ -143,3 +148,47 @@ def test_statuses_are_enums_equal_to_their_strings():
     assert isinstance(payload_capacity(p).status, CapacityStatus)
     with pytest.raises(ValueError):
         IKOutcome("convergd")  # a typo is not a status
+
+
+# ------------------------------------------------------------------------------------------- SimResult.plot
+_PLOT_WITHOUT_VIZ = """
+import sys
+import qprr
+from qprr.scenarios import run
+res = run("hover-reach", duration=0.2, progress=False)
+assert "qprr.viz" not in sys.modules
+fig = res.plot(panels="position")
+print(type(fig).__module__, type(fig).__name__, "qprr.viz.plots" in sys.modules)
+"""
+
+
+def test_plot_returns_the_figure_of_plot_result(tmp_path):
+    """``SimResult.plot()`` is ``qprr.viz.plot_result(result)``: a Figure, or the saved page with a path."""
+    from matplotlib.figure import Figure
+
+    from qprr.scenarios import run
+    from qprr.sim.result import RUN_FIGURES
+    from qprr.viz import plot_result
+
+    res = run("hover-reach", duration=0.2, progress=False)
+    assert RUN_FIGURES["run"] is plot_result
+    fig = res.plot(panels=("position", "cog"))
+    assert isinstance(fig, Figure) and len(fig.axes) >= 2
+    assert res.plot(tmp_path / "run.png") == tmp_path / "run.png" and (tmp_path / "run.png").stat().st_size > 0
+
+
+def test_plot_reaches_the_figures_through_the_entry_point_not_an_import(tmp_path):
+    """The simulator never imports qprr.viz (the module map): ``result.plot()`` finds ``plot_result`` through the
+    entry point of ``qprr.run_figures`` that qprr's pyproject.toml declares.  Here a stand-in distribution declares
+    the same entry point (the installed metadata may predate it), and the run is plotted without importing qprr.viz."""
+    root = Path(__file__).resolve().parents[1]
+    declared = read_toml(root / "pyproject.toml", "pyproject", "qprr's own")["project"]["entry-points"]["qprr.run_figures"]
+    assert declared == {"run": "qprr.viz.plots:plot_result"}
+    dist = tmp_path / "qprr_run_figures_standin-0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: qprr-run-figures-standin\nVersion: 0\n")
+    (dist / "entry_points.txt").write_text("[qprr.run_figures]\n" + "".join(f"{k} = {v}\n" for k, v in declared.items()))
+    env = {**os.environ, "PYTHONPATH": f"{root}:{tmp_path}", "MPLBACKEND": "Agg"}
+    out = subprocess.run([sys.executable, "-c", _PLOT_WITHOUT_VIZ], capture_output=True, text=True, cwd=root, env=env, timeout=300)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["matplotlib.figure", "Figure", "True"], out.stdout

@@ -48,6 +48,7 @@ from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..registry import SCENARIOS
 from ..sim import SimResult
+from ..sim.result import RUN_FIGURES
 from ..validation import as_int, as_vector
 
 DEG = 180.0 / math.pi
@@ -682,6 +683,9 @@ def plot_result(
     if path is None:
         return fig
     return save_figure(fig, path, dpi)
+
+
+RUN_FIGURES.register(RUN_FIGURES.default, plot_result)  # SimResult.plot() (its entry point names it too)
 
 
 def _chosen_panels(res: SimResult, panels) -> list[Panel]:
