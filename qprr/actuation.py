@@ -16,8 +16,8 @@ thrusts closest to the unconstrained ones.  The base wrench the rotors cannot pr
 from __future__ import annotations
 
 import math
-import struct
 from dataclasses import dataclass
+from enum import Enum, IntFlag
 from math import hypot
 
 import numpy as np
@@ -70,14 +70,44 @@ ALLOCATION_SETTINGS = QPSettings(eps_abs=1e-10, eps_primal_inf=1e-12, eps_dual_i
 """proxsuite settings of the allocation QPs: thrusts to 1e-10 N in the scaled problem."""
 
 
+class AllocationFlag(IntFlag):
+    """What limited the allocation of a control tick: the bits :meth:`Allocator.allocate_into` returns and
+    :attr:`qprr.sim.SimResult.flags` logs (saved runs store these integer values: 1, 2, 4).
+
+    ``REFUSED`` is returned, alone, by :meth:`Allocator.allocate_screened_into` for a NaN, infinite or absurd
+    demand (nothing allocated, nothing written); the simulator then stops the run, so it is never logged.
+    """
+
+    NONE = 0
+    ROTOR_SATURATED = 1
+    """A rotor thrust bound was active (the prioritised QP allocated the thrusts)."""
+    ARM_SATURATED = 2
+    """An arm effort was clipped to its limit."""
+    JOINT_STOP = 4
+    """An arm joint reached its mechanical stop during the tick (set by the simulator, :mod:`qprr.sim.stops`)."""
+    REFUSED = 8
+    """The demanded generalised force was NaN, infinite or absurd: refused (:data:`DEMAND_BOUND`)."""
+
+
+class AllocationStatus(str, Enum):
+    """How an allocation ended: ``exact`` (every producible component met) or ``saturated`` (a bound was active)."""
+
+    EXACT = "exact"
+    SATURATED = "saturated"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class AllocationResult:
     """Outcome of one allocation.
 
     ``f`` = [rotor thrusts (N), arm efforts]; ``tau_desired`` and ``tau_achieved`` = N f are
     Pinocchio generalised forces (body wrench at B in B axes, then arm efforts); ``residual`` =
-    desired - achieved (what could not be allocated).  ``status`` is "exact" (every producible
-    component met) or "saturated" (a bound was active); ``reason`` says which.
+    desired - achieved (what could not be allocated).  ``status`` (:class:`AllocationStatus`, equal to
+    its string) is "exact" (every producible component met) or "saturated" (a bound was active);
+    ``reason`` says which.
     """
 
     f: np.ndarray
@@ -86,7 +116,7 @@ class AllocationResult:
     residual: np.ndarray
     rotor_saturated: bool
     arm_saturated: bool
-    status: str
+    status: AllocationStatus
     reason: str
 
 
@@ -107,7 +137,7 @@ class Allocator:
 
     Calls: :meth:`allocate` validates its input and explains the result; :meth:`allocate_into`
     writes into given buffers without validation (the in-loop form); :meth:`allocate_screened_into`
-    is :meth:`allocate_into` behind the screen of a NaN, infinite or absurd demand (-1), the call of
+    is :meth:`allocate_into` behind the screen of a NaN, infinite or absurd demand (``AllocationFlag.REFUSED``), the call of
     :func:`qprr.sim.simulate`.  A subclass changes the allocation by overriding :meth:`allocate_into`
     (as :class:`IdealAllocator` does); the screen then applies to it as well.  The object owns its
     QPs (warm-started between calls); it can be copied or pickled.
@@ -148,9 +178,7 @@ class Allocator:
         self.platform = platform
         self.n_rotors, self.n_arm = n, platform.n_arm
         self.f_min, self.f_max = f_min, f_max
-        self._lo, self._hi = f_min.tolist(), f_max.tolist()
         self.effort_limits = np.array(platform.arm_effort_limits)
-        self._lim = self.effort_limits.tolist()
         self.clip_arm = bool(clip_arm)
         self.Omega = Omega
         rows = [i for i in range(6) if np.abs(Omega[i]).max() > 1e-12]
@@ -167,13 +195,7 @@ class Allocator:
         self._W = np.array([weight_force if self.rows[k] < 3 else weight_torque for k in self._lvl1])
         self._scale = float(f_max.max())
         self._lex = Lexicographic(n, None, settings=settings, regularization=0.0, rank_tol=1e-9, warm_start=True, exact_fallback=True)
-        # allocate_into's constants: the bounds as floats, the buffer layouts, the rows the rotors never produce
-        self._uniform = bool(np.all(f_min == f_min[0]) and np.all(f_max == f_max[0]))
-        self._lo0, self._hi0 = self._lo[0], self._hi[0]
-        self._neg_lim = [-x for x in self._lim]
-        self._rotor_range, self._arm_range = range(n), range(self.n_arm)  # (indexing in a loop: the cheapest bound test)
-        self._f_format, self._tau_format = f"={n + self.n_arm}d", f"={platform.nv}d"  # struct layouts of f_out, tau_out
-        self._zero_rows = [i for i in range(6) if i not in self.rows]
+        self._zero_rows = [i for i in range(6) if i not in self.rows]  # base rows no rotor produces
         self.qp_calls = 0
 
     @property
@@ -217,7 +239,7 @@ class Allocator:
         flags = self.allocate_into(tau_d, f)
         achieved = self.platform.actuation_matrix @ f
         residual = tau_d - achieved
-        rot, arm = bool(flags & 1), bool(flags & 2)
+        rot, arm = AllocationFlag.ROTOR_SATURATED in flags, AllocationFlag.ARM_SATURATED in flags
         reasons = []
         if rot:
             reasons.append(f"rotor thrust bounds active: unallocated base wrench {np.round(residual[0:6], 12).tolist()}")
@@ -230,7 +252,7 @@ class Allocator:
                     f"base wrench {np.round(residual[0:6], 12).tolist()} outside what the rotors can produce "
                     f"(rank {self.platform.wrench_rank} of 6{self._unproducible()})"
                 )
-        status = "saturated" if (rot or arm) else "exact"
+        status = AllocationStatus.SATURATED if (rot or arm) else AllocationStatus.EXACT
         return AllocationResult(f, tau_d.copy(), achieved, residual, rot, arm, status, "; ".join(reasons) or "all producible components met")
 
     def _unproducible(self) -> str:
@@ -243,110 +265,59 @@ class Allocator:
         lateral = ", the body-lateral force: every thrust is along z_B" if missing == ["f_x", "f_y"] else ""
         return f"; no rotor acts on {', '.join(missing)}{lateral}"
 
-    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> AllocationFlag:
         """In-loop allocation without validation: writes f into ``f_out`` and, if given, N f into ``tau_out``.
 
         ``tau_d`` (nv,) float64; ``f_out`` (n_rotors + n_arm,) and ``tau_out`` (nv,) float64 arrays.
-        Returns bit flags: 1 if a rotor bound was active, 2 if an arm effort was clipped.  A NaN
-        demand raises :class:`~qprr.errors.DivergenceError` naming the wrench component or the arm
-        joint (NaN fails every bound test).
-
-        The steps of :meth:`reference_allocate_into` on plain floats (tests compare the two bit for
-        bit): bound tests as chained float comparisons in an indexed loop (one bound pair when every
-        rotor has the same bounds), buffers written with :func:`struct.pack_into`.
+        Returns the :class:`AllocationFlag` bits ROTOR_SATURATED (a rotor bound was active) and ARM_SATURATED
+        (an arm effort was clipped).  A NaN demand raises :class:`~qprr.errors.DivergenceError` naming the
+        wrench component or the arm joint (NaN fails every bound test).
         """
-        td = tau_d.tolist()
-        f = self.Omega_P_inv.dot(tau_d[self._rows])
-        fl = f.tolist()
-        flags = 0
-        if self._uniform:
-            lo, hi = self._lo0, self._hi0
-            for x in fl:
-                if not lo <= x <= hi:  # beyond a bound, or NaN
-                    flags = 1
-                    break
-        else:
-            lo, hi = self._lo, self._hi
-            for k in self._rotor_range:
-                if not lo[k] <= fl[k] <= hi[k]:
-                    flags = 1
-                    break
-        if flags:
+        flags = AllocationFlag.NONE
+        f = self.Omega_P_inv.dot(tau_d[self._rows])  # the exact allocation of the producible rows
+        if not (np.all(self.f_min <= f) and np.all(f <= self.f_max)):  # a bound is active (or NaN)
             f = self._solve_qp(tau_d[self.rows], f)
-            fl = f.tolist()
-        arm = td[6:]
+            flags = AllocationFlag.ROTOR_SATURATED
+        arm = tau_d[6:]
         if self.clip_arm:
-            lo, hi = self._neg_lim, self._lim
-            for k in self._arm_range:
-                if not lo[k] <= arm[k] <= hi[k]:  # beyond the limit, or NaN
-                    self._check_arm_finite(arm)
-                    arm = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
-                    flags |= 2
-                    break
-        elif arm and not math.isfinite(sum(arm)):
+            if not np.all(np.abs(arm) <= self.effort_limits):  # beyond a limit (or NaN)
+                self._check_arm_finite(arm)
+                arm = np.clip(arm, -self.effort_limits, self.effort_limits)
+                flags |= AllocationFlag.ARM_SATURATED
+        elif not np.all(np.isfinite(arm)):
             self._check_arm_finite(arm)
-        _put(f_out, self._f_format, fl + arm)
+        n = self.n_rotors
+        f_out[:n] = f
+        f_out[n:] = arm
         if tau_out is not None:
-            if flags or not self.square:
-                tau_out[0:6] = self.Omega @ f
-                tau_out[6:] = arm
-            else:  # exact: Omega f = tau_d on the producible rows, zero on the others; arm efforts as asked
-                for i in self._zero_rows:
-                    td[i] = 0.0
-                _put(tau_out, self._tau_format, td)
+            self._applied_force(tau_d, f, arm, flags, tau_out)
         return flags
 
-    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+    def _applied_force(self, tau_d: np.ndarray, f: np.ndarray, arm: np.ndarray, flags: AllocationFlag, tau_out: np.ndarray) -> None:
+        """N f into ``tau_out``: Omega f and the arm efforts; for an exact allocation by a square Omega_P, tau_d itself
+        with zeros on the rows no rotor produces (Omega f = tau_d there, bit for bit)."""
+        if flags or not self.square:
+            tau_out[0:6] = self.Omega @ f
+            tau_out[6:] = arm
+        else:
+            tau_out[:] = tau_d
+            tau_out[self._zero_rows] = 0.0
+
+    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> AllocationFlag:
         """:meth:`allocate_into` behind the simulator's screen of the controller's output.
 
-        Returns -1 and writes nothing when the norm of ``tau_d`` is NaN, inf or >= :data:`DEMAND_BOUND`
-        (the simulator then names the controller's bad entry); otherwise ``self.allocate_into(tau_d,
+        Returns ``AllocationFlag.REFUSED`` and writes nothing when the norm of ``tau_d`` is NaN, inf or >=
+        :data:`DEMAND_BOUND` (the simulator then names the controller's bad entry); otherwise ``self.allocate_into(tau_d,
         f_out, tau_out)``: a subclass that overrides :meth:`allocate_into` is screened the same way.
         This is the call :func:`qprr.sim.simulate` makes at every control tick.
         """
-        if not hypot(*tau_d.tolist()) < DEMAND_BOUND:
-            return -1
+        if not hypot(*tau_d.tolist()) < DEMAND_BOUND:  # the norm; NaN fails
+            return AllocationFlag.REFUSED
         return self.allocate_into(tau_d, f_out, tau_out)
 
-    def reference_allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
-        """:meth:`allocate_into` written step by step: the specification the in-loop form is tested against, bit for bit.
-
-        Same arguments, writes and flags as :meth:`allocate_into` (tests/test_allocation_fast_path.py).
-        """
-        f = self.Omega_P_inv.dot(tau_d[self._rows])
-        fl = f.tolist()
-        flags = 0
-        inside = all(a <= x <= b for a, x, b in zip(self._lo, fl, self._hi))  # NaN fails
-        if not inside:
-            f = self._solve_qp(tau_d[self.rows], f)
-            fl = f.tolist()
-            flags = 1
-        td = tau_d.tolist()
-        arm = td[6:]
-        if self.clip_arm:
-            lim = self._lim
-            for k, a in enumerate(arm):
-                if not -lim[k] <= a <= lim[k]:  # beyond the limit, or NaN
-                    self._check_arm_finite(arm)
-                    arm = np.clip(tau_d[6:], -self.effort_limits, self.effort_limits).tolist()
-                    flags |= 2
-                    break
-        elif arm and not math.isfinite(sum(arm)):
-            self._check_arm_finite(arm)
-        _put(f_out, self._f_format, fl + arm)
-        if tau_out is not None:
-            if flags or not self.square:
-                tau_out[0:6] = self.Omega @ f
-                tau_out[6:] = arm
-            else:  # exact: Omega f = tau_d on the producible rows, zero on the others; arm efforts as asked
-                for i in self._zero_rows:
-                    td[i] = 0.0
-                _put(tau_out, self._tau_format, td)
-        return flags
-
-    def _check_arm_finite(self, arm: list[float]) -> None:
+    def _check_arm_finite(self, arm: np.ndarray) -> None:
         """DivergenceError naming the first arm joint asked for a non-finite effort."""
-        for name, a in zip(self.platform.arm_names, arm):
+        for name, a in zip(self.platform.arm_names, arm.tolist()):
             if not math.isfinite(a):
                 raise DivergenceError(f"the controller asked for a non-finite effort on arm joint {name!r}: {a!r}")
 
@@ -368,28 +339,13 @@ class Allocator:
         return f
 
 
-_F8 = np.dtype(np.float64)
-
-
-def _put(out: np.ndarray, layout: str, values: list[float]) -> None:
-    """``out[:] = values`` for a float64 vector: packed straight into its buffer (``layout`` "=<n>d"); numpy's assignment
-    for another dtype or a non-contiguous view (a wrong length still raises)."""
-    if out.dtype is _F8:
-        try:
-            struct.pack_into(layout, out, 0, *values)
-            return
-        except (TypeError, struct.error):  # not C-contiguous, or not the length of the layout
-            pass
-    out[:] = values
-
-
 class IdealAllocator(Allocator):
     """Exact allocation on :func:`qprr.rotors.ideal_wrench_set` (an idealised, fully actuated vehicle): every desired
     base wrench is applied as is, within the set's bounds.
 
     Per axis the force w_f goes to its +e or -e thruster (f = max(+-w_f, 0)) and the couple w_m to the two
     thrusters of its sign (f = max(+-w_m, 0) / 2 each), so N f = tau_d exactly; beyond a thruster's bound the
-    thrust is clipped (flag 1).  For the thesis's point-to-point test (Sec. 6.3.1.1), which drives the model
+    thrust is clipped (``AllocationFlag.ROTOR_SATURATED``).  For the thesis's point-to-point test (Sec. 6.3.1.1), which drives the model
     with u directly.
     """
 
@@ -402,21 +358,21 @@ class IdealAllocator(Allocator):
             raise InputError(f"IdealAllocator needs a platform with qprr.rotors.ideal_wrench_set rotors, got {platform!r}")
         super().__init__(platform, weight_torque=1.0, clip_arm=clip_arm)
 
-    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> AllocationFlag:
         f = np.zeros(18)
         for k in range(3):
             wf, wm = float(tau_d[k]), float(tau_d[3 + k])
             f[6 * k + (0 if wf >= 0.0 else 1)] = abs(wf)
             j = 6 * k + (2 if wm >= 0.0 else 4)
             f[j] = f[j + 1] = 0.5 * abs(wm)
-        flags = 0
+        flags = AllocationFlag.NONE
         if np.any(f > self.f_max):
             f = np.minimum(f, self.f_max)
-            flags = 1
+            flags = AllocationFlag.ROTOR_SATURATED
         arm = tau_d[6:].copy()
         if self.clip_arm and np.any(np.abs(arm) > self.effort_limits):
             arm = np.clip(arm, -self.effort_limits, self.effort_limits)
-            flags |= 2
+            flags |= AllocationFlag.ARM_SATURATED
         f_out[:18] = f
         f_out[18:] = arm
         if tau_out is not None:

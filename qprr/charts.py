@@ -21,7 +21,6 @@ batch functions over logged runs (``*_batch``).  Tests check the three against e
 from __future__ import annotations
 
 import math
-import struct
 from math import atan2, cos, hypot, sin
 
 import numpy as np
@@ -353,37 +352,6 @@ def to_body_batch(R: np.ndarray, p_world: np.ndarray, origin_world: np.ndarray) 
 
 
 # ============================================================================ hot-loop form
-_F8 = np.dtype(np.float64)
-
-
-class FloatWriter:
-    """``arr[:] = values`` for float64 vectors of length ``n``, straight into the buffer (half the cost).
-
-    ``values`` is a sequence of ``n`` Python floats; another array (not float64, not
-    C-contiguous, other length) takes the plain numpy assignment.
-    """
-
-    __slots__ = ("n", "_pack")
-
-    def __init__(self, n: int) -> None:
-        self.n = as_int(n, "n", lo=0)
-        self._pack = struct.Struct(f"={self.n}d").pack_into
-
-    def __reduce__(self):
-        """Pickle as ``FloatWriter(n)``: the bound ``struct.Struct`` method is rebuilt, not serialised."""
-        return (FloatWriter, (self.n,))
-
-    def __call__(self, arr: np.ndarray, values) -> np.ndarray:
-        if arr.dtype is _F8 and len(values) == self.n:
-            try:
-                self._pack(arr, 0, *values)
-                return arr
-            except (TypeError, struct.error):  # not C-contiguous, or too small
-                pass
-        arr[:] = values
-        return arr
-
-
 class State:
     # The array maps above on plain floats, for loops that run every millisecond (simulator,
     # controllers): one xi <-> (q, v) update caches R_b and the trigonometry that S, S_dot and
@@ -430,8 +398,6 @@ class State:
         "u_applied_floats",
         "_v",
         "_qv",
-        "_wq",
-        "_wv",
     )
 
     def __init__(self, n_arm: int) -> None:
@@ -451,7 +417,6 @@ class State:
         self.xi_floats = (0.0,) * n
         self.xi_dot_floats = (0.0,) * n
         self._qv = None
-        self._wq, self._wv = FloatWriter(n + 1), FloatWriter(n)
         self.sf, self.cf, self.st, self.ct = 0.0, 1.0, 0.0, 1.0
 
     @property
@@ -510,7 +475,7 @@ class State:
         self.st = st = -r20
         self.ct = ch
         self.xi_floats = xi = (x, y, z, atan2(r21, r22), atan2(-r20, ch), atan2(r10, r00), *ql[7:])
-        self._wv(self.xi, xi)
+        self.xi[...] = xi
         # world velocity p_dot = R v_lin; Euler rates = T^-1 omega_body (Thesis (3.25) inverted)
         psi_d = (sf * wy_ + cf * wz_) / ch
         self.xi_dot_floats = xd = (
@@ -522,7 +487,7 @@ class State:
             psi_d,
             *vl[6:],
         )
-        self._wv(self.xi_dot, xd)
+        self.xi_dot[...] = xd
         return True
 
     def set_from_xi(self, t: float, xi, xi_dot, arrays: bool = True, reuse: bool = False) -> None:
@@ -560,9 +525,9 @@ class State:
         if reuse:
             if self._qv is None:
                 self._qv = (np.zeros(len(qt)), np.zeros(len(v)))
-            self.q, self.v = qv = self._qv
-            self._wq(qv[0], qt)
-            self._wv(qv[1], v)
+            self.q, self.v = self._qv
+            self.q[...] = qt
+            self.v[...] = v
         else:
             self.q = np.array(qt)
             self.v = np.array(v)
@@ -647,7 +612,10 @@ class State:
             -sf * m1 + cf * w,
             *u[6:],
         )
-        return np.array(tau) if out is None else self._wv(out, tau)
+        if out is None:
+            return np.array(tau)
+        out[...] = tau
+        return out
 
     def lin_to_world(self, f_body) -> tuple[float, float, float]:
         """R f for a body-frame 3-vector (plain floats)."""

@@ -13,10 +13,27 @@ class QprrError(Exception):
 
     ``result``: the partial :class:`~qprr.sim.result.SimResult` of a simulation the error stopped (set by
     :func:`qprr.sim.simulate` on the error it raises: the log up to the failure, status DIVERGED or FAILED); None for
-    every other error.
+    every other error.  ``time``: the simulated time [s] the message names (set by :meth:`with_time`, or where a
+    run's divergence is detected, :meth:`DivergenceError.at`); None for an error not tied to a time of a run.
     """
 
     result = None
+    time: float | None = None
+    time_prefix = "at t = {t:.3f} s of the run: "
+    """What :meth:`with_time` puts in front of the message."""
+
+    def with_time(self, t: float) -> QprrError:
+        """This error, raised during a run, with the run's time ``t`` [s] named in front of its message
+        (:attr:`time_prefix`: "at t = 1.234 s of the run: ..."); the same object (type, attributes and traceback kept).
+        An error that already names its time is returned as is."""
+        if self.time is None:
+            self._set_message(self.time_prefix.format(t=t) + str(self))
+            self.time = t
+        return self
+
+    def _set_message(self, message: str) -> None:
+        """Replace the message (what ``str(self)`` shows)."""
+        self.args = (message,)
 
 
 class InputError(QprrError, ValueError):
@@ -58,7 +75,16 @@ class UnknownNameError(QprrError, KeyError):
 
 
 class DivergenceError(QprrError, RuntimeError):
-    """A simulation or an iterative algorithm diverged (NaN or runaway state)."""
+    """A simulation or an iterative algorithm diverged (NaN or runaway state).
+
+    Raised during a run, its message starts with "diverged at t = <time> s: " (:meth:`at`, :meth:`with_time`)."""
+
+    time_prefix = "diverged at t = {t:.3f} s: "
+
+    @classmethod
+    def at(cls, t: float, what: str) -> DivergenceError:
+        """The divergence of a run at simulated time ``t`` [s]: "diverged at t = <t> s: <what>", :attr:`time` set."""
+        return cls(what).with_time(t)
 
 
 class SolverError(QprrError, RuntimeError):
@@ -75,6 +101,11 @@ class MissingDependencyError(QprrError, ImportError):
     def __init__(self, package: str, purpose: str, install: str) -> None:
         self.package, self.purpose, self.install = package, purpose, install
         super().__init__(f"{package} is needed for {purpose}: {install}")
+
+    def _set_message(self, message: str) -> None:
+        """Replace the message: ImportError shows its ``msg``, not its ``args``."""
+        self.args = (message,)
+        self.msg = message
 
 
 class MissingTopicError(QprrError, LookupError):

@@ -23,7 +23,7 @@ convention.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -102,7 +102,7 @@ def kk_transform(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
 
 
 def _check_rows(rows: Sequence[MDHRow]) -> tuple[MDHRow, ...]:
-    if isinstance(rows, (str, bytes)) or not hasattr(rows, "__iter__"):
+    if isinstance(rows, (str, bytes)) or not isinstance(rows, Iterable):
         raise InputError(f"rows must be a non-empty sequence of MDHRow, got {rows!r}")
     rows = tuple(rows)
     if not rows or not all(isinstance(row, MDHRow) for row in rows):

@@ -41,6 +41,7 @@ Chapter 6 flights on the Q-PRR are built so (:mod:`qprr.thesis.scenarios`).
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -64,7 +65,7 @@ from .sim.contact import CompliantWall
 from .sim.disturbances import Disturbances, Pulse, WhiteNoise
 from .sim.payload import PayloadChange, PayloadSchedule
 from .sim.wind import AerodynamicDrag, Gust, Wind
-from .trajectory import Hold, MultiPhase, Phase
+from .trajectory import Hold, MultiPhase, Phase, Trajectory
 from .validation import as_real, as_vector, read_toml
 
 PHASE_KEYS = ("coordinate", "start", "end", "target")
@@ -99,7 +100,7 @@ class MissionSettings:
     plausibility: Plausibility | None = DEFAULT
 
     def __post_init__(self) -> None:
-        if self.trajectory is not None and not hasattr(self.trajectory, "sample"):
+        if self.trajectory is not None and not isinstance(self.trajectory, Trajectory):
             raise InputError(f"MissionSettings.trajectory must have sample(t) (a qprr.trajectory object), got {type(self.trajectory).__name__}")
         if self.controller is not None and not isinstance(self.controller, Controller):
             raise InputError(f"MissionSettings.controller must be a qprr Controller (make_controller), got {type(self.controller).__name__}")
@@ -317,7 +318,7 @@ def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, 
     events alone (a mission whose reference is given otherwise, :class:`MissionSettings`)."""
     if isinstance(source, (str, Path)):
         source = read_toml(source, "mission file", f"a TOML file of [[phase]] tables: {', '.join(PHASE_KEYS)}")
-    if not hasattr(source, "get"):
+    if not isinstance(source, Mapping):
         raise InputError(f"a mission is a TOML file or a mapping of 'phase' (and 'payload') tables, got {type(source).__name__}")
     for key in source:
         if key not in ("phase", "payload"):

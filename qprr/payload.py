@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
@@ -236,13 +237,34 @@ def com_with_payload(platform: Platform, data: pin.Data, q_arm, payload: Payload
 
 
 # ============================================================ Sec. 6.4.1.1: holding, capacity
+class HoldingStatus(str, Enum):
+    """Whether the platform can hold a payload (:attr:`HoldingEffort.status`, equal to its string)."""
+
+    OK = "ok"
+    EXCEEDS = "exceeds"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+class CapacityStatus(str, Enum):
+    """Whether a mission can carry any payload (:attr:`PayloadCapacity.status`, equal to its string): ``none`` when even
+    an empty gripper exceeds a limit."""
+
+    OK = "ok"
+    NONE = "none"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class HoldingEffort:
     """Efforts that hold the platform level at rest with a payload (Thesis Sec. 6.4.1.1).
 
     ``thrust`` total force the rotors must produce [N] = (m + m_c) g; ``arm_effort`` (n_arm,) the
     efforts the arm actuators must apply (the arm rows of G, Pinocchio generalised gravity of the
-    loaded model); ``arm_effort_nominal`` the same without payload.  ``status`` is "ok" or
+    loaded model); ``arm_effort_nominal`` the same without payload.  ``status`` (:class:`HoldingStatus`) is "ok" or
     "exceeds": ``reason`` names the limits exceeded (the largest total thrust along the thrust
     axis, the arm effort limits).
     """
@@ -252,7 +274,7 @@ class HoldingEffort:
     thrust: float
     arm_effort: np.ndarray
     arm_effort_nominal: np.ndarray
-    status: str
+    status: HoldingStatus
     reason: str
 
 
@@ -287,7 +309,7 @@ def holding_efforts(platform: Platform, q_arm, payload: Payload | float) -> Hold
         thrust,
         g1[6:].copy(),
         g0[6:].copy(),
-        "exceeds" if reasons else "ok",
+        HoldingStatus.EXCEEDS if reasons else HoldingStatus.OK,
         "; ".join(reasons) if reasons else "within thrust and effort limits",
     )
 
@@ -298,7 +320,7 @@ class PayloadCapacity:
 
     ``max_mass`` [kg]; ``limiting`` the constraint that sets it ("thrust" or an arm joint's
     name); ``q_arm`` the configuration where it binds (None for thrust); ``per_limit`` the bound
-    of every constraint.  ``status`` "ok" or "none" (even an empty gripper exceeds a limit);
+    of every constraint.  ``status`` (:class:`CapacityStatus`) "ok" or "none" (even an empty gripper exceeds a limit);
     ``reason`` says which.
     """
 
@@ -307,7 +329,7 @@ class PayloadCapacity:
     limiting: str
     q_arm: np.ndarray | None
     per_limit: dict
-    status: str
+    status: CapacityStatus
     reason: str
 
 
@@ -376,8 +398,8 @@ def payload_capacity(
         where = None if best == "thrust" else best_q[names.index(best)]
     m_max = per[best]
     if m_max < 0.0:
-        return PayloadCapacity(mission, 0.0, best, where, per, "none", f"{best} is exceeded without payload (bound {m_max:.4f} kg)")
-    return PayloadCapacity(mission, float(m_max), best, where, per, "ok", f"limited by {best}")
+        return PayloadCapacity(mission, 0.0, best, where, per, CapacityStatus.NONE, f"{best} is exceeded without payload (bound {m_max:.4f} kg)")
+    return PayloadCapacity(mission, float(m_max), best, where, per, CapacityStatus.OK, f"limited by {best}")
 
 
 def _configurations(platform: Platform, q_arm, configurations, n_grid: int) -> list:

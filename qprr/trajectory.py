@@ -7,7 +7,8 @@
   is a mission for any platform.
 * :class:`Spiral` is the spiral of Thesis (6.25) after a vertical climb; :class:`Hold` a constant.
 
-A trajectory is any object with ``sample(t) -> TrajectorySample`` for an array of times;
+A trajectory is any object with ``sample(t) -> TrajectorySample`` for an array of times (the
+:class:`Trajectory` protocol);
 the simulator samples the whole horizon once before the loop (references depend on time
 only).  Roll and pitch references are not given by the trajectory: the controllers derive
 them from the thrust vector (Thesis (6.17)), so their entries stay 0 here.
@@ -34,6 +35,7 @@ printed formula stay available as ``law="quintic"`` and ``law="thesis"``.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -50,6 +52,15 @@ class TrajectorySample:
     xi: np.ndarray
     xi_dot: np.ndarray
     xi_ddot: np.ndarray
+
+
+@runtime_checkable
+class Trajectory(Protocol):
+    """What the simulator and the controllers follow: ``sample(t)`` for an array of times ``t`` (m,) [s] returns the
+    :class:`TrajectorySample` there.  :class:`MultiPhase`, :class:`Spiral` and :class:`Hold` are trajectories; so is any
+    class of yours with that method (``isinstance(obj, Trajectory)`` checks it)."""
+
+    def sample(self, t) -> TrajectorySample: ...
 
 
 def _sigmoid(tau: np.ndarray, order: int) -> list[np.ndarray]:

@@ -619,7 +619,6 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.validation.as_vector", "n", S(3, "skip")),
     ("qprr.validation.as_matrix", "shape", Spec("skip", lambda c: (3,))),
     ("qprr.charts.xi_names", "n_arm", S(3, "int")),
-    ("qprr.charts.FloatWriter", "n", S(3, "int")),
     ("qprr.charts.State.lin_to_*", "f_*", F(lambda c: np.ones(3))),
     ("qprr.actuation.IdealAllocator", "platform", Spec("platform", lambda c: c.ideal_platform())),
     ("qprr.actuation.IdealAllocator.allocate_into", "f_out", V(lambda c: np.zeros(18 + c.n_arm))),

@@ -8,7 +8,7 @@ import pytest
 from scipy.optimize import linprog
 
 import qprr
-from qprr.actuation import Allocator
+from qprr.actuation import AllocationFlag, Allocator
 from qprr.analysis import hover, wrench_set
 from qprr.analysis.hover import check_reserve
 from qprr.errors import InputError
@@ -194,7 +194,7 @@ def test_hover_feasible_configuration_holds_in_simulation():
     i = int(np.argmin(np.where(r.feasible[0], r.thrust_margin[0], np.inf)))  # the tightest feasible configuration
     xi0 = np.concatenate([[0.0, 0.0, 2.0, 0.0, 0.0, 0.0], r.grid.configurations(i, i + 1)[0]])
     res = sim.simulate(p, control.InverseDynamicsController(p), trajectory.Hold(xi0), 2.0)
-    assert not np.any(res.flags & 3), "a rotor bound or an effort limit was active"
+    assert not np.any(res.flags & (AllocationFlag.ROTOR_SATURATED | AllocationFlag.ARM_SATURATED)), "a rotor bound or an effort limit was active"
     assert np.abs(res.xi[:, 0:3] - xi0[0:3]).max() < 1e-3
     assert np.abs(res.f[:, 0 : p.n_rotors] - r.thrusts[i]).max() < 1e-9
     # the payload envelope at the configuration where the rotors limit it most
@@ -210,7 +210,7 @@ def test_hover_feasible_configuration_holds_in_simulation():
             res = sim.simulate(loaded, control.InverseDynamicsController(loaded), trajectory.Hold(xi0), 2.0)
         except qprr.errors.DivergenceError as err:  # an unheld platform may leave the bounds
             res = err.result
-        assert bool(np.any(res.flags & 1)) is saturates
+        assert bool(np.any(res.flags & AllocationFlag.ROTOR_SATURATED)) is saturates
         if not saturates:
             assert np.abs(res.f[:, 0 : p.n_rotors] - expect.thrusts[0]).max() < 1e-9
             assert np.abs(res.xi[:, 0:3] - xi0[0:3]).max() < 1e-3

@@ -32,6 +32,7 @@ import pytest
 import qprr.thesis
 from qprr import kinematics as qm
 from qprr import sim as it
+from qprr.actuation import AllocationFlag
 from qprr.charts import xi_to_qv
 from qprr.control import PayloadIDC
 from qprr.control.base import Controller
@@ -180,7 +181,7 @@ def final_state(case: Case, integrator: str, substeps: int) -> tuple[Platform, n
     robot, ctrl, traj, kw = case.build()
     T = case.control_period
     res = simulate(robot, ctrl, traj, case.duration, dt=T / substeps, control_period=T, integrator=integrator, **kw)
-    assert res.status == "ok" and not (res.flags & 4).any()
+    assert res.status == "ok" and not (res.flags & AllocationFlag.JOINT_STOP).any()
     q, v = xi_to_qv(res.xi[-1], res.xi_dot[-1])
     env = kw.get("external_wrench")
     z = np.zeros(0)

@@ -6,6 +6,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
+from qprr.actuation import AllocationFlag
 from qprr.charts import xi_to_q
 from qprr.control.base import Controller
 from qprr.dynamics import generalized_gravity
@@ -104,7 +105,7 @@ def test_weak_plant_rotors_clip_the_commands_and_flag_it(platform):
     res = simulate(platform, hover, Hold(XI0), 0.05, plant=plant, joint_stops=False)
     assert np.all(hover.tau[2] / 4 > f_cap)  # the hover thrust is beyond the weak rotors
     np.testing.assert_array_equal(res.f, np.broadcast_to(f_cap, res.f.shape))
-    assert np.all(res.flags & 1)
+    assert np.all(res.flags & AllocationFlag.ROTOR_SATURATED)
     assert res.saturation_fraction() == 1.0
 
 

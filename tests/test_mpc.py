@@ -20,7 +20,7 @@ import pinocchio as pin
 import pytest
 
 import qprr
-from qprr.actuation import Allocator
+from qprr.actuation import AllocationFlag, Allocator
 from qprr.charts import State, xi_to_qv
 from qprr.control import make_controller
 from qprr.control.base import Reference
@@ -446,7 +446,7 @@ def test_planned_thrusts_never_leave_the_bounds_and_the_allocator_applies_them(p
     assert np.min(st.thrust_margin) < 1e-6  # the bound was active in some plan
     planned = ctrl.planned_thrusts
     assert planned.shape == (20, 4) and np.all((planned >= 0.0) & (planned <= 11.0))
-    assert not np.any(res.flags & 1)
+    assert not np.any(res.flags & AllocationFlag.ROTOR_SATURATED)
     solve_steps = np.round(st.t / 1e-3).astype(int)
     np.testing.assert_allclose(res.f[solve_steps], st.u[:, 0:4], rtol=0, atol=1e-12)
     np.testing.assert_allclose(res.arm_effort[solve_steps], st.u[:, 4:7], rtol=0, atol=1e-12)
@@ -591,13 +591,13 @@ def test_aggressive_reach_idc_saturates_where_the_mpc_plans_inside_the_bounds(pl
     except qprr.QprrError as err:  # it may lose the arm altogether
         idc = err.result
     assert idc.saturation_fraction() > 0.01
-    assert np.any(idc.flags & 4)
+    assert np.any(idc.flags & AllocationFlag.JOINT_STOP)
     res = run("aggressive-reach", "mpc", duration=3.0)
     assert res.status == "ok"
     m = res.metrics
     assert m["mpc_failed"] == 0 and m["mpc_min_plan_thrust_margin_N"] >= 0.0 and m["mpc_max_plan_bound_violation_N"] <= 0.0
     assert m["mpc_min_plan_thrust_margin_N"] < 1e-6  # a bound is active in some plan
-    assert not np.any(res.flags & 1)  # the allocator never clipped a rotor
+    assert not np.any(res.flags & AllocationFlag.ROTOR_SATURATED)  # the allocator never clipped a rotor
     e = res.rmse()
     assert max(e["x"], e["y"], e["z"]) < 0.05
     assert e["r0"] < 0.01 and max(e["theta2"], e["theta3"]) < 0.02

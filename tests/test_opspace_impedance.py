@@ -9,6 +9,7 @@ import pytest
 
 import qprr
 from qprr import charts as ch
+from qprr.actuation import AllocationFlag
 from qprr.analysis import opspace_model_xi
 from qprr.charts import State
 from qprr.control import InverseDynamicsController, make_controller
@@ -147,7 +148,7 @@ def test_static_deflection_is_K_inverse_h(name):
     imp = EndEffectorImpedance(K, 2.0 * (V * np.sqrt(w)) @ V.T, np.eye(3))  # D = 2 K^(1/2): every mode critically damped
     h = np.array([0.4, -0.3, 0.5])
     hist, res = _push(p, imp, h, duration=6.0)
-    assert not np.any(res.flags & 5)  # no rotor bound, no joint stop
+    assert not np.any(res.flags & (AllocationFlag.ROTOR_SATURATED | AllocationFlag.JOINT_STOP))  # no rotor bound, no joint stop
     e = hist["e"][-1]
     target = imp.deflection(h)
     if name == "q-prr":
@@ -220,7 +221,7 @@ def test_free_space_tracks_like_the_idc(name):
         ("ops", OperationalSpaceImpedance(p, EndEffectorImpedance.from_frequency(4.0, 1.0, 1.0), ee_sensor=lambda t: np.zeros(6))),
     ):
         res = simulate(p, c, traj, 5.0)
-        assert not np.any(res.flags & 5)
+        assert not np.any(res.flags & (AllocationFlag.ROTOR_SATURATED | AllocationFlag.JOINT_STOP))
         d = p.data()
         ee = np.array([ee_pose_xi(p, d, x)[0] for x in res.xi])
         xr = res.xi_d.copy()

@@ -10,6 +10,7 @@ import pytest
 
 import qprr
 import qprr.thesis
+from qprr.actuation import AllocationFlag
 from qprr.charts import xi_to_qv
 from qprr.control.base import Controller
 from qprr.dynamics import dynamics_xi
@@ -144,7 +145,7 @@ def test_the_free_arm_stays_inside_its_stops(free_robot):
     res = simulate(free_robot, zero, Hold(tuple(XI0)), 10.0, xi0=XI0, xi_dot0=XID0)
     p = free_robot.params
     assert np.all(res.xi[:, 6:9] >= p.lower_limits - 1e-12) and np.all(res.xi[:, 6:9] <= p.upper_limits + 1e-12)
-    assert (res.flags & 4).any()
+    assert (res.flags & AllocationFlag.JOINT_STOP).any()
 
 
 def test_a_joint_pushed_into_its_stop_stays_there(free_robot):
@@ -157,7 +158,7 @@ def test_a_joint_pushed_into_its_stop_stays_there(free_robot):
     assert res.xi[:, 6].max() <= hi + 1e-12
     assert res.xi[-1, 6] == pytest.approx(hi, abs=1e-12)
     assert np.abs(res.xi_dot[-100:, 6]).max() < 1e-9
-    assert (res.flags[-100:] & 4).all()
+    assert (res.flags[-100:] & AllocationFlag.JOINT_STOP).all()
     with pytest.raises(qprr.LimitError, match="xi0"):
         simulate(free_robot, OpenLoop(u), Hold(tuple(xi)), 0.01, xi0=np.r_[0, 0, 0, 0, 0, 0, 0.05, 0, 0])
 

@@ -12,10 +12,11 @@ import pytest
 
 import qprr
 import qprr.thesis
+from qprr.actuation import AllocationFlag
 from qprr.control.base import Controller
 from qprr.errors import DivergenceError, InputError, LimitError, ShapeError
 from qprr.scenarios import run
-from qprr.sim import Limits, Pulse, WhiteNoise, simulate
+from qprr.sim import Limits, Pulse, StateDisturbance, WhiteNoise, simulate
 from qprr.thesis.missions import NAMES
 from qprr.trajectory import Hold, MultiPhase, Phase
 
@@ -62,7 +63,7 @@ def test_hover_reach_with_the_generic_idc(platforms, name):
     rmse = list(res.rmse().values())
     assert max(rmse[0:6]) < 2e-4 and max(rmse[6:]) < 5e-3  # measured <= 1.4e-4 m (base) and <= 1.8e-3 rad (arm)
     # no saturation: every thrust strictly inside its bounds, no effort clipped
-    assert not (res.flags & 3).any() and res.saturation_fraction() == 0.0
+    assert not (res.flags & (AllocationFlag.ROTOR_SATURATED | AllocationFlag.ARM_SATURATED)).any() and res.saturation_fraction() == 0.0
     assert np.all(res.f > p.thrust_min) and np.all(res.f < p.thrust_max)
     assert np.all(np.abs(res.arm_effort) <= p.arm_effort_limits)
     # the reach: 60 % of the way from the neutral posture to the upper limits
@@ -104,8 +105,8 @@ def test_initial_arm_state_beyond_a_limit_is_refused(platforms):
 
 
 # ------------------------------------------------------------------------------ divergence messages
-class _Spin:
-    """A body moment m_z about z_B (a StateDisturbance)."""
+class _Spin(StateDisturbance):
+    """A body moment m_z about z_B."""
 
     def __init__(self, m_z):
         self.m_z = m_z

@@ -187,7 +187,7 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
     status = results.table["status"] if len(results) else np.array([], dtype=str)
     groups: dict[tuple, list[int]] = {}
     for i in range(len(results)):
-        groups.setdefault(tuple(k[i].item() if hasattr(k[i], "item") else k[i] for k in keys), []).append(i)
+        groups.setdefault(tuple(_plain(k[i]) for k in keys), []).append(i)
     rows = []
     for g in sorted(groups, key=lambda x: tuple((0, v) if isinstance(v, (int, float)) else (1, str(v)) for v in x)):
         idx = np.array(groups[g])
@@ -254,8 +254,13 @@ def _success(results: Results) -> np.ndarray:
     return (np.asarray(t["success"]) == 1) if "success" in t.dtype.names else _ok(results)
 
 
+def _plain(value):
+    """A numpy scalar as the Python value it holds (``value.item()``); any other value as is."""
+    return value.item() if isinstance(value, np.generic) else value
+
+
 def _order(values) -> list:
-    u = list(dict.fromkeys(v.item() if hasattr(v, "item") else v for v in values))
+    u = list(dict.fromkeys(_plain(v) for v in values))
     try:
         return sorted(u)
     except TypeError:

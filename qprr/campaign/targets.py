@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 
+from ..control import IDCGains, MFCGains
 from ..errors import InputError
 from ..validation import as_int, as_name, as_real
 
@@ -30,7 +31,7 @@ def scale_bandwidth(gains, group: str, s: float, n_xi: int):
     group = as_name(group, "group", tuple(_GROUPS), kind="bandwidth group")
     s = as_real(s, f"bandwidth.{group}", positive=True)
     n_xi = as_int(n_xi, "n_xi", lo=6)
-    if not all(len(getattr(gains, k, ())) == n_xi for k in ("kp", "kd", "ki")) or not dataclasses.is_dataclass(gains):
+    if not isinstance(gains, (IDCGains, MFCGains)) or not all(len(getattr(gains, k)) == n_xi for k in ("kp", "kd", "ki")):
         raise InputError(f"gains must be IDCGains or MFCGains with explicit vectors kp, kd, ki of n_xi = {n_xi} entries, got {type(gains).__name__}")
     idx = _GROUPS[group] if _GROUPS[group] is not None else tuple(range(6, n_xi))
     changes = {}

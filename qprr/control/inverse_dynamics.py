@@ -51,14 +51,13 @@ The thesis's printed tables are in :mod:`qprr.thesis.gains`.
 from __future__ import annotations
 
 import math
-import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sized
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
-from ..charts import FloatWriter, State
+from ..charts import State
 from ..errors import InputError, UnknownNameError
 from ..joint_friction import JointFriction
 from ..model import Platform, check_platform
@@ -98,7 +97,7 @@ class IDCGains:
     max_tilt: float = 0.8
 
     def __post_init__(self) -> None:
-        n = len(self.kp) if hasattr(self.kp, "__len__") and not isinstance(self.kp, str) else -1
+        n = len(self.kp) if isinstance(self.kp, Sized) and not isinstance(self.kp, str) else -1
         if n < 6:
             raise InputError(f"kp must have 6 + n_arm entries, got {self.kp!r}")
         for name in ("kp", "kd", "ki"):
@@ -219,7 +218,6 @@ class InverseDynamicsController(Controller):
         self._lost = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12] if self.realizable else []
         contiguous = self._lost and self._lost == list(range(self._lost[0], self._lost[-1] + 1))
         self._lost_rows = slice(self._lost[0], self._lost[-1] + 1) if contiguous else self._lost  # a slice is 4x cheaper
-        self._pack = struct.Struct(f"={platform.n_arm}d").pack  # exact key of the arm joints (tells -0.0 from 0.0)
         # hooks a configuration overrides (skipped in the loop when it does not)
         cls = type(self)
         self._refs_hook = cls.update_references is not InverseDynamicsController.update_references
@@ -227,16 +225,6 @@ class InverseDynamicsController(Controller):
         self._task_hook = cls.task_accelerations is not InverseDynamicsController.task_accelerations
         self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
         self._new_run()
-
-    def __getstate__(self) -> dict:
-        """Pickle without the bound ``struct`` method (rebuilt by :meth:`__setstate__`): controllers go to worker processes."""
-        state = self.__dict__.copy()
-        del state["_pack"]
-        return state
-
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-        self._pack = struct.Struct(f"={self.platform.n_arm}d").pack
 
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         """Start a run: the control period ``dt`` [s] (checked with the state and reference), then :meth:`_new_run`."""
@@ -261,7 +249,6 @@ class InverseDynamicsController(Controller):
         self._loops_outer = self._alpha_plan(tuple(i for i in range(n) if i not in tilt_idx))
         self._loops_tilt = self._alpha_plan(tilt_idx)
         self._abuf = np.zeros(self.platform.nv)  # the accelerations handed to RNEA
-        self._write = FloatWriter(self.platform.nv)
         self._mass_key = None  # arm joints of the reused mass-matrix rows (desired state)
         self._mass_rows = None
         self._desired = State(self.platform.n_arm) if self.at == "desired" else None
@@ -333,7 +320,7 @@ class InverseDynamicsController(Controller):
         M (CRBA, local convention) depends on the arm joints only, so at a held desired arm
         pose the rows of the previous step are exact."""
         if self._desired is not None:
-            key = self._pack(*ms.xi_floats[6:])
+            key = np.array(ms.xi_floats[6:]).tobytes()  # the arm joints bit for bit (-0.0 is not 0.0)
             if key != self._mass_key:
                 self._mass_rows = _crba(model, data, q)[self._lost_rows, 0:6].tolist()
                 self._mass_key = key
@@ -355,7 +342,6 @@ class InverseDynamicsController(Controller):
         alpha = self._alpha_loops(x, xd, r, rd, rdd, self._loops_outer, [0.0] * len(r), dt)
         a = ms.accel_to_v_list(alpha)
         abuf = self._abuf
-        write = self._write
         ff = self.feedforward(t, state) if self._ff_hook else None
         ffv = None if ff is None else ms.force_from_xi(ff).tolist()
         tilt = self.tilt
@@ -364,7 +350,7 @@ class InverseDynamicsController(Controller):
             if da is not None:
                 a = [ai + di for ai, di in zip(a, da)]
         if tilt is not None:
-            write(abuf, a)  # = np.array(a), into a buffer RNEA only reads
+            abuf[...] = a  # a buffer RNEA only reads
             t0 = _rnea(model, data, q, v, abuf).tolist()
             u_fb = ms.lin_to_world(t0[0:3])  # u_fb of (6.21) at alpha_phi = alpha_theta = 0: R times RNEA's body force
             if ff is not None:
@@ -387,14 +373,14 @@ class InverseDynamicsController(Controller):
             if da is not None:
                 a = [ai + di for ai, di in zip(a, da)]
                 if tilt is not None:
-                    write(abuf, a)
+                    abuf[...] = a
                     t0 = _rnea(model, data, q, v, abuf).tolist()
         if self._lost:
             # base accelerations along the unproducible directions chosen so that the applied
             # wrench has no component there: (tau0 + M delta)[lost] = 0, with M[lost, lost] = m I
             # (the free flyer's translational block) and delta zero elsewhere but the attitude change
             if tilt is None:
-                write(abuf, a)
+                abuf[...] = a
                 t0 = _rnea(model, data, q, v, abuf).tolist()
             rows = self._mass_rows_of(ms, model, data, q)
             if ffv is not None:  # the feedforward is applied too: its unproducible part is left to the dynamics as well
@@ -404,7 +390,7 @@ class InverseDynamicsController(Controller):
         a[3] += d3
         a[4] += d4
         a[5] += d5
-        write(abuf, a)
+        abuf[...] = a
         tau = _rnea(model, data, q, v, abuf)
         if self._friction is not None:  # the URDF's joint friction (F_v of (5.36), Coulomb): feedforward at the reference arm rates
             tau = tau - self._friction.generalized_force(self._zero6 + rd[6:])

@@ -101,6 +101,7 @@ import pinocchio as pin
 from ..charts import State, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..model import Platform
+from ..trajectory import Trajectory
 from ..validation import as_int, as_real, as_vector
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
@@ -260,8 +261,8 @@ def _frame_with_z(a: np.ndarray) -> np.ndarray:
 
 
 def _check_trajectory(trajectory) -> None:
-    if trajectory is not None and not (hasattr(trajectory, "sample") and callable(trajectory.sample)):
-        raise InputError(f"trajectory must have a sample(t) method, got {type(trajectory).__name__}")
+    if trajectory is not None and not isinstance(trajectory, Trajectory):
+        raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory.Trajectory), got {type(trajectory).__name__}")
 
 
 def _resolve_backend(requested: str) -> str:

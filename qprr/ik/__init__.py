@@ -10,7 +10,7 @@ problem and the methods (the registry :data:`IK_METHODS`: a plug-in adds its own
 """
 
 from . import tasks
-from .balance import BalanceResult, balance_prismatic
+from .balance import BalanceResult, BalanceStatus, balance_prismatic
 from .hierarchy import HierarchySolver, HierarchyStep
 from .solver import (
     DEFAULT_METHOD,
@@ -20,6 +20,7 @@ from .solver import (
     ClikaOptions,
     DLSOptions,
     IKMethod,
+    IKOutcome,
     IKResult,
     IKSolver,
     QPOptions,
@@ -35,6 +36,7 @@ __all__ = [
     "DEFAULT_METHOD",
     "IK_METHODS",
     "BalanceResult",
+    "BalanceStatus",
     "METHODS",
     "OPTIONS",
     "ClikaOptions",
@@ -42,6 +44,7 @@ __all__ = [
     "HierarchySolver",
     "HierarchyStep",
     "IKMethod",
+    "IKOutcome",
     "IKResult",
     "IKSolver",
     "QPOptions",

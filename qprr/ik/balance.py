@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
@@ -38,6 +39,20 @@ NO_EFFECT_TOL = 1e-9
 thrust axis (it moves the CoG along the axis only)."""
 
 
+class BalanceStatus(str, Enum):
+    """How :func:`balance_prismatic` ended (:attr:`BalanceResult.status`, equal to its string)."""
+
+    BALANCED = "balanced"
+    """The offset along the joint's direction is zero."""
+    LIMITED = "limited"
+    """The joint stops at a limit before."""
+    NO_EFFECT = "no_effect"
+    """The joint moves the CoG along the thrust axis only."""
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class BalanceResult:
     """Outcome of :func:`balance_prismatic`.
@@ -48,7 +63,7 @@ class BalanceResult:
     ``within_limits``: ``unclamped`` lies inside them; ``q_arm`` (n_arm,): the given arm
     posture with ``value`` in the joint; ``offset`` (2,) [m]: the CoG offset from the thrust axis
     at ``q_arm`` (:func:`qprr.kinematics.cog_offset_body`, in B; zero when balanced);
-    ``slope`` (2,) [m/m]: d offset / d joint; ``status``: "balanced" (the offset along ``slope``
+    ``slope`` (2,) [m/m]: d offset / d joint; ``status`` (:class:`BalanceStatus`): "balanced" (the offset along ``slope``
     is zero), "limited" (the joint stops at a limit before) or "no_effect" (the joint moves the
     CoG along the thrust axis only); ``reason`` says why in words when not "balanced".
     """
@@ -62,7 +77,7 @@ class BalanceResult:
     q_arm: np.ndarray
     offset: np.ndarray
     slope: np.ndarray
-    status: str
+    status: BalanceStatus
     reason: str
 
 
@@ -133,7 +148,7 @@ def balance_prismatic(platform: Platform, data: pin.Data, q_arm, joint: str | in
     gg = float(g @ g)
     if not math.sqrt(gg) >= NO_EFFECT_TOL * max(m_ratio, 1e-300):
         value = float(others[k])
-        status, unclamped = "no_effect", math.nan
+        status, unclamped = BalanceStatus.NO_EFFECT, math.nan
         reason = (
             f"joint {arm.name!r} moves the CoG along the thrust axis only at this posture (its axis is parallel "
             "to the thrust axis): no value of it changes the offset"
@@ -144,11 +159,12 @@ def balance_prismatic(platform: Platform, data: pin.Data, q_arm, joint: str | in
         within = arm.lower <= unclamped <= arm.upper
         value = min(max(unclamped, arm.lower), arm.upper)
         if within:
-            status, reason = "balanced", ""
+            status, reason = BalanceStatus.BALANCED, ""
         else:
             side = "upper" if unclamped > arm.upper else "lower"
-            status = "limited"
-            reason = f"joint {arm.name!r} would need {unclamped:.6g} m, beyond its {side} limit {getattr(arm, side):.6g} m: stopped there"
+            status = BalanceStatus.LIMITED
+            limit = arm.upper if side == "upper" else arm.lower
+            reason = f"joint {arm.name!r} would need {unclamped:.6g} m, beyond its {side} limit {limit:.6g} m: stopped there"
     q_arm[k] = value
     q[7:] = q_arm
     offset = cog_offset_body(platform, data, q)

@@ -48,6 +48,7 @@ import math
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, fields, replace
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
@@ -238,12 +239,30 @@ def make_options(method: str, options=None, table: Mapping | None = None):
 
 
 # ============================================================================= result
+class IKOutcome(str, Enum):
+    """How an IK solve ended, :attr:`IKResult.status`: a ``str`` Enum equal to its value (``res.status == "converged"``
+    holds; printed and written to JSON as the value)."""
+
+    CONVERGED = "converged"
+    UNREACHABLE = "unreachable"
+    NOT_HOVER_FEASIBLE = "not_hover_feasible"
+    LIMITS = "limits"
+    MAX_ITERATIONS = "max_iterations"
+    STALLED = "stalled"
+    DIVERGED = "diverged"
+    SOLVER_ERROR = "solver_error"
+    COLLISION = "collision"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(slots=True)
 class IKResult:
     """Outcome of an IK solve.
 
     ``success``: pose within tolerance, arm within limits and (when required) hover-feasible.
-    ``status``: "converged", "unreachable", "not_hover_feasible", "limits", "max_iterations",
+    ``status`` (:class:`IKOutcome`): "converged", "unreachable", "not_hover_feasible", "limits", "max_iterations",
     "stalled", "diverged", "solver_error" or "collision" (option ``collision_free``); ``reason`` says why in words when ``success`` is
     False (empty otherwise).  ``xi`` and ``q`` hold the returned (best-effort when failed)
     configuration.  Errors: world position [m] and rotation angle [rad] (0 for a position-only
@@ -255,7 +274,7 @@ class IKResult:
 
     method: str
     success: bool
-    status: str
+    status: IKOutcome
     reason: str
     xi: np.ndarray | None
     q: np.ndarray | None
@@ -271,6 +290,9 @@ class IKResult:
     wall_time: float
     initial_guess: str
     level_errors: tuple = field(default=())
+
+    def __post_init__(self) -> None:
+        self.status = IKOutcome(self.status)  # a status given by its string (a method of a plug-in) becomes the Enum
 
 
 # ============================================================================= inputs
@@ -424,7 +446,7 @@ class Ending:
     ``iterations``, the levels' errors (method "qp"), whether ``data`` already holds FK, frames and CoM at q, and
     the pose errors at q when the method measured them there (else :func:`finish` measures them)."""
 
-    status: str
+    status: IKOutcome
     reason: str = ""
     iterations: int = 0
     level_errors: tuple = ()
@@ -463,7 +485,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     return IKResult(
         method=ctx.method,
         success=bool(success),
-        status=status if not success else "converged",
+        status=status if not success else IKOutcome.CONVERGED,
         reason=reason,
         xi=xi,
         q=q,
@@ -492,13 +514,13 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
     if not reason:
         if not within:
             lo, hi = ctx.platform.arm_lower, ctx.platform.arm_upper
-            status = "limits"
+            status = IKOutcome.LIMITS
             reason = f"joints out of limits: q_arm = {q_arm.tolist()} not in [{lo.tolist()}, {hi.tolist()}]"
         elif not pose_ok:
-            status = status if status != "converged" else "stalled"
+            status = status if status != IKOutcome.CONVERGED else IKOutcome.STALLED
             reason = f"pose not reached after {end.iterations} iterations: position error {pos_err:.3g} m, orientation error {rot_err:.3g} rad"
         else:
-            status = "not_hover_feasible"
+            status = IKOutcome.NOT_HOVER_FEASIBLE
             if hint:
                 reason = f"the pose is reached only with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad: not reachable in hover ({hint})"
             else:
@@ -507,12 +529,12 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
                     "stopped at a tilted configuration (joint limit or local minimum from this start, or a target that "
                     "needs a tilted base); try another xi0"
                 )
-    if status != "not_hover_feasible" and ctx.require_hover and "hover" not in reason and hint:
+    if status != IKOutcome.NOT_HOVER_FEASIBLE and ctx.require_hover and "hover" not in reason and hint:
         reason += f"; the target is unreachable in hover ({hint})"
     return status, reason
 
 
-def failed_result(method: str, status: str, reason: str, iterations: int, t0: float, init: str) -> IKResult:
+def failed_result(method: str, status: IKOutcome, reason: str, iterations: int, t0: float, init: str) -> IKResult:
     """A result without a configuration (the method could not produce one)."""
     nan = float("nan")
     return IKResult(method, False, status, reason, None, None, iterations, nan, nan, nan, nan, nan, nan, False, False, time.perf_counter() - t0, init)
@@ -576,7 +598,7 @@ def solve_clika(ctx: SolveContext, xi: np.ndarray) -> IKResult:
     weights = np.ones(n) if opts.weights is None else as_vector(opts.weights, n, "option weights")
     w_isqrt = 1.0 / np.sqrt(weights[cols])
     e = np.empty(6)
-    status, reason = "max_iterations", ""
+    status, reason = IKOutcome.MAX_ITERATIONS, ""
     it, best, best_it = 0, math.inf, 0
     while True:
         q = ch.xi_to_q(xi)
@@ -586,10 +608,10 @@ def solve_clika(ctx: SolveContext, xi: np.ndarray) -> IKResult:
         e[0:3] = p_d - M.translation  # (4.38) position part
         e[3:6] = pin.log3(R_d @ M.rotation.T)  # orientation error on SO(3), world axes
         if np.linalg.norm(e[0:3]) < opts.position_tol and np.linalg.norm(e[3:6]) < opts.orientation_tol:
-            status = "converged"
+            status = IKOutcome.CONVERGED
             break
         if not np.isfinite(e).all() or np.abs(xi).max() > 1e6:
-            status, reason = "diverged", f"CLIKA diverged after {it} iterations"
+            status, reason = IKOutcome.DIVERGED, f"CLIKA diverged after {it} iterations"
             break
         if it >= opts.max_iter:
             break
@@ -597,7 +619,7 @@ def solve_clika(ctx: SolveContext, xi: np.ndarray) -> IKResult:
         if err < best * (1.0 - 1e-9):
             best, best_it = err, it
         elif it - best_it >= 100:  # no progress in 100 steps: the target is out of reach
-            status, reason = "stalled", f"CLIKA stalled after {it} iterations (error stopped decreasing)"
+            status, reason = IKOutcome.STALLED, f"CLIKA stalled after {it} iterations (error stopped decreasing)"
             break
         it += 1
         J = (Jw @ ch.rate_map(xi))[:, cols]  # (4.13): [p_e_dot; omega_e] = J xi_dot
@@ -607,7 +629,7 @@ def solve_clika(ctx: SolveContext, xi: np.ndarray) -> IKResult:
         xi[cols] += opts.dt * (w_isqrt * (np.linalg.pinv(J * w_isqrt, rcond=1e-10) @ (K * e)))  # (4.30)
     xi[3:6] = ch.wrap_angle(xi[3:6])
     q = ch.xi_to_q(xi)
-    if status == "max_iterations":
+    if status == IKOutcome.MAX_ITERATIONS:
         reason = f"CLIKA did not converge in {opts.max_iter} iterations"
     return finish(ctx, q, Ending(status, reason, it))
 
@@ -634,11 +656,11 @@ def solve_dls(ctx: SolveContext, xi: np.ndarray) -> IKResult:
 
     Me, Merr, f, cost = evaluate(q)
     lam = opts.damping
-    status, it, slow = "max_iterations", 0, 0  # finish() words the reason from the measured errors
+    status, it, slow = IKOutcome.MAX_ITERATIONS, 0, 0  # finish() words the reason from the measured errors
     while True:
         pos_err, rot_err = pose_error_values(Me, p_d, R_d)
         if pos_err < opts.position_tol and rot_err < opts.orientation_tol:
-            status = "converged"
+            status = IKOutcome.CONVERGED
             break
         if it >= opts.max_iter:
             break
@@ -676,7 +698,7 @@ def solve_dls(ctx: SolveContext, xi: np.ndarray) -> IKResult:
             if lam > 1e10:
                 break
         if lam > 1e10 or slow >= 3:
-            status = "stalled"
+            status = IKOutcome.STALLED
             break
     return finish(ctx, q, Ending(status, "", it))
 
@@ -824,7 +846,7 @@ class IKSolver:
         return replace(
             result,
             success=False,
-            status="collision",
+            status=IKOutcome.COLLISION,
             wall_time=time.perf_counter() - t0,
             reason=f"the pose is reached only in self-collision ({pairs}) after {self.options.collision_restarts} "
             "restarts from other arm postures (collision_restarts)",
@@ -848,7 +870,7 @@ class QPMethod:
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
         engine.reset()
-        it, step, end = 0, None, Ending("max_iterations")
+        it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
         try:
             while it < opts.max_iter:
@@ -864,14 +886,13 @@ class QPMethod:
                     np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
                 if stop:
                     ready = dv is None
-                    status = stop if pose_ok or stop != "converged_stationary" else "stalled"
+                    status = IKOutcome.STALLED if stop == "converged_stationary" and not pose_ok else IKOutcome.CONVERGED
                     end = Ending(status, kinematics_ready=ready, pose_errors=(pos_err, rot_err) if ready else None)
                     break
         except SolverError as exc:
-            return finish(ctx, q, Ending("solver_error", str(exc), it))
-        status = "converged" if end.status == "converged_stationary" else end.status
+            return finish(ctx, q, Ending(IKOutcome.SOLVER_ERROR, str(exc), it))
         levels_out = _level_errors(platform, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
-        return finish(ctx, q, Ending(status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
+        return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
 class _StepShaper:

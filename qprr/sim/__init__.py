@@ -18,6 +18,7 @@ module                           what
 ===============================  ==================================================================
 """
 
+from ..actuation import AllocationFlag
 from .actuators import RotorDynamics
 from .config import Limits, SimConfig, SimInputs
 from .contact import CompliantWall, ContactHistory, PrescribedWrench, PushedMass
@@ -31,6 +32,7 @@ from .wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
 
 __all__ = [
     "FORMAT_VERSION",
+    "AllocationFlag",
     "INTEGRATORS",
     "Integrator",
     "ORDERS",

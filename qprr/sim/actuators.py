@@ -25,7 +25,7 @@ w_max = 2236 rad/s, T = 5 ms); the thesis's Q-PRR (b of its parameters, T chosen
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -180,7 +180,7 @@ def rotor_dynamics_from_mapping(desc, rotors, **overrides) -> RotorDynamics:
     """
     from ..errors import UnknownNameError
 
-    table = dict(desc.get("motor", {})) if hasattr(desc, "get") else {}
+    table = dict(desc.get("motor", {})) if isinstance(desc, Mapping) else {}
     for key in list(table) + [k for k in overrides if k != "initial"]:
         if key not in MOTOR_KEYS:
             raise UnknownNameError("motor key", key, MOTOR_KEYS)

@@ -1,11 +1,16 @@
 """Disturbances on the generalised forces: known in advance (sampled at the control ticks) or state-dependent.
 
-* :class:`Disturbance` (protocol): u_ext(t) in thesis coordinates, e.g. the white noise (6.27)
+* :class:`Disturbance` (base class): u_ext(t) in thesis coordinates, e.g. the white noise (6.27)
   (:class:`WhiteNoise`) and finite pulses (6.28) (:class:`Pulse`) of Thesis Sec. 6.3.2; the
   simulator samples it at the control ticks and holds it over each period;
-* :class:`StateDisturbance` (protocol): tau(t, q, v) in Pinocchio's coordinates, evaluated at
-  every integration stage (:class:`BaseDrag`);
+* :class:`StateDisturbance` (base class): tau(t, q, v) in Pinocchio's coordinates, evaluated at
+  every integration stage (:class:`BaseDrag`, the wind's drag of :mod:`qprr.sim.wind`); a subclass may
+  draw its randomness once per run (:meth:`StateDisturbance.realize`) and report time series
+  (:meth:`StateDisturbance.report`);
 * :class:`Disturbances`: a sum of both kinds.
+
+A disturbance of your own subclasses one of the two base classes: the simulator tells the kinds apart by
+their class.
 
 Components are indices of the thesis coordinates xi = [x, y, z, phi, theta, psi, q_arm]: an
 amplitude or a pulse vector must match the platform's 6 + n_arm entries (checked when the
@@ -14,8 +19,8 @@ simulator samples it).
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Protocol
 
 import numpy as np
 
@@ -32,27 +37,42 @@ def check_values_args(t, rng, n_xi) -> tuple[np.ndarray, int]:
     return t, as_int(n_xi, "n_xi", lo=6)
 
 
-class Disturbance(Protocol):
+class Disturbance(ABC):
     """Additive generalised force u_ext(t) of Thesis (6.27), thesis coordinates, known in advance.
 
     Sampled at the control ticks and held over each control period (a noise sample, a pulse
-    edge sit on the control grid)."""
+    edge sit on the control grid).  A subclass defines :meth:`values`."""
 
+    @abstractmethod
     def values(self, t: np.ndarray, rng: np.random.Generator, n_xi: int) -> np.ndarray:
         """u_ext at the control ticks ``t`` (m,), shape (m, n_xi)."""
 
 
-class StateDisturbance(Protocol):
+class StateDisturbance(ABC):
     """A disturbance that depends on the state, evaluated at every integration stage.
 
-    ``generalized_force(t, q, v)`` returns tau (nv,) in Pinocchio's coordinates (the free
-    flyer's entries are a body wrench [force; moment] in B at its origin)."""
+    A subclass defines :meth:`generalized_force`, which returns tau (nv,) in Pinocchio's coordinates (the free
+    flyer's entries are a body wrench [force; moment] in B at its origin); it may override :meth:`realize` (draw its
+    randomness once per run) and :meth:`report` (time series for the result)."""
 
-    def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray: ...
+    @abstractmethod
+    def generalized_force(self, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """tau (nv,) at time ``t`` [s] and state (q, v)."""
+
+    def realize(self, t_ticks: np.ndarray, rng: np.random.Generator, period: float) -> StateDisturbance:
+        """The disturbance of one run, its random parts drawn from the run's ``rng`` at the control ticks ``t_ticks``
+        (spaced by ``period`` [s]); the simulator calls it once per run, after sampling the timed disturbances.
+        Default: itself (nothing to draw)."""
+        return self
+
+    def report(self) -> dict[str, np.ndarray]:
+        """Named time series of the run (one row per control tick) for :attr:`qprr.sim.SimResult.series`.
+        Default: none."""
+        return {}
 
 
 @dataclass(frozen=True)
-class BaseDrag:
+class BaseDrag(StateDisturbance):
     """Linear aerodynamic drag on the multirotor: force -c_lin v_B, moment -c_ang omega_B (body axes, at B).
 
     ``linear`` [N s/m], ``angular`` [N m s/rad]; isotropic, so the world force is -c_lin p_dot.
@@ -82,7 +102,7 @@ def _components(components, n_xi: int) -> list[int]:
 
 
 @dataclass(frozen=True)
-class WhiteNoise:
+class WhiteNoise(Disturbance):
     """Uniform white noise in [-amplitude, amplitude] on the selected generalised forces (Sec. 6.3.2.1, (6.27)).
 
     ``components``: indices of xi (None: all 6 + n_arm); ``amplitude``: one value or one per
@@ -126,7 +146,7 @@ class WhiteNoise:
 
 
 @dataclass(frozen=True)
-class Pulse:
+class Pulse(Disturbance):
     """Finite pulse Gamma [H(t - t1) - H(t - t2)] (Thesis (6.28)); ``gamma`` (6 + n_arm,) per generalised force."""
 
     t1: float
@@ -156,8 +176,9 @@ class Pulse:
 
 
 @dataclass(frozen=True)
-class Disturbances:
-    """Sum of several disturbances (:class:`Disturbance` and :class:`StateDisturbance` may be mixed)."""
+class Disturbances(Disturbance):
+    """Sum of several disturbances (:class:`Disturbance` and :class:`StateDisturbance` may be mixed): its
+    :meth:`values` are those of the timed parts; the simulator evaluates the state-dependent parts at every stage."""
 
     parts: tuple
 
@@ -165,34 +186,38 @@ class Disturbances:
         if not isinstance(self.parts, (tuple, list)) or not self.parts:
             raise InputError(f"parts must be a non-empty tuple of disturbances, got {self.parts!r:.80}")
         for p in self.parts:
-            if not (hasattr(p, "generalized_force") or hasattr(p, "values")):
-                raise InputError(f"parts: a disturbance needs values(t, rng, n_xi) or generalized_force(t, q, v), got {type(p).__name__}")
+            if not isinstance(p, (Disturbance, StateDisturbance)):
+                raise InputError(f"parts: {_NOT_A_DISTURBANCE}, got {type(p).__name__}")
         object.__setattr__(self, "parts", tuple(self.parts))
 
     def values(self, t: np.ndarray, rng: np.random.Generator, n_xi: int) -> np.ndarray:
         t, n_xi = check_values_args(t, rng, n_xi)
         out = np.zeros((t.shape[0], n_xi))
         for p in self.parts:
-            if not hasattr(p, "generalized_force"):
+            if isinstance(p, Disturbance):
                 out += p.values(t, rng, n_xi)
         return out
 
 
-def split(disturbance) -> tuple[object | None, list]:
-    """(timed part with ``values(t, rng, n_xi)`` or None, state-dependent parts with ``generalized_force(t, q, v)``)."""
+_NOT_A_DISTURBANCE = (
+    "a disturbance is a qprr.sim.Disturbance (values(t, rng, n_xi): known in advance) or a qprr.sim.StateDisturbance "
+    "(generalized_force(t, q, v): state-dependent); subclass one of them"
+)
+
+
+def split(disturbance) -> tuple[Disturbance | None, list[StateDisturbance]]:
+    """(the timed part, a :class:`Disturbance`, or None; the state-dependent parts, :class:`StateDisturbance`)."""
     if disturbance is None:
         return None, []
     parts = disturbance.parts if isinstance(disturbance, Disturbances) else (disturbance,)
     timed, state = [], []
     for p in parts:
-        if hasattr(p, "generalized_force"):
+        if isinstance(p, StateDisturbance):
             state.append(p)
-        elif hasattr(p, "values"):
+        elif isinstance(p, Disturbance):
             timed.append(p)
         else:
-            raise InputError(
-                f"a disturbance needs values(t, rng, n_xi) (known in advance) or generalized_force(t, q, v) (state-dependent), got {type(p).__name__}"
-            )
+            raise InputError(f"{_NOT_A_DISTURBANCE}, got {type(p).__name__}")
     if not timed:
         return None, state
     return (timed[0] if len(timed) == 1 else Disturbances(tuple(timed))), state

@@ -36,6 +36,8 @@ _EMPTY = np.zeros(0)
 class Environment(ABC):
     """Base class of the environments the simulator integrates with the robot (module docstring)."""
 
+    _h: np.ndarray | None = None  # the wrench at the last control tick (None before a run: :meth:`measured` reads zero)
+
     def initial_state(self) -> np.ndarray:
         """z at the start of a run (nz,); empty for a stateless environment."""
         return _EMPTY
@@ -67,5 +69,4 @@ class Environment(ABC):
     def measured(self, t: float | None = None) -> np.ndarray:
         """Wrench at the last control tick (world, on the end effector): what a wrist force sensor sampled
         at the control rate reads; a controller calling it during its step gets the previous tick's value."""
-        h = getattr(self, "_h", None)
-        return np.zeros(6) if h is None else h.copy()
+        return np.zeros(6) if self._h is None else self._h.copy()

@@ -24,9 +24,9 @@ allocated thrusts of step 3 are then speed *commands* of rotors with a first-ord
 the rotor speeds are extra states integrated with the robot (and an environment's state) by
 the same integrator, and the base wrench Omega f(w) is evaluated at every stage.  The logged
 ``f`` is then the thrust the rotors produce at the tick (b w^2); ``series`` hold
-``thrust_command`` and ``rotor_speed``.  State-dependent disturbances with a
-``realize(t_ticks, rng, period)`` method (wind: :mod:`qprr.sim.wind`) are realized once per
-run from the run's seed.
+``thrust_command`` and ``rotor_speed``.  State-dependent disturbances
+(:class:`~qprr.sim.disturbances.StateDisturbance`) are realized once per run from the run's seed
+(:meth:`~qprr.sim.disturbances.StateDisturbance.realize`: the wind's turbulence, :mod:`qprr.sim.wind`).
 
 Integrators (``integrator=``, :mod:`qprr.sim.integrators`, all on the Lie group): ``"midpoint"``
 (default: explicit midpoint, two ABA per step, second order), ``"rk4"`` (Runge-Kutta 4 in the
@@ -45,19 +45,21 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..actuation import Allocator
+from ..actuation import AllocationFlag, Allocator
 from ..charts import State
 from ..control.base import Controller, Reference
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
 from ..joint_friction import JointFriction, Treatment
 from ..model import Platform
 from ..progress import Progress
+from ..trajectory import Trajectory, TrajectorySample
 from ..validation import as_int, as_vector
 from . import disturbances as dist
 from .actuators import RotorDynamics
@@ -172,27 +174,28 @@ class _Run:
     platform: Platform
     controller: Controller
     config: SimConfig
-    n: int
-    t: np.ndarray
-    xi_d: np.ndarray
+    n: int  # control ticks
+    t: np.ndarray  # their times [s]
+    xi_d: np.ndarray  # the reference at the ticks (n, n_xi), and its rates and accelerations
     xi_dot_d: np.ndarray
     xi_ddot_d: np.ndarray
-    u_ext: np.ndarray
-    u_ext_rows: list | None  # per-tick disturbance rows as float lists (None where zero), None if all zero
-    state_dist: list
+    u_ext: np.ndarray  # the timed disturbance at the ticks (n, n_xi), thesis coordinates
+    u_ext_rows: list  # the same per tick as a list of floats, None where zero
+    state_dist: list  # the state-dependent disturbances, realized for this run
     logs: _Logs
     plant_payload: PlantPayload
     plant: _Plant
-    allocate: object  # allocate_screened_into of the allocator (or of PlantActuators with another plant)
+    allocate: Callable  # allocate_screened_into of the allocator (or of PlantActuators with another plant)
     N: np.ndarray  # the plant's actuation matrix
     rotor_bounds: np.ndarray
-    state: State
-    reference: Reference
-    q: np.ndarray
+    state: State  # the measured state, updated at every tick
+    reference: Reference  # the reference handed to the controller, set at every tick
+    tau_d: np.ndarray  # the controller's generalised force in Pinocchio coordinates, set at every tick
+    q: np.ndarray  # the initial state
     v: np.ndarray
-    stepper: object
+    stepper: Callable
     rotor_stage: _RotorStage | None
-    bounds: tuple[float, float, float, float]
+    bounds: tuple[float, float, float, float]  # position, linear, angular and joint velocity bounds (config.limits)
 
 
 def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs: SimInputs) -> _Run:
@@ -203,23 +206,13 @@ def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs
     t = np.arange(n) * config.period
     sample = trajectory.sample(t)
     _check_sample(sample, n, platform.n_xi)
-    xi_d, xi_dot_d, xi_ddot_d = sample.xi.copy(), sample.xi_dot.copy(), sample.xi_ddot.copy()
-    xi0 = xi_d[0].copy() if inputs.xi0 is None else ch.as_xi(inputs.xi0, "xi0", platform.n_xi)
-    if config.joint_stops:
-        platform.check_arm_limits(xi0[6:], "xi0[6:]")
-        _check_arm_references(platform, t, xi_d)
-    xi_dot0 = np.zeros(platform.n_xi) if inputs.xi_dot0 is None else as_vector(inputs.xi_dot0, platform.n_xi, "xi_dot0")
+    xi_d, xi_dot_d, xi_ddot_d = sample.xi.copy(), sample.xi_dot.copy(), sample.xi_ddot.copy()  # the controllers write roll/pitch
+    xi0, xi_dot0 = _initial_state(platform, config, inputs, t, xi_d)
     u_ext, state_dist = _disturbances(platform, config, inputs.disturbance, t)
-    ext_rows = np.any(u_ext != 0.0, axis=1)
-    u_ext_rows = [row if nz else None for row, nz in zip(u_ext.tolist(), ext_rows.tolist())] if ext_rows.any() else None
-
     robot = platform if inputs.plant is None else check_plant(platform, inputs.plant)  # what is integrated
     plant_payload = PlantPayload(robot, inputs.payload or PayloadSchedule())
-    model = plant_payload.model  # the plant: a copy, never platform.model
-    data = model.createData()
     plant_payload.apply_until(0.0)
     alloc = _allocator(platform, inputs.allocator)
-    allocate = alloc.allocate_screened_into if robot is platform else PlantActuators(alloc, robot).allocate_screened_into
     q, v = ch.xi_to_q(xi0), ch.xi_dot_to_v(xi0, xi_dot0)
     state = State(platform.n_arm)
     state.update(0.0, q, v)
@@ -227,38 +220,49 @@ def _setup(platform, controller, trajectory, duration, config: SimConfig, inputs
     if controller.uses_preview:  # a planning controller sees the trajectory ahead
         controller.set_preview(trajectory)
     controller.reset(state, reference, config.period)
+    model = plant_payload.model  # the plant: a copy, never platform.model
     tau = np.zeros(platform.nv)  # generalised force held over the control period (allocated + timed disturbance)
-    plant = _Plant(model, data, tau, platform.ee_frame, inputs.external_wrench, state_dist, rotors, platform.rotor_matrix)
+    plant = _Plant(model, model.createData(), tau, platform.ee_frame, inputs.external_wrench, state_dist, rotors, platform.rotor_matrix)
     plant.add_joint_friction(JointFriction.from_model(model, config.dt, q=q))  # implicit joints chosen at the first state
     logs = _Logs.empty(n, platform, rotors is not None)
-    stage = None if rotors is None else _RotorStage(rotors, platform, plant, alloc, logs, controller.uses_applied_force)
     lim = config.limits
     return _Run(
-        platform,
-        controller,
-        config,
-        n,
-        t,
-        xi_d,
-        xi_dot_d,
-        xi_ddot_d,
-        u_ext,
-        u_ext_rows,
-        state_dist,
-        logs,
-        plant_payload,
-        plant,
-        allocate,
-        np.array(robot.actuation_matrix),
-        np.column_stack([alloc.f_min, alloc.f_max]),
-        state,
-        reference,
-        q,
-        v,
-        _stepper(config, plant),
-        stage,
-        (lim.position, lim.linear_velocity, lim.angular_velocity, lim.joint_velocity),
+        platform=platform,
+        controller=controller,
+        config=config,
+        n=n,
+        t=t,
+        xi_d=xi_d,
+        xi_dot_d=xi_dot_d,
+        xi_ddot_d=xi_ddot_d,
+        u_ext=u_ext,
+        u_ext_rows=[row if row.any() else None for row in u_ext],
+        state_dist=state_dist,
+        logs=logs,
+        plant_payload=plant_payload,
+        plant=plant,
+        allocate=alloc.allocate_screened_into if robot is platform else PlantActuators(alloc, robot).allocate_screened_into,
+        N=np.array(robot.actuation_matrix),
+        rotor_bounds=np.column_stack([alloc.f_min, alloc.f_max]),
+        state=state,
+        reference=reference,
+        tau_d=np.zeros(platform.nv),
+        q=q,
+        v=v,
+        stepper=_stepper(config, plant),
+        rotor_stage=None if rotors is None else _RotorStage(rotors, platform, plant, alloc, logs, controller.uses_applied_force),
+        bounds=(lim.position, lim.linear_velocity, lim.angular_velocity, lim.joint_velocity),
     )
+
+
+def _initial_state(platform: Platform, config: SimConfig, inputs: SimInputs, t: np.ndarray, xi_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(xi0, xi_dot0): the given ones (checked), or the reference's first pose at rest; inside the arm's stops."""
+    xi0 = xi_d[0].copy() if inputs.xi0 is None else ch.as_xi(inputs.xi0, "xi0", platform.n_xi)
+    if config.joint_stops:
+        platform.check_arm_limits(xi0[6:], "xi0[6:]")
+        _check_arm_references(platform, t, xi_d)
+    xi_dot0 = np.zeros(platform.n_xi) if inputs.xi_dot0 is None else as_vector(inputs.xi_dot0, platform.n_xi, "xi_dot0")
+    return xi0, xi_dot0
 
 
 def _check_types(platform, controller, trajectory, inputs: SimInputs) -> None:
@@ -267,8 +271,8 @@ def _check_types(platform, controller, trajectory, inputs: SimInputs) -> None:
         raise InputError(f"platform must be a qprr Platform, got {type(platform).__name__}")
     if not isinstance(controller, Controller):
         raise InputError(f"controller must be a qprr.control Controller, got {type(controller).__name__}")
-    if not hasattr(trajectory, "sample"):
-        raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory), got {type(trajectory).__name__}")
+    if not isinstance(trajectory, Trajectory):
+        raise InputError(f"trajectory must have a sample(t) method (qprr.trajectory.Trajectory), got {type(trajectory).__name__}")
     payload = inputs.payload
     if payload is not None and not isinstance(payload, PayloadSchedule):
         raise InputError(f"payload must be None or a qprr.sim.PayloadSchedule, got {type(payload).__name__} {payload!r:.60}")
@@ -308,7 +312,7 @@ def _disturbances(platform: Platform, config: SimConfig, disturbance, t: np.ndar
     if not np.all(np.isfinite(u_ext)):
         raise NonFiniteError("disturbance values must be finite")
     # state-dependent disturbances drawn once per run (wind turbulence), after the timed ones (same seed, same draws)
-    return u_ext, [d.realize(t, rng, config.period) if hasattr(d, "realize") else d for d in state_dist]
+    return u_ext, [d.realize(t, rng, config.period) for d in state_dist]
 
 
 def _stepper(config: SimConfig, plant: _Plant):
@@ -373,82 +377,114 @@ class _RotorStage:
 
 # -------------------------------------------------------------------------------------- loop
 def _loop(run: _Run, bar: Progress) -> tuple[int, QprrError | None, np.ndarray, np.ndarray]:
-    """The control ticks (module docstring): (ticks logged, the qprr error that ended the run or None, last q, v)."""
-    platform, controller, cfg, logs, plant, state, ref = run.platform, run.controller, run.config, run.logs, run.plant, run.state, run.reference
-    n, period, q, v, z, tau, bounds = run.n, cfg.period, run.q, run.v, plant.z0, plant.tau, run.bounds
-    xi_log, xid_log, u_log, f_log, com_log, flags = logs.xi, logs.xi_dot, logs.u, logs.f, logs.com, logs.flags
-    xi_d, xi_dot_d, xi_ddot_d, u_ext_rows, stage = run.xi_d, run.xi_dot_d, run.xi_ddot_d, run.u_ext_rows, run.rotor_stage
-    model, data, rhs, first_stage, plain, stepper = plant.model, plant.data, plant.rhs, plant.first_stage, plant.plain, run.stepper
-    payload, payload_pending = run.plant_payload, run.plant_payload.pending
-    steps = [j * cfg.dt for j in range(cfg.substeps)]  # step start times within a control period
-    joint_stops, lo, hi, arm_range = cfg.joint_stops, platform.arm_lower.tolist(), platform.arm_upper.tolist(), range(platform.n_arm)
-    q_bound, v_bound = bounds[0], min(bounds[1:])  # |any entry| beyond its bound => the norm beyond these
-    hypot = math.hypot  # the norm of a list: 2-3x cheaper than ndarray.dot on these sizes (benchmarks/step_instructions.py)
-    POSITION, add, com, step, aba, allocate = pin.KinematicLevel.POSITION, np.add, pin.centerOfMass, controller.step, pin.aba, run.allocate
-    wants_applied, pin_out, has_ext, progress = controller.uses_applied_force, controller.output == "pinocchio", u_ext_rows is not None, cfg.progress
-    every = max(1, n // 1000)  # progress: at most a thousand updates per run (lines are rate-limited)
-    update, set_applied, force_from_xi = state.update, state.set_applied, state.force_from_xi
-    b1, tau_d_buf = np.empty(platform.nv), np.empty(platform.nv)
-    k = 0
+    """The control ticks, steps 1-5 of the module docstring: (ticks logged, the qprr error that ended the run or None,
+    the last q, v).  An error during a tick ends the logs with that tick (its row as far as it was written)."""
+    q, v, z = run.q, run.v, run.plant.z0
+    period = run.config.period
+    every = max(1, run.n // 1000)  # progress: at most a thousand updates per run (lines are rate-limited)
+    logged = 0
     try:
-        for k in range(n):
-            tk = k * period
-            if payload_pending:  # payload changes act at control ticks
-                payload.apply_until(tk)
-                payload_pending = payload.pending
-            state.xi, state.xi_dot = xi_log[k], xid_log[k]  # the state writes its xi straight into the log
-            if not update(tk, q, v, v_bound):  # |v| NaN or >= v_bound at the end of the previous tick: named check there
-                if k:
-                    k -= 1  # the state diverged during the previous tick: report it there (time, logged ticks)
-                    _check(platform, tk, q, v, bounds)
-                    k += 1
-                update(tk, q, v)  # no entry beyond its own bound: go on
-            ref.xi, ref.xi_dot, ref.xi_ddot = xi_d[k], xi_dot_d[k], xi_ddot_d[k]
-            out = step(tk, state, ref)
-            if out is None:  # numpy would store it as NaN
-                raise _bad_shape(platform, controller, out, pin_out)
-            try:
-                u_log[k] = out  # a Pinocchio tau_d is converted to u = S^T tau_d after the loop
-            except (TypeError, ValueError):  # a wrong length, text: the controller's output, not the simulator
-                raise _bad_shape(platform, controller, out, pin_out) from None
-            tau_d = out if pin_out else force_from_xi(out, tau_d_buf)
-            fl = allocate(tau_d, f_log[k], tau)  # f straight into the log, N f into tau
-            if fl:
-                if fl < 0:  # the screened allocation refused tau_d: NaN, inf or absurd controller output
-                    raise _bad_output(platform, controller, tk, u_log[k], pin_out)
-                flags[k] = fl
-            if stage is not None:  # the allocated thrusts are speed commands; the base wrench comes from the speeds
-                z = stage.tick(k, q, z, tau)
-            if wants_applied:
-                set_applied(tau)
-                if stage is not None:
-                    tau[0:6] = 0.0
-            if has_ext:
-                ue = u_ext_rows[k]
-                if ue is not None:
-                    add(tau, force_from_xi(ue, b1), tau)  # tau += S^-T u_ext, held over the period
-            # stage 1 of the first step (an Environment observes its tick there); data then holds its kinematics
-            a = aba(model, data, q, v, tau) if plain else first_stage(tk, q, v, z)
-            com_log[k] = com(model, data, POSITION, False)
-            for j in steps:
-                q, v, z = stepper(rhs, tk + j, q, v, z, a)
-                a = None
-                if joint_stops:
-                    qa = q[7:].tolist()
-                    for i in arm_range:
-                        if not lo[i] <= qa[i] <= hi[i]:
-                            q, v = apply_joint_stops(model, data, q, v, lo, hi)
-                            flags[k] |= 4
-                            break
-            # v: screened every tick by the next update (and the final check); q, which integrates v, every 16 ticks
-            if not (k & 15 or hypot(*q.tolist()) < q_bound):
-                _check(platform, tk + period, q, v, bounds)
-            if progress and k % every == 0:
+        for k in range(run.n):
+            t = k * period
+            logged = k + 1
+            if run.plant_payload.pending:  # payload changes act at the control ticks (4)
+                run.plant_payload.apply_until(t)
+            _measure(run, k, t, q, v)  # 1. (q, v) -> (xi, xi_dot), logged
+            tau_d = _control(run, k, t)  # 2. the controller's force, tau_d = S^-T u
+            z = _actuate(run, k, t, tau_d, q, z)  # 3. allocated: tau = N f, held over the period
+            _add_timed_disturbance(run, k)  # 4. tau += S^-T u_ext(t_k)
+            q, v, z = _integrate(run, k, t, q, v, z)  # 5. the plant over the period, tau held
+            _screen(run, k, (k + 1) * period, q, v)
+            if k % every == 0:
                 bar.update_to(k)
-        _check(platform, n * period, q, v, bounds)
+        _check(run.platform, run.n * period, q, v, run.bounds)
     except QprrError as err:
-        return k + 1, err, q, v
-    return n, None, q, v
+        return logged, err, q, v
+    return run.n, None, q, v
+
+
+def _measure(run: _Run, k: int, t: float, q: np.ndarray, v: np.ndarray) -> None:
+    """Step 1: the measured state from (q, v), thesis coordinates written straight into tick ``k``'s log."""
+    state = run.state
+    state.xi, state.xi_dot = run.logs.xi[k], run.logs.xi_dot[k]
+    state.update(t, q, v)
+
+
+def _control(run: _Run, k: int, t: float) -> np.ndarray:
+    """Step 2: the controller's output at tick ``k`` for the reference there, logged in u; returned as Pinocchio's
+    tau_d (S^-T u for a controller in thesis coordinates; a Pinocchio tau_d is logged as is and converted after the
+    loop, u = S^T tau_d).  A missing output or one of another shape raises ShapeError naming the controller."""
+    ref, controller = run.reference, run.controller
+    ref.xi, ref.xi_dot, ref.xi_ddot = run.xi_d[k], run.xi_dot_d[k], run.xi_ddot_d[k]
+    out = controller.step(t, run.state, ref)
+    pin_out = controller.output == "pinocchio"
+    if out is None:  # numpy would store it as NaN
+        raise _bad_shape(run.platform, controller, out, pin_out)
+    try:
+        run.logs.u[k] = out
+    except (TypeError, ValueError):  # a wrong length, text: the controller's output, not the simulator
+        raise _bad_shape(run.platform, controller, out, pin_out) from None
+    return out if pin_out else run.state.force_from_xi(out, run.tau_d)
+
+
+def _actuate(run: _Run, k: int, t: float, tau_d: np.ndarray, q: np.ndarray, z):
+    """Step 3: tau_d allocated to the rotor thrusts and arm efforts (logged in f, with the allocation flags); the
+    applied force N f into the plant's held force.  With the actuator stage the thrusts are speed commands and the
+    base wrench comes from the rotor speeds (returns z with them).  A refused demand (NaN, infinite, absurd) raises
+    DivergenceError naming the controller's entry."""
+    tau, logs = run.plant.tau, run.logs
+    flags = run.allocate(tau_d, logs.f[k], tau)
+    if flags == AllocationFlag.REFUSED:
+        raise _bad_output(run.platform, run.controller, t, logs.u[k], run.controller.output == "pinocchio")
+    logs.flags[k] = flags
+    if run.rotor_stage is not None:
+        z = run.rotor_stage.tick(k, q, z, tau)
+    if run.controller.uses_applied_force:  # the measured input of the next step (model-free control)
+        run.state.set_applied(tau)
+        if run.rotor_stage is not None:  # the plant adds the rotors' wrench at every stage
+            tau[0:6] = 0.0
+    return z
+
+
+def _add_timed_disturbance(run: _Run, k: int) -> None:
+    """Step 4: the disturbance known in advance, u_ext(t_k) of (6.27)-(6.28), added to the held force as S^-T u_ext."""
+    u_ext = run.u_ext_rows[k]
+    if u_ext is not None:
+        run.plant.tau += run.state.force_from_xi(u_ext)
+
+
+def _integrate(run: _Run, k: int, t: float, q: np.ndarray, v: np.ndarray, z):
+    """Step 5: the plant over the control period with its force held: the first stage at the tick (an Environment
+    observes it there; the kinematics it leaves give the logged CoM), then ``substeps`` steps of the integrator, the
+    arm's stops after each."""
+    plant, dt = run.plant, run.config.dt
+    a = plant.first_stage(t, q, v, z)
+    run.logs.com[k] = pin.centerOfMass(plant.model, plant.data, pin.KinematicLevel.POSITION, False)
+    for j in range(run.config.substeps):
+        q, v, z = run.stepper(plant.rhs, t + j * dt, q, v, z, a)
+        a = None  # the later steps start from their own first stage
+        if run.config.joint_stops:
+            q, v = _arm_stops(run, k, q, v)
+    return q, v, z
+
+
+def _arm_stops(run: _Run, k: int, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """An arm joint past its limit is put on its stop (:func:`qprr.sim.stops.apply_joint_stops`, flag JOINT_STOP)."""
+    lo, hi = run.platform.arm_lower, run.platform.arm_upper
+    arm = q[7:]
+    if ((lo <= arm) & (arm <= hi)).all():  # (NaN is outside)
+        return q, v
+    run.logs.flags[k] |= AllocationFlag.JOINT_STOP
+    return apply_joint_stops(run.plant.model, run.plant.data, q, v, lo.tolist(), hi.tolist())
+
+
+def _screen(run: _Run, k: int, t: float, q: np.ndarray, v: np.ndarray) -> None:
+    """The state at the end of tick ``k`` (time ``t``) against the run's bounds: the norm of v at every tick, of q
+    (which integrates v) every 16 ticks; beyond, :func:`_check` names the entry (or lets the run go on when no entry is
+    beyond its own bound)."""
+    position, velocities = run.bounds[0], min(run.bounds[1:])
+    if not math.hypot(*v.tolist()) < velocities or (k % 16 == 0 and not math.hypot(*q.tolist()) < position):
+        _check(run.platform, t, q, v, run.bounds)
 
 
 # ------------------------------------------------------------------------------------ result
@@ -500,18 +536,18 @@ def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimR
         res.series["rotor_speed"] = logs.rotor_speed[:m].copy()
         res.series["thrust_command"] = logs.thrust_command[:m].copy()
     for d in run.state_dist:
-        report = getattr(d, "report", None)
-        if callable(report):
-            res.series.update({k: v[:m] for k, v in report().items()})
+        res.series.update({k: v[:m] for k, v in d.report().items()})
     return res
 
 
 def _check_sample(sample, n: int, nxi: int) -> None:
-    """A trajectory sample must hold finite xi, xi_dot, xi_ddot of shape (n, 6 + n_arm)."""
+    """A trajectory sample must be a TrajectorySample holding finite xi, xi_dot, xi_ddot of shape (n, 6 + n_arm)."""
+    if not isinstance(sample, TrajectorySample):
+        raise InputError(f"trajectory.sample(t) must return a qprr.trajectory.TrajectorySample, got {type(sample).__name__}")
     for name in ("xi", "xi_dot", "xi_ddot"):
-        a = getattr(sample, name, None)
+        a = getattr(sample, name)  # the field of that name
         if not isinstance(a, np.ndarray) or a.shape != (n, nxi):
-            shape = getattr(a, "shape", None)
+            shape = a.shape if isinstance(a, np.ndarray) else type(a).__name__
             raise ShapeError(f"trajectory sample {name} must have shape ({n}, {nxi}) (the platform's 6 + n_arm), got {shape}")
         if not np.all(np.isfinite(a)):
             raise NonFiniteError(f"trajectory sample {name} must be finite")
@@ -660,17 +696,17 @@ def _check(platform: Platform, t: float, q: np.ndarray, v: np.ndarray, bounds) -
     names = platform.xi_names
     for i in range(3):
         if not abs(ql[i]) < pos_lim:
-            raise DivergenceError(f"diverged at t = {t:.3f} s: position {names[i]} = {ql[i]!r} m (bound {pos_lim} m)")
+            raise DivergenceError.at(t, f"position {names[i]} = {ql[i]!r} m (bound {pos_lim} m)")
     for i in range(7, len(ql)):
         if not math.isfinite(ql[i]):
-            raise DivergenceError(f"diverged at t = {t:.3f} s: joint {names[i - 1]} = {ql[i]!r}")
+            raise DivergenceError.at(t, f"joint {names[i - 1]} = {ql[i]!r}")
     if not all(math.isfinite(x) for x in ql[3:7]):
-        raise DivergenceError(f"diverged at t = {t:.3f} s: attitude quaternion is NaN")
+        raise DivergenceError.at(t, "attitude quaternion is NaN")
     for i, x in enumerate(vl):
         bound = vlin_lim if i < 3 else w_lim if i < 6 else qd_lim
         if not abs(x) < bound:
             label = _BASE_V[i] if i < 6 else f"{names[i]}_dot"
-            raise DivergenceError(f"diverged at t = {t:.3f} s: velocity {label} = {x!r} (bound {bound})")
+            raise DivergenceError.at(t, f"velocity {label} = {x!r} (bound {bound})")
 
 
 def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out: bool) -> DivergenceError:
@@ -679,9 +715,10 @@ def _bad_output(platform: Platform, controller, t: float, u: np.ndarray, pin_out
     k = next((i for i, x in enumerate(u.tolist()) if not abs(x) < 1e150), 0)
     what = "tau (Pinocchio generalised force)" if pin_out else "u (thesis generalised force)"
     label = (_BASE_F[k] if k < 6 else f"{names[k]} effort") if pin_out else (names[k] if k >= 6 else f"{names[k]} force/torque")
-    return DivergenceError(
-        f"diverged at t = {t:.3f} s: the controller {controller.name!r} "
-        f"returned a non-finite or absurd (|x| >= 1e150) {what}: entry {label} = {float(u[k])!r} (the measured state was finite)"
+    return DivergenceError.at(
+        t,
+        f"the controller {controller.name!r} returned a non-finite or absurd (|x| >= 1e150) {what}: "
+        f"entry {label} = {float(u[k])!r} (the measured state was finite)",
     )
 
 
@@ -704,21 +741,20 @@ def _bad_shape(platform: Platform, controller, out, pin_out: bool) -> ShapeError
 
 
 def _with_context(platform: Platform, err: QprrError, t: float, q, v, bounds) -> QprrError:
-    """The error to report: the runaway state if the state has diverged (the root cause), else ``err`` with the time."""
-    if isinstance(err, DivergenceError) and str(err).startswith("diverged at"):
+    """The error to report: the runaway state if the state has diverged (the root cause), else ``err`` naming the time.
+
+    An error that already names its time (:attr:`~qprr.errors.QprrError.time`: the loop's own state and output
+    checks) is reported as is; any other keeps its type and attributes and gets the time in front of its message
+    (:meth:`~qprr.errors.QprrError.with_time`)."""
+    if err.time is not None:
         return err
     try:
         _check(platform, t, q, v, bounds)
     except DivergenceError as div:
-        return DivergenceError(f"{div} (then: {type(err).__name__}: {err})")
-    if isinstance(err, DivergenceError):
-        return DivergenceError(f"diverged at t = {t:.3f} s: {err}")
-    new = type(err).__new__(type(err))
-    try:
-        new.__init__(f"at t = {t:.3f} s of the run: {err}")
-    except TypeError:  # an error class with another constructor: keep it
-        return err
-    return new
+        root = DivergenceError(f"{div} (then: {type(err).__name__}: {err})")
+        root.time = div.time
+        return root
+    return err.with_time(t)
 
 
 def check_sample(sample, n: int, nxi: int = 9) -> None:

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..actuation import Allocator
+from ..actuation import AllocationFlag, Allocator
 from ..errors import InputError
 from ..model import Platform
 
@@ -116,9 +116,9 @@ class PlantActuators:
 
     ``allocate_into`` has :meth:`qprr.actuation.Allocator.allocate_into`'s contract: ``f_out``
     receives the thrusts the plant's rotors produce (commands clipped to the plant's bounds)
-    and the arm efforts, ``tau_out`` the plant's N f; flag 1 is set when the model's or the
+    and the arm efforts, ``tau_out`` the plant's N f; ``AllocationFlag.ROTOR_SATURATED`` is set when the model's or the
     plant's thrust bounds were active.  ``allocate_screened_into`` (the simulator's call) has
-    :meth:`qprr.actuation.Allocator.allocate_screened_into`'s: -1 and nothing written on a NaN,
+    :meth:`qprr.actuation.Allocator.allocate_screened_into`'s: ``AllocationFlag.REFUSED`` and nothing written on a NaN,
     infinite or absurd demand.
     """
 
@@ -129,23 +129,24 @@ class PlantActuators:
         self.f_min, self.f_max = np.array(plant.thrust_min), np.array(plant.thrust_max)
         self._same_bounds = bool(np.array_equal(self.f_min, allocator.f_min) and np.array_equal(self.f_max, allocator.f_max))
 
-    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+    def allocate_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> AllocationFlag:
         """The model's allocation, the plant's thrusts (see the class docstring)."""
         return self._plant_side(self.allocator.allocate_into(tau_d, f_out, None), f_out, tau_out)
 
-    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
-        """:meth:`allocate_into` behind the allocator's screen: -1 (nothing written) on a NaN, infinite or absurd ``tau_d``."""
+    def allocate_screened_into(self, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> AllocationFlag:
+        """:meth:`allocate_into` behind the allocator's screen: ``AllocationFlag.REFUSED`` (nothing written) on a NaN,
+        infinite or absurd ``tau_d``."""
         flags = self.allocator.allocate_screened_into(tau_d, f_out, None)
-        return flags if flags < 0 else self._plant_side(flags, f_out, tau_out)
+        return flags if AllocationFlag.REFUSED in flags else self._plant_side(flags, f_out, tau_out)
 
-    def _plant_side(self, flags: int, f_out: np.ndarray, tau_out: np.ndarray | None) -> int:
+    def _plant_side(self, flags: AllocationFlag, f_out: np.ndarray, tau_out: np.ndarray | None) -> AllocationFlag:
         """The commanded thrusts in ``f_out`` clipped to the plant's bounds; the plant's N f into ``tau_out``."""
         nr = self.n_rotors
         f = f_out[:nr]
         if not self._same_bounds:
             clipped = np.clip(f, self.f_min, self.f_max)
             if not np.array_equal(clipped, f):
-                flags |= 1
+                flags |= AllocationFlag.ROTOR_SATURATED
                 f[:] = clipped
         if tau_out is not None:
             tau_out[0:6] = self.Omega @ f

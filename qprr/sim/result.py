@@ -6,14 +6,17 @@ import json
 import math
 import zipfile
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from enum import Enum
 from pathlib import Path
 
 import numpy as np
 
+from ..actuation import AllocationFlag
 from ..charts import wrap_angle, xi_names
 from ..errors import InputError, ShapeError
+from ..registry import Registry
 from ..validation import as_file, as_real
 
 FORMAT_VERSION = 3
@@ -41,6 +44,17 @@ class Status(str, Enum):
         return self.value
 
 
+RUN_FIGURES_GROUP = "qprr.run_figures"
+"""Entry-point group of :data:`RUN_FIGURES`: qprr's own ``pyproject.toml`` names ``qprr.viz.plots:plot_result`` there."""
+
+RUN_FIGURES: Registry[Callable[..., object]] = Registry("run figure", RUN_FIGURES_GROUP, default="run")
+"""Figure makers of a run, name -> ``(result, path=None, **options) -> Figure (or the path written)``.
+
+:meth:`SimResult.plot` calls the ``"run"`` entry, :func:`qprr.viz.plot_result` (the page of ``qprr simulate
+--plot``).  The simulator sits above the figures in the module map (docs/architecture.md) and never imports
+them: :mod:`qprr.viz` registers its function when imported, and the entry point of :data:`RUN_FIGURES_GROUP`
+names it, so ``result.plot()`` imports it on first use."""
+
 ANGLES = (3, 4, 5)
 """Columns of xi that are ZYX Euler angles: their errors are wrapped to [-pi, pi) in :meth:`SimResult.rmse`."""
 
@@ -57,8 +71,9 @@ class SimResult:
     * u (m, n_xi) controller output, thesis generalised forces (u_fb world force [N], Euler
       torques [N m], arm efforts); f (m, n_rotors) rotor thrusts [N]; arm_effort (m, n_arm) applied;
     * x_cm (m, 3) system CoM in B [m] (Thesis (3.78)); unallocated (m, nv) tau_d - N f (Pinocchio
-      coordinates); flags (m,) bits: 1 rotor bound, 2 arm effort clipped, 4 an arm joint at its stop;
-      u_ext (m, n_xi) disturbance;
+      coordinates); flags (m,) the :class:`~qprr.actuation.AllocationFlag` bits of each tick (integers: 1
+      ROTOR_SATURATED a rotor bound, 2 ARM_SATURATED an arm effort clipped, 4 JOINT_STOP an arm joint at its
+      stop; read them as ``res.flags & AllocationFlag.ROTOR_SATURATED``); u_ext (m, n_xi) disturbance;
     * ``status`` (:class:`Status`) and ``reason``; ``series``: extra named arrays (e.g. the
       contact force, the payload mass estimate; time series have m rows); ``metrics``: extra
       named numbers (e.g. the recovery time of a payload drop).  Both are saved.
@@ -127,9 +142,22 @@ class SimResult:
         e[:, ANGLES] = wrap_angle(e[:, ANGLES])
         return {name: float(np.sqrt(np.mean(e[:, i] ** 2))) for i, name in enumerate(self.names)}
 
+    def plot(self, path: str | Path | None = None, **options):
+        """A figure of the run: :func:`qprr.viz.plot_result` on this result (python-control's ``response.plot()``).
+
+        ``path`` None returns the ``matplotlib.figure.Figure``; a file path (.png, .pdf, .svg, its folder existing)
+        saves the page there and returns the path.  ``options`` go to :func:`~qprr.viz.plot_result` (``panels``,
+        ``ax``, ``title``, ``events``, ...).  The figure maker is the ``"run"`` entry of :data:`RUN_FIGURES`."""
+        if RUN_FIGURES.default not in RUN_FIGURES:
+            raise InputError(
+                "no figure maker for runs is registered: import qprr.viz, or install qprr (pip install -e .) so that its "
+                f"entry point {RUN_FIGURES_GROUP!r} is found"
+            )
+        return RUN_FIGURES[RUN_FIGURES.default](self, path, **options)
+
     def saturation_fraction(self) -> float:
         """Fraction of ticks where a rotor thrust bound was active."""
-        return float(np.mean((self.flags & 1) != 0)) if self.n else 0.0
+        return float(np.mean((self.flags & AllocationFlag.ROTOR_SATURATED) != 0)) if self.n else 0.0
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path) -> Path:

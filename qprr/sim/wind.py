@@ -55,6 +55,7 @@ from scipy.linalg import expm, solve_continuous_lyapunov
 from .. import charts as ch
 from ..errors import InputError, ShapeError
 from ..validation import as_array, as_int, as_real, as_vector
+from .disturbances import StateDisturbance
 
 FT = 0.3048
 """One foot [m] (the MIL low-altitude formulas are in feet)."""
@@ -295,7 +296,7 @@ class Wind:
 
 # ===================================================================== state disturbances
 @dataclass(frozen=True)
-class AerodynamicDrag:
+class AerodynamicDrag(StateDisturbance):
     """D of Thesis (5.36) on the multirotor (module docstring): F_B = -K_1 v_r - K_2 |v_r| v_r, M_B = -k_w omega_B.
 
     ``linear`` K_1 (3,) [N s/m] and ``quadratic`` K_2 (3,) [N s^2/m^2] per body axis (one value: all three),
@@ -341,7 +342,7 @@ class AerodynamicDrag:
         return _RealizedDrag(self, t[0], period, w)
 
 
-class _RealizedDrag:
+class _RealizedDrag(StateDisturbance):
     """:class:`AerodynamicDrag` with one realisation of the wind on the tick grid (linear in between)."""
 
     def __init__(self, drag: AerodynamicDrag, t0: float, period: float, w: np.ndarray) -> None:
@@ -363,7 +364,7 @@ class _RealizedDrag:
 
 
 @dataclass(frozen=True)
-class ViscousFriction:
+class ViscousFriction(StateDisturbance):
     """F_v xi_dot of Thesis (5.36): the generalised force u_f = -F_v xi_dot (thesis coordinates), tau = S^-T u_f.
 
     ``coefficients`` (6 + n_arm,): N s/m on x, y, z and prismatic joints, N m s/rad on the Euler

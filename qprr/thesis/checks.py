@@ -21,6 +21,7 @@ import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
@@ -65,9 +66,20 @@ class Check:
     convention: str | None = None
 
 
+class CheckStatus(str, Enum):
+    """The outcome of one check (:attr:`CheckResult.status`, equal to its string)."""
+
+    PASS = "pass"
+    FAIL = "fail"
+    SKIPPED = "skipped"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class CheckResult:
-    """Outcome of one check.  ``status`` is "pass", "fail" or "skipped"; ``reason`` the evidence."""
+    """Outcome of one check.  ``status`` (:class:`CheckStatus`) is "pass", "fail" or "skipped"; ``reason`` the evidence."""
 
     equation: str
     quantity: str
@@ -75,12 +87,12 @@ class CheckResult:
     corrected_error: float | None
     tolerance: float
     verdict: str
-    status: str
+    status: CheckStatus
     reason: str
 
     @property
     def ok(self) -> bool:
-        return self.status != "fail"
+        return self.status != CheckStatus.FAIL
 
 
 @dataclass
@@ -1513,21 +1525,21 @@ def evaluate(check: Check, ctx: Context) -> CheckResult:
     try:
         ev = check.run(ctx)
     except _Skip as exc:
-        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, str(exc), "skipped", str(exc))
+        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, str(exc), CheckStatus.SKIPPED, str(exc))
     except Exception as exc:  # a crashing check is a failing check, reported with its cause
-        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, "FAIL", "fail", f"{type(exc).__name__}: {exc}")
+        return CheckResult(check.equation, check.quantity, None, None, check.tolerance, "FAIL", CheckStatus.FAIL, f"{type(exc).__name__}: {exc}")
     tol = check.tolerance
     printed_ok = bool(np.isfinite(ev.printed_error) and ev.printed_error <= tol)
     corrected_ok = ev.corrected_error is not None and bool(np.isfinite(ev.corrected_error) and ev.corrected_error <= tol)
     if printed_ok:
         verdict = f"correct under {check.convention}" if check.convention else "correct"
-        status = "pass"
+        status = CheckStatus.PASS
         if ev.corrected_error is not None and not corrected_ok:
-            verdict, status = "FAIL (corrected form does not hold)", "fail"
+            verdict, status = "FAIL (corrected form does not hold)", CheckStatus.FAIL
     elif corrected_ok:
-        verdict, status = "misprint (corrected form holds)", "pass"
+        verdict, status = "misprint (corrected form holds)", CheckStatus.PASS
     else:
-        verdict, status = "FAIL", "fail"
+        verdict, status = "FAIL", CheckStatus.FAIL
     return CheckResult(check.equation, check.quantity, ev.printed_error, ev.corrected_error, tol, verdict, status, ev.detail)
 
 
@@ -1577,7 +1589,7 @@ def main(verbose: bool = False) -> int:
     results = run_checks(on_result=show)
     n_fail = sum(not r.ok for r in results)
     n_mis = sum(r.verdict.startswith("misprint") for r in results)
-    n_skip = sum(r.status == "skipped" for r in results)
+    n_skip = sum(r.status == CheckStatus.SKIPPED for r in results)
     print(
         f"\n{len(results)} checks: {len(results) - n_fail - n_skip} hold ({n_mis} of them misprints whose corrected form holds), "
         f"{n_skip} skipped, {n_fail} failed  [{time.perf_counter() - t0:.1f} s]"

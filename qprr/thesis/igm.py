@@ -21,6 +21,7 @@ import pinocchio as pin
 
 from ..charts import check_rotation
 from ..errors import InputError, UnknownNameError
+from ..ik import IKOutcome
 from ..ik.solver import (
     OPTIONS,
     Ending,
@@ -246,7 +247,7 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
             f"the target orientation needs theta2 + theta3 = {t:.6g} rad (mod 2 pi), outside "
             f"[{lo2 + lo3:.6g}, {hi2 + hi3:.6g}] allowed by the joint limits"
         )
-        return None, 0, "limits", reason
+        return None, 0, IKOutcome.LIMITS, reason
     lo2 = max(lo2, t23 - hi3)
     hi2 = min(hi2, t23 - lo3)
     s23, c23 = math.sin(t23), math.cos(t23)
@@ -272,7 +273,7 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
     tol2 = tol * tol
     while cost > tol2:
         if it >= opts.max_iter:
-            return None, it, "max_iterations", f"Algorithm 4 did not converge in {it} iterations (|F| = {math.sqrt(cost):.3g} m)"
+            return None, it, IKOutcome.MAX_ITERATIONS, f"Algorithm 4 did not converge in {it} iterations (|F| = {math.sqrt(cost):.3g} m)"
         it += 1
         a0, a1, a2 = cps * d2 * c2, sps * d2 * c2, -d2 * s2
         aa = a0 * a0 + a1 * a1 + a2 * a2
@@ -290,7 +291,7 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
                 break
             lam *= 4.0
             if lam > 1e12:
-                return None, it, "stalled", f"Algorithm 4 stalled at |F| = {math.sqrt(cost):.3g} m"
+                return None, it, IKOutcome.STALLED, f"Algorithm 4 stalled at |F| = {math.sqrt(cost):.3g} m"
     if not lo2 <= th2 <= hi2:  # Algorithm 4 left the feasible range: project, re-solve (3.72) exactly
         th2 = min(max(th2, lo2), hi2)
         h = d2 * math.sin(th2) + d3 * s23
@@ -298,7 +299,7 @@ def _igm_core(K: ArmConstants, p, R, guess, opts: IGMOptions):
     # (3.79)-(3.81): r0 minimising |x_cm|, then Algorithm 5 (corrected) and (3.71)
     gx = K.k0 + K.a_s * math.sin(th2) + K.a_c * math.cos(th2) + K.b_s * s23 + K.b_c * c23
     xb, yb, r0 = _prismatic(xp, yp, psi, -gx / K.M_s, lo0, hi0)
-    return [xb, yb, zb, 0.0, 0.0, psi, r0, th2, t23 - th2], it, "converged", ""
+    return [xb, yb, zb, 0.0, 0.0, psi, r0, th2, t23 - th2], it, IKOutcome.CONVERGED, ""
 
 
 _IGM_BALANCE = IGMOptions(theta2="balance")
@@ -343,7 +344,7 @@ def _igm_run(ctx: SolveContext, guess) -> IKResult:
         return failed_result("igm", status, reason, it, ctx.t0, ctx.init)
     tilt = _tilt(R_d)
     if tilt > opts.orientation_tol:
-        status = "unreachable"
+        status = IKOutcome.UNREACHABLE
         reason = (
             f"the target orientation is not reachable in hover: its y axis is tilted {tilt:.3g} rad out of the "
             "horizontal plane, which needs a base roll/pitch (Algorithm 3 assumes phi = theta = 0)"

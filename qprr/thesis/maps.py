@@ -30,7 +30,7 @@ def analysis_reference(map_name: str, platform: Platform, result) -> MapReferenc
     that r0 (all theta3): within the printed coefficients' 4-digit rounding (2e-4) for the
     thesis's lengths d0 + d1 = 0.095 m, d2 = 0.18 m.
     """
-    if map_name != "singularity" or not isinstance(getattr(platform, "params", None), QPRRParams):
+    if map_name != "singularity" or not isinstance(platform.params, QPRRParams):
         return None
     if not isinstance(result, SingularityResult):
         raise InputError(f"result must be the SingularityResult of the map, got {type(result).__name__}")

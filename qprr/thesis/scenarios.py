@@ -56,6 +56,7 @@ import math
 import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
+from enum import Enum
 from pathlib import Path
 
 import numpy as np
@@ -79,6 +80,7 @@ from ..sim import (
     PushedMass,
     SimConfig,
     SimResult,
+    Status,
     WhiteNoise,
     simulate,
 )
@@ -327,6 +329,16 @@ def _ee_world(platform, xi) -> np.ndarray:
     return p
 
 
+class RecoveryStatus(str, Enum):
+    """Whether the robot returned to the no-payload hover within the run (:attr:`Recovery.status`, equal to its string)."""
+
+    RECOVERED = "recovered"
+    NOT_RECOVERED = "not recovered"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class Recovery:
     """Time to return to the no-payload hover after a release.
@@ -334,7 +346,7 @@ class Recovery:
     ``time`` [s] after ``release_time``: from then on every |p_d - p| <= ``tol_position``
     (x, y, z and r0, m), every |q_d - q| <= ``tol_angle`` (theta2, theta3, psi, rad) and the
     total thrust is within ``tol_thrust`` (relative) of the no-payload weight m g / (c_phi c_theta).
-    ``status`` "recovered" or "not recovered" (within the run); ``peak_*`` the largest
+    ``status`` (:class:`RecoveryStatus`) "recovered" or "not recovered" (within the run); ``peak_*`` the largest
     deviations after the release.
     """
 
@@ -346,7 +358,7 @@ class Recovery:
     peak_position: float
     peak_angle: float
     peak_thrust: float
-    status: str
+    status: RecoveryStatus
     reason: str
 
 
@@ -373,7 +385,7 @@ def recovery(
     bad = idx[~ok[idx]]
     peaks = (float(pos[after].max()), float(ang[after].max()), float(thrust[after].max()))
     if bad.size == 0:
-        return Recovery(release_time, 0.0, tol_position, tol_angle, tol_thrust, *peaks, "recovered", "within tolerance at the release")
+        return Recovery(release_time, 0.0, tol_position, tol_angle, tol_thrust, *peaks, RecoveryStatus.RECOVERED, "within tolerance at the release")
     last = bad[-1]
     if last == idx[-1]:
         return Recovery(
@@ -383,7 +395,7 @@ def recovery(
             tol_angle,
             tol_thrust,
             *peaks,
-            "not recovered",
+            RecoveryStatus.NOT_RECOVERED,
             f"still out of tolerance at the end of the run (t = {t[last]:.3f} s)",
         )
     return Recovery(
@@ -393,7 +405,7 @@ def recovery(
         tol_angle,
         tol_thrust,
         *peaks,
-        "recovered",
+        RecoveryStatus.RECOVERED,
         "every tolerance holds from then to the end of the run",
     )
 
@@ -506,7 +518,7 @@ def payload_drop(
     options = {"duration": duration, "dt": SimConfig.dt, "integrator": SimConfig.integrator, "seed": seed, "law": DEFAULT_LAW}
     res = generic.mission(platform, controller, progress, settings, mission=data, **options)
     res.series["payload_mass"] = np.where(res.t < release_time, mass, 0.0)
-    if getattr(ctrl, "mode", None) == "estimate":
+    if isinstance(ctrl, PayloadIDC) and ctrl.mode == "estimate":
         res.series["mass_estimate"] = np.asarray(ctrl.mass_log)
         window = min(1.0, 0.5 * release_time)  # the last second before the release (half the carry time if shorter)
         before = (res.t >= release_time - window) & (res.t < release_time)
@@ -700,7 +712,7 @@ def impedance(
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
     res.metrics["t_off"] = float(t_off)
-    if hasattr(ctrl, "history"):
+    if isinstance(ctrl, ImpedanceController):
         h = ctrl.history()
         res.series.update(
             {"impedance_t": h["t"], "impedance_delta_eta": h["delta_eta"], "impedance_delta_q": h["delta_q"], "impedance_u_e": h["u_e"]}
@@ -1007,7 +1019,7 @@ class Comparison:
 
     rmse: dict[str, dict[str, float]]
     wall_time: dict[str, float]
-    status: dict[str, str]
+    status: dict[str, Status]
     reason: dict[str, str]
 
     def table(self) -> str:
@@ -1031,7 +1043,7 @@ class Comparison:
             row += f"{'':>13}{THESIS_RUN_TIME_S[c] / self.wall_time[c]:>14.0f}x"
         lines.append(row)
         for c in ctrls:
-            if self.status[c] != "ok":
+            if self.status[c] is not Status.OK:
                 lines.append(f"{c}: {self.status[c]}: {self.reason[c]}")
         return "\n".join(lines)
 
@@ -1052,7 +1064,7 @@ def compare(
             res = err.result
             if res is None:
                 raise
-        rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, str(res.status), res.reason
+        rmse[c], wall[c], status[c], reason[c] = res.rmse(), res.wall_time, res.status, res.reason
     return Comparison(rmse, wall, status, reason)
 
 

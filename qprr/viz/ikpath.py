@@ -20,7 +20,7 @@ from .. import charts as ch
 from ..actuation import Allocator
 from ..charts import as_xi
 from ..errors import InputError, ShapeError
-from ..ik import IKResult, IKSolver, QPOptions
+from ..ik import IKOutcome, IKResult, IKSolver, QPOptions
 from ..ik.tasks import ComTask, HoverTask, PoseTask, PositionTask, PostureTask
 from ..kinematics import cog_offset_body
 from ..model import Platform, check_model_data, check_platform
@@ -68,13 +68,13 @@ class IKPath:
     """An IK solution path: ``run`` (a :class:`RunLog`: xi, hover thrusts f), ``x_cm`` (n, 2) [m] the CoG offset from
     the thrust axis in B, and each sample's IK outcome.
 
-    ``success`` (n,) bool, ``status`` (n,) the :class:`~qprr.ik.IKResult` statuses; ``position_error`` (n,) [m].
+    ``success`` (n,) bool, ``status`` (n,) the :class:`~qprr.ik.IKResult` statuses (:class:`~qprr.ik.IKOutcome`); ``position_error`` (n,) [m].
     """
 
     run: RunLog
     x_cm: np.ndarray
     success: np.ndarray
-    status: tuple[str, ...]
+    status: tuple[IKOutcome, ...]
     position_error: np.ndarray
 
 

@@ -43,10 +43,12 @@ from pathlib import Path
 
 import numpy as np
 
+from ..actuation import AllocationFlag
 from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..registry import SCENARIOS
 from ..sim import SimResult
+from ..sim.result import RUN_FIGURES
 from ..validation import as_int, as_vector
 
 DEG = 180.0 / math.pi
@@ -143,7 +145,7 @@ def coordinate_kinds(res: SimResult) -> tuple[str, ...]:
     """Kind of each entry of xi: "length" (x, y, z, prismatic joints), "angle" (Euler angles, revolute joints) or "unknown"."""
     _check_res(res)
     kinds = ["length"] * 3 + ["angle"] * 3
-    arm = tuple(getattr(res, "arm_kinds", ()) or ())
+    arm = res.arm_kinds
     for k in range(res.n_arm):
         kind = arm[k] if k < len(arm) else ""
         kinds.append("length" if kind == "prismatic" else "angle" if kind == "revolute" else "unknown")
@@ -434,7 +436,7 @@ def _rotors(ax, res, thrust_bounds=None):
     nr = res.f.shape[1]
     cols = [f"C{i % 10}" for i in range(nr)]
     _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
-    sat = (res.flags & 1) != 0
+    sat = (res.flags & AllocationFlag.ROTOR_SATURATED) != 0
     lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
     if thrust_bounds is None and res.rotor_bounds is not None:  # the bounds the run's allocation respected
         thrust_bounds = tuple(float(b) for b in np.unique(res.rotor_bounds))
@@ -681,6 +683,9 @@ def plot_result(
     if path is None:
         return fig
     return save_figure(fig, path, dpi)
+
+
+RUN_FIGURES.register(RUN_FIGURES.default, plot_result)  # SimResult.plot() (its entry point names it too)
 
 
 def _chosen_panels(res: SimResult, panels) -> list[Panel]:

@@ -28,6 +28,7 @@ The equations are written here from those sources (notation adapted); gains are 
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,8 +112,21 @@ def reference_posture(ref, t: float) -> tuple[float, float, float, float, float]
     return float(p[0]), float(p[1]), math.atan2(d1[1], d1[0]), v, float((d1[0] * d2[1] - d1[1] * d2[0]) / v**2)
 
 
+class FeedbackLaw(ABC):
+    """A feedback law for :func:`qprr.wheeled.sim.simulate`: ``control(t, q, dt)`` returns the inputs at time ``t`` [s]
+    and state ``q``; :meth:`reset` forgets a previous run (the simulator calls it at the start; default: nothing)."""
+
+    @abstractmethod
+    def control(self, t: float, q, dt: float) -> np.ndarray:
+        """The inputs at ``t`` for the state ``q`` (``dt``: the step [s])."""
+
+    def reset(self) -> None:
+        """Forget the previous run (default: nothing to forget)."""
+        return None
+
+
 # ============================================================================ unicycle
-class KanayamaTracking:
+class KanayamaTracking(FeedbackLaw):
     """Trajectory tracking for the unicycle (Kanayama et al. 1990).
 
     Error in the robot frame e = R^T(theta) (p_r - p), e_theta = theta_r - theta;
@@ -137,7 +151,7 @@ class KanayamaTracking:
         return np.array([vr * math.cos(et) + self.kx * ex, wr + vr * (self.ky * ey + self.kt * math.sin(et))])
 
 
-class PointTracking:
+class PointTracking(FeedbackLaw):
     """Tracking of the point B = (x + b cos theta, y + b sin theta) ahead of the axle.
 
     Input-output linearisation (Siciliano et al. 2009, Sec. 11.6.1): B_dot = T(theta) (v, omega)
@@ -161,7 +175,7 @@ class PointTracking:
         return np.array([c * w[0] + s * w[1], (-s * w[0] + c * w[1]) / self.b])
 
 
-class PosturePolar:
+class PosturePolar(FeedbackLaw):
     """Posture regulation of the unicycle to ``goal`` = (x_g, y_g, theta_g) (Aicardi et al. 1995).
 
     In the goal frame: rho = |p|, gamma = atan2(y, x) - theta + pi, delta = gamma + theta;
@@ -194,7 +208,7 @@ class PosturePolar:
 
 
 # ============================================================================ car
-class CarTracking:
+class CarTracking(FeedbackLaw):
     """Trajectory tracking of the rear-axle centre of the car by dynamic feedback linearisation.
 
     De Luca, Oriolo, Samson 1998, Sec. 4: for x_dot = v cos th, y_dot = v sin th, th_dot =
@@ -242,7 +256,7 @@ class CarTracking:
         return np.array([v, u2])
 
 
-class SinusoidalParking:
+class SinusoidalParking(FeedbackLaw):
     """Open-loop steering of the car between postures by sinusoids in chained form.
 
     Chained form of the rear-wheel-drive car (De Luca et al. 1998): z1 = x, z2 = tan psi /

@@ -44,7 +44,7 @@ from ..errors import InputError, LimitError, SolverError, UnknownNameError
 from ..optim import Lexicographic, QPSettings
 from ..validation import as_real, as_vector
 from .kinematics import KinematicModel
-from .robots import FrontTricycle, RearTricycle
+from .robots import Car, FrontTricycle, RearTricycle
 
 
 # ============================================================================ arms
@@ -134,7 +134,7 @@ class MobileManipulator:
                 iv = self.n_base + jm.idx_v - 3
                 lo[iv] = self.model.lowerPositionLimit[jm.idx_q]
                 up[iv] = self.model.upperPositionLimit[jm.idx_q]
-        psi_max = float(getattr(base, "psi_max", steering_limit))
+        psi_max = float(base.psi_max if isinstance(base, Car) else steering_limit)
         lo[3 : self.n_base], up[3 : self.n_base] = -psi_max, psi_max
         lo[lo < -1e300], up[up > 1e300] = -np.inf, np.inf
         self.lower, self.upper = lo, up
@@ -552,7 +552,6 @@ def car_scenario(arm: str = "qprr") -> Scenario:
     arm of :func:`three_r_arm` (reach 0.65 m: the target 1.2 m to the side still needs the
     car to drive).  Either way the target is reachable only by moving forward and turning.
     """
-    from .robots import Car
 
     arms = {"qprr": (qprr_arm, "end_effector"), "3r": (three_r_arm, "end_effector")}
     if arm not in arms:

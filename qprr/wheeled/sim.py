@@ -11,8 +11,8 @@ only at the samples.  A general-purpose integrator (Euler, RK4) instead follows 
 no wheel can roll along; :func:`rk4_step` is kept to measure that slip.
 
 ``simulate(model, q0, inputs, duration, dt)``: ``inputs`` is a constant input vector, an
-array with one row per step, a callable ``u = f(t, q)`` or an object with
-``control(t, q, dt)`` (controllers with an internal state, :mod:`qprr.wheeled.control`).
+array with one row per step, a callable ``u = f(t, q)`` or a :class:`~qprr.wheeled.control.FeedbackLaw`
+(``control(t, q, dt)``: controllers with an internal state, :mod:`qprr.wheeled.control`).
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import InputError, KinematicSingularityError, NonFiniteError
 from ..progress import Progress
+from .control import FeedbackLaw
 from .kinematics import KinematicModel, check_duration
 
 # ------------------------------------------------------------------------- exact flows
@@ -141,9 +142,8 @@ class WheeledSimResult:
 
 
 def _input_source(model: KinematicModel, inputs, n_steps: int):
-    if hasattr(inputs, "control"):
-        if hasattr(inputs, "reset"):
-            inputs.reset()
+    if isinstance(inputs, FeedbackLaw):
+        inputs.reset()
         return lambda k, t, q, dt: inputs.control(t, q, dt)
     if callable(inputs):
         return lambda k, t, q, dt: inputs(t, q)

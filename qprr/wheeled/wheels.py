@@ -111,8 +111,8 @@ class Wheel:
         return exact(self.beta, m, angle=True)  # type: ignore[attr-defined]
 
     def _offset(self) -> float:
-        """Constant part of beta (beta or beta0), plus gamma for a Swedish wheel."""
-        return float(getattr(self, "beta0", getattr(self, "beta", 0.0))) + float(getattr(self, "gamma", 0.0))
+        """Constant part of beta (beta or beta0), plus gamma for a Swedish wheel: each kind of wheel says its own."""
+        raise NotImplementedError(f"{type(self).__name__} must define _offset (the constant part of its beta)")
 
     def _geometry(self, s, m):
         """(A, l sin B, l cos B) with A = alpha + B and B = beta (+ gamma) at wheel coordinate s.
@@ -193,6 +193,9 @@ class FixedWheel(Wheel):
     kind = WheelKind.FIXED
     constrains_posture = True
 
+    def _offset(self) -> float:
+        return float(self.beta)
+
     def __post_init__(self):
         for f in ("alpha", "beta"):
             _check(f, getattr(self, f))
@@ -218,6 +221,9 @@ class CentredSteerableWheel(Wheel):
     kind = WheelKind.CENTRED_STEERABLE
     steerable = True
     constrains_posture = True
+
+    def _offset(self) -> float:
+        return float(self.beta0)
 
     def __post_init__(self):
         _check("alpha", self.alpha)
@@ -248,6 +254,9 @@ class OffCentredSteerableWheel(Wheel):
 
     kind = WheelKind.OFF_CENTRED_STEERABLE
     steerable = True
+
+    def _offset(self) -> float:
+        return float(self.beta0)
 
     def __post_init__(self):
         _check("alpha", self.alpha)
@@ -298,6 +307,9 @@ class SwedishWheel(Wheel):
     name: str = "swedish"
 
     kind = WheelKind.SWEDISH
+
+    def _offset(self) -> float:
+        return float(self.beta) + float(self.gamma)
 
     def __post_init__(self):
         for f in ("alpha", "beta", "gamma"):

@@ -64,7 +64,7 @@ def check_linearized(task, out, nv: int) -> tuple[np.ndarray, np.ndarray]:
         raise ShapeError(f"task {task!r}: linearize must return a pair (J, e), got {type(out).__name__}") from None
     if not (isinstance(J, np.ndarray) and isinstance(e, np.ndarray)) or J.dtype.kind != "f" or e.dtype.kind != "f":
         raise ShapeError(f"task {task!r}: linearize must return float arrays (J, e), got {type(J).__name__}, {type(e).__name__}")
-    dim = getattr(task, "dim", 0)
+    dim = task.dim
     if e.ndim != 1 or J.shape != (e.shape[0], nv) or (dim and e.shape[0] != dim):
         want = f"({dim}, {nv}) and ({dim},)" if dim else f"(dim, {nv}) and (dim,)"
         raise ShapeError(f"task {task!r}: linearize returned J of shape {J.shape} and e of shape {e.shape}; they must be {want}")

@@ -1,17 +1,20 @@
-"""The in-loop Allocator.allocate_into against Allocator.reference_allocate_into, the step-by-step form it implements.
+"""Allocator.allocate_into (numpy, the in-loop form) against the allocation written step by step on plain floats.
 
-``allocate_into`` runs the allocation on plain floats with precomputed bound lists and packed buffer
-writes (one bound pair when every rotor has the same bounds).  Here two twin allocators (same QP
-warm-start history) receive the same demands, one through ``allocate_into``, one through
-``reference_allocate_into``: thrusts, efforts, N f and flags must agree bit for bit, and bad input
-must raise the same error.  ``allocate_screened_into`` is ``allocate_into`` behind the screen of a
-NaN, infinite or absurd demand, for the base class and for a subclass that overrides ``allocate_into``.
+:func:`reference_allocate_into` below is the specification: the exact allocation, a bound test per rotor,
+the prioritised QP when one fails, the arm efforts clipped one by one, N f.  (It was the production class's
+``reference_allocate_into`` while a second, faster copy of it ran in the loop; the in-loop form now reads as
+the steps, and the step-by-step form lives here, as crocoddyl keeps its readable reference models in its tests.)
+Two twin allocators (same QP warm-start history) receive the same demands, one through ``allocate_into``, one
+through the reference: thrusts, efforts, N f and flags must agree bit for bit, and bad input must raise the
+same error.  ``allocate_screened_into`` is ``allocate_into`` behind the screen of a NaN, infinite or absurd
+demand, for the base class and for a subclass that overrides ``allocate_into``.
 """
 
 from __future__ import annotations
 
 import copy
 import dataclasses
+import math
 import pickle
 
 import numpy as np
@@ -21,8 +24,44 @@ from hypothesis import strategies as st
 
 import qprr
 import qprr.thesis
-from qprr.actuation import Allocator, IdealAllocator
+from qprr.actuation import AllocationFlag, Allocator, IdealAllocator
 from qprr.rotors import ideal_wrench_set
+
+
+def reference_allocate_into(alloc: Allocator, tau_d: np.ndarray, f_out: np.ndarray, tau_out: np.ndarray | None = None) -> int:
+    """:meth:`Allocator.allocate_into` step by step on plain floats: same arguments, writes and flags (as integers)."""
+    lo, hi, lim = alloc.f_min.tolist(), alloc.f_max.tolist(), alloc.effort_limits.tolist()
+    n = alloc.n_rotors
+    rows = alloc.rows
+    f = alloc.Omega_P_inv.dot(tau_d[rows])  # the exact allocation of the producible rows
+    flags = 0
+    if not all(a <= x <= b for a, x, b in zip(lo, f.tolist(), hi)):  # NaN fails
+        f = alloc._solve_qp(tau_d[rows], f)
+        flags = 1
+    td = tau_d.tolist()
+    arm = td[6:]
+    if alloc.clip_arm:
+        for k, a in enumerate(arm):
+            if not -lim[k] <= a <= lim[k]:  # beyond the limit, or NaN
+                alloc._check_arm_finite(tau_d[6:])
+                arm = [min(max(x, -b), b) for x, b in zip(arm, lim)]
+                flags |= 2
+                break
+    elif arm and not math.isfinite(sum(arm)):
+        alloc._check_arm_finite(tau_d[6:])
+    fl = f.tolist()
+    for k in range(n):
+        f_out[k] = fl[k]
+    for k, a in enumerate(arm):
+        f_out[n + k] = a
+    if tau_out is not None:
+        if flags or not alloc.square:
+            wrench = (alloc.Omega @ f).tolist()
+        else:  # exact: Omega f = tau_d on the producible rows, zero on the others
+            wrench = [td[i] if i in rows else 0.0 for i in range(6)]
+        for i, x in enumerate(wrench + arm):
+            tau_out[i] = x
+    return flags
 
 
 def _non_uniform(p):
@@ -67,7 +106,7 @@ def _demand(p, thrust_scale, arm_scale, nan_at, lateral):
 
 @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(data=st.data())
-def test_in_loop_form_is_the_reference_method(case, data):
+def test_in_loop_form_is_the_reference(case, data):
     p, kwargs = case
     fast, ref = Allocator(p, **kwargs), Allocator(p, **kwargs)  # fresh twins: the same (empty) QP warm start
     thrust = data.draw(st.lists(st.floats(-0.5, 1.5), min_size=p.n_rotors, max_size=p.n_rotors))
@@ -79,7 +118,7 @@ def test_in_loop_form_is_the_reference_method(case, data):
     lateral = data.draw(st.lists(st.floats(-3.0, 3.0), min_size=2, max_size=2))
     tau = _demand(p, thrust, arm, nan_at, lateral)
     a = _run(fast.allocate_into, tau, p.n_actuators, p.nv)
-    b = _run(ref.reference_allocate_into, tau, p.n_actuators, p.nv)
+    b = _run(lambda *args: reference_allocate_into(ref, *args), tau, p.n_actuators, p.nv)
     if b[0] == "error":
         assert a == b
         return
@@ -101,7 +140,7 @@ def test_nan_wrench_and_nan_arm_effort_raise_the_generic_messages():
         with pytest.raises(qprr.errors.DivergenceError, match=pattern) as fast_err:
             alloc.allocate_into(tau, np.empty(p.n_actuators))
         with pytest.raises(qprr.errors.DivergenceError) as ref_err:
-            Allocator(p).reference_allocate_into(tau, np.empty(p.n_actuators))
+            reference_allocate_into(Allocator(p), tau, np.empty(p.n_actuators))
         assert str(fast_err.value) == str(ref_err.value)
 
 
@@ -113,7 +152,8 @@ def test_copies_allocate_for_themselves():
         assert other.allocate_into.__self__ is other
         f1, f2 = np.empty(p.n_actuators), np.empty(p.n_actuators)
         calls = other.qp_calls
-        assert other.allocate_into(tau, f1) == alloc.allocate_into(tau, f2) == 3
+        both = AllocationFlag.ROTOR_SATURATED | AllocationFlag.ARM_SATURATED
+        assert other.allocate_into(tau, f1) == alloc.allocate_into(tau, f2) == both
         np.testing.assert_allclose(f1, f2, rtol=0, atol=1e-7 * p.thrust_max.max())
         assert other.qp_calls == calls + 1  # the copy's own counter and QPs
 
@@ -121,24 +161,25 @@ def test_copies_allocate_for_themselves():
 @settings(max_examples=40, deadline=None)
 @given(scale=st.floats(-2.0, 2.0), bad_at=st.integers(0, 8), bad=st.sampled_from([np.nan, np.inf, -np.inf, 1e151, -3e200]))
 def test_screened_form_refuses_exactly_the_bad_demands(scale, bad_at, bad):
-    """The simulator's ``allocate_screened_into``: -1 and nothing written when the norm of tau_d is NaN, inf or
+    """The simulator's ``allocate_screened_into``: REFUSED and nothing written when the norm of tau_d is NaN, inf or
     >= DEMAND_BOUND (even on a row no rotor produces), else allocate_into's answer."""
     alloc = Allocator(qprr.thesis.load())
     p = alloc.platform
     tau = p.actuation_matrix @ np.concatenate([alloc.hover_thrusts() * (1.0 + 0.2 * scale), scale * p.arm_effort_limits])
     f1, t1, f2, t2 = (np.zeros(n) for n in (p.n_actuators, p.nv, p.n_actuators, p.nv))
-    assert alloc.allocate_screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2) >= 0
+    assert alloc.allocate_screened_into(tau, f1, t1) == alloc.allocate_into(tau, f2, t2)
+    assert AllocationFlag.REFUSED not in alloc.allocate_into(tau, f2, t2)
     np.testing.assert_array_equal(f1, f2)
     np.testing.assert_array_equal(t1, t2)
     tau[bad_at] = bad
     f1[:], t1[:] = -7.0, -7.0
-    assert alloc.allocate_screened_into(tau, f1, t1) == -1
+    assert alloc.allocate_screened_into(tau, f1, t1) is AllocationFlag.REFUSED
     assert np.all(f1 == -7.0) and np.all(t1 == -7.0)
 
 
 def test_a_subclass_that_overrides_allocate_into_is_screened_and_allocated_by_its_own_method():
     """IdealAllocator overrides allocate_into: the screened call runs its allocation (N f = tau_d exactly on the ideal
-    wrench set, where the base class's least squares would not) and refuses a NaN demand with -1."""
+    wrench set, where the base class's least squares would not) and refuses a NaN demand (REFUSED)."""
     p = qprr.thesis.load().replace(rotors=ideal_wrench_set(10.0, 10.0))
     alloc = IdealAllocator(p)
     tau = np.r_[0.3, -0.2, 4.0, 0.05, -0.02, 0.01, 0.0, 0.1, -0.1]
@@ -150,4 +191,4 @@ def test_a_subclass_that_overrides_allocate_into_is_screened_and_allocated_by_it
     np.testing.assert_allclose(p.actuation_matrix @ f1, tau, rtol=1e-14, atol=1e-14)
     tau[4] = np.nan
     f1[:] = -7.0
-    assert alloc.allocate_screened_into(tau, f1, t1) == -1 and np.all(f1 == -7.0)
+    assert alloc.allocate_screened_into(tau, f1, t1) is AllocationFlag.REFUSED and np.all(f1 == -7.0)
