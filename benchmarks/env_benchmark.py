@@ -93,6 +93,29 @@ def env_rate(platform_name: str, n: int, steps: int) -> float:
     return rate
 
 
+def rotorpy_rate(n: int, steps: int) -> float:
+    """Environment steps per second of RotorPy's batched ``QuadrotorEnv`` (a Crazyflie, thrust commands, its RK4 at
+    100 Hz on torch tensors) under constant actions."""
+    import torch
+    from rotorpy.learning.quadrotor_environments import QuadrotorEnv
+    from rotorpy.vehicles.crazyflie_params import quad_params
+
+    def zeros(*shape):
+        return torch.zeros(*shape, dtype=torch.float64)
+
+    hover_speed = float(np.sqrt(quad_params["mass"] * 9.81 / (4 * quad_params["k_eta"])))
+    initial = {"x": zeros(n, 3), "v": zeros(n, 3), "w": zeros(n, 3), "wind": zeros(n, 3)}
+    initial["q"] = torch.tensor([0.0, 0.0, 0.0, 1.0], dtype=torch.float64).repeat(n, 1)
+    initial["rotor_speeds"] = torch.full((n, 4), hover_speed, dtype=torch.float64)
+    env = QuadrotorEnv(n, initial_states=initial, control_mode="cmd_motor_thrusts", quad_params=dict(quad_params))
+    env.reset()
+    action = np.zeros((n, 4))
+    start = time.perf_counter()
+    for _ in range(steps):
+        env.step(action)
+    return steps * n / (time.perf_counter() - start)
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--platform", default="q-prr", help="a platform name (default q-prr)")
@@ -115,8 +138,11 @@ def main(argv=None) -> int:
         print(line, flush=True)
     if not has_envs:
         print('gymnasium not installed: pip install "qprr[rl]" (the environments\' steps per second)')
-    if find_spec("rotorpy") is None:
-        print("rotorpy not installed: pip install rotorpy (its batched environment, for scale)")
+    if find_spec("rotorpy") is None or find_spec("torch") is None:
+        print('rotorpy not installed: pip install "rotorpy[batched]" (its batched environment, for scale)')
+        return 0
+    for n in SIZES:
+        print(f"rotorpy N = {n}: {rotorpy_rate(n, max(5, work // (10 * n))):,.0f} env-steps/s (QuadrotorEnv, one RK4 step of 10 ms each)", flush=True)
     return 0
 
 
