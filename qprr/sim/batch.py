@@ -134,6 +134,11 @@ class BatchSimulator:
         self.N = np.array(platform.actuation_matrix)
         self.q = np.tile(platform.neutral_q(), (self.n, 1))
         self.v = np.zeros((self.n, platform.nv))
+        if self.config.integrator not in _STAGES:  # a plug-in's integrator: the batch has no vectorised form of it
+            raise InputError(
+                f"config.integrator = {self.config.integrator!r}: the batched plant steps with {', '.join(_STAGES)} "
+                "(vectorised forms of qprr.sim.integrators); choose one of them, or run simulate() for this integrator"
+            )
         self._stage = _STAGES[self.config.integrator]
         self._choose_friction(np.arange(self.n))
 
