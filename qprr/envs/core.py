@@ -8,7 +8,7 @@ the same episode.
 
 A step (control period h, :meth:`BatchCore.step`), for the live copies:
 
-1. the action (n, m), clipped to [-1, 1], becomes thrust commands and arm efforts (:mod:`qprr.envs.actions`) from the
+1. the action (n, m), clipped to [-1, 1] (a non-finite entry raises), becomes thrust commands and arm efforts (:mod:`qprr.envs.actions`) from the
    measured state at t_k and the plan at t_k;
 2. the thrusts pass the rotors' first-order lag (:func:`qprr.envs.randomize.lag_factors`: the period's mean is held);
 3. tau = N [f; effort] (Thesis (5.43)) is held over h = ``substeps`` dt while the plant integrates, with the base drag
@@ -33,7 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
-from ..errors import ShapeError
+from ..errors import InputError, NonFiniteError, ShapeError
 from ..sim.batch import BatchSimulator, integrate
 from .actions import ReferenceMap, ThrustMap, Tick, WrenchMap
 from .observation import ObservationLayout, rotation_rows, wrap
@@ -61,11 +61,16 @@ class BatchCore:
         self.kind = task_kind(task)
         self.spec = TASKS[self.kind]
         self.settings = settings
+        if settings.mission is not None and self.kind is not TaskKind.TRACK:
+            raise InputError(f"mission is Track's reference (qprr/Track-v0); the {self.kind.value} task draws its own plan: drop mission=")
         self.platform = platform = settings.resolve_platform()
+        if settings.mission is not None:
+            mission_sample(settings.mission, np.zeros(1), platform.n_xi)  # a trajectory of this platform's coordinates
         self.n = n
         self.period = settings.control_period
         self.duration = settings.duration if settings.duration is not None else self.spec.duration
         self.ticks = max(1, int(round(self.duration / self.period)))
+        self.steps = settings.actuation_steps  # thrust commands (controller calls) per action
         given = settings.randomize if settings.randomize is not None else self.spec.randomize
         self.randomization = Randomization.from_mapping(given or {})
         self.sim = BatchSimulator(platform, n, settings.sim_config(), threads=settings.threads)
@@ -79,15 +84,15 @@ class BatchCore:
 
     # ------------------------------------------------------------------------------------------ per-copy arrays
     def _allocate_rows(self) -> None:
-        n, p, k = self.n, self.platform, self.ticks + 1
+        n, p, k = self.n, self.platform, self.ticks * self.steps + 1
         self.tick = np.zeros(n, dtype=int)
         self.draws = [Draw()] * n
         self.wind_mean, self.gust_peak = np.zeros((n, 3)), np.zeros((n, 3))
         self.gust_start, self.drag, self.noise = np.zeros(n), np.zeros(n), np.zeros(n)
         self.lag_end, self.lag_mean = np.zeros(n), np.zeros(n)
         self.thrust = np.tile(np.array(p.thrust_min), (n, 1))  # the lag's state [N]
-        self.ref_xi, self.ref_xi_dot, self.ref_xi_ddot = (np.zeros((n, k, p.n_xi)) for _ in range(3))
-        self.ee_plan = np.zeros((n, k, 3))  # Hover, Track: the plan's end effector on the grid (their target)
+        self.ref_xi, self.ref_xi_dot, self.ref_xi_ddot = (np.zeros((n, k, p.n_xi)) for _ in range(3))  # the plan
+        self.ee_plan = np.zeros((n, self.ticks + 1, 3))  # Hover, Track: the plan's end effector at the ticks (their target)
         self.ee_goal = np.zeros((n, 2, 3))  # Reach: the target (twice); Carry: the payload's point, the goal
         self.carried = np.zeros(n)  # Carry: the payload's mass [kg]
         self.attached = np.zeros(n, dtype=bool)
@@ -123,16 +128,17 @@ class BatchCore:
         self.obs[rows] = self._observe()[rows]
 
     def _plan_row(self, i: int, rng: np.random.Generator) -> np.ndarray:
-        """Copy i's episode plan sampled on the control grid; returns its initial configuration q0."""
+        """Copy i's episode plan sampled at every actuation tick (the reference mode's controller reads it there, the
+        observation at the control ticks); returns its initial configuration q0."""
         plan = plan_episode(self.kind, self.platform, rng, self.settings.geometry, self.settings.mission)
-        t = np.arange(self.ticks + 1) * self.period
+        t = np.arange(self.ticks * self.steps + 1) * self.settings.actuation_period
         sample = mission_sample(plan.trajectory, t, self.platform.n_xi)
         self.ref_xi[i], self.ref_xi_dot[i], self.ref_xi_ddot[i] = sample.xi, sample.xi_dot, sample.xi_ddot
         if plan.goals:
             goals = ee_positions(self.platform, self.data, np.array(plan.goals))
             self.ee_goal[i] = goals[[0, -1]]
         else:
-            self.ee_plan[i] = ee_positions(self.platform, self.data, sample.xi)
+            self.ee_plan[i] = ee_positions(self.platform, self.data, sample.xi[:: self.steps])
         self.trajectories[i] = plan.trajectory
         return ch.xi_to_q(plan.xi0)
 
@@ -172,14 +178,17 @@ class BatchCore:
         a = np.asarray(actions, dtype=float)
         if a.shape != (self.n, self.action_size):
             raise ShapeError(f"actions must have shape ({self.n}, {self.action_size}) (one row per environment), got {a.shape}")
-        a = np.clip(np.nan_to_num(a, nan=0.0), -1.0, 1.0)
+        if not np.all(np.isfinite(a)):
+            bad = np.flatnonzero(~np.all(np.isfinite(a), axis=1)).tolist()
+            raise NonFiniteError(f"actions must be finite, got NaN or inf in the rows (environments) {bad[:8]}: check the policy's output")
+        a = np.clip(a, -1.0, 1.0)
         live = ~np.asarray(frozen, dtype=bool)
         rows = np.flatnonzero(live)
         failed = np.zeros(self.n, dtype=bool)
         for j in range(self.settings.actuation_steps):
             if j:  # the reference mode's controller runs faster than the actions: a new measurement
                 self._measure(rows, [rngs[i] for i in rows.tolist()])
-            failed |= self._actuate(a, live, j * self.settings.actuation_period)
+            failed |= self._actuate(a, live, j)
         self.tick[live] += 1
         p_ee = self._ee_positions(self.sim.q)
         picked = self._attach(p_ee, live)
@@ -193,17 +202,17 @@ class BatchCore:
         self.obs[live] = self._observe()[live]
         return self.obs.copy(), np.where(live, reward, 0.0), terminated, truncated, info
 
-    def _actuate(self, a: np.ndarray, live: np.ndarray, s: float) -> np.ndarray:
-        """One actuation period from ``s`` [s] after the control tick: commands, rotor lag, tau held while the plant
+    def _actuate(self, a: np.ndarray, live: np.ndarray, j: int) -> np.ndarray:
+        """The ``j``-th actuation period after the control tick: commands, rotor lag, tau held while the plant
         integrates; returns the copies whose controller failed."""
-        f_cmd, effort, failed = self.actions.commands(a, self._tick_context(live, s), self.thrust)
+        f_cmd, effort, failed = self.actions.commands(a, self._tick_context(live, j), self.thrust)
         f_cmd = np.where(live[:, None], f_cmd, self.thrust)
         f_mean = f_cmd + (self.thrust - f_cmd) * self.lag_mean[:, None]
         self.thrust = np.where(live[:, None], f_cmd + (self.thrust - f_cmd) * self.lag_end[:, None], self.thrust)
         tau = _generalized_force(self.N, f_mean, effort)
         if isinstance(self.actions, ReferenceMap):
             self.actions.set_applied(tau, live)
-        self._integrate(tau, live, s)
+        self._integrate(tau, live, j * self.settings.actuation_period)
         return failed
 
     def _integrate(self, tau: np.ndarray, live: np.ndarray, s: float) -> None:
@@ -249,14 +258,17 @@ class BatchCore:
         self.q_meas[rows] = integrate(self.sim.q[rows], n[:, 0:nv])
         self.v_meas[rows] = self.sim.v[rows] + n[:, nv:]
 
-    def _tick_context(self, live: np.ndarray, s: float = 0.0) -> Tick:
-        """What the action maps see ``s`` [s] after the control tick: the measured state and the plan, taken between
-        the ticks of its grid by its second-order expansion xi_d + s xi_dot_d + s^2 / 2 xi_ddot_d."""
-        rows, k = np.arange(self.n), self.tick
-        xi, xi_dot, xi_ddot = self.ref_xi[rows, k], self.ref_xi_dot[rows, k], self.ref_xi_ddot[rows, k]
-        if s:
-            xi, xi_dot = xi + s * xi_dot + 0.5 * s * s * xi_ddot, xi_dot + s * xi_ddot
-        return Tick(k * self.period + s, self.q_meas, self.v_meas, xi, xi_dot, xi_ddot, live)
+    def _plan(self, j: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The plan (xi_d, xi_dot_d, xi_ddot_d), each (n, n_xi), at the ``j``-th actuation tick after each copy's control tick."""
+        rows, k = np.arange(self.n), self.tick * self.steps + j
+        return self.ref_xi[rows, k], self.ref_xi_dot[rows, k], self.ref_xi_ddot[rows, k]
+
+    def _tick_context(self, live: np.ndarray, j: int = 0) -> Tick:
+        """What the action maps see at the ``j``-th actuation tick after the control tick: the measured state and the
+        plan there (sampled exactly: a reference held or extrapolated between the control ticks made the IDC's
+        roll and pitch references (6.17) jump every period, which destabilised borinot_flying_arm_2 on Track)."""
+        xi, xi_dot, xi_ddot = self._plan(j)
+        return Tick(self.tick * self.period + j * self.settings.actuation_period, self.q_meas, self.v_meas, xi, xi_dot, xi_ddot, live)
 
     def _ee_positions(self, q: np.ndarray) -> np.ndarray:
         """End-effector positions (n, 3) [m], world frame (NaN for a non-finite state)."""
@@ -276,20 +288,21 @@ class BatchCore:
 
     def _observe(self) -> np.ndarray:
         """Observations (n, size) of every copy from its measured state (:mod:`qprr.envs.observation`)."""
-        rows, k, q, v = np.arange(self.n), self.tick, self.q_meas, self.v_meas
+        q, v = self.q_meas, self.v_meas
+        xi_d, xi_dot_d, _ = self._plan()
         R = rotation_rows(q[:, 3:7])
         p_ee = self._ee_positions(q) if self.randomization.has("sensor_noise") else self._ee_positions(self.sim.q)
         span = self.f_max - self.f_min
         parts = {
-            "base_error_world": self.ref_xi[rows, k, 0:3] - q[:, 0:3],
+            "base_error_world": xi_d[:, 0:3] - q[:, 0:3],
             "rotation_world_body": R,
             "v_body": v[:, 0:3],
             "omega_body": v[:, 3:6],
             "q_arm": q[:, 7:],
             "q_arm_dot": v[:, 6:],
             "ee_error_world": self._ee_target() - p_ee,
-            "yaw_error": wrap(self.ref_xi[rows, k, 5] - np.arctan2(R[:, 3], R[:, 0]))[:, None],
-            "v_ref_world": self.ref_xi_dot[rows, k, 0:3],
+            "yaw_error": wrap(xi_d[:, 5] - np.arctan2(R[:, 3], R[:, 0]))[:, None],
+            "v_ref_world": xi_dot_d[:, 0:3],
             "thrust": 2.0 * (self.thrust - self.f_min) / np.where(span > 0.0, span, 1.0) - 1.0,
             "attached": self.attached[:, None].astype(float),
         }
@@ -297,12 +310,13 @@ class BatchCore:
 
     def _judge(self, a: np.ndarray, p_ee: np.ndarray, picked: np.ndarray, failed: np.ndarray, live: np.ndarray) -> tuple:
         """(reward (n,), end reason (n,) str, info) of every copy at its new state (true, not measured)."""
-        rows, k, q, v, s = np.arange(self.n), self.tick, self.sim.q, self.sim.v, self.settings
+        k, q, v, s = self.tick, self.sim.q, self.sim.v, self.settings
+        xi_d = self._plan()[0]
         cap = 2.0 * s.box
-        e_base = _capped(np.linalg.norm(self.ref_xi[rows, k, 0:3] - q[:, 0:3], axis=1), cap)
+        e_base = _capped(np.linalg.norm(xi_d[:, 0:3] - q[:, 0:3], axis=1), cap)
         e_ee = _capped(np.linalg.norm(self._ee_target() - p_ee, axis=1), cap)
         R = rotation_rows(q[:, 3:7])
-        e_yaw = np.abs(wrap(self.ref_xi[rows, k, 5] - np.arctan2(R[:, 3], R[:, 0])))
+        e_yaw = np.abs(wrap(xi_d[:, 5] - np.arctan2(R[:, 3], R[:, 0])))
         e_yaw = np.where(np.isfinite(e_yaw), e_yaw, math.pi)
         rate = _capped(np.linalg.norm(v[:, 3:6], axis=1), cap)
         end = np.full(self.n, EndReason.RUNNING.value, dtype=object)

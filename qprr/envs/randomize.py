@@ -151,7 +151,10 @@ def _value(key: str, x) -> float | Distribution:
     elif isinstance(x, Mapping):
         dist = Distribution.from_mapping(x, f"randomize[{key!r}]")
     elif isinstance(x, (tuple, list)) and len(x) == 2:
-        dist = Distribution("uniform", low=_number(x[0], key), high=_number(x[1], key))
+        low, high = _number(x[0], key), _number(x[1], key)
+        if not low <= high:
+            raise InputError(f"randomize[{key!r}] = {tuple(x)!r}: a range (low, high) needs low <= high")
+        dist = Distribution("uniform", low=low, high=high)
     elif isinstance(x, (tuple, list)):
         raise InputError(f"randomize[{key!r}] must be a number, a pair (low, high) or a distribution table, got {x!r}")
     else:

@@ -45,7 +45,7 @@ class AerialEnv(gymnasium.Env):
     def reset(self, *, seed: int | None = None, options: Mapping | None = None) -> tuple[np.ndarray, dict]:
         super().reset(seed=seed)
         if options:
-            raise UnknownNameError("reset option", sorted(options)[0], ())
+            raise UnknownNameError("reset option", sorted(options)[0], ("none: AerialEnv.reset takes no options",))
         self.core.reset_rows(np.zeros(1, dtype=int), [self.np_random])
         self._running = True
         return self.core.obs[0].copy(), {}
