@@ -60,6 +60,17 @@ def test_gymnasium_checker_passes(envs, platforms, env_id, platform):
         assert env.observation_space.shape == (len(env.unwrapped.observation_names),)
 
 
+def test_own_platform_from_its_files(envs):
+    """A user's URDF and rotor file (examples/my_platform), as qprr.platforms.resolve takes them."""
+    import gymnasium
+    from gymnasium.utils.env_checker import check_env
+
+    folder = ROOT / "examples" / "my_platform"
+    env = gymnasium.make("qprr/Hover-v0", urdf=folder / "quad_rrr.urdf", rotors=folder / "quad_rrr.rotors.toml", duration=1.0)
+    check_env(env.unwrapped, skip_render_check=True)
+    assert env.unwrapped.core.platform.name == "quad_rrr" and env.action_space.shape == (4 + 3,)
+
+
 def test_make_vec_is_one_batched_simulator(envs, platforms):
     import gymnasium
     from gymnasium.vector import AutoresetMode

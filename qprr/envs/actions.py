@@ -64,7 +64,17 @@ def effort_limits(platform: Platform) -> np.ndarray:
     return limits
 
 
-class ThrustMap:
+class _OpenLoop:
+    """What the maps without a controller share: nothing to start at a reset, no applied force to read."""
+
+    def reset(self, rows: np.ndarray, tick: Tick, trajectories: list) -> None:
+        """Start the copies ``rows`` on a new episode (nothing to do without a controller)."""
+
+    def set_applied(self, tau: np.ndarray, live: np.ndarray) -> None:
+        """The applied generalised force (n, nv) (no controller reads it)."""
+
+
+class ThrustMap(_OpenLoop):
     """``thrusts`` (module docstring)."""
 
     def __init__(self, platform: Platform, n: int) -> None:
@@ -81,7 +91,7 @@ class ThrustMap:
         return f, effort, np.zeros(actions.shape[0], dtype=bool)
 
 
-class WrenchMap:
+class WrenchMap(_OpenLoop):
     """``wrench`` (module docstring): ``rows`` the body-wrench rows the rotors produce, ``hover`` (6,) and ``scale`` (6,)
     the wrench at a zero action and per unit action."""
 

@@ -121,10 +121,9 @@ class BatchCore:
         self.attached[rows] = False
         self.inside_time[rows], self.error_sum[rows] = 0.0, 0.0
         self._measure(rows, rngs)
-        if isinstance(self.actions, ReferenceMap):
-            live = np.zeros(self.n, dtype=bool)
-            live[rows] = True
-            self.actions.reset(rows, self._tick_context(live), self.trajectories)
+        live = np.zeros(self.n, dtype=bool)
+        live[rows] = True
+        self.actions.reset(rows, self._tick_context(live), self.trajectories)
         self.obs[rows] = self._observe()[rows]
 
     def _plan_row(self, i: int, rng: np.random.Generator) -> np.ndarray:
@@ -210,8 +209,7 @@ class BatchCore:
         f_mean = f_cmd + (self.thrust - f_cmd) * self.lag_mean[:, None]
         self.thrust = np.where(live[:, None], f_cmd + (self.thrust - f_cmd) * self.lag_end[:, None], self.thrust)
         tau = _generalized_force(self.N, f_mean, effort)
-        if isinstance(self.actions, ReferenceMap):
-            self.actions.set_applied(tau, live)
+        self.actions.set_applied(tau, live)  # the model-free controller reads it
         self._integrate(tau, live, j * self.settings.actuation_period)
         return failed
 
