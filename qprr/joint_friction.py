@@ -180,10 +180,11 @@ class JointFriction:
 
     def apply(self, v, out: np.ndarray) -> np.ndarray:
         """The explicit joints' friction at one stage of velocity ``v``: ``out += tau_f,E(v)``; returns ``out`` (the implicit
-        joints' comes after the forward dynamics, from :meth:`solve`)."""
+        joints' comes after the forward dynamics, from :meth:`solve`).  ``v`` and ``out`` may be batches (n, nv): the
+        last axis is the velocity coordinate (:mod:`qprr.sim.batch`)."""
         i = self._exp
-        vi = np.asarray(v)[i]
-        out[i] -= self.damping[i] * vi + self.friction[i] * np.tanh(vi / self.velocity_scale)
+        vi = np.asarray(v)[..., i]
+        out[..., i] -= self.damping[i] * vi + self.friction[i] * np.tanh(vi / self.velocity_scale)
         return out
 
     def solve(self, model: pin.Model, data: pin.Data, q, v, a: np.ndarray) -> np.ndarray:

@@ -31,7 +31,12 @@ from qprr.errors import MissingDependencyError
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = sorted(p.relative_to(ROOT).as_posix() for p in (ROOT / "docs").glob("*.md")) + ["README.md"]
-REQUIRES = {"docs/mpc.md": ("crocoddyl", "mpc"), "docs/wheeled.md": ("sympy", "symbolic"), "docs/flightstack.md": ("pyulog", "flightlog")}
+REQUIRES = {
+    "docs/mpc.md": ("crocoddyl", "mpc"),
+    "docs/wheeled.md": ("sympy", "symbolic"),
+    "docs/flightstack.md": ("pyulog", "flightlog"),
+    "docs/rl.md": ("gymnasium", "rl"),
+}
 """Optional extras a page's blocks need: page -> (module, extra); the test is skipped with the install command where the
 extra is missing."""
 
@@ -110,9 +115,10 @@ def resolve(dotted: str) -> str:
             raise
         except MissingDependencyError as exc:  # an optional dependency is absent: read the module's source instead
             for j in range(i, 0, -1):
-                path = ROOT / Path(*parts[:j]).with_suffix(".py")
-                if path.is_file():
-                    return defined_in_source(path, parts[j:], ".".join(parts[:j]))
+                base = ROOT / Path(*parts[:j])
+                for path in (base.with_suffix(".py"), base / "__init__.py"):  # a module or a package (qprr.envs)
+                    if path.is_file():
+                        return defined_in_source(path, parts[j:], ".".join(parts[:j]))
             return f"{name}: {exc}"
         path = Path(getattr(obj, "__file__", "") or "").resolve()
         if not path.is_relative_to(ROOT):
@@ -138,6 +144,8 @@ def defined_in_source(path: Path, attrs: list[str], module: str) -> str:
                 targets = node.targets if isinstance(node, ast.Assign) else [node.target]
                 if any(isinstance(t, ast.Name) and t.id == attr for t in targets):
                     found = node
+            elif isinstance(node, ast.ImportFrom) and any((a.asname or a.name) == attr for a in node.names):
+                found = node  # a name a package's __init__ imports from its modules
         if found is None:
             return f"{'.'.join([module, *attrs[:k]])} defines no {attr!r} (read from {path.relative_to(ROOT)})"
         body = getattr(found, "body", [])
@@ -183,6 +191,8 @@ def test_paths_and_links_exist():
             path = m.group(1).rstrip(".,")
             if re.search(r"/[A-Z]+\.\w+$", path):
                 continue  # a placeholder (examples/NAME.py)
+            if re.fullmatch(r"qprr/[A-Z]\w*-v\d+", path):
+                continue  # a Gymnasium environment id (qprr/Reach-v0, docs/rl.md), not a path
             if not (any(ROOT.glob(path)) if "*" in path else (ROOT / path).exists()):
                 bad.append(f"{page}: {path}")
         for target in re.findall(r"\]\(([^)#:]+)(?:#[^)]*)?\)", text):  # relative links
