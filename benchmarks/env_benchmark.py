@@ -80,6 +80,7 @@ def core_step(platform, integrator: str, n: int, steps: int, rounds: int) -> flo
 def env_rate(platform_name: str, n: int, steps: int) -> float:
     """Environment steps per second of ``gymnasium.make_vec("qprr/Hover-v0", num_envs=n)`` under random actions."""
     import gymnasium
+
     import qprr.envs  # noqa: F401  (registers the environments)
 
     envs = gymnasium.make_vec("qprr/Hover-v0", num_envs=n, platform=platform_name)

@@ -44,7 +44,6 @@ the viewer, the campaigns or the scenario table."""
 # ------------------------------------------------------------------------------ simulate
 def _cmd_simulate(args: argparse.Namespace) -> int:
     from .scenarios import SCENARIOS
-    from .sim.export import save_table
     from .viz import plot_result
 
     prog = "qprr simulate"
@@ -116,13 +115,20 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         for line in sc.summary(res):
             print(line)
     if save_path is not None:
-        print(f"saved {res.save(save_path) if save_path.suffix == '.npz' else save_table(res, save_path)}")
+        print(f"saved {_save(res, save_path)}")
     if plot_path is not None:
         plot = sc.plot if (sc.plot is not None and code == 0) else plot_result
         print(f"figure {plot(res, plot_path)}")
     if anim_path is not None:
         _animate(res, platform, anim_path, progress)
     return code
+
+
+def _save(res, path: Path) -> Path:
+    """The run in ``path``: ``.npz`` (SimResult.save) or a long table (``.csv``, ``.parquet``: qprr.sim.export)."""
+    from .sim.export import save_table
+
+    return res.save(path) if path.suffix == ".npz" else save_table(res, path)
 
 
 def _print_gains(sc, platform, controller: str, options: dict) -> int:
