@@ -18,6 +18,7 @@ import numpy as np
 
 from ..control import CONTROLLERS, OPTIONAL
 from ..errors import InputError, UnknownNameError
+from ..platforms import DEFAULT_PLATFORM
 from ..validation import as_int
 from .settings import ENV_IDS, REFERENCE_CONTROLLERS, task_kind
 from .vector import AerialVectorEnv
@@ -79,7 +80,7 @@ def baseline_return(env_id, controller: str = "idc", seeds=(0, 1, 2, 3), platfor
     seeds = tuple(as_int(s, "seeds[i]", lo=0) for s in seeds)
     if not seeds:
         raise InputError("seeds must hold at least one seed (e.g. seeds=range(8))")
-    name = platform if isinstance(platform, str) else ("q-prr" if platform is None and "urdf" not in options else "")
+    name = platform if isinstance(platform, str) else (DEFAULT_PLATFORM if platform is None and "urdf" not in options else "")
     if controller not in CONTROLLERS:
         package, _, install = OPTIONAL[controller]
         return BaselineResult(ENV_IDS[kind], controller, name, seeds, status=BaselineStatus.SKIPPED, reason=f"{package} is not installed: {install}")

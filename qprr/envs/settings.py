@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ..errors import InputError, UnknownNameError
 from ..model import Platform
-from ..platforms import resolve
+from ..platforms import DEFAULT_PLATFORM, resolve
 from ..sim.config import INTEGRATORS, SimConfig
 from ..validation import as_int, as_real, as_vector
 from .randomize import Randomization
@@ -240,7 +240,9 @@ class EnvSettings:
         if self.rotors is not None or self.ee_frame is not None:
             return resolve(self.platform, rotors=self.rotors, ee_frame=self.ee_frame)  # raises: they go with a URDF
         if self.platform is not None and not isinstance(self.platform, str):
-            raise InputError(f"platform must be a name (e.g. 'q-prr'), a qprr Platform or None with urdf=..., got {type(self.platform).__name__}")
+            raise InputError(
+                f"platform must be a name (e.g. {DEFAULT_PLATFORM!r}), a qprr Platform or None with urdf=..., got {type(self.platform).__name__}"
+            )
         return _named_platform(self.platform)
 
 
