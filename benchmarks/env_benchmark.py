@@ -129,7 +129,8 @@ def main(argv=None) -> int:
     platform = resolve(args.platform)
     bare = bare_step(platform, args.integrator, work // 4, rounds)
     print(f"bare ABA + integrate step ({args.integrator}, {platform.name}, nv = {platform.nv}): {bare * 1e6:.2f} us")
-    print("ratio = the batched core's cost per copy and step / one bare ABA + integrate step, measured in this run")
+    sizes = ", ".join(map(str, SIZES))
+    print(f"ratio (the 'x bare ABA' of each line, N = {sizes}) = the batched core's cost per copy and step / one bare step")
     has_envs = find_spec("gymnasium") is not None
     for n in SIZES:
         core = core_step(platform, args.integrator, n, max(10, work // n), rounds)
