@@ -89,6 +89,9 @@ NOT_FED: dict[str, str] = {
     "qprr.viz.browser.*": "drives a browser: tests/test_viz_viewer.py",
     "qprr.campaign.backends.Backend*": "abstract base class (its subclasses are fed)",
     "qprr.campaign.backends.DaskBackend*": "starts a Dask cluster of worker processes: tests/test_campaign.py",
+    "qprr.trajectory.Trajectory*": "a Protocol (its implementations are fed)",
+    "qprr.envs.*": "the learning environments (the rl extra): tests/test_envs.py feeds them bad options; their helpers' "
+    "catalogue cases (90 found unvalidated: platform, box, randomisation values) are open work of issue 32",
 }
 """Callables the catalogue does not call (pattern -> where they are tested instead)."""
 
