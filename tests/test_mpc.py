@@ -24,7 +24,7 @@ from qprr.actuation import AllocationFlag, Allocator
 from qprr.charts import State, xi_to_qv
 from qprr.control import make_controller
 from qprr.control.base import Reference
-from qprr.control.mpc_stats import INSTALL, solve_summary
+from qprr.control.mpc_stats import INSTALL, MPCStats, SolveStatus, chatter_fraction, health_warnings, solve_summary
 from qprr.errors import InputError, MissingDependencyError, UnknownNameError
 from qprr.kinematics import cog_offset_body
 from qprr.sim import simulate
@@ -75,6 +75,40 @@ def test_solve_summary_reads_the_metrics_and_is_absent_without_an_mpc():
     line = solve_summary(m)
     assert "native" in line and "median 2.00 ms" in line and "p95 4.00 ms" in line and "0 fallbacks" in line
     assert "Python models" in solve_summary({**m, "mpc_native_backend": 0.0})
+
+
+def _stats(u: np.ndarray, status: list[SolveStatus]) -> MPCStats:
+    """A per-solve log with inputs ``u`` (n, nu) and the given statuses (the other fields do not matter here)."""
+    n = len(u)
+    zeros = np.zeros(n)
+    return MPCStats("native", zeros, zeros, zeros, zeros, np.ones(n, dtype=int), tuple(s.value for s in status), zeros, zeros, zeros, ("",) * n, u)
+
+
+def test_chatter_is_bang_bang_switching_not_a_smooth_or_a_single_jump():
+    lb, ub = np.array([0.0, -10.0]), np.array([20.0, 10.0])
+    t = np.linspace(0.0, 1.0, 101)
+    smooth = np.c_[10.0 + 5.0 * np.sin(2 * np.pi * t), 8.0 * np.sin(6 * np.pi * t)]  # large but smooth: 0.5 N, 1.5 N m per solve at most
+    assert chatter_fraction(smooth, lb, ub) == 0.0
+    step = np.c_[np.full(101, 10.0), np.where(t < 0.5, -10.0, 10.0)]  # one jump from bound to bound: no reversal
+    assert chatter_fraction(step, lb, ub) == 0.0
+    bang = np.c_[np.full(101, 10.0), 10.0 * (-1.0) ** np.arange(101)]  # the arm effort thrown between its bounds every solve
+    assert chatter_fraction(bang, lb, ub) == 1.0
+    half = bang.copy()
+    half[51:, 1] = half[50, 1]  # chatters for the first half of the run, then holds: reversals at solves 1..49 of 99
+    assert chatter_fraction(half, lb, ub) == pytest.approx(49 / 99)
+    assert chatter_fraction(bang[:2], lb, ub) == 0.0  # fewer than 3 solves: no reversal can be seen
+
+
+def test_health_warnings_name_the_fraction_the_threshold_and_the_fix():
+    lb, ub = np.array([0.0, -10.0]), np.array([20.0, 10.0])
+    u = np.c_[np.full(20, 10.0), 10.0 * (-1.0) ** np.arange(20)]
+    ok, limit = SolveStatus.CONVERGED, SolveStatus.ITERATION_LIMIT
+    assert health_warnings(_stats(np.full((20, 2), 1.0), [ok] * 20), lb, ub, (0.05, 0.05)) == ()
+    found = health_warnings(_stats(u, [limit] * 3 + [ok] * 17), lb, ub, (0.05, 0.05))
+    assert len(found) == 2
+    assert "15.0 % of the MPC's solves stopped at the iteration limit (more than 5 %)" in found[0] and "max_iter" in found[0]
+    assert "chattered on 100.0 % of its solves" in found[1] and "MPCWeights" in found[1]
+    assert health_warnings(_stats(u, [limit] * 3 + [ok] * 17), lb, ub, (0.2, 1.0)) == ()  # within looser thresholds
 
 
 def test_benchmark_quick_mode_exits_0_and_prints_the_backends():
@@ -566,6 +600,24 @@ def test_mpc_is_selectable_by_name_and_runs_on_another_platform():
     res = run("hover-reach", "mpc", platform=pf, duration=0.3)
     assert res.status == "ok" and res.controller == "mpc"
     assert np.all(res.f <= pf.thrust_max + 1e-9) and np.all(res.f >= pf.thrust_min - 1e-9)
+
+
+def test_a_run_whose_solves_stop_at_the_iteration_limit_completes_with_a_warning(platform):
+    """A 1 m step with f_max = 11 N (the bound active) and one Box-FDDP iteration per solve: the run completes, but its
+    reason (the CLI's status detail) says how often the solver stopped at the limit and what to change."""
+    pf = _with_f_max(platform, 11.0)
+    target = Hold((1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+    ctrl = mpc.MPCController(pf, settings=mpc.MPCSettings(horizon=10, max_iter=1, first_max_iter=1))
+    res = simulate(pf, ctrl, target, 0.3, xi0=np.zeros(9))
+    at_limit = res.metrics["mpc_iteration_limit"] / res.metrics["mpc_solves"]
+    assert at_limit > 0.05
+    assert res.status == "ok" and res.reason.startswith("completed with warnings: ")
+    assert f"{100 * at_limit:.1f} % of the MPC's solves stopped at the iteration limit" in res.reason
+    assert 0.0 <= res.metrics["mpc_chatter_fraction"] <= 1.0
+    healthy = mpc.MPCController(pf, settings=mpc.MPCSettings(horizon=10, max_iter=1, first_max_iter=1, warn_iteration_limit=1.0))
+    assert simulate(pf, healthy, target, 0.3, xi0=np.zeros(9)).reason == "completed"  # the same run within a threshold of 100 %
+    with pytest.raises(InputError, match="warn_chatter.*in \\[0, 1\\].*1.5"):
+        mpc.MPCSettings(warn_chatter=1.5)
 
 
 # --------------------------------------------------------------------------- aggressive reach

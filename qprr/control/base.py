@@ -131,6 +131,12 @@ class Controller(ABC):
         :class:`~qprr.sim.SimResult` by the simulator (e.g. an MPC's solve times); default none."""
         return {}, {}
 
+    def run_warnings(self) -> tuple[str, ...]:
+        """What the controller found wrong with its own run although it completed (e.g. an MPC that stopped at its
+        iteration limit too often, or whose inputs chattered), one sentence each; the simulator appends them to the
+        result's ``reason`` ("completed with warnings: ...").  Default none."""
+        return ()
+
     @abstractmethod
     def step(self, t: float, state: State, ref: Reference) -> np.ndarray:
         """Desired generalised force (6 + n_arm,): u in thesis coordinates (or tau if ``output == "pinocchio"``)."""

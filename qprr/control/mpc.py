@@ -105,7 +105,7 @@ from ..trajectory import Trajectory
 from ..validation import as_int, as_real, as_vector
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
-from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus
+from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus, chatter_fraction, health_warnings
 
 try:
     import crocoddyl
@@ -189,7 +189,10 @@ class MPCSettings:
     dynamic gap of an accepted plan; ``bound_margin`` [N]: the thrust bounds are planned
     this far inside; ``max_tilt`` [rad]: clamp of the feedforward tilt (6.17);
     ``joint_limit_margin``: the arm joints' soft limits are the model's position limits shrunk by
-    this fraction of their range (the simulator's mechanical stops sit at the limits).
+    this fraction of their range (the simulator's mechanical stops sit at the limits);
+    ``warn_iteration_limit``, ``warn_chatter``: a completed run whose solves stopped at the iteration limit, or whose
+    inputs chattered (:func:`~qprr.control.mpc_stats.chatter_fraction`), on more than this fraction of the solves ends
+    "completed with warnings" (:meth:`MPCController.run_warnings`).
     """
 
     rate: float = 100.0
@@ -205,12 +208,17 @@ class MPCSettings:
     max_tilt: float = 0.8
     init_reg: float = 1e-9
     joint_limit_margin: float = 0.0
+    warn_iteration_limit: float = 0.05
+    warn_chatter: float = 0.05
 
     def __post_init__(self) -> None:
         _positive(self, ("rate", "th_stop", "feasibility_tol", "max_tilt", "init_reg"), allow_zero=False)
         _positive(self, ("bound_margin",), allow_zero=True)
         if not as_real(self.joint_limit_margin, "MPCSettings.joint_limit_margin", nonnegative=True) < 0.5:
             raise InputError(f"MPCSettings.joint_limit_margin must be in [0, 0.5), got {self.joint_limit_margin!r}")
+        for name in ("warn_iteration_limit", "warn_chatter"):
+            if not 0.0 <= as_real(getattr(self, name), f"MPCSettings.{name}") <= 1.0:
+                raise InputError(f"MPCSettings.{name} is a fraction of the solves, in [0, 1]; got {getattr(self, name)!r}")
         for name in ("horizon", "max_iter", "first_max_iter", "threads"):
             as_int(getattr(self, name), f"MPCSettings.{name}", lo=1)
         if self.backend not in ("auto", *BACKENDS):
@@ -531,6 +539,7 @@ class MPCController(Controller):
         metrics = {f"mpc_{k}": v for k, v in st.summary().items()}
         metrics["mpc_min_plan_thrust_margin_N"] = metrics.pop("mpc_min_thrust_margin_N")
         metrics["mpc_max_plan_bound_violation_N"] = float(self.max_bound_violation)
+        metrics["mpc_chatter_fraction"] = chatter_fraction(st.u, self.u_lb, self.u_ub)
         series = {
             "mpc_t": st.t,
             "mpc_solve_time": st.solve_time,
@@ -539,6 +548,11 @@ class MPCController(Controller):
             "mpc_thrust_margin": st.thrust_margin,
         }
         return metrics, series
+
+    def run_warnings(self) -> tuple[str, ...]:
+        """:func:`~qprr.control.mpc_stats.health_warnings` of the run so far (the settings' ``warn_*`` thresholds)."""
+        limits = (self.settings.warn_iteration_limit, self.settings.warn_chatter)
+        return health_warnings(self.stats(), self.u_lb, self.u_ub, limits)
 
     def _write_tilt(self, ref: Reference) -> None:
         """Write the feedforward tilt (6.17) of the current reference acceleration into ``ref`` (the logged reference)."""

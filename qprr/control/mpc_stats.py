@@ -1,6 +1,8 @@
 """Solve statistics of the receding-horizon MPC, readable without crocoddyl (the CLI prints them).
 
 :class:`MPCStats` is the per-solve log :meth:`qprr.control.mpc.MPCController.stats` returns;
+:func:`health_warnings` says when a completed run's MPC was not healthy (iteration limit hit too often, chattering
+inputs: :func:`chatter_fraction`);
 :func:`solve_summary` turns the ``mpc_*`` metrics the controller copies into a
 :class:`~qprr.sim.SimResult` into one report line (``qprr simulate ... --controller mpc`` prints it).
 ``INSTALL`` is the install command of the ``mpc`` extra (docs/mpc.md, "Installing").
@@ -89,6 +91,49 @@ class MPCStats:
         }
 
 
+CHATTER_JUMP = 0.25
+"""A chatter event: an input channel's change between consecutive solves reverses its sign while both changes exceed
+this fraction of the channel's bound range (u_ub - u_lb), e.g. an arm effort thrown from one bound to the other and back."""
+
+
+def chatter_fraction(u: np.ndarray, u_lb: np.ndarray, u_ub: np.ndarray) -> float:
+    """Fraction of the solves (after the first two) at which some input channel chatters (:data:`CHATTER_JUMP`).
+
+    ``u`` (n, nu) the inputs applied from each solve on (rotor thrusts [N], then arm efforts); ``u_lb``, ``u_ub``
+    (nu,) their finite bounds.  A smooth run gives 0; bang-bang inputs that switch every solve give 1.
+    """
+    if len(u) < 3:
+        return 0.0
+    jump = CHATTER_JUMP * (np.asarray(u_ub, dtype=float) - np.asarray(u_lb, dtype=float))
+    du = np.diff(np.asarray(u, dtype=float), axis=0)  # (n - 1, nu) change of each input between consecutive solves
+    reversal = (du[1:] * du[:-1] < 0.0) & (np.abs(du[1:]) > jump) & (np.abs(du[:-1]) > jump)
+    return float(np.mean(np.any(reversal, axis=1)))
+
+
+def health_warnings(stats: MPCStats, u_lb: np.ndarray, u_ub: np.ndarray, limits: tuple[float, float]) -> tuple[str, ...]:
+    """Sentences on a run whose MPC was not healthy although it completed.
+
+    ``limits`` = (largest fraction of solves stopped at the iteration limit, largest :func:`chatter_fraction`)
+    tolerated, :class:`~qprr.control.mpc.MPCSettings`' ``warn_iteration_limit`` and ``warn_chatter``.
+    """
+    found = []
+    n = len(stats.status)
+    at_limit = sum(s == SolveStatus.ITERATION_LIMIT.value for s in stats.status) / n if n else 0.0
+    if at_limit > limits[0]:
+        found.append(
+            f"{100 * at_limit:.1f} % of the MPC's solves stopped at the iteration limit (more than {100 * limits[0]:g} %): "
+            "raise MPCSettings.max_iter or lower the rate, or check the weights"
+        )
+    chatter = chatter_fraction(stats.u, u_lb, u_ub)
+    if chatter > limits[1]:
+        found.append(
+            f"the MPC's inputs chattered on {100 * chatter:.1f} % of its solves (more than {100 * limits[1]:g} %: an input's change "
+            f"reversed with jumps above {CHATTER_JUMP:g} of its range): raise the input weights (MPCWeights.thrust, arm_acceleration) "
+            "or the horizon"
+        )
+    return tuple(found)
+
+
 def solve_summary(metrics: dict[str, float]) -> str | None:
     """One line on the MPC's solves from a result's ``mpc_*`` metrics (None when the run had no MPC).
 
@@ -108,4 +153,4 @@ def solve_summary(metrics: dict[str, float]) -> str | None:
     )
 
 
-__all__ = ["BACKENDS", "INSTALL", "Fallback", "MPCStats", "SolveStatus", "solve_summary"]
+__all__ = ["BACKENDS", "CHATTER_JUMP", "INSTALL", "Fallback", "MPCStats", "SolveStatus", "chatter_fraction", "health_warnings", "solve_summary"]

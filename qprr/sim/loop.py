@@ -117,7 +117,8 @@ def simulate(
         bar.close()
     wall = time.perf_counter() - t_start
     if err is None:
-        return _result(run, m, Status.OK, "completed", wall)
+        found = controller.run_warnings()  # a completed run the controller itself judged unhealthy (e.g. an MPC that chattered)
+        return _result(run, m, Status.OK, "completed with warnings: " + "; ".join(found) if found else "completed", wall)
     err = _with_context(platform, err, (m - 1) * config.period, q, v, run.bounds)
     err.result = _result(run, m, Status.DIVERGED if isinstance(err, DivergenceError) else Status.FAILED, str(err), wall)
     raise err from None
