@@ -4,7 +4,7 @@ Three layers, from the bottom:
 
 * the core: every module of ``qprr/`` outside ``qprr/thesis/`` and the front ends;
 * the thesis plug-in: ``qprr/thesis/`` (it registers into the core's registries, :mod:`qprr.registry`);
-* the front ends: ``qprr/cli.py``, ``qprr/cli_common.py``, ``qprr/__main__.py`` and every ``cli.py`` of a
+* the front ends: the package ``qprr/cli/``, ``qprr/__main__.py`` and every ``cli.py`` of a
   subpackage (the thesis's own ``qprr/thesis/cli.py`` included).
 
 A module imports only from its own layer or the ones below, and the core's front ends reach the
@@ -35,7 +35,7 @@ MODULES = {module_name(p): p for p in sorted(PKG.rglob("*.py"))}
 
 
 def is_front_end(mod: str) -> bool:
-    return mod in ("qprr.cli", "qprr.cli_common", "qprr.__main__") or mod.endswith(".cli")
+    return mod in ("qprr.cli", "qprr.__main__") or mod.startswith("qprr.cli.") or mod.endswith(".cli")
 
 
 def is_thesis(mod: str) -> bool:
