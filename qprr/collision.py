@@ -250,7 +250,7 @@ def collision_model(platform: Platform, *, package_dirs: Sequence[str] | None = 
     if not on_arm:
         raise InputError(
             f"platform {platform.name!r}: no arm link of its URDF has a <collision> element: add the links' "
-            "shapes (qprr.urdfgen writes them with every primitive visual)"
+            "shapes (qprr.urdf.writer writes them with every primitive visual)"
         )
     discs = _add_discs(platform, geom)
     pairs, adjacent, contacts = _select_pairs(platform, geom)

@@ -36,12 +36,12 @@ import numpy as np
 import pinocchio as pin
 
 from .errors import InputError, LimitError, NonPhysicalError, ShapeError, UnknownNameError
-from .inertia import check_rigid_body, inertia_matrix, read_inertials
-from .plausibility import DEFAULT as _PLAUSIBLE
-from .plausibility import check_plausibility_setting
-from .plausibility import check_rotors as _check_rotor_ranges
-from .plausibility import check_urdf as _check_urdf_ranges
 from .rotors import ActuationSummary, Rotor, actuation_summary, check_hover_solution, check_rotor_set, rotor_matrix, rotors_from_mapping
+from .urdf.inertia import check_rigid_body, inertia_matrix, read_inertials
+from .urdf.plausibility import DEFAULT as _PLAUSIBLE
+from .urdf.plausibility import check_plausibility_setting
+from .urdf.plausibility import check_rotors as _check_rotor_ranges
+from .urdf.plausibility import check_urdf as _check_urdf_ranges
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -76,7 +76,7 @@ class ArmJoint:
 def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
     """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
 
-    Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.inertia.check_rigid_body`.
+    Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.urdf.inertia.check_rigid_body`.
     The root link (the multirotor body) and every link a joint moves need an ``<inertial>`` (explicit zeros for a
     massless one).
     """
@@ -285,7 +285,7 @@ def check_urdf_joints(xml_text: str, source: str = "URDF") -> None:
 
 
 def check_model_inertias(model: pin.Model) -> None:
-    """:func:`qprr.inertia.check_rigid_body` on every body of a Pinocchio model (after fixed links are merged)."""
+    """:func:`qprr.urdf.inertia.check_rigid_body` on every body of a Pinocchio model (after fixed links are merged)."""
     if not isinstance(model, pin.Model):
         raise InputError(f"model must be a pinocchio.Model, got {type(model).__name__} {_short(model)}")
     for j in range(1, model.njoints):
@@ -734,7 +734,7 @@ def from_model(
     The rotors must be able to lift the platform (sum of f_max a_z >= m g), else
     :class:`~qprr.errors.NonPhysicalError` (the usual cause: masses in grams), and to hover and control
     attitude (:func:`qprr.rotors.check_rotor_set`), else :class:`~qprr.errors.ActuationError`.
-    ``plausibility``: the ranges of the rotor values (:class:`qprr.plausibility.Plausibility`, None: no range check).
+    ``plausibility``: the ranges of the rotor values (:class:`qprr.urdf.plausibility.Plausibility`, None: no range check).
     """
     plausibility = check_plausibility_setting(plausibility)
     if not isinstance(model, pin.Model):
@@ -801,7 +801,7 @@ def _check_thrust_to_weight(platform: Platform, plausibility, source: str) -> No
             f"plausible range for an aerial robot (<= {plausibility.thrust_to_weight_max:g}; racing drones reach "
             f"10-15): thrust bounds in grams-force? (f_max of rotor 1 = {platform.rotors[0].f_max:g} gf = "
             f"{platform.rotors[0].f_max * 9.80665e-3:.4g} N), or masses too small (m = {platform.total_mass:.6g} kg). "
-            "If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, thrust_to_weight_max=...)"
+            "If you mean it, pass plausibility=dataclasses.replace(qprr.urdf.plausibility.DEFAULT, thrust_to_weight_max=...)"
         )
 
 
@@ -876,8 +876,8 @@ def from_urdf(
     or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
     to the last frame of the last arm joint of a serial arm.  The XML is checked first
     (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
-    ``plausibility`` (:class:`qprr.plausibility.Plausibility`; None: no range check).  ``inertials``: a TOML file of
-    inertial overrides (:func:`qprr.inertia.read_inertials`, e.g. written by ``qprr log identify --write-inertials``)
+    ``plausibility`` (:class:`qprr.urdf.plausibility.Plausibility`; None: no range check).  ``inertials``: a TOML file of
+    inertial overrides (:func:`qprr.urdf.inertia.read_inertials`, e.g. written by ``qprr log identify --write-inertials``)
     applied to the model before its checks (:func:`apply_inertials`).
     """
     from .validation import as_real
@@ -927,7 +927,7 @@ def from_urdf(
 
 def apply_inertials(model: pin.Model, overrides: Mapping[str, Mapping], source: str = "inertials") -> pin.Model:
     """A copy of ``model`` with the inertial ``overrides`` ({link: {"mass", "com", "inertia"}},
-    :func:`qprr.inertia.read_inertials`) applied: each names a link a joint moves (its frame is the joint's; a link
+    :func:`qprr.urdf.inertia.read_inertials`) applied: each names a link a joint moves (its frame is the joint's; a link
     fixed to another is merged into it by Pinocchio's parser: give the values of that one); the values replace the
     moving body's (the link and what is fixed to it), the others are kept (the centre of mass in the link's frame, the
     inertia about it in the link's axes).  Unknown links raise :class:`~qprr.errors.UnknownNameError`, a body that

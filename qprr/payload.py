@@ -31,11 +31,11 @@ import pinocchio as pin
 from . import charts as co
 from .dynamics import dynamics_xi
 from .errors import InputError, NonPhysicalError, PlausibilityError, UnknownNameError
-from .inertia import check_rigid_body
 from .kinematics import check_q
 from .model import Platform, check_flight, check_model_data, check_platform, max_lift
-from .plausibility import DEFAULT as PLAUSIBLE
-from .plausibility import check_plausibility_setting
+from .urdf.inertia import check_rigid_body
+from .urdf.plausibility import DEFAULT as PLAUSIBLE
+from .urdf.plausibility import check_plausibility_setting
 from .validation import as_int, as_real, as_vector
 
 APPROACHES = ("link3", "body")
@@ -115,7 +115,7 @@ def with_payload(platform: Platform, payload: Payload | float, approach: str = "
     (``pin.Inertia`` addition: mass, CoM and parallel-axis term at once); ``platform.model`` is
     untouched.  ``platform.params`` is kept as is.  The checks of a loaded platform apply to the copy
     (:func:`qprr.model.check_flight`: inertias, lift, hover and attitude authority) and to the payload (a rigid body,
-    com and size within ``plausibility``, :class:`qprr.plausibility.Plausibility`, None: no range check): a payload the
+    com and size within ``plausibility``, :class:`qprr.urdf.plausibility.Plausibility`, None: no range check): a payload the
     rotors cannot lift raises :class:`~qprr.errors.NonPhysicalError` suggesting grams.
     """
     plausibility = check_plausibility_setting(plausibility)
@@ -135,7 +135,7 @@ def _loaded(platform: Platform, payload: Payload | float, approach: str = "body"
 
 
 def _check_payload(platform: Platform, payload: Payload, plausibility) -> None:
-    """The payload's own body (:func:`qprr.inertia.check_rigid_body`), its plausibility and the lift with it."""
+    """The payload's own body (:func:`qprr.urdf.inertia.check_rigid_body`), its plausibility and the lift with it."""
     check_rigid_body("payload", payload.mass, payload.com_ee, payload.inertia, allow_massless=True)
     if plausibility is not None:
         d = float(np.linalg.norm(payload.com_ee))
@@ -143,14 +143,14 @@ def _check_payload(platform: Platform, payload: Payload, plausibility) -> None:
             raise PlausibilityError(
                 f"payload com_ee is {d:g} m from the end effector, outside the plausible range (<= "
                 f"{plausibility.length_max:g} m): millimetres? {d:g} mm = {d / 1000:g} m. If you mean it, pass "
-                "plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, length_max=...)"
+                "plausibility=dataclasses.replace(qprr.urdf.plausibility.DEFAULT, length_max=...)"
             )
         radius = math.sqrt(max(payload.inertia[:3]) / payload.mass) if payload.mass > 0.0 else 0.0
         if radius > plausibility.gyration_radius_max:
             raise PlausibilityError(
                 f"payload inertia {payload.inertia!r} with mass {payload.mass:g} kg has a radius of gyration "
                 f"of {radius:g} m (> {plausibility.gyration_radius_max:g} m): kg mm^2 or g mm^2? If you mean it, "
-                "pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, gyration_radius_max=...)"
+                "pass plausibility=dataclasses.replace(qprr.urdf.plausibility.DEFAULT, gyration_radius_max=...)"
             )
     lift, g = max_lift(platform), platform.g
     weight = (platform.total_mass + payload.mass) * g

@@ -25,10 +25,10 @@ from pathlib import Path
 import pinocchio as pin
 
 from .errors import InputError, QprrError, UnknownNameError
-from .inertia import read_inertials
 from .model import Platform, apply_inertials, check_flight, from_urdf
 from .registry import Registry
 from .rotors import read_rotor_file
+from .urdf.inertia import read_inertials
 
 DATA_DIR = Path(__file__).resolve().parent / "data"
 
@@ -136,7 +136,7 @@ def resolve(
     :func:`load` for a name of :data:`NAMES`, :func:`qprr.build` for a name of formula (2.1) such
     as ``"HEX-RRR"``; ``layout`` ("plus" or "x") for the Q-PRR or a built platform.  An unknown
     name raises :class:`UnknownNameError` listing the valid ones.  ``inertials``: a TOML file of inertial overrides
-    (:func:`qprr.inertia.read_inertials`) applied to the platform's model, its physics checked again.
+    (:func:`qprr.urdf.inertia.read_inertials`) applied to the platform's model, its physics checked again.
     """
     if urdf is not None:
         if name is not None or layout is not None:

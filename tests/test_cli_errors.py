@@ -60,7 +60,7 @@ BAD = [
     ([], "command"),
     (["frobnicate"], "frobnicate"),
 ]
-NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli_common: as_real/as_int)
+NUMBERS = [  # issue 22 item 7: every numeric option through the one converter set (qprr.cli.common: as_real/as_int)
     (["simulate", "static-idc", "--duration", "1e12"], "duration"),  # logs that cannot fit in memory (the simulator's bound or MemoryError)
     (["simulate", "static-idc", "--duration", "1e400"], "--duration.*finite"),
     (["simulate", "static-idc", "--seed", "-1"], "--seed"),
@@ -133,7 +133,7 @@ def test_version(capsys):
 
 def test_no_numeric_option_bypasses_the_converters():
     """No ``add_argument(..., type=float|int)`` anywhere: argparse's own conversion lets nan, inf and negative counts
-    through and names no bound; every numeric option goes through qprr.cli_common.real/integer/reals."""
+    through and names no bound; every numeric option goes through qprr.cli.common.real/integer/reals."""
     import ast
     from pathlib import Path
 
@@ -152,7 +152,7 @@ def test_the_converters_are_the_charts_checks():
     """The CLI's messages are those of qprr.validation.as_real / as_int (one set of rules for Python and the command line)."""
     import argparse
 
-    from qprr.cli_common import integer, real, reals
+    from qprr.cli.common import integer, real, reals
     from qprr.errors import InputError
     from qprr.validation import as_int
 

@@ -11,7 +11,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import qprr
-from qprr import urdfgen as ug
 from qprr.analysis import workspace
 from qprr.analysis._common import COLLISION_AUDIT_TOLERANCE, collision_mask, make_grid
 from qprr.analysis.hover import hover
@@ -20,6 +19,7 @@ from qprr.errors import InputError
 from qprr.ik import IKSolver
 from qprr.model import from_model
 from qprr.rotors import Rotor, quadrotor, ring, rotors_from_mapping
+from qprr.urdf import writer as ug
 
 # A test robot with a closed-form collision set: a flat body box (top at z = H), a yaw joint at height A
 # (no geometry), then a pitch joint at the same point carrying a cylinder of radius R and length L along its z.

@@ -11,7 +11,6 @@ import pinocchio as pin
 import pytest
 
 import qprr
-from qprr import missions
 from qprr.charts import rate_map
 from qprr.control import IDCGains, ImpedanceGains, MFCGains, make_controller
 from qprr.control.gains import (
@@ -26,6 +25,7 @@ from qprr.control.gains import (
 )
 from qprr.errors import InputError
 from qprr.platforms import load
+from qprr.scenarios import missions
 from qprr.sim import simulate
 from qprr.trajectory import Hold, hover_and_reach
 
@@ -181,7 +181,7 @@ def test_mfc_tracks_the_turret_of_my_platform(quad):
     """hover-reach with the MFC on examples/my_platform (the turret swings 1.8 rad): the derived gains track it better than
     the class's (K_P = 60, K_I = 8, K_D = 35: 0.24 rad RMSE) and the other joints to < 1 mm-rad; the turret's limit is the
     estimator rate g = min beta / (alpha T_c): halving the control period more than halves its error."""
-    from qprr.missions import reach_posture
+    from qprr.scenarios.missions import reach_posture
 
     traj = hover_and_reach(quad, (0.0, 0.0, 2.0), reach_posture(quad, 0.6))
 

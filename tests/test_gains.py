@@ -139,7 +139,7 @@ def test_print_gains_names_the_platforms_coordinates(capsys):
 def test_print_gains_of_motor_lag_are_the_flown_ones(capsys):
     """motor-lag derives its gains knowing the rotor time constant: --print-gains shows those, for the tau of the run
     (the roll/pitch reference filter at 0.075 / tau)."""
-    from qprr.missions import lag_gains
+    from qprr.scenarios.missions import lag_gains
 
     assert main(["simulate", "motor-lag", "--set", "tau=0.02", "--print-gains"]) == 0
     out = capsys.readouterr().out
@@ -168,7 +168,7 @@ def test_print_gains_of_a_controller_without_derived_gains(capsys):
 
 
 def test_ee_impedance_called_directly_names_the_missing_options():
-    from qprr.impedance_scenario import run_ee_impedance
+    from qprr.scenarios.impedance import run_ee_impedance
 
     with pytest.raises(QprrError, match="missing .*'contact'.*qprr.scenarios.run"):
         run_ee_impedance(None, "idc", False, duration=1.0)

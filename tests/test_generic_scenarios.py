@@ -1,4 +1,4 @@
-"""The generic missions of qprr.missions on four platforms: each reaches its physical check, names its own coordinates.
+"""The generic missions of qprr.scenarios.missions on four platforms: each reaches its physical check, names its own coordinates.
 
 Runs are short (3 s at 1 kHz, targets scaled down): the missions scale their timing with the duration.
 """
@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import qprr
-from qprr.missions import read_mission
 from qprr.scenarios import MISSIONS, SCENARIOS, run
+from qprr.scenarios.missions import read_mission
 
 PLATFORMS = ("q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
 QPRR_WORDS = ("r0", "theta2", "theta3", "q-prr", "Q-PRR")
@@ -39,7 +39,7 @@ OPTIONS = {"fly-to": {"target": (0.3, 0.2, 1.0)}, "motor-lag": {"target": (0.3, 
 
 
 def check(name: str, m: dict) -> None:
-    """The physical check of each mission (metrics recorded by qprr.missions)."""
+    """The physical check of each mission (metrics recorded by qprr.scenarios.missions)."""
     if name in ("takeoff-hover", "fly-to", "motor-lag"):  # reaches the target
         assert m["final_position_error"] < 0.01 and m["final_arm_error"] < 0.02
     elif name == "mission":

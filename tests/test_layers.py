@@ -4,13 +4,16 @@ Three layers, from the bottom:
 
 * the core: every module of ``qprr/`` outside ``qprr/thesis/`` and the front ends;
 * the thesis plug-in: ``qprr/thesis/`` (it registers into the core's registries, :mod:`qprr.registry`);
-* the front ends: ``qprr/cli.py``, ``qprr/cli_common.py``, ``qprr/__main__.py`` and every ``cli.py`` of a
+* the front ends: the package ``qprr/cli/``, ``qprr/__main__.py`` and every ``cli.py`` of a
   subpackage (the thesis's own ``qprr/thesis/cli.py`` included).
 
 A module imports only from its own layer or the ones below, and the core's front ends reach the
 thesis through the registries, never by import.  Checked on the import statements (parsed, anywhere
 in a module, deferred imports included), on ``import_module``/``__import__`` calls with a literal
 name, and at run time (importing the core loads no thesis module).  No import cycle between modules.
+
+Inside the layers, the order of docs/architecture.md's module map: every module is named by a row of the map (a file,
+or its folder), and every import, deferred ones included, points to its own row or one above.
 """
 
 from __future__ import annotations
@@ -35,7 +38,7 @@ MODULES = {module_name(p): p for p in sorted(PKG.rglob("*.py"))}
 
 
 def is_front_end(mod: str) -> bool:
-    return mod in ("qprr.cli", "qprr.cli_common", "qprr.__main__") or mod.endswith(".cli")
+    return mod in ("qprr.cli", "qprr.__main__") or mod.startswith("qprr.cli.") or mod.endswith(".cli")
 
 
 def is_thesis(mod: str) -> bool:
@@ -188,3 +191,59 @@ def test_the_public_face_is_the_workflow():
 
     with pytest.raises(AttributeError, match="no attribute 'simulat'"):
         qprr.simulat  # noqa: B018 - a typo is an AttributeError, not a lazy lookup
+
+
+# ------------------------------------------------------------------------------------ the module map's order
+ARCHITECTURE = ROOT / "docs" / "architecture.md"
+MAP_COLUMN = 37
+"""Width of the left column of the map's rows (the paths); the right column describes them."""
+
+
+def map_rows() -> list[list[str]]:
+    """The paths of each row of docs/architecture.md's module map, top to bottom (a row whose left column is empty
+    continues the description of the row above)."""
+    block = ARCHITECTURE.read_text(encoding="utf-8").split("## The module map", 1)[1].split("```", 2)[1]
+    lines = block.split("\n")[1:]
+    assert lines[0].strip() == "qprr/", "the map's code block starts with qprr/"
+    return [line[:MAP_COLUMN].split() for line in lines[1:] if line[:MAP_COLUMN].strip()]
+
+
+def map_rank(mod: str, rows: list[list[str]]) -> int | None:
+    """Row of module ``mod`` in the map: the most specific entry naming it (a file, then its innermost folder; ``*/cli.py``
+    stands for every subpackage's cli module), None when no entry does."""
+    path = MODULES[mod].relative_to(PKG).as_posix()
+    best, depth = None, -1
+    for i, row in enumerate(rows):
+        for entry in row:
+            if entry == path or (entry == "*/cli.py" and path.endswith("/cli.py")):
+                return i
+            if entry.endswith("/") and path.startswith(entry) and entry.count("/") > depth:
+                best, depth = i, entry.count("/")
+    return best
+
+
+def test_the_module_map_names_every_module():
+    rows = map_rows()
+    missing = [str(MODULES[m].relative_to(ROOT)) for m in MODULES if m not in ("qprr", "qprr.__main__") and map_rank(m, rows) is None]
+    assert missing == [], missing
+
+
+def test_every_import_follows_the_module_maps_order():
+    """docs/architecture.md: "each line uses only what is above it or beside it".  Every import counts, the ones inside
+    functions too (qprr's package ``__init__`` and ``__main__`` stand outside the order)."""
+    rows = map_rows()
+    bad = []
+    for mod in MODULES:
+        if mod in ("qprr", "qprr.__main__"):
+            continue
+        mine = map_rank(mod, rows)
+        for line, target in imports(mod):
+            if target in MODULES and target != "qprr" and map_rank(target, rows) > mine:
+                bad.append(f"{_where(mod, line, target)} (map row {mine + 1} uses row {map_rank(target, rows) + 1})")
+    assert bad == [], "\n".join(bad)
+
+
+def test_the_map_order_check_sees_an_upward_import():
+    rows = map_rows()
+    assert map_rank("qprr.errors", rows) < map_rank("qprr.model", rows) < map_rank("qprr.sim.loop", rows) < map_rank("qprr.cli", rows)
+    assert map_rank("qprr.analysis.cli", rows) == map_rank("qprr.cli", rows)

@@ -1,6 +1,6 @@
 """Modified Denavit-Hartenberg (Khalil-Kleinfinger) chains, Thesis (3.27)-(3.30), Table 3.4 and (3.48)-(3.56).
 
-The builder (qprr.mdh) is checked on its own (a planar 2R arm and a prismatic joint, in
+The builder (qprr.nomenclature.mdh) is checked on its own (a planar 2R arm and a prismatic joint, in
 closed form), then the thesis's table and transforms are compared with the URDF model
 frame by frame: joint origins, joint axes (with their sign) and the end-effector pose.
 """
@@ -15,9 +15,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from qprr import mdh
 from qprr.charts import rot_y, rot_z
 from qprr.errors import InputError, ShapeError
+from qprr.nomenclature import mdh
 from qprr.thesis import ARM_JOINTS, EE_FRAME
 from qprr.thesis import printed as th
 from qprr.thesis.checks import fixed_base_arm, mdh_frame_errors, urdf_arm_frames

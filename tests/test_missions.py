@@ -1,4 +1,4 @@
-"""The building blocks of qprr.missions a plug-in instantiates (MissionSettings, noise amplitudes, a pulse train,
+"""The building blocks of qprr.scenarios.missions a plug-in instantiates (MissionSettings, noise amplitudes, a pulse train,
 phases as data, gains objects), on a platform other than the Q-PRR: what they do and what they refuse."""
 
 from __future__ import annotations
@@ -7,10 +7,9 @@ import numpy as np
 import pytest
 
 import qprr
-from qprr import missions
 from qprr.control import IDCGains
 from qprr.errors import InputError
-from qprr.scenarios import SCENARIOS
+from qprr.scenarios import SCENARIOS, missions
 from qprr.sim import Pulse, WhiteNoise
 from qprr.trajectory import Hold, Phase
 

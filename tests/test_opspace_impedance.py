@@ -292,7 +292,7 @@ def test_ee_impedance_scenario_and_figure(tmp_path):
     """The generic scenario on a coplanar hexarotor: the wall stops the end effector where K e = h (two springs in series),
     and the figure is written."""
     from qprr import scenarios
-    from qprr.impedance_scenario import plot_ee_impedance, steady_state
+    from qprr.scenarios.impedance import plot_ee_impedance, steady_state
 
     res = scenarios.run("ee-impedance", platform=_platform("HEX-RRR"), t_on=0.5, t_off=3.5, duration=6.0)
     d = steady_state(res, 3.5 - res.dt)

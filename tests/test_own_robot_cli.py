@@ -18,7 +18,7 @@ import pytest
 import qprr
 from qprr import scenarios
 from qprr.cli import main
-from qprr.impedance_scenario import steady_state
+from qprr.scenarios.impedance import steady_state
 
 try:
     import tomllib

@@ -20,9 +20,9 @@ from hypothesis import strategies as st
 import qprr
 import qprr.thesis
 from qprr.errors import InputError, NonPhysicalError, UnknownNameError
-from qprr.inertia import check_rigid_body
 from qprr.model import from_model, from_urdf
 from qprr.thesis.urdf import URDF_PATH, build_urdf
+from qprr.urdf.inertia import check_rigid_body
 
 SETTINGS = settings(max_examples=60, deadline=None, derandomize=True)
 P = qprr.thesis.thesis_params()

@@ -19,8 +19,8 @@ from hypothesis import strategies as st
 
 import qprr
 from qprr.errors import ActuationError, ActuationWarning
-from qprr.plausibility import DEFAULT
 from qprr.rotors import Rotor, actuation_summary, check_rotor_set, duplicate_rotors, ring
+from qprr.urdf.plausibility import DEFAULT
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = ROOT / "examples" / "my_platform" / "quad_rrr.urdf"

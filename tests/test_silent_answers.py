@@ -56,7 +56,7 @@ def test_motor_lag_flies_the_rotor_file_s_motor_table():
     """borinot's rotor file gives b = 4.511e-6 N s^2, T = 5 ms, w_max = 2236 rad/s: motor-lag's stage is that one (it
     flew b = 1e-5 and w_max from the thrust bounds); a tau given replaces the table's time constant only."""
     import qprr
-    from qprr.missions import motor_stage
+    from qprr.scenarios.missions import motor_stage
 
     borinot = qprr.load("borinot_flying_arm_2")
     assert borinot.motor["thrust_factor"] == 4.511e-6

@@ -1,4 +1,4 @@
-"""The thesis's Chapter 6 scenarios are the generic missions of qprr.missions called with the thesis's settings.
+"""The thesis's Chapter 6 scenarios are the generic missions of qprr.scenarios.missions called with the thesis's settings.
 
 Each test runs a thesis scenario (registered by the plug-in) and the generic scenario with the thesis's
 gains, mission (as data), disturbance amplitudes or pulses, and checks the logs agree to 1e-12; runs are
@@ -10,9 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from qprr import missions
 from qprr.control import PayloadIDC
-from qprr.scenarios import SCENARIOS
+from qprr.scenarios import SCENARIOS, missions
 from qprr.sim import SimConfig
 from qprr.thesis import gains, load
 from qprr.thesis.missions import STATIC_MISSION, static_mission

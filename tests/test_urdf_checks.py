@@ -17,7 +17,7 @@ import pytest
 import qprr
 from qprr.errors import InputError, NonPhysicalError, PlausibilityError, QprrError
 from qprr.payload import Payload, with_payload
-from qprr.plausibility import DEFAULT, Plausibility
+from qprr.urdf.plausibility import DEFAULT, Plausibility
 
 ROOT = Path(__file__).resolve().parents[1]
 URDF = (ROOT / "examples" / "my_platform" / "quad_rrr.urdf").read_text()

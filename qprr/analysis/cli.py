@@ -50,7 +50,7 @@ def map_reference(map_name: str, platform, result) -> MapReference | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..cli_common import fail, output_path, platform_from_args
+    from ..cli.common import fail, output_path, platform_from_args
 
     try:
         output_path(args.plot, (".png", ".pdf", ".svg"), "plot")
@@ -135,7 +135,7 @@ def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgr
 
 def register_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
-    from ..cli_common import add_platform_options, integer, real, reals
+    from ..cli.common import add_platform_options, integer, real, reals
 
     p = sub.add_parser(
         "analyze",
@@ -173,7 +173,7 @@ def register_cli(sub) -> None:
 
 def run_inspect(args: argparse.Namespace) -> int:
     """``qprr inspect``: the platform's report (:func:`qprr.analysis.inspect.inspect_platform`)."""
-    from ..cli_common import platform_from_args
+    from ..cli.common import platform_from_args
     from .inspect import inspect_platform
 
     print(inspect_platform(platform_from_args(args)).text())
@@ -182,7 +182,7 @@ def run_inspect(args: argparse.Namespace) -> int:
 
 def register_inspect(sub) -> None:
     """Add the ``inspect`` command: a platform's tree, inertias, joints, rotors, actuation and notes."""
-    from ..cli_common import add_platform_options
+    from ..cli.common import add_platform_options
 
     p = sub.add_parser(
         "inspect",

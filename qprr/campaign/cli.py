@@ -15,8 +15,8 @@ import os
 import sys
 import time
 
-from ..cli_common import add_store_options, integer
-from ..cli_common import fail as _fail
+from ..cli.common import add_store_options, integer
+from ..cli.common import fail as _fail
 from ..errors import QprrError
 
 

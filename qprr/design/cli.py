@@ -9,7 +9,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..cli_common import add_store_options, integer
+from ..cli.common import add_store_options, integer
 from ..errors import QprrError
 
 

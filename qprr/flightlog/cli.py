@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..cli_common import PLATFORM_HELP, add_platform_options, fail, integer, output_path, platform_from_args, real
+from ..cli.common import PLATFORM_HELP, add_platform_options, fail, integer, output_path, platform_from_args, real
 from ..errors import InputError, MissingDependencyError, QprrError, UnknownNameError
 from ..model import from_urdf
 from .identify import IdentifyOptions, identify

@@ -1,7 +1,7 @@
 """ULog files written from simulated flights of any platform, with the truth beside them (the tests and the docs).
 
 A flight is :func:`qprr.sim.simulate` of a mission (a climb, steps of x, y and yaw, the arm swept through its range,
-a descent) under qprr's IDC controller with gains for the motor lag (:func:`qprr.missions.lag_gains`), the rotors
+a descent) under qprr's IDC controller with gains for the motor lag (:func:`qprr.scenarios.missions.lag_gains`), the rotors
 behind the first-order motor lag of :class:`qprr.sim.actuators.RotorDynamics`.  The log holds what PX4 logs
 (topics and fields of PX4 1.15's msg/ definitions), in PX4's frames (:mod:`qprr.flightstack.frames`):
 
@@ -36,8 +36,8 @@ from ..control import make_controller
 from ..errors import InputError
 from ..flightstack.frames import R_ned_frd_from_world_body, frd_from_body, ned_from_world
 from ..flightstack.px4 import com_body_at, geometry_from_platform
-from ..missions import lag_gains
 from ..model import Platform, check_platform
+from ..scenarios.missions import lag_gains
 from ..sim import simulate
 from ..sim.actuators import RotorDynamics
 from ..trajectory import MultiPhase, Phase

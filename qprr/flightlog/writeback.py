@@ -1,6 +1,6 @@
 """The identified robot written back for every other command: a rotor file with the identified thrust per rotor at
 full command as each rotor's f_max (PX4's CT, :func:`qprr.rotors.rotors_to_toml`), and a TOML file of inertial
-overrides that :func:`qprr.from_urdf` applies (``inertials=``; :func:`qprr.inertia.read_inertials`).
+overrides that :func:`qprr.from_urdf` applies (``inertials=``; :func:`qprr.urdf.inertia.read_inertials`).
 
 Only identified values are written, each with its std as a comment; a value the flight does not determine is left
 out (the URDF's is kept).  The inertial values are those of each moving body (Pinocchio merges the links fixed to a
@@ -75,7 +75,7 @@ def inertial_overrides(result: Identification, platform: Platform) -> dict:
 
 def write_inertials(result: Identification, path, platform: Platform) -> Path:
     """Write the :func:`inertial_overrides` of ``result`` to ``path`` (.toml, read by
-    :func:`qprr.inertia.read_inertials`); nothing identified raises :class:`~qprr.errors.InputError` with the
+    :func:`qprr.urdf.inertia.read_inertials`); nothing identified raises :class:`~qprr.errors.InputError` with the
     reasons of the base's values."""
     path = as_output_path(path, "write_inertials", suffixes=(".toml",))
     overrides = inertial_overrides(result, platform)

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..cli_common import Parser, add_platform_options, fail, integer, output_path, platform_from_args, real, reals
+from ..cli.common import Parser, add_platform_options, fail, integer, output_path, platform_from_args, real, reals
 from ..errors import InputError
 from ..flightlog.ulog import FlightLog
 from ..rotors import check_rotor_set, rotors_to_toml

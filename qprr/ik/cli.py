@@ -13,7 +13,7 @@ import json
 import numpy as np
 import pinocchio as pin
 
-from ..cli_common import add_platform_options, fail, platform_from_args, real
+from ..cli.common import add_platform_options, fail, platform_from_args, real
 from ..errors import QprrError
 from .solver import METHODS, IKResult, IKSolver
 

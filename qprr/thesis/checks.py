@@ -29,11 +29,11 @@ import pinocchio as pin
 from .. import charts as ch
 from .. import dynamics as dyn
 from .. import kinematics as kin
-from .. import mdh
 from ..actuation import Allocator, input_map_matrix
 from ..charts import check_rotation, unit_quaternion
 from ..errors import InputError, ShapeError
 from ..model import Platform, check_platform
+from ..nomenclature import mdh
 from ..validation import as_array, as_int, as_vector
 from . import printed as th
 from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
@@ -591,7 +591,7 @@ def _c_3_27(ctx: Context) -> Evidence:
         None,
         f"chain (3.29)-(3.30) of the product (3.27) with Table 3.4 (alpha = pi/2 on the theta2 "
         f"row, as (3.53)), ^bT_0 (3.49), ^4T_eb (3.51), frame by frame vs the URDF: {_fmt(parts)}; the Pinocchio "
-        f"model built from the table (qprr.mdh.build_model): frames and end-effector Jacobian vs the URDF {e_pin:.1g}",
+        f"model built from the table (qprr.nomenclature.mdh.build_model): frames and end-effector Jacobian vs the URDF {e_pin:.1g}",
     )
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..cli_common import fail, output_path
+from ..cli.common import fail, output_path
 
 
 def _cmd_urdf(args: argparse.Namespace) -> int:

@@ -23,7 +23,7 @@ name                what
 Registered in :data:`qprr.scenarios.SCENARIOS`.  Results carry ``metrics`` on the rotor bounds
 (:func:`thrust_margins`) and, for the MPC, its solve statistics (``mpc_*``).
 
-Built on the generic missions of :mod:`qprr.missions` (bit-identical to their earlier own machinery):
+Built on the generic missions of :mod:`qprr.scenarios.missions` (bit-identical to their earlier own machinery):
 ``annex-a`` is ``mission`` with the dynamic mission to :data:`ANNEX_TARGET` as data under the CoG
 stabiliser; ``aggressive-reach`` is ``mission`` flying :func:`~qprr.thesis.missions.aggressive_reach`;
 ``realistic`` is ``motor-lag`` with the Q-PRR's rotor stage (thrust factor of its parameters, time constant
@@ -40,12 +40,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import missions as generic
 from ..actuation import IdealAllocator
 from ..control import IDCGains, InverseDynamicsController
 from ..errors import QprrError, UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
+from ..scenarios import missions as generic
 from ..sim import SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
 from ..validation import as_vector

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from ..errors import InputError, UnknownNameError
-from ..missions import phase_tables
+from ..scenarios.missions import phase_tables
 from ..trajectory import DEFAULT_LAW, MultiPhase, Phase, line_phases
 from ..validation import as_interval, as_real, as_vector, checked_module
 
@@ -95,7 +95,7 @@ def aggressive_reach(
 
 
 STATIC_MISSION = {"phase": tuple(phase_tables(static_mission().phases))}
-"""The mission of Sec. 6.3.1.4 (:func:`static_mission`) as data (:func:`qprr.missions.read_mission`): the
+"""The mission of Sec. 6.3.1.4 (:func:`static_mission`) as data (:func:`qprr.scenarios.missions.read_mission`): the
 ``static-*`` scenarios fly it through the generic ``mission`` (from the ground, yaw 0)."""
 DYNAMIC_MISSION = {"phase": tuple(phase_tables(dynamic_mission().phases))}
 """The mission of Sec. 6.3.3.3 (:func:`dynamic_mission`) as data, flown by ``dynamic-bsg``."""

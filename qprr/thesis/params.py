@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import InputError, NonPhysicalError
-from ..inertia import _finite, check_rigid_body, nearest_physical_moments, second_moments  # noqa: F401 (re-exported)
+from ..urdf.inertia import _finite, check_rigid_body, nearest_physical_moments, second_moments  # noqa: F401 (re-exported)
 
 
 @dataclass(frozen=True)

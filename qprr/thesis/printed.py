@@ -13,7 +13,7 @@ Conventions of the printed formulas (the ones of the thesis, not always ours):
   needs many of them; ``I_x3`` etc. are the principal moments (Ixx, Iyy, Izz) of
   Table 3.2 in the link frame (y parallel to the joint axis, as in the URDF).
 * The modified Denavit-Hartenberg convention of (3.27)-(3.30) is implemented once, in
-  :mod:`qprr.mdh`; Table 3.4 and the transforms (3.48)-(3.56) are here.
+  :mod:`qprr.nomenclature.mdh`; Table 3.4 and the transforms (3.48)-(3.56) are here.
 * "c" in (3.36), (3.45)-(3.46) and (A.1) multiplies forces, so only c/b (kappa) makes
   those rows consistent with (3.31)-(3.35): the ``_corrected`` forms take (b, c).
 """
@@ -26,8 +26,8 @@ import numpy as np
 
 from ..charts import check_rotation, rot_y, rot_z
 from ..errors import InputError
-from ..mdh import MDHRow, kk_transform
-from ..mdh import chain as chain_frames
+from ..nomenclature.mdh import MDHRow, kk_transform
+from ..nomenclature.mdh import chain as chain_frames
 from ..validation import as_vector, checked_module
 from .params import QPRRParams
 
@@ -115,7 +115,7 @@ def mdh_3_28(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
 
 
 def mdh_3_28_corrected(alpha: float, d: float, theta: float, r: float) -> np.ndarray:
-    """(3.28) with entry (1, 2) = -sin(theta): the product (3.27), :func:`qprr.mdh.kk_transform`."""
+    """(3.28) with entry (1, 2) = -sin(theta): the product (3.27), :func:`qprr.nomenclature.mdh.kk_transform`."""
     return kk_transform(alpha, d, theta, r)
 
 

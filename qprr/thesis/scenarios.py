@@ -24,7 +24,7 @@ references, which a multirotor's tilt needs (docs/notes-spikes.md).  ``law="quin
 order-5 polynomial the text names and ``law="thesis"`` the rational formula printed as (6.16)
 (a 1.55 g deceleration on the 10 m climb: the rotors saturate at zero thrust).
 
-Built on the generic missions of :mod:`qprr.missions` (any platform) with the thesis's settings
+Built on the generic missions of :mod:`qprr.scenarios.missions` (any platform) with the thesis's settings
 (bit-identical to the scenarios' earlier own machinery; tests/test_thesis_thin.py):
 
 ==================  ==========================================================================
@@ -62,7 +62,6 @@ from pathlib import Path
 import numpy as np
 
 from .. import kinematics as kin
-from .. import missions as generic
 from ..charts import euler_to_rotation_batch, force_to_xi_batch
 from ..control import (
     DecoupledController,
@@ -74,6 +73,7 @@ from ..control import (
 from ..control.impedance import ImpedanceController
 from ..errors import InputError, QprrError, ScheduleWarning, UnknownNameError
 from ..scenarios import COMMON_OPTIONS, Option, Scenario
+from ..scenarios import missions as generic
 from ..sim import (
     PrescribedWrench,
     Pulse,
@@ -133,7 +133,7 @@ the decoupled scheme, (A.3) with the 6.2 attitude retuning for the desired-state
 
 def flight_gains(name: str, as_printed: bool = False):
     """The gains (:data:`FLIGHT_GAINS`, or the as-printed ones) the Sec. 6.3 flights give controller ``name``: a gains
-    object for :func:`qprr.missions.controller_for` ("class" for the MPC, not the thesis's: its own defaults).
+    object for :func:`qprr.scenarios.missions.controller_for` ("class" for the MPC, not the thesis's: its own defaults).
 
     ``as_printed``: the thesis's settings as printed where they are stable: the desired-state controller with the
     position K_D = 18 of (A.3); the MFC's gains are those printed already.  IDC and the decoupled scheme have none
@@ -166,9 +166,9 @@ def _q_prr(platform):
 
 @dataclass(frozen=True)
 class Instance:
-    """A thesis flight as an instance of a generic mission of :mod:`qprr.missions`: ``generic`` (``mission``, ``noise``,
+    """A thesis flight as an instance of a generic mission of :mod:`qprr.scenarios.missions`: ``generic`` (``mission``, ``noise``,
     ``pulses``) called with the thesis's ``settings`` (options and keywords: the mission as data, noise amplitudes,
-    the pulse train) and, when not phases, the ``reference`` flown (law -> trajectory, :class:`~qprr.missions.MissionSettings`)."""
+    the pulse train) and, when not phases, the ``reference`` flown (law -> trajectory, :class:`~qprr.scenarios.missions.MissionSettings`)."""
 
     generic: Callable
     settings: Mapping[str, object]

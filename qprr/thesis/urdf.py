@@ -11,7 +11,7 @@ only) are primitives sized from the parameters: the hub, a boom from the hub to 
 the motor and a propeller disc on each rotor frame of ``layout`` (the other layout's frames stay
 bare), the slider rail at height d0, the links as cylinders of lengths d1, d2, d3, the
 revolute joint housings about y and a sphere at the end effector.  Each of these shapes is also a
-``<collision>`` element (same origin and geometry, :mod:`qprr.urdfgen`): the collision model of
+``<collision>`` element (same origin and geometry, :mod:`qprr.urdf.writer`): the collision model of
 :mod:`qprr.collision` (the propeller discs included, so qprr adds no disc of its own for the Q-PRR).
 """
 
@@ -21,7 +21,7 @@ import itertools
 import math
 from pathlib import Path
 
-from .. import urdfgen as ug
+from ..urdf import writer as ug
 from .params import LAYOUTS, QPRRParams, thesis_params
 
 URDF_PATH = Path(__file__).resolve().parent.parent.parent / "urdf" / "qprr.urdf"

@@ -58,7 +58,7 @@ def check_run_platform(run, platform, path) -> None:
 
 
 def _cmd_view(args: argparse.Namespace) -> int:
-    from ..cli_common import platform_from_args
+    from ..cli.common import platform_from_args
     from ..errors import QprrError
 
     try:
@@ -84,7 +84,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 
 def _cmd_animate(args: argparse.Namespace) -> int:
-    from ..cli_common import fail, output_path, platform_from_args
+    from ..cli.common import fail, output_path, platform_from_args
     from ..errors import QprrError
 
     try:
@@ -110,7 +110,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
 
 def register_cli(sub) -> None:
     """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
-    from ..cli_common import PLATFORM_HELP, add_platform_options, integer, real
+    from ..cli.common import PLATFORM_HELP, add_platform_options, integer, real
 
     p = sub.add_parser(
         "view",

@@ -15,7 +15,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     if args.name not in names:
         print(f"qprr wheeled: error: unknown robot or exercise {args.name!r}; valid: {', '.join(names)}", file=sys.stderr)
         return 2
-    from ..cli_common import fail, output_path
+    from ..cli.common import fail, output_path
 
     try:
         output_path(args.plot, (".png", ".pdf", ".svg"), "plot")

@@ -8,9 +8,9 @@ campaign's parameters may change).  ``platforms=None``: any platform.
 from __future__ import annotations
 
 from qprr.control import make_controller
-from qprr.missions import reach_posture
 from qprr.platforms import load
 from qprr.scenarios import Option, Scenario
+from qprr.scenarios.missions import reach_posture
 from qprr.sim import SimConfig, simulate
 from qprr.trajectory import MultiPhase, Phase
 

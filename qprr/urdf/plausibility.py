@@ -17,7 +17,7 @@ import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
-from .errors import InputError, PlausibilityError
+from ..errors import InputError, PlausibilityError
 
 
 @dataclass(frozen=True)
@@ -76,7 +76,7 @@ def check_plausibility_setting(plausibility) -> Plausibility | None:
     """``plausibility`` if it is a :class:`Plausibility` or None (checks off), else an :class:`InputError`."""
     if plausibility is not None and not isinstance(plausibility, Plausibility):
         raise InputError(
-            f"plausibility must be a qprr.plausibility.Plausibility (or None: no range checks), got "
+            f"plausibility must be a qprr.urdf.plausibility.Plausibility (or None: no range checks), got "
             f"{type(plausibility).__name__} {plausibility!r:.60}"
         )
     return plausibility
@@ -85,7 +85,7 @@ def check_plausibility_setting(plausibility) -> Plausibility | None:
 def _refuse(what: str, value: float, field_name: str, bound: float, slip: str) -> None:
     raise PlausibilityError(
         f"{what} = {value!r} is outside the plausible range for an aerial robot (<= {bound:g}): {slip}. "
-        f"If you mean it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, "
+        f"If you mean it, pass plausibility=dataclasses.replace(qprr.urdf.plausibility.DEFAULT, "
         f"{field_name}=...) "
     )
 
@@ -116,7 +116,7 @@ def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: st
                 f"propellers: 0.005-0.06 m): kappa is the drag/thrust ratio c/b that gives the rotors' yaw torque; a raw "
                 f"drag coefficient c [N m s^2]? kappa = c / b with b the thrust coefficient [N s^2] (e.g. 1.4e-7 / 8.5e-6 "
                 f"= 0.016 m). With it the yaw torque is {P.kappa_min / r.kappa:.3g}x weaker than it should be. If you mean "
-                f"it, pass plausibility=dataclasses.replace(qprr.plausibility.DEFAULT, kappa_min=...)"
+                f"it, pass plausibility=dataclasses.replace(qprr.urdf.plausibility.DEFAULT, kappa_min=...)"
             )
         if r.radius is not None and r.radius > P.rotor_radius_max:
             _refuse(

@@ -29,9 +29,9 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .charts import rot_x, rot_z
-from .errors import InputError, ShapeError
-from .validation import as_array, as_real, as_vector, checked_module
+from ..charts import rot_x, rot_z
+from ..errors import InputError, ShapeError
+from ..validation import as_array, as_real, as_vector, checked_module
 
 SIGMAS = (0, 1)
 """sigma of a row: 0 revolute (the variable is theta), 1 prismatic (the variable is r)."""

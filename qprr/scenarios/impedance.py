@@ -25,14 +25,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .control import InverseDynamicsController
-from .control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
-from .errors import InputError, UnknownNameError
-from .kinematics import ee_pose_xi
-from .sim import SimResult, simulate
-from .sim.contact import CompliantWall, PrescribedWrench
-from .trajectory import Hold, MultiPhase, Phase
-from .validation import as_vector
+from ..control import InverseDynamicsController
+from ..control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
+from ..errors import InputError, UnknownNameError
+from ..kinematics import ee_pose_xi
+from ..sim import SimResult, simulate
+from ..sim.contact import CompliantWall, PrescribedWrench
+from ..trajectory import Hold, MultiPhase, Phase
+from ..validation import as_vector
 
 CONTROLLERS = ("opspace-impedance", "idc")
 """Controllers of the scenario: the operational-space impedance with a wrist sensor, the plain IDC (no compliance law)."""
@@ -48,7 +48,7 @@ OPTION_NAMES = (
 def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progress: bool = False, **o) -> SimResult:
     """Run the scenario (module docstring); ``o``: every option of :data:`qprr.scenarios.SCENARIOS` ``["ee-impedance"]``
     (their one home; ``qprr.scenarios.run("ee-impedance", ...)`` fills the defaults)."""
-    from .platforms import load
+    from ..platforms import load
 
     missing = sorted(set(OPTION_NAMES) - set(o))
     if missing:
@@ -171,7 +171,7 @@ def summary(result: SimResult) -> list[str]:
 
 def plot_ee_impedance(result: SimResult, path) -> Path:
     """End-effector error against the ideal impedance, contact force against the spring force, base, arm, thrusts, path."""
-    from .viz import figure_path, new_figure
+    from ..viz import figure_path, new_figure
 
     path = figure_path(path)
     s, t = result.series, result.t

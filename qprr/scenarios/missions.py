@@ -47,26 +47,26 @@ from pathlib import Path
 
 import numpy as np
 
-from .control import make_controller
-from .control.base import Controller
-from .control.gains import GAIN_ARGUMENTS, platform_gains
-from .control.gains import load_gains as load_gain_file
-from .control.impedance import ImpedanceGains
-from .control.inverse_dynamics import IDCGains
-from .control.mfc import MFCGains
-from .control.opspace_impedance import EndEffectorImpedance
-from .errors import InputError, ScheduleWarning, UnknownNameError
-from .kinematics import ee_pose_xi
-from .model import Platform, check_platform, max_lift
-from .plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
-from .sim import simulate
-from .sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
-from .sim.contact import CompliantWall
-from .sim.disturbances import Disturbances, Pulse, WhiteNoise
-from .sim.payload import PayloadChange, PayloadSchedule
-from .sim.wind import AerodynamicDrag, Gust, Wind
-from .trajectory import Hold, MultiPhase, Phase, Trajectory
-from .validation import as_real, as_vector, read_toml
+from ..control import make_controller
+from ..control.base import Controller
+from ..control.gains import GAIN_ARGUMENTS, platform_gains
+from ..control.gains import load_gains as load_gain_file
+from ..control.impedance import ImpedanceGains
+from ..control.inverse_dynamics import IDCGains
+from ..control.mfc import MFCGains
+from ..control.opspace_impedance import EndEffectorImpedance
+from ..errors import InputError, ScheduleWarning, UnknownNameError
+from ..kinematics import ee_pose_xi
+from ..model import Platform, check_platform, max_lift
+from ..sim import simulate
+from ..sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
+from ..sim.contact import CompliantWall
+from ..sim.disturbances import Disturbances, Pulse, WhiteNoise
+from ..sim.payload import PayloadChange, PayloadSchedule
+from ..sim.wind import AerodynamicDrag, Gust, Wind
+from ..trajectory import Hold, MultiPhase, Phase, Trajectory
+from ..urdf.plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
+from ..validation import as_real, as_vector, read_toml
 
 PHASE_KEYS = ("coordinate", "start", "end", "target")
 """Keys of one phase of a mission given as data (``[[phase]]`` tables of a TOML file)."""
@@ -134,7 +134,7 @@ def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
         return load_gain_file(gains, name, platform)
     if gains == "class":
         return {}
-    from .registry import GAIN_TABLES
+    from ..registry import GAIN_TABLES
 
     table = GAIN_TABLES[gains]()
     if not isinstance(table, _GAIN_TYPES):
@@ -160,7 +160,7 @@ def reach_posture(platform: Platform, fraction: float) -> np.ndarray:
 
 
 def _platform(platform: Platform | None) -> Platform:
-    from .platforms import load
+    from ..platforms import load
 
     return load() if platform is None else platform
 
@@ -505,7 +505,7 @@ def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gai
 def lag_gains(controller: str, platform: Platform, tau: float) -> dict[str, object]:
     """The derived gains of ``controller`` for rotors of time constant ``tau`` [s] (motor-lag's default, and what
     ``--print-gains`` shows for it): :func:`qprr.control.gains.platform_gains` with ``Targets(rotor_time_constant=tau)``."""
-    from .control.gains import Targets
+    from ..control.gains import Targets
 
     return platform_gains(controller, platform, Targets(rotor_time_constant=tau))
 
@@ -538,7 +538,7 @@ def _noise_amplitude(platform: Platform, o: dict, amplitude) -> tuple[float, ...
         if not np.all(amp >= 0.0):
             raise InputError(f"amplitude must be >= 0 (the noise's half-width per generalised force, N or N m), got {amplitude!r}")
         return tuple(amp.tolist())
-    from .control.gains import Authority
+    from ..control.gains import Authority
 
     a = Authority.from_platform(platform)
     amp = np.array([a.thrust_margin] * 3 + list(a.torque) + [e if np.isfinite(e) else 1.0 for e in a.arm_effort])

@@ -16,12 +16,12 @@ import time
 from importlib import import_module
 from pathlib import Path
 
-from .cli_common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
-from .errors import QprrError
-from .platforms import DEFAULT_PLATFORM
-from .registry import CHECKS, COMMANDS, COMPARISONS
-from .sim.integrators import INTEGRATORS
-from .version import __version__
+from ..errors import QprrError
+from ..platforms import DEFAULT_PLATFORM
+from ..registry import CHECKS, COMMANDS, COMPARISONS
+from ..sim.integrators import INTEGRATORS
+from ..version import __version__
+from .common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
 
 GROUP_MODULES = {
     "view": "qprr.viz.cli",
@@ -43,8 +43,8 @@ the viewer, the campaigns or the scenario table."""
 
 # ------------------------------------------------------------------------------ simulate
 def _cmd_simulate(args: argparse.Namespace) -> int:
-    from .scenarios import SCENARIOS
-    from .viz import plot_result
+    from ..scenarios import SCENARIOS
+    from ..viz import plot_result
 
     prog = "qprr simulate"
     if args.scenario not in SCENARIOS:
@@ -126,7 +126,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
 def _save(res, path: Path) -> Path:
     """The run in ``path``: ``.npz`` (SimResult.save) or a long table (``.csv``, ``.parquet``: qprr.sim.export)."""
-    from .sim.export import save_table
+    from ..sim.export import save_table
 
     return res.save(path) if path.suffix == ".npz" else save_table(res, path)
 
@@ -134,9 +134,9 @@ def _save(res, path: Path) -> Path:
 def _print_gains(sc, platform, controller: str, options: dict) -> int:
     """Print the gains ``controller`` gets in scenario ``sc`` on ``platform`` with the run's ``options``
     (``--print-gains``), without running."""
-    from .control.gains import gain_lines
-    from .missions import flown_gain_arguments
-    from .platforms import load as load_platform
+    from ..control.gains import gain_lines
+    from ..platforms import load as load_platform
+    from ..scenarios.missions import flown_gain_arguments
 
     platform = platform or load_platform()
     spec = options.get("gains") or (sc.options["gains"].default if "gains" in sc.options else "class")
@@ -153,8 +153,8 @@ def _print_gains(sc, platform, controller: str, options: dict) -> int:
 
 def _animate(res, platform, path: Path, progress: bool) -> None:
     """Animate ``res`` to ``path``; :func:`qprr.viz.cli.animate_to_file` prints where it went (one line)."""
-    from .platforms import load as load_platform
-    from .viz import cli as viz_cli
+    from ..platforms import load as load_platform
+    from ..viz import cli as viz_cli
 
     viz_cli.animate_to_file(platform or load_platform(), res, path, progress=progress)
 
@@ -162,7 +162,7 @@ def _animate(res, platform, path: Path, progress: bool) -> None:
 def _summary(res) -> str:
     import numpy as np
 
-    from .control.mpc_stats import solve_summary
+    from ..control.mpc_stats import solve_summary
 
     e = res.rmse()
     kinds = (
@@ -227,7 +227,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
 
 
 def _scenario_help() -> str:
-    from .scenarios import SCENARIOS
+    from ..scenarios import SCENARIOS
 
     lines = []
     for title, group in (

@@ -14,8 +14,8 @@ generic            what
                    dynamics (or any controller of :mod:`qprr.control`)
 ``ee-impedance``   any platform: the end effector under operational-space impedance (Thesis
                    (6.72)-(6.73)) pressed into a compliant wall or pushed by a force step
-                   (:mod:`qprr.impedance_scenario`)
-``takeoff-hover``  any platform, and the other missions of :mod:`qprr.missions` (``fly-to``, ``mission``
+                   (:mod:`qprr.scenarios.impedance`)
+``takeoff-hover``  any platform, and the other missions of :mod:`qprr.scenarios.missions` (``fly-to``, ``mission``
 ``...``            given as data, ``grasp-drop``, ``ee-push``, ``hover-wind``, ``motor-lag``, ``hover-noise``,
                    ``hover-pulses``): gains derived from the platform (:mod:`qprr.control.gains`)
 =================  ===========================================================================
@@ -29,13 +29,13 @@ import inspect
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from .control import CONTROLLERS, make_controller
-from .errors import InputError, UnknownNameError
-from .model import Platform
-from .registry import SCENARIOS
-from .sim import INTEGRATORS, SimConfig, SimResult, simulate
-from .trajectory import DEFAULT_LAW, LAWS, hover_and_reach
-from .validation import as_bool
+from ..control import CONTROLLERS, make_controller
+from ..errors import InputError, UnknownNameError
+from ..model import Platform
+from ..registry import SCENARIOS
+from ..sim import INTEGRATORS, SimConfig, SimResult, simulate
+from ..trajectory import DEFAULT_LAW, LAWS, hover_and_reach
+from ..validation import as_bool
 
 
 @dataclass(frozen=True)
@@ -135,12 +135,12 @@ GAINS_OPTION = Option(
     "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
     "class (the controller's own defaults), a registered gain table, or FILE.toml",
 )
-"""The ``gains`` option of the missions (:func:`qprr.missions.controller_for`)."""
+"""The ``gains`` option of the missions (:func:`qprr.scenarios.missions.controller_for`)."""
 
 
 def _hover_reach(platform, controller, progress, plant=None, **o):
+    from ..platforms import load
     from .missions import controller_for, reach_posture
-    from .platforms import load
 
     platform = load() if platform is None else platform
     q_arm = reach_posture(platform, o["reach_fraction"])
@@ -152,19 +152,19 @@ def _hover_reach(platform, controller, progress, plant=None, **o):
 
 
 def _ee_impedance(platform, controller, progress, **options):
-    from .impedance_scenario import run_ee_impedance
+    from .impedance import run_ee_impedance
 
     return run_ee_impedance(platform, controller, progress, **options)
 
 
 def _ee_impedance_plot(result, path):
-    from .impedance_scenario import plot_ee_impedance
+    from .impedance import plot_ee_impedance
 
     return plot_ee_impedance(result, path)
 
 
 def _ee_impedance_summary(result):
-    from .impedance_scenario import summary
+    from .impedance import summary
 
     return summary(result)
 
@@ -215,7 +215,7 @@ GENERIC = (
 
 
 def _mission_runner(name: str) -> Callable[..., SimResult]:
-    """A runner of :mod:`qprr.missions` (imported on first use); ``plant``: the robot flown when it differs from the
+    """A runner of :mod:`qprr.scenarios.missions` (imported on first use); ``plant``: the robot flown when it differs from the
     controller's model (model errors of a campaign, :func:`qprr.sim.mismatch.perturbed`), on any platform."""
 
     def runner(platform, controller, progress, plant=None, **options):
@@ -345,7 +345,7 @@ MISSIONS = (
         summary=_mission_summary,
     ),
 )
-"""The generic missions of :mod:`qprr.missions` (any platform, gains derived from it)."""
+"""The generic missions of :mod:`qprr.scenarios.missions` (any platform, gains derived from it)."""
 
 
 for _scenario in GENERIC + MISSIONS:

@@ -30,11 +30,11 @@ import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from . import urdfgen as ug
-from .errors import InputError, QprrError
-from .model import Platform, from_urdf
-from .rotors import LAYOUTS, Rotor, layout_rotors
-from .validation import as_name, as_real, as_vector
+from ..errors import InputError, QprrError
+from ..model import Platform, from_urdf
+from ..rotors import LAYOUTS, Rotor, layout_rotors
+from ..urdf import writer as ug
+from ..validation import as_name, as_real, as_vector
 
 UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
 """Multirotor codes of Table 2.3 that :func:`build` makes, and their rotor counts."""

@@ -11,8 +11,8 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
-from .errors import InputError
-from .validation import as_array, as_real, as_vector
+from ..errors import InputError
+from ..validation import as_array, as_real, as_vector
 
 
 def num(x: float, name: str = "x") -> str:
@@ -126,7 +126,7 @@ def joint(name: str, kind: str, parent: str, child: str, xyz, axis=None, limits=
     """``<joint>``; ``limits`` = (lower, upper, effort, velocity)."""
     kinds = ("fixed", "prismatic", "revolute", "continuous", "floating", "planar")
     if kind not in kinds:
-        from .errors import UnknownNameError
+        from ..errors import UnknownNameError
 
         raise UnknownNameError("joint kind", kind, kinds)
     s = f'  <joint name="{xml_name(name, "name")}" type="{kind}">\n'

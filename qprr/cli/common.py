@@ -14,9 +14,9 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from .errors import InputError
-from .platforms import DEFAULT_PLATFORM
-from .validation import as_bool, as_int, as_real
+from ..errors import InputError
+from ..platforms import DEFAULT_PLATFORM
+from ..validation import as_bool, as_int, as_real
 
 
 class Parser(argparse.ArgumentParser):
@@ -107,7 +107,7 @@ def add_platform_options(p: argparse.ArgumentParser, *, name_option: bool = True
 def platform_from_args(args: argparse.Namespace):
     """The platform named by the options of :func:`add_platform_options` (:func:`qprr.platforms.resolve`);
     raises :class:`~qprr.errors.QprrError` with the option names in its message."""
-    from .platforms import resolve
+    from ..platforms import resolve
 
     layout = args.layout
 

@@ -14,8 +14,8 @@ import sys
 
 import numpy as np
 
-from .errors import InputError, NonPhysicalError
-from .validation import as_array, as_file, as_vector
+from ..errors import InputError, NonPhysicalError
+from ..validation import as_array, as_file, as_vector
 
 if sys.version_info >= (3, 11):
     import tomllib
