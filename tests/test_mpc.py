@@ -654,3 +654,29 @@ def test_aggressive_reach_idc_saturates_where_the_mpc_plans_inside_the_bounds(pl
     assert max(e["x"], e["y"], e["z"]) < 0.05
     assert e["r0"] < 0.01 and max(e["theta2"], e["theta3"]) < 0.02
     assert min(idc.rmse()["theta2"], idc.rmse()["theta3"]) > 0.2
+
+
+def test_a_gains_file_sets_the_mpcs_weights_and_settings(tmp_path):
+    """``[mpc.weights]`` and ``[mpc.settings]`` of a gains file (``qprr simulate ... --controller mpc --gains FILE``)
+    reach the controller; an unknown field, a [targets] table (the MPC derives nothing from bandwidths) and a table
+    that is not one of its settings are refused with the file and the valid names."""
+    from qprr.scenarios.missions import controller_for
+
+    pf = qprr.load("borinot_flying_arm_2")
+    good = tmp_path / "mpc.toml"
+    good.write_text("[mpc.weights]\nthrust = 0.02\narm = 3\n[mpc.settings]\nhorizon = 12\nmax_iter = 3\n")
+    ctrl = controller_for("mpc", pf, str(good))
+    assert ctrl.weights == dataclasses.replace(mpc.MPCWeights(), thrust=0.02, arm=3)
+    assert ctrl.settings == dataclasses.replace(mpc.MPCSettings(), horizon=12, max_iter=3)
+    cases = {
+        "[mpc.weights]\nthrus = 1\n": "unknown field of mpc.weights 'thrus'.*'thrust'",
+        "[mpc.settings]\nhorizon = 0\n": "MPCSettings.horizon",
+        "[targets]\nposition_error = 0.1\n": r"\[targets\] does not apply to controller 'mpc'.*\[mpc.weights\], \[mpc.settings\]",
+        "[mpc.gains]\nkp = 1\n": "unknown table of \\[mpc\\].*'gains'.*'weights', 'settings'",
+        "[mpc]\nweights = 1\n": r"\[mpc.weights\] must be a table",
+    }
+    for text, match in cases.items():
+        bad = tmp_path / "bad.toml"
+        bad.write_text(text)
+        with pytest.raises(qprr.QprrError, match=match):
+            controller_for("mpc", pf, str(bad))

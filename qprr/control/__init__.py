@@ -44,7 +44,7 @@ from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
-from .gains import derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains
+from .gains import derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains, replace_fields
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
     DesiredStateInverseDynamics,
@@ -66,9 +66,14 @@ OPTIONAL = {"mpc": ("crocoddyl", "the receding-horizon MPC (controller 'mpc')", 
 
 
 def _mpc(platform: Platform, **kwargs) -> Controller:
-    """:class:`qprr.control.mpc.MPCController` (imported on first use: crocoddyl takes ~0.8 s to import)."""
-    from .mpc import MPCController
+    """:class:`qprr.control.mpc.MPCController` (imported on first use: crocoddyl takes ~0.8 s to import); ``weights`` and
+    ``settings`` given as tables of fields (a gains file's ``[mpc.weights]``, ``[mpc.settings]``) become
+    :class:`~qprr.control.mpc.MPCWeights` and :class:`~qprr.control.mpc.MPCSettings`."""
+    from .mpc import MPCController, MPCSettings, MPCWeights
 
+    for arg, cls in (("weights", MPCWeights), ("settings", MPCSettings)):
+        if isinstance(kwargs.get(arg), dict):
+            kwargs[arg] = replace_fields(cls(), kwargs[arg], platform.n_xi, f"mpc.{arg}")
     return MPCController(platform, **kwargs)
 
 
@@ -89,7 +94,8 @@ _CORE = {
 }
 """The core's controllers (registered into :data:`CONTROLLERS` below; ``mpc`` too when crocoddyl is installed)."""
 if find_spec("crocoddyl") is not None:  # registered only when the optional dependency is installed
-    _CORE["mpc"] = ControllerEntry(_mpc, NoGains("cost weights and a horizon of its own (MPCWeights), not gains"), "receding-horizon MPC")
+    _MPC_GAINS = NoGains("cost weights and a horizon of its own (MPCWeights), not gains", ("weights", "settings"))
+    _CORE["mpc"] = ControllerEntry(_mpc, _MPC_GAINS, "receding-horizon MPC")
 for _name, _entry in _CORE.items():
     CONTROLLERS.register(_name, _entry)
 del _name, _entry

@@ -92,7 +92,7 @@ from .impedance import ImpedanceGains
 from .inverse_dynamics import IDCGains
 from .mfc import MFCGains
 from .opspace_impedance import EndEffectorImpedance
-from .registry import CONTROLLERS, GAIN_ARGUMENTS, has_derived_gains
+from .registry import CONTROLLERS, GAIN_ARGUMENTS, NoGains, has_derived_gains
 
 
 @dataclass(frozen=True)
@@ -366,11 +366,14 @@ def platform_gains(controller: str, platform: Platform, targets: Targets | None 
     for arg, fields in (overrides or {}).items():
         if arg not in kwargs:
             raise UnknownNameError(f"gain argument of {controller!r}", arg, tuple(kwargs))
-        kwargs[arg] = _replaced(kwargs[arg], fields, platform.n_xi, f"{controller}.{arg}")
+        kwargs[arg] = replace_fields(kwargs[arg], fields, platform.n_xi, f"{controller}.{arg}")
     return kwargs
 
 
-def _replaced(obj, fields: dict, n_xi: int, where: str):
+def replace_fields(obj, fields: dict, n_xi: int, where: str):
+    """A copy of the dataclass ``obj`` with ``fields`` (a gains file's table: field -> value) replaced; an unknown field
+    is refused with the valid ones, a number given for a per-coordinate field (a tuple of ``n_xi``) applies to every
+    coordinate, a list becomes a tuple; the copy's own checks run (``__post_init__``).  ``where`` names the table."""
     if not isinstance(fields, dict):
         raise InputError(f"gain overrides of {where} must be a table of field = value, got {fields!r}")
     valid = tuple(f.name for f in dataclasses.fields(obj))
@@ -389,12 +392,18 @@ def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[st
     """Constructor keyword arguments from a TOML file: ``[targets]`` (fields of :class:`Targets`) re-derives,
     then ``[<controller>.<argument>]`` tables replace fields (e.g. ``[idc.gains] kp = [...]``).
 
+    A controller with no derived gains but settings a file may set (:class:`~qprr.control.registry.NoGains`'s
+    ``settings``, e.g. ``[mpc.weights]``, ``[mpc.settings]``) gets those tables as dicts (its factory builds them).
     A file for another controller's tables only raises (it would silently change nothing)."""
     path = Path(path)
     table = read_toml(path, "gains file", "a TOML file: [targets] and [<controller>.gains] tables")
-    extra = [k for k in table if k not in ("targets", *GAIN_ARGUMENTS)]
+    settable = {n: e.gains.settings for n, e in CONTROLLERS.items() if isinstance(e.gains, NoGains) and e.gains.settings}
+    valid = ("targets", *GAIN_ARGUMENTS, *settable)
+    extra = [k for k in table if k not in valid]
     if extra:
-        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], ("targets", *GAIN_ARGUMENTS))
+        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], valid)
+    if controller in settable:
+        return _settings_tables(path, table, controller, settable[controller])
     if set(table) - {"targets"} and controller not in table:
         raise InputError(
             f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
@@ -407,10 +416,32 @@ def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[st
     return platform_gains(controller, platform, targets, table.get(controller))
 
 
+def _settings_tables(path: Path, table: dict, controller: str, names: tuple[str, ...]) -> dict[str, object]:
+    """The ``[<controller>.<argument>]`` tables of a gains file for a controller without derived gains (as dicts)."""
+    if "targets" in table:
+        raise InputError(
+            f"gains file {str(path)!r}: [targets] does not apply to controller {controller!r}, which derives no gains from "
+            f"bandwidth targets; set its {', '.join(f'[{controller}.{n}]' for n in names)} tables instead"
+        )
+    if controller not in table:
+        raise InputError(f"gains file {str(path)!r} has no table for the controller {controller!r}: add [{controller}.{names[0]}]")
+    mine = table[controller]
+    for name, fields in mine.items():
+        if name not in names:
+            raise UnknownNameError(f"table of [{controller}] in gains file {str(path)!r}", name, names)
+        if not isinstance(fields, dict):
+            raise InputError(f"gains file {str(path)!r}: [{controller}.{name}] must be a table of field = value, got {fields!r}")
+    return {name: dict(fields) for name, fields in mine.items()}
+
+
 def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
     """Readable lines of a controller's gain arguments: one row per coordinate ``names`` (xi's names)."""
     lines = []
     for arg, obj in kwargs.items():
+        if isinstance(obj, dict):  # a settings table of a controller without derived gains (:func:`load_gains`)
+            lines.append(f"{arg}: the fields the file sets (the others at the class's defaults)")
+            lines += [f"  {name} = {value}" for name, value in obj.items()]
+            continue
         lines.append(f"{arg}: {type(obj).__name__}")
         fields = dataclasses.fields(obj) if dataclasses.is_dataclass(obj) else ()
         vectors = [f.name for f in fields if isinstance(getattr(obj, f.name), tuple) and len(getattr(obj, f.name)) == len(names)]
@@ -448,6 +479,7 @@ __all__ = [
     "load_gains",
     "mfc_gains",
     "platform_gains",
+    "replace_fields",
     "rotor_bound",
     "tilt_filter",
     "workspace_inverse_inertia",

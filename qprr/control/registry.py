@@ -50,13 +50,19 @@ class DerivedGains:
 
 @dataclass(frozen=True)
 class NoGains:
-    """A controller with no gains to derive from a platform, and why (``mpc``: cost weights of its own)."""
+    """A controller with no gains to derive from a platform, and why (``mpc``: cost weights of its own).
+
+    ``settings``: constructor arguments a gains file may still set, each as a table of fields (``[mpc.weights]``,
+    ``[mpc.settings]``); the factory receives each as a dict of field -> value and builds its object from it."""
 
     reason: str
+    settings: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.reason, str) or not self.reason.strip():
             raise InputError(f"NoGains needs the reason the controller has no gains (e.g. 'cost weights, not gains'), got {self.reason!r}")
+        if isinstance(self.settings, str) or not isinstance(self.settings, tuple) or not all(isinstance(a, str) and a for a in self.settings):
+            raise InputError(f"NoGains.settings must be a tuple of constructor argument names, got {self.settings!r}")
 
 
 @dataclass(frozen=True)
