@@ -90,8 +90,8 @@ NOT_FED: dict[str, str] = {
     "qprr.campaign.backends.Backend*": "abstract base class (its subclasses are fed)",
     "qprr.campaign.backends.DaskBackend*": "starts a Dask cluster of worker processes: tests/test_campaign.py",
     "qprr.trajectory.Trajectory*": "a Protocol (its implementations are fed)",
-    "qprr.envs.*": "the learning environments (the rl extra): tests/test_envs.py feeds them bad options; their helpers' "
-    "catalogue cases (90 found unvalidated: platform, box, randomisation values) are open work of issue 32",
+    "qprr.envs.baseline.baseline_return": "flies whole episodes of a classical controller (seconds per seed): "
+    "tests/test_envs.py feeds it bad env ids, controllers, seeds and platforms",
 }
 """Callables the catalogue does not call (pattern -> where they are tested instead)."""
 
@@ -674,6 +674,40 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.campaign.targets.scale_bandwidth", "s", S(2.0, "pos")),
     ("qprr.campaign.targets.scale_bandwidth", "n_xi", S(9, "count")),
     ("qprr.campaign.worker.load_platform", "name", S("q-prr", "name")),
+    # qprr.envs (the rl extra): a task is named by its value or its Gymnasium id; 2 copies of the default platform
+    ("qprr.envs.*", "task", S("hover", "name")),
+    ("qprr.envs.*", "kind", S("hover", "name")),
+    ("qprr.envs.*", "n", S(2, "count")),
+    ("qprr.envs.*", "geometry", Spec("obj", lambda c: _envs("settings").Geometry())),
+    ("qprr.envs.*", "settings", Spec("obj", lambda c: _envs("settings").EnvSettings())),
+    ("qprr.envs.*.reset", "seed", S(3, "int")),
+    ("qprr.envs.*.reset", "options", Spec("obj", lambda c: {})),
+    ("qprr.envs.settings.settings_with", "options", Spec("obj", lambda c: {"duration": 1.0})),
+    ("qprr.envs.actions.*", "controller", S("idc", "name")),
+    ("qprr.envs.actions.*", "period", S(0.005, "pos")),
+    ("qprr.envs.actions.ReferenceMap", "residual", F(lambda c: np.array([0.5, 0.5, 0.25]))),
+    ("qprr.envs.randomize.Randomization", "entries", Spec("obj", lambda c: (("model.mass", (0.9, 1.1)), ("tau", 0.02)))),
+    ("qprr.envs.randomize.Randomization.*", "key", S("model.mass", "name")),
+    ("qprr.envs.tasks.posture", "u", V(lambda c: np.full(c.n_arm, 0.5))),
+    ("qprr.envs.tasks.posture", "fraction", S(0.5)),
+    ("qprr.envs.tasks.ee_positions", "xi", Spec("mat", lambda c: np.stack([c.xi(), c.xi()]))),
+    ("qprr.envs.tasks.mission_sample", "mission", Spec("obj", lambda c: c.trajectory())),
+    ("qprr.envs.tasks.mission_sample", "t", Spec("vec", lambda c: np.linspace(0.0, 1.0, 5))),
+    ("qprr.envs.tasks.mission_sample", "n_xi", Spec("count", lambda c: c.n_xi)),
+    ("qprr.envs.tasks.TaskSpec", "duration", S(5.0, "pos")),
+    ("qprr.envs.tasks.TaskSpec", "weights", Spec("obj", lambda c: _envs("tasks").RewardWeights())),
+    ("qprr.envs.tasks.TaskSpec", "success", Spec("obj", lambda c: _envs("tasks").Success.BASE_WINDOW)),
+    ("qprr.envs.tasks.TaskSpec", "tolerance", S(0.1, "pos")),
+    ("qprr.envs.tasks.TaskSpec", "window", S(1.0, "pos")),
+    ("qprr.envs.scalar.AerialEnv.step", "action", V(lambda c: np.zeros(_action_size(c)))),
+    ("qprr.envs.vector.AerialVectorEnv.step", "actions", Spec("mat", lambda c: np.zeros((2, _action_size(c))))),
+    ("qprr.envs.core.BatchCore.step", "actions", Spec("mat", lambda c: np.zeros((2, _action_size(c))))),
+    ("qprr.envs.core.BatchCore.step", "frozen", Spec("obj", lambda c: np.zeros(2, dtype=bool))),
+    ("qprr.envs.core.BatchCore.*", "rngs", Spec("obj", lambda c: [np.random.default_rng(0), np.random.default_rng(1)])),
+    ("qprr.envs.core.BatchCore.reset_rows", "rows", Spec("obj", lambda c: np.arange(2))),
+    ("qprr.envs.core.check_actions", "actions", Spec("mat", lambda c: np.zeros((2, _action_size(c))))),
+    ("qprr.envs.core.check_actions", "shape", Spec("skip", lambda c: (2, _action_size(c)))),
+    ("qprr.envs.core.check_actions", "name", Spec("skip", lambda c: "actions")),
 ]
 
 INSTANCES: dict[str, Callable[[Ctx], object]] = {
@@ -686,10 +720,36 @@ INSTANCES: dict[str, Callable[[Ctx], object]] = {
     "qprr.actuation.IdealAllocator": lambda c: importlib.import_module("qprr.actuation").IdealAllocator(c.ideal_platform()),
     "qprr.campaign.spec.CampaignSpec": lambda c: c.campaign_spec(),
     "qprr.campaign.spec.Distribution": lambda c: importlib.import_module("qprr.campaign.spec").Distribution("uniform", 0.5, 1.5),
+    "qprr.envs.scalar.AerialEnv": lambda c: _reset_env(_envs("scalar").AerialEnv("hover")),
+    "qprr.envs.vector.AerialVectorEnv": lambda c: _reset_env(_envs("vector").AerialVectorEnv(2, "hover")),
+    "qprr.envs.core.BatchCore": lambda c: _batch_core(),
     "qprr.campaign.store.ResultStore": lambda c: importlib.import_module("qprr.campaign.store").ResultStore(
         c.fresh_path("store.csv"), ("run", "status"), {"fingerprint": "catalogue"}
     ),
 }
+
+
+def _envs(module: str):
+    """A module of qprr.envs (imported when a builder runs: the rl extra is optional)."""
+    return importlib.import_module(f"qprr.envs.{module}")
+
+
+def _action_size(c: Ctx) -> int:
+    """The size of an action of the thrusts mode on the catalogue's platform (one per rotor and arm joint)."""
+    return c.platform.n_rotors + c.n_arm
+
+
+def _reset_env(env):
+    """An environment after ``reset(seed=0)`` (what its step needs)."""
+    env.reset(seed=0)
+    return env
+
+
+def _batch_core():
+    """Two copies of Hover on the default platform, reset."""
+    core = _envs("core").BatchCore("hover", 2, _envs("settings").EnvSettings())
+    core.reset_rows(np.arange(2), [np.random.default_rng(0), np.random.default_rng(1)])
+    return core
 
 
 def _rot() -> np.ndarray:
@@ -928,6 +988,10 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     ("qprr.charts.*_batch", "*", "NaN entry"): "batch forms over logged runs: a diverged run logs NaN rows, which stay NaN",
     ("qprr.charts.*_batch", "*", "inf entry"): "batch forms over logged runs: rows of a diverged run pass through",
     ("qprr.flightlog.stats.lag_response", "u", "2-D"): "samples in rows, one column per motor",
+    ("qprr.envs.randomize.lag_factors", "tau", "empty"): "one time constant per copy, elementwise: no copies, no factors",
+    ("qprr.envs.tasks.mission_sample", "t", "wrong length"): "any number of sample times",
+    ("qprr.envs.tasks.mission_sample", "t", "empty"): "no sample times: an empty sample",
+    ("qprr.envs.settings.settings_with", "settings", "None"): "None: the default EnvSettings() (documented)",
 }
 """(qualname pattern, parameter, bad label pattern) -> why returning a value is the right answer there."""
 

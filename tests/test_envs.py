@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import qprr
-from qprr.errors import InputError, MissingDependencyError, NotResetError, ShapeError, UnknownNameError
+from qprr.errors import InputError, MissingDependencyError, NonFiniteError, NotResetError, ShapeError, UnknownNameError
 
 ROOT = Path(__file__).resolve().parents[1]
 INSTALL = 'gymnasium is not installed: pip install "qprr[rl]"'
@@ -198,6 +198,109 @@ def test_bad_input_is_named(envs, platforms):
     env.reset(seed=0)
     with pytest.raises(ShapeError, match=r"\(7,\)"):
         env.step(np.zeros(3))
+
+
+def _refusal(error, call, *words) -> str:
+    """The message of the ``error`` that ``call()`` raises; it must contain every one of ``words``."""
+    with pytest.raises(error) as info:
+        call()
+    message = str(info.value)
+    assert all(w in message for w in words), (words, message)
+    return message
+
+
+def test_non_finite_actions_are_refused_and_never_reach_the_plant(envs, platforms):
+    env = envs.AerialEnv("hover", platform=platforms["q-prr"])
+    env.reset(seed=0)
+    q, thrust = env.core.sim.q.copy(), env.core.thrust.copy()
+    action = np.zeros(env.action_space.shape, dtype=np.float32)
+    action[2] = np.nan
+    _refusal(NonFiniteError, lambda: env.step(action), "action[2] = nan", "policy")
+    action[2] = -np.inf
+    _refusal(NonFiniteError, lambda: env.step(action), "action[2] = -inf")
+    assert np.array_equal(env.core.sim.q, q) and np.array_equal(env.core.thrust, thrust)  # nothing flown
+    assert np.isfinite(env.step(np.zeros(env.action_space.shape))[0]).all()  # the episode goes on
+    venv = envs.AerialVectorEnv(3, "hover", platform=platforms["q-prr"])
+    venv.reset(seed=0)
+    actions = np.zeros((3, venv.single_action_space.shape[0]))
+    actions[1, 4] = np.inf
+    _refusal(NonFiniteError, lambda: venv.step(actions), "actions[1, 4] = inf")
+
+
+def test_actions_of_the_wrong_shape_or_kind_are_refused(envs, platforms):
+    env = envs.AerialEnv("hover", platform=platforms["q-prr"])
+    env.reset(seed=0)
+    _refusal(ShapeError, lambda: env.step(np.zeros(8)), "action", "(7,)", "(8,)")
+    _refusal(ShapeError, lambda: env.step(np.zeros((1, 7))), "action", "(1, 7)")
+    _refusal(InputError, lambda: env.step(np.zeros(7) + 0.5j), "action", "complex")
+    _refusal(InputError, lambda: env.step(["up"] * 7), "action", "strings")
+    _refusal(InputError, lambda: env.step(None), "action", "None")
+    venv = envs.AerialVectorEnv(2, "hover", platform=platforms["q-prr"])
+    venv.reset(seed=0)
+    _refusal(ShapeError, lambda: venv.step(np.zeros(7)), "actions", "(2, 7)", "one row per environment", "(7,)")
+    big = np.full(env.action_space.shape, 5.0)  # beyond the Box: clipped to +1, as Gymnasium's bounds say
+    assert np.isfinite(env.step(big)[0]).all()
+
+
+def test_unknown_names_are_refused_naming_the_argument_and_the_value(envs, platforms):
+    _refusal(UnknownNameError, lambda: envs.EnvSettings(platform="quadrotor"), "platform", "'quadrotor'", "'q-prr'", "'borinot_flying_arm_2'")
+    _refusal(InputError, lambda: envs.EnvSettings(platform=3), "platform", "3", "a name")
+    _refusal(UnknownNameError, lambda: envs.AerialEnv("hoover"), "task", "'hoover'", "'hover'", "'qprr/Hover-v0'")
+    _refusal(UnknownNameError, lambda: envs.AerialVectorEnv(2, "qprr/Hover-v1"), "task", "'qprr/Hover-v1'", "'qprr/Hover-v0'")
+    _refusal(UnknownNameError, lambda: envs.EnvSettings(action_mode="torques"), "action_mode", "'torques'", "'thrusts'")
+    _refusal(UnknownNameError, lambda: envs.EnvSettings(action_mode=2), "action_mode", "2", "'wrench'")
+    _refusal(UnknownNameError, lambda: envs.EnvSettings(integrator="rk45"), "integrator", "'rk45'", "'rk4'")
+    _refusal(InputError, lambda: envs.EnvSettings(rotors="my.rotors.toml"), "rotors", "'my.rotors.toml'", "urdf")
+    _refusal(InputError, lambda: envs.EnvSettings(urdf="missing.urdf", rotors="missing.toml"), "urdf", "missing.urdf", "does not exist")
+    _refusal(InputError, lambda: envs.EnvSettings(platform="q-prr", urdf="a.urdf", rotors="a.toml"), "platform", "urdf", "not both")
+
+
+def test_bad_randomisation_is_refused_naming_the_name_and_the_value(envs):
+    from qprr.envs.randomize import Randomization
+
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"model.mass": (1.2, 0.8)}), "model.mass", "(1.2, 0.8)", "low <= high", "(0.8, 1.2)")
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"model.mass": -0.5}), "model.mass", "-0.5", "mass factor > 0")
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"model.mass": 0.0}), "model.mass", "0.0", "mass factor > 0")
+    normal = {"dist": "normal", "mean": 1.0, "std": 0.1}
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"model.mass": normal}), "model.mass", "-inf", "low = 0.0")
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"tau": (0.0, math.nan)}), "tau", "nan", "finite")
+    _refusal(InputError, lambda: envs.EnvSettings(randomize={"gust": (0.0, 1.0, 2.0)}), "gust", "(low, high)")
+    _refusal(InputError, lambda: envs.EnvSettings(randomize=[("tau", 0.02)]), "randomize", "mapping", "list")
+    _refusal(UnknownNameError, lambda: Randomization((("wind", 2.0),)), "randomize", "'wind'", "'mean_wind'")
+    _refusal(InputError, lambda: Randomization((("tau", -0.01),)), "tau", "-0.01", ">= 0 s")
+    _refusal(UnknownNameError, lambda: Randomization().has("mass"), "key", "'mass'", "'model.mass'")
+    _refusal(InputError, lambda: Randomization().draw(np.random.default_rng(0), math.nan), "duration", "nan")
+    _refusal(InputError, lambda: Randomization().draw(0, 5.0), "rng", "default_rng")
+
+
+def test_bad_numbers_and_reset_arguments_are_refused(envs, platforms):
+    from qprr.envs.tasks import RewardWeights
+
+    _refusal(InputError, lambda: envs.EnvSettings(control_period=None), "control_period", "None")
+    _refusal(InputError, lambda: envs.EnvSettings(box=math.inf), "box", "inf")
+    _refusal(InputError, lambda: envs.EnvSettings(duration=0.005), "duration = 0.005", "control_period = 0.02")
+    _refusal(InputError, lambda: envs.EnvSettings(geometry={"home": (0, 0, 2)}), "geometry", "dict", "Geometry(")
+    _refusal(InputError, lambda: RewardWeights(base=-1.0), "weights.base", "-1.0", ">= 0")
+    _refusal(InputError, lambda: envs.AerialEnv("hover", platform=platforms["q-prr"], settings="fast"), "settings", "'fast'")
+    env = envs.AerialEnv("hover", platform=platforms["q-prr"])
+    _refusal(InputError, lambda: env.reset(seed=-1), "seed", "-1")
+    _refusal(InputError, lambda: env.reset(seed=1.5), "seed", "1.5")
+    _refusal(UnknownNameError, lambda: env.reset(options={"reset_mask": [True]}), "reset option", "'reset_mask'")
+    venv = envs.AerialVectorEnv(2, "hover", platform=platforms["q-prr"])
+    _refusal(InputError, lambda: venv.reset(seed=[0]), "seed", "[0]", "2 ints")
+    _refusal(InputError, lambda: venv.reset(seed=[0, -3]), "seed[1]", "-3")
+    _refusal(InputError, lambda: venv.reset(options="all"), "options", "'all'", "reset_mask")
+    _refusal(InputError, lambda: venv.reset(options={"reset_mask": [1, 0]}), "reset_mask", "boolean", "(2,)")
+
+
+def test_baseline_arguments_are_checked_before_flying(envs):
+    _refusal(UnknownNameError, lambda: envs.baseline_return("qprr/Hoover-v0"), "env_id", "'qprr/Hoover-v0'", "'qprr/Hover-v0'")
+    _refusal(UnknownNameError, lambda: envs.baseline_return("hover", controller="pid"), "controller", "'pid'", "'idc'")
+    _refusal(InputError, lambda: envs.baseline_return("hover", seeds=4), "seeds", "4", "range(8)")
+    _refusal(InputError, lambda: envs.baseline_return("hover", seeds=(0, -1)), "seeds[1]", "-1")
+    _refusal(InputError, lambda: envs.baseline_return("hover", seeds=()), "seeds", "empty")
+    _refusal(UnknownNameError, lambda: envs.baseline_return("hover", platform="quadrotor"), "platform", "'quadrotor'")
+    _refusal(InputError, lambda: envs.baseline_return("hover", action_mode="thrusts"), "action_mode")
 
 
 def test_motor_lag_is_the_exact_first_order_response(envs, platforms):

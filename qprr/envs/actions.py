@@ -34,7 +34,9 @@ from ..control import CONTROLLERS, OPTIONAL, make_controller
 from ..control.base import Reference
 from ..control.gains import Authority, Targets, platform_gains
 from ..errors import InputError, MissingDependencyError, QprrError
-from ..model import Platform
+from ..model import Platform, check_platform
+from ..validation import as_int, as_name, as_real, as_vector
+from .settings import REFERENCE_CONTROLLERS
 
 
 @dataclass
@@ -54,6 +56,7 @@ class Tick:
 
 def effort_limits(platform: Platform) -> np.ndarray:
     """The arm's effort limits (n_arm,) [N m or N]: the full scale of an effort action (finite, checked)."""
+    check_platform(platform)
     limits = np.array(platform.arm_effort_limits, dtype=float)
     bad = [platform.arm_names[j] for j in range(platform.n_arm) if not (math.isfinite(limits[j]) and limits[j] > 0.0)]
     if bad:
@@ -78,6 +81,7 @@ class ThrustMap(_OpenLoop):
     """``thrusts`` (module docstring)."""
 
     def __init__(self, platform: Platform, n: int) -> None:
+        _check_map_arguments(platform, n)
         self.platform, self.n_rotors = platform, platform.n_rotors
         self.size = platform.n_rotors + platform.n_arm
         self.f_min, self.f_max = np.array(platform.thrust_min), np.array(platform.thrust_max)
@@ -96,6 +100,7 @@ class WrenchMap(_OpenLoop):
     the wrench at a zero action and per unit action."""
 
     def __init__(self, platform: Platform, n: int) -> None:
+        _check_map_arguments(platform, n)
         Omega = np.array(platform.rotor_matrix)
         self.platform, self.limits = platform, effort_limits(platform)
         self.rows = [i for i in range(6) if np.abs(Omega[i]).max() > 1e-12]
@@ -121,14 +126,16 @@ class ReferenceMap:
     per copy, its gains derived once for the control ``period`` [s]; ``residual`` = (r_p [m], r_psi [rad], r_q)."""
 
     def __init__(self, platform: Platform, n: int, controller: str, period: float, residual: tuple[float, float, float]) -> None:
-        if controller not in CONTROLLERS:
-            raise MissingDependencyError(*OPTIONAL[controller])
+        _check_map_arguments(platform, n)
+        kwargs = controller_arguments(controller, platform, period)
         self.platform, self.period = platform, period
         self.size = 4 + platform.n_arm
-        self.residual = residual
+        residual = as_vector(residual, 3, "residual")
+        if (residual < 0.0).any():
+            raise InputError(f"residual must be full scales >= 0 (position m, yaw rad, arm fraction), got {residual.tolist()}")
+        self.residual = tuple(residual.tolist())
         half_range = 0.5 * (platform.arm_upper - platform.arm_lower)
         self.arm_scale = residual[2] * np.where(np.isfinite(half_range), half_range, math.pi)
-        kwargs = controller_arguments(controller, platform, period)
         self.controllers = [make_controller(controller, platform, **kwargs) for _ in range(n)]
         self.allocators = [Allocator(platform) for _ in range(n)]
         self.states = [State(platform.n_arm) for _ in range(n)]
@@ -197,8 +204,20 @@ def controller_arguments(controller: str, platform: Platform, period: float) -> 
     """Constructor arguments of ``controller`` for a controller period ``period`` [s]: the platform-derived gains
     (:func:`qprr.control.gains.platform_gains` with ``Targets(control_period=period)``: the MFC's estimator runs at
     it); none for the MPC, which solves at its own rate (:class:`qprr.control.mpc.MPCSettings`, 100 Hz) and holds its
-    input in between (the period must divide 1 / rate: the default 5 ms does)."""
+    input in between (the period must divide 1 / rate: the default 5 ms does); a controller whose optional dependency is
+    missing raises :class:`~qprr.errors.MissingDependencyError` with its install command."""
+    as_name(controller, "controller", REFERENCE_CONTROLLERS, "controller of the reference action mode")
+    if controller not in CONTROLLERS:
+        raise MissingDependencyError(*OPTIONAL[controller])
+    check_platform(platform)
+    period = as_real(period, "period", positive=True, unit="s")
     return {} if controller == "mpc" else platform_gains(controller, platform, Targets(control_period=period))
+
+
+def _check_map_arguments(platform, n) -> None:
+    """The arguments every action map takes: a Platform and a number of copies >= 1."""
+    check_platform(platform)
+    as_int(n, "n", lo=1)
 
 
 def _fill(ref: Reference, xi, xi_dot, xi_ddot) -> None:

@@ -11,15 +11,16 @@ per control period), skipped with its install command when crocoddyl is missing.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from enum import Enum
 
 import numpy as np
 
 from ..control import CONTROLLERS, OPTIONAL
-from ..errors import InputError, UnknownNameError
+from ..errors import InputError
 from ..platforms import DEFAULT_PLATFORM
-from ..validation import as_int
+from ..validation import as_int, as_name
 from .settings import ENV_IDS, REFERENCE_CONTROLLERS, task_kind
 from .vector import AerialVectorEnv
 
@@ -72,14 +73,15 @@ def baseline_return(env_id, controller: str = "idc", seeds=(0, 1, 2, 3), platfor
     ``controller`` (``"idc"``, ``"mfc"``, ``"mpc"``; also ``"dsid"``, ``"decoupled"``) on ``seeds`` (one episode each,
     all in one batch), on ``platform`` (a name or a Platform; default q-prr).  ``options``: other environment options
     (``randomize=``, ``duration=``, ``urdf=``...; not ``action_mode``, which is ``"reference"`` with a zero residual)."""
-    kind = task_kind(env_id)
-    if controller not in REFERENCE_CONTROLLERS:
-        raise UnknownNameError("baseline controller (controller)", controller, REFERENCE_CONTROLLERS)
+    kind = task_kind(env_id, "env_id")
+    as_name(controller, "controller", REFERENCE_CONTROLLERS, "baseline controller")
     if "action_mode" in options or "controller" in options:
         raise InputError("baseline_return flies action_mode='reference' with its controller argument: do not pass action_mode in options")
-    seeds = tuple(as_int(s, "seeds[i]", lo=0) for s in seeds)
+    if isinstance(seeds, (str, bytes)) or not isinstance(seeds, Iterable):
+        raise InputError(f"seeds must be a sequence of seeds (ints >= 0, one episode each, e.g. seeds=range(8)), got {seeds!r}")
+    seeds = tuple(as_int(s, f"seeds[{i}]", lo=0) for i, s in enumerate(seeds))
     if not seeds:
-        raise InputError("seeds must hold at least one seed (e.g. seeds=range(8))")
+        raise InputError("seeds must hold at least one seed (e.g. seeds=range(8)), got an empty sequence")
     name = platform if isinstance(platform, str) else (DEFAULT_PLATFORM if platform is None and "urdf" not in options else "")
     if controller not in CONTROLLERS:
         package, _, install = OPTIONAL[controller]

@@ -35,11 +35,12 @@ import pinocchio as pin
 from .. import charts as ch
 from ..errors import InputError, NonFiniteError, ShapeError
 from ..sim.batch import BatchSimulator, integrate
+from ..validation import as_array, as_int
 from .actions import ReferenceMap, ThrustMap, Tick, WrenchMap
 from .observation import ObservationLayout, rotation_rows, wrap
-from .randomize import GUST_LENGTH, Draw, Randomization, drag_force, lag_factors, wind_world
+from .randomize import GUST_LENGTH, Draw, Randomization, check_rng, drag_force, lag_factors, wind_world
 from .settings import ActionMode, EnvSettings, TaskKind, task_kind
-from .tasks import ATTACH_RADIUS, CARRY_MASS_FRACTION, TASKS, Success, ee_positions, frame_position, mission_sample, plan_episode
+from .tasks import ATTACH_RADIUS, CARRY_MASS_FRACTION, TASKS, Success, ee_positions, mission_sample, plan_episode
 
 
 class EndReason(Enum):
@@ -60,7 +61,10 @@ class BatchCore:
     def __init__(self, task, n: int, settings: EnvSettings) -> None:
         self.kind = task_kind(task)
         self.spec = TASKS[self.kind]
+        if not isinstance(settings, EnvSettings):
+            raise InputError(f"settings must be a qprr.envs.settings.EnvSettings, got {type(settings).__name__} {settings!r}")
         self.settings = settings
+        n = as_int(n, "n", lo=1)
         if settings.mission is not None and self.kind is not TaskKind.TRACK:
             raise InputError(f"mission is Track's reference (qprr/Track-v0); the {self.kind.value} task draws its own plan: drop mission=")
         self.platform = platform = settings.resolve_platform()
@@ -109,7 +113,8 @@ class BatchCore:
     def reset_rows(self, rows: np.ndarray, rngs: list[np.random.Generator]) -> None:
         """New episodes for the copies ``rows``, copy ``rows[j]`` drawing from ``rngs[j]``: the randomisation, the
         task's goals and initial state, then the first measurement's noise."""
-        rows = np.asarray(rows, dtype=int)
+        rows = self._check_rows(rows)
+        _check_rngs(rngs, rows.size)
         q0 = np.zeros((rows.size, self.platform.nq))
         for j, i in enumerate(rows.tolist()):
             self.draws[i] = self.randomization.draw(rngs[j], self.duration)
@@ -125,6 +130,16 @@ class BatchCore:
         live[rows] = True
         self.actions.reset(rows, self._tick_context(live), self.trajectories)
         self.obs[rows] = self._observe()[rows]
+
+    def _check_rows(self, rows) -> np.ndarray:
+        """``rows`` as distinct copy indices in [0, n) (an int array), else an InputError naming them."""
+        a = np.asarray(rows)
+        if a.ndim != 1 or (a.size and a.dtype.kind not in "iu"):
+            raise InputError(f"rows must be a 1-D array of copy indices (ints in [0, {self.n})), got {rows!r}")
+        a = a.astype(int)
+        if a.size and (a.min() < 0 or a.max() >= self.n or np.unique(a).size != a.size):
+            raise InputError(f"rows must be distinct copy indices in [0, {self.n}), got {a.tolist()}")
+        return a
 
     def _plan_row(self, i: int, rng: np.random.Generator) -> np.ndarray:
         """Copy i's episode plan sampled at every actuation tick (the reference mode's controller reads it there, the
@@ -174,14 +189,12 @@ class BatchCore:
 
         Returns (observations (n, size) float32, rewards (n,), terminated (n,), truncated (n,), info: dict of (n,) arrays).
         """
-        a = np.asarray(actions, dtype=float)
-        if a.shape != (self.n, self.action_size):
-            raise ShapeError(f"actions must have shape ({self.n}, {self.action_size}) (one row per environment), got {a.shape}")
-        if not np.all(np.isfinite(a)):
-            bad = np.flatnonzero(~np.all(np.isfinite(a), axis=1)).tolist()
-            raise NonFiniteError(f"actions must be finite, got NaN or inf in the rows (environments) {bad[:8]}: check the policy's output")
-        a = np.clip(a, -1.0, 1.0)
-        live = ~np.asarray(frozen, dtype=bool)
+        a = np.clip(check_actions(actions, (self.n, self.action_size), "actions"), -1.0, 1.0)  # Gymnasium's Box: clipped
+        frozen = np.asarray(frozen)
+        if frozen.shape != (self.n,) or frozen.dtype != bool:
+            raise InputError(f"frozen must be a boolean array of shape ({self.n},) (one flag per copy), got {frozen!r}")
+        _check_rngs(rngs, self.n)
+        live = ~frozen
         rows = np.flatnonzero(live)
         failed = np.zeros(self.n, dtype=bool)
         for j in range(self.settings.actuation_steps):
@@ -272,8 +285,10 @@ class BatchCore:
         """End-effector positions (n, 3) [m], world frame (NaN for a non-finite state)."""
         out = np.full((self.n, 3), np.nan)
         finite = np.all(np.isfinite(q), axis=1)
-        for i in np.flatnonzero(finite).tolist():
-            out[i] = frame_position(self.platform, self.data, q[i])
+        model, data, frame = self.platform.model, self.data, self.platform.ee_frame
+        for i in np.flatnonzero(finite).tolist():  # frame_position without its checks: the simulator's own states
+            pin.forwardKinematics(model, data, q[i])
+            out[i] = pin.updateFramePlacement(model, data, frame).translation
         return out
 
     def _ee_target(self) -> np.ndarray:
@@ -346,6 +361,32 @@ class BatchCore:
         return self.inside_time >= spec.window - 1e-9
 
 
+def check_actions(actions, shape: tuple[int, ...], name: str) -> np.ndarray:
+    """``actions`` as a float array of ``shape`` with finite entries, else a qprr error naming ``name``, the value and the
+    fix.  Entries beyond [-1, 1] pass (the environment clips them, as Gymnasium's Box bounds say); NaN and inf do not: they
+    would fly the plant on a NaN thrust."""
+    a = as_array(actions, name)
+    if a.shape != shape:
+        rows = " (one row per environment)" if len(shape) == 2 else ""
+        raise ShapeError(f"{name} must have shape {shape}{rows}, values in [-1, 1] (docs/rl.md, action modes), got shape {a.shape}")
+    bad = np.argwhere(~np.isfinite(a))
+    if bad.size:
+        first = tuple(bad[0].tolist())
+        raise NonFiniteError(
+            f"{name} must be finite, got {name}[{', '.join(map(str, first))}] = {float(a[first])!r} ({len(bad)} non-finite entries of "
+            f"{a.size}): check the policy's output (a diverged network gives NaN); values in [-1, 1]"
+        )
+    return a
+
+
+def _check_rngs(rngs, n: int) -> None:
+    """``rngs``: a list of ``n`` numpy Generators (one per copy stepped or reset)."""
+    if not isinstance(rngs, (list, tuple)) or len(rngs) != n:
+        raise InputError(f"rngs must be a list of {n} numpy.random.Generator (one per copy), got {rngs!r}")
+    for j, rng in enumerate(rngs):
+        check_rng(rng, f"rngs[{j}]")
+
+
 def _generalized_force(N: np.ndarray, f: np.ndarray, effort: np.ndarray) -> np.ndarray:
     """tau = N [f; effort] (n, nv), Thesis (5.43), as :meth:`qprr.sim.batch.BatchSimulator.tau_from_thrusts` computes it
     but row by row (``einsum``): BLAS's matrix product sums in an order that depends on the batch size, and a copy of a
@@ -367,4 +408,4 @@ def _action_map(settings: EnvSettings, platform, n: int):
     return ReferenceMap(platform, n, settings.controller, settings.actuation_period, settings.residual)
 
 
-__all__ = ["BatchCore", "EndReason"]
+__all__ = ["BatchCore", "EndReason", "check_actions"]

@@ -33,7 +33,8 @@ import math
 
 import numpy as np
 
-from ..model import Platform
+from ..model import Platform, check_platform
+from ..validation import as_real
 
 SPEED_BOUND = 20.0
 """Bound of the observed linear velocities [m/s]."""
@@ -47,6 +48,8 @@ class ObservationLayout:
     """The entries (name, size) of the observation vector of ``platform`` and their bounds (module docstring)."""
 
     def __init__(self, platform: Platform, box: float) -> None:
+        check_platform(platform)
+        box = as_real(box, "box", positive=True, unit="m")
         na, nr = platform.n_arm, platform.n_rotors
         self.entries = (
             ("base_error_world", 3),

@@ -51,6 +51,7 @@ import numpy as np
 from ..campaign.spec import Distribution
 from ..errors import InputError, UnknownNameError
 from ..sim.batch import rotate
+from ..validation import as_array, as_name, as_real
 
 RANDOMIZE_KEYS = ("model.mass", "model.payload", "mean_wind", "gust", "drag", "tau", "sensor_noise")
 """The names a :class:`Randomization` takes, in the order their values are drawn."""
@@ -95,6 +96,25 @@ class Randomization:
 
     entries: tuple[tuple[str, float | Distribution], ...] = ()
 
+    def __post_init__(self) -> None:
+        if not isinstance(self.entries, (tuple, list)) or not all(isinstance(e, (tuple, list)) and len(e) == 2 for e in self.entries):
+            raise InputError(
+                f"Randomization.entries must be (name, value) pairs, got {self.entries!r}: "
+                "build it with Randomization.from_mapping({'model.mass': (0.9, 1.1), ...})"
+            )
+        for key, _ in self.entries:
+            if not isinstance(key, str) or key not in RANDOMIZE_KEYS:
+                raise UnknownNameError("randomisation name (randomize)", key, RANDOMIZE_KEYS)
+        keys = [key for key, _ in self.entries]
+        if keys != [key for key in RANDOMIZE_KEYS if key in keys]:
+            raise InputError(f"Randomization.entries must name each of {RANDOMIZE_KEYS} at most once, in that order (the draw order), got {keys}")
+        object.__setattr__(self, "entries", tuple((key, _value(key, value)) for key, value in self.entries))
+        if (self.has("mean_wind") or self.has("gust")) and not _may_be_positive(self.value("drag")):
+            raise InputError(
+                "randomize: the wind acts on the robot through the base's drag, and 'drag' is 0: "
+                "give randomize['drag'] > 0 N s/m as well (the hover-wind mission uses 0.3)"
+            )
+
     @classmethod
     def from_mapping(cls, mapping) -> Randomization:
         """From ``{name: number | (low, high) | distribution table | Distribution}``; every name and range checked."""
@@ -107,25 +127,22 @@ class Randomization:
         for key in mapping:
             if key not in RANDOMIZE_KEYS:
                 raise UnknownNameError("randomisation name (randomize)", key, RANDOMIZE_KEYS)
-        entries = tuple((key, _value(key, mapping[key])) for key in RANDOMIZE_KEYS if key in mapping)
-        out = cls(entries)
-        if (out.has("mean_wind") or out.has("gust")) and not _may_be_positive(out.value("drag")):
-            raise InputError(
-                "randomize: the wind acts on the robot through the base's drag, and 'drag' is 0: "
-                "give randomize['drag'] > 0 N s/m as well (the hover-wind mission uses 0.3)"
-            )
-        return out
+        return cls(tuple((key, mapping[key]) for key in RANDOMIZE_KEYS if key in mapping))
 
     def has(self, key: str) -> bool:
-        """True when ``key`` is randomised (given)."""
+        """True when ``key`` (a name of :data:`RANDOMIZE_KEYS`) is randomised (given)."""
+        as_name(key, "key", RANDOMIZE_KEYS, "randomisation name")
         return any(k == key for k, _ in self.entries)
 
     def value(self, key: str) -> float | Distribution | None:
-        """The number or distribution given for ``key`` (None: not given)."""
+        """The number or distribution given for ``key`` (a name of :data:`RANDOMIZE_KEYS`; None: not given)."""
+        as_name(key, "key", RANDOMIZE_KEYS, "randomisation name")
         return next((v for k, v in self.entries if k == key), None)
 
     def draw(self, rng: np.random.Generator, duration: float) -> Draw:
         """One episode's :class:`Draw` from ``rng`` (the draw order of the module docstring); ``duration`` [s]."""
+        check_rng(rng)
+        duration = as_real(duration, "duration", positive=True, unit="s")
         values = {k: (v.sample(rng) if isinstance(v, Distribution) else v) for k, v in self.entries}
         mean = _horizontal(values.get("mean_wind", 0.0), rng) if self.has("mean_wind") else (0.0, 0.0, 0.0)
         peak, start = (0.0, 0.0, 0.0), 0.0
@@ -144,6 +161,13 @@ class Randomization:
         )
 
 
+def check_rng(rng, name: str = "rng") -> np.random.Generator:
+    """``rng`` if it is a numpy Generator (every draw of the environments comes from one), else an InputError naming ``name``."""
+    if not isinstance(rng, np.random.Generator):
+        raise InputError(f"{name} must be a numpy.random.Generator (numpy.random.default_rng(seed)), got {type(rng).__name__} {rng!r}")
+    return rng
+
+
 def _value(key: str, x) -> float | Distribution:
     """A value of ``randomize[key]`` as a number or a Distribution, its range checked against :data:`_RANGES`."""
     if isinstance(x, Distribution):
@@ -153,7 +177,7 @@ def _value(key: str, x) -> float | Distribution:
     elif isinstance(x, (tuple, list)) and len(x) == 2:
         low, high = _number(x[0], key), _number(x[1], key)
         if not low <= high:
-            raise InputError(f"randomize[{key!r}] = {tuple(x)!r}: a range (low, high) needs low <= high")
+            raise InputError(f"randomize[{key!r}] = {tuple(x)!r}: a range (low, high) needs low <= high: did you mean {(high, low)!r}?")
         dist = Distribution("uniform", low=low, high=high)
     elif isinstance(x, (tuple, list)):
         raise InputError(f"randomize[{key!r}] must be a number, a pair (low, high) or a distribution table, got {x!r}")
@@ -164,10 +188,9 @@ def _value(key: str, x) -> float | Distribution:
         lo, hi = _support(dist, key)
     floor, included, what = _RANGES[key]
     if not (lo >= floor if included else lo > floor):
-        raise InputError(
-            f"randomize[{key!r}] must stay {what}, got values down to {lo!r}: give values in range "
-            f"(a normal distribution needs low = {floor!r} or above to stay there)"
-        )
+        given = f"a distribution reaching down to {lo!r}" if dist is not None else repr(lo)
+        fix = f"give the normal distribution low = {floor!r} or above" if dist is not None and dist.kind == "normal" else "give values in that range"
+        raise InputError(f"randomize[{key!r}] must stay {what}, got {given}: {fix}")
     return dist if dist is not None else float(lo)
 
 
@@ -225,6 +248,10 @@ def drag_force(q: np.ndarray, v: np.ndarray, wind: np.ndarray, drag: np.ndarray)
 def lag_factors(tau: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
     """(e^(-h/T), (T / h)(1 - e^(-h/T))) per copy for time constants ``tau`` (n,) [s] and the period h [s]: the
     end-of-period and mean-over-the-period weights of the exact first-order lag (module docstring); (0, 0) at T = 0."""
+    tau = as_array(tau, "tau", finite=True, ndim=1)
+    if (tau < 0.0).any():
+        raise InputError(f"tau must be rotor time constants >= 0 s (0: no lag), got {tau.tolist()}")
+    period = as_real(period, "period", positive=True, unit="s")
     lagged = tau > 0.0
     safe = np.where(lagged, tau, 1.0)
     end = np.where(lagged, np.exp(-period / safe), 0.0)
@@ -232,4 +259,4 @@ def lag_factors(tau: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]
     return end, mean
 
 
-__all__ = ["GUST_LENGTH", "GUST_START", "RANDOMIZE_KEYS", "Draw", "Randomization", "drag_force", "lag_factors", "wind_world"]
+__all__ = ["GUST_LENGTH", "GUST_START", "RANDOMIZE_KEYS", "Draw", "Randomization", "check_rng", "drag_force", "lag_factors", "wind_world"]

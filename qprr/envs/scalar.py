@@ -9,8 +9,9 @@ import gymnasium
 import numpy as np
 from gymnasium.spaces import Box
 
-from ..errors import NotResetError, ShapeError, UnknownNameError
-from .core import BatchCore
+from ..errors import InputError, NotResetError, UnknownNameError
+from ..validation import as_int
+from .core import BatchCore, check_actions
 from .settings import EnvSettings, settings_with
 
 
@@ -43,9 +44,12 @@ class AerialEnv(gymnasium.Env):
         self._running = False
 
     def reset(self, *, seed: int | None = None, options: Mapping | None = None) -> tuple[np.ndarray, dict]:
-        super().reset(seed=seed)
+        seed = None if seed is None else as_int(seed, "seed", lo=0)  # Gymnasium's own check raises a non-qprr error
+        if options is not None and not isinstance(options, Mapping):
+            raise InputError(f"options must be None or a mapping (AerialEnv.reset takes no options), got {type(options).__name__} {options!r}")
         if options:
-            raise UnknownNameError("reset option", sorted(options)[0], ("none: AerialEnv.reset takes no options",))
+            raise UnknownNameError("reset option (options)", sorted(map(str, options))[0], ("none: AerialEnv.reset takes no options",))
+        super().reset(seed=seed)
         self.core.reset_rows(np.zeros(1, dtype=int), [self.np_random])
         self._running = True
         return self.core.obs[0].copy(), {}
@@ -53,9 +57,7 @@ class AerialEnv(gymnasium.Env):
     def step(self, action) -> tuple[np.ndarray, float, bool, bool, dict]:
         if not self._running:
             raise NotResetError("AerialEnv.step: the episode has ended (or never started): call reset() first")
-        action = np.asarray(action)
-        if action.shape != self.action_space.shape:
-            raise ShapeError(f"action must have shape {self.action_space.shape} (values in [-1, 1], docs/rl.md), got {action.shape}")
+        action = check_actions(action, self.action_space.shape, "action")
         obs, reward, terminated, truncated, info = self.core.step(action[None], np.zeros(1, dtype=bool), [self.np_random])
         self._running = not (terminated[0] or truncated[0])
         return obs[0], float(reward[0]), bool(terminated[0]), bool(truncated[0]), {k: np.asarray(v)[0].item() for k, v in info.items()}

@@ -20,7 +20,7 @@ from ..errors import InputError, UnknownNameError
 from ..model import Platform
 from ..platforms import DEFAULT_PLATFORM, resolve
 from ..sim.config import INTEGRATORS, SimConfig
-from ..validation import as_int, as_real, as_vector
+from ..validation import as_file, as_int, as_name, as_real, as_vector
 from .randomize import Randomization
 
 
@@ -65,14 +65,15 @@ REFERENCE_CONTROLLERS = ("idc", "dsid", "mfc", "decoupled", "mpc")
 """Controllers the ``reference`` action mode can run (names of :data:`qprr.control.CONTROLLERS`; ``mpc`` needs crocoddyl)."""
 
 
-def task_kind(task) -> TaskKind:
-    """``task`` (a :class:`TaskKind`, its value such as ``"reach"`` or its Gymnasium id ``"qprr/Reach-v0"``) as a TaskKind."""
+def task_kind(task, name: str = "task") -> TaskKind:
+    """``task`` (a :class:`TaskKind`, its value such as ``"reach"`` or its Gymnasium id ``"qprr/Reach-v0"``) as a TaskKind;
+    an unknown one raises :class:`~qprr.errors.UnknownNameError` naming the argument ``name`` and listing the tasks."""
     if isinstance(task, TaskKind):
         return task
     for kind, env_id in ENV_IDS.items():
         if task in (kind.value, env_id):
             return kind
-    raise UnknownNameError("task (task or env id)", task, tuple(k.value for k in TaskKind) + tuple(ENV_IDS.values()))
+    raise UnknownNameError(f"task or env id ({name})", task, tuple(k.value for k in TaskKind) + tuple(ENV_IDS.values()))
 
 
 @dataclass(frozen=True)
@@ -160,13 +161,11 @@ class EnvSettings:
     render_mode: str | None = None
 
     def __post_init__(self) -> None:
+        self._check_robot()
         if not isinstance(self.action_mode, ActionMode):
-            valid = tuple(m.value for m in ActionMode)
-            if self.action_mode not in valid:
-                raise UnknownNameError("action mode (action_mode)", self.action_mode, valid)
-            object.__setattr__(self, "action_mode", ActionMode(self.action_mode))
-        if self.controller not in REFERENCE_CONTROLLERS:
-            raise UnknownNameError("controller of the reference action mode (controller)", self.controller, REFERENCE_CONTROLLERS)
+            mode = as_name(self.action_mode, "action_mode", tuple(m.value for m in ActionMode), "action mode")
+            object.__setattr__(self, "action_mode", ActionMode(mode))
+        as_name(self.controller, "controller", REFERENCE_CONTROLLERS, "controller of the reference action mode")
         residual = as_vector(self.residual, 3, "residual")
         if (residual < 0.0).any() or residual[2] > 1.0:
             raise InputError(f"residual must be (position >= 0 m, yaw >= 0 rad, arm fraction in [0, 1]), got {residual.tolist()}")
@@ -174,12 +173,20 @@ class EnvSettings:
         if not isinstance(self.randomize, Randomization):
             object.__setattr__(self, "randomize", None if self.randomize is None else Randomization.from_mapping(self.randomize))
         if not isinstance(self.geometry, Geometry):
-            raise InputError(f"geometry must be a qprr.envs.settings.Geometry, got {type(self.geometry).__name__}")
+            raise InputError(
+                f"geometry must be a qprr.envs.Geometry (e.g. Geometry(home=(0, 0, 2))), got {type(self.geometry).__name__} {self.geometry!r}"
+            )
+        object.__setattr__(self, "dt", as_real(self.dt, "dt", positive=True, unit="s"))
+        object.__setattr__(self, "control_period", as_real(self.control_period, "control_period", positive=True, unit="s"))
+        as_name(self.integrator, "integrator", tuple(INTEGRATORS))
+        self.sim_config()  # an integer number of integration steps per control period
         if self.duration is not None:
             object.__setattr__(self, "duration", as_real(self.duration, "duration", positive=True, unit="s"))
-        if self.integrator not in INTEGRATORS:
-            raise UnknownNameError("integrator", self.integrator, INTEGRATORS)
-        self.sim_config()  # dt and control_period checked (an integer number of steps per period)
+            if self.duration < self.control_period:
+                raise InputError(
+                    f"duration = {self.duration!r} s is shorter than one control period (control_period = {self.control_period!r} s): "
+                    "an episode lasts at least one action; give a longer duration or a shorter control_period"
+                )
         if self.controller_period is not None and self.action_mode is not ActionMode.REFERENCE:
             raise InputError(f"controller_period applies to action_mode='reference' (a controller runs there), not to {self.action_mode.value!r}")
         if self.action_mode is ActionMode.REFERENCE:
@@ -191,6 +198,30 @@ class EnvSettings:
             raise InputError(f"max_tilt must be in (0, pi) rad, got {tilt!r}")
         if self.render_mode is not None:
             raise UnknownNameError("render mode (render_mode)", self.render_mode, ("None: the environments do not render; qprr.viz draws a run",))
+
+    def _check_robot(self) -> None:
+        """The robot's options: a platform name (known, loaded once per process) or a Platform, or a URDF file with its
+        rotor file (and an optional ee_frame), not a mixture (:func:`qprr.platforms.resolve`'s rules, checked here)."""
+        if self.urdf is None:
+            if self.rotors is not None or self.ee_frame is not None:
+                given = ", ".join(f"{k} = {v!r}" for k, v in (("rotors", self.rotors), ("ee_frame", self.ee_frame)) if v is not None)
+                raise InputError(f"a rotor file (rotors) and an end-effector frame (ee_frame) go with a URDF (urdf=...): got {given} without urdf")
+            if not isinstance(self.platform, (str, Platform)) and self.platform is not None:
+                raise InputError(
+                    f"platform must be a name (e.g. {DEFAULT_PLATFORM!r}), a qprr Platform or None with urdf=..., "
+                    f"got {type(self.platform).__name__} {self.platform!r}"
+                )
+            if not isinstance(self.platform, Platform):
+                _named_platform(self.platform)  # an unknown name raises UnknownNameError listing the platforms
+            return
+        if self.platform is not None:
+            raise InputError(f"give a platform (platform = {self.platform!r}) or URDF files (urdf = {str(self.urdf)!r}), not both")
+        if self.rotors is None:
+            raise InputError(f"the URDF (urdf = {str(self.urdf)!r}) needs its rotor description: give rotors= a TOML rotor file (docs/platforms.md)")
+        as_file(self.urdf, "urdf", what="URDF file")
+        as_file(self.rotors, "rotors", what="rotor file (TOML)")
+        if self.ee_frame is not None and not isinstance(self.ee_frame, str):
+            raise InputError(f"ee_frame must be the name of a frame of the URDF, got {type(self.ee_frame).__name__} {self.ee_frame!r}")
 
     def _check_controller_period(self) -> None:
         """The reference mode's controller period: a whole number of integration steps, dividing the control period."""
@@ -232,17 +263,9 @@ class EnvSettings:
     def resolve_platform(self) -> Platform:
         """The platform these settings name (:func:`qprr.platforms.resolve`; named platforms are loaded once per process)."""
         if isinstance(self.platform, Platform):
-            if self.urdf is not None or self.rotors is not None or self.ee_frame is not None:
-                raise InputError("give a Platform (platform=...) or URDF files (urdf=..., rotors=...), not both")
             return self.platform
         if self.urdf is not None:
-            return resolve(self.platform, urdf=self.urdf, rotors=self.rotors, ee_frame=self.ee_frame)
-        if self.rotors is not None or self.ee_frame is not None:
-            return resolve(self.platform, rotors=self.rotors, ee_frame=self.ee_frame)  # raises: they go with a URDF
-        if self.platform is not None and not isinstance(self.platform, str):
-            raise InputError(
-                f"platform must be a name (e.g. {DEFAULT_PLATFORM!r}), a qprr Platform or None with urdf=..., got {type(self.platform).__name__}"
-            )
+            return resolve(urdf=self.urdf, rotors=self.rotors, ee_frame=self.ee_frame)
         return _named_platform(self.platform)
 
 
@@ -257,7 +280,9 @@ def settings_with(settings: EnvSettings | None, options: Mapping) -> EnvSettings
     :class:`~qprr.errors.UnknownNameError` listing the fields."""
     base = EnvSettings() if settings is None else settings
     if not isinstance(base, EnvSettings):
-        raise InputError(f"settings must be a qprr.envs.settings.EnvSettings, got {type(base).__name__}")
+        raise InputError(f"settings must be a qprr.envs.EnvSettings (or None: the defaults), got {type(base).__name__} {base!r}")
+    if not isinstance(options, Mapping):
+        raise InputError(f"options must be a mapping of EnvSettings fields to values (e.g. {{'duration': 1.0}}), got {options!r}")
     names = tuple(f.name for f in dataclasses.fields(EnvSettings))
     for key in options:
         if key not in names:

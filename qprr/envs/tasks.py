@@ -30,6 +30,7 @@ the base from its reference over the episode below 0.15 m.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -40,10 +41,13 @@ import pinocchio as pin
 
 from .. import charts as ch
 from ..errors import InputError
-from ..model import Platform
+from ..kinematics import check_q
+from ..model import Platform, check_model_data, check_platform
 from ..sim.loop import check_sample
 from ..trajectory import MultiPhase, Phase, TrajectorySample
-from .settings import Geometry, TaskKind
+from ..validation import as_array, as_int, as_matrix, as_real, as_vector
+from .randomize import Randomization, check_rng
+from .settings import Geometry, TaskKind, task_kind
 
 
 class Success(Enum):
@@ -72,6 +76,11 @@ class RewardWeights:
     pickup: float = 0.0
     crash: float = 10.0
 
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            weight = as_real(getattr(self, f.name), f"weights.{f.name}", nonnegative=f.name != "alive")  # alive < 0: a time penalty
+            object.__setattr__(self, f.name, weight)
+
 
 @dataclass(frozen=True)
 class TaskSpec:
@@ -85,6 +94,17 @@ class TaskSpec:
     tolerance: float
     window: float = 1.0
     randomize: Mapping | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kind", task_kind(self.kind, "kind"))
+        for name in ("duration", "tolerance", "window"):
+            object.__setattr__(self, name, as_real(getattr(self, name), name, positive=True))
+        if not isinstance(self.weights, RewardWeights):
+            raise InputError(f"weights must be a qprr.envs.tasks.RewardWeights, got {type(self.weights).__name__} {self.weights!r}")
+        if not isinstance(self.success, Success):
+            raise InputError(f"success must be a qprr.envs.tasks.Success, got {self.success!r}: one of {[m.name for m in Success]}")
+        if self.randomize is not None:
+            Randomization.from_mapping(self.randomize)  # names and ranges checked
 
 
 TASKS = {
@@ -130,6 +150,11 @@ class EpisodePlan:
 def posture(platform: Platform, u: np.ndarray, fraction: float) -> np.ndarray:
     """Arm joints q0 + fraction u (q_limit - q0): ``u`` (n_arm,) in [-1, 1] picks, per joint, the way from the neutral
     posture q0 towards the upper (u > 0) or lower (u < 0) limit (to +-pi for an unlimited joint)."""
+    check_platform(platform)
+    u = as_vector(u, platform.n_arm, "u")
+    if np.abs(u).max(initial=0.0) > 1.0:
+        raise InputError(f"u must pick, per arm joint, a way in [-1, 1] towards a limit, got {u.tolist()}")
+    fraction = as_real(fraction, "fraction", lo=0.0, hi=1.0)
     q0 = platform.neutral_q()[7:]
     up = np.where(np.isfinite(platform.arm_upper), platform.arm_upper - q0, math.pi)
     down = np.where(np.isfinite(platform.arm_lower), q0 - platform.arm_lower, math.pi)
@@ -138,6 +163,8 @@ def posture(platform: Platform, u: np.ndarray, fraction: float) -> np.ndarray:
 
 def home_xi(platform: Platform, geometry: Geometry) -> np.ndarray:
     """The home pose: the base at ``geometry.home``, level, yaw 0, the arm at its neutral posture."""
+    check_platform(platform)
+    _check_geometry(geometry)
     xi = platform.neutral_xi()
     xi[0:3] = geometry.home
     return xi
@@ -145,6 +172,8 @@ def home_xi(platform: Platform, geometry: Geometry) -> np.ndarray:
 
 def plan_episode(kind: TaskKind, platform: Platform, rng: np.random.Generator, geometry: Geometry, mission=None) -> EpisodePlan:
     """Draw one episode of the task ``kind`` from ``rng`` (module docstring): goals, then the initial state."""
+    kind = task_kind(kind, "kind")
+    check_rng(rng)
     home = home_xi(platform, geometry)
     if kind is TaskKind.HOVER:
         xi0 = _perturbed(home, platform, rng, geometry)
@@ -197,6 +226,8 @@ def _multiphase(platform: Platform, xi0: np.ndarray, legs) -> MultiPhase:
 
 def mission_sample(mission, t: np.ndarray, n_xi: int) -> TrajectorySample:
     """``mission.sample(t)`` checked (finite xi, xi_dot, xi_ddot of shape (len(t), n_xi), :func:`qprr.sim.check_sample`)."""
+    t = as_array(t, "t", finite=True, ndim=1)
+    n_xi = as_int(n_xi, "n_xi", lo=6)
     try:
         sample = mission.sample(t)
     except AttributeError:
@@ -208,14 +239,28 @@ def mission_sample(mission, t: np.ndarray, n_xi: int) -> TrajectorySample:
 def ee_positions(platform: Platform, data, xi: np.ndarray) -> np.ndarray:
     """End-effector positions (m, 3) [m], world frame, of the thesis coordinates ``xi`` (m, n_xi), one
     forward-kinematics call per row (the nominal model)."""
+    check_model_data(platform, data)
+    xi = as_matrix(xi, (None, platform.n_xi), "xi")
     out = np.empty((xi.shape[0], 3))
     for k in range(xi.shape[0]):
-        out[k] = frame_position(platform, data, ch.xi_to_q(xi[k]))
+        out[k] = _ee_origin(platform, data, ch.xi_to_q(xi[k]))
     return out
 
 
 def frame_position(platform: Platform, data, q: np.ndarray) -> np.ndarray:
     """The end-effector frame's origin [m], world frame, at configuration ``q`` (a copy)."""
+    check_model_data(platform, data)
+    return _ee_origin(platform, data, check_q(platform, q))
+
+
+def _check_geometry(geometry) -> Geometry:
+    if not isinstance(geometry, Geometry):
+        raise InputError(f"geometry must be a qprr.envs.settings.Geometry, got {type(geometry).__name__} {geometry!r}")
+    return geometry
+
+
+def _ee_origin(platform: Platform, data, q: np.ndarray) -> np.ndarray:
+    """:func:`frame_position` on checked arguments."""
     pin.forwardKinematics(platform.model, data, q)
     return pin.updateFramePlacement(platform.model, data, platform.ee_frame).translation.copy()
 

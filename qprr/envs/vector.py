@@ -13,7 +13,7 @@ from gymnasium.vector.utils import batch_space
 
 from ..errors import InputError, NotResetError, UnknownNameError
 from ..validation import as_int
-from .core import BatchCore
+from .core import BatchCore, check_actions
 from .settings import EnvSettings, settings_with
 
 
@@ -60,10 +60,11 @@ class AerialVectorEnv(VectorEnv):
         """New episodes for every environment (or those of ``options["reset_mask"]``, a boolean array); ``seed``: an
         int (environment i gets seed + i), one seed per environment, or None (each continues its own generator)."""
         mask = _reset_mask(options, self.num_envs)
-        if isinstance(seed, int):
-            super().reset(seed=seed)
+        seeds = _row_seeds(seed, self.num_envs)
+        if isinstance(seed, (int, np.integer)):
+            super().reset(seed=seeds[0])
         rngs = self._rngs if self._rngs is not None else [seeding.np_random(None)[0] for _ in range(self.num_envs)]
-        for i, s in enumerate(_row_seeds(seed, self.num_envs)):
+        for i, s in enumerate(seeds):
             if s is not None and mask[i]:
                 rngs[i] = seeding.np_random(s)[0]
         self._rngs = rngs
@@ -76,6 +77,7 @@ class AerialVectorEnv(VectorEnv):
         """One control period of every environment (autoreset of those that ended at the previous step)."""
         if self._rngs is None:
             raise NotResetError("AerialVectorEnv.step before reset: call reset(seed=...) first")
+        actions = check_actions(actions, self.action_space.shape, "actions")  # before the autoreset changes anything
         rows = np.flatnonzero(self._autoreset)
         if rows.size:
             self.core.reset_rows(rows, [self._rngs[i] for i in rows.tolist()])
@@ -91,9 +93,9 @@ def _row_seeds(seed, n: int) -> list[int | None]:
     """One seed (or None) per environment from ``reset``'s ``seed``."""
     if seed is None:
         return [None] * n
-    if isinstance(seed, int):
-        as_int(seed, "seed", lo=0)
-        return [seed + i for i in range(n)]
+    if isinstance(seed, (int, np.integer)):
+        first = as_int(seed, "seed", lo=0)
+        return [first + i for i in range(n)]
     if not isinstance(seed, Sequence) or isinstance(seed, str) or len(seed) != n:
         raise InputError(f"seed must be None, an int or a sequence of {n} ints or None (one per environment), got {seed!r}")
     return [None if s is None else as_int(s, f"seed[{i}]", lo=0) for i, s in enumerate(seed)]
@@ -101,15 +103,17 @@ def _row_seeds(seed, n: int) -> list[int | None]:
 
 def _reset_mask(options: Mapping | None, n: int) -> np.ndarray:
     """The environments ``reset`` renews: ``options["reset_mask"]`` (n booleans) or all."""
+    if options is not None and not isinstance(options, Mapping):
+        raise InputError(f"options must be None or a mapping such as {{'reset_mask': mask}}, got {type(options).__name__} {options!r}")
     options = dict(options or {})
     unknown = set(options) - {"reset_mask"}
     if unknown:
-        raise UnknownNameError("reset option", sorted(unknown)[0], ("reset_mask",))
+        raise UnknownNameError("reset option (options)", sorted(map(str, unknown))[0], ("reset_mask",))
     if "reset_mask" not in options:
         return np.ones(n, dtype=bool)
     mask = np.asarray(options["reset_mask"])
     if mask.shape != (n,) or mask.dtype != bool:
-        raise InputError(f"options['reset_mask'] must be a boolean array of shape ({n},), got {mask!r}")
+        raise InputError(f"options['reset_mask'] must be a boolean array of shape ({n},) (True: reset that environment), got {mask!r}")
     return mask
 
 
