@@ -199,7 +199,7 @@ class QPOptions(Tolerances):
     levels: Sequence | None = None
     max_iter: int = 50
     step_tol: float = 1e-7
-    max_step: float = 0.5
+    max_step: float = 2.0
     eps_abs: float = 1e-9
     regularization: float = 1e-7
     rank_tol: float = 1e-9
