@@ -1,10 +1,27 @@
-"""Inverse kinematics of the Q-PRR: every qprr.ik method and the peers, on the same targets.
+"""Inverse kinematics of the Q-PRR: every qprr.ik method and the peers, on the same targets; then the cold starts of
+the other shipped platforms (borinot_flying_arm_2, hextilt_flying_arm_5, HEX-RRR) against the same peers.
 
     python benchmarks/ik_benchmark.py [--n 200] [--n-unreachable 50] [--seed 0] [--reps 5]
-                                      [--no-peers] [--png ik_benchmark.png] [--quick]
+                                      [--no-peers] [--no-platforms] [--png ik_benchmark.png] [--quick]
+                                      [--placo-venv DIR] [--make-placo-venv]
 
-``--quick``: 12 reachable and 4 unreachable targets, one timed run each, pink as the only peer
-(a test runs it in seconds; its times are too few for a verdict).
+``--quick``: 12 reachable and 4 unreachable targets, one timed run each, pink as the only peer, the Q-PRR
+only (a test runs it in seconds; its times are too few for a verdict).
+
+Peers: pink (differential IK on Pinocchio, ``pip install --no-deps pin-pink``), mink (the same API on MuJoCo,
+``pip install --no-deps mink``: both only need qpsolvers besides what qprr has), PlaCo (C++ on Pinocchio), rtb and
+ikpy.  PlaCo 0.10.2 pins ``pin==3.8.0``, which cannot live beside qprr's pin 4 (crocoddyl is built against it): it
+runs in its own environment, by default ``~/.cache/qprr/placo-venv`` (``--placo-venv DIR``), which
+``--make-placo-venv`` creates (``python -m venv`` and ``pip install placo==0.10.2``: the package registry and a few
+minutes).  The benchmark writes the problem to a file, ``benchmarks/placo_worker.py`` solves and times it with that
+environment's Python and returns the configurations, which are checked here like every other answer; where the
+environment is missing, PlaCo's row says "not available" and why.
+
+Other platforms: targets from random level configurations (base in the same box, arm uniform in its range cut to
++-pi), every solver from qprr's default guess (:func:`qprr.ik.default_guess`: level base, arm neutral, end effector
+placed on the target); qprr's qp with its default four levels (level 2: hover on the under-actuated borinot and
+HEX-RRR, a level base on the fully actuated hextilt), the peers on the platform's hover chain (its URDF with x, y, z,
+yaw joints instead of the free flyer); no unreachable targets there.
 
 Targets (seeded): ``--n`` reachable ones, the end-effector pose (forward kinematics) of
 random hover configurations (roll = pitch = 0, base in a 6 m box, yaw and arm uniform in
@@ -756,24 +773,24 @@ def ratios_report(methods) -> list[str]:
 def cold_start_why(cold, qp, pink, two_levels) -> list[str]:
     """Where the cold start's time goes, from this run's numbers: the fixed cost of a solve (the IGM start's time: the
     IGM and one check of its answer, no Newton step) and the cost of a Newton iteration of the hierarchy."""
-    n_cold = float(np.median([o.iterations for o, _ in cold.results]))
-    n_pink = float(np.median([o.iterations for o, _ in pink.results]))
+    n_cold = float(np.mean([o.iterations for o, _ in cold.results]))
+    n_pink = float(np.mean([o.iterations for o, _ in pink.results]))
     t_cold, t_fixed, t_pink = (float(np.median(m.times)) for m in (cold, qp, pink))
     per_it = (t_cold - t_fixed) / max(n_cold - 1.0, 1.0)
     lines = [
-        f"- why the cold start is {t_cold / t_pink:.1f}x pink's time: {n_cold:.0f} Newton iterations (median; the last "
-        f"one finds the step below step_tol) of the four-level hierarchy at about {_fmt_us(per_it)} us each, on top of "
+        f"- why the cold start is {t_cold / t_pink:.1f}x pink's time: {n_cold:.2f} Newton iterations (mean; the last "
+        f"one finds the step below step_tol or settle_tol) of the four-level hierarchy at about {_fmt_us(per_it)} us each, on top of "
         f"the {_fmt_us(t_fixed)} us of a solve whose start is already the answer (the IGM start, the IGM included); pink takes "
-        f"{n_pink:.0f} full steps of one weighted QP over the 7 hover coordinates at {_fmt_us(t_pink / max(n_pink, 1.0))} us "
+        f"{n_pink:.2f} full steps (mean) of one weighted QP over the 7 hover coordinates at {_fmt_us(t_pink / max(n_pink, 1.0))} us "
         f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve: less than the fixed cost plus one iteration "
         "of the hierarchy driven from Python (small dense linear algebra: null spaces, active sets), so it needs the "
         "hierarchy in compiled code"
     ]
     if two_levels is not None and two_levels.times:
         t2 = float(np.median(two_levels.times))
-        n2 = float(np.median([o.iterations for o, _ in two_levels.results]))
+        n2 = float(np.mean([o.iterations for o, _ in two_levels.results]))
         lines.append(
-            f"- on pink's own problem (two levels, pose then hover): {_fmt_us(t2)} us, {n2:.0f} iterations, "
+            f"- on pink's own problem (two levels, pose then hover): {_fmt_us(t2)} us, {n2:.2f} iterations (mean), "
             f"{t_pink / t2:.2f}x pink's speed: the CoG and posture levels cost {100 * (1 - t2 / t_cold):.0f} % of the cold start"
         )
     return lines
@@ -814,8 +831,12 @@ NOTES = """\
 - unreachable (no hover configuration reaches them): refused = the solver's own flag says failure; wrong
   success = it claims success (a peer without a flag: it returns a configuration that passes the check).
 - like for like: the peers solve the same 7-dof hover problem (x, y, z, yaw, r0, theta2, theta3) from the
-  same guess; qprr's qp solves the 9-dof free-flyer problem with hover as priority level 2.
-- tolerances: pink iterates full steps (dt = 1) until this very criterion; rtb ik_LM stops at
+  same guess; qprr's qp solves the 9-dof free-flyer problem with hover as priority level 2.  On the other
+  platforms likewise: the peers on the hover chain, qprr's qp on the free flyer with four levels.
+- tolerances: pink and mink iterate full steps (dt = 1) of one QP (proxqp; joint limits by their
+  ConfigurationLimit, default gains) until this very criterion; PlaCo applies full steps of its
+  KinematicsSolver (one soft frame task, weight 1, joint limits on) until the same criterion, its times
+  taken in its own process with the same protocol (benchmarks/placo_worker.py); rtb ik_LM stops at
   E = |e|^2 / 2 < 5e-13 (|e| < 1e-6 on [position; angle-axis]); ikpy's least_squares has no absolute
   tolerance: ftol = xtol = 1e-15, budget 5000 evaluations.
 - rtb ik_LM treats joint limits by rejecting a converged solution (and restarting from random
