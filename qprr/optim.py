@@ -168,7 +168,8 @@ class Lexicographic:
     exact_fallback : when ProxQP stops at its iteration limit on a level, solve that level
         exactly with :func:`active_set_qp` instead of raising (an infeasibility verdict on a
         level, always a false positive since z = 0 is feasible, takes that path in any case).
-    active_set_first : solve each level first by :func:`kkt_on_active_set` from the bounds that
+    active_set_first : solve each level first without its bounds (one Cholesky solve: when that minimiser
+        meets the bounds it is the optimum), else by :func:`kkt_on_active_set` from the bounds that
         were active at that level in the previous call (none after :meth:`reset`); ProxQP (and the
         polish) only when those steps do not end at a KKT point.  The answer is then the exact
         optimum without a QP set-up: a sequence of similar problems (the IK's Newton iterations)
@@ -271,9 +272,13 @@ class Lexicographic:
         of 1e-11 at a joint limit).
         """
         m = H.shape[0]
-        if self.active_set_first and self._active.get(level) is None:
-            z = _spd_solve(H, -g)  # the usual case: no bound active, one Cholesky solve
+        if self.active_set_first:
+            # the usual case: no bound active, one Cholesky solve.  Tried first even when a bound was active at this
+            # level in the previous call: an unconstrained minimiser that meets the bounds is the optimum, and the
+            # active-set steps from that guess would end at it only after releasing the bound (a KKT solve more)
+            z = _spd_solve(H, -g)
             if z is not None and _within(C @ z, lo, up):
+                self._active[level] = None
                 return z, 0
         keep = np.abs(C).max(axis=1) > self.rank_tol * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
         if not keep.all():
