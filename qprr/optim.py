@@ -286,11 +286,12 @@ class Lexicographic:
         if self.active_set_first:
             guess = self._active.get(level)
             nc = C.shape[0]
-            at_lo, at_up = (
-                (guess[0].copy(), guess[1].copy())
-                if guess is not None and guess[0].shape[0] == nc
-                else (np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
-            )
+            if guess is not None and guess[0].shape[0] == nc:
+                at_lo, at_up = guess[0].copy(), guess[1].copy()
+            elif z is not None:  # no guess: the bounds the unconstrained minimiser violates (the active-set steps' first move)
+                at_lo, at_up = _violated(C @ z, lo, up)
+            else:
+                at_lo, at_up = np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool)
             out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
             if out is not None:
                 self._active[level] = (out[1], out[2]) if (out[1].any() or out[2].any()) else None
@@ -435,6 +436,14 @@ def polish_box_qp(
 
 def _bound_scale(lo, up, fin_lo, fin_up) -> float:
     return 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
+
+
+def _violated(Cz: np.ndarray, lo: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the lower and upper bounds that Cz violates by more than 1e-10 of the bound scale, as
+    :func:`kkt_on_active_set` adds them to its active set."""
+    ftol = 1e-10 * _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
+    viol_lo = lo - Cz > ftol
+    return viol_lo, (Cz - up > ftol) & ~viol_lo
 
 
 def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, at_lo: np.ndarray, at_up: np.ndarray):
