@@ -168,7 +168,8 @@ class Lexicographic:
     exact_fallback : when ProxQP stops at its iteration limit on a level, solve that level
         exactly with :func:`active_set_qp` instead of raising (an infeasibility verdict on a
         level, always a false positive since z = 0 is feasible, takes that path in any case).
-    active_set_first : solve each level first by :func:`kkt_on_active_set` from the bounds that
+    active_set_first : solve each level first without its bounds (one Cholesky solve: when that minimiser
+        meets the bounds it is the optimum), else by :func:`kkt_on_active_set` from the bounds that
         were active at that level in the previous call (none after :meth:`reset`); ProxQP (and the
         polish) only when those steps do not end at a KKT point.  The answer is then the exact
         optimum without a QP set-up: a sequence of similar problems (the IK's Newton iterations)
@@ -271,9 +272,13 @@ class Lexicographic:
         of 1e-11 at a joint limit).
         """
         m = H.shape[0]
-        if self.active_set_first and self._active.get(level) is None:
-            z = _spd_solve(H, -g)  # the usual case: no bound active, one Cholesky solve
+        if self.active_set_first:
+            # the usual case: no bound active, one Cholesky solve.  Tried first even when a bound was active at this
+            # level in the previous call: an unconstrained minimiser that meets the bounds is the optimum, and the
+            # active-set steps from that guess would end at it only after releasing the bound (a KKT solve more)
+            z = _spd_solve(H, -g)
             if z is not None and _within(C @ z, lo, up):
+                self._active[level] = None
                 return z, 0
         keep = np.abs(C).max(axis=1) > self.rank_tol * max(1.0, float(np.abs(C).max())) if C.shape[0] else np.zeros(0, dtype=bool)
         if not keep.all():
@@ -281,11 +286,12 @@ class Lexicographic:
         if self.active_set_first:
             guess = self._active.get(level)
             nc = C.shape[0]
-            at_lo, at_up = (
-                (guess[0].copy(), guess[1].copy())
-                if guess is not None and guess[0].shape[0] == nc
-                else (np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool))
-            )
+            if guess is not None and guess[0].shape[0] == nc:
+                at_lo, at_up = guess[0].copy(), guess[1].copy()
+            elif z is not None:  # no guess: the bounds the unconstrained minimiser violates (the active-set steps' first move)
+                at_lo, at_up = _violated(C @ z, lo, up)
+            else:
+                at_lo, at_up = np.zeros(nc, dtype=bool), np.zeros(nc, dtype=bool)
             out = kkt_on_active_set(H, g, C, lo, up, at_lo, at_up)
             if out is not None:
                 self._active[level] = (out[1], out[2]) if (out[1].any() or out[2].any()) else None
@@ -430,6 +436,14 @@ def polish_box_qp(
 
 def _bound_scale(lo, up, fin_lo, fin_up) -> float:
     return 1.0 + float(np.abs(np.concatenate([lo[fin_lo], up[fin_up]])).max(initial=0.0))
+
+
+def _violated(Cz: np.ndarray, lo: np.ndarray, up: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Masks of the lower and upper bounds that Cz violates by more than 1e-10 of the bound scale, as
+    :func:`kkt_on_active_set` adds them to its active set."""
+    ftol = 1e-10 * _bound_scale(lo, up, np.isfinite(lo), np.isfinite(up))
+    viol_lo = lo - Cz > ftol
+    return viol_lo, (Cz - up > ftol) & ~viol_lo
 
 
 def kkt_on_active_set(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, up: np.ndarray, at_lo: np.ndarray, at_up: np.ndarray):

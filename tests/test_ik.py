@@ -637,6 +637,39 @@ def test_results_are_deterministic(rob, dat, hover_targets):
             np.testing.assert_array_equal(x, y)
 
 
+def test_settle_tol_only_cuts_the_tail_of_the_lower_levels(rob, dat, hover_targets):
+    """Once the pose holds, steps below settle_tol end the iteration: from cold starts the same successes in no more
+    iterations than with settle_tol = step_tol (the tail run to the end), the CoG offset within 1e-9 m of it, the pose
+    still exact to 1e-10."""
+    tail = igm.solver(rob, "qp", {"settle_tol": 1e-7}, init="guess")
+    settled = igm.solver(rob, "qp", None, init="guess")
+    for M in hover_targets[:12]:
+        a, b = tail.solve(dat, M), settled.solve(dat, M)
+        assert a.success and b.success, (a.reason, b.reason)
+        assert b.iterations <= a.iterations
+        assert abs(a.x_cm - b.x_cm) < 1e-9 and abs(a.y_cm - b.y_cm) < 1e-9
+        assert b.position_error < 1e-10 and b.orientation_error < 1e-10
+
+
+@pytest.mark.parametrize("method", ["qp", "dls"])
+def test_solve_many_gives_the_answers_of_one_solve_per_target(rob, dat, hover_targets, method):
+    """IKSolver.solve_many: reachable and unreachable targets, a position target and a given xi0 among them, the same
+    results to the last bit as one solve per target; a bad target raises before any is solved."""
+    solver = qprr.ik.IKSolver(rob, method)
+    targets = [*hover_targets[:5], tilted(hover_targets[5], 0.3), hover_targets[6].translation.copy(), hover_targets[7]]
+    xi0s = [None] * 7 + [random_hover_xi(np.random.default_rng(3), rob)]
+    many = solver.solve_many(dat, targets, xi0s)
+    one = [qprr.ik.IKSolver(rob, method).solve(dat, M, xi0) for M, xi0 in zip(targets, xi0s)]
+    assert [r.success for r in many] == [r.success for r in one] and not many[5].success
+    for a, b in zip(many, one):
+        assert (a.status, a.reason, a.iterations, a.initial_guess) == (b.status, b.reason, b.iterations, b.initial_guess)
+        np.testing.assert_array_equal(a.q, b.q)
+    with pytest.raises(ShapeError, match=r"targets\[1\]"):
+        solver.solve_many(dat, [hover_targets[0], np.zeros(4)])
+    with pytest.raises(InputError, match="one entry per target"):
+        solver.solve_many(dat, targets, xi0s[:2])
+
+
 # --------------------------------------------------------- targets whose doubles cannot resolve the tolerance
 @pytest.mark.parametrize("method", ["qp", "dls", "igm", "clika"])
 def test_targets_too_far_for_the_tolerance_are_refused(rob, dat, method):

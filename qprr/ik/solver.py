@@ -191,15 +191,17 @@ class QPOptions(Tolerances):
     """Strict task-priority QP IK.  ``posture``: q_arm of the posture level (default: the initial
     guess).  ``levels``: your own sequence of sequences of :class:`qprr.ik.tasks.Task` instead of
     :func:`default_levels`.  ``require_hover``: success needs roll = pitch = 0 (within
-    ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when the pose is
-    reached and max |dv| < step_tol.  ``eps_abs``, ``regularization``, ``rank_tol``: of
+    ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when max |dv| < step_tol (a failure
+    unless the pose is reached); ``settle_tol``: once the pose is reached, stop when max |dv| < settle_tol (the lower
+    levels' tail converges linearly at best and moves nothing a tolerance sees).  ``eps_abs``, ``regularization``, ``rank_tol``: of
     :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
     posture: tuple | None = None
     levels: Sequence | None = None
     max_iter: int = 50
     step_tol: float = 1e-7
-    max_step: float = 0.5
+    settle_tol: float = 1e-5
+    max_step: float = 2.0
     eps_abs: float = 1e-9
     regularization: float = 1e-7
     rank_tol: float = 1e-9
@@ -207,7 +209,7 @@ class QPOptions(Tolerances):
     def __post_init__(self):
         self._check_tolerances()
         check_count("max_iter", self.max_iter)
-        for name in ("step_tol", "max_step", "eps_abs", "rank_tol"):
+        for name in ("step_tol", "settle_tol", "max_step", "eps_abs", "rank_tol"):
             check_positive(name, getattr(self, name))
         check_positive("regularization", self.regularization, strict=False)
         if self.posture is not None:
@@ -816,6 +818,27 @@ class IKSolver:
             result = self._collision_free(data, p_d, R_d, result, t0)
         return result
 
+    def solve_many(self, data: pin.Data, targets: Sequence, xi0s: Sequence | None = None) -> list[IKResult]:
+        """The results of :meth:`solve` for every target of ``targets`` (each from its ``xi0s`` entry, None: the initial
+        guess), in order: the same answers as one call per target (every solve starts afresh), with this solver's QPs
+        and tasks built once.  A bad target raises before any target is solved.  The targets are solved one after the
+        other: the iterations of different targets branch differently (active joint limits, frozen levels, restarts),
+        so they are not run in lockstep (``wall_time`` of each result is its own)."""
+        targets = list(targets)
+        if xi0s is None:
+            xi0s = [None] * len(targets)
+        else:
+            xi0s = list(xi0s)
+            if len(xi0s) != len(targets):
+                raise InputError(f"xi0s must have one entry per target ({len(targets)}), got {len(xi0s)}")
+        check_data(self.platform, data)
+        for k, target in enumerate(targets):
+            try:
+                parse_target(target)
+            except InputError as exc:
+                raise type(exc)(f"targets[{k}]: {exc}") from None
+        return [self.solve(data, target, xi0) for target, xi0 in zip(targets, xi0s)]
+
     def _run(self, data: pin.Data, p_d, R_d, xi: np.ndarray, init: str, t0: float) -> IKResult:
         ctx = SolveContext(
             self.platform, data, self.method, p_d, R_d, self.options, t0, init, _require_hover(self.platform, self.options), self.unreachable_hint
@@ -913,7 +936,7 @@ class _StepShaper:
     def shape(self, step, pose_ok: bool):
         opts = self.opts
         largest = float(np.abs(step.dv).max())
-        small = largest < opts.step_tol
+        small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
         if small and largest < 1e-15:
             return None, "converged_stationary"
         # the lower levels may converge only linearly (damped, unsatisfiable): once the pose holds, stop when their
@@ -940,7 +963,7 @@ class _StepShaper:
         if self.kept is not None:
             dv = step.dv_levels[self.kept - 1]
             largest = float(np.abs(dv).max())
-            small = largest < opts.step_tol
+            small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
         if largest > opts.max_step or self.rest_scale < 1.0:
             d1 = step.dv_first
             rest = (dv - d1) * self.rest_scale
