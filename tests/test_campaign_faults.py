@@ -23,7 +23,7 @@ import pytest
 from qprr.campaign import CampaignSpec, run_campaign
 from qprr.campaign.runner import columns_of, kinds_of
 from qprr.campaign.store import ResultsFileError, ResultStore, ResultsWriteError, read_results
-from qprr.campaign.worker import make_payload, run_one, xi_names_of
+from qprr.campaign.worker import make_task_payload, run_one, xi_names_of
 from qprr.errors import InputError, UnknownNameError
 
 TARGET = """
@@ -83,7 +83,7 @@ def reference(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("reference")
     spec = _spec(tmp)
     done = run_campaign(spec, tmp / "full.csv", backend="inline", progress=False)
-    payload = make_payload(spec)
+    payload = make_task_payload(spec)
     rows = {i: run_one(payload, spec.run(i)) for i in range(spec.n_runs)}
     names = xi_names_of(spec)
     return spec, (tmp / "full.csv").read_bytes(), done.results.table, rows, names, tmp

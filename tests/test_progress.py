@@ -146,7 +146,7 @@ def test_bad_arguments_are_named(kwargs):
 
 @pytest.mark.parametrize("quiet", [False, True])
 def test_analyze_shows_progress_in_a_log_by_default_and_quiet_silences_it(quiet, capsys):
-    from qprr.analysis.cli import main
+    from qprr.cli import main
 
     assert main(["analyze", "hover", "--samples", "2000", "--payload", "0", *(["--quiet"] if quiet else [])]) == 0
     captured = capsys.readouterr()

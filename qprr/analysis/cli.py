@@ -11,7 +11,6 @@ Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 
 from ..platforms import DEFAULT_PLATFORM
@@ -49,7 +48,7 @@ def map_reference(map_name: str, platform, result) -> MapReference | None:
     return None
 
 
-def run(args: argparse.Namespace) -> int:
+def run_analyze(args: argparse.Namespace) -> int:
     from ..cli_common import fail, output_path, platform_from_args
 
     try:
@@ -167,7 +166,7 @@ def register_cli(sub) -> None:
     p.add_argument(
         "-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, a line every few seconds in a log)"
     )
-    p.set_defaults(func=run)
+    p.set_defaults(func=run_analyze)
     register_inspect(sub)
 
 
@@ -195,14 +194,3 @@ def register_inspect(sub) -> None:
     )
     add_platform_options(p)
     p.set_defaults(func=run_inspect)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="qprr")
-    register_cli(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return int(args.func(args) or 0)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

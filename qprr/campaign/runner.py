@@ -32,7 +32,7 @@ from .metrics import metric_columns
 from .session import BackendChoice, Session, check_backend
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
-from .worker import make_payload, nan_row, param_columns, platform_of, run_one
+from .worker import make_task_payload, nan_row, param_columns, platform_of, run_one
 
 
 @dataclass
@@ -178,7 +178,7 @@ def run_campaign(
     names = platform.xi_names
     check_success(spec, names)
     meta = _meta(spec, platform)
-    payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts
+    payload = make_task_payload(spec)  # reads a user file now: a missing one fails before any worker starts
     session = Session(output, columns_of(spec, names), meta, BackendChoice(backend, workers, scheduler), fresh)
     store = session.store
     todo = [i for i in range(spec.n_runs) if i not in store.done]

@@ -75,9 +75,9 @@ def _comparisons():
 
 
 def _check(verbose: bool = False) -> int:
-    from .checks import main
+    from .checks import print_check_table
 
-    return main(verbose=verbose)
+    return print_check_table(verbose=verbose)
 
 
 def _map_reference(map_name, platform, result):

@@ -30,7 +30,7 @@ def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, 
         return []
     be, owned = io.open_backend(backend, workers, scheduler)
     try:
-        io.evaluate(
+        io.evaluate_points(
             be,
             fly_design,
             spec.to_dict(),
