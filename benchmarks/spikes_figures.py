@@ -136,7 +136,7 @@ def push_prismatic(robot, out: Path) -> Path:
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, *scn.ARM_PUSH[1:]])
     p0, _ = kin.ee_pose_xi(robot, data, xi0)
     obj = PushedMass(robot, mass=0.2, origin=p0, stiffness=500.0, damping=20.0, friction=0.3)
-    ctrl = _NoTranslationalCompensation(robot, gains.payload(), ee_sensor=obj.measured, sensor_filter=scn.SENSOR_FILTER)
+    ctrl = _NoTranslationalCompensation(robot, gains.payload_idc(), ee_sensor=obj.measured, sensor_filter=scn.SENSOR_FILTER)
     simulate(robot, ctrl, MultiPhase((Phase("r0", 2.0, 7.0, hi),), tuple(xi0), names=NAMES), 10.0, external_wrench=obj)
     c = obj.history()
     ax.plot(c.t, c.force, lw=1.0, ls="--", label="k = 500 N/m, force not cancelled through the thrust")

@@ -33,7 +33,7 @@ import numpy as np
 
 from qprr.control.base import Controller
 from qprr.sim import simulate
-from qprr.thesis import load
+from qprr.thesis import load_qprr
 from qprr.thesis.missions import static_mission
 from qprr.thesis.scenarios import flight_controller
 

@@ -23,7 +23,7 @@ from qprr.ik import tasks
 from qprr.thesis import igm
 
 POS_TOL = ORI_TOL = 1e-6
-_ROBOT = qprr.thesis.load()  # for the hypothesis tests (no function-scoped fixtures there)
+_ROBOT = qprr.thesis.load_qprr()  # for the hypothesis tests (no function-scoped fixtures there)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -78,7 +78,7 @@ def assert_valid_solution(robot, data, res, M_d, hover=True):
 
 @pytest.fixture(scope="module")
 def rob():
-    return qprr.thesis.load()
+    return qprr.thesis.load_qprr()
 
 
 @pytest.fixture(scope="module")
@@ -557,7 +557,7 @@ def test_qp_reaches_the_pose_of_an_unreachable_target_by_tilting(rob, dat, hover
 def test_targets_outside_the_joint_range_fail_cleanly(rob, dat):
     """A Q-PRR whose revolute joints only reach +-0.5 rad cannot point its end effector
     sideways: theta2 + theta3 = pi/2 is outside [-1, 1]."""
-    narrow = qprr.thesis.load(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
+    narrow = qprr.thesis.load_qprr(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
     data = narrow.data()
     M_d = pin.SE3(co.rot_y(math.pi / 2), np.array([0.0, 0.0, 1.0]))
     res = igm.solve(narrow, data, M_d, "igm")

@@ -74,7 +74,7 @@ def test_push_prismatic_needs_force_compensation():
 
 def test_plot_writes_png(tmp_path):
     res = scn.push_prismatic(push=(0.05, 0.25), duration=0.3, stiffness=STIFFNESS)  # 8 cm in 0.2 s: 15 m/s^2 peak (septic)
-    robot = qprr.thesis.load()
+    robot = qprr.thesis.load_qprr()
     u = scn.applied_generalized_forces(res)
     for k in (0, 120, 299):  # the plotted forces are u = R_Q N f of Thesis (5.43)
         assert np.allclose(u[k], input_map(robot, res.xi[k], np.r_[res.f[k], res.arm_effort[k]]), atol=1e-12)
@@ -94,7 +94,7 @@ def test_wrist_sensor_compensation_needs_a_filter():
     from qprr.thesis.missions import NAMES
     from qprr.trajectory import MultiPhase, Phase
 
-    robot = qprr.thesis.load()
+    robot = qprr.thesis.load_qprr()
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *scn.ARM_PUSH])
     # the law the measurements below were made with (the limit cycle does not depend on it; its amplitude in
     # the window does: with the septic 0.069 N, against 0.0017 N filtered)
@@ -103,7 +103,7 @@ def test_wrist_sensor_compensation_needs_a_filter():
     chatter = {}
     for filt in (None, scn.SENSOR_FILTER):
         obj = it.PushedMass(robot, mass=0.5, origin=p0, friction=0.3, stiffness=STIFFNESS)
-        sim.simulate(robot, LayeredIDC(robot, gains.payload(), ee_sensor=obj.measured, sensor_filter=filt), traj, 1.5, external_wrench=obj)
+        sim.simulate(robot, LayeredIDC(robot, gains.payload_idc(), ee_sensor=obj.measured, sensor_filter=filt), traj, 1.5, external_wrench=obj)
         h = obj.history()
         sel = (h.t > 0.8) & (h.t < 1.3)
         chatter[filt] = np.sqrt(np.mean(np.diff(h.force[sel]) ** 2))  # rms step-to-step change [N]

@@ -36,7 +36,7 @@ from ..errors import InputError, ShapeError
 from ..model import Platform, check_platform
 from ..validation import as_array, as_int, as_vector
 from . import printed as th
-from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
+from .robot import ARM_JOINTS, EE_FRAME, load_qprr, params_of, rotor_set
 
 SEED = 20210101
 N_STATES = 12
@@ -128,10 +128,10 @@ class CheckContext:
 
 
 def make_context(platform: Platform | None = None, seed: int = SEED, n_states: int = N_STATES) -> CheckContext:
-    """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load`)."""
+    """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load_qprr`)."""
     seed = as_int(seed, "seed", lo=0)
     n_states = as_int(n_states, "n_states", lo=1)
-    platform = platform if platform is not None else load("thesis")
+    platform = platform if platform is not None else load_qprr("thesis")
     params_of(platform)  # a Q-PRR, or InputError
     ctx = CheckContext(platform, platform.data(), np.random.default_rng(seed))
     ctx.states = [(ctx.random_xi(), ctx.rng.normal(size=9)) for _ in range(n_states)]
@@ -168,7 +168,7 @@ def _plus(ctx: CheckContext) -> Platform:
     if ctx.platform.rotors == rotor_set(ctx.params, "plus"):
         return ctx.platform
     if "plus" not in ctx.cache:
-        ctx.cache["plus"] = load(ctx.params, layout="plus")
+        ctx.cache["plus"] = load_qprr(ctx.params, layout="plus")
     return ctx.cache["plus"]
 
 
@@ -707,8 +707,8 @@ def _payload(ctx: CheckContext):
     if "payload" not in ctx.cache:
         from ..payload import Payload, com_with_payload
 
-        load = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
-        ctx.cache["payload"] = (load, com_with_payload)
+        held = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
+        ctx.cache["payload"] = (held, com_with_payload)
     return ctx.cache["payload"]
 
 
@@ -725,12 +725,12 @@ def _c_3_76(ctx: CheckContext) -> Evidence:
 
 
 def _c_3_78_payload(ctx: CheckContext) -> Evidence:
-    load, com_with_payload = _payload(ctx)
+    held, com_with_payload = _payload(ctx)
     m_l, d_cl = PAYLOAD_MASS, PAYLOAD_OFFSET
     ep = ec = ez = 0.0
     worst = None
     for xi, _ in ctx.states:
-        ref = com_with_payload(ctx.platform, ctx.data, xi[6:9], load)
+        ref = com_with_payload(ctx.platform, ctx.data, xi[6:9], held)
         printed = th.com_3_78(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl)
         e = abs(printed[0] - ref[0])
         ez = max(ez, abs(printed[2] - ref[2]))
@@ -810,7 +810,7 @@ def _zero_euler_det(platform: Platform, data: pin.Data, q_arm) -> float:
 def _c_4_44(ctx: CheckContext) -> Evidence:
     rng = np.random.default_rng(SEED + 44)
     p = ctx.params
-    other = load(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
+    other = load_qprr(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
     do = other.data()
     err = 0.0
     for _ in range(N_STATES):

@@ -52,7 +52,7 @@ from ..validation import as_vector
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
-from .robot import load, params_of
+from .robot import load_qprr, params_of
 from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, Instance, _flight, _plot_flight, flight_gains
 
 POINT_TARGET = (5.0, 5.0, 10.0)
@@ -68,7 +68,7 @@ IDEAL_FORCE_MAX, IDEAL_TORQUE_MAX = 1e4, 1e3
 
 
 def _q_prr(platform):
-    platform = load() if platform is None else platform
+    platform = load_qprr() if platform is None else platform
     params_of(platform)
     return platform
 

@@ -91,7 +91,7 @@ from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_u
 from . import gains
 from .bsg import CogStabilizer
 from .missions import DYNAMIC_MISSION, NAMES, STATIC_MISSION, static_mission
-from .robot import load, params_of
+from .robot import load_qprr, params_of
 
 SEED = 0
 
@@ -159,7 +159,7 @@ def flight_controller(name: str, platform, as_printed: bool = False):
 
 
 def _q_prr(platform):
-    platform = load() if platform is None else platform
+    platform = load_qprr() if platform is None else platform
     params_of(platform)  # a thesis scenario needs the Q-PRR
     return platform
 
@@ -454,7 +454,7 @@ def _payload_controller(name: str, platform, mass: float, release_time: float):
                 self.set_known_mass(0.0)
             return super().step(t, state, ref)
 
-    g = gains.payload()
+    g = gains.payload_idc()
     builders = {
         "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
         "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
@@ -562,7 +562,7 @@ def _push_controller(name: str, platform, contact):
     """ "layered-idc-ft": layered IDC cancelling the contact wrench its wrist sensor read at the previous step
     ((6.76)), filtered at :data:`SENSOR_FILTER`; "layered-idc": the same without force feedback (the arm
     buckles under the compressive contact force); "idc": Sec. 6.3.1's controller."""
-    g = gains.payload()
+    g = gains.payload_idc()
     builders = {
         "layered-idc-ft": lambda: LayeredIDC(platform, g, ee_sensor=contact.measured, sensor_filter=SENSOR_FILTER),
         "layered-idc": lambda: LayeredIDC(platform, g),
@@ -699,9 +699,9 @@ def impedance(
     xi0 = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *arm)
     imp = gains.impedance_filters() if impedance_gains is None else impedance_gains
     builders = {
-        "impedance": lambda: ImpedanceController(platform, gains.impedance(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
+        "impedance": lambda: ImpedanceController(platform, gains.impedance_idc(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
         "impedance-table-6.7": lambda: ImpedanceController(
-            platform, gains.impedance(), gains.impedance_table_6_7(), ee_sensor=ee.measured, base_sensor=base_sensor
+            platform, gains.impedance_idc(), gains.impedance_table_6_7(), ee_sensor=ee.measured, base_sensor=base_sensor
         ),
         "idc": lambda: InverseDynamicsController(platform, gains.idc()),
     }
