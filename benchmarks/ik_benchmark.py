@@ -173,7 +173,7 @@ def pose_over_hover(robot, data):
 
     def run(M):
         pose.set_target(M)
-        r = solver.solve(data, M, igm.default_guess(robot.params, M.translation, M.rotation))
+        r = solver.solve(data, M, igm.hover_guess(robot.params, M.translation, M.rotation))
         return Outcome(r.xi, r.success, r.iterations)
 
     return run
@@ -249,7 +249,7 @@ def peer_methods(robot, urdf_path: str, only_pink: bool = False):
     out = []
 
     def h0_of(M):
-        return igm.default_guess(robot.params, M.translation, M.rotation)[HOVER_COLS]
+        return igm.hover_guess(robot.params, M.translation, M.rotation)[HOVER_COLS]
 
     # --- pink: differential IK (one QP per step on proxqp), iterated with full steps
     m = Method("pink FrameTask (proxqp)", "hover chain, 7 dof", guess, peer=True)

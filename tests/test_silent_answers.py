@@ -69,7 +69,7 @@ def test_motor_lag_flies_the_rotor_file_s_motor_table():
 
 def test_a_study_with_no_feasible_design_says_which_constraint_excluded_how_many(tmp_path, capsys):
     from qprr.cli import main
-    from qprr.design.report import report as design_report
+    from qprr.design.report import design_report
 
     spec = tmp_path / "s.toml"
     spec.write_text(

@@ -1,6 +1,6 @@
 """``qprr analyze workspace|cog|singularity|hover|capacity|opspace [--platform NAME] [--plot FILE.png]``.
 
-Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a named platform
+Registered into :mod:`qprr.cli` by :func:`register_analysis_cli`.  ``--platform`` takes a named platform
 (:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
 :func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...); ``--urdf FILE --rotors FILE.toml
 [--ee-frame NAME]`` a user's own platform.  Published numbers for a platform (the thesis's
@@ -132,7 +132,7 @@ def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgr
     return res, fig
 
 
-def register_cli(sub) -> None:
+def register_analysis_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
     from ..cli_common import add_platform_options, integer, real, reals
 

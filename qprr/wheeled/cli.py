@@ -38,7 +38,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     return 0 if demo.ok else 1
 
 
-def register_cli(subparsers) -> None:
+def register_wheeled_cli(subparsers) -> None:
     """Add ``wheeled`` to the ``qprr`` command line."""
     from .demos import catalogue
 
