@@ -131,7 +131,7 @@ def push_prismatic(robot, out: Path) -> Path:
     fig = new_figure((11, 4.5))
     ax = fig.add_subplot()
     for k in (200.0, 500.0):
-        c = scn.contact_history(scn.push_prismatic(stiffness=k))
+        c = scn.contact_history(scn.push_prismatic(settings=scn.PushSettings.prismatic(stiffness=k)))
         ax.plot(c.t, c.force, lw=1.0, label=f"k = {k:g} N/m (loop gain k h / m g = {k * h / weight:.2f})")
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, *scn.ARM_PUSH[1:]])
     p0, _ = kin.ee_pose_xi(robot, data, xi0)

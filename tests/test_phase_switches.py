@@ -157,9 +157,9 @@ def test_push_prismatic_contact_chatter_is_a_tilt_lever_instability(robot):
         s = c.t >= 5.5
         return c.force[s].min(), c.force[s].max()
 
-    lo_f, hi_f = steady(scn.contact_history(scn.push_prismatic(stiffness=200.0, push=push, duration=duration)))
+    lo_f, hi_f = steady(scn.contact_history(scn.push_prismatic(settings=scn.PushSettings.prismatic(stiffness=200.0, push=push, duration=duration))))
     assert lo_f > 0.4 and hi_f - lo_f < 0.01 * hi_f  # measured 0.491-0.493 N
-    res = scn.push_prismatic(stiffness=500.0, push=push, duration=duration)
+    res = scn.push_prismatic(settings=scn.PushSettings.prismatic(stiffness=500.0, push=push, duration=duration))
     c = scn.contact_history(res)
     late = c.t >= 4.0
     # measured: 0-0.53 N bounces from 4.25 s, then the contact opens for good at 5.2 s (object and

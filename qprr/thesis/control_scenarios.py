@@ -48,7 +48,7 @@ from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..sim import SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
-from ..validation import as_vector
+from ..validation import as_settings, as_vector, check_fields
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
@@ -146,20 +146,28 @@ def _settling_time(t: np.ndarray, x: np.ndarray, target: float, start: float, to
     return float(t[k + 1]) if k + 1 < t.shape[0] else float("inf")
 
 
-def point_to_point(
-    platform=None,
-    controller: str = "idc",
-    progress: bool = False,
-    *,
-    target=POINT_TARGET,
-    duration: float = 10.0,
-    actuation: str = "ideal",
-    dt: float = SimConfig.dt,
-    integrator: str = "midpoint",
-    seed: int = 0,
-) -> SimResult:
-    """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``target`` [m], IDC with K_P = 30 I_9,
-    K_D = 18 I_9 (module docstring for ``actuation``)."""
+@dataclass(frozen=True)
+class PointToPointSettings:
+    """The options of ``point-to-point`` (help: the scenario's :attr:`~qprr.scenarios.Scenario.options`): the set point
+    ``target`` p_b [m], run ``duration`` [s], ``actuation`` ("ideal" or "rotors", module docstring), integration step
+    ``dt`` [s], ``integrator``, ``seed``."""
+
+    target: tuple[float, float, float] = POINT_TARGET
+    duration: float = 10.0
+    actuation: str = "ideal"
+    dt: float = SimConfig.dt
+    integrator: str = "midpoint"
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+
+
+def point_to_point(platform=None, controller: str = "idc", progress: bool = False, settings: PointToPointSettings | None = None) -> SimResult:
+    """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``settings.target`` [m], IDC with
+    K_P = 30 I_9, K_D = 18 I_9 (:class:`PointToPointSettings`; module docstring for ``actuation``)."""
+    o = as_settings(settings, PointToPointSettings)
+    target, duration, actuation, dt, integrator, seed = o.target, o.duration, o.actuation, o.dt, o.integrator, o.seed
     platform = _q_prr(platform)
     if controller != "idc":
         raise UnknownNameError("controller", controller, ("idc",))
@@ -339,13 +347,6 @@ def plot_realistic(result: SimResult, path) -> Path:
 
 
 # ------------------------------------------------------------------------------ registry
-def _runner(fn):
-    def run(platform, controller, progress, **options):
-        return fn(platform, controller, progress, **options)
-
-    return run
-
-
 def _settings_runner(fn, settings_type):
     """The registry's runner of ``fn(platform, controller, progress, settings)``: the options :meth:`Scenario.run
     <qprr.scenarios.Scenario.run>` passes by name, gathered into ``settings_type`` (a field per option)."""
@@ -372,7 +373,7 @@ SCENARIOS = (
     Scenario(
         "point-to-point",
         "regulation to p_b = [5, 5, 10] without trajectory, IDC K_P = 30 I, K_D = 18 I",
-        _runner(point_to_point),
+        _settings_runner(point_to_point, PointToPointSettings),
         ("idc",),
         {
             "target": Option(POINT_TARGET, "p_b set point [m]"),
@@ -433,6 +434,7 @@ __all__ = [
     "ANNEX_TARGET",
     "POINT_GAINS",
     "POINT_TARGET",
+    "PointToPointSettings",
     "SCENARIOS",
     "margin_summary",
     "plot_point_to_point",
