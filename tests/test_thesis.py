@@ -28,7 +28,7 @@ from qprr.thesis.params import thesis_params
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 
 P = thesis_params()
-D = th.link_lengths(P)
+D = th.d_lengths(P)
 L, B_F, C_D = P.arm_length, P.thrust_factor, P.drag_factor
 M1, M2, M3 = (link.mass for link in P.links)
 

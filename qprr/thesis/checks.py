@@ -111,7 +111,7 @@ class CheckContext:
 
     @property
     def d(self):
-        return th.link_lengths(self.params)
+        return th.d_lengths(self.params)
 
     def random_xi(self, rng: np.random.Generator | None = None, max_tilt: float = 1.3) -> np.ndarray:
         """A random xi: position in [-2, 2]^3 m, |phi|, |theta| < max_tilt, any psi, arm inside its limits."""
