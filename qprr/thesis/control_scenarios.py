@@ -46,9 +46,9 @@ from ..control import IDCGains, InverseDynamicsController
 from ..errors import QprrError, UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
-from ..sim import SimConfig, SimResult, simulate
+from ..sim import INTEGRATORS, SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
-from ..validation import as_settings, as_vector, check_fields
+from ..validation import as_name, as_real, as_settings, as_vector, check_fields
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
@@ -161,6 +161,11 @@ class PointToPointSettings:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        object.__setattr__(self, "target", tuple(as_vector(self.target, 3, "target").tolist()))
+        as_real(self.duration, "duration", positive=True, unit="s")
+        as_real(self.dt, "dt", positive=True, unit="s")
+        as_name(self.actuation, "actuation", ("ideal", "rotors"))
+        as_name(self.integrator, "integrator", INTEGRATORS)
 
 
 def point_to_point(platform=None, controller: str = "idc", progress: bool = False, settings: PointToPointSettings | None = None) -> SimResult:

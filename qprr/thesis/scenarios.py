@@ -84,7 +84,7 @@ from ..sim import (
     simulate,
 )
 from ..trajectory import DEFAULT_LAW, Hold, MultiPhase, Phase, Spiral
-from ..validation import as_interval, as_settings, as_vector, check_fields, checked_module
+from ..validation import as_interval, as_name, as_real, as_settings, as_vector, check_fields, checked_module
 from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains
@@ -484,6 +484,11 @@ class PayloadDropSettings:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        as_real(self.mass, "mass", nonnegative=True, unit="kg")
+        as_name(self.mission, "mission", ("thesis", "hover"))
+        object.__setattr__(self, "arm_target", tuple(as_vector(self.arm_target, 3, "arm_target").tolist()))
+        object.__setattr__(self, "arm_phase", as_interval(self.arm_phase, "arm_phase", lo=0.0))
 
 
 def payload_drop(
@@ -600,6 +605,8 @@ class PushSettings:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        object.__setattr__(self, "push", as_interval(self.push, "push", lo=0.0))
 
     @classmethod
     def prismatic(cls, **fields) -> PushSettings:
@@ -692,6 +699,9 @@ class ImpedanceSettings:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        for key, n in (("h_b", 4), ("h_q", 3), ("arm", 3)):
+            object.__setattr__(self, key, tuple(as_vector(self.__dict__[key], n, key).tolist()))
 
 
 def impedance(platform=None, controller: str = "impedance", progress: bool = False, settings: ImpedanceSettings | None = None) -> SimResult:
