@@ -386,14 +386,14 @@ def test_show_into_a_reader_that_stops_early_ends_without_a_traceback(reference,
 def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path):
     """3 records saved and a fourth cut: "3 of 9 runs ... (6 missing ...)", the rates over the 9 runs (it said "3 runs",
     "100 %" of what was there)."""
-    from qprr.campaign.report import report
+    from qprr.campaign.report import campaign_report
 
     spec, data, table, rows, names, ref_dir = reference
     ends = [i + 1 for i, b in enumerate(data) if b == ord("\n")]
     out = tmp_path / "cut.csv"
     out.write_bytes(data[: ends[3] + 25])
     _copy_meta(ref_dir, out)
-    head = report(out)[0].splitlines()[0]
+    head = campaign_report(out)[0].splitlines()[0]
     ok = int((table["status"][:3] == "ok").sum())
     assert (
         head.startswith("faults: 3 of 9 runs of target.py:target") and "(6 missing" in head and f"{ok} completed ({100 * ok / 9:.1f} % of 9)" in head
