@@ -298,6 +298,9 @@ class BuildSpec:
         for key, value in zip(("kappa", "thrust_to_weight", "f_min", "tilt", "g"), ring):
             object.__setattr__(self, key, value)
         _names_and_direction(self.base_name, self.ee_name, self.platform_name, self.arm_direction)
+        rotors = self.rotors
+        if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
+            raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
 
 
 def build(name: str = "Q-PRR", spec: BuildSpec | None = None, **settings) -> Platform:
@@ -315,8 +318,6 @@ def build(name: str = "Q-PRR", spec: BuildSpec | None = None, **settings) -> Pla
     mount_xyz = tuple(as_vector(s.mount_xyz, 3, "mount_xyz").tolist())
     kappa, thrust_to_weight, f_min, tilt, g = _ring_settings(s.kappa, s.thrust_to_weight, s.f_min, s.tilt, s.g)
     rotors = s.rotors
-    if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
-        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
     base_name, ee_name, sign = _names_and_direction(s.base_name, s.ee_name, s.platform_name, s.arm_direction)
     arm = _arm(name, d, s.links, s.joint_names, s.link_names)
     parts = [

@@ -178,7 +178,7 @@ class Ctx:
     @property
     def platform(self):
         if self.new:
-            return self.once("platform", lambda: importlib.import_module("qprr.thesis").load())
+            return self.once("platform", lambda: importlib.import_module("qprr").load("q-prr"))  # the thesis plug-in's Q-PRR
         return self.robot
 
     @property
@@ -441,7 +441,13 @@ SPECS: dict[str, Spec] = {
     "frame": S(None, "frame"),
 }
 
+
 # parameter names qualified by callable (fnmatch pattern on the qualname) where one name means two things
+def _thesis_settings(name: str, **fields):
+    """A settings object of :mod:`qprr.thesis.scenarios` (looked up by name: the engine reads any qprr tree)."""
+    return vars(importlib.import_module("qprr.thesis.scenarios"))[name](**fields)
+
+
 QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platforms.load", "name", S("q-prr", "name")),
     ("qprr.nomenclature.parse", "name", S("Q-PRR", "name")),
@@ -658,6 +664,9 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
         "options",
         Spec("skip", lambda c: importlib.import_module("qprr.campaign.runner").CampaignRunOptions(backend="inline", progress=False), always=True),
     ),
+    ("qprr.thesis.scenarios.push_thrust", "settings", Spec("skip", lambda c: _thesis_settings("PushSettings", duration=0.02), always=True)),
+    ("qprr.thesis.scenarios.push_prismatic", "settings", Spec("skip", lambda c: _thesis_settings("PushSettings", duration=0.02), always=True)),
+    ("qprr.thesis.scenarios.impedance", "settings", Spec("skip", lambda c: _thesis_settings("ImpedanceSettings", duration=0.02), always=True)),
     ("qprr.campaign.spec.CampaignSpec", "name", S("catalogue", "label")),
     ("qprr.campaign.spec.CampaignSpec", "scenario", S("hover-reach", "name", always=True)),
     ("qprr.campaign.spec.CampaignSpec", "options", Spec("obj", lambda c: {"duration": 0.02}, always=True)),
