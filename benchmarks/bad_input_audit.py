@@ -107,7 +107,7 @@ import qprr
 NEW = __import__("importlib").util.find_spec("qprr.model") is not None
 if NEW:
     import qprr.thesis
-    P = qprr.thesis.load(); DATA = P.data()
+    P = qprr.thesis.load_qprr(); DATA = P.data()
     from qprr.charts import xi_to_q, euler_to_rotation, rotation_to_euler
     from qprr import kinematics as kin
 else:
@@ -159,7 +159,7 @@ verdict(f, ("thrust_factor",))
     "3 parameters contradicting the URDF (d3 = 0.5)": r"""
 def f():
     if NEW:
-        qprr.thesis.load(qprr.thesis.thesis_params().with_changes(d3=0.5), urdf_path=qprr.thesis.URDF_PATH)
+        qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(d3=0.5), urdf_path=qprr.thesis.URDF_PATH)
     else:
         import qprr.params as prm, qprr.urdf as u
         kin.load(prm.thesis_params().with_changes(d3=0.5), urdf_path=u.URDF_PATH)

@@ -70,8 +70,8 @@ import sys, time
 sys.path[:0] = {path!r}
 from qprr.scenarios import run
 from qprr.sim.mismatch import ModelError, perturbed
-from qprr.thesis import load
-p = load()
+from qprr.thesis import load_qprr
+p = load_qprr()
 run("static-idc", platform=p, duration=0.01)
 print(time.time())  # ready: imported and warmed up
 start = {start!r}

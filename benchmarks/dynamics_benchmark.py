@@ -23,7 +23,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # benchmarks/machine.py, wherever this runs from
 from machine import machine_lines
 
-from qprr.thesis import load, params_of
+from qprr.thesis import load_qprr, params_of
 
 
 def _states(robot, n: int, seed: int) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -79,7 +79,7 @@ def main(argv=None) -> int:
     for line in machine_lines(("sympy",)):
         print(f"  {line}")
 
-    robot = load(args.variant)
+    robot = load_qprr(args.variant)
     data = robot.data()
 
     # one-off costs: a fresh derivation + code generation (no cache), then the cached path

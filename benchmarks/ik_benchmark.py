@@ -191,7 +191,7 @@ def pose_over_hover(robot, data):
 
     def run(M):
         pose.set_target(M)
-        r = solver.solve(data, M, igm.default_guess(robot.params, M.translation, M.rotation))
+        r = solver.solve(data, M, igm.hover_guess(robot.params, M.translation, M.rotation))
         return Outcome(r.xi, r.success, r.iterations)
 
     return run
@@ -938,7 +938,7 @@ def main(argv=None) -> int:
         f"in hover (y axis tilted 1e-3..0.5 rad out of the horizontal plane), seed {args.seed}"
     )
     guess = "hover below target, arm straight"
-    qprr_case = Case("Q-PRR", robot, data, lambda M: igm.default_guess(robot.params, M.translation, M.rotation), guess, reach, unreach)
+    qprr_case = Case("Q-PRR", robot, data, lambda M: igm.hover_guess(robot.params, M.translation, M.rotation), guess, reach, unreach)
     qprr_case.methods = qprr_methods(robot, data)
     cases = [qprr_case] + ([] if args.no_platforms else [platform_case(name, args.n, args.seed) for name in PLATFORMS])
     bad = sum(run_case(case, args, placo_python) for case in cases)

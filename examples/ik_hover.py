@@ -31,9 +31,9 @@ print(
 p_e, _ = kin.ee_pose_xi(platform, data, res.xi)
 print(f"forward kinematics: |p_e - target| = {np.linalg.norm(p_e - target):.2e} m")
 
-# the thesis's analytic IGM (Algorithms 3-5) needs a full pose; qprr.thesis.igm.solve adds it
+# the thesis's analytic IGM (Algorithms 3-5) needs a full pose; qprr.thesis.igm.solve_qprr adds it
 # to the methods above for the Q-PRR:
-#   from qprr.thesis import igm; igm.solve(platform, data, (p_world, R_world), method="igm")
+#   from qprr.thesis import igm; igm.solve_qprr(platform, data, (p_world, R_world), method="igm")
 
 # the slider value that balances the CoG for given revolute angles, in closed form (any platform
 # with a prismatic joint): Thesis (3.79)-(3.81)

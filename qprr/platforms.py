@@ -69,7 +69,7 @@ def load(name: str = DEFAULT_PLATFORM, **kwargs) -> Platform:
 
     ``load()`` is ``load("q-prr")`` (:data:`DEFAULT_PLATFORM`), looked up in the registry like any
     name: the Q-PRR comes from the thesis plug-in.  ``q-prr`` takes the options of
-    :func:`qprr.thesis.load` (``params``, ``layout``, ``urdf_path``); the example-robot-data
+    :func:`qprr.thesis.load_qprr` (``params``, ``layout``, ``urdf_path``); the example-robot-data
     platforms take ``g`` (default 9.81 m/s^2).
     """
     return PLATFORMS[name](**kwargs)
@@ -112,7 +112,7 @@ del _name
 def rotor_dynamics(name: str = DEFAULT_PLATFORM, **overrides):
     """The actuator stage (:class:`qprr.sim.actuators.RotorDynamics`) of the platform called ``name`` (:data:`ROTOR_DYNAMICS`).
 
-    ``q-prr``: :func:`qprr.thesis.realistic.rotor_dynamics` (b of the thesis parameters, a chosen
+    ``q-prr``: :func:`qprr.thesis.realistic.qprr_rotor_dynamics` (b of the thesis parameters, a chosen
     time constant); the others: the ``[motor]`` table of their rotor description, where it exists
     (borinot_flying_arm_2; hextilt_flying_arm_5 has none: pass ``thrust_factor`` and ``time_constant``).
     ``overrides``: thrust_factor, time_constant, w_min, w_max, initial.

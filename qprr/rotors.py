@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import ActuationError, ActuationWarning, InputError, UnknownNameError
-from .validation import as_file, as_int, as_real, as_vector
+from .validation import as_file, as_int, as_real, as_settings, as_vector
 
 
 def _finite3(value, name: str) -> tuple[float, float, float]:
@@ -103,21 +103,33 @@ def _snap(x: float) -> float:
     return float(r) if abs(x - r) < 1e-15 else float(x)
 
 
-def ring(
-    n: int,
-    radius: float,
-    *,
-    start_angle: float = 0.0,
-    spins: Sequence[int] | None = None,
-    kappa: float = 0.0,
-    f_min: float = 0.0,
-    f_max: float = math.inf,
-    height: float = 0.0,
-    tilt: float = 0.0,
-    tilt_signs: Sequence[int] | None = None,
-    name: str = "rotor",
-) -> tuple[Rotor, ...]:
-    """``n`` rotors on a circle of ``radius`` [m] in the plane z = ``height`` of B.
+@dataclass(frozen=True)
+class RingSpec:
+    """The layout of a :func:`ring` beyond its size: ``start_angle`` [rad] of rotor 1, ``spins``, the plane's
+    ``height`` [m], the ``tilt`` [rad] and its ``tilt_signs``; and every rotor's ``kappa`` [m], ``f_min`` and ``f_max``
+    [N], named ``name_1``, ``name_2``, ... (see :func:`ring`)."""
+
+    start_angle: float = 0.0
+    spins: Sequence[int] | None = None
+    kappa: float = 0.0
+    f_min: float = 0.0
+    f_max: float = math.inf
+    height: float = 0.0
+    tilt: float = 0.0
+    tilt_signs: Sequence[int] | None = None
+    name: str = "rotor"
+
+    def __post_init__(self) -> None:  # the numbers, checked however the spec is built (the rotors check the rest)
+        for key, unit in (("start_angle", "rad"), ("height", "m"), ("tilt", "rad")):
+            object.__setattr__(self, key, as_real(self.__dict__[key], key, unit=unit))
+        object.__setattr__(self, "kappa", as_real(self.kappa, "kappa", nonnegative=True, unit="m"))
+        object.__setattr__(self, "f_min", as_real(self.f_min, "f_min", nonnegative=True, unit="N"))
+        object.__setattr__(self, "f_max", as_real(self.f_max, "f_max", positive=True, allow_inf=True, unit="N"))
+
+
+def ring(n: int, radius: float, spec: RingSpec | None = None, **settings) -> tuple[Rotor, ...]:
+    """``n`` rotors on a circle of ``radius`` [m] in the plane z = ``height`` of B (``spec``: a :class:`RingSpec`,
+    and/or its fields as keywords, which replace the spec's: ``ring(6, 0.3, tilt=0.3, f_max=10.0)``).
 
     Rotor i (from 1) sits at the angle ``start_angle + 2 pi (i - 1) / n`` from x_B, counter-
     clockwise about z_B.  ``spins`` default to alternating +1, -1 (rotor 1: +1).  ``tilt`` [rad]
@@ -126,13 +138,14 @@ def ring(
     the base produces a 4-D wrench set (thrust along z_B and three torques); with alternating
     tilts and n >= 6 a 6-D one.
     """
+    o = as_settings(spec, RingSpec, "spec", **settings)
     n = as_int(n, "number of rotors n", lo=1)
     radius = as_real(radius, "radius", nonnegative=True, unit="m")
-    start_angle = as_real(start_angle, "start_angle", unit="rad")
-    height = as_real(height, "height", unit="m")
-    tilt = as_real(tilt, "tilt", unit="rad")
-    spins = tuple((1, -1)[i % 2] for i in range(n)) if spins is None else tuple(spins)
-    tilt_signs = tuple((1, -1)[i % 2] for i in range(n)) if tilt_signs is None else tuple(tilt_signs)
+    start_angle = as_real(o.start_angle, "start_angle", unit="rad")
+    height = as_real(o.height, "height", unit="m")
+    tilt = as_real(o.tilt, "tilt", unit="rad")
+    spins = tuple((1, -1)[i % 2] for i in range(n)) if o.spins is None else tuple(o.spins)
+    tilt_signs = tuple((1, -1)[i % 2] for i in range(n)) if o.tilt_signs is None else tuple(o.tilt_signs)
     if len(spins) != n or len(tilt_signs) != n:
         raise InputError(f"spins and tilt_signs need {n} entries, got {len(spins)} and {len(tilt_signs)}")
     out = []
@@ -143,7 +156,7 @@ def ring(
         # axis z_B turned by t about the radial unit vector (c, s, 0)
         ct, st = _snap(math.cos(t)), _snap(math.sin(t))
         axis = (st * s, -st * c, ct)
-        out.append(Rotor((radius * c, radius * s, float(height)), axis, spins[i], kappa, f_min, f_max, f"{name}_{i + 1}"))
+        out.append(Rotor((radius * c, radius * s, float(height)), axis, spins[i], o.kappa, o.f_min, o.f_max, f"{o.name}_{i + 1}"))
     return tuple(out)
 
 

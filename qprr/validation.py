@@ -1,12 +1,13 @@
 """Input validation for every entry point: converters that turn what a user passes into checked
 values or raise a :class:`qprr.errors.QprrError` naming the argument, the value and the likely fix
 (``as_real``, ``as_int``, ``as_vector``, ``as_matrix``, ``as_array``, ``as_interval``, ``as_name``,
-``as_file``, ``as_output_path``), and the decorators that apply them from a function's annotations
+``as_file``, ``as_output_path``, ``as_settings``, ``check_fields``), and the decorators that apply them from a function's annotations
 (``checked_args``, ``checked_module``).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import math
@@ -210,6 +211,30 @@ def as_output_path(x, name: str, *, suffixes: tuple[str, ...] = ()) -> Path:
     if not parent.is_dir():
         raise InputError(f"{name}: cannot write {str(path)!r}: {str(parent)!r} is a file, not a directory")
     return path
+
+
+def as_settings(settings, cls: type, name: str = "settings", **fields):
+    """``settings`` (an instance of the frozen dataclass ``cls``, or None for its defaults) with ``fields`` replacing
+    its fields: how a function takes its configuration object and, for the callers that name them, its fields as
+    keywords.  A ``settings`` of another type raises an :class:`InputError`, an unknown field a TypeError."""
+    if settings is None:
+        settings = cls()
+    elif not isinstance(settings, cls):
+        raise InputError(f"{name} must be a {cls.__name__} (or None), got {_preview(settings)}")
+    unknown = [k for k in fields if k not in {f.name for f in dataclasses.fields(cls)}]
+    if unknown:
+        raise TypeError(f"unexpected keyword argument {unknown[0]!r}: {cls.__name__} has fields {', '.join(f.name for f in dataclasses.fields(cls))}")
+    return dataclasses.replace(settings, **fields) if fields else settings
+
+
+def check_fields(settings) -> None:
+    """The fields of a frozen dataclass instance annotated ``float`` or ``int`` converted by :func:`as_real` /
+    :func:`as_int` in place (call it from ``__post_init__``): a settings object checks its numbers as the
+    function that takes them did its arguments (:func:`checked_args`)."""
+    for f in dataclasses.fields(settings):
+        if f.type in ("float", "int"):
+            value = settings.__dict__[f.name]
+            object.__setattr__(settings, f.name, as_real(value, f.name) if f.type == "float" else as_int(value, f.name))
 
 
 def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):

@@ -178,7 +178,7 @@ class Ctx:
     @property
     def platform(self):
         if self.new:
-            return self.once("platform", lambda: importlib.import_module("qprr.thesis").load())
+            return self.once("platform", lambda: importlib.import_module("qprr").load("q-prr"))  # the thesis plug-in's Q-PRR
         return self.robot
 
     @property
@@ -441,7 +441,13 @@ SPECS: dict[str, Spec] = {
     "frame": S(None, "frame"),
 }
 
+
 # parameter names qualified by callable (fnmatch pattern on the qualname) where one name means two things
+def _thesis_settings(name: str, **fields):
+    """A settings object of :mod:`qprr.thesis.scenarios` (looked up by name: the engine reads any qprr tree)."""
+    return vars(importlib.import_module("qprr.thesis.scenarios"))[name](**fields)
+
+
 QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.platforms.load", "name", S("q-prr", "name")),
     ("qprr.nomenclature.parse", "name", S("Q-PRR", "name")),
@@ -575,7 +581,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
         Spec("obj", lambda c: importlib.import_module("qprr.ik").default_levels(c.platform, c.target(), c.q_arm())),
     ),
     ("qprr.nomenclature.LinkSpec", "kind", S("R", "name")),
-    ("qprr.nomenclature.build", "*_name", S("x", "xmlname")),
+    ("qprr.nomenclature.BuildSpec", "*_name", S("x", "xmlname")),
     ("qprr.urdf.writer.num", "name", S("x", "skip")),
     ("qprr.urdf.writer.vec", "name", S("v", "skip")),
     ("qprr.urdf.writer.*", "name", S("a", "xmlname")),
@@ -653,8 +659,14 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.campaign.*", "result", Spec("obj", lambda c: c.sim_result())),
     ("qprr.campaign.*", "seed", S(3, "int")),
     ("qprr.campaign.runner.run_campaign", "output", Spec("path_out", lambda c: c.tmp / "campaign-run.csv")),
-    ("qprr.campaign.runner.run_campaign", "backend", S("inline", "name", always=True)),
-    ("qprr.campaign.runner.run_campaign", "progress", S(False, "skip", always=True)),
+    (
+        "qprr.campaign.runner.run_campaign",
+        "options",
+        Spec("skip", lambda c: importlib.import_module("qprr.campaign.runner").CampaignRunOptions(backend="inline", progress=False), always=True),
+    ),
+    ("qprr.thesis.scenarios.push_thrust", "settings", Spec("skip", lambda c: _thesis_settings("PushSettings", duration=0.02), always=True)),
+    ("qprr.thesis.scenarios.push_prismatic", "settings", Spec("skip", lambda c: _thesis_settings("PushSettings", duration=0.02), always=True)),
+    ("qprr.thesis.scenarios.impedance", "settings", Spec("skip", lambda c: _thesis_settings("ImpedanceSettings", duration=0.02), always=True)),
     ("qprr.campaign.spec.CampaignSpec", "name", S("catalogue", "label")),
     ("qprr.campaign.spec.CampaignSpec", "scenario", S("hover-reach", "name", always=True)),
     ("qprr.campaign.spec.CampaignSpec", "options", Spec("obj", lambda c: {"duration": 0.02}, always=True)),

@@ -17,12 +17,12 @@ _PACKAGE = Path(qprr.__file__).resolve().parent
 @pytest.fixture(scope="session")
 def robot() -> Platform:
     """The thesis's Q-PRR ("+" layout, default parameters)."""
-    return qprr.thesis.load()
+    return qprr.thesis.load_qprr()
 
 
 @pytest.fixture(scope="session")
 def cad_robot() -> Platform:
-    return qprr.thesis.load("cad")
+    return qprr.thesis.load_qprr("cad")
 
 
 @pytest.fixture()

@@ -16,7 +16,7 @@ from .conftest import random_xi
 
 def _platform(layout: str):
     """The thesis's Q-PRR in ``layout`` ("plus" or "x")."""
-    return qprr.thesis.load(layout=layout)
+    return qprr.thesis.load_qprr(layout=layout)
 
 
 def test_plus_layout_is_3_36_with_c_over_b(robot):

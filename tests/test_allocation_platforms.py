@@ -23,9 +23,9 @@ NAMES = ("q-prr+", "q-prr-x", "borinot_flying_arm_2", "hextilt_flying_arm_5", "O
 
 def make(name: str):
     if name == "q-prr+":
-        return qprr.thesis.load()
+        return qprr.thesis.load_qprr()
     if name == "q-prr-x":
-        return qprr.thesis.load(layout="x")
+        return qprr.thesis.load_qprr(layout="x")
     if name == "OCT-RR":
         return qprr.build("OCT-RR")
     return qprr.load(name)

@@ -71,12 +71,12 @@ def _non_uniform(p):
 
 
 CASES = {  # (platform, Allocator keyword arguments)
-    "q-prr+": lambda: (qprr.thesis.load(), {}),
-    "q-prr-x no arm clip": lambda: (qprr.thesis.load(layout="x"), {"clip_arm": False}),
+    "q-prr+": lambda: (qprr.thesis.load_qprr(), {}),
+    "q-prr-x no arm clip": lambda: (qprr.thesis.load_qprr(layout="x"), {"clip_arm": False}),
     "hextilt_flying_arm_5": lambda: (qprr.load("hextilt_flying_arm_5"), {}),
     "HEX-RRR": lambda: (qprr.build("HEX-RRR"), {}),
     "HEX-RRR non-uniform bounds": lambda: (_non_uniform(qprr.build("HEX-RRR")), {}),
-    "q-prr+ non-uniform bounds": lambda: (_non_uniform(qprr.thesis.load()), {}),
+    "q-prr+ non-uniform bounds": lambda: (_non_uniform(qprr.thesis.load_qprr()), {}),
 }
 
 
@@ -131,7 +131,7 @@ def test_in_loop_form_is_the_reference(case, data):
 
 
 def test_nan_wrench_and_nan_arm_effort_raise_the_generic_messages():
-    alloc = Allocator(qprr.thesis.load())
+    alloc = Allocator(qprr.thesis.load_qprr())
     p = alloc.platform
     base = p.actuation_matrix @ np.concatenate([alloc.hover_thrusts(), np.zeros(p.n_arm)])
     for i, pattern in ((2, "non-finite rotor wrench"), (7, "non-finite effort on arm joint")):
@@ -163,7 +163,7 @@ def test_copies_allocate_for_themselves():
 def test_screened_form_refuses_exactly_the_bad_demands(scale, bad_at, bad):
     """The simulator's ``allocate_screened_into``: REFUSED and nothing written when the norm of tau_d is NaN, inf or
     >= DEMAND_BOUND (even on a row no rotor produces), else allocate_into's answer."""
-    alloc = Allocator(qprr.thesis.load())
+    alloc = Allocator(qprr.thesis.load_qprr())
     p = alloc.platform
     tau = p.actuation_matrix @ np.concatenate([alloc.hover_thrusts() * (1.0 + 0.2 * scale), scale * p.arm_effort_limits])
     f1, t1, f2, t2 = (np.zeros(n) for n in (p.n_actuators, p.nv, p.n_actuators, p.nv))
@@ -180,7 +180,7 @@ def test_screened_form_refuses_exactly_the_bad_demands(scale, bad_at, bad):
 def test_a_subclass_that_overrides_allocate_into_is_screened_and_allocated_by_its_own_method():
     """IdealAllocator overrides allocate_into: the screened call runs its allocation (N f = tau_d exactly on the ideal
     wrench set, where the base class's least squares would not) and refuses a NaN demand (REFUSED)."""
-    p = qprr.thesis.load().replace(rotors=ideal_wrench_set(10.0, 10.0))
+    p = qprr.thesis.load_qprr().replace(rotors=ideal_wrench_set(10.0, 10.0))
     alloc = IdealAllocator(p)
     tau = np.r_[0.3, -0.2, 4.0, 0.05, -0.02, 0.01, 0.0, 0.1, -0.1]
     f1, t1, f2, t2 = np.zeros(p.n_actuators), np.zeros(p.nv), np.zeros(p.n_actuators), np.zeros(p.nv)

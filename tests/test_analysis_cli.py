@@ -8,7 +8,8 @@ os.environ.setdefault("MPLBACKEND", "Agg")
 
 import pytest
 
-from qprr.analysis.cli import MAPS, main, resolve_platform
+from qprr.analysis.cli import MAPS, resolve_platform
+from qprr.cli import main
 from qprr.errors import UnknownNameError
 
 

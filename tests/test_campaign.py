@@ -10,7 +10,7 @@ import pytest
 
 from qprr.campaign import CampaignSpec, Distribution, make_backend, run_campaign
 from qprr.campaign.metrics import metrics_of
-from qprr.campaign.report import report, summarize
+from qprr.campaign.report import campaign_report, summarize
 from qprr.campaign.targets import scale_bandwidth
 from qprr.errors import InputError, MissingDependencyError, UnknownNameError
 from qprr.scenarios import run
@@ -33,7 +33,7 @@ import numpy as np
 
 from qprr.control.base import Controller
 from qprr.sim import simulate
-from qprr.thesis import load
+from qprr.thesis import load_qprr
 from qprr.thesis.missions import static_mission
 from qprr.thesis.scenarios import flight_controller
 
@@ -274,7 +274,7 @@ def test_summary_and_figures(tmp_path):
         sel = (res.table["controller"] == row["controller"]) & (res.table["model.payload"] == row["model.payload"])
         assert row["success"] == pytest.approx(np.mean(res.table["success"][sel]))
         assert row["rmse_position"]["median"] == pytest.approx(np.median(res.table["rmse_position"][sel]))
-    text, figures = report(res, tmp_path / "rep")
+    text, figures = campaign_report(res, tmp_path / "rep")
     assert "controller" in text and (tmp_path / "rep" / "summary.md").is_file()
     assert figures and all(f.stat().st_size > 5000 for f in figures)
 

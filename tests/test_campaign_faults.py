@@ -23,7 +23,7 @@ import pytest
 from qprr.campaign import CampaignSpec, run_campaign
 from qprr.campaign.runner import columns_of, kinds_of
 from qprr.campaign.store import ResultsFileError, ResultStore, ResultsWriteError, read_results
-from qprr.campaign.worker import make_payload, run_one, xi_names_of
+from qprr.campaign.worker import make_task_payload, run_one, xi_names_of
 from qprr.errors import InputError, UnknownNameError
 
 TARGET = """
@@ -83,7 +83,7 @@ def reference(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("reference")
     spec = _spec(tmp)
     done = run_campaign(spec, tmp / "full.csv", backend="inline", progress=False)
-    payload = make_payload(spec)
+    payload = make_task_payload(spec)
     rows = {i: run_one(payload, spec.run(i)) for i in range(spec.n_runs)}
     names = xi_names_of(spec)
     return spec, (tmp / "full.csv").read_bytes(), done.results.table, rows, names, tmp
@@ -386,14 +386,14 @@ def test_show_into_a_reader_that_stops_early_ends_without_a_traceback(reference,
 def test_a_report_of_a_cut_campaign_counts_the_missing_runs(reference, tmp_path):
     """3 records saved and a fourth cut: "3 of 9 runs ... (6 missing ...)", the rates over the 9 runs (it said "3 runs",
     "100 %" of what was there)."""
-    from qprr.campaign.report import report
+    from qprr.campaign.report import campaign_report
 
     spec, data, table, rows, names, ref_dir = reference
     ends = [i + 1 for i, b in enumerate(data) if b == ord("\n")]
     out = tmp_path / "cut.csv"
     out.write_bytes(data[: ends[3] + 25])
     _copy_meta(ref_dir, out)
-    head = report(out)[0].splitlines()[0]
+    head = campaign_report(out)[0].splitlines()[0]
     ok = int((table["status"][:3] == "ok").sum())
     assert (
         head.startswith("faults: 3 of 9 runs of target.py:target") and "(6 missing" in head and f"{ok} completed ({100 * ok / 9:.1f} % of 9)" in head

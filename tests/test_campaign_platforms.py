@@ -241,7 +241,7 @@ def test_the_report_names_the_platform_it_flew_and_no_other(tmp_path):
     import hashlib
     import re
 
-    from qprr.campaign.report import box_plot, heat_map, metric_curve, platform_label, report, scatter_plot, success_curve
+    from qprr.campaign.report import box_plot, campaign_report, heat_map, metric_curve, platform_label, scatter_plot, success_curve
 
     robot, specs = _user_robot(tmp_path)
     path = _write_spec(specs, samples=1, grid={"controller": ["idc", "mfc"], "z": [1.0, 1.5]}, options={"duration": 0.1})
@@ -253,7 +253,7 @@ def test_the_report_names_the_platform_it_flew_and_no_other(tmp_path):
         f"{sha['rotors.toml']}, ee_frame gripper)"
     )
     assert platform_label(res) == expected
-    text, figures = report(res, tmp_path / "rep", metrics=["rmse_position", "rmse_shoulder"], scatter=[("model.mass", "rmse_elbow")])
+    text, figures = campaign_report(res, tmp_path / "rep", metrics=["rmse_position", "rmse_shoulder"], scatter=[("model.mass", "rmse_elbow")])
     md = (tmp_path / "rep" / "summary.md").read_text()
     assert f"4 runs of hover-reach on {expected}, " in text.splitlines()[0] and expected in md
     assert len(figures) >= 6
@@ -274,14 +274,14 @@ def test_the_report_names_the_platform_it_flew_and_no_other(tmp_path):
     # a registered platform says so; a (2.1) designation is named as one
     spec = CampaignSpec.load(_write_spec(specs, platform="borinot_flying_arm_2", samples=1, options={"duration": 0.05}))
     run_campaign(spec, tmp_path / "b.csv", backend="inline", progress=False)
-    text, _ = report(tmp_path / "b.csv")
+    text, _ = campaign_report(tmp_path / "b.csv")
     assert "on borinot_flying_arm_2 (registered platform), " in text and not re.search("q-prr", text, re.IGNORECASE)
 
 
 def test_report_units_follow_the_arm_joint_types(tmp_path):
     """On a built HEX-PRR (a prismatic, then two revolute joints) the joints' RMSE columns are in m, rad, rad, from the
     joint types the campaign recorded; the header names the (2.1) designation."""
-    from qprr.campaign.report import box_plot, column_units, format_table, report, summarize
+    from qprr.campaign.report import box_plot, campaign_report, column_units, format_table, summarize
 
     spec = {"name": "pr", "scenario": "hover-reach", "platform": "HEX-PRR", "seed": 1, "samples": 1, "options": {"duration": 0.05}}
     spec = CampaignSpec.from_mapping({**spec, "grid": {"controller": ["idc", "mfc"]}})
@@ -293,7 +293,7 @@ def test_report_units_follow_the_arm_joint_types(tmp_path):
     table = format_table(summarize(res, metrics=[f"rmse_{n}" for n in arm]))
     assert f"rmse_{arm[0]} median [m]" in table and f"rmse_{arm[1]} median [rad]" in table
     assert box_plot(res, f"rmse_{arm[0]}", None).axes[0].get_ylabel() == f"rmse_{arm[0]} [m]"
-    text, _ = report(res)
+    text, _ = campaign_report(res)
     assert "on HEX-PRR ((2.1) designation), " in text
 
 

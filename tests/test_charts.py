@@ -165,7 +165,7 @@ def free_flyer_model(n_arm: int) -> pin.Model:
         _MODELS[n_arm] = {
             0: lambda: qprr.platforms.multirotor_model("hector"),
             2: lambda: qprr.load("borinot_flying_arm_2").model,
-            3: lambda: qprr.thesis.load().model,
+            3: lambda: qprr.thesis.load_qprr().model,
             5: lambda: qprr.load("hextilt_flying_arm_5").model,
         }[n_arm]()
         assert _MODELS[n_arm].nv == 6 + n_arm

@@ -130,7 +130,7 @@ def test_every_check_holds_or_is_skipped(results):
 
 
 def test_main_prints_the_table_and_exits_zero(capsys):
-    assert checks.main(verbose=True) == 0
+    assert checks.print_check_table(verbose=True) == 0
     out = capsys.readouterr().out
     for equation, _ in EXPECTED:
         assert equation in out
@@ -163,7 +163,7 @@ def _fake(printed, corrected=None, convention=None, tol=1e-9):
     ],
 )
 def test_verdict_rule(printed, corrected, convention, verdict, status):
-    r = checks.evaluate(_fake(printed, corrected, convention), ctx=None)
+    r = checks.evaluate_check(_fake(printed, corrected, convention), ctx=None)
     assert (r.verdict, r.status) == (verdict, status)
 
 
@@ -171,13 +171,13 @@ def test_a_crashing_check_fails_with_its_cause():
     def boom(ctx):
         raise RuntimeError("model exploded")
 
-    r = checks.evaluate(checks.Check("(9.9)", "boom", boom, 1e-9), ctx=None)
+    r = checks.evaluate_check(checks.Check("(9.9)", "boom", boom, 1e-9), ctx=None)
     assert r.status == "fail" and "model exploded" in r.reason
 
 
 def test_main_exits_one_when_a_check_fails(monkeypatch, capsys):
     monkeypatch.setattr(checks, "CHECKS", checks.CHECKS[:2] + (_fake(1.0),))
-    assert checks.main() == 1
+    assert checks.print_check_table() == 1
     assert "FAIL" in capsys.readouterr().out
 
 
@@ -186,6 +186,6 @@ def test_symbolic_row_is_skipped_without_the_module(monkeypatch, capsys):
     sym = [c for c in checks.CHECKS if "sympy" in c.quantity]
     assert len(sym) == 3
     monkeypatch.setattr(checks, "CHECKS", tuple(sym))
-    assert checks.main() == 0
+    assert checks.print_check_table() == 0
     out = capsys.readouterr().out
     assert "skipped" in out and "3 skipped, 0 failed" in out

@@ -171,18 +171,18 @@ def test_the_converters_are_the_charts_checks():
 
 
 def test_a_group_command_builds_its_own_parser_alone():
-    """``qprr analyze ...`` builds the analysis group's parser only (GROUP_MODULES): the same sub-parser as in the full
+    """``qprr analyze ...`` builds the analysis group's parser only (GROUP_COMMANDS): the same sub-parser as in the full
     command line (same options and help), and the full command line has every group."""
-    from qprr.cli import GROUP_MODULES
+    from qprr.cli import GROUP_COMMANDS
 
     def commands(parser):
         return next(a for a in parser._actions if a.dest == "command").choices
 
     full = commands(build_parser())
-    assert set(GROUP_MODULES) <= set(full)
-    for name in GROUP_MODULES:
+    assert set(GROUP_COMMANDS) <= set(full)
+    for name in GROUP_COMMANDS:
         alone = commands(build_parser(name))
-        assert set(alone) == {n for n, m in GROUP_MODULES.items() if m == GROUP_MODULES[name]}  # its module's commands
+        assert set(alone) == {n for n, m in GROUP_COMMANDS.items() if m == GROUP_COMMANDS[name]}  # its module's commands
         assert alone[name].format_help() == full[name].format_help()
 
 

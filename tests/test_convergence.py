@@ -74,8 +74,8 @@ class _Ramp:
         return TrajectorySample(t, self.xi0 + t[:, None] * self.rate, np.tile(self.rate, (n, 1)), np.zeros((n, 9)))
 
 
-ROBOT = qprr.thesis.load()
-FREE = qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
+ROBOT = qprr.thesis.load_qprr()
+FREE = qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(g=0.0))
 _M, _G = ROBOT.params.total_mass, ROBOT.params.g
 
 # free tumbling with the arm moving (as tests/test_sim.py)
@@ -136,7 +136,7 @@ def _impedance():
     gamma = np.zeros(9)
     gamma[[0, 1, 2, 5]] = hb
     ctrl = ImpedanceController(
-        ROBOT, gains.impedance(), gains.impedance_filters(), ee_sensor=ee.measured, base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4)
+        ROBOT, gains.impedance_idc(), gains.impedance_filters(), ee_sensor=ee.measured, base_sensor=lambda t: hb if 0.1 <= t < 0.4 else np.zeros(4)
     )
     return _closed(ctrl, external_wrench=ee, disturbance=Pulse(0.1, 0.4, tuple(gamma)))
 
@@ -145,7 +145,7 @@ def _payload_idc():
     # starts at rest on its reference carrying 0.1 kg it does not know of, released at 0.2 s (off the 8 ms grid:
     # the release acts at the tick 0.208 s)
     sched = PayloadSchedule((PayloadChange(0.0, 0.1), PayloadChange(0.2, 0.0)))
-    return _closed(PayloadIDC(ROBOT, gains.payload(), payload="estimate"), xi0=XI_REF, xi_dot0=np.zeros(9), payload=sched)
+    return _closed(PayloadIDC(ROBOT, gains.payload_idc(), payload="estimate"), xi0=XI_REF, xi_dot0=np.zeros(9), payload=sched)
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ REL = 1e-9
 @pytest.fixture(scope="module", params=["thesis", "cad"])
 def pair(request):
     """(robot, data, symbolic model) of one parameter variant."""
-    robot = qprr.thesis.load(request.param)
+    robot = qprr.thesis.load_qprr(request.param)
     return robot, robot.data(), sy.symbolic_model(robot.params)
 
 

@@ -77,7 +77,7 @@ def damped_qprr(tmp_path) -> Platform:
         assert n == 1
     path = tmp_path / "qprr_damped.urdf"
     path.write_text(text)
-    return qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0), urdf_path=path)
+    return qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(g=0.0), urdf_path=path)
 
 
 def hextilt() -> Platform:
@@ -216,7 +216,7 @@ def test_the_mujoco_reference_is_converged(mj, qprr_damped, qprr_reference):
     b, _ = mujoco_run(mj, qprr_damped, 5e-6, QPRR_T - PERIOD, QPRR_XID0)
     assert error(qprr_damped.model, a, b) < 1e-12
     # and it is the same robot: qprr's RK4 at 1.25e-4 s is 1e-13 from it (the table), undamped it is 0.1 off
-    undamped = qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
+    undamped = qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(g=0.0))
     assert error(undamped.model, final_qv(undamped, 1.25e-4, "rk4", QPRR_T, QPRR_XID0), a) > 0.05
 
 

@@ -23,7 +23,7 @@ from qprr.ik import tasks
 from qprr.thesis import igm
 
 POS_TOL = ORI_TOL = 1e-6
-_ROBOT = qprr.thesis.load()  # for the hypothesis tests (no function-scoped fixtures there)
+_ROBOT = qprr.thesis.load_qprr()  # for the hypothesis tests (no function-scoped fixtures there)
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -78,7 +78,7 @@ def assert_valid_solution(robot, data, res, M_d, hover=True):
 
 @pytest.fixture(scope="module")
 def rob():
-    return qprr.thesis.load()
+    return qprr.thesis.load_qprr()
 
 
 @pytest.fixture(scope="module")
@@ -107,7 +107,7 @@ def hover_targets(rob, dat):
 def test_methods_reach_reachable_hover_targets(rob, dat, hover_targets, method, options):
     n = 8 if method == "clika" else len(hover_targets)  # CLIKA takes ~60 Euler steps
     for M_d in hover_targets[:n]:
-        res = igm.solve(rob, dat, M_d, method, options=options)
+        res = igm.solve_qprr(rob, dat, M_d, method, options=options)
         assert_valid_solution(rob, dat, res, M_d)
         assert res.method == method and res.iterations >= 0 and res.wall_time > 0
 
@@ -116,7 +116,7 @@ def test_igm_levenberg_marquardt_converges_from_a_far_guess(rob, dat, hover_targ
     """Algorithm 4 on (3.72) from a guess metres away with a bent arm: a few iterations."""
     for M_d in hover_targets[:10]:
         xi0 = np.r_[M_d.translation + [3.0, -2.0, 4.0], 0.0, 0.0, 1.0, 0.03, 1.5, -1.0]
-        res = igm.solve(rob, dat, M_d, "igm", xi0=xi0)
+        res = igm.solve_qprr(rob, dat, M_d, "igm", xi0=xi0)
         assert_valid_solution(rob, dat, res, M_d)
         assert 1 <= res.iterations <= 10 and res.initial_guess == "xi0 (given)"
 
@@ -126,7 +126,7 @@ def test_igm_is_exact_and_puts_r0_at_the_cog_optimum(rob, dat, hover_targets):
     the base compensates (3.71) so that the end effector stays on the target."""
     lo, hi = rob.params.r0_limits
     for M_d in hover_targets:
-        res = igm.solve(rob, dat, M_d, "igm")
+        res = igm.solve_qprr(rob, dat, M_d, "igm")
         assert res.position_error < 1e-9 and res.orientation_error < 1e-12
         xs = []
         for r0 in np.linspace(lo, hi, 41):
@@ -141,8 +141,8 @@ def test_igm_is_exact_and_puts_r0_at_the_cog_optimum(rob, dat, hover_targets):
 def test_balanced_igm_centres_the_cog_when_possible(rob, dat, hover_targets):
     n_balanced = 0
     for M_d in hover_targets:
-        lm = igm.solve(rob, dat, M_d, "igm")
-        bal = igm.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
+        lm = igm.solve_qprr(rob, dat, M_d, "igm")
+        bal = igm.solve_qprr(rob, dat, M_d, "igm", options={"theta2": "balance"})
         assert abs(bal.x_cm) <= abs(lm.x_cm) + 1e-12
         n_balanced += abs(bal.x_cm) < 1e-12
     assert n_balanced >= 0.8 * len(hover_targets)
@@ -154,7 +154,7 @@ def test_igm_cog_closed_form_matches_pinocchio_for_cad_parameters(cad_robot):
     rng = np.random.default_rng(3)
     for _ in range(10):
         M_d = target_of(cad_robot, data, random_hover_xi(rng, cad_robot))
-        res = igm.solve(cad_robot, data, M_d, "igm")
+        res = igm.solve_qprr(cad_robot, data, M_d, "igm")
         assert res.success, res.reason
         K = igm.arm_constants(cad_robot.params)
         r0, t2, t3 = res.xi[6:9]
@@ -298,7 +298,7 @@ def test_clika_thesis_example(rob, dat):
     leaves its +-0.04 m range (reported as a failure with the reason); weighting r0 by
     (4.34) keeps it inside."""
     M_d = thesis_example_target()
-    res = igm.solve(rob, dat, M_d, "clika", xi0=np.zeros(9))
+    res = igm.solve_qprr(rob, dat, M_d, "clika", xi0=np.zeros(9))
     pos, ori = fk_errors(rob, dat, res.q, M_d)
     assert pos < POS_TOL and ori < ORI_TOL
     assert not res.success and res.status == "limits" and "out of limits" in res.reason
@@ -306,11 +306,11 @@ def test_clika_thesis_example(rob, dat):
     w = (1, 1, 1, 1, 1, 1, 1e6, 1, 1)
     # the thesis's CLIKA moves every coordinate: it reaches the pose with the base pitched 0.12 rad,
     # which a quadrotor cannot hold: not a success by default (issue 16 item 6) ...
-    tilted_res = igm.solve(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w})
+    tilted_res = igm.solve_qprr(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w})
     assert not tilted_res.success and tilted_res.status == "not_hover_feasible" and "not in hover" in tilted_res.reason
     assert abs(tilted_res.pitch - 0.1202) < 1e-3 and tilted_res.within_limits
     # ... and the pose alone when the caller says so
-    res_w = igm.solve(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w, "require_hover": False})
+    res_w = igm.solve_qprr(rob, dat, M_d, "clika", xi0=np.zeros(9), options={"weights": w, "require_hover": False})
     assert_valid_solution(rob, dat, res_w, M_d, hover=False)
 
 
@@ -414,7 +414,7 @@ def test_qp_never_violates_joint_limits(seed, tilt, cold):
         xi0[0:3] = M_d.translation + rng.normal(0, 0.2, 3)
     lo, hi = rob.params.lower_limits, rob.params.upper_limits
     for max_iter in (1, 2, 3, 50):
-        res = igm.solve(rob, dat, M_d, "qp", xi0=xi0, options={"max_iter": max_iter})
+        res = igm.solve_qprr(rob, dat, M_d, "qp", xi0=xi0, options={"max_iter": max_iter})
         assert np.all(res.q[7:10] >= lo) and np.all(res.q[7:10] <= hi), res.q[7:10]
         assert res.within_limits
 
@@ -423,9 +423,9 @@ def test_qp_result_respects_the_hierarchy(rob, dat, hover_targets):
     """On reachable targets the QP IK ends with pose and hover exact, the CoG on the thrust
     axis whenever the slider range allows it, and never a worse |x_cm| than the thesis IGM."""
     for M_d in hover_targets:
-        qp = igm.solve(rob, dat, M_d, "qp", options={"init": "guess"})
+        qp = igm.solve_qprr(rob, dat, M_d, "qp", options={"init": "guess"})
         assert_valid_solution(rob, dat, qp, M_d)
-        igm_res = igm.solve(rob, dat, M_d, "igm", options={"theta2": "balance"})
+        igm_res = igm.solve_qprr(rob, dat, M_d, "igm", options={"theta2": "balance"})
         if abs(igm_res.x_cm) < 1e-12:  # balanceable; the CoG level settles to ~ |dx_cm/dq| step_tol
             assert abs(qp.x_cm) < 0.1 * qprr.ik.QPOptions().step_tol
 
@@ -442,13 +442,13 @@ def test_user_tasks_extend_the_hierarchy(rob, dat, hover_targets):
             J[0, 7] = 1.0
             return J, np.array([0.2 - q[8]])
 
-    M_d = next(M for M in hover_targets if abs(igm.solve(rob, dat, M, "igm", options={"theta2": "balance"}).xi[6]) < 0.02)
+    M_d = next(M for M in hover_targets if abs(igm.solve_qprr(rob, dat, M, "igm", options={"theta2": "balance"}).xi[6]) < 0.02)
     levels = ((tasks.PoseTask(rob, M_d),), (Theta2Task(),), (tasks.HoverTask(),))
-    res = igm.solve(rob, dat, M_d, "qp", options={"levels": levels, "require_hover": False})
+    res = igm.solve_qprr(rob, dat, M_d, "qp", options={"levels": levels, "require_hover": False})
     assert res.success and abs(res.xi[7] - 0.2) < 0.1 * qprr.ik.QPOptions().step_tol
     assert res.hover_feasible  # 9 dof - 6 (pose) - 1 (theta2) leave room for hover (rank 1 here)
     levels = ((tasks.PoseTask(rob, M_d),), (tasks.HoverTask(),), (tasks.ComTask((0.001, 0.0)),))
-    res = igm.solve(rob, dat, M_d, "qp", options={"levels": levels})
+    res = igm.solve_qprr(rob, dat, M_d, "qp", options={"levels": levels})
     assert res.success and abs(res.x_cm - 0.001) < 0.1 * qprr.ik.QPOptions().step_tol
 
 
@@ -537,7 +537,7 @@ def test_a_failing_qp_raises_solver_error(rob, dat):
 def test_unreachable_in_hover_fails_with_a_reason(rob, dat, hover_targets, method, options):
     for angle in (1e-3, 0.3):
         M_d = tilted(hover_targets[1], angle)
-        res = igm.solve(rob, dat, M_d, method, options=options)
+        res = igm.solve_qprr(rob, dat, M_d, method, options=options)
         assert not res.success
         assert res.reason and "hover" in res.reason
         assert res.status in ("unreachable", "not_hover_feasible", "stalled", "max_iterations")
@@ -546,26 +546,26 @@ def test_unreachable_in_hover_fails_with_a_reason(rob, dat, hover_targets, metho
 def test_qp_reaches_the_pose_of_an_unreachable_target_by_tilting(rob, dat, hover_targets):
     """Level 1 is kept; level 2 (hover) is what gives: the best-effort solution is tilted."""
     M_d = tilted(hover_targets[2], 0.3)
-    res = igm.solve(rob, dat, M_d, "qp")
+    res = igm.solve_qprr(rob, dat, M_d, "qp")
     assert res.status == "not_hover_feasible"
     assert res.position_error < POS_TOL and res.orientation_error < ORI_TOL
     assert max(abs(res.roll), abs(res.pitch)) > 0.05
-    relaxed = igm.solve(rob, dat, M_d, "qp", options={"require_hover": False})
+    relaxed = igm.solve_qprr(rob, dat, M_d, "qp", options={"require_hover": False})
     assert relaxed.success and not relaxed.hover_feasible
 
 
 def test_targets_outside_the_joint_range_fail_cleanly(rob, dat):
     """A Q-PRR whose revolute joints only reach +-0.5 rad cannot point its end effector
     sideways: theta2 + theta3 = pi/2 is outside [-1, 1]."""
-    narrow = qprr.thesis.load(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
+    narrow = qprr.thesis.load_qprr(rob.params.with_changes(theta2_limits=(-0.5, 0.5), theta3_limits=(-0.5, 0.5)))
     data = narrow.data()
     M_d = pin.SE3(co.rot_y(math.pi / 2), np.array([0.0, 0.0, 1.0]))
-    res = igm.solve(narrow, data, M_d, "igm")
+    res = igm.solve_qprr(narrow, data, M_d, "igm")
     assert not res.success and res.status == "limits" and "theta2 + theta3" in res.reason
-    res = igm.solve(narrow, data, M_d, "dls")  # hover only: the orientation cannot be reached
+    res = igm.solve_qprr(narrow, data, M_d, "dls")  # hover only: the orientation cannot be reached
     assert not res.success and "orientation error" in res.reason
     assert res.within_limits and res.orientation_error > 0.1
-    res = igm.solve(narrow, data, M_d, "qp")  # level 1 is reached by tilting the base, level 2 gives
+    res = igm.solve_qprr(narrow, data, M_d, "qp")  # level 1 is reached by tilting the base, level 2 gives
     assert not res.success and res.status == "not_hover_feasible" and "hover" in res.reason
     assert res.within_limits and res.orientation_error < ORI_TOL
 
@@ -573,39 +573,39 @@ def test_targets_outside_the_joint_range_fail_cleanly(rob, dat):
 def test_out_of_limit_requests_raise(rob, dat, hover_targets):
     M_d = hover_targets[0]
     with pytest.raises(LimitError, match="r0"):
-        igm.solve(rob, dat, M_d, "qp", xi0=[0, 0, 0, 0, 0, 0, 0.1, 0, 0])
+        igm.solve_qprr(rob, dat, M_d, "qp", xi0=[0, 0, 0, 0, 0, 0, 0.1, 0, 0])
     with pytest.raises(LimitError, match="theta2"):
-        igm.solve(rob, dat, M_d, "qp", options={"posture": (0.0, 3.0, 0.0)})
+        igm.solve_qprr(rob, dat, M_d, "qp", options={"posture": (0.0, 3.0, 0.0)})
     with pytest.raises(InputError, match="roll and pitch"):
-        igm.solve(rob, dat, M_d, "dls", xi0=[0, 0, 0, 0.1, 0, 0, 0, 0, 0])
+        igm.solve_qprr(rob, dat, M_d, "dls", xi0=[0, 0, 0, 0.1, 0, 0, 0, 0, 0])
 
 
 def test_bad_input_raises_with_names(rob, dat, hover_targets):
     M_d = hover_targets[0]
     with pytest.raises(UnknownNameError, match="'qp'"):
-        igm.solve(rob, dat, M_d, "newton")
+        igm.solve_qprr(rob, dat, M_d, "newton")
     with pytest.raises(UnknownNameError, match="max_iter"):
-        igm.solve(rob, dat, M_d, "qp", options={"max_iters": 3})
+        igm.solve_qprr(rob, dat, M_d, "qp", options={"max_iters": 3})
     with pytest.raises(InputError, match="dt"):
-        igm.solve(rob, dat, M_d, "clika", options={"dt": -1.0})
+        igm.solve_qprr(rob, dat, M_d, "clika", options={"dt": -1.0})
     with pytest.raises(NonFiniteError):
-        igm.solve(rob, dat, (np.array([0.0, np.nan, 0.0]), np.eye(3)), "igm")
+        igm.solve_qprr(rob, dat, (np.array([0.0, np.nan, 0.0]), np.eye(3)), "igm")
     with pytest.raises(ShapeError):
-        igm.solve(rob, dat, (np.zeros(2), np.eye(3)), "igm")
+        igm.solve_qprr(rob, dat, (np.zeros(2), np.eye(3)), "igm")
     with pytest.raises(InputError, match="rotation"):
-        igm.solve(rob, dat, (np.zeros(3), 1.01 * np.eye(3)), "igm")
+        igm.solve_qprr(rob, dat, (np.zeros(3), 1.01 * np.eye(3)), "igm")
     with pytest.raises(InputError, match="rotation"):
-        igm.solve(rob, dat, (np.zeros(3), np.diag([1.0, 1.0, -1.0])), "igm")
+        igm.solve_qprr(rob, dat, (np.zeros(3), np.diag([1.0, 1.0, -1.0])), "igm")
     with pytest.raises(InputError, match="SE3"):
-        igm.solve(rob, dat, np.eye(4), "igm")
+        igm.solve_qprr(rob, dat, np.eye(4), "igm")
     with pytest.raises(ShapeError, match="xi0"):
-        igm.solve(rob, dat, M_d, "qp", xi0=np.zeros(8))
+        igm.solve_qprr(rob, dat, M_d, "qp", xi0=np.zeros(8))
 
 
 def test_target_forms_are_equivalent(rob, dat, hover_targets):
     M_d = hover_targets[3]
-    a = igm.solve(rob, dat, M_d, "qp")
-    b = igm.solve(rob, dat, (M_d.translation, M_d.rotation), "qp")
+    a = igm.solve_qprr(rob, dat, M_d, "qp")
+    b = igm.solve_qprr(rob, dat, (M_d.translation, M_d.rotation), "qp")
     np.testing.assert_array_equal(a.q, b.q)
 
 
@@ -622,7 +622,7 @@ def test_benchmark_targets_and_results_are_deterministic_for_a_seed(rob, dat):
     b = bench.make_targets(rob, dat, 5, 3, seed=7)
     for Ma, Mb in zip(a[0] + a[1], b[0] + b[1]):
         np.testing.assert_array_equal(Ma.homogeneous, Mb.homogeneous)
-        np.testing.assert_array_equal(igm.solve(rob, dat, Ma, "qp").q, igm.solve(rob, dat, Mb, "qp").q)
+        np.testing.assert_array_equal(igm.solve_qprr(rob, dat, Ma, "qp").q, igm.solve_qprr(rob, dat, Mb, "qp").q)
     c = bench.make_targets(rob, dat, 5, 3, seed=8)
     assert not np.array_equal(a[0][0].homogeneous, c[0][0].homogeneous)
 
@@ -630,9 +630,9 @@ def test_benchmark_targets_and_results_are_deterministic_for_a_seed(rob, dat):
 def test_results_are_deterministic(rob, dat, hover_targets):
     """Same inputs, same answers to the last bit, whatever was solved in between."""
     for method, opts in (("qp", {"init": "guess"}), ("dls", None), ("igm", None)):
-        first = [igm.solve(rob, dat, M, method, options=opts).q for M in hover_targets[:6]]
-        igm.solve(rob, dat, tilted(hover_targets[7], 0.2), method, options=opts)
-        again = [igm.solve(rob, dat, M, method, options=opts).q for M in reversed(hover_targets[:6])][::-1]
+        first = [igm.solve_qprr(rob, dat, M, method, options=opts).q for M in hover_targets[:6]]
+        igm.solve_qprr(rob, dat, tilted(hover_targets[7], 0.2), method, options=opts)
+        again = [igm.solve_qprr(rob, dat, M, method, options=opts).q for M in reversed(hover_targets[:6])][::-1]
         for x, y in zip(first, again):
             np.testing.assert_array_equal(x, y)
 
@@ -678,7 +678,7 @@ def test_targets_too_far_for_the_tolerance_are_refused(rob, dat, method):
     R = np.eye(3)
     for far in (1e17, 1e9):
         with pytest.raises(InputError, match="too far from the origin"):
-            igm.solve(rob, dat, (np.array([far, 0.0, 1.0]), R), method)
+            igm.solve_qprr(rob, dat, (np.array([far, 0.0, 1.0]), R), method)
     from qprr.ik.solver import check_resolvable
 
     # the bound follows the tolerance, not a fixed distance: 16 ulps of |p| below a tenth of it

@@ -25,9 +25,9 @@ N_TARGETS = 12
 
 def make(name: str):
     if name == "q-prr+":
-        return qprr.thesis.load()
+        return qprr.thesis.load_qprr()
     if name == "q-prr-x":
-        return qprr.thesis.load(layout="x")
+        return qprr.thesis.load_qprr(layout="x")
     if name == "HEX-RRR":
         return qprr.build("HEX-RRR")
     return qprr.load(name)
@@ -203,7 +203,7 @@ def test_kept_tasks_retargeted_match_a_fresh_solver(case):
 
 
 def test_retargeting_a_task_checks_its_target():
-    p = qprr.thesis.load()
+    p = qprr.thesis.load_qprr()
     pose = tasks.PoseTask(p, pin.SE3.Identity())
     with pytest.raises(qprr.errors.InputError, match="PoseTask target must be a pinocchio.SE3"):
         pose.set_target(np.zeros(3))

@@ -75,7 +75,7 @@ def test_printed_gain_tables_are_unstable_under_exact_linearisation():
     assert t67.unstable_axes(NAMES) == ["r0", "theta2", "theta3"]
     for g, axis in ((t65, "theta"), (t67, "theta2")):
         assert np.roots(g.characteristic_polynomials(NAMES)[axis]).real.max() > 0.0
-    for g in (gains.payload(), gains.impedance()):
+    for g in (gains.payload_idc(), gains.impedance_idc()):
         assert g.unstable_axes(NAMES) == []
         assert all(np.roots(c).real.max() < 0 for c in g.characteristic_polynomials(NAMES).values())
 
@@ -94,7 +94,7 @@ FAST = ImpedanceGains(M_base=(0.5,) * 4, D_base=(3.0,) * 4, K_base=(5.0,) * 4, M
 def test_closed_loop_deflection_equals_h_over_K():
     """Hover, h_b = 0.2 N on x and h_q = [0.05, 0.01, 0.05] N on the end effector: the base yields h_b/K along +x,
     the arm yields K^-1 J_eb^T h_q (the compliant sign); y and z stay rigid."""
-    res = scn.impedance(impedance_gains=FAST, duration=6.0, t_off=10.0)
+    res = scn.impedance(settings=scn.ImpedanceSettings(impedance_gains=FAST, duration=6.0, t_off=10.0))
     d = scn.impedance_steady_state(res, 5.99)
     meas, pred = d["measured"], d["predicted"]
     assert pred[0] == pytest.approx(0.04)

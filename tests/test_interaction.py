@@ -137,7 +137,7 @@ def test_pushed_mass_coulomb_stick_and_slip(robot):
 
 @pytest.fixture(scope="module")
 def free_robot():
-    return qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
+    return qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(g=0.0))
 
 
 def _push_run(robot, integrator, duration=0.045, dt=1e-3):
@@ -241,9 +241,9 @@ def _locked_arm_check(robot, q_arm, theta, T1, T3, F):
 
 def test_push_model_corrected_matches_locked_arm_pinocchio():
     """Corrected (6.66) = full rigid-body dynamics with the arm locked, at rest (products Ixy = Iyz = 0 so pitch decouples)."""
-    p0 = qprr.thesis.load().params
+    p0 = qprr.thesis.load_qprr().params
     I = p0.multirotor_inertia
-    robot = qprr.thesis.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
+    robot = qprr.thesis.load_qprr(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
     rng = np.random.default_rng(SEED)
     for _ in range(5):
         qa = rng.uniform(robot.params.lower_limits, robot.params.upper_limits)
@@ -256,9 +256,9 @@ def test_push_model_corrected_matches_locked_arm_pinocchio():
 
 def test_push_model_6_66_printed_rotor_sign():
     """Printed rotor term L/(2 I)(T3 - T1) has the opposite sign of (3.36)'s l (f1 - f3) (no contact, CoG on the thrust axis)."""
-    p0 = qprr.thesis.load().params
+    p0 = qprr.thesis.load_qprr().params
     I = p0.multirotor_inertia
-    robot = qprr.thesis.load(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
+    robot = qprr.thesis.load_qprr(p0.with_changes(multirotor_inertia=(I[0], I[1], I[2], 0.0, I[4], 0.0)))
     _, thdd, M, Iyy, contact_b, com_b = _locked_arm_check(robot, (0.0, 0.0, 0.0), 0.0, 9.0, 8.0, 0.0)
     printed = ti.push_model_6_66(0.0, 9.0, 8.0, 0.0, M, Iyy, 2 * robot.params.arm_length, 0.0)
     # arm straight up: the CoG is on z_B (x_cm = 0), so the thrust has no moment about it

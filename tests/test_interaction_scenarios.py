@@ -22,13 +22,13 @@ def test_registry():
     assert set(inter) == plots == controllers == {"payload-drop", "push-thrust", "push-prismatic", "impedance"}
     assert all(SCENARIOS[n] is s for n, s in inter.items())  # registered with the flight scenarios
     with pytest.raises(UnknownNameError):
-        scn.push_thrust(controller="mpc", duration=0.01)
+        scn.push_thrust(controller="mpc", settings=scn.PushSettings(duration=0.01))
 
 
 def test_payload_release_recovers_to_no_payload_hover():
     """0.1 kg released at 0.5 s from a hover (estimated mass): within 1.5 s the Q-PRR is back at the no-payload hover
     (positions within 1 mm, joints and yaw within 1 mrad, thrust within 1 % of m g) and stays there."""
-    res = scn.payload_drop(mission="hover", release_time=0.5, duration=3.0)
+    res = scn.payload_drop(settings=scn.PayloadDropSettings(mission="hover", release_time=0.5, duration=3.0))
     rec = scn.recovery_of(res)
     assert rec.status == "recovered" and rec.time <= 1.5  # measured 1.14 s
     assert rec.peak_thrust > 0.02  # the release did disturb it: 0.1 kg = 2.8 % of the weight
@@ -48,7 +48,7 @@ def test_payload_release_recovers_to_no_payload_hover():
 
 
 def test_push_thrust_contact_force_is_unilateral_and_moves_the_object():
-    res = scn.push_thrust(push=(0.3, 1.5), distance=0.15, duration=2.5, stiffness=STIFFNESS)
+    res = scn.push_thrust(settings=scn.PushSettings(push=(0.3, 1.5), distance=0.15, duration=2.5, stiffness=STIFFNESS))
     c = scn.contact_history(res)
     assert np.all(c.force >= 0.0)
     friction = 0.3 * 0.5 * 9.8
@@ -63,18 +63,19 @@ def test_push_thrust_contact_force_is_unilateral_and_moves_the_object():
 def test_push_prismatic_needs_force_compensation():
     """Pushing along the horizontal links compresses the arm: without cancelling the measured contact wrench the
     soft inverse-dynamics joints buckle (theta3 swings 0.6 rad); with it theta3 stays within 2e-3 rad."""
-    ft = scn.push_prismatic(push=(0.3, 1.5), duration=2.0, stiffness=STIFFNESS)
+    ft = scn.push_prismatic(settings=scn.PushSettings.prismatic(push=(0.3, 1.5), duration=2.0, stiffness=STIFFNESS))
     c = scn.contact_history(ft)
     assert np.all(c.force >= 0.0)
     assert c.position[-1] - c.position[0] == pytest.approx(0.08, abs=3e-3)  # the slider stroke
     assert np.abs(ft.xi_d - ft.xi)[:, 8].max() < 2e-3  # measured 1.7e-3 rad
-    free = scn.push_prismatic(controller="layered-idc", push=(0.3, 1.5), duration=2.0, stiffness=STIFFNESS)
+    free = scn.push_prismatic(controller="layered-idc", settings=scn.PushSettings.prismatic(push=(0.3, 1.5), duration=2.0, stiffness=STIFFNESS))
     assert np.abs(free.xi_d - free.xi)[:, 8].max() > 0.3  # measured 0.61 rad
 
 
 def test_plot_writes_png(tmp_path):
-    res = scn.push_prismatic(push=(0.05, 0.25), duration=0.3, stiffness=STIFFNESS)  # 8 cm in 0.2 s: 15 m/s^2 peak (septic)
-    robot = qprr.thesis.load()
+    fast = scn.PushSettings.prismatic(push=(0.05, 0.25), duration=0.3, stiffness=STIFFNESS)  # 8 cm in 0.2 s: 15 m/s^2 peak (septic)
+    res = scn.push_prismatic(settings=fast)
+    robot = qprr.thesis.load_qprr()
     u = scn.applied_generalized_forces(res)
     for k in (0, 120, 299):  # the plotted forces are u = R_Q N f of Thesis (5.43)
         assert np.allclose(u[k], input_map(robot, res.xi[k], np.r_[res.f[k], res.arm_effort[k]]), atol=1e-12)
@@ -94,7 +95,7 @@ def test_wrist_sensor_compensation_needs_a_filter():
     from qprr.thesis.missions import NAMES
     from qprr.trajectory import MultiPhase, Phase
 
-    robot = qprr.thesis.load()
+    robot = qprr.thesis.load_qprr()
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *scn.ARM_PUSH])
     # the law the measurements below were made with (the limit cycle does not depend on it; its amplitude in
     # the window does: with the septic 0.069 N, against 0.0017 N filtered)
@@ -103,7 +104,7 @@ def test_wrist_sensor_compensation_needs_a_filter():
     chatter = {}
     for filt in (None, scn.SENSOR_FILTER):
         obj = it.PushedMass(robot, mass=0.5, origin=p0, friction=0.3, stiffness=STIFFNESS)
-        sim.simulate(robot, LayeredIDC(robot, gains.payload(), ee_sensor=obj.measured, sensor_filter=filt), traj, 1.5, external_wrench=obj)
+        sim.simulate(robot, LayeredIDC(robot, gains.payload_idc(), ee_sensor=obj.measured, sensor_filter=filt), traj, 1.5, external_wrench=obj)
         h = obj.history()
         sel = (h.t > 0.8) & (h.t < 1.3)
         chatter[filt] = np.sqrt(np.mean(np.diff(h.force[sel]) ** 2))  # rms step-to-step change [N]

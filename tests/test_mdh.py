@@ -25,7 +25,7 @@ from qprr.thesis.params import thesis_params
 
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 P = thesis_params()
-D = th.link_lengths(P)
+D = th.d_lengths(P)
 _angle = st.floats(-math.pi, math.pi)
 _len = st.floats(-2.0, 2.0)
 _arm = st.tuples(*(st.floats(float(a), float(b)) for a, b in zip(P.lower_limits, P.upper_limits))).map(np.array)

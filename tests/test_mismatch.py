@@ -15,7 +15,7 @@ from qprr.payload import with_payload
 from qprr.scenarios import SCENARIOS, run
 from qprr.sim import simulate
 from qprr.sim.mismatch import ModelError, perturbed
-from qprr.thesis import load
+from qprr.thesis import load_qprr
 from qprr.trajectory import Hold
 
 XI0 = np.array([0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
@@ -23,7 +23,7 @@ XI0 = np.array([0.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
 
 @pytest.fixture(scope="module")
 def platform():
-    return load()
+    return load_qprr()
 
 
 class ConstantTau(Controller):

@@ -110,10 +110,10 @@ def test_gains_object_reaches_the_controller(borinot):
 # the generic missions' functions and the registered names, for the MissionSettings tests below
 FUNCTIONS = {
     "takeoff-hover": missions.takeoff_hover,
-    "fly-to": missions.point_to_point,
+    "fly-to": missions.fly_to,
     "mission": missions.mission,
-    "grasp-drop": missions.payload,
-    "hover-wind": missions.wind,
+    "grasp-drop": missions.grasp_drop,
+    "hover-wind": missions.hover_wind,
     "motor-lag": missions.motor_lag,
     "hover-noise": missions.noise,
     "hover-pulses": missions.pulses,

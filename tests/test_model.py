@@ -183,7 +183,7 @@ def test_bad_input(robot, data):
     with pytest.raises(LimitError, match=r"r0 = 0.05 not in \[-0.04, 0.04\]"):
         robot.check_arm_limits([0.05, 0.0, 0.0])
     with pytest.raises(UnknownNameError, match="valid: 'thesis', 'cad'"):
-        qprr.thesis.load("heavy")
+        qprr.thesis.load_qprr("heavy")
     xi = np.zeros(9)
     xi[4] = np.pi / 2
     with pytest.raises(qprr.EulerSingularityError):

@@ -149,7 +149,7 @@ def rebuilt_qprr(params) -> qprr.Platform:
     )  # Table 3.2's link 2 until issue 8's parameters land
 
 
-_BUILT, _THESIS = rebuilt_qprr(P), qprr.thesis.load()
+_BUILT, _THESIS = rebuilt_qprr(P), qprr.thesis.load_qprr()
 
 
 @SETTINGS

@@ -71,7 +71,7 @@ def test_printed_table_3_2_is_an_explicit_nonphysical_opt_in():
     assert printed.links[1].inertia[:3] == _TABLE_3_2_INERTIA["link2"]
     assert printed.nonphysical == ("link2",) and "nonphysical" in printed.variant
     assert printed != thesis_params()
-    robot = qprr.thesis.load(printed)  # Pinocchio accepts it (it does not check); its link-2 inertia is the printed one
+    robot = qprr.thesis.load_qprr(printed)  # Pinocchio accepts it (it does not check); its link-2 inertia is the printed one
     assert robot.model.inertias[robot.model.getJointId("theta2")].inertia[1, 1] == pytest.approx(5.013e-5, rel=1e-12)
     with pytest.raises(NonPhysicalError, match=r"link2: .*I_yy <= I_xx \+ I_zz: 5\.013e-05 > 4\.5507e-05 by 4\.623e-06"):
         printed.with_changes(nonphysical=())

@@ -269,7 +269,7 @@ def test_estimator_is_exact_on_a_noise_free_step(robot):
 def test_estimator_converges_on_a_seeded_noisy_hover(robot):
     """Hover carrying 0.1 kg (unknown to the controller), white force noise 0.3 N (Thesis (6.27)) on x, y, z."""
     xi = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -0.04, 0.3, 0.5)
-    ctrl = PayloadIDC(robot, gains.payload(), payload="estimate")
+    ctrl = PayloadIDC(robot, gains.payload_idc(), payload="estimate")
     res = sim.simulate(
         robot,
         ctrl,
@@ -314,7 +314,7 @@ def test_payload_and_estimator_validate_inputs(robot):
     with pytest.raises(InputError):
         pl.MassEstimator(robot, time_constant=0.0)
     with pytest.raises(UnknownNameError):
-        PayloadIDC(robot, gains.payload(), payload="guess")
+        PayloadIDC(robot, gains.payload_idc(), payload="guess")
 
 
 def test_hypothesis_5_payload_moment_is_a_pitch_moment(robot):
@@ -336,7 +336,7 @@ def test_closed_loop_static_equilibrium_with_payload(robot):
     """Hovering with a known 0.3 kg payload, the applied generalised force N f equals the loaded model's gravity G(q):
     thrust (m + m_c) g, rotor torques balancing the arm's moment, joint efforts = the holding torques."""
     xi = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.03, 0.6, 0.5)
-    ctrl = PayloadIDC(robot, gains.payload(), payload="known", known_mass=0.3)
+    ctrl = PayloadIDC(robot, gains.payload_idc(), payload="known", known_mass=0.3)
     res = sim.simulate(robot, ctrl, Hold(xi), 2.0, payload=sim.PayloadSchedule((sim.PayloadChange(0.0, 0.3),)))
     loaded = pl.with_payload(robot, 0.3)
     q = co.xi_to_q(res.xi[-1])

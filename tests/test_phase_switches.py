@@ -157,9 +157,9 @@ def test_push_prismatic_contact_chatter_is_a_tilt_lever_instability(robot):
         s = c.t >= 5.5
         return c.force[s].min(), c.force[s].max()
 
-    lo_f, hi_f = steady(scn.contact_history(scn.push_prismatic(stiffness=200.0, push=push, duration=duration)))
+    lo_f, hi_f = steady(scn.contact_history(scn.push_prismatic(settings=scn.PushSettings.prismatic(stiffness=200.0, push=push, duration=duration))))
     assert lo_f > 0.4 and hi_f - lo_f < 0.01 * hi_f  # measured 0.491-0.493 N
-    res = scn.push_prismatic(stiffness=500.0, push=push, duration=duration)
+    res = scn.push_prismatic(settings=scn.PushSettings.prismatic(stiffness=500.0, push=push, duration=duration))
     c = scn.contact_history(res)
     late = c.t >= 4.0
     # measured: 0-0.53 N bounces from 4.25 s, then the contact opens for good at 5.2 s (object and
@@ -169,7 +169,7 @@ def test_push_prismatic_contact_chatter_is_a_tilt_lever_instability(robot):
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, *scn.ARM_PUSH[1:]])
     p0, _ = ee_pose_xi(robot, robot.data(), xi0)
     obj = PushedMass(robot, mass=0.2, origin=p0, stiffness=500.0, damping=20.0, friction=0.3)
-    ctrl = _NoTranslationalCompensation(robot, gains.payload(), ee_sensor=obj.measured, sensor_filter=scn.SENSOR_FILTER)
+    ctrl = _NoTranslationalCompensation(robot, gains.payload_idc(), ee_sensor=obj.measured, sensor_filter=scn.SENSOR_FILTER)
     simulate(robot, ctrl, MultiPhase((Phase("r0", *push, hi),), tuple(xi0), names=NAMES), duration, external_wrench=obj)
     lo_f, hi_f = steady(obj.history())
     assert lo_f > 0.4 and hi_f - lo_f < 0.15 * hi_f  # 0.49-0.54 N: the contact holds (its lightly damped position loop settling)

@@ -16,7 +16,7 @@ from qprr.actuation import Allocator
 from qprr.charts import State, xi_dot_to_v, xi_to_q
 from qprr.control import PayloadIDC
 from qprr.sim import simulate
-from qprr.thesis import gains, load
+from qprr.thesis import gains, load_qprr
 from qprr.thesis.bsg import CogStabilizer
 from qprr.thesis.missions import static_mission
 from qprr.thesis.scenarios import flight_controller
@@ -24,7 +24,7 @@ from qprr.thesis.scenarios import flight_controller
 
 @pytest.fixture(scope="module")
 def platform():
-    return load()
+    return load_qprr()
 
 
 def _round_trip(obj):
@@ -53,7 +53,7 @@ def test_pickled_controller_and_allocator_fly_bit_identically(platform, name):
         if name == "bsg":
             return CogStabilizer(platform, flight_controller("mfc", platform), theta_e_d=0.0)
         if name == "payload-idc":
-            return PayloadIDC(platform, gains.payload(), payload="estimate")
+            return PayloadIDC(platform, gains.payload_idc(), payload="estimate")
         return flight_controller(name, platform)
 
     mission = static_mission()

@@ -136,7 +136,7 @@ def test_unsupported_arm_joint_types_are_named(kind, match):
 
 
 def test_massless_arm_link_makes_a_singular_mass_matrix_and_is_refused():
-    model = qprr.thesis.load().model
+    model = qprr.thesis.load_qprr().model
     massless = pin.Model(model)
     massless.inertias[4] = pin.Inertia.Zero()  # link 3 (theta3) carries nothing
     with pytest.raises(NonPhysicalError, match="theta3.*moves no mass"):
@@ -164,7 +164,7 @@ def test_rotor_frames_give_the_rotor_positions_and_axes():
         "rotor": [{"frame": f"rotor_x_{i}", "spin": s} for i, s in zip(range(1, 5), (1, -1, 1, -1))],
     }
     platform = from_urdf(TEXT, desc, ee_frame="end_effector", allow_nonphysical=True)
-    ref = qprr.thesis.load(layout="x")
+    ref = qprr.thesis.load_qprr(layout="x")
     np.testing.assert_allclose(platform.rotor_matrix, ref.rotor_matrix, atol=1e-15)
 
 
@@ -172,7 +172,7 @@ def test_a_model_without_free_flyer_or_with_sideways_gravity_is_refused():
     model = pin.buildModelFromXML(TEXT)  # fixed base
     with pytest.raises(InputError, match="free-flyer root"):
         from_model(model, ROTORS, ee_frame="end_effector", allow_nonphysical=True)
-    model = pin.Model(qprr.thesis.load().model)
+    model = pin.Model(qprr.thesis.load_qprr().model)
     model.gravity = pin.Motion(np.array([1.0, 0.0, -9.8]), np.zeros(3))
     with pytest.raises(InputError, match="gravity"):
         from_model(model, ROTORS, ee_frame="end_effector", allow_nonphysical=True)
@@ -190,23 +190,23 @@ def test_user_model_is_never_modified():
 def test_thesis_loader_refuses_parameters_that_contradict_the_urdf():
     """issue 16 item 3: a parameter the URDF contradicts is an error naming it and both values, not a silent mix."""
     with pytest.raises(InputError, match=r"params\.d3 = 0\.5 m contradicts .*qprr\.urdf, which has 0\.1\b"):
-        qprr.thesis.load(P.with_changes(d3=0.5), urdf_path=URDF_PATH)
+        qprr.thesis.load_qprr(P.with_changes(d3=0.5), urdf_path=URDF_PATH)
     link2 = P.links[1]
     heavier = (P.links[0], type(link2)(link2.name, 0.5, link2.length, link2.com, link2.inertia), P.links[2])
     with pytest.raises(InputError, match=r"params\.links\[1\]\.mass \(link2\) = 0\.5 kg contradicts .* which has 0\.2773"):
-        qprr.thesis.load(P.with_changes(links=heavier), urdf_path=URDF_PATH)
+        qprr.thesis.load_qprr(P.with_changes(links=heavier), urdf_path=URDF_PATH)
     with pytest.raises(InputError, match=r"params\.theta2_limits\[1\] = 1\.0 contradicts"):
-        qprr.thesis.load(P.with_changes(theta2_limits=(P.theta2_limits[0], 1.0)), urdf_path=URDF_PATH)
+        qprr.thesis.load_qprr(P.with_changes(theta2_limits=(P.theta2_limits[0], 1.0)), urdf_path=URDF_PATH)
     with pytest.raises(InputError, match=r"params\.arm_length \(rotor rotor_plus_1 at x, y\) = 0\.3 m contradicts .* which has 0\.225"):
-        qprr.thesis.load(P.with_changes(arm_length=0.3), urdf_path=URDF_PATH)
+        qprr.thesis.load_qprr(P.with_changes(arm_length=0.3), urdf_path=URDF_PATH)
     # parameters the URDF does not hold (rotor factors, thrust bound, g) are the parameters' own
-    assert qprr.thesis.load(P.with_changes(thrust_max=25.0), urdf_path=URDF_PATH).thrust_max.tolist() == [25.0] * 4
+    assert qprr.thesis.load_qprr(P.with_changes(thrust_max=25.0), urdf_path=URDF_PATH).thrust_max.tolist() == [25.0] * 4
 
 
 def test_thesis_loader_refuses_an_unrelated_robot():
     path = qprr.platforms.robots_dir() / "borinot_description/urdf/borinot_flying_arm_2.urdf"
     with pytest.raises((InputError, UnknownNameError)):
-        qprr.thesis.load(urdf_path=path)
+        qprr.thesis.load_qprr(urdf_path=path)
 
 
 def test_named_platform_registry_lists_names():

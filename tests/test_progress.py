@@ -146,7 +146,7 @@ def test_bad_arguments_are_named(kwargs):
 
 @pytest.mark.parametrize("quiet", [False, True])
 def test_analyze_shows_progress_in_a_log_by_default_and_quiet_silences_it(quiet, capsys):
-    from qprr.analysis.cli import main
+    from qprr.cli import main
 
     assert main(["analyze", "hover", "--samples", "2000", "--payload", "0", *(["--quiet"] if quiet else [])]) == 0
     captured = capsys.readouterr()
@@ -162,13 +162,13 @@ def test_analyze_shows_progress_in_a_log_by_default_and_quiet_silences_it(quiet,
 
 def test_wheeled_simulate_reports_its_steps_only_when_asked(capsys):
     from qprr.wheeled.robots import Unicycle
-    from qprr.wheeled.sim import simulate
+    from qprr.wheeled.sim import simulate_wheeled
 
-    res = simulate(Unicycle(), [0.0, 0.0, 0.0], [1.0, 0.5], 1.0, 0.01, progress=True)
+    res = simulate_wheeled(Unicycle(), [0.0, 0.0, 0.0], [1.0, 0.5], 1.0, 0.01, progress=True)
     err = capsys.readouterr().err
     assert str(res.status.value) == "ok" and "\r" not in err
     assert err.splitlines()[-1].startswith("unicycle: 100/100 (100%)")
-    simulate(Unicycle(), [0.0, 0.0, 0.0], [1.0, 0.5], 1.0, 0.01)
+    simulate_wheeled(Unicycle(), [0.0, 0.0, 0.0], [1.0, 0.5], 1.0, 0.01)
     assert capsys.readouterr().err == ""
 
 

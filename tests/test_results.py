@@ -111,7 +111,7 @@ def test_save_load_round_trip_is_bit_exact(res):
 
 def test_a_scenario_run_with_extras_round_trips(tmp_path):
     """A payload release: its series (carried mass, estimate) and metrics (release and recovery times) come back."""
-    res = scn.payload_drop(mission="hover", release_time=0.1, duration=0.3)
+    res = scn.payload_drop(settings=scn.PayloadDropSettings(mission="hover", release_time=0.1, duration=0.3))
     assert {"payload_mass", "mass_estimate"} <= set(res.series) and {"release_time", "recovery_time"} <= set(res.metrics)
     back = SimResult.load(res.save(tmp_path / "drop.npz"))
     for k in ARRAYS:

@@ -75,7 +75,7 @@ def test_quadrotor_x_is_plus_turned_45_degrees():
     for layout in ("plus", "x"):  # the Q-PRR's own rotor set is the "+"/"x" ring of its parameters
         P = qprr.thesis.thesis_params()
         ring = ro.quadrotor(P.arm_length, layout, kappa=P.kappa)
-        np.testing.assert_allclose(ro.rotor_matrix(ring), qprr.thesis.load(layout=layout).rotor_matrix, atol=1e-15)
+        np.testing.assert_allclose(ro.rotor_matrix(ring), qprr.thesis.load_qprr(layout=layout).rotor_matrix, atol=1e-15)
 
 
 @pytest.mark.parametrize(

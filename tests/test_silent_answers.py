@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from qprr.campaign.report import report
+from qprr.campaign.report import campaign_report
 from qprr.campaign.runner import run_campaign
 from qprr.campaign.spec import CampaignSpec
 
@@ -20,10 +20,10 @@ def test_a_campaign_whose_last_record_is_cut_reports_the_run_missing(four_runs, 
     cut = tmp_path / "cut.csv"
     cut.write_bytes(four_runs.read_bytes()[:-20])  # the last record cut mid-line
     (tmp_path / "cut.meta.json").write_bytes(four_runs.with_name("four.meta.json").read_bytes())
-    head = report(cut)[0].splitlines()[0]
+    head = campaign_report(cut)[0].splitlines()[0]
     assert "3 of 4 runs" in head and "1 missing" in head, head
     assert "3 completed (75.0 % of 4)" in head and "100.0 %" not in head, head
-    assert "4 of 4 runs" in report(four_runs)[0].splitlines()[0]
+    assert "4 of 4 runs" in campaign_report(four_runs)[0].splitlines()[0]
 
 
 def test_the_reasons_of_failed_runs_are_on_the_terminal(tmp_path, capsys):
@@ -69,7 +69,7 @@ def test_motor_lag_flies_the_rotor_file_s_motor_table():
 
 def test_a_study_with_no_feasible_design_says_which_constraint_excluded_how_many(tmp_path, capsys):
     from qprr.cli import main
-    from qprr.design.report import report as design_report
+    from qprr.design.report import design_report
 
     spec = tmp_path / "s.toml"
     spec.write_text(

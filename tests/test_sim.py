@@ -71,7 +71,7 @@ def test_hover_at_a_cog_balanced_pose(robot):
 # ------------------------------------------------------------------------------ conservation
 @pytest.fixture(scope="module")
 def free_robot():
-    return qprr.thesis.load(qprr.thesis.thesis_params().with_changes(g=0.0))
+    return qprr.thesis.load_qprr(qprr.thesis.thesis_params().with_changes(g=0.0))
 
 
 XI0 = np.r_[0, 0, 0, 0.1, -0.2, 0.3, 0.01, 0.3, -0.4]

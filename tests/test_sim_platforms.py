@@ -27,7 +27,7 @@ def platforms() -> dict[str, qprr.Platform]:
         "borinot_flying_arm_2": qprr.load("borinot_flying_arm_2"),
         "hextilt_flying_arm_5": qprr.load("hextilt_flying_arm_5"),
         "HEX-RRR": qprr.build("HEX-RRR"),
-        "q-prr": qprr.thesis.load(),
+        "q-prr": qprr.thesis.load_qprr(),
     }
 
 
@@ -122,7 +122,7 @@ def test_runaway_rate_names_time_and_variable():
     a 0.5 N m yaw moment: a pure spin omega_z = m_z t / I_zz that reaches the 2 rad/s bound at t* = 2 I_zz / m_z; the run
     stops at the first check after t* (every 16 steps) naming omega_z and the time."""
     p0 = qprr.thesis.thesis_params()
-    free = qprr.thesis.load(p0.with_changes(g=0.0, multirotor_inertia=(*p0.multirotor_inertia[0:3], 0.0, 0.0, 0.0)))
+    free = qprr.thesis.load_qprr(p0.with_changes(g=0.0, multirotor_inertia=(*p0.multirotor_inertia[0:3], 0.0, 0.0, 0.0)))
     data = free.data()
     pin.ccrba(free.model, data, free.neutral_q(), np.zeros(9))
     assert np.abs(data.Ig.inertia - np.diag(np.diag(data.Ig.inertia))).max() == 0.0 and np.abs(data.com[0][0:2]).max() == 0.0

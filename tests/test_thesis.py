@@ -28,7 +28,7 @@ from qprr.thesis.params import thesis_params
 SETTINGS = settings(max_examples=40, deadline=None, derandomize=True)
 
 P = thesis_params()
-D = th.link_lengths(P)
+D = th.d_lengths(P)
 L, B_F, C_D = P.arm_length, P.thrust_factor, P.drag_factor
 M1, M2, M3 = (link.mass for link in P.links)
 
@@ -129,7 +129,7 @@ def test_allocation_3_36_yaw_row_needs_c_over_b(robot):
 
 def test_allocation_3_36_corrected_for_other_rotor_parameters():
     other = P.with_changes(arm_length=0.31, thrust_factor=2.0e-5, drag_factor=9.0e-7)
-    Om = qprr.thesis.load(other).rotor_matrix
+    Om = qprr.thesis.load_qprr(other).rotor_matrix
     np.testing.assert_allclose(th.allocation_3_36_corrected(0.31, 2.0e-5, 9.0e-7), Om[2:6], atol=1e-15)
 
 
@@ -376,7 +376,7 @@ def _det_zero_euler(robot, data, q_arm):
 
 @pytest.mark.parametrize("d3", [0.10, 0.02, 0.40])
 def test_det_JJt_4_44_is_exact_and_independent_of_d3_and_theta3(d3):
-    robot = qprr.thesis.load(P.with_changes(d3=d3))
+    robot = qprr.thesis.load_qprr(P.with_changes(d3=d3))
     data, rng = robot.data(), np.random.default_rng(444)
     for _ in range(10):
         q_arm = rng.uniform([-0.04, -np.pi, -np.pi], [0.04, np.pi, np.pi])

@@ -13,7 +13,7 @@ import pytest
 from qprr.control import PayloadIDC
 from qprr.scenarios import SCENARIOS, missions
 from qprr.sim import SimConfig
-from qprr.thesis import gains, load
+from qprr.thesis import gains, load_qprr
 from qprr.thesis.missions import STATIC_MISSION, static_mission
 from qprr.thesis.realistic import TIME_CONSTANT, realistic
 from qprr.thesis.robot import params_of
@@ -26,7 +26,7 @@ COMMON = {"dt": SimConfig.dt, "integrator": "midpoint", "seed": 0, "law": "septi
 
 @pytest.fixture(scope="module")
 def qprr():
-    return load()
+    return load_qprr()
 
 
 def same_run(a, b) -> None:
@@ -75,7 +75,7 @@ def test_payload_drop_is_the_generic_mission_with_payload_events(qprr):
     """payload-drop (hover) = the generic ``mission`` with the payload events as data and the thesis's payload IDC."""
     ours = SCENARIOS["payload-drop"].run(platform=qprr, mission="hover", duration=2.0, release_time=1.0)
     arm = (-0.04, 0.3, 0.5)
-    ctrl = PayloadIDC(qprr, gains.payload(), payload="estimate")
+    ctrl = PayloadIDC(qprr, gains.payload_idc(), payload="estimate")
     settings = missions.MissionSettings(trajectory=Hold((0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *arm)), controller=ctrl, name="payload-drop")
     data = {"payload": [{"time": 0.0, "mass": 0.1}, {"time": 1.0, "mass": 0.0}]}
     mine = missions.mission(qprr, "payload-idc", False, settings, mission=data, duration=2.0, **COMMON)

@@ -41,5 +41,5 @@ def test_cad_variant_adds_rail_and_moves_coms(cad_robot, robot):
 
 
 def test_model_is_not_shared_between_loads():
-    a, b = qprr.thesis.load(), qprr.thesis.load()
+    a, b = qprr.thesis.load_qprr(), qprr.thesis.load_qprr()
     assert a.model is not b.model

@@ -47,7 +47,7 @@ from qprr.sim import SimResult, simulate
 from qprr.trajectory import Hold, MultiPhase, Phase
 from tests.strategies import platform_xi_strategy
 
-P = qprr.thesis.load()
+P = qprr.thesis.load_qprr()
 
 
 # ------------------------------------------------------------------------------------ item 1

@@ -30,7 +30,7 @@ def test_a_result_file_is_read_as_the_run_it_logged(result, tmp_path):
 
 
 def test_a_result_without_contact_series(result):
-    res = SimpleNamespace(t=result.t, xi=result.xi, f=result.f, platform=qprr.thesis.load())
+    res = SimpleNamespace(t=result.t, xi=result.xi, f=result.f, platform=qprr.thesis.load_qprr())
     run = as_run(res)
     assert run.contact_wrench_world is None and run.arm_effort is None and run.platform == res.platform.name
     with pytest.raises(qprr.InputError, match="lacks xi"):

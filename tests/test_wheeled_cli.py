@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from qprr.cli import build_parser, main
-from qprr.wheeled.demos import EXERCISES, catalogue, run
+from qprr.wheeled.demos import EXERCISES, catalogue, run_demo
 from qprr.wheeled.robots import ROBOTS
 
 
@@ -51,7 +51,7 @@ def test_runs_print_checks_and_save_a_png(capsys, tmp_path, name):
 
 
 def test_types_output_is_computed():
-    lines = run("types").lines
+    lines = run_demo("types").lines
     assert "[(3, 0), (2, 0), (2, 1), (1, 1), (1, 2)]" in lines[0]
     assert all("computed type (" in ln for ln in lines[1:])
     for ln in lines[1:]:

@@ -11,7 +11,7 @@ from qprr.charts import wrap_angle
 from qprr.errors import InputError
 from qprr.wheeled import control as ctl
 from qprr.wheeled.robots import Car, Unicycle
-from qprr.wheeled.sim import simulate
+from qprr.wheeled.sim import simulate_wheeled
 
 
 def _err(res, ref, offset=0.0):
@@ -24,7 +24,7 @@ def test_kanayama_tracking_converges_to_the_zero_order_hold_floor():
     ref = ctl.Lemniscate()
     floors = []
     for dt in (0.04, 0.02):
-        r = simulate(Unicycle(), [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 30.0, dt)
+        r = simulate_wheeled(Unicycle(), [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 30.0, dt)
         e = _err(r, ref)
         floors.append(e[int(22 / dt) :].max())
         assert e[0] > 0.7
@@ -35,7 +35,7 @@ def test_kanayama_tracking_converges_to_the_zero_order_hold_floor():
 def test_point_tracking_decays_at_the_chosen_rate():
     """I/O linearisation: B_dot = p_d' + k (p_d - B) gives |e(t)| = |e(0)| exp(-k t) (up to the hold)."""
     ref, k = ctl.Circle(), 2.0
-    r = simulate(Unicycle(), [1.0, -0.5, 0.0], ctl.PointTracking(ref, b=0.2, k=k), 2.0, 0.001)
+    r = simulate_wheeled(Unicycle(), [1.0, -0.5, 0.0], ctl.PointTracking(ref, b=0.2, k=k), 2.0, 0.001)
     e = _err(r, ref, 0.2)
     assert e[-1] / e[0] == pytest.approx(math.exp(-k * 2.0), rel=0.02)
 
@@ -43,7 +43,7 @@ def test_point_tracking_decays_at_the_chosen_rate():
 @pytest.mark.parametrize("start", [(-2.0, 1.5, 0.5), (1.5, 1.5, 3.0), (0.0, 1.0, 0.0), (-1.0, -1.0, -2.5)])
 def test_polar_posture_regulation_reaches_the_goal(start):
     goal = np.array([0.5, -0.3, 0.4])
-    r = simulate(Unicycle(), start, ctl.PosturePolar(goal), 30.0, 0.02)
+    r = simulate_wheeled(Unicycle(), start, ctl.PosturePolar(goal), 30.0, 0.02)
     assert np.linalg.norm(r.q[-1, :2] - goal[:2]) < 1e-6
     assert abs(wrap_angle(r.q[-1, 2] - goal[2])) < 1e-6
 
@@ -53,7 +53,7 @@ def test_car_tracking_by_dynamic_feedback_linearisation():
     car = Car()
     floors = []
     for dt in (0.04, 0.02):
-        r = simulate(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 24.0, dt)
+        r = simulate_wheeled(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 24.0, dt)
         floors.append(_err(r, ref)[int(16 / dt) :].max())
         assert np.abs(r.q[int(10 / dt) :, 3]).max() <= car.psi_max  # within the steering limit once converged
     assert floors[1] < 5e-3 and floors[0] / floors[1] == pytest.approx(2.0, rel=0.25)
@@ -66,7 +66,7 @@ def test_sinusoidal_parking_reaches_the_posture():
     errs = []
     for dt in (0.04, 0.02):
         pk = ctl.SinusoidalParking(goal, car.D)
-        r = simulate(car, np.zeros(4), pk, pk.duration, dt)
+        r = simulate_wheeled(car, np.zeros(4), pk, pk.duration, dt)
         errs.append(np.linalg.norm(r.q[-1] - goal))
         assert np.abs(r.q[:, 3]).max() < car.psi_max
     assert errs[1] < 1e-3 and errs[0] / errs[1] > 2.0

@@ -10,7 +10,7 @@ from scipy.integrate import solve_ivp
 
 from qprr.errors import InputError, KinematicSingularityError, NonFiniteError, ShapeError
 from qprr.wheeled.robots import ROBOTS, TRICYCLE_CASES, RearTricycle, Unicycle, get_robot, tricycle_exercise
-from qprr.wheeled.sim import SimStatus, chord_slip, euler_step, rk4_step, simulate
+from qprr.wheeled.sim import SimStatus, chord_slip, euler_step, rk4_step, simulate_wheeled
 
 
 def _sample(model, rng):
@@ -123,14 +123,14 @@ def test_rear_and_front_drive_differ_only_by_the_input_scale():
 def test_simulate_input_errors():
     m = Unicycle()
     with pytest.raises(ShapeError, match="u of 'unicycle'"):
-        simulate(m, [0, 0, 0], [1.0, 2.0, 3.0], 1.0, 0.1)
+        simulate_wheeled(m, [0, 0, 0], [1.0, 2.0, 3.0], 1.0, 0.1)
     with pytest.raises(InputError, match="whole number"):
-        simulate(m, [0, 0, 0], [1.0, 0.0], 1.05, 0.1)
+        simulate_wheeled(m, [0, 0, 0], [1.0, 0.0], 1.05, 0.1)
     with pytest.raises(InputError, match="dt"):
-        simulate(m, [0, 0, 0], [1.0, 0.0], 1.0, 0.0)
+        simulate_wheeled(m, [0, 0, 0], [1.0, 0.0], 1.0, 0.0)
     with pytest.raises(NonFiniteError):
-        simulate(m, [0, float("nan"), 0], [1.0, 0.0], 1.0, 0.1)
+        simulate_wheeled(m, [0, float("nan"), 0], [1.0, 0.0], 1.0, 0.1)
     with pytest.raises(InputError, match="shape"):
-        simulate(m, [0, 0, 0], np.zeros((3, 2)), 1.0, 0.1)
-    ok = simulate(m, [0, 0, 0], np.tile([1.0, 0.5], (10, 1)), 1.0, 0.1)
+        simulate_wheeled(m, [0, 0, 0], np.zeros((3, 2)), 1.0, 0.1)
+    ok = simulate_wheeled(m, [0, 0, 0], np.tile([1.0, 0.5], (10, 1)), 1.0, 0.1)
     assert ok.q[-1] == pytest.approx(m.flow([0, 0, 0], [1.0, 0.5], 1.0))

@@ -26,10 +26,10 @@ against Pinocchio to round-off) over joint grids (:mod:`qprr.analysis._common`);
 come from :mod:`qprr.analysis.voxels`.  Command line: ``python -m qprr analyze MAP``.
 """
 
-from ._common import JointGrid, Status, make_grid
+from ._common import JointGrid, MapStatus, make_grid
 from .capacity import LIMITS, CapacityOptions, CapacityResult, capacity
 from .chain import ArmChain, Statics
-from .cog import BalanceOptions, BalanceResult, CoGOptions, CoGResult, balance, cog_regions
+from .cog import BalanceOptions, CoGBalanceMap, CoGOptions, CoGResult, balance, cog_regions
 from .hover import HoverOptions, HoverResult, PayloadLimits, hover
 from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
 from .singularity import SingularityOptions, SingularityResult, singularity
@@ -41,7 +41,7 @@ __all__ = [
     "LIMITS",
     "ArmChain",
     "BalanceOptions",
-    "BalanceResult",
+    "CoGBalanceMap",
     "CapacityOptions",
     "CapacityResult",
     "CoGOptions",
@@ -57,7 +57,7 @@ __all__ = [
     "SingularityOptions",
     "SingularityResult",
     "Statics",
-    "Status",
+    "MapStatus",
     "WorkspaceOptions",
     "WorkspaceResult",
     "WrenchSet",

@@ -41,7 +41,7 @@ CHUNK = 16384
 """Configurations per batch: large enough to amortise numpy's per-call cost, small enough for the cache."""
 
 
-class Status(str, Enum):
+class MapStatus(str, Enum):
     """Outcome of a map: ``OK`` (every quantity computed), ``EMPTY`` (the set asked for is empty,
     e.g. no configuration hovers), ``PARTIAL`` (computed, but a part is missing: the reason says which)."""
 
@@ -50,7 +50,7 @@ class Status(str, Enum):
     PARTIAL = "partial"
 
 
-def check_platform(platform) -> Platform:
+def check_arm_platform(platform) -> Platform:
     """:func:`qprr.model.check_platform`, and the platform must have an arm (the maps are over its configurations)."""
     _check_platform(platform)
     if platform.n_arm == 0:
@@ -77,7 +77,7 @@ def check_masses(masses, name: str = "payload_masses") -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class Payload:
+class PayloadMount:
     """A point payload held by a frame of the arm (default: the end effector).
 
     ``offset_frame``: its position in that frame [m] (the thesis's d_cl along link 3 is
@@ -88,11 +88,11 @@ class Payload:
     frame: int | None = None
 
 
-def make_payload(platform: Platform, payload_offset, frame=None) -> Payload:
+def make_payload_mount(platform: Platform, payload_offset, frame=None) -> PayloadMount:
     _check_platform(platform)
     off = as_vector(payload_offset, 3, "payload_offset")
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
-    return Payload(tuple(float(x) for x in off), fid)
+    return PayloadMount(tuple(float(x) for x in off), fid)
 
 
 # ------------------------------------------------------------------------------ joint grid

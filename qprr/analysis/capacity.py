@@ -33,16 +33,16 @@ from ..model import Platform
 from ..validation import as_vector
 from ._common import (
     JointGrid,
-    Status,
+    MapStatus,
     affine_span,
     best_per_cell,
+    check_arm_platform,
     check_int,
-    check_platform,
     check_pos,
     check_progress,
     default_map_cell,
     make_grid,
-    make_payload,
+    make_payload_mount,
 )
 from .chain import ArmChain
 from .hover import check_reserve, payload_limits
@@ -85,7 +85,7 @@ class CapacityResult:
     map_origin: np.ndarray
     best: tuple
     worst_reachable: float
-    status: Status
+    status: MapStatus
     reason: str
 
     def fractions(self) -> dict[str, float]:
@@ -158,11 +158,11 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
         raise InputError(f"options must be a CapacityOptions, got {type(o).__name__}")
     o = replace(o, **settings) if settings else o
     n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
-    check_platform(platform)
+    check_arm_platform(platform)
     check_int("n_samples", n_samples, 2)
     torque_reserve = check_reserve(o.torque_reserve)
     thrust_tol = check_pos("thrust_tol", o.thrust_tol, strict=False)
-    payload = make_payload(platform, payload_offset)
+    payload = make_payload_mount(platform, payload_offset)
     progress = check_progress(progress)
     grid = make_grid(platform, n_samples, locked, ranges)
     W = wrench_set(platform)
@@ -194,9 +194,9 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
     best_map = np.where(arg >= 0, cap[np.clip(arg, 0, None)], np.nan)
     i = int(np.argmax(cap))
     allq = grid.configurations(i, i + 1)[0]
-    status, reason = Status.OK, ""
+    status, reason = MapStatus.OK, ""
     if np.all(lim == 3):
-        status, reason = Status.EMPTY, "no configuration hovers even without payload"
+        status, reason = MapStatus.EMPTY, "no configuration hovers even without payload"
     return CapacityResult(
         platform.name,
         grid,

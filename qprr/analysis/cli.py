@@ -1,6 +1,6 @@
 """``qprr analyze workspace|cog|singularity|hover|capacity|opspace [--platform NAME] [--plot FILE.png]``.
 
-Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a named platform
+Registered into :mod:`qprr.cli` by :func:`register_analysis_cli`.  ``--platform`` takes a named platform
 (:data:`qprr.platforms.NAMES`) or a name of the thesis nomenclature (2.1) that
 :func:`qprr.build` makes (``HEX-RRR``, ``QX-PRR``...); ``--urdf FILE --rotors FILE.toml
 [--ee-frame NAME]`` a user's own platform.  Published numbers for a platform (the thesis's
@@ -11,7 +11,6 @@ Registered into :mod:`qprr.cli` by :func:`register_cli`.  ``--platform`` takes a
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 
 from ..platforms import DEFAULT_PLATFORM
@@ -49,7 +48,7 @@ def map_reference(map_name: str, platform, result) -> MapReference | None:
     return None
 
 
-def run(args: argparse.Namespace) -> int:
+def run_analyze(args: argparse.Namespace) -> int:
     from ..cli.common import fail, output_path, platform_from_args
 
     try:
@@ -133,7 +132,7 @@ def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgr
     return res, fig
 
 
-def register_cli(sub) -> None:
+def register_analysis_cli(sub) -> None:
     """Add the ``analyze`` command to the subparsers ``sub`` of the qprr command line."""
     from ..cli.common import add_platform_options, integer, real, reals
 
@@ -167,7 +166,7 @@ def register_cli(sub) -> None:
     p.add_argument(
         "-q", "--quiet", action="store_true", help="no progress on stderr (shown by default: a bar on a terminal, a line every few seconds in a log)"
     )
-    p.set_defaults(func=run)
+    p.set_defaults(func=run_analyze)
     register_inspect(sub)
 
 
@@ -195,14 +194,3 @@ def register_inspect(sub) -> None:
     )
     add_platform_options(p)
     p.set_defaults(func=run_inspect)
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="qprr")
-    register_cli(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return int(args.func(args) or 0)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

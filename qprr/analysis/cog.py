@@ -40,16 +40,16 @@ from ..model import Platform
 from ..validation import as_vector
 from ._common import (
     JointGrid,
-    Status,
+    MapStatus,
     affine_span,
+    check_arm_platform,
     check_int,
     check_locked,
     check_masses,
-    check_platform,
     check_pos,
     check_progress,
     make_grid,
-    make_payload,
+    make_payload_mount,
 )
 from .chain import ArmChain
 from .voxels import MeasureEstimate, estimate_measure
@@ -90,7 +90,7 @@ class CoGResult:
     masses: np.ndarray
     variants: tuple[dict, ...]
     regions: dict
-    status: Status
+    status: MapStatus
     reason: str
 
     def summary(self) -> str:
@@ -194,12 +194,12 @@ def cog_regions(platform: Platform, options: CoGOptions | None = None, *, progre
     (stderr) or a callable (fraction, message).
     """
     o = _settings(CoGOptions, options, settings)
-    check_platform(platform)
+    check_arm_platform(platform)
     check_int("n_samples", o.n_samples, 8)
     masses = check_masses(o.payload_masses)
     check_int("n_shifts", o.n_shifts, 2)
     check_int("n_pitch", o.n_pitch, 2)
-    payload = make_payload(platform, o.payload_offset)
+    payload = make_payload_mount(platform, o.payload_offset)
     base = check_locked(platform, o.locked)
     variants = default_variants(platform) if o.variants is None else [check_locked(platform, v) for v in o.variants]
     progress = check_progress(progress)
@@ -221,12 +221,12 @@ def cog_regions(platform: Platform, options: CoGOptions | None = None, *, progre
             regions[(v, k)], why = _region(lk, m, grid, coms[k], pitches, axis, o.n_shifts)
             if why:
                 reasons.append(f"[{v}] payload {m:g} kg: {why}")
-    return CoGResult(platform.name, masses, tuple(sets), regions, Status.PARTIAL if reasons else Status.OK, "; ".join(reasons))
+    return CoGResult(platform.name, masses, tuple(sets), regions, MapStatus.PARTIAL if reasons else MapStatus.OK, "; ".join(reasons))
 
 
 # ================================================================================ balance
 @dataclass(frozen=True)
-class BalanceResult:
+class CoGBalanceMap:
     """Where the CoG can be put on the thrust axis (see the module docstring).
 
     With a slider: ``grid`` over the other joints (the slider axis has one value), ``r_star``
@@ -255,7 +255,7 @@ class BalanceResult:
     balanced_measure: MeasureEstimate | None
     workspace_measure: MeasureEstimate | None
     fraction_workspace: Ratio | None
-    status: Status
+    status: MapStatus
     reason: str
 
     def summary(self) -> str:
@@ -479,7 +479,7 @@ def _measures(platform: Platform, chain: ArmChain, ws_grid: JointGrid, bmap: _Ba
     return bal_m, ws_m, Ratio.of(bal_m, ws_m), ""
 
 
-def balance(platform: Platform, options: BalanceOptions | None = None, *, progress=None, **settings) -> BalanceResult:
+def balance(platform: Platform, options: BalanceOptions | None = None, *, progress=None, **settings) -> CoGBalanceMap:
     """The slider position that zeroes the CoG offset from the thrust axis, over the other joints.
 
     ``options``: :class:`BalanceOptions`, and/or its fields as keywords (``balance(p, n_samples=2e4,
@@ -488,11 +488,11 @@ def balance(platform: Platform, options: BalanceOptions | None = None, *, progre
     balancing slider position is continuous (see :func:`_resolved_points`).
     """
     o = _settings(BalanceOptions, options, settings)
-    check_platform(platform)
+    check_arm_platform(platform)
     check_int("n_samples", o.n_samples, 8)
     check_int("n_shifts", o.n_shifts, 2)
     m = float(check_masses([o.payload_mass], "payload_mass")[0])
-    payload = make_payload(platform, o.payload_offset)
+    payload = make_payload_mount(platform, o.payload_offset)
     tol = check_pos("tol", o.tol)
     progress = check_progress(progress)
     base = check_locked(platform, o.locked)
@@ -511,8 +511,8 @@ def balance(platform: Platform, options: BalanceOptions | None = None, *, progre
         bmap = _slider_map(platform, load, grid, k, (lo_r, hi_r), progress)
     ok = bmap.offset <= tol
     bal_m, ws_m, ratio, reason = _measures(platform, chain, ws_grid, bmap, ok, o.n_shifts)
-    status = Status.OK if not reason else (Status.EMPTY if not ok.any() else Status.PARTIAL)
-    return BalanceResult(
+    status = MapStatus.OK if not reason else (MapStatus.EMPTY if not ok.any() else MapStatus.PARTIAL)
+    return CoGBalanceMap(
         platform.name,
         slider,
         m,

@@ -43,14 +43,14 @@ from ..model import Platform
 from ..validation import as_vector
 from ._common import (
     JointGrid,
-    Status,
+    MapStatus,
+    check_arm_platform,
     check_int,
     check_masses,
-    check_platform,
     check_progress,
     collision_mask,
     make_grid,
-    make_payload,
+    make_payload_mount,
     resolve_collision,
 )
 from .chain import ArmChain, Statics
@@ -157,7 +157,7 @@ class HoverResult:
     feasible_fraction: np.ndarray
     min_thrust_margin: np.ndarray
     worst_q: np.ndarray
-    status: Status
+    status: MapStatus
     reason: str
     collision_free: np.ndarray | None = None
     feasible_free_fraction: np.ndarray | None = None
@@ -236,7 +236,7 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     o = replace(options or HoverOptions(), **settings) if settings else (options or HoverOptions())
     if not isinstance(o, HoverOptions):
         raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
-    check_platform(platform)
+    check_arm_platform(platform)
     cmodel, note = resolve_collision(platform, o.collision)
     setup = _Setup(
         platform,
@@ -244,7 +244,7 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
         wrench_set(platform),
         Allocator(platform),
         ArmChain(platform),
-        make_payload(platform, o.payload_offset),
+        make_payload_mount(platform, o.payload_offset),
         np.array(platform.arm_effort_limits),
         check_reserve(o.torque_reserve),
     )
@@ -259,9 +259,9 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     rmargin = np.minimum(arr.thrusts - W.thrust_min, W.thrust_max - arr.thrusts)
     feasible = arr.rot_ok & arr.eff_ok
     worst = arr.margin.argmin(axis=1)
-    status, reason = Status.OK, ""
+    status, reason = MapStatus.OK, ""
     if not feasible.any():
-        status, reason = Status.EMPTY, "no configuration hovers at any payload mass asked"
+        status, reason = MapStatus.EMPTY, "no configuration hovers at any payload mass asked"
     limits = PayloadLimits(arr.lim_rot, arr.lim_eff, arr.lim_joint, float(arr.collective), arr.lim_per)
     result = HoverResult(
         platform.name,

@@ -46,7 +46,7 @@ from ..errors import InputError
 from ..kinematics import check_q
 from ..model import Platform, check_data
 from ..validation import as_vector
-from ._common import JointGrid, Status, check_int, check_platform, check_progress, make_grid
+from ._common import JointGrid, MapStatus, check_arm_platform, check_int, check_progress, make_grid
 
 
 @dataclass(frozen=True)
@@ -86,7 +86,7 @@ def opspace_model(platform: Platform, data: pin.Data, q, v=None, frame=None, *, 
     ``q``, ``v``: Pinocchio configuration and velocity of the platform (``fixed_base``: of the
     arm model, nq = nv = n_arm, and ``data`` from ``platform.arm_model().createData()``).
     """
-    check_platform(platform)
+    check_arm_platform(platform)
     if not isinstance(data, pin.Data):
         raise InputError(f"data must be a pinocchio.Data, got {type(data).__name__}")
     model = platform.arm_model() if fixed_base else platform.model
@@ -201,7 +201,7 @@ def opspace_model_xi(platform: Platform, data: pin.Data, xi, xi_dot=None, frame=
     With every coordinate free and ``rows="pose"``, Lambda, mu, p equal those of
     :func:`opspace_model` at the same state (tests/test_analysis_opspace.py).
     """
-    check_data(check_platform(platform), data)
+    check_data(check_arm_platform(platform), data)
     n_xi = platform.n_xi
     xi = ch.as_xi(xi, "xi", n_xi)
     w = np.zeros(n_xi) if xi_dot is None else as_vector(xi_dot, n_xi, "xi_dot")
@@ -288,7 +288,7 @@ class OpSpaceMap:
     inertia_xyz: np.ndarray
     condition: np.ndarray
     gravity_force: np.ndarray
-    status: Status
+    status: MapStatus
     reason: str
 
     def summary(self) -> str:
@@ -311,7 +311,7 @@ def opspace_map(
 ) -> OpSpaceMap:
     """Effective mass and conditioning of the operational-space inertia over the arm's joint grid (one Pinocchio
     evaluation per configuration: CRBA, the frame Jacobian and a Cholesky solve)."""
-    check_platform(platform)
+    check_arm_platform(platform)
     check_int("n_samples", n_samples, 2)
     progress = check_progress(progress)
     grid = make_grid(platform, n_samples, locked, ranges)
@@ -340,4 +340,4 @@ def opspace_map(
             grav[k] = np.linalg.solve(Li, X.T @ solve_triangular(c, g, lower=True))[0:3]
         if progress:
             progress((start + len(qa)) / n, "operational-space map")
-    return OpSpaceMap(platform.name, grid, ee, mass, inert, cond, grav, Status.OK, "")
+    return OpSpaceMap(platform.name, grid, ee, mass, inert, cond, grav, MapStatus.OK, "")

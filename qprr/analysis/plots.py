@@ -14,7 +14,7 @@ import numpy as np
 
 from ..viz.plots import legend, new_figure, plain, tidy_3d
 from .capacity import LIMITS, CapacityResult
-from .cog import BalanceResult, CoGResult
+from .cog import CoGBalanceMap, CoGResult
 from .hover import HoverResult
 from .opspace import OpSpaceMap
 from .singularity import SingularityResult
@@ -215,7 +215,7 @@ def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
     return ax
 
 
-def plot_balance(result: BalanceResult, ax=None, axes=None):
+def plot_balance(result: CoGBalanceMap, ax=None, axes=None):
     """Slider position r* that balances the CoG over two joints (NaN where none within the limits), or |offset|."""
     ax = _new_ax(ax)
     g = result.grid
@@ -237,7 +237,7 @@ def plot_balance(result: BalanceResult, ax=None, axes=None):
     return ax
 
 
-def plot_balanced_workspace(result: BalanceResult, ax=None):
+def plot_balanced_workspace(result: CoGBalanceMap, ax=None):
     """End-effector positions reachable with the CoG balanced (in the x-z plane of B)."""
     ax = _new_ax(ax)
     ok = result.balanced
@@ -253,7 +253,7 @@ def plot_balanced_workspace(result: BalanceResult, ax=None):
     return ax
 
 
-def cog_figure(result: CoGResult, balance: BalanceResult | None = None):
+def cog_figure(result: CoGResult, balance: CoGBalanceMap | None = None):
     """CoG regions per variant and payload (Thesis Fig. 6.31/6.32/6.47/6.48) and the balance map."""
     nv = len(result.variants)
     n = nv + (2 if balance is not None else 0)

@@ -35,9 +35,9 @@ from ..errors import InputError, UnknownNameError
 from ..model import Platform
 from ._common import (
     JointGrid,
-    Status,
+    MapStatus,
+    check_arm_platform,
     check_int,
-    check_platform,
     check_pos,
     check_progress,
     joint_ranges,
@@ -74,7 +74,7 @@ class SingularityResult:
     det_system: np.ndarray
     singular: np.ndarray
     distance: np.ndarray
-    status: Status
+    status: MapStatus
     reason: str
 
     def summary(self) -> str:
@@ -208,7 +208,7 @@ def singularity(platform: Platform, options: SingularityOptions | None = None, *
     if not isinstance(o, SingularityOptions):
         raise InputError(f"options must be a SingularityOptions, got {type(o).__name__}")
     o = replace(o, **settings) if settings else o
-    check_platform(platform)
+    check_arm_platform(platform)
     check_int("n_samples", o.n_samples, 8)
     if o.task not in TASKS:
         raise UnknownNameError("singularity task", o.task, TASKS)
@@ -232,10 +232,10 @@ def singularity(platform: Platform, options: SingularityOptions | None = None, *
     spacing = [(grid.axes[a][1] - grid.axes[a][0]) / (length if platform.arm[a].kind == "prismatic" else 1.0) for a in free]
     if sing.any():
         dist = ndimage.distance_transform_edt(~sing, sampling=spacing).reshape(-1)
-        status, reason = Status.OK, ""
+        status, reason = MapStatus.OK, ""
     else:
         dist = np.full(grid.size, np.inf)
-        status, reason = Status.OK, "no singular configuration on the grid (distance = inf)"
+        status, reason = MapStatus.OK, "no singular configuration on the grid (distance = inf)"
     return SingularityResult(
         platform.name,
         o.task,

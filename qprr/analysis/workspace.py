@@ -35,11 +35,11 @@ from ..model import Platform
 from ._common import (
     CollisionMask,
     JointGrid,
-    Status,
+    MapStatus,
     affine_span,
+    check_arm_platform,
     check_int,
     check_locked,
-    check_platform,
     check_progress,
     collision_mask,
     make_grid,
@@ -144,7 +144,7 @@ class WorkspaceResult:
     ``regions[0]`` has every joint free (apart from ``locked``); the others lock the joints of
     each variant.  ``gain[i]`` (i >= 1): regions[0] over regions[i] in B (``Ratio``) and
     ``gain_hover[i]`` under hover; ``difference[i]`` = measure(regions[0]) - measure(regions[i])
-    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis._common.Status`.  With a collision check:
+    with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis.MapStatus`.  With a collision check:
     ``gain_free[i]`` = (in B, under hover) ratios of the collision-free measures (None where not measured);
     ``collision_note``: why collisions were not checked, if they were not.
     """
@@ -155,7 +155,7 @@ class WorkspaceResult:
     gain: dict = field(default_factory=dict)
     gain_hover: dict = field(default_factory=dict)
     difference: dict = field(default_factory=dict)
-    status: Status = Status.OK
+    status: MapStatus = MapStatus.OK
     reason: str = ""
     collision_note: str = ""
     gain_free: dict = field(default_factory=dict)
@@ -192,7 +192,7 @@ class WorkspaceResult:
 
 def default_variants(platform: Platform) -> list[dict[str, float]]:
     """One variant per prismatic joint, locked at 0 (or the limit nearest 0): "without the slider"."""
-    check_platform(platform)
+    check_arm_platform(platform)
     out = []
     for j in platform.arm:
         if j.kind == "prismatic":
@@ -255,7 +255,7 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
         raise InputError(f"options must be a WorkspaceOptions, got {type(o).__name__}")
     n_samples, variants, locked, ranges, frame, hover = o.n_samples, o.variants, o.locked, o.ranges, o.frame, o.hover
     n_shifts, seed = o.n_shifts, o.seed
-    check_platform(platform)
+    check_arm_platform(platform)
     base_locked = check_locked(platform, locked)
     if variants is None:
         variants = default_variants(platform)
@@ -297,7 +297,7 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
         )
         if any(g is not None for g in free_gains):
             gain_free[i] = free_gains
-    status = Status.PARTIAL if reasons else Status.OK
+    status = MapStatus.PARTIAL if reasons else MapStatus.OK
     return WorkspaceResult(
         platform.name, platform.model.frames[fid].name, tuple(regions), gain, gain_hover, diff, status, "; ".join(reasons), note, gain_free
     )

@@ -37,8 +37,9 @@ workers (each run's draws and seed come from the specification's seed and the ru
 
 Public API for other packages (e.g. a design search that runs its evaluations here):
 
-* ``run_campaign(spec, output, *, backend="local", workers=None, scheduler=None, fresh=False,
-  limit=None, progress=True, stream=None) -> CampaignRun``: the one loop.  ``CampaignRun``:
+* ``run_campaign(spec, output, options=None, **settings) -> CampaignRun``: the one loop; ``options`` a
+  :class:`CampaignRunOptions` (backend="local", workers=None, scheduler=None, fresh=False, limit=None,
+  progress=True, stream=None), its fields also keywords.  ``CampaignRun``:
   ``path``, ``executed``, ``skipped``, ``failed``, ``lost`` (runs lost with a worker or the
   scheduler: not saved), ``interrupted`` ("" or "SIGINT"/"SIGTERM"), ``remaining`` (runs of the
   specification not saved), ``backend`` (name), ``where`` (what ran them), ``wall_time``,
@@ -64,7 +65,7 @@ Public API for other packages (e.g. a design search that runs its evaluations he
 
 from .backends import BACKENDS, Backend, DaskBackend, InlineBackend, LocalBackend, make_backend
 from .metrics import DEFAULT_METRICS, METRICS, STATUSES, CampaignMetric, metric_columns, metrics_of
-from .runner import CampaignRun, run_campaign
+from .runner import CampaignRun, CampaignRunOptions, run_campaign
 from .spec import MODEL_PARAMS, CampaignSpec, Distribution, Run
 from .store import KINDS, Results, ResultsFileError, ResultStore, ResultsWriteError, read_meta, read_results
 
@@ -78,6 +79,7 @@ __all__ = [
     "Backend",
     "CampaignMetric",
     "CampaignRun",
+    "CampaignRunOptions",
     "CampaignSpec",
     "DaskBackend",
     "Distribution",

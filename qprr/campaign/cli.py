@@ -1,6 +1,6 @@
 """``qprr campaign run SPEC`` / ``qprr campaign report RESULTS`` / ``qprr campaign show SPEC``.
 
-Registered in :func:`qprr.cli.build_parser` through :func:`register_cli`.  Exit codes of ``run``:
+Registered in :func:`qprr.cli.build_parser` through :func:`register_campaign_cli`.  Exit codes of ``run``:
 0 done (every run asked for saved, whatever their status), 1 runs remain (interrupted by Ctrl-C
 or SIGTERM, or lost with a worker or the scheduler: run the same command again), 2 bad
 arguments, specification or results file (a bad row is named with its file, line and column),
@@ -32,7 +32,7 @@ def _print(lines) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .report import not_ok_reasons, report
+    from .report import campaign_report, not_ok_reasons
     from .runner import run_campaign
     from .spec import CampaignSpec
     from .store import ResultsWriteError
@@ -77,16 +77,16 @@ def _cmd_run(args: argparse.Namespace) -> int:
     if done.interrupted or done.lost:
         return 1
     if args.report:
-        text, figures = report(res, args.report)
+        text, figures = campaign_report(res, args.report)
         _print([text, *(f"figure {f}" for f in figures)])
     return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
-    from .report import report
+    from .report import campaign_report
 
     try:
-        text, figures = report(
+        text, figures = campaign_report(
             args.results,
             args.out,
             by=args.by,
@@ -129,7 +129,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     return 0
 
 
-def register_cli(sub) -> None:
+def register_campaign_cli(sub) -> None:
     """Add ``campaign run | report | show`` to the ``qprr`` command line."""
     p = sub.add_parser(
         "campaign",

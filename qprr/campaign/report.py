@@ -9,7 +9,7 @@
   :func:`success_curve` (success rate against a parameter, one curve per controller; a random
   parameter is binned by quantiles), :func:`scatter_plot` (a metric against any parameter).
   Figures go through :func:`qprr.viz.new_figure` (no pyplot).
-* :func:`report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
+* :func:`campaign_report`: all of these for a results file, into a folder (``summary.md`` + PNGs).
 * :func:`platform_label`: the platform the campaign flew and where it came from (a registered
   name, a (2.1) designation, or a URDF and rotor file with their SHA-256), named in the report's
   header and the figures' titles.  Titles and axis labels are re-wrapped to the page
@@ -516,7 +516,7 @@ def not_ok_reasons(results: Results, limit: int = 3) -> list[str]:
     return [f"not completed ({int(bad.sum())} run(s)):", *lines]
 
 
-def report(
+def campaign_report(
     path_or_results, out: str | Path | None = None, *, by=None, metrics=None, heatmap=None, curve=None, scatter=None, markdown: bool = False
 ) -> tuple[str, list[Path]]:
     """Summary text (and, with ``out``, ``summary.md`` and the figures in that folder); returns (text, figure paths).

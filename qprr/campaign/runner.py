@@ -26,13 +26,13 @@ from pathlib import Path
 
 from ..errors import InputError, UnknownNameError
 from ..progress import StatusProgress
-from ..validation import as_int
+from ..validation import as_int, as_settings
 from .backends import Backend
 from .metrics import metric_columns
 from .session import BackendChoice, Session, check_backend
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
-from .worker import make_payload, nan_row, param_columns, platform_of, run_one
+from .worker import make_task_payload, nan_row, param_columns, platform_of, run_one
 
 
 @dataclass
@@ -146,28 +146,38 @@ def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultSt
         bar.update(str(row["status"]))
 
 
-def run_campaign(
-    spec: CampaignSpec,
-    output: str | Path,
-    *,
-    backend: str | Backend = "local",
-    workers: int | None = None,
-    scheduler: str | None = None,
-    fresh: bool = False,
-    limit: int | None = None,
-    progress: bool = True,
-    stream=None,
-) -> CampaignRun:
+@dataclass(frozen=True)
+class CampaignRunOptions:
+    """How :func:`run_campaign` runs a campaign: ``backend`` "local" (process pool, default), "dask" (``scheduler``
+    address or a LocalCluster of ``workers``), "inline", or a :class:`Backend` instance (not closed by the run);
+    ``fresh``: discard existing results; ``limit``: run at most this many of the missing runs (the first ones by
+    index); ``progress``: the progress line (on ``stream``, default stderr)."""
+
+    backend: str | Backend = "local"
+    workers: int | None = None
+    scheduler: str | None = None
+    fresh: bool = False
+    limit: int | None = None
+    progress: bool = True
+    stream: object = None
+
+    def __post_init__(self) -> None:  # checked however the options are built
+        BackendChoice(self.backend, self.workers, self.scheduler)
+        if self.limit is not None:
+            object.__setattr__(self, "limit", as_int(self.limit, "limit", lo=0))
+
+
+def run_campaign(spec: CampaignSpec, output: str | Path, options: CampaignRunOptions | None = None, **settings) -> CampaignRun:
     """Run ``spec``, saving rows to ``output`` (.csv or .parquet) as they arrive; resume what is there.
 
-    ``backend``: "local" (process pool, default), "dask" (``scheduler`` address or a
-    LocalCluster of ``workers``), "inline", or a :class:`Backend` instance (not closed here).
-    ``fresh``: discard existing results.  ``limit``: run at most this many of the missing runs
-    (the first ones by index).  Returns a :class:`CampaignRun`; raises
+    ``options``: a :class:`CampaignRunOptions`, and/or its fields as keywords, which replace the options'
+    (``run_campaign(spec, "out.csv", backend="inline", progress=False)``).  Returns a :class:`CampaignRun`; raises
     :class:`~qprr.campaign.store.ResultsWriteError` when a row cannot be written (the workers
     stopped first, the rows saved before kept) and :class:`~qprr.campaign.store.ResultsFileError`
     when the existing results hold a bad row.
     """
+    o = as_settings(options, CampaignRunOptions, "options", **settings)
+    backend, limit, progress = o.backend, o.limit, o.progress
     if not isinstance(spec, CampaignSpec):
         raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
     if limit is not None:
@@ -178,15 +188,15 @@ def run_campaign(
     names = platform.xi_names
     check_success(spec, names)
     meta = _meta(spec, platform)
-    payload = make_payload(spec)  # reads a user file now: a missing one fails before any worker starts
-    session = Session(output, columns_of(spec, names), meta, BackendChoice(backend, workers, scheduler), fresh)
+    payload = make_task_payload(spec)  # reads a user file now: a missing one fails before any worker starts
+    session = Session(output, columns_of(spec, names), meta, BackendChoice(backend, o.workers, o.scheduler), o.fresh)
     store = session.store
     todo = [i for i in range(spec.n_runs) if i not in store.done]
     if limit is not None:
         todo = todo[:limit]
     t0 = time.perf_counter()
     tally, runs, clean = _Tally(skipped=len(store.done)), {}, False
-    bar = session.progress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=stream, unit="run")
+    bar = session.progress(f"campaign {spec.name}", tally.skipped + len(todo), tally.skipped, quiet=not progress, stream=o.stream, unit="run")
     if store.dropped:  # shown even without the progress line (--quiet): a cut write is never repaired silently
         print(
             f"campaign {spec.name}: dropped an incomplete last record ({store.dropped} bytes, a cut write) of {store.path}: its run is done again",

@@ -3,7 +3,7 @@
 :func:`run_one` is the task every backend executes (local process pool or Dask worker).  Its
 arguments are plain data (the specification as a dict, one :class:`~qprr.campaign.spec.Run`),
 so nothing unpicklable ever crosses a process boundary.  The first task of a campaign in a
-process builds a :class:`Context` - the platform (Pinocchio model, rotors), the target function,
+process builds a :class:`WorkerContext` - the platform (Pinocchio model, rotors), the target function,
 a user callable's module - and keeps it for the later tasks of the same campaign (keyed by the
 specification's fingerprint; a new campaign replaces it): the model is built once per worker.
 """
@@ -77,7 +77,7 @@ def xi_names_of(spec: CampaignSpec) -> tuple[str, ...]:
 
 
 @dataclass
-class Payload:
+class TaskPayload:
     """What a task carries: the specification (as data), its folder, a user file's source text (or None), and the
     text of a platform table's URDF and rotor file (or None)."""
 
@@ -88,7 +88,7 @@ class Payload:
     platform_files: dict | None = None
 
 
-def make_payload(spec: CampaignSpec) -> Payload:
+def make_task_payload(spec: CampaignSpec) -> TaskPayload:
     """The task payload of ``spec``; a ``file.py:function`` callable travels as source text (remote workers need no copy)."""
     if not isinstance(spec, CampaignSpec):
         raise InputError(f"spec must be a CampaignSpec, got {type(spec).__name__}")
@@ -100,7 +100,7 @@ def make_payload(spec: CampaignSpec) -> Payload:
             if not path.is_file():
                 raise InputError(f"callable {spec.callable!r}: file {str(path)!r} does not exist")
             source = path.read_text()
-    return Payload(spec.to_dict(), spec.base_dir, source, spec.fingerprint, spec.platform_files())
+    return TaskPayload(spec.to_dict(), spec.base_dir, source, spec.fingerprint, spec.platform_files())
 
 
 def _load_callable(spec: CampaignSpec, source: str | None) -> Callable:
@@ -125,7 +125,7 @@ def _load_callable(spec: CampaignSpec, source: str | None) -> Callable:
 
 
 @dataclass
-class Context:
+class WorkerContext:
     """Per-worker state of one campaign: the specification, its platform, the column names, the target."""
 
     spec: CampaignSpec
@@ -133,7 +133,7 @@ class Context:
     target: Callable[[Run], SimResult]
 
 
-def build_context(payload: Payload) -> Context:
+def build_context(payload: TaskPayload) -> WorkerContext:
     """Build the platform and the target of a campaign (once per worker)."""
     spec = CampaignSpec.from_mapping(payload.spec, base_dir=payload.base_dir)
     platform = load_platform(spec.platform, payload.platform_files)
@@ -162,10 +162,10 @@ def build_context(payload: Payload) -> Context:
                 return fn(dict(run.params), run.seed, platform)
             return fn(dict(run.params), run.seed)
 
-    return Context(spec, platform.xi_names, target)
+    return WorkerContext(spec, platform.xi_names, target)
 
 
-def execute(ctx: Context, run: Run) -> dict[str, object]:
+def execute(ctx: WorkerContext, run: Run) -> dict[str, object]:
     """Run ``run`` and return its row (``run``, ``seed``, parameters, metrics); failures become rows too."""
     spec = ctx.spec
     t0 = time.perf_counter()
@@ -220,12 +220,12 @@ def param_columns(spec: CampaignSpec) -> tuple[str, ...]:
     return (("controller",) if has_ctrl else ()) + tuple(k for k in spec.varying if k != "controller")
 
 
-_CONTEXT: dict[str, Context] = {}
+_CONTEXT: dict[str, WorkerContext] = {}
 """This process's context, keyed by the specification's fingerprint (one campaign at a time).
 Only worker processes fill it; it holds the model so that it is built once per worker."""
 
 
-def run_one(payload: Payload, run: Run) -> dict[str, object]:
+def run_one(payload: TaskPayload, run: Run) -> dict[str, object]:
     """The task of every backend: the row of ``run`` (context built on the first call in this process)."""
     ctx = _CONTEXT.get(payload.fingerprint)
     if ctx is None:
@@ -243,4 +243,4 @@ def nan_row(spec: CampaignSpec, names, run: Run, status: str, reason: str) -> di
 
 
 # the worker's entry points (the other functions are the runner's helpers on a validated specification)
-__all__ = ["Context", "Payload", "build_context", "execute", "load_platform", "make_payload", "run_one"]
+__all__ = ["WorkerContext", "TaskPayload", "build_context", "execute", "load_platform", "make_task_payload", "run_one"]

@@ -23,20 +23,21 @@ from ..sim.integrators import INTEGRATORS
 from ..version import __version__
 from .common import Parser, add_platform_options, cache_dir, fail, integer, option_value, output_path, platform_from_args, real
 
-GROUP_MODULES = {
-    "view": "qprr.viz.cli",
-    "animate": "qprr.viz.cli",
-    "wheeled": "qprr.wheeled.cli",
-    "analyze": "qprr.analysis.cli",
-    "inspect": "qprr.analysis.cli",
-    "ik": "qprr.ik.cli",
-    "campaign": "qprr.campaign.cli",
-    "design": "qprr.design.cli",
-    "export": "qprr.flightstack.cli",
-    "import": "qprr.flightstack.cli",
-    "log": "qprr.flightlog.cli",
+GROUP_COMMANDS = {
+    "view": "qprr.viz.cli:register_viz_cli",
+    "animate": "qprr.viz.cli:register_viz_cli",
+    "wheeled": "qprr.wheeled.cli:register_wheeled_cli",
+    "analyze": "qprr.analysis.cli:register_analysis_cli",
+    "inspect": "qprr.analysis.cli:register_analysis_cli",
+    "ik": "qprr.ik.cli:register_ik_cli",
+    "campaign": "qprr.campaign.cli:register_campaign_cli",
+    "design": "qprr.design.cli:register_design_cli",
+    "export": "qprr.flightstack.cli:register_flightstack_cli",
+    "import": "qprr.flightstack.cli:register_flightstack_cli",
+    "log": "qprr.flightlog.cli:register_flightlog_cli",
 }
-"""The packages' command groups: command -> the module whose ``register_cli(subparsers)`` adds it.  A command line
+"""The packages' command groups: command -> ``module:function``, the function ``(subparsers)`` that adds it (the form of
+an entry point; the module is imported when the group is built).  A command line
 that names one of them builds that group's parser alone (:func:`build_parser`), so ``qprr analyze ...`` does not import
 the viewer, the campaigns or the scenario table."""
 
@@ -250,23 +251,29 @@ def _scenario_help() -> str:
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The ``qprr`` command line: ``simulate``, ``compare``, ``check``, then the plug-ins' and the packages' command groups.
 
-    ``command``: a command of :data:`GROUP_MODULES` to build the parser of that group alone (what :func:`main` does
+    ``command``: a command of :data:`GROUP_COMMANDS` to build the parser of that group alone (what :func:`main` does
     when the command line names one); None: every command (``qprr --help`` lists them all).
     """
     parser = Parser(prog="qprr", description="qprr: aerial manipulators on Pinocchio (the thesis's Q-PRR as flagship).")
     parser.add_argument("--version", action="version", version=f"qprr {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, parser_class=Parser)
-    if command in GROUP_MODULES:
-        import_module(GROUP_MODULES[command]).register_cli(sub)
+    if command in GROUP_COMMANDS:
+        _group_registrar(GROUP_COMMANDS[command])(sub)
         return parser
     _add_simulate(sub)
     _add_compare(sub)
     _add_check(sub)
     for register_cli in COMMANDS.values():  # plug-ins' command groups (the thesis: urdf)
         register_cli(sub)
-    for module in dict.fromkeys(GROUP_MODULES.values()):  # optional packages load when a command runs
-        import_module(module).register_cli(sub)
+    for target in dict.fromkeys(GROUP_COMMANDS.values()):  # optional packages load when a command runs
+        _group_registrar(target)(sub)
     return parser
+
+
+def _group_registrar(target: str):
+    """The function ``module:function`` of :data:`GROUP_COMMANDS` names (its module imported now)."""
+    module, _, function = target.partition(":")
+    return vars(import_module(module))[function]
 
 
 def _add_simulate(sub) -> None:

@@ -4,7 +4,7 @@ A study (:class:`DesignSpec`, TOML) names candidate architectures (``Q-PRR``, ``
 their continuous parameters (reach, taper, slider stroke, masses from a material...), the
 objectives and constraints taken from the design maps of :mod:`qprr.analysis`, and the effort.
 :func:`run_design` evaluates the grid or runs NSGA-II (pymoo or Optuna, extra ``qprr[design]``)
-on the campaign backends (local processes, Dask), resumably; :func:`report` ranks the designs,
+on the campaign backends (local processes, Dask), resumably; :func:`design_report` ranks the designs,
 draws the Pareto front and flies the best ones.
 
 =================================  ==================================================================
@@ -16,7 +16,7 @@ package                            what
 :mod:`qprr.design.evaluate`        the maps of a design, the backend tasks, the closed-loop flight
 :mod:`qprr.design.search`          grid and run indices, NSGA-II engines, Pareto dominance
 :mod:`qprr.design.engine`          :func:`run_design` (the campaign integration: ``campaign_io``)
-:mod:`qprr.design.report`          ranking, figures, :func:`report`
+:mod:`qprr.design.report`          ranking, figures, :func:`design_report`
 :mod:`qprr.design.cli`             ``qprr design run | report | show``
 =================================  ==================================================================
 
@@ -28,7 +28,7 @@ Quick start::
 from .engine import DesignRun, run_design
 from .evaluate import evaluate_platform
 from .model import Candidate, build_candidate
-from .report import front, ranked, report
+from .report import design_report, front, ranked
 from .search import dominated, front_levels, make_optimiser
 from .spec import DESIGN_METRICS, PARAMETERS, DesignSpec, MassModel
 
@@ -46,6 +46,6 @@ __all__ = [
     "front_levels",
     "make_optimiser",
     "ranked",
-    "report",
+    "design_report",
     "run_design",
 ]

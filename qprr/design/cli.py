@@ -1,6 +1,6 @@
 """``qprr design run SPEC`` / ``qprr design report RESULTS`` / ``qprr design show SPEC``.
 
-Registered in :func:`qprr.cli.build_parser` through :func:`register_cli` (as :mod:`qprr.campaign.cli`).
+Registered in :func:`qprr.cli.build_parser` through :func:`register_design_cli` (as :mod:`qprr.campaign.cli`).
 Exit codes: 0 done, 1 interrupted, 2 bad arguments or specification.
 """
 
@@ -19,9 +19,9 @@ def _fail(prog: str, message: str) -> int:
 
 
 def _print_report(results, out, args) -> None:
-    from .report import report
+    from .report import design_report
 
-    text, figures = report(results, out, top=args.top, fly=not args.no_flight, backend=args.flight_backend)
+    text, figures = design_report(results, out, top=args.top, fly=not args.no_flight, backend=args.flight_backend)
     print(text)
     for f in figures:
         print(f"figure {f}")
@@ -104,7 +104,7 @@ def _report_args(r) -> None:
     )
 
 
-def register_cli(sub) -> None:
+def register_design_cli(sub) -> None:
     """Add ``design run | report | show`` to the ``qprr`` command line."""
     p = sub.add_parser(
         "design",

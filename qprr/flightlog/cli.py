@@ -21,7 +21,7 @@ from .ulog import FlightLog
 from .writeback import write_inertials, write_rotors
 
 
-def register_cli(sub) -> None:
+def register_flightlog_cli(sub) -> None:
     """Add the ``log`` command group to the subparsers ``sub`` of the qprr command line."""
     p = sub.add_parser("log", help="PX4 flight logs (ULog): show, replay through PX4's mix and a platform, identify the robot")
     group = p.add_subparsers(dest="log_command", required=True, parser_class=type(p))

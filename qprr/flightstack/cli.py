@@ -177,7 +177,7 @@ def _add_import(sub) -> None:
     px.set_defaults(func=_cmd_import_px4)
 
 
-def register_cli(sub) -> None:
+def register_flightstack_cli(sub) -> None:
     """Add the ``export`` and ``import`` command groups to the subparsers ``sub`` of the qprr command line."""
     _add_export(sub)
     _add_import(sub)

@@ -41,7 +41,7 @@ def advice(platform, result: IKResult, oriented: bool) -> str:
     return "check the target against `qprr inspect` (the arm's reach and limits)"
 
 
-def run(args: argparse.Namespace) -> int:
+def run_ik(args: argparse.Namespace) -> int:
     try:
         platform = platform_from_args(args)
         p_world = np.array(args.target, dtype=float)
@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
-def register_cli(sub) -> None:
+def register_ik_cli(sub) -> None:
     """Add the ``ik`` command to the subparsers ``sub`` of the qprr command line."""
     p = sub.add_parser(
         "ik",
@@ -81,4 +81,4 @@ def register_cli(sub) -> None:
     p.add_argument("--method", choices=METHODS, default="qp", help="qp (task priorities, default), dls or clika")
     add_platform_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON")
-    p.set_defaults(func=run)
+    p.set_defaults(func=run_ik)

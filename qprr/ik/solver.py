@@ -21,7 +21,7 @@ Methods (the registry :data:`IK_METHODS`, default ``"qp"``; a plug-in adds its o
   an active set.
 
 The thesis's analytic IGM (Algorithms 3-5) is the Q-PRR's own: the thesis plug-in registers it as method
-``"igm"`` (on the Q-PRR only) and :func:`qprr.thesis.igm.solve` uses it as the QP's initial guess.
+``"igm"`` (on the Q-PRR only) and :func:`qprr.thesis.igm.solve_qprr` uses it as the QP's initial guess.
 
 A method is an :class:`IKMethod`: its options class (a frozen dataclass deriving from :class:`Tolerances`) and
 ``make(platform, options) -> run``, called once per :class:`IKSolver`, whose ``run(ctx, xi) -> IKResult`` solves from

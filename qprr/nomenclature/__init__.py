@@ -20,7 +20,7 @@ B; a ``P`` joint slides along the x axis of its parent frame, an ``R`` joint tur
 axis; each link extends along +z (``arm_direction="up"``, as the Q-PRR) or -z (``"down"``, a
 hanging arm) by its length to the next joint; the end-effector frame is at the tip of the last
 link.  Bodies are homogeneous (Hypothesis 1 of Sec. 3.3.2): links are solid cylinders, the
-multirotor a solid disc.  Every default is a keyword argument, documented in :func:`build`.
+multirotor a solid disc.  Every default is a field of :class:`BuildSpec` (each also a keyword of :func:`build`).
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ from ..errors import InputError, QprrError
 from ..model import Platform, from_urdf
 from ..rotors import LAYOUTS, Rotor, layout_rotors
 from ..urdf import writer as ug
-from ..validation import as_name, as_real, as_vector
+from ..validation import as_name, as_real, as_settings, as_vector
 
 UAV_ROTORS = {"Q": 4, "QUA": 4, "HEX": 6, "OCT": 8}
 """Multirotor codes of Table 2.3 that :func:`build` makes, and their rotor counts."""
@@ -248,35 +248,10 @@ def _rotor_parts(name: str, rotor: Rotor, base_name: str) -> list[str]:
     ]
 
 
-def build(
-    name: str = "Q-PRR",
-    *,
-    layout: str | None = None,
-    links: Sequence[LinkSpec] | None = None,
-    body_mass: float | None = None,
-    body_inertia: tuple[float, float, float, float, float, float] | None = None,
-    arm_length: float | None = None,
-    body_height: float = 0.1,
-    mount_xyz: tuple[float, float, float] = (0.0, 0.0, 0.04),
-    arm_direction: str = "up",
-    rotors: Sequence[Rotor] | None = None,
-    kappa: float = 0.016,
-    thrust_to_weight: float = 2.0,
-    f_min: float = 0.0,
-    tilt: float = 0.0,
-    g: float = 9.81,
-    joint_names: Sequence[str] | None = None,
-    link_names: Sequence[str] | None = None,
-    base_name: str = "base",
-    ee_name: str = "end_effector",
-    platform_name: str | None = None,
-    allow_nonphysical: bool = False,
-) -> Platform:
-    """A platform of one multirotor and one serial arm from a (2.1) name (see the module docstring).
+@dataclass(frozen=True)
+class BuildSpec:
+    """How :func:`build` makes the platform a (2.1) name designates, beyond the name (SI units).
 
-    Parameters (SI units)
-    ---------------------
-    name : "Q-PRR", "QX-PRR", "HEX-RRR", "OCT-RR", "Q-RRR", ...
     layout : "plus" or "x" rotor ring (default: from the name, else "plus").
     links : one :class:`LinkSpec` per joint letter (default: 0.15 m, 0.1 kg solid cylinders of
         radius 1 cm; P joints +-0.05 m, 20 N, 0.5 m/s; R joints +-2pi/3, 5 N m, 6 rad/s).
@@ -287,21 +262,64 @@ def build(
     rotors : an explicit rotor set (overrides the ring); otherwise ``kappa`` [m] (0.016, a 10-inch
         propeller's drag ratio), ``f_min``, ``f_max = thrust_to_weight m g / n`` and ``tilt`` [rad]
         (alternating tilts about the rotor arms: ``tilt > 0`` on a HEX is fully actuated).
-    g : gravity [m/s^2].  joint_names, link_names, base_name, ee_name : URDF names.
+    g : gravity [m/s^2].  joint_names, link_names, base_name, ee_name : URDF names; platform_name : the
+        platform's name (default: the designation).
     allow_nonphysical : skip the inertia checks (as :func:`qprr.model.from_urdf`), e.g. to
         rebuild a printed table that no rigid body has.
     """
+
+    layout: str | None = None
+    links: Sequence[LinkSpec] | None = None
+    body_mass: float | None = None
+    body_inertia: tuple[float, float, float, float, float, float] | None = None
+    arm_length: float | None = None
+    body_height: float = 0.1
+    mount_xyz: tuple[float, float, float] = (0.0, 0.0, 0.04)
+    arm_direction: str = "up"
+    rotors: Sequence[Rotor] | None = None
+    kappa: float = 0.016
+    thrust_to_weight: float = 2.0
+    f_min: float = 0.0
+    tilt: float = 0.0
+    g: float = 9.81
+    joint_names: Sequence[str] | None = None
+    link_names: Sequence[str] | None = None
+    base_name: str = "base"
+    ee_name: str = "end_effector"
+    platform_name: str | None = None
+    allow_nonphysical: bool = False
+
+    def __post_init__(self) -> None:  # what needs no name to check, checked however the spec is built
+        if self.layout is not None:
+            as_name(self.layout, "layout", LAYOUTS, "rotor layout")
+        as_real(self.body_height, "body_height", positive=True, unit="m")
+        object.__setattr__(self, "mount_xyz", tuple(as_vector(self.mount_xyz, 3, "mount_xyz").tolist()))
+        ring = _ring_settings(self.kappa, self.thrust_to_weight, self.f_min, self.tilt, self.g)
+        for key, value in zip(("kappa", "thrust_to_weight", "f_min", "tilt", "g"), ring):
+            object.__setattr__(self, key, value)
+        _names_and_direction(self.base_name, self.ee_name, self.platform_name, self.arm_direction)
+        rotors = self.rotors
+        if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
+            raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
+
+
+def build(name: str = "Q-PRR", spec: BuildSpec | None = None, **settings) -> Platform:
+    """A platform of one multirotor and one serial arm from a (2.1) name (see the module docstring).
+
+    ``name`` : "Q-PRR", "QX-PRR", "HEX-RRR", "OCT-RR", "Q-RRR", ...; ``spec`` : a :class:`BuildSpec` (None: its
+    defaults) and/or its fields as keywords, which replace the spec's (``build("HEX-RRR", arm_length=0.3, tilt=0.3)``).
+    """
+    s = as_settings(spec, BuildSpec, "spec", **settings)
     d = parse(name)
     _check_buildable(d)
     n_rot = UAV_ROTORS[d.uav]
-    layout = _layout(name, d, layout)
-    body = _body(n_rot, body_mass, body_inertia, arm_length, body_height)
-    mount_xyz = tuple(as_vector(mount_xyz, 3, "mount_xyz").tolist())
-    kappa, thrust_to_weight, f_min, tilt, g = _ring_settings(kappa, thrust_to_weight, f_min, tilt, g)
-    if rotors is not None and (isinstance(rotors, str) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors)):
-        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor, got {rotors!r:.80}")
-    base_name, ee_name, sign = _names_and_direction(base_name, ee_name, platform_name, arm_direction)
-    arm = _arm(name, d, links, joint_names, link_names)
+    layout = _layout(name, d, s.layout)
+    body = _body(n_rot, s.body_mass, s.body_inertia, s.arm_length, s.body_height)
+    mount_xyz = tuple(as_vector(s.mount_xyz, 3, "mount_xyz").tolist())
+    kappa, thrust_to_weight, f_min, tilt, g = _ring_settings(s.kappa, s.thrust_to_weight, s.f_min, s.tilt, s.g)
+    rotors = s.rotors
+    base_name, ee_name, sign = _names_and_direction(s.base_name, s.ee_name, s.platform_name, s.arm_direction)
+    arm = _arm(name, d, s.links, s.joint_names, s.link_names)
     parts = [
         ug.link(
             base_name,
@@ -309,19 +327,19 @@ def build(
         )
     ]
     total_mass = body[0]
-    for spec, _, _ in arm:  # summed in this order: f_max below is the same to the last bit as before
-        total_mass += spec.mass
+    for link, _, _ in arm:  # summed in this order: f_max below is the same to the last bit as before
+        total_mass += link.mass
     parts += _arm_parts(arm, base_name, ee_name, mount_xyz, sign)
     if rotors is None:
         f_max = thrust_to_weight * total_mass * g / n_rot
         rotors = layout_rotors(n_rot, body[1], layout, kappa=kappa, f_min=f_min, f_max=f_max, tilt=tilt)
     for k, r in enumerate(rotors):  # a frame per rotor: its z axis is the thrust axis
         parts += _rotor_parts(f"rotor_{k + 1}", r, base_name)
-    text = ug.robot(platform_name or d.name, parts, "qprr.nomenclature.build")
+    text = ug.robot(s.platform_name or d.name, parts, "qprr.nomenclature.build")
     prov = {
         "design": f"formula (2.1) name {d.name!r}: {n_rot} rotors ({layout}), arm {d.joints}",
         "defaults": "qprr.nomenclature.build keyword defaults (homogeneous bodies, Hypothesis 1 of Sec. 3.3.2)",
     }
     return from_urdf(
-        text, tuple(rotors), ee_frame=ee_name, g=g, name=platform_name or d.name, params=d, provenance=prov, allow_nonphysical=allow_nonphysical
+        text, tuple(rotors), ee_frame=ee_name, g=g, name=s.platform_name or d.name, params=d, provenance=prov, allow_nonphysical=s.allow_nonphysical
     )

@@ -164,9 +164,9 @@ def _ee_impedance_plot(result, path):
 
 
 def _ee_impedance_summary(result):
-    from .impedance import summary
+    from .impedance import ee_impedance_summary
 
-    return summary(result)
+    return ee_impedance_summary(result)
 
 
 GENERIC = (
@@ -229,9 +229,9 @@ def _mission_runner(name: str) -> Callable[..., SimResult]:
 
 
 def _mission_summary(result: SimResult) -> list[str]:
-    from .missions import summary
+    from .missions import mission_summary
 
-    return summary(result)
+    return mission_summary(result)
 
 
 _FLIGHT = ("idc", "dsid", "decoupled")
@@ -260,7 +260,7 @@ MISSIONS = (
     Scenario(
         "fly-to",
         "any platform: climb, fly to target while the arm reaches out, hold",
-        _mission_runner("point_to_point"),
+        _mission_runner("fly_to"),
         _FLIGHT,
         _MOVE,
         summary=_mission_summary,
@@ -284,7 +284,7 @@ MISSIONS = (
     Scenario(
         "grasp-drop",
         "any platform: a mass grasped at the end effector at 25 % of the run, dropped at 55 %",
-        _mission_runner("payload"),
+        _mission_runner("grasp_drop"),
         ("idc", "payload-idc"),
         {**_HOVER, "mass_fraction": Option(0.1, "payload mass as a fraction of the platform's mass")},
         summary=_mission_summary,
@@ -306,7 +306,7 @@ MISSIONS = (
     Scenario(
         "hover-wind",
         "any platform: hover in a mean wind with a 1 - cos gust (base drag)",
-        _mission_runner("wind"),
+        _mission_runner("hover_wind"),
         _FLIGHT,
         {
             **_HOVER,

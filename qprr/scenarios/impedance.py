@@ -16,7 +16,7 @@ neutral posture to the upper joint limits, under :class:`~qprr.control.opspace_i
 The result carries the controller's history (``ee_position``, ``ee_reference``, ``ee_error``,
 ``ee_force``, ``ee_ideal`` = the ideal impedance response to the measured force, and the
 stiffness, damping and mass matrices); :func:`plot_ee_impedance` draws it and
-:func:`summary` reports the steady-state deflection against K_d^-1 h.
+:func:`ee_impedance_summary` reports the steady-state deflection against K_d^-1 h.
 """
 
 from __future__ import annotations
@@ -146,7 +146,7 @@ def steady_state(result: SimResult, at: float) -> dict[str, np.ndarray]:
     return {"t": result.t[k], "e": s["ee_error"][k], "h": h, "predicted": np.linalg.solve(s["impedance_K"], h)}
 
 
-def summary(result: SimResult) -> list[str]:
+def ee_impedance_summary(result: SimResult) -> list[str]:
     """Steady-state deflection against K_d^-1 h just before the release; the step-response fit of a force step."""
     s, m = result.series, result.metrics
     d = steady_state(result, m["t_off"] - result.dt)

@@ -238,7 +238,7 @@ def takeoff_hover(platform=None, controller="idc", progress=False, settings: Mis
     return res
 
 
-def point_to_point(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+def fly_to(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Climb to ``target``'s height (first 30 %), then fly to ``target`` while the arm reaches out (30-70 %), hold."""
     platform = _platform(platform)
     if settings.trajectory is not None:
@@ -368,7 +368,7 @@ def mission(platform=None, controller="idc", progress=False, settings: MissionSe
     return res
 
 
-def payload(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+def grasp_drop(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Hover with the arm out; a mass ``mass_fraction`` of the platform's mass attaches at the end effector at 25 % of
     the run (grasp) and drops at 55 %."""
     platform = _platform(platform)
@@ -417,7 +417,7 @@ def push(platform=None, controller="opspace-impedance", progress=False, settings
     return res
 
 
-def wind(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+def hover_wind(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
     """Hover under base drag (``drag`` [N s/m] linear per axis) in a mean wind ``mean_wind`` [m/s] plus a 1 - cos gust
     ``gust`` [m/s] peaking at 50 % of the run (lasting 20 %)."""
     platform = _platform(platform)
@@ -583,7 +583,7 @@ def pulses(platform=None, controller="idc", progress=False, settings: MissionSet
     return res
 
 
-def summary(result) -> list[str]:
+def mission_summary(result) -> list[str]:
     """The physical checks a generic scenario recorded (``result.metrics``), one line."""
     m = result.metrics
     parts = []
@@ -614,15 +614,15 @@ __all__ = [
     "motor_lag",
     "motor_stage",
     "noise",
-    "payload",
+    "grasp_drop",
     "phase_tables",
-    "point_to_point",
+    "fly_to",
     "pulse_train",
     "pulses",
     "push",
     "reach_posture",
     "read_mission",
-    "summary",
+    "mission_summary",
     "takeoff_hover",
-    "wind",
+    "hover_wind",
 ]

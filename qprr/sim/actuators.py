@@ -19,7 +19,7 @@ the first command (``initial="command"``), at the hover speeds of the initial co
 Where the numbers come from: the rotor descriptions of the named platforms carry a ``[motor]``
 table (``qprr/data/*.rotors.toml``: borinot's upstream Gazebo model gives b = 4.511e-6 N s^2,
 w_max = 2236 rad/s, T = 5 ms); the thesis's Q-PRR (b of its parameters, T chosen) comes from
-:func:`qprr.thesis.rotor_dynamics`.
+:func:`qprr.thesis.realistic.qprr_rotor_dynamics`.
 """
 
 from __future__ import annotations

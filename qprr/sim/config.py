@@ -2,7 +2,7 @@
 
 :func:`qprr.sim.simulate` takes both as keyword arguments (``simulate(p, c, ref, 5.0, dt=2e-3,
 xi0=...)``) or as objects (``config=SimConfig(...)``, ``inputs=SimInputs(...)``); the keyword
-form is turned into these objects by :func:`resolve`, so every setting has one default (the
+form is turned into these objects by :func:`config_and_inputs`, so every setting has one default (the
 field's) and is validated once (in ``__post_init__``).  The scenario registries take their
 defaults from here (``SimConfig.dt``).
 """
@@ -181,7 +181,7 @@ _CONFIG_FIELDS = tuple(f.name for f in dataclasses.fields(SimConfig))
 _INPUT_FIELDS = tuple(f.name for f in dataclasses.fields(SimInputs))
 
 
-def resolve(config: SimConfig | None, inputs: SimInputs | None, options: dict) -> tuple[SimConfig, SimInputs]:
+def config_and_inputs(config: SimConfig | None, inputs: SimInputs | None, options: dict) -> tuple[SimConfig, SimInputs]:
     """(config, inputs) of a :func:`~qprr.sim.simulate` call: keyword ``options`` are fields of either, given over the objects.
 
     An unknown keyword raises :class:`~qprr.errors.UnknownNameError` listing the valid ones."""

@@ -63,7 +63,7 @@ from ..trajectory import Trajectory, TrajectorySample
 from ..validation import as_int, as_vector
 from . import disturbances as dist
 from .actuators import RotorDynamics
-from .config import INTEGRATORS, Limits, SimConfig, SimInputs, resolve
+from .config import INTEGRATORS, Limits, SimConfig, SimInputs, config_and_inputs
 from .environment import Environment
 from .integrators import make_stepper
 from .mismatch import PlantActuators, check_plant
@@ -106,7 +106,7 @@ def simulate(
     :class:`~qprr.errors.DivergenceError` (with ``.result``) on NaN or runaway states.  See the
     module docstring for the step.
     """
-    config, inputs = resolve(config, inputs, options)
+    config, inputs = config_and_inputs(config, inputs, options)
     run = _setup(platform, controller, trajectory, duration, config, inputs)
     bar = Progress(run.n, f"{config.scenario}/{controller.name}", quiet=not config.progress, unit="tick")
     t_start = time.perf_counter()

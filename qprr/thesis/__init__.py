@@ -3,7 +3,7 @@
 K. Bouzgou, *Contribution a l'architecture, la modelisation et la commande d'un bras
 manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers refer to it.
 
-* :func:`load` - the Q-PRR as a :class:`qprr.model.Platform` (the flagship instance of the
+* :func:`load_qprr` - the Q-PRR as a :class:`qprr.model.Platform` (the flagship instance of the
   generic core), from :mod:`qprr.thesis.params` (Tables 3.1-3.3 and the values the thesis does
   not print, each with its provenance) and the URDF of :mod:`qprr.thesis.urdf`;
 * :mod:`qprr.thesis.printed` - closed forms as printed and corrected; :mod:`qprr.thesis.checks`
@@ -27,13 +27,13 @@ the group ``qprr.commands`` (:data:`qprr.registry.COMMANDS`).
 from __future__ import annotations
 
 from .params import LAYOUTS, QPRRParams, cad_params, thesis_params
-from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
+from .robot import ARM_JOINTS, EE_FRAME, load_qprr, params_of, rotor_set
 
 
 def _rotor_dynamics(**overrides):
-    from .realistic import rotor_dynamics
+    from .realistic import qprr_rotor_dynamics
 
-    return rotor_dynamics(**overrides)
+    return qprr_rotor_dynamics(**overrides)
 
 
 def _scenarios():
@@ -52,9 +52,9 @@ def _gain_tables():
         "desired-state": gains.desired_state,
         "annex-a3": gains.annex_a3,
         "table-6.5": gains.table_6_5,
-        "payload": gains.payload,
+        "payload": gains.payload_idc,
         "table-6.7": gains.table_6_7,
-        "impedance": gains.impedance,
+        "impedance": gains.impedance_idc,
         "impedance-table-6.7": gains.impedance_table_6_7,
         "impedance-filters": gains.impedance_filters,
         "mfc": gains.mfc,
@@ -75,9 +75,9 @@ def _comparisons():
 
 
 def _check(verbose: bool = False) -> int:
-    from .checks import main
+    from .checks import print_check_table
 
-    return main(verbose=verbose)
+    return print_check_table(verbose=verbose)
 
 
 def _map_reference(map_name, platform, result):
@@ -93,7 +93,7 @@ def register() -> None:
     from ..registry import CHECKS, COMPARISONS, GAIN_TABLES, MAP_REFERENCES, PARAMETER_SETS, SCENARIOS
     from .params import VARIANTS
 
-    PLATFORMS.register("q-prr", load)
+    PLATFORMS.register("q-prr", load_qprr)
     ROTOR_DYNAMICS.register("q-prr", _rotor_dynamics)
     for variant, make in VARIANTS.items():
         PARAMETER_SETS.register(f"q-prr:{variant}", make)
@@ -105,4 +105,4 @@ def register() -> None:
     MAP_REFERENCES.register("thesis", _map_reference)
 
 
-__all__ = ["ARM_JOINTS", "EE_FRAME", "LAYOUTS", "QPRRParams", "cad_params", "load", "params_of", "register", "rotor_set", "thesis_params"]
+__all__ = ["ARM_JOINTS", "EE_FRAME", "LAYOUTS", "QPRRParams", "cad_params", "load_qprr", "params_of", "register", "rotor_set", "thesis_params"]

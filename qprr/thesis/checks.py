@@ -36,7 +36,7 @@ from ..model import Platform, check_platform
 from ..nomenclature import mdh
 from ..validation import as_array, as_int, as_vector
 from . import printed as th
-from .robot import ARM_JOINTS, EE_FRAME, load, params_of, rotor_set
+from .robot import ARM_JOINTS, EE_FRAME, load_qprr, params_of, rotor_set
 
 SEED = 20210101
 N_STATES = 12
@@ -61,7 +61,7 @@ class Check:
 
     equation: str
     quantity: str
-    run: Callable[[Context], Evidence]
+    run: Callable[[CheckContext], Evidence]
     tolerance: float
     convention: str | None = None
 
@@ -96,7 +96,7 @@ class CheckResult:
 
 
 @dataclass
-class Context:
+class CheckContext:
     """The Q-PRR platform and the seeded random states every check uses."""
 
     platform: Platform
@@ -111,7 +111,7 @@ class Context:
 
     @property
     def d(self):
-        return th.link_lengths(self.params)
+        return th.d_lengths(self.params)
 
     def random_xi(self, rng: np.random.Generator | None = None, max_tilt: float = 1.3) -> np.ndarray:
         """A random xi: position in [-2, 2]^3 m, |phi|, |theta| < max_tilt, any psi, arm inside its limits."""
@@ -127,13 +127,13 @@ class Context:
         )
 
 
-def make_context(platform: Platform | None = None, seed: int = SEED, n_states: int = N_STATES) -> Context:
-    """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load`)."""
+def make_context(platform: Platform | None = None, seed: int = SEED, n_states: int = N_STATES) -> CheckContext:
+    """The context of the checks on ``platform`` (default: the thesis's Q-PRR, :func:`qprr.thesis.load_qprr`)."""
     seed = as_int(seed, "seed", lo=0)
     n_states = as_int(n_states, "n_states", lo=1)
-    platform = platform if platform is not None else load("thesis")
+    platform = platform if platform is not None else load_qprr("thesis")
     params_of(platform)  # a Q-PRR, or InputError
-    ctx = Context(platform, platform.data(), np.random.default_rng(seed))
+    ctx = CheckContext(platform, platform.data(), np.random.default_rng(seed))
     ctx.states = [(ctx.random_xi(), ctx.rng.normal(size=9)) for _ in range(n_states)]
     return ctx
 
@@ -163,12 +163,12 @@ def body_rate_fd(euler, euler_dot, h: float = 1e-6) -> np.ndarray:
     return pin.log3(Rm.T @ Rp) / (2 * h)
 
 
-def _plus(ctx: Context) -> Platform:
+def _plus(ctx: CheckContext) -> Platform:
     """The context's Q-PRR with the "+" rotor layout of Thesis (3.34)-(3.36) (the printed allocation rows use it)."""
     if ctx.platform.rotors == rotor_set(ctx.params, "plus"):
         return ctx.platform
     if "plus" not in ctx.cache:
-        ctx.cache["plus"] = load(ctx.params, layout="plus")
+        ctx.cache["plus"] = load_qprr(ctx.params, layout="plus")
     return ctx.cache["plus"]
 
 
@@ -231,7 +231,7 @@ def _mass_matrix(model: pin.Model, data: pin.Data, q) -> np.ndarray:
     return np.triu(M) + np.triu(M, 1).T
 
 
-def _arm_samples(ctx: Context, n: int = N_STATES):
+def _arm_samples(ctx: CheckContext, n: int = N_STATES):
     rng = np.random.default_rng(SEED + 7)
     p = ctx.params
     return [(rng.uniform(p.lower_limits, p.upper_limits), rng.normal(size=3), rng.normal(size=3)) for _ in range(n)]
@@ -243,12 +243,12 @@ def _bad_entries(err: np.ndarray, tol: float, names) -> str:
 
 
 # ------------------------------------------------------------------------------ chapter 3
-def _c_3_4(ctx: Context) -> Evidence:
+def _c_3_4(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.rotation_3_4(*xi[3:6]) - _R(xi)) for xi, _ in ctx.states)
     return Evidence(err, None, "printed entries vs pinocchio.rpy.rpyToMatrix(phi, theta, psi) = Rz Ry Rx")
 
 
-def _c_3_8(ctx: Context) -> Evidence:
+def _c_3_8(ctx: CheckContext) -> Evidence:
     ep, ec, worst = 0.0, 0.0, None
     for xi, _ in ctx.states:
         R = _R(xi)
@@ -263,7 +263,7 @@ def _c_3_8(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_25(ctx: Context) -> Evidence:
+def _c_3_25(ctx: CheckContext) -> Evidence:
     e_body, e_world = 0.0, 0.0
     for xi, xid in ctx.states:
         w_fd = body_rate_fd(xi[3:6], xid[3:6])
@@ -278,7 +278,7 @@ def _c_3_25(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_36(ctx: Context) -> Evidence:
+def _c_3_36(ctx: CheckContext) -> Evidence:
     p = ctx.params
     Om = _plus(ctx).rotor_matrix
     ep = max(_maxabs(Om[2:6] - th.allocation_3_36(p.arm_length, p.drag_factor)), _maxabs(Om[0:2]))
@@ -291,7 +291,7 @@ def _c_3_36(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_37(ctx: Context) -> Evidence:
+def _c_3_37(ctx: CheckContext) -> Evidence:
     p = ctx.params
     model_w2 = p.thrust_factor * _plus(ctx).rotor_matrix[2:6]  # u = Omega_z (b w^2)
     P = th.allocation_3_37(p.thrust_factor, p.arm_length, p.drag_factor)
@@ -306,7 +306,7 @@ def _c_3_37(ctx: Context) -> Evidence:
     )
 
 
-def _c_det_3_37(ctx: Context) -> Evidence:
+def _c_det_3_37(ctx: CheckContext) -> Evidence:
     p = ctx.params
     b, l, c = p.thrust_factor, p.arm_length, p.drag_factor
     true = np.linalg.det(b * _plus(ctx).rotor_matrix[2:6])
@@ -322,7 +322,7 @@ def _c_det_3_37(ctx: Context) -> Evidence:
     )
 
 
-def _c_A1(ctx: Context) -> Evidence:
+def _c_A1(ctx: CheckContext) -> Evidence:
     p = ctx.params
     l, b, c = p.arm_length, p.thrust_factor, p.drag_factor
     model_inv = Allocator(_plus(ctx)).Omega_P_inv  # inv(Omega[2:6]): the exact path of the four-rotor allocation
@@ -337,11 +337,11 @@ def _c_A1(ctx: Context) -> Evidence:
     )
 
 
-def _arm_states(ctx: Context):
+def _arm_states(ctx: CheckContext):
     return [(ch.euler_to_rotation(xi[3:6]), xi[6:9], xi) for xi, _ in ctx.states]
 
 
-def _c_3_42(ctx: Context) -> Evidence:
+def _c_3_42(ctx: CheckContext) -> Evidence:
     up, du = ctx.platform, ctx.data
     ep = ec = 0.0
     for R, q_arm, xi in _arm_states(ctx):
@@ -359,7 +359,7 @@ def _c_3_42(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_43(ctx: Context) -> Evidence:
+def _c_3_43(ctx: CheckContext) -> Evidence:
     ep = ec = flip = 0.0
     for R, q_arm, xi in _arm_states(ctx):
         q = _q(xi)
@@ -376,17 +376,17 @@ def _c_3_43(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_44(ctx: Context) -> Evidence:
+def _c_3_44(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.arm_com_3_44(xi[6:9], ctx.params) - kin.arm_com(ctx.platform, ctx.data, _q(xi))[2]) for xi, _ in ctx.states)
     return Evidence(err, None, "arm CoM in B vs Pinocchio subtree CoM (Hypothesis 1 link CoMs of (3.78))")
 
 
-def _c_3_58(ctx: Context) -> Evidence:
+def _c_3_58(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.T_eb_3_58(xi[6:9], ctx.d) - kin.ee_placement_body(ctx.platform, ctx.data, _q(xi)).homogeneous) for xi, _ in ctx.states)
     return Evidence(err, None, "^bT_eb vs Pinocchio end-effector placement relative to B")
 
 
-def _c_3_61(ctx: Context) -> Evidence:
+def _c_3_61(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     worst = None
     for xi, _ in ctx.states:
@@ -403,12 +403,12 @@ def _c_3_61(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_62(ctx: Context) -> Evidence:
+def _c_3_62(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.R_e_3_62(*xi[3:6], xi[7], xi[8]) - kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation) for xi, _ in ctx.states)
     return Evidence(err, None, "R_e entries vs Pinocchio end-effector rotation")
 
 
-def _c_3_64(ctx: Context) -> Evidence:
+def _c_3_64(ctx: CheckContext) -> Evidence:
     ep = zyx = 0.0
     for xi, _ in ctx.states:
         R = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation
@@ -424,7 +424,7 @@ def _c_3_64(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_65(ctx: Context) -> Evidence:
+def _c_3_65(ctx: CheckContext) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
         M = kin.ee_placement(ctx.platform, ctx.data, _q(xi))
@@ -435,7 +435,7 @@ def _c_3_65(ctx: Context) -> Evidence:
     return Evidence(err, None, "position vs Pinocchio; angles rebuild R_e through Rz Ry Rz")
 
 
-def _hover_states(ctx: Context):
+def _hover_states(ctx: CheckContext):
     rng = np.random.default_rng(SEED + 3)
     out = []
     while len(out) < N_STATES:
@@ -447,7 +447,7 @@ def _hover_states(ctx: Context):
     return out
 
 
-def _c_3_68_pos(ctx: Context) -> Evidence:
+def _c_3_68_pos(ctx: CheckContext) -> Evidence:
     err = 0.0
     for xi in _hover_states(ctx):
         p = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).translation
@@ -455,7 +455,7 @@ def _c_3_68_pos(ctx: Context) -> Evidence:
     return Evidence(err, None, "lines 1-3 at phi = theta = 0 vs Pinocchio")
 
 
-def _c_3_68_ang(ctx: Context) -> Evidence:
+def _c_3_68_ang(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     worst = None
     for xi in _hover_states(ctx):
@@ -475,12 +475,12 @@ def _c_3_68_ang(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_78_xy(ctx: Context) -> Evidence:
+def _c_3_78_xy(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.com_3_78(xi[6:9], ctx.params)[0:2] - kin.com_body(ctx.platform, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
     return Evidence(err, None, "x_cm, y_cm in B vs Pinocchio centre of mass")
 
 
-def _c_3_78_z(ctx: Context) -> Evidence:
+def _c_3_78_z(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
         z = kin.com_body(ctx.platform, ctx.data, _q(xi))[2]
@@ -495,13 +495,13 @@ def _c_3_78_z(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_80(ctx: Context) -> Evidence:
+def _c_3_80(ctx: CheckContext) -> Evidence:
     err = max(abs(th.x_cm_3_80(xi[6:9], ctx.params) - kin.com_body(ctx.platform, ctx.data, _q(xi))[0]) for xi, _ in ctx.states)
     return Evidence(err, None, "F(r0, theta2, theta3) vs Pinocchio x_cm")
 
 
 # ------------------------------------------------------------ modified Denavit-Hartenberg
-def _urdf_arm(ctx: Context):
+def _urdf_arm(ctx: CheckContext):
     """The URDF arm with its base locked at the origin (frames in B), cached per context."""
     if "urdf_arm" not in ctx.cache:
         ctx.cache["urdf_arm"] = fixed_base_arm(ctx.platform)
@@ -545,11 +545,11 @@ def mdh_frame_errors(frames, model: pin.Model, data: pin.Data, q_arm) -> dict[st
     }
 
 
-def _arm_qs(ctx: Context) -> list[np.ndarray]:
+def _arm_qs(ctx: CheckContext) -> list[np.ndarray]:
     return [xi[6:9] for xi, _ in ctx.states]
 
 
-def _chain_vs_urdf(ctx: Context, frames_fn) -> tuple[float, dict[str, float]]:
+def _chain_vs_urdf(ctx: CheckContext, frames_fn) -> tuple[float, dict[str, float]]:
     """Max frame-by-frame error of ``frames_fn(q_arm)`` over the seeded arm states (offsets must stay constant)."""
     model, data = _urdf_arm(ctx)
     worst = {"origins": 0.0, "axes": 0.0, "end effector": 0.0, "offsets": 0.0}
@@ -571,7 +571,7 @@ def _mdh_chain(rows, transform=None):
     return lambda q: mdh.chain(rows, q, base=th.T_b0_3_49(), tool=th.T_4eb_3_51(), **kw)
 
 
-def _c_3_27(ctx: Context) -> Evidence:
+def _c_3_27(ctx: CheckContext) -> Evidence:
     rows = th.table_3_4_corrected(ctx.d)
     err, parts = _chain_vs_urdf(ctx, _mdh_chain(rows))
     model = mdh.build_model(rows, base=th.T_b0_3_49(), tool=th.T_4eb_3_51())
@@ -595,7 +595,7 @@ def _c_3_27(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_28(ctx: Context) -> Evidence:
+def _c_3_28(ctx: CheckContext) -> Evidence:
     rows = th.table_3_4_corrected(ctx.d)
     ep, parts = _chain_vs_urdf(ctx, _mdh_chain(rows, th.mdh_3_28))
     ec, _ = _chain_vs_urdf(ctx, _mdh_chain(rows, th.mdh_3_28_corrected))
@@ -616,7 +616,7 @@ def _c_3_28(ctx: Context) -> Evidence:
     )
 
 
-def _c_table_3_4(ctx: Context) -> Evidence:
+def _c_table_3_4(ctx: CheckContext) -> Evidence:
     ep, parts = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4(ctx.d)))
     ec, _ = _chain_vs_urdf(ctx, _mdh_chain(th.table_3_4_corrected(ctx.d)))
     z2 = mdh.chain(th.table_3_4(ctx.d), np.zeros(3), base=th.T_b0_3_49())[1][0:3, 2]
@@ -628,14 +628,14 @@ def _c_table_3_4(ctx: Context) -> Evidence:
     )
 
 
-def _required_tool(ctx: Context, q) -> np.ndarray:
+def _required_tool(ctx: CheckContext, q) -> np.ndarray:
     """^4T_eb that ends the chain (3.49) + Table 3.4 (corrected) on the URDF end effector: (^bT_4)^-1 ^bT_eb."""
     model, data = _urdf_arm(ctx)
     T_b4 = mdh.chain(th.table_3_4_corrected(ctx.d), q, base=th.T_b0_3_49())[-1]
     return np.linalg.solve(T_b4, urdf_arm_frames(model, data, q)[2])
 
 
-def _c_3_48(ctx: Context) -> Evidence:
+def _c_3_48(ctx: CheckContext) -> Evidence:
     model, data = _urdf_arm(ctx)
     stated = _maxabs(th.T_b0_3_48() - th.T_b0_3_49())
     req = 0.0
@@ -650,7 +650,7 @@ def _c_3_48(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_50(ctx: Context) -> Evidence:
+def _c_3_50(ctx: CheckContext) -> Evidence:
     ep = max(_maxabs(th.T_4eb_3_50() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
     ec = max(_maxabs(th.T_4eb_3_50_corrected() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
     return Evidence(
@@ -662,12 +662,12 @@ def _c_3_50(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_51(ctx: Context) -> Evidence:
+def _c_3_51(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.T_4eb_3_51() - _required_tool(ctx, q)) for q in _arm_qs(ctx))
     return Evidence(err, None, "printed matrix vs the ^4T_eb the URDF requires ((^bT_4)^-1 ^bT_eb, constant over q)")
 
 
-def _c_3_52(ctx: Context) -> Evidence:
+def _c_3_52(ctx: CheckContext) -> Evidence:
     d0, d1, d2, d3 = ctx.d
     rows, printed_rows = th.table_3_4_corrected(ctx.d), th.table_3_4(ctx.d)
     e_kk = e_tab = 0.0
@@ -687,7 +687,7 @@ def _c_3_52(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_56(ctx: Context) -> Evidence:
+def _c_3_56(ctx: CheckContext) -> Evidence:
     model, data = _urdf_arm(ctx)
     e_urdf = max(_maxabs(th.T_eb_3_56(q, ctx.d) - urdf_arm_frames(model, data, q)[2]) for q in _arm_qs(ctx))
     e_58 = max(_maxabs(th.T_eb_3_56(q, ctx.d) - th.T_eb_3_58(q, ctx.d)) for q in _arm_qs(ctx))
@@ -703,16 +703,16 @@ PAYLOAD_MASS, PAYLOAD_OFFSET = 0.1, 0.03
 """m_l [kg] (the 0.1 kg of Sec. 6.4.1) and d_cl [m] of the payload rows."""
 
 
-def _payload(ctx: Context):
+def _payload(ctx: CheckContext):
     if "payload" not in ctx.cache:
         from ..payload import Payload, com_with_payload
 
-        load = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
-        ctx.cache["payload"] = (load, com_with_payload)
+        held = Payload(PAYLOAD_MASS, com_ee=(0.0, 0.0, PAYLOAD_OFFSET))
+        ctx.cache["payload"] = (held, com_with_payload)
     return ctx.cache["payload"]
 
 
-def _c_3_76(ctx: Context) -> Evidence:
+def _c_3_76(ctx: CheckContext) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
         M = kin.ee_placement_body(ctx.platform, ctx.data, _q(xi))
@@ -724,13 +724,13 @@ def _c_3_76(ctx: Context) -> Evidence:
     )
 
 
-def _c_3_78_payload(ctx: Context) -> Evidence:
-    load, com_with_payload = _payload(ctx)
+def _c_3_78_payload(ctx: CheckContext) -> Evidence:
+    held, com_with_payload = _payload(ctx)
     m_l, d_cl = PAYLOAD_MASS, PAYLOAD_OFFSET
     ep = ec = ez = 0.0
     worst = None
     for xi, _ in ctx.states:
-        ref = com_with_payload(ctx.platform, ctx.data, xi[6:9], load)
+        ref = com_with_payload(ctx.platform, ctx.data, xi[6:9], held)
         printed = th.com_3_78(xi[6:9], ctx.params, m_l=m_l, d_cl=d_cl)
         e = abs(printed[0] - ref[0])
         ez = max(ez, abs(printed[2] - ref[2]))
@@ -748,7 +748,7 @@ def _c_3_78_payload(ctx: Context) -> Evidence:
 
 
 # ------------------------------------------------------------------------------ chapter 4
-def _ee_body_fd(ctx: Context, q_arm, h: float = 1e-6) -> np.ndarray:
+def _ee_body_fd(ctx: CheckContext, q_arm, h: float = 1e-6) -> np.ndarray:
     """J_eb by central differences: [d p_eb; log3(R_eb^- ^T R_eb^+) expressed in B] / 2h."""
     J = np.zeros((6, 3))
     for k in range(3):
@@ -760,7 +760,7 @@ def _ee_body_fd(ctx: Context, q_arm, h: float = 1e-6) -> np.ndarray:
     return J
 
 
-def _c_4_26(ctx: Context) -> Evidence:
+def _c_4_26(ctx: CheckContext) -> Evidence:
     e_model = e_fd = 0.0
     for xi, _ in ctx.states:
         J = th.J_eb_4_26(xi[6:9], ctx.d)
@@ -769,12 +769,12 @@ def _c_4_26(ctx: Context) -> Evidence:
     return Evidence(max(e_model, e_fd), None, f"vs Pinocchio arm Jacobian ({e_model:.1g}) and central differences of (3.58) on SE(3) ({e_fd:.1g})")
 
 
-def _c_4_27(ctx: Context) -> Evidence:
+def _c_4_27(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.J_4_27(xi[6:9], ctx.d) - kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]) for xi, _ in ctx.states)
     return Evidence(err, None, "rows (x, z, omega_y) of the Pinocchio arm Jacobian")
 
 
-def _c_4_28(ctx: Context) -> Evidence:
+def _c_4_28(ctx: CheckContext) -> Evidence:
     err = max(
         abs(th.det_4_28(xi[7], ctx.params.d2) - np.linalg.det(kin.arm_jacobian_body(ctx.platform, ctx.data, xi[6:9])[[0, 2, 4]]))
         for xi, _ in ctx.states
@@ -782,7 +782,7 @@ def _c_4_28(ctx: Context) -> Evidence:
     return Evidence(err, None, "det of the reduced Pinocchio arm Jacobian")
 
 
-def _c_4_12(ctx: Context) -> Evidence:
+def _c_4_12(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
         J = kin.jacobian_xi(ctx.platform, ctx.data, xi)
@@ -791,13 +791,13 @@ def _c_4_12(ctx: Context) -> Evidence:
     return Evidence(ep, ec, "lower middle block printed T(phi_b) (body rate) where omega_e (world) needs R_b T(phi_b)")
 
 
-def _pose_fd(ctx: Context, xi, xid, h: float = 1e-6) -> np.ndarray:
+def _pose_fd(ctx: CheckContext, xi, xid, h: float = 1e-6) -> np.ndarray:
     pp, Rp = kin.ee_pose_xi(ctx.platform, ctx.data, xi + h * xid)
     pm, Rm = kin.ee_pose_xi(ctx.platform, ctx.data, xi - h * xid)
     return np.concatenate([(pp - pm) / (2 * h), pin.log3(Rp @ Rm.T) / (2 * h)])
 
 
-def _c_4_13(ctx: Context) -> Evidence:
+def _c_4_13(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(kin.jacobian_xi(ctx.platform, ctx.data, xi) @ xid - _pose_fd(ctx, xi, xid)) for xi, xid in ctx.states)
     return Evidence(err, None, "model J_e xi_dot vs central differences of the world pose (log3 for the rotation)")
 
@@ -807,10 +807,10 @@ def _zero_euler_det(platform: Platform, data: pin.Data, q_arm) -> float:
     return float(np.linalg.det(J @ J.T))
 
 
-def _c_4_44(ctx: Context) -> Evidence:
+def _c_4_44(ctx: CheckContext) -> Evidence:
     rng = np.random.default_rng(SEED + 44)
     p = ctx.params
-    other = load(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
+    other = load_qprr(p.with_changes(d3=0.25))  # (4.44) has no d3: check it on a second arm too
     do = other.data()
     err = 0.0
     for _ in range(N_STATES):
@@ -826,7 +826,7 @@ def _c_4_44(ctx: Context) -> Evidence:
 
 
 def _sol_check(fn, r0):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         grid = np.linspace(-np.pi, np.pi, 73)
         e44 = max(abs(fn(t) - th.det_JJt_4_44(r0, t, ctx.d)) for t in grid)
         emod = max(abs(fn(t) - _zero_euler_det(ctx.platform, ctx.data, np.array([r0, t, 0.3]))) for t in grid)
@@ -853,7 +853,7 @@ def doolittle(A) -> tuple[np.ndarray, np.ndarray]:
     return L, U
 
 
-def _lu_samples(ctx: Context):
+def _lu_samples(ctx: CheckContext):
     """(q_arm, J J^T of the model at zero Euler angles, its Doolittle factors), cached per context."""
     if "lu" not in ctx.cache:
         out = []
@@ -870,7 +870,7 @@ def _lu_entry(name: str, L: np.ndarray, U: np.ndarray) -> float:
 
 
 def _lu_check(names: tuple[str, ...], what: str):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         ep, ec = {n: 0.0 for n in names}, 0.0
         for q, _, L, U in _lu_samples(ctx):
             printed, corrected = th.lu_factors_4_42(q, ctx.d), th.lu_factors_4_42_corrected(q, ctx.d)
@@ -889,7 +889,7 @@ def _lu_check(names: tuple[str, ...], what: str):
     return run
 
 
-def _c_4_42_pattern(ctx: Context) -> Evidence:
+def _c_4_42_pattern(ctx: CheckContext) -> Evidence:
     zeros = prod = 0.0
     for q, A, L, U in _lu_samples(ctx):
         Lc, Uc = th.lu_matrices_4_42(th.lu_factors_4_42_corrected(q, ctx.d))
@@ -903,7 +903,7 @@ def _c_4_42_pattern(ctx: Context) -> Evidence:
     )
 
 
-def _c_4_43(ctx: Context) -> Evidence:
+def _c_4_43(ctx: CheckContext) -> Evidence:
     with_printed = with_corrected = ident = 0.0
     for q, A, _, U in _lu_samples(ctx):
         det = np.linalg.det(A)
@@ -919,7 +919,7 @@ def _c_4_43(ctx: Context) -> Evidence:
     )
 
 
-def _c_4_43_text(ctx: Context) -> Evidence:
+def _c_4_43_text(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     for _, _, L, U in _lu_samples(ctx):
         ep = max(ep, abs(np.linalg.det(U) - 1.0))
@@ -932,7 +932,7 @@ def _c_4_43_text(ctx: Context) -> Evidence:
     )
 
 
-def _c_4_24(ctx: Context) -> Evidence:
+def _c_4_24(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     for xi, xi_dot in ctx.states:
         q, qd = xi[6:9], xi_dot[6:9]
@@ -948,7 +948,7 @@ def _c_4_24(ctx: Context) -> Evidence:
     )
 
 
-def _c_5_20(ctx: Context) -> Evidence:
+def _c_5_20(ctx: CheckContext) -> Evidence:
     ep = ec = fd_err = 0.0
     h = 1e-6
     for xi, _ in ctx.states:
@@ -973,7 +973,7 @@ def _c_5_20(ctx: Context) -> Evidence:
     )
 
 
-def _c_4_45(ctx: Context) -> Evidence:
+def _c_4_45(ctx: CheckContext) -> Evidence:
     rng = np.random.default_rng(SEED + 45)
     p = ctx.params
     pts, dets = [], []
@@ -1001,7 +1001,7 @@ _BLOCK_SLICES = {"B11": (0, 0), "B12": (0, 3), "B13": (0, 6), "B22": (3, 3), "B2
 
 
 def _block_check(*names: str):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         ep = ec = 0.0
         worst = ""
         for xi, xid in ctx.states:
@@ -1020,7 +1020,7 @@ def _block_check(*names: str):
     return run
 
 
-def _c_5_15(ctx: Context) -> Evidence:
+def _c_5_15(ctx: CheckContext) -> Evidence:
     model = pin.Model(ctx.platform.model)
     for j in (joint.joint_id for joint in ctx.platform.arm):  # keep the multirotor only
         model.inertias[j] = pin.Inertia.Zero()
@@ -1040,7 +1040,7 @@ def _c_5_15(ctx: Context) -> Evidence:
     )
 
 
-def _c_5_25(ctx: Context) -> Evidence:
+def _c_5_25(ctx: CheckContext) -> Evidence:
     err = 0.0
     for xi, xid in ctx.states:
         B = dyn.dynamics_xi(ctx.platform, ctx.data, xi, xid)[0]
@@ -1049,12 +1049,12 @@ def _c_5_25(ctx: Context) -> Evidence:
     return Evidence(err, None, "model: 1/2 xi_dot^T B xi_dot vs Pinocchio kinetic energy")
 
 
-def _c_5_29(ctx: Context) -> Evidence:
+def _c_5_29(ctx: CheckContext) -> Evidence:
     err = max(abs(th.potential_5_29(xi, ctx.params) - dyn.potential_energy(ctx.platform, ctx.data, _q(xi))) for xi, _ in ctx.states)
     return Evidence(err, None, "vs Pinocchio potential energy (gravity -g e3, z up)")
 
 
-def _c_5_35(ctx: Context) -> Evidence:
+def _c_5_35(ctx: CheckContext) -> Evidence:
     h = 1e-6
     err = skew = 0.0
     pf, data = ctx.platform, ctx.data
@@ -1076,7 +1076,7 @@ def _c_5_35(ctx: Context) -> Evidence:
     )
 
 
-def _c_5_37(ctx: Context) -> Evidence:
+def _c_5_37(ctx: CheckContext) -> Evidence:
     h = 1e-6
     err = 0.0
     for xi, xid in ctx.states:
@@ -1090,7 +1090,7 @@ def _c_5_37(ctx: Context) -> Evidence:
     return Evidence(err, None, "model G vs central differences of the potential energy in xi")
 
 
-def _c_5_39(ctx: Context) -> Evidence:
+def _c_5_39(ctx: CheckContext) -> Evidence:
     err = 0.0
     rng = np.random.default_rng(SEED + 39)
     for xi, xid in ctx.states:
@@ -1100,7 +1100,7 @@ def _c_5_39(ctx: Context) -> Evidence:
     return Evidence(err, None, "model: ABA on the Lie group (converted to xi_ddot) vs B^-1 (u - C xi_dot - G)")
 
 
-def _virtual_power_error(RQ_fn, ctx: Context) -> float:
+def _virtual_power_error(RQ_fn, ctx: CheckContext) -> float:
     rng = np.random.default_rng(SEED + 41)
     err = 0.0
     for xi, xid in ctx.states:
@@ -1112,7 +1112,7 @@ def _virtual_power_error(RQ_fn, ctx: Context) -> float:
 
 
 def _rq_check(fn):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         ep = _virtual_power_error(fn, ctx)
         ec = max(_virtual_power_error(th.R_Q_corrected, ctx), max(_maxabs(th.R_Q_corrected(xi) - input_map_matrix(xi)) for xi, _ in ctx.states))
         return Evidence(
@@ -1125,7 +1125,7 @@ def _rq_check(fn):
     return run
 
 
-def _c_5_46(ctx: Context) -> Evidence:
+def _c_5_46(ctx: CheckContext) -> Evidence:
     p = ctx.params
     N = _plus(ctx).actuation_matrix
     ep = _maxabs(th.N_5_46(p.arm_length, p.drag_factor) - N)
@@ -1133,7 +1133,7 @@ def _c_5_46(ctx: Context) -> Evidence:
     return Evidence(ep, ec, "vs the model's N (rotor frames of the URDF); same yaw-row c vs c/b issue as (3.36)")
 
 
-def _c_5_54(ctx: Context) -> Evidence:
+def _c_5_54(ctx: CheckContext) -> Evidence:
     model, data = fixed_base_arm(ctx.platform)
     err = max(_maxabs(th.arm_B_5_54(q, ctx.params) - _mass_matrix(model, data, q)) for q, _, _ in _arm_samples(ctx))
     return Evidence(err, None, "vs CRBA of the arm with the base locked")
@@ -1142,7 +1142,7 @@ def _c_5_54(ctx: Context) -> Evidence:
 _ARM_B_NAMES = [f"b{i}{j}" for i in range(1, 4) for j in range(1, 4)]
 
 
-def _c_5_5_B(ctx: Context) -> Evidence:
+def _c_5_5_B(ctx: CheckContext) -> Evidence:
     model, data = fixed_base_arm(ctx.platform)
     ep = ec = 0.0
     errs = []
@@ -1162,7 +1162,7 @@ def _c_5_5_B(ctx: Context) -> Evidence:
     )
 
 
-def _c_5_5_C(ctx: Context) -> Evidence:
+def _c_5_5_C(ctx: CheckContext) -> Evidence:
     model, data = fixed_base_arm(ctx.platform)
     ep = ec = 0.0
     errs = []
@@ -1181,7 +1181,7 @@ def _c_5_5_C(ctx: Context) -> Evidence:
     )
 
 
-def _c_5_5_G(ctx: Context) -> Evidence:
+def _c_5_5_G(ctx: CheckContext) -> Evidence:
     down_x = ch.rot_y(np.pi / 2)  # x_B points down: gravity in B is +g x_B
     model, data = fixed_base_arm(ctx.platform, down_x)
     lm, ld = fixed_base_arm(ctx.platform)
@@ -1198,7 +1198,7 @@ def _c_5_5_G(ctx: Context) -> Evidence:
 
 
 def _u_check(i: int, what: str):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         model, data = fixed_base_arm(ctx.platform, ch.rot_y(np.pi / 2))
         ep = ec = 0.0
         for q, qd, qdd in _arm_samples(ctx):
@@ -1210,7 +1210,7 @@ def _u_check(i: int, what: str):
     return run
 
 
-def _c_conversion(ctx: Context) -> Evidence:
+def _c_conversion(ctx: CheckContext) -> Evidence:
     err = 0.0
     rng = np.random.default_rng(SEED + 9)
     for xi, xid in ctx.states:
@@ -1226,7 +1226,7 @@ def _c_conversion(ctx: Context) -> Evidence:
     return Evidence(err, None, "xi -> (q, v) -> xi round trip, accelerations, and v = pin.difference of q(xi(t))")
 
 
-def _symbolic_errors(ctx: Context) -> dict:
+def _symbolic_errors(ctx: CheckContext) -> dict:
     """Max |Pinocchio - sympy| of B, C, G at three states (computed once per context)."""
     if "symbolic" in ctx.cache:
         return ctx.cache["symbolic"]
@@ -1250,7 +1250,7 @@ def _symbolic_errors(ctx: Context) -> dict:
 
 
 def _symbolic_check(name: str):
-    def run(ctx: Context) -> Evidence:
+    def run(ctx: CheckContext) -> Evidence:
         return Evidence(
             _symbolic_errors(ctx)[name],
             None,
@@ -1261,19 +1261,19 @@ def _symbolic_check(name: str):
 
 
 # ------------------------------------------------------------------------------ chapter 6
-def _level_states(ctx: Context, phi: float = 0.0, psi: float | None = None, max_pitch: float = 0.4) -> list[np.ndarray]:
+def _level_states(ctx: CheckContext, phi: float = 0.0, psi: float | None = None, max_pitch: float = 0.4) -> list[np.ndarray]:
     """The seeded states with roll ``phi``, |pitch| < ``max_pitch`` (and yaw ``psi`` when given): Sec. 6.3.3's hypotheses."""
     out = []
     for xi, _ in ctx.states:
         x = xi.copy()
-        x[3], x[4] = phi, xi[4] * max_pitch / 1.3  # the seeded pitches lie in (-1.3, 1.3) (Context.random_xi)
+        x[3], x[4] = phi, xi[4] * max_pitch / 1.3  # the seeded pitches lie in (-1.3, 1.3) (CheckContext.random_xi)
         if psi is not None:
             x[5] = psi
         out.append(x)
     return out
 
 
-def _c_6_29(ctx: Context) -> Evidence:
+def _c_6_29(ctx: CheckContext) -> Evidence:
     err = 0.0
     for xi, _ in ctx.states:
         q = _q(xi)
@@ -1281,7 +1281,7 @@ def _c_6_29(ctx: Context) -> Evidence:
     return Evidence(err, None, "p_b + R_b p_cm (p_cm: Pinocchio CoM in B) vs Pinocchio CoM in the world frame")
 
 
-def _c_6_29_rate(ctx: Context) -> Evidence:
+def _c_6_29_rate(ctx: CheckContext) -> Evidence:
     h = 1e-6
     ep = e_world = 0.0
     for xi, xid in ctx.states:
@@ -1303,12 +1303,12 @@ def _c_6_29_rate(ctx: Context) -> Evidence:
     )
 
 
-def _c_6_30_xy(ctx: Context) -> Evidence:
+def _c_6_30_xy(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.com_6_30(xi[6:9], ctx.params)[0:2] - kin.com_body(ctx.platform, ctx.data, _q(xi))[0:2]) for xi, _ in ctx.states)
     return Evidence(err, None, "x_cm, y_cm in B vs Pinocchio centre of mass")
 
 
-def _c_6_30_z(ctx: Context) -> Evidence:
+def _c_6_30_z(ctx: CheckContext) -> Evidence:
     ep = ec = 0.0
     for xi, _ in ctx.states:
         z = kin.com_body(ctx.platform, ctx.data, _q(xi))[2]
@@ -1323,14 +1323,14 @@ def _c_6_30_z(ctx: Context) -> Evidence:
     )
 
 
-def _pitch_only_offsets(ctx: Context, phi: float = 0.0, psi: float = 0.0):
+def _pitch_only_offsets(ctx: CheckContext, phi: float = 0.0, psi: float = 0.0):
     """(theta, p_cm in B, p_c - p_b in the world) from Pinocchio at roll ``phi``, yaw ``psi``."""
     for xi in _level_states(ctx, phi, psi):
         q = _q(xi)
         yield xi[4], kin.com_body(ctx.platform, ctx.data, q), kin.com_world(ctx.platform, ctx.data, q) - xi[0:3]
 
 
-def _c_6_31(ctx: Context) -> Evidence:
+def _c_6_31(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx))
     rolled = max(_maxabs(th.p_cm_prime_6_31(t, p) - w) for t, p, w in _pitch_only_offsets(ctx, phi=0.3))
     return Evidence(
@@ -1341,18 +1341,18 @@ def _c_6_31(ctx: Context) -> Evidence:
     )
 
 
-def _c_6_32(ctx: Context) -> Evidence:
+def _c_6_32(ctx: CheckContext) -> Evidence:
     err = max(_maxabs(th.nabla_p_cm_6_32(t, p) - (w - p)) for t, p, w in _pitch_only_offsets(ctx))
     return Evidence(err, None, "(R_theta - I) p_cm vs Pinocchio (p_c - p_b) - p_cm at phi = psi = 0")
 
 
-def _ee_pitch_error(ctx: Context, xi, theta_e: float) -> float:
+def _ee_pitch_error(ctx: CheckContext, xi, theta_e: float) -> float:
     """|R_e - Rz(psi) Ry(theta_e)| with R_e from Pinocchio."""
     R_e = kin.ee_placement(ctx.platform, ctx.data, _q(xi)).rotation
     return _maxabs(R_e - ch.rot_z(xi[5]) @ ch.rot_y(theta_e))
 
 
-def _c_6_34(ctx: Context) -> Evidence:
+def _c_6_34(ctx: CheckContext) -> Evidence:
     ep = e_roll = e_zyz = 0.0
     for xi in _level_states(ctx):
         te = th.theta_e_6_34(xi[4], xi[7], xi[8])
@@ -1369,7 +1369,7 @@ def _c_6_34(ctx: Context) -> Evidence:
     )
 
 
-def _c_6_35(ctx: Context) -> Evidence:
+def _c_6_35(ctx: CheckContext) -> Evidence:
     from ..control import make_controller
     from .bsg import CogStabilizer
     from .gains import mfc
@@ -1520,7 +1520,7 @@ CHECKS: tuple[Check, ...] = (
 
 
 # ---------------------------------------------------------------------------- running
-def evaluate(check: Check, ctx: Context) -> CheckResult:
+def evaluate_check(check: Check, ctx: CheckContext) -> CheckResult:
     """Run one check and apply the verdict rule."""
     try:
         ev = check.run(ctx)
@@ -1548,7 +1548,7 @@ def run_checks(platform: Platform | None = None, on_result: Callable[[CheckResul
     ctx = make_context(platform)
     results = []
     for check in CHECKS:
-        r = evaluate(check, ctx)
+        r = evaluate_check(check, ctx)
         results.append(r)
         if on_result is not None:
             on_result(r)
@@ -1570,7 +1570,7 @@ def format_row(r: CheckResult) -> str:
     return f"{r.equation:<9} {r.quantity:<46} {_format_error(r):<19} {r.verdict}"
 
 
-def main(verbose: bool = False) -> int:
+def print_check_table(verbose: bool = False) -> int:
     """Print the table row by row; return 0 only if every check holds (skipped rows do not fail).
 
     "max error" is the largest error of the printed form over the seeded states; for a
@@ -1598,4 +1598,4 @@ def main(verbose: bool = False) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main("-v" in sys.argv))
+    sys.exit(print_check_table("-v" in sys.argv))

@@ -42,8 +42,8 @@ from ..viz.compare import plot_overlay, plot_rmse_bars
 from .bsg import CogStabilizer
 from .control_scenarios import thrust_margins
 from .missions import NAMES, dynamic_mission, static_mission
-from .realistic import rotor_dynamics
-from .robot import load
+from .realistic import qprr_rotor_dynamics
+from .robot import load_qprr
 from .scenarios import NOISE_AMPLITUDE, TABLE_6_3, THESIS_NAMES, THESIS_RUN_TIME_S, flight_controller
 
 NAMES_ALL = ("table", "overlay", "noise", "sweeps", "decoupled", "mpc", "realistic", "lag")
@@ -189,7 +189,7 @@ SWEEP_THETA2 = (-0.8, -0.5, -0.2, 0.2, 0.5)
 
 
 def _bsg_run(theta_e: float, theta2: float, duration: float, progress: bool) -> SimResult:
-    platform = load()
+    platform = load_qprr()
     ctrl = CogStabilizer(platform, flight_controller("mfc", platform), theta_e_d=theta_e)
     try:
         return simulate(platform, ctrl, dynamic_mission(theta2_d=theta2), duration, progress=progress, scenario="dynamic-bsg")
@@ -289,7 +289,7 @@ def compare_mpc(runs: _Runs, plot_dir: Path | None) -> Report:
         rep.lines.append(f"skipped: the MPC needs crocoddyl ({OPTIONAL['mpc'][2]})")
         rep.ok = False
         return rep
-    platform = load()
+    platform = load_qprr()
     rows = {}
     for sc, idc in (("static-idc", "idc"), ("spiral", "idc"), ("payload-drop", "idc"), ("aggressive-reach", "idc")):
         for c in (idc, "mpc"):
@@ -385,7 +385,7 @@ def compare_realistic(runs: _Runs, plot_dir: Path | None) -> Report:
         + ", ".join(f"{c} {max(rows[c].rmse()[n] for n in 'xyz') / max(ideal[c].rmse()[n] for n in 'xyz'):.1f}x" for c in ctrls)
     )
     for c, r in rows.items():
-        m = thrust_margins(r, load())
+        m = thrust_margins(r, load_qprr())
         rep.lines.append(f"{c}: {r.status}; thrust margin applied {m['applied_margin_N']:.3g} N, asked {m['asked_margin_N']:.3g} N")
     rep.ok = all(r.status == "ok" for r in rows.values())
     if plot_dir is not None:
@@ -414,13 +414,13 @@ LAG_TIME_CONSTANTS = (0.0, 0.0025, 0.005, 0.01, 0.015, 0.02)
 def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
     """Each controller on the static mission for motor time constants 0-20 ms (no wind): how slow may the motors be?"""
     rep = Report("lag")
-    platform = load()
+    platform = load_qprr()
     duration = runs.duration or 30.0
     ctrls = ("idc", "dsid", "mfc", "decoupled")
     table: dict[str, list[tuple[float, str, float]]] = {c: [] for c in ctrls}
     for c in ctrls:
         for T in LAG_TIME_CONSTANTS:
-            act = rotor_dynamics(platform, time_constant=T) if T > 0 else None
+            act = qprr_rotor_dynamics(platform, time_constant=T) if T > 0 else None
             try:
                 r = simulate(
                     platform, flight_controller(c, platform), static_mission(), duration, actuators=act, progress=runs.progress, scenario="lag"

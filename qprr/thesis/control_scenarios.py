@@ -46,13 +46,13 @@ from ..errors import QprrError, UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..scenarios import missions as generic
-from ..sim import SimConfig, SimResult, simulate
+from ..sim import INTEGRATORS, SimConfig, SimResult, simulate
 from ..trajectory import Hold, Spiral
-from ..validation import as_vector
+from ..validation import as_name, as_real, as_settings, as_vector, check_fields
 from ..viz import plot_result
 from .missions import aggressive_reach, dynamic_mission, static_mission
 from .realistic import MEAN_WIND, TIME_CONSTANT, W20, realistic
-from .robot import load, params_of
+from .robot import load_qprr, params_of
 from .scenarios import _BSG_CONTROLLERS, _FLIGHT, _FLIGHT_CONTROLLERS, Instance, _flight, _plot_flight, flight_gains
 
 POINT_TARGET = (5.0, 5.0, 10.0)
@@ -68,7 +68,7 @@ IDEAL_FORCE_MAX, IDEAL_TORQUE_MAX = 1e4, 1e3
 
 
 def _q_prr(platform):
-    platform = load() if platform is None else platform
+    platform = load_qprr() if platform is None else platform
     params_of(platform)
     return platform
 
@@ -146,20 +146,33 @@ def _settling_time(t: np.ndarray, x: np.ndarray, target: float, start: float, to
     return float(t[k + 1]) if k + 1 < t.shape[0] else float("inf")
 
 
-def point_to_point(
-    platform=None,
-    controller: str = "idc",
-    progress: bool = False,
-    *,
-    target=POINT_TARGET,
-    duration: float = 10.0,
-    actuation: str = "ideal",
-    dt: float = SimConfig.dt,
-    integrator: str = "midpoint",
-    seed: int = 0,
-) -> SimResult:
-    """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``target`` [m], IDC with K_P = 30 I_9,
-    K_D = 18 I_9 (module docstring for ``actuation``)."""
+@dataclass(frozen=True)
+class PointToPointSettings:
+    """The options of ``point-to-point`` (help: the scenario's :attr:`~qprr.scenarios.Scenario.options`): the set point
+    ``target`` p_b [m], run ``duration`` [s], ``actuation`` ("ideal" or "rotors", module docstring), integration step
+    ``dt`` [s], ``integrator``, ``seed``."""
+
+    target: tuple[float, float, float] = POINT_TARGET
+    duration: float = 10.0
+    actuation: str = "ideal"
+    dt: float = SimConfig.dt
+    integrator: str = "midpoint"
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        object.__setattr__(self, "target", tuple(as_vector(self.target, 3, "target").tolist()))
+        as_real(self.duration, "duration", positive=True, unit="s")
+        as_real(self.dt, "dt", positive=True, unit="s")
+        as_name(self.actuation, "actuation", ("ideal", "rotors"))
+        as_name(self.integrator, "integrator", INTEGRATORS)
+
+
+def point_to_point(platform=None, controller: str = "idc", progress: bool = False, settings: PointToPointSettings | None = None) -> SimResult:
+    """Sec. 6.3.1.1 (Fig. 6.4): a step of the base reference from the origin to ``settings.target`` [m], IDC with
+    K_P = 30 I_9, K_D = 18 I_9 (:class:`PointToPointSettings`; module docstring for ``actuation``)."""
+    o = as_settings(settings, PointToPointSettings)
+    target, duration, actuation, dt, integrator, seed = o.target, o.duration, o.actuation, o.dt, o.integrator, o.seed
     platform = _q_prr(platform)
     if controller != "idc":
         raise UnknownNameError("controller", controller, ("idc",))
@@ -339,13 +352,6 @@ def plot_realistic(result: SimResult, path) -> Path:
 
 
 # ------------------------------------------------------------------------------ registry
-def _runner(fn):
-    def run(platform, controller, progress, **options):
-        return fn(platform, controller, progress, **options)
-
-    return run
-
-
 def _settings_runner(fn, settings_type):
     """The registry's runner of ``fn(platform, controller, progress, settings)``: the options :meth:`Scenario.run
     <qprr.scenarios.Scenario.run>` passes by name, gathered into ``settings_type`` (a field per option)."""
@@ -372,7 +378,7 @@ SCENARIOS = (
     Scenario(
         "point-to-point",
         "regulation to p_b = [5, 5, 10] without trajectory, IDC K_P = 30 I, K_D = 18 I",
-        _runner(point_to_point),
+        _settings_runner(point_to_point, PointToPointSettings),
         ("idc",),
         {
             "target": Option(POINT_TARGET, "p_b set point [m]"),
@@ -433,6 +439,7 @@ __all__ = [
     "ANNEX_TARGET",
     "POINT_GAINS",
     "POINT_TARGET",
+    "PointToPointSettings",
     "SCENARIOS",
     "margin_summary",
     "plot_point_to_point",

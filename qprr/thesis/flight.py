@@ -22,7 +22,7 @@ from ..sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
 from ..sim.mismatch import perturbed
 from .bsg import CogStabilizer
 from .missions import dynamic_mission, static_mission
-from .robot import load
+from .robot import load_qprr
 from .scenarios import NOISE_AMPLITUDE, PULSES, flight_controller
 
 __all__ = ["FLIGHT_DEFAULTS", "flight"]
@@ -72,7 +72,7 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
         if k not in FLIGHT_DEFAULTS and not k.startswith(MODEL_PREFIX):
             raise UnknownNameError("parameter of qprr.thesis.flight.flight", k, tuple(FLIGHT_DEFAULTS))
     p = {**FLIGHT_DEFAULTS, **{k: v for k, v in params.items() if not k.startswith(MODEL_PREFIX)}}
-    platform = load() if platform is None else check_platform(platform)
+    platform = load_qprr() if platform is None else check_platform(platform)
     ts = float(p["time_scale"])
     if not ts > 0:
         raise InputError(f"time_scale must be > 0, got {ts!r}")

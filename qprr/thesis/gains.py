@@ -99,7 +99,7 @@ def table_6_5() -> IDCGains:
     return IDCGains.from_groups(3, position=(20.0, 2.0, 0.0), attitude=((20.0, 40.0, 20.0), 0.0, (5.0, 2.0, 2.0)), arm=(10.0, 2.0, 15.0))
 
 
-def payload() -> IDCGains:
+def payload_idc() -> IDCGains:
     """Table 6.5 position PD kept; attitude PID (s + 15)^3, arm PID (s + 10)^3.
 
     Attitude: the printed PI is unstable; (s + 15)^3 is three times the position loop's natural
@@ -118,7 +118,7 @@ def table_6_7() -> IDCGains:
     return IDCGains.from_groups(3, position=(6.0, 5.0, 0.0), attitude=((5.0, 5.0, 25.0), (2.0, 2.0, 4.5), 0.0), arm=(8.0, 0.0, 2.0))
 
 
-def impedance() -> IDCGains:
+def impedance_idc() -> IDCGains:
     """Table 6.7 position PD kept (poles -2, -3); attitude PD (s + 15)^2, arm PID (s + 5)^3, roll/pitch filter 20 rad/s.
 
     Attitude: the printed PD (k_P = 5, k_D = 2: poles -1 +- 2j) is slower than the position loop it

@@ -3,7 +3,7 @@
 * Algorithm 3 under the hover assumption (3.66)-(3.72), Levenberg-Marquardt (Algorithm 4) on the
   reduced system, r0 from the centre-of-mass criterion (3.79)-(3.81) and the prismatic check of
   Algorithm 5, with the printed steps corrected where they are wrong (docs/thesis-errata.md);
-* :func:`solve`: the generic IK of :mod:`qprr.ik` with the thesis's defaults for the Q-PRR - the
+* :func:`solve_qprr`: the generic IK of :mod:`qprr.ik` with the thesis's defaults for the Q-PRR - the
   method ``"igm"`` added, the hover guess "below the target by the arm reach, yaw of the target's
   y axis", the QP started from the analytic IGM (balanced theta2), and the reason a target is
   unreachable in hover (its y axis must be horizontal: R_e = Rz(psi) Ry(theta2 + theta3),
@@ -78,7 +78,7 @@ def hover_yaw(R_world) -> float:
     return math.atan2(-R_world[0, 1], R_world[1, 1])
 
 
-def default_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
+def hover_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
     """Initial guess xi0: hovering (roll = pitch = 0) below the target by the arm reach
     d0 + d1 + d2 + d3, yaw of the target's y axis, arm at zero (straight up)."""
     p = params
@@ -306,7 +306,7 @@ _IGM_BALANCE = IGMOptions(theta2="balance")
 
 
 def _guess_tuple(params: QPRRParams, p_d) -> tuple:
-    """:func:`default_guess` as a tuple (no array on the IGM's hot path; the yaw comes from the target)."""
+    """:func:`hover_guess` as a tuple (no array on the IGM's hot path; the yaw comes from the target)."""
     x, y, z = p_d.tolist()
     return (x, y, z - (params.d0 + params.d1 + params.d2 + params.d3), 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
@@ -365,10 +365,10 @@ IGM = IKMethod(IGMOptions, _make_igm, "the thesis's analytic IGM (Algorithms 3-5
 def _thesis_guess(platform, data, p_d, R_d):
     params = params_of(platform)
     if R_d is None:
-        xi = default_guess(params, p_d, np.eye(3))
+        xi = hover_guess(params, p_d, np.eye(3))
         xi[5] = 0.0
         return xi, "hover below the target, arm straight"
-    return default_guess(params, p_d, R_d), "hover below the target, arm straight"
+    return hover_guess(params, p_d, R_d), "hover below the target, arm straight"
 
 
 def _igm_guess(platform, data, p_d, R_d):
@@ -377,7 +377,7 @@ def _igm_guess(platform, data, p_d, R_d):
         xi_l, _, _, _ = _igm_core(_arm_constants(params), p_d, R_d, _guess_tuple(params, p_d), _IGM_BALANCE)
         if xi_l is not None:
             return np.array(xi_l), "analytic IGM (balanced theta2)"
-        return default_guess(params, p_d, R_d), "hover below the target, arm straight (IGM failed)"
+        return hover_guess(params, p_d, R_d), "hover below the target, arm straight (IGM failed)"
     return _thesis_guess(platform, data, p_d, R_d)
 
 
@@ -390,7 +390,7 @@ def solver(platform: Platform, method: str = "qp", options=None, *, init: str = 
     return IKSolver(platform, method, options, initial_guess=guess, unreachable_hint=unreachable_hint)
 
 
-def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=None, options=None) -> IKResult:
+def solve_qprr(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=None, options=None) -> IKResult:
     """IK of the Q-PRR with the thesis's defaults: methods ``"igm"``, ``"clika"``, ``"dls"``, ``"qp"``.
 
     ``options`` may hold ``init`` ("igm" default, or "guess") for the QP's initial guess; the
@@ -411,4 +411,4 @@ def solve(platform: Platform, data: pin.Data, target, method: str = "qp", xi0=No
 
 # the closed forms refuse NaN, strings, complex, a non-QPRRParams, in their annotated arguments; the IK entry points
 # check their own inputs once (a wrapper per call doubled the IGM's time)
-checked_module(globals(), skip=("solve_igm", "solver", "solve"))
+checked_module(globals(), skip=("solve_igm", "solver", "solve_qprr"))

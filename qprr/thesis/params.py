@@ -41,7 +41,7 @@ class Link:
 
 
 @dataclass(frozen=True)
-class Rotor:
+class RotorPlacement:
     """A rotor: position in B [m], spin sign (+1: reaction torque along +z_B)."""
 
     position: tuple[float, float, float]
@@ -113,7 +113,7 @@ class QPRRParams:
         ixx, iyy, izz, ixy, ixz, iyz = self.multirotor_inertia
         return np.array([[ixx, ixy, ixz], [ixy, iyy, iyz], [ixz, iyz, izz]])
 
-    def rotors(self, layout: str = "plus") -> tuple[Rotor, Rotor, Rotor, Rotor]:
+    def rotors(self, layout: str = "plus") -> tuple[RotorPlacement, RotorPlacement, RotorPlacement, RotorPlacement]:
         """Rotor positions in B for the "+" layout of Thesis (3.36) or the "X" layout.
 
         "+": rotor 1 on -x_B, 2 on -y_B, 3 on +x_B, 4 on +y_B, so that with thrust along
@@ -130,7 +130,7 @@ class QPRRParams:
             c = s = np.sqrt(0.5)
             plus = [(c * x - s * y, s * x + c * y) for x, y in plus]
         spins = (1, -1, 1, -1)
-        return tuple(Rotor((float(x), float(y), 0.0), spin) for (x, y), spin in zip(plus, spins))
+        return tuple(RotorPlacement((float(x), float(y), 0.0), spin) for (x, y), spin in zip(plus, spins))
 
     def hover_thrust(self) -> float:
         """Per-rotor thrust [N] that holds the whole system's weight, m_G g / 4."""

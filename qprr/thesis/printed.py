@@ -50,7 +50,7 @@ def _lengths(d) -> tuple[float, float, float, float]:
     return float(d0), float(d1), float(d2), float(d3)
 
 
-def link_lengths(params: QPRRParams) -> tuple[float, float, float, float]:
+def d_lengths(params: QPRRParams) -> tuple[float, float, float, float]:
     """(d0, d1, d2, d3) of a parameter set, the ``d`` argument of this module."""
     return (params.d0, params.d1, params.d2, params.d3)
 
@@ -293,7 +293,7 @@ def _link_masses(params: QPRRParams) -> np.ndarray:
 def arm_com_3_44(q_arm, params: QPRRParams) -> np.ndarray:
     """xi_c = (1/m_G) sum m_i xi_ci, the arm's CoM in B, Thesis (3.44) with the p_ci of (3.78)."""
     m = _link_masses(params)
-    return m @ link_coms_3_78(q_arm, link_lengths(params)) / m.sum()
+    return m @ link_coms_3_78(q_arm, d_lengths(params)) / m.sum()
 
 
 def potential_3_42(R_b, q_arm, params: QPRRParams) -> float:
@@ -301,7 +301,7 @@ def potential_3_42(R_b, q_arm, params: QPRRParams) -> float:
     R_b = check_rotation(R_b, "R_b", 1e-6)
     R_b = np.asarray(R_b, dtype=float)
     m = _link_masses(params)
-    coms = link_coms_3_78(q_arm, link_lengths(params))
+    coms = link_coms_3_78(q_arm, d_lengths(params))
     return float(-sum(mi * params.g * E3 @ R_b @ c for mi, c in zip(m, coms)))
 
 
@@ -488,7 +488,7 @@ def com_3_78(q_arm, params: QPRRParams, *, m_l: float = 0.0, d_cl: float = 0.0) 
     The corrected form is :func:`com_3_78_corrected`.
     """
     r0, t2, t3 = _arm(q_arm)
-    d0, d1, d2, d3 = link_lengths(params)
+    d0, d1, d2, d3 = d_lengths(params)
     m_l, d_cl = _payload_args(m_l, d_cl)
     m1, m2, m3 = _link_masses(params)
     mG = params.total_mass + m_l
@@ -502,7 +502,7 @@ def com_3_78_corrected(q_arm, params: QPRRParams, *, m_l: float = 0.0, d_cl: flo
     """(3.78) corrected: m_l p_cl for the payload term (3.76) and, in z_cm,
     m1 (d0 + d1/2) + (m2 + m3)(d0 + d1) + (m2/2 + m3) d2 c2 + m3 d3 c23 / 2; divided by m_G of (3.77)."""
     r0, t2, t3 = _arm(q_arm)
-    d0, d1, d2, d3 = link_lengths(params)
+    d0, d1, d2, d3 = d_lengths(params)
     m_l, d_cl = _payload_args(m_l, d_cl)
     m1, m2, m3 = _link_masses(params)
     x = (m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2
@@ -514,7 +514,7 @@ def com_3_78_corrected(q_arm, params: QPRRParams, *, m_l: float = 0.0, d_cl: flo
 def x_cm_3_80(q_arm, params: QPRRParams) -> float:
     """F(r0, theta2, theta3) = x_cm, Thesis (3.79)-(3.80)."""
     r0, t2, t3 = _arm(q_arm)
-    _, _, d2, d3 = link_lengths(params)
+    _, _, d2, d3 = d_lengths(params)
     m1, m2, m3 = _link_masses(params)
     return float(((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2) / params.total_mass)
 
@@ -837,7 +837,7 @@ def _blocks_common(xi, params: QPRRParams):
     xi = as_vector(xi, 9, "xi")
     Rb = rotation_3_4(*xi[3:6])
     T = T_3_25(xi[3], xi[4])
-    d = link_lengths(params)
+    d = d_lengths(params)
     coms = link_coms_3_78(xi[6:9], d)
     Jp, Jo = link_jacobians_5_20(xi[6:9], d)
     Ib = params.multirotor_inertia_matrix()
@@ -901,7 +901,7 @@ def potential_5_29(xi, params: QPRRParams) -> float:
     """U = m_b g e3^T p_b + sum m_ci g e3^T (p_b + R_b p_ci^b), Thesis (5.29) (z up)."""
     xi = as_vector(xi, 9, "xi")
     Rb = rotation_3_4(*xi[3:6])
-    coms = link_coms_3_78(xi[6:9], link_lengths(params))
+    coms = link_coms_3_78(xi[6:9], d_lengths(params))
     m = _link_masses(params)
     g = params.g
     return float(params.multirotor_mass * g * xi[2] + sum(mi * g * (xi[2] + E3 @ Rb @ p) for mi, p in zip(m, coms)))
@@ -961,7 +961,7 @@ def N_5_46_corrected(l: float, b: float, c: float) -> np.ndarray:
 # ------------------------------------------------------------ Sec. 5.5 fixed-base arm model
 def _arm_consts(params: QPRRParams):
     m1, m2, m3 = _link_masses(params)
-    _, _, d2, d3 = link_lengths(params)
+    _, _, d2, d3 = d_lengths(params)
     Ix2, Iy2, Iz2 = params.links[1].inertia[:3]
     Ix3, Iy3, Iz3 = params.links[2].inertia[:3]
     return m1, m2, m3, d2, d3, Iy2, Iz2, Ix3, Iy3, Iz3
@@ -969,7 +969,7 @@ def _arm_consts(params: QPRRParams):
 
 def arm_B_5_54(q_arm, params: QPRRParams) -> np.ndarray:
     """B(q_eb) = sum m_ci J_p^T J_p + J_o^T R_i I_ci^i R_i^T J_o of the fixed-base arm, Thesis (5.54)."""
-    Jp, Jo = link_jacobians_5_20(q_arm, link_lengths(params))
+    Jp, Jo = link_jacobians_5_20(q_arm, d_lengths(params))
     Ic = _link_inertias_in_B(q_arm, params)
     return sum(mi * J.T @ J + O.T @ I @ O for mi, J, O, I in zip(_link_masses(params), Jp, Jo, Ic))
 
@@ -1125,7 +1125,7 @@ def com_6_30(q_arm, params: QPRRParams) -> np.ndarray:
     :func:`com_3_78_corrected`).
     """
     r0, t2, t3 = _arm(q_arm)
-    d0, d1, d2, d3 = link_lengths(params)
+    d0, d1, d2, d3 = d_lengths(params)
     m1, m2, m3 = _link_masses(params)
     mG = params.total_mass
     x = ((m1 + m2 + m3) * r0 + (m2 / 2 + m3) * d2 * np.sin(t2) + m3 * d3 * np.sin(t2 + t3) / 2) / mG

@@ -41,7 +41,7 @@ from ..sim.actuators import RotorDynamics
 from ..sim.disturbances import Disturbances
 from ..sim.wind import AerodynamicDrag, Dryden, Gust, ViscousFriction, Wind
 from ..validation import as_real, as_vector
-from .robot import load, params_of
+from .robot import load_qprr, params_of
 
 TIME_CONSTANT = 0.005
 """Motor time constant of the Q-PRR [s] (chosen, see the module table)."""
@@ -55,15 +55,15 @@ ALTITUDE = 10.0
 GUST = Gust(18.0, 3.0, (0.0, 2.0, 0.0))
 
 
-def rotor_dynamics(platform: Platform | None = None, *, time_constant: float = TIME_CONSTANT, **overrides) -> RotorDynamics:
+def qprr_rotor_dynamics(platform: Platform | None = None, *, time_constant: float = TIME_CONSTANT, **overrides) -> RotorDynamics:
     """The Q-PRR's actuator stage: f = b w^2 with b of its parameters, speeds up to sqrt(f_max / b), lag ``time_constant`` [s]."""
-    platform = load() if platform is None else check_platform(platform)
+    platform = load_qprr() if platform is None else check_platform(platform)
     time_constant = as_real(time_constant, "time_constant", positive=True, unit="s")
     p = params_of(platform)
     return RotorDynamics.for_rotors(platform.rotors, p.thrust_factor, time_constant, **overrides)
 
 
-def wind(mean=MEAN_WIND, w20: float = W20, gust: bool = True, altitude: float = ALTITUDE) -> Wind:
+def realistic_wind(mean=MEAN_WIND, w20: float = W20, gust: bool = True, altitude: float = ALTITUDE) -> Wind:
     """The realistic scenarios' wind: ``mean`` [m/s] + Dryden turbulence (``w20`` [m/s]; 0: none) + the gust (or not)."""
     mean = tuple(as_vector(mean, 3, "mean").tolist())
     w20 = as_real(w20, "w20", nonnegative=True, unit="m/s")
@@ -96,27 +96,27 @@ def realistic(
     time_constant: float = TIME_CONSTANT,
 ) -> Realistic:
     """Every stage of the module table, each switchable (all on by default)."""
-    platform = load() if platform is None else check_platform(platform)
+    platform = load_qprr() if platform is None else check_platform(platform)
     mean_wind = as_vector(mean_wind, 3, "mean_wind")
     w20 = as_real(w20, "w20", nonnegative=True, unit="m/s")
     time_constant = as_real(time_constant, "time_constant", positive=True, unit="s")
     parts = []
     if drag:
-        parts.append(AerodynamicDrag(DRAG_LINEAR, DRAG_QUADRATIC, DRAG_ANGULAR, wind(mean_wind, w20, gust)))
+        parts.append(AerodynamicDrag(DRAG_LINEAR, DRAG_QUADRATIC, DRAG_ANGULAR, realistic_wind(mean_wind, w20, gust)))
     if friction:
         parts.append(ViscousFriction((0.0,) * 6 + FRICTION_ARM))
-    act = rotor_dynamics(platform, time_constant=time_constant, initial="hover") if motors else None
+    act = qprr_rotor_dynamics(platform, time_constant=time_constant, initial="hover") if motors else None
     return Realistic(act, Disturbances(tuple(parts)) if parts else None)
 
 
 def steady_wind_offset(platform: Platform | None = None, kp_position: float = 1.4, mean_wind=MEAN_WIND) -> float:
     """Steady position offset [m] a PD position loop of gain ``kp_position`` [1/s^2] leaves in the mean wind:
     |F_drag| / (m k_P), with the drag of the module table at rest (v_r = -w).  For the Table 6.2 gains (k_P = 1.4)."""
-    platform = load() if platform is None else check_platform(platform)
+    platform = load_qprr() if platform is None else check_platform(platform)
     kp_position = as_real(kp_position, "kp_position", positive=True, unit="1/s^2")
     w = as_vector(mean_wind, 3, "mean_wind")
     F = np.asarray(DRAG_LINEAR) * w + np.asarray(DRAG_QUADRATIC) * np.linalg.norm(w) * w
     return float(np.linalg.norm(F) / (platform.total_mass * kp_position))
 
 
-__all__ = ["GUST", "TIME_CONSTANT", "Realistic", "realistic", "rotor_dynamics", "steady_wind_offset", "wind"]
+__all__ = ["GUST", "TIME_CONSTANT", "Realistic", "realistic", "qprr_rotor_dynamics", "steady_wind_offset", "realistic_wind"]

@@ -33,7 +33,7 @@ def rotor_set(params: QPRRParams, layout: str = "plus") -> tuple[Rotor, ...]:
     )
 
 
-def load(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_path: Path | str | None = None) -> Platform:
+def load_qprr(params: QPRRParams | str | None = None, *, layout: str = "plus", urdf_path: Path | str | None = None) -> Platform:
     """The Q-PRR as a :class:`~qprr.model.Platform` (free flyer, nq = 10, nv = 9).
 
     ``params``: a :class:`QPRRParams`, a variant name (``"thesis"`` default: Hypothesis 1;

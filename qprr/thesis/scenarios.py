@@ -51,7 +51,6 @@ law (6.72)-(6.73) with one end-effector wrench and no base wrench.
 
 from __future__ import annotations
 
-import functools
 import math
 import warnings
 from collections.abc import Callable, Mapping
@@ -70,7 +69,7 @@ from ..control import (
     PayloadIDC,
     make_controller,
 )
-from ..control.impedance import ImpedanceController
+from ..control.impedance import ImpedanceController, ImpedanceGains
 from ..errors import InputError, QprrError, ScheduleWarning, UnknownNameError
 from ..scenarios import COMMON_OPTIONS, Option, Scenario
 from ..scenarios import missions as generic
@@ -85,13 +84,13 @@ from ..sim import (
     simulate,
 )
 from ..trajectory import DEFAULT_LAW, Hold, MultiPhase, Phase, Spiral
-from ..validation import as_interval, as_vector, checked_module
+from ..validation import as_interval, as_name, as_real, as_settings, as_vector, check_fields, checked_module
 from ..viz import plot_result
 from ..viz.plots import REFERENCE_STYLE, Panel, applied_forces, legend, length_unit, robust_limits, time_axis
 from . import gains
 from .bsg import CogStabilizer
 from .missions import DYNAMIC_MISSION, NAMES, STATIC_MISSION, static_mission
-from .robot import load, params_of
+from .robot import load_qprr, params_of
 
 SEED = 0
 
@@ -159,7 +158,7 @@ def flight_controller(name: str, platform, as_printed: bool = False):
 
 
 def _q_prr(platform):
-    platform = load() if platform is None else platform
+    platform = load_qprr() if platform is None else platform
     params_of(platform)  # a thesis scenario needs the Q-PRR
     return platform
 
@@ -454,7 +453,7 @@ def _payload_controller(name: str, platform, mass: float, release_time: float):
                 self.set_known_mass(0.0)
             return super().step(t, state, ref)
 
-    g = gains.payload()
+    g = gains.payload_idc()
     builders = {
         "payload-idc": lambda: PayloadIDC(platform, g, payload="estimate"),
         "payload-idc-known": lambda: _Told(platform, g, payload="known", known_mass=mass),
@@ -468,22 +467,35 @@ def _payload_controller(name: str, platform, mass: float, release_time: float):
     return builders[name]()
 
 
+@dataclass(frozen=True)
+class PayloadDropSettings:
+    """The options of ``payload-drop`` (:func:`payload_drop`): the payload ``mass`` [kg], its ``release_time`` [s],
+    the run's ``duration`` [s], the ``mission`` ("thesis" or "hover"), the arm's ``arm_target`` (r0, theta2, theta3)
+    reached during ``arm_phase`` (start, end) [s], the white-``noise`` amplitude [N] and the ``seed``."""
+
+    mass: float = 0.1
+    release_time: float = 18.0
+    duration: float = 25.0
+    mission: str = "thesis"
+    arm_target: tuple[float, float, float] = (-0.04, 0.3, 0.5)
+    arm_phase: tuple[float, float] = (15.0, 17.0)
+    noise: float = 0.0
+    seed: int = SEED
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        as_real(self.mass, "mass", nonnegative=True, unit="kg")
+        as_name(self.mission, "mission", ("thesis", "hover"))
+        object.__setattr__(self, "arm_target", tuple(as_vector(self.arm_target, 3, "arm_target").tolist()))
+        object.__setattr__(self, "arm_phase", as_interval(self.arm_phase, "arm_phase", lo=0.0))
+
+
 def payload_drop(
-    platform=None,
-    controller: str = "payload-idc",
-    progress: bool = False,
-    *,
-    mass: float = 0.1,
-    release_time: float = 18.0,
-    duration: float = 25.0,
-    mission: str = "thesis",
-    arm_target=(-0.04, 0.3, 0.5),
-    arm_phase=(15.0, 17.0),
-    noise: float = 0.0,
-    seed: int = SEED,
-    plant=None,
+    platform=None, controller: str = "payload-idc", progress: bool = False, settings: PayloadDropSettings | None = None, plant=None
 ) -> SimResult:
-    """Carry ``mass`` at the end effector and release it at ``release_time`` (Thesis Sec. 6.4.2.3).
+    """Carry ``mass`` at the end effector and release it at ``release_time`` (Thesis Sec. 6.4.2.3; the fields of
+    ``settings``, a :class:`PayloadDropSettings`).
 
     ``mission="thesis"``: climb/x/y flight of Sec. 6.3.1.4 to (3, 6, 10) m, arm to ``arm_target``
     during ``arm_phase``; ``mission="hover"``: start hovering at (0, 0, 1) m with the arm already
@@ -496,14 +508,16 @@ def payload_drop(
     the ``recovery_time`` (:class:`Recovery`) and ``mass_estimate_error``.  ``plant``: the robot
     flown when it differs from the controllers' model ``platform`` (:func:`qprr.sim.simulate`).
     """
+    o = as_settings(settings, PayloadDropSettings)
+    mass, release_time, duration, mission, noise, seed = o.mass, o.release_time, o.duration, o.mission, o.noise, o.seed
     platform = _q_prr(platform)
     missions = ("thesis", "hover")
     if mission not in missions:
         raise UnknownNameError("mission", mission, missions)
-    r0, t2, t3 = platform.check_arm_limits(arm_target, "arm_target")
+    r0, t2, t3 = platform.check_arm_limits(o.arm_target, "arm_target")
     if not 0.0 < release_time < duration:
         raise InputError(f"release_time must lie inside the run, 0 < release_time < duration = {duration!r} s, got {release_time!r}")
-    arm_phase = as_interval(arm_phase, "arm_phase", lo=0.0)
+    arm_phase = as_interval(o.arm_phase, "arm_phase", lo=0.0)
     data = {"payload": ({"time": 0.0, "mass": mass}, {"time": release_time, "mass": 0.0})}
     trajectory = None
     if mission == "thesis":
@@ -562,7 +576,7 @@ def _push_controller(name: str, platform, contact):
     """ "layered-idc-ft": layered IDC cancelling the contact wrench its wrist sensor read at the previous step
     ((6.76)), filtered at :data:`SENSOR_FILTER`; "layered-idc": the same without force feedback (the arm
     buckles under the compressive contact force); "idc": Sec. 6.3.1's controller."""
-    g = gains.payload()
+    g = gains.payload_idc()
     builders = {
         "layered-idc-ft": lambda: LayeredIDC(platform, g, ee_sensor=contact.measured, sensor_filter=SENSOR_FILTER),
         "layered-idc": lambda: LayeredIDC(platform, g),
@@ -573,21 +587,35 @@ def _push_controller(name: str, platform, contact):
     return builders[name]()
 
 
-def push_thrust(
-    platform=None,
-    controller: str = "layered-idc-ft",
-    progress: bool = False,
-    *,
-    distance: float = 0.5,
-    push=(2.0, 7.0),
-    duration: float = 12.0,
-    object_mass: float = 0.5,
-    friction: float = 0.3,
-    stiffness: float = PUSH_STIFFNESS,
-    damping: float = 20.0,
-    seed: int = SEED,
-) -> SimResult:
-    """Push an object along x with the thrust, arm locked (Thesis Sec. 6.4.3.1).
+@dataclass(frozen=True)
+class PushSettings:
+    """The options of a pushing scenario (:func:`push_thrust`, :func:`push_prismatic`): the push ``distance`` [m] (the
+    thrust's; the slider goes from its lower to its upper limit), the pushing phase ``push`` (start, end) [s], the run's
+    ``duration`` [s], the object's ``object_mass`` [kg] and Coulomb ``friction``, the contact's ``stiffness`` [N/m] and
+    ``damping`` [N s/m], the ``seed``.  Defaults: push-thrust's (:meth:`prismatic` gives push-prismatic's)."""
+
+    distance: float = 0.5
+    push: tuple[float, float] = (2.0, 7.0)
+    duration: float = 12.0
+    object_mass: float = 0.5
+    friction: float = 0.3
+    stiffness: float = PUSH_STIFFNESS
+    damping: float = 20.0
+    seed: int = SEED
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        object.__setattr__(self, "push", as_interval(self.push, "push", lo=0.0))
+
+    @classmethod
+    def prismatic(cls, **fields) -> PushSettings:
+        """push-prismatic's defaults (a 10 s run, a 0.2 kg object), with ``fields`` replacing them."""
+        return cls(**{"duration": 10.0, "object_mass": 0.2, **fields})
+
+
+def push_thrust(platform=None, controller: str = "layered-idc-ft", progress: bool = False, settings: PushSettings | None = None) -> SimResult:
+    """Push an object along x with the thrust, arm locked (Thesis Sec. 6.4.3.1; ``settings``: :class:`PushSettings`).
 
     The Q-PRR hovers at (0, 0, 1) m with the arm at :data:`ARM_PUSH`, its end effector
     touching the object's face; x_d goes 0 -> ``distance`` during ``push`` ((6.16), septic law).
@@ -596,34 +624,25 @@ def push_thrust(
     frictionless line (``friction=0``): the object then only resists its acceleration
     and slides on when the robot decelerates, the contact opening.
     """
+    o = as_settings(settings, PushSettings)
     platform = _q_prr(platform)
-    push = as_interval(push, "push", lo=0.0)
+    push = as_interval(o.push, "push", lo=0.0)
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *ARM_PUSH])
-    trajectory = MultiPhase((Phase("x", push[0], push[1], distance),), tuple(xi0), name="push-thrust", names=NAMES)
-    experiment = PushExperiment(xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    trajectory = MultiPhase((Phase("x", push[0], push[1], o.distance),), tuple(xi0), name="push-thrust", names=NAMES)
+    experiment = PushExperiment(xi0, trajectory, push, o.duration, o.object_mass, o.friction, o.stiffness, o.damping, o.seed)
     return _push(platform, controller, progress, experiment)
 
 
-def push_prismatic(
-    platform=None,
-    controller: str = "layered-idc-ft",
-    progress: bool = False,
-    *,
-    push=(2.0, 7.0),
-    duration: float = 10.0,
-    object_mass: float = 0.2,
-    friction: float = 0.3,
-    stiffness: float = PUSH_STIFFNESS,
-    damping: float = 20.0,
-    seed: int = SEED,
-) -> SimResult:
-    """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2)."""
+def push_prismatic(platform=None, controller: str = "layered-idc-ft", progress: bool = False, settings: PushSettings | None = None) -> SimResult:
+    """Push an object with the slider from r0 = -0.04 m to +0.04 m while the rotors hold the pose (Thesis Sec. 6.4.3.2;
+    ``settings``: :class:`PushSettings`, default :meth:`PushSettings.prismatic`; its ``distance`` is not used)."""
+    o = PushSettings.prismatic() if settings is None else as_settings(settings, PushSettings)
     platform = _q_prr(platform)
-    push = as_interval(push, "push", lo=0.0)
+    push = as_interval(o.push, "push", lo=0.0)
     lo, hi = params_of(platform).r0_limits
     xi0 = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, lo, ARM_PUSH[1], ARM_PUSH[2]])
     trajectory = MultiPhase((Phase("r0", push[0], push[1], hi),), tuple(xi0), name="push-prismatic", names=NAMES)
-    experiment = PushExperiment(xi0, trajectory, push, duration, object_mass, friction, stiffness, damping, seed)
+    experiment = PushExperiment(xi0, trajectory, push, o.duration, o.object_mass, o.friction, o.stiffness, o.damping, o.seed)
     return _push(platform, controller, progress, experiment)
 
 
@@ -662,21 +681,32 @@ def _push(platform, controller, progress, experiment: PushExperiment) -> SimResu
 IMPEDANCE_CONTROLLERS = ("impedance", "impedance-table-6.7", "idc")
 
 
-def impedance(
-    platform=None,
-    controller: str = "impedance",
-    progress: bool = False,
-    *,
-    h_b=(0.2, 0.0, 0.0, 0.0),
-    h_q=(0.05, 0.01, 0.05),
-    t_on: float = 0.0,
-    t_off: float = 18.0,
-    duration: float = 25.0,
-    arm=ARM_PUSH,
-    impedance_gains=None,
-    seed: int = SEED,
-) -> SimResult:
-    """Interaction forces from ``t_on`` to ``t_off`` on a hovering Q-PRR under impedance control (Thesis Sec. 6.4.3.4).
+@dataclass(frozen=True)
+class ImpedanceSettings:
+    """The options of ``impedance`` (:func:`impedance`): the base force ``h_b`` on [x, y, z, psi] (N, N, N, N m) and
+    the end-effector force ``h_q`` [N], applied from ``t_on`` to ``t_off`` [s]; the run's ``duration`` [s]; the
+    hovering ``arm`` posture; ``impedance_gains`` (:class:`~qprr.control.impedance.ImpedanceGains`; None: the
+    thesis's filters) and the ``seed``."""
+
+    h_b: tuple[float, float, float, float] = (0.2, 0.0, 0.0, 0.0)
+    h_q: tuple[float, float, float] = (0.05, 0.01, 0.05)
+    t_on: float = 0.0
+    t_off: float = 18.0
+    duration: float = 25.0
+    arm: tuple[float, float, float] = ARM_PUSH
+    impedance_gains: ImpedanceGains | None = None
+    seed: int = SEED
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        as_real(self.duration, "duration", positive=True, unit="s")
+        for key, n in (("h_b", 4), ("h_q", 3), ("arm", 3)):
+            object.__setattr__(self, key, tuple(as_vector(self.__dict__[key], n, key).tolist()))
+
+
+def impedance(platform=None, controller: str = "impedance", progress: bool = False, settings: ImpedanceSettings | None = None) -> SimResult:
+    """Interaction forces from ``t_on`` to ``t_off`` on a hovering Q-PRR under impedance control (Thesis Sec. 6.4.3.4;
+    the fields of ``settings``, an :class:`ImpedanceSettings`).
 
     ``h_b`` = generalised force on [x, y, z, psi] of the base (N, N, N, N m), applied as the
     disturbance (6.28) pulse; ``h_q`` = force on the end effector [N, world axes] (the moments
@@ -684,10 +714,12 @@ def impedance(
     controller measures both exactly.  Controllers: "impedance" (stable gains), "impedance-
     table-6.7" (printed impedance gains: the slider reference saturates), "idc" (no compliance).
     """
+    o = as_settings(settings, ImpedanceSettings)
+    t_on, t_off, impedance_gains = o.t_on, o.t_off, o.impedance_gains
     platform = _q_prr(platform)
-    arm = tuple(params_of(platform).lower_limits * 0.0 + platform.check_arm_limits(arm, "arm"))
-    hb = as_vector(h_b, 4, "h_b").copy()
-    hq = np.concatenate([as_vector(h_q, 3, "h_q"), np.zeros(3)])
+    arm = tuple(params_of(platform).lower_limits * 0.0 + platform.check_arm_limits(o.arm, "arm"))
+    hb = as_vector(o.h_b, 4, "h_b").copy()
+    hq = np.concatenate([as_vector(o.h_q, 3, "h_q"), np.zeros(3)])
     ee = PrescribedWrench(hq, t_on, t_off)
 
     def base_sensor(t: float) -> np.ndarray:
@@ -699,16 +731,16 @@ def impedance(
     xi0 = (0.0, 0.0, 1.0, 0.0, 0.0, 0.0, *arm)
     imp = gains.impedance_filters() if impedance_gains is None else impedance_gains
     builders = {
-        "impedance": lambda: ImpedanceController(platform, gains.impedance(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
+        "impedance": lambda: ImpedanceController(platform, gains.impedance_idc(), imp, ee_sensor=ee.measured, base_sensor=base_sensor),
         "impedance-table-6.7": lambda: ImpedanceController(
-            platform, gains.impedance(), gains.impedance_table_6_7(), ee_sensor=ee.measured, base_sensor=base_sensor
+            platform, gains.impedance_idc(), gains.impedance_table_6_7(), ee_sensor=ee.measured, base_sensor=base_sensor
         ),
         "idc": lambda: InverseDynamicsController(platform, gains.idc()),
     }
     if controller not in builders:
         raise UnknownNameError("controller", controller, IMPEDANCE_CONTROLLERS)
     ctrl = builders[controller]()
-    res = simulate(platform, ctrl, Hold(xi0), duration, external_wrench=ee, disturbance=pulse, seed=seed, progress=progress, scenario="impedance")
+    res = simulate(platform, ctrl, Hold(xi0), o.duration, external_wrench=ee, disturbance=pulse, seed=o.seed, progress=progress, scenario="impedance")
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
     res.metrics["t_off"] = float(t_off)
@@ -911,19 +943,26 @@ def summary(result: SimResult) -> list[str]:
     return lines
 
 
-def _interaction(fn: Callable) -> Callable:
-    @functools.wraps(fn)  # its signature tells Scenario.takes_plant
+def _interaction(fn: Callable, settings_of: Callable) -> Callable:
+    """The registry's runner of ``fn(platform, controller, progress, settings)``: the options :meth:`Scenario.run
+    <qprr.scenarios.Scenario.run>` passes by name, gathered by ``settings_of`` (a settings class or constructor)."""
+
     def runner(platform, controller, progress, **options):
-        return fn(platform, controller, progress, **options)
+        return fn(platform, controller, progress, settings_of(**options))
 
     return runner
+
+
+def _payload_drop_runner(platform, controller, progress, plant=None, **options):
+    """The registry's runner of :func:`payload_drop`; its ``plant`` argument tells :attr:`Scenario.takes_plant`."""
+    return payload_drop(platform, controller, progress, PayloadDropSettings(**options), plant)
 
 
 INTERACTION_SCENARIOS = (
     Scenario(
         "payload-drop",
         "carry 0.1 kg at the end effector, release it at 18 s (payload IDC)",
-        _interaction(payload_drop),
+        _payload_drop_runner,
         PAYLOAD_CONTROLLERS,
         {
             "mass": Option(0.1, "payload mass [kg]"),
@@ -941,7 +980,7 @@ INTERACTION_SCENARIOS = (
     Scenario(
         "push-thrust",
         "push a 0.5 kg object 0.5 m with the thrust, arm locked",
-        _interaction(push_thrust),
+        _interaction(push_thrust, PushSettings),
         PUSH_CONTROLLERS,
         {
             "distance": Option(0.5, "push distance [m]"),
@@ -960,7 +999,7 @@ INTERACTION_SCENARIOS = (
     Scenario(
         "push-prismatic",
         "push a 0.2 kg object with the slider while hovering",
-        _interaction(push_prismatic),
+        _interaction(push_prismatic, PushSettings.prismatic),
         PUSH_CONTROLLERS,
         {
             "duration": Option(10.0, "run length [s]"),
@@ -978,7 +1017,7 @@ INTERACTION_SCENARIOS = (
     Scenario(
         "impedance",
         "interaction forces on a hovering Q-PRR under impedance control",
-        _interaction(impedance),
+        _interaction(impedance, ImpedanceSettings),
         IMPEDANCE_CONTROLLERS,
         {
             "t_on": Option(0.0, "forces on [s]"),

@@ -16,17 +16,19 @@
   :class:`~qprr.errors.MissingDependencyError`.
 """
 
-from .animation import AnimationInfo, animate, animate_result
+from .animation import AnimationInfo, AnimationOptions, animate, animate_result
 from .geometry import primitive_visual_model, visual_model
 from .ikpath import IKPath, ik_levels, ik_path, ik_solve
-from .plots import figure_path, fit_texts, new_figure, plot_result
+from .plots import PlotOptions, figure_path, fit_texts, new_figure, plot_result
 from .run import RunLog, load_run
 from .scene import HoverReport, RobotPose, hover_report, robot_pose
 
 __all__ = [
     "AnimationInfo",
+    "AnimationOptions",
     "HoverReport",
     "IKPath",
+    "PlotOptions",
     "RobotPose",
     "RunLog",
     "animate",

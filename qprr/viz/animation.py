@@ -22,10 +22,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import charts as ch
-from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError
+from ..errors import InputError, MissingDependencyError, NonFiniteError, ShapeError, UnknownNameError
 from ..model import Platform
 from ..progress import Progress
-from ..validation import as_array, as_real
+from ..validation import as_array, as_real, as_settings, as_vector
 from .geometry import characteristic_length, rotor_radius
 from .scene import RobotPose, arm_chain, robot_pose
 
@@ -273,10 +273,10 @@ class _Look:
 
 def _pixels(size) -> tuple[int, int]:
     """(width, height) [px] of the video, each between 16 and 4096."""
-    try:
-        width, height = (int(size[0]), int(size[1]))
-    except (TypeError, ValueError, IndexError):
-        raise InputError(f"size must be (width, height) in pixels, got {size!r}") from None
+    v = as_vector(size, 2, "size (width, height) in pixels")
+    if not np.all(np.isfinite(v)):
+        raise InputError(f"size must be (width, height) in pixels, got {size!r}")
+    width, height = int(v[0]), int(v[1])
     if not (16 <= width <= 4096 and 16 <= height <= 4096):
         raise InputError(f"size must be between 16 and 4096 pixels per side, got {size!r}")
     return width, height
@@ -491,24 +491,47 @@ def _write_frames(scene: _Scene, series: _Series, writer, bar) -> None:
         bar.update()
 
 
+@dataclass(frozen=True)
+class AnimationOptions:
+    """How :func:`animate` draws a run (each field also a keyword of :func:`animate`).
+
+    fps : frames per second of the file; ``speed``: run seconds per video second (2: twice as fast).
+    size : (width, height) in pixels.
+    view : "follow" (a cube of half-width ``radius`` [m] centred on the base, default 1.3 x the
+        robot's size) or "fixed" (the whole run).
+    trail : seconds of base and end-effector trail (None: the whole past; 0: none).
+    thrust_scale : metres per newton of the rotor arrows (default: the hover thrust drawn 0.6 x the robot's size);
+        ``force_scale``: of the contact force (default ``thrust_scale``).
+    title : text above the plot (default: the platform's name).  progress : a progress bar on stderr.
+    """
+
+    fps: float = 20.0
+    speed: float = 1.0
+    size: tuple[int, int] = (640, 480)
+    view: str = "follow"
+    radius: float | None = None
+    trail: float | None = None
+    thrust_scale: float | None = None
+    force_scale: float | None = None
+    title: str | None = None
+    progress: bool = False
+
+    def __post_init__(self) -> None:  # what needs no platform to check, checked however the options are built
+        object.__setattr__(self, "fps", _positive("fps", self.fps))
+        object.__setattr__(self, "speed", _positive("speed", self.speed))
+        object.__setattr__(self, "size", _pixels(self.size))
+        if self.view not in VIEWS:
+            raise UnknownNameError("view", self.view, VIEWS)
+        for key in ("radius", "thrust_scale", "force_scale"):
+            if self.__dict__[key] is not None:
+                object.__setattr__(self, key, _positive(key, self.__dict__[key]))
+        trail = self.trail
+        if trail is not None and not (isinstance(trail, (int, float)) and not isinstance(trail, bool) and math.isfinite(trail) and trail >= 0):
+            raise InputError(f"trail must be None or a number of seconds >= 0, got {trail!r}")
+
+
 def animate(
-    platform: Platform,
-    t,
-    xi,
-    path: str | Path,
-    *,
-    f=None,
-    contact_force_world=None,
-    fps: float = 20.0,
-    speed: float = 1.0,
-    size: tuple[int, int] = (640, 480),
-    view: str = "follow",
-    radius: float | None = None,
-    trail: float | None = None,
-    thrust_scale: float | None = None,
-    force_scale: float | None = None,
-    title: str | None = None,
-    progress: bool = False,
+    platform: Platform, t, xi, path: str | Path, f=None, contact_force_world=None, options: AnimationOptions | None = None, **settings
 ) -> AnimationInfo:
     """Animate a run of ``platform`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg).
 
@@ -521,22 +544,14 @@ def animate(
         f / f_max (green to red).
     contact_force_world : optional (n, 3) force [N] on the end effector, world axes, drawn at the
         end effector with ``force_scale`` m/N (default ``thrust_scale``).
-    fps : frames per second of the file; ``speed``: run seconds per video second (2: twice as fast).
-    size : (width, height) in pixels.
-    view : "follow" (a cube of half-width ``radius`` [m] centred on the base, default 1.3 x the
-        robot's size) or "fixed" (the whole run).
-    trail : seconds of base and end-effector trail (None: the whole past; 0: none).
-    title : text above the plot (default: the platform's name).  progress : a progress bar on stderr.
+    options : an :class:`AnimationOptions` (frame rate, speed, size, view, trail, scales, title, progress), and/or
+        its fields as keywords, which replace the options' (``animate(p, t, xi, "run.gif", fps=10, view="fixed")``).
     """
+    o = as_settings(options, AnimationOptions, "options", **settings)
     t, xi, f, contact = _check_inputs(platform, t, xi, f, contact_force_world)
-    fps, speed = _positive("fps", fps), _positive("speed", speed)
-    if view not in VIEWS:
-        from ..errors import UnknownNameError
-
-        raise UnknownNameError("view", view, VIEWS)
-    size = _pixels(size)
+    fps, speed, size, title, progress = o.fps, o.speed, o.size, o.title, o.progress
     path = Path(path)
-    look = _look(platform, fps, speed, view, radius, trail, thrust_scale, force_scale)
+    look = _look(platform, fps, speed, o.view, o.radius, o.trail, o.thrust_scale, o.force_scale)
     t0 = time.perf_counter()
     series = _series(platform, t, xi, f, contact, fps, speed)
     scene = _Scene(platform, series.poses, look, size)

@@ -1,6 +1,6 @@
 """Command-line entry points of :mod:`qprr.viz`: ``qprr view`` and ``qprr animate``, and the call behind ``--animate``.
 
-:func:`register_cli` adds the two subcommands to ``qprr``'s parser (it imports neither viser nor
+:func:`register_viz_cli` adds the two subcommands to ``qprr``'s parser (it imports neither viser nor
 matplotlib: they load when a command runs).  :func:`animate_to_file` is what a command with an
 ``--animate FILE`` option calls after a run.
 """
@@ -108,7 +108,7 @@ def _cmd_animate(args: argparse.Namespace) -> int:
     return 0
 
 
-def register_cli(sub) -> None:
+def register_viz_cli(sub) -> None:
     """Add ``view`` and ``animate`` to the subparsers ``sub`` of the ``qprr`` command."""
     from ..cli.common import PLATFORM_HELP, add_platform_options, integer, real
 

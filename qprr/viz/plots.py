@@ -49,7 +49,7 @@ from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..registry import SCENARIOS
 from ..sim import SimResult
 from ..sim.result import RUN_FIGURES
-from ..validation import as_int, as_vector
+from ..validation import as_int, as_settings, as_vector
 
 DEG = 180.0 / math.pi
 """Degrees per radian (for figures that choose degrees explicitly; the panels here draw radians)."""
@@ -630,19 +630,44 @@ def _events(ax, events, label: bool) -> None:
             ax.text(te, 0.98, f" {name}", transform=tr, fontsize=7.5, color="0.25", rotation=90, va="top", ha="right")
 
 
-def plot_result(
-    res: SimResult,
-    path: str | Path | None = None,
-    *,
-    panels=None,
-    ax=None,
-    title: str | None = None,
-    figures: Mapping[str, str] | None = None,
-    thrust_bounds: tuple[float, float] | None = None,
-    events: Sequence[tuple[float, str]] = (),
-    ncols: int | None = None,
-    dpi: int = 90,
-):
+@dataclass(frozen=True)
+class PlotOptions:
+    """The page of :func:`plot_result` beyond its panels (each field also a keyword of :func:`plot_result`).
+
+    title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
+    figures : figure numbers per panel name (default: those of the scenario that made the result; pass
+        ``{}`` for none).
+    thrust_bounds : thrust bounds [N] drawn on the ``rotors`` panel (default: the distinct values of the
+        result's ``rotor_bounds``; none for a result that does not record them).
+    events : (time [s], label) pairs drawn as vertical lines on the time panels (a release, a contact).
+    ncols : columns of the page (default 3, or fewer panels).  dpi : of the saved file.
+    """
+
+    title: str | None = None
+    figures: Mapping[str, str] | None = None
+    thrust_bounds: tuple[float, ...] | None = None
+    events: Sequence[tuple[float, str]] = ()
+    ncols: int | None = None
+    dpi: int = 90
+
+    def __post_init__(self) -> None:  # checked however the options are built
+        object.__setattr__(self, "dpi", as_int(self.dpi, "dpi", lo=1))
+        if self.ncols is not None:
+            object.__setattr__(self, "ncols", as_int(self.ncols, "ncols", lo=1))
+        if self.figures is not None and not isinstance(self.figures, Mapping):
+            raise InputError(f"figures must be a mapping panel name -> figure number (or None), got {self.figures!r:.80}")
+        if self.title is not None and not isinstance(self.title, str):
+            raise InputError(f"title must be a string (or None), got {self.title!r:.80}")
+        try:
+            events = tuple((float(te), str(name)) for te, name in self.events)
+        except (TypeError, ValueError):
+            raise InputError(f"events must be (time [s], label) pairs, got {self.events!r:.80}") from None
+        if not all(math.isfinite(te) for te, _ in events):
+            raise InputError(f"events must have finite times, got {self.events!r:.80}")
+        object.__setattr__(self, "events", events)
+
+
+def plot_result(res: SimResult, path: str | Path | None = None, *, panels=None, ax=None, options: PlotOptions | None = None, **settings):
     """Draw ``panels`` of ``res``; save to ``path`` (.png, .pdf, .svg) or return the Figure, or draw into ``ax``.
 
     Parameters
@@ -653,36 +678,30 @@ def plot_result(
     ax : an Axes (one panel) or a sequence of Axes (one per panel) to draw into; the panels are then
         drawn on your figure and nothing is saved (``path`` must be None).  The ``path`` panel needs
         an Axes with ``projection="3d"``.
-    title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
-    figures : figure numbers per panel name (default: those of the scenario that made ``res``; pass
-        ``{}`` for none).
-    thrust_bounds : thrust bounds [N] drawn on the ``rotors`` panel (default: the distinct values of the
-        result's ``rotor_bounds``; none for a result that does not record them).
-    events : (time [s], label) pairs drawn as vertical lines on the time panels (a release, a contact).
-    ncols : columns of the page (default 3, or fewer panels).
+    options : a :class:`PlotOptions` (title, figure numbers, thrust bounds, events, columns, dpi), and/or its fields
+        as keywords, which replace the options' (``plot_result(res, "run.png", thrust_bounds=(0.5, 15.0))``).
 
     Returns
     -------
     The ``path`` when given; with ``ax``, the Axes' Figure; else a new Figure.
     """
+    o = as_settings(options, PlotOptions, "options", **settings)
     _check_res(res)
-    dpi = as_int(dpi, "dpi", lo=1)
     chosen = _chosen_panels(res, panels)
-    figures = scenario_figures(res) if figures is None else dict(figures)
-    draw = _PanelDrawer(res, figures, thrust_bounds, tuple((float(te), str(name)) for te, name in events))
+    figures = scenario_figures(res) if o.figures is None else dict(o.figures)
+    draw = _PanelDrawer(res, figures, o.thrust_bounds, o.events)
     if ax is not None:
         if path is not None:
             raise InputError("plot_result: give either ax (draw into your Axes) or path (save a new figure), not both")
         return _draw_into(ax, chosen, draw)
-    fig = _page(chosen, draw, ncols)
-    if title is None:
-        title = default_title(res)
+    fig = _page(chosen, draw, o.ncols)
+    title = default_title(res) if o.title is None else o.title
     if title:  # wrapped to the page: a single panel's page is narrower than the RMSE line
         n = len(chosen)
         fig.suptitle(wrap_title(title, fig.get_figwidth(), 10.5 if n > 1 else 9), fontsize=10.5 if n > 1 else 9)
     if path is None:
         return fig
-    return save_figure(fig, path, dpi)
+    return save_figure(fig, path, o.dpi)
 
 
 RUN_FIGURES.register(RUN_FIGURES.default, plot_result)  # SimResult.plot() (its entry point names it too)

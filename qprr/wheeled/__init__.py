@@ -14,7 +14,7 @@ slide to the function and test implementing it.
 from .chassis import ICR, AckermannSteering, Mobility, WheeledRobot, admissible_types, wheel_at
 from .kinematics import KinematicModel
 from .robots import ROBOTS, TYPE_EXAMPLES, get_robot, tricycle_exercise
-from .sim import WheeledSimResult, simulate
+from .sim import WheeledSimResult, simulate_wheeled
 from .wheels import CentredSteerableWheel, FixedWheel, OffCentredSteerableWheel, SwedishWheel
 
 __all__ = [
@@ -32,7 +32,7 @@ __all__ = [
     "WheeledSimResult",
     "admissible_types",
     "get_robot",
-    "simulate",
+    "simulate_wheeled",
     "tricycle_exercise",
     "wheel_at",
 ]

@@ -9,7 +9,7 @@ from ..errors import MissingDependencyError, QprrError
 
 
 def _cmd_wheeled(args: argparse.Namespace) -> int:
-    from .demos import catalogue, run
+    from .demos import catalogue, run_demo
 
     names = catalogue()
     if args.name not in names:
@@ -22,7 +22,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     except ValueError as exc:
         return fail("qprr wheeled", str(exc))
     try:
-        demo = run(args.name)
+        demo = run_demo(args.name)
     except MissingDependencyError as err:
         print(f"qprr wheeled: error: {err}", file=sys.stderr)
         return 2
@@ -38,7 +38,7 @@ def _cmd_wheeled(args: argparse.Namespace) -> int:
     return 0 if demo.ok else 1
 
 
-def register_cli(subparsers) -> None:
+def register_wheeled_cli(subparsers) -> None:
     """Add ``wheeled`` to the ``qprr`` command line."""
     from .demos import catalogue
 

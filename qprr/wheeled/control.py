@@ -20,7 +20,7 @@ law                         source
                             1993, pp. 700-716 (chained form of the car: De Luca et al. 1998, Sec. 2)
 ==========================  ===========================================================================
 
-A controller is called by :func:`qprr.wheeled.sim.simulate` as ``u = ctrl.control(t, q, dt)``
+A controller is called by :func:`qprr.wheeled.sim.simulate_wheeled` as ``u = ctrl.control(t, q, dt)``
 once per step (the input is then held over dt); ``reset()`` clears its internal state.
 The equations are written here from those sources (notation adapted); gains are arguments.
 """
@@ -113,7 +113,7 @@ def reference_posture(ref, t: float) -> tuple[float, float, float, float, float]
 
 
 class FeedbackLaw(ABC):
-    """A feedback law for :func:`qprr.wheeled.sim.simulate`: ``control(t, q, dt)`` returns the inputs at time ``t`` [s]
+    """A feedback law for :func:`qprr.wheeled.sim.simulate_wheeled`: ``control(t, q, dt)`` returns the inputs at time ``t`` [s]
     and state ``q``; :meth:`reset` forgets a previous run (the simulator calls it at the start; default: nothing)."""
 
     @abstractmethod

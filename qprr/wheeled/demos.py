@@ -1,6 +1,6 @@
 """Runnable catalogue of the lecture: robots, exercises, control laws and mobile manipulation.
 
-``run(name)`` returns a :class:`Demo`: the text ``qprr wheeled NAME`` prints, and a function
+``run_demo(name)`` returns a :class:`Demo`: the text ``qprr wheeled NAME`` prints, and a function
 that saves the figure (``--plot FILE.png``).  The catalogue is the single list the command
 line, the docs figures and the tests iterate over.
 """
@@ -31,7 +31,7 @@ from .robots import (
     icr_offset,
     tricycle_exercise,
 )
-from .sim import chord_slip, euler_step, rk4_step, simulate
+from .sim import chord_slip, euler_step, rk4_step, simulate_wheeled
 
 
 @dataclass
@@ -80,7 +80,7 @@ _PROGRAMS: dict[str, Callable[[float, np.ndarray], tuple]] = {
 def _robot_demo(name: str) -> Demo:
     model = get_robot(name)
     q0 = np.zeros(model.n)
-    res = simulate(model, q0, _PROGRAMS[name], 20.0, 0.02)
+    res = simulate_wheeled(model, q0, _PROGRAMS[name], 20.0, 0.02)
     mob = model.robot.mobility()
     sig = np.full(model.robot.n_steering, 0.3)
     icr = model.robot.icr(sig)
@@ -325,8 +325,8 @@ def _unicycle_tracking_demo() -> Demo:
     ref = ctl.Lemniscate()
     m = get_robot("unicycle")
     runs = {
-        "Kanayama": simulate(m, [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 60.0, 0.01),
-        "point offset b = 0.2 m": simulate(m, [0.5, -0.6, 0.4], ctl.PointTracking(ref), 60.0, 0.01),
+        "Kanayama": simulate_wheeled(m, [0.5, -0.6, 0.4], ctl.KanayamaTracking(ref), 60.0, 0.01),
+        "point offset b = 0.2 m": simulate_wheeled(m, [0.5, -0.6, 0.4], ctl.PointTracking(ref), 60.0, 0.01),
     }
     errs = {}
     for k, r in runs.items():
@@ -358,7 +358,7 @@ def _unicycle_tracking_demo() -> Demo:
 def _unicycle_posture_demo() -> Demo:
     m = get_robot("unicycle")
     starts = [(-2.0, 1.5, 0.5), (-2.0, -1.0, -2.5), (1.5, 1.5, 3.0), (0.0, 1.0, 0.0)]
-    runs = [simulate(m, s, ctl.PosturePolar([0.0, 0.0, 0.0]), 30.0, 0.01) for s in starts]
+    runs = [simulate_wheeled(m, s, ctl.PosturePolar([0.0, 0.0, 0.0]), 30.0, 0.01) for s in starts]
     lines = ["posture regulation to (0, 0, 0) in polar coordinates (Aicardi et al. 1995), 30 s:"]
     lines += [f"  from {_fmt(s)}: final {_fmt(r.q[-1])}" for s, r in zip(starts, runs)]
     lines.append("(0, 1, 0): the goal straight to the side, the case no smooth static feedback can handle (Brockett)")
@@ -377,7 +377,7 @@ def _unicycle_posture_demo() -> Demo:
 def _car_tracking_demo() -> Demo:
     ref = ctl.Lemniscate(a=4.5, w=0.15)
     car = Car()
-    r = simulate(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 60.0, 0.01)
+    r = simulate_wheeled(car, [0.3, -0.4, 0.6, 0.0], ctl.CarTracking(ref, car.D), 60.0, 0.01)
     e = np.linalg.norm(r.q[:, :2] - np.array([ref.derivatives(t)[0] for t in r.t]), axis=1)
     lines = [
         f"car (D = {car.D} m) on a figure-eight (a = {ref.a} m), dynamic feedback linearisation, poles at -1.5 1/s:",
@@ -406,7 +406,7 @@ def _car_parking_demo() -> Demo:
     car = Car()
     goal = np.array([0.0, 1.0, 0.0, 0.0])
     pk = ctl.SinusoidalParking(goal, car.D)
-    r = simulate(car, [0.0, 0.0, 0.0, 0.0], pk, pk.duration, 0.01)
+    r = simulate_wheeled(car, [0.0, 0.0, 0.0, 0.0], pk, pk.duration, 0.01)
     lines = [
         f"parallel parking of the car 1 m to the left by sinusoids in chained form (3 phases of {pk.T:g} s), dt = 0.01 s:",
         f"  {r.status.value}; final q = {_fmt(r.q[-1])}, posture error {np.linalg.norm(r.q[-1] - goal):.1e}; "
@@ -503,7 +503,7 @@ def catalogue() -> dict[str, str]:
     return out
 
 
-def run(name: str) -> Demo:
+def run_demo(name: str) -> Demo:
     """Run the catalogue entry ``name`` (a robot of :data:`~qprr.wheeled.robots.ROBOTS` or an exercise)."""
     if name in ROBOTS:
         return _robot_demo(name)
@@ -512,4 +512,4 @@ def run(name: str) -> Demo:
     raise UnknownNameError("wheeled robot or exercise", name, tuple(ROBOTS) + tuple(EXERCISES))
 
 
-__all__ = ["EXERCISES", "Demo", "catalogue", "run"]
+__all__ = ["EXERCISES", "Demo", "catalogue", "run_demo"]

@@ -260,7 +260,7 @@ class MobileIKOptions:
         )
 
 
-def make_options(options=None) -> MobileIKOptions:
+def make_mobile_ik_options(options=None) -> MobileIKOptions:
     """Options from None, a :class:`MobileIKOptions` or a dict of overrides (unknown keys raise)."""
     if options is None:
         return MobileIKOptions()
@@ -315,7 +315,7 @@ def step_solver(robot: MobileManipulator, options=None) -> Lexicographic:
     It owns its QPs and warm starts: :func:`solve_ik` builds one per call (results depend on the
     inputs only).  A level it cannot solve raises :class:`~qprr.errors.SolverError`.
     """
-    opts = make_options(options)
+    opts = make_mobile_ik_options(options)
     return Lexicographic(
         robot.nz,
         settings=opts.qp_settings(),
@@ -330,7 +330,7 @@ def lookahead_solver(robot: MobileManipulator, options=None) -> Lexicographic:
     """The engine of :func:`lookahead_steering`: bounded least squares (one level) over (drive input, arm rates),
     with ``options``' QP settings and a damping of 1e-12 (the smallest minimiser; the residual it compares is
     unaffected)."""
-    opts = make_options(options)
+    opts = make_mobile_ik_options(options)
     return Lexicographic(
         1 + robot.nv_arm,
         settings=opts.qp_settings(),
@@ -407,7 +407,7 @@ def step_problem(robot: MobileManipulator, z, target, options=None, *, lookahead
 
     ``lookahead``: the solver of :func:`lookahead_steering` (default :func:`lookahead_solver`).
     """
-    opts = make_options(options)
+    opts = make_mobile_ik_options(options)
     p_t = as_vector(target, 3, "target (world position)")
     z = robot.check_z(z)
     base, nb, nz = robot.base, robot.n_base, robot.nz
@@ -465,7 +465,7 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
     """
     if not isinstance(robot, MobileManipulator):
         raise InputError(f"robot must be a MobileManipulator, got {type(robot).__name__}")
-    opts = make_options(options)
+    opts = make_mobile_ik_options(options)
     p_t = as_vector(target, 3, "target (world position)")
     z = robot.check_z(z0, "z0").copy()
     if not robot.within_limits(z):
@@ -533,7 +533,7 @@ def solve_ik(robot: MobileManipulator, target, z0, options=None) -> MobileIKResu
 
 # ============================================================================ scenario
 @dataclass(frozen=True)
-class Scenario:
+class MobileScenario:
     """The lecture's manoeuvre: a target beside a car-like robot (or any base), out of the arm's reach."""
 
     robot: MobileManipulator
@@ -542,7 +542,7 @@ class Scenario:
     description: str
 
 
-def car_scenario(arm: str = "qprr") -> Scenario:
+def car_scenario(arm: str = "qprr") -> MobileScenario:
     """Car (D = 0.5 m, front track 0.4 m, |psi| <= 0.6 rad) with an arm on its front bumper
     (0.6 m ahead of the rear axle, 0.3 m high), at the origin heading +x; target 1.2 m to
     the left, 1.0 m ahead, 0.5 m high.
@@ -558,7 +558,8 @@ def car_scenario(arm: str = "qprr") -> Scenario:
         raise UnknownNameError("arm", arm, tuple(arms))
     make, frame = arms[arm]
     mm = MobileManipulator(Car(), make(), frame, pin.SE3(np.eye(3), np.array([0.6, 0.0, 0.3])))
-    return Scenario(mm, mm.neutral(), np.array([1.0, 1.2, 0.5]), f"car + {arm} arm: target 1.2 m to the left of the chassis, beyond the arm's reach")
+    text = f"car + {arm} arm: target 1.2 m to the left of the chassis, beyond the arm's reach"
+    return MobileScenario(mm, mm.neutral(), np.array([1.0, 1.2, 0.5]), text)
 
 
 __all__ = [
@@ -566,12 +567,12 @@ __all__ = [
     "MobileIKOptions",
     "MobileIKResult",
     "MobileManipulator",
-    "Scenario",
+    "MobileScenario",
     "StepProblem",
     "car_scenario",
     "lookahead_solver",
     "lookahead_steering",
-    "make_options",
+    "make_mobile_ik_options",
     "qprr_arm",
     "solve_ik",
     "step_problem",

@@ -34,7 +34,7 @@ from ..validation import as_real, checked_args
 from ._backend import exact, is_symbolic, matrix
 from .chassis import AckermannSteering, Mobility, NamedSteering, SynchroSteering, WheeledRobot, wheel_at
 from .kinematics import KinematicModel, check_duration
-from .sim import WheeledSimResult, heading_quadrature, se2_flow, simulate, sinc
+from .sim import WheeledSimResult, heading_quadrature, se2_flow, simulate_wheeled, sinc
 from .wheels import CentredSteerableWheel, FixedWheel, OffCentredSteerableWheel, SwedishWheel
 
 
@@ -545,7 +545,7 @@ def tricycle_exercise(case: str, drive: str = "rear", *, duration: float = 30.0,
     if drive not in models:
         raise UnknownNameError("tricycle drive", drive, tuple(models))
     model = models[drive](D=D)
-    res = simulate(model, TRICYCLE_Q0, TRICYCLE_CASES[case], duration, dt)
+    res = simulate_wheeled(model, TRICYCLE_Q0, TRICYCLE_CASES[case], duration, dt)
     res.extras["case"] = case
     return res
 

@@ -10,7 +10,7 @@ its constraint residual A^T(q(t)) q_dot(t) is zero up to round-off at every inst
 only at the samples.  A general-purpose integrator (Euler, RK4) instead follows chords that
 no wheel can roll along; :func:`rk4_step` is kept to measure that slip.
 
-``simulate(model, q0, inputs, duration, dt)``: ``inputs`` is a constant input vector, an
+``simulate_wheeled(model, q0, inputs, duration, dt)``: ``inputs`` is a constant input vector, an
 array with one row per step, a callable ``u = f(t, q)`` or a :class:`~qprr.wheeled.control.FeedbackLaw`
 (``control(t, q, dt)``: controllers with an internal state, :mod:`qprr.wheeled.control`).
 """
@@ -161,7 +161,7 @@ def _input_source(model: KinematicModel, inputs, n_steps: int):
     )
 
 
-def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.01, *, progress: bool = False) -> WheeledSimResult:
+def simulate_wheeled(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.01, *, progress: bool = False) -> WheeledSimResult:
     """Simulate ``model`` from ``q0`` for ``duration`` seconds with steps of ``dt`` (zero-order hold).
 
     Each step is the model's exact flow (see the module docstring).  When the motion
@@ -224,4 +224,4 @@ def simulate(model: KinematicModel, q0, inputs, duration: float, dt: float = 0.0
     )
 
 
-__all__ = ["SimStatus", "WheeledSimResult", "chord_slip", "euler_step", "heading_quadrature", "rk4_step", "se2_flow", "simulate", "sinc"]
+__all__ = ["SimStatus", "WheeledSimResult", "chord_slip", "euler_step", "heading_quadrature", "rk4_step", "se2_flow", "simulate_wheeled", "sinc"]

@@ -33,7 +33,7 @@ def read_table(path: str | Path) -> Results:
     return read_results(path)
 
 
-def evaluate(
+def evaluate_points(
     backend: Backend,
     fn: Callable,
     spec_dict: dict,
@@ -60,7 +60,7 @@ __all__ = [
     "Results",
     "Session",
     "close_backend",
-    "evaluate",
+    "evaluate_points",
     "metrics_of",
     "open_backend",
     "read_table",

@@ -106,7 +106,7 @@ class _Study:
                 be = self.session.backend()
                 self.bar.message(f"{self.bar.total - self.bar.done} designs to evaluate on {be.describe()}")
             on_error = functools.partial(_error_row, self.spec)
-            io.evaluate(be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row, on_error)
+            io.evaluate_points(be, evaluate_design, self.spec.to_dict(), todo, self.spec.fingerprint, self.on_row, on_error)
         return [self.rows[p["run"]] for p in points]
 
 

@@ -30,7 +30,7 @@ def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, 
         return []
     be, owned = io.open_backend(backend, workers, scheduler)
     try:
-        io.evaluate(
+        io.evaluate_points(
             be,
             fly_design,
             spec.to_dict(),
@@ -63,7 +63,7 @@ def _flight_table(rows: list[dict], fl: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def report(results, out=None, *, top: int | None = None, fly: bool = True, backend="inline", workers=None, scheduler=None):
+def design_report(results, out=None, *, top: int | None = None, fly: bool = True, backend="inline", workers=None, scheduler=None):
     """Ranked table (Markdown text) and, with ``out``, ``summary.md``, ``ranking.csv``, ``closed_loop.csv`` and the figures.
 
     ``top``: designs flown in the closed-loop check (default the study's ``closed_loop.top``; the

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ._check import fail, number, table_keys
+from ._check import number, spec_error, table_keys
 
 MATERIALS = {"carbon": 0.10, "aluminium": 0.25, "pla": 0.18}
 """Linear density [kg/m] of an arm link of each material (a 20 mm tube with its end fittings; chosen)."""
@@ -33,7 +33,7 @@ class MassModel:
 
     def __post_init__(self) -> None:  # checked however it is built (from_mapping or directly)
         if self.mode not in MODES:
-            fail("mass.mode", self.mode, f"one of {', '.join(MODES)}")
+            spec_error("mass.mode", self.mode, f"one of {', '.join(MODES)}")
         for k in ("body", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density"):
             object.__setattr__(self, k, number(getattr(self, k), f"mass.{k}", lo=0.0, positive=(k == "body")))
 
@@ -51,13 +51,13 @@ class MassModel:
         out = {}
         mode = d.get("mode", "equal-total")
         if mode not in MODES:
-            fail("mass.mode", mode, f"one of {', '.join(MODES)}")
+            spec_error("mass.mode", mode, f"one of {', '.join(MODES)}")
         out["mode"] = mode
         if "material" in d and "link_density" in d:
-            fail("mass.material", d["material"], "give material or link_density, not both")
+            spec_error("mass.material", d["material"], "give material or link_density, not both")
         if "material" in d:
             if d["material"] not in MATERIALS:
-                fail("mass.material", d["material"], f"one of {', '.join(MATERIALS)} (or link_density in kg/m)")
+                spec_error("mass.material", d["material"], f"one of {', '.join(MATERIALS)} (or link_density in kg/m)")
             out["link_density"] = MATERIALS[d["material"]]
         for k in ("body", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density"):
             if k in d:

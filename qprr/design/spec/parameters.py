@@ -27,7 +27,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 
-from ._check import fail, number
+from ._check import number, spec_error
 
 PARAMETERS = {
     "reach": ("m", 0.28, (0.05, 2.0)),
@@ -65,23 +65,23 @@ def parse_parameter(name: str, value) -> Parameter:
     """A ``[parameters]`` entry checked against :data:`PARAMETERS` (errors name the key, the value and the fix)."""
     key = f"parameters.{name}"
     if name not in PARAMETERS:
-        fail(key, value, f"a parameter among {', '.join(PARAMETERS)}")
+        spec_error(key, value, f"a parameter among {', '.join(PARAMETERS)}")
     unit, _, (lo, hi) = PARAMETERS[name]
     unit = f" {unit}" if unit else ""
     if isinstance(value, Mapping):
         if set(value) != {"low", "high"}:
-            fail(key, dict(value), "a range {low = a, high = b}")
+            spec_error(key, dict(value), "a range {low = a, high = b}")
         a = number(value["low"], f"{key}.low", lo=lo, hi=hi)
         b = number(value["high"], f"{key}.high", lo=lo, hi=hi)
         if not a < b:
-            fail(key, dict(value), f"low < high (in{unit})")
+            spec_error(key, dict(value), f"low < high (in{unit})")
         return Parameter(name, (), a, b)
     if isinstance(value, (list, tuple)):
         if not value:
-            fail(key, value, "at least one value")
+            spec_error(key, value, "at least one value")
         vals = tuple(number(v, key, lo=lo, hi=hi) for v in value)
         if len(set(vals)) != len(vals):
-            fail(key, list(value), "distinct values")
+            spec_error(key, list(value), "distinct values")
         return Parameter(name, vals)
     return Parameter(name, (number(value, key, lo=lo, hi=hi),))
 

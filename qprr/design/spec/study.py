@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from ...errors import QprrError
 from ...platforms import PLATFORMS
 from ...validation import as_file
-from ._check import fail, integer, number, table_keys
+from ._check import number, spec_error, spec_integer, table_keys
 from .mass import MassModel
 from .metrics import DESIGN_METRICS, RANGES
 from .parameters import Parameter, default_parameters, parse_parameter
@@ -69,8 +69,8 @@ class Effort:
     payload_reach: float = 0.15
 
     def __post_init__(self) -> None:  # checked however it is built (the [effort] table or directly)
-        object.__setattr__(self, "samples", integer(self.samples, "effort.samples", lo=64))
-        object.__setattr__(self, "shifts", integer(self.shifts, "effort.shifts", lo=2))
+        object.__setattr__(self, "samples", spec_integer(self.samples, "effort.samples", lo=64))
+        object.__setattr__(self, "shifts", spec_integer(self.shifts, "effort.shifts", lo=2))
         object.__setattr__(self, "balance_tol", number(self.balance_tol, "effort.balance_tol", positive=True))
         object.__setattr__(self, "payload_reach", number(self.payload_reach, "effort.payload_reach", lo=0.0))
 
@@ -87,11 +87,11 @@ class Search:
 
     def __post_init__(self) -> None:  # checked however it is built (the [search] table or directly)
         if self.method not in SEARCH_METHODS:
-            fail("search.method", self.method, f"one of {', '.join(SEARCH_METHODS)}")
+            spec_error("search.method", self.method, f"one of {', '.join(SEARCH_METHODS)}")
         if self.optimiser not in OPTIMISERS:
-            fail("search.optimiser", self.optimiser, f"one of {', '.join(OPTIMISERS)}")
-        object.__setattr__(self, "population", integer(self.population, "search.population", lo=4))
-        object.__setattr__(self, "generations", integer(self.generations, "search.generations", lo=1))
+            spec_error("search.optimiser", self.optimiser, f"one of {', '.join(OPTIMISERS)}")
+        object.__setattr__(self, "population", spec_integer(self.population, "search.population", lo=4))
+        object.__setattr__(self, "generations", spec_integer(self.generations, "search.generations", lo=1))
 
 
 @dataclass(frozen=True)
@@ -106,11 +106,11 @@ class ClosedLoop:
     def __post_init__(self) -> None:  # checked however it is built (the [closed_loop] table or directly)
         from ...scenarios import SCENARIOS
 
-        object.__setattr__(self, "top", integer(self.top, "closed_loop.top", lo=0))
+        object.__setattr__(self, "top", spec_integer(self.top, "closed_loop.top", lo=0))
         if not isinstance(self.scenario, str) or self.scenario not in SCENARIOS or SCENARIOS[self.scenario].platforms is not None:
-            fail("closed_loop.scenario", self.scenario, "a generic scenario (any platform), e.g. hover-reach")
+            spec_error("closed_loop.scenario", self.scenario, "a generic scenario (any platform), e.g. hover-reach")
         if self.controller not in SCENARIOS[self.scenario].controller_names():
-            fail("closed_loop.controller", self.controller, f"one of {', '.join(SCENARIOS[self.scenario].controller_names())}")
+            spec_error("closed_loop.controller", self.controller, f"one of {', '.join(SCENARIOS[self.scenario].controller_names())}")
         object.__setattr__(self, "duration", number(self.duration, "closed_loop.duration", positive=True))
 
 
@@ -177,14 +177,14 @@ class DesignSpec:
             try:
                 data = tomllib.loads(p.read_text())
             except tomllib.TOMLDecodeError as exc:
-                fail("spec", str(p), f"valid TOML ({exc})")
+                spec_error("spec", str(p), f"valid TOML ({exc})")
         elif p.suffix == ".json":
             try:
                 data = json.loads(p.read_text())
             except json.JSONDecodeError as exc:
-                fail("spec", str(p), f"valid JSON ({exc})")
+                spec_error("spec", str(p), f"valid JSON ({exc})")
         else:
-            fail("spec", str(p), "a .toml or .json file")
+            spec_error("spec", str(p), "a .toml or .json file")
         return cls.from_mapping(data)
 
     @classmethod
@@ -193,8 +193,8 @@ class DesignSpec:
         d = table_keys(data, "", _KEYS)
         name = d.get("name")
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "/\\"):
-            fail("name", name, "a non-empty study name without slashes")
-        seed = integer(d.get("seed", 0), "seed", lo=0)
+            spec_error("name", name, "a non-empty study name without slashes")
+        seed = spec_integer(d.get("seed", 0), "seed", lo=0)
         archs = _architectures(d.get("architectures"))
         refs = _names(d.get("references", []), "references", tuple(PLATFORMS))  # any registered platform, as it is
         objectives = _names(d.get("objectives"), "objectives", tuple(DESIGN_METRICS), need=2)
@@ -207,16 +207,16 @@ class DesignSpec:
         closed = _closed_loop(d.get("closed_loop", {}))
         ranged = [k for k, p in params.items() if p.optimised]
         if search.method == "grid" and ranged:
-            fail(
+            spec_error(
                 f"parameters.{ranged[0]}",
                 params[ranged[0]].to_dict(),
                 'a number or a list for search.method = "grid" (ranges need search.method = "nsga2")',
             )
         if search.method == "nsga2" and not ranged:
-            fail("search.method", "nsga2", 'give at least one parameter as a range {low, high}, or use method = "grid"')
+            spec_error("search.method", "nsga2", 'give at least one parameter as a range {low, high}, or use method = "grid"')
         desc = d.get("description", "")
         if not isinstance(desc, str):
-            fail("description", desc, "a string")
+            spec_error("description", desc, "a string")
         return cls(
             name.strip(), archs, objectives, params, seed, refs, MassModel.from_mapping(d.get("mass", {})), constraints, effort, search, closed, desc
         )
@@ -224,12 +224,12 @@ class DesignSpec:
 
 def _names(value, key: str, valid: tuple[str, ...], need: int = 0) -> tuple[str, ...]:
     if not isinstance(value, (list, tuple)) or len(value) < need:
-        fail(key, value, f"a list of at least {need} names among {', '.join(valid)}" if need else f"a list of names among {', '.join(valid)}")
+        spec_error(key, value, f"a list of at least {need} names among {', '.join(valid)}" if need else f"a list of names among {', '.join(valid)}")
     for v in value:
         if v not in valid:
-            fail(key, v, f"names among {', '.join(valid)}")
+            spec_error(key, v, f"names among {', '.join(valid)}")
     if len(set(value)) != len(value):
-        fail(key, list(value), "each name once")
+        spec_error(key, list(value), "each name once")
     return tuple(value)
 
 
@@ -237,25 +237,25 @@ def _architectures(value) -> tuple[str, ...]:
     from ...nomenclature import UAV_ROTORS, parse
 
     if not isinstance(value, (list, tuple)) or not value:
-        fail("architectures", value, 'a non-empty list of (2.1) names such as ["Q-PRR", "HEX-RRR"]')
+        spec_error("architectures", value, 'a non-empty list of (2.1) names such as ["Q-PRR", "HEX-RRR"]')
     out = []
     for a in value:
         try:
             d = parse(a)
         except QprrError as exc:
-            fail("architectures", a, f"a (2.1) name ({exc})")
+            spec_error("architectures", a, f"a (2.1) name ({exc})")
         if d.n_uav != 1 or d.n_arms != 1 or d.uav not in UAV_ROTORS or set(d.joints) - set("RP") or "R" not in d.joints:
-            fail(
+            spec_error(
                 "architectures",
                 a,
                 "one multirotor (Q, HEX, OCT) and one arm of R and P joints with at least one R "
                 "(qprr.build makes no other; several vehicles or arms, cables and helicopters are not built)",
             )
         if d.joints.count("P") > 1:
-            fail("architectures", a, "at most one P joint (the slider parameters describe one)")
+            spec_error("architectures", a, "at most one P joint (the slider parameters describe one)")
         out.append(d.name.strip().upper())
     if len(set(out)) != len(out):
-        fail("architectures", list(value), "each architecture once")
+        spec_error("architectures", list(value), "each architecture once")
     return tuple(out)
 
 
@@ -264,17 +264,17 @@ def _constraints(value) -> dict:
     for k, v in table_keys(value, "constraints", tuple(DESIGN_METRICS)).items():
         b = table_keys(v, f"constraints.{k}", ("min", "max"))
         if not b:
-            fail(f"constraints.{k}", v, "{min = a} and/or {max = b}")
+            spec_error(f"constraints.{k}", v, "{min = a} and/or {max = b}")
         lo = number(b["min"], f"constraints.{k}.min") if "min" in b else None
         hi = number(b["max"], f"constraints.{k}.max") if "max" in b else None
         if lo is not None and hi is not None and not lo <= hi:
-            fail(f"constraints.{k}", v, "min <= max")
+            spec_error(f"constraints.{k}", v, "min <= max")
         low, high = RANGES[k]
         unit = DESIGN_METRICS[k].unit
         if hi is not None and low is not None and hi < low:
-            fail(f"constraints.{k}.max", hi, f"a bound >= {low:g} {unit}: {k} is never below {low:g}, so max = {hi:g} excludes every design")
+            spec_error(f"constraints.{k}.max", hi, f"a bound >= {low:g} {unit}: {k} is never below {low:g}, so max = {hi:g} excludes every design")
         if lo is not None and high is not None and lo > high:
-            fail(f"constraints.{k}.min", lo, f"a bound <= {high:g}: {k} is never above {high:g}, so min = {lo:g} excludes every design")
+            spec_error(f"constraints.{k}.min", lo, f"a bound <= {high:g}: {k} is never above {high:g}, so min = {lo:g} excludes every design")
         out[k] = (lo, hi)
     return out
 
