@@ -453,6 +453,7 @@ QUALIFIED: list[tuple[str, str, Spec]] = [
     ("qprr.nomenclature.parse", "name", S("Q-PRR", "name")),
     ("qprr.nomenclature.build", "name", S("Q-PRR", "name")),
     ("qprr.scenarios.*", "name", S("hover-reach", "name")),
+    ("qprr.scenarios.missions.MissionSettings", "name", S("", "skip")),  # free text: the run's title ("" keeps the scenario's), no registry name
     ("qprr.scenarios.run", "controller", S("idc", "name")),
     ("qprr.scenarios.Scenario.run", "controller", S("idc", "name")),
     ("qprr.control.make_controller", "name", S("idc", "name")),

@@ -25,8 +25,9 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH = ROOT / "benchmarks"
-HELPERS = {"machine.py"}
-"""Modules the benchmarks import (the machine report), not benchmarks."""
+HELPERS = {"machine.py", "placo_worker.py"}
+"""Scripts the benchmarks import or run, not benchmarks: the machine report, and the IK benchmark's PlaCo worker (it runs
+inside PlaCo's own venv, ``ik_benchmark.py --make-placo-venv``)."""
 NOT_YET_QUICK: dict[str, str] = {}
 """Benchmarks skipped until their branch gives them ``--quick``; the lead empties this list after merging."""
 RATIO = re.compile(r"\bratios?\b.*\d", re.IGNORECASE)
