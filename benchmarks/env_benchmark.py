@@ -10,7 +10,8 @@ For N = 1, 16, 64, 256 copies, measured side by side in this run:
   divided by ``bare`` is the ratio printed (issue 32: at most 1.5 at N = 64);
 * with gymnasium installed (the ``rl`` extra), the vector environment of ``qprr/Hover-v0`` made by
   ``gymnasium.make_vec(..., num_envs=N)``: environment steps per second (each is one control period, several
-  integration steps, with the observation, reward and autoreset);
+  integration steps, with the observation, reward and autoreset), under random actions (an untrained policy: the arm
+  thrown against its stops, crashes, resets) and under a constant action (as RotorPy's rate is measured);
 * with rotorpy installed (the ``peers`` extra does not pin it: ``pip install rotorpy``), its batched quadrotor
   environment at the same N, for scale (a quadrotor without an arm).
 
@@ -77,15 +78,17 @@ def core_step(platform, integrator: str, n: int, steps: int, rounds: int) -> flo
     return best
 
 
-def env_rate(platform_name: str, n: int, steps: int) -> float:
-    """Environment steps per second of ``gymnasium.make_vec("qprr/Hover-v0", num_envs=n)`` under random actions."""
+def env_rate(platform_name: str, n: int, steps: int, random: bool) -> float:
+    """Environment steps per second of ``gymnasium.make_vec("qprr/Hover-v0", num_envs=n)`` under random actions (an
+    untrained policy: arms thrown against their stops, crashes and resets) or under the constant action 0 (every rotor
+    at mid-range thrust, as RotorPy's rate below is measured)."""
     import gymnasium
 
     import qprr.envs  # noqa: F401  (registers the environments)
 
     envs = gymnasium.make_vec("qprr/Hover-v0", num_envs=n, platform=platform_name)
     envs.reset(seed=0)
-    actions = [envs.action_space.sample() for _ in range(8)]
+    actions = [envs.action_space.sample() if random else np.zeros(envs.action_space.shape, dtype=envs.action_space.dtype) for _ in range(8)]
     start = time.perf_counter()
     for k in range(steps):
         envs.step(actions[k % 8])
@@ -136,7 +139,9 @@ def main(argv=None) -> int:
         core = core_step(platform, args.integrator, n, max(10, work // n), rounds)
         line = f"N = {n}: {1.0 / core:,.0f} core-steps/s, {core / bare:.2f} x bare ABA"
         if has_envs:
-            line += f"; {env_rate(args.platform, n, max(5, work // (10 * n))):,.0f} env-steps/s (qprr/Hover-v0, one control period each)"
+            steps = max(5, work // (10 * n))
+            line += f"; {env_rate(args.platform, n, steps, True):,.0f} env-steps/s random actions"
+            line += f", {env_rate(args.platform, n, steps, False):,.0f} constant (qprr/Hover-v0, one control period each)"
         print(line, flush=True)
     if not has_envs:
         print('gymnasium not installed: pip install "qprr[rl]" (the environments\' steps per second)')
