@@ -22,7 +22,7 @@ import numpy as np
 import qprr
 from qprr.analysis import workspace
 from qprr.analysis._common import collision_mask, make_grid
-from qprr.collision import collision_model
+from qprr.analysis.collision import collision_model
 
 PLATFORMS = ("q-prr", "borinot_flying_arm_2", "hextilt_flying_arm_5", "HEX-RRR")
 

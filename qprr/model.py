@@ -544,7 +544,7 @@ class Platform:
 
     def without_joint_friction(self) -> Platform:
         """The same platform with the URDF's joint ``<dynamics damping friction>`` set to zero (a model copy): the plant
-        (:mod:`qprr.joint_friction`) and the controllers then see frictionless joints.  ``self`` when it has none."""
+        (:mod:`qprr.dynamics.friction`) and the controllers then see frictionless joints.  ``self`` when it has none."""
         if not (np.any(self.model.damping) or np.any(self.model.friction)):
             return self
         model = pin.Model(self.model)

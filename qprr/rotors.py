@@ -46,8 +46,8 @@ class Rotor:
     kappa : drag torque per newton of thrust, c/b [m] (>= 0).
     f_min, f_max : thrust bounds [N], 0 <= f_min < f_max.
     name : a label (e.g. the URDF frame of the rotor).
-    radius : propeller radius [m] (the disc the blades sweep, used by :mod:`qprr.collision`); None: not given
-        (:func:`qprr.collision.default_disc_radius` derives one from the rotor spacing).
+    radius : propeller radius [m] (the disc the blades sweep, used by :mod:`qprr.analysis.collision`); None: not given
+        (:func:`qprr.analysis.collision.default_disc_radius` derives one from the rotor spacing).
     """
 
     position_body: tuple[float, float, float]

@@ -1,4 +1,4 @@
-"""Self-collision model (qprr.collision): closed forms, the maps' collision-free numbers, the IK's collision-free option."""
+"""Self-collision model (qprr.analysis.collision): closed forms, the maps' collision-free numbers, the IK's collision-free option."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from hypothesis import strategies as st
 import qprr
 from qprr.analysis import workspace
 from qprr.analysis._common import COLLISION_AUDIT_TOLERANCE, collision_mask, make_grid
+from qprr.analysis.collision import CONTACT_MARGIN, DISC_THICKNESS, collision_model, contacts, default_disc_radius
 from qprr.analysis.hover import hover
-from qprr.collision import CONTACT_MARGIN, DISC_THICKNESS, collision_model, contacts, default_disc_radius
 from qprr.errors import InputError
 from qprr.ik import IKSolver
 from qprr.model import from_model
@@ -102,8 +102,8 @@ def test_screened_check_of_the_default_map_answers_as_every_pair(name, monkeypat
     mask sends to the screened colliding_batch gets the answer of checking every pair one configuration at a time
     (colliding_arm), on a sample of 3000 of them, half from the later batches (the cells straddling the collision
     boundary), contacts included; so the map's masks are those of the unscreened check."""
+    from qprr.analysis.collision import CollisionModel
     from qprr.analysis.workspace import default_variants
-    from qprr.collision import CollisionModel
 
     p = qprr.platforms.resolve(name)
     cm = collision_model(p)

@@ -1,5 +1,5 @@
 """Issue 34 item 1: joint damping and Coulomb friction keep each integrator's order where they are not stiff, and stay
-stable and right where they are (qprr.joint_friction: explicit or implicit per joint from dt x rate).
+stable and right where they are (qprr.dynamics.friction: explicit or implicit per joint from dt x rate).
 
 References: MuJoCo's RK4 at a small step with the same damping and the project's Coulomb law F tanh(v / v_s) added as
 a passive force at every stage (``mujoco`` extra; the MJCF is written here from the Pinocchio model), and, so that the
@@ -33,7 +33,7 @@ import qprr
 import qprr.thesis
 from qprr.charts import xi_to_qv
 from qprr.control.base import Controller
-from qprr.joint_friction import VELOCITY_SCALE, JointFriction, Treatment
+from qprr.dynamics.friction import VELOCITY_SCALE, JointFriction, Treatment
 from qprr.model import Platform
 from qprr.sim import simulate
 from qprr.sim.integrators import ORDERS

@@ -693,7 +693,7 @@ def test_targets_too_far_for_the_tolerance_are_refused(rob, dat, method):
 @given(seed=st.integers(0, 2**31 - 1))
 def test_exact_active_set_step_equals_the_proxqp_step(seed):
     """The hierarchy's step by exact solves on the active set (default) equals the ProxQP + polish step (the two
-    paths of qprr.optim.Lexicographic), joint limits active included."""
+    paths of qprr.actuation.lexicographic.Lexicographic), joint limits active included."""
     rob, dat, q, full = _random_step_problem(seed)
     tasks.update_kinematics(rob, dat, q)
     a = qprr.ik.HierarchySolver(rob, active_set_first=True)

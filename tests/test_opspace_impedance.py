@@ -16,8 +16,8 @@ from qprr.control import InverseDynamicsController, make_controller
 from qprr.control.base import Reference
 from qprr.control.gains import platform_gains
 from qprr.control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
+from qprr.dynamics.friction import JointFriction
 from qprr.errors import InputError, UnknownNameError
-from qprr.joint_friction import JointFriction
 from qprr.kinematics import ee_pose_xi
 from qprr.sim import simulate
 from qprr.sim.contact import PrescribedWrench
@@ -72,7 +72,7 @@ def test_fully_actuated_law_is_khatibs_with_the_operational_space_model():
         a_star = hist["a_star"][-1]
         e, e_dot = hist["e"][-1], m.velocity[0:3] - _ref_velocity(p, ref)
         assert np.allclose(a_star, _ref_acc(p, ref) + np.linalg.solve(imp.mass, h[0:3] - imp.damping @ e_dot - imp.stiffness @ e), atol=1e-10)
-        # the URDF's joint friction is compensated in full at the reference arm rates (qprr.joint_friction), outside the projection
+        # the URDF's joint friction is compensated in full at the reference arm rates (qprr.dynamics.friction), outside the projection
         ff = -JointFriction.from_model(p.model).generalized_force(np.r_[np.zeros(6), ref.xi_dot[6:]])
         khatib = J.T @ (m.Lambda @ a_star + m.mu + m.p) + (np.eye(p.nv) - J.T @ Jbar.T) @ (tau0 - ff) + ff - _J6(p, xi).T @ h
         assert np.abs(tau - khatib).max() < 1e-9 * max(1.0, np.abs(tau).max())
@@ -103,7 +103,7 @@ def test_realised_end_effector_acceleration_is_the_task(name):
     and the measured wrench) moves the end effector by a* along every direction the task coordinates reach."""
     import pinocchio as pin
 
-    p = qprr.load(name).without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_joint_friction.py)
+    p = qprr.load(name).without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_friction.py)
     rng = np.random.default_rng(5)
     for _ in range(4):
         xi = _hover(p, rng.uniform(0.1, 0.5))
@@ -139,7 +139,7 @@ def test_static_deflection_is_K_inverse_h(name):
     Q-PRR along its arm's plane (x to 1e-4; z to 1 %: the roll that holds h_y tilts that plane by h_y / (m g) = 0.5 deg and
     the unserved sideways residual leaks into z by that angle), while sideways the hover loop holds the base and the end
     effector moves only with that lean (2.2 mm here, 15 % of K^-1 h_y)."""
-    p = qprr.load(name).without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_joint_friction.py)
+    p = qprr.load(name).without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_friction.py)
     if name == "q-prr":
         K = np.diag([20.0, 20.0, 30.0])
     else:
@@ -161,7 +161,7 @@ def test_static_deflection_is_K_inverse_h(name):
 def test_sensorless_static_deflection_and_apparent_mass_lambda():
     """Without a sensor (M_d = Lambda of the free system, Khatib's inertia weighting) the static deflection is still
     K^-1 h (fully actuated platform; its lightest end-effector direction weighs 15 g here, so D / Lambda = 500 1/s)."""
-    p = qprr.load("hextilt_flying_arm_5").without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_joint_friction.py)
+    p = qprr.load("hextilt_flying_arm_5").without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_friction.py)
     imp = EndEffectorImpedance(16.0, 8.0, None)
     h = np.array([0.3, 0.2, -0.3])
     hist, res = _push(p, imp, h, duration=5.0, sensor=False, weighting="inertia")
@@ -179,7 +179,7 @@ def _fit(hist, axis, t_on):
 def test_natural_frequency_and_damping_converge_at_first_order_in_the_control_period():
     """Fully actuated hexarotor, force step along x: the fitted (omega_n, zeta) approach the impedance's (4 rad/s, 0.3)
     with the control period (zero-order hold): errors at 1 ms 6e-5 and 2.8e-3 (relative), halved at 0.5 ms (order 1)."""
-    p = qprr.load("hextilt_flying_arm_5").without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_joint_friction.py)
+    p = qprr.load("hextilt_flying_arm_5").without_joint_friction()  # the law of a frictionless arm (joint friction: tests/test_friction.py)
     imp = EndEffectorImpedance.from_frequency(4.0, 0.3, 1.0)
     errs = []
     for dt in (1e-3, 5e-4):
@@ -213,7 +213,7 @@ def test_q_prr_step_response_along_the_arm_plane(axis):
 def test_free_space_tracks_like_the_idc(name):
     """No contact, a climb-and-reach mission: the same xi tracking as the IDC once the motion ends, and the end effector
     on its path at least as well (the Q-PRR's arm takes out, in its plane, the motion the tilt gives the end effector)."""
-    p = qprr.load(name).without_joint_friction()  # frictionless arm (joint friction: tests/test_joint_friction.py)
+    p = qprr.load(name).without_joint_friction()  # frictionless arm (joint friction: tests/test_friction.py)
     traj = hover_and_reach(p, (0.5, 0.3, 1.0), climb=(0.0, 2.0), reach=(2.0, 3.5))
     out = {}
     for label, c in (

@@ -1,4 +1,4 @@
-"""The lexicographic engine's exact pieces (qprr.optim): the active-set QP and the KKT polish, against the KKT
+"""The lexicographic engine's exact pieces (qprr.actuation.lexicographic): the active-set QP and the KKT polish, against the KKT
 conditions; bounds that exclude 0; the degenerate vertex ProxQP called infeasible (octorotor allocation); the
 hard equality (a Pfaffian constraint) against the closed form; the duality-gap setting."""
 
@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from proxsuite import proxqp
 
+from qprr.actuation.lexicographic import Lexicographic, QPSettings, active_set_qp, polish_box_qp
 from qprr.errors import InputError
-from qprr.optim import Lexicographic, QPSettings, active_set_qp, polish_box_qp
 
 SETTINGS = settings(max_examples=80, deadline=None, derandomize=True)
 
@@ -155,7 +155,7 @@ def test_qp_settings_duality_gap():
 @given(box_qp(), st.integers(0, 2**32 - 1))
 def test_kkt_on_active_set_returns_only_the_optimum(qp, seed):
     """From any guessed active set the active-set steps end at a KKT point (the optimum) or decline (None)."""
-    from qprr.optim import kkt_on_active_set
+    from qprr.actuation.lexicographic import kkt_on_active_set
 
     H, g, C, lo, up = qp
     H = H + 1e-6 * np.eye(H.shape[0])  # strictly convex, as every level of the engine (regularisation)

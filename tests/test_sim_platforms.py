@@ -58,7 +58,7 @@ def test_hover_reach_with_the_generic_idc(platforms, name):
     assert e[:, 3:6].max() < 1e-4
     assert e[:, 6:].max() < 1e-2
     # settled 4 s after the reach; hextilt's arm joints carry the URDF's Coulomb friction (0.1 N m, smoothed over 0.01 rad/s,
-    # qprr.joint_friction): at rest they creep towards the reference, measured 1.4e-4-3.3e-4 rad 4 s after the reach
+    # qprr.dynamics.friction): at rest they creep towards the reference, measured 1.4e-4-3.3e-4 rad 4 s after the reach
     assert e[-1, 0:6].max() < 1e-4 and e[-1, 6:].max() < (5e-4 if p.model.friction.any() else 1e-4)
     rmse = list(res.rmse().values())
     assert max(rmse[0:6]) < 2e-4 and max(rmse[6:]) < 5e-3  # measured <= 1.4e-4 m (base) and <= 1.8e-3 rad (arm)

@@ -13,8 +13,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import qprr
+from qprr.actuation.lexicographic import Lexicographic
 from qprr.errors import InputError, LimitError, NonFiniteError, UnknownNameError
-from qprr.optim import Lexicographic
 from qprr.wheeled.manipulation import (
     IKStatus,
     MobileIKOptions,
@@ -297,7 +297,7 @@ def test_mobile_manipulator_input_errors(scenarios):
     with pytest.raises(UnknownNameError, match="max_iters"):
         solve_ik(sc.robot, sc.target, sc.z0, {"max_iters": 3})
     with pytest.raises(UnknownNameError, match="'elimination'.*valid:.*'respect_constraint'.*'rank_tol'"):
-        solve_ik(sc.robot, sc.target, sc.z0, {"elimination": "nullspace"})  # one form now (qprr.optim's null space)
+        solve_ik(sc.robot, sc.target, sc.z0, {"elimination": "nullspace"})  # one form now (qprr.actuation.lexicographic's null space)
     with pytest.raises(NonFiniteError):
         solve_ik(sc.robot, [0.0, float("nan"), 0.0], sc.z0)
     with pytest.raises(InputError, match="step_xy"):

@@ -337,11 +337,11 @@ def default_map_cell(coords: np.ndarray, cells_across: int = 120) -> float:
 
 
 def resolve_collision(platform: Platform, collision) -> tuple[object, str]:
-    """(the :class:`qprr.collision.CollisionModel` a map filters with, or None; a note saying why it is None).
+    """(the :class:`qprr.analysis.collision.CollisionModel` a map filters with, or None; a note saying why it is None).
 
     ``collision``: None (default: filter when the platform has a collision model, i.e. a URDF with ``<collision>``
     geometry on its arm links), True (filter; an error when there is no model) or False (no filter)."""
-    from ..collision import collision_model
+    from .collision import collision_model
 
     if collision is False:
         return None, "collisions not checked (collision=False)"
@@ -359,7 +359,7 @@ def resolve_collision(platform: Platform, collision) -> tuple[object, str]:
 class CollisionMask:
     """Which configurations of a joint grid are free of self-collision (:func:`collision_mask`).
 
-    ``free`` (n,) bool; ``evaluated``: how many configurations :meth:`qprr.collision.CollisionModel.colliding_batch` checked (the others took
+    ``free`` (n,) bool; ``evaluated``: how many configurations :meth:`qprr.analysis.collision.CollisionModel.colliding_batch` checked (the others took
     the value on which the corners of their cell of the twice-coarser grid agree); ``audited``, ``mismatches``: a
     random sample of the inferred configurations checked afterwards, and how many of them were wrong (the error bar of
     the inference: a collision set thinner than a coarse cell could hide between agreeing corners)."""
@@ -388,13 +388,14 @@ COLLISION_EXACT_BELOW = 4096
 
 
 def collision_mask(model, grid: JointGrid, progress=None, label: str = "collision check", *, audit: int = 1000, seed: int = 0) -> CollisionMask:
-    """The self-collision mask of the configurations of ``grid`` (``model``: a :class:`qprr.collision.CollisionModel`).
+    """The self-collision mask of the configurations of ``grid`` (``model``: a :class:`qprr.analysis.collision.CollisionModel`).
 
     Coarse to fine: the grid with every other value along each axis (when every axis has an odd number of values,
     so the ends are kept; else, and below :data:`COLLISION_EXACT_BELOW` configurations, every one is checked) is done
     first (recursively); a configuration whose cell of that grid has all its corners free (or
     all colliding) takes that value; the others (cells that straddle the boundary) are checked with
-    :meth:`qprr.collision.CollisionModel.colliding_batch`.  ``audit`` inferred configurations, drawn with ``seed``, are then checked too; their
+    :meth:`qprr.analysis.collision.CollisionModel.colliding_batch`.  ``audit`` inferred configurations, drawn with
+    ``seed``, are then checked too; their
     mismatches are reported (:class:`CollisionMask`) and corrected.  When more than :data:`COLLISION_AUDIT_TOLERANCE`
     of the audited ones are wrong (collision sets thinner than the coarse cells: a coarse grid in many joints), every
     configuration is checked instead."""

@@ -20,7 +20,7 @@ tau(m) = tau_0 + m tau_1.  With the wrench set Z of the rotors
 * **payload envelope**: the largest m each configuration can hold, min of the rotor limit
   (the ray from w_0 along w_1 leaving Z) and the effort limit (each joint affine in m).
 
-With a collision model (:mod:`qprr.collision`) the configurations where the arm hits the body, a
+With a collision model (:mod:`qprr.analysis.collision`) the configurations where the arm hits the body, a
 propeller disc or itself are flagged (``collision_free``) and every fraction is reported twice:
 over all configurations and over the collision-free ones (``feasible_free_fraction``).
 

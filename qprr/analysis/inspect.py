@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from ..joint_friction import STIFF, JointFriction
+from ..dynamics.friction import STIFF, JointFriction
 from ..model import Platform, check_platform, max_lift
 from ..rotors import ActuationSummary
 

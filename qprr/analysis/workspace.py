@@ -12,7 +12,7 @@ positions W_b are unbounded, so what characterises a design is W_eb.  Two forms 
 
 Each region is computed with every joint free and with chosen joints locked (the thesis's
 Fig. 3.14/3.15: with and without the slider r0); the gain of the free joints is reported as a
-ratio and a difference, with error bars.  With a collision model (:mod:`qprr.collision`: the arm
+ratio and a difference, with error bars.  With a collision model (:mod:`qprr.analysis.collision`: the arm
 against the body, the propeller discs and itself) every region is measured twice: over the whole
 joint box, and over its collision-free configurations only (the image of the grid cells whose
 corners are all collision-free, counted in the same pass on the same counting grid as the whole

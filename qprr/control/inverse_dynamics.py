@@ -58,8 +58,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..charts import State
+from ..dynamics.friction import JointFriction
 from ..errors import InputError, UnknownNameError
-from ..joint_friction import JointFriction
 from ..model import Platform, check_platform
 from ..payload import MassEstimator, PayloadModel
 from ..validation import as_array, as_real, as_vector

@@ -6,7 +6,7 @@ Level k is the QP
     s.t.    J_j dv = J_j dv_j*   for every level j < k   (their optimum is kept)
             lower - q_arm <= dv_arm <= upper - q_arm     (joint limits, hard, every level)
 
-solved by :class:`qprr.optim.Lexicographic` (the free directions of the earlier levels as unknowns:
+solved by :class:`qprr.actuation.lexicographic.Lexicographic` (the free directions of the earlier levels as unknowns:
 the earlier optima hold by construction).  The minimisers of a least-squares objective over a
 convex set all share the same J_k dv, so keeping J_j dv fixed keeps level j's optimum; a test checks
 every level's KKT conditions, equalities included, independently of the elimination.
@@ -19,8 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..actuation.lexicographic import Lexicographic, QPSettings
 from ..model import Platform, check_platform
-from ..optim import Lexicographic, QPSettings
 from ..validation import as_int, as_real
 from .tasks.base import check_linearized
 
@@ -66,7 +66,7 @@ class HierarchySolver:
     ``rank_tol``: singular values below it (absolute) count as zero when a kernel is computed.
     ``lower_damping``: c in the damping c ||J_k^T e_k|| of the levels after the first.
     ``active_set_first``: each level solved exactly on the active set of the previous iteration first,
-    ProxQP (then polished) only when that is not the optimum (:class:`qprr.optim.Lexicographic`).
+    ProxQP (then polished) only when that is not the optimum (:class:`qprr.actuation.lexicographic.Lexicographic`).
     The object owns its QPs: one solver per thread.
     """
 

@@ -31,11 +31,11 @@ the start xi with the :class:`SolveContext` ``ctx``.  A method's parts are publi
 and the option checks :func:`check_positive` and :func:`check_count`.
 
 Self-collision (option ``collision_free`` of every method, :class:`Tolerances`): success also needs the returned
-configuration free of self-collision (:mod:`qprr.collision`: the arm against the body, the propeller discs and
+configuration free of self-collision (:mod:`qprr.analysis.collision`: the arm against the body, the propeller discs and
 itself).  A solve whose answer collides is restarted from other arm postures (``collision_restarts`` of them, drawn
 uniformly in the joint limits with a fixed seed, the base placed so the end effector starts on the target); when
 every answer collides the result is a failure with status "collision" naming the pairs in contact.  The check is
-exact at the returned configuration (:meth:`qprr.collision.CollisionModel.colliding_pairs`); the path to it is not
+exact at the returned configuration (:meth:`qprr.analysis.collision.CollisionModel.colliding_pairs`); the path to it is not
 checked.
 
 Position error: ||p_e - p_d|| [m]; orientation error: ||log3(R_d^T R_e)|| [rad], both from
@@ -123,7 +123,7 @@ class Tolerances:
     position_tol: float = 1e-6  # [m] success threshold on ||p_e - p_d||
     orientation_tol: float = 1e-6  # [rad] success threshold on ||log3(R_d^T R_e)||
     hover_tol: float = 1e-6  # [rad] |roll|, |pitch| below it count as hover-feasible
-    collision_free: bool = False  # success needs no self-collision (qprr.collision); restarts when the answer collides
+    collision_free: bool = False  # success needs no self-collision (qprr.analysis.collision); restarts when the answer collides
     collision_restarts: int = 8  # other arm postures tried when the answer collides (collision_free)
     require_hover: bool | None = None  # success needs roll = pitch = 0 within hover_tol (None: for under-actuated platforms)
 
@@ -791,7 +791,7 @@ class IKSolver:
         self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
         self._collision = None
         if self.options.collision_free:
-            from ..collision import collision_model
+            from ..analysis.collision import collision_model
 
             self._collision = collision_model(platform)
 

@@ -8,7 +8,7 @@ force over a control period (:mod:`qprr.sim.loop`, step 5); the same integrators
 
 * the forward dynamics a = M^-1 (tau + tau_f(v) + tau_s(q, v) - h(q, v)) of every copy by Pinocchio's compiled
   ``abaInParallel`` over a :class:`pinocchio.ModelPool` (LOCAL convention, as ``pin.aba`` in the scalar loop); tau_f is
-  the URDF's joint friction (:class:`qprr.joint_friction.JointFriction`, explicit joints), tau_s an optional
+  the URDF's joint friction (:class:`qprr.dynamics.friction.JointFriction`, explicit joints), tau_s an optional
   state-dependent force evaluated at every stage (wind drag: :meth:`step`'s ``force``);
 * the rotor thrusts folded into tau as the scalar simulator does: tau = N [f; effort] (Thesis (5.43),
   :meth:`tau_from_thrusts`);
@@ -25,9 +25,9 @@ force over a control period (:mod:`qprr.sim.loop`, step 5); the same integrators
 Copies with their own inertias (a payload in the gripper, a randomised mass: :meth:`set_payload`,
 :meth:`set_mass_scale`) get their own models; the batch is then stepped with one ``pin.aba`` call per copy (the pool
 holds one model per thread, not per copy).  Joint friction is treated as in the scalar simulator: each copy's joints
-are chosen explicit or implicit at its reset state (:meth:`qprr.joint_friction.JointFriction.choose`); while every
+are chosen explicit or implicit at its reset state (:meth:`qprr.dynamics.friction.JointFriction.choose`); while every
 joint is explicit the friction force is one vectorised term, and a stiff joint (hextilt's wrist at 1 ms) is solved copy
-by copy with :meth:`~qprr.joint_friction.JointFriction.solve` (slower: a smaller ``dt`` keeps the fast path).
+by copy with :meth:`~qprr.dynamics.friction.JointFriction.solve` (slower: a smaller ``dt`` keeps the fast path).
 
 ``tests/test_batch.py`` checks the batch against :func:`qprr.sim.simulate` step by step (max difference <= 1e-12 over a
 2 s flight, every integrator, the Q-PRR, borinot and hextilt with its Coulomb friction); ``benchmarks/env_benchmark.py`` measures it against one
@@ -41,8 +41,8 @@ import os
 import numpy as np
 import pinocchio as pin
 
+from ..dynamics.friction import JointFriction, Treatment
 from ..errors import InputError, ShapeError
-from ..joint_friction import JointFriction, Treatment
 from ..model import Platform, check_platform
 from ..validation import as_int
 from .config import SimConfig

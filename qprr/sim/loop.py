@@ -55,8 +55,8 @@ from .. import charts as ch
 from ..actuation import AllocationFlag, Allocator
 from ..charts import State
 from ..control.base import Controller, Reference
+from ..dynamics.friction import JointFriction, Treatment
 from ..errors import DivergenceError, InputError, LimitError, NonFiniteError, QprrError, ShapeError
-from ..joint_friction import JointFriction, Treatment
 from ..model import Platform
 from ..progress import Progress
 from ..trajectory import Trajectory, TrajectorySample
@@ -612,7 +612,7 @@ class _Plant:
             self.rhs = self._rhs_z
 
     def add_joint_friction(self, friction: JointFriction | None) -> None:
-        """The joints' viscous damping and Coulomb friction (:class:`qprr.joint_friction.JointFriction`, from the
+        """The joints' viscous damping and Coulomb friction (:class:`qprr.dynamics.friction.JointFriction`, from the
         URDF's ``<dynamics damping friction>``; None: none) in every stage's generalised force."""
         self.friction = friction
         if friction is not None and self.plain:
@@ -666,7 +666,7 @@ class _Plant:
         return self._solve(q, v, pin.aba(self.model, self.data, q, v, tau)), np.asarray(zd, dtype=float)
 
     def _solve(self, q, v, a):
-        """``a`` with the implicit joint friction (:meth:`qprr.joint_friction.JointFriction.solve`; none: ``a``)."""
+        """``a`` with the implicit joint friction (:meth:`qprr.dynamics.friction.JointFriction.solve`; none: ``a``)."""
         return a if self.friction is None else self.friction.solve(self.model, self.data, q, v, a)
 
     def first_stage(self, t: float, q, v, z):

@@ -12,7 +12,7 @@ the motor and a propeller disc on each rotor frame of ``layout`` (the other layo
 bare), the slider rail at height d0, the links as cylinders of lengths d1, d2, d3, the
 revolute joint housings about y and a sphere at the end effector.  Each of these shapes is also a
 ``<collision>`` element (same origin and geometry, :mod:`qprr.urdf.writer`): the collision model of
-:mod:`qprr.collision` (the propeller discs included, so qprr adds no disc of its own for the Q-PRR).
+:mod:`qprr.analysis.collision` (the propeller discs included, so qprr adds no disc of its own for the Q-PRR).
 """
 
 from __future__ import annotations

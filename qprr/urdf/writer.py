@@ -1,7 +1,7 @@
 """Small URDF writer: links with inertials and primitive visuals, joints, and a robot around them.
 
 Each primitive visual also writes a ``<collision>`` element with the same origin and geometry (``collision=True``,
-the default), so the generated robots carry the collision model :mod:`qprr.collision` reads.
+the default), so the generated robots carry the collision model :mod:`qprr.analysis.collision` reads.
 
 Numbers are written with ``repr`` so a URDF read back gives the same doubles.
 """

@@ -9,7 +9,7 @@ z = [q_base, q_arm] (q_base: the wheeled model's coordinates, e.g. [x, y, theta,
 car) and the IK step dz = [dq_base, v_arm].
 
 :func:`solve_ik` is a strict task-priority IK (levels solved in order, each keeping the
-optimum of those above) on the project's lexicographic engine :class:`qprr.optim.Lexicographic`
+optimum of those above) on the project's lexicographic engine :class:`qprr.actuation.lexicographic.Lexicographic`
 (null-space elimination on proxsuite's dense ProxQP), where **every level** carries
 
 * the Pfaffian constraint of the base, A^T(q_base) dq_base = 0 (the base can only move along
@@ -40,8 +40,8 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
+from ..actuation.lexicographic import Lexicographic, QPSettings
 from ..errors import InputError, LimitError, SolverError, UnknownNameError
-from ..optim import Lexicographic, QPSettings
 from ..validation import as_real, as_vector
 from .kinematics import KinematicModel
 from .robots import Car, FrontTricycle, RearTricycle
@@ -206,17 +206,17 @@ class MobileIKOptions:
     iterations without a relative error decrease of 1e-9 before "stalled"; trust region per
     iteration: ``step_xy``, ``step_theta``, ``step_steer``, ``step_arm``;
     ``respect_constraint``: impose the Pfaffian constraint (False: the IK that ignores it).
-    The QP engine is :class:`qprr.optim.Lexicographic` (:func:`step_solver`): ``eps_abs``,
+    The QP engine is :class:`qprr.actuation.lexicographic.Lexicographic` (:func:`step_solver`): ``eps_abs``,
     ``eps_duality_gap`` (absolute, checked) and ``max_qp_iter`` are its
-    :class:`~qprr.optim.QPSettings` (eps_rel = 0, infeasibility thresholds 1e-14);
+    :class:`~qprr.actuation.lexicographic.QPSettings` (eps_rel = 0, infeasibility thresholds 1e-14);
     ``regularization``: its Levenberg damping of every level, which also picks the smallest
     step among a level's minimisers; ``polish``: each QP answer replaced by the exact optimum on
     its active set (residuals compared by :func:`lookahead_steering` exact, not to eps_abs);
     ``exact_fallback``: a level where ProxQP stops at ``max_qp_iter`` is solved exactly by
-    :func:`qprr.optim.active_set_qp` instead of ending the run with "solver_error" (ProxQP
+    :func:`qprr.actuation.lexicographic.active_set_qp` instead of ending the run with "solver_error" (ProxQP
     0.8 stalls at degenerate vertices, e.g. 2 free directions and 5 bounds, two of them rows
     of rounding size active at 0, met in ``benchmarks/wheeled_ik_benchmark.py``);
-    ``rank_tol``: its kernel tolerance, **absolute** (as everywhere in :mod:`qprr.optim`):
+    ``rank_tol``: its kernel tolerance, **absolute** (as everywhere in :mod:`qprr.actuation.lexicographic`):
     singular values of the Pfaffian matrix and of each level's Jacobian restricted to the free
     directions below it count as zero.  (The rows are O(1): unit no-slip rows with lever arms of
     ~0.5 m, end-effector Jacobians in m/m and m/rad, largest singular values 1.1-1.8 on the car
@@ -254,7 +254,7 @@ class MobileIKOptions:
                 raise InputError(f"option {f} must be an integer >= 1, got {v!r}")
 
     def qp_settings(self) -> QPSettings:
-        """The :class:`~qprr.optim.QPSettings` of these options."""
+        """The :class:`~qprr.actuation.lexicographic.QPSettings` of these options."""
         return QPSettings(
             eps_abs=self.eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, eps_duality_gap=self.eps_duality_gap, max_iter=self.max_qp_iter
         )
@@ -309,7 +309,7 @@ class MobileIKResult:
 
 
 def step_solver(robot: MobileManipulator, options=None) -> Lexicographic:
-    """The engine of one IK step: :class:`qprr.optim.Lexicographic` over dz (``robot.nz``), every
+    """The engine of one IK step: :class:`qprr.actuation.lexicographic.Lexicographic` over dz (``robot.nz``), every
     coordinate bounded (trust region, limits), with ``options``' settings, damping and rank tolerance.
 
     It owns its QPs and warm starts: :func:`solve_ik` builds one per call (results depend on the
@@ -368,7 +368,10 @@ def lookahead_steering(
     if solver is None:
         solver = lookahead_solver(robot)
     elif not (isinstance(solver, Lexicographic) and solver.n == 1 + robot.nv_arm):
-        raise InputError(f"solver must be a qprr.optim.Lexicographic over {1 + robot.nv_arm} variables (drive input and arm rates), got {solver!r}")
+        raise InputError(
+            f"solver must be a qprr.actuation.lexicographic.Lexicographic over {1 + robot.nv_arm} variables "
+            f"(drive input and arm rates), got {solver!r}"
+        )
     psi_max = float(robot.upper[3])
     cands = np.unique(np.concatenate([np.linspace(-psi_max, psi_max, n_candidates), [np.clip(z[3], -psi_max, psi_max)]]))
     arm = slice(nb, robot.nz)

@@ -113,7 +113,7 @@ class DesignMaps:
 def evaluate_platform(platform, effort: Effort, seed: int, collision: bool = False) -> dict[str, float]:
     """Every metric of :data:`DESIGN_METRICS` for ``platform`` at ``effort`` (``seed``: the measure's counting-grid shifts).
 
-    ``collision``: check self-collision (:mod:`qprr.collision`) and give the metrics that need it (``free_hover_volume``;
+    ``collision``: check self-collision (:mod:`qprr.analysis.collision`) and give the metrics that need it (``free_hover_volume``;
     NaN without: the check costs time, so a study asks for it only when it names such a metric)."""
     maps = DesignMaps(platform, effort, seed, collision)
     return {k: m.compute(maps) if collision or not m.collision else float("nan") for k, m in DESIGN_METRICS.items()}

@@ -7,7 +7,7 @@ name                        unit    better     map (qprr.analysis) and what is t
                                                free (W_eb of Thesis (3.3))
 ``free_hover_volume``       m^3     max        the same over the configurations free of self-collision (the arm
                                                against the body, the propeller discs and itself:
-                                               :mod:`qprr.collision`); computed only for a study that names it
+                                               :mod:`qprr.analysis.collision`); computed only for a study that names it
                                                (an objective or a constraint: the check costs time), else NaN
 ``balance_fraction``        --      max        :func:`~qprr.analysis.balance`: share of the workspace cells (in
                                                B) reached by a configuration with the CoG within ``balance_tol``
@@ -49,7 +49,7 @@ class DesignMetric:
     (:class:`qprr.design.evaluate.maps.DesignMaps`: the platform, the effort, and the maps of :mod:`qprr.analysis`,
     each computed once on first use and shared by the metrics), its ``unit``, ``better`` ("max" or "min"), a short
     ``label`` and the range it can take (``low``, ``high``; None: unbounded; a constraint outside it is refused).
-    ``collision``: it needs the workspace's self-collision check (:mod:`qprr.collision`), which costs time: measured
+    ``collision``: it needs the workspace's self-collision check (:mod:`qprr.analysis.collision`), which costs time: measured
     only for a study that names it (an objective or a constraint), else NaN."""
 
     compute: Callable[[object], float]

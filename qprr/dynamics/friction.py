@@ -71,7 +71,7 @@ from enum import Enum
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError, UnknownNameError
+from ..errors import InputError, UnknownNameError
 
 VELOCITY_SCALE = 1e-2
 """v_s [rad/s or m/s]: the velocity over which the Coulomb term of :class:`JointFriction` goes from 0 to ~F (tanh)."""

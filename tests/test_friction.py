@@ -1,4 +1,4 @@
-"""Issue 22 class 3: the URDF's joint <dynamics damping friction> is simulated (qprr.joint_friction) and compensated.
+"""Issue 22 class 3: the URDF's joint <dynamics damping friction> is simulated (qprr.dynamics.friction) and compensated.
 
 Physics checked: the friction law and its Jacobian (finite differences), the energy balance of a free-floating robot
 (dE/dt = -v^T tau_f... = the friction's power) at the integrator's order, the difference a damped hextilt run makes, and
@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 import qprr
 from qprr.control.base import Controller
+from qprr.dynamics.friction import VELOCITY_SCALE, JointFriction
 from qprr.errors import InputError
-from qprr.joint_friction import VELOCITY_SCALE, JointFriction
 from qprr.sim import simulate
 from qprr.trajectory import Hold
 

@@ -10,10 +10,10 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from . import charts as ch
-from .kinematics import check_q
-from .model import Platform, check_model_data
-from .validation import as_vector
+from .. import charts as ch
+from ..kinematics import check_q
+from ..model import Platform, check_model_data
+from ..validation import as_vector
 
 
 def mass_matrix(platform: Platform, data: pin.Data, q) -> np.ndarray:

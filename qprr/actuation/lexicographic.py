@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from proxsuite import proxqp
 
-from .errors import InputError, SolverError
+from ..errors import InputError, SolverError
 
 try:  # LAPACK without numpy.linalg's wrapper: 3x cheaper on these tiny matrices
     from scipy.linalg.lapack import dgesdd as _dgesdd  # scipy is a dependency of proxsuite

@@ -32,9 +32,9 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from .errors import InputError, MissingDependencyError, QprrError
-from .model import Platform, check_platform
-from .rotors import Rotor
+from ..errors import InputError, MissingDependencyError, QprrError
+from ..model import Platform, check_platform
+from ..rotors import Rotor
 
 DISC_THICKNESS = 0.01
 """Thickness [m] of the propeller disc cylinder qprr adds for a rotor (blades and their flapping, ~1 cm)."""
@@ -85,7 +85,7 @@ def _rotation_of_axis(axis) -> np.ndarray:
 
 def _package_dirs(platform: Platform) -> list[str]:
     """Folders where ``package://`` mesh paths are looked up: example-robot-data's share folder, the URDF's folder."""
-    from .platforms import robots_dir
+    from ..platforms import robots_dir
 
     dirs = []
     try:
@@ -458,7 +458,7 @@ class PairScreen:
     """
 
     def __init__(self, platform: Platform, geom: pin.GeometryModel) -> None:
-        from .analysis.chain import ArmChain
+        from .chain import ArmChain
 
         self.chain = ArmChain(platform)
         objs = geom.geometryObjects

@@ -23,12 +23,14 @@ from math import hypot
 import numpy as np
 import pinocchio as pin
 
-from . import charts as ch
-from .errors import DivergenceError, InputError
-from .kinematics import ee_jacobian_world
-from .model import Platform, check_model_data, check_platform
-from .optim import Lexicographic, QPSettings
-from .validation import as_real, as_vector
+from .. import charts as ch
+from ..dynamics import generalized_gravity
+from ..errors import DivergenceError, InputError
+from ..kinematics import ee_jacobian_world
+from ..model import Platform, check_model_data, check_platform
+from ..rotors import ideal_wrench_set, rotor_matrix
+from ..validation import as_real, as_vector
+from .lexicographic import Lexicographic, QPSettings
 
 
 def input_map_matrix(xi) -> np.ndarray:
@@ -127,7 +129,7 @@ class Allocator:
       torques; a tilted hexarotor: all six).  When they are independent (the usual case) the
       exact allocation is f = Omega_P^-1 w_P (square) or the minimum-norm Omega_P^+ w_P; in
       general, f = Omega^+ w.  Inside [f_min, f_max] this is the answer of every level below.
-    * Otherwise, lexicographic bounded least squares (:class:`qprr.optim.Lexicographic`):
+    * Otherwise, lexicographic bounded least squares (:class:`qprr.actuation.lexicographic.Lexicographic`):
       level 1 the force rows and the roll/pitch torques, weighted (``weight_force`` per newton,
       ``weight_torque`` per newton metre; default 10 / l with l the mean rotor distance from the
       thrust axis: a torque error counts ten times the same per-rotor force error, attitude
@@ -174,7 +176,7 @@ class Allocator:
             l_mean = float(np.mean(radial))
             weight_torque = 10.0 / l_mean if l_mean > 0 else 10.0
         if not isinstance(settings, QPSettings):
-            raise InputError(f"settings must be a qprr.optim.QPSettings, got {type(settings).__name__}")
+            raise InputError(f"settings must be a qprr.actuation.lexicographic.QPSettings, got {type(settings).__name__}")
         self.platform = platform
         self.n_rotors, self.n_arm = n, platform.n_arm
         self.f_min, self.f_max = f_min, f_max
@@ -330,8 +332,6 @@ class Allocator:
         p = self.platform
         q = p.neutral_q() if q is None else q
         data = p.data() if data is None else data
-        from .dynamics import generalized_gravity
-
         w = generalized_gravity(p, data, q)[0:6]
         f = self.Omega_P_inv.dot(w[self._rows])
         if np.any(f < self.f_min - 1e-12) or np.any(f > self.f_max + 1e-12):
@@ -350,8 +350,6 @@ class IdealAllocator(Allocator):
     """
 
     def __init__(self, platform: Platform, *, clip_arm: bool = True) -> None:
-        from .rotors import rotor_matrix
-
         ideal = ideal_pattern()
         check_platform(platform)
         if platform.n_rotors != 18 or not np.allclose(platform.rotor_matrix, rotor_matrix(ideal), rtol=0, atol=1e-15):
@@ -383,6 +381,4 @@ class IdealAllocator(Allocator):
 
 def ideal_pattern():
     """The rotor pattern :class:`IdealAllocator` expects (unit bounds; only the columns are compared)."""
-    from .rotors import ideal_wrench_set
-
     return ideal_wrench_set(1.0, 1.0)
