@@ -28,7 +28,7 @@ def _print_report(results, out, args) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .engine import infeasible_reasons, run_design
+    from .search import infeasible_reasons, run_design
     from .spec import DesignSpec
 
     prog = "qprr design run"
@@ -66,7 +66,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from .search.points import grid_points, n_points, reference_points
+    from .search import grid_points, n_points, reference_points
     from .spec import DesignSpec
 
     try:

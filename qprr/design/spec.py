@@ -1,4 +1,38 @@
-"""A design study: candidate space, objectives, constraints, effort, search (TOML / JSON / dict).
+"""Design study specifications: :class:`DesignSpec` (TOML/JSON), the parameters, the mass model.
+
+**Checks.** Validation helpers of design specifications: every error names the key, the value and the fix.
+
+**Mass model.** Mass model of a generated arm: links from their lengths and a material, actuators per joint.
+
+A link's mass is the actuator of the joint at its base plus the tube's linear density times its
+length; a prismatic joint adds its rail (linear density times the stroke).  The numbers of
+:data:`MATERIALS` and the actuator defaults are *chosen* (typical catalogue values of the parts
+named), not measured; a study overrides any of them in its ``[mass]`` table.
+
+**Parameters.** The continuous parameters of a candidate and how a study gives them: fixed, a grid, or a range to optimise.
+
+========================  =====  ==========================================================================
+name                      unit   what
+========================  =====  ==========================================================================
+``reach``                 m      total length of the revolute links (the arm's reach from its first
+                                 revolute joint, straight)
+``taper``                 --     length of each revolute link over the previous one (1: equal links;
+                                 the thesis's d3/d2 = 0.10/0.18 = 0.556)
+``slider_stroke``         m      full stroke of a prismatic joint (limits -stroke/2 .. +stroke/2)
+``slider_link``           m      length of the link after a prismatic joint (the thesis's d1)
+``mount_height``          m      height of the first joint above B's origin (the thesis's d0)
+``rotor_arm_length``      m      rotor distance from z_B (0: the vehicle's default of
+                                 :func:`qprr.nomenclature.build`)
+``total_mass``            kg     the take-off mass (``equal-total`` mass mode) or the budget
+                                 used to size the rotors (``fixed-body``)
+``thrust_to_weight``      --     total maximum rotor thrust over total_mass * g (the rotors of every
+                                 design give the same total thrust, whatever their number)
+========================  =====  ==========================================================================
+
+In a study's ``[parameters]`` table each is a number (fixed), a list (every value, a grid) or
+``{low = a, high = b}`` (a range the optimiser explores).
+
+**The study.** A design study: candidate space, objectives, constraints, effort, search (TOML / JSON / dict).
 
 Example (``examples/design/thesis_architectures.toml``)::
 
@@ -27,17 +61,179 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from ...errors import QprrError
-from ...platforms import PLATFORMS
-from ...validation import as_file
-from ._check import number, spec_error, spec_integer, table_keys
-from .mass import MassModel
+from ..errors import InputError, QprrError
+from ..platforms import PLATFORMS
+from ..validation import as_file
 from .metrics import DESIGN_METRICS, RANGES
-from .parameters import Parameter, default_parameters, parse_parameter
 
+
+# ----------------------------------------------------------------------------------------------------- Checks
+def spec_error(key: str, value, fix: str):
+    """Raise an :class:`InputError` ``key = value: fix``."""
+    raise InputError(f"design specification: {key} = {value!r} is not valid; fix: {fix}")
+
+
+def number(x, key: str, *, lo: float | None = None, hi: float | None = None, positive: bool = False) -> float:
+    """``x`` as a finite float in [lo, hi] (> 0 if ``positive``), else :func:`spec_error`."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)) or not math.isfinite(x):
+        spec_error(key, x, "a finite number")
+    v = float(x)
+    if positive and not v > 0.0:
+        spec_error(key, x, "a number > 0")
+    if lo is not None and v < lo:
+        spec_error(key, x, f"a number >= {lo!r}")
+    if hi is not None and v > hi:
+        spec_error(key, x, f"a number <= {hi!r}")
+    return v
+
+
+def spec_integer(x, key: str, lo: int = 1) -> int:
+    if isinstance(x, bool) or not isinstance(x, int) or x < lo:
+        spec_error(key, x, f"an spec_integer >= {lo}")
+    return int(x)
+
+
+def table_keys(d, name: str, allowed) -> dict:
+    """``d`` as a dict whose keys are all in ``allowed`` (an unknown one fails with the list)."""
+    if not isinstance(d, Mapping):
+        spec_error(name, d, f"a table with keys among {', '.join(allowed)}")
+    for k in d:
+        if k not in allowed:
+            spec_error(f"{name}.{k}" if name else k, d[k], f"remove it or use one of {', '.join(allowed)}")
+    return dict(d)
+
+
+# ------------------------------------------------------------------------------------------------- Mass model
+MATERIALS = {"carbon": 0.10, "aluminium": 0.25, "pla": 0.18}
+"""Linear density [kg/m] of an arm link of each material (a 20 mm tube with its end fittings; chosen)."""
+
+MODES = ("equal-total", "fixed-body")
+"""``equal-total``: every design has the take-off mass ``total_mass``, the body gets what the arm leaves;
+``fixed-body``: the body has ``body`` kg, the arm adds to it (the total is then an objective/constraint)."""
+
+
+@dataclass(frozen=True)
+class MassModel:
+    """Masses [kg] and linear densities [kg/m] of the generated arms (module docstring)."""
+
+    mode: str = "equal-total"
+    body: float = 2.0
+    link_density: float = MATERIALS["carbon"]
+    revolute_actuator: float = 0.082  # a Dynamixel XM430-class servo (82 g)
+    prismatic_actuator: float = 0.10  # a servo with its lead-screw carriage
+    rail_density: float = 0.40  # a linear guide rail with its screw, per metre of stroke
+
+    def __post_init__(self) -> None:  # checked however it is built (from_mapping or directly)
+        if self.mode not in MODES:
+            spec_error("mass.mode", self.mode, f"one of {', '.join(MODES)}")
+        for k in ("body", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density"):
+            object.__setattr__(self, k, number(getattr(self, k), f"mass.{k}", lo=0.0, positive=(k == "body")))
+
+    def link_mass(self, kind: str, length: float, stroke: float = 0.0) -> float:
+        """Mass [kg] of the link after a joint of ``kind`` ("R" or "P") of ``length`` [m] (``stroke`` [m] for P)."""
+        if kind == "P":
+            return self.prismatic_actuator + self.link_density * length + self.rail_density * stroke
+        return self.revolute_actuator + self.link_density * length
+
+    @classmethod
+    def from_mapping(cls, d) -> MassModel:
+        """The ``[mass]`` table: ``mode``, ``body``, ``material`` or ``link_density``, the actuators, ``rail_density``."""
+        keys = ("mode", "body", "material", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density")
+        d = table_keys(d, "mass", keys)
+        out = {}
+        mode = d.get("mode", "equal-total")
+        if mode not in MODES:
+            spec_error("mass.mode", mode, f"one of {', '.join(MODES)}")
+        out["mode"] = mode
+        if "material" in d and "link_density" in d:
+            spec_error("mass.material", d["material"], "give material or link_density, not both")
+        if "material" in d:
+            if d["material"] not in MATERIALS:
+                spec_error("mass.material", d["material"], f"one of {', '.join(MATERIALS)} (or link_density in kg/m)")
+            out["link_density"] = MATERIALS[d["material"]]
+        for k in ("body", "link_density", "revolute_actuator", "prismatic_actuator", "rail_density"):
+            if k in d:
+                out[k] = number(d[k], f"mass.{k}", lo=0.0, positive=(k == "body"))
+        return cls(**out)
+
+    def to_dict(self) -> dict:
+        return {
+            "mode": self.mode,
+            "body": self.body,
+            "link_density": self.link_density,
+            "revolute_actuator": self.revolute_actuator,
+            "prismatic_actuator": self.prismatic_actuator,
+            "rail_density": self.rail_density,
+        }
+
+
+# ------------------------------------------------------------------------------------------------- Parameters
+PARAMETERS = {
+    "reach": ("m", 0.28, (0.05, 2.0)),
+    "taper": ("", 0.556, (0.1, 10.0)),
+    "slider_stroke": ("m", 0.08, (0.005, 1.0)),
+    "slider_link": ("m", 0.055, (0.005, 1.0)),
+    "mount_height": ("m", 0.04, (0.0, 1.0)),
+    "rotor_arm_length": ("m", 0.0, (0.0, 2.0)),
+    "total_mass": ("kg", 3.5196, (0.1, 100.0)),
+    "thrust_to_weight": ("", 2.317, (1.0, 10.0)),
+}
+"""name -> (unit, default, (smallest, largest) value accepted)."""
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """One parameter of a study: ``values`` (one: fixed; several: a grid) or ``low``/``high`` (optimised)."""
+
+    name: str
+    values: tuple[float, ...] = ()
+    low: float | None = None
+    high: float | None = None
+
+    @property
+    def optimised(self) -> bool:
+        return self.low is not None
+
+    def to_dict(self):
+        if self.optimised:
+            return {"low": self.low, "high": self.high}
+        return list(self.values) if len(self.values) > 1 else self.values[0]
+
+
+def parse_parameter(name: str, value) -> Parameter:
+    """A ``[parameters]`` entry checked against :data:`PARAMETERS` (errors name the key, the value and the fix)."""
+    key = f"parameters.{name}"
+    if name not in PARAMETERS:
+        spec_error(key, value, f"a parameter among {', '.join(PARAMETERS)}")
+    unit, _, (lo, hi) = PARAMETERS[name]
+    unit = f" {unit}" if unit else ""
+    if isinstance(value, Mapping):
+        if set(value) != {"low", "high"}:
+            spec_error(key, dict(value), "a range {low = a, high = b}")
+        a = number(value["low"], f"{key}.low", lo=lo, hi=hi)
+        b = number(value["high"], f"{key}.high", lo=lo, hi=hi)
+        if not a < b:
+            spec_error(key, dict(value), f"low < high (in{unit})")
+        return Parameter(name, (), a, b)
+    if isinstance(value, (list, tuple)):
+        if not value:
+            spec_error(key, value, "at least one value")
+        vals = tuple(number(v, key, lo=lo, hi=hi) for v in value)
+        if len(set(vals)) != len(vals):
+            spec_error(key, list(value), "distinct values")
+        return Parameter(name, vals)
+    return Parameter(name, (number(value, key, lo=lo, hi=hi),))
+
+
+def default_parameters() -> dict[str, Parameter]:
+    return {k: Parameter(k, (d,)) for k, (_, d, _) in PARAMETERS.items()}
+
+
+# -------------------------------------------------------------------------------------------------- The study
 OPTIMISERS = ("pymoo", "optuna")
 """Multi-objective optimisers (NSGA-II) a study may use; the first is the default (docs/design.md says why)."""
 
@@ -104,7 +300,7 @@ class ClosedLoop:
     duration: float = 8.0
 
     def __post_init__(self) -> None:  # checked however it is built (the [closed_loop] table or directly)
-        from ...scenarios import SCENARIOS
+        from ..scenarios import SCENARIOS
 
         object.__setattr__(self, "top", spec_integer(self.top, "closed_loop.top", lo=0))
         if not isinstance(self.scenario, str) or self.scenario not in SCENARIOS or SCENARIOS[self.scenario].platforms is not None:
@@ -234,7 +430,7 @@ def _names(value, key: str, valid: tuple[str, ...], need: int = 0) -> tuple[str,
 
 
 def _architectures(value) -> tuple[str, ...]:
-    from ...nomenclature import UAV_ROTORS, parse
+    from ..nomenclature import UAV_ROTORS, parse
 
     if not isinstance(value, (list, tuple)) or not value:
         spec_error("architectures", value, 'a non-empty list of (2.1) names such as ["Q-PRR", "HEX-RRR"]')
