@@ -37,7 +37,7 @@ from ..errors import InputError, QprrError
 from ..model import check_platform
 from ..nomenclature import LinkSpec, build, parse
 from .metrics import DESIGN_METRICS
-from .spec import PARAMETERS, DesignSpec, Effort, MassModel
+from .spec import DesignSpec, Effort, MassModel, StudyKind
 
 # ------------------------------------------------------------------------------------------------- Candidates
 G = 9.81
@@ -54,22 +54,36 @@ class Candidate:
 def link_lengths(joints: str, params: Mapping[str, float]) -> list[float]:
     """Lengths [m] of the links after each joint: the revolute ones share ``reach`` in the ratio ``taper``."""
     n_r = joints.count("R")
-    w = [params["taper"] ** k for k in range(n_r)]
+    w = [1.0] + [params["taper"] ** k for k in range(1, n_r)]  # taper applies from a second revolute link on
     rev = iter(params["reach"] * x / sum(w) for x in w)
     return [params["slider_link"] if k == "P" else next(rev) for k in joints]
 
 
 def arm_links(joints: str, params: Mapping[str, float], mass: MassModel) -> list[LinkSpec]:
     """The :class:`~qprr.nomenclature.LinkSpec` of each joint (masses from ``mass``)."""
-    stroke = params["slider_stroke"]
     out = []
     for kind, length in zip(joints, link_lengths(joints, params)):
-        m = mass.link_mass(kind, length, stroke if kind == "P" else 0.0)
         if kind == "P":
-            out.append(LinkSpec("P", length=length, mass=m, lower=-stroke / 2.0, upper=stroke / 2.0))
+            stroke = params["slider_stroke"]
+            out.append(LinkSpec("P", length=length, mass=mass.link_mass("P", length, stroke), lower=-stroke / 2.0, upper=stroke / 2.0))
         else:
-            out.append(LinkSpec("R", length=length, mass=m))
+            out.append(LinkSpec("R", length=length, mass=mass.link_mass("R", length)))
     return out
+
+
+NEEDS = {"slider_stroke": "a P joint", "slider_link": "a P joint", "taper": "two R joints"}
+"""The nomenclature's parameters that apply only to some arms, and what the arm needs for them to apply."""
+
+
+def applies(spec: DesignSpec, family: str, name: str, chosen: Mapping[str, float | str]) -> bool:
+    """Whether parameter ``name`` applies to a candidate of ``family`` (an architecture, or a URDF study's robot) whose
+    earlier parameters have the values ``chosen``: a slider's parameters need a P joint, ``taper`` two R joints (a
+    parameter that does not apply is not varied, its cell is left empty); a URDF study's need their ``when``."""
+    if spec.kind is StudyKind.URDF:
+        return spec.parameters[name].applies(chosen)
+    joints = parse(family).joints
+    need = NEEDS.get(name)
+    return need is None or (need == "a P joint" and "P" in joints) or (need == "two R joints" and joints.count("R") >= 2)
 
 
 def build_candidate(candidate: Candidate, mass: MassModel):
@@ -205,13 +219,40 @@ def evaluate_platform(platform, effort: Effort, seed: int, collision: bool = Fal
 
 # ------------------------------------------------------------------------------------------- The backend task
 ID_COLUMNS = ("run", "seed", "kind", "architecture", "name", "generation")
-"""Leading columns of a design table; then the parameters (:data:`PARAMETERS`), the status, the metrics."""
+"""Leading columns of a design table; then the study's parameters (:data:`PARAMETERS` for the nomenclature), the status,
+the metrics."""
 
 TAIL_COLUMNS = ("feasible", "wall_time")
 
 
-def columns() -> tuple[str, ...]:
-    return (*ID_COLUMNS, *PARAMETERS, "status", "reason", *DESIGN_METRICS, *TAIL_COLUMNS)
+def columns(spec: DesignSpec) -> tuple[str, ...]:
+    return (*ID_COLUMNS, *spec.parameters, "status", "reason", *DESIGN_METRICS, *TAIL_COLUMNS)
+
+
+def cells(spec: DesignSpec, params: Mapping[str, float | str]) -> dict[str, float | str]:
+    """The parameter cells of a row: each value, or empty where the parameter does not apply (NaN, or "" for words)."""
+    return {k: params[k] if k in params else "" if p.words else math.nan for k, p in spec.parameters.items()}
+
+
+def params_of_row(spec: DesignSpec, row: Mapping) -> dict[str, float | str]:
+    """The parameters of a table row that apply to its design (the point's ``params``)."""
+    out: dict[str, float | str] = {}
+    for k, p in spec.parameters.items():
+        if applies(spec, row["architecture"], k, out):
+            out[k] = str(row[k]) if p.words else float(row[k])
+    return out
+
+
+def design_platform(spec: DesignSpec, kind: str, family: str, params: Mapping[str, float | str]):
+    """The platform of a design: a reference as registered, a URDF study's robot instantiated (the parameters that do not
+    apply get their ``otherwise``), or the nomenclature's candidate (:func:`build_candidate`)."""
+    if kind == "reference":
+        from ..platforms import load
+
+        return load(family)
+    if spec.kind is StudyKind.URDF:
+        return spec.robot.platform({**{k: p.otherwise for k, p in spec.parameters.items() if k not in params}, **params})
+    return build_candidate(Candidate(family, params), spec.mass)
 
 
 def feasible(row: Mapping, constraints: Mapping) -> int:
@@ -225,33 +266,50 @@ def feasible(row: Mapping, constraints: Mapping) -> int:
     return 1
 
 
-def exclusions(rows, constraints: Mapping, limit: int = 3) -> list[str]:
-    """Why designs are not feasible, on the terminal: the failed evaluations per reason (the ``limit`` most frequent), then
-    each constraint ``{metric: (min, max)}`` with the number of evaluated designs it excludes (one may be excluded by
-    several); [] when every design is feasible."""
-    rows = list(rows)
-    failed: dict[str, int] = {}
-    for r in rows:
-        if r["status"] != "ok":
-            key = f"{r['status']}: {r.get('reason', '')}"
-            failed[key] = failed.get(key, 0) + 1
-    ok = [r for r in rows if r["status"] == "ok"]
-    lines = [f"  {n} design(s) {why}" for why, n in sorted(failed.items(), key=lambda kv: -kv[1])[:limit]]
+def violations(row: Mapping, constraints: Mapping) -> list[str]:
+    """The bounds ``{metric: (min, max)}`` an evaluated row misses, each with its value (e.g. "thrust_margin = -0.4 N,
+    below its min 0")."""
+    out = []
     for k, (lo, hi) in constraints.items():
+        unit = f" {DESIGN_METRICS[k].unit}" if DESIGN_METRICS[k].unit else ""
+        if lo is not None and not row[k] >= lo:
+            out.append(f"{k} = {row[k]:.4g}{unit}, below its min {lo:g}")
+        if hi is not None and not row[k] <= hi:
+            out.append(f"{k} = {row[k]:.4g}{unit}, above its max {hi:g}")
+    return out
+
+
+def describe(spec: DesignSpec, row: Mapping) -> str:
+    """``design RUN NAME (the varied parameters that apply)``: how a design is named on the terminal."""
+    shown = spec.optimised or spec.swept
+    vals = params_of_row(spec, row) if row["kind"] != "reference" else {}
+    text = ", ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}" for k, v in vals.items() if k in shown)
+    return f"design {row['run']} {row['name']}" + (f" ({text})" if text else "")
+
+
+def exclusions(rows, spec: DesignSpec) -> list[str]:
+    """Why designs are not feasible, on the terminal: each constraint with the number of evaluated designs it excludes
+    (one may be excluded by several), the count of failed evaluations, then every design that is not feasible with its
+    reason (the failure, or the bounds it misses and its values); [] when every design is feasible."""
+    rows = list(rows)
+    ok = [r for r in rows if r["status"] == "ok"]
+    lines = []
+    for k, (lo, hi) in spec.constraints.items():
         bound = " and ".join(b for b in ((f"{k} >= {lo:g}" if lo is not None else ""), (f"{k} <= {hi:g}" if hi is not None else "")) if b)
-        out = sum(1 for r in ok if (lo is not None and not r[k] >= lo) or (hi is not None and not r[k] <= hi))
+        out = sum(1 for r in ok if violations(r, {k: (lo, hi)}))
         if out:
             lines.append(f"  constraint {bound} excludes {out} of the {len(ok)} evaluated design(s)")
-    n_feasible = sum(feasible(r, constraints) for r in rows)
+    n_failed = len(rows) - len(ok)
+    if n_failed:
+        lines.append(f"  {n_failed} design(s) could not be evaluated (failed: the design is refused; error: a bug, re-run on resume)")
+    for r in rows:
+        if r["status"] != "ok":
+            reason = " ".join(str(r.get("reason", "")).split())
+            lines.append(f"  {describe(spec, r)}: {r['status']}: {reason}")
+        elif not feasible(r, spec.constraints):
+            lines.append(f"  {describe(spec, r)}: infeasible: {'; '.join(violations(r, spec.constraints))}")
+    n_feasible = sum(feasible(r, spec.constraints) for r in rows)
     return [f"not feasible: {len(rows) - n_feasible} of {len(rows)} design(s):", *lines] if lines else []
-
-
-def _platform(spec: DesignSpec, point: Mapping):
-    if point["kind"] == "reference":
-        from ..platforms import load
-
-        return load(point["architecture"])
-    return build_candidate(Candidate(point["architecture"], point["params"]), spec.mass)
 
 
 _SPECS: dict[str, DesignSpec] = {}
@@ -277,13 +335,14 @@ def evaluate_design(spec_dict: dict, point: dict) -> dict:
     try:
         named = {*spec.objectives, *spec.constraints}
         collision = any(DESIGN_METRICS[k].collision for k in named)  # a metric the study names needs the self-collision check
-        values = evaluate_platform(_platform(spec, point), spec.effort, point["seed"], collision=collision)
+        platform = design_platform(spec, point["kind"], point["architecture"], point["params"])
+        values = evaluate_platform(platform, spec.effort, point["seed"], collision=collision)
     except QprrError as exc:
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
     except Exception as exc:  # a bug must not lose the study: recorded, visible in the table, re-run on resume
         status, reason = "error", f"{type(exc).__name__}: {exc}"
     row = {k: point[k] for k in ID_COLUMNS}
-    row.update({k: float(point["params"].get(k, math.nan)) for k in PARAMETERS})
+    row.update(cells(spec, point["params"]))
     row.update(status=status, reason=reason, **values)
     row["feasible"] = feasible(row, spec.constraints)
     row["wall_time"] = time.perf_counter() - t0

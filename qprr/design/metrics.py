@@ -31,6 +31,7 @@ constraint.  (The campaign metrics, numbers of a simulated run, are the other re
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -135,6 +136,12 @@ def sign(name: str) -> float:
     return 1.0 if DESIGN_METRICS[name].better == "min" else -1.0
 
 
+def unit_text(unit: str) -> str:
+    """A unit as matplotlib's mathtext draws it: ``m^3`` -> m with a superscript 3, ``m/s^2`` likewise; the rest as is."""
+    return re.sub(r"([A-Za-z]+)\^(-?\d+)", lambda m: rf"$\mathrm{{{m.group(1)}}}^{{{m.group(2)}}}$", unit)
+
+
 def label(name: str) -> str:
+    """The axis label of a metric on a figure: its label, its unit (mathtext) and its better direction."""
     m = DESIGN_METRICS[name]
-    return f"{m.label} [{m.unit}] ({m.better})" if m.unit else f"{m.label} ({m.better})"
+    return f"{m.label} [{unit_text(m.unit)}] ({m.better})" if m.unit else f"{m.label} ({m.better})"

@@ -34,10 +34,10 @@ from ..campaign import metrics_of
 from ..errors import InputError, QprrError
 from ..nomenclature import parse
 from ..scenarios import SCENARIOS
-from .evaluate import Candidate, build_candidate, exclusions, study_of
+from .evaluate import design_platform, exclusions, params_of_row, study_of
 from .metrics import DESIGN_METRICS, label, sign
 from .search import Results, close_backend, dominated, evaluate_points, front_levels, open_backend, read_table
-from .spec import PARAMETERS, DesignSpec
+from .spec import DesignSpec, StudyKind
 
 
 # ---------------------------------------------------------------------------------------------------- Ranking
@@ -74,7 +74,10 @@ def front(rows: list[dict], objectives) -> list[dict]:
     return [r for r in ranked(rows, objectives) if r["level"] == 1]
 
 
-def _fmt(v: float) -> str:
+def _fmt(v: float | str) -> str:
+    """A cell of the Markdown table: a number to 4 digits, a word as it is, "--" where nothing applies."""
+    if isinstance(v, str):
+        return v or "--"
     return f"{v:.4g}" if np.isfinite(v) else "--"
 
 
@@ -83,7 +86,7 @@ def markdown_table(rows: list[dict], objectives, params=(), limit: int | None = 
     cols = [k for k in DESIGN_METRICS]
     head = [
         "rank",
-        "design (2.1)",
+        "design",
         "run",
         "front",
         "score",
@@ -108,42 +111,59 @@ def markdown_table(rows: list[dict], objectives, params=(), limit: int | None = 
 
 # ---------------------------------------------------------------------------------------------------- Figures
 MARKERS = {"Q": "o", "HEX": "s", "OCT": "D"}
-"""Marker of each vehicle (Table 2.3 code); the colour is the arm's joint sequence."""
+"""Marker of each vehicle (Table 2.3 code) in a nomenclature study; the colour is the arm's joint sequence."""
 
 
-def _arm(row: dict) -> str:
-    return row["architecture"].split("-")[-1] if row["kind"] != "reference" else "reference"
+def _group(row: dict, kind: StudyKind, colour_by: str | None) -> str:
+    """The colour's legend entry of a design: the value of parameter ``colour_by`` when given, else its arm (a
+    nomenclature study) or its robot (a URDF study)."""
+    if colour_by is not None:
+        v = row[colour_by]
+        return f"{colour_by} = {v:.4g}" if isinstance(v, float) and np.isfinite(v) else f"{colour_by} = {v or 'n/a'}"
+    return f"arm {row['architecture'].split('-')[-1]}" if kind is StudyKind.NOMENCLATURE else row["architecture"]
 
 
-def _vehicle(row: dict) -> str:
-    return parse(row["architecture"]).uav if row["kind"] != "reference" else "reference"
+def _vehicle(row: dict, kind: StudyKind) -> str:
+    """The marker's legend entry: the vehicle of a nomenclature study's design, "" in a URDF study (one robot)."""
+    return parse(row["architecture"]).uav if kind is StudyKind.NOMENCLATURE else ""
 
 
-def _colours(rows):
+def _in_order(v: float | str) -> tuple:
+    """Sort key of a parameter's values: numbers in their order, then words, then the cells where it does not apply."""
+    if isinstance(v, float):
+        return (0, v, "") if np.isfinite(v) else (2, 0.0, "")
+    return (1, 0.0, v) if v else (2, 0.0, "")
+
+
+def _colours(rows, kind: StudyKind, colour_by: str | None):
     import matplotlib
 
-    arms = sorted({_arm(r) for r in rows} - {"reference"})
+    designs = [r for r in rows if r["kind"] != "reference"]
+    if colour_by is None:
+        groups = sorted({_group(r, kind, None) for r in designs})
+    else:
+        groups = list(dict.fromkeys(_group(r, kind, colour_by) for r in sorted(designs, key=lambda r: _in_order(r[colour_by]))))
     cmap = matplotlib.colormaps["tab10"]
-    return {a: cmap(i % 10) for i, a in enumerate(arms)}
+    return {a: cmap(i % 10) for i, a in enumerate(groups)}
 
 
-def _legend(fig, axes, colours, vehicles) -> int:
+def _legend(fig, colours, vehicles, references) -> int:
+    """The figure's legend: the colours, the vehicles' markers, a star per reference the study names, the front's ring."""
     from matplotlib.lines import Line2D
 
-    h = [Line2D([], [], ls="", marker="o", color=c, label=f"arm {a}") for a, c in colours.items()]
+    h = [Line2D([], [], ls="", marker="o", color=c, label=a) for a, c in colours.items()]
     h += [Line2D([], [], ls="", marker=MARKERS.get(v, "o"), color="0.4", label=f"{v} vehicle") for v in vehicles]
-    h += [
-        Line2D([], [], ls="", marker="*", markersize=12, color="k", label="thesis Q-PRR (stored)"),
-        Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor="none", markeredgecolor="k", label="Pareto front (all objectives)"),
-    ]
+    h += [Line2D([], [], ls="", marker="*", markersize=12, color="k", label=name) for name in references]
+    h.append(Line2D([], [], ls="", marker="o", markersize=9, markerfacecolor="none", markeredgecolor="k", label="Pareto front (all objectives)"))
     fig.legend(handles=h, loc="lower center", ncol=min(6, len(h)), fontsize=8, frameon=False)
     return len(h)
 
 
-def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
+def pareto_2d(rows: list[dict], objectives, path, pairs=None, kind: StudyKind = StudyKind.NOMENCLATURE, colour_by: str | None = None) -> str:
     """Scatter panels of ``objectives[0]`` against each other objective (or ``pairs``): every feasible
-    design coloured by architecture, the study's Pareto front (all objectives) ringed in black, each
-    panel's own 2-D front as a step line, references as stars."""
+    design coloured by the value of parameter ``colour_by``, or by arm (``kind``: a nomenclature study; by robot in a
+    URDF study), the study's Pareto front (all objectives) ringed in black, each panel's own 2-D front as a step line,
+    the references the study names as stars."""
     from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
     ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
@@ -153,8 +173,9 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
     nrow = int(np.ceil(n / ncol))
     fig = Figure(figsize=(6.4 * ncol, 4.6 * nrow))
     axes = fig.subplots(nrow, ncol, squeeze=False)
-    col = _colours(ok)
-    vehicles = sorted({_vehicle(r) for r in ok} - {"reference"})
+    col = _colours(ok, kind, colour_by)
+    vehicles = sorted({_vehicle(r, kind) for r in ok if r["kind"] != "reference"} - {""})
+    references = list(dict.fromkeys(r["name"] for r in ok if r["kind"] == "reference"))
     for ax, (kx, ky) in zip(axes.flat, pairs):
         x = np.array([r[kx] for r in ok])
         y = np.array([r[ky] for r in ok])
@@ -162,7 +183,7 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
             if r["kind"] == "reference":
                 ax.scatter(a, b, s=220, marker="*", color="k", zorder=5)
             else:
-                ax.scatter(a, b, s=34, marker=MARKERS.get(_vehicle(r), "o"), color=col[_arm(r)], alpha=0.85, zorder=2)
+                ax.scatter(a, b, s=34, marker=MARKERS.get(_vehicle(r, kind), "o"), color=col[_group(r, kind, colour_by)], alpha=0.85, zorder=2)
         lv1 = np.array([r["level"] == 1 for r in ok])
         ax.scatter(x[lv1], y[lv1], s=110, facecolor="none", edgecolor="k", linewidth=1.0, zorder=3)
         nd = ~dominated(np.c_[sign(kx) * x, sign(ky) * y])
@@ -173,15 +194,16 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None) -> str:
         ax.grid(alpha=0.3)
     for ax in list(axes.flat)[n:]:
         ax.axis("off")
-    nh = _legend(fig, axes, col, vehicles)
+    nh = _legend(fig, col, vehicles, references)
     fig.tight_layout(rect=(0, 0.035 * int(np.ceil(nh / 6)), 1, 1))
     fig.savefig(path, dpi=110)
     return str(path)
 
 
-def parallel_coordinates(rows: list[dict], objectives, path) -> str:
+def parallel_coordinates(rows: list[dict], objectives, path, kind: StudyKind = StudyKind.NOMENCLATURE, colour_by: str | None = None) -> str:
     """One line per feasible design across the objectives (each axis from its worst to its best value seen):
-    the Pareto front coloured by arm (solid: Q, dash-dot: HEX), the other designs grey, references dashed black."""
+    the Pareto front coloured as in :func:`pareto_2d` (solid: Q, dash-dot: HEX), the other designs grey, references
+    dashed black."""
     from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
     ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
@@ -192,7 +214,7 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
     Z = np.abs(F - worst) / span  # 0 worst, 1 best
     fig = Figure(figsize=(2.1 * len(objectives) + 2.5, 5.0))
     ax = fig.subplots()
-    col = {a: c for a, c in _colours(ok).items()}
+    col = _colours(ok, kind, colour_by)
     xs = np.arange(len(objectives))
     for z, r in zip(Z, ok):
         if r["level"] != 1 and r["kind"] != "reference":
@@ -202,9 +224,9 @@ def parallel_coordinates(rows: list[dict], objectives, path) -> str:
         if r["kind"] == "reference":
             ax.plot(xs, z, color="k", lw=2.0, ls="--", zorder=4, label=r["name"])
         elif r["level"] == 1:
-            a = r["architecture"]
-            ls = "-" if _vehicle(r) == "Q" else "-." if _vehicle(r) == "HEX" else ":"
-            ax.plot(xs, z, color=col[_arm(r)], ls=ls, lw=1.6, zorder=3, label=None if a in seen else a)
+            a = r["architecture"] if kind is StudyKind.NOMENCLATURE else _group(r, kind, colour_by)
+            ls = {"": "-", "Q": "-", "HEX": "-."}.get(_vehicle(r, kind), ":")
+            ax.plot(xs, z, color=col[_group(r, kind, colour_by)], ls=ls, lw=1.6, zorder=3, label=None if a in seen else a)
             seen.add(a)
     best = np.where([DESIGN_METRICS[k].better == "max" for k in objectives], hi, lo)
     ax.set_xticks(xs, [f"{label(k)}\nworst {w:.3g}\nbest {b:.3g}" for k, w, b in zip(objectives, worst, best)], fontsize=8)
@@ -229,12 +251,8 @@ def fly_design(spec_dict: dict, row: dict) -> dict:
     cl = spec.closed_loop
     out = {"run": row["run"], "name": row["name"], **dict.fromkeys(FLIGHT_COLUMNS, math.nan)}
     try:
-        if row["kind"] == "reference":
-            from ..platforms import load
-
-            platform = load(row["architecture"])
-        else:
-            platform = build_candidate(Candidate(row["architecture"], {k: float(row[k]) for k in PARAMETERS}), spec.mass)
+        params = params_of_row(spec, row) if row["kind"] != "reference" else {}
+        platform = design_platform(spec, row["kind"], row["architecture"], params)
         result = SCENARIOS[cl.scenario].run(platform=platform, controller=cl.controller, duration=cl.duration)
         m = metrics_of(result, ("rmse", "x_cm_max", "saturation"), platform.xi_names)
     except QprrError as exc:
@@ -249,7 +267,7 @@ def load_study(results) -> tuple[DesignSpec, list[dict]]:
     """The study and its rows from a results file (.csv / .parquet with its .meta.json) or a campaign Results."""
     res = results if isinstance(results, Results) else read_table(results)
     study = res.meta.get("design_spec")
-    if not isinstance(study, dict) or "architectures" not in study:
+    if not isinstance(study, dict) or "objectives" not in study:
         raise InputError(f"{str(res.path)!r} holds no design study (run `qprr design run SPEC -o FILE` first)")
     return DesignSpec.from_mapping(study), rows_of(res.table)
 
@@ -277,7 +295,7 @@ def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, 
 
 def _flight_table(rows: list[dict], fl: list[dict]) -> str:
     lines = [
-        "| design (2.1) | run | status | position RMSE [mm] | max CoG offset [mm] | rotor saturation [% of ticks] |",
+        "| design | run | status | position RMSE [mm] | max CoG offset [mm] | rotor saturation [% of ticks] |",
         "|---|---|---|---|---|---|",
     ]
     for r, f in zip(rows, fl):
@@ -310,7 +328,7 @@ def design_report(results, out=None, *, top: int | None = None, fly: bool = True
         f"design study {spec.name}: {len(rows)} designs evaluated, {n_ok} ok, {n_feas} feasible, {n_front} on the Pareto front "
         f"of ({', '.join(spec.objectives)})"
     )
-    text = [head, *exclusions(rows, spec.constraints), "", markdown_table(rk, spec.objectives, params)]
+    text = [head, *exclusions(rows, spec), "", markdown_table(rk, spec.objectives, params)]
     figures: list[str] = []
     k = spec.closed_loop.top if top is None else top
     chosen = [r for r in rk if r["level"] >= 1 and r["kind"] != "reference"][:k] + [r for r in rk if r["kind"] == "reference"]
@@ -328,8 +346,9 @@ def design_report(results, out=None, *, top: int | None = None, fly: bool = True
             raise InputError(f"out: {str(d)!r} is a file, not a folder for the report")
         d.mkdir(parents=True, exist_ok=True)
         if sum(r["level"] >= 1 for r in rk) >= 2:
-            figures.append(pareto_2d(rk, spec.objectives, d / "pareto.png"))
-            figures.append(parallel_coordinates(rk, spec.objectives, d / "parallel.png"))
+            colour_by = spec.swept[-1] if spec.kind is StudyKind.URDF and spec.swept else None  # the robot is one: its grid's last axis
+            figures.append(pareto_2d(rk, spec.objectives, d / "pareto.png", kind=spec.kind, colour_by=colour_by))
+            figures.append(parallel_coordinates(rk, spec.objectives, d / "parallel.png", kind=spec.kind, colour_by=colour_by))
         _csv(d / "ranking.csv", rk)
         if fl:
             _csv(d / "closed_loop.csv", fl, ("run", "name", *FLIGHT_COLUMNS))

@@ -3,8 +3,10 @@
 **Design points**: the references, the grid, and the seeds and run indices of every evaluation.
 
 Run indices: the references first (0..R-1), then the grid in C order (architecture slowest, then
-the swept parameters in :data:`~qprr.design.spec.PARAMETERS` order); with NSGA-II, architecture
-``a`` generation ``g`` member ``k`` is run ``R + (a * generations + g) * population + k``.  Every design is measured with the same seed,
+the swept parameters in :data:`~qprr.design.spec.PARAMETERS` order, each only where it applies);
+with NSGA-II, architecture ``a`` generation ``g`` member ``k`` is run ``R + (a * generations + g) *
+population + k`` (an architecture to which no ranged parameter applies is one design, and the
+blocks after it start earlier).  Every design is measured with the same seed,
 drawn from ``SeedSequence(seed)`` (the workspace estimator's counting-grid shifts): common random
 numbers, so that two designs differ by their geometry, never by the shifts (two identical
 geometries give identical numbers).  The table depends on the study only.
@@ -43,7 +45,6 @@ designs are evaluated.
 from __future__ import annotations
 
 import functools
-import itertools
 import math
 import time
 import warnings
@@ -57,9 +58,9 @@ import numpy as np
 from ..campaign import Backend, Results, make_backend, read_results
 from ..campaign.session import BackendChoice, Session
 from ..errors import InputError, MissingDependencyError
-from .evaluate import ID_COLUMNS, TAIL_COLUMNS, columns, evaluate_design, exclusions
+from .evaluate import ID_COLUMNS, TAIL_COLUMNS, applies, cells, columns, evaluate_design, exclusions
 from .metrics import DESIGN_METRICS, sign
-from .spec import PARAMETERS, DesignSpec
+from .spec import DesignSpec
 
 
 # ---------------------------------------------------------------------------------------------- Design points
@@ -91,24 +92,57 @@ def fixed_params(spec: DesignSpec) -> dict[str, float]:
     return {k: p.values[0] for k, p in spec.parameters.items() if len(p.values) == 1}
 
 
+def candidates(spec: DesignSpec, family: str) -> list[dict]:
+    """Every combination of the listed values (a fixed one is a list of one) of the parameters that apply to a candidate
+    of ``family``, in order (the first parameter slowest); a parameter that does not apply is left out, not varied
+    (:func:`~qprr.design.evaluate.applies`).  The ranged parameters are the optimiser's."""
+    out: list[dict] = [{}]
+    for k, p in spec.parameters.items():
+        if p.optimised:
+            continue
+        grown = []
+        for c in out:
+            grown += [{**c, k: v} for v in p.values] if applies(spec, family, k, c) else [c]
+        out = grown
+    return out
+
+
 def grid_points(spec: DesignSpec) -> list[dict]:
-    """Every architecture x every combination of the swept parameters (after the references)."""
-    swept = spec.swept
-    base = fixed_params(spec)
+    """Every family (architecture, or the URDF study's robot) x every combination of the values that apply to it
+    (after the references)."""
     out = []
     i = len(spec.references)
-    for arch in spec.architectures:
-        for combo in itertools.product(*(spec.parameters[k].values for k in swept)):
-            out.append(point(spec, i, "grid", arch, {**base, **dict(zip(swept, combo))}))
+    for family in spec.families:
+        for params in candidates(spec, family):
+            out.append(point(spec, i, "grid", family, params))
             i += 1
     return out
+
+
+def ranged(spec: DesignSpec, family: str) -> tuple[str, ...]:
+    """The ranged parameters NSGA-II varies for ``family`` (those that apply to it)."""
+    base = candidates(spec, family)[0]
+    return tuple(k for k in spec.optimised if applies(spec, family, k, base))
+
+
+def block_starts(spec: DesignSpec) -> list[int]:
+    """NSGA-II: the first run of each family's block (``generations x population`` designs, or one design for a
+    family to which no ranged parameter applies)."""
+    s = spec.search
+    starts, i = [], len(spec.references)
+    for family in spec.families:
+        starts.append(i)
+        i += s.generations * s.population if ranged(spec, family) else 1
+    return starts
 
 
 def n_points(spec: DesignSpec) -> int:
     """How many designs the study evaluates."""
     if spec.search.method == "grid":
         return len(spec.references) + len(grid_points(spec))
-    return len(spec.references) + len(spec.architectures) * spec.search.generations * spec.search.population
+    last = spec.families[-1]
+    s = spec.search
+    return block_starts(spec)[-1] + (s.generations * s.population if ranged(spec, last) else 1)
 
 
 # ------------------------------------------------------------------------------------------- Pareto dominance
@@ -301,7 +335,7 @@ def meta_of(spec: DesignSpec) -> dict:
         "fingerprint": spec.fingerprint,
         "design_spec": spec.to_dict(),
         "kind": "design",
-        "params": [*ID_COLUMNS[2:], *PARAMETERS],
+        "params": [*ID_COLUMNS[2:], *spec.parameters],
         "metrics": ["status", "reason", *DESIGN_METRICS, TAIL_COLUMNS[1]],
         "names": [],
         "n_runs": n_points(spec),
@@ -310,7 +344,7 @@ def meta_of(spec: DesignSpec) -> dict:
 
 def _error_row(spec: DesignSpec, p: dict, exc: Exception) -> dict:
     row = {k: p[k] for k in ID_COLUMNS}
-    row.update({k: float(p["params"].get(k, math.nan)) for k in PARAMETERS})
+    row.update(cells(spec, p["params"]))
     row.update(status="error", reason=f"{type(exc).__name__}: {exc}", **dict.fromkeys(DESIGN_METRICS, math.nan), feasible=0, wall_time=math.nan)
     return row
 
@@ -362,33 +396,41 @@ class _Study:
 def _nsga2(study: _Study) -> None:
     spec = study.spec
     s = spec.search
-    names = spec.optimised
-    low = [spec.parameters[k].low for k in names]
-    high = [spec.parameters[k].high for k in names]
-    base = fixed_params(spec)
+    families = spec.families
+    names = [ranged(spec, f) for f in families]
+    bases = [candidates(spec, f)[0] for f in families]
+    starts = block_starts(spec)
     opts = [
         make_optimiser(
             s.optimiser,
-            low,
-            high,
+            [spec.parameters[k].low for k in names[a]],
+            [spec.parameters[k].high for k in names[a]],
             len(spec.objectives),
             1 + len(spec.constraints),
             s.population,
             int(np.random.SeedSequence(spec.seed, spawn_key=(2**20, a)).generate_state(1)[0]),
         )
-        for a in range(len(spec.architectures))
+        if names[a]
+        else None  # nothing to optimise for this family: one design
+        for a in range(len(families))
     ]
-    start = len(spec.references)
     for g in range(s.generations):
-        pts = []
-        for a, (arch, opt) in enumerate(zip(spec.architectures, opts)):
+        groups = []
+        for a, (family, opt) in enumerate(zip(families, opts)):
+            if opt is None:
+                groups.append([point(spec, starts[a], "nsga2", family, bases[a], 0)] if g == 0 else [])
+                continue
+            first = starts[a] + g * s.population
             X = opt.ask()
-            first = start + (a * s.generations + g) * s.population
-            pts.append([point(spec, first + k, "nsga2", arch, {**base, **{n: float(v) for n, v in zip(names, x)}}, g) for k, x in enumerate(X)])
-        rows = study.evaluate([p for group in pts for p in group])
-        for a, opt in enumerate(opts):
-            F, G = told(spec, rows[a * s.population : (a + 1) * s.population])
-            opt.tell(F, G)
+            groups.append(
+                [point(spec, first + k, "nsga2", family, {**bases[a], **{n: float(v) for n, v in zip(names[a], x)}}, g) for k, x in enumerate(X)]
+            )
+        rows = study.evaluate([p for group in groups for p in group])
+        i = 0
+        for opt, group in zip(opts, groups):
+            if opt is not None:
+                opt.tell(*told(spec, rows[i : i + len(group)]))
+            i += len(group)
         study.bar.message(f"generation {g + 1}/{s.generations} done")
 
 
@@ -411,7 +453,7 @@ def run_design(
     """
     if not isinstance(spec, DesignSpec):
         raise InputError(f"spec must be a DesignSpec (DesignSpec.load(path)), got {type(spec).__name__}")
-    session = Session(output, columns(), meta_of(spec), BackendChoice(backend, workers, scheduler), fresh)
+    session = Session(output, columns(spec), meta_of(spec), BackendChoice(backend, workers, scheduler), fresh)
     done: dict[int, dict] = {}
     if session.store.rows_before:
         t = read_table(session.store.path).table
@@ -447,4 +489,4 @@ def infeasible_reasons(results, spec: DesignSpec) -> list[str]:
     """Why designs of a study's table are not feasible (:func:`~qprr.design.evaluate.exclusions`), for the terminal:
     the failed evaluations' reasons and what each constraint excludes, otherwise only in the table's columns."""
     table = results.table
-    return exclusions(({k: r[k].item() for k in table.dtype.names} for r in table), spec.constraints)
+    return exclusions(({k: r[k].item() for k in table.dtype.names} for r in table), spec)

@@ -64,11 +64,14 @@ import json
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from enum import Enum
+from pathlib import Path
 
 from ..errors import InputError, QprrError
 from ..platforms import PLATFORMS
 from ..validation import as_file
 from .metrics import DESIGN_METRICS, RANGES
+from .template import RobotTemplate
 
 
 # ----------------------------------------------------------------------------------------------------- Checks
@@ -187,21 +190,39 @@ PARAMETERS = {
 
 @dataclass(frozen=True)
 class Parameter:
-    """One parameter of a study: ``values`` (one: fixed; several: a grid) or ``low``/``high`` (optimised)."""
+    """One parameter of a study: ``values`` (one: fixed; several: a grid; numbers, or words in a URDF study) or
+    ``low``/``high`` (optimised); in a URDF study, ``when`` (earlier parameter -> the values for which this one applies;
+    empty: always) and ``otherwise`` (what its placeholders get where it does not apply)."""
 
     name: str
-    values: tuple[float, ...] = ()
+    values: tuple[float | str, ...] = ()
     low: float | None = None
     high: float | None = None
+    when: Mapping[str, tuple[float | str, ...]] = field(default_factory=dict)
+    otherwise: float | str | None = None
 
     @property
     def optimised(self) -> bool:
         return self.low is not None
 
+    @property
+    def words(self) -> bool:
+        """The values are words (a joint type, an axis), not numbers: a table cell of text, never optimised."""
+        return any(isinstance(v, str) for v in self.values)
+
+    def applies(self, chosen: Mapping[str, float | str]) -> bool:
+        """Whether this parameter applies to a candidate whose earlier parameters have the values ``chosen``."""
+        return all(k in chosen and chosen[k] in allowed for k, allowed in self.when.items())
+
     def to_dict(self):
         if self.optimised:
-            return {"low": self.low, "high": self.high}
-        return list(self.values) if len(self.values) > 1 else self.values[0]
+            short = {"low": self.low, "high": self.high}
+        else:
+            short = list(self.values) if len(self.values) > 1 else self.values[0]
+        if not self.when:
+            return short
+        out = short if isinstance(short, dict) else {"values": list(self.values)}
+        return {**out, "when": {k: list(v) for k, v in self.when.items()}, "otherwise": self.otherwise}
 
 
 def parse_parameter(name: str, value) -> Parameter:
@@ -229,6 +250,54 @@ def parse_parameter(name: str, value) -> Parameter:
     return Parameter(name, (number(value, key, lo=lo, hi=hi),))
 
 
+RESERVED = ("run", "seed", "kind", "architecture", "name", "generation", "status", "reason", "feasible", "wall_time", "level", "score")
+"""Column names of a design table that a URDF study's parameter may not take (nor a design metric's)."""
+
+
+def _value(v, key: str) -> float | str:
+    """A parameter value of a URDF study: a finite number or a word (a joint type, an axis "0 1 0")."""
+    if isinstance(v, str):
+        if not v.strip() or "\n" in v:
+            spec_error(key, v, 'a word on one line (a joint type, an axis such as "0 1 0")')
+        return v
+    return number(v, key)
+
+
+def parse_robot_parameter(name: str, value, earlier: Mapping[str, Parameter]) -> Parameter:
+    """A ``[parameters]`` entry of a URDF study (module docstring of :mod:`qprr.design.template`): a number, a list of
+    numbers or of words, ``{low, high}``, or a table ``{values | low, high, when, otherwise}``; ``when`` names earlier
+    parameters and their values."""
+    key = f"parameters.{name}"
+    if not name.isidentifier() or name in RESERVED or name in DESIGN_METRICS:
+        spec_error(key, value, "a placeholder name (letters, digits, _) that is not a column of the table (" + ", ".join(RESERVED) + ", the metrics)")
+    d = dict(value) if isinstance(value, Mapping) else {"values": value}
+    table_keys(d, key, ("values", "low", "high", "when", "otherwise"))
+    if ("values" in d) == ("low" in d or "high" in d):
+        spec_error(key, value, "values (a number or a list) or a range low, high; one of them")
+    if "values" in d:
+        raw = d["values"] if isinstance(d["values"], (list, tuple)) else [d["values"]]
+        vals = tuple(_value(v, key) for v in raw)
+        if not vals or len(set(vals)) != len(vals) or len({type(v) is str for v in vals}) > 1:
+            spec_error(key, d["values"], "at least one value, distinct, all numbers or all words")
+        low = high = None
+    else:
+        low, high, vals = number(d.get("low"), f"{key}.low"), number(d.get("high"), f"{key}.high"), ()
+        if not low < high:
+            spec_error(key, value, "low < high")
+    when = {}
+    for k, allowed in table_keys(d.get("when", {}), f"{key}.when", tuple(earlier)).items():
+        allowed = tuple(allowed) if isinstance(allowed, (list, tuple)) else (allowed,)
+        if earlier[k].optimised or not set(allowed) <= set(earlier[k].values):
+            spec_error(f"{key}.when.{k}", allowed, f"values among those of parameters.{k} ({', '.join(map(str, earlier[k].values))})")
+        when[k] = allowed
+    if when and low is not None:
+        spec_error(f"{key}.when", d["when"], "a condition on a listed parameter only (an optimised range applies to every candidate)")
+    if bool(when) != ("otherwise" in d):
+        spec_error(f"{key}.otherwise", d.get("otherwise"), "the value its placeholders get where it does not apply (with when, and only with it)")
+    otherwise = _value(d["otherwise"], f"{key}.otherwise") if when else None
+    return Parameter(name, vals, low, high, when, otherwise)
+
+
 def default_parameters() -> dict[str, Parameter]:
     return {k: Parameter(k, (d,)) for k, (_, d, _) in PARAMETERS.items()}
 
@@ -251,6 +320,7 @@ _KEYS = (
     "effort",
     "search",
     "closed_loop",
+    "robot",
 )
 
 
@@ -310,6 +380,14 @@ class ClosedLoop:
         object.__setattr__(self, "duration", number(self.duration, "closed_loop.duration", positive=True))
 
 
+class StudyKind(Enum):
+    """What a study's candidates are: architectures of the nomenclature (2.1) built by :func:`qprr.nomenclature.build`,
+    or the user's own robot, a URDF and rotor file with placeholders (:mod:`qprr.design.template`)."""
+
+    NOMENCLATURE = "nomenclature"
+    URDF = "urdf"
+
+
 @dataclass(frozen=True)
 class DesignSpec:
     """A validated design study (module docstring).  :meth:`load` reads TOML/JSON, :meth:`from_mapping` a dict."""
@@ -326,6 +404,16 @@ class DesignSpec:
     search: Search = field(default_factory=Search)
     closed_loop: ClosedLoop = field(default_factory=ClosedLoop)
     description: str = ""
+    robot: RobotTemplate | None = None
+
+    @property
+    def kind(self) -> StudyKind:
+        return StudyKind.NOMENCLATURE if self.robot is None else StudyKind.URDF
+
+    @property
+    def families(self) -> tuple[str, ...]:
+        """What the search runs over, one family at a time: the architectures, or the robot's name (a URDF study)."""
+        return self.architectures if self.robot is None else (self.robot.name,)
 
     @property
     def optimised(self) -> tuple[str, ...]:
@@ -346,7 +434,7 @@ class DesignSpec:
         return hashlib.sha256(json.dumps(d, sort_keys=True).encode()).hexdigest()[:16]
 
     def to_dict(self) -> dict:
-        return {
+        out = {
             "name": self.name,
             "description": self.description,
             "seed": self.seed,
@@ -360,10 +448,14 @@ class DesignSpec:
             "search": vars(self.search).copy(),
             "closed_loop": vars(self.closed_loop).copy(),
         }
+        if self.robot is not None:  # a URDF study: the robot (its files' texts included) instead of the nomenclature's
+            del out["architectures"], out["mass"]
+            out["robot"] = self.robot.to_dict()
+        return out
 
     @classmethod
     def load(cls, path) -> DesignSpec:
-        """Read a ``.toml`` or ``.json`` study."""
+        """Read a ``.toml`` or ``.json`` study (a ``[robot]``'s files are found relative to it)."""
         p = as_file(path, "spec", what="design specification")
         if p.suffix == ".toml":
             try:
@@ -381,41 +473,83 @@ class DesignSpec:
                 spec_error("spec", str(p), f"valid JSON ({exc})")
         else:
             spec_error("spec", str(p), "a .toml or .json file")
-        return cls.from_mapping(data)
+        return cls.from_mapping(data, base=p.parent)
 
     @classmethod
-    def from_mapping(cls, data: Mapping) -> DesignSpec:
-        """Validate a study given as a dict (the TOML tables as nested dicts)."""
+    def from_mapping(cls, data: Mapping, base: Path | None = None) -> DesignSpec:
+        """Validate a study given as a dict (the TOML tables as nested dicts); ``base``: the folder a ``[robot]``'s
+        relative paths start from (default: the working folder)."""
         d = table_keys(data, "", _KEYS)
         name = d.get("name")
         if not isinstance(name, str) or not name.strip() or any(c in name for c in "/\\"):
             spec_error("name", name, "a non-empty study name without slashes")
         seed = spec_integer(d.get("seed", 0), "seed", lo=0)
-        archs = _architectures(d.get("architectures"))
         refs = _names(d.get("references", []), "references", tuple(PLATFORMS))  # any registered platform, as it is
         objectives = _names(d.get("objectives"), "objectives", tuple(DESIGN_METRICS), need=2)
-        params = default_parameters()
-        for k, v in table_keys(d.get("parameters", {}), "parameters", tuple(params)).items():
-            params[k] = parse_parameter(k, v)
+        if "robot" in d:
+            robot, archs, params, mass = _robot_study(d, base)
+        else:
+            robot, archs, mass = None, _architectures(d.get("architectures")), MassModel.from_mapping(d.get("mass", {}))
+            params = default_parameters()
+            for k, v in table_keys(d.get("parameters", {}), "parameters", tuple(params)).items():
+                params[k] = parse_parameter(k, v)
         constraints = _constraints(d.get("constraints", {}))
-        effort = _effort(d.get("effort", {}))
         search = _search(d.get("search", {}))
-        closed = _closed_loop(d.get("closed_loop", {}))
-        ranged = [k for k, p in params.items() if p.optimised]
-        if search.method == "grid" and ranged:
-            spec_error(
-                f"parameters.{ranged[0]}",
-                params[ranged[0]].to_dict(),
-                'a number or a list for search.method = "grid" (ranges need search.method = "nsga2")',
-            )
-        if search.method == "nsga2" and not ranged:
-            spec_error("search.method", "nsga2", 'give at least one parameter as a range {low, high}, or use method = "grid"')
+        _check_search(search, params)
         desc = d.get("description", "")
         if not isinstance(desc, str):
             spec_error("description", desc, "a string")
-        return cls(
-            name.strip(), archs, objectives, params, seed, refs, MassModel.from_mapping(d.get("mass", {})), constraints, effort, search, closed, desc
+        effort, closed = _effort(d.get("effort", {})), _closed_loop(d.get("closed_loop", {}))
+        return cls(name.strip(), archs, objectives, params, seed, refs, mass, constraints, effort, search, closed, desc, robot)
+
+
+def _check_search(search: Search, params: dict[str, Parameter]) -> None:
+    """Ranges need NSGA-II, NSGA-II needs a range and takes no list of several values (it varies the ranges only)."""
+    ranged = [k for k, p in params.items() if p.optimised]
+    listed = [k for k, p in params.items() if len(p.values) > 1]
+    if search.method == "grid" and ranged:
+        spec_error(
+            f"parameters.{ranged[0]}",
+            params[ranged[0]].to_dict(),
+            'a number or a list for search.method = "grid" (ranges need search.method = "nsga2")',
         )
+    if search.method == "nsga2" and not ranged:
+        spec_error("search.method", "nsga2", 'give at least one parameter as a range {low, high}, or use method = "grid"')
+    if search.method == "nsga2" and listed:
+        spec_error(
+            f"parameters.{listed[0]}",
+            params[listed[0]].to_dict(),
+            'one value or a range {low, high} for search.method = "nsga2" (a list needs "grid")',
+        )
+
+
+def _robot_study(d: Mapping, base: Path | None) -> tuple[RobotTemplate, tuple, dict[str, Parameter], MassModel]:
+    """The robot, (no architectures), the parameters and (the default mass model, unused) of a URDF study."""
+    for k in ("architectures", "mass"):
+        if k in d:
+            spec_error(
+                k,
+                d[k],
+                "remove it: a study with a [robot] evaluates that robot (the nomenclature's architectures and mass model are for generated arms)",
+            )
+    robot = RobotTemplate.from_mapping(d["robot"], base)
+    raw = d.get("parameters", {})
+    if not isinstance(raw, Mapping) or not raw:
+        spec_error("parameters", raw, "a table giving each placeholder of the robot's files its values")
+    params: dict[str, Parameter] = {}
+    for k, v in raw.items():
+        params[k] = parse_robot_parameter(k, v, params)
+    used = robot.used()
+    for k in params:
+        if k not in used:
+            spec_error(f"parameters.{k}", params[k].to_dict(), f"remove it, or use ${{{k}}} in the robot's files (it appears in none)")
+    for k in robot.derived:
+        if k in params:
+            spec_error(f"robot.derived.{k}", robot.derived[k], f"another name: {k} is a parameter")
+    for k, where in used.items():
+        if k not in params and k not in robot.derived:
+            spec_error("parameters", sorted(params), f"give {k} a value: {where} uses it")
+    return robot, (), params, MassModel()
 
 
 def _names(value, key: str, valid: tuple[str, ...], need: int = 0) -> tuple[str, ...]:
