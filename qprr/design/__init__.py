@@ -1,8 +1,9 @@
-"""Design search over the thesis nomenclature (2.1): which aerial manipulator should I build?
+"""Design search over the thesis nomenclature (2.1) or your own robot: which aerial manipulator should I build?
 
-A study (:class:`DesignSpec`, TOML) names candidate architectures (``Q-PRR``, ``HEX-RRR``...),
-their continuous parameters (reach, taper, slider stroke, masses from a material...), the
-objectives and constraints taken from the design maps of :mod:`qprr.analysis`, and the effort.
+A study (:class:`DesignSpec`, TOML) names candidate architectures (``Q-PRR``, ``HEX-RRR``...) and
+their continuous parameters (reach, taper, slider stroke, masses from a material...), or a URDF and
+rotor file with ``${name}`` placeholders and the values of each name (:mod:`qprr.design.template`),
+the objectives and constraints taken from the design maps of :mod:`qprr.analysis`, and the effort.
 :func:`run_design` evaluates the grid or runs NSGA-II (pymoo or Optuna, extra ``qprr[design]``)
 on the campaign backends (local processes, Dask), resumably; :func:`design_report` ranks the designs,
 draws the Pareto front and flies the best ones.
@@ -11,6 +12,7 @@ draws the Pareto front and flies the best ones.
 module                             what
 =================================  ==================================================================
 :mod:`qprr.design.metrics`         :data:`DESIGN_METRICS` (the registry of :class:`DesignMetric`)
+:mod:`qprr.design.template`        a URDF study's robot: placeholders, derived values, rotor ring
 :mod:`qprr.design.spec`            :class:`DesignSpec`, :data:`PARAMETERS`, :class:`MassModel`
 :mod:`qprr.design.evaluate`        :func:`build_candidate` (a design point as a platform), the maps
                                    of a design, the backend task

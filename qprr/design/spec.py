@@ -1,5 +1,9 @@
 """Design study specifications: :class:`DesignSpec` (TOML/JSON), the parameters, the mass model.
 
+A study is of one of two kinds (:class:`StudyKind`): architectures of the nomenclature (2.1) with the parameters of
+:data:`PARAMETERS` and a :class:`MassModel`, or a ``[robot]`` (:class:`~qprr.design.template.RobotTemplate`) whose
+parameters are the names its files' placeholders use (:func:`parse_robot_parameter`).
+
 **Checks.** Validation helpers of design specifications: every error names the key, the value and the fix.
 
 **Mass model.** Mass model of a generated arm: links from their lengths and a material, actuators per joint.
