@@ -90,7 +90,11 @@ def test_the_rotor_count_is_a_variable_of_a_rotor_ring(tmp_path):
 
 
 # ------------------------------------------------------------------------------ variables that do not apply
-JOINT_TYPE_URDF = URDF.replace('<joint name="elbow" type="revolute">', '<joint name="elbow" type="${elbow_type}">').replace(
+JOINT_TYPE_URDF = URDF.replace('<joint name="elbow" type="revolute">', '<joint name="elbow" type="${elbow_type}">')
+JOINT_TYPE_URDF = JOINT_TYPE_URDF.replace(
+    '<origin xyz="0 0 -${upper_arm}"/>\n    <axis xyz="0 1 0"/>', '<origin xyz="0 0 -${upper_arm}"/>\n    <axis xyz="${elbow_axis}"/>'
+)
+JOINT_TYPE_URDF = JOINT_TYPE_URDF.replace(
     '<limit lower="-2.5" upper="2.5" effort="1.5" velocity="3.0"/>',
     '<limit lower="-${elbow_range}" upper="${elbow_range}" effort="${elbow_effort}" velocity="3.0"/>',
 )
@@ -105,14 +109,19 @@ def test_a_joint_type_and_its_stroke_vary_only_where_they_apply(tmp_path):
         "elbow_type": ["revolute", "prismatic"],
         "elbow_range": {"values": [0.05, 0.10], "when": {"elbow_type": "prismatic"}, "otherwise": 2.5},
         "elbow_effort": {"values": 20.0, "when": {"elbow_type": "prismatic"}, "otherwise": 1.5},
+        "elbow_axis": "0 1 0",
     }
     spec = DesignSpec.from_mapping(study(tmp_path, urdf=JOINT_TYPE_URDF, parameters=params), base=tmp_path)
     rows = rows_of(run_design(spec, tmp_path / "j.csv", backend="inline", progress=False).results.table)
     assert [(r["elbow_type"], r["elbow_range"]) for r in rows][1:] == [("prismatic", 0.05), ("prismatic", 0.10)]
     assert rows[0]["elbow_type"] == "revolute" and math.isnan(rows[0]["elbow_range"]) and all(r["status"] == "ok" for r in rows), rows
-    p = spec.robot.platform({"upper_arm": 0.25, "rotor_arm": 0.2, "elbow_type": "prismatic", "elbow_range": 0.05, "elbow_effort": 20.0})
+    chosen = {"upper_arm": 0.25, "rotor_arm": 0.2, "elbow_type": "prismatic", "elbow_range": 0.05, "elbow_effort": 20.0, "elbow_axis": "0 1 0"}
+    p = spec.robot.platform(chosen)
     elbow = p.arm[-1]
-    assert elbow.kind == "prismatic" and (elbow.lower, elbow.upper) == (-0.05, 0.05)
+    assert elbow.kind == "prismatic" and (elbow.lower, elbow.upper) == (-0.05, 0.05) and elbow.effort == 20.0
+    assert p.model.joints[elbow.joint_id].shortname() == "JointModelPY"
+    about_x = spec.robot.platform({**chosen, "elbow_type": "revolute", "elbow_range": 2.5, "elbow_effort": 1.5, "elbow_axis": "1 0 0"})
+    assert about_x.model.joints[about_x.arm[-1].joint_id].shortname() == "JointModelRX" and about_x.arm[-1].upper == 2.5
 
 
 def test_the_nomenclature_varies_a_slider_only_on_arms_with_a_slider(tmp_path):

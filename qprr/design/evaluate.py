@@ -71,8 +71,16 @@ def arm_links(joints: str, params: Mapping[str, float], mass: MassModel) -> list
     return out
 
 
-NEEDS = {"slider_stroke": "a P joint", "slider_link": "a P joint", "taper": "two R joints"}
-"""The nomenclature's parameters that apply only to some arms, and what the arm needs for them to apply."""
+def _has_slider(joints: str) -> bool:
+    return "P" in joints
+
+
+def _has_two_revolute(joints: str) -> bool:
+    return joints.count("R") >= 2
+
+
+APPLIES_TO = {"slider_stroke": _has_slider, "slider_link": _has_slider, "taper": _has_two_revolute}
+"""The nomenclature's parameters that apply only to some arms: name -> whether it applies to an arm's joints ("PRR")."""
 
 
 def applies(spec: DesignSpec, family: str, name: str, chosen: Mapping[str, float | str]) -> bool:
@@ -81,9 +89,7 @@ def applies(spec: DesignSpec, family: str, name: str, chosen: Mapping[str, float
     parameter that does not apply is not varied, its cell is left empty); a URDF study's need their ``when``."""
     if spec.kind is StudyKind.URDF:
         return spec.parameters[name].applies(chosen)
-    joints = parse(family).joints
-    need = NEEDS.get(name)
-    return need is None or (need == "a P joint" and "P" in joints) or (need == "two R joints" and joints.count("R") >= 2)
+    return name not in APPLIES_TO or APPLIES_TO[name](parse(family).joints)
 
 
 def build_candidate(candidate: Candidate, mass: MassModel):
