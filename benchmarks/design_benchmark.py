@@ -39,7 +39,7 @@ import numpy as np
 
 from qprr.campaign import LocalBackend
 from qprr.design import DesignSpec, run_design
-from qprr.design.evaluate.task import evaluate_design
+from qprr.design.evaluate import evaluate_design
 from qprr.design.search import hypervolume_2d, make_optimiser
 
 ARCHS = ["Q-PRR", "Q-RPR", "Q-RRP", "Q-RR", "Q-RRR", "HEX-PRR", "HEX-RRR", "HEX-RR"]
@@ -86,9 +86,8 @@ def throughput(args) -> None:
 
 def split(args) -> None:
     from qprr.analysis import balance, capacity, hover, singularity, workspace
-    from qprr.design.evaluate.maps import slider_of
-    from qprr.design.model import Candidate, build_candidate
-    from qprr.design.search.points import fixed_params
+    from qprr.design.evaluate import Candidate, build_candidate, slider_of
+    from qprr.design.search import fixed_params
 
     spec = study(8, args.samples)
     params = fixed_params(spec)
@@ -124,7 +123,7 @@ def split(args) -> None:
 
 def fixed_cost(args) -> None:
     """t(n) = a + b n fitted over n/4, n, 4n samples per map: a is what batching designs together could save."""
-    from qprr.design.search.points import fixed_params
+    from qprr.design.search import fixed_params
 
     spec = study(8, args.samples)
     params = fixed_params(spec)

@@ -17,8 +17,8 @@ import qprr
 from qprr.analysis import balance, capacity, hover, singularity, workspace
 from qprr.campaign import read_results
 from qprr.design import DesignSpec, dominated, front, front_levels, ranked, run_design
-from qprr.design.report.rank import rows_of
-from qprr.design.search.optimiser import INSTALL, make_optimiser
+from qprr.design.report import rows_of
+from qprr.design.search import INSTALL, make_optimiser
 from qprr.errors import InputError, MissingDependencyError
 from qprr.nomenclature import LinkSpec
 
@@ -100,7 +100,7 @@ def hit_share(region, balanced_body, across=40) -> float:
 def test_balance_share_limits():
     """A tolerance of 1 m balances everything (share 1); the share grows with the tolerance; at 1 nm only the
     postures with the arm's CoG on z_B remain (the straight-up arm), a few cells."""
-    from qprr.design.evaluate.maps import balanced_share
+    from qprr.design.evaluate import balanced_share
 
     p = qprr.build("Q-RR")
     region = workspace(p, n_samples=SAMPLES, variants=[]).regions[0]

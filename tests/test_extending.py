@@ -18,7 +18,7 @@ from qprr.campaign import DEFAULT_METRICS, METRICS, CampaignMetric
 from qprr.control import CONTROLLERS, GAIN_ARGUMENTS, ControllerEntry, DerivedGains, InverseDynamicsController, NoGains
 from qprr.control import gains as gain_rules
 from qprr.design import DESIGN_METRICS
-from qprr.design.spec.metrics import RANGES, DesignMetric
+from qprr.design.metrics import RANGES, DesignMetric
 from qprr.errors import InputError, UnknownNameError
 from qprr.ik import IK_METHODS, OPTIONS, IKMethod
 from qprr.platforms import DEFAULT_PLATFORM, PLATFORMS
@@ -72,7 +72,7 @@ def platform_authority():
         (IK_METHODS, object(), "register a qprr.ik.solver.IKMethod"),
         (INTEGRATORS, lambda model, dt: None, "register a qprr.sim.integrators.Integrator"),
         (METRICS, lambda result, names: 0.0, "register a qprr.campaign.metrics.CampaignMetric"),
-        (DESIGN_METRICS, lambda maps: 0.0, "register a qprr.design.spec.metrics.DesignMetric"),
+        (DESIGN_METRICS, lambda maps: 0.0, "register a qprr.design.DesignMetric"),
     ],
 )
 def test_each_registry_refuses_a_value_of_another_kind(registry, value, message):

@@ -76,8 +76,9 @@ def test_a_study_with_no_feasible_design_says_which_constraint_excluded_how_many
         'name = "none"\narchitectures = ["Q-RR", "Q-RRR"]\nobjectives = ["hover_volume", "arm_mass"]\n'
         "[constraints]\narm_mass = { max = 1e-6 }\n[effort]\nsamples = 300\n"
     )
-    assert main(["design", "run", str(spec), "-o", str(tmp_path / "r.csv"), "--backend", "inline"]) == 0
+    assert main(["design", "run", str(spec), "-o", str(tmp_path / "r.csv"), "--backend", "inline"]) == 3  # nothing feasible
     out = capsys.readouterr().out
+    assert "design 0 Q-RR: infeasible: arm_mass = 0.192 kg, above its max 1e-06" in out, out
     assert "not feasible: 2 of 2 design(s)" in out and "constraint arm_mass <= 1e-06 excludes 2 of the 2 evaluated design(s)" in out, out
     text, _ = design_report(tmp_path / "r.csv", fly=False)
     assert "0 feasible" in text and "arm_mass <= 1e-06 excludes 2" in text, text

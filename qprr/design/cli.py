@@ -1,7 +1,8 @@
 """``qprr design run SPEC`` / ``qprr design report RESULTS`` / ``qprr design show SPEC``.
 
 Registered in :func:`qprr.cli.build_parser` through :func:`register_design_cli` (as :mod:`qprr.campaign.cli`).
-Exit codes: 0 done, 1 interrupted, 2 bad arguments or specification.
+Exit codes: 0 done, 1 interrupted, 2 bad arguments or specification, 3 no design of the study is feasible (the
+summary says which constraint excluded how many designs, and why each design is out).
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ def _print_report(results, out, args) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from .engine import infeasible_reasons, run_design
+    from .search import infeasible_reasons, run_design
     from .spec import DesignSpec
 
     prog = "qprr design run"
@@ -48,13 +49,20 @@ def _cmd_run(args: argparse.Namespace) -> int:
             f"{spec.name}: {done.executed} designs evaluated now ({done.skipped} resumed), {n} saved in {done.path}; "
             f"{done.failed} failed; {done.wall_time:.1f} s on {done.backend}"
         )
-        for line in infeasible_reasons(done.results, spec):
-            print(line)
+        if not args.report or done.interrupted:  # the report's text gives them otherwise
+            for line in infeasible_reasons(done.results, spec):
+                print(line)
+        n_feasible = int(sum(done.results.table["feasible"]))
         if args.report and not done.interrupted:
             _print_report(done.results, args.report, args)
     except (QprrError, KeyError, ValueError) as exc:
         return _fail(prog, f"{type(exc).__name__}: {exc}")
-    return 1 if done.interrupted else 0
+    if done.interrupted:
+        return 1
+    if n_feasible == 0:
+        print(f"{prog}: no feasible design among the {n} of {spec.name} (the reasons above)", file=sys.stderr)
+        return 3
+    return 0
 
 
 def _cmd_report(args: argparse.Namespace) -> int:
@@ -66,7 +74,7 @@ def _cmd_report(args: argparse.Namespace) -> int:
 
 
 def _cmd_show(args: argparse.Namespace) -> int:
-    from .search.points import grid_points, n_points, reference_points
+    from .search import grid_points, n_points, reference_points
     from .spec import DesignSpec
 
     try:
@@ -75,8 +83,9 @@ def _cmd_show(args: argparse.Namespace) -> int:
         return _fail("qprr design show", f"{type(exc).__name__}: {exc}")
     s = spec.search
     how = "grid" if s.method == "grid" else f"NSGA-II ({s.optimiser}) over {', '.join(spec.optimised)}: {s.generations} generations x {s.population}"
+    what = f"{len(spec.architectures)} architectures ({', '.join(spec.architectures)})" if spec.robot is None else f"robot {spec.robot.name}"
     print(
-        f"{spec.name}: {len(spec.architectures)} architectures ({', '.join(spec.architectures)}), {len(spec.references)} references; "
+        f"{spec.name}: {what}, {len(spec.references)} references; "
         f"{how}; {n_points(spec)} designs; {spec.effort.samples} samples per map; seed {spec.seed}; fingerprint {spec.fingerprint}"
     )
     print(
@@ -85,7 +94,7 @@ def _cmd_show(args: argparse.Namespace) -> int:
     )
     pts = reference_points(spec) + (grid_points(spec) if s.method == "grid" else [])
     for p in pts[: args.first]:
-        print(f"  design {p['run']}: {p['name']} " + ", ".join(f"{k}={v:g}" for k, v in p["params"].items()))
+        print(f"  design {p['run']}: {p['name']} " + ", ".join(f"{k}={v:g}" if isinstance(v, float) else f"{k}={v}" for k, v in p["params"].items()))
     return 0
 
 
@@ -108,7 +117,7 @@ def register_design_cli(sub) -> None:
     """Add ``design run | report | show`` to the ``qprr`` command line."""
     p = sub.add_parser(
         "design",
-        help="design search over the (2.1) nomenclature: Pareto fronts of architectures and parameters",
+        help="design search over the (2.1) nomenclature or your own robot (a URDF with placeholders): Pareto fronts",
         description="Design studies (qprr.design): evaluate candidate aerial manipulators on the design maps, "
         "find the Pareto front, rank and fly the best.",
     )

@@ -13,7 +13,7 @@ name                        unit    better     map (qprr.analysis) and what is t
                                                B) reached by a configuration with the CoG within ``balance_tol``
                                                of the thrust axis (Thesis (3.79); with a slider, at the slider
                                                position r* of (6.33));
-                                               :func:`~qprr.design.evaluate.maps.balanced_share`
+                                               :func:`~qprr.design.evaluate.balanced_share`
 ``thrust_margin``           N       max        :func:`~qprr.analysis.hover`: smallest thrust margin over the
                                                joint grid, no payload
 ``payload_at_reach``        kg      max        :func:`~qprr.analysis.capacity`: largest payload held with the
@@ -31,13 +31,14 @@ constraint.  (The campaign metrics, numbers of a simulated run, are the other re
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from ...errors import InputError
-from ...registry import Registry
+from ..errors import InputError
+from ..registry import Registry
 
 BETTER = ("max", "min")
 """The directions a design metric improves in."""
@@ -46,7 +47,7 @@ BETTER = ("max", "min")
 @dataclass(frozen=True)
 class DesignMetric:
     """A number a design is judged on: ``compute(maps) -> float`` from the design's maps
-    (:class:`qprr.design.evaluate.maps.DesignMaps`: the platform, the effort, and the maps of :mod:`qprr.analysis`,
+    (:class:`qprr.design.evaluate.DesignMaps`: the platform, the effort, and the maps of :mod:`qprr.analysis`,
     each computed once on first use and shared by the metrics), its ``unit``, ``better`` ("max" or "min"), a short
     ``label`` and the range it can take (``low``, ``high``; None: unbounded; a constraint outside it is refused).
     ``collision``: it needs the workspace's self-collision check (:mod:`qprr.analysis.collision`), which costs time: measured
@@ -108,9 +109,7 @@ def _mass(maps) -> float:
 
 def _check(name: str, entry: object) -> None:
     if not isinstance(entry, DesignMetric):
-        raise InputError(
-            f"design metric {name!r}: register a qprr.design.spec.metrics.DesignMetric(compute, unit, better, label), got {type(entry).__name__}"
-        )
+        raise InputError(f"design metric {name!r}: register a qprr.design.DesignMetric(compute, unit, better, label), got {type(entry).__name__}")
 
 
 DESIGN_METRICS: Registry[DesignMetric] = Registry("design metric", default="hover_volume", check=_check)
@@ -137,6 +136,12 @@ def sign(name: str) -> float:
     return 1.0 if DESIGN_METRICS[name].better == "min" else -1.0
 
 
+def unit_text(unit: str) -> str:
+    """A unit as matplotlib's mathtext draws it: ``m^3`` -> m with a superscript 3, ``m/s^2`` likewise; the rest as is."""
+    return re.sub(r"([A-Za-z]+)\^(-?\d+)", lambda m: rf"$\mathrm{{{m.group(1)}}}^{{{m.group(2)}}}$", unit)
+
+
 def label(name: str) -> str:
+    """The axis label of a metric on a figure: its label, its unit (mathtext) and its better direction."""
     m = DESIGN_METRICS[name]
-    return f"{m.label} [{m.unit}] ({m.better})" if m.unit else f"{m.label} ({m.better})"
+    return f"{m.label} [{unit_text(m.unit)}] ({m.better})" if m.unit else f"{m.label} ({m.better})"
