@@ -14,7 +14,8 @@ scenario            what (check in ``result.metrics``)
 ``fly-to``          climb, then move the base to ``target`` and the arm ``reach_fraction`` of
                     the way to its upper limits (``final_position_error``, ``final_arm_error``)
 ``mission``         phases of base and arm coordinates by name given as data (a TOML file or a
-                    list of tables: :func:`read_mission`), payload grasps and releases included
+                    mapping of tables: :mod:`qprr.scenarios.mission_file`), with payload grasps and
+                    releases, wind, gusts, drag, motor lag and the controller, flown as written
 ``grasp-drop``      hover with the arm reached out; a mass attaches at the end effector
                     (grasp), then drops (``final_position_error`` after the drop,
                     ``max_position_error``)
@@ -57,6 +58,7 @@ from ..control.opspace_impedance import EndEffectorImpedance
 from ..errors import InputError, ScheduleWarning, UnknownNameError
 from ..kinematics import ee_pose_xi
 from ..model import Platform, check_platform, max_lift
+from ..registry import SCENARIOS
 from ..sim import simulate
 from ..sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
 from ..sim.contact import CompliantWall
@@ -366,8 +368,6 @@ def _mission_controller_name(controller: str | None, data: MissionFile) -> str:
     written = data.controller.name
     if not written:
         return controller or "idc"
-    from ..registry import SCENARIOS
-
     as_name(written, "name", SCENARIOS["mission"].controller_names(), f"controller of mission {data.name!r} ([controller] name)")
     if controller is not None and controller != written:
         raise InputError(

@@ -513,7 +513,7 @@ def _wind(ax, res):
     t = res.t[: w.shape[0]]
     speed = np.linalg.norm(w, axis=1)
     _draw_signals(ax, t, [w[:, 0], w[:, 1], w[:, 2]], ["$w_x$", "$w_y$", "$w_z$"], colors=["C0", "C1", "C2"], lw=1.1)
-    ax.plot(t, speed, color="0.25", lw=1.3, label="$|w|$", zorder=3)
+    ax.plot(t, speed, color="0.7", lw=3.0, label="$|w|$", zorder=1)  # wide and pale, under the components it often meets
     ax.axhline(0.0, color="0.4", lw=0.6, zorder=1)
     robust_limits(ax, [w[:, 0], w[:, 1], w[:, 2], speed], min_span=0.1, t=t)
     ax.set_ylabel("wind velocity, world axes [m/s]")
