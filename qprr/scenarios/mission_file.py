@@ -114,7 +114,7 @@ def _keys(table, valid: tuple[str, ...], what: str, required: tuple[str, ...] = 
 def _tables(source, key: str) -> list:
     """The array of tables ``[[key]]`` of a mission (a list of tables)."""
     value = source.get(key, [])
-    if not isinstance(value, list):
+    if not isinstance(value, (list, tuple)):
         raise InputError(f"mission {key!r} must be an array of tables ([[{key}]]), got {value!r:.80}")
     return value
 

@@ -603,9 +603,9 @@ DEFAULT_PANELS = (
     "path",
     "cog",
     "disturbance",
-    "wind",
 )
-"""The panels of the full page (``disturbance`` and ``wind`` only when the run had them)."""
+"""The panels of the full page (``disturbance`` only when the run had one; ``wind`` added after them when the run had a
+wind)."""
 
 
 def _panel(spec) -> Panel:
@@ -730,8 +730,8 @@ RUN_FIGURES.register(RUN_FIGURES.default, plot_result)  # SimResult.plot() (its 
 
 def _chosen_panels(res: SimResult, panels) -> list[Panel]:
     """The panels to draw: ``panels`` (a name, a :class:`Panel` or a sequence of them), default :data:`DEFAULT_PANELS`
-    without the disturbance panel of a run that has none and the wind panel of a run without wind; a wind panel asked
-    for a run that recorded none is refused."""
+    without the disturbance panel of a run that has none, with the wind panel of a run that recorded its wind; a wind
+    panel asked for a run that recorded none is refused."""
     explicit = panels is not None
     if panels is None:
         panels = DEFAULT_PANELS
@@ -739,13 +739,13 @@ def _chosen_panels(res: SimResult, panels) -> list[Panel]:
     if not specs:
         raise InputError("panels must name at least one panel")
     chosen = [_panel(s) for s in specs]
-    if not explicit and not np.any(res.u_ext):
-        chosen = [p for p in chosen if p.name != "disturbance"]
-    if WIND_SERIES not in res.series:
-        if explicit and any(p.draw is _wind for p in chosen):
+    if explicit:
+        if WIND_SERIES not in res.series and any(p.draw is _wind for p in chosen):
             raise InputError(f"panel 'wind': run {res.scenario!r} recorded no wind (no series {WIND_SERIES!r}: it flew in still air)")
-        chosen = [p for p in chosen if p.draw is not _wind]
-    return chosen
+        return chosen
+    if not np.any(res.u_ext):
+        chosen = [p for p in chosen if p.name != "disturbance"]
+    return chosen + ([PANELS["wind"]] if WIND_SERIES in res.series else [])
 
 
 class _PanelDrawer:
