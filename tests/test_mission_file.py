@@ -97,9 +97,9 @@ def test_settings_objects_are_accepted_and_the_file_adds_to_them(quad):
         scenarios.get_scenario("mission").run(platform=quad, plant=quad, settings=MissionSettings(plant=quad), duration=0.05)
 
 
-def test_gains_in_the_file_are_the_gains_flown(quad, tmp_path):
+def test_gains_in_the_file_are_the_gains_flown(quad, tmp_path, capsys):
     """[controller] gains = "gains.toml" (relative to the mission file), the same tables written in [controller], and
-    the option gains=FILE fly the same run bit for bit; the derived gains fly another."""
+    the option gains=FILE fly the same run bit for bit, and ``--print-gains`` shows them; the derived gains fly another."""
     shutil.copy(MY / "gains.toml", tmp_path / "gains.toml")
     climb = '[[phase]]\ncoordinate = "z"\nstart = 0.0\nend = 0.3\ntarget = 0.5\n'
     (tmp_path / "by_file.toml").write_text(climb + '[controller]\nname = "idc"\ngains = "gains.toml"\n')
@@ -114,6 +114,12 @@ def test_gains_in_the_file_are_the_gains_flown(quad, tmp_path):
     derived = scenarios.run("mission", platform=quad, duration=0.3, mission=str(tmp_path / "plain.toml"))
     assert np.max(np.abs(derived.xi[:, 2] - runs["plain"].xi[:, 2])) > 1e-4
     assert runs["by_file"].scenario == "mission by_file" and derived.scenario == "mission plain"
+    printed = [
+        simulate_cli(capsys, *extra, "--print-gains")
+        for extra in (["--set", f"mission={tmp_path / 'inline.toml'}"], ["--gains", str(MY / "gains.toml")])
+    ]
+    assert "gains of idc in mission on quad_rrr ([controller] of mission 'inline')" in printed[0] and "10.208" in printed[0]
+    assert printed[0].split("\n", 1)[1] == printed[1].split("\n", 1)[1]  # the same table
 
 
 def test_the_wind_seed_is_the_winds_own():

@@ -378,14 +378,20 @@ def _mission_controller_name(controller: str | None, data: MissionFile) -> str:
 
 
 def _mission_controller(name: str, platform: Platform, o: dict, settings: MissionSettings, data: MissionFile, stage):
-    """The controller ``name`` with the gains the data's ``[controller]`` table gives, else the option ``gains``;
-    derived gains know the motor ``stage``'s time constant (:func:`lag_gains`) when the mission flies one."""
-    choice = data.controller
+    """``settings.controller``, else the controller ``name`` with the gains of :func:`mission_gain_arguments`."""
     if settings.controller is not None:
-        if choice.name or choice.gains != "":
+        if data.controller.name or data.controller.gains != "":
             raise InputError(f"mission {data.name!r}: MissionSettings.controller is flown, its [controller] table would be ignored; remove one")
         return settings.controller
-    gains = o["gains"]
+    defaults = "class" if o["gains"] == "class" and data.controller.gains == "" else "platform"
+    return make_controller(name, platform, defaults=defaults, **mission_gain_arguments(name, platform, o["gains"], data, stage))
+
+
+def mission_gain_arguments(name: str, platform: Platform, gains, data: MissionFile, stage: RotorDynamics | None) -> dict[str, object]:
+    """The gain arguments controller ``name`` flies a mission with: the data's ``[controller]`` gains (a gain set's
+    name or file, or a gains file's tables), else the option ``gains`` (:func:`gain_arguments`; both given: refused);
+    derived gains know the motor ``stage``'s time constant (``Targets(rotor_time_constant=tau)``, :func:`lag_gains`)."""
+    choice = data.controller
     if choice.gains != "":
         if gains != "platform":
             raise InputError(
@@ -397,11 +403,28 @@ def _mission_controller(name: str, platform: Platform, o: dict, settings: Missio
     if isinstance(gains, Mapping):
         if derived:  # Targets(rotor_time_constant=tau) unless the file's [controller.targets] gives its own
             gains = {**gains, "targets": {"rotor_time_constant": tau, **gains.get("targets", {})}}
-        where = f"the [controller] tables of mission {data.name!r}"
-        return make_controller(name, platform, defaults="platform", **load_gain_file(gains, name, platform, where))
+        return load_gain_file(gains, name, platform, f"the [controller] tables of mission {data.name!r}")
     if gains == "platform" and derived:
-        return make_controller(name, platform, **lag_gains(name, platform, tau))
-    return controller_for(name, platform, gains)
+        return lag_gains(name, platform, tau)
+    return gain_arguments(name, platform, gains)
+
+
+def flown_gain_source(scenario: str, gains, options: dict) -> str:
+    """What gives the gains of the generic ``scenario`` (``--print-gains``'s header): a mission's ``[controller]`` table
+    when its data sets the gains, else the option ``gains``."""
+    if scenario == "mission" and options.get("mission"):
+        data = read_mission_file(options["mission"], phases_required=False)
+        if data.controller.gains != "":
+            return f"[controller] of mission {data.name!r}"
+    return str(gains)
+
+
+def flown_controller(scenario: str, controller: str | None, options: dict) -> str:
+    """The controller the generic ``scenario`` flies when ``controller`` is asked (None: none): for ``mission``, the
+    mission data's ``[controller] name`` (:func:`_mission_controller_name`), else ``controller`` or the scenario's first."""
+    if scenario == "mission" and options.get("mission"):
+        return _mission_controller_name(controller, read_mission_file(options["mission"], phases_required=False))
+    return controller or SCENARIOS[scenario].controllers[0]
 
 
 def grasp_drop(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
@@ -529,7 +552,13 @@ def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
 def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gains, options: dict) -> dict[str, object]:
     """The gain arguments ``controller`` is built with in the generic ``scenario`` (``--print-gains``): those of
     :func:`gain_arguments`, except motor-lag's derived gains, which know its rotor time constant (:func:`lag_gains`;
-    ``options`` the run's, missing ones at the scenario's defaults)."""
+    ``options`` the run's, missing ones at the scenario's defaults) and a mission's, which its data may give
+    (:func:`mission_gain_arguments`)."""
+    if scenario == "mission" and options.get("mission"):
+        data = read_mission_file(options["mission"], phases_required=False)
+        stage = motor_stage_of(platform, data.motor) if data.motor else None
+        if data.controller.gains != "" or stage is not None:
+            return mission_gain_arguments(controller, platform, gains, data, stage)
     if gains == "platform" and controller not in GAIN_ARGUMENTS:  # e.g. mpc: cost weights, make_controller's own
         return {}
     if scenario == "motor-lag" and gains == "platform":
@@ -644,7 +673,11 @@ __all__ = [
     "controller_for",
     "default_mission",
     "fly",
+    "flown_controller",
+    "flown_gain_source",
+    "flown_gain_arguments",
     "gain_arguments",
+    "mission_gain_arguments",
     "MOTOR_DEFAULTS",
     "mission",
     "motor_lag",
