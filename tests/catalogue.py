@@ -1447,6 +1447,11 @@ def mission_file_cases() -> list[Case]:
             lambda: run_scenario("mission", platform=example_platform(), duration=0.05, gains="class", mission=gains_platform),
             ("gains = 'class'", "one place"),
         ),
+        Case(
+            "mission as data with a relative gains file",
+            _mission(controller={"gains": "gains.toml"}),
+            ("gains = 'gains.toml'", "relative", "[controller.targets]"),
+        ),
         Case("mission [controller] gain field misspelt", _mission(controller={"idc": {"gains": {"kq": 1.0}}}), ("kq",)),
         Case(
             "settings object to a scenario that takes none",

@@ -150,3 +150,14 @@ def test_every_mission_file_refusal_names_the_input():
     outcomes = catalogue.run_cases(catalogue.mission_file_cases())
     bad = [o for o in outcomes if o.verdict != "good"]
     assert len(outcomes) >= 20 and not bad, "\n".join(f"{o.verdict:8s} {o.target}: {o.detail}" for o in bad)
+
+
+def test_a_campaign_names_the_controller_its_mission_file_flies(tmp_path):
+    """A campaign of the mission scenario that names no controller: its table's controller column is the one the
+    mission file names (the runs fly it), not the scenario's first."""
+    from qprr.campaign import CampaignSpec
+    from qprr.campaign.worker import default_controller
+
+    (tmp_path / "m.toml").write_text('[[phase]]\ncoordinate = "z"\nstart = 0.0\nend = 1.0\ntarget = 1.0\n[controller]\nname = "dsid"\n')
+    (tmp_path / "spec.toml").write_text('name = "m"\nscenario = "mission"\nplatform = "HEX-RRR"\n[options]\nmission = "m.toml"\nduration = 1.5\n')
+    assert default_controller(CampaignSpec.load(tmp_path / "spec.toml")) == "dsid"

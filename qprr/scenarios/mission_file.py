@@ -25,7 +25,8 @@ table               keys (units)
                     hover): ``thrust_factor`` [N s^2], ``time_constant`` [s], ``w_min``, ``w_max`` [rad/s] (one
                     value, or one per rotor); a key left out comes from the rotor file's ``[motor]`` table
 ``[controller]``    ``name`` (a controller the mission scenario flies), ``gains`` ("platform", "class", a
-                    registered gain table or a gains file, relative to the mission file), or the tables of a gains
+                    registered gain table or a gains file, relative to the mission file; a mission given as
+                    data takes an absolute path only), or the tables of a gains
                     file written inside it (:func:`qprr.control.gains.load_gains`): ``[controller.targets]``,
                     ``[controller.idc.gains]``, ``[controller.mpc.weights]``, ``[controller.mpc.settings]``...
 ==================  ================================================================================================
@@ -73,7 +74,7 @@ WIND_SPEED_MAX = 40.0
 @dataclass(frozen=True)
 class ControllerChoice:
     """The ``[controller]`` table: ``name`` ("": the caller's or the scenario's), ``gains``: "" (the caller's option),
-    a gain set's name or file (a string), or the tables of a gains file (a mapping)."""
+    a gain set's name or file (a string; a file relative to the mission file), or the tables of a gains file (a mapping)."""
 
     name: str = ""
     gains: str | Mapping = ""
@@ -217,7 +218,12 @@ def read_controller(source: Mapping, folder: Path | None) -> ControllerChoice:
             f"mission [controller] gains must be 'platform', 'class', a gain table or a FILE.toml, got {gains!r:.80} "
             "(tables of a gains file go in [controller.targets], [controller.idc.gains], ...)"
         )
-    if gains.endswith(".toml") and folder is not None and not Path(gains).is_absolute():
+    if gains.endswith(".toml") and not Path(gains).is_absolute():
+        if folder is None:  # data without its file (a campaign carries the content): relative to what?
+            raise InputError(
+                f"mission [controller] gains = {gains!r}: a mission given as data has no folder to find a relative gains file "
+                "in; write its tables in [controller] ([controller.targets], [controller.idc.gains]...) or give an absolute path"
+            )
         gains = str(folder / gains)
     return ControllerChoice(name, table if table else gains)
 
