@@ -1380,10 +1380,85 @@ def mission_cases() -> list[Case]:
             ("phase 1", "end = 0.08", "duration", "flown in part"),
             warns=True,
         ),
+        *mission_file_cases(),
         Case("fly-to target of two numbers", _scenario("fly-to", target=(1.0, 0.5)), ("target", "(1.0, 0.5)", "(x, y, z)")),
         Case("hover-noise fraction NaN", _scenario("hover-noise", fraction=math.nan), ("fraction", "nan")),
         Case("hover-noise fraction text", _scenario("hover-noise", fraction="2%"), ("fraction", "'2%'")),
         Case("thesis flag as_printed = 'maybe'", lambda: _thesis_run(as_printed="maybe"), ("as_printed", "'maybe'", "true or false")),
+    ]
+
+
+_WIND = {"model": "mean", "mean_world": [3.0, 0.0, 0.0]}
+_DRAG = {"linear": 0.3}
+
+
+def _mission(**tables):
+    """A mission on examples/my_platform: one short climb and ``tables`` (a scenario run of 0.05 s)."""
+    return _scenario("mission", mission={"phase": [_z_phase()], **tables})
+
+
+def mission_file_cases() -> list[Case]:
+    """Issue 35, item 2: the tables of a mission file beyond its phases (qprr.scenarios.mission_file), and settings objects."""
+    from qprr.scenarios import run as run_scenario
+    from qprr.scenarios.missions import MissionSettings
+
+    dryden = {"model": "dryden", "mean_world": [3.0, 0.0, 0.0]}
+    named_idc = {"phase": [_z_phase()], "controller": {"name": "idc"}}
+    gains_platform = {"phase": [_z_phase()], "controller": {"gains": "platform"}}
+    return [
+        Case("mission table misspelt", _mission(winds=_WIND), ("mission table", "'winds'", "'wind'", "'gust'")),
+        Case("mission [wind] key misspelt", _mission(wind={**_WIND, "speed": 3.0}, drag=_DRAG), ("[wind]", "'speed'", "'mean_world'")),
+        Case("mission [wind] model unknown", _mission(wind={"model": "gusty"}, drag=_DRAG), ("[wind] model", "'gusty'", "'dryden'")),
+        Case("mission wind without drag", _mission(wind=_WIND), ("[wind]", "[drag]", "linear")),
+        Case("mission wind with zero drag", _mission(wind=_WIND, drag={"linear": 0.0}), ("[drag] linear or quadratic", "nothing")),
+        Case("mission seed of a wind without turbulence", _mission(wind={**_WIND, "seed": 3}, drag=_DRAG), ("seed", 'model = "dryden"')),
+        Case("mission wind in km/h", _mission(wind={"model": "mean", "mean_world": [54.0, 0.0, 0.0]}, drag=_DRAG), ("mean_world", "54", "km/h")),
+        Case("mission Dryden without intensities", _mission(wind=dryden, drag=_DRAG), ("dryden", "sigma", "w20")),
+        Case("mission Dryden negative sigma", _mission(wind={**dryden, "sigma": -1.0, "length": 30.0}, drag=_DRAG), ("sigma", "-1.0")),
+        Case("mission [drag] negative", _mission(drag={"linear": -0.3}), ("[drag] linear", "-0.3")),
+        Case("mission gust without duration", _mission(gust=[{"start": 0.0, "amplitude_world": [1.0, 0, 0]}], drag=_DRAG), ("gust 1", "duration")),
+        Case(
+            "mission gust after the run's end",
+            _mission(gust=[{"start": 0.5, "duration": 0.2, "amplitude_world": [1.0, 0.0, 0.0]}], drag=_DRAG),
+            ("gust 1", "start = 0.5", "duration = 0.05", "never flown or applied"),
+            warns=True,
+        ),
+        Case("mission payload of negative mass", _mission(payload=[{"time": 0.01, "mass": -0.1}]), ("payload event 1 mass", "-0.1", "kg")),
+        Case("mission [motor] key misspelt", _mission(motor={"tau": 0.01}), ("[motor]", "'tau'", "'time_constant'")),
+        Case("mission [motor] without thrust factor", _mission(motor={"time_constant": 0.01}), ("thrust_factor", "quad_rrr", "[motor]")),
+        Case(
+            "mission [motor] time constant in ms",
+            _mission(motor={"time_constant": 20.0, "thrust_factor": 8.5e-6}),
+            ("time_constant", "20", "milliseconds"),
+        ),
+        Case("mission controller unknown", _mission(controller={"name": "pid"}), ("[controller] name", "'pid'", "'idc'")),
+        Case(
+            "mission controller named twice",
+            lambda: run_scenario("mission", "dsid", platform=example_platform(), duration=0.05, mission=named_idc),
+            ("'idc'", "'dsid'", "one place"),
+        ),
+        Case(
+            "mission gains given twice in [controller]",
+            _mission(controller={"gains": "platform", "targets": {"ratio": 3.0}}),
+            ("gains = 'platform'", "['targets']", "give one"),
+        ),
+        Case(
+            "mission gains in the file and as an option",
+            lambda: run_scenario("mission", platform=example_platform(), duration=0.05, gains="class", mission=gains_platform),
+            ("gains = 'class'", "one place"),
+        ),
+        Case(
+            "mission as data with a relative gains file",
+            _mission(controller={"gains": "gains.toml"}),
+            ("gains = 'gains.toml'", "relative", "[controller.targets]"),
+        ),
+        Case("mission [controller] gain field misspelt", _mission(controller={"idc": {"gains": {"kq": 1.0}}}), ("kq",)),
+        Case(
+            "settings object to a scenario that takes none",
+            lambda: run_scenario("hover-reach", platform=example_platform(), duration=0.05, settings=MissionSettings()),
+            ("hover-reach", "takes no settings", "mission"),
+        ),
+        Case("settings of the wrong type", _scenario("mission", settings={"name": "x"}), ("settings", "MissionSettings", "dict")),
     ]
 
 

@@ -209,9 +209,11 @@ def params_row(spec: CampaignSpec, params: Mapping[str, object]) -> dict[str, ob
 
 
 def default_controller(spec: CampaignSpec) -> str:
-    from ..scenarios import SCENARIOS
+    """The controller a scenario's runs fly when the campaign names none: the scenario's first, or the one its mission
+    file names (:func:`qprr.scenarios.missions.flown_controller`)."""
+    from ..scenarios.missions import flown_controller
 
-    return SCENARIOS[spec.scenario].controllers[0] if spec.scenario is not None else ""
+    return flown_controller(spec.scenario, None, dict(spec.options)) if spec.scenario is not None else ""
 
 
 def param_columns(spec: CampaignSpec) -> tuple[str, ...]:

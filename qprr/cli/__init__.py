@@ -100,7 +100,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         except QprrError as exc:
             return fail(prog, f"--platform {name!r}: {exc}" if args.platform and not args.urdf else str(exc))
     if args.print_gains:
-        return _print_gains(sc, platform, args.controller or sc.controllers[0], options)
+        return _print_gains(sc, platform, args.controller, options)
     progress = not args.quiet
     try:
         res = sc.run(platform=platform, controller=args.controller, progress=progress, **options)
@@ -132,21 +132,23 @@ def _save(res, path: Path) -> Path:
     return res.save(path) if path.suffix == ".npz" else save_table(res, path)
 
 
-def _print_gains(sc, platform, controller: str, options: dict) -> int:
-    """Print the gains ``controller`` gets in scenario ``sc`` on ``platform`` with the run's ``options``
-    (``--print-gains``), without running."""
+def _print_gains(sc, platform, controller: str | None, options: dict) -> int:
+    """Print the gains ``controller`` (None: the scenario's, or the one its mission file names) gets in scenario ``sc``
+    on ``platform`` with the run's ``options`` (``--print-gains``), without running."""
     from ..control.gains import gain_lines
     from ..platforms import load as load_platform
-    from ..scenarios.missions import flown_gain_arguments
+    from ..scenarios.missions import flown_controller, flown_gain_arguments, flown_gain_source
 
     platform = platform or load_platform()
     spec = options.get("gains") or (sc.options["gains"].default if "gains" in sc.options else "class")
     values = {**{k: o.default for k, o in sc.options.items()}, **options}
     try:
+        controller = flown_controller(sc.name, controller, values)  # a mission file may name it
         kwargs = flown_gain_arguments(sc.name, controller, platform, spec, values)
+        source = flown_gain_source(sc.name, spec, values)
     except QprrError as exc:
         return fail("qprr simulate", f"--gains {spec!r}: {exc}")
-    print(f"gains of {controller} in {sc.name} on {platform.name} ({spec})")
+    print(f"gains of {controller} in {sc.name} on {platform.name} ({source})")
     for line in gain_lines(kwargs, platform.xi_names) if kwargs else [f"  the defaults of the {controller} class"]:
         print(line)
     return 0

@@ -78,6 +78,7 @@ from __future__ import annotations
 import dataclasses
 import itertools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -388,49 +389,52 @@ def replace_fields(obj, fields: dict, n_xi: int, where: str):
     return dataclasses.replace(obj, **changes)
 
 
-def load_gains(path: str | Path, controller: str, platform: Platform) -> dict[str, object]:
+def load_gains(source: str | Path | Mapping, controller: str, platform: Platform, where: str = "") -> dict[str, object]:
     """Constructor keyword arguments from a TOML file: ``[targets]`` (fields of :class:`Targets`) re-derives,
     then ``[<controller>.<argument>]`` tables replace fields (e.g. ``[idc.gains] kp = [...]``).
 
     A controller with no derived gains but settings a file may set (:class:`~qprr.control.registry.NoGains`'s
     ``settings``, e.g. ``[mpc.weights]``, ``[mpc.settings]``) gets those tables as dicts (its factory builds them).
-    A file for another controller's tables only raises (it would silently change nothing)."""
-    path = Path(path)
-    table = read_toml(path, "gains file", "a TOML file: [targets] and [<controller>.gains] tables")
+    A file for another controller's tables only raises (it would silently change nothing).  ``source``: the file's
+    path, or its tables as a mapping (a mission file's ``[controller]`` tables), called ``where`` in the messages."""
+    if isinstance(source, Mapping):
+        table, where = dict(source), where or "gains tables"
+    else:
+        path = Path(source)
+        table, where = read_toml(path, "gains file", "a TOML file: [targets] and [<controller>.gains] tables"), f"gains file {str(path)!r}"
     settable = {n: e.gains.settings for n, e in CONTROLLERS.items() if isinstance(e.gains, NoGains) and e.gains.settings}
     valid = ("targets", *GAIN_ARGUMENTS, *settable)
     extra = [k for k in table if k not in valid]
     if extra:
-        raise UnknownNameError(f"table of gains file {str(path)!r}", extra[0], valid)
+        raise UnknownNameError(f"table of {where}", extra[0], valid)
     if controller in settable:
-        return _settings_tables(path, table, controller, settable[controller])
+        return _settings_tables(where, table, controller, settable[controller])
     if set(table) - {"targets"} and controller not in table:
         raise InputError(
-            f"gains file {str(path)!r} has tables for {sorted(set(table) - {'targets'})}, not for the controller "
-            f"{controller!r}: add a [{controller}.gains] table"
+            f"{where} has tables for {sorted(set(table) - {'targets'})}, not for the controller {controller!r}: add a [{controller}.gains] table"
         )
     try:
         targets = Targets(**table.get("targets", {}))
     except TypeError as exc:
-        raise InputError(f"gains file {str(path)!r}: [targets] takes {[f.name for f in dataclasses.fields(Targets)]} ({exc})") from exc
+        raise InputError(f"{where}: [targets] takes {[f.name for f in dataclasses.fields(Targets)]} ({exc})") from exc
     return platform_gains(controller, platform, targets, table.get(controller))
 
 
-def _settings_tables(path: Path, table: dict, controller: str, names: tuple[str, ...]) -> dict[str, object]:
-    """The ``[<controller>.<argument>]`` tables of a gains file for a controller without derived gains (as dicts)."""
+def _settings_tables(where: str, table: dict, controller: str, names: tuple[str, ...]) -> dict[str, object]:
+    """The ``[<controller>.<argument>]`` tables of a gains file (``where``) for a controller without derived gains (as dicts)."""
     if "targets" in table:
         raise InputError(
-            f"gains file {str(path)!r}: [targets] does not apply to controller {controller!r}, which derives no gains from "
+            f"{where}: [targets] does not apply to controller {controller!r}, which derives no gains from "
             f"bandwidth targets; set its {', '.join(f'[{controller}.{n}]' for n in names)} tables instead"
         )
     if controller not in table:
-        raise InputError(f"gains file {str(path)!r} has no table for the controller {controller!r}: add [{controller}.{names[0]}]")
+        raise InputError(f"{where} has no table for the controller {controller!r}: add [{controller}.{names[0]}]")
     mine = table[controller]
     for name, fields in mine.items():
         if name not in names:
-            raise UnknownNameError(f"table of [{controller}] in gains file {str(path)!r}", name, names)
+            raise UnknownNameError(f"table of [{controller}] in {where}", name, names)
         if not isinstance(fields, dict):
-            raise InputError(f"gains file {str(path)!r}: [{controller}.{name}] must be a table of field = value, got {fields!r}")
+            raise InputError(f"{where}: [{controller}.{name}] must be a table of field = value, got {fields!r}")
     return {name: dict(fields) for name, fields in mine.items()}
 
 

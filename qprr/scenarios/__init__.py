@@ -61,7 +61,8 @@ class Scenario:
     ``plot``: ``(result, path) -> path`` drawing its figure; ``source``: the thesis section it
     reproduces ("" if none); ``summary``: extra report lines of a result; ``figures``: the
     thesis figure number of each panel of :func:`qprr.viz.plot_result` it reproduces (panel
-    name -> "6.7"; the panel titles carry them).
+    name -> "6.7"; the panel titles carry them); ``controller_in_data``: its data may name the controller (the
+    mission file's ``[controller] name``): its runner gets ``controller=None`` when none is asked, and chooses.
     """
 
     name: str
@@ -74,6 +75,7 @@ class Scenario:
     source: str = ""
     summary: Callable[[SimResult], list[str]] | None = None
     figures: Mapping[str, str] = field(default_factory=dict)
+    controller_in_data: bool = False
 
     def controller_names(self) -> tuple[str, ...]:
         """The controllers it flies: its own :attr:`controllers` (the first the default), then every registered
@@ -87,14 +89,27 @@ class Scenario:
         """Whether the runner can fly a plant other than the controller's model (a ``plant`` argument)."""
         return "plant" in inspect.signature(self.runner).parameters
 
+    @property
+    def takes_settings(self) -> bool:
+        """Whether the runner takes a settings object (``settings``: the generic missions' :class:`~qprr.scenarios.missions.MissionSettings`)."""
+        return "settings" in inspect.signature(self.runner).parameters
+
     def run(
-        self, platform: Platform | None = None, controller: str | None = None, progress: bool = False, plant: Platform | None = None, **options
+        self,
+        platform: Platform | None = None,
+        controller: str | None = None,
+        progress: bool = False,
+        plant: Platform | None = None,
+        settings: object = None,
+        **options,
     ) -> SimResult:
         """Run with ``options`` (unknown names raise :class:`UnknownNameError` listing the valid ones).
 
         ``plant``: fly another robot than the controller's model ``platform`` (model errors,
         :func:`qprr.sim.mismatch.perturbed`); only scenarios whose runner takes ``plant`` do
-        (:attr:`takes_plant`)."""
+        (:attr:`takes_plant`).  ``settings``: what a Python caller sets beyond the options (the generic missions:
+        a :class:`~qprr.scenarios.missions.MissionSettings`); only scenarios whose runner takes it do
+        (:attr:`takes_settings`)."""
         for key in options:
             if key not in self.options:
                 raise UnknownNameError(f"option of scenario {self.name!r}", key, tuple(self.options))
@@ -116,7 +131,15 @@ class Scenario:
                     f"scenarios that do: {', '.join(n for n, s in SCENARIOS.items() if s.takes_plant)}"
                 )
             values["plant"] = plant
-        return self.runner(platform=platform, controller=controller or self.controllers[0], progress=progress, **values)
+        if settings is not None:
+            if not self.takes_settings:
+                raise InputError(
+                    f"scenario {self.name!r} takes no settings object; scenarios that do: "
+                    f"{', '.join(n for n, s in SCENARIOS.items() if s.takes_settings)}"
+                )
+            values["settings"] = settings
+        chosen = controller if self.controller_in_data else (controller or self.controllers[0])
+        return self.runner(platform=platform, controller=chosen, progress=progress, **values)
 
 
 # ------------------------------------------------------------------------- generic scenarios
@@ -216,12 +239,22 @@ GENERIC = (
 
 def _mission_runner(name: str) -> Callable[..., SimResult]:
     """A runner of :mod:`qprr.scenarios.missions` (imported on first use); ``plant``: the robot flown when it differs from the
-    controller's model (model errors of a campaign, :func:`qprr.sim.mismatch.perturbed`), on any platform."""
+    controller's model (model errors of a campaign, :func:`qprr.sim.mismatch.perturbed`), on any platform; ``settings``:
+    a :class:`~qprr.scenarios.missions.MissionSettings` (``scenarios.run(name, settings=...)``)."""
 
-    def runner(platform, controller, progress, plant=None, **options):
+    def runner(platform, controller, progress, plant=None, settings=None, **options):
+        from dataclasses import replace
+
         from . import missions
 
-        settings = missions.MissionSettings(plant=plant)
+        if settings is None:
+            settings = missions.MissionSettings(plant=plant)
+        elif not isinstance(settings, missions.MissionSettings):
+            raise InputError(f"settings of scenario {name!r} must be a qprr.scenarios.missions.MissionSettings, got {type(settings).__name__}")
+        elif plant is not None:
+            if settings.plant is not None:
+                raise InputError("the plant is given twice (plant= and MissionSettings.plant): give it once")
+            settings = replace(settings, plant=plant)
         return getattr(missions, name)(platform, controller, progress, settings=settings, **options)
 
     runner.__name__ = name
@@ -275,11 +308,13 @@ MISSIONS = (
             "gains": GAINS_OPTION,
             "mission": Option(
                 "",
-                "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables; empty: climb, fly 1 m, reach out",
+                "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables, and optionally [wind], "
+                "[[gust]], [drag], [motor], [controller] (qprr.scenarios.mission_file); empty: climb, fly 1 m, reach out",
                 file=True,
             ),
         },
         summary=_mission_summary,
+        controller_in_data=True,
     ),
     Scenario(
         "grasp-drop",
@@ -358,9 +393,12 @@ def get_scenario(name: str) -> Scenario:
     return SCENARIOS[name]
 
 
-def run(name: str, controller: str | None = None, *, platform: Platform | None = None, progress: bool = False, **options) -> SimResult:
-    """Run scenario ``name`` (optionally with another ``controller`` by name and on another ``platform``)."""
-    return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
+def run(
+    name: str, controller: str | None = None, *, platform: Platform | None = None, progress: bool = False, settings: object = None, **options
+) -> SimResult:
+    """Run scenario ``name`` (optionally with another ``controller`` by name and on another ``platform``); ``settings``:
+    its settings object (the generic missions: a :class:`~qprr.scenarios.missions.MissionSettings`), :meth:`Scenario.run`."""
+    return get_scenario(name).run(platform=platform, controller=controller, progress=progress, settings=settings, **options)
 
 
 __all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]

@@ -14,7 +14,8 @@ scenario            what (check in ``result.metrics``)
 ``fly-to``          climb, then move the base to ``target`` and the arm ``reach_fraction`` of
                     the way to its upper limits (``final_position_error``, ``final_arm_error``)
 ``mission``         phases of base and arm coordinates by name given as data (a TOML file or a
-                    list of tables: :func:`read_mission`), payload grasps and releases included
+                    mapping of tables: :mod:`qprr.scenarios.mission_file`), with payload grasps and
+                    releases, wind, gusts, drag, motor lag and the controller, flown as written
 ``grasp-drop``      hover with the arm reached out; a mass attaches at the end effector
                     (grasp), then drops (``final_position_error`` after the drop,
                     ``max_position_error``)
@@ -42,8 +43,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass
-from pathlib import Path
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -58,6 +58,7 @@ from ..control.opspace_impedance import EndEffectorImpedance
 from ..errors import InputError, ScheduleWarning, UnknownNameError
 from ..kinematics import ee_pose_xi
 from ..model import Platform, check_platform, max_lift
+from ..registry import SCENARIOS
 from ..sim import simulate
 from ..sim.actuators import RotorDynamics, rotor_dynamics_from_mapping
 from ..sim.contact import CompliantWall
@@ -66,13 +67,8 @@ from ..sim.payload import PayloadChange, PayloadSchedule
 from ..sim.wind import AerodynamicDrag, Gust, Wind
 from ..trajectory import Hold, MultiPhase, Phase, Trajectory
 from ..urdf.plausibility import DEFAULT, Plausibility, check_plausibility_setting, check_time_constant
-from ..validation import as_real, as_vector, read_toml
-
-PHASE_KEYS = ("coordinate", "start", "end", "target")
-"""Keys of one phase of a mission given as data (``[[phase]]`` tables of a TOML file)."""
-PAYLOAD_KEYS = ("time", "mass")
-"""Keys of one payload event of a mission (``[[payload]]`` tables): from ``time`` [s] the end effector carries ``mass`` [kg]."""
-
+from ..validation import as_name, as_real, as_vector
+from .mission_file import PAYLOAD_KEYS, PHASE_KEYS, MissionFile, motor_stage_of, read_mission_file
 
 _GAIN_TYPES = (IDCGains, MFCGains, ImpedanceGains, EndEffectorImpedance)
 
@@ -265,12 +261,13 @@ def _target(value) -> tuple[float, float, float]:
     return x, y, z
 
 
-def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule | None, duration: float) -> None:
+def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule | None, duration: float, gusts=()) -> None:
     """Say what a run of ``duration`` [s] would silently skip or cannot carry.
 
     Refused: a payload the rotors cannot lift with the platform (the mass in grams?).  Warned about, once per run: the
     phases that start at or after the end (never flown), end after it (flown in part: the final errors are measured
-    against an unfinished reference) and the payload events at or after it (never applied) - a run shorter than its
+    against an unfinished reference), the payload events at or after it (never applied) and the ``gusts``
+    (:class:`qprr.sim.wind.Gust`) that start at or after it or end after it - a run shorter than its
     mission is legal (the first seconds of a long mission), a mission file longer than the run by mistake is not
     noticed otherwise.  Each message names the phase or event, its time and the duration that flies it all."""
     platform = check_platform(platform)
@@ -297,8 +294,11 @@ def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule 
                 f"{lift / platform.g - platform.total_mass:.4g} kg of payload at most); the mass is in kg (grams? "
                 f"{ev.mass:g} g = {ev.mass / 1000:g} kg)"
             )
+    for k, g in enumerate(gusts):
+        if g.start >= D or g.start + g.duration > D:
+            (skipped if g.start >= D else cut).append(f"gust {k + 1} (start = {g.start:g} s, end = {g.start + g.duration:g} s)")
     if skipped or cut:
-        end = max([p.t2 for p in phases] + [ev.time for ev in changes])
+        end = max([p.t2 for p in phases] + [ev.time for ev in changes] + [g.start + g.duration for g in gusts])
         said = ([f"never flown or applied: {', '.join(skipped)}"] if skipped else []) + ([f"flown in part: {', '.join(cut)}"] if cut else [])
         warnings.warn(
             f"mission longer than the run (duration = {D:g} s): {'; '.join(said)}; the run reports only what it flew. "
@@ -309,32 +309,16 @@ def check_mission_schedule(platform: Platform, phases, payload: PayloadSchedule 
 
 
 def read_mission(source, *, phases_required: bool = True) -> tuple[tuple[Phase, ...], PayloadSchedule | None]:
-    """Phases and payload events of a mission given as data.
+    """Phases and payload events of a mission given as data (:func:`qprr.scenarios.mission_file.read_mission_file`,
+    which reads and checks the whole file: the air, the motors and the controller too).
 
     ``source``: a TOML file (``[[phase]]`` tables with :data:`PHASE_KEYS`, optional ``[[payload]]``
     tables with :data:`PAYLOAD_KEYS`) or a mapping ``{"phase": [...], "payload": [...]}`` of the same
     tables.  A phase moves ``coordinate`` (a name of the platform's xi: "z", "psi", an arm joint's
     name) to ``target`` between ``start`` and ``end`` [s].  ``phases_required=False`` accepts payload
     events alone (a mission whose reference is given otherwise, :class:`MissionSettings`)."""
-    if isinstance(source, (str, Path)):
-        source = read_toml(source, "mission file", f"a TOML file of [[phase]] tables: {', '.join(PHASE_KEYS)}")
-    if not isinstance(source, Mapping):
-        raise InputError(f"a mission is a TOML file or a mapping of 'phase' (and 'payload') tables, got {type(source).__name__}")
-    for key in source:
-        if key not in ("phase", "payload"):
-            raise UnknownNameError("mission table", key, ("phase", "payload"))
-    phases, events = [], []
-    for k, table in enumerate(source.get("phase", ())):
-        if set(table) != set(PHASE_KEYS):
-            raise InputError(f"mission phase {k + 1} has keys {sorted(table)}; a phase needs exactly {list(PHASE_KEYS)}")
-        phases.append(Phase(table["coordinate"], table["start"], table["end"], table["target"]))
-    for k, table in enumerate(source.get("payload", ())):
-        if set(table) != set(PAYLOAD_KEYS):
-            raise InputError(f"mission payload event {k + 1} has keys {sorted(table)}; an event needs exactly {list(PAYLOAD_KEYS)}")
-        events.append(PayloadChange(float(table["time"]), float(table["mass"])))
-    if phases_required and not phases:
-        raise InputError("a mission needs at least one [[phase]] table")
-    return tuple(phases), (PayloadSchedule(tuple(events)) if events else None)
+    data = read_mission_file(source, phases_required=phases_required)
+    return data.phases, data.payload
 
 
 def default_mission(platform: Platform, duration: float) -> dict:
@@ -348,24 +332,99 @@ def default_mission(platform: Platform, duration: float) -> dict:
     return {"phase": phases}
 
 
-def mission(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
-    """The phases of ``o["mission"]`` (file or mapping; "" for :func:`default_mission`) from the neutral posture on the ground.
+def mission(platform=None, controller=None, progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
+    """The phases of ``o["mission"]`` (file or mapping; "" for :func:`default_mission`) from the neutral posture on the ground,
+    with what the mission data carries besides (:mod:`qprr.scenarios.mission_file`): payload events, the wind, gusts and
+    drag, the motor stage, the controller and its gains, flown as written.
 
-    With ``settings.trajectory`` the mission data gives the payload events only (phases there are refused)."""
+    ``controller``: None flies the data's ``[controller] name`` (else "idc"); a name that differs from the data's is
+    refused.  The result is labelled ``mission NAME`` by the data's name (its file's stem).  With
+    ``settings.trajectory`` the mission data gives the rest only (phases there are refused)."""
     platform = _platform(platform)
     if settings.trajectory is None:
-        phases, payload = read_mission(o["mission"] or default_mission(platform, o["duration"]))
-        check_mission_schedule(platform, phases, payload, o["duration"])
-        traj = MultiPhase(phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
+        data = read_mission_file(o["mission"] or default_mission(platform, o["duration"]))
+        traj = MultiPhase(data.phases, tuple(platform.neutral_xi()), name="mission", law=o["law"], names=platform.xi_names)
     else:
-        phases, payload = read_mission(o["mission"], phases_required=False) if o["mission"] else ((), None)
-        if phases:
+        data = read_mission_file(o["mission"], phases_required=False) if o["mission"] else MissionFile("mission", (), None)
+        if data.phases:
             raise InputError("mission: phases in the mission data and MissionSettings.trajectory both give the reference; give one")
-        check_mission_schedule(platform, (), payload, o["duration"])
         traj = settings.trajectory
-    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "mission", settings, payload=payload)
+    check_mission_schedule(platform, data.phases, data.payload, o["duration"], data.gusts)
+    stage = motor_stage_of(platform, data.motor, settings.plausibility) if data.motor else None
+    ctrl = _mission_controller(_mission_controller_name(controller, data), platform, o, settings, data, stage)
+    disturbance = data.drag
+    if disturbance is not None and settings.disturbance is not None:  # the caller's and the file's: both act
+        mine = settings.disturbance.parts if isinstance(settings.disturbance, Disturbances) else (settings.disturbance,)
+        disturbance, settings = Disturbances((*mine, disturbance)), replace(settings, disturbance=None)
+    label = "mission" if data.name == "mission" else f"mission {data.name}"
+    res = fly(platform, ctrl, traj, o, progress, label, settings, payload=data.payload, disturbance=disturbance, actuators=stage)
     _errors(res)
     return res
+
+
+def _mission_controller_name(controller: str | None, data: MissionFile) -> str:
+    """The controller a mission flies: the caller's ``controller``, the data's ``[controller] name`` (one of those the
+    ``mission`` scenario flies), or "idc"; the caller's and the data's must agree."""
+    written = data.controller.name
+    if not written:
+        return controller or "idc"
+    as_name(written, "name", SCENARIOS["mission"].controller_names(), f"controller of mission {data.name!r} ([controller] name)")
+    if controller is not None and controller != written:
+        raise InputError(
+            f"mission {data.name!r} names the controller {written!r} ([controller] name) and the run asks for {controller!r}: "
+            "name it in one place (leave out --controller, or remove name from [controller])"
+        )
+    return written
+
+
+def _mission_controller(name: str, platform: Platform, o: dict, settings: MissionSettings, data: MissionFile, stage):
+    """``settings.controller``, else the controller ``name`` with the gains of :func:`mission_gain_arguments`."""
+    if settings.controller is not None:
+        if data.controller.name or data.controller.gains != "":
+            raise InputError(f"mission {data.name!r}: MissionSettings.controller is flown, its [controller] table would be ignored; remove one")
+        return settings.controller
+    defaults = "class" if o["gains"] == "class" and data.controller.gains == "" else "platform"
+    return make_controller(name, platform, defaults=defaults, **mission_gain_arguments(name, platform, o["gains"], data, stage))
+
+
+def mission_gain_arguments(name: str, platform: Platform, gains, data: MissionFile, stage: RotorDynamics | None) -> dict[str, object]:
+    """The gain arguments controller ``name`` flies a mission with: the data's ``[controller]`` gains (a gain set's
+    name or file, or a gains file's tables), else the option ``gains`` (:func:`gain_arguments`; both given: refused);
+    derived gains know the motor ``stage``'s time constant (``Targets(rotor_time_constant=tau)``, :func:`lag_gains`)."""
+    choice = data.controller
+    if choice.gains != "":
+        if gains != "platform":
+            raise InputError(
+                f"mission {data.name!r} sets the gains in [controller] and the run's option gains = {gains!r} too: give them in one place"
+            )
+        gains = choice.gains
+    derived = stage is not None and name in GAIN_ARGUMENTS  # gains derived from targets: they learn the rotors' lag
+    tau = float(np.max(stage.time_constant)) if stage is not None else 0.0
+    if isinstance(gains, Mapping):
+        if derived:  # Targets(rotor_time_constant=tau) unless the file's [controller.targets] gives its own
+            gains = {**gains, "targets": {"rotor_time_constant": tau, **gains.get("targets", {})}}
+        return load_gain_file(gains, name, platform, f"the [controller] tables of mission {data.name!r}")
+    if gains == "platform" and derived:
+        return lag_gains(name, platform, tau)
+    return gain_arguments(name, platform, gains)
+
+
+def flown_gain_source(scenario: str, gains, options: dict) -> str:
+    """What gives the gains of the generic ``scenario`` (``--print-gains``'s header): a mission's ``[controller]`` table
+    when its data sets the gains, else the option ``gains``."""
+    if scenario == "mission" and options.get("mission"):
+        data = read_mission_file(options["mission"], phases_required=False)
+        if data.controller.gains != "":
+            return f"[controller] of mission {data.name!r}"
+    return str(gains)
+
+
+def flown_controller(scenario: str, controller: str | None, options: dict) -> str:
+    """The controller the generic ``scenario`` flies when ``controller`` is asked (None: none): for ``mission``, the
+    mission data's ``[controller] name`` (:func:`_mission_controller_name`), else ``controller`` or the scenario's first."""
+    if scenario == "mission" and options.get("mission"):
+        return _mission_controller_name(controller, read_mission_file(options["mission"], phases_required=False))
+    return controller or SCENARIOS[scenario].controllers[0]
 
 
 def grasp_drop(platform=None, controller="idc", progress=False, settings: MissionSettings = _AS_REGISTERED, **o):
@@ -493,7 +552,13 @@ def _lag_reference(platform: Platform, o: dict) -> MultiPhase:
 def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gains, options: dict) -> dict[str, object]:
     """The gain arguments ``controller`` is built with in the generic ``scenario`` (``--print-gains``): those of
     :func:`gain_arguments`, except motor-lag's derived gains, which know its rotor time constant (:func:`lag_gains`;
-    ``options`` the run's, missing ones at the scenario's defaults)."""
+    ``options`` the run's, missing ones at the scenario's defaults) and a mission's, which its data may give
+    (:func:`mission_gain_arguments`)."""
+    if scenario == "mission" and options.get("mission"):
+        data = read_mission_file(options["mission"], phases_required=False)
+        stage = motor_stage_of(platform, data.motor) if data.motor else None
+        if data.controller.gains != "" or stage is not None:
+            return mission_gain_arguments(controller, platform, gains, data, stage)
     if gains == "platform" and controller not in GAIN_ARGUMENTS:  # e.g. mpc: cost weights, make_controller's own
         return {}
     if scenario == "motor-lag" and gains == "platform":
@@ -608,7 +673,11 @@ __all__ = [
     "controller_for",
     "default_mission",
     "fly",
+    "flown_controller",
+    "flown_gain_source",
+    "flown_gain_arguments",
     "gain_arguments",
+    "mission_gain_arguments",
     "MOTOR_DEFAULTS",
     "mission",
     "motor_lag",

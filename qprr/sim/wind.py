@@ -251,15 +251,20 @@ class Wind:
     """Wind velocity w(t) (world axes, m/s): ``mean`` (3,) + the ``gusts`` + Dryden ``turbulence`` (or None).
 
     The turbulence components (u, v, w) are along the mean wind's horizontal direction, across
-    it (horizontal) and up (along x, y, z when the mean wind has no horizontal part).
+    it (horizontal) and up (along x, y, z when the mean wind has no horizontal part).  ``seed``: the
+    turbulence's own seed (an integer >= 0; None: drawn from the run's seed), so that one realisation of the
+    air can be flown again under runs of other seeds.
     """
 
     mean: tuple[float, float, float] = (0.0, 0.0, 0.0)
     turbulence: Dryden | None = None
     gusts: tuple[Gust, ...] = ()
+    seed: int | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "mean", tuple(float(v) for v in as_vector(self.mean, 3, "mean wind")))
+        if self.seed is not None:
+            object.__setattr__(self, "seed", as_int(self.seed, "wind seed", lo=0))
         if self.turbulence is not None and not isinstance(self.turbulence, Dryden):
             raise InputError(f"turbulence must be a Dryden model or None, got {type(self.turbulence).__name__}")
         if any(not isinstance(g, Gust) for g in self.gusts):
@@ -335,9 +340,12 @@ class AerodynamicDrag(StateDisturbance):
         return self._force(q, v, self.wind_velocity(t))
 
     def realize(self, t_ticks: np.ndarray, rng: np.random.Generator, period: float) -> _RealizedDrag:
-        """The drag of one run: the wind sampled at the ticks (and one period after the last), interpolated linearly."""
+        """The drag of one run: the wind sampled at the ticks (and one period after the last), interpolated linearly;
+        the turbulence drawn from ``rng`` (the run's), or from the wind's own ``seed`` when it has one."""
         n = t_ticks.shape[0] + 1
         t = t_ticks[0] + period * np.arange(n)
+        if self.wind is not None and self.wind.seed is not None:  # the wind's own realisation, whatever the run's seed
+            rng = np.random.default_rng(self.wind.seed)
         w = np.zeros((n, 3)) if self.wind is None else self.wind.sample(t, rng)
         return _RealizedDrag(self, t[0], period, w)
 

@@ -14,7 +14,8 @@ references from (6.17), Fig. 6.8), ``arm`` (joints, Fig. 6.9), ``errors_position
 ``errors_angle`` (reference - measured, Fig. 6.10, 6.18), ``thrust`` (u_fb, world axes, Fig.
 6.11), ``torques`` (u_tau, Fig. 6.12), ``arm_efforts`` (u_mu, Fig. 6.12), ``rotors`` (thrusts and
 their bounds), ``path`` (3-D, Fig. 6.13-6.14), ``cog`` (x_cm, y_cm in B, Fig. 6.42-6.43) and
-``disturbance`` (u_ext of (6.27)-(6.28)).  The forces are the applied ones, S^T N f (what the
+``disturbance`` (u_ext of (6.27)-(6.28)) and ``wind`` (the air the base flew in, world axes, when the run had a
+wind: ``result.series["wind_velocity"]``).  The forces are the applied ones, S^T N f (what the
 rotors and joints produced after the allocation); where the controller asked for something else (a
 bound was active, or a force the rotors cannot produce), the commanded value is drawn dotted.  Your own panels are :class:`Panel` objects.
 
@@ -502,6 +503,24 @@ def _disturbance(ax, res):
     legend(ax, *axes[1:])
 
 
+WIND_SERIES = "wind_velocity"
+"""The series of a run holding the wind it flew in, (m, 3) [m/s] world axes (the drag's report, :mod:`qprr.sim.wind`)."""
+
+
+def _wind(ax, res):
+    """The wind w(t) the base flew in [m/s], world axes (its x, y, z components and its speed |w|)."""
+    w = np.asarray(res.series[WIND_SERIES], dtype=float)
+    t = res.t[: w.shape[0]]
+    speed = np.linalg.norm(w, axis=1)
+    _draw_signals(ax, t, [w[:, 0], w[:, 1], w[:, 2]], ["$w_x$", "$w_y$", "$w_z$"], colors=["C0", "C1", "C2"], lw=1.1)
+    ax.plot(t, speed, color="0.7", lw=3.0, label="$|w|$", zorder=1)  # wide and pale, under the components it often meets
+    ax.axhline(0.0, color="0.4", lw=0.6, zorder=1)
+    robust_limits(ax, [w[:, 0], w[:, 1], w[:, 2], speed], min_span=0.1, t=t)
+    ax.set_ylabel("wind velocity, world axes [m/s]")
+    time_axis(ax, res)
+    legend(ax)
+
+
 def _path(ax, res):
     p, pd = res.xi[:, 0:3], res.xi_d[:, 0:3]
     both = np.vstack([p, pd])
@@ -567,6 +586,7 @@ PANELS: dict[str, Panel] = {
     "path": Panel("path", "3-D path of B", _path, "3d"),
     "cog": Panel("cog", "CoG offset in B", _cog),
     "disturbance": Panel("disturbance", "disturbance $u_{ext}$", _disturbance),
+    "wind": Panel("wind", "wind the base flew in", _wind),
 }
 """Every panel by name (see the module docstring)."""
 
@@ -584,7 +604,8 @@ DEFAULT_PANELS = (
     "cog",
     "disturbance",
 )
-"""The panels of the full page (``disturbance`` only when the run had one)."""
+"""The panels of the full page (``disturbance`` only when the run had one; ``wind`` added after them when the run had a
+wind)."""
 
 
 def _panel(spec) -> Panel:
@@ -709,7 +730,8 @@ RUN_FIGURES.register(RUN_FIGURES.default, plot_result)  # SimResult.plot() (its 
 
 def _chosen_panels(res: SimResult, panels) -> list[Panel]:
     """The panels to draw: ``panels`` (a name, a :class:`Panel` or a sequence of them), default :data:`DEFAULT_PANELS`
-    without the disturbance panel of a run that has none."""
+    without the disturbance panel of a run that has none, with the wind panel of a run that recorded its wind; a wind
+    panel asked for a run that recorded none is refused."""
     explicit = panels is not None
     if panels is None:
         panels = DEFAULT_PANELS
@@ -717,9 +739,13 @@ def _chosen_panels(res: SimResult, panels) -> list[Panel]:
     if not specs:
         raise InputError("panels must name at least one panel")
     chosen = [_panel(s) for s in specs]
-    if not explicit and not np.any(res.u_ext):
+    if explicit:
+        if WIND_SERIES not in res.series and any(p.draw is _wind for p in chosen):
+            raise InputError(f"panel 'wind': run {res.scenario!r} recorded no wind (no series {WIND_SERIES!r}: it flew in still air)")
+        return chosen
+    if not np.any(res.u_ext):
         chosen = [p for p in chosen if p.name != "disturbance"]
-    return chosen
+    return chosen + ([PANELS["wind"]] if WIND_SERIES in res.series else [])
 
 
 class _PanelDrawer:
