@@ -19,10 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..actuation.lexicographic import Lexicographic, QPSettings
+from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings
 from ..model import Platform, check_platform
 from ..validation import as_int, as_real
 from .tasks.base import check_linearized
+
+DEFAULT_KERNEL = Kernel.AUTO
+"""The IK's lexicographic kernel (:class:`qprr.actuation.lexicographic.Kernel`): the compiled one when numba is installed
+(``pip install qprr[fast]``), else the readable numpy one."""
 
 MET = 1e-14
 """A level whose error entries are all below MET (m, rad: the rounding of forward kinematics near the origin) is met."""
@@ -67,6 +71,7 @@ class HierarchySolver:
     ``lower_damping``: c in the damping c ||J_k^T e_k|| of the levels after the first.
     ``active_set_first``: each level solved exactly on the active set of the previous iteration first,
     ProxQP (then polished) only when that is not the optimum (:class:`qprr.actuation.lexicographic.Lexicographic`).
+    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto").
     The object owns its QPs: one solver per thread.
     """
 
@@ -80,6 +85,7 @@ class HierarchySolver:
         max_qp_iter: int = 1000,
         lower_damping: float = 0.1,
         active_set_first: bool = True,
+        kernel: Kernel | str = DEFAULT_KERNEL,
     ) -> None:
         check_platform(platform)
         max_qp_iter = as_int(max_qp_iter, "max_qp_iter", lo=1)
@@ -93,7 +99,8 @@ class HierarchySolver:
         # stiff inequality penalty cut the iterations with an active joint limit from ~12 to ~4
         # (benchmarks/ik_benchmark.py) without changing the optimum.
         self.settings = QPSettings(
-            eps_abs=eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, max_iter=max_qp_iter, default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6
+            eps_abs=eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, max_iter=max_qp_iter, default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6,
+            kernel=kernel,
         )
         self.platform = platform
         self.nv = platform.nv

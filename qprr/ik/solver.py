@@ -58,7 +58,8 @@ from ..errors import InputError, NonFiniteError, ShapeError, SolverError, Unknow
 from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
-from .hierarchy import MET, HierarchySolver
+from ..actuation.lexicographic import resolve_kernel
+from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 DEFAULT_METHOD = "qp"
@@ -193,8 +194,8 @@ class QPOptions(Tolerances):
     :func:`default_levels`.  ``require_hover``: success needs roll = pitch = 0 (within
     ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when max |dv| < step_tol (a failure
     unless the pose is reached); ``settle_tol``: once the pose is reached, stop when max |dv| < settle_tol (the lower
-    levels' tail converges linearly at best and moves nothing a tolerance sees).  ``eps_abs``, ``regularization``, ``rank_tol``: of
-    :class:`qprr.ik.hierarchy.HierarchySolver`."""
+    levels' tail converges linearly at best and moves nothing a tolerance sees).  ``eps_abs``, ``regularization``, ``rank_tol``,
+    ``kernel`` ("auto", "numpy", "numba": the lexicographic steps compiled or not): of :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
     posture: tuple | None = None
     levels: Sequence | None = None
@@ -205,9 +206,11 @@ class QPOptions(Tolerances):
     eps_abs: float = 1e-9
     regularization: float = 1e-7
     rank_tol: float = 1e-9
+    kernel: str = DEFAULT_KERNEL.value
 
     def __post_init__(self):
         self._check_tolerances()
+        resolve_kernel(self.kernel)
         check_count("max_iter", self.max_iter)
         for name in ("step_tol", "settle_tol", "max_step", "eps_abs", "rank_tol"):
             check_positive(name, getattr(self, name))
@@ -883,7 +886,9 @@ class QPMethod:
 
     def __init__(self, platform: Platform, options: QPOptions) -> None:
         self.platform, self.options = platform, options
-        self.engine = HierarchySolver(platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol)
+        self.engine = HierarchySolver(
+            platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol, kernel=options.kernel
+        )
         self.default_levels = _DefaultLevels(platform)
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
