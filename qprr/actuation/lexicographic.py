@@ -247,7 +247,8 @@ class Lexicographic:
         self.polish = bool(polish)
         self.active_set_first = bool(active_set_first)
         self._active: dict[int, tuple] = {}
-        self._fast = None if self.settings.kernel is Kernel.NUMPY else _FastState(self.n_bounded)
+        # the compiled kernel takes the active-set-first steps; without them every level goes to ProxQP (numpy path)
+        self._fast = _FastState(self.n_bounded) if self.settings.kernel is Kernel.NUMBA and self.active_set_first else None
         self._C_full = np.eye(n)[self.bounded]
         self._qps: dict[int, object] = {}
         self._warm: dict[int, tuple] = {}
@@ -260,7 +261,7 @@ class Lexicographic:
         state["_warm"] = {}
         state["_fresh"] = set()
         state["_active"] = {}
-        state["_fast"] = None if self._fast is None else _FastState(self.n_bounded)
+        state["_fast"] = None if self._fast is None else _FastState(self.n_bounded)  # guesses forgotten, as _active
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -387,15 +388,15 @@ class Lexicographic:
         n, tol, b_idx = self.n, self.rank_tol, self.bounded
         lo = np.asarray(lower, dtype=float)
         up = np.asarray(upper, dtype=float)
+        if self._fast is not None and equality is None and isinstance(b_idx, slice):
+            fast = self._fast.solve(self, levels, lo, up, x0, damping)
+            if fast is not None:  # else a level needs ProxQP: the readable path below solves the whole problem
+                return fast
         if x0 is None:  # 0, moved into the bounds (a positive lower bound, e.g. a rotor's f_min > 0, excludes 0)
             x = np.zeros(n)
             x[b_idx] = np.clip(0.0, lo, up)
         else:
             x = np.array(x0, dtype=float)
-        if self._fast is not None and equality is None and isinstance(b_idx, slice):
-            fast = self._fast.solve(self, levels, lo, up, x, damping)
-            if fast is not None:  # else a level needs ProxQP: the readable path below solves the whole problem
-                return fast
         iters = 0
         x_levels = []
         Z = None  # basis of the free directions (None: the whole space)
@@ -444,11 +445,13 @@ class _FastState:
         self.n = np.full(0, -1, dtype=np.int64)
         self.lo = np.zeros((0, n_bounded), dtype=bool)
         self.up = np.zeros((0, n_bounded), dtype=bool)
+        self.offsets: dict[tuple, np.ndarray] = {}  # level sizes -> where each level starts in the stacked rows
+        self.no_start = np.zeros(0)
 
     def reset(self) -> None:
         self.n[:] = -1
 
-    def solve(self, lex: Lexicographic, levels, lo: np.ndarray, up: np.ndarray, x: np.ndarray, damping) -> LexResult | None:
+    def solve(self, lex: Lexicographic, levels, lo: np.ndarray, up: np.ndarray, x0, damping) -> LexResult | None:
         """:meth:`Lexicographic.solve` by ``lexicographic_fast.lex_solve``; None when a level needs ProxQP."""
         from .lexicographic_fast import lex_solve
 
@@ -458,12 +461,15 @@ class _FastState:
             self.n = np.concatenate([self.n, np.full(grow, -1, dtype=np.int64)])
             self.lo = np.vstack([self.lo, np.zeros((grow, self.nb), dtype=bool)])
             self.up = np.vstack([self.up, np.zeros((grow, self.nb), dtype=bool)])
-        A = np.vstack([Ak for Ak, _ in levels]).astype(float, copy=False)
-        b = np.concatenate([bk for _, bk in levels]).astype(float, copy=False)
-        offsets = np.cumsum([0] + [Ak.shape[0] for Ak, _ in levels])
+        A = np.concatenate([Ak for Ak, _ in levels], dtype=float)
+        b = np.concatenate([bk for _, bk in levels], dtype=float)
+        rows = tuple(bk.shape[0] for _, bk in levels)
+        offsets = self.offsets.get(rows)
+        if offsets is None:
+            offsets = self.offsets[rows] = np.cumsum((0,) + rows)
         damp = np.zeros(K) if damping is None else np.asarray(damping, dtype=float)
-        b0 = lex.bounded.start
-        x, x_levels, ok = lex_solve(A, b, offsets, lo, up, b0, x, lex.regularization, damp, lex.rank_tol, self.n, self.lo, self.up)
+        x = self.no_start if x0 is None else np.array(x0, dtype=float)  # no start: the kernel clips 0 into the bounds
+        x, x_levels, ok = lex_solve(A, b, offsets, lo, up, lex.bounded.start, x, lex.regularization, damp, lex.rank_tol, self.n, self.lo, self.up)
         if not ok:
             return None
         return LexResult(x, tuple(levels), 0, tuple(x_levels))

@@ -4,8 +4,9 @@ One call solves every level of the lexicographic bounded least squares: the null
 unconstrained minimiser by Cholesky, the 1-D closed form, and the active-set KKT steps from the previous call's active
 bounds -- the steps of the readable path in ``lexicographic.py`` (``_clamped_1d``, ``_within``, ``_violated``,
 ``kkt_on_active_set``, ``_kkt_solve``, ``null_space``), with the same tolerances, in the same order.  What it does
-not do is hand a level to ProxQP: when the active-set steps do not end at a KKT point it returns ``ok = False`` and
-the caller solves the whole problem on the readable path (which does).  tests/test_lexicographic_fast.py checks it
+not do is hand a level to ProxQP, or take a least-squares solution of a singular system: when the active-set steps do
+not end at a KKT point, or meet such a system, it returns ``ok = False`` and the caller solves the whole problem on the
+readable path (which does both).  tests/test_lexicographic_fast.py checks it
 against that path to round-off on seeded random problems, bounds active and not.
 
 This module is imported only when the numba kernel is asked for (:func:`qprr.actuation.lexicographic.resolve_kernel`);
@@ -111,26 +112,53 @@ def _clamped_1d(B, r, reg, c, lo, up):
 
 
 @numba.njit(**_JIT)
+def _lu_solve(K, rhs):
+    """(K^-1 rhs, True) by Gaussian elimination with partial pivoting (LAPACK's dgesv, which np.linalg.solve calls),
+    or (anything, False) on an exactly zero pivot, where np.linalg.solve raises."""
+    n = K.shape[0]
+    U = K.copy()
+    x = rhs.copy()
+    for j in range(n):
+        p = j
+        for i in range(j + 1, n):
+            if abs(U[i, j]) > abs(U[p, j]):
+                p = i
+        if U[p, j] == 0.0:
+            return x, False
+        if p != j:
+            for c in range(n):
+                U[j, c], U[p, c] = U[p, c], U[j, c]
+            x[j], x[p] = x[p], x[j]
+        for i in range(j + 1, n):
+            f = U[i, j] / U[j, j]
+            for c in range(j, n):
+                U[i, c] -= f * U[j, c]
+            x[i] -= f * x[j]
+    for i in range(n - 1, -1, -1):
+        s = x[i]
+        for c in range(i + 1, n):
+            s -= U[i, c] * x[c]
+        x[i] = s / U[i, i]
+    return x, True
+
+
+@numba.njit(**_JIT)
 def _kkt_solve(H, g, A, b):
-    """(z, mu, stationarity residual, constraint residual) of min 1/2 z^T H z + g^T z s.t. A z = b
-    (``lexicographic._kkt_solve``)."""
+    """(z, mu, stationarity residual, constraint residual, ok) of min 1/2 z^T H z + g^T z s.t. A z = b
+    (``lexicographic._kkt_solve``); ok False where that one takes a least-squares solution (H not positive definite
+    with no active bound, a singular KKT matrix): the caller then hands the problem back to the numpy path."""
     n, k = H.shape[0], A.shape[0]
     if k == 0:
         z, ok = _spd_solve(H, -g)
-        if not ok:
-            z = np.linalg.lstsq(H, -g, rcond=1e-13)[0]
-        return z, np.zeros(0), H @ z + g, np.zeros(0)
+        return z, np.zeros(0), H @ z + g, np.zeros(0), ok
     K = np.zeros((n + k, n + k))
     K[:n, :n] = H
     K[:n, n:] = A.T
     K[n:, :n] = A
     rhs = np.concatenate((-g, b))
-    try:
-        sol = np.linalg.solve(K, rhs)
-    except Exception:  # noqa: BLE001 (numba raises LinAlgError on a singular K; the readable path catches that one)
-        sol = np.linalg.lstsq(K, rhs, rcond=1e-13)[0]
+    sol, ok = _lu_solve(K, rhs)
     r = K @ sol - rhs
-    return sol[:n], -sol[n:], r[:n], r[n:]
+    return sol[:n], -sol[n:], r[:n], r[n:], ok
 
 
 @numba.njit(**_JIT)
@@ -155,7 +183,9 @@ def _kkt_on_active_set(H, g, C, lo, up, at_lo, at_up):
         idx = np.flatnonzero(at_lo | at_up)
         Ak = np.ascontiguousarray(C[idx])
         bk = np.where(at_lo, lo, up)[idx]
-        zp, mu, res_x, res_b = _kkt_solve(H, g, Ak, bk)
+        zp, mu, res_x, res_b, solved = _kkt_solve(H, g, Ak, bk)
+        if not solved:
+            return zp, at_lo, at_up, False
         gscale = gscale0 + hmax * (1.0 + (np.abs(zp).max() if zp.shape[0] else 0.0))
         if (res_x.shape[0] and np.abs(res_x).max() > 1e-10 * gscale) or (res_b.shape[0] and np.abs(res_b).max() > ftol):
             return zp, at_lo, at_up, False
@@ -217,15 +247,20 @@ def _box_level(H, g, C, lo, up, rank_tol, guess_n, guess_lo, guess_up):
 def lex_solve(A, b, offsets, lower, upper, b0, x, reg0, damping, rank_tol, guess_n, guess_lo, guess_up):
     """Every level of ``Lexicographic.solve`` (no equality, bounded variables x[b0 : b0 + len(lower)]).
 
-    ``A``, ``b``: the levels stacked, level k in rows offsets[k]:offsets[k + 1]; ``x``: the start (x0, in the
-    bounds); ``reg0`` the regularisation, ``damping[k]`` added at level k.  ``guess_n[k]``, ``guess_lo[k]``,
-    ``guess_up[k]``: the active bounds of level k in the previous call (guess_n[k] < 0: none), updated in place.
-    Returns (x, x_levels (K, n), ok); ok False: a level needs ProxQP (the state is then left as it was).
+    ``A``, ``b``: the levels stacked, level k in rows offsets[k]:offsets[k + 1].  ``x``: the start (x0, in the bounds;
+    empty: 0 clipped into the bounds, ``Lexicographic.solve``'s default).  ``reg0``: the regularisation,
+    ``damping[k]`` added at level k.  ``guess_n[k]``, ``guess_lo[k]``, ``guess_up[k]``: the active bounds of level k in
+    the previous call (guess_n[k] < 0: none), updated in place.  Returns (x, x_levels (K, n), ok); ok False: a level
+    needs the numpy path (the guesses are then left as they were).
     """
-    n = x.shape[0]
+    n = A.shape[1]
     nb = lower.shape[0]
     K = offsets.shape[0] - 1
-    x = x.copy()
+    if x.shape[0] == 0:
+        x = np.zeros(n)
+        x[b0 : b0 + nb] = np.minimum(np.maximum(0.0, lower), upper)
+    else:
+        x = x.copy()
     x_levels = np.zeros((K, n))
     new_n = guess_n.copy()
     new_lo = guess_lo.copy()
