@@ -441,6 +441,9 @@ class _FastState:
     of active lower and upper bounds), the counterpart of ``Lexicographic._active``."""
 
     def __init__(self, n_bounded: int) -> None:
+        from .lexicographic_fast import lex_solve  # numba: only when this kernel is asked for
+
+        self.kernel = lex_solve
         self.nb = n_bounded
         self.n = np.full(0, -1, dtype=np.int64)
         self.lo = np.zeros((0, n_bounded), dtype=bool)
@@ -453,8 +456,6 @@ class _FastState:
 
     def solve(self, lex: Lexicographic, levels, lo: np.ndarray, up: np.ndarray, x0, damping) -> LexResult | None:
         """:meth:`Lexicographic.solve` by ``lexicographic_fast.lex_solve``; None when a level needs ProxQP."""
-        from .lexicographic_fast import lex_solve
-
         K = len(levels)
         if self.n.shape[0] < K:  # more levels than before: room for their guesses
             grow = K - self.n.shape[0]
@@ -469,7 +470,8 @@ class _FastState:
             offsets = self.offsets[rows] = np.cumsum((0,) + rows)
         damp = np.zeros(K) if damping is None else np.asarray(damping, dtype=float)
         x = self.no_start if x0 is None else np.array(x0, dtype=float)  # no start: the kernel clips 0 into the bounds
-        x, x_levels, ok = lex_solve(A, b, offsets, lo, up, lex.bounded.start, x, lex.regularization, damp, lex.rank_tol, self.n, self.lo, self.up)
+        bounds, weights = (lo, up, lex.bounded.start), (lex.regularization, damp, lex.rank_tol)
+        x, x_levels, ok = self.kernel(A, b, offsets, bounds, x, weights, (self.n, self.lo, self.up))
         if not ok:
             return None
         return LexResult(x, tuple(levels), 0, tuple(x_levels))

@@ -214,10 +214,11 @@ def _kkt_on_active_set(H, g, C, lo, up, at_lo, at_up):
 
 
 @numba.njit(**_JIT)
-def _box_level(H, g, C, lo, up, rank_tol, guess_n, guess_lo, guess_up):
+def _box_level(H, g, C, lo, up, rank_tol, guess):
     """One level's min 1/2 z^T H z + g^T z s.t. lo <= C z <= up (``Lexicographic.solve_box_qp`` with
     ``active_set_first``, without its ProxQP): (z, ok, kept rows, at_lo, at_up) with the active bounds over the kept
-    rows of C; guess_n < 0: no active set from the previous call."""
+    rows of C; ``guess`` = (n, at_lo, at_up) from the previous call, n < 0: none."""
+    guess_n, guess_lo, guess_up = guess
     z, chol = _spd_solve(H, -g)
     if chol and _within(C @ z, lo, up):
         return z, True, -1, guess_lo, guess_up
@@ -244,15 +245,19 @@ def _box_level(H, g, C, lo, up, rank_tol, guess_n, guess_lo, guess_up):
 
 
 @numba.njit(**_JIT)
-def lex_solve(A, b, offsets, lower, upper, b0, x, reg0, damping, rank_tol, guess_n, guess_lo, guess_up):
-    """Every level of ``Lexicographic.solve`` (no equality, bounded variables x[b0 : b0 + len(lower)]).
+def lex_solve(A, b, offsets, bounds, x, weights, guesses):
+    """Every level of ``Lexicographic.solve`` (no equality).
 
-    ``A``, ``b``: the levels stacked, level k in rows offsets[k]:offsets[k + 1].  ``x``: the start (x0, in the bounds;
-    empty: 0 clipped into the bounds, ``Lexicographic.solve``'s default).  ``reg0``: the regularisation,
-    ``damping[k]`` added at level k.  ``guess_n[k]``, ``guess_lo[k]``, ``guess_up[k]``: the active bounds of level k in
-    the previous call (guess_n[k] < 0: none), updated in place.  Returns (x, x_levels (K, n), ok); ok False: a level
+    ``A``, ``b``: the levels stacked, level k in rows offsets[k]:offsets[k + 1].  ``bounds`` = (lower, upper, b0):
+    lower <= x[b0 : b0 + len(lower)] <= upper.  ``x``: the start (x0, in the bounds; empty: 0 clipped into the
+    bounds, ``Lexicographic.solve``'s default).  ``weights`` = (reg0, damping, rank_tol): the regularisation,
+    damping[k] added at level k, the rank tolerance.  ``guesses`` = (n, at_lo, at_up): the active bounds of level k in
+    the previous call (n[k] < 0: none), updated in place.  Returns (x, x_levels (K, n), ok); ok False: a level
     needs the numpy path (the guesses are then left as they were).
     """
+    lower, upper, b0 = bounds
+    reg0, damping, rank_tol = weights
+    guess_n, guess_lo, guess_up = guesses
     n = A.shape[1]
     nb = lower.shape[0]
     K = offsets.shape[0] - 1
@@ -285,7 +290,7 @@ def lex_solve(A, b, offsets, lower, upper, b0, x, reg0, damping, rank_tol, guess
             H = B.T @ B
             for i in range(m):
                 H[i, i] += reg
-            z, ok, nc, at_lo, at_up = _box_level(H, -(B.T @ r), Cz, lo_z, up_z, rank_tol, guess_n[k], guess_lo[k], guess_up[k])
+            z, ok, nc, at_lo, at_up = _box_level(H, -(B.T @ r), Cz, lo_z, up_z, rank_tol, (guess_n[k], guess_lo[k], guess_up[k]))
             if not ok:
                 return x, x_levels, False
             if nc < 0 or not (at_lo.any() or at_up.any()):
