@@ -906,7 +906,7 @@ class QPMethod:
                 update_kinematics(platform, data, q)
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
-                if it and pose_ok and (not ctx.require_hover or _level(data, opts.hover_tol)):
+                if it and pose_ok and (not ctx.require_hover or _hovering(data, opts.hover_tol)):
                     tol = min(opts.position_tol, opts.orientation_tol, opts.hover_tol)
                     # the lower levels are tested only when the last step's linear model met them all (an unsatisfiable
                     # level, e.g. the posture, keeps its residual: no task is evaluated for nothing)
@@ -1048,7 +1048,7 @@ def _lower_levels_met(platform, data, q, levels, tol: float) -> tuple[float, ...
     return (first, *errors)
 
 
-def _level(data, hover_tol: float) -> bool:
+def _hovering(data, hover_tol: float) -> bool:
     """|roll|, |pitch| < hover_tol for the base orientation in ``data`` (as :func:`finish` measures them)."""
     r20, r21, r22 = data.oMi[1].rotation[2].tolist()
     return abs(math.atan2(r21, r22)) < hover_tol and abs(math.atan2(-r20, math.hypot(r21, r22))) < hover_tol
