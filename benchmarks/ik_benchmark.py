@@ -95,7 +95,7 @@ HOVER_COLS = [0, 1, 2, 5, 6, 7, 8]  # xi entries of the 7-dof hover chain
 # --------------------------------------------------------------------------- machine
 def print_machine() -> None:
     print("## Machine")
-    for line in machine_lines(("pin-pink", "roboticstoolbox-python", "ikpy")):
+    for line in machine_lines(("pin-pink", "roboticstoolbox-python", "ikpy", "numba")):
         print(f"- {line}")
     print()
 
@@ -782,9 +782,9 @@ def cold_start_why(cold, qp, pink, two_levels) -> list[str]:
         f"one finds the step below step_tol or settle_tol) of the four-level hierarchy at about {_fmt_us(per_it)} us each, on top of "
         f"the {_fmt_us(t_fixed)} us of a solve whose start is already the answer (the IGM start, the IGM included); pink takes "
         f"{n_pink:.2f} full steps (mean) of one weighted QP over the 7 hover coordinates at {_fmt_us(t_pink / max(n_pink, 1.0))} us "
-        f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve: less than the fixed cost plus one iteration "
-        "of the hierarchy driven from Python (small dense linear algebra: null spaces, active sets), so it needs the "
-        "hierarchy in compiled code"
+        f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve; with the compiled kernel (qprr[fast]) the "
+        "levels' linear algebra is one numba call per iteration, and what is left of an iteration is driven from Python: "
+        "the tasks' Jacobians (Pinocchio and numpy on 2- to 9-column matrices), the step control and the glue"
     ]
     if two_levels is not None and two_levels.times:
         t2 = float(np.median(two_levels.times))

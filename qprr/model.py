@@ -418,6 +418,11 @@ class Platform:
         return _readonly(np.array([j.upper for j in self.arm]))
 
     @cached_property
+    def _arm_limits_with_slack(self) -> tuple[np.ndarray, np.ndarray]:
+        """(arm_lower - 1e-12, arm_upper + 1e-12): the interval :meth:`check_arm_limits` accepts (rounding slack)."""
+        return _readonly(self.arm_lower - 1e-12), _readonly(self.arm_upper + 1e-12)
+
+    @cached_property
     def arm_effort_limits(self) -> np.ndarray:
         """Largest |effort| per arm joint [N or N m]."""
         return _readonly(np.array([j.effort for j in self.arm]))
@@ -427,7 +432,8 @@ class Platform:
         from .validation import as_vector
 
         q_arm = as_vector(q_arm, self.n_arm, name)
-        if bool(np.all(q_arm >= self.arm_lower - 1e-12)) and bool(np.all(q_arm <= self.arm_upper + 1e-12)):
+        lower, upper = self._arm_limits_with_slack
+        if (q_arm >= lower).all() and (q_arm <= upper).all():
             return q_arm
         bad = [k for k, j in enumerate(self.arm) if not j.lower - 1e-12 <= q_arm[k] <= j.upper + 1e-12]
         if bad:

@@ -51,6 +51,20 @@ def _foreign_qprr_modules() -> list[str]:
     return sorted(out)
 
 
+def pytest_sessionstart(session):
+    """Compile the numba kernel of the QP IK once, before the xdist workers start (qprr[fast]; cached beside the source
+    by numba): workers that all hit a cold cache would each compile it, minutes on a busy 2-core machine."""
+    import os
+    from importlib.util import find_spec
+
+    if find_spec("numba") is None or os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    from qprr.actuation.lexicographic import Lexicographic, QPSettings
+
+    lex = Lexicographic(3, range(1, 3), settings=QPSettings(kernel="numba"), regularization=1e-7, active_set_first=True)
+    lex.solve([(np.eye(3)[:2], np.ones(2)), (np.eye(3), np.ones(3))], -np.ones(2), np.ones(2), damping=[0.0, 1e-3])
+
+
 def pytest_terminal_summary(terminalreporter, exitstatus, config):
     foreign = _foreign_qprr_modules()
     if foreign:

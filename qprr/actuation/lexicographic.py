@@ -23,6 +23,10 @@ than there are free directions; such a level is solved exactly by :func:`active_
 for an infeasibility verdict, for an iteration limit when ``exact_fallback`` is set).  Any other
 failure, after one cold retry, raises :class:`~qprr.errors.SolverError`.  A solver object owns its QPs and warm starts (no module-level
 state): two threads with two solvers are independent.
+
+:attr:`QPSettings.kernel` chooses who runs :meth:`Lexicographic.solve`: this module's numpy code (the reference) or its
+compiled form, ``lexicographic_fast.py`` (numba, ``pip install qprr[fast]``), which takes the same steps in one call
+and hands a problem back to this path whenever a level needs ProxQP.
 """
 
 from __future__ import annotations
@@ -30,11 +34,13 @@ from __future__ import annotations
 import copy
 from collections.abc import Sequence
 from dataclasses import dataclass
+from enum import Enum
+from importlib.util import find_spec
 
 import numpy as np
 from proxsuite import proxqp
 
-from ..errors import InputError, SolverError
+from ..errors import InputError, MissingDependencyError, SolverError
 
 try:  # LAPACK without numpy.linalg's wrapper: 3x cheaper on these tiny matrices
     from scipy.linalg.lapack import dgesdd as _dgesdd  # scipy is a dependency of proxsuite
@@ -84,6 +90,31 @@ def null_space(B: np.ndarray, tol: float) -> np.ndarray:
     return Vt[int(np.count_nonzero(s > tol)) :].T
 
 
+class Kernel(str, Enum):
+    """Who runs :meth:`Lexicographic.solve`: ``NUMPY`` the readable code of this module (the reference), ``NUMBA``
+    its compiled form (``lexicographic_fast.py``; ``pip install qprr[fast]``), ``AUTO`` numba when it is installed,
+    else numpy."""
+
+    AUTO = "auto"
+    NUMPY = "numpy"
+    NUMBA = "numba"
+
+
+def resolve_kernel(kernel) -> Kernel:
+    """The kernel that will run: ``Kernel.AUTO`` becomes NUMBA when numba is installed, else NUMPY; NUMBA without numba
+    raises :class:`~qprr.errors.MissingDependencyError` ("not available: pip install qprr[fast]")."""
+    try:
+        kernel = Kernel(kernel)
+    except ValueError:
+        raise InputError(f"kernel must be one of {[k.value for k in Kernel]}, got {kernel!r}") from None
+    installed = find_spec("numba") is not None
+    if kernel is Kernel.AUTO:
+        return Kernel.NUMBA if installed else Kernel.NUMPY
+    if kernel is Kernel.NUMBA and not installed:
+        raise MissingDependencyError("numba", "the compiled lexicographic kernel (kernel='numba')", "not available: pip install 'qprr[fast]'")
+    return kernel
+
+
 @dataclass(frozen=True)
 class QPSettings:
     """ProxQP settings that make ``PROXQP_SOLVED`` mean solved (see the module docstring).
@@ -92,6 +123,7 @@ class QPSettings:
     ``default_rho``, ``default_mu_in``, ``default_mu_eq``: proximal parameters (None keeps
     proxsuite's); small well-scaled problems converge in fewer iterations with a small rho and
     a stiff inequality penalty.
+    ``kernel``: :class:`Kernel` (the module docstring); the engine's default is the readable numpy path.
     """
 
     eps_abs: float = 1e-9
@@ -103,8 +135,10 @@ class QPSettings:
     default_mu_in: float | None = None
     default_mu_eq: float | None = None
     eps_duality_gap: float | None = None
+    kernel: Kernel = Kernel.NUMPY
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "kernel", resolve_kernel(self.kernel))
         for name in ("eps_abs", "eps_primal_inf", "eps_dual_inf", "eps_duality_gap"):
             v = getattr(self, name)
             if name == "eps_duality_gap" and v is None:
@@ -213,6 +247,8 @@ class Lexicographic:
         self.polish = bool(polish)
         self.active_set_first = bool(active_set_first)
         self._active: dict[int, tuple] = {}
+        # the compiled kernel takes the active-set-first steps; without them every level goes to ProxQP (numpy path)
+        self._fast = _FastState(self.n_bounded) if self.settings.kernel is Kernel.NUMBA and self.active_set_first else None
         self._C_full = np.eye(n)[self.bounded]
         self._qps: dict[int, object] = {}
         self._warm: dict[int, tuple] = {}
@@ -225,6 +261,7 @@ class Lexicographic:
         state["_warm"] = {}
         state["_fresh"] = set()
         state["_active"] = {}
+        state["_fast"] = None if self._fast is None else _FastState(self.n_bounded)  # guesses forgotten, as _active
         return state
 
     def __setstate__(self, state: dict) -> None:
@@ -246,6 +283,8 @@ class Lexicographic:
         self._qps.clear()
         self._fresh.clear()
         self._active.clear()
+        if self._fast is not None:
+            self._fast.reset()
 
     # ------------------------------------------------------------------ QP
     def _qp(self, m: int, n_in: int):
@@ -349,6 +388,10 @@ class Lexicographic:
         n, tol, b_idx = self.n, self.rank_tol, self.bounded
         lo = np.asarray(lower, dtype=float)
         up = np.asarray(upper, dtype=float)
+        if self._fast is not None and equality is None and isinstance(b_idx, slice):
+            fast = self._fast.solve(self, levels, lo, up, x0, damping)
+            if fast is not None:  # else a level needs ProxQP: the readable path below solves the whole problem
+                return fast
         if x0 is None:  # 0, moved into the bounds (a positive lower bound, e.g. a rotor's f_min > 0, excludes 0)
             x = np.zeros(n)
             x[b_idx] = np.clip(0.0, lo, up)
@@ -391,6 +434,47 @@ class Lexicographic:
                 N = null_space(B, tol)
                 Z = N if Z is None else Z @ N
         return LexResult(x, tuple(levels), iters, tuple(x_levels))
+
+
+class _FastState:
+    """The compiled kernel's active-set guesses (per level: the number of kept bound rows, -1 for none, and the masks
+    of active lower and upper bounds), the counterpart of ``Lexicographic._active``."""
+
+    def __init__(self, n_bounded: int) -> None:
+        from .lexicographic_fast import lex_solve  # numba: only when this kernel is asked for
+
+        self.kernel = lex_solve
+        self.nb = n_bounded
+        self.n = np.full(0, -1, dtype=np.int64)
+        self.lo = np.zeros((0, n_bounded), dtype=bool)
+        self.up = np.zeros((0, n_bounded), dtype=bool)
+        self.offsets: dict[tuple, np.ndarray] = {}  # level sizes -> where each level starts in the stacked rows
+        self.no_start = np.zeros(0)
+
+    def reset(self) -> None:
+        self.n[:] = -1
+
+    def solve(self, lex: Lexicographic, levels, lo: np.ndarray, up: np.ndarray, x0, damping) -> LexResult | None:
+        """:meth:`Lexicographic.solve` by ``lexicographic_fast.lex_solve``; None when a level needs ProxQP."""
+        K = len(levels)
+        if self.n.shape[0] < K:  # more levels than before: room for their guesses
+            grow = K - self.n.shape[0]
+            self.n = np.concatenate([self.n, np.full(grow, -1, dtype=np.int64)])
+            self.lo = np.vstack([self.lo, np.zeros((grow, self.nb), dtype=bool)])
+            self.up = np.vstack([self.up, np.zeros((grow, self.nb), dtype=bool)])
+        A = np.concatenate([Ak for Ak, _ in levels], dtype=float)
+        b = np.concatenate([bk for _, bk in levels], dtype=float)
+        rows = tuple(bk.shape[0] for _, bk in levels)
+        offsets = self.offsets.get(rows)
+        if offsets is None:
+            offsets = self.offsets[rows] = np.cumsum((0,) + rows)
+        damp = np.zeros(K) if damping is None else np.asarray(damping, dtype=float)
+        x = self.no_start if x0 is None else np.array(x0, dtype=float)  # no start: the kernel clips 0 into the bounds
+        bounds, weights = (lo, up, lex.bounded.start), (lex.regularization, damp, lex.rank_tol)
+        x, x_levels, ok = self.kernel(A, b, offsets, bounds, x, weights, (self.n, self.lo, self.up))
+        if not ok:
+            return None
+        return LexResult(x, tuple(levels), 0, tuple(x_levels))
 
 
 def polish_box_qp(

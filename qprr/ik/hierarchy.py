@@ -19,10 +19,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..actuation.lexicographic import Lexicographic, QPSettings
+from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings
 from ..model import Platform, check_platform
 from ..validation import as_int, as_real
 from .tasks.base import check_linearized
+
+DEFAULT_KERNEL = Kernel.AUTO
+"""The IK's lexicographic kernel (:class:`qprr.actuation.lexicographic.Kernel`): the compiled one when numba is installed
+(``pip install qprr[fast]``), else the readable numpy one."""
 
 MET = 1e-14
 """A level whose error entries are all below MET (m, rad: the rounding of forward kinematics near the origin) is met."""
@@ -33,13 +37,19 @@ class HierarchyStep:
     """One solve of the hierarchy: the step dv, the linearised levels (J_k, e_k; J_k None when every level was met
     and dv = 0 needed no Jacobian), ProxQP iterations,
     ``dv_levels[k]`` the optimum of levels 1..k (``dv_first`` = ``dv_levels[0]``, the step of level 1
-    alone), ``damping[k]`` the damping each level's QP added to the regularisation."""
+    alone), ``damping[k]`` the damping each level's QP added to the regularisation, ``errors[k]`` = ||e_k||, each
+    task's error before the step."""
 
     dv: np.ndarray
     linearized: list
     qp_iterations: int
     dv_levels: tuple = ()
     damping: tuple = ()
+    errors: tuple = ()
+
+    def __post_init__(self) -> None:
+        if not self.errors:
+            object.__setattr__(self, "errors", _norms(self.linearized))
 
     @property
     def dv_first(self) -> np.ndarray | None:
@@ -50,10 +60,18 @@ class HierarchyStep:
         """||J_k dv - e_k|| per level: what is left of each task after the step (linear model)."""
         return tuple(math.sqrt(float(e @ e)) if J is None else math.sqrt(float((J @ self.dv - e) @ (J @ self.dv - e))) for J, e in self.linearized)
 
-    @property
-    def errors(self) -> tuple[float, ...]:
-        """||e_k|| per level: each task's error before the step."""
-        return tuple(math.sqrt(float(e @ e)) for _, e in self.linearized)
+
+def _norms(linearized) -> tuple[float, ...]:
+    """||e_k|| per level."""
+    return tuple(math.sqrt(float(e @ e)) for _, e in linearized)
+
+
+def _met(linearized, errors) -> bool:
+    """Every entry of every e_k within MET (a level whose norm exceeds MET sqrt(dim) has an entry above it: no entry
+    test needed, the usual case)."""
+    if any(err > MET * math.sqrt(e.shape[0]) for err, (_, e) in zip(errors, linearized)):
+        return False
+    return all(float(np.abs(e).max(initial=0.0)) <= MET for _, e in linearized)
 
 
 class HierarchySolver:
@@ -67,6 +85,7 @@ class HierarchySolver:
     ``lower_damping``: c in the damping c ||J_k^T e_k|| of the levels after the first.
     ``active_set_first``: each level solved exactly on the active set of the previous iteration first,
     ProxQP (then polished) only when that is not the optimum (:class:`qprr.actuation.lexicographic.Lexicographic`).
+    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto").
     The object owns its QPs: one solver per thread.
     """
 
@@ -80,6 +99,7 @@ class HierarchySolver:
         max_qp_iter: int = 1000,
         lower_damping: float = 0.1,
         active_set_first: bool = True,
+        kernel: Kernel | str = DEFAULT_KERNEL,
     ) -> None:
         check_platform(platform)
         max_qp_iter = as_int(max_qp_iter, "max_qp_iter", lo=1)
@@ -93,7 +113,14 @@ class HierarchySolver:
         # stiff inequality penalty cut the iterations with an active joint limit from ~12 to ~4
         # (benchmarks/ik_benchmark.py) without changing the optimum.
         self.settings = QPSettings(
-            eps_abs=eps_abs, eps_primal_inf=1e-14, eps_dual_inf=1e-14, max_iter=max_qp_iter, default_rho=1e-8, default_mu_in=1e-4, default_mu_eq=1e-6
+            eps_abs=eps_abs,
+            eps_primal_inf=1e-14,
+            eps_dual_inf=1e-14,
+            max_iter=max_qp_iter,
+            default_rho=1e-8,
+            default_mu_in=1e-4,
+            default_mu_eq=1e-6,
+            kernel=kernel,
         )
         self.platform = platform
         self.nv = platform.nv
@@ -130,10 +157,10 @@ class HierarchySolver:
         nv = self.nv
         first, self._first = self._first, False
         if first and not validate:  # started at the answer (every level met): dv = 0, no Jacobian needed
-            errors = [np.concatenate([t.error(platform, data, q) for t in tasks]) for tasks in levels]
-            if all(float(np.abs(e).max(initial=0.0)) <= MET for e in errors):
+            met = [(None, np.concatenate([t.error(platform, data, q) for t in tasks])) for tasks in levels]
+            if _met(met, _norms(met)):
                 dv = np.zeros(nv)
-                return HierarchyStep(dv, [(None, e) for e in errors], 0, (dv,) * len(levels), (0.0,) * len(levels))
+                return HierarchyStep(dv, met, 0, (dv,) * len(levels), (0.0,) * len(levels))
         if validate:
             lin = []
             for tasks in levels:
@@ -144,15 +171,16 @@ class HierarchySolver:
                     lin.append((np.vstack(Js), np.concatenate(es)))
         else:
             lin = [tasks[0].linearize(platform, data, q) if len(tasks) == 1 else _stack(platform, data, q, tasks) for tasks in levels]
-            if not math.isfinite(sum(float(J.sum()) + float(e.sum()) for J, e in lin)):
-                for tasks in levels:  # name the task
-                    for t in tasks:
-                        check_linearized(t, t.linearize(platform, data, q), nv)
-        if all(float(np.abs(e).max(initial=0.0)) <= MET for _, e in lin):
+        errors = _norms(lin)
+        if not validate and not math.isfinite(sum(errors) + sum(float(J.sum()) for J, _ in lin)):
+            for tasks in levels:  # name the task
+                for t in tasks:
+                    check_linearized(t, t.linearize(platform, data, q), nv)
+        if _met(lin, errors):
             # every level met to rounding: dv = 0 is each level's optimum (zero objective, the regularisation pulls to
             # 0 and 0 is inside the joint bounds); a solve would return a step of rounding size (|dv| < 1e-11)
             dv = np.zeros(nv)
-            return HierarchyStep(dv, lin, 0, (dv,) * len(lin), (0.0,) * len(lin))
+            return HierarchyStep(dv, lin, 0, (dv,) * len(lin), (0.0,) * len(lin), errors)
         q_arm = q[self.iq]
         lo_arm = self.lower - q_arm
         up_arm = self.upper - q_arm
@@ -164,7 +192,7 @@ class HierarchySolver:
         # median, 23 at worst, against 5 and 7 with 0.1; c = 0 cycles on the hextilt's position-only targets).
         damping = [0.0] + [self.lower_damping * math.sqrt(float(g @ g)) for g in (J.T @ e for J, e in lin[1:])]
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
-        return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping))
+        return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping), errors)
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:

@@ -54,11 +54,12 @@ import numpy as np
 import pinocchio as pin
 
 from .. import charts as ch
+from ..actuation.lexicographic import resolve_kernel
 from ..errors import InputError, NonFiniteError, ShapeError, SolverError, UnknownNameError
 from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
-from .hierarchy import MET, HierarchySolver
+from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 DEFAULT_METHOD = "qp"
@@ -193,8 +194,8 @@ class QPOptions(Tolerances):
     :func:`default_levels`.  ``require_hover``: success needs roll = pitch = 0 (within
     ``hover_tol``; default: for under-actuated platforms).  ``step_tol``: stop when max |dv| < step_tol (a failure
     unless the pose is reached); ``settle_tol``: once the pose is reached, stop when max |dv| < settle_tol (the lower
-    levels' tail converges linearly at best and moves nothing a tolerance sees).  ``eps_abs``, ``regularization``, ``rank_tol``: of
-    :class:`qprr.ik.hierarchy.HierarchySolver`."""
+    levels' tail converges linearly at best and moves nothing a tolerance sees).  ``eps_abs``, ``regularization``, ``rank_tol``,
+    ``kernel`` ("auto", "numpy", "numba": the lexicographic steps compiled or not): of :class:`qprr.ik.hierarchy.HierarchySolver`."""
 
     posture: tuple | None = None
     levels: Sequence | None = None
@@ -205,9 +206,11 @@ class QPOptions(Tolerances):
     eps_abs: float = 1e-9
     regularization: float = 1e-7
     rank_tol: float = 1e-9
+    kernel: str = DEFAULT_KERNEL.value
 
     def __post_init__(self):
         self._check_tolerances()
+        resolve_kernel(self.kernel)
         check_count("max_iter", self.max_iter)
         for name in ("step_tol", "settle_tol", "max_step", "eps_abs", "rank_tol"):
             check_positive(name, getattr(self, name))
@@ -883,7 +886,9 @@ class QPMethod:
 
     def __init__(self, platform: Platform, options: QPOptions) -> None:
         self.platform, self.options = platform, options
-        self.engine = HierarchySolver(platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol)
+        self.engine = HierarchySolver(
+            platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol, kernel=options.kernel
+        )
         self.default_levels = _DefaultLevels(platform)
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
@@ -895,11 +900,25 @@ class QPMethod:
         engine.reset()
         it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
+        settled = False  # the last step was below settle_tol
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
+                if it and pose_ok and (not ctx.require_hover or _hovering(data, opts.hover_tol)):
+                    tol = min(opts.position_tol, opts.orientation_tol, opts.hover_tol)
+                    # the lower levels are tested only when the last step's linear model met them all (an unsatisfiable
+                    # level, e.g. the posture, keeps its residual: no task is evaluated for nothing)
+                    met = None
+                    if not settled and all(r < tol for r in step.residuals[1:]):
+                        met = _lower_levels_met(platform, data, q, levels, tol)
+                    if settled or met is not None:
+                        # the pose (and hover) holds after a step below settle_tol, or with every lower level met to the
+                        # tightest tolerance: the step from here would be smaller still; stop without linearising
+                        end = Ending(IKOutcome.CONVERGED, "", it, met or (), True, (pos_err, rot_err))
+                        step = None
+                        break
                 it += 1
                 active = levels if shaper.kept is None else levels[: shaper.kept]  # frozen levels are not solved
                 step = engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
@@ -907,6 +926,7 @@ class QPMethod:
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
                     np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
+                    settled = float(np.abs(dv).max()) < opts.settle_tol
                 if stop:
                     ready = dv is None
                     status = IKOutcome.STALLED if stop == "converged_stationary" and not pose_ok else IKOutcome.CONVERGED
@@ -914,7 +934,7 @@ class QPMethod:
                     break
         except SolverError as exc:
             return finish(ctx, q, Ending(IKOutcome.SOLVER_ERROR, str(exc), it))
-        levels_out = _level_errors(platform, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
+        levels_out = end.level_errors or _level_errors(platform, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
         return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
@@ -1007,11 +1027,31 @@ def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
 
 
 def _level_errors(platform, data, q, levels, ready, step) -> tuple[float, ...]:
-    """||e_k|| of every level at the returned q."""
+    """||e_k|| of every level at the returned q (``ready``: ``data`` holds its kinematics; with ``step``: the errors
+    that step was computed from, at q)."""
     if step is not None and ready:
         return step.errors
-    update_kinematics(platform, data, q)
-    return tuple(math.sqrt(sum(float(e @ e) for e in (t.linearize(platform, data, q)[1] for t in level))) for level in levels)
+    if not ready:
+        update_kinematics(platform, data, q)
+    return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
+
+
+def _lower_levels_met(platform, data, q, levels, tol: float) -> tuple[float, ...] | None:
+    """Every level's ||e_k|| at q (``data`` holds its kinematics) when each level after the first is below ``tol``
+    (nothing left for a step to improve), else None.  The first level is the caller's (its own tolerances)."""
+    errors = []
+    for level in levels[1:]:  # the first level not met ends the test
+        errors.append(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))))
+        if errors[-1] >= tol:
+            return None
+    first = math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in levels[0])))
+    return (first, *errors)
+
+
+def _hovering(data, hover_tol: float) -> bool:
+    """|roll|, |pitch| < hover_tol for the base orientation in ``data`` (as :func:`finish` measures them)."""
+    r20, r21, r22 = data.oMi[1].rotation[2].tolist()
+    return abs(math.atan2(r21, r22)) < hover_tol and abs(math.atan2(-r20, math.hypot(r21, r22))) < hover_tol
 
 
 # ============================================================================ the registry

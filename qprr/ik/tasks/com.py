@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import numpy as np
 import pinocchio as pin
 
 from ...validation import as_vector
@@ -29,11 +28,11 @@ class ComTask(Task):
         R = base.rotation
         c_b = R.T @ (data.com[0] - base.translation)
         # the body-frame CoM Jacobian of qprr.kinematics.com_jacobian_body_from, from the data filled by
-        # update_kinematics (no argument checks on this per-iteration path): R^T Jcom - [I, -hat(c_b), 0]
-        J_b = R.T @ data.Jcom
-        J_b[:, 0:3] -= np.eye(3)
-        J_b[:, 3:6] += pin.skew(c_b)
-        return scaled(self._sw, E @ J_b, self.target - E @ (c_b - point))
+        # update_kinematics (no argument checks on this per-iteration path): R^T Jcom - [I, -hat(c_b), 0], times E
+        J = (E @ R.T) @ data.Jcom
+        J[:, 0:3] -= E
+        J[:, 3:6] += E @ pin.skew(c_b)
+        return scaled(self._sw, J, self.target - E @ (c_b - point))
 
     def error(self, platform, data, q):
         point, E = platform.thrust_axis[0], platform.thrust_axis_basis
