@@ -529,6 +529,7 @@ def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimR
         names=platform.xi_names,
         arm_kinds=tuple(j.kind for j in platform.arm),
         rotor_bounds=run.rotor_bounds,
+        rotor_names=tuple(r.name for r in platform.rotors),
     )
     metrics, series = run.controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
     res.metrics.update(metrics)

@@ -388,13 +388,20 @@ def _u_labels(res: SimResult) -> list[str]:
 class Panel:
     """One panel: ``title`` (without figure number), ``draw(ax, res)``, ``projection`` ("3d" or None).
 
-    ``name`` is the key of :attr:`qprr.scenarios.Scenario.figures` giving its figure number.
+    ``name`` is the key of :attr:`qprr.scenarios.Scenario.figures` giving its figure number.  ``thesis_title``: the
+    title of a run reproducing a thesis section (:func:`scenario_source`), which may cite the thesis's equations; any
+    other run (a generic scenario, a user's platform) shows ``title`` (default: ``title`` for both).
     """
 
     name: str
     title: str
     draw: Callable
     projection: str | None = None
+    thesis_title: str = ""
+
+    def title_for(self, thesis: bool) -> str:
+        """The panel's title for a run that reproduces a thesis section (``thesis``) or not."""
+        return self.thesis_title if (thesis and self.thesis_title) else self.title
 
 
 def _position(ax, res):
@@ -435,7 +442,7 @@ def _rotors(ax, res, thrust_bounds=None):
     t = res.t
     nr = res.f.shape[1]
     cols = [f"C{i % 10}" for i in range(nr)]
-    _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
+    _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], rotor_labels(res), colors=cols, lw=1.1)
     sat = (res.flags & AllocationFlag.ROTOR_SATURATED) != 0
     lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
     if thrust_bounds is None and res.rotor_bounds is not None:  # the bounds the run's allocation respected
@@ -451,6 +458,14 @@ def _rotors(ax, res, thrust_bounds=None):
     ax.set_ylabel("rotor thrust [N]")
     time_axis(ax, res)
     legend(ax)
+
+
+def rotor_labels(res: SimResult) -> list[str]:
+    """One legend label per rotor of ``res``: the names its platform's rotor description gives (``res.rotor_names``,
+    written as they are: mathtext specials escaped), or $f_1$ ... $f_n$ for a result that did not record them."""
+    if res.rotor_names:
+        return [plain(name) for name in res.rotor_names]
+    return [f"$f_{{{i + 1}}}$" for i in range(res.f.shape[1])]
 
 
 def _cog(ax, res):
@@ -556,7 +571,9 @@ def tidy_3d(ax, nbins: int = 4) -> None:
 
 PANELS: dict[str, Panel] = {
     "position": Panel("position", "position of B", _position),
-    "attitude": Panel("attitude", "attitude (roll, pitch references from (6.17))", _attitude),
+    "attitude": Panel(
+        "attitude", "attitude (roll, pitch references from the controller)", _attitude, thesis_title="attitude (roll, pitch references from (6.17))"
+    ),
     "arm": Panel("arm", "arm joints", _arm),
     "errors_position": Panel("errors_position", "tracking errors, lengths", _errors_position),
     "errors_angle": Panel("errors_angle", "tracking errors, angles", _errors_angle),
@@ -614,9 +631,10 @@ def scenario_source(res: SimResult) -> str:
     return SCENARIOS[res.scenario].source if res.scenario in SCENARIOS else ""
 
 
-def _title(panel: Panel, figures: Mapping[str, str]) -> str:
+def _title(panel: Panel, figures: Mapping[str, str], thesis: bool) -> str:
     fig = figures.get(panel.name)
-    return f"{panel.title} (Fig. {fig})" if fig else panel.title
+    title = panel.title_for(thesis)
+    return f"{title} (Fig. {fig})" if fig else title
 
 
 def _events(ax, events, label: bool) -> None:
@@ -634,7 +652,7 @@ def _events(ax, events, label: bool) -> None:
 class PlotOptions:
     """The page of :func:`plot_result` beyond its panels (each field also a keyword of :func:`plot_result`).
 
-    title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
+    title : page title (default: scenario, controller, status, thesis section and RMSE, :func:`default_title`).
     figures : figure numbers per panel name (default: those of the scenario that made the result; pass
         ``{}`` for none).
     thrust_bounds : thrust bounds [N] drawn on the ``rotors`` panel (default: the distinct values of the
@@ -728,6 +746,7 @@ class _PanelDrawer:
 
     def __init__(self, res: SimResult, figures: Mapping[str, str], thrust_bounds, events: tuple) -> None:
         self.res, self.figures, self.thrust_bounds, self.events = res, figures, thrust_bounds, events
+        self.thesis = bool(scenario_source(res))  # a run reproducing a thesis section: its titles may cite equations
         self.labelled: list[str] = []
 
     def __call__(self, p: Panel, a) -> None:
@@ -735,7 +754,7 @@ class _PanelDrawer:
             _rotors(a, self.res, self.thrust_bounds)
         else:
             p.draw(a, self.res)
-        a.set_title(_title(p, self.figures), fontsize=10)
+        a.set_title(_title(p, self.figures, self.thesis), fontsize=10)
         if self.events and p.projection is None:
             _events(a, self.events, label=not self.labelled)
             self.labelled.append(p.name)
@@ -837,8 +856,8 @@ def fit_texts(fig, rounds: int = 3) -> None:
 
 
 def default_title(res: SimResult) -> str:
-    """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in
-    radians, as on the command line)."""
+    """Scenario / controller (status), the thesis section it reproduces, and the RMSE with units (angles in radians, as
+    on the command line), "RMSE (6.26)" for a run that reproduces a thesis section (equation numbers only there)."""
     _check_res(res)
     src = scenario_source(res)
     on = f" on {res.platform}" if res.platform else ""
@@ -850,7 +869,7 @@ def default_title(res: SimResult) -> str:
     for (name, v), kind in zip(res.rmse().items(), kinds):
         unit, scale = _UNIT[kind]
         parts.append(f"{plain(name)} {scale * v:.2g} {unit}")
-    return head + "\nRMSE (6.26): " + ", ".join(parts)
+    return head + ("\nRMSE (6.26): " if src else "\nRMSE: ") + ", ".join(parts)
 
 
 __all__ = [
@@ -869,6 +888,7 @@ __all__ = [
     "plot_result",
     "pretty",
     "robust_limits",
+    "rotor_labels",
     "save_figure",
     "scenario_figures",
     "tidy_3d",
