@@ -225,9 +225,10 @@ def legend(ax, *others, **kwargs) -> None:
 
     handles, labels = [], []
     for a in (ax, *others):
-        h, lab = a.get_legend_handles_labels()
-        handles += h
-        labels += lab
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            if lab not in labels:  # one entry per label (host and twin may both explain their dotted commands)
+                handles.append(h)
+                labels.append(lab)
     if handles:
         drop = ScaledTranslation(0.0, -LEGEND_DROP / 72.0, ax.figure.dpi_scale_trans)
         opts = {
@@ -236,15 +237,42 @@ def legend(ax, *others, **kwargs) -> None:
             "loc": "upper center",
             "bbox_to_anchor": (0.5, 0.0),
             "bbox_transform": ax.transAxes + drop,
-            "ncol": min(len(handles), 4),
             "handlelength": 1.8,
             "borderaxespad": 0.0,
             "columnspacing": 1.2,
         }
         opts.update(kwargs)
+        if "ncol" not in opts:  # as many columns (at most 4) as the panel's column of the page holds
+            opts["ncol"] = legend_columns(ax, labels, opts["fontsize"], opts["handlelength"], opts["columnspacing"])
         top = max((ax, *others), key=lambda a: a.get_zorder())  # drawn last: nothing covers its legend
         leg = top.legend(handles, labels, **opts)
         leg.set_zorder(10)
+
+
+def legend_columns(ax, labels: Sequence[str], fontsize: float, handlelength: float, columnspacing: float, most: int = 4) -> int:
+    """The most columns (1 to ``most``) in which a legend of ``labels`` under ``ax`` is no wider than the column of the
+    page's grid that ``ax`` spans (the whole figure for axes outside a grid).  Widths in points: each entry's handle
+    (``handlelength`` em), the gap to its text (0.8 em, matplotlib's default) and its text as rendered at ``fontsize``;
+    columns filled as matplotlib fills them (the first ones one entry longer); the gaps between columns and the frame's
+    padding (0.4 em per side); 90 % of the column, the legend being centred under its axes, not on the column.  A third-row legend of long names (URDF joints, rotors) then wraps instead of running
+    into its neighbours or off the page."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextToPath
+
+    spec = ax.get_subplotspec()
+    share = 1.0 if spec is None else len(spec.colspan) / spec.get_gridspec().ncols
+    room = 0.9 * 72.0 * ax.figure.get_figwidth() * share  # centred under its axes, which sit off the column's centre
+    measure, prop = TextToPath(), FontProperties(size=fontsize)
+    widths = [measure.get_text_width_height_descent(lab, prop, ismath=lab.replace("\\$", "").count("$") >= 2)[0] for lab in labels]
+    entry = [(handlelength + 0.8) * fontsize + w for w in widths]
+    for k in range(min(most, len(labels)), 1, -1):
+        rows = -(-len(labels) // k)
+        sizes = [rows] * (k - (k * rows - len(labels))) + [rows - 1] * (k * rows - len(labels))
+        starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        total = sum(max(entry[i : i + n]) for i, n in zip(starts, sizes) if n) + (k - 1) * columnspacing * fontsize + 0.8 * fontsize
+        if total <= room:
+            return k
+    return 1
 
 
 def _under(host, twin) -> None:
@@ -883,6 +911,7 @@ __all__ = [
     "figure_path",
     "fit_texts",
     "legend",
+    "legend_columns",
     "new_figure",
     "plain",
     "plot_result",
