@@ -67,15 +67,22 @@ class CarriedPayload:
     mass: np.ndarray
     com_ee: np.ndarray | None = None
 
+    def __post_init__(self) -> None:  # checked however it is built; the sample count is checked by the animation
+        mass = as_array(self.mass, "payload mass", finite=True, ndim=1)
+        if mass.shape[0] < 1 or not np.all(mass >= 0.0):
+            raise InputError(f"payload mass must hold one mass >= 0 kg per sample, got {mass.tolist()!r:.80}")
+        object.__setattr__(self, "mass", mass)
+        if self.com_ee is not None:
+            com = as_array(self.com_ee, "payload com_ee", finite=True, ndim=2)
+            if com.shape != (mass.shape[0], 3):
+                raise ShapeError(f"payload com_ee must have shape ({mass.shape[0]}, 3) (one point [m, end-effector frame] per mass), got {com.shape}")
+            object.__setattr__(self, "com_ee", com)
+
     def checked(self, n: int) -> tuple[np.ndarray, np.ndarray]:
-        """(mass (n,), com_ee (n, 3)) validated against ``n`` samples."""
-        mass = as_array(self.mass, "payload mass", finite=True)
-        if mass.shape != (n,) or not np.all(mass >= 0.0):
-            raise ShapeError(f"payload mass must have shape ({n},) (one value per sample), masses >= 0 kg, got shape {mass.shape}")
-        com = np.zeros((n, 3)) if self.com_ee is None else as_array(self.com_ee, "payload com_ee", finite=True)
-        if com.shape != (n, 3):
-            raise ShapeError(f"payload com_ee must have shape ({n}, 3) [m, end-effector frame], got {com.shape}")
-        return mass, com
+        """(mass (n,), com_ee (n, 3)) for a run of ``n`` samples."""
+        if self.mass.shape != (n,):
+            raise ShapeError(f"payload mass must have shape ({n},) (one value per sample of the run), got {self.mass.shape}")
+        return self.mass, np.zeros((n, 3)) if self.com_ee is None else self.com_ee
 
 
 # ============================================================================ inputs

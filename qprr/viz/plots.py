@@ -254,8 +254,8 @@ def legend_columns(ax, labels: Sequence[str], fontsize: float, handlelength: flo
     page's grid that ``ax`` spans (the whole figure for axes outside a grid).  Widths in points: each entry's handle
     (``handlelength`` em), the gap to its text (0.8 em, matplotlib's default) and its text as rendered at ``fontsize``;
     columns filled as matplotlib fills them (the first ones one entry longer); the gaps between columns and the frame's
-    padding (0.4 em per side); 90 % of the column, the legend being centred under its axes, not on the column.  A third-row legend of long names (URDF joints, rotors) then wraps instead of running
-    into its neighbours or off the page."""
+    padding (0.4 em per side); 90 % of the column, the legend being centred under its axes, not on the column.  A
+    legend of long names (URDF joints, rotors) then wraps instead of running into its neighbours or off the page."""
     from matplotlib.font_manager import FontProperties
     from matplotlib.textpath import TextToPath
 
@@ -491,6 +491,7 @@ def _rotors(ax, res, thrust_bounds=None):
 def rotor_labels(res: SimResult) -> list[str]:
     """One legend label per rotor of ``res``: the names its platform's rotor description gives (``res.rotor_names``,
     written as they are: mathtext specials escaped), or $f_1$ ... $f_n$ for a result that did not record them."""
+    _check_res(res)
     if res.rotor_names:
         return [plain(name) for name in res.rotor_names]
     return [f"$f_{{{i + 1}}}$" for i in range(res.f.shape[1])]
