@@ -54,7 +54,7 @@ prefix = sys.argv[4]
 include = (lambda t: t.module == prefix or t.module.startswith(prefix + ".")) if prefix else None
 rep = cat.run(include=include, hooks=cat._Hooks(start_at=start_at, on_start=on_start, on_outcome=on_outcome))
 out.write(json.dumps({"done": True, "fed": len({o.target for o in rep.outcomes}), "not_fed": len(rep.not_fed),
-                      "baseline_failed": len(rep.baseline_failed), "seconds": rep.seconds}) + "\n")
+                      "baseline_failed": len(rep.baseline_failed)}) + "\n")
 """
 
 

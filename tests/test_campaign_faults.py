@@ -14,7 +14,6 @@ import shutil
 import signal
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,7 @@ from qprr.campaign.runner import columns_of, kinds_of
 from qprr.campaign.store import ResultsFileError, ResultStore, ResultsWriteError, read_results
 from qprr.campaign.worker import make_task_payload, run_one, xi_names_of
 from qprr.errors import InputError, UnknownNameError
+from tests.polling import poll
 
 TARGET = """
 import os
@@ -41,7 +41,7 @@ def target(params, seed, platform):
         os.kill(os.getpid(), signal.SIGKILL)
     if os.environ.get("QPRR_TEST_LOG"):
         with open(os.environ["QPRR_TEST_LOG"], "a") as fh:
-            fh.write(f"{params['k']} {time.time()!r}\\n")
+            fh.write(f"{params['k']}\\n")
     time.sleep(float(os.environ.get("QPRR_TEST_DELAY", "0")))
     if params["k"] % 3 == 2:
         raise ValueError(f'run {params["k"]} failed,\\n  File "x.py", line 3, in "target"\\n    a, b = "1,2"\\\\n\\nValueError: end')
@@ -429,7 +429,7 @@ def test_a_full_disk_stops_the_campaign_at_once_and_resume_completes_it(referenc
     monkeypatch.setenv("QPRR_TEST_DELAY", "0.5")
     with pytest.raises(ResultsWriteError, match=rf"cannot write campaign results '{out}': \[Errno 28\] No space left"):
         run_campaign(spec, out, backend="local", workers=1, progress=False)
-    starts = [float(line.split()[1]) for line in (tmp_path / "started.log").read_text().splitlines()]
+    starts = (tmp_path / "started.log").read_text().splitlines()
     # the 4 runs that reached the store and at most the next one, which the worker took as it handed over the 4th:
     # no run is started after the failure (counted, not timed: the machine's load cannot move it)
     assert len(starts) <= 5
@@ -529,14 +529,19 @@ def _start(tmp_path: Path, spec: CampaignSpec, out: Path, delay: float) -> subpr
     )
 
 
-def _wait_rows(out: Path, n: int, proc: subprocess.Popen, timeout: float = 60.0) -> None:
-    t0 = time.monotonic()
-    while time.monotonic() - t0 < timeout:
-        if out.exists() and out.read_bytes().count(b"\n") >= n + 1:
-            return
+def _rows_reached(out: Path, n: int) -> bool:
+    """``out`` holds its header and at least ``n`` rows."""
+    return out.exists() and out.read_bytes().count(b"\n") >= n + 1
+
+
+def _wait_rows(out: Path, n: int, proc: subprocess.Popen, tries: int = 1200) -> None:
+    """Until ``out`` has ``n`` rows (checked ``tries`` times, 0.05 s apart); the runner must stay alive meanwhile."""
+
+    def reached() -> bool:
         assert proc.poll() is None, proc.communicate()
-        time.sleep(0.05)
-    raise AssertionError(f"no {n} rows in {out} after {timeout} s")
+        return _rows_reached(out, n)
+
+    assert poll(reached, tries), f"no {n} rows in {out} after {tries} checks"
 
 
 @pytest.mark.slow
@@ -551,9 +556,7 @@ def test_killing_the_runner_leaves_no_worker_and_loses_no_saved_run(reference, t
     assert len(kids) >= 2  # the two pool workers (and the resource tracker)
     proc.send_signal(sig)
     stdout, stderr = proc.communicate(timeout=30)
-    t0 = time.monotonic()
-    while any(_alive(k) for k in kids) and time.monotonic() - t0 < 10:
-        time.sleep(0.1)
+    poll(lambda: not any(_alive(k) for k in kids), tries=100, pause=0.1)
     assert not [k for k in kids if _alive(k)], "processes outlived the runner"
     if sig != signal.SIGKILL:
         assert proc.returncode == 1, stderr
@@ -606,9 +609,7 @@ def test_sigterm_to_the_whole_process_group_ends_the_campaign_cleanly_and_the_sa
     assert "Traceback" not in stderr and "Warning" not in stderr, stderr
     assert "stopped by SIGTERM" in stdout
     assert _flock_free(tmp_path / "g.lock")
-    t0 = time.monotonic()
-    while any(_alive(k) for k in kids) and time.monotonic() - t0 < 10:
-        time.sleep(0.1)
+    poll(lambda: not any(_alive(k) for k in kids), tries=100, pause=0.1)
     assert not [k for k in kids if _alive(k)], "processes outlived the runner"
     saved = read_results(out).table
     assert 2 <= len(saved) < spec.n_runs
@@ -629,9 +630,7 @@ def test_a_local_worker_killed_midway_is_retried_on_a_new_pool(reference, tmp_pa
     from threading import Thread
 
     def kill():
-        t0 = time.monotonic()
-        while (not out.exists() or out.read_bytes().count(b"\n") < 3) and time.monotonic() - t0 < 60:
-            time.sleep(0.05)
+        poll(lambda: _rows_reached(out, 2), tries=1200)
         workers = [p for p in _children(os.getpid()) if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()]
         os.kill(workers[0], signal.SIGKILL)
 
@@ -691,9 +690,7 @@ def test_a_dask_worker_killed_midway_loses_no_run(reference, tmp_path, monkeypat
         from threading import Thread
 
         def kill():
-            t0 = time.monotonic()
-            while (not out.exists() or out.read_bytes().count(b"\n") < 3) and time.monotonic() - t0 < 60:
-                time.sleep(0.05)
+            poll(lambda: _rows_reached(out, 2), tries=1200)
             saved_at_kill.extend(read_results(out).table["run"].tolist())
             os.kill(pids[0], signal.SIGKILL)
 

@@ -32,7 +32,7 @@ def test_every_bad_input_ends_in_a_named_qprr_error_or_a_documented_result(repor
 def test_the_catalogue_covers_the_api(report):
     """The table builds valid arguments for most callables; the rest are listed with the reason (run with -s to read)."""
     fed = {o.target for o in report.outcomes}
-    print(f"\n{len(report.outcomes)} bad calls on {len(fed)} callables in {report.seconds:.1f} s: {report.counts()}")
+    print(f"\n{len(report.outcomes)} bad calls on {len(fed)} callables: {report.counts()}")
     print(f"not fed ({len(report.not_fed)}): {sorted(set(report.not_fed.values()))}")
     print(f"no valid call from the table ({len(report.baseline_failed)}): {sorted(report.baseline_failed)}")
     print(f"modules not imported (optional dependency missing): {catalogue.MISSING}")

@@ -10,7 +10,6 @@ import signal
 import socket
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +20,7 @@ import qprr
 from qprr import kinematics
 from qprr.charts import rot_y, xi_to_q
 from qprr.viz import RunLog
+from tests.polling import poll
 
 pytest.importorskip("viser", reason="the viewer needs the 'viewer' extra: pip install 'qprr[viewer]'")
 viewer_mod = importlib.import_module("qprr.viz.viewer")  # with viser installed, an import error is a failure
@@ -87,7 +87,7 @@ def test_player_shows_the_logged_samples(viewer, platform, tmp_path):
     np.testing.assert_array_equal(viewer.xi, xi[5])
     assert viewer.run_time == 0.5
     viewer.play()
-    time.sleep(0.3)
+    poll(lambda: viewer.run_time != 0.5, tries=200)  # the player's thread moved on
     viewer.stop_playing()
     k = int(np.flatnonzero(t == viewer.run_time)[0])  # the player moved on and shows a logged sample
     assert viewer.run_time != 0.5 and np.array_equal(viewer.xi, xi[k])
@@ -164,17 +164,18 @@ def _png(data: bytes) -> np.ndarray:
     return np.asarray(Image.open(io.BytesIO(data)).convert("RGB"), dtype=np.int16)
 
 
-def _wait_for_change(browser, before: np.ndarray, region, timeout: float = 20.0) -> tuple[np.ndarray, int]:
-    """Screenshot until the 3-D region differs from ``before`` in more than 200 pixels (or the timeout)."""
-    deadline, changed, shot = time.monotonic() + timeout, 0, before
-    while time.monotonic() < deadline:
-        time.sleep(0.5)
-        shot = _png(browser.screenshot())
-        diff = np.abs(shot[region] - before[region]).max(axis=2) > 30
-        changed = int(diff.sum())
-        if changed > 200:
-            break
-    return shot, changed
+def _wait_for_change(browser, before: np.ndarray, region, pixels: int = 200, tries: int = 40) -> tuple[np.ndarray, int]:
+    """Screenshot until the 3-D region differs from ``before`` in more than ``pixels`` pixels (at most ``tries`` shots,
+    0.5 s apart: a loaded machine renders in several frames)."""
+    last = {"shot": before, "changed": 0}
+
+    def differs() -> bool:
+        last["shot"] = _png(browser.screenshot())
+        last["changed"] = int((np.abs(last["shot"][region] - before[region]).max(axis=2) > 30).sum())
+        return last["changed"] > pixels
+
+    poll(differs, tries, pause=0.5)
+    return last["shot"], last["changed"]
 
 
 @pytest.mark.slow
@@ -183,15 +184,13 @@ def test_headless_chromium_renders_the_viewer_and_its_ik(platform):
     """Chromium loads the page and renders the robot with WebGL; moving a slider and solving a target change the picture;
     the page shows the IK outcome the viewer reports, and that outcome is right (FK at the target, hover, CoG on the axis)."""
     with Viewer(platform, port=0, verbose=False) as viewer, browser_mod.HeadlessChromium(viewer.url, width=1280, height=800) as browser:
-        deadline = time.monotonic() + 30.0
-        while viewer.clients() == 0 and time.monotonic() < deadline:
-            time.sleep(0.1)
+        poll(lambda: viewer.clients() > 0, tries=300, pause=0.1)
         assert viewer.clients() == 1, "the page did not connect to the viewer"
         assert browser.evaluate("!!document.createElement('canvas').getContext('webgl2')"), "no WebGL in headless Chromium"
         browser.evaluate(browser_mod.DISMISS_NOTIFICATIONS)
         scene = (slice(0, 800), slice(0, 860))  # the 3-D view, left of the control panel
         blank = _png(browser.screenshot())
-        first, drawn = _wait_for_change(browser, np.full_like(blank, 255), scene)
+        first, drawn = _wait_for_change(browser, np.full_like(blank, 255), scene, pixels=2000)
         assert drawn > 2000, "nothing rendered in the 3-D view"
 
         viewer.set_joint("theta2", 1.2)  # a slider move through the viewer's API
@@ -208,10 +207,7 @@ def test_headless_chromium_renders_the_viewer_and_its_ik(platform):
         M = kinematics.ee_placement(platform, platform.data(), xi_to_q(viewer.xi))
         np.testing.assert_allclose(M.translation, p_d, atol=1e-8)
         assert abs(res.roll) < 1e-9 and abs(res.pitch) < 1e-9 and math.hypot(res.x_cm, res.y_cm) < 1e-6
-        deadline = time.monotonic() + 10.0
-        text = ""
-        while time.monotonic() < deadline and "IK converged" not in text:
-            text = browser.evaluate("document.body.innerText")
-            time.sleep(0.2)
+        poll(lambda: "IK converged" in browser.evaluate("document.body.innerText"), tries=50, pause=0.2)
+        text = browser.evaluate("document.body.innerText")
         assert "IK converged" in text and f"position error {res.position_error:.2e} m" in text
         assert "can hover" in text

@@ -71,7 +71,9 @@ from enum import Enum
 import numpy as np
 import pinocchio as pin
 
+from .. import charts as ch
 from ..errors import InputError, UnknownNameError
+from ..validation import as_real, as_vector
 
 VELOCITY_SCALE = 1e-2
 """v_s [rad/s or m/s]: the velocity over which the Coulomb term of :class:`JointFriction` goes from 0 to ~F (tanh)."""
@@ -141,6 +143,7 @@ class JointFriction:
         """The treatment of each velocity coordinate at the step ``dt`` (module docstring): the joints with friction in
         the order of their rates K_i(0) (M^-1)_ii join the explicit set while dt x the largest eigenvalue of
         (M^-1)_EE K_E stays <= :data:`STIFF`; the rest are implicit (coordinates without friction: explicit)."""
+        dt = as_real(dt, "dt", positive=True)
         Minv = np.linalg.inv(self._inertia(model, q))
         K = self.damping + self.friction / self.velocity_scale
         explicit: list[int] = []
@@ -171,7 +174,7 @@ class JointFriction:
 
     def stiffness(self, v) -> np.ndarray:
         """K(v) = -dtau_f/dv (nv,), the diagonal of the friction's Jacobian [N m s/rad or N s/m]."""
-        x = np.asarray(v, dtype=float) / self.velocity_scale
+        x = as_vector(v, self.damping.shape[0], "v") / self.velocity_scale
         return self.damping + self.friction / np.cosh(np.clip(x, -350.0, 350.0)) ** 2 / self.velocity_scale
 
     def start(self, v) -> None:
@@ -242,16 +245,21 @@ class JointFriction:
 
     def generalized_force(self, v) -> np.ndarray:
         """tau_f(v) (nv,) [N m or N]."""
-        return self.add_generalized_force(v, np.zeros(self.damping.shape[0]))
+        return self.add_generalized_force(as_vector(v, self.damping.shape[0], "v"), np.zeros(self.damping.shape[0]))
 
     def viscous_xi(self) -> np.ndarray:
         """The viscous coefficients in thesis coordinates (6 + n_arm,): the diagonal of F_v of Thesis (5.36) (zero on the base;
         the arm's xi_dot entries are its joint rates), the ``coefficients`` of :class:`qprr.sim.wind.ViscousFriction`."""
         return self.damping.copy()
 
-    @staticmethod
-    def _inertia(model: pin.Model, q) -> np.ndarray:
-        M = pin.crba(model, model.createData(), np.asarray(q, dtype=float))
+    def _inertia(self, model: pin.Model, q) -> np.ndarray:
+        """M(q) of ``model`` (checked: the model this friction belongs to, ``q`` a configuration of it with a unit
+        quaternion)."""
+        if not isinstance(model, pin.Model) or model.nv != self.damping.shape[0]:
+            raise InputError(f"model must be the pinocchio.Model of this friction ({self.damping.shape[0]} velocity coordinates), got {model!r}")
+        q = as_vector(q, model.nq, "q")
+        ch.unit_quaternion(q[3:7], "q[3:7]")  # the free flyer's orientation (its coordinates carry no friction: from_model)
+        M = pin.crba(model, model.createData(), q)
         return np.triu(M) + np.triu(M, 1).T
 
     def max_rate(self, model: pin.Model, q) -> float:
