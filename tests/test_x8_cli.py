@@ -149,8 +149,8 @@ def test_robustness_campaign_success_follows_the_thrust(tmp_path, capsys, x8):
     """tests/robots/x8_arm4/robustness.toml: takeoff-hover with every rotor's f_max scaled by a random factor k (the
     controller's model is otherwise exact).  Physics: the rotors hold the weight only if k 8 f_max >= m g; they also
     fly the climb untouched if k f_max >= (m g / 8)(1 + a_max / g), a_max the reference's largest climb acceleration.
-    A run below the first bound must fail (it sinks), one above the second must succeed; the campaign's success rate
-    is the share of draws above it.  No .lock is left beside the finished results."""
+    A run below the first bound must fail (it sinks), one 5 % above the second (room for the feedback) must succeed;
+    the campaign's success rate is the share of draws above it.  No .lock is left beside the finished results."""
     for name in ("x8_arm4.urdf", "x8_arm4.rotors.toml", "robustness.toml"):
         shutil.copy(x8_robot.DIR / name, tmp_path / name)
     spec = tomllib.loads((tmp_path / "robustness.toml").read_text())
@@ -164,7 +164,7 @@ def test_robustness_campaign_success_follows_the_thrust(tmp_path, capsys, x8):
     a_max = float(np.max(np.abs(transition(t, 0.0, 0.4 * o["duration"], 0.0, o["z"], order=2)[2])))
     f_max = np.array([r.f_max for r in x8.rotors])
     k_weight = TOTAL_MASS * G / f_max.sum()
-    k_climb = k_weight * (1.0 + a_max / G)
+    k_climb = 1.05 * k_weight * (1.0 + a_max / G)
     predicted, measured = [], []
     for r in rows:
         k = float(r["model.f_max"])
