@@ -147,6 +147,86 @@ def test_single_panel_title_fits(qprr_run):
     assert fig._suptitle.get_text().count("\n") >= 2  # the RMSE line is wrapped to the page, not clipped
 
 
+# ============================================================================ the X8 of issue 35: 4 joints, 8 named rotors
+@pytest.fixture(scope="module")
+def x8_run():
+    """tests/robots/x8_arm4/mission.toml (a payload grasped at 2 s, released at 4 s) on the X8, 4.5 s at 2 ms."""
+    from tests import x8_robot
+
+    return run("mission", platform=x8_robot.load(), duration=4.5, dt=0.002, mission=str(x8_robot.DIR / "mission.toml"))
+
+
+def column_of(a, page) -> tuple[float, float]:
+    """(left, right) [px] of the columns of the page's grid that the axes ``a`` spans."""
+    spec = a.get_subplotspec()
+    n, cols = spec.get_gridspec().ncols, spec.colspan
+    return page.x0 + page.width * cols.start / n, page.x0 + page.width * cols.stop / n
+
+
+def check_page(fig, what: str) -> None:
+    """:func:`check_layout`, and: every legend within its panel's column of the page (a legend under a panel that is
+    wider runs into its neighbour's), no two legends overlapping, no empty axes (each draws some finite data)."""
+    check_layout(fig, what)
+    renderer = render(fig)
+    page = fig.bbox
+    boxes = []
+    for a in fig.axes:
+        leg = a.get_legend()
+        if leg is not None:
+            bb = leg.get_window_extent(renderer)
+            lo, hi = column_of(a, page)
+            assert lo - SLACK <= bb.x0 and bb.x1 <= hi + SLACK, f"{what}: the legend of {a.get_title()!r} leaves its column"
+            boxes.append((a.get_title(), bb))
+        finite = [line for line in a.get_lines() if np.isfinite(np.asarray(line.get_ydata(), float)).any()]
+        assert finite or a.collections or a.get_images(), f"{what}: {a.get_title()!r} ({a.get_ylabel()!r}) is empty"
+    for i, (ti, bi) in enumerate(boxes):
+        for tj, bj in boxes[i + 1 :]:
+            assert not bi.overlaps(bj), f"{what}: the legends of {ti!r} and {tj!r} overlap"
+
+
+def test_x8_page_names_its_rotors_and_cites_no_thesis_equation(x8_run):
+    """The X8's page: nothing clipped or empty, the rotor legend in the rotor file's names, and a generic run's titles
+    without the thesis's equation numbers ((6.17) for the attitude references, (6.26) for the RMSE)."""
+    from tests.x8_robot import ROTOR_NAMES
+
+    assert x8_run.rotor_names == ROTOR_NAMES
+    fig = plot_result(x8_run)
+    check_page(fig, "X8 page")
+    rotors = next(a for a in fig.axes if a.get_title().startswith("rotor thrusts"))
+    labels = [t.get_text() for t in rotors.get_legend().get_texts()]
+    assert labels[:8] == list(ROTOR_NAMES) and not any(lab.startswith("$f_") for lab in labels)
+    titles = [a.get_title() for a in fig.axes] + [fig._suptitle.get_text()]
+    assert not any(re.search(r"\([3-6]\.\d+\)", t) for t in titles), titles
+    assert "\nRMSE: x " in fig._suptitle.get_text()
+    for name in DEFAULT_PANELS:
+        if name != "disturbance":
+            check_layout(plot_result(x8_run, panels=name), f"X8 panel {name}")
+
+
+def test_x8_page_with_every_legend_entry_fits(x8_run):
+    """The same run as if every command had been clipped (1 N or N m of every generalised force not produced, every tick
+    saturated): the longest
+    legends a page draws (dotted commands on the thrust, torque and effort panels, the 8 rotor names, the bounds, the
+    saturation marks) wrap to their column instead of running into their neighbours or off the page."""
+    from qprr.actuation import AllocationFlag
+
+    clipped = dataclasses.replace(x8_run, unallocated=x8_run.unallocated + 1.0, flags=np.full_like(x8_run.flags, int(AllocationFlag.ROTOR_SATURATED)))
+    fig = plot_result(clipped)
+    check_page(fig, "X8 page, every command clipped")
+    efforts = next(a for a in fig.axes if a.get_title().startswith("arm efforts") and a.get_legend() is not None)
+    labels = [t.get_text() for t in efforts.get_legend().get_texts()]
+    assert labels.count("commanded (where not produced)") == 1 and len(labels) == 5  # four joints, one explanation
+
+
+def test_thesis_run_keeps_its_equation_numbers(qprr_run):
+    """hover-reach on the Q-PRR is a generic run too; a result named after a thesis scenario cites (6.17) and (6.26)."""
+    fig = plot_result(dataclasses.replace(qprr_run, scenario="static-idc"), panels=("attitude", "rotors"))
+    assert fig.axes[0].get_title().startswith("attitude (roll, pitch references from (6.17))")
+    assert "RMSE (6.26): " in fig._suptitle.get_text()
+    generic = plot_result(qprr_run, panels=("attitude",))
+    assert generic.axes[0].get_title() == "attitude (roll, pitch references from the controller)"
+
+
 # ============================================================================ maps and wheeled
 def test_hover_and_workspace_maps():
     platform = qprr.load()

@@ -528,6 +528,8 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
             status = IKOutcome.NOT_HOVER_FEASIBLE
             if hint:
                 reason = f"the pose is reached only with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad: not reachable in hover ({hint})"
+            elif not ctx.platform.fully_actuated:
+                reason = _tilt_reason(ctx.platform, ctx.method, roll, pitch)
             else:
                 reason = (
                     f"the pose is reached with roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: the iteration "
@@ -537,6 +539,25 @@ def _failure(ctx: SolveContext, end: Ending, q_arm: np.ndarray, errors: tuple, v
     if status != IKOutcome.NOT_HOVER_FEASIBLE and ctx.require_hover and "hover" not in reason and hint:
         reason += f"; the target is unreachable in hover ({hint})"
     return status, reason
+
+
+def _tilt_reason(platform: Platform, method: str, roll: float, pitch: float) -> str:
+    """Why a pose reached only with a tilted base fails on an under-actuated platform: it hovers only with its collective
+    thrust axis d (in B) vertical, so the end effector's orientations are those of a hovering base (its yaw) and of the
+    arm's joints.  Method "qp" holds the hover as its second priority, below the pose: a tilt there is what the pose
+    needs, which another start cannot change; the other methods do not hold the base level at all."""
+    d_body = platform.thrust_axis[1]
+    axis = "z_B" if np.allclose(d_body, (0.0, 0.0, 1.0), atol=1e-12) else f"{np.round(d_body, 4).tolist()} in B"
+    why = (
+        f"{platform.name} is under-actuated (wrench rank {platform.wrench_rank}) with its collective thrust along {axis}, which "
+        "must stay vertical at hover, so the end effector can only take the orientations its base yaw and arm joints give"
+    )
+    if method == DEFAULT_METHOD:
+        return f"the target orientation needs the base at roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover: {why}"
+    return (
+        f"method {method} reached the pose with the base at roll = {roll:.3g} rad, pitch = {pitch:.3g} rad, not in hover (it "
+        f"does not hold the base level; method {DEFAULT_METHOD} does, below the pose): {why}"
+    )
 
 
 def failed_result(method: str, status: IKOutcome, reason: str, iterations: int, t0: float, init: str) -> IKResult:

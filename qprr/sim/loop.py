@@ -529,10 +529,13 @@ def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimR
         names=platform.xi_names,
         arm_kinds=tuple(j.kind for j in platform.arm),
         rotor_bounds=run.rotor_bounds,
+        rotor_names=tuple(r.name for r in platform.rotors),
     )
     metrics, series = run.controller.report()  # what the controller measured about itself (e.g. an MPC's solve times)
     res.metrics.update(metrics)
     res.series.update(series)
+    if run.plant_payload.changes:  # what the end effector carried at each tick (figures and animations draw it)
+        res.series["payload_mass"], res.series["payload_com_ee"] = run.plant_payload.carried(res.t)
     if run.rotor_stage is not None:
         res.series["rotor_speed"] = logs.rotor_speed[:m].copy()
         res.series["thrust_command"] = logs.thrust_command[:m].copy()

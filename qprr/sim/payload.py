@@ -14,7 +14,7 @@ import pinocchio as pin
 
 from ..errors import InputError
 from ..model import Platform, check_platform
-from ..validation import as_real, as_vector
+from ..validation import as_array, as_real, as_vector
 
 
 @dataclass(frozen=True)
@@ -78,6 +78,17 @@ class PlantPayload:
     @property
     def pending(self) -> bool:
         return self.next < len(self.changes)
+
+    def carried(self, t) -> tuple[np.ndarray, np.ndarray]:
+        """(mass (m,) [kg], com_ee (m, 3) [m, end-effector frame]) of the payload at each time of ``t`` (m,) [s]: the
+        last change at or before it, as :meth:`apply_until` applies them at the ticks (no payload before the first)."""
+        t = as_array(t, "t", finite=True, ndim=1)
+        mass, com_ee = np.zeros(t.shape[0]), np.zeros((t.shape[0], 3))
+        for c in self.changes:  # in time order: a later change overrides an earlier one
+            on = c.time <= t + 1e-12
+            mass[on] = c.mass
+            com_ee[on] = c.com_ee
+        return mass, com_ee
 
     def apply_until(self, t: float) -> bool:
         """Apply every change at or before ``t`` [s] (the simulator calls it at its ticks while changes are pending)."""

@@ -82,6 +82,8 @@ class SimResult:
     * ``rotor_bounds`` (n_rotors, 2) [N]: per rotor [f_min, f_max], the thrust bounds the run's
       allocation respected (the platform's, or those given to its allocator); None when not
       recorded (a result built by hand, a file of format 2).
+    * ``rotor_names``: one name per column of ``f``, as the platform's rotor description gives them (figures label the
+      thrusts with them); empty when not recorded (a result built by hand, a file written before it existed).
     """
 
     scenario: str
@@ -111,6 +113,7 @@ class SimResult:
     metrics: dict[str, float] = field(default_factory=dict)
     arm_kinds: tuple[str, ...] = ()
     rotor_bounds: np.ndarray | None = None
+    rotor_names: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if self.control_period is None:
@@ -120,6 +123,7 @@ class SimResult:
             self.names = xi_names(self.xi.shape[1] - 6) if self.xi.ndim == 2 else ()
         if self.rotor_bounds is not None:
             self.rotor_bounds = _check_rotor_bounds(self.rotor_bounds, self.f, "rotor_bounds")
+        self.rotor_names = _check_rotor_names(self.rotor_names, self.f, "rotor_names")
 
     @property
     def n(self) -> int:
@@ -196,6 +200,7 @@ class SimResult:
             metrics={k: float(v) for k, v in self.metrics.items()},
             series=sorted(self.series),
             arm_kinds=list(self.arm_kinds),
+            rotor_names=list(self.rotor_names),
         )
         arrays = {k: getattr(self, k) for k in ARRAYS}
         if self.rotor_bounds is not None:
@@ -265,6 +270,7 @@ class SimResult:
             metrics={k: float(v) for k, v in meta["metrics"].items()},
             arm_kinds=tuple(meta["arm_kinds"]),
             rotor_bounds=bounds,
+            rotor_names=tuple(meta["rotor_names"]),
         )
 
 
@@ -286,6 +292,17 @@ def _check_rotor_bounds(bounds, f: np.ndarray, what: str, loaded: bool = False) 
     if not (np.all(np.isfinite(b)) and np.all(b[:, 0] <= b[:, 1])):
         raise InputError(f"{what} must hold finite rows [f_min, f_max] with f_min <= f_max [N], got {b.tolist()}")
     return b
+
+
+def _check_rotor_names(names, f: np.ndarray, what: str) -> tuple[str, ...]:
+    """``names`` as a tuple of strings, empty or one per column of ``f`` (the rotors)."""
+    if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+        raise InputError(f"{what} must be a sequence of strings (one per rotor), got {names!r:.80}")
+    names = tuple(names)
+    n_rotors = f.shape[1] if f.ndim == 2 else -1
+    if names and len(names) != n_rotors:
+        raise ShapeError(f"{what} has {len(names)} names for the {n_rotors} rotors (columns of f): give one per rotor, or none")
+    return names
 
 
 def _read(z, key: str, source: str) -> np.ndarray:
@@ -310,7 +327,7 @@ def _is_number(v) -> bool:
 
 def _check_meta(meta: dict, source: str) -> dict:
     """The metadata's entries with their types checked (InputError naming the entry); optional ones filled in."""
-    meta = {"platform": "", "names": [], "metrics": {}, "series": [], "arm_kinds": [], **meta}
+    meta = {"platform": "", "names": [], "metrics": {}, "series": [], "arm_kinds": [], "rotor_names": [], **meta}
     missing = [k for k in ("scenario", "controller", "integrator", "dt", "control_period", "wall_time", "status", "reason", "seed") if k not in meta]
     if missing:
         raise InputError(f"{source}: metadata lacks {missing}: truncated or corrupted")
@@ -325,7 +342,7 @@ def _check_meta(meta: dict, source: str) -> dict:
         raise InputError(f"{source}: unknown status {meta['status']!r}; valid: {[s.value for s in Status]}")
     if meta["seed"] is not None and not (isinstance(meta["seed"], int) and not isinstance(meta["seed"], bool)):
         raise InputError(f"{source}: metadata seed must be an integer or null, got {meta['seed']!r}")
-    for key in ("names", "arm_kinds"):
+    for key in ("names", "arm_kinds", "rotor_names"):
         if not (isinstance(meta[key], list) and all(isinstance(n, str) for n in meta[key])):
             raise InputError(f"{source}: metadata {key} must be a list of strings, got {meta[key]!r}")
     m = meta["metrics"]

@@ -4,14 +4,16 @@
 the multirotor (hub, booms, propeller discs), the arm as a polyline through its joint origins
 (from Pinocchio's frames), the rotor thrusts as arrows scaled by force and coloured by the
 fraction of the rotor's maximum thrust, the centre of gravity and the thrust axis (with their
-distance), the trails of the base and of the end effector and the contact force at the end
-effector.  Frames are decimated to ``fps`` (a 30 s run at 1 kHz becomes 600 frames at 20 fps)
+distance), the trails of the base and of the end effector, the contact force at the end
+effector and the payload it carries (a ball at the payload's centre of mass while its mass is not zero, the CoG
+then that of the robot with the payload).  Frames are decimated to ``fps`` (a 30 s run at 1 kHz becomes 600 frames at 20 fps)
 and written as they are drawn: GIF through Pillow, MP4 through ``ffmpeg`` when it is installed.
 :func:`animate_result` reads the arrays of a run object (``SimResult``, :class:`~qprr.viz.run.RunLog`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import shutil
 import subprocess
@@ -40,6 +42,7 @@ _AXIS = "#7f8c8d"
 _EE_TRAIL = "#e67e22"
 _BASE_TRAIL = "#95a5a6"
 _FORCE = "#8e44ad"
+_PAYLOAD = "#16a085"
 _CMAP = ((0.0, "#27ae60"), (0.6, "#f39c12"), (1.0, "#c0392b"))  # thrust colour from 0 to f_max
 
 
@@ -53,6 +56,33 @@ class AnimationInfo:
     duration: float
     wall_time: float
     writer: str
+
+
+@dataclass(frozen=True)
+class CarriedPayload:
+    """The payload the end effector carries during a run: ``mass`` (n,) [kg] per sample (0: none) at ``com_ee`` (n, 3)
+    [m] in the end-effector frame (None: at its origin), as a run logs it (``SimResult.series["payload_mass"]`` and
+    ``["payload_com_ee"]``)."""
+
+    mass: np.ndarray
+    com_ee: np.ndarray | None = None
+
+    def __post_init__(self) -> None:  # checked however it is built; the sample count is checked by the animation
+        mass = as_array(self.mass, "payload mass", finite=True, ndim=1)
+        if mass.shape[0] < 1 or not np.all(mass >= 0.0):
+            raise InputError(f"payload mass must hold one mass >= 0 kg per sample, got {mass.tolist()!r:.80}")
+        object.__setattr__(self, "mass", mass)
+        if self.com_ee is not None:
+            com = as_array(self.com_ee, "payload com_ee", finite=True, ndim=2)
+            if com.shape != (mass.shape[0], 3):
+                raise ShapeError(f"payload com_ee must have shape ({mass.shape[0]}, 3) (one point [m, end-effector frame] per mass), got {com.shape}")
+            object.__setattr__(self, "com_ee", com)
+
+    def checked(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """(mass (n,), com_ee (n, 3)) for a run of ``n`` samples."""
+        if self.mass.shape != (n,):
+            raise ShapeError(f"payload mass must have shape ({n},) (one value per sample of the run), got {self.mass.shape}")
+        return self.mass, np.zeros((n, 3)) if self.com_ee is None else self.com_ee
 
 
 # ============================================================================ inputs
@@ -298,7 +328,8 @@ def _look(platform: Platform, fps: float, speed: float, view: str, radius, trail
 def _swatch(cmap) -> np.ndarray:
     """Every colour the artists draw (RGB, 0-255): the GIF palette keeps them."""
     colours = [cmap(x)[:3] for x in np.linspace(0, 1, 24)]
-    colours += [tuple(int(c[i : i + 2], 16) / 255 for i in (1, 3, 5)) for c in (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE)]
+    named = (_ARM, _BODY, _DISC, _COG, _AXIS, _EE_TRAIL, _BASE_TRAIL, _FORCE, _PAYLOAD)
+    colours += [tuple(int(c[i : i + 2], 16) / 255 for i in (1, 3, 5)) for c in named]
     return np.array(colours) * 255
 
 
@@ -362,13 +393,15 @@ class _Scene:
             ax.add_collection3d(artist, autolim=False)
         (self.arm_line,) = ax.plot([], [], [], "-o", color=_ARM, lw=3.0, ms=3.5, mfc="#f5f5f5", mec="#1f3a5f", zorder=5)
         (self.ee_dot,) = ax.plot([], [], [], "o", color="#c0392b", ms=5)
+        (self.payload_dot,) = ax.plot([], [], [], "o", color=_PAYLOAD, ms=10, mec="#0b5345", mew=0.8, zorder=7)
         (self.cog_dot,) = ax.plot([], [], [], "X", color=_COG, ms=8, mec="white", mew=0.6, zorder=6)
         (self.axis_line,) = ax.plot([], [], [], "--", color=_AXIS, lw=1.0)
         (self.ee_trail,) = ax.plot([], [], [], "-", color=_EE_TRAIL, lw=1.0, alpha=0.8)
         (self.base_trail,) = ax.plot([], [], [], "-", color=_BASE_TRAIL, lw=1.0, alpha=0.8)
 
-    def texts(self, thrusts: bool, contact: bool, title: str) -> None:
-        """The legend (thrust and contact entries when drawn), the title, the grid spacing and the two changing lines."""
+    def texts(self, thrusts: bool, contact: bool, title: str, payload: bool = False) -> None:
+        """The legend (thrust, contact and payload entries when drawn), the title, the grid spacing and the two changing
+        lines."""
         from matplotlib.lines import Line2D
 
         handles = [
@@ -381,6 +414,8 @@ class _Scene:
             handles.append(Line2D([], [], color=self.cmap(0.5), lw=2, label="thrust (colour: f / f_max)"))
         if contact:
             handles.append(Line2D([], [], color=_FORCE, lw=2, label="contact force"))
+        if payload:
+            handles.append(Line2D([], [], color=_PAYLOAD, marker="o", lw=0, ms=7, mec="#0b5345", label="payload (while carried)"))
         fig = self.fig
         fig.legend(handles=handles, loc="upper right", ncols=2, fontsize=6.5, framealpha=0.8, borderaxespad=0.3)
         fig.text(0.01, 0.975, title, fontsize=9, va="top")
@@ -434,6 +469,13 @@ class _Scene:
         self.thrusts.set_color(np.repeat([self.cmap(x) for x in np.clip(fk / f_ref, 0.0, 1.0)], 3, axis=0))
         self.foot.set_text("f [N] " + " ".join(f"{v:.2f}" for v in fk))
 
+    def payload_ball(self, p_world: np.ndarray, mass: float) -> None:
+        """The payload at ``p_world`` [m] while its ``mass`` [kg] is not zero (nothing drawn otherwise)."""
+        if mass > 0.0:
+            self.payload_dot.set_data_3d([p_world[0]], [p_world[1]], [p_world[2]])
+        else:
+            self.payload_dot.set_data_3d([], [], [])
+
     def contact_arrow(self, pose: RobotPose, fc_world: np.ndarray) -> None:
         """The contact force ``fc_world`` [N, world axes] as an arrow at the end effector."""
         arrow = (self.look.force_scale * fc_world)[None, :]
@@ -460,17 +502,37 @@ class _Series:
     f: np.ndarray | None
     contact: np.ndarray | None
     f_ref: np.ndarray
+    payload_mass: np.ndarray | None = None
+    payload_world: np.ndarray | None = None
 
 
-def _series(platform: Platform, t, xi, f, contact, fps: float, speed: float) -> _Series:
-    """Every frame's geometry first (Pinocchio: microseconds per frame)."""
+def _series(platform: Platform, t, xi, f, contact, fps: float, speed: float, payload=None) -> _Series:
+    """Every frame's geometry first (Pinocchio: microseconds per frame); ``payload``: (mass (n,), com_ee (n, 3)) or None."""
     times, idx = frame_indices(t, fps, speed)
     data = platform.data()
     chain = arm_chain(platform)
-    poses = [robot_pose(platform, data, ch.xi_to_q(xi[k]), chain) for k in idx]
+    poses, where = [], []
+    for k in idx:
+        pose = robot_pose(platform, data, ch.xi_to_q(xi[k]), chain)
+        if payload is not None:
+            pose, p_world = _with_payload(platform, data, pose, payload[0][k], payload[1][k])
+            where.append(p_world)
+        poses.append(pose)
     hover = platform.total_mass * platform.g / platform.n_rotors
     f_max = platform.thrust_max
-    return _Series(times, idx, poses, f, contact, np.where(np.isfinite(f_max), f_max, 2.0 * hover))
+    f_ref = np.where(np.isfinite(f_max), f_max, 2.0 * hover)
+    if payload is None:
+        return _Series(times, idx, poses, f, contact, f_ref)
+    return _Series(times, idx, poses, f, contact, f_ref, payload[0][idx], np.array(where))
+
+
+def _with_payload(platform: Platform, data, pose: RobotPose, mass: float, com_ee: np.ndarray) -> tuple[RobotPose, np.ndarray]:
+    """(``pose`` with the CoG of robot and payload, the payload's position [m, world]); ``data`` holds ``pose``'s kinematics."""
+    frame = platform.model.frames[platform.ee_frame]
+    p_world = data.oMi[frame.parentJoint].act(frame.placement.act(np.asarray(com_ee, dtype=float)))
+    m_robot = platform.total_mass
+    com = (m_robot * pose.com_world + mass * p_world) / (m_robot + mass)
+    return dataclasses.replace(pose, com_world=com), np.array(p_world)
 
 
 def _write_frames(scene: _Scene, series: _Series, writer, bar) -> None:
@@ -487,6 +549,9 @@ def _write_frames(scene: _Scene, series: _Series, writer, bar) -> None:
             fc = series.contact[i]
             scene.contact_arrow(pose, fc)
             line += f"   |F| {np.linalg.norm(fc):.2f} N"
+        if series.payload_mass is not None:
+            scene.payload_ball(series.payload_world[k], series.payload_mass[k])
+            line += f"   payload {series.payload_mass[k]:.3g} kg"
         writer.add(scene.image(line))
         bar.update()
 
@@ -531,7 +596,15 @@ class AnimationOptions:
 
 
 def animate(
-    platform: Platform, t, xi, path: str | Path, f=None, contact_force_world=None, options: AnimationOptions | None = None, **settings
+    platform: Platform,
+    t,
+    xi,
+    path: str | Path,
+    f=None,
+    contact_force_world=None,
+    payload: CarriedPayload | None = None,
+    options: AnimationOptions | None = None,
+    **settings,
 ) -> AnimationInfo:
     """Animate a run of ``platform`` to ``path`` (``.gif`` with Pillow, ``.mp4`` with ffmpeg).
 
@@ -544,6 +617,8 @@ def animate(
         f / f_max (green to red).
     contact_force_world : optional (n, 3) force [N] on the end effector, world axes, drawn at the
         end effector with ``force_scale`` m/N (default ``thrust_scale``).
+    payload : optional :class:`CarriedPayload`: a ball where the payload is while its mass is not zero (and the CoG
+        drawn is that of the robot with the payload).
     options : an :class:`AnimationOptions` (frame rate, speed, size, view, trail, scales, title, progress), and/or
         its fields as keywords, which replace the options' (``animate(p, t, xi, "run.gif", fps=10, view="fixed")``).
     """
@@ -553,9 +628,14 @@ def animate(
     path = Path(path)
     look = _look(platform, fps, speed, o.view, o.radius, o.trail, o.thrust_scale, o.force_scale)
     t0 = time.perf_counter()
-    series = _series(platform, t, xi, f, contact, fps, speed)
+    carried = None
+    if payload is not None:
+        if not isinstance(payload, CarriedPayload):
+            raise InputError(f"payload must be a qprr.viz.animation.CarriedPayload (mass per sample [kg], com_ee), got {type(payload).__name__}")
+        carried = payload.checked(t.shape[0])
+    series = _series(platform, t, xi, f, contact, fps, speed, carried)
     scene = _Scene(platform, series.poses, look, size)
-    scene.texts(f is not None, contact is not None, platform.name if title is None else str(title))
+    scene.texts(f is not None, contact is not None, platform.name if title is None else str(title), payload=carried is not None)
     scene.freeze()
 
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -578,7 +658,8 @@ def animate(
 
 def animate_result(platform: Platform, result, path: str | Path, **options) -> AnimationInfo:
     """:func:`animate` a run object (``SimResult`` or :class:`~qprr.viz.run.RunLog`): its ``t``, ``xi``, ``f``
-    and, when logged, the force part of ``contact_wrench_world``; ``options`` go to :func:`animate`."""
+    and, when logged, the force part of ``contact_wrench_world`` and the payload (``payload_mass``, ``payload_com_ee``);
+    ``options`` go to :func:`animate`."""
     from .run import as_run
 
     run = as_run(result)
@@ -589,4 +670,5 @@ def animate_result(platform: Platform, result, path: str | Path, **options) -> A
     if run.f is not None and run.f.shape[1] != platform.n_rotors:
         raise ShapeError(f"the run logs {run.f.shape[1]} rotor thrusts per sample; platform {platform.name!r} has {platform.n_rotors} rotors")
     contact = None if run.contact_wrench_world is None else run.contact_wrench_world[:, 0:3]
-    return animate(platform, run.t, run.xi, path, f=run.f, contact_force_world=contact, **options)
+    payload = None if run.payload_mass is None else CarriedPayload(run.payload_mass, run.payload_com_ee)
+    return animate(platform, run.t, run.xi, path, f=run.f, contact_force_world=contact, payload=payload, **options)

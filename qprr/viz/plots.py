@@ -226,9 +226,10 @@ def legend(ax, *others, **kwargs) -> None:
 
     handles, labels = [], []
     for a in (ax, *others):
-        h, lab = a.get_legend_handles_labels()
-        handles += h
-        labels += lab
+        for h, lab in zip(*a.get_legend_handles_labels()):
+            if lab not in labels:  # one entry per label (host and twin may both explain their dotted commands)
+                handles.append(h)
+                labels.append(lab)
     if handles:
         drop = ScaledTranslation(0.0, -LEGEND_DROP / 72.0, ax.figure.dpi_scale_trans)
         opts = {
@@ -237,15 +238,42 @@ def legend(ax, *others, **kwargs) -> None:
             "loc": "upper center",
             "bbox_to_anchor": (0.5, 0.0),
             "bbox_transform": ax.transAxes + drop,
-            "ncol": min(len(handles), 4),
             "handlelength": 1.8,
             "borderaxespad": 0.0,
             "columnspacing": 1.2,
         }
         opts.update(kwargs)
+        if "ncol" not in opts:  # as many columns (at most 4) as the panel's column of the page holds
+            opts["ncol"] = legend_columns(ax, labels, opts["fontsize"], opts["handlelength"], opts["columnspacing"])
         top = max((ax, *others), key=lambda a: a.get_zorder())  # drawn last: nothing covers its legend
         leg = top.legend(handles, labels, **opts)
         leg.set_zorder(10)
+
+
+def legend_columns(ax, labels: Sequence[str], fontsize: float, handlelength: float, columnspacing: float, most: int = 4) -> int:
+    """The most columns (1 to ``most``) in which a legend of ``labels`` under ``ax`` is no wider than the column of the
+    page's grid that ``ax`` spans (the whole figure for axes outside a grid).  Widths in points: each entry's handle
+    (``handlelength`` em), the gap to its text (0.8 em, matplotlib's default) and its text as rendered at ``fontsize``;
+    columns filled as matplotlib fills them (the first ones one entry longer); the gaps between columns and the frame's
+    padding (0.4 em per side); 90 % of the column, the legend being centred under its axes, not on the column.  A
+    legend of long names (URDF joints, rotors) then wraps instead of running into its neighbours or off the page."""
+    from matplotlib.font_manager import FontProperties
+    from matplotlib.textpath import TextToPath
+
+    spec = ax.get_subplotspec()
+    share = 1.0 if spec is None else len(spec.colspan) / spec.get_gridspec().ncols
+    room = 0.9 * 72.0 * ax.figure.get_figwidth() * share  # centred under its axes, which sit off the column's centre
+    measure, prop = TextToPath(), FontProperties(size=fontsize)
+    widths = [measure.get_text_width_height_descent(lab, prop, ismath=lab.replace("\\$", "").count("$") >= 2)[0] for lab in labels]
+    entry = [(handlelength + 0.8) * fontsize + w for w in widths]
+    for k in range(min(most, len(labels)), 1, -1):
+        rows = -(-len(labels) // k)
+        sizes = [rows] * (k - (k * rows - len(labels))) + [rows - 1] * (k * rows - len(labels))
+        starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        total = sum(max(entry[i : i + n]) for i, n in zip(starts, sizes) if n) + (k - 1) * columnspacing * fontsize + 0.8 * fontsize
+        if total <= room:
+            return k
+    return 1
 
 
 def _under(host, twin) -> None:
@@ -389,13 +417,20 @@ def _u_labels(res: SimResult) -> list[str]:
 class Panel:
     """One panel: ``title`` (without figure number), ``draw(ax, res)``, ``projection`` ("3d" or None).
 
-    ``name`` is the key of :attr:`qprr.scenarios.Scenario.figures` giving its figure number.
+    ``name`` is the key of :attr:`qprr.scenarios.Scenario.figures` giving its figure number.  ``thesis_title``: the
+    title of a run reproducing a thesis section (:func:`scenario_source`), which may cite the thesis's equations; any
+    other run (a generic scenario, a user's platform) shows ``title`` (default: ``title`` for both).
     """
 
     name: str
     title: str
     draw: Callable
     projection: str | None = None
+    thesis_title: str = ""
+
+    def title_for(self, thesis: bool) -> str:
+        """The panel's title for a run that reproduces a thesis section (``thesis``) or not."""
+        return self.thesis_title if (thesis and self.thesis_title) else self.title
 
 
 def _position(ax, res):
@@ -436,7 +471,7 @@ def _rotors(ax, res, thrust_bounds=None):
     t = res.t
     nr = res.f.shape[1]
     cols = [f"C{i % 10}" for i in range(nr)]
-    _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], [f"$f_{{{i + 1}}}$" for i in range(nr)], colors=cols, lw=1.1)
+    _draw_signals(ax, t, [res.f[:, i] for i in range(nr)], rotor_labels(res), colors=cols, lw=1.1)
     sat = (res.flags & AllocationFlag.ROTOR_SATURATED) != 0
     lo, hi = robust_limits(ax, [res.f], min_span=0.1, t=t)
     if thrust_bounds is None and res.rotor_bounds is not None:  # the bounds the run's allocation respected
@@ -452,6 +487,15 @@ def _rotors(ax, res, thrust_bounds=None):
     ax.set_ylabel("rotor thrust [N]")
     time_axis(ax, res)
     legend(ax)
+
+
+def rotor_labels(res: SimResult) -> list[str]:
+    """One legend label per rotor of ``res``: the names its platform's rotor description gives (``res.rotor_names``,
+    written as they are: mathtext specials escaped), or $f_1$ ... $f_n$ for a result that did not record them."""
+    _check_res(res)
+    if res.rotor_names:
+        return [plain(name) for name in res.rotor_names]
+    return [f"$f_{{{i + 1}}}$" for i in range(res.f.shape[1])]
 
 
 def _cog(ax, res):
@@ -575,7 +619,9 @@ def tidy_3d(ax, nbins: int = 4) -> None:
 
 PANELS: dict[str, Panel] = {
     "position": Panel("position", "position of B", _position),
-    "attitude": Panel("attitude", "attitude (roll, pitch references from (6.17))", _attitude),
+    "attitude": Panel(
+        "attitude", "attitude (roll, pitch references from the controller)", _attitude, thesis_title="attitude (roll, pitch references from (6.17))"
+    ),
     "arm": Panel("arm", "arm joints", _arm),
     "errors_position": Panel("errors_position", "tracking errors, lengths", _errors_position),
     "errors_angle": Panel("errors_angle", "tracking errors, angles", _errors_angle),
@@ -635,9 +681,10 @@ def scenario_source(res: SimResult) -> str:
     return SCENARIOS[res.scenario].source if res.scenario in SCENARIOS else ""
 
 
-def _title(panel: Panel, figures: Mapping[str, str]) -> str:
+def _title(panel: Panel, figures: Mapping[str, str], thesis: bool) -> str:
     fig = figures.get(panel.name)
-    return f"{panel.title} (Fig. {fig})" if fig else panel.title
+    title = panel.title_for(thesis)
+    return f"{title} (Fig. {fig})" if fig else title
 
 
 def _events(ax, events, label: bool) -> None:
@@ -655,7 +702,7 @@ def _events(ax, events, label: bool) -> None:
 class PlotOptions:
     """The page of :func:`plot_result` beyond its panels (each field also a keyword of :func:`plot_result`).
 
-    title : page title (default: scenario, controller, status, thesis section and RMSE (6.26)).
+    title : page title (default: scenario, controller, status, thesis section and RMSE, :func:`default_title`).
     figures : figure numbers per panel name (default: those of the scenario that made the result; pass
         ``{}`` for none).
     thrust_bounds : thrust bounds [N] drawn on the ``rotors`` panel (default: the distinct values of the
@@ -754,6 +801,7 @@ class _PanelDrawer:
 
     def __init__(self, res: SimResult, figures: Mapping[str, str], thrust_bounds, events: tuple) -> None:
         self.res, self.figures, self.thrust_bounds, self.events = res, figures, thrust_bounds, events
+        self.thesis = bool(scenario_source(res))  # a run reproducing a thesis section: its titles may cite equations
         self.labelled: list[str] = []
 
     def __call__(self, p: Panel, a) -> None:
@@ -761,7 +809,7 @@ class _PanelDrawer:
             _rotors(a, self.res, self.thrust_bounds)
         else:
             p.draw(a, self.res)
-        a.set_title(_title(p, self.figures), fontsize=10)
+        a.set_title(_title(p, self.figures, self.thesis), fontsize=10)
         if self.events and p.projection is None:
             _events(a, self.events, label=not self.labelled)
             self.labelled.append(p.name)
@@ -863,8 +911,8 @@ def fit_texts(fig, rounds: int = 3) -> None:
 
 
 def default_title(res: SimResult) -> str:
-    """Scenario / controller (status), the thesis section it reproduces, and the RMSE (6.26) with units (angles in
-    radians, as on the command line)."""
+    """Scenario / controller (status), the thesis section it reproduces, and the RMSE with units (angles in radians, as
+    on the command line), "RMSE (6.26)" for a run that reproduces a thesis section (equation numbers only there)."""
     _check_res(res)
     src = scenario_source(res)
     on = f" on {res.platform}" if res.platform else ""
@@ -876,7 +924,7 @@ def default_title(res: SimResult) -> str:
     for (name, v), kind in zip(res.rmse().items(), kinds):
         unit, scale = _UNIT[kind]
         parts.append(f"{plain(name)} {scale * v:.2g} {unit}")
-    return head + "\nRMSE (6.26): " + ", ".join(parts)
+    return head + ("\nRMSE (6.26): " if src else "\nRMSE: ") + ", ".join(parts)
 
 
 __all__ = [
@@ -890,11 +938,13 @@ __all__ = [
     "figure_path",
     "fit_texts",
     "legend",
+    "legend_columns",
     "new_figure",
     "plain",
     "plot_result",
     "pretty",
     "robust_limits",
+    "rotor_labels",
     "save_figure",
     "scenario_figures",
     "tidy_3d",

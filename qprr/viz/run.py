@@ -4,13 +4,14 @@
 simulator's :class:`~qprr.sim.SimResult`: ``t`` (n,) [s], ``xi`` (n, 6 + n_arm) thesis
 coordinates, ``f`` (n, n_rotors) rotor thrusts [N], ``arm_effort`` (n, n_arm) [N or N m],
 ``contact_wrench_world`` (n, 6) the end-effector contact wrench [force N; moment N m] in world
-axes, and ``platform`` (the platform's name).  Only ``t`` and ``xi`` are required; a path with
+axes, ``payload_mass`` (n,) [kg] and ``payload_com_ee`` (n, 3) [m, end-effector frame] the payload the end effector
+carries, and ``platform`` (the platform's name).  Only ``t`` and ``xi`` are required; a path with
 no simulator behind it (an IK path, :mod:`qprr.viz.ikpath`) is a RunLog too.
 
 Runs on disk are result files of the simulator (:meth:`SimResult.save
 <qprr.sim.SimResult.save>`, ``qprr simulate ... --save FILE.npz``): one file format in the
-project.  :func:`load_run` reads one as a RunLog (a ``contact_wrench_world`` series, when
-logged, is drawn).
+project.  :func:`load_run` reads one as a RunLog (the ``contact_wrench_world``, ``payload_mass`` and
+``payload_com_ee`` series, when logged, are drawn).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 from ..errors import InputError, NonFiniteError, ShapeError
 from ..validation import as_array
 
-ARRAYS = ("t", "xi", "f", "arm_effort", "contact_wrench_world")
+ARRAYS = ("t", "xi", "f", "arm_effort", "contact_wrench_world", "payload_mass", "payload_com_ee")
 """Array attributes of a run, in file order (``t`` and ``xi`` required)."""
 
 
@@ -37,6 +38,8 @@ class RunLog:
     arm_effort: np.ndarray | None = None
     contact_wrench_world: np.ndarray | None = None
     platform: str = ""
+    payload_mass: np.ndarray | None = None
+    payload_com_ee: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.platform, str):
@@ -47,11 +50,16 @@ class RunLog:
         if not np.all(np.isfinite(t)) or np.any(np.diff(t) < 0.0):
             raise InputError("t must be finite and non-decreasing [s]")
         n = t.shape[0]
-        widths = {"f": None, "arm_effort": None, "contact_wrench_world": 6}
+        widths = {"f": None, "arm_effort": None, "contact_wrench_world": 6, "payload_com_ee": 3}
         xi = as_array(self.xi, "xi")
         if xi.ndim != 2 or xi.shape[0] != n or xi.shape[1] < 6:
             raise ShapeError(f"xi must have shape ({n}, 6 + n_arm) like t, got {xi.shape}")
         arrays = {"t": t, "xi": xi}
+        if self.payload_mass is not None:
+            mass = as_array(self.payload_mass, "payload_mass")
+            if mass.shape != (n,) or not np.all(mass >= 0.0):
+                raise ShapeError(f"payload_mass must have shape ({n},) like t, masses >= 0 kg, got shape {mass.shape}")
+            arrays["payload_mass"] = mass
         for name, width in widths.items():
             a = getattr(self, name)
             if a is None:
@@ -76,7 +84,8 @@ class RunLog:
 
 def as_run(result) -> RunLog:
     """A :class:`RunLog` of a :class:`~qprr.sim.SimResult` or of any object with the attributes ``t`` and ``xi``
-    (and optionally ``f``, ``arm_effort``, ``contact_wrench_world`` or a ``series`` dict holding the latter)."""
+    (and optionally ``f``, ``arm_effort``, and ``contact_wrench_world``, ``payload_mass``, ``payload_com_ee`` as
+    attributes or in a ``series`` dict)."""
     if isinstance(result, RunLog):
         return result
     missing = [k for k in ("t", "xi") if getattr(result, k, None) is None]
@@ -87,8 +96,9 @@ def as_run(result) -> RunLog:
         )
     arrays = {k: getattr(result, k, None) for k in ARRAYS}
     series = getattr(result, "series", None)
-    if arrays["contact_wrench_world"] is None and isinstance(series, dict):
-        arrays["contact_wrench_world"] = series.get("contact_wrench_world")
+    for key in ("contact_wrench_world", "payload_mass", "payload_com_ee"):
+        if arrays[key] is None and isinstance(series, dict):
+            arrays[key] = series.get(key)
     name = getattr(result, "platform", "")
     name = name if isinstance(name, str) else getattr(name, "name", "")
     return RunLog(**arrays, platform=name)
