@@ -106,3 +106,22 @@ def test_heavier_plant_sags_below_the_hover_height():
     dz_heavy = heavy.xi[-1, 2] - heavy.xi_d[-1, 2]
     assert abs(dz_nominal) < 1e-3
     assert dz_heavy < -10.0 * max(abs(dz_nominal), 1e-4)
+
+
+def test_a_run_whose_rotors_saturate_completes_with_a_warning():
+    """The Q-PRR's plant with 90 % of the rotor thrust hover takes (m g / sum f_max of the nominal maximum) cannot climb:
+    the run completes, sinking, but its reason says the rotor bounds were active on most ticks; the nominal run's reason
+    is plain "completed"."""
+    from qprr.sim.loop import SATURATION_WARNING
+    from qprr.sim.mismatch import ModelError, perturbed
+
+    p = qprr.load()
+    share = p.total_mass * p.g / float(np.sum(p.thrust_max))  # the fraction of the maximum thrust hover takes
+    sc = SCENARIOS["takeoff-hover"]
+    nominal = sc.run(platform=p, controller="idc", duration=3.0)
+    weak = sc.run(platform=p, controller="idc", duration=3.0, plant=perturbed(p, ModelError(f_max=0.9 * share)))
+    assert nominal.reason == "completed" and nominal.saturation_fraction() <= SATURATION_WARNING
+    assert str(weak.status) == "ok" and weak.saturation_fraction() > SATURATION_WARNING
+    assert weak.reason.startswith("completed with warnings: a rotor thrust bound was active on ")
+    assert f"{100 * weak.saturation_fraction():.0f} % of the ticks" in weak.reason
+    assert weak.xi[-1, 2] < weak.xi[0, 2] - 1.0  # it sank

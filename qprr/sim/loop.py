@@ -117,7 +117,7 @@ def simulate(
         bar.close()
     wall = time.perf_counter() - t_start
     if err is None:
-        found = controller.run_warnings()  # a completed run the controller itself judged unhealthy (e.g. an MPC that chattered)
+        found = controller.run_warnings() + _saturation_warning(run.logs.flags[:m])  # a completed run that was not healthy
         return _result(run, m, Status.OK, "completed with warnings: " + "; ".join(found) if found else "completed", wall)
     err = _with_context(platform, err, (m - 1) * config.period, q, v, run.bounds)
     err.result = _result(run, m, Status.DIVERGED if isinstance(err, DivergenceError) else Status.FAILED, str(err), wall)
@@ -489,6 +489,24 @@ def _screen(run: _Run, k: int, t: float, q: np.ndarray, v: np.ndarray) -> None:
 
 
 # ------------------------------------------------------------------------------------ result
+SATURATION_WARNING = 0.25
+"""Fraction of the ticks with a rotor thrust bound active above which a completed run ends "completed with warnings":
+the rotors could not give the wrench the controller asked for (a vehicle too weak for its load, its mission or its
+wind), so its tracking numbers describe a saturated vehicle."""
+
+
+def _saturation_warning(flags: np.ndarray) -> tuple[str, ...]:
+    """The warning of a run whose rotors were saturated on more than :data:`SATURATION_WARNING` of its ticks (``flags``:
+    the logged :class:`~qprr.actuation.AllocationFlag` bits), else none."""
+    fraction = float(np.mean((flags & AllocationFlag.ROTOR_SATURATED) != 0)) if flags.size else 0.0
+    if fraction <= SATURATION_WARNING:
+        return ()
+    return (
+        f"a rotor thrust bound was active on {100 * fraction:.0f} % of the ticks (above {100 * SATURATION_WARNING:.0f} %): "
+        "the rotors could not give the wrench asked for (too little thrust for the load, the mission or the wind?)",
+    )
+
+
 def _result(run: _Run, m: int, status: Status, reason: str, wall: float) -> SimResult:
     """The first ``m`` ticks as a :class:`SimResult`: the logs, what is derived from them, and what the controller and the
     optional stages report (the controller's metrics and series, rotor speeds and commands, the wind)."""
