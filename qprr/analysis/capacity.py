@@ -23,7 +23,7 @@ slider - chooses the one that balances the CoG).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -38,12 +38,14 @@ from ._common import (
     best_per_cell,
     check_arm_platform,
     check_int,
+    check_locked,
     check_pos,
     check_progress,
     default_map_cell,
     make_grid,
     make_payload_mount,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 from .hover import check_reserve, payload_limits
 from .wrenchset import wrench_set
@@ -87,6 +89,7 @@ class CapacityResult:
     worst_reachable: float
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def fractions(self) -> dict[str, float]:
         """Share of the configurations limited by each factor."""
@@ -115,6 +118,8 @@ class CapacityResult:
             lines.append("  effort-limited configurations by joint: " + ", ".join(f"{k} {v}" for k, v in per.items()))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -126,7 +131,8 @@ class CapacityOptions:
     ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace`; ``torque_reserve``: torque [N m]
     kept available about x, y, z of B (one value or three); ``thrust_tol``: relative gap below which
     the rotors' limit counts as the collective thrust's; ``cell``: workspace cell side [m] (default:
-    the largest extent / 120).
+    the largest extent / 120); ``budget``, ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from
+    pilot runs timed with ``clock`` (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
     n_samples: int = 200_000
@@ -136,9 +142,13 @@ class CapacityOptions:
     torque_reserve: object = 0.0
     thrust_tol: float = 0.01
     cell: float | None = None
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
         check_int("n_samples", self.n_samples, 2)
+        check_budget(self.budget)
+        check_clock(self.clock)
         as_vector(self.payload_offset, 3, "payload_offset")
         check_reserve(self.torque_reserve)
         check_pos("thrust_tol", self.thrust_tol, strict=False)
@@ -157,13 +167,17 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
     if not isinstance(o, CapacityOptions):
         raise InputError(f"options must be a CapacityOptions, got {type(o).__name__}")
     o = replace(o, **settings) if settings else o
-    n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
     check_arm_platform(platform)
-    check_int("n_samples", n_samples, 2)
+    work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
+    return within_budget(o, lambda oo, pr: _capacity(platform, oo, pr), work, check_progress(progress))
+
+
+def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResult:
+    """:func:`capacity` at ``o.n_samples``."""
+    n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
     torque_reserve = check_reserve(o.torque_reserve)
     thrust_tol = check_pos("thrust_tol", o.thrust_tol, strict=False)
     payload = make_payload_mount(platform, payload_offset)
-    progress = check_progress(progress)
     grid = make_grid(platform, n_samples, locked, ranges)
     W = wrench_set(platform)
     chain = ArmChain(platform)
