@@ -55,7 +55,9 @@ def expected_count(budget: float, pilots: tuple[Pilot, ...], overhead: float, pe
     return int(math.floor((left - overhead) / per_sample))
 
 
-@pytest.mark.parametrize("overhead, per_sample, budget", [(0.3, 2e-5, 10.0), (0.05, 1e-6, 10.0), (0.05, 3e-6, 10.0), (1.0, 1e-4, 30.0), (0.0, 5e-6, 2.0)])
+@pytest.mark.parametrize(
+    "overhead, per_sample, budget", [(0.3, 2e-5, 10.0), (0.05, 1e-6, 10.0), (0.05, 3e-6, 10.0), (1.0, 1e-4, 30.0), (0.0, 5e-6, 2.0)]
+)
 def test_an_affine_cost_is_recovered_and_the_largest_count_that_fits_is_chosen(overhead, per_sample, budget):
     clock = FakeClock()
     run, calls = fake_map(clock, overhead, per_sample)

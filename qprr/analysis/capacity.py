@@ -41,14 +41,18 @@ from ._common import (
     check_locked,
     check_pos,
     check_progress,
-    default_map_cell,
     make_grid,
     make_payload_mount,
 )
 from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 from .hover import check_reserve, payload_limits
+from .voxels import map_cell
 from .wrenchset import wrench_set
+
+MAP_CELLS = 120
+"""Cells across the largest extent of the capacity map, unless the samples are too sparse for them
+(:func:`qprr.analysis.voxels.map_cell`: then coarser cells, never empty ones between samples)."""
 
 LIMITS = ("thrust", "attitude", "effort", "infeasible")
 """Limiting factors, in the order of the integer codes of :attr:`CapacityResult.limiting`."""
@@ -131,7 +135,8 @@ class CapacityOptions:
     ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace`; ``torque_reserve``: torque [N m]
     kept available about x, y, z of B (one value or three); ``thrust_tol``: relative gap below which
     the rotors' limit counts as the collective thrust's; ``cell``: workspace cell side [m] (default:
-    the largest extent / 120); ``budget``, ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from
+    the largest extent / :data:`MAP_CELLS`, coarser when the samples would leave empty cells between them,
+    :func:`qprr.analysis.voxels.map_cell`); ``budget``, ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from
     pilot runs timed with ``clock`` (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
@@ -202,7 +207,7 @@ def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResul
     cap = np.clip(cap, 0.0, None)
     origin, basis = affine_span(ee)
     coords = (ee - origin) @ basis.T
-    h = default_map_cell(coords) if cell is None else check_pos("cell", cell)
+    h = map_cell(coords, MAP_CELLS) if cell is None else check_pos("cell", cell)
     best_map, arg, morigin = best_per_cell(coords, np.where(lim == 3, -1.0, cap), h)
     map_lim = np.where(arg >= 0, lim[np.clip(arg, 0, None)], -1)
     best_map = np.where(arg >= 0, cap[np.clip(arg, 0, None)], np.nan)

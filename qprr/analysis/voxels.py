@@ -848,21 +848,40 @@ def boundary_cells(occ: np.ndarray) -> np.ndarray:
 
 def display_occupancy(points: np.ndarray, pinhole_fraction: float = 1e-3, max_steps: int = 40) -> tuple[np.ndarray, np.ndarray, float]:
     """(occupancy, origin, h) of the sample points at the finest cell side h where the sampling leaves no
-    pinholes (empty cells whose 2d face neighbours are all occupied) beyond ``pinhole_fraction`` of
-    the occupied cells: an outline for figures and boundaries (the measure comes from
-    :func:`estimate_measure`)."""
+    pinholes (empty cells whose 2d face neighbours are all occupied) and no isolated cells (occupied cells with no
+    occupied face neighbour: samples sparser than the cells, drawn as dots or a checkerboard) beyond
+    ``pinhole_fraction`` of the occupied cells: an outline for figures and boundaries (the measure comes from
+    :func:`estimate_measure`).  The first h tried is the side of a cell holding one distinct point of the bounding
+    box (repeated points, e.g. the hover profile of an arm whose first joint turns about the yaw axis, counted once)."""
     pts = np.asarray(points, dtype=float)
     d = pts.shape[1]
     bounds = _column_bounds(pts)
     ext = bounds[1] - bounds[0]
     ext = np.where(ext > 0, ext, ext.max())
-    h = float((np.prod(ext) / pts.shape[0]) ** (1.0 / d))
+    distinct = np.unique(pts, axis=0).shape[0] if pts.shape[0] <= UNIQUE_BELOW else pts.shape[0]
+    h = float((np.prod(ext) / distinct) ** (1.0 / d))
     structure = ndimage.generate_binary_structure(d, 1).astype(np.int16)
     for _ in range(max_steps):
         occ, origin = occupancy(pts, h, bounds)
         nb = ndimage.convolve(occ.astype(np.int16), structure, mode="constant") - occ
         holes = int(np.sum(~occ & (nb == 2 * d)))
-        if holes <= pinhole_fraction * occ.sum():
+        isolated = int(np.sum(occ & (nb == 0)))
+        if holes + isolated <= pinhole_fraction * occ.sum():
             return occ, origin, h
         h *= 1.25
     return occ, origin, h
+
+
+UNIQUE_BELOW = 200_000
+""":func:`display_occupancy` counts the distinct points of sets up to this size (a sort; larger sets start from their
+point count and coarsen in a few more steps)."""
+
+
+def map_cell(points: np.ndarray, cells_across: int) -> float:
+    """Cell side [m] of a map drawn from the sample points (n, d) [m] by binning (the best value per cell): the largest
+    extent over ``cells_across``, or the side on which the samples leave no pinholes and no isolated cells
+    (:func:`display_occupancy`) when that is coarser.  Finer cells than the samples fill would show the sampling's
+    lattice (empty cells between the images of neighbouring grid points: a checkerboard), not the map."""
+    pts = np.asarray(points, dtype=float)
+    ext = float((pts.max(axis=0) - pts.min(axis=0)).max())
+    return max(ext / cells_across, display_occupancy(pts)[2], 1e-9)
