@@ -48,7 +48,7 @@ PILOT_SLOPE = 1.5
 PILOT_CAP = 0.3
 """The pilots stop once together they took this share of the budget, whatever they showed."""
 
-SAFETY = 0.9
+SAFETY = 0.8
 """Share of the budget left after the pilots that the chosen map is planned to take (the model's error and the
 machine's load take the rest)."""
 

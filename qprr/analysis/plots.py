@@ -136,9 +136,16 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
         pts = np.vstack([r.profile, r.profile * np.array([-1.0, 1.0])])
         occ, focc, o, h = _sample_cells(pts, free)
         label = f"{plain(r.label)}: {measure_text(r.hover_volume)}"
-        _cells_image(ax, occ, o, h, colour, 0.25 if free is not None else (0.35 if i == 0 else 0.55), label)
+        alpha = 0.25 if free is not None else (0.35 if i == 0 else 0.55)
+        free_label = f"{plain(r.label)}, {_free_label(r.free_hover_volume)}"
+        if r.hover_counted is not None and r.hover_counted[2] < h:  # the cells the volume counted are finer: those
+            _half_and_mirror(ax, r.hover_counted, colour, alpha, label)
+            if r.free_hover_counted is not None:
+                _half_and_mirror(ax, r.free_hover_counted, colour, 0.75 if i == 0 else 0.9, free_label)
+            continue
+        _cells_image(ax, occ, o, h, colour, alpha, label)
         if focc is not None:
-            _cells_image(ax, focc, o, h, colour, 0.75 if i == 0 else 0.9, f"{plain(r.label)}, {_free_label(r.free_hover_volume)}")
+            _cells_image(ax, focc, o, h, colour, 0.75 if i == 0 else 0.9, free_label)
     ax.axvline(0.0, color="k", lw=0.6, ls="--")
     ax.set_xlabel("distance to the yaw axis (signed) [m]")
     ax.set_ylabel("z (world, from the base) [m]")
@@ -146,6 +153,13 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
     legend(ax, ncol=2 if len(ax.get_legend_handles_labels()[0]) > 2 else 1)  # four entries with collisions: two rows
     ax.set_title("hover workspace: section through the yaw axis", fontsize=10)
     return ax
+
+
+def _half_and_mirror(ax, counted, colour, alpha, label) -> None:
+    """The counted half section (s >= 0, :mod:`qprr.analysis.voxels`) and its mirror image s -> -s."""
+    grid, o, h = counted
+    _cells_image(ax, grid, o, h, colour, alpha, label)
+    _cells_image(ax, grid[::-1], np.array([-(o[0] + grid.shape[0] * h), o[1]]), h, colour, alpha)
 
 
 def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: int = 60):

@@ -84,7 +84,8 @@ class WorkspaceRegion:
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
-    grid of ``measure`` / ``hover_volume``: same cell side and frame).
+    grid of ``measure`` / ``hover_volume``: same cell side and frame), ``free_occupancy``, ``free_hover_counted`` the
+    cells they counted (as ``occupancy`` / ``hover_counted``, on the same grids).
     """
 
     label: str
@@ -103,6 +104,8 @@ class WorkspaceRegion:
     collision_check: str = ""
     free_measure: MeasureEstimate | None = None
     free_hover_volume: MeasureEstimate | None = None
+    free_occupancy: tuple | None = None
+    free_hover_counted: tuple | None = None
 
     @property
     def dim(self) -> int:
@@ -318,13 +321,16 @@ def _workspace(platform: Platform, o: WorkspaceOptions, sets: list[dict], progre
 
 def _measures(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int):
     """(measure of ``image``, occupancy of its first counting grid, measure over the cells whose corners are all
-    collision-free or None: no mask, or no such cell), the two from one counting pass on one counting grid
-    (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the whole image's cell side and frame)."""
+    collision-free or None: no mask, or no such cell, the occupancy of those cells on the same counting grid or None),
+    the measures from one counting pass on one counting grid (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the
+    whole image's cell side and frame)."""
     if mask is None or not mask.free.any():
         measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-        return measure, occ, None
-    measure, free, occ = image.estimate_pair(mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True)
-    return measure, occ, free
+        return measure, occ, None, None
+    whole, free, occ, free_occ = image.estimate_pair(
+        mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True, return_free_occupancy=True
+    )
+    return whole, occ, free, free_occ if free is not None else None
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
@@ -336,7 +342,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = free_measure = free_hover = None
+    measure = occ = free_measure = free_hover = free_occ = free_hocc = None
     dim = basis.shape[0]
     if dim == 0:
         why = "the frame does not move (a point)"
@@ -344,7 +350,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
         image = CellImage(coords.reshape(*shape, dim))
-        measure, occ, free_measure = _measures(image, mask, shape, n_shifts, seed)
+        measure, occ, free_measure, free_occ = _measures(image, mask, shape, n_shifts, seed)
         del image
     profile = hover_profile(pts, origin, basis)
     hv = hocc = None
@@ -352,13 +358,21 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
-            hv, hocc, free_hover = _measures(hover_image, mask, shape, n_shifts, seed)
+            hv, hocc, free_hover, free_hocc = _measures(hover_image, mask, shape, n_shifts, seed)
             del hover_image
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
     region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, occ, profile, hocc)
     if mask is not None:
-        region = replace(region, collision_free=mask.free, collision_check=mask.describe(), free_measure=free_measure, free_hover_volume=free_hover)
+        region = replace(
+            region,
+            collision_free=mask.free,
+            collision_check=mask.describe(),
+            free_measure=free_measure,
+            free_hover_volume=free_hover,
+            free_occupancy=free_occ,
+            free_hover_counted=free_hocc,
+        )
     return region, why
 
 
