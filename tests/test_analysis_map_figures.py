@@ -17,7 +17,7 @@ import qprr
 from qprr.analysis import plots
 from qprr.analysis.capacity import capacity
 from qprr.analysis.cog import balance, cog_regions
-from qprr.analysis.voxels import display_occupancy, map_cell
+from qprr.analysis.voxels import MAP_GAP_FRACTION, display_occupancy, map_cell
 from qprr.analysis.workspace import workspace
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
@@ -53,7 +53,7 @@ def test_capacity_map_has_no_lattice_holes_on_a_3d_workspace(own_robot):
     assert len(maps) == 2
     for ax in maps:
         holes, cells = _image_holes(ax)
-        assert cells > 150 and holes <= 1e-3 * cells + 1, (ax.get_title(), holes, cells)
+        assert cells > 150 and holes <= MAP_GAP_FRACTION * cells, (ax.get_title(), holes, cells)
     # the drawn axes are B's: the end effector reaches z_B = -0.55 m (straight down) and never above the body's 0.2 m
     im = fig.axes[0].get_images()[0]
     x0, x1, z0, z1 = im.get_extent()
@@ -62,7 +62,7 @@ def test_capacity_map_has_no_lattice_holes_on_a_3d_workspace(own_robot):
     cells3 = res.map_limiting >= 0
     structure = ndimage.generate_binary_structure(3, 1).astype(int)
     nb = ndimage.convolve(cells3.astype(int), structure, mode="constant") - cells3
-    assert np.sum(cells3 & (nb == 0)) <= 1e-3 * cells3.sum() + 1
+    assert np.sum(cells3 & (nb == 0)) <= MAP_GAP_FRACTION * cells3.sum()
 
 
 def test_map_cell_is_coarser_only_where_the_samples_are_sparse():
@@ -104,7 +104,7 @@ def test_cog_figure_has_no_empty_panel_and_says_why_one_is_left_out(own_robot):
     assert "not drawn" in fig._supxlabel.get_text() and "no slider" in fig._supxlabel.get_text()
     offset = axes[1]
     holes, cells = _image_holes(offset)
-    assert cells > 100 and holes <= 1e-3 * cells + 1
+    assert cells > 100 and holes <= MAP_GAP_FRACTION * cells
     for a in axes:  # regions drawn as filled cells, not as scattered points
         assert a.get_images() and not any(len(c.get_offsets()) for c in a.collections)
 

@@ -62,17 +62,18 @@ def run_analyze(args: argparse.Namespace) -> int:
             f"measures no collision-free part; the maps that do: {', '.join(COLLISION_MAPS)} (leave --collision out here)",
         )
     platform = platform_from_args(args)
-    sizing = _sizing(args)
     progress = FractionProgress(quiet=args.quiet)  # stderr: a bar on a terminal, plain lines in a log
     t0 = time.perf_counter()
     try:
-        res, fig = _compute(args, platform, sizing, progress)
+        res, extra = _compute(args, platform, _sizing(args), progress)
     finally:
         progress.close()
+    seconds = time.perf_counter() - t0
+    fig = _report(args, res, extra, platform)
     if args.samples:
         print(f"  --samples {args.samples} given: --budget not used")
-    budget = f" (budget {args.budget:g} s: pilots and map, the figure not included)" if not args.samples else ""
-    print(f"{args.map} map of {platform.name}: {time.perf_counter() - t0:.2f} s{budget}")
+    budget = f" (budget {args.budget:g} s: pilots and map; the figure not included)" if not args.samples else ""
+    print(f"{args.map} map of {platform.name}: {seconds:.2f} s{budget}")
     if fig is not None:
         fig.savefig(args.plot, dpi=120)
         print(f"saved {args.plot}")
@@ -93,8 +94,7 @@ def _halved(sizing: dict) -> dict:
 
 
 def _compute(args: argparse.Namespace, platform, sizing: dict, progress: FractionProgress):
-    """The map ``args.map`` of ``platform`` (``sizing``: :func:`_sizing`), its summary printed; (result, figure or None)."""
-    from . import plots
+    """The map ``args.map`` of ``platform`` (``sizing``: :func:`_sizing`): (result, the balance map of ``cog`` or None)."""
     from .capacity import capacity
     from .cog import balance, cog_regions
     from .hover import hover
@@ -102,45 +102,45 @@ def _compute(args: argparse.Namespace, platform, sizing: dict, progress: Fractio
     from .singularity import singularity
     from .workspace import workspace
 
-    fig = None
     if args.map == "workspace":
-        res = workspace(platform, progress=progress, collision=COLLISION[args.collision], **sizing)
-        print(res.summary())
-        if args.plot:
-            fig = plots.workspace_figure(res)
-    elif args.map == "cog":
+        return workspace(platform, progress=progress, collision=COLLISION[args.collision], **sizing), None
+    if args.map == "cog":
         masses = args.payload if args.payload else [0.0, 0.5]
         res = cog_regions(platform, payload_masses=masses, progress=progress, **_halved(sizing))
-        bal = balance(platform, tol=args.tol, progress=progress, **_halved(sizing))
-        print(res.summary())
-        print(bal.summary())
-        if args.plot:
-            fig = plots.cog_figure(res, bal)
-    elif args.map == "singularity":
-        res = singularity(platform, task=args.task, progress=progress, **sizing)
-        print(res.summary())
-        ref = map_reference(args.map, platform, res)
-        if ref is not None:
-            print("\n".join(ref.lines))
-        if args.plot:
-            fig = plots.singularity_figure(res, ref.curves if ref is not None else None)
-    elif args.map == "hover":
+        return res, balance(platform, tol=args.tol, progress=progress, **_halved(sizing))
+    if args.map == "singularity":
+        return singularity(platform, task=args.task, progress=progress, **sizing), None
+    if args.map == "hover":
         masses = args.payload if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
-        res = hover(platform, payload_masses=masses, torque_reserve=args.reserve, progress=progress, collision=COLLISION[args.collision], **sizing)
-        print(res.summary())
-        if args.plot:
-            fig = _hover_figures(res, args.plot)
-    elif args.map == "capacity":
-        res = capacity(platform, torque_reserve=args.reserve, progress=progress, **sizing)
-        print(res.summary())
-        if args.plot:
-            fig = plots.capacity_figure(res)
-    else:
-        res = opspace_map(platform, progress=progress, **sizing)
-        print(res.summary())
-        if args.plot:
-            fig = plots.opspace_figure(res)
-    return res, fig
+        collision = COLLISION[args.collision]
+        return hover(platform, payload_masses=masses, torque_reserve=args.reserve, progress=progress, collision=collision, **sizing), None
+    if args.map == "capacity":
+        return capacity(platform, torque_reserve=args.reserve, progress=progress, **sizing), None
+    return opspace_map(platform, progress=progress, **sizing), None
+
+
+def _report(args: argparse.Namespace, res, extra, platform):
+    """Print the summary of the map ``res`` (and ``extra``: the balance map of ``cog``); its figure when ``--plot``."""
+    from . import plots
+
+    print(res.summary())
+    if extra is not None:
+        print(extra.summary())
+    ref = map_reference(args.map, platform, res) if args.map == "singularity" else None
+    if ref is not None:
+        print("\n".join(ref.lines))
+    if not args.plot:
+        return None
+    if args.map == "hover":
+        return _hover_figures(res, args.plot)
+    figures = {
+        "workspace": lambda: plots.workspace_figure(res),
+        "cog": lambda: plots.cog_figure(res, extra),
+        "singularity": lambda: plots.singularity_figure(res, ref.curves if ref is not None else None),
+        "capacity": lambda: plots.capacity_figure(res),
+        "opspace": lambda: plots.opspace_figure(res),
+    }
+    return figures[args.map]()
 
 
 def _hover_figures(res, path: str):

@@ -252,12 +252,14 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
         raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_arm_platform(platform)
     work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
-    return within_budget(o, lambda oo, pr: _hover(platform, oo, pr), work, check_progress(progress))
+    collisions = resolve_collision(platform, o.collision)  # built once, not per pilot (seconds for a 5-joint arm)
+    return within_budget(o, lambda oo, pr: _hover(platform, oo, collisions, pr), work, check_progress(progress))
 
 
-def _hover(platform: Platform, o: HoverOptions, progress) -> HoverResult:
-    """:func:`hover` at ``o.n_samples``."""
-    cmodel, note = resolve_collision(platform, o.collision)
+def _hover(platform: Platform, o: HoverOptions, collisions: tuple, progress) -> HoverResult:
+    """:func:`hover` at ``o.n_samples``; ``collisions``: (collision model or None, note) of
+    :func:`qprr.analysis._common.resolve_collision`."""
+    cmodel, note = collisions
     setup = _Setup(
         platform,
         np.array(o.payload_masses),

@@ -203,7 +203,7 @@ def workspace_figure(result: WorkspaceResult):
     """
     n = len(result.regions)
     if n == 1:
-        fig = new_figure((16, 5.8))
+        fig = new_figure((16, 6.4))  # room for two legend rows (a collision-free part) under the panels
         plot_workspace(result, fig.add_subplot(1, 3, 1), [0], title=f"(a) {result.regions[0].label}, in B")
         plot_hover_workspace(result, fig.add_subplot(1, 3, 2))
         plot_hover_solid(result, fig.add_subplot(1, 3, 3, projection="3d"), 0)

@@ -272,15 +272,17 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     variants = default_variants(platform) if o.variants is None else o.variants
     sets = [dict(base_locked)] + [{**base_locked, **check_locked(platform, v)} for v in variants]
     work = grid_work(platform, sets, o.ranges)
-    return within_budget(o, lambda oo, pr: _workspace(platform, oo, sets, pr), work, check_progress(progress))
+    collisions = resolve_collision(platform, o.collision)  # built once, not per pilot (seconds for a 5-joint arm)
+    return within_budget(o, lambda oo, pr: _workspace(platform, oo, sets, collisions, pr), work, check_progress(progress))
 
 
-def _workspace(platform: Platform, o: WorkspaceOptions, sets: list[dict], progress) -> WorkspaceResult:
-    """:func:`workspace` at ``o.n_samples`` per region over the locked ``sets`` (the first: every joint free)."""
+def _workspace(platform: Platform, o: WorkspaceOptions, sets: list[dict], collisions: tuple, progress) -> WorkspaceResult:
+    """:func:`workspace` at ``o.n_samples`` per region over the locked ``sets`` (the first: every joint free);
+    ``collisions``: (collision model or None, note) of :func:`qprr.analysis._common.resolve_collision`."""
     n_samples, ranges, frame, hover, n_shifts, seed = o.n_samples, o.ranges, o.frame, o.hover, o.n_shifts, o.seed
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     chain = ArmChain(platform)
-    cmodel, note = resolve_collision(platform, o.collision)
+    cmodel, note = collisions
     regions, reasons = [], []
     for i, lk in enumerate(sets):
         grid = make_grid(platform, n_samples, lk, ranges)
