@@ -150,7 +150,7 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
     ax.set_xlabel("distance to the yaw axis (signed) [m]")
     ax.set_ylabel("z (world, from the base) [m]")
     ax.set_aspect("equal")
-    legend(ax, ncol=2 if len(ax.get_legend_handles_labels()[0]) > 2 else 1)  # four entries with collisions: two rows
+    _legend_below(ax)
     ax.set_title("hover workspace: section through the yaw axis", fontsize=10)
     return ax
 
@@ -188,7 +188,7 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    ax.set_box_aspect(None, zoom=0.88)  # room for the z label inside the panel
+    ax.set_box_aspect(None, zoom=0.82)  # room for the z label and the tick labels inside the panel
     tidy_3d(ax)
     ax.set_title(f"hover workspace, {plain(r.label)}:\n{measure_text(r.hover_volume)}", fontsize=9)
     return ax
@@ -209,7 +209,7 @@ def workspace_figure(result: WorkspaceResult):
         plot_hover_solid(result, fig.add_subplot(1, 3, 3, projection="3d"), 0)
         fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3))")
         return fig
-    fig = new_figure((14, 9))
+    fig = new_figure((14, 10))  # room for the legends' collision-free rows
     plot_workspace(result, fig.add_subplot(2, 3, 1), [0], title=f"(a) {result.regions[0].label}")
     plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
     ax3 = fig.add_subplot(2, 3, 3)
