@@ -929,6 +929,8 @@ ALLOWED: dict[tuple[str, str, str], str] = {
     "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
     ("qprr.analysis.workspace.WorkspaceOptions", "frame", "*"): "a frame is a name or id of a platform: workspace() "
     "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
+    ("qprr.analysis.opspace.OpSpaceOptions", "frame", "*"): "a frame is a name or id of a platform: opspace_map() "
+    "resolves it against the platform it maps (an unknown one is refused there, naming the frames)",
     ("qprr.validation.as_file", "x", "*file"): "as_file checks that the file exists; its content is for the reader to check",
     ("qprr.validation.as_array", "x", "*"): "as_array converts any shape; NaN and inf pass unless finite=True is asked",
     ("qprr.charts.wrap_angle", "a", "NaN entry"): "elementwise on any array: NaN stays NaN (logs of diverged runs), like numpy's ufuncs",

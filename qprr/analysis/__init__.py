@@ -23,21 +23,25 @@ Each map takes ``(platform, ...)`` and returns a result dataclass with a ``statu
 ``reason`` and a ``summary()``; figures are in :mod:`qprr.analysis.plots`.  The maps run on
 :class:`~qprr.analysis.chain.ArmChain` (batched kinematics and statics of the arm, checked
 against Pinocchio to round-off) over joint grids (:mod:`qprr.analysis._common`); measures
-come from :mod:`qprr.analysis.voxels`.  Command line: ``python -m qprr analyze MAP``.
+come from :mod:`qprr.analysis.voxels`.  Every map's options take ``budget`` (seconds of wall time): the sample
+count is then chosen from timed pilot runs (:mod:`qprr.analysis.budget`; the command line's default,
+:data:`DEFAULT_BUDGET`).  Command line: ``python -m qprr analyze MAP``.
 """
 
 from ._common import JointGrid, MapStatus, make_grid
+from .budget import DEFAULT_BUDGET, SampleChoice
 from .capacity import LIMITS, CapacityOptions, CapacityResult, capacity
 from .chain import ArmChain, Statics
 from .cog import BalanceOptions, CoGBalanceMap, CoGOptions, CoGResult, balance, cog_regions
 from .hover import HoverOptions, HoverResult, PayloadLimits, hover
-from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, opspace_map, opspace_model, opspace_model_xi
+from .opspace import OpSpaceMap, OpSpaceModel, OpSpaceModelXi, OpSpaceOptions, opspace_map, opspace_model, opspace_model_xi
 from .singularity import SingularityOptions, SingularityResult, singularity
 from .voxels import MeasureEstimate, estimate_measure
 from .workspace import WorkspaceOptions, WorkspaceResult, reachable, workspace
 from .wrenchset import WrenchSet, wrench_set
 
 __all__ = [
+    "DEFAULT_BUDGET",
     "LIMITS",
     "ArmChain",
     "BalanceOptions",
@@ -53,7 +57,9 @@ __all__ = [
     "OpSpaceMap",
     "OpSpaceModel",
     "OpSpaceModelXi",
+    "OpSpaceOptions",
     "PayloadLimits",
+    "SampleChoice",
     "SingularityOptions",
     "SingularityResult",
     "Statics",

@@ -269,6 +269,18 @@ def make_grid(
     return JointGrid(platform.arm_names, tuple(axes), tuple(locked), tuple(j.kind for j in platform.arm))
 
 
+def fraction_error(mask: np.ndarray, shape: tuple[int, ...]) -> float:
+    """Error bar of the share of a grid's configurations where ``mask`` (n,) holds: |share on the grid - share on the
+    grid with twice the step (every other value along each axis of 3 values or more, the same ends)|, the
+    discretisation error of the finer share when it converges at first order in the step (a set's boundary cuts
+    the cells); 0 on a grid that has no coarser one."""
+    m = np.asarray(mask, dtype=bool).reshape(shape)
+    coarse = m[tuple(slice(None, None, 2) if n >= 3 else slice(None) for n in shape)]
+    if coarse.size == m.size:
+        return 0.0
+    return float(abs(m.mean() - coarse.mean()))
+
+
 # ------------------------------------------------------------------------------ progress
 ProgressFn = Callable[[float, str], None]
 

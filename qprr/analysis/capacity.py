@@ -23,7 +23,7 @@ slider - chooses the one that balances the CoG).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -38,15 +38,21 @@ from ._common import (
     best_per_cell,
     check_arm_platform,
     check_int,
+    check_locked,
     check_pos,
     check_progress,
-    default_map_cell,
     make_grid,
     make_payload_mount,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 from .hover import check_reserve, payload_limits
+from .voxels import map_cell
 from .wrenchset import wrench_set
+
+MAP_CELLS = 120
+"""Cells across the largest extent of the capacity map, unless the samples are too sparse for them
+(:func:`qprr.analysis.voxels.map_cell`: then coarser cells, never empty ones between samples)."""
 
 LIMITS = ("thrust", "attitude", "effort", "infeasible")
 """Limiting factors, in the order of the integer codes of :attr:`CapacityResult.limiting`."""
@@ -87,6 +93,7 @@ class CapacityResult:
     worst_reachable: float
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def fractions(self) -> dict[str, float]:
         """Share of the configurations limited by each factor."""
@@ -115,6 +122,8 @@ class CapacityResult:
             lines.append("  effort-limited configurations by joint: " + ", ".join(f"{k} {v}" for k, v in per.items()))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -126,7 +135,9 @@ class CapacityOptions:
     ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace`; ``torque_reserve``: torque [N m]
     kept available about x, y, z of B (one value or three); ``thrust_tol``: relative gap below which
     the rotors' limit counts as the collective thrust's; ``cell``: workspace cell side [m] (default:
-    the largest extent / 120).
+    the largest extent / :data:`MAP_CELLS`, coarser when the samples would leave empty cells between them,
+    :func:`qprr.analysis.voxels.map_cell`); ``budget``, ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from
+    pilot runs timed with ``clock`` (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
     n_samples: int = 200_000
@@ -136,9 +147,13 @@ class CapacityOptions:
     torque_reserve: object = 0.0
     thrust_tol: float = 0.01
     cell: float | None = None
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
         check_int("n_samples", self.n_samples, 2)
+        check_budget(self.budget)
+        check_clock(self.clock)
         as_vector(self.payload_offset, 3, "payload_offset")
         check_reserve(self.torque_reserve)
         check_pos("thrust_tol", self.thrust_tol, strict=False)
@@ -157,13 +172,17 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
     if not isinstance(o, CapacityOptions):
         raise InputError(f"options must be a CapacityOptions, got {type(o).__name__}")
     o = replace(o, **settings) if settings else o
-    n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
     check_arm_platform(platform)
-    check_int("n_samples", n_samples, 2)
+    work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
+    return within_budget(o, lambda oo, pr: _capacity(platform, oo, pr), work, check_progress(progress))
+
+
+def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResult:
+    """:func:`capacity` at ``o.n_samples``."""
+    n_samples, payload_offset, locked, ranges, cell = o.n_samples, o.payload_offset, o.locked, o.ranges, o.cell
     torque_reserve = check_reserve(o.torque_reserve)
     thrust_tol = check_pos("thrust_tol", o.thrust_tol, strict=False)
     payload = make_payload_mount(platform, payload_offset)
-    progress = check_progress(progress)
     grid = make_grid(platform, n_samples, locked, ranges)
     W = wrench_set(platform)
     chain = ArmChain(platform)
@@ -188,7 +207,7 @@ def capacity(platform: Platform, options: CapacityOptions | None = None, *, prog
     cap = np.clip(cap, 0.0, None)
     origin, basis = affine_span(ee)
     coords = (ee - origin) @ basis.T
-    h = default_map_cell(coords) if cell is None else check_pos("cell", cell)
+    h = map_cell(coords, MAP_CELLS) if cell is None else check_pos("cell", cell)
     best_map, arg, morigin = best_per_cell(coords, np.where(lim == 3, -1.0, cap), h)
     map_lim = np.where(arg >= 0, lim[np.clip(arg, 0, None)], -1)
     best_map = np.where(arg >= 0, cap[np.clip(arg, 0, None)], np.nan)

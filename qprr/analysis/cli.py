@@ -16,13 +16,13 @@ import time
 from ..platforms import DEFAULT_PLATFORM
 from ..progress import FractionProgress
 from ._common import MapReference
+from .budget import DEFAULT_BUDGET
 
 MAPS = ("workspace", "cog", "singularity", "hover", "capacity", "opspace")
 COLLISION = {"auto": None, "on": True, "off": False}
 """``--collision`` to the maps' ``collision`` option (auto: check when the platform has a collision model)."""
 COLLISION_MAPS = ("workspace", "hover")
 """The maps that measure a collision-free part (their ``collision`` option); the others sample the joint box only."""
-DEFAULT_SAMPLES = {"workspace": 1_000_000, "cog": 200_000, "singularity": 200_000, "hover": 100_000, "capacity": 200_000, "opspace": 10_000}
 
 
 def resolve_platform(name: str):
@@ -62,23 +62,39 @@ def run_analyze(args: argparse.Namespace) -> int:
             f"measures no collision-free part; the maps that do: {', '.join(COLLISION_MAPS)} (leave --collision out here)",
         )
     platform = platform_from_args(args)
-    n = args.samples or DEFAULT_SAMPLES[args.map]
     progress = FractionProgress(quiet=args.quiet)  # stderr: a bar on a terminal, plain lines in a log
     t0 = time.perf_counter()
     try:
-        res, fig = _compute(args, platform, n, progress)
+        res, extra = _compute(args, platform, _sizing(args), progress)
     finally:
         progress.close()
-    print(f"{args.map} map of {platform.name}: {time.perf_counter() - t0:.2f} s")
+    seconds = time.perf_counter() - t0
+    fig = _report(args, res, extra, platform)
+    if args.samples:
+        print(f"  --samples {args.samples} given: --budget not used")
+    budget = f" (budget {args.budget:g} s: pilots and map; the figure not included)" if not args.samples else ""
+    print(f"{args.map} map of {platform.name}: {seconds:.2f} s{budget}")
     if fig is not None:
         fig.savefig(args.plot, dpi=120)
         print(f"saved {args.plot}")
     return 0
 
 
-def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgress):
-    """The map ``args.map`` of ``platform`` over ``n`` samples, its summary printed; (result, figure or None)."""
-    from . import plots
+def _sizing(args: argparse.Namespace) -> dict:
+    """The sample-count settings of every map's options: ``--samples N`` (no budget), else ``--budget`` seconds
+    timed with :func:`time.perf_counter` (the one clock the maps read, passed from here)."""
+    if args.samples:
+        return {"n_samples": args.samples, "budget": None}
+    return {"budget": args.budget, "clock": time.perf_counter}
+
+
+def _halved(sizing: dict) -> dict:
+    """``sizing`` for one of two maps sharing a budget (the CoG regions and the balance map)."""
+    return {**sizing, "budget": sizing["budget"] / 2.0} if sizing["budget"] is not None else sizing
+
+
+def _compute(args: argparse.Namespace, platform, sizing: dict, progress: FractionProgress):
+    """The map ``args.map`` of ``platform`` (``sizing``: :func:`_sizing`): (result, the balance map of ``cog`` or None)."""
     from .capacity import capacity
     from .cog import balance, cog_regions
     from .hover import hover
@@ -86,50 +102,57 @@ def _compute(args: argparse.Namespace, platform, n: int, progress: FractionProgr
     from .singularity import singularity
     from .workspace import workspace
 
-    fig = None
     if args.map == "workspace":
-        res = workspace(platform, n_samples=n, progress=progress, collision=COLLISION[args.collision])
-        print(res.summary())
-        if args.plot:
-            fig = plots.workspace_figure(res)
-    elif args.map == "cog":
+        return workspace(platform, progress=progress, collision=COLLISION[args.collision], **sizing), None
+    if args.map == "cog":
         masses = args.payload if args.payload else [0.0, 0.5]
-        res = cog_regions(platform, n_samples=n, payload_masses=masses, progress=progress)
-        bal = balance(platform, n_samples=n, tol=args.tol, progress=progress)
-        print(res.summary())
-        print(bal.summary())
-        if args.plot:
-            fig = plots.cog_figure(res, bal)
-    elif args.map == "singularity":
-        res = singularity(platform, n_samples=n, task=args.task, progress=progress)
-        print(res.summary())
-        ref = map_reference(args.map, platform, res)
-        if ref is not None:
-            print("\n".join(ref.lines))
-        if args.plot:
-            fig = plots.singularity_figure(res, ref.curves if ref is not None else None)
-    elif args.map == "hover":
+        res = cog_regions(platform, payload_masses=masses, progress=progress, **_halved(sizing))
+        return res, balance(platform, tol=args.tol, progress=progress, **_halved(sizing))
+    if args.map == "singularity":
+        return singularity(platform, task=args.task, progress=progress, **sizing), None
+    if args.map == "hover":
         masses = args.payload if args.payload else [0.0, 0.25, 0.5, 1.0, 1.5, 2.0]
-        res = hover(platform, n_samples=n, payload_masses=masses, torque_reserve=args.reserve, progress=progress, collision=COLLISION[args.collision])
-        print(res.summary())
-        if args.plot:
-            fig = plots.hover_figure(res)
-            if res.wrench_set.rank == 6:
-                stem = args.plot.rsplit(".", 1)
-                path = f"{stem[0]}-wrench-set.{stem[1] if len(stem) > 1 else 'png'}"
-                plots.wrench_set_figure(res).savefig(path, dpi=120)
-                print(f"saved {path}")
-    elif args.map == "capacity":
-        res = capacity(platform, n_samples=n, torque_reserve=args.reserve, progress=progress)
-        print(res.summary())
-        if args.plot:
-            fig = plots.capacity_figure(res)
-    else:
-        res = opspace_map(platform, n_samples=n, progress=progress)
-        print(res.summary())
-        if args.plot:
-            fig = plots.opspace_figure(res)
-    return res, fig
+        collision = COLLISION[args.collision]
+        return hover(platform, payload_masses=masses, torque_reserve=args.reserve, progress=progress, collision=collision, **sizing), None
+    if args.map == "capacity":
+        return capacity(platform, torque_reserve=args.reserve, progress=progress, **sizing), None
+    return opspace_map(platform, progress=progress, **sizing), None
+
+
+def _report(args: argparse.Namespace, res, extra, platform):
+    """Print the summary of the map ``res`` (and ``extra``: the balance map of ``cog``); its figure when ``--plot``."""
+    from . import plots
+
+    print(res.summary())
+    if extra is not None:
+        print(extra.summary())
+    ref = map_reference(args.map, platform, res) if args.map == "singularity" else None
+    if ref is not None:
+        print("\n".join(ref.lines))
+    if not args.plot:
+        return None
+    if args.map == "hover":
+        return _hover_figures(res, args.plot)
+    figures = {
+        "workspace": lambda: plots.workspace_figure(res),
+        "cog": lambda: plots.cog_figure(res, extra),
+        "singularity": lambda: plots.singularity_figure(res, ref.curves if ref is not None else None),
+        "capacity": lambda: plots.capacity_figure(res),
+        "opspace": lambda: plots.opspace_figure(res),
+    }
+    return figures[args.map]()
+
+
+def _hover_figures(res, path: str):
+    """The hover figure; the wrench-set sections saved beside ``path`` for a fully actuated platform."""
+    from . import plots
+
+    if res.wrench_set.rank == 6:
+        stem = path.rsplit(".", 1)
+        side = f"{stem[0]}-wrench-set.{stem[1] if len(stem) > 1 else 'png'}"
+        plots.wrench_set_figure(res).savefig(side, dpi=120)
+        print(f"saved {side}")
+    return plots.hover_figure(res)
 
 
 def register_analysis_cli(sub) -> None:
@@ -148,7 +171,16 @@ def register_analysis_cli(sub) -> None:
     p.add_argument("map", choices=MAPS, help="which map")
     add_platform_options(p)
     p.add_argument("--plot", default=None, metavar="FILE.png", help="save the figure")
-    p.add_argument("--samples", type=integer(lo=1), default=None, help="joint-grid size (default depends on the map)")
+    p.add_argument(
+        "--budget",
+        type=real(positive=True, unit="s"),
+        default=DEFAULT_BUDGET,
+        metavar="SECONDS",
+        help=f"wall time the map may take (default {DEFAULT_BUDGET:g} s): pilot batches time the map on this platform and "
+        "machine, and the joint-grid size (values per joint from the arm's joint count) is the largest that fits; the "
+        "summary says the count chosen and the error bars reached",
+    )
+    p.add_argument("--samples", type=integer(lo=1), default=None, help="joint-grid size, instead of the budget (the budget is then not used)")
     p.add_argument("--payload", type=reals(nonnegative=True, unit="kg"), default=None, help="payload masses in kg, comma-separated (cog, hover)")
     p.add_argument("--reserve", type=real(nonnegative=True, unit="N m"), default=0.0, help="torque reserve about every axis [N m] (hover, capacity)")
     p.add_argument("--task", default="pose", choices=("pose", "position"), help="task rows of the singularity map")

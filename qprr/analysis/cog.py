@@ -29,7 +29,7 @@ axis.  For the Q-PRR, r* = -((m2/2 + m3) d2 s2 + m3 d3 s23 / 2) / (m1 + m2 + m3)
 from __future__ import annotations
 
 import itertools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -51,6 +51,7 @@ from ._common import (
     make_grid,
     make_payload_mount,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 from .voxels import MeasureEstimate, estimate_measure
 from .workspace import Ratio, default_variants
@@ -92,6 +93,7 @@ class CoGResult:
     regions: dict
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         lines = [f"CoG regions of {self.platform_name}"]
@@ -109,6 +111,8 @@ class CoGResult:
                 lines.append(f"  payload {self.masses[k]:g} kg: region [0] / [1] = {g.value:.4f} +- {g.error:.2g}")
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -133,7 +137,9 @@ class CoGOptions:
     the free arm (default: each prismatic joint locked at 0); ``locked``, ``ranges``: as in
     :func:`qprr.analysis.workspace`; ``pitch``: (low, high) base pitch [rad]: map
     p_c - p_b = R_y(theta) p_cm in world-aligned axes, Thesis (6.29) with (6.31), over ``n_pitch``
-    pitches (None: the CoG in B); ``n_shifts``: counting shifts of the measure estimator.
+    pitches (None: the CoG in B); ``n_shifts``: counting shifts of the measure estimator; ``budget``, ``clock``: wall
+    time [s] the map may take, ``n_samples`` then chosen from pilot runs timed with ``clock``
+    (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
     n_samples: int = 200_000
@@ -145,9 +151,13 @@ class CoGOptions:
     pitch: tuple[float, float] | None = None
     n_pitch: int = 9
     n_shifts: int = 4
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
         check_int("n_samples", self.n_samples, 8)
+        check_budget(self.budget)
+        check_clock(self.clock)
         check_masses(self.payload_masses)
         as_vector(self.payload_offset, 3, "payload_offset")
         check_int("n_pitch", self.n_pitch, 2)
@@ -195,18 +205,20 @@ def cog_regions(platform: Platform, options: CoGOptions | None = None, *, progre
     """
     o = _settings(CoGOptions, options, settings)
     check_arm_platform(platform)
-    check_int("n_samples", o.n_samples, 8)
-    masses = check_masses(o.payload_masses)
-    check_int("n_shifts", o.n_shifts, 2)
-    check_int("n_pitch", o.n_pitch, 2)
-    payload = make_payload_mount(platform, o.payload_offset)
     base = check_locked(platform, o.locked)
     variants = default_variants(platform) if o.variants is None else [check_locked(platform, v) for v in o.variants]
-    progress = check_progress(progress)
+    sets = [base] + [{**base, **v} for v in variants]
+    work = grid_work(platform, sets, o.ranges)
+    return within_budget(o, lambda oo, pr: _cog_regions(platform, oo, sets, pr), work, check_progress(progress))
+
+
+def _cog_regions(platform: Platform, o: CoGOptions, sets: list[dict], progress) -> CoGResult:
+    """:func:`cog_regions` at ``o.n_samples`` per locked set of ``sets``."""
+    masses = check_masses(o.payload_masses)
+    payload = make_payload_mount(platform, o.payload_offset)
     pitches = _pitches(o.pitch, o.n_pitch)
     chain = ArmChain(platform)
     axis = (platform.thrust_axis[0], np.array(platform.thrust_axis_basis))
-    sets = [base] + [{**base, **v} for v in variants]
     regions, reasons = {}, []
     for v, lk in enumerate(sets):
         grid = make_grid(platform, o.n_samples, lk, o.ranges)
@@ -257,6 +269,7 @@ class CoGBalanceMap:
     fraction_workspace: Ratio | None
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         what = f"slider {self.slider!r}" if self.slider else "no slider: |offset| over the joint grid"
@@ -271,6 +284,8 @@ class CoGBalanceMap:
             )
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -284,7 +299,9 @@ class BalanceOptions:
     ``payload_mass``, ``payload_offset``: a point payload [kg] at [m] in the end-effector frame.
     ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace` (the slider may not be locked).
     ``tol``: offset [m] that counts as balanced (the thesis's epsilon of (3.79); default 1e-6 m:
-    exactly on the axis up to round-off).  ``n_shifts``: counting shifts of the measure estimator.
+    exactly on the axis up to round-off).  ``n_shifts``: counting shifts of the measure estimator.  ``budget``,
+    ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from pilot runs timed with ``clock``
+    (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
     slider: str | None = "auto"
@@ -295,11 +312,15 @@ class BalanceOptions:
     ranges: Mapping[str, tuple[float, float]] | None = None
     tol: float = 1e-6
     n_shifts: int = 4
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
         if self.slider is not None and not isinstance(self.slider, str):
             raise InputError(f"slider must be a prismatic joint's name, 'auto' or None, got {self.slider!r}")
         check_int("n_samples", self.n_samples, 8)
+        check_budget(self.budget)
+        check_clock(self.clock)
         check_masses([self.payload_mass], "payload_mass")
         as_vector(self.payload_offset, 3, "payload_offset")
         check_pos("tol", self.tol)
@@ -489,14 +510,24 @@ def balance(platform: Platform, options: BalanceOptions | None = None, *, progre
     """
     o = _settings(BalanceOptions, options, settings)
     check_arm_platform(platform)
-    check_int("n_samples", o.n_samples, 8)
-    check_int("n_shifts", o.n_shifts, 2)
+    base = check_locked(platform, o.locked)
+    slider = _slider_of(platform, o.slider, base)
+    sets = [base] if slider is None else [base, {**base, slider: _slider_range(platform, slider, o.ranges)[0]}]
+    work = grid_work(platform, sets, o.ranges)
+    return within_budget(o, lambda oo, pr: _balance(platform, oo, base, slider, pr), work, check_progress(progress))
+
+
+def _slider_range(platform: Platform, slider: str, ranges) -> tuple[float, float]:
+    """(low, high) [m] of the balancing slider: its limits or its entry of ``ranges``."""
+    js = platform.arm[platform.arm_names.index(slider)]
+    return (float(js.lower), float(js.upper)) if ranges is None or slider not in ranges else tuple(float(x) for x in ranges[slider])
+
+
+def _balance(platform: Platform, o: BalanceOptions, base: dict, slider: str | None, progress) -> CoGBalanceMap:
+    """:func:`balance` at ``o.n_samples`` (``base``: the locked joints; ``slider``: the balancing joint or None)."""
     m = float(check_masses([o.payload_mass], "payload_mass")[0])
     payload = make_payload_mount(platform, o.payload_offset)
     tol = check_pos("tol", o.tol)
-    progress = check_progress(progress)
-    base = check_locked(platform, o.locked)
-    slider = _slider_of(platform, o.slider, base)
     chain = ArmChain(platform)
     point, _ = platform.thrust_axis
     load = _Loading(chain, payload, m, point, np.array(platform.thrust_axis_basis))
@@ -505,8 +536,7 @@ def balance(platform: Platform, options: BalanceOptions | None = None, *, progre
         bmap = _offset_map(platform, load, ws_grid)
     else:
         k = platform.arm_names.index(slider)
-        js = platform.arm[k]
-        lo_r, hi_r = (js.lower, js.upper) if o.ranges is None or slider not in o.ranges else o.ranges[slider]
+        lo_r, hi_r = _slider_range(platform, slider, o.ranges)
         grid = make_grid(platform, o.n_samples, {**base, slider: float(lo_r)}, o.ranges)
         bmap = _slider_map(platform, load, grid, k, (lo_r, hi_r), progress)
     ok = bmap.offset <= tol

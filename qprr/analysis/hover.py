@@ -32,7 +32,7 @@ them onto the workspace.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -46,13 +46,16 @@ from ._common import (
     MapStatus,
     check_arm_platform,
     check_int,
+    check_locked,
     check_masses,
     check_progress,
     collision_mask,
+    fraction_error,
     make_grid,
     make_payload_mount,
     resolve_collision,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain, Statics
 from .wrenchset import WrenchSet, wrench_set
 
@@ -162,6 +165,7 @@ class HoverResult:
     collision_free: np.ndarray | None = None
     feasible_free_fraction: np.ndarray | None = None
     collision_note: str = ""
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         lines = [
@@ -169,8 +173,9 @@ class HoverResult:
             f"{self.wrench_set.rank} ({self.wrench_set.normals.shape[0]} facets)"
         ]
         for k, m in enumerate(self.masses):
+            err = 100 * fraction_error(self.feasible[k], self.grid.shape)
             lines.append(
-                f"  payload {m:g} kg: hover-feasible at {100 * self.feasible_fraction[k]:.2f}% of the configurations "
+                f"  payload {m:g} kg: hover-feasible at {100 * self.feasible_fraction[k]:.2f} +- {err:.2g}% of the configurations "
                 f"(rotors {100 * self.rotor_ok[k].mean():.2f}%, efforts {100 * self.effort_ok[k].mean():.2f}%); "
                 f"min thrust margin {self.min_thrust_margin[k]:.4g} N at q_arm = {np.round(self.worst_q[k], 4).tolist()}; "
                 f"min roll/pitch/yaw authority {np.round(self.authority[k].min(axis=0), 4).tolist()} N m"
@@ -188,8 +193,11 @@ class HoverResult:
             f"  payload envelope (zero reserve): {np.nanmax(np.where(ok, pl, np.nan)):.4g} kg at best, "
             f"{np.nanmin(np.where(ok, pl, np.nan)):.4g} kg at worst; collective-thrust limit {self.payload.collective:.4g} kg"
         )
+        lines.append("  error bars: |share on the grid - share on the grid with twice the step|")
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -204,9 +212,13 @@ class HoverOptions:
     ranges: Mapping[str, tuple[float, float]] | None = None
     torque_reserve: object = 0.0
     collision: bool | None = None
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings are checked however the options are built
         object.__setattr__(self, "n_samples", check_int("n_samples", self.n_samples, 2))
+        object.__setattr__(self, "budget", check_budget(self.budget))
+        check_clock(self.clock)
         object.__setattr__(self, "payload_masses", tuple(float(m) for m in check_masses(self.payload_masses)))
         object.__setattr__(self, "payload_offset", tuple(float(x) for x in as_vector(self.payload_offset, 3, "payload_offset")))
         check_reserve(self.torque_reserve)
@@ -232,12 +244,22 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
     progress : None, True (stderr) or a callable (fraction, message).
     collision : flag the self-colliding configurations (None: when the platform has a collision model,
         :func:`qprr.analysis._common.resolve_collision`; True: required; False: off).
+    budget, clock : wall time [s] the map may take: ``n_samples`` is then chosen from pilot runs timed with
+        ``clock`` (default :func:`time.perf_counter`), :mod:`qprr.analysis.budget`; None: ``n_samples`` is used.
     """
     o = replace(options or HoverOptions(), **settings) if settings else (options or HoverOptions())
     if not isinstance(o, HoverOptions):
         raise InputError(f"options must be a HoverOptions, got {type(o).__name__}")
     check_arm_platform(platform)
-    cmodel, note = resolve_collision(platform, o.collision)
+    work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
+    collisions = resolve_collision(platform, o.collision)  # built once, not per pilot (seconds for a 5-joint arm)
+    return within_budget(o, lambda oo, pr: _hover(platform, oo, collisions, pr), work, check_progress(progress))
+
+
+def _hover(platform: Platform, o: HoverOptions, collisions: tuple, progress) -> HoverResult:
+    """:func:`hover` at ``o.n_samples``; ``collisions``: (collision model or None, note) of
+    :func:`qprr.analysis._common.resolve_collision`."""
+    cmodel, note = collisions
     setup = _Setup(
         platform,
         np.array(o.payload_masses),
@@ -248,7 +270,6 @@ def hover(platform: Platform, options: HoverOptions | None = None, *, progress=N
         np.array(platform.arm_effort_limits),
         check_reserve(o.torque_reserve),
     )
-    progress = check_progress(progress)
     grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
     n, masses, W = grid.size, setup.masses, setup.W
     arr = _Arrays.empty(n, len(masses), platform.n_rotors, platform.n_arm, W.rank == 6)

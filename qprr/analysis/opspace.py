@@ -34,19 +34,19 @@ inertia felt pushing it) and the condition number of Lambda.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import solve_triangular
 
 from .. import charts as ch
 from ..errors import InputError
 from ..kinematics import check_q
 from ..model import Platform, check_data
 from ..validation import as_vector
-from ._common import JointGrid, MapStatus, check_arm_platform, check_int, check_progress, make_grid
+from ._common import JointGrid, MapStatus, check_arm_platform, check_int, check_locked, check_progress, make_grid
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 
 
 @dataclass(frozen=True)
@@ -290,31 +290,61 @@ class OpSpaceMap:
     gravity_force: np.ndarray
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         lo, hi = self.mass_xyz.min(axis=0), self.mass_xyz.max(axis=0)
+        more = f"\n  {self.sampling.describe()}" if self.sampling is not None else ""
         return (
             f"operational space of {self.platform_name} ({self.grid.size} configurations): effective mass along x, y, z in "
             f"[{lo[0]:.4g}, {hi[0]:.4g}], [{lo[1]:.4g}, {hi[1]:.4g}], [{lo[2]:.4g}, {hi[2]:.4g}] kg; "
-            f"condition number of Lambda in [{self.condition.min():.4g}, {self.condition.max():.4g}]"
+            f"condition number of Lambda in [{self.condition.min():.4g}, {self.condition.max():.4g}]{more}"
         )
 
 
-def opspace_map(
-    platform: Platform,
-    *,
-    n_samples: int = 20_000,
-    locked: Mapping[str, float] | None = None,
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    frame=None,
-    progress=None,
-) -> OpSpaceMap:
+@dataclass(frozen=True)
+class OpSpaceOptions:
+    """Settings of :func:`opspace_map` (each can also be given to it as a keyword).
+
+    ``n_samples``: joint-grid size; ``locked``, ``ranges``: as in :func:`qprr.analysis.workspace`; ``frame``: the
+    frame mapped (name or id; default the end effector); ``budget``, ``clock``: wall time [s] the map may take,
+    ``n_samples`` then chosen from pilot runs timed with ``clock`` (:mod:`qprr.analysis.budget`; None: ``n_samples``
+    is used)."""
+
+    n_samples: int = 20_000
+    locked: Mapping[str, float] | None = None
+    ranges: Mapping[str, tuple[float, float]] | None = None
+    frame: object = None
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
+
+    def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
+        check_int("n_samples", self.n_samples, 2)
+        check_budget(self.budget)
+        check_clock(self.clock)
+
+
+def opspace_map(platform: Platform, options: OpSpaceOptions | None = None, *, progress=None, **settings) -> OpSpaceMap:
     """Effective mass and conditioning of the operational-space inertia over the arm's joint grid (one Pinocchio
-    evaluation per configuration: CRBA, the frame Jacobian and a Cholesky solve)."""
+    evaluation per configuration: CRBA, the frame Jacobian and a Cholesky solve).
+
+    ``options``: :class:`OpSpaceOptions`, and/or its fields as keywords (``opspace_map(p, n_samples=300)``; an unknown
+    keyword is a TypeError); ``progress``: None, True (stderr) or a callable (fraction, message)."""
+    o = options if options is not None else OpSpaceOptions()
+    if not isinstance(o, OpSpaceOptions):
+        raise InputError(f"options must be an OpSpaceOptions, got {type(o).__name__}")
+    o = replace(o, **settings) if settings else o
     check_arm_platform(platform)
-    check_int("n_samples", n_samples, 2)
-    progress = check_progress(progress)
-    grid = make_grid(platform, n_samples, locked, ranges)
+    work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
+    return within_budget(o, lambda oo, pr: _opspace_map(platform, oo, pr), work, check_progress(progress))
+
+
+def _opspace_map(platform: Platform, o: OpSpaceOptions, progress) -> OpSpaceMap:
+    """:func:`opspace_map` at ``o.n_samples``.  The triangular solves are numpy's: scipy's ``solve_triangular`` on
+    these 6-10 column matrices took 10-20 ms a call on a loaded 2-core machine (its BLAS threads waiting for a core),
+    numpy's solve about 0.1 ms."""
+    grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
+    frame = o.frame
     model = platform.model
     data = platform.data()
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
@@ -328,7 +358,7 @@ def opspace_map(
             M = np.triu(M) + np.triu(M, 1).T
             J = pin.computeFrameJacobian(model, data, q, fid, pin.LOCAL_WORLD_ALIGNED)
             c = np.linalg.cholesky(M)
-            X = solve_triangular(c, J.T, lower=True)  # M = c c^T: J M^-1 J^T = X^T X
+            X = np.linalg.solve(c, J.T)  # M = c c^T (c lower triangular): J M^-1 J^T = X^T X
             Li = X.T @ X
             k = start + i
             ee[k] = data.oMf[fid].translation
@@ -337,7 +367,7 @@ def opspace_map(
             w = np.linalg.eigvalsh(Li)
             cond[k] = w[-1] / w[0]
             g = pin.computeGeneralizedGravity(model, data, q)
-            grav[k] = np.linalg.solve(Li, X.T @ solve_triangular(c, g, lower=True))[0:3]
+            grav[k] = np.linalg.solve(Li, X.T @ np.linalg.solve(c, g))[0:3]
         if progress:
             progress((start + len(qa)) / n, "operational-space map")
     return OpSpaceMap(platform.name, grid, ee, mass, inert, cond, grav, MapStatus.OK, "")

@@ -8,7 +8,6 @@ Every ``plot_*`` function draws into an ``ax`` (a new figure if None) and return
 from __future__ import annotations
 
 import dataclasses
-import warnings
 
 import numpy as np
 
@@ -70,34 +69,49 @@ def _cells_image(ax, grid, origin, h, colour, alpha, label=None):
         ax.fill([], [], color=colour, alpha=alpha, label=label)
 
 
+def _sample_cells(points: np.ndarray, free: np.ndarray | None = None):
+    """(occupancy of the sample points ``points`` (n, 2) [m] on the finest cells they fill without pinholes or isolated
+    cells (:func:`qprr.analysis.voxels.display_occupancy`), occupancy of the samples where ``free`` (n,) holds on the
+    same cells (None without ``free`` or when it holds nowhere), origin [m], cell side [m])."""
+    from .voxels import display_occupancy, occupancy
+
+    occ, o, h = display_occupancy(points)
+    focc = None
+    if free is not None and np.any(free):
+        focc, _ = occupancy(points[free], h, (points.min(axis=0), points.max(axis=0)))
+    return occ, focc, o, h
+
+
+def _free_label(measure) -> str:
+    return f"collision-free: {measure_text(measure)}" if measure is not None else "collision-free (no cell with every corner free)"
+
+
 # ================================================================================ workspace
-def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | None = None):
-    """Body-frame workspace regions (filled covered cells and outlines) in their hull's axes."""
+def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | None = None, collision: bool = True):
+    """Body-frame workspace regions (filled covered cells and outlines) in their hull's axes; with ``collision`` and a
+    collision check, each region's collision-free part drawn over it (darker, with its measure)."""
     ax = _new_ax(ax)
     regions = range(len(result.regions)) if regions is None else regions
     for i in regions:
         r = result.regions[i]
-        if r.occupancy is None:
+        if r.occupancy is None or r.dim not in (2, 3):
             continue
-        grid, o, h = r.outline if r.outline is not None else r.occupancy
-        if r.dim == 2:  # hull coordinates shifted back to B's axes
-            _cells_image(
-                ax,
-                grid,
-                o + r.origin @ r.basis.T,
-                h,
-                COLOURS[i % len(COLOURS)],
-                0.35 if i == 0 else 0.55,
-                f"{plain(r.label)}: {measure_text(r.measure)}",
-            )
+        colour = COLOURS[i % len(COLOURS)]
+        free = r.collision_free if collision else None
+        label = f"{plain(r.label)}: {measure_text(r.measure)}" + (" (x-z projection)" if r.dim == 3 else "")
+        if r.dim == 2 and free is None:  # hull coordinates shifted back to B's axes
+            grid, o, h = r.outline if r.outline is not None else r.occupancy
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.35 if i == 0 else 0.55, label)
+        else:  # from the samples: the plane's coordinates, or the x-z projection of a 3-D set
+            pts = r.coords + r.origin @ r.basis.T if r.dim == 2 else r.points_body[:, [0, 2]]
+            occ, focc, o, h = _sample_cells(pts, free)
+            _cells_image(ax, occ, o, h, colour, 0.25 if free is not None else 0.45, label if free is None else f"all configurations, {label}")
+            if focc is not None:
+                _cells_image(ax, focc, o, h, colour, 0.75, _free_label(r.free_measure))
+        if r.dim == 2:
             for ln in r.boundary:
                 loc = ln @ r.basis.T
-                ax.plot(loc[:, 0], loc[:, 1], color=COLOURS[i % len(COLOURS)], lw=0.8)
-        elif r.dim == 3:  # the x-z projection of the covered cells (any y)
-            proj = grid.any(axis=1)
-            _cells_image(
-                ax, proj, (o + r.origin)[[0, 2]], h, COLOURS[i % len(COLOURS)], 0.45, f"{plain(r.label)}: {measure_text(r.measure)} (x-z projection)"
-            )
+                ax.plot(loc[:, 0], loc[:, 1], color=colour, lw=0.8)
     r0 = result.regions[0]
     names = _axis_names(r0.basis) if r0.dim == 2 else ["x_B [m]", "z_B [m]"]
     ax.set_xlabel(names[0])
@@ -109,15 +123,29 @@ def plot_workspace(result: WorkspaceResult, ax=None, regions=None, title: str | 
 
 
 def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
-    """Hover workspace (yaw free about z_B): profile (s, z) of each region, s = signed distance to the axis."""
+    """Hover workspace (yaw free about z_B): the section (s, z) of each region drawn from its profile's samples and
+    their mirror image (s = signed distance to the axis), its collision-free part over it when checked."""
     ax = _new_ax(ax)
     regions = range(len(result.regions)) if regions is None else regions
     for i in regions:
         r = result.regions[i]
         if r.hover_occupancy is None:
             continue
-        grid, o, h = r.hover_occupancy
-        _cells_image(ax, grid, o, h, COLOURS[i % len(COLOURS)], 0.35 if i == 0 else 0.55, f"{plain(r.label)}: {measure_text(r.hover_volume)}")
+        colour = COLOURS[i % len(COLOURS)]
+        free = None if r.collision_free is None else np.concatenate([r.collision_free, r.collision_free])
+        pts = np.vstack([r.profile, r.profile * np.array([-1.0, 1.0])])
+        occ, focc, o, h = _sample_cells(pts, free)
+        label = f"{plain(r.label)}: {measure_text(r.hover_volume)}"
+        alpha = 0.25 if free is not None else (0.35 if i == 0 else 0.55)
+        free_label = f"{plain(r.label)}, {_free_label(r.free_hover_volume)}"
+        if r.hover_counted is not None and r.hover_counted[2] < h:  # the cells the volume counted are finer: those
+            _half_and_mirror(ax, r.hover_counted, colour, alpha, label)
+            if r.free_hover_counted is not None:
+                _half_and_mirror(ax, r.free_hover_counted, colour, 0.75 if i == 0 else 0.9, free_label)
+            continue
+        _cells_image(ax, occ, o, h, colour, alpha, label)
+        if focc is not None:
+            _cells_image(ax, focc, o, h, colour, 0.75 if i == 0 else 0.9, free_label)
     ax.axvline(0.0, color="k", lw=0.6, ls="--")
     ax.set_xlabel("distance to the yaw axis (signed) [m]")
     ax.set_ylabel("z (world, from the base) [m]")
@@ -125,6 +153,13 @@ def plot_hover_workspace(result: WorkspaceResult, ax=None, regions=None):
     _legend_below(ax)
     ax.set_title("hover workspace: section through the yaw axis", fontsize=10)
     return ax
+
+
+def _half_and_mirror(ax, counted, colour, alpha, label) -> None:
+    """The counted half section (s >= 0, :mod:`qprr.analysis.voxels`) and its mirror image s -> -s."""
+    grid, o, h = counted
+    _cells_image(ax, grid, o, h, colour, alpha, label)
+    _cells_image(ax, grid[::-1], np.array([-(o[0] + grid.shape[0] * h), o[1]]), h, colour, alpha)
 
 
 def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: int = 60):
@@ -153,7 +188,7 @@ def plot_hover_solid(result: WorkspaceResult, ax=None, region: int = 0, n_turn: 
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.set_zlabel("z [m]")
-    ax.set_box_aspect(None, zoom=0.88)  # room for the z label inside the panel
+    ax.set_box_aspect(None, zoom=0.82)  # room for the z label and the tick labels inside the panel
     tidy_3d(ax)
     ax.set_title(f"hover workspace, {plain(r.label)}:\n{measure_text(r.hover_volume)}", fontsize=9)
     return ax
@@ -168,13 +203,13 @@ def workspace_figure(result: WorkspaceResult):
     """
     n = len(result.regions)
     if n == 1:
-        fig = new_figure((16, 5.8))
+        fig = new_figure((16, 6.4))  # room for two legend rows (a collision-free part) under the panels
         plot_workspace(result, fig.add_subplot(1, 3, 1), [0], title=f"(a) {result.regions[0].label}, in B")
         plot_hover_workspace(result, fig.add_subplot(1, 3, 2))
         plot_hover_solid(result, fig.add_subplot(1, 3, 3, projection="3d"), 0)
         fig.suptitle(f"{result.platform_name}: workspace (Thesis (3.1)-(3.3))")
         return fig
-    fig = new_figure((14, 9))
+    fig = new_figure((14, 10))  # room for the legends' collision-free rows
     plot_workspace(result, fig.add_subplot(2, 3, 1), [0], title=f"(a) {result.regions[0].label}")
     plot_workspace(result, fig.add_subplot(2, 3, 2), [1], title=f"(b) {result.regions[1].label}")
     ax3 = fig.add_subplot(2, 3, 3)
@@ -183,7 +218,7 @@ def workspace_figure(result: WorkspaceResult):
         g, d = result.gain[1], result.difference[1]
         unit = measure_text(dataclasses.replace(result.regions[0].measure, measure=d[0], error=d[1]))
         gained += f":\nx{g.value:.3f} ± {g.error:.1g} (+ {unit})"
-    plot_workspace(result, ax3, [0, 1], title=gained)
+    plot_workspace(result, ax3, [0, 1], title=gained, collision=False)
     plot_hover_workspace(result, fig.add_subplot(2, 3, 4))
     plot_hover_solid(result, fig.add_subplot(2, 3, 5, projection="3d"), 0)
     plot_hover_solid(result, fig.add_subplot(2, 3, 6, projection="3d"), 1)
@@ -193,20 +228,21 @@ def workspace_figure(result: WorkspaceResult):
 
 # ================================================================================ CoG
 def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
-    """CoG regions in the (x, z) plane of B (Thesis Fig. 6.31/6.32, 6.47/6.48)."""
+    """CoG regions in the (x, z) plane of B (Thesis Fig. 6.31/6.32, 6.47/6.48): the counted cells of a region in that
+    plane, else the x-z projection of its samples on cells they fill."""
     ax = _new_ax(ax)
     keys = list(result.regions) if keys is None else keys
     keys = sorted(keys, key=lambda k: -result.regions[k].mass)  # heavier payloads (larger regions) underneath
     for c, key in enumerate(keys):
         r = result.regions[key]
         colour = COLOURS[c % len(COLOURS)]
+        label = f"{plain(r.label)}, payload {r.mass:g} kg" + (f": {measure_text(r.measure)}" if r.measure is not None else "")
         if r.occupancy is not None and r.basis.shape[0] == 2 and np.allclose(np.abs(r.basis), np.eye(3)[[0, 2]]):
             grid, o, h = r.occupancy
-            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, f"{plain(r.label)}, payload {r.mass:g} kg: {measure_text(r.measure)}")
+            _cells_image(ax, grid, o + r.origin @ r.basis.T, h, colour, 0.4, label)
         else:
-            step = max(1, len(r.com) // 20000)
-            loc = r.com[::step]
-            ax.scatter(loc[:, 0], loc[:, 2], s=0.2, color=colour, label=f"{plain(r.label)}, payload {r.mass:g} kg")
+            occ, _, o, h = _sample_cells(r.com[:, [0, 2]])
+            _cells_image(ax, occ, o, h, colour, 0.4, label + (" (x-z projection)" if r.basis.shape[0] == 3 else ""))
     ax.axvline(0.0, color="k", lw=0.6, ls="--", label="thrust axis")
     ax.set_xlabel("x_cm in B [m]")
     ax.set_ylabel("z_cm in B [m]")
@@ -216,21 +252,25 @@ def plot_cog_regions(result: CoGResult, ax=None, keys=None, title=None):
 
 
 def plot_balance(result: CoGBalanceMap, ax=None, axes=None):
-    """Slider position r* that balances the CoG over two joints (NaN where none within the limits), or |offset|."""
+    """Slider position r* that balances the CoG over two joints (NaN where none within the limits); without a slider,
+    the smallest |CoG offset| per end-effector cell (the x-z projection of a 3-D workspace)."""
     ax = _new_ax(ax)
     g = result.grid
+    if result.slider is None:
+        coords, basis, h = _plane(result.ee_body)
+        _workspace_map(ax, coords, result.offset_clamped, h, "coolwarm", "smallest |CoG offset| [m]", smallest=True)
+        names = _axis_names(basis) if basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
+        ax.set_xlabel(names[0])
+        ax.set_ylabel(names[1])
+        ax.set_title("CoG offset from the thrust axis, best configuration per end-effector cell", fontsize=9)
+        return ax
     free = [a for a in range(len(g.shape)) if g.shape[a] > 1]
     axes = axes or _two_longest(g, free)
     sl = _slice_index(g, axes)
-    if result.slider is not None:
-        vals = np.where(result.balanced, result.r_star, np.nan).reshape(g.shape)[sl]
-        label = f"r* of {result.slider} [m] (blank: not balanced)"
-    else:
-        vals = result.offset_clamped.reshape(g.shape)[sl]
-        label = "|CoG offset| [m]"
+    vals = np.where(result.balanced, result.r_star, np.nan).reshape(g.shape)[sl]
     a0, a1 = g.axes[axes[0]], g.axes[axes[1]]
     im = ax.pcolormesh(a0, a1, vals.T, shading="nearest", cmap="coolwarm")
-    ax.figure.colorbar(im, ax=ax, label=label)
+    ax.figure.colorbar(im, ax=ax, label=f"r* of {result.slider} [m] (blank: not balanced)")
     ax.set_xlabel(g.label(axes[0]))
     ax.set_ylabel(g.label(axes[1]))
     ax.set_title(f"CoG on the thrust axis: {100 * result.fraction_configurations:.1f}% of the grid", fontsize=9)
@@ -241,23 +281,44 @@ def plot_balanced_workspace(result: CoGBalanceMap, ax=None):
     """End-effector positions reachable with the CoG balanced (in the x-z plane of B)."""
     ax = _new_ax(ax)
     ok = result.balanced
-    step = max(1, int(ok.sum()) // 40000)
-    ax.scatter(result.ee_body[ok][::step, 0], result.ee_body[ok][::step, 2], s=0.3, color="tab:green", label="CoG balanced")
+    coords, basis, _ = _plane(result.ee_body)
+    occ, focc, o, h = _sample_cells(coords[:, [0, 2]] if coords.shape[1] == 3 else coords, ok)
+    label = "CoG balanced"
     if result.fraction_workspace is not None:
-        ax.scatter([], [], s=0, label=f"{100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % of the workspace")
-    ax.set_xlabel("x_B [m]")
-    ax.set_ylabel("z_B [m]")
+        label += f": {100 * result.fraction_workspace.value:.2f} ± {100 * result.fraction_workspace.error:.1g} % of the workspace"
+    _cells_image(ax, occ, o, h, "0.6", 0.3, "workspace (slider at its balancing position, clamped)")
+    if focc is not None:
+        _cells_image(ax, focc, o, h, "tab:green", 0.8, label)
+    names = _axis_names(basis) if basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
+    ax.set_xlabel(names[0])
+    ax.set_ylabel(names[1])
     ax.set_aspect("equal")
     _legend_below(ax)
     ax.set_title("end-effector positions with the CoG on the thrust axis", fontsize=9)
     return ax
 
 
+def _balanced_panel_note(balance: CoGBalanceMap) -> str:
+    """Why the panel of balanced end-effector positions is left out ("" when it is drawn: the set has a measure)."""
+    if balance.balanced_measure is not None:
+        return ""
+    what = (
+        f"no slider: |CoG offset| <= {balance.tol:g} m holds on {100 * balance.fraction_configurations:.2g} % of the grid only, "
+        "a set without area or volume (the arm cannot move its CoG along the thrust axis at will)"
+        if balance.slider is None
+        else f"the balanced configurations cover no measurable set ({balance.reason})"
+    )
+    return f"balanced end-effector positions not drawn: {what}"
+
+
 def cog_figure(result: CoGResult, balance: CoGBalanceMap | None = None):
-    """CoG regions per variant and payload (Thesis Fig. 6.31/6.32/6.47/6.48) and the balance map."""
+    """CoG regions per variant and payload (Thesis Fig. 6.31/6.32/6.47/6.48) and the balance map; the panel of balanced
+    end-effector positions only when that set has a measure (a note in the figure says why it is left out)."""
     nv = len(result.variants)
-    n = nv + (2 if balance is not None else 0)
-    ncol = 2 if n > 2 else n
+    note = _balanced_panel_note(balance) if balance is not None else ""
+    nb = 0 if balance is None else (1 if note else 2)
+    n = nv + nb
+    ncol = n if n <= 3 else 2
     nrow = (n + ncol - 1) // ncol
     fig = new_figure((6.5 * ncol, 5.2 * nrow))
     for v in range(nv):
@@ -265,7 +326,10 @@ def cog_figure(result: CoGResult, balance: CoGBalanceMap | None = None):
         plot_cog_regions(result, fig.add_subplot(nrow, ncol, v + 1), keys, title=f"CoG, {result.regions[keys[0]].label}")
     if balance is not None:
         plot_balance(balance, fig.add_subplot(nrow, ncol, nv + 1))
-        plot_balanced_workspace(balance, fig.add_subplot(nrow, ncol, nv + 2))
+        if not note:
+            plot_balanced_workspace(balance, fig.add_subplot(nrow, ncol, nv + 2))
+    if note:  # a figure-level x label: the layout keeps room for it below the legends
+        fig.supxlabel(note, fontsize=8)
     fig.suptitle(f"{result.platform_name}: CoG regions (Thesis (3.78), (6.29)-(6.33))")
     return fig
 
@@ -337,19 +401,18 @@ def singularity_figure(result: SingularityResult, reference=None, system_axis=No
 
 
 # ================================================================================ hover / capacity
-def _workspace_map(ax, coords, values, h, cmap, label):
-    """The largest of ``values`` per cell of side ``h`` of the points ``coords`` (a 3-D map projected onto x-z, the
-    largest over y), coloured by ``cmap`` with a colour bar named ``label`` (none if empty); a field that is the same
+def _workspace_map(ax, coords, values, h, cmap, label, smallest: bool = False):
+    """The largest of ``values`` per cell of side ``h`` of the points ``coords`` (a 3-D map projected onto x-z first:
+    the largest over y), coloured by ``cmap`` with a colour bar named ``label`` (none if empty); a field that is the same
     in every cell is drawn in one colour with its value in a legend entry (a colour bar over a constant reads as
-    "no data"); returns the image."""
+    "no data"); returns the image.  ``h``: :func:`_plane`'s, no finer than the samples fill; ``smallest``: the smallest
+    value per cell instead."""
     from ._common import best_per_cell
 
-    best, _, o = best_per_cell(coords, values, h)
-    if best.ndim == 3:  # project a 3-D map onto x-z: best over y (columns without a sample stay NaN)
-        with np.errstate(invalid="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)
-            best = np.nanmax(best, axis=1)
-        o = o[[0, 2]]
+    pts = coords[:, [0, 2]] if coords.shape[1] == 3 else coords  # the projection of a 3-D set (affine_span: B's axes)
+    sign = -1.0 if smallest else 1.0
+    best, _, o = best_per_cell(pts, sign * np.asarray(values, dtype=float), h)
+    best = sign * best
     extent = (o[0], o[0] + best.shape[0] * h, o[1], o[1] + best.shape[1] * h)
     finite = best[np.isfinite(best)]
     lo, hi = (float(finite.min()), float(finite.max())) if finite.size else (0.0, 0.0)
@@ -383,17 +446,20 @@ def _yes_no_map(ax, coords, ok, h, yes: str, no: str) -> None:
     im.set_norm(BoundaryNorm([-0.5, 0.5, 1.5], 2))
     cells = np.ma.filled(np.ma.asarray(im.get_array(), dtype=float), np.nan)
     share = float(np.nanmean(cells)) if np.isfinite(cells).any() else 0.0
-    ax.fill([], [], color="tab:green", label=f"{yes} ({100 * share:.0f} % of the cells)")
-    ax.fill([], [], color="tab:red", label=f"{no} ({100 * (1 - share):.0f} %)")
+    ax.fill([], [], color="tab:green", label=f"{yes} ({100 * share:.1f} % of the cells)")
+    ax.fill([], [], color="tab:red", label=f"{no} ({100 * (1 - share):.1f} %)")
     _legend_below(ax)
 
 
 def _plane(ee):
-    from ._common import affine_span, default_map_cell
+    """(the end-effector positions in their hull's axes, the hull's basis, the map's cell side [m]: 80 across or
+    coarser, as the samples fill the cells of the drawn plane: the x-z projection of a 3-D set)."""
+    from ._common import affine_span
+    from .voxels import map_cell
 
     _, basis = affine_span(ee)
     coords = ee @ basis.T
-    return coords, basis, default_map_cell(coords, 80)
+    return coords, basis, map_cell(coords[:, [0, 2]] if coords.shape[1] == 3 else coords, 80)
 
 
 def hover_figure(result: HoverResult, mass_index: int = 0):
@@ -409,9 +475,12 @@ def hover_figure(result: HoverResult, mass_index: int = 0):
         ax = axs[0, 1] if j == 0 else axs[0, 2] if j == 1 else axs[1, 0]
         _workspace_map(ax, coords, result.authority[k, :, j], h, "cividis", f"{axis} authority left [N m]")
         ax.set_title(f"largest {axis} torque still available", fontsize=8)
-    kk = len(result.masses) - 1
+    # the payload whose feasible share is nearest one half: the map with the most to say (all green or all red says
+    # only what the envelope panel shows)
+    kk = int(np.argmin(np.abs(result.feasible_fraction - 0.5)))
     _yes_no_map(axs[1, 1], coords, result.feasible[kk], h, "hover possible", "impossible")
-    axs[1, 1].set_title(f"where hovering is possible with {result.masses[kk]:g} kg (some configuration)", fontsize=8)
+    share = f"{100 * result.feasible_fraction[kk]:.1f} % of the configurations"
+    axs[1, 1].set_title(f"where hovering is possible with {result.masses[kk]:g} kg ({share}; some configuration per cell)", fontsize=8)
     for ax in list(axs[0]) + [axs[1, 0], axs[1, 1]]:
         ax.set_xlabel(names[0])
         ax.set_ylabel(names[1] if len(names) > 1 else "")
@@ -462,36 +531,33 @@ def wrench_set_figure(result: HoverResult, index: int | None = None):
 
 
 def capacity_figure(result: CapacityResult):
-    """Thesis Fig. 6.46 generalised: best payload per workspace cell and the factor that limits it."""
+    """Thesis Fig. 6.46 generalised: best payload per workspace cell and the factor that limits it there.
+
+    Drawn from the configurations (a 3-D workspace projected onto x-z first: the best over y), on cells the samples
+    fill (:func:`_plane`); the shares in the legend are the result's, over its own cells
+    (:meth:`~qprr.analysis.capacity.CapacityResult.map_fractions`)."""
     from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    from ._common import best_per_cell
 
     fig = new_figure((13, 5))
     axs = fig.subplots(1, 2)
-    h = result.cell
-    grid = result.map_capacity
-    o = result.map_origin
-    lim = result.map_limiting.astype(float)
-    lim[lim < 0] = np.nan
-    if grid.ndim == 3:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", RuntimeWarning)  # columns without a sample stay NaN
-            grid = np.nanmax(grid, axis=1)
-            lim = np.nanmin(lim, axis=1)
-        o = o[[0, 2]]
-    extent = (o[0], o[0] + grid.shape[0] * h, o[1], o[1] + grid.shape[1] * h)
-    shift = result.origin @ result.basis.T if result.basis.shape[0] == 2 else np.zeros(2)
-    extent = (extent[0] + shift[0], extent[1] + shift[0], extent[2] + shift[1], extent[3] + shift[1])
-    im = axs[0].imshow(grid.T, origin="lower", extent=extent, cmap="viridis", interpolation="nearest")
-    fig.colorbar(im, ax=axs[0], label="largest payload [kg]")
+    coords, basis, h = _plane(result.ee_body)
+    pts = coords[:, [0, 2]] if coords.shape[1] == 3 else coords
+    _workspace_map(axs[0], coords, result.capacity, h, "viridis", "largest payload [kg]")
     axs[0].set_title(f"payload capacity (reserve {np.round(result.torque_reserve, 3).tolist()} N m); collective {result.m_thrust:.3g} kg", fontsize=8)
+    _, arg, o = best_per_cell(pts, np.where(result.limiting == 3, -1.0, result.capacity), h)
+    lim = np.where(arg >= 0, result.limiting[np.clip(arg, 0, None)], -1).astype(float)
+    lim[lim < 0] = np.nan
+    extent = (o[0], o[0] + lim.shape[0] * h, o[1], o[1] + lim.shape[1] * h)
     cmap = ListedColormap(["tab:blue", "tab:orange", "tab:red", "0.3"])
-    im = axs[1].imshow(lim.T, origin="lower", extent=extent, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest")
+    axs[1].imshow(lim.T, origin="lower", extent=extent, cmap=cmap, norm=BoundaryNorm([-0.5, 0.5, 1.5, 2.5, 3.5], 4), interpolation="nearest")
     fr = result.map_fractions()
     for k, name in enumerate(LIMITS):
-        axs[1].fill([], [], color=cmap(k), label=f"{name} ({100 * fr[name]:.1f}%)")
+        axs[1].fill([], [], color=cmap(k), label=f"{name} ({100 * fr[name]:.1f}% of the cells)")
     _legend_below(axs[1])
-    axs[1].set_title("limiting factor", fontsize=8)
-    names = _axis_names(result.basis) if result.basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
+    axs[1].set_title("limiting factor (at the best configuration of each cell)", fontsize=8)
+    names = _axis_names(basis) if basis.shape[0] == 2 else ["x_B [m]", "z_B [m]"]
     for ax in axs:
         ax.set_xlabel(names[0])
         ax.set_ylabel(names[1] if len(names) > 1 else "")

@@ -25,7 +25,7 @@ which the thesis does not map.  :func:`singularity` computes over the joint grid
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -38,12 +38,14 @@ from ._common import (
     MapStatus,
     check_arm_platform,
     check_int,
+    check_locked,
     check_pos,
     check_progress,
     joint_ranges,
     lever_lengths,
     make_grid,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 
 TASKS = ("pose", "position")
@@ -76,6 +78,7 @@ class SingularityResult:
     distance: np.ndarray
     status: MapStatus
     reason: str
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         g = self.grid
@@ -92,6 +95,8 @@ class SingularityResult:
         ]
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -125,7 +130,8 @@ class SingularityOptions:
     :func:`qprr.analysis._common.lever_lengths` (1 m for an arm without revolute joints); ``locked``,
     ``ranges``: as in :func:`qprr.analysis.workspace`; ``frame``: the frame mapped (name or id; default
     the end effector); ``tol``: sigma_r / sigma_1 below which a configuration counts as singular
-    (non-square J_t).
+    (non-square J_t); ``budget``, ``clock``: wall time [s] the map may take, ``n_samples`` then chosen from pilot
+    runs timed with ``clock`` (:mod:`qprr.analysis.budget`; None: ``n_samples`` is used).
     """
 
     n_samples: int = 200_000
@@ -135,9 +141,13 @@ class SingularityOptions:
     ranges: Mapping[str, tuple[float, float]] | None = None
     frame: object = None
     tol: float = 1e-3
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings, checked however the options are built
         check_int("n_samples", self.n_samples, 8)
+        check_budget(self.budget)
+        check_clock(self.clock)
         if self.task not in TASKS:
             raise UnknownNameError("singularity task", self.task, TASKS)
         if self.length is not None:
@@ -209,11 +219,13 @@ def singularity(platform: Platform, options: SingularityOptions | None = None, *
         raise InputError(f"options must be a SingularityOptions, got {type(o).__name__}")
     o = replace(o, **settings) if settings else o
     check_arm_platform(platform)
-    check_int("n_samples", o.n_samples, 8)
-    if o.task not in TASKS:
-        raise UnknownNameError("singularity task", o.task, TASKS)
+    work = grid_work(platform, [check_locked(platform, o.locked)], o.ranges)
+    return within_budget(o, lambda oo, pr: _singularity(platform, oo, pr), work, check_progress(progress))
+
+
+def _singularity(platform: Platform, o: SingularityOptions, progress) -> SingularityResult:
+    """:func:`singularity` at ``o.n_samples``."""
     tol = check_pos("tol", o.tol)
-    progress = check_progress(progress)
     fid = platform.ee_frame if o.frame is None else platform.frame_id(o.frame)
     grid = make_grid(platform, o.n_samples, o.locked, o.ranges)
     length = check_pos("length", _reach(platform, o.ranges) if o.length is None else o.length)

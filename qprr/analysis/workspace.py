@@ -25,7 +25,7 @@ plane, the Q-PRR's x-z plane of B) has an *area* in B and a *volume* under hover
 from __future__ import annotations
 
 import functools
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -45,6 +45,7 @@ from ._common import (
     make_grid,
     resolve_collision,
 )
+from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
 from .voxels import CellImage, MeasureEstimate, display_occupancy
 
@@ -83,7 +84,8 @@ class WorkspaceRegion:
     ``collision_free``: (n,) bool, the grid configurations free of self-collision (None: not checked);
     ``collision_check``: how the mask was obtained (:meth:`qprr.analysis._common.CollisionMask.describe`);
     ``free_measure``, ``free_hover_volume``: the measures over the collision-free cells only (counted on the counting
-    grid of ``measure`` / ``hover_volume``: same cell side and frame).
+    grid of ``measure`` / ``hover_volume``: same cell side and frame), ``free_occupancy``, ``free_hover_counted`` the
+    cells they counted (as ``occupancy`` / ``hover_counted``, on the same grids).
     """
 
     label: str
@@ -102,6 +104,8 @@ class WorkspaceRegion:
     collision_check: str = ""
     free_measure: MeasureEstimate | None = None
     free_hover_volume: MeasureEstimate | None = None
+    free_occupancy: tuple | None = None
+    free_hover_counted: tuple | None = None
 
     @property
     def dim(self) -> int:
@@ -146,7 +150,8 @@ class WorkspaceResult:
     ``gain_hover[i]`` under hover; ``difference[i]`` = measure(regions[0]) - measure(regions[i])
     with its error bar.  ``status``/``reason``: see :class:`~qprr.analysis.MapStatus`.  With a collision check:
     ``gain_free[i]`` = (in B, under hover) ratios of the collision-free measures (None where not measured);
-    ``collision_note``: why collisions were not checked, if they were not.
+    ``collision_note``: why collisions were not checked, if they were not.  ``sampling``: how ``n_samples`` was
+    set (:class:`qprr.analysis.budget.SampleChoice`: given, or chosen for a time budget).
     """
 
     platform_name: str
@@ -159,6 +164,7 @@ class WorkspaceResult:
     reason: str = ""
     collision_note: str = ""
     gain_free: dict = field(default_factory=dict)
+    sampling: SampleChoice | None = None
 
     def summary(self) -> str:
         """A few lines with the measures and the gains (all configurations, then the collision-free ones)."""
@@ -187,6 +193,8 @@ class WorkspaceResult:
                 lines.append(f"  gain of [0] over [{i}], collision-free parts: " + ", ".join(parts))
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
+        if self.sampling is not None:
+            lines.append(f"  {self.sampling.describe()}")
         return "\n".join(lines)
 
 
@@ -220,7 +228,9 @@ class WorkspaceOptions:
     region (None: when the platform has a collision model, :func:`qprr.analysis._common.resolve_collision`; True:
     required; False: off).  Cost: the collision check and the collision-free measures (counted with the whole
     ones, in one pass) make the map about 1.4x slower (Q-PRR, 1e6 configurations per region: ~3.8 s against ~2.8 s;
-    docs/analysis.md, Speed).
+    docs/analysis.md, Speed).  ``budget``: wall time [s] the map may take; when given, ``n_samples`` is chosen from
+    pilot runs timed with ``clock`` (default :func:`time.perf_counter`) and the given one is not used
+    (:mod:`qprr.analysis.budget`; the choice is the result's ``sampling``).
     """
 
     n_samples: int = 1_000_000
@@ -232,9 +242,13 @@ class WorkspaceOptions:
     n_shifts: int = 4
     seed: int = 0
     collision: bool | None = None
+    budget: float | None = None
+    clock: Callable[[], float] | None = None
 
     def __post_init__(self) -> None:  # the platform-free settings are checked however the options are built
         object.__setattr__(self, "n_samples", check_int("n_samples", self.n_samples, 8))
+        object.__setattr__(self, "budget", check_budget(self.budget))
+        check_clock(self.clock)
         object.__setattr__(self, "n_shifts", check_int("n_shifts", self.n_shifts, 2))
         object.__setattr__(self, "seed", check_int("seed", self.seed, 0))
         if not isinstance(self.hover, (bool, np.bool_)):
@@ -253,18 +267,22 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
     o = replace(options or WorkspaceOptions(), **settings) if settings else (options or WorkspaceOptions())
     if not isinstance(o, WorkspaceOptions):
         raise InputError(f"options must be a WorkspaceOptions, got {type(o).__name__}")
-    n_samples, variants, locked, ranges, frame, hover = o.n_samples, o.variants, o.locked, o.ranges, o.frame, o.hover
-    n_shifts, seed = o.n_shifts, o.seed
     check_arm_platform(platform)
-    base_locked = check_locked(platform, locked)
-    if variants is None:
-        variants = default_variants(platform)
-    variants = [check_locked(platform, v) for v in variants]
-    progress = check_progress(progress)
+    base_locked = check_locked(platform, o.locked)
+    variants = default_variants(platform) if o.variants is None else o.variants
+    sets = [dict(base_locked)] + [{**base_locked, **check_locked(platform, v)} for v in variants]
+    work = grid_work(platform, sets, o.ranges)
+    collisions = resolve_collision(platform, o.collision)  # built once, not per pilot (seconds for a 5-joint arm)
+    return within_budget(o, lambda oo, pr: _workspace(platform, oo, sets, collisions, pr), work, check_progress(progress))
+
+
+def _workspace(platform: Platform, o: WorkspaceOptions, sets: list[dict], collisions: tuple, progress) -> WorkspaceResult:
+    """:func:`workspace` at ``o.n_samples`` per region over the locked ``sets`` (the first: every joint free);
+    ``collisions``: (collision model or None, note) of :func:`qprr.analysis._common.resolve_collision`."""
+    n_samples, ranges, frame, hover, n_shifts, seed = o.n_samples, o.ranges, o.frame, o.hover, o.n_shifts, o.seed
     fid = platform.ee_frame if frame is None else platform.frame_id(frame)
     chain = ArmChain(platform)
-    cmodel, note = resolve_collision(platform, o.collision)
-    sets = [dict(base_locked)] + [{**base_locked, **v} for v in variants]
+    cmodel, note = collisions
     regions, reasons = [], []
     for i, lk in enumerate(sets):
         grid = make_grid(platform, n_samples, lk, ranges)
@@ -305,13 +323,16 @@ def workspace(platform: Platform, options: WorkspaceOptions | None = None, *, pr
 
 def _measures(image: CellImage, mask: CollisionMask | None, shape: tuple, n_shifts: int, seed: int):
     """(measure of ``image``, occupancy of its first counting grid, measure over the cells whose corners are all
-    collision-free or None: no mask, or no such cell), the two from one counting pass on one counting grid
-    (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the whole image's cell side and frame)."""
+    collision-free or None: no mask, or no such cell, the occupancy of those cells on the same counting grid or None),
+    the measures from one counting pass on one counting grid (:meth:`qprr.analysis.voxels.CellImage.estimate_pair`: the
+    whole image's cell side and frame)."""
     if mask is None or not mask.free.any():
         measure, occ = image.estimate(n_shifts=n_shifts, seed=seed, return_occupancy=True)
-        return measure, occ, None
-    measure, free, occ = image.estimate_pair(mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True)
-    return measure, occ, free
+        return measure, occ, None, None
+    whole, free, occ, free_occ = image.estimate_pair(
+        mask.free.reshape(shape), n_shifts=n_shifts, seed=seed, return_occupancy=True, return_free_occupancy=True
+    )
+    return whole, occ, free, free_occ if free is not None else None
 
 
 def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shifts: int, seed: int, mask: CollisionMask | None = None):
@@ -323,7 +344,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
     free = sum(1 for n in grid.shape if n > 1)
     shape = tuple(n for n in grid.shape if n > 1)
     why = ""
-    measure = occ = free_measure = free_hover = None
+    measure = occ = free_measure = free_hover = free_occ = free_hocc = None
     dim = basis.shape[0]
     if dim == 0:
         why = "the frame does not move (a point)"
@@ -331,7 +352,7 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         why = f"{free} free joint(s) sweep a curved {free}-dimensional set inside a {dim}-dimensional hull: no {dim}-D measure"
     else:
         image = CellImage(coords.reshape(*shape, dim))
-        measure, occ, free_measure = _measures(image, mask, shape, n_shifts, seed)
+        measure, occ, free_measure, free_occ = _measures(image, mask, shape, n_shifts, seed)
         del image
     profile = hover_profile(pts, origin, basis)
     hv = hocc = None
@@ -339,13 +360,21 @@ def _region(pts: np.ndarray, grid: JointGrid, locked: dict, hover: bool, n_shift
         pdim = affine_span(np.column_stack([profile[:, 0], np.zeros(len(profile)), profile[:, 1]]))[1].shape[0]
         if pdim == 2 and free >= 2:
             hover_image = CellImage(profile.reshape(*shape, 2), revolve=True)
-            hv, hocc, free_hover = _measures(hover_image, mask, shape, n_shifts, seed)
+            hv, hocc, free_hover, free_hocc = _measures(hover_image, mask, shape, n_shifts, seed)
             del hover_image
         elif not why:
             why = "the hover profile (rho, z) is not two-dimensional: no volume under hover"
     region = WorkspaceRegion(_label(locked), dict(locked), grid, pts, origin, basis, coords, measure, hv, occ, profile, hocc)
     if mask is not None:
-        region = replace(region, collision_free=mask.free, collision_check=mask.describe(), free_measure=free_measure, free_hover_volume=free_hover)
+        region = replace(
+            region,
+            collision_free=mask.free,
+            collision_check=mask.describe(),
+            free_measure=free_measure,
+            free_hover_volume=free_hover,
+            free_occupancy=free_occ,
+            free_hover_counted=free_hocc,
+        )
     return region, why
 
 
