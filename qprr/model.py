@@ -498,7 +498,7 @@ def _resolve_rotors(model: pin.Model, base: int, rotors, rotor_source: str | Non
             raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
     except (InputError, UnknownNameError) as exc:
         if rotor_source is not None:
-            exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
+            exc.within(f"rotor file {rotor_source!r}")
         raise
     return rotors
 

@@ -6,7 +6,7 @@ drag/thrust ratio of 16 (millimetres), an arm offset of 300 (millimetres), revol
 rotor file, a URDF and a payload (the table of docs/platforms.md); the checks raise
 :class:`~qprr.errors.PlausibilityError` naming the input, the value, the likely slip and the way to
 accept the value on purpose: ``plausibility=Plausibility(...)`` (``dataclasses.replace`` of
-:data:`DEFAULT`) passed to :func:`qprr.from_urdf`, :func:`qprr.from_model` or
+:data:`DEFAULT`) passed to :func:`qprr.from_urdf`, :func:`qprr.model.from_model` or
 :func:`qprr.payload.with_payload`.  ``plausibility=None`` keeps the type and physics checks only.
 """
 
