@@ -137,7 +137,7 @@ def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: st
 
 # ------------------------------------------------------------------------- URDF
 def _check_joint(joint, P: Plausibility, source: str) -> None:
-    """One :class:`qprr.urdf.reader.Joint`: its origin length, its limits and effort, its dynamics."""
+    """One :class:`qprr.urdf.reader.UrdfJoint`: its origin length, its limits and effort, its dynamics."""
     name, kind = joint.name, joint.kind
     if joint.origin.xyz is not None:
         d = math.hypot(*joint.origin.xyz)
@@ -201,7 +201,7 @@ def _check_limit(joint, P: Plausibility, source: str) -> None:
 
 
 def _check_link(link, P: Plausibility, source: str) -> None:
-    """One :class:`qprr.urdf.reader.Link`: its mass, its CoM offset and its radius of gyration."""
+    """One :class:`qprr.urdf.reader.UrdfLink`: its mass, its CoM offset and its radius of gyration."""
     inertial = link.inertial
     if inertial is None:
         return

@@ -101,7 +101,7 @@ class Inertial:
 
 
 @dataclass(frozen=True)
-class Link:
+class UrdfLink:
     """A ``<link>``: its name and its inertial (None: it has none)."""
 
     name: str
@@ -120,7 +120,7 @@ class Limit:
 
 
 @dataclass(frozen=True)
-class Joint:
+class UrdfJoint:
     """A ``<joint>``: its ``kind`` (the ``type`` attribute), the links it joins, its origin, ``axis`` (in the joint
     frame) and ``limit`` (1-DOF joints only; None otherwise or absent), ``<dynamics>`` ``damping``/``friction``
     (None: absent)."""
@@ -143,8 +143,8 @@ class UrdfFile:
 
     source: str
     name: str
-    links: tuple[Link, ...]
-    joints: tuple[Joint, ...]
+    links: tuple[UrdfLink, ...]
+    joints: tuple[UrdfJoint, ...]
     text: str
 
     @property
@@ -239,7 +239,7 @@ def _dynamics(joint: ET.Element, where: str) -> tuple[float | None, float | None
     return values[0], values[1]
 
 
-def _joint(joint: ET.Element, links: set, source: str) -> Joint:
+def _joint(joint: ET.Element, links: set, source: str) -> UrdfJoint:
     """One <joint> after checking its links, origin, axis, limit and dynamics attributes."""
     name, kind = joint.get("name"), joint.get("type")
     where = f"{source}: joint {name!r}"
@@ -247,7 +247,7 @@ def _joint(joint: ET.Element, links: set, source: str) -> Joint:
     origin = _origin(joint, where)
     axis, limit = _axis_and_limit(joint, where) if kind in ("revolute", "prismatic", "continuous") else (None, None)
     damping, friction = _dynamics(joint, where)
-    return Joint(name, kind, parent, child, origin, axis, limit, damping, friction)
+    return UrdfJoint(name, kind, parent, child, origin, axis, limit, damping, friction)
 
 
 def _inertial(link: ET.Element, source: str) -> Inertial | None:
@@ -288,7 +288,7 @@ def parse_urdf(xml_text: str, source: str = "URDF") -> UrdfFile:
             )
         parent_of[joint.child] = joint.name
         joints.append(joint)
-    links = tuple(Link(el.get("name"), _inertial(el, source)) for el in root.findall("link"))
+    links = tuple(UrdfLink(el.get("name"), _inertial(el, source)) for el in root.findall("link"))
     return UrdfFile(source, root.get("name", ""), links, tuple(joints), xml_text)
 
 
@@ -380,11 +380,11 @@ __all__ = [
     "ARM_JOINT_TYPES",
     "INERTIA_KEYS",
     "Inertial",
-    "Joint",
     "Limit",
-    "Link",
     "Origin",
     "UrdfFile",
+    "UrdfJoint",
+    "UrdfLink",
     "attribute_numbers",
     "check_inertials",
     "check_serial_arm",
