@@ -113,10 +113,10 @@ def make_targets(robot, data, n: int, n_unreachable: int, seed: int):
         xi[6:9] = rng.uniform(lo, hi)
         return xi
 
-    reach = [kin.ee_placement(robot, data, qprr.xi_to_q(hover_xi())) for _ in range(n)]
+    reach = [kin.ee_placement(robot, data, qprr.charts.xi_to_q(hover_xi())) for _ in range(n)]
     unreach = []
     for _ in range(n_unreachable):
-        M = kin.ee_placement(robot, data, qprr.xi_to_q(hover_xi()))
+        M = kin.ee_placement(robot, data, qprr.charts.xi_to_q(hover_xi()))
         u = np.cross([0.0, 0.0, 1.0], M.rotation[:, 1])
         u /= np.linalg.norm(u)
         angle = math.exp(rng.uniform(math.log(1e-3), math.log(0.5))) * rng.choice([-1.0, 1.0])
@@ -264,7 +264,7 @@ def check_chain(robot, data, urdf_path: str, ee: str = "end_effector") -> None:
     for _ in range(100):
         xi = random_level_xi(robot, rng)
         pin.framesForwardKinematics(model, cdata, xi[cols])
-        worst = max(worst, float(np.abs(cdata.oMf[fid].homogeneous - kin.ee_placement(robot, data, qprr.xi_to_q(xi)).homogeneous).max()))
+        worst = max(worst, float(np.abs(cdata.oMf[fid].homogeneous - kin.ee_placement(robot, data, qprr.charts.xi_to_q(xi)).homogeneous).max()))
     if not (
         worst < 1e-12 and np.allclose(model.lowerPositionLimit[4:], robot.arm_lower) and np.allclose(model.upperPositionLimit[4:], robot.arm_upper)
     ):
@@ -549,7 +549,7 @@ def check(robot, data, xi, M) -> Check:
     """Independent verdict on a returned configuration, with Pinocchio on the full model."""
     if xi is None or not np.all(np.isfinite(xi)):
         return Check(False, False, False, float("nan"))
-    q = qprr.xi_to_q(xi)
+    q = qprr.charts.xi_to_q(xi)
     Me = kin.ee_placement(robot, data, q)
     pe, oe = np.linalg.norm(Me.translation - M.translation), np.linalg.norm(pin.log3(M.rotation.T @ Me.rotation))
     lo, hi = robot.arm_lower, robot.arm_upper
@@ -856,7 +856,7 @@ def platform_case(name: str, n: int, seed: int) -> Case:
     robot = qprr.build(name) if name == "HEX-RRR" else qprr.load(name)
     data = robot.data()
     rng = np.random.default_rng(seed)
-    reach = [kin.ee_placement(robot, data, qprr.xi_to_q(random_level_xi(robot, rng))) for _ in range(n)]
+    reach = [kin.ee_placement(robot, data, qprr.charts.xi_to_q(random_level_xi(robot, rng))) for _ in range(n)]
     label = "level base, arm neutral, end effector on the target"
     case = Case(name, robot, data, lambda M: ik.default_guess(robot, data, M.translation, M.rotation), label, reach)
     solver = IKSolver(robot, "qp")

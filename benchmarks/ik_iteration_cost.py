@@ -43,7 +43,7 @@ def measure(n: int, kernel: str | None) -> dict:
         xi[2] = rng.uniform(0.5, 3.0)
         xi[5] = rng.uniform(-np.pi, np.pi)
         xi[6:9] = rng.uniform(robot.arm_lower, robot.arm_upper)
-        q = qprr.xi_to_q(xi)
+        q = qprr.charts.xi_to_q(xi)
         pin.framesForwardKinematics(robot.model, data, q)
         targets.append(data.oMf[robot.ee_frame].copy())
     options = None if kernel is None else {"kernel": kernel}

@@ -126,7 +126,7 @@ def push_prismatic(robot, out: Path) -> Path:
     lo, hi = params_of(robot).r0_limits
     data = robot.data()
     xi_end = np.array([0.0, 0.0, 1.0, 0.0, 0.0, 0.0, hi, *scn.ARM_PUSH[1:]])
-    h = kin.ee_pose_xi(robot, data, xi_end)[0][2] - kin.com_world(robot, data, qprr.xi_to_q(xi_end))[2]
+    h = kin.ee_pose_xi(robot, data, xi_end)[0][2] - kin.com_world(robot, data, qprr.charts.xi_to_q(xi_end))[2]
     weight = robot.total_mass * robot.g
     fig = new_figure((11, 4.5))
     ax = fig.add_subplot()

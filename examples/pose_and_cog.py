@@ -22,7 +22,7 @@ p_e, R_e = kin.ee_pose_xi(platform, data, xi)  # world pose of the end effector,
 print("end effector p_world [m]:", np.round(p_e, 6))
 print("end effector R_world:\n", np.round(R_e, 6))
 
-q = qprr.xi_to_q(xi)  # Pinocchio's configuration [p, quaternion xyzw, q_arm]
+q = qprr.charts.xi_to_q(xi)  # Pinocchio's configuration [p, quaternion xyzw, q_arm]
 c_world = kin.com_world(platform, data, q)  # CoG of the whole system, world frame [m]
 c_body = kin.com_body(platform, data, q)  # the same in the body frame B, Thesis (3.76)-(3.78)
 offset = kin.cog_offset_body(platform, data, q)  # (x_cm, y_cm): distance from the thrust axis in B

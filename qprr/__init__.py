@@ -10,59 +10,91 @@
   plug-in that fills the core's registries (:mod:`qprr.registry`); the core never imports it.
 
 The workflow in one import (``__all__``): :func:`load`, :func:`build`, :func:`from_urdf`,
-:class:`Platform`, :func:`make_controller`, :func:`simulate` and its :class:`SimResult`,
-:class:`IKSolver`, :class:`Allocator`, and :class:`QprrError`, the base of every qprr error.
-``simulate``, ``SimResult``, ``make_controller``, ``IKSolver`` and ``Allocator`` are loaded on first
-access (the module's ``__getattr__``, :data:`LAZY`): ``import qprr`` stays as fast as the model
-alone, and ``qprr.simulate is qprr.sim.simulate``.  Also importable from here for existing code: the
-other exceptions of :mod:`qprr.errors`, :class:`ArmJoint`, :class:`Rotor`, :func:`from_model` and the
-coordinate maps :func:`xi_to_q`, :func:`xi_to_qv`, :func:`qv_to_xi`.
+:class:`Platform`, :func:`make_controller`, the references (:class:`Hold`, :class:`Phase`, :class:`MultiPhase`,
+:class:`Spiral`), :func:`simulate` with its settings (:class:`SimConfig`, :class:`SimInputs`) and its
+:class:`SimResult`, :class:`IKSolver`, :class:`Allocator`, and :class:`QprrError`, the base of every qprr error.
+All but the platform model are loaded on first access (the module's ``__getattr__``, :data:`LAZY`): ``import qprr``
+stays as fast as the model alone, and ``qprr.simulate is qprr.sim.simulate``.
+
+Deprecated: the names of :data:`DEPRECATED` (the other exceptions, :class:`~qprr.model.ArmJoint`,
+:class:`~qprr.rotors.Rotor`, :func:`~qprr.model.from_model`, the coordinate maps ``xi_to_q``, ``xi_to_qv``,
+``qv_to_xi``), kept here for code written against earlier versions: deprecated since 0.2.0, each access warns
+(:class:`DeprecationWarning`) naming their home (``qprr.errors.InputError``, ``qprr.charts.xi_to_q``...); they are
+removed in qprr :data:`REMOVED_IN`.
 
 Thesis: K. Bouzgou, *Contribution a l'architecture, la modelisation et la commande d'un bras
 manipulateur aerien*, Universite Paris-Saclay, 2021.  Equation numbers in docstrings refer to it.
 """
 
+import warnings
 from importlib import import_module
 
-from .charts import qv_to_xi as qv_to_xi
-from .charts import xi_to_q as xi_to_q
-from .charts import xi_to_qv as xi_to_qv
-from .errors import DivergenceError as DivergenceError
-from .errors import EulerSingularityError as EulerSingularityError
-from .errors import InputError as InputError
-from .errors import LimitError as LimitError
-from .errors import MissingDependencyError as MissingDependencyError
-from .errors import NonFiniteError as NonFiniteError
-from .errors import NonPhysicalError as NonPhysicalError
+from . import charts as charts  # the submodules the deprecated names live in stay loaded (qprr.charts.xi_to_q)
+from . import errors as errors
+from . import rotors as rotors
 from .errors import QprrError
-from .errors import ShapeError as ShapeError
-from .errors import SolverError as SolverError
-from .errors import UnknownNameError as UnknownNameError
-from .model import ArmJoint as ArmJoint
 from .model import Platform, from_urdf
-from .model import from_model as from_model
 from .nomenclature import build
 from .platforms import load
-from .rotors import Rotor as Rotor
 from .version import __version__ as __version__
 
 LAZY = {
     "simulate": "qprr.sim",
+    "SimConfig": "qprr.sim",
+    "SimInputs": "qprr.sim",
     "SimResult": "qprr.sim",
     "make_controller": "qprr.control",
     "IKSolver": "qprr.ik",
     "Allocator": "qprr.actuation",
+    "Hold": "qprr.trajectory",
+    "Phase": "qprr.trajectory",
+    "MultiPhase": "qprr.trajectory",
+    "Spiral": "qprr.trajectory",
 }
 """Names of the public face loaded on first access: name -> the module that defines it (imported then)."""
 
+REMOVED_IN = "0.4.0"
+"""The version that removes the names of :data:`DEPRECATED` from the package."""
+
+DEPRECATED = {
+    **{
+        name: "qprr.errors"
+        for name in (
+            "DivergenceError",
+            "EulerSingularityError",
+            "InputError",
+            "LimitError",
+            "MissingDependencyError",
+            "NonFiniteError",
+            "NonPhysicalError",
+            "ShapeError",
+            "SolverError",
+            "UnknownNameError",
+        )
+    },
+    "ArmJoint": "qprr.model",
+    "from_model": "qprr.model",
+    "Rotor": "qprr.rotors",
+    "xi_to_q": "qprr.charts",
+    "xi_to_qv": "qprr.charts",
+    "qv_to_xi": "qprr.charts",
+}
+"""Names importable from ``qprr`` before 0.2.0, deprecated since 0.2.0 and removed in :data:`REMOVED_IN`: name -> the
+module that is their home (each access warns, naming it)."""
+
 
 def __getattr__(name: str):
-    """``qprr.simulate`` and the other names of :data:`LAZY`: import their module on first access (then cached here)."""
-    if name not in LAZY:
-        raise AttributeError(f"module 'qprr' has no attribute {name!r}")
-    value = getattr(import_module(LAZY[name]), name)
-    globals()[name] = value
-    return value
+    """``qprr.simulate`` and the other names of :data:`LAZY`: import their module on first access (then cached here).
+    A name of :data:`DEPRECATED`: its object, with a :class:`DeprecationWarning` naming its home."""
+    if name in LAZY:
+        value = getattr(import_module(LAZY[name]), name)
+        globals()[name] = value
+        return value
+    if name in DEPRECATED:
+        home = DEPRECATED[name]
+        warnings.warn(f"qprr.{name} is deprecated and will be removed in qprr {REMOVED_IN}: use {home}.{name}", DeprecationWarning, stacklevel=2)
+        return getattr(import_module(home), name)
+    raise AttributeError(f"module 'qprr' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
@@ -71,10 +103,16 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "Allocator",
+    "Hold",
     "IKSolver",
+    "MultiPhase",
+    "Phase",
     "Platform",
     "QprrError",
+    "SimConfig",
+    "SimInputs",
     "SimResult",
+    "Spiral",
     "build",
     "from_urdf",
     "load",

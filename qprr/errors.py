@@ -31,6 +31,12 @@ class QprrError(Exception):
             self.time = t
         return self
 
+    def within(self, where: str) -> QprrError:
+        """This error with ``where`` (what was being read, e.g. "rotor file 'x.toml'") named in front of its message,
+        "where: ..."; the same object (type, attributes and traceback kept), to re-raise."""
+        self._set_message(f"{where}: {self}")
+        return self
+
     def _set_message(self, message: str) -> None:
         """Replace the message (what ``str(self)`` shows)."""
         self.args = (message,)

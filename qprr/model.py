@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import xml.etree.ElementTree as ET
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
@@ -41,7 +40,7 @@ from .urdf.inertia import check_rigid_body, inertia_matrix, read_inertials
 from .urdf.plausibility import DEFAULT as _PLAUSIBLE
 from .urdf.plausibility import check_plausibility_setting
 from .urdf.plausibility import check_rotors as _check_rotor_ranges
-from .urdf.plausibility import check_urdf as _check_urdf_ranges
+from .urdf.reader import read_urdf
 
 _REVOLUTE = {"JointModelRX", "JointModelRY", "JointModelRZ", "JointModelRevoluteUnaligned"}
 _PRISMATIC = {"JointModelPX", "JointModelPY", "JointModelPZ", "JointModelPrismaticUnaligned"}
@@ -73,217 +72,6 @@ class ArmJoint:
 
 
 # ============================================================================ physics checks
-def check_urdf_inertials(xml_text: str, source: str = "URDF") -> None:
-    """Check every ``<inertial>`` of a URDF before Pinocchio reads it (its parser drops malformed ones silently).
-
-    Each mass and the six inertia entries must be numbers; the values must pass :func:`qprr.urdf.inertia.check_rigid_body`.
-    The root link (the multirotor body) and every link a joint moves need an ``<inertial>`` (explicit zeros for a
-    massless one).
-    """
-    if not isinstance(xml_text, str):
-        raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
-    try:
-        root = ET.fromstring(xml_text)
-    except ET.ParseError as exc:
-        raise InputError(f"{source} (xml_text) is not valid XML: {exc}") from exc
-    for link in root.iter("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        name = link.get("name", "?")
-        mass_el = inertial.find("mass")
-        inertia_el = inertial.find("inertia")
-        if mass_el is None or inertia_el is None:
-            raise NonPhysicalError(f"{source}: link {name!r} has an <inertial> without <mass> or <inertia>")
-        try:
-            mass = float(mass_el.get("value"))
-            vals = {k: float(inertia_el.get(k)) for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")}
-        except (TypeError, ValueError) as exc:
-            raise NonPhysicalError(f"{source}: link {name!r} has a non-numeric mass or inertia ({exc})") from exc
-        I = np.array([[vals["ixx"], vals["ixy"], vals["ixz"]], [vals["ixy"], vals["iyy"], vals["iyz"]], [vals["ixz"], vals["iyz"], vals["izz"]]])
-        check_rigid_body(f"{source}: link {name!r}", mass, (0.0, 0.0, 0.0), I, allow_massless=True)
-    with_inertial = {link.get("name") for link in root.iter("link") if link.find("inertial") is not None}
-    children = {c.get("link") for c in root.iter("child")}
-    roots = [link.get("name") for link in root.iter("link") if link.get("name") not in children]
-    if len(roots) == 1 and roots[0] not in with_inertial:
-        raise NonPhysicalError(
-            f"{source}: the root link {roots[0]!r} (the multirotor body) has no <inertial>: Pinocchio would "
-            "load the body massless and the platform with the wrong total mass; give its mass and inertia, or an "
-            'explicit <inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/>'
-            "</inertial> when the body's mass sits on links fixed to it"
-        )
-    for joint in root.iter("joint"):
-        child = joint.find("child")
-        if joint.get("type") != "fixed" and child is not None and child.get("link") not in with_inertial:
-            raise NonPhysicalError(
-                f"{source}: link {child.get('link')!r}, moved by joint {joint.get('name')!r}, has no <inertial> "
-                "(Pinocchio would make it massless); give its mass and inertia, or write an explicit "
-                '<inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial> '
-                "for a link that is massless on purpose"
-            )
-
-
-def _attr_numbers(el: ET.Element, attr: str, count: int, where: str, *, required: bool = False) -> list[float] | None:
-    """The ``count`` finite numbers of attribute ``attr`` of ``el`` (None when absent and not ``required``)."""
-    text = el.get(attr)
-    tag = f"<{el.tag} {attr}>"
-    if text is None:
-        if required:
-            raise InputError(f"{where}: {tag} is missing")
-        return None
-    parts = text.split()
-    try:
-        vals = [float(x) for x in parts]
-    except ValueError:
-        vals = []
-    if len(parts) != count or len(vals) != count or not all(math.isfinite(v) for v in vals):
-        want = "a finite number" if count == 1 else f"{count} finite numbers separated by spaces"
-        raise InputError(f"{where}: {tag} = {text!r} must be {want}")
-    return vals
-
-
-def _check_origin(el: ET.Element | None, where: str) -> None:
-    origin = el.find("origin") if el is not None else None
-    if origin is not None:
-        _attr_numbers(origin, "xyz", 3, where)
-        _attr_numbers(origin, "rpy", 3, where)
-
-
-def _check_urdf_joint_xml(joint: ET.Element, links: set, source: str) -> tuple[str | None, str | None]:
-    """(parent, child) of one <joint> after checking its name, links, origin, axis and limit attributes."""
-    name, kind = joint.get("name"), joint.get("type")
-    where = f"{source}: joint {name!r}"
-    ends = []
-    for tag in ("parent", "child"):
-        el = joint.find(tag)
-        if el is None or el.get("link") is None:
-            raise InputError(f'{where}: <{tag} link="..."/> is missing')
-        if el.get("link") not in links:
-            raise UnknownNameError(f"<{tag} link> of joint {name!r} in {source}", el.get("link"), tuple(sorted(links)))
-        ends.append(el.get("link"))
-    if ends[0] == ends[1]:
-        raise InputError(f"{where}: <parent link> and <child link> are both {ends[0]!r}")
-    _check_origin(joint, where)
-    if kind in ("revolute", "prismatic", "continuous"):
-        axis_el = joint.find("axis")
-        if axis_el is not None:
-            axis = _attr_numbers(axis_el, "xyz", 3, where)
-            if axis is not None and not math.hypot(*axis) > 1e-9:
-                raise InputError(
-                    f"{where}: <axis xyz> = {axis_el.get('xyz')!r} is the zero vector; give the unit direction of "
-                    f'the joint axis in the joint frame, e.g. "0 0 1"'
-                )
-        limit = joint.find("limit")
-        if limit is not None:
-            for attr in ("lower", "upper"):
-                _attr_numbers(limit, attr, 1, where)
-            for attr in ("effort", "velocity"):
-                v = _attr_numbers(limit, attr, 1, where, required=True)
-                if v[0] < 0.0:
-                    raise InputError(f"{where}: <limit {attr}> = {v[0]!r} must be >= 0 (the largest |{attr}|)")
-    dyn = joint.find("dynamics")
-    if dyn is not None:
-        for attr in ("damping", "friction"):
-            v = _attr_numbers(dyn, attr, 1, where)
-            if v is not None and v[0] < 0.0:
-                raise InputError(f"{where}: <dynamics {attr}> = {v[0]!r} must be >= 0 (a passive joint {attr}, SI per radian or metre)")
-    return ends[0], ends[1]
-
-
-def check_urdf_structure(xml_text: str, source: str = "URDF") -> ET.Element:
-    """Parse a URDF with a real XML parser and check what Pinocchio's parser reports without naming the element:
-    duplicate link or joint names, joints whose parent or child is not a link, a link with two parents, a non-finite
-    or malformed number in an ``<origin xyz rpy>``, ``<axis xyz>``, ``<limit>`` or ``<dynamics>``, a zero joint axis, a missing
-    ``effort`` or ``velocity``.  Raises
-    :class:`~qprr.errors.InputError` naming the element (link or joint) and the attribute; returns the root element."""
-    if not isinstance(xml_text, str):
-        raise InputError(f"xml_text must be the URDF text (str), got {type(xml_text).__name__}")
-    try:
-        root = ET.fromstring(xml_text)
-    except ET.ParseError as exc:
-        raise InputError(f"{source} is not valid XML: {exc}") from exc
-    if root.tag != "robot":
-        raise InputError(f"{source}: the root element is <{root.tag}>, not <robot>: not a URDF")
-    for tag in ("link", "joint"):
-        seen: dict[str, int] = {}
-        for k, el in enumerate(root.findall(tag)):
-            name = el.get("name")
-            if not name:
-                raise InputError(f'{source}: <{tag}> number {k + 1} has no name="..."')
-            if name in seen:
-                raise InputError(
-                    f"{source}: two <{tag}> elements are named {name!r} (numbers {seen[name] + 1} and {k + 1}); {tag} names must be unique"
-                )
-            seen[name] = k
-    links = {el.get("name") for el in root.findall("link")}
-    parent_of: dict[str, str] = {}
-    for joint in root.findall("joint"):
-        parent, child = _check_urdf_joint_xml(joint, links, source)
-        if child in parent_of:
-            raise InputError(
-                f"{source}: link {child!r} has two parents: it is the <child> of joints {parent_of[child]!r} and "
-                f"{joint.get('name')!r} (a URDF is a tree: each link has at most one parent joint)"
-            )
-        parent_of[child] = joint.get("name")
-    for link in root.findall("link"):
-        inertial = link.find("inertial")
-        where = f"{source}: link {link.get('name')!r}"
-        _check_origin(inertial, where)  # mass and inertia values: check_urdf_inertials
-    return root
-
-
-_ARM_JOINT_TYPES = ("revolute", "prismatic", "fixed")
-
-
-def check_urdf_joints(xml_text: str, source: str = "URDF") -> None:
-    """Check that a URDF describes one multirotor body (the root link) carrying a serial arm of 1-DOF joints.
-
-    One root link; every joint ``revolute``, ``prismatic`` (both with ``<limit lower upper>``) or
-    ``fixed``.  A ``floating`` joint, a ``planar`` or a ``continuous`` one raises :class:`InputError`
-    naming the joint and saying what to write instead (qprr adds the free-flyer joint itself).
-    """
-    try:
-        root = ET.fromstring(xml_text)
-    except ET.ParseError as exc:
-        raise InputError(f"{source} is not valid XML: {exc}") from exc
-    if root.tag != "robot":
-        raise InputError(f"{source}: the root element is <{root.tag}>, not <robot>: not a URDF")
-    links = [link.get("name") for link in root.findall("link")]
-    children = set()
-    children_all = {c.get("link") for c in root.findall("joint/child")}
-    for joint in root.findall("joint"):
-        name, kind = joint.get("name"), joint.get("type")
-        child = joint.find("child")
-        if child is not None:
-            children.add(child.get("link"))
-        if kind in ("floating", "planar"):
-            parent = joint.find("parent")
-            parent = parent.get("link") if parent is not None else None
-            if parent is not None and parent not in children_all:  # a "world" link holding the body
-                raise InputError(
-                    f"{source}: joint {name!r} is {kind}: qprr adds the multirotor's free-flyer joint itself; remove "
-                    f"link {parent!r} and joint {name!r} so that the multirotor body is the URDF's root link"
-                )
-            raise InputError(f"{source}: joint {name!r} is {kind}: not supported as an arm joint (1-DOF revolute or prismatic only)")
-        if kind == "continuous":
-            raise InputError(
-                f"{source}: joint {name!r} is continuous (unbounded): not supported as an arm joint yet; make it "
-                'type="revolute" with <limit lower="..." upper="..." effort="..." velocity="..."/>'
-            )
-        if kind not in _ARM_JOINT_TYPES:
-            raise UnknownNameError(f"type of joint {name!r} in {source}", kind, _ARM_JOINT_TYPES)
-        if kind != "fixed":
-            limit = joint.find("limit")
-            if limit is None or limit.get("lower") is None or limit.get("upper") is None:
-                raise InputError(
-                    f'{source}: {kind} joint {name!r} needs <limit lower="..." upper="..." effort="..." '
-                    f'velocity="..."/> ({"rad" if kind == "revolute" else "m"}, N{" m" if kind == "revolute" else ""})'
-                )
-    roots = [link for link in links if link not in children]
-    if len(roots) != 1:
-        raise InputError(f"{source}: a URDF has exactly one root link (the multirotor body), found {len(roots)}: {roots}")
-
-
 def check_model_inertias(model: pin.Model) -> None:
     """:func:`qprr.urdf.inertia.check_rigid_body` on every body of a Pinocchio model (after fixed links are merged)."""
     if not isinstance(model, pin.Model):
@@ -710,7 +498,7 @@ def _resolve_rotors(model: pin.Model, base: int, rotors, rotor_source: str | Non
             raise InputError(f"rotors must be qprr.rotors.Rotor objects, got {_short(rotors)}")
     except (InputError, UnknownNameError) as exc:
         if rotor_source is not None:
-            exc.args = (f"rotor file {rotor_source!r}: {exc.args[0]}", *exc.args[1:])
+            exc.within(f"rotor file {rotor_source!r}")
         raise
     return rotors
 
@@ -876,13 +664,13 @@ def from_urdf(
 ) -> Platform:
     """A :class:`Platform` from a URDF (a path, or the XML text) and a rotor description.
 
-    The URDF's inertials are checked first (:func:`check_urdf_inertials`: Pinocchio's parser
-    drops a malformed one silently), then the model is built with a free-flyer root and gravity
-    -g e3 (g >= 0; 0 for free flight).  ``rotors``: a sequence of :class:`~qprr.rotors.Rotor`, a rotor description mapping,
-    or the path of a TOML rotor file (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults
-    to the last frame of the last arm joint of a serial arm.  The XML is checked first
-    (:func:`check_urdf_structure`: names, numbers, axes, limits, the root inertial), then every physical value against
-    ``plausibility`` (:class:`qprr.urdf.plausibility.Plausibility`; None: no range check).  ``inertials``: a TOML file of
+    The URDF is read once and checked first (:func:`qprr.urdf.reader.read_urdf`: its structure, names, numbers, axes
+    and limits, every physical value against ``plausibility`` (:class:`qprr.urdf.plausibility.Plausibility`; None: no
+    range check), the serial arm, and the inertials, which Pinocchio's parser drops silently when malformed), then the
+    model is built with a free-flyer root and gravity -g e3 (g >= 0; 0 for free flight).  ``rotors``: a sequence of
+    :class:`~qprr.rotors.Rotor`, a rotor description mapping, or the path of a TOML rotor file
+    (:func:`qprr.rotors.read_rotor_file`).  ``ee_frame`` defaults to the last frame of the last arm joint of a serial
+    arm.  ``allow_nonphysical=True`` skips the inertial checks (and the model's, :func:`from_model`).  ``inertials``: a TOML file of
     inertial overrides (:func:`qprr.urdf.inertia.read_inertials`, e.g. written by ``qprr log identify --write-inertials``)
     applied to the model before its checks (:func:`apply_inertials`).
     """
@@ -891,10 +679,7 @@ def from_urdf(
     text, source = _urdf_text(urdf)
     g = as_real(g, "g", nonnegative=True, unit="m/s^2")  # g = 0: free flight (conservation tests)
     plausibility = check_plausibility_setting(plausibility)
-    _check_urdf_ranges(check_urdf_structure(text, source), plausibility, source)
-    check_urdf_joints(text, source)
-    if not allow_nonphysical:
-        check_urdf_inertials(text, source)
+    read_urdf(text, source, plausibility=plausibility, inertials=not allow_nonphysical)
     try:
         model = pin.buildModelFromXML(text, pin.JointModelFreeFlyer())
     except ValueError as exc:  # urdfdom prints its reason on stderr

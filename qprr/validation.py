@@ -252,7 +252,7 @@ def checked_args(fn=None, *, allow_inf: tuple[str, ...] = ()):
         names = list(sig.parameters)
         checks = {}
         for p in sig.parameters.values():
-            ann = p.annotation if isinstance(p.annotation, str) else getattr(p.annotation, "__name__", "")
+            ann = p.annotation if isinstance(p.annotation, str) else p.annotation.__name__ if isinstance(p.annotation, type) else ""
             if ann == "float":
                 checks[p.name] = lambda v, n=p.name, inf=p.name in allow_inf: as_real(v, n, allow_inf=inf)
             elif ann == "int":

@@ -76,7 +76,7 @@ def test_point_to_point_follows_the_closed_form_error_dynamics():
 
 def test_point_to_point_on_the_real_rotors_saturates_and_diverges():
     """The same step on the four bounded rotors with (6.17) tilt: every tick saturates and the run diverges."""
-    with pytest.raises(qprr.DivergenceError) as info:
+    with pytest.raises(qprr.errors.DivergenceError) as info:
         run("point-to-point", actuation="rotors", duration=2.0)
     assert info.value.result.saturation_fraction() > 0.9
 

@@ -323,7 +323,7 @@ def test_drag_is_the_simulators_aerodynamic_drag(envs, platforms):
 
     p = platforms["borinot_flying_arm_2"]
     rng = np.random.default_rng(4)
-    q = np.array([qprr.xi_to_q(np.r_[rng.normal(size=3), rng.uniform(-0.5, 0.5, 3), np.zeros(p.n_arm)]) for _ in range(5)])
+    q = np.array([qprr.charts.xi_to_q(np.r_[rng.normal(size=3), rng.uniform(-0.5, 0.5, 3), np.zeros(p.n_arm)]) for _ in range(5)])
     v, wind = rng.normal(size=(5, p.nv)), rng.normal(size=(5, 3))
     batch = drag_force(q, v, wind, np.full(5, 0.3))
     for i in range(5):

@@ -525,7 +525,7 @@ def test_a_failing_qp_raises_solver_error(rob, dat):
     tasks.update_kinematics(rob, dat, q)
     eng = qprr.ik.HierarchySolver(rob, max_qp_iter=1, eps_abs=1e-14, active_set_first=False)
     eng.reset()
-    with pytest.raises(qprr.SolverError, match="ProxQP did not solve level"):
+    with pytest.raises(qprr.errors.SolverError, match="ProxQP did not solve level"):
         eng.solve(rob, dat, q, levels)
 
 

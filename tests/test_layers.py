@@ -185,12 +185,29 @@ def test_the_public_face_is_the_workflow():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=300)
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == (
-        "[] True ['Allocator', 'IKSolver', 'Platform', 'QprrError', 'SimResult', 'build', 'from_urdf', 'load', 'make_controller', 'simulate']"
+        "[] True ['Allocator', 'Hold', 'IKSolver', 'MultiPhase', 'Phase', 'Platform', 'QprrError', 'SimConfig', 'SimInputs', "
+        "'SimResult', 'Spiral', 'build', 'from_urdf', 'load', 'make_controller', 'simulate']"
     ), out.stdout
     import qprr
 
     with pytest.raises(AttributeError, match="no attribute 'simulat'"):
         qprr.simulat  # noqa: B018 - a typo is an AttributeError, not a lazy lookup
+    assert qprr.SimConfig is qprr.sim.SimConfig and qprr.Hold is qprr.trajectory.Hold
+
+
+def test_names_kept_for_existing_code_are_deprecated_with_a_removal_version():
+    """``qprr.InputError``, ``qprr.xi_to_q``...: still their objects, with a DeprecationWarning naming the home and the
+    version that removes them (issue 33 item 5); no deprecated name is in ``__all__``."""
+    import importlib
+
+    import qprr
+
+    version = [tuple(int(x) for x in v.split(".")) for v in (qprr.REMOVED_IN, qprr.__version__)]
+    assert version[0] > version[1] and not set(qprr.DEPRECATED) & set(qprr.__all__)
+    for name, home in qprr.DEPRECATED.items():
+        with pytest.warns(DeprecationWarning, match=rf"qprr\.{name} is deprecated .* removed in qprr {qprr.REMOVED_IN}: use {home}\.{name}"):
+            value = getattr(qprr, name)
+        assert value is getattr(importlib.import_module(home), name)
 
 
 # ------------------------------------------------------------------------------------ the module map's order

@@ -100,7 +100,7 @@ def test_ik_cold_starts_agree_between_kernels(name):
         xi[0:3] = rng.uniform(-2.0, 2.0, 3)
         xi[5] = rng.uniform(-np.pi, np.pi)
         xi[6:] = rng.uniform(np.maximum(platform.arm_lower, -np.pi), np.minimum(platform.arm_upper, np.pi))
-        q = qprr.xi_to_q(xi)
+        q = qprr.charts.xi_to_q(xi)
         pin.framesForwardKinematics(platform.model, data, q)
         target = data.oMf[platform.ee_frame].copy()
         ra, rf = (solvers[k].solve(data, target) for k in ("numpy", "numba"))

@@ -186,5 +186,5 @@ def test_bad_input(robot, data):
         qprr.thesis.load_qprr("heavy")
     xi = np.zeros(9)
     xi[4] = np.pi / 2
-    with pytest.raises(qprr.EulerSingularityError):
+    with pytest.raises(qprr.errors.EulerSingularityError):
         dyn.dynamics_xi(robot, data, xi, np.zeros(9))

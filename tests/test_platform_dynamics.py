@@ -153,7 +153,7 @@ def test_allocated_hover_thrusts_hold_the_platform_still(platform):
         g = dyn.generalized_gravity(p, data, q)
         try:
             f = alloc.hover_thrusts(data, q)
-        except qprr.InputError:  # this arm pose needs more than the rotors' bounds
+        except qprr.errors.InputError:  # this arm pose needs more than the rotors' bounds
             continue
         n_ok += 1
         a = pin.aba(p.model, data, q, np.zeros(p.nv), p.actuation_matrix @ np.r_[f, g[6:]])

@@ -159,7 +159,7 @@ def test_a_joint_pushed_into_its_stop_stays_there(free_robot):
     assert res.xi[-1, 6] == pytest.approx(hi, abs=1e-12)
     assert np.abs(res.xi_dot[-100:, 6]).max() < 1e-9
     assert (res.flags[-100:] & AllocationFlag.JOINT_STOP).all()
-    with pytest.raises(qprr.LimitError, match="xi0"):
+    with pytest.raises(qprr.errors.LimitError, match="xi0"):
         simulate(free_robot, OpenLoop(u), Hold(tuple(xi)), 0.01, xi0=np.r_[0, 0, 0, 0, 0, 0, 0.05, 0, 0])
 
 

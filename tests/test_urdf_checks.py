@@ -167,3 +167,24 @@ def test_a_payload_that_moves_the_cog_beyond_the_rotors_cannot_hover():
     with pytest.raises(QprrError, match="cannot hover"):  # it lifts (above): the refusal is the hover's, not the lift's
         with_payload(p, far)
     assert math.isfinite(summary_ok.condition) and np.all(np.isfinite(summary_ok.hover_thrusts))
+
+
+# ----------------------------------------------------------------------------------------------- the one reader
+def test_the_reader_parses_once_what_pinocchio_loads():
+    """qprr.urdf.reader.read_urdf: one parse gives every value the checks read, the same as the loaded model's
+    (total mass, joint limits and efforts, the root link); a number that is not one is refused with the attribute."""
+    from qprr.urdf.reader import attribute_numbers, read_urdf
+
+    urdf = read_urdf(URDF, "quad_rrr.urdf")
+    platform = _load(URDF)
+    masses = [link.inertial.mass for link in urdf.links if link.inertial is not None]
+    assert math.fsum(masses) == pytest.approx(platform.total_mass, rel=1e-14)
+    moving = {j.name: j for j in urdf.joints if j.kind != "fixed"}
+    for arm in platform.arm:
+        j = moving[arm.name]
+        assert (j.limit.lower, j.limit.upper, j.limit.effort, j.limit.velocity) == (arm.lower, arm.upper, arm.effort, arm.velocity)
+    assert urdf.roots == (platform.model.frames[platform.base_frame].name,)
+    assert attribute_numbers("0 0 -0.25") == (0.0, 0.0, -0.25) and attribute_numbers("0 x") is None and attribute_numbers(None) is None
+    with pytest.raises(NonPhysicalError, match=r"link 'base_link' has a non-numeric mass or inertia \(<mass value> = '1.2kg'\)"):
+        read_urdf(_sub('<mass value="1.20"/>', '<mass value="1.2kg"/>')(URDF))
+    assert read_urdf(_sub('<mass value="1.20"/>', '<mass value="1.2kg"/>')(URDF), inertials=False).links[0].inertial.mass is None

@@ -133,7 +133,7 @@ def test_none_model_or_data_is_a_qprr_error():
     with pytest.raises(ShapeError, match="data was made for another model"):
         kin.ee_placement(P, qprr.load("borinot_flying_arm_2").data(), P.neutral_q())
     with pytest.raises(InputError, match="model must be a pinocchio.Model"):
-        qprr.from_model(None, P.rotors)
+        qprr.model.from_model(None, P.rotors)
 
 
 # ------------------------------------------------------------------------------------ item 6

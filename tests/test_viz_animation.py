@@ -85,9 +85,9 @@ def test_animate_result_reads_a_run(platform, tmp_path):
         platform, RunLog(t, xi, f=f, contact_wrench_world=wrench, platform=platform.name), tmp_path / "r.gif", view="fixed", **SMALL
     )
     assert info.frames == 11
-    with pytest.raises(qprr.ShapeError, match="4 rotors"):
+    with pytest.raises(qprr.errors.ShapeError, match="4 rotors"):
         animate_result(platform, RunLog(t, xi, f=np.zeros((t.size, 6))), tmp_path / "bad.gif", **SMALL)
-    with pytest.raises(qprr.ShapeError, match="has 9"):
+    with pytest.raises(qprr.errors.ShapeError, match="has 9"):
         animate_result(platform, RunLog(t, xi[:, :8]), tmp_path / "bad.gif", **SMALL)
 
 
@@ -97,23 +97,23 @@ def test_mp4_needs_ffmpeg(platform, tmp_path, monkeypatch):
         info = animate(platform, t, xi, tmp_path / "a.mp4", **SMALL)
         assert info.path.stat().st_size > 0
     monkeypatch.setattr(anim.shutil, "which", lambda name: None)
-    with pytest.raises(qprr.MissingDependencyError, match="apt-get install ffmpeg"):
+    with pytest.raises(qprr.errors.MissingDependencyError, match="apt-get install ffmpeg"):
         animate(platform, t, xi, tmp_path / "b.mp4", **SMALL)
 
 
 def test_bad_inputs_are_named(platform, tmp_path):
     t, xi, f = _run(platform)
-    with pytest.raises(qprr.ShapeError, match=r"xi must have shape \(101, 9\)"):
+    with pytest.raises(qprr.errors.ShapeError, match=r"xi must have shape \(101, 9\)"):
         animate(platform, t, xi[:, :7], tmp_path / "a.gif")
-    with pytest.raises(qprr.ShapeError, match=r"f must have shape \(101, 4\)"):
+    with pytest.raises(qprr.errors.ShapeError, match=r"f must have shape \(101, 4\)"):
         animate(platform, t, xi, tmp_path / "a.gif", f=f[:, :3])
-    with pytest.raises(qprr.InputError, match="non-decreasing"):
+    with pytest.raises(qprr.errors.InputError, match="non-decreasing"):
         animate(platform, t[::-1], xi, tmp_path / "a.gif")
-    with pytest.raises(qprr.InputError, match=r"\.gif or \.mp4"):
+    with pytest.raises(qprr.errors.InputError, match=r"\.gif or \.mp4"):
         animate(platform, t, xi, tmp_path / "a.avi")
-    with pytest.raises(qprr.UnknownNameError, match="follow"):
+    with pytest.raises(qprr.errors.UnknownNameError, match="follow"):
         animate(platform, t, xi, tmp_path / "a.gif", view="orbit")
-    with pytest.raises(qprr.InputError, match="fps"):
+    with pytest.raises(qprr.errors.InputError, match="fps"):
         animate(platform, t, xi, tmp_path / "a.gif", fps=0)
 
 

@@ -130,7 +130,7 @@ def test_example_robot_data_platforms_use_their_meshes():
 def test_primitive_shapes_follow_the_model(name):
     """Without a URDF: a disc per rotor normal to its (possibly tilted) axis, arm cylinders joining consecutive joints."""
     platform = qprr.load(name) if "_" in name else qprr.build(name)
-    bare = qprr.from_model(platform.model, platform.rotors, ee_frame=platform.ee_frame, name="bare")
+    bare = qprr.model.from_model(platform.model, platform.rotors, ee_frame=platform.ee_frame, name="bare")
     assert bare.urdf is None
     geom = visual_model(bare)
     assert geom.ngeoms == len(primitive_visual_model(bare).geometryObjects)
@@ -155,5 +155,5 @@ def test_primitive_shapes_follow_the_model(name):
 
 
 def test_visual_model_rejects_a_missing_urdf_file(tmp_path):
-    with pytest.raises(qprr.InputError, match="does not exist"):
+    with pytest.raises(qprr.errors.InputError, match="does not exist"):
         visual_model(qprr.load(), tmp_path / "nope.urdf")

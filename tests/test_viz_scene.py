@@ -131,7 +131,7 @@ def test_ik_path_reaches_every_target_hovering_with_the_cog_on_the_axis(qprr_pla
 
 
 def test_ik_path_checks_shapes(qprr_platform):
-    with pytest.raises(qprr.ShapeError):
+    with pytest.raises(qprr.errors.ShapeError):
         ik_path(qprr_platform, np.zeros(3), np.zeros((2, 3)))
-    with pytest.raises(qprr.ShapeError):
+    with pytest.raises(qprr.errors.ShapeError):
         ik_path(qprr_platform, np.zeros(2), np.zeros((2, 3)), np.zeros((2, 3)))

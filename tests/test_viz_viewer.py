@@ -55,9 +55,9 @@ def test_sliders_are_forward_kinematics(viewer, platform):
     np.testing.assert_allclose(viewer.pose.ee_world, M.translation, atol=1e-14)
     np.testing.assert_allclose(viewer.pose.com_world, kinematics.com_world(platform, platform.data(), xi_to_q(xi)), atol=1e-14)
     assert viewer.hover_state.f.sum() == pytest.approx(platform.total_mass * platform.g, rel=1e-13)
-    with pytest.raises(qprr.UnknownNameError, match="theta2"):
+    with pytest.raises(qprr.errors.UnknownNameError, match="theta2"):
         viewer.set_joint("theta9", 0.0)
-    with pytest.raises(qprr.LimitError, match="theta3"):
+    with pytest.raises(qprr.errors.LimitError, match="theta3"):
         viewer.set_xi(np.r_[xi[:8], 3.0])
 
 
@@ -91,9 +91,9 @@ def test_player_shows_the_logged_samples(viewer, platform, tmp_path):
     viewer.stop_playing()
     k = int(np.flatnonzero(t == viewer.run_time)[0])  # the player moved on and shows a logged sample
     assert viewer.run_time != 0.5 and np.array_equal(viewer.xi, xi[k])
-    with pytest.raises(qprr.InputError, match="does not exist"):
+    with pytest.raises(qprr.errors.InputError, match="does not exist"):
         viewer.load_run(tmp_path / "missing.npz")
-    with pytest.raises(qprr.ShapeError, match="has 9"):
+    with pytest.raises(qprr.errors.ShapeError, match="has 9"):
         viewer.load_run(RunLog(t, xi[:, :8]))
 
 

@@ -58,7 +58,7 @@ def default_disc_radius(rotors: Sequence[Rotor]) -> float:
     Raises :class:`~qprr.errors.InputError` when no pair of rotors is side by side (a single rotor, all coaxial):
     then give ``radius`` in the rotor file."""
     if isinstance(rotors, (str, bytes)) or not isinstance(rotors, Sequence) or not all(isinstance(r, Rotor) for r in rotors):
-        raise InputError(f"rotors must be a sequence of qprr.Rotor (e.g. platform.rotors), got {rotors!r}")
+        raise InputError(f"rotors must be a sequence of qprr.rotors.Rotor (e.g. platform.rotors), got {rotors!r}")
     best = math.inf
     for a, b in itertools.combinations(rotors, 2):
         d = np.subtract(b.position_body, a.position_body)

@@ -32,6 +32,7 @@ def _print(lines) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from .metrics import RunStatus
     from .report import campaign_report, not_ok_reasons
     from .runner import run_campaign
     from .spec import CampaignSpec
@@ -63,7 +64,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         return _fail(prog, f"{type(exc).__name__}: {exc}")
     wall = time.perf_counter() - t0
     res = done.results
-    ok = int((res.table["status"] == "ok").sum()) if len(res) else 0
+    ok = int((res.table["status"] == RunStatus.OK).sum()) if len(res) else 0
     lost = f", {done.lost} lost (not saved)" if done.lost else ""
     lost += f", stopped by {done.interrupted}" if done.interrupted else ""
     _print(

@@ -34,16 +34,40 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, UnknownNameError
 from ..registry import Registry
-from ..sim import SimResult, Status
+from ..sim import SimResult
 from ..validation import as_name, as_real
 
-STATUSES = ("ok", "diverged", "failed", "error")
-"""Run outcomes: the three :class:`qprr.sim.Status` values and ``error`` (an exception that is not a qprr error)."""
+
+class RunStatus(str, Enum):
+    """How a run of a campaign ended (the ``status`` column): the three :class:`qprr.sim.Status` values and ``error``
+    (an exception that is not a qprr error: a bug, recorded rather than lost).  A ``str``: the table's text compares
+    equal (``table["status"] == RunStatus.OK``)."""
+
+    OK = "ok"
+    DIVERGED = "diverged"
+    FAILED = "failed"
+    ERROR = "error"
+
+    def __str__(self) -> str:
+        return self.value
+
+
+STATUSES = tuple(s.value for s in RunStatus)
+"""The texts of the ``status`` column (:class:`RunStatus` values)."""
+
+
+def run_status(status) -> RunStatus:
+    """``status`` (a :class:`RunStatus`, a :class:`qprr.sim.Status` or the text of either) as a :class:`RunStatus`."""
+    if isinstance(status, str) and status in STATUSES:
+        return RunStatus(str(status))
+    raise UnknownNameError("run status", status, STATUSES)
+
 
 BASE_COLUMNS = ("status", "reason", "t_end", "wall_time")
 POSITION = ("x", "y", "z")
@@ -161,12 +185,20 @@ def metric_columns(groups, names, extras=()) -> tuple[str, ...]:
 
 
 def metrics_of(
-    result: SimResult | None, groups, names, extras=(), *, status: str | None = None, reason: str = "", wall_time: float = math.nan, success=None
+    result: SimResult | None,
+    groups,
+    names,
+    extras=(),
+    *,
+    status: RunStatus | None = None,
+    reason: str = "",
+    wall_time: float = math.nan,
+    success=None,
 ) -> dict[str, object]:
-    """The row of one run: :func:`metric_columns` -> value.
+    """The row of one run: :func:`metric_columns` -> value (the status as its text, a value of :data:`STATUSES`).
 
     ``result`` may be None (the run raised before simulating); ``status``/``reason`` override
-    the result's (e.g. ``error`` with the exception text); ``success``: {metric: upper bound}.
+    the result's (e.g. :attr:`RunStatus.ERROR` with the exception text); ``success``: {metric: upper bound}.
     """
     if result is not None and not isinstance(result, SimResult):
         raise InputError(f"result must be a SimResult or None (a run that raised before simulating), got {type(result).__name__}")
@@ -175,20 +207,20 @@ def metrics_of(
     row: dict[str, object] = {c: math.nan for c in metric_columns(groups, names, extras)}
     row["success"] = 0
     if result is None:
-        row.update(status=status or "error", reason=reason, t_end=0.0, wall_time=wall_time)
+        row.update(status=run_status(status or RunStatus.ERROR).value, reason=reason, t_end=0.0, wall_time=wall_time)
         return row
-    st = status or str(result.status)
+    st = run_status(status or result.status)
     row.update(
-        status=st,
+        status=st.value,
         reason=reason or result.reason,
         wall_time=result.wall_time if math.isnan(wall_time) else wall_time,
         t_end=float(result.t[-1] + result.control_period) if result.n else 0.0,
     )
     for g in groups:
-        row.update(METRICS[g].values(g, result, tuple(names), st == Status.OK.value))
+        row.update(METRICS[g].values(g, result, tuple(names), st == RunStatus.OK))
     for k in extras:
         row[k] = float(result.metrics.get(k, math.nan))
-    row["success"] = int(st == Status.OK.value and all(float(row[m]) <= bound for m, bound in (success or {}).items()))
+    row["success"] = int(st == RunStatus.OK and all(float(row[m]) <= bound for m, bound in (success or {}).items()))
     return row
 
 
@@ -199,7 +231,9 @@ __all__ = [
     "POSITION",
     "STATUSES",
     "CampaignMetric",
+    "RunStatus",
     "is_nonnegative",
     "metric_columns",
+    "run_status",
     "metrics_of",
 ]

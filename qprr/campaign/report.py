@@ -32,7 +32,7 @@ import numpy as np
 
 from ..errors import InputError, UnknownNameError
 from ..viz import figure_path, fit_texts, new_figure
-from .metrics import DEFAULT_METRICS, METRICS
+from .metrics import DEFAULT_METRICS, METRICS, RunStatus
 from .store import Results, read_results
 
 if TYPE_CHECKING:
@@ -191,7 +191,7 @@ def summarize(results: Results, by=None, metrics=None) -> Summary:
     rows = []
     for g in sorted(groups, key=lambda x: tuple((0, v) if isinstance(v, (int, float)) else (1, str(v)) for v in x)):
         idx = np.array(groups[g])
-        ok = status[idx] == "ok"
+        ok = status[idx] == RunStatus.OK
         row = dict(zip(by, g))
         row.update(n=int(idx.size), ok=int(ok.sum()), completed=float(ok.mean()), success=float(_success(results)[idx].mean()))
         reasons = {}
@@ -246,7 +246,7 @@ def format_table(summary: Summary, markdown: bool = False, stats=("median", "p90
 
 # ------------------------------------------------------------------------------ figures
 def _ok(results: Results) -> np.ndarray:
-    return results.table["status"] == "ok"
+    return results.table["status"] == RunStatus.OK
 
 
 def _success(results: Results) -> np.ndarray:
@@ -505,7 +505,7 @@ def not_ok_reasons(results: Results, limit: int = 3) -> list[str]:
     if not len(results) or "reason" not in results.table.dtype.names:
         return []
     status, reason = results.table["status"], results.table["reason"]
-    bad = status != "ok"
+    bad = status != RunStatus.OK
     if not bad.any():
         return []
     keys, counts = np.unique(np.char.add(np.char.add(status[bad], ": "), reason[bad]), return_counts=True)

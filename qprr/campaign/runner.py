@@ -28,7 +28,7 @@ from ..errors import InputError, UnknownNameError
 from ..progress import StatusProgress
 from ..validation import as_int, as_settings
 from .backends import Backend
-from .metrics import metric_columns
+from .metrics import RunStatus, metric_columns
 from .session import BackendChoice, Session, check_backend
 from .spec import CampaignSpec
 from .store import Results, ResultStore, check_output, read_results
@@ -139,10 +139,10 @@ def _collect(spec: CampaignSpec, names, be: Backend, runs: dict, store: ResultSt
                 tally.lost.append(run)
                 tally.lost_reason = tally.lost_reason or f"{type(exc).__name__}: {exc}".strip().splitlines()[0]
                 continue
-            row = nan_row(spec, names, run, "error", f"{type(exc).__name__}: {exc}")  # the task could not run
+            row = nan_row(spec, names, run, RunStatus.ERROR, f"{type(exc).__name__}: {exc}")  # the task could not run
         store.append(row)
         tally.executed += 1
-        tally.failed += row["status"] != "ok"
+        tally.failed += row["status"] != RunStatus.OK
         bar.update(str(row["status"]))
 
 

@@ -52,7 +52,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, fields
 from pathlib import Path
 
@@ -201,7 +201,7 @@ def _grid_values(name: str, value) -> tuple:
         if isinstance(num, bool) or not isinstance(num, int) or num < 1:
             raise InputError(f"grid parameter {name!r}: num must be an integer >= 1, got {num!r}")
         return tuple(float(x) for x in np.linspace(_number(value["start"], "start"), _number(value["stop"], "stop"), num))
-    if isinstance(value, (str, bytes)) or not hasattr(value, "__iter__"):
+    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
         raise InputError(f"grid parameter {name!r} must be a list of values, got {value!r}")
     values = tuple(value)
     if not values:

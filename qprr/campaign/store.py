@@ -479,9 +479,26 @@ def read_meta(path: str | Path) -> dict:
     return meta
 
 
-_SPECS: dict[str, object] = {}
+@dataclass
+class _Specification:
+    """A campaign specification read from metadata, and the seed and parameter columns (as written) it gives each run,
+    computed once per run (a resumed or re-read file checks every row against them)."""
+
+    spec: object
+    columns: dict[int, dict[str, str]] = field(default_factory=dict)
+
+    def expected(self, run: int) -> dict[str, str]:
+        """The seed and parameter columns of ``run``."""
+        if run not in self.columns:
+            from .worker import params_row
+
+            r = self.spec.run(run)
+            self.columns[run] = {"seed": str(r.seed), **{k: _fmt(v) for k, v in params_row(self.spec, r.params).items()}}
+        return self.columns[run]
+
+
+_SPECS: dict[str, _Specification] = {}
 """Specifications read from metadata in this process, keyed by their JSON text (a report after a run reads it once)."""
-_BY_FINGERPRINT: dict[str, object] = {}
 
 
 def _short(value) -> str:
@@ -521,33 +538,39 @@ def _spec_difference(old, new) -> str:
     return f"; it differs in {', '.join(parts)}" if parts else ""
 
 
-def _recomputed(meta: dict, mp: Path):
-    """The specification of campaign metadata and its fingerprint recomputed ((None, None) for a plain store);
-    :class:`ResultsFileError` when its 'spec' is no valid specification."""
+def _read_spec(meta: dict, mp: Path) -> _Specification | None:
+    """The :class:`_Specification` of campaign metadata (None for a plain store); :class:`ResultsFileError` when its
+    'spec' is no valid specification."""
     if "spec" not in meta:
-        return None, None
+        return None
     from .spec import CampaignSpec
 
     key = json.dumps(meta["spec"], sort_keys=True, default=str)
     try:
-        spec = _SPECS.get(key) or _SPECS.setdefault(key, CampaignSpec.from_mapping(meta["spec"]))
-        return spec, spec.fingerprint
+        return _SPECS.get(key) or _SPECS.setdefault(key, _Specification(CampaignSpec.from_mapping(meta["spec"])))
     except (QprrError, TypeError, ValueError) as exc:
         raise ResultsFileError(f"{str(mp)!r}: key 'spec' is not a valid campaign specification ({exc}): {_META_FIX}") from exc
 
 
-def _campaign_spec(meta: dict, mp: Path):
+def _recomputed(meta: dict, mp: Path):
+    """The specification of campaign metadata and its fingerprint recomputed ((None, None) for a plain store);
+    :class:`ResultsFileError` when its 'spec' is no valid specification."""
+    entry = _read_spec(meta, mp)
+    return (None, None) if entry is None else (entry.spec, entry.spec.fingerprint)
+
+
+def _campaign_spec(meta: dict, mp: Path) -> _Specification | None:
     """The specification of campaign metadata (None for a plain store), checked against its fingerprint."""
-    spec, fingerprint = _recomputed(meta, mp)
-    if spec is None:
+    entry = _read_spec(meta, mp)
+    if entry is None:
         return None
+    fingerprint = entry.spec.fingerprint
     if fingerprint != meta["fingerprint"]:
         raise ResultsFileError(
             f"{str(mp)!r}: its 'spec' has fingerprint {fingerprint!r}, not the {meta['fingerprint']!r} it records "
             f"(the file was damaged or edited): {_META_FIX}"
         )
-    _BY_FINGERPRINT[fingerprint] = spec
-    return spec
+    return entry
 
 
 class _Rows:
@@ -557,7 +580,8 @@ class _Rows:
         self.columns = list(meta["columns"])
         kinds = dict(default_kinds(self.columns), **meta.get("kinds", {}))
         self.kinds = [kinds[c] for c in self.columns]
-        self.spec = _campaign_spec(meta, mp)
+        self.campaign = _campaign_spec(meta, mp)
+        self.spec = self.campaign.spec if self.campaign is not None else None
         self.fingerprint = meta["fingerprint"]
         self.version = meta["format_version"]
         self.spec_dict = meta.get("spec")
@@ -610,20 +634,10 @@ class _Rows:
         self.rows[run] = fields
 
     def _check_run(self, where: str, run: int, fields: list[str]) -> None:
-        expected = _expected(self.fingerprint, run)
+        expected = self.campaign.expected(run)
         for j, c in enumerate(self.columns):
             if c in expected and fields[j] != expected[c]:
                 raise self._bad(where, c, f"{fields[j]!r} is not what the specification gives run {run} ({expected[c]!r})")
-
-
-@functools.lru_cache(maxsize=1 << 16)
-def _expected(fingerprint: str, run: int) -> dict[str, str]:
-    """The seed and parameter columns of ``run`` (as written) under the specification of ``fingerprint`` (in :data:`_SPECS`)."""
-    from .worker import params_row
-
-    spec = _BY_FINGERPRINT[fingerprint]
-    r = spec.run(run)
-    return {"seed": str(r.seed), **{k: _fmt(v) for k, v in params_row(spec, r.params).items()}}
 
 
 def _split_check(raw: bytes) -> tuple[bytes, int | None]:

@@ -25,7 +25,7 @@ from ..errors import InputError, QprrError
 from ..model import Platform
 from ..sim import SimResult
 from ..sim.mismatch import perturbed
-from .metrics import metrics_of
+from .metrics import RunStatus, metrics_of
 from .spec import MODEL_PREFIX, CampaignSpec, Run, model_error
 
 
@@ -173,11 +173,11 @@ def execute(ctx: WorkerContext, run: Run) -> dict[str, object]:
     try:
         result = ctx.target(run)
         if not isinstance(result, SimResult):
-            result, status, reason = None, "error", f"the target returned {type(result).__name__}, not a SimResult"
+            result, status, reason = None, RunStatus.ERROR, f"the target returned {type(result).__name__}, not a SimResult"
         elif tuple(result.names) != tuple(ctx.names):  # its errors would be lost in the campaign's columns
             result, status, reason = (
                 None,
-                "error",
+                RunStatus.ERROR,
                 (
                     f"the target flew {result.platform or 'a platform'} (coordinates {', '.join(result.names)}), not the "
                     f"campaign's platform = {spec.platform_label!r} (coordinates {', '.join(ctx.names)}): set platform in the "
@@ -186,10 +186,10 @@ def execute(ctx: WorkerContext, run: Run) -> dict[str, object]:
             )
     except QprrError as err:
         result = err.result
-        status = None if result is not None else "failed"
+        status = None if result is not None else RunStatus.FAILED
         reason = f"{type(err).__name__}: {err}"
     except Exception as err:  # a bug in a target must not lose the campaign: recorded, then visible in the table
-        status, reason = "error", f"{type(err).__name__}: {err}"
+        status, reason = RunStatus.ERROR, f"{type(err).__name__}: {err}"
     wall = time.perf_counter() - t0
     row: dict[str, object] = {"run": run.index, "seed": run.seed}
     row.update(params_row(spec, run.params))
@@ -236,7 +236,7 @@ def run_one(payload: TaskPayload, run: Run) -> dict[str, object]:
     return execute(ctx, run)
 
 
-def nan_row(spec: CampaignSpec, names, run: Run, status: str, reason: str) -> dict[str, object]:
+def nan_row(spec: CampaignSpec, names, run: Run, status: RunStatus, reason: str) -> dict[str, object]:
     """The row of a run whose task raised outside the target (``error``, re-run on resume); runs lost with a worker get none."""
     row: dict[str, object] = {"run": run.index, "seed": run.seed}
     row.update(params_row(spec, run.params))

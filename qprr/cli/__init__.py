@@ -380,7 +380,7 @@ def main(argv: list[str] | None = None) -> int:
     except QprrError as exc:
         return fail(prog, f"{type(exc).__name__}: {exc}")
     except MemoryError as exc:  # numpy's ArrayMemoryError names the size: say which options set it
-        sized = [f"--{k}" for k in ("duration", "dt", "samples") if getattr(args, k, None) is not None]
+        sized = [f"--{k}" for k in ("duration", "dt", "samples") if vars(args).get(k) is not None]
         return fail(prog, f"MemoryError: {exc}" + (f" (set by {', '.join(sized)}: ask for less)" if sized else ""))
 
 

@@ -38,7 +38,7 @@ from ..flightstack.frames import R_ned_frd_from_world_body, frd_from_body, ned_f
 from ..flightstack.px4 import com_body_at, geometry_from_platform
 from ..model import Platform, check_platform
 from ..scenarios.missions import lag_gains
-from ..sim import simulate
+from ..sim import SimConfig, SimInputs, simulate
 from ..sim.actuators import RotorDynamics
 from ..trajectory import MultiPhase, Phase
 from ..validation import as_int, as_real
@@ -114,7 +114,8 @@ def fly_excitation(platform: Platform, options: SynthOptions):
     rotors = RotorDynamics.for_rotors(platform.rotors, 1e-5, T, initial="hover")
     ctrl = make_controller("idc", platform, **lag_gains("idc", platform, T))
     traj = excitation_mission(platform, options.duration_s, options.arm_sweep, options.seed, options.steps)
-    return simulate(platform, ctrl, traj, options.duration_s, dt=1e-3, control_period=2e-3, actuators=rotors, seed=options.seed)
+    config = SimConfig(dt=1e-3, control_period=2e-3, seed=options.seed)
+    return simulate(platform, ctrl, traj, options.duration_s, config=config, inputs=SimInputs(actuators=rotors))
 
 
 def imu(platform: Platform, res) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

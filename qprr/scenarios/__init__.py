@@ -33,7 +33,7 @@ from ..control import CONTROLLERS, make_controller
 from ..errors import InputError, UnknownNameError
 from ..model import Platform
 from ..registry import SCENARIOS
-from ..sim import INTEGRATORS, SimConfig, SimResult, simulate
+from ..sim import INTEGRATORS, SimConfig, SimInputs, SimResult, simulate
 from ..trajectory import DEFAULT_LAW, LAWS, hover_and_reach
 from ..validation import as_bool
 
@@ -170,8 +170,8 @@ def _hover_reach(platform, controller, progress, plant=None, **o):
     trajectory = hover_and_reach(platform, (0.0, 0.0, o["z"]), q_arm, law=o["law"])
     # "platform": make_controller's own default (derived gains; a controller they do not cover, e.g. mpc, its class's)
     ctrl = make_controller(controller, platform) if o["gains"] == "platform" else controller_for(controller, platform, o["gains"])
-    sim = {k: o[k] for k in ("dt", "integrator", "seed")}
-    return simulate(platform, ctrl, trajectory, o["duration"], progress=progress, scenario="hover-reach", plant=plant, **sim)
+    config = SimConfig(dt=o["dt"], integrator=o["integrator"], seed=o["seed"], progress=progress, scenario="hover-reach")
+    return simulate(platform, ctrl, trajectory, o["duration"], config=config, inputs=SimInputs(plant=plant))
 
 
 def _ee_impedance(platform, controller, progress, **options):

@@ -29,7 +29,7 @@ from ..control import InverseDynamicsController
 from ..control.opspace_impedance import EndEffectorImpedance, OperationalSpaceImpedance, fit_second_order
 from ..errors import InputError, UnknownNameError
 from ..kinematics import ee_pose_xi
-from ..sim import SimResult, simulate
+from ..sim import SimConfig, SimInputs, SimResult, simulate
 from ..sim.contact import CompliantWall, PrescribedWrench
 from ..trajectory import Hold, MultiPhase, Phase
 from ..validation import as_vector
@@ -65,8 +65,8 @@ def run_ee_impedance(platform=None, controller: str = "opspace-impedance", progr
         ctrl = OperationalSpaceImpedance(platform, imp, ee_sensor=env.measured)
     else:
         ctrl = InverseDynamicsController(platform)
-    sim = {k: o[k] for k in ("dt", "integrator", "seed")}
-    res = simulate(platform, ctrl, trajectory, o["duration"], external_wrench=env, progress=progress, scenario="ee-impedance", **sim)
+    config = SimConfig(dt=o["dt"], integrator=o["integrator"], seed=o["seed"], progress=progress, scenario="ee-impedance")
+    res = simulate(platform, ctrl, trajectory, o["duration"], config=config, inputs=SimInputs(external_wrench=env))
     _record(res, platform, env, ctrl, imp)
     res.metrics.update({"t_on": float(o["t_on"]), "t_off": float(o["t_off"]), "contact_wall": float(o["contact"] == "wall")})
     return res

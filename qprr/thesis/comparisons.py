@@ -36,7 +36,7 @@ import numpy as np
 from ..control import CONTROLLERS
 from ..errors import QprrError, UnknownNameError
 from ..scenarios import SCENARIOS
-from ..sim import SimResult, simulate
+from ..sim import SimConfig, SimInputs, SimResult, Status, simulate
 from ..viz import figure_path, new_figure
 from ..viz.compare import plot_overlay, plot_rmse_bars
 from .bsg import CogStabilizer
@@ -116,7 +116,7 @@ def compare_table(runs: _Runs, plot_dir: Path | None) -> Report:
     for i, v in enumerate(NAMES):
         rep.lines.append(f"{v:<9}" + "".join(f"{r.rmse()[v]:>13.3e}{TABLE_6_3[c][i]:>15.4e}" for c, r in res.items()))
     rep.lines.append(f"{'time':<9}" + "".join(f"{r.wall_time:>12.3f}s{THESIS_RUN_TIME_S[c] / 60:>12.0f}min" for c, r in res.items()))
-    rep.ok = all(r.status == "ok" for r in res.values())
+    rep.ok = all(r.status == Status.OK for r in res.values())
     if plot_dir is not None:
         table = {f"{c} (ours)": r.rmse() for c, r in res.items()}
         table.update({f"{THESIS_NAMES[c]} (thesis)": dict(zip(NAMES, TABLE_6_3[c])) for c in res})
@@ -139,7 +139,7 @@ def compare_overlay(runs: _Runs, plot_dir: Path | None) -> Report:
                 title="Figs. 6.19-6.21: IDC, desired-state ID (thesis MPC), MFC - positions, position errors, arm errors",
             ),
         )
-    rep.ok = all(r.status == "ok" for r in res.values())
+    rep.ok = all(r.status == Status.OK for r in res.values())
     return rep
 
 
@@ -192,7 +192,7 @@ def _bsg_run(theta_e: float, theta2: float, duration: float, progress: bool) -> 
     platform = load_qprr()
     ctrl = CogStabilizer(platform, flight_controller("mfc", platform), theta_e_d=theta_e)
     try:
-        return simulate(platform, ctrl, dynamic_mission(theta2_d=theta2), duration, progress=progress, scenario="dynamic-bsg")
+        return simulate(platform, ctrl, dynamic_mission(theta2_d=theta2), duration, config=SimConfig(progress=progress, scenario="dynamic-bsg"))
     except QprrError as err:
         if err.result is None:
             raise
@@ -215,7 +215,7 @@ def compare_sweeps(runs: _Runs, plot_dir: Path | None) -> Report:
             f"{1e3 * np.abs(r.x_cm[after, 0]).max() if after.any() else float('nan'):>11.3f}{r.xi[-1, 6]:>9.4f}"
             f"{r.xi[-1, 8]:>9.4f}{te_meas:>9.4f}"
         )
-        rep.ok &= r.status == "ok"
+        rep.ok &= r.status == Status.OK
     if plot_dir is not None:
         fig = new_figure((14, 9))
         ax = fig.subplots(2, 2)
@@ -259,7 +259,7 @@ def compare_decoupled(runs: _Runs, plot_dir: Path | None) -> Report:
         a, b = rows[f"{sc} / idc"].rmse(), rows[f"{sc} / decoupled"].rmse()
         ratio = {n: b[n] / a[n] if a[n] > 0 else float("nan") for n in ("x", "y", "z", "r0", "theta2", "theta3")}
         rep.lines.append(f"{sc}: decoupled / coupled RMSE " + ", ".join(f"{n} {v:.2f}" for n, v in ratio.items()))
-    rep.ok = all(r.status == "ok" for r in rows.values())
+    rep.ok = all(r.status == Status.OK for r in rows.values())
     if plot_dir is not None:
         res = {"coupled IDC": rows["static-idc / idc"], "decoupled": rows["static-idc / decoupled"]}
         _save(
@@ -316,7 +316,7 @@ def compare_mpc(runs: _Runs, plot_dir: Path | None) -> Report:
         "margins in N: applied = closest applied thrust to [0, 20] N; asked = closest thrust the controller asked for "
         "(negative: beyond a bound, clipped by the allocator); plan = smallest margin of any MPC plan"
     )
-    rep.ok = all(r.status == "ok" for k, r in rows.items() if k.endswith("/ mpc"))
+    rep.ok = all(r.status == Status.OK for k, r in rows.items() if k.endswith("/ mpc"))
     if plot_dir is not None:
         res = {"IDC": rows["static-idc / idc"], "MPC": rows["static-idc / mpc"]}
         _save(
@@ -387,7 +387,7 @@ def compare_realistic(runs: _Runs, plot_dir: Path | None) -> Report:
     for c, r in rows.items():
         m = thrust_margins(r, load_qprr())
         rep.lines.append(f"{c}: {r.status}; thrust margin applied {m['applied_margin_N']:.3g} N, asked {m['asked_margin_N']:.3g} N")
-    rep.ok = all(r.status == "ok" for r in rows.values())
+    rep.ok = all(r.status == Status.OK for r in rows.values())
     if plot_dir is not None:
         _save(
             rep,
@@ -422,31 +422,30 @@ def compare_lag(runs: _Runs, plot_dir: Path | None) -> Report:
         for T in LAG_TIME_CONSTANTS:
             act = qprr_rotor_dynamics(platform, time_constant=T) if T > 0 else None
             try:
-                r = simulate(
-                    platform, flight_controller(c, platform), static_mission(), duration, actuators=act, progress=runs.progress, scenario="lag"
-                )
+                config = SimConfig(progress=runs.progress, scenario="lag")
+                r = simulate(platform, flight_controller(c, platform), static_mission(), duration, config=config, inputs=SimInputs(actuators=act))
             except QprrError as err:
                 r = err.result
                 if r is None:
                     raise
-            table[c].append((T, str(r.status), max(r.rmse()[n] for n in "xyz") if r.status == "ok" else float(r.t[-1])))
+            table[c].append((T, r.status, max(r.rmse()[n] for n in "xyz") if r.status == Status.OK else float(r.t[-1])))
     rep.lines.append("static mission with the motor lag only: max position RMSE [m], or 'diverged at t s'")
     rep.lines.append(f"{'T [ms]':<8}" + "".join(f"{c:>22}" for c in ctrls))
     for k, T in enumerate(LAG_TIME_CONSTANTS):
         cells = []
         for c in ctrls:
             _, status, v = table[c][k]
-            cells.append(f"{v:>22.3e}" if status == "ok" else f"{'diverged at ' + format(v, '.2f') + ' s':>22}")
+            cells.append(f"{v:>22.3e}" if status == Status.OK else f"{'diverged at ' + format(v, '.2f') + ' s':>22}")
         rep.lines.append(f"{1e3 * T:<8.1f}" + "".join(cells))
     if plot_dir is not None:
         fig = new_figure((8, 4.5))
         ax = fig.subplots()
         styles = (("o", "-"), ("s", "--"), ("^", "-."), ("D", ":"))
         for k, c in enumerate(ctrls):
-            Ts = [1e3 * T for T, s, _ in table[c] if s == "ok"]
-            vs = [v for _, s, v in table[c] if s == "ok"]
+            Ts = [1e3 * T for T, s, _ in table[c] if s == Status.OK]
+            vs = [v for _, s, v in table[c] if s == Status.OK]
             ax.plot(Ts, vs, marker=styles[k][0], ls=styles[k][1], color=f"C{k}", label=c, ms=5 + 2 * (len(ctrls) - k))
-            bad = [1e3 * T for T, s, _ in table[c] if s != "ok"]
+            bad = [1e3 * T for T, s, _ in table[c] if s != Status.OK]
             if bad:  # diverged: a cross above the plot, one row per controller
                 ax.plot(bad, [2.0 * 1.6**k] * len(bad), "x", color=f"C{k}", ms=10, mew=2)
         ax.set_yscale("log")

@@ -46,7 +46,7 @@ from ..errors import QprrError, UnknownNameError
 from ..rotors import ideal_wrench_set
 from ..scenarios import Option, Scenario
 from ..scenarios import missions as generic
-from ..sim import INTEGRATORS, SimConfig, SimResult, simulate
+from ..sim import INTEGRATORS, SimConfig, SimInputs, SimResult, simulate
 from ..trajectory import Hold, Spiral
 from ..validation import as_name, as_real, as_settings, as_vector, check_fields
 from ..viz import plot_result
@@ -184,19 +184,9 @@ def point_to_point(platform=None, controller: str = "idc", progress: bool = Fals
     elif actuation != "rotors":
         raise UnknownNameError("actuation", actuation, ("ideal", "rotors"))
     ctrl = InverseDynamicsController(platform, POINT_GAINS)
-    res = simulate(
-        platform,
-        ctrl,
-        Hold((*target, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)),
-        duration,
-        dt=dt,
-        integrator=integrator,
-        xi0=np.zeros(9),
-        allocator=allocator,
-        seed=seed,
-        progress=progress,
-        scenario="point-to-point",
-    )
+    config = SimConfig(dt=dt, integrator=integrator, seed=seed, progress=progress, scenario="point-to-point")
+    inputs = SimInputs(xi0=np.zeros(9), allocator=allocator)
+    res = simulate(platform, ctrl, Hold((*target, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)), duration, config=config, inputs=inputs)
     res.metrics["final_position_error"] = float(np.linalg.norm(res.xi[-1, 0:3] - np.array(target)))
     for i, name in enumerate("xyz"):
         res.metrics[f"settling_{name}"] = _settling_time(res.t, res.xi[:, i], target[i], 0.0)

@@ -18,7 +18,7 @@ from ..campaign.spec import MODEL_PREFIX, model_error
 from ..campaign.targets import scale_bandwidth
 from ..errors import InputError, UnknownNameError
 from ..model import check_platform
-from ..sim import Disturbances, Pulse, SimResult, WhiteNoise, simulate
+from ..sim import Disturbances, Pulse, SimConfig, SimInputs, SimResult, WhiteNoise, simulate
 from ..sim.mismatch import perturbed
 from .bsg import CogStabilizer
 from .missions import dynamic_mission, static_mission
@@ -107,14 +107,5 @@ def flight(params: Mapping[str, object], seed: int, platform=None) -> SimResult:
     disturbance = Disturbances(tuple(parts)) if parts else None
     err = model_error(params)
     plant = None if err is None or err.is_nominal else perturbed(platform, err)
-    return simulate(
-        platform,
-        ctrl,
-        trajectory,
-        float(p["duration"]),
-        dt=float(p["dt"]),
-        disturbance=disturbance,
-        seed=seed,
-        plant=plant,
-        scenario=f"flight-{p['mission']}",
-    )
+    config = SimConfig(dt=float(p["dt"]), seed=seed, scenario=f"flight-{p['mission']}")
+    return simulate(platform, ctrl, trajectory, float(p["duration"]), config=config, inputs=SimInputs(disturbance=disturbance, plant=plant))

@@ -78,6 +78,7 @@ from ..sim import (
     Pulse,
     PushedMass,
     SimConfig,
+    SimInputs,
     SimResult,
     Status,
     WhiteNoise,
@@ -671,7 +672,8 @@ def _push(platform, controller, progress, experiment: PushExperiment) -> SimResu
     e = experiment
     obj = PushedMass(platform, mass=e.object_mass, origin=_ee_world(platform, e.xi0), stiffness=e.stiffness, damping=e.damping, friction=e.friction)
     ctrl = _push_controller(controller, platform, obj)
-    res = simulate(platform, ctrl, e.trajectory, e.duration, external_wrench=obj, seed=e.seed, progress=progress, scenario=e.trajectory.name)
+    config = SimConfig(seed=e.seed, progress=progress, scenario=e.trajectory.name)
+    res = simulate(platform, ctrl, e.trajectory, e.duration, config=config, inputs=SimInputs(external_wrench=obj))
     _contact_series(res, obj)
     res.metrics.update({"object_mass": float(e.object_mass), "push_start": float(e.push[0]), "push_end": float(e.push[1])})
     return res
@@ -740,7 +742,8 @@ def impedance(platform=None, controller: str = "impedance", progress: bool = Fal
     if controller not in builders:
         raise UnknownNameError("controller", controller, IMPEDANCE_CONTROLLERS)
     ctrl = builders[controller]()
-    res = simulate(platform, ctrl, Hold(xi0), o.duration, external_wrench=ee, disturbance=pulse, seed=o.seed, progress=progress, scenario="impedance")
+    config = SimConfig(seed=o.seed, progress=progress, scenario="impedance")
+    res = simulate(platform, ctrl, Hold(xi0), o.duration, config=config, inputs=SimInputs(external_wrench=ee, disturbance=pulse))
     res.series["ee_wrench"] = np.array([ee.measured(t) for t in res.t])
     res.series["base_wrench"] = np.array([base_sensor(t) for t in res.t])
     res.metrics["t_off"] = float(t_off)

@@ -6,14 +6,13 @@ drag/thrust ratio of 16 (millimetres), an arm offset of 300 (millimetres), revol
 rotor file, a URDF and a payload (the table of docs/platforms.md); the checks raise
 :class:`~qprr.errors.PlausibilityError` naming the input, the value, the likely slip and the way to
 accept the value on purpose: ``plausibility=Plausibility(...)`` (``dataclasses.replace`` of
-:data:`DEFAULT`) passed to :func:`qprr.from_urdf`, :func:`qprr.from_model` or
+:data:`DEFAULT`) passed to :func:`qprr.from_urdf`, :func:`qprr.model.from_model` or
 :func:`qprr.payload.with_payload`.  ``plausibility=None`` keeps the type and physics checks only.
 """
 
 from __future__ import annotations
 
 import math
-import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
@@ -137,19 +136,11 @@ def check_rotors(rotors: Sequence, plausibility: Plausibility | None, source: st
 
 
 # ------------------------------------------------------------------------- URDF
-def _floats(text: str | None) -> list[float]:
-    try:
-        return [float(x) for x in (text or "").split()]
-    except ValueError:
-        return []
-
-
-def _check_joint(joint: ET.Element, P: Plausibility, source: str) -> None:
-    name, kind = joint.get("name"), joint.get("type")
-    origin = joint.find("origin")
-    if origin is not None:
-        xyz = _floats(origin.get("xyz"))
-        d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
+def _check_joint(joint, P: Plausibility, source: str) -> None:
+    """One :class:`qprr.urdf.reader.UrdfJoint`: its origin length, its limits and effort, its dynamics."""
+    name, kind = joint.name, joint.kind
+    if joint.origin.xyz is not None:
+        d = math.hypot(*joint.origin.xyz)
         if d > P.length_max:
             _refuse(
                 f"{source}: joint {name!r} <origin xyz> length [m]",
@@ -158,100 +149,95 @@ def _check_joint(joint: ET.Element, P: Plausibility, source: str) -> None:
                 P.length_max,
                 f"lengths in millimetres? {d:g} mm = {d / 1000:g} m",
             )
-    limit = joint.find("limit")
-    if limit is not None and kind in ("revolute", "prismatic"):
-        for attr in ("lower", "upper"):
-            v = _floats(limit.get(attr))
-            if not v:
-                continue
-            v = v[0]
-            if kind == "revolute" and abs(v) > P.revolute_limit_max:
-                _refuse(
-                    f"{source}: revolute joint {name!r} <limit {attr}> [rad]",
-                    v,
-                    "revolute_limit_max",
-                    P.revolute_limit_max,
-                    f"degrees? {v:g} deg = {math.radians(v):.6g} rad",
-                )
-            if kind == "prismatic" and abs(v) > P.prismatic_limit_max:
-                _refuse(
-                    f"{source}: prismatic joint {name!r} <limit {attr}> [m]",
-                    v,
-                    "prismatic_limit_max",
-                    P.prismatic_limit_max,
-                    f"millimetres? {v:g} mm = {v / 1000:g} m",
-                )
-        eff = _floats(limit.get("effort"))
-        bound, field_name = (P.revolute_effort_max, "revolute_effort_max") if kind == "revolute" else (P.prismatic_effort_max, "prismatic_effort_max")
-        if eff and eff[0] > bound:
-            unit = "N m" if kind == "revolute" else "N"
+    if joint.limit is not None and kind in ("revolute", "prismatic"):
+        _check_limit(joint, P, source)
+    for attr, v, bound, field_name in (
+        ("damping", joint.damping, P.joint_damping_max, "joint_damping_max"),
+        ("friction", joint.friction, P.joint_friction_max, "joint_friction_max"),
+    ):
+        if v is not None and abs(v) > bound:
             _refuse(
-                f"{source}: joint {name!r} <limit effort> [{unit}]",
-                eff[0],
+                f"{source}: joint {name!r} <dynamics {attr}>",
+                v,
                 field_name,
                 bound,
-                f"N mm or kg cm? {eff[0]:g} N mm = {eff[0] / 1000:g} N m"
-                if kind == "revolute"
-                else f"grams-force? {eff[0]:g} gf = {eff[0] * 9.80665e-3:.4g} N",
+                "per-millimetre or per-degree units? URDF dynamics are in SI per radian or per metre",
             )
-    dyn = joint.find("dynamics")
-    if dyn is not None:
-        for attr, bound, field_name in (
-            ("damping", P.joint_damping_max, "joint_damping_max"),
-            ("friction", P.joint_friction_max, "joint_friction_max"),
-        ):
-            v = _floats(dyn.get(attr))
-            if v and abs(v[0]) > bound:
-                _refuse(
-                    f"{source}: joint {name!r} <dynamics {attr}>",
-                    v[0],
-                    field_name,
-                    bound,
-                    "per-millimetre or per-degree units? URDF dynamics are in SI per radian or per metre",
-                )
 
 
-def _check_link(link: ET.Element, P: Plausibility, source: str) -> None:
-    inertial = link.find("inertial")
+def _check_limit(joint, P: Plausibility, source: str) -> None:
+    """The position limits [rad or m] and the effort [N m or N] of a revolute or prismatic joint."""
+    name, kind, limit = joint.name, joint.kind, joint.limit
+    for attr, v in (("lower", limit.lower), ("upper", limit.upper)):
+        if v is None:
+            continue
+        if kind == "revolute" and abs(v) > P.revolute_limit_max:
+            _refuse(
+                f"{source}: revolute joint {name!r} <limit {attr}> [rad]",
+                v,
+                "revolute_limit_max",
+                P.revolute_limit_max,
+                f"degrees? {v:g} deg = {math.radians(v):.6g} rad",
+            )
+        if kind == "prismatic" and abs(v) > P.prismatic_limit_max:
+            _refuse(
+                f"{source}: prismatic joint {name!r} <limit {attr}> [m]",
+                v,
+                "prismatic_limit_max",
+                P.prismatic_limit_max,
+                f"millimetres? {v:g} mm = {v / 1000:g} m",
+            )
+    eff = limit.effort
+    bound, field_name = (P.revolute_effort_max, "revolute_effort_max") if kind == "revolute" else (P.prismatic_effort_max, "prismatic_effort_max")
+    if eff is not None and eff > bound:
+        unit = "N m" if kind == "revolute" else "N"
+        _refuse(
+            f"{source}: joint {name!r} <limit effort> [{unit}]",
+            eff,
+            field_name,
+            bound,
+            f"N mm or kg cm? {eff:g} N mm = {eff / 1000:g} N m" if kind == "revolute" else f"grams-force? {eff:g} gf = {eff * 9.80665e-3:.4g} N",
+        )
+
+
+def _check_link(link, P: Plausibility, source: str) -> None:
+    """One :class:`qprr.urdf.reader.UrdfLink`: its mass, its CoM offset and its radius of gyration."""
+    inertial = link.inertial
     if inertial is None:
         return
-    name = link.get("name")
-    mass_el = inertial.find("mass")
-    mass = _floats(mass_el.get("value")) if mass_el is not None else []
-    m = mass[0] if mass else 0.0
+    name = link.name
+    m = inertial.mass if inertial.mass is not None else 0.0  # not a number: refused by the inertial check
     if m > P.link_mass_max:
         _refuse(f"{source}: link {name!r} <mass value> [kg]", m, "link_mass_max", P.link_mass_max, f"grams? {m:g} g = {m / 1000:g} kg")
-    origin = inertial.find("origin")
-    xyz = _floats(origin.get("xyz")) if origin is not None else []
-    d = math.hypot(*xyz) if len(xyz) == 3 else 0.0
+    d = math.hypot(*inertial.origin.xyz) if inertial.origin.xyz is not None else 0.0
     if d > P.length_max:
         _refuse(
             f"{source}: link {name!r} <inertial><origin xyz> length [m]", d, "length_max", P.length_max, f"millimetres? {d:g} mm = {d / 1000:g} m"
         )
-    inertia = inertial.find("inertia")
-    if inertia is not None and m > 0.0:
-        moments = [v for k in ("ixx", "iyy", "izz") for v in _floats(inertia.get(k))[:1]]
-        if moments and max(moments) > 0.0:
-            radius = math.sqrt(max(moments) / m)
-            if radius > P.gyration_radius_max:
-                _refuse(
-                    f"{source}: link {name!r} radius of gyration sqrt(I_max / m) [m]",
-                    radius,
-                    "gyration_radius_max",
-                    P.gyration_radius_max,
-                    f"an inertia in kg mm^2 or g mm^2? (I_max = {max(moments):g}, m = {m:g}: in kg mm^2 the radius would be {radius / 1000:g} m)",
-                )
+    xx, _, _, yy, _, zz = inertial.inertia
+    moments = [v for v in (xx, yy, zz) if v is not None]
+    if inertial.has_inertia and m > 0.0 and moments and max(moments) > 0.0:
+        radius = math.sqrt(max(moments) / m)
+        if radius > P.gyration_radius_max:
+            _refuse(
+                f"{source}: link {name!r} radius of gyration sqrt(I_max / m) [m]",
+                radius,
+                "gyration_radius_max",
+                P.gyration_radius_max,
+                f"an inertia in kg mm^2 or g mm^2? (I_max = {max(moments):g}, m = {m:g}: in kg mm^2 the radius would be {radius / 1000:g} m)",
+            )
 
 
-def check_urdf(root: ET.Element, plausibility: Plausibility | None, source: str = "URDF") -> None:
-    """Every joint origin, limit, effort, dynamics and every link mass, CoM and inertia of a parsed URDF within
-    ``plausibility`` (None: no check)."""
+def check_urdf(urdf, plausibility: Plausibility | None) -> None:
+    """Every joint origin, limit, effort, dynamics and every link mass, CoM and inertia of a URDF read by
+    :func:`qprr.urdf.reader.parse_urdf` (a :class:`qprr.urdf.reader.UrdfFile`) within ``plausibility`` (None: no
+    check); the messages name ``urdf.source``."""
     if plausibility is None:
         return
-    for joint in root.findall("joint"):
-        _check_joint(joint, plausibility, source)
-    for link in root.findall("link"):
-        _check_link(link, plausibility, source)
+    for joint in urdf.joints:
+        _check_joint(joint, plausibility, urdf.source)
+    for link in urdf.links:
+        _check_link(link, plausibility, urdf.source)
 
 
 def check_time_constant(time_constant, plausibility: Plausibility | None, source: str = "motor time constant") -> None:

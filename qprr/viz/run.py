@@ -83,25 +83,29 @@ class RunLog:
 
 
 def as_run(result) -> RunLog:
-    """A :class:`RunLog` of a :class:`~qprr.sim.SimResult` or of any object with the attributes ``t`` and ``xi``
-    (and optionally ``f``, ``arm_effort``, and ``contact_wrench_world``, ``payload_mass``, ``payload_com_ee`` as
-    attributes or in a ``series`` dict)."""
+    """The :class:`RunLog` of a :class:`~qprr.sim.SimResult` (its ``contact_wrench_world``, ``payload_mass`` and
+    ``payload_com_ee`` series drawn when logged), or ``result`` itself when it is one (a run from elsewhere: build a
+    :class:`RunLog` of its arrays)."""
+    from ..sim.result import SimResult
+
     if isinstance(result, RunLog):
         return result
-    missing = [k for k in ("t", "xi") if getattr(result, k, None) is None]
-    if missing:
+    if not isinstance(result, SimResult):
         raise InputError(
-            f"result must be a run (a SimResult, a RunLog, or an object with the attributes t and xi); "
-            f"{type(result).__name__} lacks {', '.join(missing)}"
+            f"result must be a run: a qprr.sim.SimResult or a qprr.viz.RunLog (RunLog(t, xi, ...) of another run's "
+            f"arrays), got {type(result).__name__}"
         )
-    arrays = {k: getattr(result, k, None) for k in ARRAYS}
-    series = getattr(result, "series", None)
-    for key in ("contact_wrench_world", "payload_mass", "payload_com_ee"):
-        if arrays[key] is None and isinstance(series, dict):
-            arrays[key] = series.get(key)
-    name = getattr(result, "platform", "")
-    name = name if isinstance(name, str) else getattr(name, "name", "")
-    return RunLog(**arrays, platform=name)
+    series = result.series
+    return RunLog(
+        result.t,
+        result.xi,
+        result.f,
+        result.arm_effort,
+        series.get("contact_wrench_world"),
+        platform=result.platform,
+        payload_mass=series.get("payload_mass"),
+        payload_com_ee=series.get("payload_com_ee"),
+    )
 
 
 def load_run(path: str | Path) -> RunLog:
