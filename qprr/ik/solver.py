@@ -62,6 +62,11 @@ from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
+POLISHED = 1e-3
+"""The QP IK stops before linearising again (the last step below ``settle_tol``, or every lower level met) only when
+the pose (and hover) errors are below this fraction of their tolerances: with the quadratic convergence of the pose
+level, one more step would take them to round-off, so an answer that is merely within its tolerance is polished."""
+
 DEFAULT_METHOD = "qp"
 """The method of :class:`IKSolver` and :func:`solve` unless one is named: the strict task-priority QP."""
 
@@ -927,7 +932,8 @@ class QPMethod:
                 update_kinematics(platform, data, q)
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
-                if it and pose_ok and (not ctx.require_hover or _hovering(data, opts.hover_tol)):
+                polished = pos_err < POLISHED * opts.position_tol and rot_err < POLISHED * opts.orientation_tol
+                if it and polished and (not ctx.require_hover or _hovering(data, POLISHED * opts.hover_tol)):
                     tol = min(opts.position_tol, opts.orientation_tol, opts.hover_tol)
                     # the lower levels are tested only when the last step's linear model met them all (an unsatisfiable
                     # level, e.g. the posture, keeps its residual: no task is evaluated for nothing)
