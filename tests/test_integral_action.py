@@ -153,3 +153,18 @@ def test_payload_awareness_and_anti_windup_refuse_bad_input():
         dataclasses.replace(g, anti_windup="sometimes")
     with pytest.raises(qprr.errors.InputError, match="integral_limit"):
         dataclasses.replace(g, integral_limit=(0.0,) * g.n_xi)
+
+
+def test_missions_take_the_payload_model_option():
+    """grasp-drop told its payload events (payload_model = "announced") holds exactly; the default is "unknown" (the
+    integrals); a controller that is not the inverse-dynamics core is refused for the others, before any flight."""
+    from qprr.scenarios import PAYLOAD_OPTION, run
+    from qprr.scenarios.missions import PAYLOAD_MODELS
+
+    assert PAYLOAD_OPTION.default == PAYLOAD_MODELS[0] == "unknown"
+    told = run("grasp-drop", platform=qprr.load(), duration=2.0, payload_model="announced")
+    assert told.status == "ok" and told.metrics["max_position_error"] < 1e-12 and told.metrics["final_arm_error"] < 1e-12
+    with pytest.raises(qprr.errors.InputError, match="payload_model"):
+        run("grasp-drop", controller="payload-idc", platform=qprr.load(), duration=2.0, payload_model="estimate")
+    with pytest.raises(qprr.errors.UnknownNameError, match="payload_model"):
+        run("grasp-drop", platform=qprr.load(), duration=2.0, payload_model="guess")

@@ -306,6 +306,8 @@ def integral_limits(authority: Authority) -> tuple[float, ...]:
     """The clamp of each integral of the derived IDC gains (:class:`~qprr.control.inverse_dynamics.AntiWindup`): the
     acceleration the actuators give the coordinate (module docstring, "Integral action"): thrust margin over mass on
     x, y, z, torque over inertia on the angles, effort over the joint's inertia M_jj on the arm (inf: no bound)."""
+    if not isinstance(authority, Authority):
+        raise InputError(f"authority must be a qprr.control.gains.Authority (Authority.from_platform), got {type(authority).__name__}")
     a = authority
 
     def ratio(force, inertia):

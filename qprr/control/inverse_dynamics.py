@@ -43,6 +43,11 @@ end-effector impedance          an end-effector acceleration task (:meth:`task_a
 * psi in (6.17) is the measured yaw; tilt references are clamped to ``max_tilt``; when
   u_fb,z < 5 % of the weight (Hypothesis 2 violated) the last tilt reference is held.
 
+* ``payload_awareness`` (:class:`PayloadAwareness`): the model carries a payload at the end effector, announced
+  (mass from given times on, (6.40)) or estimated online (Sec. 6.4.2); without it an unannounced payload is left to the
+  integrals.  The integrals of :class:`IDCGains` may be guarded against the actuator bounds (:class:`AntiWindup`,
+  ``integral_limit``); the gains derived from a platform are (:mod:`qprr.control.gains`, "Integral action").
+
 Gains: :class:`IDCGains` (per-coordinate vectors); under exact linearisation each error obeys
 e''' + k_D e'' + k_P e' + k_I e = 0 whatever the platform, so the defaults suit any platform.
 The thesis's printed tables are in :mod:`qprr.thesis.gains`.
@@ -228,6 +233,7 @@ class PayloadAwareness:
 
     def mass_at(self, t: float) -> float:
         """The announced mass [kg] at ``t`` [s] (the last event at or before t, within 1e-12 s as the simulator applies them)."""
+        t = as_real(t, "t", unit="s")
         m = 0.0
         for time, mass in self.announced:
             if time <= t + 1e-12:

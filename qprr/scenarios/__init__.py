@@ -371,4 +371,4 @@ def run(name: str, controller: str | None = None, *, platform: Platform | None =
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, **options)
 
 
-__all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
+__all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "PAYLOAD_OPTION", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]

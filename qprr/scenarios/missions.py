@@ -209,8 +209,12 @@ def payload_awareness(controller: str, o: dict, payload: PayloadSchedule | None)
     """The keyword ``payload_awareness`` (:class:`qprr.control.PayloadAwareness`) of an inverse-dynamics controller for the
     option ``payload_model`` (:data:`PAYLOAD_MODELS`; absent: the default), {} for ``unknown``.  A controller that is
     not the inverse-dynamics core (``mfc``, ``payload-idc`` with its own estimator ...) is refused for the others."""
+    if not isinstance(o, Mapping):
+        raise InputError(f"o must be the mission's options (a mapping of option name -> value), got {type(o).__name__}")
+    if payload is not None and not isinstance(payload, PayloadSchedule):
+        raise InputError(f"payload must be the mission's qprr.sim.PayloadSchedule or None, got {type(payload).__name__}")
     mode = o.get("payload_model", PAYLOAD_MODELS[0])
-    if mode not in PAYLOAD_MODELS:
+    if not isinstance(mode, str) or mode not in PAYLOAD_MODELS:
         raise UnknownNameError("payload_model", mode, PAYLOAD_MODELS)
     if mode == PAYLOAD_MODELS[0]:
         return {}
