@@ -450,7 +450,7 @@ def gain_lines(kwargs: dict[str, object], names: tuple[str, ...]) -> list[str]:
         fields = dataclasses.fields(obj) if dataclasses.is_dataclass(obj) else ()
         vectors = [f.name for f in fields if isinstance(getattr(obj, f.name), tuple) and len(getattr(obj, f.name)) == len(names)]
         if vectors:
-            width = max(12, *(len(v) + 2 for v in vectors))  # a column as wide as its heading (integral_limit)
+            width = max(12, *(len(v) + 2 for v in vectors))  # a column as wide as its longest heading
             lines.append(f"  {'coordinate':<14}" + "".join(f"{v:>{width}}" for v in vectors))
             for i, n in enumerate(names):
                 lines.append(f"  {n:<14}" + "".join(f"{getattr(obj, v)[i]:>{width}.5g}" for v in vectors))
