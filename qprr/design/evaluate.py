@@ -33,6 +33,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..analysis import balance, capacity, hover, singularity, workspace
+from ..campaign.metrics import RunStatus
 from ..errors import InputError, QprrError
 from ..model import check_platform
 from ..nomenclature import LinkSpec, build, parse
@@ -263,7 +264,7 @@ def design_platform(spec: DesignSpec, kind: str, family: str, params: Mapping[st
 
 def feasible(row: Mapping, constraints: Mapping) -> int:
     """1 if the row is ok and meets every ``{metric: (min, max)}`` bound, else 0."""
-    if row["status"] != "ok":
+    if row["status"] != RunStatus.OK:
         return 0
     for k, (lo, hi) in constraints.items():
         v = row[k]
@@ -298,7 +299,7 @@ def exclusions(rows, spec: DesignSpec) -> list[str]:
     (one may be excluded by several), the count of failed evaluations, then every design that is not feasible with its
     reason (the failure, or the bounds it misses and its values); [] when every design is feasible."""
     rows = list(rows)
-    ok = [r for r in rows if r["status"] == "ok"]
+    ok = [r for r in rows if r["status"] == RunStatus.OK]
     lines = []
     for k, (lo, hi) in spec.constraints.items():
         bound = " and ".join(b for b in ((f"{k} >= {lo:g}" if lo is not None else ""), (f"{k} <= {hi:g}" if hi is not None else "")) if b)
@@ -309,7 +310,7 @@ def exclusions(rows, spec: DesignSpec) -> list[str]:
     if n_failed:
         lines.append(f"  {n_failed} design(s) could not be evaluated (failed: the design is refused; error: a bug, re-run on resume)")
     for r in rows:
-        if r["status"] != "ok":
+        if r["status"] != RunStatus.OK:
             reason = " ".join(str(r.get("reason", "")).split())
             lines.append(f"  {describe(spec, r)}: {r['status']}: {reason}")
         elif not feasible(r, spec.constraints):
@@ -336,7 +337,7 @@ def evaluate_design(spec_dict: dict, point: dict) -> dict:
     """The row of one design ``point`` (``run``, ``seed``, ``kind``, ``architecture``, ``name``, ``generation``, ``params``)."""
     spec = study_of(spec_dict)
     t0 = time.perf_counter()
-    status, reason = "ok", ""
+    status, reason = RunStatus.OK, ""
     values = dict.fromkeys(DESIGN_METRICS, math.nan)
     try:
         named = {*spec.objectives, *spec.constraints}
@@ -344,9 +345,9 @@ def evaluate_design(spec_dict: dict, point: dict) -> dict:
         platform = design_platform(spec, point["kind"], point["architecture"], point["params"])
         values = evaluate_platform(platform, spec.effort, point["seed"], collision=collision)
     except QprrError as exc:
-        status, reason = "failed", f"{type(exc).__name__}: {exc}"
+        status, reason = RunStatus.FAILED, f"{type(exc).__name__}: {exc}"
     except Exception as exc:  # a bug must not lose the study: recorded, visible in the table, re-run on resume
-        status, reason = "error", f"{type(exc).__name__}: {exc}"
+        status, reason = RunStatus.ERROR, f"{type(exc).__name__}: {exc}"
     row = {k: point[k] for k in ID_COLUMNS}
     row.update(cells(spec, point["params"]))
     row.update(status=status, reason=reason, **values)

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ..campaign import metrics_of
+from ..campaign.metrics import RunStatus
 from ..errors import InputError, QprrError
 from ..nomenclature import parse
 from ..scenarios import SCENARIOS
@@ -58,8 +59,8 @@ def scores(rows: list[dict], objectives) -> np.ndarray:
 
 def ranked(rows: list[dict], objectives) -> list[dict]:
     """``rows`` with ``level`` and ``score`` added, sorted: feasible by (level, -score, run), then the others by run."""
-    good = [dict(r) for r in rows if r["status"] == "ok" and r["feasible"] == 1]
-    bad = [dict(r, level=0, score=float("nan")) for r in rows if not (r["status"] == "ok" and r["feasible"] == 1)]
+    good = [dict(r) for r in rows if r["status"] == RunStatus.OK and r["feasible"] == 1]
+    bad = [dict(r, level=0, score=float("nan")) for r in rows if not (r["status"] == RunStatus.OK and r["feasible"] == 1)]
     if good:
         F = np.array([[sign(k) * r[k] for k in objectives] for r in good], dtype=float)
         lv, sc = front_levels(F), scores(good, objectives)
@@ -95,7 +96,7 @@ def markdown_table(rows: list[dict], objectives, params=(), limit: int | None = 
     ]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for i, r in enumerate(rows[:limit] if limit else rows, start=1):
-        mark = {1: "**1**", 0: "infeasible" if r["status"] == "ok" else r["status"]}.get(r["level"], str(r["level"]))
+        mark = {1: "**1**", 0: "infeasible" if r["status"] == RunStatus.OK else r["status"]}.get(r["level"], str(r["level"]))
         cells = [
             str(i),
             r["name"],
@@ -166,7 +167,7 @@ def pareto_2d(rows: list[dict], objectives, path, pairs=None, kind: StudyKind = 
     the references the study names as stars."""
     from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
-    ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
+    ok = [r for r in rows if r["status"] == RunStatus.OK and r.get("level", 0) >= 1]
     pairs = pairs or [(objectives[0], k) for k in objectives[1:]]
     n = len(pairs)
     ncol = min(n, 2)
@@ -206,7 +207,7 @@ def parallel_coordinates(rows: list[dict], objectives, path, kind: StudyKind = S
     dashed black."""
     from matplotlib.figure import Figure  # not attached to pyplot: no backend chosen, nothing to close
 
-    ok = [r for r in rows if r["status"] == "ok" and r.get("level", 0) >= 1]
+    ok = [r for r in rows if r["status"] == RunStatus.OK and r.get("level", 0) >= 1]
     F = np.array([[r[k] for k in objectives] for r in ok], dtype=float)
     lo, hi = F.min(axis=0), F.max(axis=0)
     span = np.where(hi > lo, hi - lo, 1.0)
@@ -256,7 +257,7 @@ def fly_design(spec_dict: dict, row: dict) -> dict:
         result = SCENARIOS[cl.scenario].run(platform=platform, controller=cl.controller, duration=cl.duration)
         m = metrics_of(result, ("rmse", "x_cm_max", "saturation"), platform.xi_names)
     except QprrError as exc:
-        out.update(status="failed", reason=f"{type(exc).__name__}: {exc}")
+        out.update(status=RunStatus.FAILED, reason=f"{type(exc).__name__}: {exc}")
         return out
     out.update({k: m[k] for k in FLIGHT_COLUMNS})
     return out
@@ -286,7 +287,7 @@ def flights(spec: DesignSpec, rows: list[dict], backend="inline", workers=None, 
             rows,
             f"{spec.fingerprint}-flight",
             lambda r: out.__setitem__(r["run"], r),
-            lambda p, exc: {"run": p["run"], "name": p["name"], "status": "error", "reason": f"{type(exc).__name__}: {exc}"},
+            lambda p, exc: {"run": p["run"], "name": p["name"], "status": RunStatus.ERROR, "reason": f"{type(exc).__name__}: {exc}"},
         )
     finally:
         close_backend(be, owned)
@@ -299,7 +300,7 @@ def _flight_table(rows: list[dict], fl: list[dict]) -> str:
         "|---|---|---|---|---|---|",
     ]
     for r, f in zip(rows, fl):
-        ok = f["status"] == "ok"
+        ok = f["status"] == RunStatus.OK
         lines.append(
             f"| {r['name']} | {r['run']} | {f['status']} | "
             + (
@@ -321,7 +322,7 @@ def design_report(results, out=None, *, top: int | None = None, fly: bool = True
     spec, rows = load_study(results)
     rk = ranked(rows, spec.objectives)
     params = spec.optimised or spec.swept
-    n_ok = sum(r["status"] == "ok" for r in rows)
+    n_ok = sum(r["status"] == RunStatus.OK for r in rows)
     n_feas = sum(r["level"] >= 1 for r in rk)
     n_front = sum(r["level"] == 1 for r in rk)
     head = (

@@ -56,6 +56,7 @@ from pathlib import Path
 import numpy as np
 
 from ..campaign import Backend, Results, make_backend, read_results
+from ..campaign.metrics import RunStatus
 from ..campaign.session import BackendChoice, Session
 from ..errors import InputError, MissingDependencyError
 from .evaluate import ID_COLUMNS, TAIL_COLUMNS, applies, cells, columns, evaluate_design, exclusions
@@ -345,7 +346,8 @@ def meta_of(spec: DesignSpec) -> dict:
 def _error_row(spec: DesignSpec, p: dict, exc: Exception) -> dict:
     row = {k: p[k] for k in ID_COLUMNS}
     row.update(cells(spec, p["params"]))
-    row.update(status="error", reason=f"{type(exc).__name__}: {exc}", **dict.fromkeys(DESIGN_METRICS, math.nan), feasible=0, wall_time=math.nan)
+    row.update(status=RunStatus.ERROR, reason=f"{type(exc).__name__}: {exc}")
+    row.update(dict.fromkeys(DESIGN_METRICS, math.nan), feasible=0, wall_time=math.nan)
     return row
 
 
@@ -354,7 +356,7 @@ def told(spec: DesignSpec, rows: list[dict]) -> tuple[np.ndarray, np.ndarray]:
     F = np.empty((len(rows), len(spec.objectives)))
     G = np.empty((len(rows), 1 + len(spec.constraints)))
     for i, r in enumerate(rows):
-        if r["status"] != "ok":
+        if r["status"] != RunStatus.OK:
             F[i], G[i] = FAILED, FAILED
             continue
         F[i] = [sign(k) * float(r[k]) for k in spec.objectives]
@@ -377,12 +379,12 @@ class _Study:
         self.session.store.append(row)
         self.rows[int(row["run"])] = row
         self.executed += 1
-        self.failed += row["status"] != "ok"
+        self.failed += row["status"] != RunStatus.OK
         self.bar.update(str(row["status"]))
 
     def evaluate(self, points: list[dict]) -> list[dict]:
         """The rows of ``points`` (evaluated now when not saved before)."""
-        todo = [p for p in points if p["run"] not in self.rows or self.rows[p["run"]]["status"] == "error"]
+        todo = [p for p in points if p["run"] not in self.rows or self.rows[p["run"]]["status"] == RunStatus.ERROR]
         if todo:
             be = self.session.be
             if be is None:
@@ -459,7 +461,7 @@ def run_design(
         t = read_table(session.store.path).table
         done = {int(r["run"]): {k: r[k].item() for k in t.dtype.names} for r in t}
     total = n_points(spec)
-    skipped = sum(1 for r in done.values() if r["status"] != "error")
+    skipped = sum(1 for r in done.values() if r["status"] != RunStatus.ERROR)
     bar = session.progress(f"design {spec.name}", total, skipped, quiet=not progress, stream=stream, unit="design")
     study = _Study(spec, session, done)
     t0 = time.perf_counter()
