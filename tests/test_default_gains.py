@@ -9,7 +9,6 @@ import itertools
 import numpy as np
 import pinocchio as pin
 import pytest
-from scipy.linalg import expm
 
 import qprr
 from qprr.charts import rate_map
@@ -83,47 +82,41 @@ def test_opspace_impedance_default_needs_the_contact_force(platform):
         make_controller("opspace-impedance", platform)
 
 
-def test_arm_offset_decays_as_the_placed_poles_first_order_in_dt(platform):
-    """IDC at the default gains, hover with the last arm joint 0.02 off: the error follows its polynomial (s + w)^2 (s + w / 10)
-    (w the derived arm bandwidth, the integral starting at zero: the matrix exponential of its companion matrix); the only
-    deviation is the control's zero-order hold, first order in dt (ratio 4 for dt / 4)."""
+def test_arm_offset_decays_as_the_placed_double_pole_first_order_in_dt(platform):
+    """IDC at the default gains, hover with the last arm joint 0.02 off: e(t) = e0 (1 + w t) exp(-w t) with w the derived
+    arm bandwidth; the only deviation is the control's zero-order hold, first order in dt (ratio 4 for dt / 4)."""
     xi = platform.neutral_xi().copy()
     xi[2] = 2.0
     j = 5 + platform.n_arm
-    g = platform_gains("idc", platform)["gains"]
     w = bandwidths(Authority.from_platform(platform))[j]
-    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-g.ki[j], -g.kp[j], -g.kd[j]]])  # [int e, e, e']
     x0 = xi.copy()
     x0[j] += 0.02
     dev = []
     for dt in (1e-3, 2.5e-4):
         r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 1.0, xi0=x0, dt=dt)
-        closed = np.array([(expm(A * t) @ [0.0, 0.02, 0.0])[1] for t in r.t])
+        closed = 0.02 * (1.0 + w * r.t) * np.exp(-w * r.t)
         dev.append(np.abs(r.xi[:, j] - xi[j] - closed).max() / 0.02)
         assert dev[-1] < w * dt, (dt, dev[-1], w * dt)  # the hold delays u by dt / 2 on average
     assert 3.6 < dev[0] / dev[1] < 4.4, dev
 
 
 def test_hover_from_a_base_and_arm_offset_converges(platform):
-    """From 0.1 m off in x and y and every arm joint 0.02 off, the default IDC settles on the hover reference (12 s: the
-    integral poles, w / 2 on position and w / 10 on the arm, are the slowest)."""
+    """From 0.1 m off in x and y and every arm joint 0.02 off, the default IDC settles on the hover reference."""
     xi = platform.neutral_xi().copy()
     xi[2] = 2.0
     x0 = xi.copy()
     x0[0] += 0.1
     x0[1] -= 0.1
     x0[6:] += 0.02
-    r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 12.0, xi0=x0)
+    r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 8.0, xi0=x0)
     assert r.status == "ok"
     assert np.abs(r.xi[-1] - xi).max() < 1e-6
-    # the error grows at first while the base tilts (the cascade); with the integral action
-    # the position k_P is 2 w^2 (was w^2), so the tilt is asked harder: measured 0.1056 on the Q-PRR (0.1 m offset)
-    assert np.abs(r.xi[:, 0:3] - xi[0:3]).max() < 0.107
+    assert np.abs(r.xi[:, 0:3] - xi[0:3]).max() < 0.105  # no overshoot beyond 5 % of the offset
 
 
 # ------------------------------------------------------------------------------------------- motor lag
 MOTOR_LAG = dict(
-    duration=14.0,  # the hold after the move (40 % of the run) outlasts the arm's integral pole, w / 10
+    duration=10.0,
     dt=1e-3,
     integrator="midpoint",
     seed=0,

@@ -95,11 +95,12 @@ def test_authority_of_the_x_quadrotor_in_closed_form(quad):
 
 def test_closed_loop_arm_error_decays_as_its_error_polynomial():
     """On the fully actuated hextilt the inverse dynamics cancel the coupling: an arm offset e0 follows the error
-    polynomial (s + w)^2 (s + w / 10) of the derived gains (the integral starting at zero): [int e, e, e']' = A [int e, e, e']
+    polynomial (s + w)^2 (s + w / 10) of the derived gains with integral action (Targets(integral=True); the integral
+    starting at zero): [int e, e, e']' = A [int e, e, e']
     with A the companion matrix of [1, k_D, k_P, k_I], solved by the matrix exponential (RK4, 0.5 ms, exact model
     without the URDF's joint friction, which the controller does not feed back, no saturation)."""
     p = qprr.load("hextilt_flying_arm_5").without_joint_friction()
-    gains = platform_gains("idc", p)
+    gains = platform_gains("idc", p, Targets(integral=True))
     ctrl = qprr.make_controller("idc", p, **gains)
     xi = p.neutral_xi()
     xi[2] = 2.0

@@ -19,7 +19,7 @@ import pytest
 import qprr
 from qprr.actuation import Allocator
 from qprr.control import AntiWindup, PayloadAwareness, make_controller
-from qprr.control.gains import INTEGRAL_RATIO_ARM, INTEGRAL_RATIO_POSITION, Authority, bandwidths, integral_limits, platform_gains
+from qprr.control.gains import INTEGRAL_RATIO_ARM, INTEGRAL_RATIO_POSITION, Authority, Targets, bandwidths, integral_limits, platform_gains
 from qprr.dynamics import generalized_gravity
 from qprr.kinematics import ee_pose_xi
 from qprr.payload import with_payload
@@ -29,6 +29,8 @@ from qprr.sim.payload import PayloadChange, PayloadSchedule
 from qprr.sim.wind import AerodynamicDrag, Wind
 from qprr.trajectory import Hold
 
+INTEGRAL = Targets(integral=True)
+"""The derived gains with integral action on position and arm (off by default: qprr.control.gains, "Integral action")."""
 MY = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
 PAYLOAD, WIND, DRAG = 0.4, 5.0, 0.3  # kg, m/s along world x, N s/m (linear, every body axis)
 REACH = {"q-prr": 0.6, "borinot_flying_arm_2": 0.3, "my_platform": 0.0}
@@ -77,12 +79,13 @@ PLATFORMS = ("q-prr", "borinot_flying_arm_2", "my_platform")
 
 @pytest.mark.parametrize("name", PLATFORMS)
 def test_derived_gains_place_the_integral_pole_below_the_pd(name):
-    """Derived IDC gains: (s + w)^2 (s + w / r) on position (r = 2) and arm (r = 10), (s + w)^3 on the attitude, the
-    conditional anti-windup, and each integral clamped to the acceleration the actuators give the coordinate."""
+    """Derived IDC gains with integral action: (s + w)^2 (s + w / r) on position (r = 2) and arm (r = 10), (s + w)^3 on
+    the attitude, the conditional anti-windup, and each integral clamped to the acceleration the actuators give the
+    coordinate; without it (the default) (s + w)^2 on position and arm, plain integration and no clamp."""
     platform = _platform(name)
     a = Authority.from_platform(platform)
     w = bandwidths(a)
-    g = platform_gains("idc", platform)["gains"]
+    g = platform_gains("idc", platform, INTEGRAL)["gains"]
     for i, wi in enumerate(w):
         r = INTEGRAL_RATIO_POSITION if i < 3 else INTEGRAL_RATIO_ARM if i >= 6 else None
         poles = [-wi] * 3 if r is None else [-wi, -wi, -wi / r]
@@ -93,6 +96,14 @@ def test_derived_gains_place_the_integral_pole_below_the_pd(name):
     np.testing.assert_allclose(g.integral_limit[0:3], [m_g] * 3, rtol=1e-15)
     np.testing.assert_allclose(g.integral_limit[6:], np.array(a.arm_effort) / np.array(a.arm_inertia), rtol=1e-15)
     assert integral_limits(a) == g.integral_limit
+    plain = platform_gains("idc", platform)["gains"]
+    for i, wi in enumerate(w):
+        poles = [-wi] * 3 if 3 <= i < 6 else [-wi, -wi]
+        np.testing.assert_allclose([1.0, plain.kd[i], plain.kp[i], *([plain.ki[i]] if 3 <= i < 6 else [])], np.poly(poles), rtol=1e-13, atol=0)
+        assert plain.ki[i] == 0.0 or 3 <= i < 6
+    assert plain.anti_windup is AntiWindup.NONE
+    with pytest.raises(qprr.errors.InputError, match="integral"):
+        Targets(integral="yes")
 
 
 @pytest.mark.parametrize("name", PLATFORMS)
@@ -102,7 +113,7 @@ def test_unannounced_payload_leaves_under_1_cm_with_integral_action(name):
     q = platform.neutral_q()
     q[7:] = _hover(platform, name)[6:]
     assert Allocator(loaded).allocate(generalized_gravity(loaded, loaded.data(), q)).status == "exact"  # holdable
-    gains = platform_gains("idc", platform)["gains"]
+    gains = platform_gains("idc", platform, INTEGRAL)["gains"]
     on = _fly(platform, name, "payload", gains, 16.0)
     off = _fly(platform, name, "payload", _without_integral(gains), 8.0)
     assert on.status == "ok" and off.status == "ok"
@@ -116,7 +127,7 @@ def test_mean_wind_leaves_under_1_cm_with_integral_action(name):
     (linear drag, the same on every body axis: R K_1 R^T w = K_1 w at rest), and the end effector at the level
     reference is off by that lean's geometry."""
     platform = _platform(name)
-    gains = platform_gains("idc", platform)["gains"]
+    gains = platform_gains("idc", platform, INTEGRAL)["gains"]
     on = _fly(platform, name, "wind", gains, 12.0)
     off = _fly(platform, name, "wind", _without_integral(gains), 8.0)
     assert on.status == "ok" and off.status == "ok"
@@ -136,7 +147,7 @@ def test_announced_payload_is_flown_exactly():
     """PayloadAwareness(announced=...): the model carries the payload from its time on, so the hold stays exact (machine
     precision) through the grasp, the integrals having nothing to do."""
     platform, name = qprr.load(), "q-prr"
-    gains = platform_gains("idc", platform)["gains"]
+    gains = platform_gains("idc", platform, INTEGRAL)["gains"]
     res = _fly(platform, name, "payload", gains, 2.0, payload_awareness=PayloadAwareness(announced=((0.5, PAYLOAD),)))
     assert np.abs(res.xi - res.xi_d)[:, [0, 1, 2, 5, 6, 7, 8]].max() < 1e-9
     blind = _fly(platform, name, "payload", gains, 2.0)
@@ -148,7 +159,7 @@ def test_payload_awareness_and_anti_windup_refuse_bad_input():
         PayloadAwareness(announced=((1.0, 0.1), (0.5, 0.0)))
     with pytest.raises(qprr.errors.InputError, match="not both"):
         PayloadAwareness(announced=((1.0, 0.1),), estimate=True)
-    g = platform_gains("idc", qprr.load())["gains"]
+    g = platform_gains("idc", qprr.load(), INTEGRAL)["gains"]
     with pytest.raises(qprr.errors.UnknownNameError, match="anti-windup"):
         dataclasses.replace(g, anti_windup="sometimes")
     with pytest.raises(qprr.errors.InputError, match="integral_limit"):
@@ -168,3 +179,42 @@ def test_missions_take_the_payload_model_option():
         run("grasp-drop", controller="payload-idc", platform=qprr.load(), duration=2.0, payload_model="estimate")
     with pytest.raises(qprr.errors.UnknownNameError, match="payload_model"):
         run("grasp-drop", platform=qprr.load(), duration=2.0, payload_model="guess")
+
+
+def test_a_mission_file_asks_for_integral_action_by_its_targets():
+    """``[controller.targets] integral = true`` in a mission file gives the inverse-dynamics controller the derived gains
+    with integral action (the same as Targets(integral=True) in Python); without it, the default PD gains; a value that
+    is not a boolean is refused with its name."""
+    from qprr.scenarios.mission_file import read_mission_file
+    from qprr.scenarios.missions import mission_gain_arguments
+
+    platform = _platform("my_platform")
+    phase = {"coordinate": "z", "start": 0.0, "end": 1.0, "target": 1.0}
+    asked = read_mission_file({"phase": [phase], "controller": {"name": "idc", "targets": {"integral": True}}})
+    plain = read_mission_file({"phase": [phase], "controller": {"name": "idc"}})
+    with_integral = mission_gain_arguments("idc", platform, "platform", asked, None)["gains"]
+    default = mission_gain_arguments("idc", platform, "platform", plain, None)["gains"]
+    assert with_integral == platform_gains("idc", platform, INTEGRAL)["gains"]
+    assert default == platform_gains("idc", platform)["gains"]
+    assert all(k > 0.0 for k in with_integral.ki) and all(k == 0.0 for i, k in enumerate(default.ki) if not 3 <= i < 6)
+    wrong = read_mission_file({"phase": [phase], "controller": {"name": "idc", "targets": {"integral": "on"}}})
+    with pytest.raises(qprr.errors.InputError, match="integral"):
+        mission_gain_arguments("idc", platform, "platform", wrong, None)
+
+
+@pytest.mark.parametrize("controller", ["mfc", "impedance", "opspace-impedance"])
+def test_integral_targets_are_refused_where_no_integral_is_derived(controller):
+    """Targets(integral=True) for a controller whose derived gains have no such integral: refused, naming the target."""
+    with pytest.raises(qprr.errors.InputError, match="integral = true"):
+        platform_gains(controller, qprr.load(), INTEGRAL)
+
+
+def test_the_gains_option_takes_a_gains_files_tables_inline():
+    """``gains = { targets = { integral = true } }`` (a campaign's option or grid value) derives as the file would; a
+    table for no controller is refused by the file reader with its name."""
+    from qprr.scenarios.missions import gain_arguments
+
+    platform = qprr.load("borinot_flying_arm_2")
+    assert gain_arguments("idc", platform, {"targets": {"integral": True}}) == platform_gains("idc", platform, INTEGRAL)
+    with pytest.raises(qprr.errors.UnknownNameError):
+        gain_arguments("idc", platform, {"targetz": {"integral": True}})

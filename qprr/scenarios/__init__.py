@@ -156,7 +156,8 @@ COMMON_OPTIONS = {
 GAINS_OPTION = Option(
     "platform",
     "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
-    "class (the controller's own defaults), a registered gain table, or FILE.toml",
+    "class (the controller's own defaults), a registered gain table, FILE.toml, "
+    "or its tables inline (a campaign's gains = { targets = { integral = true } })",
 )
 """The ``gains`` option of the missions (:func:`qprr.scenarios.missions.controller_for`)."""
 

@@ -112,7 +112,8 @@ _AS_REGISTERED = MissionSettings()
 
 # ------------------------------------------------------------------------- building blocks
 def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
-    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none).
+    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none;
+    a mapping: a gains file's tables, :func:`qprr.control.gains.load_gains`).
 
     A gains object (:data:`_GAIN_TYPES`) is passed as is: ``gains=`` or, for impedance gains, ``impedance=`` (refused
     when controller ``name`` takes no such argument, :data:`qprr.control.gains.GAIN_ARGUMENTS`)."""
@@ -122,8 +123,12 @@ def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
         if arg not in takes:
             raise InputError(f"gains {type(gains).__name__} do not fit controller {name!r} (it takes {', '.join(takes) or 'no gains'})")
         return {arg: gains}
+    if isinstance(gains, Mapping):  # a gains file's tables given inline (a campaign's gains = { targets = { ... } })
+        return load_gain_file(gains, name, platform, "the gains tables")
     if not isinstance(gains, str):
-        raise InputError(f"gains must be 'platform', 'class', a registered gain table, a TOML file or a gains object of qprr.control, got {gains!r}")
+        raise InputError(
+            f"gains must be 'platform', 'class', a registered gain table, a TOML file, its tables or a gains object of qprr.control, got {gains!r}"
+        )
     if gains == "platform":
         return platform_gains(name, platform)
     if gains.endswith(".toml"):
