@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.linalg import expm
 
 import qprr
 from qprr.cli import main
@@ -92,20 +93,26 @@ def test_authority_of_the_x_quadrotor_in_closed_form(quad):
     assert a.mass == pytest.approx(quad.total_mass, rel=1e-15)
 
 
-def test_closed_loop_arm_error_decays_as_the_double_pole():
-    """On the fully actuated hextilt the inverse dynamics cancel the coupling: an arm offset e0 decays as
-    e0 (1 + w t) exp(-w t), the response of (s + w)^2 (RK4, 0.5 ms, exact model without the URDF's joint friction,
-    which the controller does not feed back, no saturation)."""
+def test_closed_loop_arm_error_decays_as_its_error_polynomial():
+    """On the fully actuated hextilt the inverse dynamics cancel the coupling: an arm offset e0 follows the error
+    polynomial (s + w)^2 (s + w / 10) of the derived gains with integral action (Targets(integral=True); the integral
+    starting at zero): [int e, e, e']' = A [int e, e, e']
+    with A the companion matrix of [1, k_D, k_P, k_I], solved by the matrix exponential (RK4, 0.5 ms, exact model
+    without the URDF's joint friction, which the controller does not feed back, no saturation)."""
     p = qprr.load("hextilt_flying_arm_5").without_joint_friction()
-    ctrl = qprr.make_controller("idc", p, **platform_gains("idc", p))
+    gains = platform_gains("idc", p, Targets(integral=True))
+    ctrl = qprr.make_controller("idc", p, **gains)
     xi = p.neutral_xi()
     xi[2] = 2.0
     e0 = 0.02
     xi_start = xi.copy()
     xi_start[6] += e0
     res = simulate(p, ctrl, Hold(tuple(xi)), 0.3, dt=5e-4, integrator="rk4", xi0=xi_start)
+    g = gains["gains"]
     w = bandwidths(Authority.from_platform(p))[6]
-    expected = e0 * (1 + w * res.t) * np.exp(-w * res.t)
+    np.testing.assert_allclose([1.0, g.kd[6], g.kp[6], g.ki[6]], np.poly([-w, -w, -w / 10.0]), rtol=1e-13)
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-g.ki[6], -g.kp[6], -g.kd[6]]])
+    expected = np.array([(expm(A * t) @ [0.0, e0, 0.0])[1] for t in res.t])
     np.testing.assert_allclose(res.xi[:, 6] - xi[6], expected, rtol=0, atol=2e-3 * e0)
 
 

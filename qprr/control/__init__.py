@@ -47,10 +47,12 @@ from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_1
 from .gains import derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains, replace_fields
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
+    AntiWindup,
     DesiredStateInverseDynamics,
     IDCGains,
     InverseDynamicsController,
     LayeredIDC,
+    PayloadAwareness,
     PayloadIDC,
 )
 from .mfc import MFCGains, ModelFreeController, ipid
@@ -137,6 +139,7 @@ def make_controller(name: str, platform: Platform, *, defaults: str = "platform"
 
 
 __all__ = [
+    "AntiWindup",
     "CONTROLLERS",
     "DEFAULT_CONTROLLER",
     "GAIN_ARGUMENTS",
@@ -157,6 +160,7 @@ __all__ = [
     "ModelFreeController",
     "NoGains",
     "OperationalSpaceImpedance",
+    "PayloadAwareness",
     "PayloadIDC",
     "Reference",
     "SingleTiltReference",

@@ -72,7 +72,7 @@ class _LockedArmIDC(InverseDynamicsController):
         super()._new_run()
         self._locked = State(self.platform.n_arm)
 
-    def _alpha_plan(self, idx) -> tuple[tuple, tuple]:
+    def _alpha_plan(self, idx) -> tuple[tuple, tuple, tuple]:
         return super()._alpha_plan(tuple(i for i in idx if i < 6))
 
     def _model_state(self, state: State, r: list, rd: list) -> State:

@@ -43,6 +43,11 @@ end-effector impedance          an end-effector acceleration task (:meth:`task_a
 * psi in (6.17) is the measured yaw; tilt references are clamped to ``max_tilt``; when
   u_fb,z < 5 % of the weight (Hypothesis 2 violated) the last tilt reference is held.
 
+* ``payload_awareness`` (:class:`PayloadAwareness`): the model carries a payload at the end effector, announced
+  (mass from given times on, (6.40)) or estimated online (Sec. 6.4.2); without it an unannounced payload is left to the
+  integrals.  The integrals of :class:`IDCGains` may be guarded against the actuator bounds (:class:`AntiWindup`,
+  ``integral_limit``); the gains derived from a platform are (:mod:`qprr.control.gains`, "Integral action").
+
 Gains: :class:`IDCGains` (per-coordinate vectors); under exact linearisation each error obeys
 e''' + k_D e'' + k_P e' + k_I e = 0 whatever the platform, so the defaults suit any platform.
 The thesis's printed tables are in :mod:`qprr.thesis.gains`.
@@ -53,10 +58,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sized
 from dataclasses import dataclass
+from enum import Enum
 
 import numpy as np
 import pinocchio as pin
 
+from ..actuation import Allocator
 from ..charts import State
 from ..dynamics.friction import JointFriction
 from ..errors import InputError, UnknownNameError
@@ -81,13 +88,34 @@ def _gain_vector(x, n: int, name: str) -> tuple[float, ...]:
     return tuple(float(v) for v in a)
 
 
+class AntiWindup(str, Enum):
+    """How the integrals of :class:`IDCGains` (k_I > 0) are kept from winding up against the actuator bounds.
+
+    ``NONE``: plain integration (the thesis's PIDs, flown as printed or retuned).  ``CONDITIONAL``: a coordinate stops
+    integrating while its command saturates, judged on the controller's own output of the previous tick (one tick
+    late, 1 ms in the default loop): an arm joint j while |tau_j| exceeds its effort limit and its error would push the
+    integral further the same way; the six base coordinates while the exact allocation of the base wrench
+    (f = Omega_P^+ w_P, :class:`qprr.actuation.Allocator`'s first try) leaves a rotor outside [f_min, f_max].  Either
+    way :attr:`IDCGains.integral_limit` clamps what each integral contributes.
+    """
+
+    NONE = "none"
+    CONDITIONAL = "conditional"
+
+    def __str__(self) -> str:
+        return self.value
+
+
 @dataclass(frozen=True)
 class IDCGains:
     """Per-coordinate gains of the outer loops, order x, y, z, phi, theta, psi, then the arm joints.
 
     ``kp``, ``kd``, ``ki``: tuples of 6 + n_arm values >= 0; ``filter_omega`` [rad/s]: bandwidth
-    of the roll/pitch command filter; ``max_tilt`` [rad].  Build with :meth:`default` (any
-    platform) or :meth:`from_groups`; the thesis's tables: :mod:`qprr.thesis.gains`.
+    of the roll/pitch command filter; ``max_tilt`` [rad]; ``anti_windup`` (:class:`AntiWindup`, default
+    none); ``integral_limit``: per coordinate the largest |k_I int e| the integral may add to alpha
+    (m/s^2, rad/s^2 or m/s^2 of a prismatic joint; inf: no clamp, the default), the clamp of the
+    anti-windup.  Build with :meth:`default` (any platform) or :meth:`from_groups`; the thesis's
+    tables: :mod:`qprr.thesis.gains`; derived from a platform: :func:`qprr.control.gains.idc_gains`.
     """
 
     kp: tuple[float, ...]
@@ -95,6 +123,8 @@ class IDCGains:
     ki: tuple[float, ...]
     filter_omega: float = 50.0
     max_tilt: float = 0.8
+    anti_windup: AntiWindup = AntiWindup.NONE
+    integral_limit: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
         n = len(self.kp) if isinstance(self.kp, Sized) and not isinstance(self.kp, str) else -1
@@ -102,6 +132,14 @@ class IDCGains:
             raise InputError(f"kp must have 6 + n_arm entries, got {self.kp!r}")
         for name in ("kp", "kd", "ki"):
             object.__setattr__(self, name, _gain_vector(getattr(self, name), n, name))
+        if self.anti_windup not in tuple(AntiWindup):
+            raise UnknownNameError("anti-windup", self.anti_windup, tuple(a.value for a in AntiWindup))
+        object.__setattr__(self, "anti_windup", AntiWindup(self.anti_windup))
+        limit = (math.inf,) * n if self.integral_limit is None else self.integral_limit
+        limit = np.asarray(as_array(limit, "integral_limit"), dtype=float)
+        if limit.shape != (n,) or not np.all(limit > 0.0):  # NaN fails too
+            raise InputError(f"integral_limit must be {n} values > 0, one per coordinate (m/s^2 or rad/s^2; inf: no clamp), got {limit.tolist()}")
+        object.__setattr__(self, "integral_limit", tuple(float(v) for v in limit))
         object.__setattr__(self, "filter_omega", as_real(self.filter_omega, "filter_omega", positive=True, unit="rad/s"))
         object.__setattr__(self, "max_tilt", as_real(self.max_tilt, "max_tilt", positive=True, unit="rad"))
         if not self.max_tilt < math.pi / 2:
@@ -161,6 +199,48 @@ class IDCGains:
         return bad
 
 
+@dataclass(frozen=True)
+class PayloadAwareness:
+    """What the model of an inverse-dynamics controller knows of a payload at the end effector (Thesis Sec. 6.4).
+
+    ``announced``: ((time [s], mass [kg]), ...) in time order: from each time on the model carries that mass (a
+    mission's payload events told to the controller: the known-mass model (6.40)); ``estimate``: the mass is estimated
+    online from the torque residual instead (:class:`~qprr.payload.MassEstimator`, Sec. 6.4.2, forgetting with
+    ``time_constant`` [s]; it takes the commanded force as the applied one).  ``com_ee`` [m]: the payload's point in
+    the end-effector frame.  Without it (``payload_awareness=None``) the model is the nominal one and an unannounced
+    payload is left to the integral action (:class:`IDCGains`' k_I).
+    """
+
+    announced: tuple[tuple[float, float], ...] = ()
+    estimate: bool = False
+    time_constant: float = 0.05
+    com_ee: tuple[float, float, float] = (0.0, 0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        events = []
+        for k, ev in enumerate(self.announced):
+            if not isinstance(ev, (tuple, list)) or len(ev) != 2:
+                raise InputError(f"PayloadAwareness.announced[{k}] must be a pair (time [s], mass [kg]), got {ev!r}")
+            events.append((as_real(ev[0], f"announced[{k}] time", nonnegative=True, unit="s"), _mass(ev[1], f"announced[{k}] mass")))
+        if [t for t, _ in events] != sorted(t for t, _ in events):
+            raise InputError(f"PayloadAwareness.announced must be in time order, got times {[t for t, _ in events]}")
+        if events and self.estimate:
+            raise InputError("PayloadAwareness: give announced payload events or estimate=True, not both (the estimate would replace them)")
+        object.__setattr__(self, "announced", tuple(events))
+        object.__setattr__(self, "estimate", bool(self.estimate))
+        object.__setattr__(self, "time_constant", as_real(self.time_constant, "time_constant", positive=True, unit="s"))
+        object.__setattr__(self, "com_ee", tuple(float(v) for v in as_vector(self.com_ee, 3, "com_ee")))
+
+    def mass_at(self, t: float) -> float:
+        """The announced mass [kg] at ``t`` [s] (the last event at or before t, within 1e-12 s as the simulator applies them)."""
+        t = as_real(t, "t", unit="s")
+        m = 0.0
+        for time, mass in self.announced:
+            if time <= t + 1e-12:
+                m = mass
+        return m
+
+
 class InverseDynamicsController(Controller):
     """The inverse-dynamics core (module docstring): u = B_hat alpha + C_hat xi_dot + G_hat (+ feedforward).
 
@@ -187,8 +267,11 @@ class InverseDynamicsController(Controller):
         tilt: str | None = None,
         output: str | None = None,
         name: str | None = None,
+        payload_awareness: PayloadAwareness | None = None,
     ) -> None:
         check_platform(platform)
+        if payload_awareness is not None and not isinstance(payload_awareness, PayloadAwareness):
+            raise InputError(f"payload_awareness must be a qprr.control.PayloadAwareness or None, got {type(payload_awareness).__name__}")
         if at not in MODEL_STATES:
             raise UnknownNameError("model state", at, MODEL_STATES)
         tilt = tilt or ("none" if platform.fully_actuated else "split")
@@ -212,6 +295,15 @@ class InverseDynamicsController(Controller):
         self.model = platform.model
         self.data = platform.model.createData()
         self._friction = JointFriction.from_model(platform.model)  # nominal joint friction of the URDF (None: none)
+        self.payload_awareness = payload_awareness
+        self._carried = None  # the model's payload (PayloadAwareness): a copy of the model whose end effector carries it
+        self._estimator = None
+        if payload_awareness is not None:
+            self._carried = PayloadModel(platform, payload_awareness.com_ee)
+            self.model, self.data = self._carried.model, self._carried.data
+            if payload_awareness.estimate:
+                self._estimator = MassEstimator(platform, time_constant=payload_awareness.time_constant, com_ee=payload_awareness.com_ee)
+        self._guards(platform)
         self._zero6 = [0.0] * 6
         # base directions the rotors cannot produce (coplanar rotors: the body-lateral force)
         Omega = platform.rotor_matrix
@@ -226,6 +318,17 @@ class InverseDynamicsController(Controller):
         self.dt = None  # the control period: set by reset(state, ref, dt), called by the simulator
         self._new_run()
 
+    def _guards(self, platform: Platform) -> None:
+        """The guarded integrals (:class:`AntiWindup` CONDITIONAL) of the base and of the arm, with what they are judged on."""
+        g = self.gains
+        on = g.anti_windup is AntiWindup.CONDITIONAL
+        self._base_guard = tuple(i for i in range(6) if on and g.ki[i])
+        limits = platform.arm_effort_limits
+        self._arm_guard = tuple((6 + j, float(limits[j])) for j in range(platform.n_arm) if on and g.ki[6 + j] and math.isfinite(limits[j]))
+        self._allocator = Allocator(platform) if self._base_guard else None
+        Omega = platform.rotor_matrix
+        self._rows_unproducible = [i for i in range(6) if np.abs(Omega[i]).max() <= 1e-12]  # rows the rotors cannot push along
+
     def reset(self, state: State, ref: Reference, dt: float) -> None:
         """Start a run: the control period ``dt`` [s] (checked with the state and reference), then :meth:`_new_run`."""
         self.dt = check_reset(self, state, ref, dt)
@@ -235,6 +338,12 @@ class InverseDynamicsController(Controller):
         """Fresh per-run values (integrals, filters, buffers, caches); a configuration extends it for its own."""
         n = self.platform.n_xi
         self.integral = [0.0] * n
+        self._windup = [0] * n  # AntiWindup: 0 integrate, +-1 the arm effort saturated that way, 2 the rotors saturated
+        self._last_tick = None  # (q, v, tau) of the last tick, for the payload estimator
+        if self._carried is not None:
+            if self._estimator is not None:
+                self._estimator.reset()
+            self._carried.set_mass(self.payload_awareness.mass_at(0.0))
         g = self.gains
         uz_min = 0.05 * self.platform.total_mass * self.platform.g
         if self.tilt_mode == "split":
@@ -254,17 +363,20 @@ class InverseDynamicsController(Controller):
         self._desired = State(self.platform.n_arm) if self.at == "desired" else None
 
     # ------------------------------------------------------------------ pieces
-    def _alpha_plan(self, idx) -> tuple[tuple, tuple]:
+    def _alpha_plan(self, idx) -> tuple[tuple, tuple, tuple]:
         """Gains of the coordinates ``idx``: ((i, k_P, k_D) without integral action, ...),
-        ((i, k_P, k_D, k_I) with integral action or yaw (wrapped error), ...)."""
+        ((i, k_P, k_D, k_I) with plain integral action or yaw (wrapped error), ...),
+        ((i, k_P, k_D, k_I, cap) with a guarded integral (:class:`AntiWindup`; |int e| <= cap = limit / k_I), ...)."""
         g = self.gains
+        guarded = g.anti_windup is AntiWindup.CONDITIONAL or any(math.isfinite(v) for v in g.integral_limit)
         plain = tuple((i, g.kp[i], g.kd[i]) for i in idx if i != 5 and not g.ki[i])
-        other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if i == 5 or g.ki[i])
-        return plain, other
+        other = tuple((i, g.kp[i], g.kd[i], g.ki[i]) for i in idx if (i == 5 or g.ki[i]) and not (guarded and g.ki[i]))
+        guard = tuple((i, g.kp[i], g.kd[i], g.ki[i], g.integral_limit[i] / g.ki[i]) for i in idx if guarded and g.ki[i])
+        return plain, other, guard
 
     def _alpha_loops(self, x, xd, r, rd, rdd, plan, al: list[float], dt: float) -> list[float]:
         """Virtual accelerations (6.20), (6.23), (6.24), (A.3) of a plan into ``al`` (plain float lists; dt [s] for the integrals)."""
-        plain, other = plan
+        plain, other, guard = plan
         for i, kp, kd in plain:  # PD: alpha = xi_ddot_d + k_D e_dot + k_P e
             al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * (r[i] - x[i])
         integ = self.integral
@@ -277,7 +389,31 @@ class InverseDynamicsController(Controller):
                 integ[i] += e * dt
                 a += ki * integ[i]
             al[i] = a
+        hold = self._windup
+        for i, kp, kd, ki, cap in guard:  # + k_I int e, integrated unless its command saturates (AntiWindup), clamped
+            e = r[i] - x[i]
+            if i == 5:
+                e = (e + _PI) % _TWO_PI - _PI
+            h = hold[i]  # 0: integrate; +-1: saturated that way, integrate only back; 2: rotors saturated, hold
+            if h == 0 or (h != 2 and e * h < 0.0):
+                integ[i] = min(cap, max(-cap, integ[i] + e * dt))
+            al[i] = rdd[i] + kd * (rd[i] - xd[i]) + kp * e + ki * integ[i]
         return al
+
+    def _saturation(self, tau: np.ndarray) -> None:
+        """Which guarded integrals hold at the next tick (:class:`AntiWindup` CONDITIONAL), from the Pinocchio force ``tau``
+        this tick commands: the base ones while the exact allocation leaves a rotor outside its bounds, an arm joint's
+        while its effort exceeds the limit (then +1 or -1: the sign of the excess)."""
+        hold = self._windup
+        if self._base_guard:
+            alloc = self._allocator
+            f = alloc.Omega_P_inv.dot(tau[alloc.rows])
+            h = 0 if (np.all(alloc.f_min <= f) and np.all(f <= alloc.f_max)) else 2
+            for i in self._base_guard:
+                hold[i] = h
+        for i, limit in self._arm_guard:
+            t = float(tau[i])
+            hold[i] = 1 if t > limit else (-1 if t < -limit else 0)
 
     def _model_state(self, state: State, r: list, rd: list) -> State:
         """State at which B, C, G are evaluated: the measured one, or the desired one (Annex A.2)."""
@@ -320,7 +456,7 @@ class InverseDynamicsController(Controller):
         M (CRBA, local convention) depends on the arm joints only, so at a held desired arm
         pose the rows of the previous step are exact."""
         if self._desired is not None:
-            key = np.array(ms.xi_floats[6:]).tobytes()  # the arm joints bit for bit (-0.0 is not 0.0)
+            key = np.array([*ms.xi_floats[6:], self.payload_mass]).tobytes()  # the arm joints bit for bit (-0.0 is not 0.0), the payload
             if key != self._mass_key:
                 self._mass_rows = _crba(model, data, q)[self._lost_rows, 0:6].tolist()
                 self._mass_key = key
@@ -333,6 +469,8 @@ class InverseDynamicsController(Controller):
         dt = self._dt  # the control period (read once: this runs every tick)
         if dt is None:
             raise not_reset(self)
+        if self._carried is not None:
+            self._update_payload(t, state, dt)
         if self._refs_hook:
             self.update_references(t, state, ref)
         x, xd = state.xi_floats, state.xi_dot_floats
@@ -394,6 +532,8 @@ class InverseDynamicsController(Controller):
         tau = _rnea(model, data, q, v, abuf)
         if self._friction is not None:  # the URDF's joint friction (F_v of (5.36), Coulomb): feedforward at the reference arm rates
             tau = tau - self._friction.generalized_force(self._zero6 + rd[6:])
+        if self._base_guard or self._arm_guard or self._estimator is not None:
+            self._after_step(state, tau if ff is None else tau + np.array(ffv))
         if self.output == "pinocchio":
             if ff is not None:
                 tau = tau + np.array(ffv)
@@ -402,6 +542,31 @@ class InverseDynamicsController(Controller):
         if ff is not None:
             u = [ui + fi for ui, fi in zip(u, ff)]
         return np.array(u)
+
+    def _update_payload(self, t: float, state: State, dt: float) -> None:
+        """The model's payload at this tick (:class:`PayloadAwareness`): the announced mass, or the estimate updated with
+        the last tick's step (Sec. 6.4.2)."""
+        if self._estimator is None:
+            m = self.payload_awareness.mass_at(t)
+            if m != self._carried.mass:
+                self._carried.set_mass(m)
+        elif self._last_tick is not None:
+            q0, v0, tau0 = self._last_tick
+            self._carried.set_mass(self._estimator.update(q0, v0, tau0, state.v, dt))
+
+    def _after_step(self, state: State, tau: np.ndarray) -> None:
+        """What the next tick needs of this one's command ``tau`` (Pinocchio force): the anti-windup's saturation, the
+        estimator's step (the rows no rotor produces set to zero: they are not applied)."""
+        self._saturation(tau)
+        if self._estimator is not None:
+            applied = np.array(tau, dtype=float)
+            applied[self._rows_unproducible] = 0.0
+            self._last_tick = (state.q.copy(), state.v.copy(), applied)
+
+    @property
+    def payload_mass(self) -> float:
+        """The payload mass [kg] the model carries now (0 without :class:`PayloadAwareness`)."""
+        return 0.0 if self._carried is None else self._carried.mass
 
 
 class DesiredStateInverseDynamics(InverseDynamicsController):

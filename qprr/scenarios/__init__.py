@@ -156,7 +156,8 @@ COMMON_OPTIONS = {
 GAINS_OPTION = Option(
     "platform",
     "gain set: platform (derived from its mass, inertia and actuators: qprr.control.gains), "
-    "class (the controller's own defaults), a registered gain table, or FILE.toml",
+    "class (the controller's own defaults), a registered gain table, FILE.toml, "
+    "or its tables inline (a campaign's gains = { targets = { integral = true } })",
 )
 """The ``gains`` option of the missions (:func:`qprr.scenarios.missions.controller_for`)."""
 
@@ -268,9 +269,16 @@ def _mission_summary(result: SimResult) -> list[str]:
 
 
 _FLIGHT = ("idc", "dsid", "decoupled")
+PAYLOAD_OPTION = Option(
+    "unknown",
+    "what the controller's model knows of a payload: unknown (integral action rejects it), announced (the mission's "
+    "payload events), estimate (online mass estimate, Thesis Sec. 6.4.2); qprr.scenarios.missions.PAYLOAD_MODELS",
+)
+"""The ``payload_model`` option of the generic missions (:func:`qprr.scenarios.missions.payload_awareness`)."""
 _HOVER = {
     **COMMON_OPTIONS,
     "gains": GAINS_OPTION,
+    "payload_model": PAYLOAD_OPTION,
     "z": Option(2.0, "hover height [m]"),
     "reach_fraction": Option(0.3, "arm posture: fraction of the way from neutral to the upper joint limits"),
 }
@@ -306,6 +314,7 @@ MISSIONS = (
         {
             **COMMON_OPTIONS,
             "gains": GAINS_OPTION,
+            "payload_model": PAYLOAD_OPTION,
             "mission": Option(
                 "",
                 "FILE.toml of [[phase]] (coordinate, start, end, target) and [[payload]] (time, mass) tables, and optionally [wind], "
@@ -330,7 +339,7 @@ MISSIONS = (
         _mission_runner("push"),
         ("opspace-impedance", "idc"),
         {
-            **_HOVER,
+            **{k: v for k, v in _HOVER.items() if k != "payload_model"},  # its controller reads the wall's sensor, not a payload
             "gap": Option(0.05, "distance from the end effector to the wall at the start [m]"),
             "penetration": Option(0.05, "how far the reference ends inside the wall [m]"),
             "wall_stiffness": Option(2000.0, "wall stiffness [N/m]"),
@@ -401,4 +410,4 @@ def run(
     return get_scenario(name).run(platform=platform, controller=controller, progress=progress, settings=settings, **options)
 
 
-__all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]
+__all__ = ["COMMON_OPTIONS", "GAINS_OPTION", "GENERIC", "MISSIONS", "PAYLOAD_OPTION", "SCENARIOS", "Option", "Scenario", "get_scenario", "run"]

@@ -47,12 +47,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ..control import make_controller
+from ..control import CONTROLLERS, PayloadAwareness, make_controller
 from ..control.base import Controller
 from ..control.gains import GAIN_ARGUMENTS, platform_gains
 from ..control.gains import load_gains as load_gain_file
 from ..control.impedance import ImpedanceGains
-from ..control.inverse_dynamics import IDCGains
+from ..control.inverse_dynamics import IDCGains, InverseDynamicsController, LayeredIDC
 from ..control.mfc import MFCGains
 from ..control.opspace_impedance import EndEffectorImpedance
 from ..errors import InputError, ScheduleWarning, UnknownNameError
@@ -112,7 +112,8 @@ _AS_REGISTERED = MissionSettings()
 
 # ------------------------------------------------------------------------- building blocks
 def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
-    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none).
+    """The constructor keyword arguments of controller ``name`` for the gain set ``gains`` (module docstring; "class": none;
+    a mapping: a gains file's tables, :func:`qprr.control.gains.load_gains`).
 
     A gains object (:data:`_GAIN_TYPES`) is passed as is: ``gains=`` or, for impedance gains, ``impedance=`` (refused
     when controller ``name`` takes no such argument, :data:`qprr.control.gains.GAIN_ARGUMENTS`)."""
@@ -122,8 +123,12 @@ def gain_arguments(name: str, platform: Platform, gains) -> dict[str, object]:
         if arg not in takes:
             raise InputError(f"gains {type(gains).__name__} do not fit controller {name!r} (it takes {', '.join(takes) or 'no gains'})")
         return {arg: gains}
+    if isinstance(gains, Mapping):  # a gains file's tables given inline (a campaign's gains = { targets = { ... } })
+        return load_gain_file(gains, name, platform, "the gains tables")
     if not isinstance(gains, str):
-        raise InputError(f"gains must be 'platform', 'class', a registered gain table, a TOML file or a gains object of qprr.control, got {gains!r}")
+        raise InputError(
+            f"gains must be 'platform', 'class', a registered gain table, a TOML file, its tables or a gains object of qprr.control, got {gains!r}"
+        )
     if gains == "platform":
         return platform_gains(name, platform)
     if gains.endswith(".toml"):
@@ -186,9 +191,44 @@ def fly(platform: Platform, ctrl, trajectory, o: dict, progress: bool, name: str
     )
 
 
-def _controller(name: str, platform: Platform, o: dict, settings: MissionSettings, **kwargs):
-    """``settings.controller`` if given, else ``controller_for(name, platform, o["gains"], **kwargs)``."""
-    return settings.controller if settings.controller is not None else controller_for(name, platform, o["gains"], **kwargs)
+def _controller(name: str, platform: Platform, o: dict, settings: MissionSettings, payload: PayloadSchedule | None = None, **kwargs):
+    """``settings.controller`` if given, else ``controller_for(name, platform, o["gains"], **kwargs)`` told about the
+    payload as the option ``payload_model`` says (:func:`payload_awareness`; ``payload``: the mission's events)."""
+    if settings.controller is not None:
+        return settings.controller
+    return controller_for(name, platform, o["gains"], **payload_awareness(name, o, payload), **kwargs)
+
+
+# ------------------------------------------------------------------------- payload awareness (issue 35)
+PAYLOAD_MODELS = ("unknown", "announced", "estimate")
+"""The option ``payload_model`` of the generic missions, the first the default: ``unknown`` (the controller's model has no
+payload; integral action, :mod:`qprr.control.gains`, rejects it), ``announced`` (the mission's payload events are told to
+the controller's model, (6.40)), ``estimate`` (the controller estimates the mass online, Thesis Sec. 6.4.2)."""
+
+
+def payload_awareness(controller: str, o: dict, payload: PayloadSchedule | None) -> dict[str, object]:
+    """The keyword ``payload_awareness`` (:class:`qprr.control.PayloadAwareness`) of an inverse-dynamics controller for the
+    option ``payload_model`` (:data:`PAYLOAD_MODELS`; absent: the default), {} for ``unknown``.  A controller that is
+    not the inverse-dynamics core (``mfc``, ``payload-idc`` with its own estimator ...) is refused for the others."""
+    if not isinstance(o, Mapping):
+        raise InputError(f"o must be the mission's options (a mapping of option name -> value), got {type(o).__name__}")
+    if payload is not None and not isinstance(payload, PayloadSchedule):
+        raise InputError(f"payload must be the mission's qprr.sim.PayloadSchedule or None, got {type(payload).__name__}")
+    mode = o.get("payload_model", PAYLOAD_MODELS[0])
+    if not isinstance(mode, str) or mode not in PAYLOAD_MODELS:
+        raise UnknownNameError("payload_model", mode, PAYLOAD_MODELS)
+    if mode == PAYLOAD_MODELS[0]:
+        return {}
+    factory = CONTROLLERS[controller].factory
+    if not (isinstance(factory, type) and issubclass(factory, InverseDynamicsController) and not issubclass(factory, LayeredIDC)):
+        raise InputError(
+            f"payload_model = {mode!r} needs an inverse-dynamics controller (idc, dsid), not {controller!r}; "
+            "use payload_model = 'unknown' (integral action) or controller payload-idc (its own estimator)"
+        )
+    if mode == "estimate":
+        return {"payload_awareness": PayloadAwareness(estimate=True)}
+    events = tuple((c.time, c.mass) for c in payload.changes) if payload is not None else ()
+    return {"payload_awareness": PayloadAwareness(announced=events)}
 
 
 def _errors(res) -> None:
@@ -378,13 +418,15 @@ def _mission_controller_name(controller: str | None, data: MissionFile) -> str:
 
 
 def _mission_controller(name: str, platform: Platform, o: dict, settings: MissionSettings, data: MissionFile, stage):
-    """``settings.controller``, else the controller ``name`` with the gains of :func:`mission_gain_arguments`."""
+    """``settings.controller``, else the controller ``name`` with the gains of :func:`mission_gain_arguments`, told
+    about the mission's payload events as the option ``payload_model`` says (:func:`payload_awareness`)."""
     if settings.controller is not None:
         if data.controller.name or data.controller.gains != "":
             raise InputError(f"mission {data.name!r}: MissionSettings.controller is flown, its [controller] table would be ignored; remove one")
         return settings.controller
     defaults = "class" if o["gains"] == "class" and data.controller.gains == "" else "platform"
-    return make_controller(name, platform, defaults=defaults, **mission_gain_arguments(name, platform, o["gains"], data, stage))
+    gains = mission_gain_arguments(name, platform, o["gains"], data, stage)
+    return make_controller(name, platform, defaults=defaults, **gains, **payload_awareness(name, o, data.payload))
 
 
 def mission_gain_arguments(name: str, platform: Platform, gains, data: MissionFile, stage: RotorDynamics | None) -> dict[str, object]:
@@ -437,7 +479,7 @@ def grasp_drop(platform=None, controller="idc", progress=False, settings: Missio
     m = o["mass_fraction"] * platform.total_mass
     D = o["duration"]
     schedule = PayloadSchedule((PayloadChange(0.25 * D, m), PayloadChange(0.55 * D, 0.0)))
-    res = fly(platform, _controller(controller, platform, o, settings), traj, o, progress, "grasp-drop", settings, payload=schedule)
+    res = fly(platform, _controller(controller, platform, o, settings, schedule), traj, o, progress, "grasp-drop", settings, payload=schedule)
     _errors(res)
     res.metrics.update({"payload_mass": m, "t_grasp": 0.25 * D, "t_drop": 0.55 * D})
     return res
@@ -502,7 +544,8 @@ def motor_lag(platform=None, controller="idc", progress=False, settings: Mission
     platform = _platform(platform)
     actuators = motor_stage(platform, o["tau"], o["thrust_factor"], settings.plausibility)
     if o["gains"] == "platform" and settings.controller is None:
-        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, float(np.max(actuators.time_constant))))
+        tau = float(np.max(actuators.time_constant))
+        ctrl = make_controller(controller, platform, **lag_gains(controller, platform, tau), **payload_awareness(controller, o, None))
     else:
         ctrl = _controller(controller, platform, o, settings)
     traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
@@ -667,6 +710,8 @@ def mission_summary(result) -> list[str]:
 
 __all__ = [
     "PAYLOAD_KEYS",
+    "PAYLOAD_MODELS",
+    "payload_awareness",
     "PHASE_KEYS",
     "MissionSettings",
     "check_mission_schedule",
