@@ -653,21 +653,21 @@ def test_settle_tol_only_cuts_the_tail_of_the_lower_levels(rob, dat, hover_targe
 
 @pytest.mark.parametrize("method", ["qp", "dls"])
 def test_solve_many_gives_the_answers_of_one_solve_per_target(rob, dat, hover_targets, method):
-    """IKSolver.solve_many: reachable and unreachable targets, a position target and a given xi0 among them, the same
+    """qprr.ik.solve_many: reachable and unreachable targets, a position target and a given xi0 among them, the same
     results to the last bit as one solve per target; a bad target raises before any is solved."""
     solver = qprr.ik.IKSolver(rob, method)
     targets = [*hover_targets[:5], tilted(hover_targets[5], 0.3), hover_targets[6].translation.copy(), hover_targets[7]]
     xi0s = [None] * 7 + [random_hover_xi(np.random.default_rng(3), rob)]
-    many = solver.solve_many(dat, targets, xi0s)
+    many = qprr.ik.solve_many(solver, targets, xi0=xi0s)
     one = [qprr.ik.IKSolver(rob, method).solve(dat, M, xi0) for M, xi0 in zip(targets, xi0s)]
     assert [r.success for r in many] == [r.success for r in one] and not many[5].success
     for a, b in zip(many, one):
         assert (a.status, a.reason, a.iterations, a.initial_guess) == (b.status, b.reason, b.iterations, b.initial_guess)
         np.testing.assert_array_equal(a.q, b.q)
     with pytest.raises(ShapeError, match=r"targets\[1\]"):
-        solver.solve_many(dat, [hover_targets[0], np.zeros(4)])
+        qprr.ik.solve_many(solver, [hover_targets[0], np.zeros(4)])
     with pytest.raises(InputError, match="one entry per target"):
-        solver.solve_many(dat, targets, xi0s[:2])
+        qprr.ik.solve_many(solver, targets, xi0=xi0s[:2])
 
 
 # --------------------------------------------------------- targets whose doubles cannot resolve the tolerance

@@ -2,6 +2,7 @@
 
     solver = qprr.ik.IKSolver(platform, method="qp")   # build once (owns its QPs)
     result = solver.solve(data, target)                # solve many
+    batch = qprr.ik.solve_many(solver, targets, workers=2)   # or many in one call (qprr.ik.batch)
 
 or ``qprr.ik.solve(platform, data, target, method="qp")``; :func:`balance_prismatic` gives the value of a
 prismatic joint that puts the CoG on the thrust axis (closed form).  See :mod:`qprr.ik.solver` for the
@@ -11,6 +12,7 @@ problem and the methods (the registry :data:`IK_METHODS`: a plug-in adds its own
 
 from . import tasks
 from .balance import BalanceResult, BalanceStatus, balance_prismatic
+from .batch import IKBatch, solve_many
 from .hierarchy import HierarchySolver, HierarchyStep
 from .solver import (
     DEFAULT_METHOD,
@@ -43,6 +45,7 @@ __all__ = [
     "DLSOptions",
     "HierarchySolver",
     "HierarchyStep",
+    "IKBatch",
     "IKMethod",
     "IKOutcome",
     "IKResult",
@@ -55,5 +58,6 @@ __all__ = [
     "parse_target",
     "pose_errors",
     "solve",
+    "solve_many",
     "tasks",
 ]

@@ -847,27 +847,6 @@ class IKSolver:
             result = self._collision_free(data, p_d, R_d, result, t0)
         return result
 
-    def solve_many(self, data: pin.Data, targets: Sequence, xi0s: Sequence | None = None) -> list[IKResult]:
-        """The results of :meth:`solve` for every target of ``targets`` (each from its ``xi0s`` entry, None: the initial
-        guess), in order: the same answers as one call per target (every solve starts afresh), with this solver's QPs
-        and tasks built once.  A bad target raises before any target is solved.  The targets are solved one after the
-        other: the iterations of different targets branch differently (active joint limits, frozen levels, restarts),
-        so they are not run in lockstep (``wall_time`` of each result is its own)."""
-        targets = list(targets)
-        if xi0s is None:
-            xi0s = [None] * len(targets)
-        else:
-            xi0s = list(xi0s)
-            if len(xi0s) != len(targets):
-                raise InputError(f"xi0s must have one entry per target ({len(targets)}), got {len(xi0s)}")
-        check_data(self.platform, data)
-        for k, target in enumerate(targets):
-            try:
-                parse_target(target)
-            except InputError as exc:
-                raise type(exc)(f"targets[{k}]: {exc}") from None
-        return [self.solve(data, target, xi0) for target, xi0 in zip(targets, xi0s)]
-
     def _run(self, data: pin.Data, p_d, R_d, xi: np.ndarray, init: str, t0: float) -> IKResult:
         ctx = SolveContext(
             self.platform, data, self.method, p_d, R_d, self.options, t0, init, _require_hover(self.platform, self.options), self.unreachable_hint
