@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings
+from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings, resolve_kernel
 from ..model import Platform, check_platform
 from ..validation import as_int, as_real
 from .tasks.base import check_linearized
@@ -46,6 +46,7 @@ class HierarchyStep:
     dv_levels: tuple = ()
     damping: tuple = ()
     errors: tuple = ()
+    level_residuals: tuple = ()  # ||J_k dv - e_k|| per level when the solver computed them (else :attr:`residuals` does)
 
     def __post_init__(self) -> None:
         if not self.errors:
@@ -58,6 +59,8 @@ class HierarchyStep:
     @property
     def residuals(self) -> tuple[float, ...]:
         """||J_k dv - e_k|| per level: what is left of each task after the step (linear model)."""
+        if self.level_residuals:
+            return self.level_residuals
         return tuple(math.sqrt(float(e @ e)) if J is None else math.sqrt(float((J @ self.dv - e) @ (J @ self.dv - e))) for J, e in self.linearized)
 
 
@@ -85,7 +88,8 @@ class HierarchySolver:
     ``lower_damping``: c in the damping c ||J_k^T e_k|| of the levels after the first.
     ``active_set_first``: each level solved exactly on the active set of the previous iteration first,
     ProxQP (then polished) only when that is not the optimum (:class:`qprr.actuation.lexicographic.Lexicographic`).
-    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto").
+    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto"); with numba, a hierarchy of
+    default tasks (one per level) is also linearised in the same compiled call (:mod:`qprr.ik.iteration_fast`).
     The object owns its QPs: one solver per thread.
     """
 
@@ -141,11 +145,21 @@ class HierarchySolver:
             active_set_first=bool(active_set_first),
         )
         self._first = True  # the first step of a solve asks the tasks for their errors first (Task.error)
+        self._fused = None  # (compiled_levels, kinematics, iterate) of qprr.ik.iteration_fast, with the numba kernel
+        if resolve_kernel(kernel) is Kernel.NUMBA and active_set_first:
+            from . import iteration_fast  # numba: only when this kernel is asked for
+
+            self._fused = (iteration_fast.compiled_levels, iteration_fast.kinematics, iteration_fast.iterate, iteration_fast.FastStatus)
+        self._packed = (None, None)  # (levels, their CompiledLevels or None) of this solve
+        nb = platform.n_arm
+        self._guesses = (np.full(0, -1, dtype=np.int64), np.zeros((0, nb), dtype=bool), np.zeros((0, nb), dtype=bool))
 
     def reset(self) -> None:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
         self._lex.reset()
         self._first = True
+        self._packed = (None, None)  # the tasks may have been retargeted
+        self._guesses[0][:] = -1
 
     def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
         """The hierarchical step dv at q for ``levels`` (a sequence of sequences of tasks).
@@ -155,6 +169,10 @@ class HierarchySolver:
         at its first iteration and afterwards only that they are finite (a task's shapes do not change).
         """
         nv = self.nv
+        if self._fused is not None:  # default tasks need no validation: their shapes are right by construction
+            step = self._solve_compiled(platform, data, q, levels)
+            if step is not None:
+                return step
         first, self._first = self._first, False
         if first and not validate:  # started at the answer (every level met): dv = 0, no Jacobian needed
             met = [(None, np.concatenate([t.error(platform, data, q) for t in tasks])) for tasks in levels]
@@ -193,6 +211,35 @@ class HierarchySolver:
         damping = [0.0] + [self.lower_damping * math.sqrt(float(g @ g)) for g in (J.T @ e for J, e in lin[1:])]
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
         return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping), errors)
+
+    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
+        """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
+        default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
+        compiled_levels, kinematics, iterate, FastStatus = self._fused
+        packed_for, packed = self._packed
+        if levels is not packed_for:
+            packed = compiled_levels(platform, levels)
+            self._packed = (levels, packed)
+        if packed is None:
+            return None
+        K = len(levels)
+        if self._guesses[0].shape[0] < K:  # room for the active-set guesses of K levels
+            nb = platform.n_arm
+            self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
+        frame, base = kinematics(platform, data, packed.frame)
+        weights = (self.regularization, self.lower_damping, self.rank_tol, MET)
+        out = iterate(packed.levels, frame, base, q, (self.lower, self.upper), weights, self._guesses)
+        status, A, b, offsets, errors, damping, x, x_levels, residuals = out
+        if status == FastStatus.NOT_FINITE:
+            return None
+        self._first = False
+        cuts = offsets.tolist()
+        lin = [(A[i:j], b[i:j]) for i, j in zip(cuts, cuts[1:])]
+        errors, damping = tuple(errors.tolist()), tuple(damping.tolist())
+        if status == FastStatus.NEEDS_NUMPY:  # a level needs ProxQP
+            res = self._lex.solve(lin, self.lower - q[self.iq], self.upper - q[self.iq], damping=damping)
+            return HierarchyStep(res.x, lin, res.iterations, res.x_levels, damping, errors)
+        return HierarchyStep(x, lin, 0, tuple(x_levels), damping, errors, tuple(residuals.tolist()))
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:
