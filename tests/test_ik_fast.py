@@ -146,10 +146,11 @@ def test_compiled_step_matches_numpy_path(name):
     """HierarchySolver's step in one compiled call (each level's optimum, the errors, the damping, the residuals)
     against its readable glue (tasks one by one, norms, damping, Lexicographic) on the same (J, e) (the tasks' agreement
     is the test above; the lower levels' conditioning, up to 1e8 with the regularisation 1e-7, would turn their 1e-13
-    into 1e-8 here), joint limits active in some.  Against the glue with the same compiled lexicographic kernel: to
-    round-off; against the numpy kernel: the first two levels to 1e-7 of the step (eps times that condition number is
-    2e-8; 3.8e-8 the largest difference seen, on random attitudes far from any answer).  (The lower levels of the
-    hextilt at such attitudes can differ between the two lexicographic kernels, as on main: issue 36's report.)"""
+    into 1e-8 here), joint limits active in some; against the glue with the same compiled lexicographic kernel and with
+    the numpy kernel: to 1e-7 of the step (eps times that condition number is 2e-8, and the damping, computed in
+    either place, differs by rounding; 3.8e-8 the largest difference seen, on random attitudes far from any answer).  The hextilt's draws include a posture level
+    with one free direction and a joint on its limit that this direction moves only by rounding (lexicographic's
+    ``_clamped_1d``)."""
     platform = platform_of(name)
     data = platform.data()
     rng = np.random.default_rng(21)
@@ -167,12 +168,12 @@ def test_compiled_step_matches_numpy_path(name):
         ra = glue.solve(platform, data, q, given, validate=False)
         size = 1.0 + np.abs(ra.dv).max()
         for xa, xf in zip(ra.dv_levels, rf.dv_levels, strict=True):
-            np.testing.assert_allclose(xf, xa, rtol=0, atol=1e-13 * size)
+            np.testing.assert_allclose(xf, xa, rtol=0, atol=1e-7 * size)
         np.testing.assert_allclose(rf.errors, ra.errors, rtol=1e-14, atol=0)
         np.testing.assert_allclose(rf.damping, ra.damping, rtol=1e-13, atol=0)
-        np.testing.assert_allclose(rf.residuals, ra.residuals, rtol=0, atol=1e-12 * size * (1.0 + max(ra.errors)))
+        np.testing.assert_allclose(rf.residuals, ra.residuals, rtol=0, atol=1e-7 * size * (1.0 + max(ra.errors)))
         rn = reference.solve(platform, data, q, given, validate=False)
-        for xa, xf in zip(rn.dv_levels[:2], rf.dv_levels[:2]):
+        for xa, xf in zip(rn.dv_levels, rf.dv_levels, strict=True):
             np.testing.assert_allclose(xf, xa, rtol=0, atol=1e-7 * size)
         q_arm = q[7:] + rf.dv[6:]
         active += int(np.any(np.isclose(q_arm, platform.arm_lower, atol=1e-9) | np.isclose(q_arm, platform.arm_upper, atol=1e-9)))

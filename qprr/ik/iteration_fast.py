@@ -13,7 +13,9 @@ targets of four platforms.
 log6 and Jlog6 are those of Pinocchio (``pin.log6``, ``pin.Jlog6``: the body-frame logarithm of SE(3) and its
 derivative along a right perturbation, M exp(delta)), written from their closed forms below; a test compares them.
 This module is imported only when the numba kernel is asked for (``kernel="numba"``, or ``"auto"`` with numba
-installed); numba caches its machine code beside the source.
+installed); numba caches its machine code beside the source.  That cache holds ``lex_solve`` compiled in, and numba
+checks only this file's time stamp: after editing ``lexicographic_fast.py``, delete
+``qprr/ik/__pycache__/iteration_fast.*.nbi`` and ``.nbc`` (or touch this file), or the IK runs the old kernel.
 """
 
 from __future__ import annotations
