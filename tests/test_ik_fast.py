@@ -148,9 +148,9 @@ def test_compiled_step_matches_numpy_path(name):
     is the test above; the lower levels' conditioning, up to 1e8 with the regularisation 1e-7, would turn their 1e-13
     into 1e-8 here), joint limits active in some; against the glue with the same compiled lexicographic kernel and with
     the numpy kernel: to 1e-7 of the step (eps times that condition number is 2e-8, and the damping, computed in
-    either place, differs by rounding; 3.8e-8 the largest difference seen, on random attitudes far from any answer).  The hextilt's draws include a posture level
-    with one free direction and a joint on its limit that this direction moves only by rounding (lexicographic's
-    ``_clamped_1d``)."""
+    either place, differs by rounding; 3.8e-8 the largest difference seen, on random attitudes far from any answer).
+    The hextilt's draws include a posture level with one free direction and a joint on its limit that this direction
+    moves only by rounding (lexicographic's ``_clamped_1d``)."""
     platform = platform_of(name)
     data = platform.data()
     rng = np.random.default_rng(21)
