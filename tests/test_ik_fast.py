@@ -103,7 +103,7 @@ def test_compiled_tasks_match_linearize(name):
         update_kinematics(platform, data, q)
         packed = fast.compiled_levels(platform, levels)
         assert packed is not None
-        frame, base = fast.kinematics(platform, data, packed.frame)
+        frame, base = fast.kinematics(platform, data, packed)
         A, b, offsets = fast.linearize(packed.levels, frame, base, q, platform.nv)
         for j, level in enumerate(levels):
             J, e = level[0].linearize(platform, data, q)
@@ -124,7 +124,7 @@ def test_hover_task_upside_down_compiled():
     update_kinematics(platform, data, q)
     levels = [[HoverTask()]]
     packed = fast.compiled_levels(platform, levels)
-    frame, base = fast.kinematics(platform, data, packed.frame)
+    frame, base = fast.kinematics(platform, data, packed)
     A, b, _ = fast.linearize(packed.levels, frame, base, q, platform.nv)
     J, e = levels[0][0].linearize(platform, data, q)
     np.testing.assert_allclose(A, J, rtol=0, atol=1e-14)

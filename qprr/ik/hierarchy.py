@@ -135,6 +135,7 @@ class HierarchySolver:
         self.iq = slice(7, platform.nq)
         self.lower = np.array(platform.arm_lower)
         self.upper = np.array(platform.arm_upper)
+        self._limits = (self.lower, self.upper)
         self._lex = Lexicographic(
             platform.nv,
             range(6, platform.nv),
@@ -226,20 +227,18 @@ class HierarchySolver:
         if self._guesses[0].shape[0] < K:  # room for the active-set guesses of K levels
             nb = platform.n_arm
             self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
-        frame, base = kinematics(platform, data, packed.frame)
+        frame, base = kinematics(platform, data, packed)
         weights = (self.regularization, self.lower_damping, self.rank_tol, MET)
-        out = iterate(packed.levels, frame, base, q, (self.lower, self.upper), weights, self._guesses)
-        status, A, b, offsets, errors, damping, x, x_levels, residuals = out
+        status, A, b, x, x_levels, norms = iterate(packed.levels, frame, base, q, self._limits, weights, self._guesses)
         if status == FastStatus.NOT_FINITE:
             return None
         self._first = False
-        cuts = offsets.tolist()
-        lin = [(A[i:j], b[i:j]) for i, j in zip(cuts, cuts[1:])]
-        errors, damping = tuple(errors.tolist()), tuple(damping.tolist())
+        lin = [(A[i:j], b[i:j]) for i, j in packed.rows]
+        errors, damping, residuals = (tuple(row) for row in norms.tolist())
         if status == FastStatus.NEEDS_NUMPY:  # a level needs ProxQP
             res = self._lex.solve(lin, self.lower - q[self.iq], self.upper - q[self.iq], damping=damping)
             return HierarchyStep(res.x, lin, res.iterations, res.x_levels, damping, errors)
-        return HierarchyStep(x, lin, 0, tuple(x_levels), damping, errors, tuple(residuals.tolist()))
+        return HierarchyStep(x, lin, 0, tuple(x_levels), damping, errors, residuals)
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:
