@@ -221,7 +221,7 @@ class Platform:
 
         q_arm = as_vector(q_arm, self.n_arm, name)
         lower, upper = self._arm_limits_with_slack
-        if (q_arm >= lower).all() and (q_arm <= upper).all():
+        if all(lo <= x <= up for x, lo, up in zip(q_arm.tolist(), lower.tolist(), upper.tolist())):  # floats: cheaper than numpy here
             return q_arm
         bad = [k for k, j in enumerate(self.arm) if not j.lower - 1e-12 <= q_arm[k] <= j.upper + 1e-12]
         if bad:

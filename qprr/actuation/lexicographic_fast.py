@@ -23,6 +23,29 @@ _JIT = {"cache": True, "nogil": True}
 
 
 @numba.njit(**_JIT)
+def mm(A, B):
+    """A @ B by loops: numba's @ calls BLAS, whose call costs more than these small products (0.35 us for a 3 x 3
+    product against 0.09 us, measured); the IK's compiled iteration uses it too."""
+    out = np.zeros((A.shape[0], B.shape[1]))
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            a = A[i, k]
+            for j in range(B.shape[1]):
+                out[i, j] += a * B[k, j]
+    return out
+
+
+@numba.njit(**_JIT)
+def mv(A, x):
+    """A @ x by loops (:func:`mm`)."""
+    out = np.zeros(A.shape[0])
+    for i in range(A.shape[0]):
+        for k in range(A.shape[1]):
+            out[i] += A[i, k] * x[k]
+    return out
+
+
+@numba.njit(**_JIT)
 def _bound_scale(lo, up):
     """1 + the largest finite |bound| (``lexicographic._bound_scale``)."""
     big = 0.0
@@ -208,14 +231,14 @@ def _kkt_solve(H, g, A, b):
     n, k = H.shape[0], A.shape[0]
     if k == 0:
         z, ok = _spd_solve(H, -g)
-        return z, np.zeros(0), H @ z + g, np.zeros(0), ok
+        return z, np.zeros(0), mv(H, z) + g, np.zeros(0), ok
     K = np.zeros((n + k, n + k))
     K[:n, :n] = H
     K[:n, n:] = A.T
     K[n:, :n] = A
     rhs = np.concatenate((-g, b))
     sol, ok = _lu_solve(K, rhs)
-    r = K @ sol - rhs
+    r = mv(K, sol) - rhs
     return sol[:n], -sol[n:], r[:n], r[n:], ok
 
 
@@ -248,7 +271,7 @@ def _kkt_on_active_set(H, g, C, lo, up, at_lo, at_up):
         if (res_x.shape[0] and np.abs(res_x).max() > 1e-10 * gscale) or (res_b.shape[0] and np.abs(res_b).max() > ftol):
             return zp, at_lo, at_up, False
         wrong = np.where(at_lo[idx], -mu, mu)
-        Czp = C @ zp
+        Czp = mv(C, zp)
         viol_lo = lo - Czp > ftol
         viol_up = (Czp - up > ftol) & ~viol_lo
         release = wrong > (1e-9 if cycling else 1e-12) * gscale
@@ -278,7 +301,7 @@ def _box_level(H, g, C, lo, up, rank_tol, guess):
     rows of C; ``guess`` = (n, at_lo, at_up) from the previous call, n < 0: none."""
     guess_n, guess_lo, guess_up = guess
     z, chol = _spd_solve(H, -g)
-    if chol and _within(C @ z, lo, up):
+    if chol and _within(mv(C, z), lo, up):
         return z, True, -1, guess_lo, guess_up
     nc0 = C.shape[0]
     cmax = np.abs(C).max() if C.size else 0.0
@@ -292,7 +315,7 @@ def _box_level(H, g, C, lo, up, rank_tol, guess):
     if guess_n == nc:
         at_lo, at_up = guess_lo[:nc].copy(), guess_up[:nc].copy()
     elif chol:
-        Cz = Ck @ z
+        Cz = mv(Ck, z)
         ftol = 1e-10 * _bound_scale(lok, upk)
         at_lo = lok - Cz > ftol
         at_up = (Cz - upk > ftol) & ~at_lo
@@ -334,8 +357,8 @@ def lex_solve(A, b, offsets, bounds, x, weights, guesses):
         if Z.shape[1] == 0:
             x_levels[k] = x
             continue
-        B = Ak @ Z
-        r = b[offsets[k] : offsets[k + 1]] - Ak @ x
+        B = mm(Ak, Z)
+        r = b[offsets[k] : offsets[k + 1]] - mv(Ak, x)
         reg = reg0 + damping[k]
         xb = x[b0 : b0 + nb]
         lo_z = np.minimum(lower - xb, 0.0)
@@ -345,10 +368,10 @@ def lex_solve(A, b, offsets, bounds, x, weights, guesses):
         if m == 1:
             z = _clamped_1d(np.ascontiguousarray(B[:, 0]), r, reg, np.ascontiguousarray(Cz[:, 0]), lo_z, up_z, rank_tol)
         else:
-            H = B.T @ B
+            H = mm(B.T, B)
             for i in range(m):
                 H[i, i] += reg
-            z, ok, nc, at_lo, at_up = _box_level(H, -(B.T @ r), Cz, lo_z, up_z, rank_tol, (guess_n[k], guess_lo[k], guess_up[k]))
+            z, ok, nc, at_lo, at_up = _box_level(H, -mv(B.T, r), Cz, lo_z, up_z, rank_tol, (guess_n[k], guess_lo[k], guess_up[k]))
             if not ok:
                 return x, x_levels, False
             if nc < 0 or not (at_lo.any() or at_up.any()):
@@ -357,10 +380,10 @@ def lex_solve(A, b, offsets, bounds, x, weights, guesses):
                 new_n[k] = nc
                 new_lo[k, :nc] = at_lo
                 new_up[k, :nc] = at_up
-        x = x + Z @ z
+        x = x + mv(Z, z)
         x_levels[k] = x
         if k < K - 1:
-            Z = np.ascontiguousarray(Z @ _null_space(np.ascontiguousarray(B), rank_tol))
+            Z = mm(Z, _null_space(B, rank_tol))
     guess_n[:] = new_n
     guess_lo[:] = new_lo
     guess_up[:] = new_up

@@ -146,12 +146,12 @@ class HierarchySolver:
             active_set_first=bool(active_set_first),
         )
         self._first = True  # the first step of a solve asks the tasks for their errors first (Task.error)
-        self._fused = None  # (compiled_levels, kinematics, iterate) of qprr.ik.iteration_fast, with the numba kernel
+        self._fused = None  # qprr.ik.iteration_fast's functions, with the numba kernel
         if resolve_kernel(kernel) is Kernel.NUMBA and active_set_first:
             from . import iteration_fast  # numba: only when this kernel is asked for
 
-            self._fused = (iteration_fast.compiled_levels, iteration_fast.kinematics, iteration_fast.iterate, iteration_fast.FastStatus)
-        self._packed = (None, None)  # (levels, their CompiledLevels or None) of this solve
+            self._fused = _Fused(iteration_fast)
+        self._packed = (None, None, False)  # (levels, their CompiledLevels or None, packed for this solve)
         nb = platform.n_arm
         self._guesses = (np.full(0, -1, dtype=np.int64), np.zeros((0, nb), dtype=bool), np.zeros((0, nb), dtype=bool))
 
@@ -159,7 +159,8 @@ class HierarchySolver:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
         self._lex.reset()
         self._first = True
-        self._packed = (None, None)  # the tasks may have been retargeted
+        levels, packed, _ = self._packed
+        self._packed = (levels, packed, False)  # the tasks may have been retargeted: repacked at the next step
         self._guesses[0][:] = -1
 
     def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
@@ -216,29 +217,39 @@ class HierarchySolver:
     def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
         """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
         default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
-        compiled_levels, kinematics, iterate, FastStatus = self._fused
-        packed_for, packed = self._packed
-        if levels is not packed_for:
-            packed = compiled_levels(platform, levels)
-            self._packed = (levels, packed)
+        fast = self._fused
+        packed_for, packed, current = self._packed
+        if levels is not packed_for or (packed is not None and not current and not fast.same_tasks(levels, packed)):
+            packed = fast.compiled_levels(platform, levels)
+        elif packed is not None and not current:  # the same tasks, maybe retargeted since the last solve
+            fast.refill(platform, packed)
+        self._packed = (levels, packed, True)
         if packed is None:
             return None
         K = len(levels)
         if self._guesses[0].shape[0] < K:  # room for the active-set guesses of K levels
             nb = platform.n_arm
             self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
-        frame, base = kinematics(platform, data, packed)
+        frame, base = fast.kinematics(platform, data, packed)
         weights = (self.regularization, self.lower_damping, self.rank_tol, MET)
-        status, A, b, x, x_levels, norms = iterate(packed.levels, frame, base, q, self._limits, weights, self._guesses)
-        if status == FastStatus.NOT_FINITE:
+        status, A, b, x, x_levels, norms = fast.iterate(packed.levels, frame, base, q, self._limits, weights, self._guesses)
+        if status == fast.FastStatus.NOT_FINITE:
             return None
         self._first = False
         lin = [(A[i:j], b[i:j]) for i, j in packed.rows]
         errors, damping, residuals = (tuple(row) for row in norms.tolist())
-        if status == FastStatus.NEEDS_NUMPY:  # a level needs ProxQP
+        if status == fast.FastStatus.NEEDS_NUMPY:  # a level needs ProxQP
             res = self._lex.solve(lin, self.lower - q[self.iq], self.upper - q[self.iq], damping=damping)
             return HierarchyStep(res.x, lin, res.iterations, res.x_levels, damping, errors)
         return HierarchyStep(x, lin, 0, tuple(x_levels), damping, errors, residuals)
+
+
+class _Fused:
+    """The functions of :mod:`qprr.ik.iteration_fast` a solver calls (a module cannot be pickled; functions can)."""
+
+    def __init__(self, module) -> None:
+        self.compiled_levels, self.refill, self.same_tasks = module.compiled_levels, module.refill, module.same_tasks
+        self.kinematics, self.iterate, self.FastStatus = module.kinematics, module.iterate, module.FastStatus
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:

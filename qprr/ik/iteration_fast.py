@@ -28,6 +28,8 @@ import numpy as np
 import pinocchio as pin
 
 from ..actuation.lexicographic_fast import lex_solve
+from ..actuation.lexicographic_fast import mm as _mm
+from ..actuation.lexicographic_fast import mv as _mv
 from ..model import Platform
 from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask
 
@@ -59,29 +61,6 @@ class FastStatus(IntEnum):
 
 POSE, POSITION, HOVER, BASE_ORIENTATION, COM, POSTURE = (int(kind) for kind in FastTask)  # numba's constants
 OK, ALL_MET, NEEDS_NUMPY, NOT_FINITE = (int(status) for status in FastStatus)
-
-
-@numba.njit(**_JIT)
-def _mm(A, B):
-    """A @ B by loops: numba's @ calls BLAS, whose call costs more than a 3 x 3 or 6 x 9 product itself (0.35 us
-    against 0.09 us for 3 x 3, measured)."""
-    out = np.zeros((A.shape[0], B.shape[1]))
-    for i in range(A.shape[0]):
-        for k in range(A.shape[1]):
-            a = A[i, k]
-            for j in range(B.shape[1]):
-                out[i, j] += a * B[k, j]
-    return out
-
-
-@numba.njit(**_JIT)
-def _mv(A, x):
-    """A @ x by loops (:func:`_mm`)."""
-    out = np.zeros(A.shape[0])
-    for i in range(A.shape[0]):
-        for k in range(A.shape[1]):
-            out[i] += A[i, k] * x[k]
-    return out
 
 
 @numba.njit(**_JIT)
@@ -334,6 +313,7 @@ class CompiledLevels:
     frame: int
     rows: tuple
     no_com: tuple | None
+    tasks: tuple = ()  # the tasks packed, one per level (:func:`refill` rewrites their parameters)
 
 
 def _fill(platform: Platform, task, kind: int, row: np.ndarray) -> int:
@@ -375,16 +355,27 @@ def compiled_levels(platform: Platform, levels) -> CompiledLevels | None:
         return None
     width = max(18, 2 * platform.n_arm)  # the widest parameters and row scale: a pose's 12 + 6, a posture's 2 n_arm
     params = np.zeros((len(tasks), width))
-    dims, rows, start = [], [], 0
-    for task, kind, row in zip(tasks, kinds, params):
-        dim = _fill(platform, task, kind, row)
-        row[width - dim :] = 1.0 if task.row_scale is None else task.row_scale
-        dims.append(dim)
-        rows.append((start, start + dim))
-        start += dim
+    dims = [_fill(platform, task, kind, row) for task, kind, row in zip(tasks, kinds, params)]
+    ends = np.cumsum(dims).tolist()
+    rows = tuple(zip([0, *ends[:-1]], ends))
     no_com = None if COM in kinds else (np.zeros(3), np.zeros((3, platform.nv), order="F"))
-    packed = (np.array(kinds, dtype=np.int64), np.array(dims, dtype=np.int64), params)
-    return CompiledLevels(packed, frames.pop() if frames else platform.ee_frame, tuple(rows), no_com)
+    packed = CompiledLevels((np.array(kinds, dtype=np.int64), np.array(dims, dtype=np.int64), params), 0, rows, no_com, tuple(tasks))
+    refill(platform, packed)
+    return CompiledLevels(packed.levels, frames.pop() if frames else platform.ee_frame, rows, no_com, tuple(tasks))
+
+
+def refill(platform: Platform, packed: CompiledLevels) -> None:
+    """Rewrite the parameters and row scales of ``packed``'s tasks (retargeted since they were packed) in place."""
+    kinds, dims, params = packed.levels
+    width = params.shape[1]
+    for task, kind, row, dim in zip(packed.tasks, kinds.tolist(), params, dims.tolist()):
+        _fill(platform, task, kind, row)
+        row[width - dim :] = 1.0 if task.row_scale is None else task.row_scale
+
+
+def same_tasks(levels, packed: CompiledLevels) -> bool:
+    """Whether ``levels`` hold the very tasks ``packed`` was made of, one per level (then :func:`refill` suffices)."""
+    return len(levels) == len(packed.tasks) and all(len(level) == 1 and level[0] is task for level, task in zip(levels, packed.tasks))
 
 
 def kinematics(platform: Platform, data: pin.Data, packed: CompiledLevels) -> tuple[tuple, tuple]:
