@@ -164,6 +164,8 @@ def test_compiled_step_matches_numpy_path(name):
         for solver in (fused, glue, reference):
             solver.reset()
         rf = fused.solve(platform, data, q, levels, validate=False)
+        # the levels' errors alone (the stopping tests'), compiled against the tasks' error (Pinocchio's log6 near pi: 1e-11)
+        np.testing.assert_allclose(fused.level_errors(platform, data, q, levels), reference.level_errors(platform, data, q, levels), rtol=1e-10)
         given = [[Given(J, e)] for J, e in rf.linearized]
         ra = glue.solve(platform, data, q, given, validate=False)
         size = 1.0 + np.abs(ra.dv).max()

@@ -214,9 +214,19 @@ class HierarchySolver:
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
         return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping), errors)
 
-    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
-        """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
-        default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
+    def level_errors(self, platform: Platform, data, q: np.ndarray, levels) -> tuple[float, ...]:
+        """||e_k|| of every level at q, each task's error (``data`` holds the kinematics at q:
+        :func:`qprr.ik.tasks.update_kinematics`); with the numba kernel and default tasks, in one compiled call."""
+        packed = None if self._fused is None else self._packed_for(platform, levels)
+        if packed is not None:
+            norms = self._fused.level_norms(packed.levels, *self._fused.kinematics(platform, data, packed), q)
+            if math.isfinite(float(norms.sum())):
+                return tuple(norms.tolist())
+        return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
+
+    def _packed_for(self, platform: Platform, levels):
+        """``levels`` packed for the compiled iteration (qprr.ik.iteration_fast.CompiledLevels), None if they are not
+        all default tasks; packed once per solve (refilled when the same tasks were retargeted)."""
         fast = self._fused
         packed_for, packed, current = self._packed
         if levels is not packed_for or (packed is not None and not current and not fast.same_tasks(levels, packed)):
@@ -224,6 +234,13 @@ class HierarchySolver:
         elif packed is not None and not current:  # the same tasks, maybe retargeted since the last solve
             fast.refill(platform, packed)
         self._packed = (levels, packed, True)
+        return packed
+
+    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
+        """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
+        default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
+        fast = self._fused
+        packed = self._packed_for(platform, levels)
         if packed is None:
             return None
         K = len(levels)
@@ -250,6 +267,7 @@ class _Fused:
     def __init__(self, module) -> None:
         self.compiled_levels, self.refill, self.same_tasks = module.compiled_levels, module.refill, module.same_tasks
         self.kinematics, self.iterate, self.FastStatus = module.kinematics, module.iterate, module.FastStatus
+        self.level_norms = module.level_norms
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:

@@ -255,6 +255,17 @@ def linearize(levels, frame, base, q, nv):
 
 
 @numba.njit(**_JIT)
+def level_norms(levels, frame, base, q):
+    """||e_k|| of every level (:func:`linearize`'s e_k, row scales included)."""
+    A, b, offsets = linearize(levels, frame, base, q, frame[0].shape[1])
+    norms = np.zeros(offsets.shape[0] - 1)
+    for k in range(norms.shape[0]):
+        e = b[offsets[k] : offsets[k + 1]]
+        norms[k] = np.sqrt(np.sum(e * e))
+    return norms
+
+
+@numba.njit(**_JIT)
 def iterate(levels, frame, base, q, bounds, weights, guesses):
     """One iteration of HierarchySolver.solve on compiled levels: (status, A, b, x, x_levels, norms).
 
