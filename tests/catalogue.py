@@ -77,6 +77,10 @@ NOT_FED: dict[str, str] = {
     "qprr.cli.common.Parser*": "argparse.ArgumentParser with one-line errors: its constructor is argparse's own",
     "*.main": "a command-line entry point (reads sys.argv, exits the interpreter)",
     "qprr.ik.tasks.base.Task*": "abstract base class (its subclasses are fed)",
+    "qprr.ik.iteration_fast.*": "compiled kernels (numba) on arrays their caller, qprr.ik.hierarchy.HierarchySolver, built and "
+    "checked: tests/test_ik_fast.py checks them against the tasks' linearize and Pinocchio's log6 / Jlog6",
+    "qprr.actuation.lexicographic_fast.*": "compiled kernels (numba) on arrays their caller, qprr.actuation.lexicographic, built "
+    "and checked: tests/test_lexicographic_fast.py checks them against the numpy path",
     "qprr.control.base.Controller*": "abstract base class (its subclasses are fed)",
     "qprr.thesis.symbolic.SymbolicModel*": "the sympy model takes seconds to derive (tests/test_symbolic.py)",
     "qprr.thesis.symbolic.symbolic_model": "the sympy model takes seconds to derive (tests/test_symbolic.py)",

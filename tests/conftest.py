@@ -52,8 +52,8 @@ def _foreign_qprr_modules() -> list[str]:
 
 
 def pytest_sessionstart(session):
-    """Compile the numba kernel of the QP IK once, before the xdist workers start (qprr[fast]; cached beside the source
-    by numba): workers that all hit a cold cache would each compile it, minutes on a busy 2-core machine."""
+    """Compile the numba kernels of the QP IK once, before the xdist workers start (qprr[fast]; cached beside the sources
+    by numba): workers that all hit a cold cache would each compile them, minutes on a busy 2-core machine."""
     import os
     from importlib.util import find_spec
 
@@ -63,6 +63,11 @@ def pytest_sessionstart(session):
 
     lex = Lexicographic(3, range(1, 3), settings=QPSettings(kernel="numba"), regularization=1e-7, active_set_first=True)
     lex.solve([(np.eye(3)[:2], np.ones(2)), (np.eye(3), np.ones(3))], -np.ones(2), np.ones(2), damping=[0.0, 1e-3])
+    import qprr  # the IK's compiled iteration (qprr/ik/iteration_fast.py), which holds the kernel compiled in
+    from qprr import ik
+
+    platform = qprr.load("q-prr")
+    ik.IKSolver(platform, "qp", {"kernel": "numba"}).solve(platform.data(), np.array([0.3, 0.0, 1.0]))
 
 
 def pytest_terminal_summary(terminalreporter, exitstatus, config):

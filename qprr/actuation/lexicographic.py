@@ -422,7 +422,7 @@ class Lexicographic:
             Cz = self._C_full if Z is None else Z[b_idx]
             m = B.shape[1]
             if m == 1:
-                z = _clamped_1d(B[:, 0], r, reg, Cz[:, 0], lo_z, up_z)
+                z = _clamped_1d(B[:, 0], r, reg, Cz[:, 0], lo_z, up_z, tol)
             else:
                 H = B.T @ B
                 H.flat[:: m + 1] += reg
@@ -665,15 +665,21 @@ def active_set_qp(H: np.ndarray, g: np.ndarray, C: np.ndarray, lo: np.ndarray, u
     return None
 
 
-def _clamped_1d(B: np.ndarray, r: np.ndarray, reg: float, c: np.ndarray, lo: np.ndarray, up: np.ndarray) -> np.ndarray:
-    """argmin_z ||B z - r||^2 + reg z^2 over the interval {z : lo <= c z <= up} (contains 0), as a (1,) array."""
+def _clamped_1d(B: np.ndarray, r: np.ndarray, reg: float, c: np.ndarray, lo: np.ndarray, up: np.ndarray, tol: float) -> np.ndarray:
+    """argmin_z ||B z - r||^2 + reg z^2 over the interval {z : lo <= c z <= up} (contains 0), as a (1,) array.
+
+    An entry of c zero to the rank tolerance ``tol`` (the free direction is known only to it) bounds nothing, as
+    :meth:`Lexicographic.solve_box_qp` drops such rows: its sign is rounding, and with its bound active (a gap of 0)
+    it would let rounding pick which way the level may move (seen on hextilt_flying_arm_5: a posture step of 0 or
+    0.95 rad depending on a 1e-17)."""
     bb = float(B @ B) + reg
     z = float(B @ r) / bb if bb > 0.0 else 0.0
     zl, zu = -np.inf, np.inf
+    small = tol * max(1.0, float(np.abs(c).max(initial=0.0)))
     for ci, li, ui in zip(c.tolist(), lo.tolist(), up.tolist()):
-        if ci > 0.0:
+        if ci > small:
             zl, zu = max(zl, li / ci), min(zu, ui / ci)
-        elif ci < 0.0:
+        elif ci < -small:
             zl, zu = max(zl, ui / ci), min(zu, li / ci)
     if zl <= zu:
         z = min(max(z, zl), zu)

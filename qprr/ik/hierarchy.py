@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings
+from ..actuation.lexicographic import Kernel, Lexicographic, QPSettings, resolve_kernel
 from ..model import Platform, check_platform
 from ..validation import as_int, as_real
 from .tasks.base import check_linearized
@@ -46,6 +46,7 @@ class HierarchyStep:
     dv_levels: tuple = ()
     damping: tuple = ()
     errors: tuple = ()
+    level_residuals: tuple = ()  # ||J_k dv - e_k|| per level when the solver computed them (else :attr:`residuals` does)
 
     def __post_init__(self) -> None:
         if not self.errors:
@@ -58,6 +59,8 @@ class HierarchyStep:
     @property
     def residuals(self) -> tuple[float, ...]:
         """||J_k dv - e_k|| per level: what is left of each task after the step (linear model)."""
+        if self.level_residuals:
+            return self.level_residuals
         return tuple(math.sqrt(float(e @ e)) if J is None else math.sqrt(float((J @ self.dv - e) @ (J @ self.dv - e))) for J, e in self.linearized)
 
 
@@ -85,7 +88,8 @@ class HierarchySolver:
     ``lower_damping``: c in the damping c ||J_k^T e_k|| of the levels after the first.
     ``active_set_first``: each level solved exactly on the active set of the previous iteration first,
     ProxQP (then polished) only when that is not the optimum (:class:`qprr.actuation.lexicographic.Lexicographic`).
-    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto").
+    ``kernel``: who runs those steps (:data:`DEFAULT_KERNEL`; "numpy", "numba" or "auto"); with numba, a hierarchy of
+    default tasks (one per level) is also linearised in the same compiled call (:mod:`qprr.ik.iteration_fast`).
     The object owns its QPs: one solver per thread.
     """
 
@@ -131,6 +135,7 @@ class HierarchySolver:
         self.iq = slice(7, platform.nq)
         self.lower = np.array(platform.arm_lower)
         self.upper = np.array(platform.arm_upper)
+        self._limits = (self.lower, self.upper)
         self._lex = Lexicographic(
             platform.nv,
             range(6, platform.nv),
@@ -141,11 +146,22 @@ class HierarchySolver:
             active_set_first=bool(active_set_first),
         )
         self._first = True  # the first step of a solve asks the tasks for their errors first (Task.error)
+        self._fused = None  # qprr.ik.iteration_fast's functions, with the numba kernel
+        if resolve_kernel(kernel) is Kernel.NUMBA and active_set_first:
+            from . import iteration_fast  # numba: only when this kernel is asked for
+
+            self._fused = _Fused(iteration_fast)
+        self._packed = (None, None, False)  # (levels, their CompiledLevels or None, packed for this solve)
+        nb = platform.n_arm
+        self._guesses = (np.full(0, -1, dtype=np.int64), np.zeros((0, nb), dtype=bool), np.zeros((0, nb), dtype=bool))
 
     def reset(self) -> None:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
         self._lex.reset()
         self._first = True
+        levels, packed, _ = self._packed
+        self._packed = (levels, packed, False)  # the tasks may have been retargeted: repacked at the next step
+        self._guesses[0][:] = -1
 
     def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
         """The hierarchical step dv at q for ``levels`` (a sequence of sequences of tasks).
@@ -155,6 +171,10 @@ class HierarchySolver:
         at its first iteration and afterwards only that they are finite (a task's shapes do not change).
         """
         nv = self.nv
+        if self._fused is not None:  # default tasks need no validation: their shapes are right by construction
+            step = self._solve_compiled(platform, data, q, levels)
+            if step is not None:
+                return step
         first, self._first = self._first, False
         if first and not validate:  # started at the answer (every level met): dv = 0, no Jacobian needed
             met = [(None, np.concatenate([t.error(platform, data, q) for t in tasks])) for tasks in levels]
@@ -193,6 +213,61 @@ class HierarchySolver:
         damping = [0.0] + [self.lower_damping * math.sqrt(float(g @ g)) for g in (J.T @ e for J, e in lin[1:])]
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
         return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping), errors)
+
+    def level_errors(self, platform: Platform, data, q: np.ndarray, levels) -> tuple[float, ...]:
+        """||e_k|| of every level at q, each task's error (``data`` holds the kinematics at q:
+        :func:`qprr.ik.tasks.update_kinematics`); with the numba kernel and default tasks, in one compiled call."""
+        packed = None if self._fused is None else self._packed_for(platform, levels)
+        if packed is not None:
+            norms = self._fused.level_norms(packed.levels, *self._fused.kinematics(platform, data, packed), q)
+            if math.isfinite(float(norms.sum())):
+                return tuple(norms.tolist())
+        return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
+
+    def _packed_for(self, platform: Platform, levels):
+        """``levels`` packed for the compiled iteration (qprr.ik.iteration_fast.CompiledLevels), None if they are not
+        all default tasks; packed once per solve (refilled when the same tasks were retargeted)."""
+        fast = self._fused
+        packed_for, packed, current = self._packed
+        if levels is not packed_for or (packed is not None and not current and not fast.same_tasks(levels, packed)):
+            packed = fast.compiled_levels(platform, levels)
+        elif packed is not None and not current:  # the same tasks, maybe retargeted since the last solve
+            fast.refill(platform, packed)
+        self._packed = (levels, packed, True)
+        return packed
+
+    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
+        """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
+        default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
+        fast = self._fused
+        packed = self._packed_for(platform, levels)
+        if packed is None:
+            return None
+        K = len(levels)
+        if self._guesses[0].shape[0] < K:  # room for the active-set guesses of K levels
+            nb = platform.n_arm
+            self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
+        frame, base = fast.kinematics(platform, data, packed)
+        weights = (self.regularization, self.lower_damping, self.rank_tol, MET)
+        status, A, b, x, x_levels, norms = fast.iterate(packed.levels, frame, base, q, self._limits, weights, self._guesses)
+        if status == fast.FastStatus.NOT_FINITE:
+            return None
+        self._first = False
+        lin = [(A[i:j], b[i:j]) for i, j in packed.rows]
+        errors, damping, residuals = (tuple(row) for row in norms.tolist())
+        if status == fast.FastStatus.NEEDS_NUMPY:  # a level needs ProxQP
+            res = self._lex.solve(lin, self.lower - q[self.iq], self.upper - q[self.iq], damping=damping)
+            return HierarchyStep(res.x, lin, res.iterations, res.x_levels, damping, errors)
+        return HierarchyStep(x, lin, 0, tuple(x_levels), damping, errors, residuals)
+
+
+class _Fused:
+    """The functions of :mod:`qprr.ik.iteration_fast` a solver calls (a module cannot be pickled; functions can)."""
+
+    def __init__(self, module) -> None:
+        self.compiled_levels, self.refill, self.same_tasks = module.compiled_levels, module.refill, module.same_tasks
+        self.kinematics, self.iterate, self.FastStatus = module.kinematics, module.iterate, module.FastStatus
+        self.level_norms = module.level_norms
 
 
 def _stack(platform, data, q, tasks) -> tuple[np.ndarray, np.ndarray]:

@@ -918,7 +918,7 @@ class QPMethod:
                     # level, e.g. the posture, keeps its residual: no task is evaluated for nothing)
                     met = None
                     if not settled and all(r < tol for r in step.residuals[1:]):
-                        met = _lower_levels_met(platform, data, q, levels, tol)
+                        met = _lower_levels_met(engine, data, q, levels, tol)
                     if settled or met is not None:
                         # the pose (and hover) holds after a step below settle_tol, or with every lower level met to the
                         # tightest tolerance: the step from here would be smaller still; stop without linearising
@@ -940,7 +940,7 @@ class QPMethod:
                     break
         except SolverError as exc:
             return finish(ctx, q, Ending(IKOutcome.SOLVER_ERROR, str(exc), it))
-        levels_out = end.level_errors or _level_errors(platform, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
+        levels_out = end.level_errors or _level_errors(engine, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
         return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
@@ -1032,26 +1032,21 @@ def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
     return False
 
 
-def _level_errors(platform, data, q, levels, ready, step) -> tuple[float, ...]:
+def _level_errors(engine: HierarchySolver, data, q, levels, ready, step) -> tuple[float, ...]:
     """||e_k|| of every level at the returned q (``ready``: ``data`` holds its kinematics; with ``step``: the errors
     that step was computed from, at q)."""
     if step is not None and ready:
         return step.errors
     if not ready:
-        update_kinematics(platform, data, q)
-    return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
+        update_kinematics(engine.platform, data, q)
+    return engine.level_errors(engine.platform, data, q, levels)
 
 
-def _lower_levels_met(platform, data, q, levels, tol: float) -> tuple[float, ...] | None:
+def _lower_levels_met(engine: HierarchySolver, data, q, levels, tol: float) -> tuple[float, ...] | None:
     """Every level's ||e_k|| at q (``data`` holds its kinematics) when each level after the first is below ``tol``
     (nothing left for a step to improve), else None.  The first level is the caller's (its own tolerances)."""
-    errors = []
-    for level in levels[1:]:  # the first level not met ends the test
-        errors.append(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))))
-        if errors[-1] >= tol:
-            return None
-    first = math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in levels[0])))
-    return (first, *errors)
+    errors = engine.level_errors(engine.platform, data, q, levels)
+    return errors if all(e < tol for e in errors[1:]) else None
 
 
 def _hovering(data, hover_tol: float) -> bool:

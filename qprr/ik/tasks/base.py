@@ -34,6 +34,12 @@ class Task(ABC):
 
     name: str = "task"
     dim: int = 0
+    _sw: np.ndarray | None = None  # sqrt of the row weights (a task with weights sets it: :func:`sqrt_weights`)
+
+    @property
+    def row_scale(self) -> np.ndarray | None:
+        """The factors the task's rows of (J, e) are multiplied by, the square roots of its weights (None: none)."""
+        return self._sw
 
     @abstractmethod
     def linearize(self, platform: Platform, data: pin.Data, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
