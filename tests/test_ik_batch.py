@@ -108,6 +108,10 @@ def test_qprr_ik_targets_solves_a_file_and_writes_its_rows(tmp_path, capsys):
     path.write_text("x,y,z,roll\n0.3,0,1,0.1\n")
     assert main(["ik", "--targets", str(path)]) == 2
     assert "roll, pitch and yaw together" in capsys.readouterr().err
+    assert main(["ik", "--targets", str(path), "--rpy", "0", "0", "0"]) == 2
+    assert "--rpy and --json go with one --target" in capsys.readouterr().err
+    assert main(["ik", "--target", "0.3", "0", "1", "--save", str(out)]) == 2
+    assert "--workers and --save go with --targets" in capsys.readouterr().err
     path.write_text("x,y,z\n0.3,zero,1\n")
     assert main(["ik", "--targets", str(path)]) == 2
     assert "line 2" in capsys.readouterr().err

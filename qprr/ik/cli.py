@@ -101,9 +101,13 @@ def run_batch(args: argparse.Namespace) -> int:
 
 def run_ik(args: argparse.Namespace) -> int:
     if args.targets is not None:
+        if args.rpy is not None or args.json:
+            return fail("qprr ik", "--rpy and --json go with one --target; a --targets file gives orientations in its roll, pitch, yaw columns")
         return run_batch(args)
     if args.target is None:
         return fail("qprr ik", "give --target X Y Z (one target) or --targets FILE.csv (many)")
+    if args.workers != 1 or args.save is not None:
+        return fail("qprr ik", "--workers and --save go with --targets FILE.csv; one --target prints its answer (--json for JSON)")
     try:
         platform = platform_from_args(args)
         p_world = np.array(args.target, dtype=float)
