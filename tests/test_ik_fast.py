@@ -164,6 +164,7 @@ def test_compiled_step_matches_numpy_path(name):
         for solver in (fused, glue, reference):
             solver.reset()
         rf = fused.solve(platform, data, q, levels, validate=False)
+        assert rf.level_residuals  # the compiled call made this step (the readable path leaves them to .residuals)
         # the levels' errors alone (the stopping tests'), compiled against the tasks' error (Pinocchio's log6 near pi: 1e-11)
         np.testing.assert_allclose(fused.level_errors(platform, data, q, levels), reference.level_errors(platform, data, q, levels), rtol=1e-10)
         given = [[Given(J, e)] for J, e in rf.linearized]
@@ -180,6 +181,26 @@ def test_compiled_step_matches_numpy_path(name):
         q_arm = q[7:] + rf.dv[6:]
         active += int(np.any(np.isclose(q_arm, platform.arm_lower, atol=1e-9) | np.isclose(q_arm, platform.arm_upper, atol=1e-9)))
     assert active >= 3  # joint limits bind in some of the steps
+
+
+def test_a_retargeted_task_is_read_again_by_the_compiled_step():
+    """HierarchySolver.solve on the same levels after a task's set_target, without reset: the compiled step follows the
+    new target as the readable path does (the packed parameters are refilled at every call)."""
+    platform = qprr.load("borinot_flying_arm_2")
+    data = platform.data()
+    rng = np.random.default_rng(5)
+    fused, reference = HierarchySolver(platform, kernel="numba"), HierarchySolver(platform, kernel="numpy")
+    levels = levels_for(platform, rng, "pose", weighted=False)
+    q = random_q(platform, rng)
+    update_kinematics(platform, data, q)
+    fused.solve(platform, data, q, levels, validate=False)
+    levels[0][0].set_target(pin.SE3(pin.exp3(rng.normal(size=3)), rng.uniform(-3.0, 3.0, 3)))
+    levels[3][0].set_reference(rng.uniform(np.maximum(platform.arm_lower, -np.pi), np.minimum(platform.arm_upper, np.pi)))
+    rf = fused.solve(platform, data, q, levels, validate=False)
+    rn = reference.solve(platform, data, q, levels, validate=False)
+    assert rf.level_residuals
+    np.testing.assert_allclose(rf.errors, rn.errors, rtol=1e-10)
+    np.testing.assert_allclose(rf.dv, rn.dv, rtol=0, atol=1e-7 * (1.0 + np.abs(rn.dv).max()))
 
 
 def test_levels_the_compiled_form_does_not_take():

@@ -151,7 +151,7 @@ class HierarchySolver:
             from . import iteration_fast  # numba: only when this kernel is asked for
 
             self._fused = _Fused(iteration_fast)
-        self._packed = (None, None, False)  # (levels, their CompiledLevels or None, packed for this solve)
+        self._packed = (None, None)  # (levels, their CompiledLevels or None)
         nb = platform.n_arm
         self._guesses = (np.full(0, -1, dtype=np.int64), np.zeros((0, nb), dtype=bool), np.zeros((0, nb), dtype=bool))
 
@@ -159,8 +159,6 @@ class HierarchySolver:
         """Forget warm starts (called at the start of every IK solve: results depend on the inputs only)."""
         self._lex.reset()
         self._first = True
-        levels, packed, _ = self._packed
-        self._packed = (levels, packed, False)  # the tasks may have been retargeted: repacked at the next step
         self._guesses[0][:] = -1
 
     def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
@@ -226,14 +224,15 @@ class HierarchySolver:
 
     def _packed_for(self, platform: Platform, levels):
         """``levels`` packed for the compiled iteration (qprr.ik.iteration_fast.CompiledLevels), None if they are not
-        all default tasks; packed once per solve (refilled when the same tasks were retargeted)."""
+        all default tasks; packed once for the same tasks, whose targets are read again at every call (a task may be
+        retargeted between two steps, as the readable path reads it live)."""
         fast = self._fused
-        packed_for, packed, current = self._packed
-        if levels is not packed_for or (packed is not None and not current and not fast.same_tasks(levels, packed)):
+        packed_for, packed = self._packed
+        if levels is not packed_for or (packed is not None and not fast.same_tasks(levels, packed)):
             packed = fast.compiled_levels(platform, levels)
-        elif packed is not None and not current:  # the same tasks, maybe retargeted since the last solve
+        elif packed is not None:  # the same tasks: their current targets and weights
             fast.refill(platform, packed)
-        self._packed = (levels, packed, True)
+        self._packed = (levels, packed)
         return packed
 
     def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
