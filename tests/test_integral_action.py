@@ -218,3 +218,15 @@ def test_the_gains_option_takes_a_gains_files_tables_inline():
     assert gain_arguments("idc", platform, {"targets": {"integral": True}}) == platform_gains("idc", platform, INTEGRAL)
     with pytest.raises(qprr.errors.UnknownNameError):
         gain_arguments("idc", platform, {"targetz": {"integral": True}})
+
+
+def test_motor_lag_with_inline_gains_tables_learns_the_rotor_lag():
+    """motor-lag given a gains file's tables inline derives them knowing the rotors' time constant, as with
+    gains = "platform" (without it, the Q-PRR's integral gains at tau = 20 ms diverged at 0.7 s)."""
+    from qprr.scenarios import run
+    from qprr.scenarios.missions import with_rotor_lag
+
+    assert with_rotor_lag({"targets": {"integral": True}}, "idc", 0.02) == {"targets": {"rotor_time_constant": 0.02, "integral": True}}
+    assert with_rotor_lag({"targets": {"rotor_time_constant": 0.01}}, "idc", 0.02)["targets"]["rotor_time_constant"] == 0.01
+    res = run("motor-lag", platform=qprr.load(), duration=1.5, tau=0.02, gains={"targets": {"integral": True}})
+    assert res.status == "ok"

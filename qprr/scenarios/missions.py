@@ -443,9 +443,8 @@ def mission_gain_arguments(name: str, platform: Platform, gains, data: MissionFi
     derived = stage is not None and name in GAIN_ARGUMENTS  # gains derived from targets: they learn the rotors' lag
     tau = float(np.max(stage.time_constant)) if stage is not None else 0.0
     if isinstance(gains, Mapping):
-        if derived:  # Targets(rotor_time_constant=tau) unless the file's [controller.targets] gives its own
-            gains = {**gains, "targets": {"rotor_time_constant": tau, **gains.get("targets", {})}}
-        return load_gain_file(gains, name, platform, f"the [controller] tables of mission {data.name!r}")
+        where = f"the [controller] tables of mission {data.name!r}" if choice.gains != "" else "the gains tables"
+        return load_gain_file(with_rotor_lag(gains, name, tau) if derived else gains, name, platform, where)
     if gains == "platform" and derived:
         return lag_gains(name, platform, tau)
     return gain_arguments(name, platform, gains)
@@ -543,9 +542,12 @@ def motor_lag(platform=None, controller="idc", progress=False, settings: Mission
     disturbance, the result's name."""
     platform = _platform(platform)
     actuators = motor_stage(platform, o["tau"], o["thrust_factor"], settings.plausibility)
+    tau = float(np.max(actuators.time_constant))
     if o["gains"] == "platform" and settings.controller is None:
-        tau = float(np.max(actuators.time_constant))
         ctrl = make_controller(controller, platform, **lag_gains(controller, platform, tau), **payload_awareness(controller, o, None))
+    elif isinstance(o["gains"], Mapping) and settings.controller is None:  # inline tables: their targets learn the lag too
+        gains = load_gain_file(with_rotor_lag(o["gains"], controller, tau), controller, platform, "the gains tables")
+        ctrl = make_controller(controller, platform, **gains, **payload_awareness(controller, o, None))
     else:
         ctrl = _controller(controller, platform, o, settings)
     traj = settings.trajectory if settings.trajectory is not None else _lag_reference(platform, o)
@@ -608,6 +610,14 @@ def flown_gain_arguments(scenario: str, controller: str, platform: Platform, gai
         stage = motor_stage(platform, options["tau"], options["thrust_factor"])
         return lag_gains(controller, platform, float(np.max(stage.time_constant)))
     return gain_arguments(controller, platform, gains)
+
+
+def with_rotor_lag(gains: Mapping, controller: str, tau: float) -> dict:
+    """A gains file's tables for ``controller`` whose derived gains learn rotors of time constant ``tau`` [s]
+    (``Targets(rotor_time_constant=tau)``), unless their ``targets`` table gives its own."""
+    if controller not in GAIN_ARGUMENTS:
+        return dict(gains)
+    return {**gains, "targets": {"rotor_time_constant": tau, **gains.get("targets", {})}}
 
 
 def lag_gains(controller: str, platform: Platform, tau: float) -> dict[str, object]:
