@@ -228,5 +228,5 @@ def test_motor_lag_with_inline_gains_tables_learns_the_rotor_lag():
 
     assert with_rotor_lag({"targets": {"integral": True}}, "idc", 0.02) == {"targets": {"rotor_time_constant": 0.02, "integral": True}}
     assert with_rotor_lag({"targets": {"rotor_time_constant": 0.01}}, "idc", 0.02)["targets"]["rotor_time_constant"] == 0.01
-    res = run("motor-lag", platform=qprr.load(), duration=1.5, tau=0.02, gains={"targets": {"integral": True}})
+    res = run("motor-lag", platform=qprr.load(), duration=4.0, tau=0.02, gains={"targets": {"integral": True}})
     assert res.status == "ok"
