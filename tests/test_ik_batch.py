@@ -67,6 +67,10 @@ def test_a_batch_takes_one_start_for_all_or_one_per_target():
     assert all(_same(a, solver.solve(data, t, xi0)) for a, t in zip(common.results, targets))
     each = solve_many(solver, targets, xi0=np.array([xi0] * 3))
     assert all(_same(a, b) for a, b in zip(common.results, each.results))
+    as_list = solve_many(solver, targets, xi0=xi0.tolist())  # one start written as a list of numbers
+    assert all(_same(a, b) for a, b in zip(common.results, as_list.results))
+    mixed = solve_many(solver, targets, xi0=[None, xi0, None])
+    assert _same(mixed[1], common[1]) and _same(mixed[0], solver.solve(data, targets[0]))
 
 
 def test_a_batch_refuses_bad_input_with_its_name():

@@ -122,6 +122,8 @@ def _starts(xi0, n: int, n_xi: int) -> list:
     array, or a sequence of n entries each None or (6 + n_arm,)."""
     if xi0 is None:
         return [None] * n
+    if isinstance(xi0, (list, tuple)) and all(isinstance(x, (int, float)) for x in xi0) and len(xi0) == n_xi:
+        return [np.asarray(xi0, dtype=float)] * n  # one start for all, written as a list of numbers
     if isinstance(xi0, (list, tuple)):
         if len(xi0) != n:
             raise InputError(f"xi0 must have one entry per target ({n}), got {len(xi0)}")
@@ -219,6 +221,8 @@ def _in_processes(solver: IKSolver, targets: list, starts: list, workers: int, p
     with ProcessPoolExecutor(max_workers=workers) as pool:
         futures = {pool.submit(_solve_chunk_in_worker, recipe, targets[lo:hi], starts[lo:hi]): lo for lo, hi in zip(bounds[:-1], bounds[1:])}
         for future in as_completed(futures):
+            if future.exception() is not None:  # a worker failed: the chunks not started are dropped, then it is raised
+                pool.shutdown(wait=False, cancel_futures=True)
             chunk = future.result()
             by_start[futures[future]] = chunk
             done += len(chunk)
