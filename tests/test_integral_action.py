@@ -202,7 +202,7 @@ def test_a_mission_file_asks_for_integral_action_by_its_targets():
         mission_gain_arguments("idc", platform, "platform", wrong, None)
 
 
-@pytest.mark.parametrize("controller", ["mfc", "impedance", "opspace-impedance"])
+@pytest.mark.parametrize("controller", ["mfc", "impedance", "opspace-impedance", "decoupled"])
 def test_integral_targets_are_refused_where_no_integral_is_derived(controller):
     """Targets(integral=True) for a controller whose derived gains have no such integral: refused, naming the target."""
     with pytest.raises(qprr.errors.InputError, match="integral = true"):

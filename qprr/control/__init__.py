@@ -44,7 +44,7 @@ from ..model import Platform
 from .base import Controller, Reference
 from .decoupled import DecoupledController, lock_arm
 from .filters import CommandFilter, SingleTiltReference, TiltReference, tilt_6_17
-from .gains import derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains, replace_fields
+from .gains import derive_decoupled, derive_dsid, derive_idc, derive_impedance, derive_mfc, derive_opspace_impedance, platform_gains, replace_fields
 from .impedance import ImpedanceController, ImpedanceFilter, ImpedanceGains, analytic_wrench
 from .inverse_dynamics import (
     AntiWindup,
@@ -89,7 +89,9 @@ _CORE = {
     "impedance": ControllerEntry(
         ImpedanceController, DerivedGains(("gains", "impedance"), derive_impedance), "impedance filters on the IDC (6.71)-(6.81)"
     ),
-    "decoupled": ControllerEntry(DecoupledController, _IDC, "multirotor + fixed-base arm controllers, coupling as a disturbance"),
+    "decoupled": ControllerEntry(
+        DecoupledController, DerivedGains(("gains",), derive_decoupled), "multirotor + fixed-base arm controllers, coupling as a disturbance"
+    ),
     "opspace-impedance": ControllerEntry(
         OperationalSpaceImpedance, DerivedGains(("impedance",), derive_opspace_impedance), "end-effector impedance (6.72)-(6.73)"
     ),

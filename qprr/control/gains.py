@@ -359,7 +359,7 @@ def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains
 
 
 def derive_idc(authority: Authority, targets: Targets) -> dict[str, object]:
-    """``idc``, ``layered-idc``, ``payload-idc``, ``decoupled``: (s + w)^3 on the attitude, (s + w)^2 (s + w / r) with
+    """``idc``, ``layered-idc``, ``payload-idc`` (and ``decoupled``, :func:`derive_decoupled`): (s + w)^3 on the attitude, (s + w)^2 (s + w / r) with
     anti-windup on position and arm (module docstring, "Integral action"); the roll/pitch reference filter at the
     class's 50 rad/s unless the rotors lag."""
     w = bandwidths(authority, targets)
@@ -386,8 +386,15 @@ def _refuse_integral(targets: Targets, controller: str) -> None:
     if targets.integral:
         raise InputError(
             f"gain target integral = true: the derived gains of {controller} have no integral action to turn on (it is "
-            "derived for idc, dsid, layered-idc, payload-idc and decoupled); remove integral from the targets"
+            "derived for idc, dsid, layered-idc and payload-idc); remove integral from the targets"
         )
+
+
+def derive_decoupled(authority: Authority, targets: Targets) -> dict[str, object]:
+    """``decoupled``: the IDC's gains (:func:`derive_idc`) without the integral action, which its per-joint loops would
+    integrate with no anti-windup: ``targets.integral`` is refused."""
+    _refuse_integral(targets, "decoupled")
+    return derive_idc(authority, targets)
 
 
 def derive_mfc(authority: Authority, targets: Targets) -> dict[str, object]:
@@ -550,6 +557,7 @@ __all__ = [
     "Targets",
     "bandwidths",
     "derive",
+    "derive_decoupled",
     "derive_dsid",
     "derive_idc",
     "derive_impedance",
