@@ -230,3 +230,17 @@ def test_motor_lag_with_inline_gains_tables_learns_the_rotor_lag():
     assert with_rotor_lag({"targets": {"rotor_time_constant": 0.01}}, "idc", 0.02)["targets"]["rotor_time_constant"] == 0.01
     res = run("motor-lag", platform=qprr.load(), duration=4.0, tau=0.02, gains={"targets": {"integral": True}})
     assert res.status == "ok"
+
+
+def test_a_payload_model_the_run_would_not_hear_is_refused():
+    """payload_model = "announced" on a mission with no payload events, and any payload model with a built controller
+    (MissionSettings.controller), are refused before the flight: they would change nothing."""
+    from qprr.scenarios import run
+    from qprr.scenarios.missions import MissionSettings
+
+    p = qprr.load()
+    with pytest.raises(qprr.errors.InputError, match="has none"):
+        run("takeoff-hover", platform=p, duration=1.0, payload_model="announced")
+    built = MissionSettings(controller=make_controller("idc", p))
+    with pytest.raises(qprr.errors.InputError, match="flown as it is"):
+        run("grasp-drop", platform=p, duration=1.0, payload_model="announced", settings=built)

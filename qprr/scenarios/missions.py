@@ -195,8 +195,18 @@ def _controller(name: str, platform: Platform, o: dict, settings: MissionSetting
     """``settings.controller`` if given, else ``controller_for(name, platform, o["gains"], **kwargs)`` told about the
     payload as the option ``payload_model`` says (:func:`payload_awareness`; ``payload``: the mission's events)."""
     if settings.controller is not None:
-        return settings.controller
+        return _built(settings, o)
     return controller_for(name, platform, o["gains"], **payload_awareness(name, o, payload), **kwargs)
+
+
+def _built(settings: MissionSettings, o: dict):
+    """``settings.controller``, flown as it is: refused with a ``payload_model`` it would not hear."""
+    if o.get("payload_model", PAYLOAD_MODELS[0]) != PAYLOAD_MODELS[0]:
+        raise InputError(
+            f"payload_model = {o['payload_model']!r} and MissionSettings.controller: the built controller is flown as it is; "
+            "give it its PayloadAwareness yourself, or leave payload_model out"
+        )
+    return settings.controller
 
 
 # ------------------------------------------------------------------------- payload awareness (issue 35)
@@ -228,6 +238,11 @@ def payload_awareness(controller: str, o: dict, payload: PayloadSchedule | None)
     if mode == "estimate":
         return {"payload_awareness": PayloadAwareness(estimate=True)}
     events = tuple((c.time, c.mass) for c in payload.changes) if payload is not None else ()
+    if not events:
+        raise InputError(
+            "payload_model = 'announced' tells the controller the mission's payload events, and this mission has none "
+            "(grasp-drop and a mission file's [[payload]] tables have); leave payload_model out"
+        )
     return {"payload_awareness": PayloadAwareness(announced=events)}
 
 
@@ -423,7 +438,7 @@ def _mission_controller(name: str, platform: Platform, o: dict, settings: Missio
     if settings.controller is not None:
         if data.controller.name or data.controller.gains != "":
             raise InputError(f"mission {data.name!r}: MissionSettings.controller is flown, its [controller] table would be ignored; remove one")
-        return settings.controller
+        return _built(settings, o)
     defaults = "class" if o["gains"] == "class" and data.controller.gains == "" else "platform"
     gains = mission_gain_arguments(name, platform, o["gains"], data, stage)
     return make_controller(name, platform, defaults=defaults, **gains, **payload_awareness(name, o, data.payload))
