@@ -116,6 +116,17 @@ def test_qprr_ik_targets_solves_a_file_and_writes_its_rows(tmp_path, capsys):
     assert "--rpy and --json go with one --target" in capsys.readouterr().err
     assert main(["ik", "--target", "0.3", "0", "1", "--save", str(out)]) == 2
     assert "--workers and --save go with --targets" in capsys.readouterr().err
+    path.write_text("x,y,z\n0.3,0,1,7\n")
+    assert main(["ik", "--targets", str(path)]) == 2
+    assert "line 2: more values than the header's 3 columns" in capsys.readouterr().err
+    assert main(["ik", "--targets", str(path), "--save", str(tmp_path / "no" / "rows.csv")]) == 2
+    assert "no folder" in capsys.readouterr().err
+    path.write_text("\ufeffx,y,z\n0.3,0,1.5\n", encoding="utf-8")  # a spreadsheet's byte-order mark
+    assert main(["ik", "--platform", "borinot_flying_arm_2", "--targets", str(path)]) == 0
+    capsys.readouterr()
+    path.write_text("x,y,z\n\n0.3,0,1\n0.3,zero,1\n")  # a blank line: the bad row is still named by its line
+    assert main(["ik", "--targets", str(path)]) == 2
+    assert "line 4" in capsys.readouterr().err
     path.write_text("x,y,z\n0.3,zero,1\n")
     assert main(["ik", "--targets", str(path)]) == 2
     assert "line 2" in capsys.readouterr().err

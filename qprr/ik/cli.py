@@ -55,7 +55,7 @@ def advice(platform, result: IKResult, oriented: bool) -> str:
 def read_targets(path: Path) -> list:
     """The targets of a CSV file (module docstring): positions (3,) [m], or (p, R) pairs where roll, pitch, yaw are given."""
     try:
-        text = path.read_text()
+        text = path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark is not part of the first column's name
     except OSError as exc:
         raise InputError(f"targets file {str(path)!r} cannot be read: {exc.strerror}") from None
     reader = csv.DictReader(text.splitlines())
@@ -67,8 +67,11 @@ def read_targets(path: Path) -> list:
     if oriented and len(oriented) < 3:
         raise InputError(f"targets file {str(path)!r}: give roll, pitch and yaw together or none, got {', '.join(oriented)}")
     targets = []
-    for line, row in enumerate(reader, start=2):
-        row = {k.strip(): v for k, v in row.items() if k is not None}
+    for row in reader:
+        line = reader.line_num
+        if None in row:
+            raise InputError(f"targets file {str(path)!r}, line {line}: more values than the header's {len(columns)} columns")
+        row = {k.strip(): v for k, v in row.items()}
         try:
             values = [float(row[c]) for c in POSITION_COLUMNS + tuple(oriented)]
         except (TypeError, ValueError):
@@ -82,6 +85,8 @@ def read_targets(path: Path) -> list:
 
 def run_batch(args: argparse.Namespace) -> int:
     """``qprr ik --targets FILE.csv``: every target in one call, the summary printed, the rows written with ``--save``."""
+    if args.save and not Path(args.save).parent.is_dir():
+        return fail("qprr ik", f"--save {args.save!r}: no folder {str(Path(args.save).parent)!r} to write it in")
     try:
         platform = platform_from_args(args)
         targets = read_targets(Path(args.targets))
@@ -138,9 +143,10 @@ def register_ik_cli(sub) -> None:
     """Add the ``ik`` command to the subparsers ``sub`` of the qprr command line."""
     p = sub.add_parser(
         "ik",
-        help="solve one end-effector target: configuration, status, and on failure what would help",
+        help="solve one end-effector target (or a file of them): configuration, status, and on failure what would help",
         description="Inverse kinematics of one target on any platform (qprr.ik.IKSolver): the end effector at --target "
-        "(world, m), optionally with the orientation --rpy (roll, pitch, yaw in rad, fixed axes X, Y, Z) while hovering.",
+        "(world, m), optionally with the orientation --rpy (roll, pitch, yaw in rad, fixed axes X, Y, Z) while hovering; "
+        "or every target of a CSV file (--targets: columns x, y, z and optionally roll, pitch, yaw) in one call.",
     )
     which = p.add_mutually_exclusive_group()
     which.add_argument("--target", type=real(unit="m"), nargs=3, default=None, metavar=("X", "Y", "Z"), help="end-effector position in the world [m]")
