@@ -244,3 +244,16 @@ def test_a_payload_model_the_run_would_not_hear_is_refused():
     built = MissionSettings(controller=make_controller("idc", p))
     with pytest.raises(qprr.errors.InputError, match="flown as it is"):
         run("grasp-drop", platform=p, duration=1.0, payload_model="announced", settings=built)
+
+
+def test_the_estimated_payload_holds_grasp_drop_far_closer_than_an_unknown_one():
+    """payload_model = "estimate" (Thesis Sec. 6.4.2's online mass estimate in the IDC's model) on borinot's grasp-drop:
+    the base moves 30 times less than with the payload unknown to a PD (measured 2.9 mm against 102 mm), and the
+    announced payload is held exactly."""
+    from qprr.scenarios import run
+
+    p = qprr.load("borinot_flying_arm_2")
+    moved = {m: run("grasp-drop", platform=p, duration=3.0, payload_model=m).metrics["max_position_error"] for m in ("unknown", "estimate", "announced")}
+    assert moved["estimate"] < moved["unknown"] / 20.0
+    assert moved["estimate"] < 0.01
+    assert moved["announced"] < 1e-9
