@@ -253,7 +253,8 @@ def test_the_estimated_payload_holds_grasp_drop_far_closer_than_an_unknown_one()
     from qprr.scenarios import run
 
     p = qprr.load("borinot_flying_arm_2")
-    moved = {m: run("grasp-drop", platform=p, duration=3.0, payload_model=m).metrics["max_position_error"] for m in ("unknown", "estimate", "announced")}
+    models = ("unknown", "estimate", "announced")
+    moved = {m: run("grasp-drop", platform=p, duration=3.0, payload_model=m).metrics["max_position_error"] for m in models}
     assert moved["estimate"] < moved["unknown"] / 20.0
     assert moved["estimate"] < 0.01
     assert moved["announced"] < 1e-9
