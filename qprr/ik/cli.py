@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..cli.common import add_platform_options, fail, platform_from_args, real
+from ..cli.common import add_platform_options, fail, integer, platform_from_args, real
 from ..errors import InputError, QprrError
 from .batch import solve_many
 from .solver import METHODS, IKResult, IKSolver
@@ -157,6 +157,6 @@ def register_ik_cli(sub) -> None:
     p.add_argument("--method", choices=METHODS, default="qp", help="qp (task priorities, default), dls or clika")
     add_platform_options(p)
     p.add_argument("--json", action="store_true", help="print the result as JSON (one --target)")
-    p.add_argument("--workers", type=int, default=1, help="with --targets: processes solving them (default 1)")
+    p.add_argument("--workers", type=integer(lo=1), default=1, help="with --targets: processes solving them (default 1)")
     p.add_argument("--save", default=None, metavar="OUT.csv", help="with --targets: one row per target (status, errors, configuration)")
     p.set_defaults(func=run_ik)
