@@ -281,6 +281,85 @@ def fraction_error(mask: np.ndarray, shape: tuple[int, ...]) -> float:
     return float(abs(m.mean() - coarse.mean()))
 
 
+def _neighbourhood_max(a: np.ndarray, axes: list[int]) -> np.ndarray:
+    """The largest value of ``a`` over each point's neighbours within one step along ``axes`` (and itself): a 3^d box
+    maximum filter, one axis at a time."""
+    out = a
+    for k in axes:
+        lo = [slice(None)] * a.ndim
+        hi = [slice(None)] * a.ndim
+        lo[k], hi[k] = slice(None, -1), slice(1, None)
+        m = out.copy()
+        m[tuple(hi)] = np.maximum(m[tuple(hi)], out[tuple(lo)])
+        m[tuple(lo)] = np.maximum(m[tuple(lo)], out[tuple(hi)])
+        out = m
+    return out
+
+
+def lipschitz_halo(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """(n,) per grid point, how far a function sampled on a tensor grid can differ from its value there within half a
+    step along every axis (the box of the joint space that point stands for).
+
+    ``values`` (n,) on the grid of ``shape`` (C order, :class:`JointGrid`).  Along axis k, the steepest change between
+    neighbouring grid points on the edges within one step of the point, max |dv_k|, measures the slope there:
+    L_k = max |dv_k| / h_k (h_k the step).  The point's half-step box is then within sum_k L_k h_k / 2 = sum_k max
+    |dv_k| / 2 of its value, *if* the function's slope along each axis in that box does not exceed the steepest
+    change measured around it (the grid resolves the function: no peak or dip narrower than a step).  The largest
+    (smallest) value over the whole box is then at most max(v + halo) (at least min(v - halo)).  Non-finite
+    changes count as 0."""
+    v = np.asarray(values, dtype=float).reshape(shape)
+    axes = [k for k, n in enumerate(shape) if n >= 2]  # a locked joint's axis has one value: no step
+    halo = np.zeros(shape)
+    for k in axes:
+        d = np.nan_to_num(np.abs(np.diff(v, axis=k)), nan=0.0, posinf=0.0)
+        lo = [slice(None)] * v.ndim
+        hi = [slice(None)] * v.ndim
+        lo[k], hi[k] = slice(None, -1), slice(1, None)
+        edge = np.zeros(shape)  # the steeper of the two edges along k at each point
+        edge[tuple(lo)] = d
+        edge[tuple(hi)] = np.maximum(edge[tuple(hi)], d)
+        halo += 0.5 * _neighbourhood_max(edge, axes)
+    return halo.reshape(-1)
+
+
+def boundary_share(mask: np.ndarray, shape: tuple[int, ...]) -> tuple[float, float]:
+    """(low, high): the share of a tensor grid's cells (boxes of 2^d neighbouring grid points) whose corners all
+    hold ``mask`` (n,), and the share of those where one corner at least holds it.
+
+    When the set where ``mask`` holds has no part smaller than a cell (its boundary crosses a cell's edges, it never
+    enters and leaves a cell between the corners), a cell whose corners all agree lies wholly inside or outside it,
+    so its share of the box lies in [low, high]; high - low is the share of boundary cells (corners disagreeing)."""
+    lo = np.asarray(mask, dtype=bool).reshape(shape)
+    hi = lo
+    for k in [k for k, n in enumerate(shape) if n >= 2]:
+        a = [slice(None)] * lo.ndim
+        b = [slice(None)] * lo.ndim
+        a[k], b[k] = slice(None, -1), slice(1, None)
+        lo = lo[tuple(a)] & lo[tuple(b)]
+        hi = hi[tuple(a)] | hi[tuple(b)]
+    return float(lo.mean()), float(hi.mean())
+
+
+def share_error(mask: np.ndarray, shape: tuple[int, ...]) -> float:
+    """Bound of |share of the box where ``mask`` holds - share of the grid's points where it holds|, from
+    :func:`boundary_share` (its assumption): the farther end of [low, high] from the points' share."""
+    share = float(np.mean(mask))
+    low, high = boundary_share(mask, shape)
+    return max(share - low, high - share, 0.0)
+
+
+def error_bar_text(value: float, error: float, unit: str) -> str:
+    """A value with its error bar as a reader writes it: ``0.2004 ± 0.0004 m²`` (the value to the error bar's first
+    digit, the error with one significant figure; ``m^2``, ``m^3`` as powers); the value alone when the error is 0
+    or not finite."""
+    for k, v in {"^2": "\u00b2", "^3": "\u00b3"}.items():
+        unit = unit.replace(k, v)
+    if not (np.isfinite(error) and error > 0):
+        return f"{value:.4g} {unit}"
+    digits = max(0, -int(np.floor(np.log10(error))))
+    return f"{value:.{digits}f} ± {error:.1g} {unit}"
+
+
 # ------------------------------------------------------------------------------ progress
 ProgressFn = Callable[[float, str], None]
 

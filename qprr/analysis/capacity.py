@@ -19,6 +19,26 @@ rotors' limit is within ``thrust_tol`` (relative) of the collective one (the off
 costs less than that), else "attitude".  Over the workspace, each cell of end-effector
 positions keeps the configuration with the largest capacity (a redundant arm - the Q-PRR's
 slider - chooses the one that balances the CoG).
+
+Error bars.  The grid samples the box of joint ranges; what it reports about the box has a discretisation
+error, bounded from the grid itself under one stated assumption each:
+
+* the **largest** and **smallest** capacity over the box (``best``, ``worst``): every configuration lies
+  within half a step along every joint of a grid point, and the capacity (the smallest of three Lipschitz
+  limits, clipped at 0) changes over that half step by at most half the steepest change measured between
+  neighbouring grid points around it, summed over the joints
+  (:func:`qprr.analysis._common.lipschitz_halo`), *assuming* its slope is no steeper between the grid
+  points than the steepest change measured around them.  So the box's largest capacity lies in [grid best,
+  max(cap + halo)] (and below the collective-thrust limit), its smallest in [max(min(cap - halo), 0), grid
+  worst];
+* the **shares** limited by each factor: a cell of the grid (2^d neighbouring points) whose corners agree
+  is counted wholly in their factor, *assuming* no region of one factor is smaller than a cell; the
+  box's share then lies between the share of cells whose corners all have that factor and the share
+  where one at least has it (the boundary cells make the difference;
+  :func:`qprr.analysis._common.share_error`).
+
+The workspace cells' numbers (``worst_reachable``, :meth:`CapacityResult.map_fractions`) depend on the cell
+size chosen for the samples and have no error bar.
 """
 
 from __future__ import annotations
@@ -41,8 +61,11 @@ from ._common import (
     check_locked,
     check_pos,
     check_progress,
+    error_bar_text,
+    lipschitz_halo,
     make_grid,
     make_payload_mount,
+    share_error,
 )
 from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
 from .chain import ArmChain
@@ -70,6 +93,14 @@ class CapacityResult:
     [m]: ``map_capacity`` (grid, NaN outside), ``map_limiting`` (codes, -1 outside),
     ``map_origin``.  ``best`` = (capacity, q_arm, ee_body) of the best configuration;
     ``worst_reachable``: the smallest per-cell best capacity over the workspace [kg].
+
+    ``worst`` [kg]: the smallest capacity over the joint grid (the worst configuration).
+
+    Error bars of the joint grid against the joint box it samples (the module docstring, "Error bars"):
+    ``best_error`` [kg] bounds |largest capacity over the box - ``best[0]``|, ``worst_error`` [kg] |smallest
+    capacity over the box - ``worst``| (:func:`_extreme_errors`); ``fraction_errors`` (4,) [share of
+    the box, 0-1] bounds |share of the box limited by each factor of :data:`LIMITS` - :meth:`fractions`|
+    (:func:`qprr.analysis._common.share_error`).
     """
 
     platform_name: str
@@ -93,6 +124,10 @@ class CapacityResult:
     worst_reachable: float
     status: MapStatus
     reason: str
+    worst: float
+    best_error: float
+    worst_error: float
+    fraction_errors: np.ndarray
     sampling: SampleChoice | None = None
 
     def fractions(self) -> dict[str, float]:
@@ -108,10 +143,14 @@ class CapacityResult:
     def summary(self) -> str:
         cap, q, ee = self.best
         fr = self.map_fractions()
+        share = self.fractions()
         lines = [
             f"payload capacity of {self.platform_name} (torque reserve {np.round(self.torque_reserve, 4).tolist()} N m): "
             f"collective-thrust limit {self.m_thrust:.4g} kg",
-            f"  best {cap:.4g} kg at q_arm = {np.round(q, 4).tolist()} (end effector {np.round(ee, 4).tolist()} m in B)",
+            f"  best {error_bar_text(cap, self.best_error, 'kg')} at q_arm = {np.round(q, 4).tolist()} (end effector "
+            f"{np.round(ee, 4).tolist()} m in B); worst configuration {error_bar_text(self.worst, self.worst_error, 'kg')}",
+            "  configurations limited by "
+            + ", ".join(f"{k} {error_bar_text(100 * share[k], 100 * e, '%')}" for k, e in zip(LIMITS, self.fraction_errors)),
             f"  over the workspace ({int((self.map_limiting >= 0).sum())} cells of {self.cell * 1000:.3g} mm): smallest best "
             f"capacity {self.worst_reachable:.4g} kg; limited by " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items()),
         ]
@@ -120,6 +159,10 @@ class CapacityResult:
             per[self.joint_names[j]] = per.get(self.joint_names[j], 0) + 1
         if per:
             lines.append("  effort-limited configurations by joint: " + ", ".join(f"{k} {v}" for k, v in per.items()))
+        lines.append(
+            "  error bars: the joint grid against the joint box (capacity: the steepest change between neighbouring "
+            "configurations; shares: the cells whose corners disagree); the workspace cells' numbers have none"
+        )
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
         if self.sampling is not None:
@@ -238,4 +281,19 @@ def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResul
         float(np.nanmin(best_map)),
         status,
         reason,
+        float(cap.min()),
+        *_extreme_errors(cap, grid.shape, float(m_thr)),
+        np.array([share_error(lim == k, grid.shape) for k in range(len(LIMITS))]),
     )
+
+
+def _extreme_errors(cap: np.ndarray, shape: tuple[int, ...], m_thrust: float) -> tuple[float, float]:
+    """(best_error, worst_error) [kg]: bounds of how far the largest and the smallest capacity over the joint box lie
+    from the grid's (the module docstring, "Error bars"; :func:`qprr.analysis._common.lipschitz_halo`).  The box's
+    largest capacity is in [max cap, max(cap + halo)] (at most ``m_thrust`` [kg], the collective limit), its
+    smallest in [max(min(cap - halo), 0), min cap] (a capacity is >= 0 by definition: clipped)."""
+    halo = lipschitz_halo(cap, shape)
+    top = min(float(np.max(cap + halo)), m_thrust)  # the collective limit is a ceiling: at it, no error but rounding
+    best_error = top - float(np.max(cap)) if top - float(np.max(cap)) > 1e-12 * max(m_thrust, 1.0) else 0.0
+    worst_error = float(np.min(cap) - max(float(np.min(cap - halo)), 0.0))
+    return best_error, worst_error

@@ -12,6 +12,7 @@ import dataclasses
 import numpy as np
 
 from ..viz.plots import legend, new_figure, plain, tidy_3d
+from ._common import error_bar_text
 from .capacity import LIMITS, CapacityResult
 from .cog import CoGBalanceMap, CoGResult
 from .hover import HoverResult
@@ -38,19 +39,10 @@ def _axis_names(basis: np.ndarray) -> list[str]:
     return out
 
 
-_POWERS = {"^2": "\u00b2", "^3": "\u00b3"}
-
-
 def measure_text(m) -> str:
     """A length, area or volume with its error bar, as a reader writes it: ``0.2004 ± 0.0004 m²``
-    (the value to the error bar's first digit, the error with one significant figure)."""
-    unit = m.unit
-    for k, v in _POWERS.items():
-        unit = unit.replace(k, v)
-    if not (np.isfinite(m.error) and m.error > 0):
-        return f"{m.measure:.4g} {unit}"
-    digits = max(0, -int(np.floor(np.log10(m.error))))
-    return f"{m.measure:.{digits}f} ± {m.error:.1g} {unit}"
+    (:func:`qprr.analysis._common.error_bar_text` of its ``measure``, ``error``, ``unit``)."""
+    return error_bar_text(m.measure, m.error, m.unit)
 
 
 def _legend_below(ax) -> None:
