@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pinocchio as pin
 import pytest
 
 import qprr
 from qprr.analysis import LIMITS, capacity
+from qprr.analysis._common import boundary_share, lipschitz_halo, share_error
 from qprr.errors import InputError
 
 
@@ -148,3 +151,56 @@ def test_capacity_options_and_keywords_agree(qp):
     np.testing.assert_array_equal(a.limiting, b.limiting)
     with pytest.raises(TypeError):
         capacity(qp, n_sample=2000)
+
+
+# ------------------------------------------------------------------------------ error bars (module docstring)
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _platform(name):
+    if name == "my_platform":
+        return qprr.from_urdf(ROOT / "examples/my_platform/quad_rrr.urdf", ROOT / "examples/my_platform/quad_rrr.rotors.toml")
+    return qprr.load(name)
+
+
+@pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "my_platform"])
+def test_coarse_error_bars_hold_the_fine_grid(name):
+    """The error bars a coarse grid reaches contain what a grid 40 times as fine finds: the best and worst capacity
+    (the steepest neighbour changes) and every share of limiting factors (the cells whose corners disagree)."""
+    p = _platform(name)
+    coarse = capacity(p, n_samples=1500)
+    fine = capacity(p, n_samples=60_000)
+    assert fine.grid.size > 30 * coarse.grid.size
+    assert coarse.best_error >= 0.0 and coarse.worst_error >= 0.0
+    assert abs(fine.best[0] - coarse.best[0]) <= coarse.best_error + 1e-9
+    assert abs(fine.worst - coarse.worst) <= coarse.worst_error + 1e-9
+    fc, ff = coarse.fractions(), fine.fractions()
+    for k, name_k in enumerate(LIMITS):
+        assert abs(ff[name_k] - fc[name_k]) <= coarse.fraction_errors[k] + 1e-12, name_k
+    assert fine.worst_error <= coarse.worst_error + 1e-12  # the finer grid's bar where the capacity is smooth
+
+
+def test_lipschitz_halo_bounds_a_kink_between_grid_points():
+    """|x - 0.3| + 0.5 y on a grid that misses x = 0.3: the box's minimum 0 lies within the halo of the grid's, and
+    the halo is the half-step steepest change (0.1 / 2 along x, 0.05 / 2 along y on a 0.1 step)."""
+    x, y = np.meshgrid(np.linspace(0.0, 1.0, 11), np.linspace(0.0, 1.0, 11), indexing="ij")
+    shifted = np.abs(x - 0.35) + 0.5 * y  # minimum 0 at x = 0.35, between two grid values
+    halo = lipschitz_halo(shifted.reshape(-1), shifted.shape)
+    np.testing.assert_allclose(halo, 0.05 + 0.025)
+    lo = float(np.min(shifted.reshape(-1) - halo))
+    assert lo <= 0.0 <= float(shifted.min())
+    # a locked joint (one value) adds nothing
+    np.testing.assert_allclose(lipschitz_halo(shifted[:, :1].reshape(-1), (11, 1)), 0.05)
+
+
+def test_boundary_share_brackets_a_disc():
+    """The share of [0, 1]^2 inside the disc of radius 0.8 about the origin (a quarter disc: pi 0.64 / 4) lies between the
+    share of cells with every corner inside and the share with one corner inside, and the points' share is within
+    share_error of it."""
+    for n in (7, 21, 61):
+        x, y = np.meshgrid(np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, n), indexing="ij")
+        inside = (x**2 + y**2 <= 0.64).reshape(-1)
+        low, high = boundary_share(inside, (n, n))
+        true = np.pi * 0.64 / 4.0
+        assert low <= true <= high
+        assert abs(inside.mean() - true) <= share_error(inside, (n, n))

@@ -31,7 +31,9 @@ def test_fully_actuated_hover_also_draws_its_wrench_set(tmp_path, capsys):
 
 def test_designations_and_unknown_names(capsys):
     assert main(["analyze", "capacity", "--platform", "HEX-RRR", "--samples", "2000"]) == 0
-    assert "HEX-RRR" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "HEX-RRR" in out
+    assert "worst configuration" in out and "±" in out and "configurations limited by thrust" in out  # the error bars
     with pytest.raises(UnknownNameError, match="q-prr"):
         resolve_platform("ZZ-TOP")
 
