@@ -166,7 +166,8 @@ def _platform(name):
 @pytest.mark.parametrize("name", ["q-prr", "borinot_flying_arm_2", "my_platform"])
 def test_coarse_error_bars_hold_the_fine_grid(name):
     """The error bars a coarse grid reaches contain what a grid 40 times as fine finds: the best and worst capacity
-    (the steepest neighbour changes) and every share of limiting factors (the cells whose corners disagree)."""
+    (the steepest neighbour changes), every share of limiting factors (the cells whose corners disagree) and the
+    smallest best capacity over the workspace on the coarse map's cells."""
     p = _platform(name)
     coarse = capacity(p, n_samples=1500)
     fine = capacity(p, n_samples=60_000)
@@ -178,6 +179,20 @@ def test_coarse_error_bars_hold_the_fine_grid(name):
     for k, name_k in enumerate(LIMITS):
         assert abs(ff[name_k] - fc[name_k]) <= coarse.fraction_errors[k] + 1e-12, name_k
     assert fine.worst_error <= coarse.worst_error + 1e-12  # the finer grid's bar where the capacity is smooth
+    # the smallest best capacity over the workspace, on the coarse map's cells: both grids' configurations binned there
+    w = _smallest_best_on_cells(coarse, fine)
+    assert coarse.worst_reachable - 1e-12 <= w <= coarse.worst_reachable + coarse.worst_reachable_error + 1e-9
+    assert coarse.worst_reachable_error > 0.0 and fine.worst_reachable_error < coarse.worst_reachable_error
+
+
+def _smallest_best_on_cells(coarse, fine) -> float:
+    """The smallest per-cell best capacity [kg] over the cells the coarse map holds, with the fine grid's
+    configurations binned on the coarse map's cells too (its end effectors in the coarse hull's coordinates)."""
+    best = np.where(np.isfinite(coarse.map_capacity), coarse.map_capacity, -np.inf).reshape(-1)
+    idx = np.floor(((fine.ee_body - coarse.origin) @ coarse.basis.T - coarse.map_origin) / coarse.cell).astype(np.int64)
+    inside = np.all((idx >= 0) & (idx < np.array(coarse.map_capacity.shape)), axis=1)
+    np.maximum.at(best, np.ravel_multi_index(tuple(idx[inside].T), coarse.map_capacity.shape), fine.capacity[inside])
+    return float(best[np.isfinite(coarse.map_capacity).reshape(-1)].min())
 
 
 def test_lipschitz_halo_bounds_a_kink_between_grid_points():

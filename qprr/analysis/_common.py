@@ -281,18 +281,19 @@ def fraction_error(mask: np.ndarray, shape: tuple[int, ...]) -> float:
     return float(abs(m.mean() - coarse.mean()))
 
 
-def _neighbourhood_max(a: np.ndarray, axes: list[int]) -> np.ndarray:
-    """The largest value of ``a`` over each point's neighbours within one step along ``axes`` (and itself): a 3^d box
-    maximum filter, one axis at a time."""
-    out = a
-    for k in axes:
-        lo = [slice(None)] * a.ndim
-        hi = [slice(None)] * a.ndim
-        lo[k], hi[k] = slice(None, -1), slice(1, None)
-        m = out.copy()
-        m[tuple(hi)] = np.maximum(m[tuple(hi)], out[tuple(lo)])
-        m[tuple(lo)] = np.maximum(m[tuple(lo)], out[tuple(hi)])
-        out = m
+def neighbourhood_max(a: np.ndarray, axes: list[int], radius: int = 1) -> np.ndarray:
+    """The largest value of ``a`` over each entry's neighbours within ``radius`` steps along every axis of ``axes``
+    (itself included): a (2 radius + 1)^d box maximum filter, one axis and one step at a time (-inf for NaN)."""
+    out = np.where(np.isnan(a), -np.inf, a)
+    for _ in range(radius):
+        for k in axes:
+            lo = [slice(None)] * a.ndim
+            hi = [slice(None)] * a.ndim
+            lo[k], hi[k] = slice(None, -1), slice(1, None)
+            m = out.copy()
+            m[tuple(hi)] = np.maximum(m[tuple(hi)], out[tuple(lo)])
+            m[tuple(lo)] = np.maximum(m[tuple(lo)], out[tuple(hi)])
+            out = m
     return out
 
 
@@ -318,7 +319,7 @@ def lipschitz_halo(values: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
         edge = np.zeros(shape)  # the steeper of the two edges along k at each point
         edge[tuple(lo)] = d
         edge[tuple(hi)] = np.maximum(edge[tuple(hi)], d)
-        halo += 0.5 * _neighbourhood_max(edge, axes)
+        halo += 0.5 * neighbourhood_max(edge, axes)
     return halo.reshape(-1)
 
 

@@ -37,8 +37,13 @@ error, bounded from the grid itself under one stated assumption each:
   where one at least has it (the boundary cells make the difference;
   :func:`qprr.analysis._common.share_error`).
 
-The workspace cells' numbers (``worst_reachable``, :meth:`CapacityResult.map_fractions`) depend on the cell
-size chosen for the samples and have no error bar.
+* the **smallest best capacity over the workspace** (``worst_reachable``), over the cells the map holds (its cells,
+  as binned): a cell's best over the box is at least the grid's; it is at most the largest capacity + halo of
+  the grid points whose half-step box can reach the cell, which lie within K cells of it, K the largest
+  distance an end-effector coordinate can move within a half step (the same halo, of the coordinates) in cells.
+  So the workspace's smallest best lies in [grid value, min over the held cells of that dilated largest].
+
+The workspace cells' shares (:meth:`CapacityResult.map_fractions`) have no error bar.
 """
 
 from __future__ import annotations
@@ -65,6 +70,7 @@ from ._common import (
     lipschitz_halo,
     make_grid,
     make_payload_mount,
+    neighbourhood_max,
     share_error,
 )
 from .budget import SampleChoice, check_budget, check_clock, grid_work, within_budget
@@ -100,7 +106,8 @@ class CapacityResult:
     ``best_error`` [kg] bounds |largest capacity over the box - ``best[0]``|, ``worst_error`` [kg] |smallest
     capacity over the box - ``worst``| (:func:`_extreme_errors`); ``fraction_errors`` (4,) [share of
     the box, 0-1] bounds |share of the box limited by each factor of :data:`LIMITS` - :meth:`fractions`|
-    (:func:`qprr.analysis._common.share_error`).
+    (:func:`qprr.analysis._common.share_error`); ``worst_reachable_error`` [kg] bounds |smallest best capacity
+    over the box, on the map's cells - ``worst_reachable``| (:func:`_workspace_error`).
     """
 
     platform_name: str
@@ -128,6 +135,7 @@ class CapacityResult:
     best_error: float
     worst_error: float
     fraction_errors: np.ndarray
+    worst_reachable_error: float
     sampling: SampleChoice | None = None
 
     def fractions(self) -> dict[str, float]:
@@ -152,7 +160,8 @@ class CapacityResult:
             "  configurations limited by "
             + ", ".join(f"{k} {error_bar_text(100 * share[k], 100 * e, '%')}" for k, e in zip(LIMITS, self.fraction_errors)),
             f"  over the workspace ({int((self.map_limiting >= 0).sum())} cells of {self.cell * 1000:.3g} mm): smallest best "
-            f"capacity {self.worst_reachable:.4g} kg; limited by " + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items()),
+            f"capacity {error_bar_text(self.worst_reachable, self.worst_reachable_error, 'kg')}; limited by "
+            + ", ".join(f"{k} {100 * v:.1f}%" for k, v in fr.items()),
         ]
         per = {}
         for j in self.effort_joint[self.limiting == 2]:
@@ -161,7 +170,7 @@ class CapacityResult:
             lines.append("  effort-limited configurations by joint: " + ", ".join(f"{k} {v}" for k, v in per.items()))
         lines.append(
             "  error bars: the joint grid against the joint box (capacity: the steepest change between neighbouring "
-            "configurations; shares: the cells whose corners disagree); the workspace cells' numbers have none"
+            "configurations; shares: the cells whose corners disagree); the workspace cells' shares have none"
         )
         if self.reason:
             lines.append(f"  status {self.status.value}: {self.reason}")
@@ -256,6 +265,7 @@ def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResul
     best_map = np.where(arg >= 0, cap[np.clip(arg, 0, None)], np.nan)
     i = int(np.argmax(cap))
     allq = grid.configurations(i, i + 1)[0]
+    halo = lipschitz_halo(cap, grid.shape)
     status, reason = MapStatus.OK, ""
     if np.all(lim == 3):
         status, reason = MapStatus.EMPTY, "no configuration hovers even without payload"
@@ -282,18 +292,37 @@ def _capacity(platform: Platform, o: CapacityOptions, progress) -> CapacityResul
         status,
         reason,
         float(cap.min()),
-        *_extreme_errors(cap, grid.shape, float(m_thr)),
+        *_extreme_errors(cap, halo, float(m_thr)),
         np.array([share_error(lim == k, grid.shape) for k in range(len(LIMITS))]),
+        _workspace_error(coords, np.minimum(cap + halo, m_thr), grid.shape, h, morigin, best_map),
     )
 
 
-def _extreme_errors(cap: np.ndarray, shape: tuple[int, ...], m_thrust: float) -> tuple[float, float]:
+def _extreme_errors(cap: np.ndarray, halo: np.ndarray, m_thrust: float) -> tuple[float, float]:
     """(best_error, worst_error) [kg]: bounds of how far the largest and the smallest capacity over the joint box lie
     from the grid's (the module docstring, "Error bars"; :func:`qprr.analysis._common.lipschitz_halo`).  The box's
     largest capacity is in [max cap, max(cap + halo)] (at most ``m_thrust`` [kg], the collective limit), its
     smallest in [max(min(cap - halo), 0), min cap] (a capacity is >= 0 by definition: clipped)."""
-    halo = lipschitz_halo(cap, shape)
     top = min(float(np.max(cap + halo)), m_thrust)  # the collective limit is a ceiling: at it, no error but rounding
     best_error = top - float(np.max(cap)) if top - float(np.max(cap)) > 1e-12 * max(m_thrust, 1.0) else 0.0
     worst_error = float(np.min(cap) - max(float(np.min(cap - halo)), 0.0))
     return best_error, worst_error
+
+
+def _workspace_error(coords: np.ndarray, upper: np.ndarray, shape: tuple[int, ...], h: float, origin, best_map) -> float:
+    """Bound [kg] of |smallest best capacity over the box, on the cells ``best_map`` holds - its smallest value|
+    (the module docstring, "Error bars").
+
+    ``coords`` (n, d) [m]: the grid points' end effectors in the hull coordinates, binned in cells of side ``h``
+    from ``origin`` as ``best_map``; ``upper`` (n,) [kg]: capacity + halo, the most each point's half-step box
+    holds; ``shape``: the joint grid's.  Each coordinate's halo (:func:`qprr.analysis._common.lipschitz_halo`)
+    bounds how far the end effector moves within a point's half-step box, so that box reaches cells within
+    K = ceil(largest halo / h) of the point's: a held cell's best is at most the largest ``upper`` within K
+    cells, and at least the grid's."""
+    reach = max((float(np.max(lipschitz_halo(coords[:, i], shape))) for i in range(coords.shape[1])), default=0.0)
+    idx = np.floor((coords - origin) / h).astype(np.int64)  # the cells of best_map (best_per_cell's binning)
+    top = np.full(best_map.size, -np.inf)
+    np.maximum.at(top, np.ravel_multi_index(tuple(idx.T), best_map.shape), upper)
+    top = neighbourhood_max(top.reshape(best_map.shape), list(range(best_map.ndim)), int(np.ceil(reach / h)))
+    held = np.isfinite(best_map)
+    return float(max(np.min(top[held]) - np.min(best_map[held]), 0.0))
