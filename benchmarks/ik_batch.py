@@ -19,20 +19,7 @@ import numpy as np
 
 import qprr
 from qprr.ik import IKSolver, solve_many
-from qprr.kinematics import ee_pose_xi
-
-
-def targets(platform, n: int, seed: int = 0) -> list[np.ndarray]:
-    rng = np.random.default_rng(seed)
-    data = platform.data()
-    out = []
-    for _ in range(n):
-        xi = platform.neutral_xi().copy()
-        xi[0:3] = rng.uniform(-1.0, 1.0, 3) + (0.0, 0.0, 2.0)
-        xi[5] = rng.uniform(-np.pi, np.pi)
-        xi[6:] = rng.uniform(np.maximum(platform.arm_lower, -3.0), np.minimum(platform.arm_upper, 3.0))
-        out.append(ee_pose_xi(platform, data, xi)[0])
-    return out
+from qprr.ik.batch import reachable_targets
 
 
 def main() -> None:
@@ -46,7 +33,7 @@ def main() -> None:
         args.n = 24
     platform = qprr.build(args.platform) if args.platform.isupper() else qprr.load(args.platform)
     solver = IKSolver(platform)
-    goals = targets(platform, args.n)
+    goals = reachable_targets(platform, args.n)
     data = platform.data()
     solver.solve(data, goals[0])  # warm-up: numba's kernels loaded or compiled before any timing
     t0 = time.perf_counter()

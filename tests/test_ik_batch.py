@@ -13,21 +13,14 @@ import qprr
 from qprr.cli import main
 from qprr.errors import InputError
 from qprr.ik import IKBatch, IKSolver, solve_many
+from qprr.ik.batch import reachable_targets
 from qprr.kinematics import ee_pose_xi
 
 
 def _targets(platform, n: int, seed: int = 0) -> list:
     """End-effector positions of random hover configurations (reachable by construction), then one oriented target
     no level base reaches on an under-actuated platform (its y axis tilted out of the horizontal plane)."""
-    rng = np.random.default_rng(seed)
-    data = platform.data()
-    out = []
-    for _ in range(n):
-        xi = platform.neutral_xi().copy()
-        xi[0:3] = rng.uniform(-1.0, 1.0, 3) + (0.0, 0.0, 2.0)
-        xi[5] = rng.uniform(-np.pi, np.pi)
-        xi[6:] = rng.uniform(np.maximum(platform.arm_lower, -3.0), np.minimum(platform.arm_upper, 3.0))
-        out.append(ee_pose_xi(platform, data, xi)[0])
+    out = reachable_targets(platform, n, seed)
     out.append((np.array([0.3, 0.0, 1.5]), pin.rpy.rpyToMatrix(0.4, 0.0, 0.0)))
     return out
 

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InputError
+from ..kinematics import ee_pose_xi
 from ..model import Platform
 from ..validation import as_int
 from .solver import IKOutcome, IKResult, IKSolver, parse_target
@@ -28,6 +29,22 @@ from .solver import IKOutcome, IKResult, IKSolver, parse_target
 CHUNKS_PER_WORKER = 4
 """Chunks each worker process gets on average (``workers`` > 1): more chunks balance uneven solve times, fewer save
 the solver's unpickling."""
+
+
+def reachable_targets(platform: Platform, n: int, seed: int = 0) -> list[np.ndarray]:
+    """``n`` end-effector positions p_world [m] reachable by construction: those of random hover configurations (base
+    within 1 m of (0, 0, 2) m, any yaw, arm joints uniform within their limits clipped to +-3), seeded by ``seed``."""
+    n = as_int(n, "n", lo=0)
+    rng = np.random.default_rng(seed)
+    data = platform.data()
+    out = []
+    for _ in range(n):
+        xi = platform.neutral_xi().copy()
+        xi[0:3] = rng.uniform(-1.0, 1.0, 3) + (0.0, 0.0, 2.0)
+        xi[5] = rng.uniform(-np.pi, np.pi)
+        xi[6:] = rng.uniform(np.maximum(platform.arm_lower, -3.0), np.minimum(platform.arm_upper, 3.0))
+        out.append(ee_pose_xi(platform, data, xi)[0])
+    return out
 
 
 @dataclass(frozen=True)
