@@ -139,8 +139,9 @@ COST_TIME = {"euler": 0.0, "rk2": 0.5, "rk3": 0.5, "rk4": 0.5}
 
 crocoddyl's ``IntegratedActionModelRK`` charges h sum_i b_i l(x at stage i) with the stage times c_i h: RK2 (explicit
 midpoint) b = (0, 1), c = (0, 1/2); RK3 b = (1/4, 0, 3/4), c = (0, 1/3, 2/3); RK4 b = (1/6, 1/3, 1/3, 1/6),
-c = (0, 1/2, 1/2, 1): a quadrature of the cost over the interval whose weighted mean time sum_i b_i c_i is 1/2 in all
-three.  ``IntegratedActionModelEuler`` charges h l(x_k, u_k), at the interval's start (0).  The node's state and
+c = (0, 1/2, 1/2, 1) (c: crocoddyl 3.2.1's ``set_rk_type``; b: read off the stages' costs of one node): a quadrature
+of the cost over the interval whose weighted mean time sum_i b_i c_i is 1/2 in all three.
+``IntegratedActionModelEuler`` charges h l(x_k, u_k), at the interval's start (0).  The node's state and
 end-effector references are sampled there (:meth:`MPCController._references`); tests/test_mpc.py checks it on a
 constant-speed climb, planned exactly with RK2 and Euler."""
 
