@@ -1,6 +1,6 @@
 """Receding-horizon MPC (qprr.control.mpc): crocoddyl's native node models against the Python ones, and the MPC against the IDC.
 
-    python benchmarks/mpc_benchmark.py [--window 10] [--duration 30] [--tilt-weights 10,1000] [--no-reach]
+    python benchmarks/mpc_benchmark.py [--window 10] [--duration 30] [--tilt-weights 10,1000] [--no-reach] [--platforms 3,10]
     python benchmarks/mpc_benchmark.py --quick        # a few seconds (tests/test_mpc.py runs it)
 
 Prints the machine (with its load average), then:
@@ -17,7 +17,10 @@ Prints the machine (with its load average), then:
    the IDC's is the tilt its own position feedback commands (its attitude loop follows that to micro-radians).
    Row "common" measures both against the feedforward tilt; ``--tilt-weights`` reruns the window with other
    roll/pitch weights to show what weights change;
-4. (unless ``--no-reach``) the aggressive reach (scenario ``aggressive-reach``, climb 2 m in 1 s): thrust bounds.
+4. (unless ``--no-reach``) the aggressive reach (scenario ``aggressive-reach``, climb 2 m in 1 s): thrust bounds;
+5. (``--platforms 3,10``, the default; '' for none) the generic hover-reach on borinot_flying_arm_2 and
+   examples/my_platform for each duration: position RMSE of the IDC (derived gains) and of the default MPC, and
+   the ratio MPC / IDC (issue 35: within 2).
 
 Times are wall-clock on a shared machine: the thread-CPU times are the steadier figure.
 """
@@ -179,16 +182,49 @@ def section_reach(platform) -> None:
         )
 
 
+EXAMPLE = ROOT / "examples" / "my_platform"
+
+
+def other_platforms() -> dict:
+    """The platforms of issue 35's MPC acceptance: borinot and examples/my_platform's quad_rrr."""
+    quad = qprr.from_urdf(EXAMPLE / "quad_rrr.urdf", EXAMPLE / "quad_rrr.rotors.toml", ee_frame="gripper")
+    return {"borinot_flying_arm_2": qprr.load("borinot_flying_arm_2"), "examples/my_platform": quad}
+
+
+def position_rmse(res: SimResult) -> float:
+    """RMSE [m] of the base position error's norm, sqrt(mean |p_d - p|^2) (tests/test_mpc.py's yardstick)."""
+    e = res.xi_d[:, :3] - res.xi[:, :3]
+    return float(np.sqrt(np.mean(np.sum(e**2, axis=1))))
+
+
+def section_platforms(durations) -> None:
+    """Generic hover-reach (climb 2 m, then the arm 60 % of the way to its upper limits from t = 3 s) on borinot and
+    examples/my_platform: position RMSE of the IDC (derived gains) and of the default MPC, and their ratio."""
+    from qprr.scenarios import run as run_scenario
+
+    print("\n5. hover-reach on other platforms: position RMSE [m] (norm), IDC (derived gains) against the default MPC")
+    print(f"{'platform':<22}{'duration':>9}{'IDC':>11}{'MPC':>11}{'MPC/IDC':>9}{'x':>10}{'z':>10}  (MPC's, [m])")
+    for name, pf in other_platforms().items():
+        for duration in durations:
+            e = {c: run_scenario("hover-reach", c, platform=pf, duration=duration) for c in ("idc", "mpc")}
+            r = {c: position_rmse(res) for c, res in e.items()}
+            m = e["mpc"].rmse()
+            print(f"{name:<22}{duration:>8g}s{r['idc']:>11.3e}{r['mpc']:>11.3e}{ratio(r['mpc'], r['idc'])}{m['x']:>10.2e}{m['z']:>10.2e}")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--window", type=float, default=10.0, help="seconds of the static mission both backends are timed on (default 10)")
     ap.add_argument("--duration", type=float, default=30.0, help="static mission length for the MPC vs IDC run [s] (default 30)")
     ap.add_argument("--tilt-weights", default="1000", help="other MPC roll/pitch weights run on the window (comma list, '' for none)")
     ap.add_argument("--no-reach", action="store_true", help="skip the aggressive reach")
-    ap.add_argument("--quick", action="store_true", help="a few seconds: 0.3 s window and mission, no reach, no extra weights")
+    ap.add_argument(
+        "--platforms", default="3,10", help="hover-reach durations [s] flown on borinot and examples/my_platform (comma list, '' for none)"
+    )
+    ap.add_argument("--quick", action="store_true", help="a few seconds: 0.3 s window and mission, no reach, no extra weights, no platforms")
     args = ap.parse_args(argv)
     if args.quick:
-        args.window, args.duration, args.tilt_weights, args.no_reach = 0.3, 0.3, "", True
+        args.window, args.duration, args.tilt_weights, args.no_reach, args.platforms = 0.3, 0.3, "", True, ""
     print(" | ".join(machine_lines(extra=("crocoddyl",))))
     try:
         import qprr.control.mpc as mpc
@@ -203,6 +239,9 @@ def main(argv=None) -> int:
     section_attitude(runs, traj)
     if not args.no_reach:
         section_reach(platform)
+    durations = [float(d) for d in args.platforms.split(",") if d.strip()]
+    if durations:
+        section_platforms(durations)
     return 0
 
 

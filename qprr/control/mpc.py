@@ -43,8 +43,11 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
     inputs that realise the reference acceleration; hover thrusts at rest).
 
   l_N: the state, end-effector, CoG and joint-limit terms times ``terminal_factor`` (no control term).
-* References: the trajectory (thesis coordinates, any number of arm joints) sampled at the node
-  times (the simulator hands it over before the run: ``uses_preview``); roll and pitch
+* References: the trajectory (thesis coordinates, any number of arm joints) sampled where each node's
+  cost is evaluated (the simulator hands it over before the run: ``uses_preview``): the state and
+  end-effector references of node k at t_k + h / 2 with the RK nodes (the mean time of crocoddyl's
+  quadrature of the running cost; t_k with Euler; :data:`COST_TIME`), its control reference at
+  t_k + h / 2 (the input is held over [t_k, t_k + h]), the terminal ones at t_N; roll and pitch
   are the feedforward tilt of Thesis (6.17) applied to the reference acceleration (the tilt
   that points z_B along p_ddot_d + g e3, as the IDC's feedforward filter does), their rates 0.
   Without a trajectory the current reference is extrapolated (second order) over the horizon.
@@ -130,6 +133,17 @@ if NATIVE_PROBLEM:
     )
 
 INTEGRATORS = ("euler", "rk2", "rk3", "rk4")
+
+COST_TIME = {"euler": 0.0, "rk2": 0.5, "rk3": 0.5, "rk4": 0.5}
+"""Where in its interval [t_k, t_k + h] a running node's cost is evaluated, as a fraction of h, per integrator.
+
+crocoddyl's ``IntegratedActionModelRK`` charges h sum_i b_i l(x at stage i) with the stage times c_i h: RK2 (explicit
+midpoint) b = (0, 1), c = (0, 1/2); RK3 b = (1/4, 0, 3/4), c = (0, 1/3, 2/3); RK4 b = (1/6, 1/3, 1/3, 1/6),
+c = (0, 1/2, 1/2, 1) (c: crocoddyl 3.2.1's ``set_rk_type``; b: read off the stages' costs of one node): a quadrature
+of the cost over the interval whose weighted mean time sum_i b_i c_i is 1/2 in all three.
+``IntegratedActionModelEuler`` charges h l(x_k, u_k), at the interval's start (0).  The node's state and
+end-effector references are sampled there (:meth:`MPCController._references`); tests/test_mpc.py checks it on a
+constant-speed climb, planned exactly with RK2 and Euler."""
 
 
 # ================================================================================ settings
@@ -459,15 +473,38 @@ class MPCController(Controller):
         return np.concatenate([q, v]), data.oMf[self.ee_frame].copy(), u_ref
 
     def _references(self, t: float, ref: Reference, ks) -> list:
-        """References at the node times t + k h for k in ``ks``."""
-        times = np.array([t + k * self.h for k in ks])
+        """References of the nodes k in ``ks`` for a solve at time t (k = N: the terminal node), t_k = t + k h.
+
+        A running node's cost is crocoddyl's quadrature of the cost over [t_k, t_k + h] against one reference, so its
+        state and end-effector references are the trajectory at the quadrature's mean time t_k + c h (:data:`COST_TIME`:
+        c = 1/2 for the RK nodes, 0 for Euler), and its control reference is the inverse dynamics at t_k + h / 2,
+        whose acceleration the input held over the interval gives on average to second order.  The terminal node's
+        cost is at t_N.  (Referenced at t_k, the RK2 plan lagged the climb of hover-reach by 0.5 mm, 3 times the IDC's
+        error: docs/mpc.md, "Tracking against the IDC on other platforms".)
+        """
+        N, h = self.settings.horizon, self.h
+        c = COST_TIME[self.settings.integrator]
+        state_times = [t + (k + (c if k < N else 0.0)) * h for k in ks]
+        control_times = [t + (k + 0.5) * h for k in ks]
+        samples = self._samples(t, ref, np.array(state_times + control_times))
+        out = []
+        for i in range(len(ks)):
+            x, M, u = self._reference(*samples[i])
+            if control_times[i] != state_times[i]:
+                u = self._reference(*samples[len(ks) + i])[2]
+            out.append((x, M, u))
+        return out
+
+    def _samples(self, t: float, ref: Reference, times: np.ndarray) -> list:
+        """(xi, xi_dot, xi_ddot) of the reference at ``times`` [s]: the previewed trajectory, else the current reference
+        extrapolated to second order from t."""
         if self.trajectory is not None:
             s = self.trajectory.sample(times)
-            return [self._reference(s.xi[i], s.xi_dot[i], s.xi_ddot[i]) for i in range(len(ks))]
+            return [(s.xi[i], s.xi_dot[i], s.xi_ddot[i]) for i in range(len(times))]
         out = []
-        for tk in times:  # second-order extrapolation of the current reference
+        for tk in times:
             d = tk - t
-            out.append(self._reference(ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot, ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
+            out.append((ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot, ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
         return out
 
     @staticmethod
