@@ -905,12 +905,16 @@ class QPMethod:
         engine.reset()
         it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
+        shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
         settled = False  # the last step was below settle_tol
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
+                moved = 0.0 if shift is None else shift.apply(platform, data, q)
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
+                if pose_ok:  # the base is moved on the way to the pose only (the step control then sees every error)
+                    shift = None
                 polished = pos_err < POLISHED * opts.position_tol and rot_err < POLISHED * opts.orientation_tol
                 if it and polished and (not ctx.require_hover or _hovering(data, POLISHED * opts.hover_tol)):
                     tol = min(opts.position_tol, opts.orientation_tol, opts.hover_tol)
@@ -926,9 +930,9 @@ class QPMethod:
                         step = None
                         break
                 it += 1
-                active = levels if shaper.kept is None else levels[: shaper.kept]  # frozen levels are not solved
-                step = engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
-                dv, stop = shaper.shape(step, pose_ok)
+                # frozen levels are not solved; the tasks' targets are read at the first step only (none changes within a solve)
+                step = engine.solve(platform, data, q, shaper.active(levels), validate=it == 1 and opts.levels is not None, refresh=it == 1)
+                dv, stop = shaper.shape(step, pose_ok, moved)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
                     np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
@@ -944,10 +948,52 @@ class QPMethod:
         return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
 
 
+class _BaseShift:
+    """The world translation of the base that puts level 1's frame on its target position, applied before each
+    linearisation (a Newton step's first-order model misplaces a frame the base swings about: after a 2 rad turn of
+    the yaw the first step leaves the frame 0.3 m off while its orientation is exact to 1e-7).  A translation of the
+    free-flyer base moves every frame by the same world vector and turns none: it meets level 1's position exactly
+    and changes no other error of these levels (roll, pitch, the base orientation, the CoG offset in B and the arm
+    are the same), so the hierarchy's fixed points stay those of the Newton steps alone.  Only for a level 1 of one
+    pose or position task above levels of the tasks that do not see the base position (:meth:`of`)."""
+
+    UNMOVED = (HoverTask, BaseOrientationTask, ComTask, PostureTask)  # the tasks whose errors a base translation keeps
+
+    def __init__(self, frame: int, target: np.ndarray, threshold: float) -> None:
+        self.frame, self.target, self.threshold = frame, target, threshold
+
+    @classmethod
+    def of(cls, levels, threshold: float) -> _BaseShift | None:
+        """The shift for ``levels``, or None when it does not apply; the frame moves when it is over ``threshold`` [m]
+        (along an axis) from its target."""
+        if len(levels[0]) != 1 or not all(type(t) in cls.UNMOVED for level in levels[1:] for t in level):
+            return None
+        first = levels[0][0]
+        if isinstance(first, PoseTask):
+            return cls(first.frame, first.target.translation, threshold)
+        if type(first) is PositionTask:
+            return cls(first.frame, first.target, threshold)
+        return None
+
+    def apply(self, platform: Platform, data: pin.Data, q: np.ndarray) -> float:
+        """Move the base of q (in place) and ``data``'s kinematics when the frame is off its target; the distance
+        moved [m] (0: not moved)."""
+        (x, y, z), (tx, ty, tz) = data.oMf[self.frame].translation.tolist(), self.target.tolist()
+        dx, dy, dz = tx - x, ty - y, tz - z
+        if max(abs(dx), abs(dy), abs(dz)) <= self.threshold:
+            return 0.0
+        q[0] += dx
+        q[1] += dy
+        q[2] += dz
+        update_kinematics(platform, data, q)
+        return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
 class _StepShaper:
     """The QP IK's step control and stopping tests, iteration after iteration.
 
-    ``shape(step, pose_ok) -> (dv or None, stop)``: dv the step to take (None: none, q is the answer and ``data``
+    ``shape(step, pose_ok, moved) -> (dv or None, stop)`` (``moved``: how far :class:`_BaseShift` moved the base
+    before this step was linearised, m): dv the step to take (None: none, q is the answer and ``data``
     holds its kinematics), stop "" to go on, else "converged_stationary" (the step vanished: converged if the pose
     holds, stalled otherwise) or "converged" (the pose holds and the lower levels stopped improving).
     ``kept``: None, or the number of leading levels still solved once the lower ones were frozen (:meth:`_freeze`).
@@ -958,8 +1004,17 @@ class _StepShaper:
         self.lower_prev, self.flat = None, 0
         self.e1_prev, self.rest_scale = math.inf, 1.0
         self.kept = None  # None: every level steps; k: levels 1..k only, the levels after them are frozen
+        self._prefix = None  # levels[:kept], sliced once (the compiled step keeps the levels it packed by identity)
 
-    def shape(self, step, pose_ok: bool):
+    def active(self, levels):
+        """The levels still solved: all of them, or the leading ``kept`` once the lower ones are frozen."""
+        if self.kept is None:
+            return levels
+        if self._prefix is None or len(self._prefix) != self.kept:
+            self._prefix = levels[: self.kept]
+        return self._prefix
+
+    def shape(self, step, pose_ok: bool, moved: float = 0.0):
         opts = self.opts
         largest = float(np.abs(step.dv).max())
         small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
@@ -977,7 +1032,7 @@ class _StepShaper:
         # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
         # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
         # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
-        e1 = errors[0]
+        e1 = math.hypot(errors[0], moved)  # level 1's error before the base was moved onto its position (_BaseShift)
         if not pose_ok and e1 > 0.5 * self.e1_prev:
             self.rest_scale *= 0.5
         elif self.rest_scale < 1.0:
@@ -1034,18 +1089,18 @@ def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
 
 def _level_errors(engine: HierarchySolver, data, q, levels, ready, step) -> tuple[float, ...]:
     """||e_k|| of every level at the returned q (``ready``: ``data`` holds its kinematics; with ``step``: the errors
-    that step was computed from, at q)."""
+    that step was computed from, at q).  The tasks' targets are those the solve's first step read."""
     if step is not None and ready:
         return step.errors
     if not ready:
         update_kinematics(engine.platform, data, q)
-    return engine.level_errors(engine.platform, data, q, levels)
+    return engine.level_errors(engine.platform, data, q, levels, refresh=False)
 
 
 def _lower_levels_met(engine: HierarchySolver, data, q, levels, tol: float) -> tuple[float, ...] | None:
     """Every level's ||e_k|| at q (``data`` holds its kinematics) when each level after the first is below ``tol``
     (nothing left for a step to improve), else None.  The first level is the caller's (its own tolerances)."""
-    errors = engine.level_errors(engine.platform, data, q, levels)
+    errors = engine.level_errors(engine.platform, data, q, levels, refresh=False)
     return errors if all(e < tol for e in errors[1:]) else None
 
 
