@@ -484,7 +484,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
     lo, hi = platform.arm_lower, platform.arm_upper
-    within = bool(np.all(q_arm >= lo - 1e-12) and np.all(q_arm <= hi + 1e-12))
+    within = bool((q_arm >= lo - 1e-12).all() and (q_arm <= hi + 1e-12).all())
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
@@ -584,12 +584,18 @@ def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
     pmax = float(np.abs(p_d).max())
     ulp = float(np.spacing(pmax))
     if 16.0 * ulp > 0.1 * position_tol:
-        limit = 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
+        limit = _resolvable_below(position_tol)
         raise InputError(
             f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
             f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
             f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol"
         )
+
+
+def _resolvable_below(position_tol: float) -> float:
+    """The power of two below which every |p| passes :func:`check_resolvable` (neighbouring doubles there are at
+    most half of it times eps apart: 16 of them stay below a tenth of ``position_tol``)."""
+    return 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
 
 
 def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
@@ -818,6 +824,7 @@ class IKSolver:
         self.initial_guess = initial_guess
         self.unreachable_hint = unreachable_hint
         self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
+        self._resolvable = _resolvable_below(self.options.position_tol)  # [m] targets nearer pass check_resolvable
         self._collision = None
         if self.options.collision_free:
             from ..analysis.collision import collision_model
@@ -836,7 +843,9 @@ class IKSolver:
         check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
-        check_resolvable(p_d, opts.position_tol)
+        x, y, z = p_d.tolist()  # finite (parse_target): only a target far out needs check_resolvable's test
+        if not max(abs(x), abs(y), abs(z)) < self._resolvable:
+            check_resolvable(p_d, opts.position_tol)
         hover = isinstance(opts, (ClikaOptions, DLSOptions)) and opts.hover  # method "qp" reaches hover as its level 2
         if xi0 is not None:
             xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
