@@ -791,7 +791,7 @@ class _DefaultLevels:
         levels[0][0].set_target(target)
         if self.platform.fully_actuated:
             levels[1][0].set_target(ch.euler_to_rotation([0.0, 0.0, base_yaw]))
-        levels[3][0].set_reference(q_arm_posture)
+        levels[3][0].ref = q_arm_posture  # a copy, inside the limits (checked where the solve got it: prepare_xi0, option posture)
         return levels
 
 
@@ -825,6 +825,7 @@ class IKSolver:
         self.unreachable_hint = unreachable_hint
         self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
         self._resolvable = _resolvable_below(self.options.position_tol)  # [m] targets nearer pass check_resolvable
+        self._data = None  # the last pin.Data checked (check_data)
         self._collision = None
         if self.options.collision_free:
             from ..analysis.collision import collision_model
@@ -840,7 +841,8 @@ class IKSolver:
     def solve(self, data: pin.Data, target, xi0=None) -> IKResult:
         """Configuration reaching ``target`` from ``xi0`` (default: the initial guess); see the module docstring."""
         t0 = time.perf_counter()
-        check_data(self.platform, data)
+        if data is not self._data:  # a pin.Data keeps the model it was made for: checked once
+            self._data = check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
         x, y, z = p_d.tolist()  # finite (parse_target): only a target far out needs check_resolvable's test
@@ -945,7 +947,7 @@ class QPMethod:
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
                     np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
-                    settled = float(np.abs(dv).max()) < opts.settle_tol
+                    settled = shaper.largest < opts.settle_tol
                 if stop:
                     ready = dv is None
                     status = IKOutcome.STALLED if stop == "converged_stationary" and not pose_ok else IKOutcome.CONVERGED
@@ -953,8 +955,11 @@ class QPMethod:
                     break
         except SolverError as exc:
             return finish(ctx, q, Ending(IKOutcome.SOLVER_ERROR, str(exc), it))
-        levels_out = end.level_errors or _level_errors(engine, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
-        return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
+        ready = end.kinematics_ready
+        if not (end.level_errors or ready):  # the level errors and finish read the kinematics at the returned q
+            update_kinematics(platform, data, q)
+        levels_out = end.level_errors or _level_errors(engine, data, q, levels, ready and shaper.kept is None, step)
+        return finish(ctx, q, Ending(end.status, "", it, levels_out, ready or not end.level_errors, end.pose_errors))
 
 
 class _BaseShift:
@@ -1013,6 +1018,7 @@ class _StepShaper:
         self.lower_prev, self.flat = None, 0
         self.e1_prev, self.rest_scale = math.inf, 1.0
         self.kept = None  # None: every level steps; k: levels 1..k only, the levels after them are frozen
+        self.largest = math.inf  # max |dv| of the last step :meth:`shape` returned
         self._prefix = None  # levels[:kept], sliced once (the compiled step keeps the levels it packed by identity)
 
     def active(self, levels):
@@ -1059,6 +1065,8 @@ class _StepShaper:
             rest = (dv - d1) * self.rest_scale
             m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
             dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
+            largest = float(np.abs(dv).max())
+        self.largest = largest  # max |dv| of the step returned
         # small: stationary, every level settled; the last (tiny) Newton step is kept
         return dv, ("converged_stationary" if small else "")
 
@@ -1097,12 +1105,10 @@ def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
 
 
 def _level_errors(engine: HierarchySolver, data, q, levels, ready, step) -> tuple[float, ...]:
-    """||e_k|| of every level at the returned q (``ready``: ``data`` holds its kinematics; with ``step``: the errors
-    that step was computed from, at q).  The tasks' targets are those the solve's first step read."""
+    """||e_k|| of every level at the returned q (``data`` holds its kinematics; ``ready``: the step's errors, when
+    ``step`` is given, were computed at q).  The tasks' targets are those the solve's first step read."""
     if step is not None and ready:
         return step.errors
-    if not ready:
-        update_kinematics(engine.platform, data, q)
     return engine.level_errors(engine.platform, data, q, levels, refresh=False)
 
 
