@@ -611,7 +611,9 @@ def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
 def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
     """``xi0`` validated: shape, finite, arm inside its limits, level when ``hover``."""
     xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
-    platform.check_arm_limits(xi0[6:], "xi0[6:]")
+    q_arm = xi0[6:]
+    if not ((q_arm >= platform.arm_lower - 1e-12).all() and (q_arm <= platform.arm_upper + 1e-12).all()):
+        platform.check_arm_limits(q_arm, "xi0[6:]")  # names the joints out of their limits
     if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
         raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); set hover=False or level xi0")
     return xi0
@@ -909,7 +911,7 @@ class QPMethod:
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
-        q = ch.xi_to_q(xi)
+        q = hover_q(platform, xi) if xi[3] == 0.0 and xi[4] == 0.0 else ch.xi_to_q(xi)  # xi checked by the entry point
         posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
@@ -946,7 +948,8 @@ class QPMethod:
                 dv, stop = shaper.shape(step, pose_ok, moved)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
-                    np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
+                    q_arm = q[7:]
+                    np.minimum(np.maximum(q_arm, engine.lower, out=q_arm), engine.upper, out=q_arm)  # remove the QP's bound slack
                     settled = shaper.largest < opts.settle_tol
                 if stop:
                     ready = dv is None
