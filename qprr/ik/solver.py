@@ -483,8 +483,8 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     pitch = math.atan2(-r20, math.hypot(r21, r22))
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
-    lo, hi = platform.arm_lower, platform.arm_upper
-    within = bool((q_arm >= lo - 1e-12).all() and (q_arm <= hi + 1e-12).all())
+    limits = zip(q_arm.tolist(), platform.arm_lower.tolist(), platform.arm_upper.tolist())  # floats: a few joints
+    within = all(lo - 1e-12 <= v <= hi + 1e-12 for v, lo, hi in limits)
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
