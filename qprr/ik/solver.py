@@ -60,7 +60,7 @@ from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
-from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
+from .tasks import BaseOrientationTask, BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 POLISHED = 1e-3
 """The QP IK stops before linearising again (the last step below ``settle_tol``, or every lower level met) only when
@@ -912,7 +912,7 @@ class QPMethod:
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
         q = hover_q(platform, xi) if xi[3] == 0.0 and xi[4] == 0.0 else ch.xi_to_q(xi)  # xi checked by the entry point
-        posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
+        posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
         engine.reset()
@@ -986,7 +986,7 @@ class _BaseShift:
         if len(levels[0]) != 1 or not all(type(t) in cls.UNMOVED for level in levels[1:] for t in level):
             return None
         first = levels[0][0]
-        if isinstance(first, PoseTask):
+        if type(first) in (PoseTask, BasePoseTask):  # exact types: a subclass may mean another target
             return cls(first.frame, first.target.translation, threshold)
         if type(first) is PositionTask:
             return cls(first.frame, first.target, threshold)
