@@ -483,8 +483,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     pitch = math.atan2(-r20, math.hypot(r21, r22))
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
-    limits = zip(q_arm.tolist(), platform.arm_lower.tolist(), platform.arm_upper.tolist())  # floats: a few joints
-    within = all(lo - 1e-12 <= v <= hi + 1e-12 for v, lo, hi in limits)
+    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
@@ -847,8 +846,7 @@ class IKSolver:
             self._data = check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
-        x, y, z = p_d.tolist()  # finite (parse_target): only a target far out needs check_resolvable's test
-        if not max(abs(x), abs(y), abs(z)) < self._resolvable:
+        if not np.abs(p_d).max() < self._resolvable:  # finite (parse_target): only a target far out needs the test
             check_resolvable(p_d, opts.position_tol)
         hover = isinstance(opts, (ClikaOptions, DLSOptions)) and opts.hover  # method "qp" reaches hover as its level 2
         if xi0 is not None:
@@ -911,7 +909,7 @@ class QPMethod:
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
-        q = hover_q(platform, xi) if xi[3] == 0.0 and xi[4] == 0.0 else ch.xi_to_q(xi)  # xi checked by the entry point
+        q = ch.xi_to_q(xi)
         posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
@@ -948,8 +946,7 @@ class QPMethod:
                 dv, stop = shaper.shape(step, pose_ok, moved)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
-                    q_arm = q[7:]
-                    np.minimum(np.maximum(q_arm, engine.lower, out=q_arm), engine.upper, out=q_arm)  # remove the QP's bound slack
+                    np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
                     settled = shaper.largest < opts.settle_tol
                 if stop:
                     ready = dv is None
@@ -995,15 +992,12 @@ class _BaseShift:
     def apply(self, platform: Platform, data: pin.Data, q: np.ndarray) -> float:
         """Move the base of q (in place) and ``data``'s kinematics when the frame is off its target; the distance
         moved [m] (0: not moved)."""
-        (x, y, z), (tx, ty, tz) = data.oMf[self.frame].translation.tolist(), self.target.tolist()
-        dx, dy, dz = tx - x, ty - y, tz - z
-        if max(abs(dx), abs(dy), abs(dz)) <= self.threshold:
+        d_world = self.target - data.oMf[self.frame].translation
+        if np.abs(d_world).max() <= self.threshold:
             return 0.0
-        q[0] += dx
-        q[1] += dy
-        q[2] += dz
+        q[0:3] += d_world  # the free flyer's translation is in the world frame
         update_kinematics(platform, data, q)
-        return math.sqrt(dx * dx + dy * dy + dz * dz)
+        return float(np.linalg.norm(d_world))
 
 
 class _StepShaper:

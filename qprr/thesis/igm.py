@@ -74,7 +74,11 @@ class IGMOptions(Tolerances):
 
 def hover_yaw(R_world) -> float:
     """Yaw psi of the hover configuration whose end effector has orientation R (y_e = Rz(psi) e_y)."""
-    R_world = check_rotation(R_world, "R_world", 1e-6)
+    return _yaw_of(check_rotation(R_world, "R_world", 1e-6))
+
+
+def _yaw_of(R_world: np.ndarray) -> float:
+    """:func:`hover_yaw` of a rotation already checked."""
     return math.atan2(-R_world[0, 1], R_world[1, 1])
 
 
@@ -86,9 +90,8 @@ def hover_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
 
 def _hover_guess(p: QPRRParams, p_world: np.ndarray, R_world: np.ndarray) -> np.ndarray:
     """:func:`hover_guess` of a position and a rotation already checked (the IK's parsed target)."""
-    x, y, z = p_world.tolist()
-    yaw = math.atan2(-float(R_world[0, 1]), float(R_world[1, 1]))  # hover_yaw
-    return np.array([x, y, z - (p.d0 + p.d1 + p.d2 + p.d3), 0.0, 0.0, yaw, 0.0, 0.0, 0.0])
+    reach = p.d0 + p.d1 + p.d2 + p.d3
+    return np.array([p_world[0], p_world[1], p_world[2] - reach, 0.0, 0.0, _yaw_of(R_world), 0.0, 0.0, 0.0])
 
 
 def hover_tilt(R_world) -> float:
