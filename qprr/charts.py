@@ -124,8 +124,9 @@ def check_rotation(R, name: str = "R", tol: float = 1e-9) -> np.ndarray:
     tol = as_real(tol, "tol", positive=True)
     R = as_matrix(R, (3, 3), name)
     err = float(np.abs(R.T @ R - np.eye(3)).max())
-    if not err <= tol or not np.linalg.det(R) > 0.0:
-        raise InputError(f"{name} must be a rotation matrix (R^T R = I, det R = +1): |R^T R - I| = {err:.3g}, det R = {np.linalg.det(R):.6g}")
+    det = float(np.linalg.det(R))
+    if not err <= tol or not det > 0.0:
+        raise InputError(f"{name} must be a rotation matrix (R^T R = I, det R = +1): |R^T R - I| = {err:.3g}, det R = {det:.6g}")
     return R
 
 

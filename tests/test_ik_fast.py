@@ -217,3 +217,33 @@ def test_levels_the_compiled_form_does_not_take():
     base = PoseTask(platform, target, frame=platform.base_frame)
     assert fast.compiled_levels(platform, [[PoseTask(platform, target)], [base]]) is None  # two frames
     assert fast.compiled_levels(platform, [[PoseTask(platform, target)], [HoverTask()]]) is not None
+
+
+@pytest.mark.parametrize("name", PLATFORMS)
+def test_steps_without_refresh_and_on_leading_levels_match(name):
+    """HierarchySolver.solve with refresh=False (the IK's steps after the first of a solve: the packed targets kept)
+    gives the step of refresh=True when no task changed, and the leading levels packed beside the full ones (the IK
+    once its lower levels are frozen) give the readable path's step on those levels."""
+    platform = platform_of(name)
+    data = platform.data()
+    rng = np.random.default_rng(21)
+    fused, reference = HierarchySolver(platform, kernel="numba"), HierarchySolver(platform, kernel="numpy")
+    levels = levels_for(platform, rng, "pose", weighted=True)
+    leading = levels[:2]
+    for k in range(10):
+        q = random_q(platform, rng)
+        update_kinematics(platform, data, q)
+        for solver in (fused, reference):
+            solver.reset()
+        first = fused.solve(platform, data, q, levels, validate=False, refresh=k == 0)
+        fused.reset()
+        again = fused.solve(platform, data, q, levels, validate=False)
+        np.testing.assert_array_equal(first.dv, again.dv)
+        assert first.errors == again.errors
+        lead = fused.solve(platform, data, q, leading, validate=False, refresh=False)
+        ref = reference.solve(platform, data, q, leading, validate=False)
+        size = 1.0 + np.abs(ref.dv).max()
+        np.testing.assert_allclose(lead.dv, ref.dv, rtol=0, atol=1e-7 * size)
+        np.testing.assert_allclose(
+            fused.level_errors(platform, data, q, levels, refresh=False), reference.level_errors(platform, data, q, levels), rtol=1e-10, atol=1e-14
+        )

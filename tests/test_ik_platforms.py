@@ -215,3 +215,52 @@ def test_retargeting_a_task_checks_its_target():
     position = tasks.PositionTask(p, np.zeros(3))
     with pytest.raises(qprr.errors.ShapeError, match="PositionTask p_world"):
         position.set_target(np.zeros(2))
+
+
+def test_base_shift_meets_the_position_and_keeps_every_lower_error(case):
+    """The QP IK moves the base by a world translation onto level 1's position (qprr.ik.solver._BaseShift): at random
+    configurations the frame lands on the target position while its orientation and the errors of every lower
+    default level (hover or base orientation, CoG offset in B, posture) are unchanged to rounding."""
+    from qprr.ik.solver import _BaseShift, default_levels
+
+    name, p, data, targets = case
+    rng = np.random.default_rng(7)
+    for M in targets:
+        xi = p.neutral_xi()
+        xi[0:3] = rng.uniform(-2.0, 2.0, 3)
+        xi[3:6] = rng.uniform(-0.4, 0.4, 3)
+        xi[6:] = rng.uniform(np.maximum(p.arm_lower, -math.pi), np.minimum(p.arm_upper, math.pi))
+        q = ch.xi_to_q(xi)
+        levels = default_levels(p, M, q[7:], 0.3)
+        shift = _BaseShift.of(levels, 1e-9)
+        tasks.update_kinematics(p, data, q)
+        before = [np.concatenate([t.error(p, data, q) for t in level]) for level in levels]
+        R_before = data.oMf[p.ee_frame].rotation.copy()
+        moved = shift.apply(p, data, q)
+        assert moved > 0.0
+        np.testing.assert_allclose(data.oMf[p.ee_frame].translation, M.translation, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(data.oMf[p.ee_frame].rotation, R_before, rtol=0, atol=1e-15)
+        for e0, level in zip(before[1:], levels[1:]):
+            e1 = np.concatenate([t.error(p, data, q) for t in level])
+            np.testing.assert_allclose(e1, e0, rtol=0, atol=1e-12)
+    custom = [[tasks.PoseTask(p, targets[0])], [tasks.PositionTask(p, np.zeros(3), frame=p.base_frame)]]
+    assert _BaseShift.of(custom, 1e-9) is None  # a lower level that sees the base position: no shift
+
+
+def test_base_shift_keeps_the_answers(case, monkeypatch):
+    """The shift changes the path to the answer, not the answer: the default hierarchy's configurations with and
+    without it agree to 1e-6 (hextilt: its unsatisfiable lower levels stop on settle_tol, 5e-3), and it never costs
+    iterations on these targets."""
+    from qprr.ik import solver as ik_solver
+
+    name, p, data, targets = case
+    mixed = [M if k % 3 else M.translation.copy() for k, M in enumerate(targets)]
+    shifted = [IKSolver(p, "qp").solve(data, t) for t in mixed]
+    monkeypatch.setattr(ik_solver._BaseShift, "of", classmethod(lambda cls, levels, threshold: None))
+    plain = [IKSolver(p, "qp").solve(data, t) for t in mixed]
+    atol = 5e-3 if name.startswith("hextilt") else 1e-6
+    for t, a, b in zip(mixed, shifted, plain):
+        assert a.success and b.success
+        check(p, data, a, t, position_only=not isinstance(t, pin.SE3))
+        np.testing.assert_allclose(a.q, b.q, rtol=0, atol=atol)
+    assert sum(r.iterations for r in shifted) <= sum(r.iterations for r in plain)

@@ -151,7 +151,8 @@ class HierarchySolver:
             from . import iteration_fast  # numba: only when this kernel is asked for
 
             self._fused = _Fused(iteration_fast)
-        self._packed = (None, None)  # (levels, their CompiledLevels or None)
+        self._packed: list = []  # [(levels, their CompiledLevels or None)], the last two sequences of levels asked for
+        self._weights = (self.regularization, self.lower_damping, self.rank_tol, MET)  # iteration_fast.iterate's
         nb = platform.n_arm
         self._guesses = (np.full(0, -1, dtype=np.int64), np.zeros((0, nb), dtype=bool), np.zeros((0, nb), dtype=bool))
 
@@ -161,16 +162,18 @@ class HierarchySolver:
         self._first = True
         self._guesses[0][:] = -1
 
-    def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True) -> HierarchyStep:
+    def solve(self, platform: Platform, data, q: np.ndarray, levels, *, validate: bool = True, refresh: bool = True) -> HierarchyStep:
         """The hierarchical step dv at q for ``levels`` (a sequence of sequences of tasks).
 
         Call :func:`qprr.ik.tasks.update_kinematics` at q first.  Raises SolverError if a QP fails.
         ``validate``: check each task's (J, e) (shapes, types, finite: :func:`check_linearized`); the IK checks them
         at its first iteration and afterwards only that they are finite (a task's shapes do not change).
+        ``refresh`` (the compiled path): read the tasks' targets and weights again; False when no task was retargeted
+        since the last call with these very levels (the IK's steps after the first of a solve).
         """
         nv = self.nv
         if self._fused is not None:  # default tasks need no validation: their shapes are right by construction
-            step = self._solve_compiled(platform, data, q, levels)
+            step = self._solve_compiled(platform, data, q, levels, refresh)
             if step is not None:
                 return step
         first, self._first = self._first, False
@@ -212,34 +215,43 @@ class HierarchySolver:
         res = self._lex.solve(lin, lo_arm, up_arm, damping=damping)
         return HierarchyStep(res.x, lin, res.iterations, res.x_levels, tuple(damping), errors)
 
-    def level_errors(self, platform: Platform, data, q: np.ndarray, levels) -> tuple[float, ...]:
+    def level_errors(self, platform: Platform, data, q: np.ndarray, levels, *, refresh: bool = True) -> tuple[float, ...]:
         """||e_k|| of every level at q, each task's error (``data`` holds the kinematics at q:
-        :func:`qprr.ik.tasks.update_kinematics`); with the numba kernel and default tasks, in one compiled call."""
-        packed = None if self._fused is None else self._packed_for(platform, levels)
+        :func:`qprr.ik.tasks.update_kinematics`); with the numba kernel and default tasks, in one compiled call
+        (``refresh``: as :meth:`solve`'s)."""
+        packed = None if self._fused is None else self._packed_for(platform, levels, refresh)
         if packed is not None:
             norms = self._fused.level_norms(packed.levels, *self._fused.kinematics(platform, data, packed), q)
             if math.isfinite(float(norms.sum())):
                 return tuple(norms.tolist())
         return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
 
-    def _packed_for(self, platform: Platform, levels):
+    def _packed_for(self, platform: Platform, levels, refresh: bool = True):
         """``levels`` packed for the compiled iteration (qprr.ik.iteration_fast.CompiledLevels), None if they are not
-        all default tasks; packed once for the same tasks, whose targets are read again at every call (a task may be
-        retargeted between two steps, as the readable path reads it live)."""
+        all default tasks; packed once for the same tasks, whose targets are read again at every call with
+        ``refresh`` (a task may be retargeted between two steps, as the readable path reads it live).  The last two
+        sequences of levels are kept packed (the IK alternates between its levels and their leading ones once the
+        lower levels are frozen)."""
         fast = self._fused
-        packed_for, packed = self._packed
-        if levels is not packed_for or (packed is not None and not fast.same_tasks(levels, packed)):
+        cache = self._packed
+        if not refresh and cache and cache[0][0] is levels:  # the IK's steps: the levels of the previous call
+            return cache[0][1]
+        entry = next((e for e in cache if e[0] is levels), None)
+        if entry is not None and not refresh:
+            return entry[1]
+        packed = None if entry is None else entry[1]
+        if entry is None or (packed is not None and not fast.same_tasks(levels, packed)):
             packed = fast.compiled_levels(platform, levels)
         elif packed is not None:  # the same tasks: their current targets and weights
             fast.refill(platform, packed)
-        self._packed = (levels, packed)
+        self._packed = [(levels, packed)] + [e for e in cache if e[0] is not levels][:1]
         return packed
 
-    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels) -> HierarchyStep | None:
+    def _solve_compiled(self, platform: Platform, data, q: np.ndarray, levels, refresh: bool = True) -> HierarchyStep | None:
         """:meth:`solve` in one compiled call (:mod:`qprr.ik.iteration_fast`), or None when ``levels`` are not all
         default tasks or a task's J or e is not finite (the readable path then solves them, or names the task)."""
         fast = self._fused
-        packed = self._packed_for(platform, levels)
+        packed = self._packed_for(platform, levels, refresh)
         if packed is None:
             return None
         K = len(levels)
@@ -247,8 +259,7 @@ class HierarchySolver:
             nb = platform.n_arm
             self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
         frame, base = fast.kinematics(platform, data, packed)
-        weights = (self.regularization, self.lower_damping, self.rank_tol, MET)
-        status, A, b, x, x_levels, norms = fast.iterate(packed.levels, frame, base, q, self._limits, weights, self._guesses)
+        status, A, b, x, x_levels, norms = fast.iterate(packed.levels, frame, base, q, self._limits, self._weights, self._guesses)
         if status == fast.FastStatus.NOT_FINITE:
             return None
         self._first = False

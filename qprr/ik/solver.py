@@ -60,7 +60,7 @@ from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
-from .tasks import BaseOrientationTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
+from .tasks import BaseOrientationTask, BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 POLISHED = 1e-3
 """The QP IK stops before linearising again (the last step below ``settle_tol``, or every lower level met) only when
@@ -483,8 +483,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     pitch = math.atan2(-r20, math.hypot(r21, r22))
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
-    lo, hi = platform.arm_lower, platform.arm_upper
-    within = bool(np.all(q_arm >= lo - 1e-12) and np.all(q_arm <= hi + 1e-12))
+    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
@@ -584,12 +583,18 @@ def check_resolvable(p_d: np.ndarray, position_tol: float) -> None:
     pmax = float(np.abs(p_d).max())
     ulp = float(np.spacing(pmax))
     if 16.0 * ulp > 0.1 * position_tol:
-        limit = 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
+        limit = _resolvable_below(position_tol)
         raise InputError(
             f"target position {p_d.tolist()} m is too far from the origin: neighbouring doubles there are "
             f"{ulp:.3g} m apart, too coarse to check the position tolerance {position_tol:.3g} m; express the "
             f"target in a frame near the robot (|p| below about {limit:.3g} m) or loosen position_tol"
         )
+
+
+def _resolvable_below(position_tol: float) -> float:
+    """The power of two below which every |p| passes :func:`check_resolvable` (neighbouring doubles there are at
+    most half of it times eps apart: 16 of them stay below a tenth of ``position_tol``)."""
+    return 2.0 ** (math.floor(math.log2(0.1 * position_tol / 16.0 / np.finfo(float).eps)) + 1)
 
 
 def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
@@ -605,7 +610,9 @@ def _xi_of_q(q: np.ndarray, R: np.ndarray) -> np.ndarray | None:
 def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
     """``xi0`` validated: shape, finite, arm inside its limits, level when ``hover``."""
     xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
-    platform.check_arm_limits(xi0[6:], "xi0[6:]")
+    q_arm = xi0[6:]
+    if not ((q_arm >= platform.arm_lower - 1e-12).all() and (q_arm <= platform.arm_upper + 1e-12).all()):
+        platform.check_arm_limits(q_arm, "xi0[6:]")  # names the joints out of their limits
     if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
         raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); set hover=False or level xi0")
     return xi0
@@ -785,7 +792,7 @@ class _DefaultLevels:
         levels[0][0].set_target(target)
         if self.platform.fully_actuated:
             levels[1][0].set_target(ch.euler_to_rotation([0.0, 0.0, base_yaw]))
-        levels[3][0].set_reference(q_arm_posture)
+        levels[3][0].ref = q_arm_posture  # a copy, inside the limits (checked where the solve got it: prepare_xi0, option posture)
         return levels
 
 
@@ -818,6 +825,8 @@ class IKSolver:
         self.initial_guess = initial_guess
         self.unreachable_hint = unreachable_hint
         self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
+        self._resolvable = _resolvable_below(self.options.position_tol)  # [m] targets nearer pass check_resolvable
+        self._data = None  # the last pin.Data checked (check_data)
         self._collision = None
         if self.options.collision_free:
             from ..analysis.collision import collision_model
@@ -833,10 +842,12 @@ class IKSolver:
     def solve(self, data: pin.Data, target, xi0=None) -> IKResult:
         """Configuration reaching ``target`` from ``xi0`` (default: the initial guess); see the module docstring."""
         t0 = time.perf_counter()
-        check_data(self.platform, data)
+        if data is not self._data:  # a pin.Data keeps the model it was made for: checked once
+            self._data = check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
-        check_resolvable(p_d, opts.position_tol)
+        if not np.abs(p_d).max() < self._resolvable:  # finite (parse_target): only a target far out needs the test
+            check_resolvable(p_d, opts.position_tol)
         hover = isinstance(opts, (ClikaOptions, DLSOptions)) and opts.hover  # method "qp" reaches hover as its level 2
         if xi0 is not None:
             xi, init = prepare_xi0(self.platform, xi0, hover).copy(), "xi0 (given)"
@@ -899,18 +910,22 @@ class QPMethod:
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
         q = ch.xi_to_q(xi)
-        posture = q[7:].copy() if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")
+        posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
         engine.reset()
         it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
+        shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
         settled = False  # the last step was below settle_tol
         try:
             while it < opts.max_iter:
                 update_kinematics(platform, data, q)
+                moved = 0.0 if shift is None else shift.apply(platform, data, q)
                 pos_err, rot_err = pose_error_values(data.oMf[platform.ee_frame], ctx.p_d, ctx.R_d)
                 pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
+                if pose_ok:  # the base is moved on the way to the pose only (the step control then sees every error)
+                    shift = None
                 polished = pos_err < POLISHED * opts.position_tol and rot_err < POLISHED * opts.orientation_tol
                 if it and polished and (not ctx.require_hover or _hovering(data, POLISHED * opts.hover_tol)):
                     tol = min(opts.position_tol, opts.orientation_tol, opts.hover_tol)
@@ -926,13 +941,13 @@ class QPMethod:
                         step = None
                         break
                 it += 1
-                active = levels if shaper.kept is None else levels[: shaper.kept]  # frozen levels are not solved
-                step = engine.solve(platform, data, q, active, validate=it == 1 and opts.levels is not None)
-                dv, stop = shaper.shape(step, pose_ok)
+                # frozen levels are not solved; the tasks' targets are read at the first step only (none changes within a solve)
+                step = engine.solve(platform, data, q, shaper.active(levels), validate=it == 1 and opts.levels is not None, refresh=it == 1)
+                dv, stop = shaper.shape(step, pose_ok, moved)
                 if dv is not None:
                     q = pin.integrate(platform.model, q, dv)
                     np.clip(q[7:], engine.lower, engine.upper, out=q[7:])  # remove the QP's bound slack
-                    settled = float(np.abs(dv).max()) < opts.settle_tol
+                    settled = shaper.largest < opts.settle_tol
                 if stop:
                     ready = dv is None
                     status = IKOutcome.STALLED if stop == "converged_stationary" and not pose_ok else IKOutcome.CONVERGED
@@ -940,14 +955,56 @@ class QPMethod:
                     break
         except SolverError as exc:
             return finish(ctx, q, Ending(IKOutcome.SOLVER_ERROR, str(exc), it))
-        levels_out = end.level_errors or _level_errors(engine, data, q, levels, end.kinematics_ready and shaper.kept is None, step)
-        return finish(ctx, q, Ending(end.status, "", it, levels_out, end.kinematics_ready, end.pose_errors))
+        ready = end.kinematics_ready
+        if not (end.level_errors or ready):  # the level errors and finish read the kinematics at the returned q
+            update_kinematics(platform, data, q)
+        levels_out = end.level_errors or _level_errors(engine, data, q, levels, ready and shaper.kept is None, step)
+        return finish(ctx, q, Ending(end.status, "", it, levels_out, ready or not end.level_errors, end.pose_errors))
+
+
+class _BaseShift:
+    """The world translation of the base that puts level 1's frame on its target position, applied before each
+    linearisation (a Newton step's first-order model misplaces a frame the base swings about: after a 2 rad turn of
+    the yaw the first step leaves the frame 0.3 m off while its orientation is exact to 1e-7).  A translation of the
+    free-flyer base moves every frame by the same world vector and turns none: it meets level 1's position exactly
+    and changes no other error of these levels (roll, pitch, the base orientation, the CoG offset in B and the arm
+    are the same), so the hierarchy's fixed points stay those of the Newton steps alone.  Only for a level 1 of one
+    pose or position task above levels of the tasks that do not see the base position (:meth:`of`)."""
+
+    UNMOVED = (HoverTask, BaseOrientationTask, ComTask, PostureTask)  # the tasks whose errors a base translation keeps
+
+    def __init__(self, frame: int, target: np.ndarray, threshold: float) -> None:
+        self.frame, self.target, self.threshold = frame, target, threshold
+
+    @classmethod
+    def of(cls, levels, threshold: float) -> _BaseShift | None:
+        """The shift for ``levels``, or None when it does not apply; the frame moves when it is over ``threshold`` [m]
+        (along an axis) from its target."""
+        if len(levels[0]) != 1 or not all(type(t) in cls.UNMOVED for level in levels[1:] for t in level):
+            return None
+        first = levels[0][0]
+        if type(first) in (PoseTask, BasePoseTask):  # exact types: a subclass may mean another target
+            return cls(first.frame, first.target.translation, threshold)
+        if type(first) is PositionTask:
+            return cls(first.frame, first.target, threshold)
+        return None
+
+    def apply(self, platform: Platform, data: pin.Data, q: np.ndarray) -> float:
+        """Move the base of q (in place) and ``data``'s kinematics when the frame is off its target; the distance
+        moved [m] (0: not moved)."""
+        d_world = self.target - data.oMf[self.frame].translation
+        if np.abs(d_world).max() <= self.threshold:
+            return 0.0
+        q[0:3] += d_world  # the free flyer's translation is in the world frame
+        update_kinematics(platform, data, q)
+        return float(np.linalg.norm(d_world))
 
 
 class _StepShaper:
     """The QP IK's step control and stopping tests, iteration after iteration.
 
-    ``shape(step, pose_ok) -> (dv or None, stop)``: dv the step to take (None: none, q is the answer and ``data``
+    ``shape(step, pose_ok, moved) -> (dv or None, stop)`` (``moved``: how far :class:`_BaseShift` moved the base
+    before this step was linearised, m): dv the step to take (None: none, q is the answer and ``data``
     holds its kinematics), stop "" to go on, else "converged_stationary" (the step vanished: converged if the pose
     holds, stalled otherwise) or "converged" (the pose holds and the lower levels stopped improving).
     ``kept``: None, or the number of leading levels still solved once the lower ones were frozen (:meth:`_freeze`).
@@ -958,8 +1015,18 @@ class _StepShaper:
         self.lower_prev, self.flat = None, 0
         self.e1_prev, self.rest_scale = math.inf, 1.0
         self.kept = None  # None: every level steps; k: levels 1..k only, the levels after them are frozen
+        self.largest = math.inf  # max |dv| of the last step :meth:`shape` returned
+        self._prefix = None  # levels[:kept], sliced once (the compiled step keeps the levels it packed by identity)
 
-    def shape(self, step, pose_ok: bool):
+    def active(self, levels):
+        """The levels still solved: all of them, or the leading ``kept`` once the lower ones are frozen."""
+        if self.kept is None:
+            return levels
+        if self._prefix is None or len(self._prefix) != self.kept:
+            self._prefix = levels[: self.kept]
+        return self._prefix
+
+    def shape(self, step, pose_ok: bool, moved: float = 0.0):
         opts = self.opts
         largest = float(np.abs(step.dv).max())
         small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
@@ -977,7 +1044,7 @@ class _StepShaper:
         # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
         # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
         # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
-        e1 = errors[0]
+        e1 = math.hypot(errors[0], moved)  # level 1's error before the base was moved onto its position (_BaseShift)
         if not pose_ok and e1 > 0.5 * self.e1_prev:
             self.rest_scale *= 0.5
         elif self.rest_scale < 1.0:
@@ -995,6 +1062,8 @@ class _StepShaper:
             rest = (dv - d1) * self.rest_scale
             m1, m2 = float(np.abs(d1).max()), float(np.abs(rest).max())
             dv = (d1 if m1 <= opts.max_step else d1 * (opts.max_step / m1)) + (rest if m2 <= opts.max_step else rest * (opts.max_step / m2))
+            largest = float(np.abs(dv).max())
+        self.largest = largest  # max |dv| of the step returned
         # small: stationary, every level settled; the last (tiny) Newton step is kept
         return dv, ("converged_stationary" if small else "")
 
@@ -1033,19 +1102,17 @@ def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
 
 
 def _level_errors(engine: HierarchySolver, data, q, levels, ready, step) -> tuple[float, ...]:
-    """||e_k|| of every level at the returned q (``ready``: ``data`` holds its kinematics; with ``step``: the errors
-    that step was computed from, at q)."""
+    """||e_k|| of every level at the returned q (``data`` holds its kinematics; ``ready``: the step's errors, when
+    ``step`` is given, were computed at q).  The tasks' targets are those the solve's first step read."""
     if step is not None and ready:
         return step.errors
-    if not ready:
-        update_kinematics(engine.platform, data, q)
-    return engine.level_errors(engine.platform, data, q, levels)
+    return engine.level_errors(engine.platform, data, q, levels, refresh=False)
 
 
 def _lower_levels_met(engine: HierarchySolver, data, q, levels, tol: float) -> tuple[float, ...] | None:
     """Every level's ||e_k|| at q (``data`` holds its kinematics) when each level after the first is below ``tol``
     (nothing left for a step to improve), else None.  The first level is the caller's (its own tolerances)."""
-    errors = engine.level_errors(engine.platform, data, q, levels)
+    errors = engine.level_errors(engine.platform, data, q, levels, refresh=False)
     return errors if all(e < tol for e in errors[1:]) else None
 
 

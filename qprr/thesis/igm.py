@@ -74,17 +74,24 @@ class IGMOptions(Tolerances):
 
 def hover_yaw(R_world) -> float:
     """Yaw psi of the hover configuration whose end effector has orientation R (y_e = Rz(psi) e_y)."""
-    R_world = check_rotation(R_world, "R_world", 1e-6)
+    return _yaw_of(check_rotation(R_world, "R_world", 1e-6))
+
+
+def _yaw_of(R_world: np.ndarray) -> float:
+    """:func:`hover_yaw` of a rotation already checked."""
     return math.atan2(-R_world[0, 1], R_world[1, 1])
 
 
 def hover_guess(params: QPRRParams, p_world, R_world) -> np.ndarray:
     """Initial guess xi0: hovering (roll = pitch = 0) below the target by the arm reach
     d0 + d1 + d2 + d3, yaw of the target's y axis, arm at zero (straight up)."""
-    p = params
-    p_world = as_vector(p_world, 3, "p_world")
+    return _hover_guess(params, as_vector(p_world, 3, "p_world"), check_rotation(R_world, "R_world", 1e-6))
+
+
+def _hover_guess(p: QPRRParams, p_world: np.ndarray, R_world: np.ndarray) -> np.ndarray:
+    """:func:`hover_guess` of a position and a rotation already checked (the IK's parsed target)."""
     reach = p.d0 + p.d1 + p.d2 + p.d3
-    return np.array([p_world[0], p_world[1], p_world[2] - reach, 0.0, 0.0, hover_yaw(R_world), 0.0, 0.0, 0.0])
+    return np.array([p_world[0], p_world[1], p_world[2] - reach, 0.0, 0.0, _yaw_of(R_world), 0.0, 0.0, 0.0])
 
 
 def hover_tilt(R_world) -> float:
@@ -363,12 +370,12 @@ IGM = IKMethod(IGMOptions, _make_igm, "the thesis's analytic IGM (Algorithms 3-5
 
 
 def _thesis_guess(platform, data, p_d, R_d):
-    params = params_of(platform)
+    params = params_of(platform)  # p_d, R_d: the IK's parsed and checked target
     if R_d is None:
-        xi = hover_guess(params, p_d, np.eye(3))
+        xi = _hover_guess(params, p_d, np.eye(3))
         xi[5] = 0.0
         return xi, "hover below the target, arm straight"
-    return hover_guess(params, p_d, R_d), "hover below the target, arm straight"
+    return _hover_guess(params, p_d, R_d), "hover below the target, arm straight"
 
 
 def _igm_guess(platform, data, p_d, R_d):
