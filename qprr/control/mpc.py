@@ -48,8 +48,13 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
   end-effector references of node k at t_k + h / 2 with the RK nodes (the mean time of crocoddyl's
   quadrature of the running cost; t_k with Euler; :data:`COST_TIME`), its control reference at
   t_k + h / 2 (the input is held over [t_k, t_k + h]), the terminal ones at t_N; roll and pitch
-  are the feedforward tilt of Thesis (6.17) applied to the reference acceleration (the tilt
-  that points z_B along p_ddot_d + g e3, as the IDC's feedforward filter does), their rates 0.
+  are the feedforward tilt of Thesis (6.17) applied to the whole robot's centre-of-mass
+  acceleration (z_B along c_ddot + g e3: the rotors are its only external force besides gravity),
+  with the tilt's rates and accelerations by central differences (:meth:`MPCController.tilt`,
+  ``MPCSettings.tilt_reference = "system"``); ``"base"``: along p_ddot_d + g e3 of the base, as the
+  IDC's feedforward filter does, rates 0 (the behaviour before issue 35: on examples/my_platform's
+  hover-reach its reference inputs could not realise the reference while the arm swung, and the
+  MPC's position error was 20 times the IDC's; docs/mpc.md).
   Without a trajectory the current reference is extrapolated (second order) over the horizon.
   The feedforward tilt at the current time is written into ``ref`` (the logged roll/pitch
   references).
