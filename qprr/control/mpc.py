@@ -521,16 +521,13 @@ class MPCController(Controller):
         system = self.settings.tilt_reference == "system"
         if system:
             r, r_dot, r_ddot = self._arm_com(xi, xi_dot, xi_ddot)
-            w, w_dot = xi_dot[5], xi_ddot[5]
+            omega, omega_dot = np.array([0.0, 0.0, xi_dot[5]]), np.array([0.0, 0.0, xi_ddot[5]])  # world, the yaw's
         for k in range(1 + (SYSTEM_TILT_PASSES if system else 0)):
             previous = angles.copy()
             if k:  # the system's centre-of-mass acceleration [m/s^2] (world) at the tilt of the previous pass
                 R = euler_to_rotation((angles[0], angles[1], psi))
                 c, c_dot, c_ddot = R @ r, R @ r_dot, R @ r_ddot
-                # e3 x u = (-u_y, u_x, 0): the cross products with omega = w e3 and omega_dot = w_dot e3
-                acc = xi_ddot[0:3] + c_ddot
-                acc[0] -= 2.0 * w * c_dot[1] + w_dot * c[1] + w * w * c[0]
-                acc[1] += 2.0 * w * c_dot[0] + w_dot * c[0] - w * w * c[1]
+                acc = xi_ddot[0:3] + c_ddot + 2.0 * np.cross(omega, c_dot) + np.cross(omega_dot, c) + np.cross(omega, np.cross(omega, c))
             az = acc[2] + self.g
             lifted = az > 0.05 * self.g
             angles[:] = tilt_6_17(acc[0], acc[1], az, cp, sp, self.settings.max_tilt) if lifted else (0.0, 0.0)
