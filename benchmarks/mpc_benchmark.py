@@ -19,8 +19,10 @@ Prints the machine (with its load average), then:
    roll/pitch weights to show what weights change;
 4. (unless ``--no-reach``) the aggressive reach (scenario ``aggressive-reach``, climb 2 m in 1 s): thrust bounds;
 5. (``--platforms 3,10``, the default; '' for none) the generic hover-reach on borinot_flying_arm_2 and
-   examples/my_platform for each duration: position RMSE of the IDC (derived gains) and of the default MPC, and
-   the ratio MPC / IDC (issue 35: within 2).
+   examples/my_platform for each duration: position RMSE of the IDC (derived gains) and of the default MPC with the
+   feedforward tilt of the base's acceleration (``tilt_reference="base"``, before issue 35) and of the whole robot's
+   centre of mass (``"system"``, the default), the ratio MPC / IDC (issue 35: within 2), the worst arm joint's
+   RMSE ratio and the solves stopped at the iteration limit.
 
 Times are wall-clock on a shared machine: the thread-CPU times are the steadier figure.
 """
@@ -199,17 +201,29 @@ def position_rmse(res: SimResult) -> float:
 
 def section_platforms(durations) -> None:
     """Generic hover-reach (climb 2 m, then the arm 60 % of the way to its upper limits from t = 3 s) on borinot and
-    examples/my_platform: position RMSE of the IDC (derived gains) and of the default MPC, and their ratio."""
+    examples/my_platform: position RMSE of the IDC (derived gains) and of the default MPC with each tilt reference
+    (``MPCSettings.tilt_reference``: "base", the behaviour before issue 35, and "system", the default), their ratio,
+    the worst arm joint's RMSE over the IDC's and the solves stopped at the iteration limit."""
     from qprr.scenarios import run as run_scenario
 
     print("\n5. hover-reach on other platforms: position RMSE [m] (norm), IDC (derived gains) against the default MPC")
-    print(f"{'platform':<22}{'duration':>9}{'IDC':>11}{'MPC':>11}{'MPC/IDC':>9}{'x':>10}{'z':>10}  (MPC's, [m])")
+    print(
+        f"{'platform':<22}{'duration':>9}{'tilt ref':>9}{'IDC':>11}{'MPC':>11}{'MPC/IDC':>9}{'x':>10}{'psi':>10}"
+        f"{'arm/IDC':>9}{'iter-lim':>9}  (x, psi: the MPC's RMSE; arm/IDC: the worst joint's ratio)"
+    )
     for name, pf in other_platforms().items():
         for duration in durations:
-            e = {c: run_scenario("hover-reach", c, platform=pf, duration=duration) for c in ("idc", "mpc")}
-            r = {c: position_rmse(res) for c, res in e.items()}
-            m = e["mpc"].rmse()
-            print(f"{name:<22}{duration:>8g}s{r['idc']:>11.3e}{r['mpc']:>11.3e}{ratio(r['mpc'], r['idc'])}{m['x']:>10.2e}{m['z']:>10.2e}")
+            idc = run_scenario("hover-reach", "idc", platform=pf, duration=duration)
+            r_idc, e_idc = position_rmse(idc), idc.rmse()
+            for tilt in ("base", "system"):
+                res = run_scenario("hover-reach", "mpc", platform=pf, duration=duration, gains={"mpc": {"settings": {"tilt_reference": tilt}}})
+                r, e = position_rmse(res), res.rmse()
+                arm = max((e[j] / e_idc[j] for j in pf.arm_names if e_idc[j] > 1e-12), default=float("nan"))
+                limit = f"{res.metrics['mpc_iteration_limit']:.0f}/{res.metrics['mpc_solves']:.0f}"
+                print(
+                    f"{name:<22}{duration:>8g}s{tilt:>9}{r_idc:>11.3e}{r:>11.3e}{ratio(r, r_idc)}{e['x']:>10.2e}{e['psi']:>10.2e}"
+                    f"{arm:>9.3g}{limit:>9}"
+                )
 
 
 def main(argv=None) -> int:

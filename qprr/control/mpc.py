@@ -48,8 +48,13 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
   end-effector references of node k at t_k + h / 2 with the RK nodes (the mean time of crocoddyl's
   quadrature of the running cost; t_k with Euler; :data:`COST_TIME`), its control reference at
   t_k + h / 2 (the input is held over [t_k, t_k + h]), the terminal ones at t_N; roll and pitch
-  are the feedforward tilt of Thesis (6.17) applied to the reference acceleration (the tilt
-  that points z_B along p_ddot_d + g e3, as the IDC's feedforward filter does), their rates 0.
+  are the feedforward tilt of Thesis (6.17) applied to the whole robot's centre-of-mass
+  acceleration (z_B along c_ddot + g e3: the rotors are its only external force besides gravity),
+  with the tilt's rates and accelerations by central differences (:meth:`MPCController.tilt`,
+  ``MPCSettings.tilt_reference = "system"``); ``"base"``: along p_ddot_d + g e3 of the base, as the
+  IDC's feedforward filter does, rates 0 (the behaviour before issue 35: on examples/my_platform's
+  hover-reach its reference inputs could not realise the reference while the arm swung, and the
+  MPC's position error was 20 times the IDC's; docs/mpc.md).
   Without a trajectory the current reference is extrapolated (second order) over the horizon.
   The feedforward tilt at the current time is written into ``ref`` (the logged roll/pitch
   references).
@@ -101,13 +106,14 @@ from dataclasses import dataclass, fields
 import numpy as np
 import pinocchio as pin
 
-from ..charts import State, xi_ddot_to_a, xi_to_qv
+from ..charts import State, euler_to_rotation, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..model import Platform
 from ..trajectory import Trajectory
 from ..validation import as_int, as_real, as_vector
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
+from .gains import Authority
 from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus, chatter_fraction, health_warnings
 
 try:
@@ -133,6 +139,20 @@ if NATIVE_PROBLEM:
     )
 
 INTEGRATORS = ("euler", "rk2", "rk3", "rk4")
+
+TILT_REFERENCES = ("system", "base")
+"""``MPCSettings.tilt_reference``: the acceleration the feedforward roll/pitch (6.17) is read from (:meth:`MPCController.tilt`)."""
+TILT_STEP = 2e-3
+"""Step [s] of the central differences that give the feedforward tilt's rates and accelerations (``"system"``)."""
+TILT_AUTHORITY_SHARE = 0.1
+"""The feedforward tilt's rates are used where its acceleration is at most this share of the rotors' roll/pitch torque
+over the base's inertia (:class:`~qprr.control.gains.Authority`), else held at 0 (:meth:`MPCController._tilt_motion`).
+Measured on aggressive-reach (Q-PRR, where the reference asks for free fall and then 0.8 rad): share 1 left 21 % of the
+solves at the iteration limit and theta2 at 2.3e-2 rad RMSE, 0.1 12.7 % and 1.2e-2 rad ("base": 10.3 %, 1.1e-2 rad)."""
+SYSTEM_TILT_PASSES = 10
+"""At most this many passes of (6.17) on the system's centre-of-mass acceleration after the base's (:meth:`MPCController.tilt`)."""
+SYSTEM_TILT_TOL = 1e-9
+"""[rad] The passes stop once a pass changes the tilt by less (:meth:`MPCController.tilt`)."""
 
 COST_TIME = {"euler": 0.0, "rk2": 0.5, "rk3": 0.5, "rk4": 0.5}
 """Where in its interval [t_k, t_k + h] a running node's cost is evaluated, as a fraction of h, per integrator.
@@ -204,6 +224,9 @@ class MPCSettings:
     this far inside; ``max_tilt`` [rad]: clamp of the feedforward tilt (6.17);
     ``joint_limit_margin``: the arm joints' soft limits are the model's position limits shrunk by
     this fraction of their range (the simulator's mechanical stops sit at the limits);
+    ``tilt_reference``: ``"system"`` (the roll/pitch reference points the thrust along the whole robot's centre-of-mass
+    acceleration, with its rates) or ``"base"`` (along the base's, rates 0; the behaviour before issue 35), module
+    docstring and :meth:`MPCController.tilt`;
     ``warn_iteration_limit``, ``warn_chatter``: a completed run whose solves stopped at the iteration limit, or whose
     inputs chattered (:func:`~qprr.control.mpc_stats.chatter_fraction`), on more than this fraction of the solves ends
     "completed with warnings" (:meth:`MPCController.run_warnings`).
@@ -222,6 +245,7 @@ class MPCSettings:
     max_tilt: float = 0.8
     init_reg: float = 1e-9
     joint_limit_margin: float = 0.0
+    tilt_reference: str = "system"
     warn_iteration_limit: float = 0.05
     warn_chatter: float = 0.05
 
@@ -237,6 +261,8 @@ class MPCSettings:
             as_int(getattr(self, name), f"MPCSettings.{name}", lo=1)
         if self.backend not in ("auto", *BACKENDS):
             raise UnknownNameError("backend", self.backend, ("auto", *BACKENDS))
+        if self.tilt_reference not in TILT_REFERENCES:
+            raise UnknownNameError("tilt_reference", self.tilt_reference, TILT_REFERENCES)
         if self.integrator not in INTEGRATORS:
             raise UnknownNameError("integrator", self.integrator, INTEGRATORS)
         if not self.max_tilt < math.pi / 2:
@@ -280,6 +306,11 @@ def _frame_with_z(a: np.ndarray) -> np.ndarray:
     x = np.cross(helper, a)
     x /= np.linalg.norm(x)
     return np.column_stack([x, np.cross(a, x), a])
+
+
+def _extrapolate(xi, xi_dot, xi_ddot, d: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The reference sample (xi, xi_dot, xi_ddot) extrapolated to second order by ``d`` seconds."""
+    return xi + d * xi_dot + 0.5 * d * d * xi_ddot, xi_dot + d * xi_ddot, xi_ddot
 
 
 def _check_trajectory(trajectory) -> None:
@@ -349,6 +380,10 @@ class MPCController(Controller):
         self._plan_lb = u_lb + np.r_[np.full(n_rot, m), np.zeros(len(u_lb) - n_rot)]
         self._plan_ub = u_ub - np.r_[np.full(n_rot, m), np.zeros(len(u_ub) - n_rot)]
         self._data = model.createData()
+        self._q_body = pin.neutral(model)  # the base at the origin, level (:meth:`_arm_com`)
+        authority = Authority.from_platform(platform)
+        # [rad/s^2] roll and pitch: the largest tilt acceleration the reference may ask (:meth:`_tilt_motion`)
+        self._tilt_authority = TILT_AUTHORITY_SHARE * np.array(authority.torque[0:2]) / np.array(authority.inertia[0:2])
         multibody = crocoddyl.StateMultibody(model)
         self.actuation = crocoddyl.ActuationModelFloatingBaseThrusters(multibody, thrusters)
         self.state = multibody if self.backend == "native" else LieState(model)
@@ -445,25 +480,95 @@ class MPCController(Controller):
     def reference(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
         """(x_ref = (q, v), M_ee_ref (world), u_ref) the MPC tracks for one reference sample (thesis coordinates).
 
-        Roll and pitch: the feedforward tilt (6.17) of the reference acceleration; u_ref = W^+
-        RNEA(q_ref, v_ref, a_ref) clipped to the bounds (module docstring).
+        Roll and pitch: the feedforward tilt of :meth:`tilt` (its rates by central differences of the sample's
+        second-order extrapolation, :data:`TILT_STEP`); u_ref = W^+ RNEA(q_ref, v_ref, a_ref) clipped to the bounds
+        (module docstring).
         """
         n = self.platform.n_xi
-        return self._reference(as_vector(xi, n, "xi"), as_vector(xi_dot, n, "xi_dot"), as_vector(xi_ddot, n, "xi_ddot"))
+        sample = (as_vector(xi, n, "xi"), as_vector(xi_dot, n, "xi_dot"), as_vector(xi_ddot, n, "xi_ddot"))
+        lo, hi = (_extrapolate(*sample, d) for d in (-TILT_STEP, TILT_STEP))
+        return self._reference(*sample, self._tilt_motion(lo, sample, hi))
 
-    def _reference(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
-        """:meth:`reference` on vectors of the right size (the per-node path of :meth:`_references`)."""
+    def tilt(self, xi, xi_dot, xi_ddot) -> np.ndarray:
+        """Feedforward roll and pitch [rad] of one reference sample: Thesis (6.17) on a reference acceleration.
+
+        ``tilt_reference = "base"``: on the base's, p_ddot_d + g e3.  ``"system"`` (default): on the whole robot's
+        centre-of-mass acceleration c_ddot + g e3, the direction the total thrust must point in by Newton's law for
+        the system, m c_ddot = f - m g e3 (the rotors are its only external force besides gravity, Thesis (5.29)).  With
+        the tilt's rates 0, as in the reference, the base turns at omega = psi_dot e3 (world), so
+
+            c_ddot = p_ddot + R r_ddot + 2 omega x R r_dot + omega_dot x R r + omega x (omega x R r),
+
+        R = Rz(psi) Ry(theta) Rx(phi) (Thesis (3.4)), r, r_dot, r_ddot the centre of mass's offset from B in the body
+        frame and its rates from the arm's motion (Pinocchio's ``centerOfMass`` with the base at rest at the origin).
+        R depends on the tilt sought: passes from the base's tilt until one changes it by less than
+        :data:`SYSTEM_TILT_TOL` (at most :data:`SYSTEM_TILT_PASSES`; each pass shrinks the change by the arm's share of
+        the motion: 4 to 8 passes on random samples of examples/my_platform, 1.8 on average on its hover-reach).
+        Held level when the acceleration asks for less than 5 % of g upward.
+        """
+        return self._tilt(xi, xi_dot, xi_ddot)[0]
+
+    def _tilt(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, bool]:
+        """:meth:`tilt` and whether it is a smooth function of the sample there: False where (6.17) is clamped to
+        ``max_tilt`` or held level (the reference asks for less than 5 % of g upward)."""
+        xi = np.asarray(xi, dtype=float)
+        xi_dot = np.asarray(xi_dot, dtype=float)
+        xi_ddot = np.asarray(xi_ddot, dtype=float)
+        psi = xi[5]
+        cp, sp = math.cos(psi), math.sin(psi)
+        acc = xi_ddot[0:3]
+        angles = np.zeros(2)
+        system = self.settings.tilt_reference == "system"
+        if system:
+            r, r_dot, r_ddot = self._arm_com(xi, xi_dot, xi_ddot)
+            omega, omega_dot = np.array([0.0, 0.0, xi_dot[5]]), np.array([0.0, 0.0, xi_ddot[5]])  # world, the yaw's
+        for k in range(1 + (SYSTEM_TILT_PASSES if system else 0)):
+            previous = angles.copy()
+            if k:  # the system's centre-of-mass acceleration [m/s^2] (world) at the tilt of the previous pass
+                R = euler_to_rotation((angles[0], angles[1], psi))
+                c, c_dot, c_ddot = R @ r, R @ r_dot, R @ r_ddot
+                acc = xi_ddot[0:3] + c_ddot + 2.0 * np.cross(omega, c_dot) + np.cross(omega_dot, c) + np.cross(omega, np.cross(omega, c))
+            az = acc[2] + self.g
+            lifted = az > 0.05 * self.g
+            angles[:] = tilt_6_17(acc[0], acc[1], az, cp, sp, self.settings.max_tilt) if lifted else (0.0, 0.0)
+            if k and np.max(np.abs(angles - previous)) < SYSTEM_TILT_TOL:
+                break
+        return angles, bool(lifted and np.all(np.abs(angles) < self.settings.max_tilt))
+
+    def _arm_com(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(r, r_dot, r_ddot) [m, m/s, m/s^2]: the system's centre of mass in the body frame B and its rates when only the
+        arm moves (Pinocchio's ``centerOfMass`` with the base at rest at the origin)."""
+        q = self._q_body
+        q[7:] = xi[6:]
+        v = np.zeros(self.model.nv)
+        a = np.zeros(self.model.nv)
+        v[6:] = xi_dot[6:]
+        a[6:] = xi_ddot[6:]
+        data = self._data
+        pin.centerOfMass(self.model, data, q, v, a)
+        return data.com[0].copy(), data.vcom[0].copy(), data.acom[0].copy()
+
+    def _tilt_motion(self, lo, mid, hi) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(angles, rates, accelerations) of the feedforward tilt at the sample ``mid`` (module docstring): central
+        differences over the samples ``lo``, ``hi`` :data:`TILT_STEP` before and after with ``"system"``; rates 0 with
+        ``"base"`` (the tilt of (6.17) held between samples), and with ``"system"`` where one of the three is clamped or
+        held level (a jump there made the differences 200 rad/s and 2e5 rad/s^2 on aggressive-reach, which diverged) or
+        whose acceleration exceeds :data:`TILT_AUTHORITY_SHARE` of the rotors' (``_tilt_authority``)."""
+        a1, smooth = self._tilt(*mid)
+        if self.settings.tilt_reference == "base":
+            return a1, np.zeros(2), np.zeros(2)
+        (a0, smooth0), (a2, smooth2) = self._tilt(*lo), self._tilt(*hi)
+        rates, accelerations = (a2 - a0) / (2.0 * TILT_STEP), (a2 - 2.0 * a1 + a0) / TILT_STEP**2
+        if not (smooth0 and smooth and smooth2 and np.all(np.abs(accelerations) <= self._tilt_authority)):
+            return a1, np.zeros(2), np.zeros(2)  # a clamp, the level hold or a turn beyond TILT_AUTHORITY_SHARE: held
+        return a1, rates, accelerations
+
+    def _reference(self, xi, xi_dot, xi_ddot, tilt) -> tuple[np.ndarray, pin.SE3, np.ndarray]:
+        """:meth:`reference` on vectors of the right size with the tilt's (angles, rates, accelerations) given."""
         xi = np.array(xi, dtype=float)
         xi_dot = np.array(xi_dot, dtype=float)
         xi_ddot = np.array(xi_ddot, dtype=float)
-        psi = xi[5]
-        az = xi_ddot[2] + self.g
-        if az > 0.05 * self.g:  # (6.17) on p_ddot_d + g e3 (held level when it asks for less than free fall)
-            xi[3], xi[4] = tilt_6_17(xi_ddot[0], xi_ddot[1], az, math.cos(psi), math.sin(psi), self.settings.max_tilt)
-        else:
-            xi[3] = xi[4] = 0.0
-        xi_dot[3] = xi_dot[4] = 0.0
-        xi_ddot[3] = xi_ddot[4] = 0.0
+        xi[3:5], xi_dot[3:5], xi_ddot[3:5] = tilt
         q, v = xi_to_qv(xi, xi_dot)
         a = xi_ddot_to_a(xi, xi_dot, xi_ddot)
         data = self._data
@@ -480,18 +585,27 @@ class MPCController(Controller):
         c = 1/2 for the RK nodes, 0 for Euler), and its control reference is the inverse dynamics at t_k + h / 2,
         whose acceleration the input held over the interval gives on average to second order.  The terminal node's
         cost is at t_N.  (Referenced at t_k, the RK2 plan lagged the climb of hover-reach by 0.5 mm, 3 times the IDC's
-        error: docs/mpc.md, "Tracking against the IDC on other platforms".)
+        error: docs/mpc.md, "Tracking against the IDC on other platforms".)  The tilt's rates: :meth:`_tilt_motion`.
         """
         N, h = self.settings.horizon, self.h
         c = COST_TIME[self.settings.integrator]
         state_times = [t + (k + (c if k < N else 0.0)) * h for k in ks]
         control_times = [t + (k + 0.5) * h for k in ks]
-        samples = self._samples(t, ref, np.array(state_times + control_times))
+        times = np.array(state_times + control_times)
+        mid = self._samples(t, ref, times)
+        if self.settings.tilt_reference == "base":
+            lo = hi = mid
+        else:
+            lo, hi = self._samples(t, ref, times - TILT_STEP), self._samples(t, ref, times + TILT_STEP)
+        first = {tk: i for i, tk in reversed(list(enumerate(times)))}  # RK nodes: a state time is its control time
+        tilts = [self._tilt_motion(lo[i], mid[i], hi[i]) if first[tk] == i else None for i, tk in enumerate(times)]
+        tilts = [tilts[first[tk]] for tk in times]
         out = []
         for i in range(len(ks)):
-            x, M, u = self._reference(*samples[i])
+            x, M, u = self._reference(*mid[i], tilts[i])
+            j = len(ks) + i
             if control_times[i] != state_times[i]:
-                u = self._reference(*samples[len(ks) + i])[2]
+                u = self._reference(*mid[j], tilts[j])[2]
             out.append((x, M, u))
         return out
 
@@ -501,11 +615,7 @@ class MPCController(Controller):
         if self.trajectory is not None:
             s = self.trajectory.sample(times)
             return [(s.xi[i], s.xi_dot[i], s.xi_ddot[i]) for i in range(len(times))]
-        out = []
-        for tk in times:
-            d = tk - t
-            out.append((ref.xi + d * ref.xi_dot + 0.5 * d * d * ref.xi_ddot, ref.xi_dot + d * ref.xi_ddot, ref.xi_ddot))
-        return out
+        return [_extrapolate(ref.xi, ref.xi_dot, ref.xi_ddot, tk - t) for tk in times]
 
     @staticmethod
     def _set(node, reference) -> None:
@@ -592,12 +702,8 @@ class MPCController(Controller):
         return health_warnings(self.stats(), self.u_lb, self.u_ub, limits)
 
     def _write_tilt(self, ref: Reference) -> None:
-        """Write the feedforward tilt (6.17) of the current reference acceleration into ``ref`` (the logged reference)."""
-        a = ref.xi_ddot
-        az = a[2] + self.g
-        if az > 0.05 * self.g:
-            psi = ref.xi[5]
-            ref.xi[3], ref.xi[4] = tilt_6_17(a[0], a[1], az, math.cos(psi), math.sin(psi), self.settings.max_tilt)
+        """Write the feedforward tilt (:meth:`tilt`) of the current reference into ``ref`` (the logged reference)."""
+        ref.xi[3:5] = self.tilt(ref.xi, ref.xi_dot, ref.xi_ddot)
         ref.xi_dot[3] = ref.xi_dot[4] = 0.0
         ref.xi_ddot[3] = ref.xi_ddot[4] = 0.0
 
