@@ -743,3 +743,16 @@ def test_custom_task_is_linearized_once_per_step(rob, dat):
     res = qprr.ik.IKSolver(rob, "qp", {"levels": levels}).solve(dat, M_d)
     assert res.success and res.iterations >= 2
     assert len(calls) <= res.iterations + 1  # one per step, and the level errors at the returned q
+
+
+def test_solve_checks_every_new_data_even_after_a_checked_one():
+    """The solver checks a pinocchio.Data once and trusts it afterwards: None, or a Data of another model, given after
+    a checked one is still refused with an InputError naming ``data``."""
+    platform = qprr.load()
+    solver = qprr.ik.IKSolver(platform)
+    data = platform.data()
+    assert solver.solve(data, [0.3, 0.0, 1.5]).success
+    for wrong in (None, qprr.load("borinot_flying_arm_2").data()):
+        with pytest.raises(qprr.errors.InputError, match="data"):
+            solver.solve(wrong, [0.3, 0.0, 1.5])
+    assert solver.solve(data, [0.3, 0.0, 1.5]).success

@@ -842,7 +842,7 @@ class IKSolver:
     def solve(self, data: pin.Data, target, xi0=None) -> IKResult:
         """Configuration reaching ``target`` from ``xi0`` (default: the initial guess); see the module docstring."""
         t0 = time.perf_counter()
-        if data is not self._data:  # a pin.Data keeps the model it was made for: checked once
+        if data is None or data is not self._data:  # a pin.Data keeps the model it was made for: checked once
             self._data = check_data(self.platform, data)
         p_d, R_d = parse_target(target)
         opts = self.options
