@@ -506,7 +506,8 @@ class MPCController(Controller):
         the motion: 4 to 8 passes on random samples of examples/my_platform, 1.8 on average on its hover-reach).
         Held level when the acceleration asks for less than 5 % of g upward.
         """
-        return self._tilt(xi, xi_dot, xi_ddot)[0]
+        n = self.platform.n_xi
+        return self._tilt(as_vector(xi, n, "xi"), as_vector(xi_dot, n, "xi_dot"), as_vector(xi_ddot, n, "xi_ddot"))[0]
 
     def _tilt(self, xi, xi_dot, xi_ddot) -> tuple[np.ndarray, bool]:
         """:meth:`tilt` and whether it is a smooth function of the sample there: False where (6.17) is clamped to
