@@ -142,6 +142,8 @@ INTEGRATORS = ("euler", "rk2", "rk3", "rk4")
 
 TILT_REFERENCES = ("system", "base")
 """``MPCSettings.tilt_reference``: the acceleration the feedforward roll/pitch (6.17) is read from (:meth:`MPCController.tilt`)."""
+E3_CROSS = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]])
+"""The cross-product matrix of e3: E3_CROSS u = e3 x u (numpy's cross costs ten times more on 3-vectors)."""
 TILT_STEP = 2e-3
 """Step [s] of the central differences that give the feedforward tilt's rates and accelerations (``"system"``)."""
 TILT_AUTHORITY_SHARE = 0.1
@@ -522,13 +524,14 @@ class MPCController(Controller):
         system = self.settings.tilt_reference == "system"
         if system:
             r, r_dot, r_ddot = self._arm_com(xi, xi_dot, xi_ddot)
-            omega, omega_dot = np.array([0.0, 0.0, xi_dot[5]]), np.array([0.0, 0.0, xi_ddot[5]])  # world, the yaw's
+            w, w_dot = float(xi_dot[5]), float(xi_ddot[5])  # omega = w e3, omega_dot = w_dot e3 (world): the yaw's
         for k in range(1 + (SYSTEM_TILT_PASSES if system else 0)):
             previous = angles.copy()
             if k:  # the system's centre-of-mass acceleration [m/s^2] (world) at the tilt of the previous pass
                 R = euler_to_rotation((angles[0], angles[1], psi))
                 c, c_dot, c_ddot = R @ r, R @ r_dot, R @ r_ddot
-                acc = xi_ddot[0:3] + c_ddot + 2.0 * np.cross(omega, c_dot) + np.cross(omega_dot, c) + np.cross(omega, np.cross(omega, c))
+                # c_ddot + 2 omega x c_dot + omega_dot x c + omega x (omega x c), with e3 x u = E3_CROSS u
+                acc = xi_ddot[0:3] + c_ddot + E3_CROSS @ (2.0 * w * c_dot + w_dot * c + w * w * (E3_CROSS @ c))
             az = acc[2] + self.g
             lifted = az > 0.05 * self.g
             angles[:] = tilt_6_17(acc[0], acc[1], az, cp, sp, self.settings.max_tilt) if lifted else (0.0, 0.0)
