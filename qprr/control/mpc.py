@@ -707,7 +707,7 @@ class MPCController(Controller):
 
     def _write_tilt(self, ref: Reference) -> None:
         """Write the feedforward tilt (:meth:`tilt`) of the current reference into ``ref`` (the logged reference)."""
-        ref.xi[3:5] = self.tilt(ref.xi, ref.xi_dot, ref.xi_ddot)
+        ref.xi[3:5] = self._tilt(ref.xi, ref.xi_dot, ref.xi_ddot)[0]  # the simulator's reference: checked vectors
         ref.xi_dot[3] = ref.xi_dot[4] = 0.0
         ref.xi_ddot[3] = ref.xi_ddot[4] = 0.0
 
