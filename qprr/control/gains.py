@@ -128,7 +128,11 @@ class Targets:
     known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag");
     ``control_period`` [s] (> 0): the period the MFC's estimator differences the rates over (the
     simulator's default step, 1 ms; module docstring, "MFC"); ``integral``: the inverse-dynamics controllers' position
-    and arm loops get integral action with anti-windup (module docstring, "Integral action"; off by default).
+    and arm loops get integral action with anti-windup (module docstring, "Integral action"): None (the default) turns
+    it on for the controllers whose derivation has it (idc, dsid, layered-idc, payload-idc) and leaves the others
+    without; True asks for it (refused by a derivation without it), False turns it off; ``payload`` [kg] (>= 0): the
+    heaviest payload at the end effector the x, y loops stay stable with (module docstring, "Tilt filter"); None (the
+    default): :data:`PAYLOAD_SHARE` of the platform's mass.
     """
 
     position_error: float = 1.0
@@ -138,11 +142,21 @@ class Targets:
     cap: float = 40.0
     rotor_time_constant: float = 0.0
     control_period: float = 1e-3
-    integral: bool = False
+    integral: bool | None = None
+    payload: float | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.integral, bool):
-            raise InputError(f"gain target integral must be true or false (integral action on position and arm), got {self.integral!r}")
+        if not (self.integral is None or isinstance(self.integral, bool)):
+            raise InputError(
+                f"gain target integral must be true or false (integral action on position and arm; leave it out for the "
+                f"controller's default), got {self.integral!r}"
+            )
+        P = self.payload
+        if not (P is None or (isinstance(P, (int, float)) and not isinstance(P, bool) and math.isfinite(P) and P >= 0.0)):
+            raise InputError(
+                f"gain target payload must be a mass >= 0 kg (the heaviest payload at the end effector; leave it out for "
+                f"{PAYLOAD_SHARE:g} of the platform's mass), got {P!r}"
+            )
         T = self.rotor_time_constant
         if not (isinstance(T, (int, float)) and math.isfinite(T) and T >= 0.0):
             raise InputError(f"gain target rotor_time_constant must be a finite number >= 0 s (0: instantaneous rotors), got {T!r}")
@@ -164,7 +178,10 @@ class Authority:
     ``inverse_inertia`` ((min, max), ...) per coordinate of xi: the range of (B^-1)_ii over the arm's
     workspace at level attitude (B = S^T M S, Thesis (5.53); x, y, z averaged as the MFC's alpha is)
     [1/kg or 1/(kg m^2)]; () when not measured (the MFC's gains need it); ``coupling``: the largest
-    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`).
+    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`); ``heights``:
+    (c_z, e_z) [m], the heights of the centre of mass and of the end effector above B over that workspace
+    (:func:`workspace_heights`; () when not measured: no bound on the roll/pitch filter, module docstring "Tilt filter");
+    ``g`` [m/s^2]: the platform's gravity.
     """
 
     mass: float
@@ -175,6 +192,8 @@ class Authority:
     arm_effort: tuple[float, ...]
     inverse_inertia: tuple[tuple[float, float], ...] = ()
     coupling: float = 1.0
+    heights: tuple[tuple[float, float], ...] = ()
+    g: float = 9.81
 
     @classmethod
     def from_platform(cls, platform: Platform) -> Authority:
@@ -205,6 +224,8 @@ class Authority:
             tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
             tuple(float(v) for v in platform.arm_effort_limits),
             *workspace_inverse_inertia(platform),
+            workspace_heights(platform),
+            platform.g,
         )
 
     def scaled(self, k: float) -> Authority:
@@ -218,6 +239,8 @@ class Authority:
             tuple(k * v for v in self.arm_effort),
             tuple((lo / k, hi / k) for lo, hi in self.inverse_inertia),
             self.coupling,
+            self.heights,
+            self.g,
         )
 
 
@@ -225,34 +248,54 @@ WORKSPACE_SAMPLES = 256
 """Arm configurations (a grid, at most this many) over which :func:`workspace_inverse_inertia` reads B^-1."""
 
 
-def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
-    """The MFC's inputs over a grid of the arm's joint ranges at level attitude (B = S^T M S, Thesis (5.53)).
-
-    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
-    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).  Each joint takes
-    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi
-    where unlimited) and its neutral value.
-    """
+def workspace_grid(platform: Platform) -> list[np.ndarray]:
+    """Configurations q (level base at the neutral pose) over a grid of the arm's joint ranges: each joint takes
+    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi where
+    unlimited) and its neutral value (a folded arm, the inertia about a joint smallest, is often there)."""
     platform = check_platform(platform)
     n = platform.n_arm
     q0 = platform.neutral_q()
     k = max(2, int(math.floor(WORKSPACE_SAMPLES ** (1.0 / n)))) if n else 1
-    axes = [  # the neutral value too: a folded arm (the inertia about a joint smallest) is often there
+    axes = [
         np.unique(np.append(np.linspace(lo if math.isfinite(lo) else c - math.pi, hi if math.isfinite(hi) else c + math.pi, k), c))
         for lo, hi, c in zip(platform.arm_lower, platform.arm_upper, q0[7:])
     ]
-    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
-    data = platform.data()
-    inverses = []
+    grid = []
     for q_arm in itertools.product(*axes) if n else [()]:
         q = q0.copy()
         q[7:] = q_arm
-        inverses.append(np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S))
+        grid.append(q)
+    return grid
+
+
+def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
+    """The MFC's inputs over :func:`workspace_grid` at level attitude (B = S^T M S, Thesis (5.53)).
+
+    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
+    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).
+    """
+    platform = check_platform(platform)
+    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
+    data = platform.data()
+    inverses = [np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S) for q in workspace_grid(platform)]
     d = np.array([np.diag(Bi) for Bi in inverses])
     d[:, 0:3] = d[:, 0:3].mean(axis=1, keepdims=True)
     lo, hi = d.min(axis=0), d.max(axis=0)
     lam = max(float(np.linalg.eigvals(Bi / hi[:, None]).real.max()) for Bi in inverses)
     return tuple((float(a), float(b)) for a, b in zip(lo, hi)), lam
+
+
+def workspace_heights(platform: Platform) -> tuple[tuple[float, float], ...]:
+    """(c_z, e_z) [m] over :func:`workspace_grid` at level attitude: the heights of the platform's centre of mass and of
+    its end-effector frame above B (world z; the inputs of :func:`com_height`)."""
+    platform = check_platform(platform)
+    data = platform.data()
+    heights = []
+    for q in workspace_grid(platform):
+        c_world = pin.centerOfMass(platform.model, data, q)
+        pin.updateFramePlacement(platform.model, data, platform.ee_frame)
+        heights.append((float(c_world[2] - q[2]), float(data.oMf[platform.ee_frame].translation[2] - q[2])))
+    return tuple(heights)
 
 
 def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
@@ -283,9 +326,52 @@ def rotor_bound(c: float, targets: Targets) -> float:
     return c / T if T > 0.0 else math.inf
 
 
-def tilt_filter(default: float, targets: Targets) -> float:
-    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T."""
-    return min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
+PAYLOAD_SHARE = 0.12
+"""Targets.payload's default: a payload of this share of the platform's mass (module docstring, "Tilt filter")."""
+TILT_SEARCH_STEP = 0.98
+""":func:`tilt_filter` lowers the filter's bandwidth by this factor until the x, y loops are stable."""
+
+
+def com_height(authority: Authority, payload: float) -> float:
+    """The highest centre of mass above B [m] over the workspace with ``payload`` [kg] held at the end effector (the
+    mass-weighted mean of :attr:`Authority.heights`; -inf when the heights were not measured)."""
+    m = authority.mass
+    return max(((m * c_z + payload * e_z) / (m + payload) for c_z, e_z in authority.heights), default=-math.inf)
+
+
+def x_pitch_polynomial(omega_f: float, c_z: float, loop: tuple[float, float, float], g: float) -> np.ndarray:
+    """Characteristic polynomial (highest power first) of x (or y) under a tilting inverse-dynamics controller, linearised
+    at hover (module docstring, "Tilt filter"): s^n (s + w_f)^2 + w_f^2 (1 - c_z s^2 / g) (k_D s^2 + k_P s + k_I) / s^(3-n),
+    ``loop`` = (k_D, k_P, k_I) of x, n = 3 with an integral (k_I > 0), else 2."""
+    kd, kp, ki = loop
+    gains = np.array([kd, kp, ki] if ki > 0.0 else [kd, kp])
+    lag = np.polymul(np.eye(1, gains.size + 1)[0], [1.0, 2.0 * omega_f, omega_f**2])
+    return np.polyadd(lag, omega_f**2 * np.polymul([-c_z / g, 0.0, 1.0], gains))
+
+
+def hurwitz(coefficients: np.ndarray) -> bool:
+    """Every root of the polynomial (highest power first) in the open left half-plane."""
+    return bool(np.roots(coefficients).real.max() < 0.0)
+
+
+def tilt_filter(default: float, targets: Targets, authority: Authority, loop: tuple[float, float, float]) -> float:
+    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T (module
+    docstring, "Rotor lag"), lowered by :data:`TILT_SEARCH_STEP` until :func:`x_pitch_polynomial` of the x loop's
+    ``loop`` = (k_D, k_P, k_I) is Hurwitz with ``targets.payload`` at the end effector (module docstring, "Tilt filter")."""
+    omega = min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
+    payload = PAYLOAD_SHARE * authority.mass if targets.payload is None else targets.payload
+    c_z = com_height(authority, payload)
+    if c_z <= 0.0:  # the centre of mass below B: the pitch acceleration adds to the tilt's push (no bound)
+        return omega
+    while not hurwitz(x_pitch_polynomial(omega, c_z, loop, authority.g)):
+        omega *= TILT_SEARCH_STEP
+        if omega < loop[0]:  # a filter slower than the x loop's damping: no bandwidth keeps it stable
+            raise InputError(
+                f"gain target payload = {payload:.4g} kg: with it at the end effector the centre of mass rises to "
+                f"{c_z * 1e3:.1f} mm above B and no roll/pitch filter keeps the x, y loops (k_D = {loop[0]:.3g}) stable; "
+                "give a smaller payload target or slower position loops (a larger position_error target)"
+            )
+    return omega
 
 
 INTEGRAL_RATIO_POSITION = 2.0
@@ -354,7 +440,7 @@ def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains
     alpha = (authority.coupling / MFC_EIGENVALUE) * hi
     g = lo / (alpha * targets.control_period)  # slowest estimator rate [rad/s], at the largest inertia
     w = np.minimum(w, g / MFC_ESTIMATOR)  # the iPID no faster than a quarter of its estimator
-    f = tilt_filter(MFCGains.filter_omega, targets)
+    f = min(MFCGains.filter_omega, rotor_bound(ROTOR_LAG_FILTER, targets))
     return MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), alpha=tuple(alpha), filter_omega=f)
 
 
@@ -363,13 +449,21 @@ def derive_idc(authority: Authority, targets: Targets) -> dict[str, object]:
     anti-windup on position and arm (module docstring, "Integral action"); the roll/pitch reference filter at the
     class's 50 rad/s unless the rotors lag."""
     w = bandwidths(authority, targets)
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets), **_integral_action(authority, targets))}
+    return {"gains": tilting_gains(w, IDCGains.filter_omega, authority, targets)}
+
+
+def tilting_gains(w: np.ndarray, filter_omega: float, authority: Authority, targets: Targets) -> IDCGains:
+    """:func:`idc_gains` of the bandwidths ``w`` (with :func:`_integral_action`) and the roll/pitch reference filter at
+    the controller's ``filter_omega`` [rad/s] bounded by :func:`tilt_filter` for the x loop's gains."""
+    gains = idc_gains(w, **_integral_action(authority, targets))
+    loop = (gains.kd[0], gains.kp[0], gains.ki[0])
+    return dataclasses.replace(gains, filter_omega=tilt_filter(filter_omega, targets, authority, loop))
 
 
 def _integral_action(authority: Authority, targets: Targets) -> dict[str, object]:
-    """The keywords of :func:`idc_gains` that turn the integral action on when ``targets.integral`` asks for it (module
+    """The keywords of :func:`idc_gains` that turn the integral action on unless ``targets.integral`` is False (module
     docstring, "Integral action"), else none."""
-    if not targets.integral:
+    if targets.integral is False:
         return {}
     return {"integral": True, "anti_windup": AntiWindup.CONDITIONAL, "integral_limit": integral_limits(authority)}
 
@@ -378,7 +472,7 @@ def derive_dsid(authority: Authority, targets: Targets) -> dict[str, object]:
     """``dsid``: the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap."""
     w = bandwidths(authority, targets)
     w[6:] = targets.cap
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(20.0, targets), **_integral_action(authority, targets))}
+    return {"gains": tilting_gains(w, 20.0, authority, targets)}
 
 
 def _refuse_integral(targets: Targets, controller: str) -> None:
@@ -392,9 +486,9 @@ def _refuse_integral(targets: Targets, controller: str) -> None:
 
 def derive_decoupled(authority: Authority, targets: Targets) -> dict[str, object]:
     """``decoupled``: the IDC's gains (:func:`derive_idc`) without the integral action, which its per-joint loops would
-    integrate with no anti-windup: ``targets.integral`` is refused."""
+    integrate with no anti-windup: ``targets.integral = True`` is refused (None, the default, derives none)."""
     _refuse_integral(targets, "decoupled")
-    return derive_idc(authority, targets)
+    return derive_idc(authority, dataclasses.replace(targets, integral=False))
 
 
 def derive_mfc(authority: Authority, targets: Targets) -> dict[str, object]:
@@ -407,7 +501,7 @@ def derive_impedance(authority: Authority, targets: Targets) -> dict[str, object
     """``impedance``: the IDC's gains and the impedance filters (6.74)-(6.75) of :func:`impedance_gains`."""
     _refuse_integral(targets, "impedance")
     w = bandwidths(authority, targets)
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets)), "impedance": impedance_gains(authority, w)}
+    return {"gains": tilting_gains(w, IDCGains.filter_omega, authority, dataclasses.replace(targets, integral=False)), "impedance": impedance_gains(authority, w)}
 
 
 def derive_opspace_impedance(authority: Authority, targets: Targets) -> dict[str, object]:
