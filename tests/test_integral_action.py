@@ -297,8 +297,9 @@ def test_the_roll_pitch_filter_is_bounded_by_the_payload_budget():
     """The derived filter is the largest bandwidth (on the search's 2 % steps below the class's 50 rad/s) whose x, y
     loops are stable with the payload budget at the end effector anywhere in the workspace: on the Q-PRR (centre of mass
     26 mm above B at most, 61 mm with 0.42 kg at the wrist) it is lowered, with the integral more than without; with no
-    payload it stays at 50 rad/s; a budget no bandwidth can hold is refused with its name."""
-    from qprr.control.gains import PAYLOAD_SHARE, TILT_SEARCH_STEP, com_height, hurwitz, x_pitch_polynomial
+    payload it stays at 50 rad/s; with 3 kg the position loops are slowed until a filter holds them; a payload beyond
+    the thrust margin, or a centre of mass no filter can hold, is refused with its name."""
+    from qprr.control.gains import PAYLOAD_SHARE, TILT_SEARCH_STEP, com_height, derive, hurwitz, x_pitch_polynomial
 
     platform = qprr.load()
     a = Authority.from_platform(platform)
@@ -312,8 +313,15 @@ def test_the_roll_pitch_filter_is_bounded_by_the_payload_budget():
         assert not hurwitz(x_pitch_polynomial(g.filter_omega / TILT_SEARCH_STEP, c_z, loop, a.g))
     assert platform_gains("idc", platform, INTEGRAL)["gains"].filter_omega < platform_gains("idc", platform, PLAIN)["gains"].filter_omega
     assert platform_gains("idc", platform, Targets(payload=0.0))["gains"].filter_omega == 50.0
-    with pytest.raises(qprr.errors.InputError, match="payload = 3"):
-        platform_gains("idc", platform, Targets(payload=3.0))
+    # 3 kg: the x loops are slowed until a filter holds them; beyond the thrust margin (4.6 kg): refused
+    heavy = platform_gains("idc", platform, Targets(payload=3.0))["gains"]
+    loop = (heavy.kd[0], heavy.kp[0], heavy.ki[0])
+    assert heavy.kd[0] < platform_gains("idc", platform)["gains"].kd[0]
+    assert hurwitz(x_pitch_polynomial(heavy.filter_omega, com_height(a, 3.0), loop, a.g))
+    with pytest.raises(qprr.errors.InputError, match="payload = 5 kg: the rotors lift at most 4.6"):
+        platform_gains("idc", platform, Targets(payload=5.0))
+    with pytest.raises(qprr.errors.InputError, match="no roll/pitch filter"):  # the centre of mass 10 m above B
+        derive("idc", dataclasses.replace(a, heights=((10.0, 10.0),)), INTEGRAL)
     with pytest.raises(qprr.errors.InputError, match="payload"):
         Targets(payload=-1.0)
 

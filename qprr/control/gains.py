@@ -57,12 +57,35 @@ Anti-windup: :class:`~qprr.control.inverse_dynamics.AntiWindup` ``CONDITIONAL`` 
 while its command saturates the rotors or its joint's effort) and each integral's contribution clamped to the
 acceleration the actuators give the coordinate (:func:`integral_limits`).  Measured (tests/test_integral_action.py):
 0.4 kg and a 5 m/s wind leave < 1 mm at the end effector of the Q-PRR, borinot_flying_arm_2 and examples/my_platform
-(15 to 370 mm without the position and arm integrals).  It is asked for with ``Targets(integral=True)`` (a gains file's
-or a mission's ``[controller.targets] integral = true``) and is off by default: the integral poles this robustness
-needs are slow (w / 10 on the arm), so what they hold is unwound slowly once the disturbance goes -- measured on the
-3 s generic missions, after a release of 10 % of the mass the Q-PRR's and HEX-RRR's arms end 0.27-0.30 rad off (PD: on
-the reference), and HEX-RRR's fly-to ends 4 cm off after the integral of its fast move; and beyond the margin (the
-Q-PRR's grasp-drop holding 0.35 kg for 2 s at reach 0.3) the loop diverges where the PD only sags.
+(15 to 370 mm without the position and arm integrals).  It is on by default for idc, dsid, layered-idc and
+payload-idc (``Targets.integral`` None; ``[controller.targets] integral = false`` in a gains or mission file turns it off,
+``true`` asks for it and is refused by a derivation without it).  Its cost: what the slow integral poles hold is unwound
+at their pace once the disturbance goes (measured, 10 s generic missions: after grasp-drop's release the end effector
+ends 1 to 9 mm off on the Q-PRR, borinot_flying_arm_2, HEX-RRR and examples/my_platform, the PD within 1 mm; on hover-wind
+it ends 0.02 to 7 mm off, the PD 15 to 114 mm off).
+
+**Tilt filter.** An underactuated base moves x (and y) by tilting: Newton for the whole robot gives x_c'' = g theta
+for its centre of mass, which sits c_z above B, so B itself moves by x'' = g theta - c_z theta''. The pitch reference
+of (6.17) comes from the x loop's command u = -(k_D x' + k_P x + k_I int x) / g through the critically damped
+reference filter theta'' = w_f^2 (u - theta) - 2 w_f theta' (the attitude loop tracks it), so x obeys s^n (s + w_f)^2
++ w_f^2 (1 - c_z s^2 / g) (k_D s^2 + k_P s + k_I) / s^(3-n) = 0 (n = 3 with an integral, else 2;
+:func:`x_pitch_polynomial`). The term -c_z theta'' is a right-half-plane zero at sqrt(g / c_z): with the centre of
+mass above B, a fast filter feeds it back and the x loop diverges (its s^(n+1) coefficient 2 w_f - w_f^2 c_z k_D / g
+turns negative near w_f k_D c_z / g = 2). A payload at the end effector raises c_z: 0.35 kg at the Q-PRR's wrist takes
+it from 22 to 45 mm, and its grasp-drop with integral action diverged 1.6 s after the grasp at the class's 50 rad/s
+(measured; with the payload estimated it diverged at 45 rad/s and flew at 40; not announced, it sagged 97 mm at 35
+rad/s and 26 mm at 32). So the filter is the largest of the class's default lowered in 2 % steps
+(:data:`TILT_SEARCH_STEP`) for which the polynomial is Hurwitz at the highest centre of mass over the arm's workspace
+(:func:`workspace_heights`, the grid of :func:`workspace_inverse_inertia`) with ``Targets.payload`` at the end
+effector (:func:`com_height`; default :data:`PAYLOAD_SHARE` = 12 % of the platform's mass, or of what its rotors lift
+beyond it when that is less). The same polynomial is unstable when the filter is too slow for the loop (below about
+k_D): where the rotor lag caps the filter (0.075 / T) under that, the position bandwidth is lowered in the same steps
+until it is stable (:func:`tilting_gains`; examples/my_platform at T = 10 ms with the cascade ratio 3: the filter's
+7.5 rad/s would otherwise leave the integral gains' x loop unstable); a payload no filter can hold with the position
+loops 10 times slower is refused. With the defaults the filter is lowered on the Q-PRR (to 30.8 rad/s with integral
+action, 41.7 without) and HEX-RRR (44.3 with integral action) and stays at 50 rad/s on borinot_flying_arm_2,
+hextilt_flying_arm_5 and examples/my_platform; the Q-PRR's 10 s grasp-drop then flies with the payload not announced
+(26 mm at most, 1.3 mm at the end). A centre of mass at or below B needs no bound.
 
 **MFC.**  The iPID (6.37) realises y'' = v only through its estimate F_est = y''_meas - alpha u_prev,
 which a constant alpha makes a loop of its own: with beta = (B^-1)_ii the true inverse inertia and
@@ -109,7 +132,7 @@ import pinocchio as pin
 from ..charts import rate_map
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
-from ..validation import read_toml
+from ..validation import as_real, read_toml
 from .impedance import ImpedanceGains
 from .inverse_dynamics import AntiWindup, IDCGains
 from .mfc import MFCGains
@@ -132,7 +155,7 @@ class Targets:
     it on for the controllers whose derivation has it (idc, dsid, layered-idc, payload-idc) and leaves the others
     without; True asks for it (refused by a derivation without it), False turns it off; ``payload`` [kg] (>= 0): the
     heaviest payload at the end effector the x, y loops stay stable with (module docstring, "Tilt filter"); None (the
-    default): :data:`PAYLOAD_SHARE` of the platform's mass.
+    default): :data:`PAYLOAD_SHARE` of the platform's mass (:func:`payload_budget`).
     """
 
     position_error: float = 1.0
@@ -327,7 +350,8 @@ def rotor_bound(c: float, targets: Targets) -> float:
 
 
 PAYLOAD_SHARE = 0.12
-"""Targets.payload's default: a payload of this share of the platform's mass (module docstring, "Tilt filter")."""
+"""Targets.payload's default: this share of the platform's mass, or of the mass its rotors lift beyond it when that is
+less (module docstring, "Tilt filter")."""
 TILT_SEARCH_STEP = 0.98
 """:func:`tilt_filter` lowers the filter's bandwidth by this factor until the x, y loops are stable."""
 
@@ -335,6 +359,8 @@ TILT_SEARCH_STEP = 0.98
 def com_height(authority: Authority, payload: float) -> float:
     """The highest centre of mass above B [m] over the workspace with ``payload`` [kg] held at the end effector (the
     mass-weighted mean of :attr:`Authority.heights`; -inf when the heights were not measured)."""
+    _check_authority(authority)
+    payload = as_real(payload, "payload", nonnegative=True, unit="kg")
     m = authority.mass
     return max(((m * c_z + payload * e_z) / (m + payload) for c_z, e_z in authority.heights), default=-math.inf)
 
@@ -343,35 +369,67 @@ def x_pitch_polynomial(omega_f: float, c_z: float, loop: tuple[float, float, flo
     """Characteristic polynomial (highest power first) of x (or y) under a tilting inverse-dynamics controller, linearised
     at hover (module docstring, "Tilt filter"): s^n (s + w_f)^2 + w_f^2 (1 - c_z s^2 / g) (k_D s^2 + k_P s + k_I) / s^(3-n),
     ``loop`` = (k_D, k_P, k_I) of x, n = 3 with an integral (k_I > 0), else 2."""
-    kd, kp, ki = loop
+    omega_f = as_real(omega_f, "omega_f", positive=True, unit="rad/s")
+    c_z, g = as_real(c_z, "c_z", unit="m"), as_real(g, "g", positive=True, unit="m/s^2")
+    kd, kp, ki = _loop(loop)
     gains = np.array([kd, kp, ki] if ki > 0.0 else [kd, kp])
-    lag = np.polymul(np.eye(1, gains.size + 1)[0], [1.0, 2.0 * omega_f, omega_f**2])
+    lag = np.polymul(np.r_[1.0, np.zeros(gains.size)], [1.0, 2.0 * omega_f, omega_f**2])  # s^n (s + w_f)^2
     return np.polyadd(lag, omega_f**2 * np.polymul([-c_z / g, 0.0, 1.0], gains))
 
 
 def hurwitz(coefficients: np.ndarray) -> bool:
     """Every root of the polynomial (highest power first) in the open left half-plane."""
-    return bool(np.roots(coefficients).real.max() < 0.0)
+    c = np.asarray(coefficients)
+    if c.ndim != 1 or c.size < 2 or not np.issubdtype(c.dtype, np.number) or not np.all(np.isfinite(c)) or c[0] == 0.0:
+        raise InputError(f"coefficients must be finite numbers, highest power first with a non-zero leading one, got {coefficients!r}")
+    return bool(np.roots(c).real.max() < 0.0)
 
 
-def tilt_filter(default: float, targets: Targets, authority: Authority, loop: tuple[float, float, float]) -> float:
-    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T (module
-    docstring, "Rotor lag"), lowered by :data:`TILT_SEARCH_STEP` until :func:`x_pitch_polynomial` of the x loop's
-    ``loop`` = (k_D, k_P, k_I) is Hurwitz with ``targets.payload`` at the end effector (module docstring, "Tilt filter")."""
-    omega = min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
-    payload = PAYLOAD_SHARE * authority.mass if targets.payload is None else targets.payload
-    c_z = com_height(authority, payload)
-    if c_z <= 0.0:  # the centre of mass below B: the pitch acceleration adds to the tilt's push (no bound)
-        return omega
-    while not hurwitz(x_pitch_polynomial(omega, c_z, loop, authority.g)):
+def _loop(loop) -> tuple[float, float, float]:
+    """(k_D, k_P, k_I) of an x loop, each a number >= 0 (k_D, k_P > 0)."""
+    if not (isinstance(loop, (tuple, list)) and len(loop) == 3):
+        raise InputError(f"loop must be (k_D, k_P, k_I) of the x loop, got {loop!r}")
+    return as_real(loop[0], "k_D", positive=True), as_real(loop[1], "k_P", positive=True), as_real(loop[2], "k_I", nonnegative=True)
+
+
+def _check_authority(authority) -> None:
+    if not isinstance(authority, Authority):
+        raise InputError(f"authority must be a qprr.control.gains.Authority (Authority.from_platform), got {type(authority).__name__}")
+
+
+def payload_budget(authority: Authority, targets: Targets) -> float:
+    """``targets.payload`` [kg] (refused beyond what the rotors lift on top of the platform, thrust margin / g), or when
+    None :data:`PAYLOAD_SHARE` of the platform's mass or of that lift, whichever is smaller."""
+    _check_authority(authority)
+    if not isinstance(targets, Targets):
+        raise InputError(f"targets must be a qprr.control.gains.Targets, got {type(targets).__name__}")
+    lift = authority.thrust_margin / authority.g
+    if targets.payload is None:
+        return PAYLOAD_SHARE * min(authority.mass, lift)
+    payload = targets.payload
+    if payload >= lift:
+        raise InputError(
+            f"gain target payload = {payload:.4g} kg: the rotors lift at most {lift:.4g} kg beyond the platform; give a payload target below it"
+        )
+    return payload
+
+
+def tilt_filter(top: float, c_z: float, loop: tuple[float, float, float], g: float) -> float | None:
+    """The roll/pitch reference filter's bandwidth [rad/s]: ``top`` lowered by :data:`TILT_SEARCH_STEP` until
+    :func:`x_pitch_polynomial` of the x loop's ``loop`` = (k_D, k_P, k_I) is Hurwitz with the centre of mass ``c_z`` [m]
+    above B (module docstring, "Tilt filter"); None when no bandwidth above k_D is (the filter would be slower than
+    the loop it filters)."""
+    omega = as_real(top, "top", positive=True, unit="rad/s")
+    loop = _loop(loop)
+    while not hurwitz(x_pitch_polynomial(omega, c_z, loop, g)):
         omega *= TILT_SEARCH_STEP
-        if omega < loop[0]:  # a filter slower than the x loop's damping: no bandwidth keeps it stable
-            raise InputError(
-                f"gain target payload = {payload:.4g} kg: with it at the end effector the centre of mass rises to "
-                f"{c_z * 1e3:.1f} mm above B and no roll/pitch filter keeps the x, y loops (k_D = {loop[0]:.3g}) stable; "
-                "give a smaller payload target or slower position loops (a larger position_error target)"
-            )
+        if omega < loop[0]:
+            return None
     return omega
+
+
+POSITION_FLOOR = 0.1
+""":func:`tilting_gains` slows the position loops to at most this fraction of their derived bandwidth, then refuses."""
 
 
 INTEGRAL_RATIO_POSITION = 2.0
@@ -402,8 +460,7 @@ def integral_limits(authority: Authority) -> tuple[float, ...]:
     """The clamp of each integral of the derived IDC gains (:class:`~qprr.control.inverse_dynamics.AntiWindup`): the
     acceleration the actuators give the coordinate (module docstring, "Integral action"): thrust margin over mass on
     x, y, z, torque over inertia on the angles, effort over the joint's inertia M_jj on the arm (inf: no bound)."""
-    if not isinstance(authority, Authority):
-        raise InputError(f"authority must be a qprr.control.gains.Authority (Authority.from_platform), got {type(authority).__name__}")
+    _check_authority(authority)
     a = authority
 
     def ratio(force, inertia):
@@ -454,10 +511,30 @@ def derive_idc(authority: Authority, targets: Targets) -> dict[str, object]:
 
 def tilting_gains(w: np.ndarray, filter_omega: float, authority: Authority, targets: Targets) -> IDCGains:
     """:func:`idc_gains` of the bandwidths ``w`` (with :func:`_integral_action`) and the roll/pitch reference filter at
-    the controller's ``filter_omega`` [rad/s] bounded by :func:`tilt_filter` for the x loop's gains."""
-    gains = idc_gains(w, **_integral_action(authority, targets))
-    loop = (gains.kd[0], gains.kp[0], gains.ki[0])
-    return dataclasses.replace(gains, filter_omega=tilt_filter(filter_omega, targets, authority, loop))
+    the controller's ``filter_omega`` [rad/s], at most 0.075 / T (module docstring, "Rotor lag"), lowered by
+    :func:`tilt_filter` until x and y are stable with ``targets.payload`` at the end effector; when no filter is fast
+    enough (rotor lag), the position loops are slowed by :data:`TILT_SEARCH_STEP` until one is (module docstring,
+    "Tilt filter")."""
+    payload = payload_budget(authority, targets)
+    top = min(as_real(filter_omega, "filter_omega", positive=True, unit="rad/s"), rotor_bound(ROTOR_LAG_FILTER, targets))
+    c_z = com_height(authority, payload)
+    w = np.array(w, dtype=float) if isinstance(w, (np.ndarray, list, tuple)) else np.zeros(0)
+    if w.ndim != 1 or w.size < 6 or not np.all(np.isfinite(w) & (w > 0.0)):
+        raise InputError(f"w must be the bandwidths [rad/s] of the 6 + n_arm coordinates of xi, each > 0 (bandwidths()), got {w!r}")
+    w_pos = w[0]
+    while True:
+        gains = idc_gains(w, **_integral_action(authority, targets))
+        omega = tilt_filter(top, max(c_z, 0.0), (gains.kd[0], gains.kp[0], gains.ki[0]), authority.g)
+        if omega is not None:
+            return dataclasses.replace(gains, filter_omega=omega)
+        w[0:3] *= TILT_SEARCH_STEP
+        if w[0] < POSITION_FLOOR * w_pos:
+            raise InputError(
+                f"gain target payload = {payload:.4g} kg: with it at the end effector the centre of mass rises to "
+                f"{c_z * 1e3:.1f} mm above B, and no roll/pitch filter up to {top:.3g} rad/s keeps the x, y loops stable "
+                f"even {1.0 / POSITION_FLOOR:g} times slower than derived; give a smaller payload target (or a larger "
+                "position_error target)"
+            )
 
 
 def _integral_action(authority: Authority, targets: Targets) -> dict[str, object]:
@@ -501,7 +578,8 @@ def derive_impedance(authority: Authority, targets: Targets) -> dict[str, object
     """``impedance``: the IDC's gains and the impedance filters (6.74)-(6.75) of :func:`impedance_gains`."""
     _refuse_integral(targets, "impedance")
     w = bandwidths(authority, targets)
-    return {"gains": tilting_gains(w, IDCGains.filter_omega, authority, dataclasses.replace(targets, integral=False)), "impedance": impedance_gains(authority, w)}
+    gains = tilting_gains(w, IDCGains.filter_omega, authority, dataclasses.replace(targets, integral=False))
+    return {"gains": gains, "impedance": impedance_gains(authority, w)}
 
 
 def derive_opspace_impedance(authority: Authority, targets: Targets) -> dict[str, object]:
