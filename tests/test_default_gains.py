@@ -9,6 +9,7 @@ import itertools
 import numpy as np
 import pinocchio as pin
 import pytest
+from scipy.linalg import expm
 
 import qprr
 from qprr.charts import rate_map
@@ -82,41 +83,57 @@ def test_opspace_impedance_default_needs_the_contact_force(platform):
         make_controller("opspace-impedance", platform)
 
 
-def test_arm_offset_decays_as_the_placed_double_pole_first_order_in_dt(platform):
-    """IDC at the default gains, hover with the last arm joint 0.02 off: e(t) = e0 (1 + w t) exp(-w t) with w the derived
-    arm bandwidth; the only deviation is the control's zero-order hold, first order in dt (ratio 4 for dt / 4)."""
+@pytest.mark.parametrize("integral", [False, True], ids=["pd", "integral"])
+def test_arm_offset_decays_as_the_placed_poles_first_order_in_dt(platform, integral):
+    """IDC at the derived gains, hover with the last arm joint 0.02 off.  PD (``integral = false``): e(t) = e0 (1 + w t)
+    exp(-w t) with w the derived arm bandwidth; with integral action (the default): the error of the placed poles
+    (s + w)^2 (s + w / 10) from e0 with a zero integral, [0 1 0] expm(A t) (0, e0, 0) with A the companion matrix of
+    s^3 + k_D s^2 + k_P s + k_I.  The only deviation is the control's zero-order hold, first order in dt (ratio 4 for
+    dt / 4)."""
     xi = platform.neutral_xi().copy()
     xi[2] = 2.0
     j = 5 + platform.n_arm
-    w = bandwidths(Authority.from_platform(platform))[j]
+    targets = Targets(integral=integral)
+    w = bandwidths(Authority.from_platform(platform), targets)[j]
+    g = platform_gains("idc", platform, targets)["gains"]
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-g.ki[j], -g.kp[j], -g.kd[j]]])  # state (int e, e, e')
     x0 = xi.copy()
     x0[j] += 0.02
     dev = []
     for dt in (1e-3, 2.5e-4):
-        r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 1.0, xi0=x0, dt=dt)
-        closed = 0.02 * (1.0 + w * r.t) * np.exp(-w * r.t)
+        r = simulate(platform, make_controller("idc", platform, gains=g), Hold(tuple(xi)), 1.0, xi0=x0, dt=dt)
+        if integral:
+            closed = np.array([(expm(A * t) @ [0.0, 0.02, 0.0])[1] for t in r.t])
+        else:
+            closed = 0.02 * (1.0 + w * r.t) * np.exp(-w * r.t)
         dev.append(np.abs(r.xi[:, j] - xi[j] - closed).max() / 0.02)
         assert dev[-1] < w * dt, (dt, dev[-1], w * dt)  # the hold delays u by dt / 2 on average
     assert 3.6 < dev[0] / dev[1] < 4.4, dev
 
 
 def test_hover_from_a_base_and_arm_offset_converges(platform):
-    """From 0.1 m off in x and y and every arm joint 0.02 off, the default IDC settles on the hover reference."""
+    """From 0.1 m off in x and y and every arm joint 0.02 off, the IDC with the derived PD gains settles on the hover
+    reference in 8 s without overshooting; with the default gains (integral action) in 16 s (the integral poles, w / 2
+    on position and w / 10 on the arm, are the slow ones)."""
     xi = platform.neutral_xi().copy()
     xi[2] = 2.0
     x0 = xi.copy()
     x0[0] += 0.1
     x0[1] -= 0.1
     x0[6:] += 0.02
-    r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 8.0, xi0=x0)
+    pd = platform_gains("idc", platform, Targets(integral=False))["gains"]
+    r = simulate(platform, make_controller("idc", platform, gains=pd), Hold(tuple(xi)), 8.0, xi0=x0)
     assert r.status == "ok"
     assert np.abs(r.xi[-1] - xi).max() < 1e-6
     assert np.abs(r.xi[:, 0:3] - xi[0:3]).max() < 0.105  # no overshoot beyond 5 % of the offset
+    r = simulate(platform, make_controller("idc", platform), Hold(tuple(xi)), 16.0, xi0=x0)
+    assert r.status == "ok"
+    assert np.abs(r.xi[-1] - xi).max() < 1e-6
 
 
 # ------------------------------------------------------------------------------------------- motor lag
 MOTOR_LAG = dict(
-    duration=10.0,
+    duration=14.0,  # the default gains' integral poles are the slow ones: 10 s left the arm 1.7e-5 rad off at T = 10 ms
     dt=1e-3,
     integrator="midpoint",
     seed=0,

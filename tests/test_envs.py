@@ -121,7 +121,8 @@ def test_vector_step_is_the_scalar_step(envs, platforms, mode):
 
 def test_reference_mode_flies_what_simulate_flies(envs, platforms):
     """A zero residual: the IDC on the episode's plan, its controller every 5 ms, is qprr.sim.simulate's run of the same
-    controller on the same plan from the same state (states equal at every action, to rounding)."""
+    controller (the derived PD gains at 5 ms: qprr.envs.actions.controller_arguments) on the same plan from the same
+    state (states equal at every action, to rounding)."""
     from qprr import charts
     from qprr.control import make_controller
     from qprr.control.gains import Targets, platform_gains
@@ -130,7 +131,7 @@ def test_reference_mode_flies_what_simulate_flies(envs, platforms):
     p = platforms["borinot_flying_arm_2"]
     env = envs.AerialVectorEnv(1, "reach", platform=p, action_mode="reference", duration=1.0)
     env.reset(seed=4)
-    controller = make_controller("idc", p, **platform_gains("idc", p, Targets(control_period=0.005)))
+    controller = make_controller("idc", p, **platform_gains("idc", p, Targets(control_period=0.005, integral=False)))
     run = simulate(p, controller, env.core.trajectories[0], 1.0, control_period=0.005, xi0=charts.q_to_xi(env.core.sim.q[0]))
     zero = np.zeros((1, env.single_action_space.shape[0]))
     worst = 0.0

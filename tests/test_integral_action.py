@@ -30,7 +30,10 @@ from qprr.sim.wind import AerodynamicDrag, Wind
 from qprr.trajectory import Hold
 
 INTEGRAL = Targets(integral=True)
-"""The derived gains with integral action on position and arm (off by default: qprr.control.gains, "Integral action")."""
+"""The derived gains with integral action on position and arm (the inverse-dynamics family's default: qprr.control.gains,
+"Integral action")."""
+PLAIN = Targets(integral=False)
+"""The derived gains without the position and arm integrals (PD)."""
 MY = Path(__file__).resolve().parents[1] / "examples" / "my_platform"
 PAYLOAD, WIND, DRAG = 0.4, 5.0, 0.3  # kg, m/s along world x, N s/m (linear, every body axis)
 REACH = {"q-prr": 0.6, "borinot_flying_arm_2": 0.3, "my_platform": 0.0}
@@ -93,7 +96,8 @@ def _integrals_do_the_work(platform, name: str, disturbance: str, duration: floa
 def test_derived_gains_place_the_integral_pole_below_the_pd(name):
     """Derived IDC gains with integral action: (s + w)^2 (s + w / r) on position (r = 2) and arm (r = 10), (s + w)^3 on
     the attitude, the conditional anti-windup, and each integral clamped to the acceleration the actuators give the
-    coordinate; without it (the default) (s + w)^2 on position and arm, plain integration and no clamp."""
+    coordinate, the same as the default targets; without it (integral = false) (s + w)^2 on position and arm, plain
+    integration and no clamp."""
     platform = _platform(name)
     a = Authority.from_platform(platform)
     w = bandwidths(a)
@@ -108,7 +112,8 @@ def test_derived_gains_place_the_integral_pole_below_the_pd(name):
     np.testing.assert_allclose(g.integral_limit[0:3], [m_g] * 3, rtol=1e-15)
     np.testing.assert_allclose(g.integral_limit[6:], np.array(a.arm_effort) / np.array(a.arm_inertia), rtol=1e-15)
     assert integral_limits(a) == g.integral_limit
-    plain = platform_gains("idc", platform)["gains"]
+    assert platform_gains("idc", platform)["gains"] == g
+    plain = platform_gains("idc", platform, PLAIN)["gains"]
     for i, wi in enumerate(w):
         poles = [-wi] * 3 if 3 <= i < 6 else [-wi, -wi]
         np.testing.assert_allclose([1.0, plain.kd[i], plain.kp[i], *([plain.ki[i]] if 3 <= i < 6 else [])], np.poly(poles), rtol=1e-13, atol=0)
@@ -185,20 +190,22 @@ def test_missions_take_the_payload_model_option():
 
 def test_a_mission_file_asks_for_integral_action_by_its_targets():
     """``[controller.targets] integral = true`` in a mission file gives the inverse-dynamics controller the derived gains
-    with integral action (the same as Targets(integral=True) in Python); without it, the default PD gains; a value that
-    is not a boolean is refused with its name."""
+    with integral action (the same as Targets(integral=True) in Python, and as the default); ``integral = false`` the PD
+    gains; a value that is not a boolean is refused with its name."""
     from qprr.scenarios.mission_file import read_mission_file
     from qprr.scenarios.missions import mission_gain_arguments
 
     platform = _platform("my_platform")
     phase = {"coordinate": "z", "start": 0.0, "end": 1.0, "target": 1.0}
     asked = read_mission_file({"phase": [phase], "controller": {"name": "idc", "targets": {"integral": True}}})
-    plain = read_mission_file({"phase": [phase], "controller": {"name": "idc"}})
+    plain = read_mission_file({"phase": [phase], "controller": {"name": "idc", "targets": {"integral": False}}})
+    unsaid = read_mission_file({"phase": [phase], "controller": {"name": "idc"}})
     with_integral = mission_gain_arguments("idc", platform, "platform", asked, None)["gains"]
-    default = mission_gain_arguments("idc", platform, "platform", plain, None)["gains"]
+    without = mission_gain_arguments("idc", platform, "platform", plain, None)["gains"]
     assert with_integral == platform_gains("idc", platform, INTEGRAL)["gains"]
-    assert default == platform_gains("idc", platform)["gains"]
-    assert all(k > 0.0 for k in with_integral.ki) and all(k == 0.0 for i, k in enumerate(default.ki) if not 3 <= i < 6)
+    assert mission_gain_arguments("idc", platform, "platform", unsaid, None)["gains"] == with_integral
+    assert without == platform_gains("idc", platform, PLAIN)["gains"]
+    assert all(k > 0.0 for k in with_integral.ki) and all(k == 0.0 for i, k in enumerate(without.ki) if not 3 <= i < 6)
     wrong = read_mission_file({"phase": [phase], "controller": {"name": "idc", "targets": {"integral": "on"}}})
     with pytest.raises(qprr.errors.InputError, match="integral"):
         mission_gain_arguments("idc", platform, "platform", wrong, None)
@@ -260,3 +267,74 @@ def test_the_estimated_payload_holds_grasp_drop_far_closer_than_an_unknown_one()
     assert moved["estimate"] < moved["unknown"] / 20.0
     assert moved["estimate"] < 0.01
     assert moved["announced"] < 1e-9
+
+
+@pytest.mark.parametrize("loop", [(8.4, 22.6, 19.0), (6.7, 11.3, 0.0)], ids=["integral", "pd"])
+@pytest.mark.parametrize("omega_f, c_z", [(50.0, 0.0), (30.0, 0.045), (50.0, 0.06), (20.0, -0.03)])
+def test_x_pitch_polynomial_is_the_linearised_closed_loop(loop, omega_f, c_z):
+    """The characteristic polynomial of qprr.control.gains (module docstring, "Tilt filter") has the eigenvalues of the
+    loop written as a state space, step by step: the command u = -(k_D x' + k_P x + k_I int x) / g through the critically
+    damped roll/pitch filter theta'' = w^2 (u - theta) - 2 w theta', then x'' = g theta - c_z theta'' (Newton for the whole
+    robot: its centre of mass, c_z above B, moves by x + c_z theta and the thrust tilted by theta pushes it)."""
+    from qprr.control.gains import x_pitch_polynomial
+
+    kd, kp, ki, g, w = *loop, 9.81, omega_f
+    # state (x, x', theta, theta', int x); theta'' = w^2 (u - theta) - 2 w theta' with u linear in the state
+    u = np.array([-kp, -kd, 0.0, 0.0, -ki]) / g
+    theta_dd = w**2 * (u - np.array([0.0, 0.0, 1.0, 0.0, 0.0])) - np.array([0.0, 0.0, 0.0, 2.0 * w, 0.0])
+    A = np.zeros((5, 5))
+    A[0, 1] = A[2, 3] = A[4, 0] = 1.0
+    A[3] = theta_dd
+    A[1] = g * np.eye(5)[2] - c_z * theta_dd
+    if ki == 0.0:
+        A = A[:4, :4]
+    expected = np.sort_complex(np.linalg.eigvals(A))
+    roots = np.sort_complex(np.roots(x_pitch_polynomial(w, c_z, loop, g)))
+    np.testing.assert_allclose(roots, expected, rtol=1e-8, atol=1e-8)
+
+
+def test_the_roll_pitch_filter_is_bounded_by_the_payload_budget():
+    """The derived filter is the largest bandwidth (on the search's 2 % steps below the class's 50 rad/s) whose x, y
+    loops are stable with the payload budget at the end effector anywhere in the workspace: on the Q-PRR (centre of mass
+    26 mm above B at most, 61 mm with 0.42 kg at the wrist) it is lowered, with the integral more than without; with no
+    payload it stays at 50 rad/s; with 3 kg the position loops are slowed until a filter holds them; a payload beyond
+    the thrust margin, or a centre of mass no filter can hold, is refused with its name."""
+    from qprr.control.gains import PAYLOAD_SHARE, TILT_SEARCH_STEP, com_height, derive, hurwitz, x_pitch_polynomial
+
+    platform = qprr.load()
+    a = Authority.from_platform(platform)
+    c_z = com_height(a, PAYLOAD_SHARE * a.mass)
+    assert 0.05 < c_z < 0.07 and com_height(a, 0.0) < 0.03
+    for targets in (INTEGRAL, PLAIN):
+        g = platform_gains("idc", platform, targets)["gains"]
+        loop = (g.kd[0], g.kp[0], g.ki[0])
+        assert g.filter_omega < 50.0
+        assert hurwitz(x_pitch_polynomial(g.filter_omega, c_z, loop, a.g))
+        assert not hurwitz(x_pitch_polynomial(g.filter_omega / TILT_SEARCH_STEP, c_z, loop, a.g))
+    assert platform_gains("idc", platform, INTEGRAL)["gains"].filter_omega < platform_gains("idc", platform, PLAIN)["gains"].filter_omega
+    assert platform_gains("idc", platform, Targets(payload=0.0))["gains"].filter_omega == 50.0
+    # 3 kg: the x loops are slowed until a filter holds them; beyond the thrust margin (4.6 kg): refused
+    heavy = platform_gains("idc", platform, Targets(payload=3.0))["gains"]
+    loop = (heavy.kd[0], heavy.kp[0], heavy.ki[0])
+    assert heavy.kd[0] < platform_gains("idc", platform)["gains"].kd[0]
+    assert hurwitz(x_pitch_polynomial(heavy.filter_omega, com_height(a, 3.0), loop, a.g))
+    with pytest.raises(qprr.errors.InputError, match="payload = 5 kg: the rotors lift at most 4.6"):
+        platform_gains("idc", platform, Targets(payload=5.0))
+    with pytest.raises(qprr.errors.InputError, match="no roll/pitch filter"):  # the centre of mass 10 m above B
+        derive("idc", dataclasses.replace(a, heights=((10.0, 10.0),)), INTEGRAL)
+    with pytest.raises(qprr.errors.InputError, match="payload"):
+        Targets(payload=-1.0)
+
+
+def test_the_bounded_filter_flies_the_q_prr_grasp_drop_that_50_rad_s_lets_diverge():
+    """The Q-PRR's grasp-drop (0.35 kg at the wrist for 2 s, not announced) with the default derived gains (integral on,
+    filter bounded for the payload budget) ends within 5 mm; the same gains with the class's 50 rad/s filter diverge
+    (the x-pitch mode of the module docstring's "Tilt filter": measured, 1.6 s after the grasp)."""
+    from qprr.scenarios import run
+
+    platform = qprr.load()
+    res = run("grasp-drop", platform=platform, duration=10.0)
+    assert res.status == "ok"
+    assert np.linalg.norm(res.xi[-1, :3] - res.xi_d[-1, :3]) < 5e-3
+    with pytest.raises(qprr.errors.DivergenceError):
+        run("grasp-drop", platform=platform, duration=10.0, gains={"idc": {"gains": {"filter_omega": 50.0}}})

@@ -57,12 +57,35 @@ Anti-windup: :class:`~qprr.control.inverse_dynamics.AntiWindup` ``CONDITIONAL`` 
 while its command saturates the rotors or its joint's effort) and each integral's contribution clamped to the
 acceleration the actuators give the coordinate (:func:`integral_limits`).  Measured (tests/test_integral_action.py):
 0.4 kg and a 5 m/s wind leave < 1 mm at the end effector of the Q-PRR, borinot_flying_arm_2 and examples/my_platform
-(15 to 370 mm without the position and arm integrals).  It is asked for with ``Targets(integral=True)`` (a gains file's
-or a mission's ``[controller.targets] integral = true``) and is off by default: the integral poles this robustness
-needs are slow (w / 10 on the arm), so what they hold is unwound slowly once the disturbance goes -- measured on the
-3 s generic missions, after a release of 10 % of the mass the Q-PRR's and HEX-RRR's arms end 0.27-0.30 rad off (PD: on
-the reference), and HEX-RRR's fly-to ends 4 cm off after the integral of its fast move; and beyond the margin (the
-Q-PRR's grasp-drop holding 0.35 kg for 2 s at reach 0.3) the loop diverges where the PD only sags.
+(15 to 370 mm without the position and arm integrals).  It is on by default for idc, dsid, layered-idc and
+payload-idc (``Targets.integral`` None; ``[controller.targets] integral = false`` in a gains or mission file turns it off,
+``true`` asks for it and is refused by a derivation without it).  Its cost: what the slow integral poles hold is unwound
+at their pace once the disturbance goes (measured, 10 s generic missions: after grasp-drop's release the end effector
+ends 1 to 9 mm off on the Q-PRR, borinot_flying_arm_2, HEX-RRR and examples/my_platform, the PD within 1 mm; on hover-wind
+it ends 0.02 to 7 mm off, the PD 15 to 114 mm off).
+
+**Tilt filter.** An underactuated base moves x (and y) by tilting: Newton for the whole robot gives x_c'' = g theta
+for its centre of mass, which sits c_z above B, so B itself moves by x'' = g theta - c_z theta''. The pitch reference
+of (6.17) comes from the x loop's command u = -(k_D x' + k_P x + k_I int x) / g through the critically damped
+reference filter theta'' = w_f^2 (u - theta) - 2 w_f theta' (the attitude loop tracks it), so x obeys s^n (s + w_f)^2
++ w_f^2 (1 - c_z s^2 / g) (k_D s^2 + k_P s + k_I) / s^(3-n) = 0 (n = 3 with an integral, else 2;
+:func:`x_pitch_polynomial`). The term -c_z theta'' is a right-half-plane zero at sqrt(g / c_z): with the centre of
+mass above B, a fast filter feeds it back and the x loop diverges (its s^(n+1) coefficient 2 w_f - w_f^2 c_z k_D / g
+turns negative near w_f k_D c_z / g = 2). A payload at the end effector raises c_z: 0.35 kg at the Q-PRR's wrist takes
+it from 22 to 45 mm, and its grasp-drop with integral action diverged 1.6 s after the grasp at the class's 50 rad/s
+(measured; with the payload estimated it diverged at 45 rad/s and flew at 40; not announced, it sagged 97 mm at 35
+rad/s and 26 mm at 32). So the filter is the largest of the class's default lowered in 2 % steps
+(:data:`TILT_SEARCH_STEP`) for which the polynomial is Hurwitz at the highest centre of mass over the arm's workspace
+(:func:`workspace_heights`, the grid of :func:`workspace_inverse_inertia`) with ``Targets.payload`` at the end
+effector (:func:`com_height`; default :data:`PAYLOAD_SHARE` = 12 % of the platform's mass, or of what its rotors lift
+beyond it when that is less). The same polynomial is unstable when the filter is too slow for the loop (below about
+k_D): where the rotor lag caps the filter (0.075 / T) under that, the position bandwidth is lowered in the same steps
+until it is stable (:func:`tilting_gains`; examples/my_platform at T = 10 ms with the cascade ratio 3: the filter's
+7.5 rad/s would otherwise leave the integral gains' x loop unstable); a payload no filter can hold with the position
+loops 10 times slower is refused. With the defaults the filter is lowered on the Q-PRR (to 30.8 rad/s with integral
+action, 41.7 without) and HEX-RRR (44.3 with integral action) and stays at 50 rad/s on borinot_flying_arm_2,
+hextilt_flying_arm_5 and examples/my_platform; the Q-PRR's 10 s grasp-drop then flies with the payload not announced
+(26 mm at most, 1.3 mm at the end). A centre of mass at or below B needs no bound.
 
 **MFC.**  The iPID (6.37) realises y'' = v only through its estimate F_est = y''_meas - alpha u_prev,
 which a constant alpha makes a loop of its own: with beta = (B^-1)_ii the true inverse inertia and
@@ -109,7 +132,7 @@ import pinocchio as pin
 from ..charts import rate_map
 from ..errors import InputError, UnknownNameError
 from ..model import Platform, check_platform
-from ..validation import read_toml
+from ..validation import as_real, read_toml
 from .impedance import ImpedanceGains
 from .inverse_dynamics import AntiWindup, IDCGains
 from .mfc import MFCGains
@@ -128,7 +151,11 @@ class Targets:
     known it bounds the attitude loop and the roll/pitch reference filter (module docstring, "Rotor lag");
     ``control_period`` [s] (> 0): the period the MFC's estimator differences the rates over (the
     simulator's default step, 1 ms; module docstring, "MFC"); ``integral``: the inverse-dynamics controllers' position
-    and arm loops get integral action with anti-windup (module docstring, "Integral action"; off by default).
+    and arm loops get integral action with anti-windup (module docstring, "Integral action"): None (the default) turns
+    it on for the controllers whose derivation has it (idc, dsid, layered-idc, payload-idc) and leaves the others
+    without; True asks for it (refused by a derivation without it), False turns it off; ``payload`` [kg] (>= 0): the
+    heaviest payload at the end effector the x, y loops stay stable with (module docstring, "Tilt filter"); None (the
+    default): :data:`PAYLOAD_SHARE` of the platform's mass (:func:`payload_budget`).
     """
 
     position_error: float = 1.0
@@ -138,11 +165,21 @@ class Targets:
     cap: float = 40.0
     rotor_time_constant: float = 0.0
     control_period: float = 1e-3
-    integral: bool = False
+    integral: bool | None = None
+    payload: float | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.integral, bool):
-            raise InputError(f"gain target integral must be true or false (integral action on position and arm), got {self.integral!r}")
+        if not (self.integral is None or isinstance(self.integral, bool)):
+            raise InputError(
+                f"gain target integral must be true or false (integral action on position and arm; leave it out for the "
+                f"controller's default), got {self.integral!r}"
+            )
+        P = self.payload
+        if not (P is None or (isinstance(P, (int, float)) and not isinstance(P, bool) and math.isfinite(P) and P >= 0.0)):
+            raise InputError(
+                f"gain target payload must be a mass >= 0 kg (the heaviest payload at the end effector; leave it out for "
+                f"{PAYLOAD_SHARE:g} of the platform's mass), got {P!r}"
+            )
         T = self.rotor_time_constant
         if not (isinstance(T, (int, float)) and math.isfinite(T) and T >= 0.0):
             raise InputError(f"gain target rotor_time_constant must be a finite number >= 0 s (0: instantaneous rotors), got {T!r}")
@@ -164,7 +201,10 @@ class Authority:
     ``inverse_inertia`` ((min, max), ...) per coordinate of xi: the range of (B^-1)_ii over the arm's
     workspace at level attitude (B = S^T M S, Thesis (5.53); x, y, z averaged as the MFC's alpha is)
     [1/kg or 1/(kg m^2)]; () when not measured (the MFC's gains need it); ``coupling``: the largest
-    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`).
+    eigenvalue of diag(1 / max (B^-1)_ii) B^-1 over that workspace (:func:`workspace_inverse_inertia`); ``heights``:
+    (c_z, e_z) [m], the heights of the centre of mass and of the end effector above B over that workspace
+    (:func:`workspace_heights`; () when not measured: no bound on the roll/pitch filter, module docstring "Tilt filter");
+    ``g`` [m/s^2]: the platform's gravity.
     """
 
     mass: float
@@ -175,6 +215,8 @@ class Authority:
     arm_effort: tuple[float, ...]
     inverse_inertia: tuple[tuple[float, float], ...] = ()
     coupling: float = 1.0
+    heights: tuple[tuple[float, float], ...] = ()
+    g: float = 9.81
 
     @classmethod
     def from_platform(cls, platform: Platform) -> Authority:
@@ -205,6 +247,8 @@ class Authority:
             tuple(float(v) for v in np.diag(M)[6 : 6 + n]),
             tuple(float(v) for v in platform.arm_effort_limits),
             *workspace_inverse_inertia(platform),
+            workspace_heights(platform),
+            platform.g,
         )
 
     def scaled(self, k: float) -> Authority:
@@ -218,6 +262,8 @@ class Authority:
             tuple(k * v for v in self.arm_effort),
             tuple((lo / k, hi / k) for lo, hi in self.inverse_inertia),
             self.coupling,
+            self.heights,
+            self.g,
         )
 
 
@@ -225,34 +271,54 @@ WORKSPACE_SAMPLES = 256
 """Arm configurations (a grid, at most this many) over which :func:`workspace_inverse_inertia` reads B^-1."""
 
 
-def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
-    """The MFC's inputs over a grid of the arm's joint ranges at level attitude (B = S^T M S, Thesis (5.53)).
-
-    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
-    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).  Each joint takes
-    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi
-    where unlimited) and its neutral value.
-    """
+def workspace_grid(platform: Platform) -> list[np.ndarray]:
+    """Configurations q (level base at the neutral pose) over a grid of the arm's joint ranges: each joint takes
+    ``max(2, floor(WORKSPACE_SAMPLES^(1/n_arm)))`` values from its lower to its upper limit (neutral -+ pi where
+    unlimited) and its neutral value (a folded arm, the inertia about a joint smallest, is often there)."""
     platform = check_platform(platform)
     n = platform.n_arm
     q0 = platform.neutral_q()
     k = max(2, int(math.floor(WORKSPACE_SAMPLES ** (1.0 / n)))) if n else 1
-    axes = [  # the neutral value too: a folded arm (the inertia about a joint smallest) is often there
+    axes = [
         np.unique(np.append(np.linspace(lo if math.isfinite(lo) else c - math.pi, hi if math.isfinite(hi) else c + math.pi, k), c))
         for lo, hi, c in zip(platform.arm_lower, platform.arm_upper, q0[7:])
     ]
-    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
-    data = platform.data()
-    inverses = []
+    grid = []
     for q_arm in itertools.product(*axes) if n else [()]:
         q = q0.copy()
         q[7:] = q_arm
-        inverses.append(np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S))
+        grid.append(q)
+    return grid
+
+
+def workspace_inverse_inertia(platform: Platform) -> tuple[tuple[tuple[float, float], ...], float]:
+    """The MFC's inputs over :func:`workspace_grid` at level attitude (B = S^T M S, Thesis (5.53)).
+
+    Returns ((min, max) of (B^-1)_ii per coordinate of xi (x, y, z share their mean, as in the MFC's
+    alpha), the largest eigenvalue of diag(1 / max_q (B^-1)_ii) B^-1(q) over the grid).
+    """
+    platform = check_platform(platform)
+    S = rate_map(platform.neutral_xi())  # level base: the Euler-rate map at phi = theta = 0 (arm rows: identity)
+    data = platform.data()
+    inverses = [np.linalg.inv(S.T @ pin.crba(platform.model, data, q) @ S) for q in workspace_grid(platform)]
     d = np.array([np.diag(Bi) for Bi in inverses])
     d[:, 0:3] = d[:, 0:3].mean(axis=1, keepdims=True)
     lo, hi = d.min(axis=0), d.max(axis=0)
     lam = max(float(np.linalg.eigvals(Bi / hi[:, None]).real.max()) for Bi in inverses)
     return tuple((float(a), float(b)) for a, b in zip(lo, hi)), lam
+
+
+def workspace_heights(platform: Platform) -> tuple[tuple[float, float], ...]:
+    """(c_z, e_z) [m] over :func:`workspace_grid` at level attitude: the heights of the platform's centre of mass and of
+    its end-effector frame above B (world z; the inputs of :func:`com_height`)."""
+    platform = check_platform(platform)
+    data = platform.data()
+    heights = []
+    for q in workspace_grid(platform):
+        c_world = pin.centerOfMass(platform.model, data, q)
+        pin.updateFramePlacement(platform.model, data, platform.ee_frame)
+        heights.append((float(c_world[2] - q[2]), float(data.oMf[platform.ee_frame].translation[2] - q[2])))
+    return tuple(heights)
 
 
 def bandwidths(authority: Authority, targets: Targets = Targets()) -> np.ndarray:
@@ -283,9 +349,87 @@ def rotor_bound(c: float, targets: Targets) -> float:
     return c / T if T > 0.0 else math.inf
 
 
-def tilt_filter(default: float, targets: Targets) -> float:
-    """Bandwidth [rad/s] of the roll/pitch reference filter: the controller's ``default``, at most 0.075 / T."""
-    return min(default, rotor_bound(ROTOR_LAG_FILTER, targets))
+PAYLOAD_SHARE = 0.12
+"""Targets.payload's default: this share of the platform's mass, or of the mass its rotors lift beyond it when that is
+less (module docstring, "Tilt filter")."""
+TILT_SEARCH_STEP = 0.98
+""":func:`tilt_filter` lowers the filter's bandwidth by this factor until the x, y loops are stable."""
+
+
+def com_height(authority: Authority, payload: float) -> float:
+    """The highest centre of mass above B [m] over the workspace with ``payload`` [kg] held at the end effector (the
+    mass-weighted mean of :attr:`Authority.heights`; -inf when the heights were not measured)."""
+    _check_authority(authority)
+    payload = as_real(payload, "payload", nonnegative=True, unit="kg")
+    m = authority.mass
+    return max(((m * c_z + payload * e_z) / (m + payload) for c_z, e_z in authority.heights), default=-math.inf)
+
+
+def x_pitch_polynomial(omega_f: float, c_z: float, loop: tuple[float, float, float], g: float) -> np.ndarray:
+    """Characteristic polynomial (highest power first) of x (or y) under a tilting inverse-dynamics controller, linearised
+    at hover (module docstring, "Tilt filter"): s^n (s + w_f)^2 + w_f^2 (1 - c_z s^2 / g) (k_D s^2 + k_P s + k_I) / s^(3-n),
+    ``loop`` = (k_D, k_P, k_I) of x, n = 3 with an integral (k_I > 0), else 2."""
+    omega_f = as_real(omega_f, "omega_f", positive=True, unit="rad/s")
+    c_z, g = as_real(c_z, "c_z", unit="m"), as_real(g, "g", positive=True, unit="m/s^2")
+    kd, kp, ki = _loop(loop)
+    gains = np.array([kd, kp, ki] if ki > 0.0 else [kd, kp])
+    lag = np.polymul(np.r_[1.0, np.zeros(gains.size)], [1.0, 2.0 * omega_f, omega_f**2])  # s^n (s + w_f)^2
+    return np.polyadd(lag, omega_f**2 * np.polymul([-c_z / g, 0.0, 1.0], gains))
+
+
+def hurwitz(coefficients: np.ndarray) -> bool:
+    """Every root of the polynomial (highest power first) in the open left half-plane."""
+    c = np.asarray(coefficients)
+    if c.ndim != 1 or c.size < 2 or not np.issubdtype(c.dtype, np.number) or not np.all(np.isfinite(c)) or c[0] == 0.0:
+        raise InputError(f"coefficients must be finite numbers, highest power first with a non-zero leading one, got {coefficients!r}")
+    return bool(np.roots(c).real.max() < 0.0)
+
+
+def _loop(loop) -> tuple[float, float, float]:
+    """(k_D, k_P, k_I) of an x loop, each a number >= 0 (k_D, k_P > 0)."""
+    if not (isinstance(loop, (tuple, list)) and len(loop) == 3):
+        raise InputError(f"loop must be (k_D, k_P, k_I) of the x loop, got {loop!r}")
+    return as_real(loop[0], "k_D", positive=True), as_real(loop[1], "k_P", positive=True), as_real(loop[2], "k_I", nonnegative=True)
+
+
+def _check_authority(authority) -> None:
+    if not isinstance(authority, Authority):
+        raise InputError(f"authority must be a qprr.control.gains.Authority (Authority.from_platform), got {type(authority).__name__}")
+
+
+def payload_budget(authority: Authority, targets: Targets) -> float:
+    """``targets.payload`` [kg] (refused beyond what the rotors lift on top of the platform, thrust margin / g), or when
+    None :data:`PAYLOAD_SHARE` of the platform's mass or of that lift, whichever is smaller."""
+    _check_authority(authority)
+    if not isinstance(targets, Targets):
+        raise InputError(f"targets must be a qprr.control.gains.Targets, got {type(targets).__name__}")
+    lift = authority.thrust_margin / authority.g
+    if targets.payload is None:
+        return PAYLOAD_SHARE * min(authority.mass, lift)
+    payload = targets.payload
+    if payload >= lift:
+        raise InputError(
+            f"gain target payload = {payload:.4g} kg: the rotors lift at most {lift:.4g} kg beyond the platform; give a payload target below it"
+        )
+    return payload
+
+
+def tilt_filter(top: float, c_z: float, loop: tuple[float, float, float], g: float) -> float | None:
+    """The roll/pitch reference filter's bandwidth [rad/s]: ``top`` lowered by :data:`TILT_SEARCH_STEP` until
+    :func:`x_pitch_polynomial` of the x loop's ``loop`` = (k_D, k_P, k_I) is Hurwitz with the centre of mass ``c_z`` [m]
+    above B (module docstring, "Tilt filter"); None when no bandwidth above k_D is (the filter would be slower than
+    the loop it filters)."""
+    omega = as_real(top, "top", positive=True, unit="rad/s")
+    loop = _loop(loop)
+    while not hurwitz(x_pitch_polynomial(omega, c_z, loop, g)):
+        omega *= TILT_SEARCH_STEP
+        if omega < loop[0]:
+            return None
+    return omega
+
+
+POSITION_FLOOR = 0.1
+""":func:`tilting_gains` slows the position loops to at most this fraction of their derived bandwidth, then refuses."""
 
 
 INTEGRAL_RATIO_POSITION = 2.0
@@ -316,8 +460,7 @@ def integral_limits(authority: Authority) -> tuple[float, ...]:
     """The clamp of each integral of the derived IDC gains (:class:`~qprr.control.inverse_dynamics.AntiWindup`): the
     acceleration the actuators give the coordinate (module docstring, "Integral action"): thrust margin over mass on
     x, y, z, torque over inertia on the angles, effort over the joint's inertia M_jj on the arm (inf: no bound)."""
-    if not isinstance(authority, Authority):
-        raise InputError(f"authority must be a qprr.control.gains.Authority (Authority.from_platform), got {type(authority).__name__}")
+    _check_authority(authority)
     a = authority
 
     def ratio(force, inertia):
@@ -354,7 +497,7 @@ def mfc_gains(authority: Authority, w: np.ndarray, targets: Targets) -> MFCGains
     alpha = (authority.coupling / MFC_EIGENVALUE) * hi
     g = lo / (alpha * targets.control_period)  # slowest estimator rate [rad/s], at the largest inertia
     w = np.minimum(w, g / MFC_ESTIMATOR)  # the iPID no faster than a quarter of its estimator
-    f = tilt_filter(MFCGains.filter_omega, targets)
+    f = min(MFCGains.filter_omega, rotor_bound(ROTOR_LAG_FILTER, targets))
     return MFCGains(kp=tuple(3.0 * w**2), kd=tuple(3.0 * w), ki=tuple(w**3), alpha=tuple(alpha), filter_omega=f)
 
 
@@ -363,13 +506,41 @@ def derive_idc(authority: Authority, targets: Targets) -> dict[str, object]:
     anti-windup on position and arm (module docstring, "Integral action"); the roll/pitch reference filter at the
     class's 50 rad/s unless the rotors lag."""
     w = bandwidths(authority, targets)
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets), **_integral_action(authority, targets))}
+    return {"gains": tilting_gains(w, IDCGains.filter_omega, authority, targets)}
+
+
+def tilting_gains(w: np.ndarray, filter_omega: float, authority: Authority, targets: Targets) -> IDCGains:
+    """:func:`idc_gains` of the bandwidths ``w`` (with :func:`_integral_action`) and the roll/pitch reference filter at
+    the controller's ``filter_omega`` [rad/s], at most 0.075 / T (module docstring, "Rotor lag"), lowered by
+    :func:`tilt_filter` until x and y are stable with ``targets.payload`` at the end effector; when no filter is fast
+    enough (rotor lag), the position loops are slowed by :data:`TILT_SEARCH_STEP` until one is (module docstring,
+    "Tilt filter")."""
+    payload = payload_budget(authority, targets)
+    top = min(as_real(filter_omega, "filter_omega", positive=True, unit="rad/s"), rotor_bound(ROTOR_LAG_FILTER, targets))
+    c_z = com_height(authority, payload)
+    w = np.array(w, dtype=float) if isinstance(w, (np.ndarray, list, tuple)) else np.zeros(0)
+    if w.ndim != 1 or w.size < 6 or not np.all(np.isfinite(w) & (w > 0.0)):
+        raise InputError(f"w must be the bandwidths [rad/s] of the 6 + n_arm coordinates of xi, each > 0 (bandwidths()), got {w!r}")
+    w_pos = w[0]
+    while True:
+        gains = idc_gains(w, **_integral_action(authority, targets))
+        omega = tilt_filter(top, max(c_z, 0.0), (gains.kd[0], gains.kp[0], gains.ki[0]), authority.g)
+        if omega is not None:
+            return dataclasses.replace(gains, filter_omega=omega)
+        w[0:3] *= TILT_SEARCH_STEP
+        if w[0] < POSITION_FLOOR * w_pos:
+            raise InputError(
+                f"gain target payload = {payload:.4g} kg: with it at the end effector the centre of mass rises to "
+                f"{c_z * 1e3:.1f} mm above B, and no roll/pitch filter up to {top:.3g} rad/s keeps the x, y loops stable "
+                f"even {1.0 / POSITION_FLOOR:g} times slower than derived; give a smaller payload target (or a larger "
+                "position_error target)"
+            )
 
 
 def _integral_action(authority: Authority, targets: Targets) -> dict[str, object]:
-    """The keywords of :func:`idc_gains` that turn the integral action on when ``targets.integral`` asks for it (module
+    """The keywords of :func:`idc_gains` that turn the integral action on unless ``targets.integral`` is False (module
     docstring, "Integral action"), else none."""
-    if not targets.integral:
+    if targets.integral is False:
         return {}
     return {"integral": True, "anti_windup": AntiWindup.CONDITIONAL, "integral_limit": integral_limits(authority)}
 
@@ -378,7 +549,7 @@ def derive_dsid(authority: Authority, targets: Targets) -> dict[str, object]:
     """``dsid``: the arm loop must dominate the gravity mismatch dG/dq (q - q_d): arm poles at the cap."""
     w = bandwidths(authority, targets)
     w[6:] = targets.cap
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(20.0, targets), **_integral_action(authority, targets))}
+    return {"gains": tilting_gains(w, 20.0, authority, targets)}
 
 
 def _refuse_integral(targets: Targets, controller: str) -> None:
@@ -392,9 +563,9 @@ def _refuse_integral(targets: Targets, controller: str) -> None:
 
 def derive_decoupled(authority: Authority, targets: Targets) -> dict[str, object]:
     """``decoupled``: the IDC's gains (:func:`derive_idc`) without the integral action, which its per-joint loops would
-    integrate with no anti-windup: ``targets.integral`` is refused."""
+    integrate with no anti-windup: ``targets.integral = True`` is refused (None, the default, derives none)."""
     _refuse_integral(targets, "decoupled")
-    return derive_idc(authority, targets)
+    return derive_idc(authority, dataclasses.replace(targets, integral=False))
 
 
 def derive_mfc(authority: Authority, targets: Targets) -> dict[str, object]:
@@ -407,7 +578,8 @@ def derive_impedance(authority: Authority, targets: Targets) -> dict[str, object
     """``impedance``: the IDC's gains and the impedance filters (6.74)-(6.75) of :func:`impedance_gains`."""
     _refuse_integral(targets, "impedance")
     w = bandwidths(authority, targets)
-    return {"gains": idc_gains(w, filter_omega=tilt_filter(IDCGains.filter_omega, targets)), "impedance": impedance_gains(authority, w)}
+    gains = tilting_gains(w, IDCGains.filter_omega, authority, dataclasses.replace(targets, integral=False))
+    return {"gains": gains, "impedance": impedance_gains(authority, w)}
 
 
 def derive_opspace_impedance(authority: Authority, targets: Targets) -> dict[str, object]:
