@@ -131,7 +131,7 @@ def test_reference_mode_flies_what_simulate_flies(envs, platforms):
     p = platforms["borinot_flying_arm_2"]
     env = envs.AerialVectorEnv(1, "reach", platform=p, action_mode="reference", duration=1.0)
     env.reset(seed=4)
-    controller = make_controller("idc", p, **platform_gains("idc", p, Targets(control_period=0.005, integral=False)))
+    controller = make_controller("idc", p, **platform_gains("idc", p, Targets(control_period=0.005, integral=False, payload=0.0)))
     run = simulate(p, controller, env.core.trajectories[0], 1.0, control_period=0.005, xi0=charts.q_to_xi(env.core.sim.q[0]))
     zero = np.zeros((1, env.single_action_space.shape[0]))
     worst = 0.0

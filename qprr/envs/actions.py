@@ -202,18 +202,20 @@ class ReferenceMap:
 
 def controller_arguments(controller: str, platform: Platform, period: float) -> dict[str, object]:
     """Constructor arguments of ``controller`` for a controller period ``period`` [s]: the platform-derived gains
-    (:func:`qprr.control.gains.platform_gains` with ``Targets(control_period=period)``: the MFC's estimator runs at
-    it; ``integral=False``: the inverse-dynamics controllers fly their PD gains, whose steady errors under an unknown
-    mass are what the residual policies of docs/rl.md learn to cancel, and an integral state would outlive the
-    policy's offsets across steps); none for the MPC, which solves at its own rate (:class:`qprr.control.mpc.MPCSettings`, 100 Hz) and holds its
-    input in between (the period must divide 1 / rate: the default 5 ms does); a controller whose optional dependency is
-    missing raises :class:`~qprr.errors.MissingDependencyError` with its install command."""
+    (:func:`qprr.control.gains.platform_gains` with ``Targets(control_period=period)``: the MFC's estimator runs
+    at it; ``integral=False``: the inverse-dynamics controllers fly their PD gains, whose steady errors under an
+    unknown mass are what the residual policies of docs/rl.md learn to cancel, and an integral state would outlive
+    the policy's offsets across steps; ``payload=0.0``: the tasks carry nothing at the end effector, so the
+    roll/pitch filter keeps the class's bandwidth, that of the committed experiments); none for the MPC, which
+    solves at its own rate (:class:`qprr.control.mpc.MPCSettings`, 100 Hz) and holds its input in between (the
+    period must divide 1 / rate: the default 5 ms does); a controller whose optional dependency is missing raises
+    :class:`~qprr.errors.MissingDependencyError` with its install command."""
     as_name(controller, "controller", REFERENCE_CONTROLLERS, "controller of the reference action mode")
     if controller not in CONTROLLERS:
         raise MissingDependencyError(*OPTIONAL[controller])
     check_platform(platform)
     period = as_real(period, "period", positive=True, unit="s")
-    return {} if controller == "mpc" else platform_gains(controller, platform, Targets(control_period=period, integral=False))
+    return {} if controller == "mpc" else platform_gains(controller, platform, Targets(control_period=period, integral=False, payload=0.0))
 
 
 def _check_map_arguments(platform, n) -> None:
