@@ -906,14 +906,29 @@ class QPMethod:
             platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol, kernel=options.kernel
         )
         self.default_levels = _DefaultLevels(platform)
+        o = options  # the compiled loop's settings (qprr.ik.newton_fast.NewtonLoop)
+        self._settings = (o.position_tol, o.orientation_tol, o.hover_tol, POLISHED, o.settle_tol, o.step_tol, o.max_step, o.max_iter)
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
-        platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
+        platform, opts, engine = self.platform, self.options, self.engine
         q = ch.xi_to_q(xi)
         posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
         target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
         levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
         engine.reset()
+        loop = engine.newton_loop(platform, levels, self._settings)
+        if loop is not None and loop.packed.frame == platform.ee_frame:  # the success test's frame: the loop's pose errors
+            shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
+            out = loop.run(ctx.data, q, (ctx.p_d, ctx.R_d), ctx.require_hover, None if shift is None else shift.target)
+            if out is not None:
+                q, it, outcome, level_errors, pose_errors = out
+                return finish(ctx, q, Ending(_OUTCOMES[outcome], "", it, level_errors, True, pose_errors))
+            engine.reset()  # a pass the compiled loop cannot take: the readable loop solves from the start
+        return self._readable(ctx, q, levels)
+
+    def _readable(self, ctx: SolveContext, q: np.ndarray, levels) -> IKResult:
+        """The readable Newton loop from q (the reference of :mod:`qprr.ik.newton_fast`'s compiled loop)."""
+        platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
         it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
         shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
@@ -960,6 +975,11 @@ class QPMethod:
             update_kinematics(platform, data, q)
         levels_out = end.level_errors or _level_errors(engine, data, q, levels, ready and shaper.kept is None, step)
         return finish(ctx, q, Ending(end.status, "", it, levels_out, ready or not end.level_errors, end.pose_errors))
+
+
+_OUTCOMES = {0: IKOutcome.CONVERGED, 1: IKOutcome.STALLED, 2: IKOutcome.MAX_ITERATIONS}
+"""qprr.ik.newton_fast.Outcome's values -> the solve's status (the compiled loop's outcomes, by value: that module is
+imported with numba only)."""
 
 
 class _BaseShift:

@@ -1,0 +1,319 @@
+"""The QP IK's Newton loop on the default tasks, compiled (numba, ``pip install qprr[fast]``).
+
+The readable loop is :meth:`qprr.ik.solver.QPMethod.__call__` with its helpers ``_BaseShift`` (the base moved onto
+level 1's position), ``_StepShaper`` (the step control, the freezing of lower levels, the stopping tests) and the
+polished-pose stop at the top of an iteration; they stay the reference.  :func:`newton` is one pass of that loop --
+from the kinematics Pinocchio left in ``data`` at q to the step to integrate -- with the step itself taken by
+:func:`qprr.ik.iteration_fast.iterate` (the tasks' (J, e) and the lexicographic step).  Between two passes Python
+calls Pinocchio only: :func:`qprr.ik.tasks.update_kinematics` at q and ``pin.integrate`` of the step
+(:class:`NewtonLoop`).  A pass it cannot take -- a level that needs ProxQP, a task's J or e not finite -- ends the
+compiled loop with ``FALLBACK``: the readable loop then solves the target from its start, so the answer is always one
+of the readable loop's.  ``tests/test_ik_fast.py`` checks both loops give the same answers, statuses, iteration counts
+and level errors on cold starts of four platforms.
+
+The state the readable loop keeps in Python objects lives in three arrays, ``istate`` (counters and flags, ``I_*``),
+``scal`` (scalars, ``S_*``) and ``prev`` (one row per quantity of each level, ``P_*``); ``control`` holds the
+options and the target (``C_*``, :func:`control_vector`).  numba caches the machine code beside this file and checks
+only its time stamp: after editing ``iteration_fast.py`` or ``qprr/actuation/lexicographic_fast.py``, delete this
+module's ``.nbi`` / ``.nbc`` files in ``qprr/ik/__pycache__`` too.
+"""
+
+from __future__ import annotations
+
+import math
+from enum import IntEnum
+
+import numba
+import numpy as np
+import pinocchio as pin
+
+from .iteration_fast import NEEDS_NUMPY, NOT_FINITE, iterate, level_norms
+from .iteration_fast import kinematics as _kinematics
+from .tasks import update_kinematics
+
+_JIT = {"cache": True, "nogil": True}
+
+
+class Pass(IntEnum):
+    """What :func:`newton` asks of its caller: STEP (integrate ``dv`` into q, compute the kinematics, call again),
+    SHIFTED (q's base was moved in place: compute the kinematics, call again), STOP (the solve ended: ``istate``,
+    ``scal`` and ``prev`` hold how), FALLBACK (a pass the compiled loop cannot take: solve with the readable loop)."""
+
+    STEP = 0
+    SHIFTED = 1
+    STOP = 2
+    FALLBACK = 3
+
+
+class Outcome(IntEnum):
+    """How the compiled loop ended (``istate[I_STATUS]``), the readable loop's statuses of a solve that did not fail
+    inside it."""
+
+    CONVERGED = 0
+    STALLED = 1
+    MAX_ITERATIONS = 2
+
+
+STEP, SHIFTED, STOP, FALLBACK = (int(p) for p in Pass)
+CONVERGED, STALLED, MAX_ITERATIONS = (int(o) for o in Outcome)
+
+# control: the options and the target
+C_POS_TOL, C_ROT_TOL, C_HOVER_TOL, C_POLISHED, C_SETTLE, C_STEP, C_MAX_STEP, C_HOVER, C_MAX_ITER, C_SHIFT_TOL = range(10)
+C_HAS_R, C_PD, C_RD, C_SHIFT_TARGET = 10, 11, 14, 23
+C_SIZE = 26
+# istate: counters and flags
+I_IT, I_SHIFT, I_SHIFTED, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_POSE_KNOWN, I_NSTEP = range(11)
+I_SIZE = 11
+# scal: scalars
+S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT = range(6)
+S_SIZE = 6
+# prev: per level
+P_LOWER, P_RESIDUALS, P_OUT = range(3)
+
+
+@numba.njit(**_JIT)
+def _pose_errors(M_frame, control):
+    """(||p - p_d||, ||log3(R_d^T R)||) of the frame placement M_frame (4 x 4) against the target
+    (``qprr.ik.solver.pose_error_values``: the angle from sin = |skew(N)| / 2 and cos = (tr N - 1) / 2, N = R_d^T R)."""
+    d0 = M_frame[0, 3] - control[C_PD]
+    d1 = M_frame[1, 3] - control[C_PD + 1]
+    d2 = M_frame[2, 3] - control[C_PD + 2]
+    pos = np.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+    if control[C_HAS_R] == 0.0:
+        return pos, 0.0
+    Rd = control[C_RD : C_RD + 9].reshape(3, 3)
+    N = np.zeros((3, 3))
+    for i in range(3):
+        for j in range(3):
+            N[i, j] = Rd[0, i] * M_frame[0, j] + Rd[1, i] * M_frame[1, j] + Rd[2, i] * M_frame[2, j]
+    s0, s1, s2 = N[2, 1] - N[1, 2], N[0, 2] - N[2, 0], N[1, 0] - N[0, 1]
+    sin = 0.5 * np.sqrt(s0 * s0 + s1 * s1 + s2 * s2)
+    return pos, np.arctan2(sin, 0.5 * (N[0, 0] + N[1, 1] + N[2, 2] - 1.0))
+
+
+@numba.njit(**_JIT)
+def _hovering(M_base, tol):
+    """|roll|, |pitch| < tol for the base placement M_base (``qprr.ik.solver._hovering``)."""
+    r20, r21, r22 = M_base[2, 0], M_base[2, 1], M_base[2, 2]
+    return abs(np.arctan2(r21, r22)) < tol and abs(np.arctan2(-r20, np.hypot(r21, r22))) < tol
+
+
+@numba.njit(**_JIT)
+def _lexicographic_progress(errors, previous, n_previous, rtol=1e-9):
+    """``qprr.ik.solver._lexicographic_progress`` (``n_previous`` < 0: no previous errors)."""
+    if n_previous < 0:
+        return True
+    for i in range(min(errors.shape[0], n_previous)):
+        e, e0 = errors[i], previous[i]
+        if abs(e - e0) > rtol * max(e, e0):
+            return e < e0
+    return False
+
+
+@numba.njit(**_JIT)
+def _satisfiable_prefix(errors, residuals, met, ratio=0.5):
+    """``qprr.ik.solver._satisfiable_prefix``: level 1, then each level the step's linear model meets."""
+    kept = 1
+    for k in range(1, errors.shape[0]):
+        e, r = errors[k], residuals[k]
+        if not (e <= met or r <= ratio * e):
+            break
+        kept += 1
+    return kept
+
+
+@numba.njit(**_JIT)
+def _max_abs(v):
+    m = 0.0
+    for x in v:
+        m = max(m, abs(x))
+    return m
+
+
+@numba.njit(**_JIT)
+def _shape(x, x_levels, norms, pose_ok, control, istate, scal, prev, met, n_levels):
+    """``qprr.ik.solver._StepShaper.shape`` on the step (x, x_levels, norms of :func:`iterate`): (dv or an empty
+    array, stop: 0 go on, 1 "converged_stationary", 2 "converged"); ``n_levels``: how many levels the hierarchy has
+    (``istate[I_KEPT]`` below it: the lower ones are frozen)."""
+    errors, residuals = norms[0], norms[2]
+    K = errors.shape[0]
+    tol = control[C_SETTLE] if pose_ok else control[C_STEP]
+    largest = _max_abs(x)
+    small = largest < tol
+    if small and largest < 1e-15:
+        return np.zeros(0), 1
+    lower = errors[1 : istate[I_KEPT]].copy()
+    progress = _lexicographic_progress(lower, prev[P_LOWER], istate[I_NPREV])
+    istate[I_FLAT] = istate[I_FLAT] + 1 if (pose_ok and not progress) else 0
+    prev[P_LOWER, : lower.shape[0]] = lower
+    istate[I_NPREV] = lower.shape[0]
+    if istate[I_FLAT] >= 3:
+        return np.zeros(0), 2
+    e1 = math.hypot(errors[0], scal[S_MOVED])  # level 1's error before the base was moved onto its position
+    if not pose_ok and e1 > 0.5 * scal[S_E1_PREV]:
+        scal[S_REST] *= 0.5
+    elif scal[S_REST] < 1.0:
+        scal[S_REST] = min(1.0, 2.0 * scal[S_REST])
+    scal[S_E1_PREV] = e1
+    dv = x
+    if scal[S_REST] <= 0.25:  # _StepShaper._freeze
+        kept = max(K - 1, _satisfiable_prefix(errors, residuals, met))
+        if kept < K:
+            istate[I_KEPT], istate[I_NPREV] = kept, -1
+            scal[S_REST], scal[S_E1_PREV] = 1.0, np.inf
+    if istate[I_KEPT] < n_levels:
+        dv = x_levels[istate[I_KEPT] - 1]
+        largest = _max_abs(dv)
+        small = largest < tol
+    max_step = control[C_MAX_STEP]
+    if largest > max_step or scal[S_REST] < 1.0:
+        d1 = x_levels[0]
+        rest = (dv - d1) * scal[S_REST]
+        m1, m2 = _max_abs(d1), _max_abs(rest)
+        dv = (d1 if m1 <= max_step else d1 * (max_step / m1)) + (rest if m2 <= max_step else rest * (max_step / m2))
+        largest = _max_abs(dv)
+    scal[S_LARGEST] = largest
+    return dv, 1 if small else 0
+
+
+@numba.njit(**_JIT)
+def _stop(status, out, istate, prev, pose_known):
+    istate[I_STATUS] = status
+    istate[I_POSE_KNOWN] = pose_known
+    prev[P_OUT, : out.shape[0]] = out
+    return STOP
+
+
+@numba.njit(**_JIT)
+def _all_norms(levels, frame, base, q):
+    """Every level's ||e_k|| at q (``HierarchySolver.level_errors``), and whether they are finite."""
+    norms = level_norms(levels, frame, base, q)
+    return norms, np.isfinite(norms.sum())
+
+
+@numba.njit(**_JIT)
+def _active(levels, kept):
+    """The leading ``kept`` levels (the lower ones frozen), packed as ``levels`` are."""
+    kinds, dims, params = levels
+    return kinds[:kept].copy(), dims[:kept].copy(), params[:kept].copy()
+
+
+@numba.njit(**_JIT)
+def newton(levels, frame, base, q, bounds, weights, guesses, control, istate, scal, prev, dv_out):
+    """One pass of the readable loop from the kinematics at q (module docstring): :class:`Pass`'s code; q is moved
+    in place on SHIFTED, ``dv_out`` holds the step on STEP."""
+    met = weights[3]
+    K = levels[0].shape[0]
+    if istate[I_FINAL]:  # after the last step was integrated: the answer's level errors
+        norms, finite = _all_norms(levels, frame, base, q)
+        return _stop(istate[I_STATUS], norms, istate, prev, 0) if finite else FALLBACK
+    if istate[I_SHIFTED]:  # the kinematics at the moved q
+        istate[I_SHIFTED] = 0
+    else:
+        if istate[I_IT] >= control[C_MAX_ITER]:
+            norms, finite = _all_norms(levels, frame, base, q)
+            return _stop(MAX_ITERATIONS, norms, istate, prev, 0) if finite else FALLBACK
+        scal[S_MOVED] = 0.0
+        if istate[I_SHIFT]:  # _BaseShift.apply
+            d = control[C_SHIFT_TARGET : C_SHIFT_TARGET + 3] - frame[1][0:3, 3]
+            if _max_abs(d) > control[C_SHIFT_TOL]:
+                q[0:3] += d
+                scal[S_MOVED] = np.sqrt(d @ d)
+                istate[I_SHIFTED] = 1
+                return SHIFTED
+    M_frame, M_base = frame[1], base[0]
+    pos, rot = _pose_errors(M_frame, control)
+    scal[S_POS], scal[S_ROT] = pos, rot
+    pose_ok = pos < control[C_POS_TOL] and rot < control[C_ROT_TOL]
+    if pose_ok:
+        istate[I_SHIFT] = 0
+    polish = control[C_POLISHED]
+    polished = pos < polish * control[C_POS_TOL] and rot < polish * control[C_ROT_TOL]
+    if istate[I_IT] and polished and (control[C_HOVER] == 0.0 or _hovering(M_base, polish * control[C_HOVER_TOL])):
+        tol = min(control[C_POS_TOL], control[C_ROT_TOL], control[C_HOVER_TOL])
+        if not istate[I_SETTLED] and np.all(prev[P_RESIDUALS, 1 : istate[I_NSTEP]] < tol):
+            norms, finite = _all_norms(levels, frame, base, q)
+            if not finite:
+                return FALLBACK
+            if np.all(norms[1:] < tol):
+                return _stop(CONVERGED, norms, istate, prev, 1)
+        if istate[I_SETTLED]:
+            norms, finite = _all_norms(levels, frame, base, q)
+            return _stop(CONVERGED, norms, istate, prev, 1) if finite else FALLBACK
+    istate[I_IT] += 1
+    active = levels if istate[I_KEPT] == K else _active(levels, istate[I_KEPT])
+    status, _, _, x, x_levels, norms = iterate(active, frame, base, q, bounds, weights, guesses)
+    if status == NEEDS_NUMPY or status == NOT_FINITE:
+        return FALLBACK
+    n = norms.shape[1]
+    prev[P_RESIDUALS, :n] = norms[2]
+    istate[I_NSTEP] = n
+    dv, stop = _shape(x, x_levels, norms, pose_ok, control, istate, scal, prev, met, K)
+    if dv.shape[0]:
+        dv_out[:] = dv
+        istate[I_SETTLED] = scal[S_LARGEST] < control[C_SETTLE]
+        if stop:
+            istate[I_STATUS] = STALLED if (stop == 1 and not pose_ok) else CONVERGED
+            istate[I_FINAL] = 1
+        return STEP
+    status = STALLED if (stop == 1 and not pose_ok) else CONVERGED
+    if istate[I_KEPT] == K:  # no step taken: the step's errors are those at q
+        return _stop(status, norms[0].copy(), istate, prev, 1)
+    norms_all, finite = _all_norms(levels, frame, base, q)
+    return _stop(status, norms_all, istate, prev, 1) if finite else FALLBACK
+
+
+# ============================================================================ the Python side
+class NewtonLoop:
+    """The compiled loop for one packed hierarchy (``qprr.ik.iteration_fast.CompiledLevels``) of a
+    ``HierarchySolver``: its joint ``limits`` (arm lower, upper), ``weights`` and active-set ``guesses`` (those of
+    :func:`iterate`, shared with the solver: its ``reset`` clears them), and ``settings`` = (position_tol,
+    orientation_tol, hover_tol, polished, settle_tol, step_tol, max_step, max_iter), the QP IK's options."""
+
+    def __init__(self, platform, packed, limits: tuple, weights: tuple, guesses: tuple, settings: tuple) -> None:
+        self.platform, self.packed = platform, packed
+        self.limits, self.weights, self.guesses = limits, weights, guesses
+        self.settings = settings
+        self._control = np.zeros(C_SIZE)
+        self._control[: C_MAX_ITER + 1] = settings[:7] + (0.0, settings[7])
+        self._control[C_SHIFT_TOL] = settings[3] * settings[0]  # the base moves when level 1's frame is off by more
+
+    def run(self, data, q: np.ndarray, target: tuple, require_hover: bool, shift_target: np.ndarray | None):
+        """Solve from q (not modified) for ``target`` = (p_d, R_d or None), the pose the success test measures at
+        the packed frame; ``shift_target``: level 1's position the base is moved onto (None: no move).  Returns
+        (q, iterations, :class:`Outcome`, the levels' errors at q, the pose errors at q or None), ``data`` holding
+        the kinematics at q; or None when a pass needs the readable loop (:data:`FALLBACK`)."""
+        platform, packed = self.platform, self.packed
+        control = self._control.copy()
+        p_d, R_d = target
+        control[C_PD : C_PD + 3] = p_d
+        if R_d is not None:
+            control[C_HAS_R] = 1.0
+            control[C_RD : C_RD + 9] = R_d.ravel()
+        control[C_HOVER] = float(require_hover)
+        K = packed.levels[0].shape[0]
+        istate = np.zeros(I_SIZE, dtype=np.int64)
+        istate[I_KEPT], istate[I_NPREV] = K, -1
+        if shift_target is not None:
+            istate[I_SHIFT] = 1
+            control[C_SHIFT_TARGET : C_SHIFT_TARGET + 3] = shift_target
+        scal = np.zeros(S_SIZE)
+        scal[S_E1_PREV], scal[S_REST], scal[S_LARGEST] = np.inf, 1.0, np.inf
+        prev = np.zeros((3, K))
+        dv = np.zeros(platform.nv)
+        q = q.copy()
+        model, (lower, upper) = platform.model, self.limits
+        args = (self.limits, self.weights, self.guesses, control, istate, scal, prev, dv)
+        while True:
+            update_kinematics(platform, data, q)
+            frame, base = _kinematics(platform, data, packed)
+            code = newton(packed.levels, frame, base, q, *args)
+            if code == STEP:
+                q = pin.integrate(model, q, dv)
+                np.clip(q[7:], lower, upper, out=q[7:])  # remove the QP's bound slack
+            elif code == STOP:
+                break
+            elif code == FALLBACK:
+                return None
+        pose = (float(scal[S_POS]), float(scal[S_ROT])) if istate[I_POSE_KNOWN] else None
+        return q, int(istate[I_IT]), Outcome(int(istate[I_STATUS])), tuple(prev[P_OUT].tolist()), pose
