@@ -6,14 +6,15 @@ polished-pose stop at the top of an iteration; they stay the reference.  :func:`
 from the kinematics Pinocchio left in ``data`` at q to the step to integrate -- with the step itself taken by
 :func:`qprr.ik.iteration_fast.iterate` (the tasks' (J, e) and the lexicographic step).  Between two passes Python
 calls Pinocchio only: :func:`qprr.ik.tasks.update_kinematics` at q and ``pin.integrate`` of the step
-(:class:`NewtonLoop`).  A pass it cannot take -- a level that needs ProxQP, a task's J or e not finite -- ends the
-compiled loop with ``FALLBACK``: the readable loop then solves the target from its start, so the answer is always one
-of the readable loop's.  ``tests/test_ik_fast.py`` checks both loops give the same answers, statuses, iteration counts
+(:class:`NewtonLoop`); the base move onto level 1's position shifts the kinematics it read instead of asking
+Pinocchio again (:func:`_shifted`: the answers then differ from the readable loop's by rounding).  A pass it cannot
+take -- a level that needs ProxQP, a task's J or e not finite -- ends the compiled loop with ``FALLBACK``: the readable
+loop then solves the target from its start.  ``tests/test_ik_fast.py`` checks both loops give the same answers, statuses, iteration counts
 and level errors on cold starts of four platforms.
 
 The state the readable loop keeps in Python objects lives in three arrays, ``istate`` (counters and flags, ``I_*``),
 ``scal`` (scalars, ``S_*``) and ``prev`` (one row per quantity of each level, ``P_*``); ``control`` holds the
-options and the target (``C_*``, :func:`control_vector`).  numba caches the machine code beside this file and checks
+options and the target (``C_*``, filled by :meth:`NewtonLoop.run`).  numba caches the machine code beside this file and checks
 only its time stamp: after editing ``iteration_fast.py`` or ``qprr/actuation/lexicographic_fast.py``, delete this
 module's ``.nbi`` / ``.nbc`` files in ``qprr/ik/__pycache__`` too.
 """
@@ -36,13 +37,12 @@ _JIT = {"cache": True, "nogil": True}
 
 class Pass(IntEnum):
     """What :func:`newton` asks of its caller: STEP (integrate ``dv`` into q, compute the kinematics, call again),
-    SHIFTED (q's base was moved in place: compute the kinematics, call again), STOP (the solve ended: ``istate``,
+    STOP (the solve ended: ``istate``,
     ``scal`` and ``prev`` hold how), FALLBACK (a pass the compiled loop cannot take: solve with the readable loop)."""
 
     STEP = 0
-    SHIFTED = 1
-    STOP = 2
-    FALLBACK = 3
+    STOP = 1
+    FALLBACK = 2
 
 
 class Outcome(IntEnum):
@@ -54,7 +54,7 @@ class Outcome(IntEnum):
     MAX_ITERATIONS = 2
 
 
-STEP, SHIFTED, STOP, FALLBACK = (int(p) for p in Pass)
+STEP, STOP, FALLBACK = (int(p) for p in Pass)
 CONVERGED, STALLED, MAX_ITERATIONS = (int(o) for o in Outcome)
 
 # control: the options and the target
@@ -62,7 +62,7 @@ C_POS_TOL, C_ROT_TOL, C_HOVER_TOL, C_POLISHED, C_SETTLE, C_STEP, C_MAX_STEP, C_H
 C_HAS_R, C_PD, C_RD, C_SHIFT_TARGET = 10, 11, 14, 23
 C_SIZE = 26
 # istate: counters and flags
-I_IT, I_SHIFT, I_SHIFTED, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_POSE_KNOWN, I_NSTEP = range(11)
+I_IT, I_SHIFT, I_STALE, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_POSE_KNOWN, I_NSTEP = range(11)
 I_SIZE = 11
 # scal: scalars
 S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT = range(6)
@@ -131,10 +131,13 @@ def _max_abs(v):
 
 
 @numba.njit(**_JIT)
-def _shape(x, x_levels, norms, pose_ok, control, istate, scal, prev, met, n_levels):
-    """``qprr.ik.solver._StepShaper.shape`` on the step (x, x_levels, norms of :func:`iterate`): (dv or an empty
+def _shape(step, pose_ok, control, state, met, n_levels):
+    """``qprr.ik.solver._StepShaper.shape`` on the ``step`` (x, x_levels, norms of :func:`iterate`; ``state`` =
+    (istate, scal, prev), :func:`newton`'s): (dv or an empty
     array, stop: 0 go on, 1 "converged_stationary", 2 "converged"); ``n_levels``: how many levels the hierarchy has
     (``istate[I_KEPT]`` below it: the lower ones are frozen)."""
+    x, x_levels, norms = step
+    istate, scal, prev = state
     errors, residuals = norms[0], norms[2]
     K = errors.shape[0]
     tol = control[C_SETTLE] if pose_ok else control[C_STEP]
@@ -199,28 +202,44 @@ def _active(levels, kept):
 
 
 @numba.njit(**_JIT)
-def newton(levels, frame, base, q, bounds, weights, guesses, control, istate, scal, prev, dv_out):
-    """One pass of the readable loop from the kinematics at q (module docstring): :class:`Pass`'s code; q is moved
-    in place on SHIFTED, ``dv_out`` holds the step on STEP."""
+def _shifted(frame, base, q, control, istate):
+    """``qprr.ik.solver._BaseShift.apply`` (while ``istate[I_SHIFT]``): q's base moved (in place) by the world
+    translation d that puts the frame on ``control``'s shift target when it is off by more than the threshold, and
+    the kinematics at the moved q without Pinocchio: a translation of the free-flyer base adds d to every placement's
+    translation and to the centre of mass, and changes neither the frame's LOCAL Jacobian nor the world CoM
+    Jacobian (the base twist is in B).  Returns (frame, base, |d|), copies (d = 0: unmoved); ``istate[I_STALE]`` set
+    when q moved (``data`` no longer holds its kinematics)."""
+    M_frame, M_base, com = frame[1].copy(), base[0].copy(), base[1].copy()
+    moved = 0.0
+    if istate[I_SHIFT]:
+        d = control[C_SHIFT_TARGET : C_SHIFT_TARGET + 3] - M_frame[0:3, 3]
+        if _max_abs(d) > control[C_SHIFT_TOL]:
+            q[0:3] += d
+            M_frame[0:3, 3] += d
+            M_base[0:3, 3] += d
+            com += d
+            moved = np.sqrt(d @ d)
+            istate[I_STALE] = 1
+    return (frame[0], M_frame), (M_base, com, base[2]), moved
+
+
+@numba.njit(**_JIT)
+def newton(levels, frame, base, q, solver, control, state):
+    """One pass of the readable loop from the kinematics at q (module docstring): :class:`Pass`'s code; q's base
+    may be moved in place (:func:`_shifted`), ``dv_out`` holds the step on STEP.  ``solver`` = (bounds, weights, guesses) of
+    :func:`iterate`; ``state`` = (istate, scal, prev, dv_out)."""
+    bounds, weights, guesses = solver
+    istate, scal, prev, dv_out = state
     met = weights[3]
     K = levels[0].shape[0]
+    istate[I_STALE] = 0  # the caller computed the kinematics at q
     if istate[I_FINAL]:  # after the last step was integrated: the answer's level errors
         norms, finite = _all_norms(levels, frame, base, q)
         return _stop(istate[I_STATUS], norms, istate, prev, 0) if finite else FALLBACK
-    if istate[I_SHIFTED]:  # the kinematics at the moved q
-        istate[I_SHIFTED] = 0
-    else:
-        if istate[I_IT] >= control[C_MAX_ITER]:
-            norms, finite = _all_norms(levels, frame, base, q)
-            return _stop(MAX_ITERATIONS, norms, istate, prev, 0) if finite else FALLBACK
-        scal[S_MOVED] = 0.0
-        if istate[I_SHIFT]:  # _BaseShift.apply
-            d = control[C_SHIFT_TARGET : C_SHIFT_TARGET + 3] - frame[1][0:3, 3]
-            if _max_abs(d) > control[C_SHIFT_TOL]:
-                q[0:3] += d
-                scal[S_MOVED] = np.sqrt(d @ d)
-                istate[I_SHIFTED] = 1
-                return SHIFTED
+    if istate[I_IT] >= control[C_MAX_ITER]:
+        norms, finite = _all_norms(levels, frame, base, q)
+        return _stop(MAX_ITERATIONS, norms, istate, prev, 0) if finite else FALLBACK
+    frame, base, scal[S_MOVED] = _shifted(frame, base, q, control, istate)
     M_frame, M_base = frame[1], base[0]
     pos, rot = _pose_errors(M_frame, control)
     scal[S_POS], scal[S_ROT] = pos, rot
@@ -248,7 +267,7 @@ def newton(levels, frame, base, q, bounds, weights, guesses, control, istate, sc
     n = norms.shape[1]
     prev[P_RESIDUALS, :n] = norms[2]
     istate[I_NSTEP] = n
-    dv, stop = _shape(x, x_levels, norms, pose_ok, control, istate, scal, prev, met, K)
+    dv, stop = _shape((x, x_levels, norms), pose_ok, control, (istate, scal, prev), met, K)
     if dv.shape[0]:
         dv_out[:] = dv
         istate[I_SETTLED] = scal[S_LARGEST] < control[C_SETTLE]
@@ -303,15 +322,17 @@ class NewtonLoop:
         dv = np.zeros(platform.nv)
         q = q.copy()
         model, (lower, upper) = platform.model, self.limits
-        args = (self.limits, self.weights, self.guesses, control, istate, scal, prev, dv)
+        solver, state = (self.limits, self.weights, self.guesses), (istate, scal, prev, dv)
         while True:
             update_kinematics(platform, data, q)
             frame, base = _kinematics(platform, data, packed)
-            code = newton(packed.levels, frame, base, q, *args)
+            code = newton(packed.levels, frame, base, q, solver, control, state)
             if code == STEP:
                 q = pin.integrate(model, q, dv)
                 np.clip(q[7:], lower, upper, out=q[7:])  # remove the QP's bound slack
             elif code == STOP:
+                if istate[I_STALE]:  # the base was moved in this last pass
+                    update_kinematics(platform, data, q)
                 break
             elif code == FALLBACK:
                 return None
