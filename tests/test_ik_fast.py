@@ -281,6 +281,7 @@ def assert_same_answer(rc, rr):
     verdicts = ("status", "success", "iterations", "hover_feasible", "within_limits")
     assert [getattr(rc, f) for f in verdicts] == [getattr(rr, f) for f in verdicts]
     np.testing.assert_allclose(rc.q, rr.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rc.xi, rr.xi, rtol=0, atol=1e-9)  # the compiled loop's xi of q against finish's
     np.testing.assert_allclose(rc.level_errors, rr.level_errors, rtol=0, atol=1e-9)
     errors = ("position_error", "orientation_error", "x_cm", "y_cm", "roll", "pitch")
     np.testing.assert_allclose([getattr(rc, f) for f in errors], [getattr(rr, f) for f in errors], rtol=0, atol=1e-12)

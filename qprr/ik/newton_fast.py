@@ -28,8 +28,8 @@ import numba
 import numpy as np
 import pinocchio as pin
 
+from ..charts import EULER_TOL
 from .iteration_fast import NEEDS_NUMPY, NOT_FINITE, iterate, level_norms
-from .iteration_fast import kinematics as _kinematics
 from .tasks import update_kinematics
 
 _JIT = {"cache": True, "nogil": True}
@@ -59,14 +59,14 @@ CONVERGED, STALLED, MAX_ITERATIONS = (int(o) for o in Outcome)
 
 # control: the options and the target
 C_POS_TOL, C_ROT_TOL, C_HOVER_TOL, C_POLISHED, C_SETTLE, C_STEP, C_MAX_STEP, C_HOVER, C_MAX_ITER, C_SHIFT_TOL = range(10)
-C_HAS_R, C_PD, C_RD, C_SHIFT_TARGET = 10, 11, 14, 23
-C_SIZE = 26
+C_HAS_R, C_PD, C_RD, C_SHIFT_TARGET, C_AXIS, C_EULER_TOL = 10, 11, 14, 23, 26, 35
+C_SIZE = 36
 # istate: counters and flags
-I_IT, I_SHIFT, I_STALE, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_POSE_KNOWN, I_NSTEP = range(11)
+I_IT, I_SHIFT, I_STALE, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_XI, I_NSTEP = range(11)
 I_SIZE = 11
 # scal: scalars
-S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT = range(6)
-S_SIZE = 6
+S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT, S_XCM, S_YCM, S_ROLL, S_PITCH = range(10)
+S_SIZE = 10
 # prev: per level
 P_LOWER, P_RESIDUALS, P_OUT = range(3)
 
@@ -180,10 +180,31 @@ def _shape(step, pose_ok, control, state, met, n_levels):
 
 
 @numba.njit(**_JIT)
-def _stop(status, out, istate, prev, pose_known):
+def _stop(status, norms, kinematics, q, control, state):
+    """End the solve with ``status`` and the levels' errors ``norms`` at q, and measure q as
+    ``qprr.ik.solver.finish`` does from the ``kinematics`` = (frame, base) at q: the pose errors, the CoG offset from
+    the thrust axis in B (``Platform.thrust_axis``: E (R_b^T (c - p_b) - point)), roll and pitch, and xi (thesis
+    coordinates, ``istate[I_XI]`` 0 at the ZYX singularity, ``qprr.ik.solver._xi_of_q``)."""
+    istate, scal, prev, _, xi = state
+    (_, M_frame), (M_base, com, _) = kinematics
     istate[I_STATUS] = status
-    istate[I_POSE_KNOWN] = pose_known
-    prev[P_OUT, : out.shape[0]] = out
+    prev[P_OUT, : norms.shape[0]] = norms
+    scal[S_POS], scal[S_ROT] = _pose_errors(M_frame, control)
+    c = com - M_base[0:3, 3]
+    point, E = control[C_AXIS : C_AXIS + 3], control[C_AXIS + 3 : C_AXIS + 9].reshape(2, 3)
+    for i in range(2):
+        off = 0.0
+        for j in range(3):
+            c_b = M_base[0, j] * c[0] + M_base[1, j] * c[1] + M_base[2, j] * c[2]  # (R_b^T (c - p_b))_j
+            off += E[i, j] * (c_b - point[j])
+        scal[S_XCM + i] = off
+    r20, r21, r22 = M_base[2, 0], M_base[2, 1], M_base[2, 2]
+    pitch = np.arctan2(-r20, np.hypot(r21, r22))
+    scal[S_ROLL], scal[S_PITCH] = np.arctan2(r21, r22), pitch
+    istate[I_XI] = abs(np.cos(pitch)) >= control[C_EULER_TOL]
+    xi[0:3] = q[0:3]
+    xi[3], xi[4], xi[5] = scal[S_ROLL], pitch, np.arctan2(M_base[1, 0], M_base[0, 0])
+    xi[6:] = q[7:]
     return STOP
 
 
@@ -229,16 +250,16 @@ def newton(levels, frame, base, q, solver, control, state):
     may be moved in place (:func:`_shifted`), ``dv_out`` holds the step on STEP.  ``solver`` = (bounds, weights, guesses) of
     :func:`iterate`; ``state`` = (istate, scal, prev, dv_out)."""
     bounds, weights, guesses = solver
-    istate, scal, prev, dv_out = state
+    istate, scal, prev, dv_out, _ = state
     met = weights[3]
     K = levels[0].shape[0]
     istate[I_STALE] = 0  # the caller computed the kinematics at q
     if istate[I_FINAL]:  # after the last step was integrated: the answer's level errors
         norms, finite = _all_norms(levels, frame, base, q)
-        return _stop(istate[I_STATUS], norms, istate, prev, 0) if finite else FALLBACK
+        return _stop(istate[I_STATUS], norms, (frame, base), q, control, state) if finite else FALLBACK
     if istate[I_IT] >= control[C_MAX_ITER]:
         norms, finite = _all_norms(levels, frame, base, q)
-        return _stop(MAX_ITERATIONS, norms, istate, prev, 0) if finite else FALLBACK
+        return _stop(MAX_ITERATIONS, norms, (frame, base), q, control, state) if finite else FALLBACK
     frame, base, scal[S_MOVED] = _shifted(frame, base, q, control, istate)
     M_frame, M_base = frame[1], base[0]
     pos, rot = _pose_errors(M_frame, control)
@@ -255,10 +276,10 @@ def newton(levels, frame, base, q, solver, control, state):
             if not finite:
                 return FALLBACK
             if np.all(norms[1:] < tol):
-                return _stop(CONVERGED, norms, istate, prev, 1)
+                return _stop(CONVERGED, norms, (frame, base), q, control, state)
         if istate[I_SETTLED]:
             norms, finite = _all_norms(levels, frame, base, q)
-            return _stop(CONVERGED, norms, istate, prev, 1) if finite else FALLBACK
+            return _stop(CONVERGED, norms, (frame, base), q, control, state) if finite else FALLBACK
     istate[I_IT] += 1
     active = levels if istate[I_KEPT] == K else _active(levels, istate[I_KEPT])
     status, _, _, x, x_levels, norms = iterate(active, frame, base, q, bounds, weights, guesses)
@@ -277,12 +298,20 @@ def newton(levels, frame, base, q, solver, control, state):
         return STEP
     status = STALLED if (stop == 1 and not pose_ok) else CONVERGED
     if istate[I_KEPT] == K:  # no step taken: the step's errors are those at q
-        return _stop(status, norms[0].copy(), istate, prev, 1)
+        return _stop(status, norms[0].copy(), (frame, base), q, control, state)
     norms_all, finite = _all_norms(levels, frame, base, q)
-    return _stop(status, norms_all, istate, prev, 1) if finite else FALLBACK
+    return _stop(status, norms_all, (frame, base), q, control, state) if finite else FALLBACK
 
 
 # ============================================================================ the Python side
+def _kinematics(platform, data, packed) -> tuple[tuple, tuple]:
+    """``qprr.ik.iteration_fast.kinematics`` with the centre of mass always (:func:`_stop` measures the CoG offset
+    of the answer whether a level reads it or not; :func:`qprr.ik.tasks.update_kinematics` computed it)."""
+    J_local = pin.getFrameJacobian(platform.model, data, packed.frame, pin.LOCAL)
+    Jcom = data.Jcom if packed.no_com is None else packed.no_com[1]
+    return (J_local, data.oMf[packed.frame].homogeneous), (data.oMi[1].homogeneous, data.com[0], Jcom)
+
+
 class NewtonLoop:
     """The compiled loop for one packed hierarchy (``qprr.ik.iteration_fast.CompiledLevels``) of a
     ``HierarchySolver``: its joint ``limits`` (arm lower, upper), ``weights`` and active-set ``guesses`` (those of
@@ -296,12 +325,16 @@ class NewtonLoop:
         self._control = np.zeros(C_SIZE)
         self._control[: C_MAX_ITER + 1] = settings[:7] + (0.0, settings[7])
         self._control[C_SHIFT_TOL] = settings[3] * settings[0]  # the base moves when level 1's frame is off by more
+        self._control[C_AXIS : C_AXIS + 3] = platform.thrust_axis[0]
+        self._control[C_AXIS + 3 : C_AXIS + 9] = platform.thrust_axis_basis.ravel()
+        self._control[C_EULER_TOL] = EULER_TOL
 
     def run(self, data, q: np.ndarray, target: tuple, require_hover: bool, shift_target: np.ndarray | None):
         """Solve from q (not modified) for ``target`` = (p_d, R_d or None), the pose the success test measures at
         the packed frame; ``shift_target``: level 1's position the base is moved onto (None: no move).  Returns
-        (q, iterations, :class:`Outcome`, the levels' errors at q, the pose errors at q or None), ``data`` holding
-        the kinematics at q; or None when a pass needs the readable loop (:data:`FALLBACK`)."""
+        (q, iterations, :class:`Outcome`, the levels' errors at q, (position error, angle, x_cm, y_cm, roll, pitch)
+        at q, xi of q or None at the ZYX singularity), ``data`` holding the kinematics at q; or None when a pass needs
+        the readable loop (:data:`FALLBACK`)."""
         platform, packed = self.platform, self.packed
         control = self._control.copy()
         p_d, R_d = target
@@ -322,7 +355,8 @@ class NewtonLoop:
         dv = np.zeros(platform.nv)
         q = q.copy()
         model, (lower, upper) = platform.model, self.limits
-        solver, state = (self.limits, self.weights, self.guesses), (istate, scal, prev, dv)
+        xi = np.zeros(platform.n_xi)
+        solver, state = (self.limits, self.weights, self.guesses), (istate, scal, prev, dv, xi)
         while True:
             update_kinematics(platform, data, q)
             frame, base = _kinematics(platform, data, packed)
@@ -336,5 +370,5 @@ class NewtonLoop:
                 break
             elif code == FALLBACK:
                 return None
-        pose = (float(scal[S_POS]), float(scal[S_ROT])) if istate[I_POSE_KNOWN] else None
-        return q, int(istate[I_IT]), Outcome(int(istate[I_STATUS])), tuple(prev[P_OUT].tolist()), pose
+        measured = tuple(scal[S_POS : S_PITCH + 1].tolist())
+        return q, int(istate[I_IT]), Outcome(int(istate[I_STATUS])), tuple(prev[P_OUT].tolist()), measured, xi if istate[I_XI] else None

@@ -467,7 +467,7 @@ class Ending:
 def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     """Evaluate q with Pinocchio (FK, CoM) and build the result; decide success (``xi``: q's thesis coordinates
     when the method has them, else computed from q)."""
-    platform, data, opts = ctx.platform, ctx.data, ctx.opts
+    platform, data = ctx.platform, ctx.data
     if end.kinematics_ready:  # data already holds FK, frames and CoM at q
         c = data.com[0]
         M = data.oMf[platform.ee_frame]
@@ -481,6 +481,16 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     r20, r21, r22 = Rb[2].tolist()
     roll = math.atan2(r21, r22)
     pitch = math.atan2(-r20, math.hypot(r21, r22))
+    if xi is None:
+        xi = _xi_of_q(q, Rb)
+    return _verdict(ctx, q, end, (pos_err, rot_err, float(off[0]), float(off[1]), roll, pitch), xi)
+
+
+def _verdict(ctx: SolveContext, q: np.ndarray, end: Ending, measured: tuple, xi: np.ndarray | None) -> IKResult:
+    """The result of q, its success decided, from what :func:`finish` measured there: (position error [m], angle
+    [rad], x_cm, y_cm [m], roll, pitch [rad]), and its thesis coordinates xi (None at the ZYX singularity)."""
+    platform, opts = ctx.platform, ctx.opts
+    pos_err, rot_err, x_cm, y_cm, roll, pitch = measured
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
     within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
@@ -489,8 +499,6 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
     if not success:
         status, reason = _failure(ctx, end, q_arm, (pos_err, rot_err, roll, pitch), (pose_ok, within))
-    if xi is None:
-        xi = _xi_of_q(q, Rb)
     return IKResult(
         method=ctx.method,
         success=bool(success),
@@ -501,8 +509,8 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
         iterations=int(end.iterations),
         position_error=pos_err,
         orientation_error=rot_err,
-        x_cm=float(off[0]),
-        y_cm=float(off[1]),
+        x_cm=x_cm,
+        y_cm=y_cm,
         roll=roll,
         pitch=pitch,
         hover_feasible=bool(hover_ok),
@@ -920,9 +928,9 @@ class QPMethod:
         if loop is not None and loop.packed.frame == platform.ee_frame:  # the success test's frame: the loop's pose errors
             shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
             out = loop.run(ctx.data, q, (ctx.p_d, ctx.R_d), ctx.require_hover, None if shift is None else shift.target)
-            if out is not None:
-                q, it, outcome, level_errors, pose_errors = out
-                return finish(ctx, q, Ending(_OUTCOMES[outcome], "", it, level_errors, True, pose_errors))
+            if out is not None:  # the loop measured q as finish does (tested against it)
+                q, it, outcome, level_errors, measured, xi = out
+                return _verdict(ctx, q, Ending(_OUTCOMES[outcome], "", it, level_errors), measured, xi)
             engine.reset()  # a pass the compiled loop cannot take: the readable loop solves from the start
         return self._readable(ctx, q, levels)
 
