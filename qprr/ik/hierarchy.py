@@ -229,14 +229,15 @@ class HierarchySolver:
 
     def newton_loop(self, platform: Platform, levels, settings: tuple):
         """The QP IK's Newton loop compiled for ``levels`` (:class:`qprr.ik.newton_fast.NewtonLoop`, its targets read
-        now), or None when there is no compiled kernel or ``levels`` are not all default tasks.  ``settings``: the
-        loop's options (``NewtonLoop``'s)."""
+        now, the warm starts of its compiled steps forgotten: a new solve), or None when there is no compiled kernel or
+        ``levels`` are not all default tasks.  ``settings``: the loop's options (``NewtonLoop``'s)."""
         if self._fused is None:
             return None
         packed = self._packed_for(platform, levels, True)
         if packed is None:
             return None
         self._room_for(len(levels))
+        self._guesses[0][:] = -1
         loop = self._loop
         if loop is None or loop.packed is not packed or loop.guesses is not self._guesses or loop.settings != settings:
             loop = self._loop = self._fused.newton_loop(platform, packed, self._limits, self._weights, self._guesses, settings)

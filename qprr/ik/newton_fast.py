@@ -65,8 +65,8 @@ C_SIZE = 36
 I_IT, I_SHIFT, I_STALE, I_FLAT, I_KEPT, I_NPREV, I_SETTLED, I_FINAL, I_STATUS, I_XI, I_NSTEP = range(11)
 I_SIZE = 11
 # scal: scalars
-S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT, S_XCM, S_YCM, S_ROLL, S_PITCH = range(10)
-S_SIZE = 10
+S_MOVED, S_E1_PREV, S_REST, S_LARGEST, S_POS, S_ROT, S_XCM, S_YCM, S_ROLL, S_PITCH, S_WITHIN = range(11)
+S_SIZE = 11
 # prev: per level
 P_LOWER, P_RESIDUALS, P_OUT = range(3)
 
@@ -180,13 +180,16 @@ def _shape(step, pose_ok, control, state, met, n_levels):
 
 
 @numba.njit(**_JIT)
-def _stop(status, norms, kinematics, q, control, state):
+def _stop(status, norms, at, control, state):
     """End the solve with ``status`` and the levels' errors ``norms`` at q, and measure q as
-    ``qprr.ik.solver.finish`` does from the ``kinematics`` = (frame, base) at q: the pose errors, the CoG offset from
-    the thrust axis in B (``Platform.thrust_axis``: E (R_b^T (c - p_b) - point)), roll and pitch, and xi (thesis
-    coordinates, ``istate[I_XI]`` 0 at the ZYX singularity, ``qprr.ik.solver._xi_of_q``)."""
+    ``qprr.ik.solver.finish`` does from ``at`` = (frame, base, q, bounds), the kinematics at q and the arm's limits:
+    the pose errors, the CoG offset from the thrust axis in B (``Platform.thrust_axis``: E (R_b^T (c - p_b) - point)),
+    roll and pitch, whether the arm is within its limits (1e-12 of rounding slack), and xi (thesis coordinates,
+    ``istate[I_XI]`` 0 at the ZYX singularity, ``qprr.ik.solver._xi_of_q``)."""
     istate, scal, prev, _, xi = state
-    (_, M_frame), (M_base, com, _) = kinematics
+    (_, M_frame), (M_base, com, _), q, (lower, upper) = at
+    q_arm = q[7:]
+    scal[S_WITHIN] = np.all(q_arm >= lower - 1e-12) and np.all(q_arm <= upper + 1e-12)
     istate[I_STATUS] = status
     prev[P_OUT, : norms.shape[0]] = norms
     scal[S_POS], scal[S_ROT] = _pose_errors(M_frame, control)
@@ -256,10 +259,10 @@ def newton(levels, frame, base, q, solver, control, state):
     istate[I_STALE] = 0  # the caller computed the kinematics at q
     if istate[I_FINAL]:  # after the last step was integrated: the answer's level errors
         norms, finite = _all_norms(levels, frame, base, q)
-        return _stop(istate[I_STATUS], norms, (frame, base), q, control, state) if finite else FALLBACK
+        return _stop(istate[I_STATUS], norms, (frame, base, q, bounds), control, state) if finite else FALLBACK
     if istate[I_IT] >= control[C_MAX_ITER]:
         norms, finite = _all_norms(levels, frame, base, q)
-        return _stop(MAX_ITERATIONS, norms, (frame, base), q, control, state) if finite else FALLBACK
+        return _stop(MAX_ITERATIONS, norms, (frame, base, q, bounds), control, state) if finite else FALLBACK
     frame, base, scal[S_MOVED] = _shifted(frame, base, q, control, istate)
     M_frame, M_base = frame[1], base[0]
     pos, rot = _pose_errors(M_frame, control)
@@ -276,10 +279,10 @@ def newton(levels, frame, base, q, solver, control, state):
             if not finite:
                 return FALLBACK
             if np.all(norms[1:] < tol):
-                return _stop(CONVERGED, norms, (frame, base), q, control, state)
+                return _stop(CONVERGED, norms, (frame, base, q, bounds), control, state)
         if istate[I_SETTLED]:
             norms, finite = _all_norms(levels, frame, base, q)
-            return _stop(CONVERGED, norms, (frame, base), q, control, state) if finite else FALLBACK
+            return _stop(CONVERGED, norms, (frame, base, q, bounds), control, state) if finite else FALLBACK
     istate[I_IT] += 1
     active = levels if istate[I_KEPT] == K else _active(levels, istate[I_KEPT])
     status, _, _, x, x_levels, norms = iterate(active, frame, base, q, bounds, weights, guesses)
@@ -298,9 +301,9 @@ def newton(levels, frame, base, q, solver, control, state):
         return STEP
     status = STALLED if (stop == 1 and not pose_ok) else CONVERGED
     if istate[I_KEPT] == K:  # no step taken: the step's errors are those at q
-        return _stop(status, norms[0].copy(), (frame, base), q, control, state)
+        return _stop(status, norms[0].copy(), (frame, base, q, bounds), control, state)
     norms_all, finite = _all_norms(levels, frame, base, q)
-    return _stop(status, norms_all, (frame, base), q, control, state) if finite else FALLBACK
+    return _stop(status, norms_all, (frame, base, q, bounds), control, state) if finite else FALLBACK
 
 
 # ============================================================================ the Python side
@@ -332,8 +335,8 @@ class NewtonLoop:
     def run(self, data, q: np.ndarray, target: tuple, require_hover: bool, shift_target: np.ndarray | None):
         """Solve from q (not modified) for ``target`` = (p_d, R_d or None), the pose the success test measures at
         the packed frame; ``shift_target``: level 1's position the base is moved onto (None: no move).  Returns
-        (q, iterations, :class:`Outcome`, the levels' errors at q, (position error, angle, x_cm, y_cm, roll, pitch)
-        at q, xi of q or None at the ZYX singularity), ``data`` holding the kinematics at q; or None when a pass needs
+        (q, iterations, :class:`Outcome`, the levels' errors at q, [position error, angle, x_cm, y_cm, roll, pitch,
+        within the joint limits] at q, xi of q or None at the ZYX singularity), ``data`` holding the kinematics at q; or None when a pass needs
         the readable loop (:data:`FALLBACK`)."""
         platform, packed = self.platform, self.packed
         control = self._control.copy()
@@ -370,5 +373,6 @@ class NewtonLoop:
                 break
             elif code == FALLBACK:
                 return None
-        measured = tuple(scal[S_POS : S_PITCH + 1].tolist())
+        *measured, within = scal[S_POS : S_WITHIN + 1].tolist()
+        measured.append(within == 1.0)
         return q, int(istate[I_IT]), Outcome(int(istate[I_STATUS])), tuple(prev[P_OUT].tolist()), measured, xi if istate[I_XI] else None

@@ -481,19 +481,21 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     r20, r21, r22 = Rb[2].tolist()
     roll = math.atan2(r21, r22)
     pitch = math.atan2(-r20, math.hypot(r21, r22))
+    q_arm = q[7:]
+    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
     if xi is None:
         xi = _xi_of_q(q, Rb)
-    return _verdict(ctx, q, end, (pos_err, rot_err, float(off[0]), float(off[1]), roll, pitch), xi)
+    return _verdict(ctx, q, end, (pos_err, rot_err, float(off[0]), float(off[1]), roll, pitch, within), xi)
 
 
 def _verdict(ctx: SolveContext, q: np.ndarray, end: Ending, measured: tuple, xi: np.ndarray | None) -> IKResult:
     """The result of q, its success decided, from what :func:`finish` measured there: (position error [m], angle
-    [rad], x_cm, y_cm [m], roll, pitch [rad]), and its thesis coordinates xi (None at the ZYX singularity)."""
-    platform, opts = ctx.platform, ctx.opts
-    pos_err, rot_err, x_cm, y_cm, roll, pitch = measured
+    [rad], x_cm, y_cm [m], roll, pitch [rad], the arm within its joint limits), and its thesis coordinates xi (None at
+    the ZYX singularity)."""
+    opts = ctx.opts
+    pos_err, rot_err, x_cm, y_cm, roll, pitch, within = measured
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
-    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
@@ -921,17 +923,18 @@ class QPMethod:
         platform, opts, engine = self.platform, self.options, self.engine
         q = ch.xi_to_q(xi)
         posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
-        target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-        levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
-        engine.reset()
-        loop = engine.newton_loop(platform, levels, self._settings)
+        levels = opts.levels
+        if levels is None:
+            target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
+            levels = self.default_levels.levels(target, posture, float(xi[5]))
+        loop = engine.newton_loop(platform, levels, self._settings)  # its warm starts forgotten (a new solve)
         if loop is not None and loop.packed.frame == platform.ee_frame:  # the success test's frame: the loop's pose errors
             shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
             out = loop.run(ctx.data, q, (ctx.p_d, ctx.R_d), ctx.require_hover, None if shift is None else shift.target)
             if out is not None:  # the loop measured q as finish does (tested against it)
                 q, it, outcome, level_errors, measured, xi = out
                 return _verdict(ctx, q, Ending(_OUTCOMES[outcome], "", it, level_errors), measured, xi)
-            engine.reset()  # a pass the compiled loop cannot take: the readable loop solves from the start
+        engine.reset()  # the readable loop, warm starts forgotten: no compiled loop, or a pass it cannot take
         return self._readable(ctx, q, levels)
 
     def _readable(self, ctx: SolveContext, q: np.ndarray, levels) -> IKResult:
