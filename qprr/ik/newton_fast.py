@@ -186,7 +186,7 @@ def _stop(status, norms, at, control, state):
     the pose errors, the CoG offset from the thrust axis in B (``Platform.thrust_axis``: E (R_b^T (c - p_b) - point)),
     roll and pitch, whether the arm is within its limits (1e-12 of rounding slack), and xi (thesis coordinates,
     ``istate[I_XI]`` 0 at the ZYX singularity, ``qprr.ik.solver._xi_of_q``)."""
-    istate, scal, prev, _, xi = state
+    istate, scal, prev, _, xi, _ = state
     (_, M_frame), (M_base, com, _), q, (lower, upper) = at
     q_arm = q[7:]
     scal[S_WITHIN] = np.all(q_arm >= lower - 1e-12) and np.all(q_arm <= upper + 1e-12)
@@ -250,10 +250,12 @@ def _shifted(frame, base, q, control, istate):
 @numba.njit(**_JIT)
 def newton(levels, frame, base, q, solver, control, state):
     """One pass of the readable loop from the kinematics at q (module docstring): :class:`Pass`'s code; q's base
-    may be moved in place (:func:`_shifted`), ``dv_out`` holds the step on STEP.  ``solver`` = (bounds, weights, guesses) of
-    :func:`iterate`; ``state`` = (istate, scal, prev, dv_out)."""
+    may be moved in place (:func:`_shifted`); on STEP ``dv_out`` holds the step and ``arm_out`` the arm's joints
+    after it, q_arm + dv_arm clipped into the joint limits (what ``pin.integrate`` and the readable loop's clip give:
+    an arm joint's q and v are one number).  ``solver`` = (bounds, weights, guesses) of :func:`iterate`; ``state`` =
+    (istate, scal, prev, dv_out, xi, arm_out)."""
     bounds, weights, guesses = solver
-    istate, scal, prev, dv_out, _ = state
+    istate, scal, prev, dv_out, _, arm_out = state
     met = weights[3]
     K = levels[0].shape[0]
     istate[I_STALE] = 0  # the caller computed the kinematics at q
@@ -294,6 +296,7 @@ def newton(levels, frame, base, q, solver, control, state):
     dv, stop = _shape((x, x_levels, norms), pose_ok, control, (istate, scal, prev), met, K)
     if dv.shape[0]:
         dv_out[:] = dv
+        arm_out[:] = np.clip(q[7:] + dv[6:], bounds[0], bounds[1])  # the QP's bound slack removed
         istate[I_SETTLED] = scal[S_LARGEST] < control[C_SETTLE]
         if stop:
             istate[I_STATUS] = STALLED if (stop == 1 and not pose_ok) else CONVERGED
@@ -357,16 +360,17 @@ class NewtonLoop:
         prev = np.zeros((3, K))
         dv = np.zeros(platform.nv)
         q = q.copy()
-        model, (lower, upper) = platform.model, self.limits
+        model = platform.model
         xi = np.zeros(platform.n_xi)
-        solver, state = (self.limits, self.weights, self.guesses), (istate, scal, prev, dv, xi)
+        arm = np.zeros(platform.n_arm)
+        solver, state = (self.limits, self.weights, self.guesses), (istate, scal, prev, dv, xi, arm)
         while True:
             update_kinematics(platform, data, q)
             frame, base = _kinematics(platform, data, packed)
             code = newton(packed.levels, frame, base, q, solver, control, state)
             if code == STEP:
                 q = pin.integrate(model, q, dv)
-                np.clip(q[7:], lower, upper, out=q[7:])  # remove the QP's bound slack
+                q[7:] = arm  # clipped into the joint limits (newton)
             elif code == STOP:
                 if istate[I_STALE]:  # the base was moved in this last pass
                     update_kinematics(platform, data, q)
