@@ -233,14 +233,17 @@ class HierarchySolver:
         ``levels`` are not all default tasks.  ``settings``: the loop's options (``NewtonLoop``'s)."""
         if self._fused is None:
             return None
-        packed = self._packed_for(platform, levels, True)
-        if packed is None:
-            return None
-        self._room_for(len(levels))
-        self._guesses[0][:] = -1
         loop = self._loop
-        if loop is None or loop.packed is not packed or loop.guesses is not self._guesses or loop.settings != settings:
-            loop = self._loop = self._fused.newton_loop(platform, packed, self._limits, self._weights, self._guesses, settings)
+        fresh = loop is not None and loop.levels is levels and loop.guesses is self._guesses and loop.settings == settings
+        if fresh and self._fused.same_tasks(levels, loop.packed):
+            self._fused.refill(platform, loop.packed)  # the levels of the last solve, retargeted
+        else:
+            packed = self._packed_for(platform, levels, True)
+            if packed is None:
+                return None
+            self._room_for(len(levels))
+            loop = self._loop = self._fused.newton_loop(platform, levels, packed, (self._limits, self._weights, self._guesses), settings)
+        self._guesses[0][:] = -1
         return loop
 
     def _room_for(self, K: int) -> None:

@@ -319,14 +319,15 @@ def _kinematics(platform, data, packed) -> tuple[tuple, tuple]:
 
 
 class NewtonLoop:
-    """The compiled loop for one packed hierarchy (``qprr.ik.iteration_fast.CompiledLevels``) of a
-    ``HierarchySolver``: its joint ``limits`` (arm lower, upper), ``weights`` and active-set ``guesses`` (those of
-    :func:`iterate`, shared with the solver: its ``reset`` clears them), and ``settings`` = (position_tol,
-    orientation_tol, hover_tol, polished, settle_tol, step_tol, max_step, max_iter), the QP IK's options."""
+    """The compiled loop for ``levels`` (a sequence of levels of default tasks) packed as ``packed``
+    (``qprr.ik.iteration_fast.CompiledLevels``) by a ``HierarchySolver``, with its ``solver`` = (joint limits (arm
+    lower, upper), weights, active-set guesses), those of :func:`iterate` (the guesses shared with the solver, which
+    clears them per solve), and ``settings`` = (position_tol, orientation_tol, hover_tol, polished, settle_tol,
+    step_tol, max_step, max_iter), the QP IK's options."""
 
-    def __init__(self, platform, packed, limits: tuple, weights: tuple, guesses: tuple, settings: tuple) -> None:
-        self.platform, self.packed = platform, packed
-        self.limits, self.weights, self.guesses = limits, weights, guesses
+    def __init__(self, platform, levels, packed, solver: tuple, settings: tuple) -> None:
+        self.platform, self.levels, self.packed = platform, levels, packed
+        self.limits, self.weights, self.guesses = solver
         self.settings = settings
         self._control = np.zeros(C_SIZE)
         self._control[: C_MAX_ITER + 1] = settings[:7] + (0.0, settings[7])
