@@ -234,8 +234,8 @@ class HierarchySolver:
         if self._fused is None:
             return None
         loop = self._loop
-        fresh = loop is not None and loop.levels is levels and loop.guesses is self._guesses and loop.settings == settings
-        if fresh and self._fused.same_tasks(levels, loop.packed):
+        reuse = loop is not None and loop.levels is levels and loop.guesses is self._guesses and loop.settings == settings
+        if reuse and self._fused.same_tasks(levels, loop.packed):
             self._fused.refill(platform, loop.packed)  # the levels of the last solve, retargeted
         else:
             packed = self._packed_for(platform, levels, True)
