@@ -37,8 +37,8 @@ _JIT = {"cache": True, "nogil": True}
 
 class Pass(IntEnum):
     """What :func:`newton` asks of its caller: STEP (integrate ``dv`` into q, compute the kinematics, call again),
-    STOP (the solve ended: ``istate``,
-    ``scal`` and ``prev`` hold how), FALLBACK (a pass the compiled loop cannot take: solve with the readable loop)."""
+    STOP (the solve ended: ``istate``, ``scal`` and ``prev`` hold how), FALLBACK (a pass the compiled loop cannot take:
+    solve with the readable loop)."""
 
     STEP = 0
     STOP = 1
@@ -46,8 +46,8 @@ class Pass(IntEnum):
 
 
 class Outcome(IntEnum):
-    """How the compiled loop ended (``istate[I_STATUS]``), the readable loop's statuses of a solve that did not fail
-    inside it."""
+    """How the compiled loop ended (``istate[I_STATUS]``): the readable loop's statuses of a solve that did not fail
+    inside it, named as ``qprr.ik.solver.IKOutcome``'s members (the solver maps them by name)."""
 
     CONVERGED = 0
     STALLED = 1
@@ -124,6 +124,7 @@ def _satisfiable_prefix(errors, residuals, met, ratio=0.5):
 
 @numba.njit(**_JIT)
 def _max_abs(v):
+    """max |v_i| (0 for an empty v)."""
     m = 0.0
     for x in v:
         m = max(m, abs(x))
@@ -133,9 +134,9 @@ def _max_abs(v):
 @numba.njit(**_JIT)
 def _shape(step, pose_ok, control, state, met, n_levels):
     """``qprr.ik.solver._StepShaper.shape`` on the ``step`` (x, x_levels, norms of :func:`iterate`; ``state`` =
-    (istate, scal, prev), :func:`newton`'s): (dv or an empty
-    array, stop: 0 go on, 1 "converged_stationary", 2 "converged"); ``n_levels``: how many levels the hierarchy has
-    (``istate[I_KEPT]`` below it: the lower ones are frozen)."""
+    (istate, scal, prev), :func:`newton`'s): (dv or an empty array, stop: 0 go on, 1 "converged_stationary",
+    2 "converged"); ``n_levels``: how many levels the hierarchy has (``istate[I_KEPT]`` below it: the lower ones are
+    frozen)."""
     x, x_levels, norms = step
     istate, scal, prev = state
     errors, residuals = norms[0], norms[2]

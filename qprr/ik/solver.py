@@ -933,7 +933,7 @@ class QPMethod:
             out = loop.run(ctx.data, q, (ctx.p_d, ctx.R_d), ctx.require_hover, None if shift is None else shift.target)
             if out is not None:  # the loop measured q as finish does (tested against it)
                 q, it, outcome, level_errors, measured, xi = out
-                return _verdict(ctx, q, Ending(_OUTCOMES[outcome], "", it, level_errors), measured, xi)
+                return _verdict(ctx, q, Ending(IKOutcome[outcome.name], "", it, level_errors), measured, xi)
         engine.reset()  # the readable loop, warm starts forgotten: no compiled loop, or a pass it cannot take
         return self._readable(ctx, q, levels)
 
@@ -986,11 +986,6 @@ class QPMethod:
             update_kinematics(platform, data, q)
         levels_out = end.level_errors or _level_errors(engine, data, q, levels, ready and shaper.kept is None, step)
         return finish(ctx, q, Ending(end.status, "", it, levels_out, ready or not end.level_errors, end.pose_errors))
-
-
-_OUTCOMES = {0: IKOutcome.CONVERGED, 1: IKOutcome.STALLED, 2: IKOutcome.MAX_ITERATIONS}
-"""qprr.ik.newton_fast.Outcome's values -> the solve's status (the compiled loop's outcomes, by value: that module is
-imported with numba only)."""
 
 
 class _BaseShift:
