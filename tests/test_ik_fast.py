@@ -357,3 +357,18 @@ def test_compiled_loop_hands_a_solve_to_the_readable_loop(monkeypatch):
         passes.clear()
         assert_same_answer(solver.solve(data, target), rr)
         assert len(passes) >= 3
+
+
+@pytest.mark.parametrize("options", [{"max_iter": 2}, {"max_step": 0.3, "settle_tol": 1e-9}, {"require_hover": False, "position_tol": 1e-3}])
+def test_compiled_loop_matches_with_other_options(options, monkeypatch):
+    """The options the compiled loop reads (an iteration limit that ends solves with status max_iterations, a smaller
+    step cap, a tighter settle tolerance, hover not required, a looser tolerance) give the readable loop's answers."""
+    platform = qprr.load("q-prr")
+    data = platform.data()
+    compiled, readable = ik.IKSolver(platform, "qp", options), readable_solver(platform, monkeypatch, options)
+    statuses = set()
+    for target in cold_targets(platform, np.random.default_rng(4), 15):
+        rc, rr = compiled.solve(data, target), readable.solve(data, target)
+        assert_same_answer(rc, rr)
+        statuses.add(str(rc.status))
+    assert ("max_iterations" in statuses) == (options.get("max_iter") == 2)
