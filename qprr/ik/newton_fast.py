@@ -14,9 +14,11 @@ and level errors on cold starts of four platforms.
 
 The state the readable loop keeps in Python objects lives in three arrays, ``istate`` (counters and flags, ``I_*``),
 ``scal`` (scalars, ``S_*``) and ``prev`` (one row per quantity of each level, ``P_*``); ``control`` holds the
-options and the target (``C_*``, filled by :meth:`NewtonLoop.run`).  numba caches the machine code beside this file and checks
-only its time stamp: after editing ``iteration_fast.py`` or ``qprr/actuation/lexicographic_fast.py``, delete this
-module's ``.nbi`` / ``.nbc`` files in ``qprr/ik/__pycache__`` too.
+options and the target (``C_*``, filled by :meth:`NewtonLoop.run`); the step control's constants are
+:mod:`qprr.ik.stepping`'s, shared with the readable loop.  numba caches the machine code beside this file, with those
+constants frozen in, and checks only this file's time stamp: after editing ``iteration_fast.py``,
+``qprr/actuation/lexicographic_fast.py`` or ``stepping.py``, delete this module's ``.nbi`` / ``.nbc`` files in
+``qprr/ik/__pycache__`` too.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ import pinocchio as pin
 
 from ..charts import EULER_TOL
 from .iteration_fast import NEEDS_NUMPY, NOT_FINITE, iterate, level_norms
+from .stepping import FLAT_STEPS, FREEZE_SCALE, LEVEL1_RATE, LIMITS_SLACK, PROGRESS_RTOL, REST_FACTOR, SATISFIABLE_RATIO, STATIONARY_STEP
 from .tasks import update_kinematics
 
 _JIT = {"cache": True, "nogil": True}
@@ -99,24 +102,24 @@ def _hovering(M_base, tol):
 
 
 @numba.njit(**_JIT)
-def _lexicographic_progress(errors, previous, n_previous, rtol=1e-9):
+def _lexicographic_progress(errors, previous, n_previous):
     """``qprr.ik.solver._lexicographic_progress`` (``n_previous`` < 0: no previous errors)."""
     if n_previous < 0:
         return True
     for i in range(min(errors.shape[0], n_previous)):
         e, e0 = errors[i], previous[i]
-        if abs(e - e0) > rtol * max(e, e0):
+        if abs(e - e0) > PROGRESS_RTOL * max(e, e0):
             return e < e0
     return False
 
 
 @numba.njit(**_JIT)
-def _satisfiable_prefix(errors, residuals, met, ratio=0.5):
+def _satisfiable_prefix(errors, residuals, met):
     """``qprr.ik.solver._satisfiable_prefix``: level 1, then each level the step's linear model meets."""
     kept = 1
     for k in range(1, errors.shape[0]):
         e, r = errors[k], residuals[k]
-        if not (e <= met or r <= ratio * e):
+        if not (e <= met or r <= SATISFIABLE_RATIO * e):
             break
         kept += 1
     return kept
@@ -144,23 +147,23 @@ def _shape(step, pose_ok, control, state, met, n_levels):
     tol = control[C_SETTLE] if pose_ok else control[C_STEP]
     largest = _max_abs(x)
     small = largest < tol
-    if small and largest < 1e-15:
+    if small and largest < STATIONARY_STEP:
         return np.zeros(0), 1
     lower = errors[1 : istate[I_KEPT]].copy()
     progress = _lexicographic_progress(lower, prev[P_LOWER], istate[I_NPREV])
     istate[I_FLAT] = istate[I_FLAT] + 1 if (pose_ok and not progress) else 0
     prev[P_LOWER, : lower.shape[0]] = lower
     istate[I_NPREV] = lower.shape[0]
-    if istate[I_FLAT] >= 3:
+    if istate[I_FLAT] >= FLAT_STEPS:
         return np.zeros(0), 2
     e1 = math.hypot(errors[0], scal[S_MOVED])  # level 1's error before the base was moved onto its position
-    if not pose_ok and e1 > 0.5 * scal[S_E1_PREV]:
-        scal[S_REST] *= 0.5
+    if not pose_ok and e1 > LEVEL1_RATE * scal[S_E1_PREV]:
+        scal[S_REST] *= REST_FACTOR
     elif scal[S_REST] < 1.0:
-        scal[S_REST] = min(1.0, 2.0 * scal[S_REST])
+        scal[S_REST] = min(1.0, scal[S_REST] / REST_FACTOR)
     scal[S_E1_PREV] = e1
     dv = x
-    if scal[S_REST] <= 0.25:  # _StepShaper._freeze
+    if scal[S_REST] <= FREEZE_SCALE:  # _StepShaper._freeze
         kept = max(K - 1, _satisfiable_prefix(errors, residuals, met))
         if kept < K:
             istate[I_KEPT], istate[I_NPREV] = kept, -1
@@ -185,12 +188,12 @@ def _stop(status, norms, at, control, state):
     """End the solve with ``status`` and the levels' errors ``norms`` at q, and measure q as
     ``qprr.ik.solver.finish`` does from ``at`` = (frame, base, q, bounds), the kinematics at q and the arm's limits:
     the pose errors, the CoG offset from the thrust axis in B (``Platform.thrust_axis``: E (R_b^T (c - p_b) - point)),
-    roll and pitch, whether the arm is within its limits (1e-12 of rounding slack), and xi (thesis coordinates,
+    roll and pitch, whether the arm is within its limits (``LIMITS_SLACK`` of rounding slack), and xi (thesis coordinates,
     ``istate[I_XI]`` 0 at the ZYX singularity, ``qprr.ik.solver._xi_of_q``)."""
     istate, scal, prev, _, xi, _ = state
     (_, M_frame), (M_base, com, _), q, (lower, upper) = at
     q_arm = q[7:]
-    scal[S_WITHIN] = np.all(q_arm >= lower - 1e-12) and np.all(q_arm <= upper + 1e-12)
+    scal[S_WITHIN] = np.all(q_arm >= lower - LIMITS_SLACK) and np.all(q_arm <= upper + LIMITS_SLACK)
     istate[I_STATUS] = status
     prev[P_OUT, : norms.shape[0]] = norms
     scal[S_POS], scal[S_ROT] = _pose_errors(M_frame, control)

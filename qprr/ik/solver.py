@@ -60,6 +60,7 @@ from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
+from .stepping import FLAT_STEPS, FREEZE_SCALE, LEVEL1_RATE, LIMITS_SLACK, PROGRESS_RTOL, REST_FACTOR, SATISFIABLE_RATIO, STATIONARY_STEP
 from .tasks import BaseOrientationTask, BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 POLISHED = 1e-3
@@ -482,7 +483,7 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     roll = math.atan2(r21, r22)
     pitch = math.atan2(-r20, math.hypot(r21, r22))
     q_arm = q[7:]
-    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
+    within = bool(np.all(q_arm >= platform.arm_lower - LIMITS_SLACK) and np.all(q_arm <= platform.arm_upper + LIMITS_SLACK))
     if xi is None:
         xi = _xi_of_q(q, Rb)
     return _verdict(ctx, q, end, (pos_err, rot_err, float(off[0]), float(off[1]), roll, pitch, within), xi)
@@ -621,7 +622,7 @@ def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
     """``xi0`` validated: shape, finite, arm inside its limits, level when ``hover``."""
     xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
     q_arm = xi0[6:]
-    if not ((q_arm >= platform.arm_lower - 1e-12).all() and (q_arm <= platform.arm_upper + 1e-12).all()):
+    if not ((q_arm >= platform.arm_lower - LIMITS_SLACK).all() and (q_arm <= platform.arm_upper + LIMITS_SLACK).all()):
         platform.check_arm_limits(q_arm, "xi0[6:]")  # names the joints out of their limits
     if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
         raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); set hover=False or level xi0")
@@ -1056,7 +1057,7 @@ class _StepShaper:
         opts = self.opts
         largest = float(np.abs(step.dv).max())
         small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
-        if small and largest < 1e-15:
+        if small and largest < STATIONARY_STEP:
             return None, "converged_stationary"
         # the lower levels may converge only linearly (damped, unsatisfiable): once the pose holds, stop when their
         # errors no longer decrease, compared in priority order (the first level that moved decides: a posture error
@@ -1065,19 +1066,19 @@ class _StepShaper:
         lower = errors[1 : self.kept]
         self.flat = self.flat + 1 if (pose_ok and not _lexicographic_progress(lower, self.lower_prev)) else 0
         self.lower_prev = lower
-        if self.flat >= 3:
+        if self.flat >= FLAT_STEPS:
             return None, "converged"
         # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
         # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
         # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
         e1 = math.hypot(errors[0], moved)  # level 1's error before the base was moved onto its position (_BaseShift)
-        if not pose_ok and e1 > 0.5 * self.e1_prev:
-            self.rest_scale *= 0.5
+        if not pose_ok and e1 > LEVEL1_RATE * self.e1_prev:
+            self.rest_scale *= REST_FACTOR
         elif self.rest_scale < 1.0:
-            self.rest_scale = min(1.0, 2.0 * self.rest_scale)
+            self.rest_scale = min(1.0, self.rest_scale / REST_FACTOR)
         self.e1_prev = e1
         dv = step.dv
-        if self.rest_scale <= 0.25:
+        if self.rest_scale <= FREEZE_SCALE:
             self._freeze(step)
         if self.kept is not None:
             dv = step.dv_levels[self.kept - 1]
@@ -1105,24 +1106,25 @@ class _StepShaper:
             self.kept, self.rest_scale, self.e1_prev, self.lower_prev = kept, 1.0, math.inf, None
 
 
-def _satisfiable_prefix(step, ratio: float = 0.5) -> int:
+def _satisfiable_prefix(step) -> int:
     """How many leading levels the linearisation meets: level 1 always, then each level whose error the step's
-    linear model at least halves (||J_k dv - e_k|| <= ratio ||e_k||) or which is met (MET), up to the first that is not."""
+    linear model at least halves (||J_k dv - e_k|| <= SATISFIABLE_RATIO ||e_k||) or which is met (MET), up to the first
+    that is not."""
     kept = 1
     for e, r in zip(step.errors[1:], step.residuals[1:]):
-        if not (e <= MET or r <= ratio * e):
+        if not (e <= MET or r <= SATISFIABLE_RATIO * e):
             break
         kept += 1
     return kept
 
 
-def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
+def _lexicographic_progress(errors, previous) -> bool:
     """Whether ``errors`` (one norm per level, highest priority first) improve on ``previous``: the first level
-    whose error changed by more than ``rtol`` (relative) decreased."""
+    whose error changed by more than ``PROGRESS_RTOL`` (relative) decreased."""
     if previous is None:
         return True
     for e, e0 in zip(errors, previous):
-        if abs(e - e0) > rtol * max(e, e0):
+        if abs(e - e0) > PROGRESS_RTOL * max(e, e0):
             return e < e0
     return False
 
