@@ -343,8 +343,8 @@ class NewtonLoop:
     def run(self, data, q: np.ndarray, target: tuple, require_hover: bool, shift_target: np.ndarray | None):
         """Solve from q (not modified) for ``target`` = (p_d, R_d or None), the pose the success test measures at
         the packed frame; ``shift_target``: level 1's position the base is moved onto (None: no move).  Returns
-        (q, iterations, :class:`Outcome`, the levels' errors at q, [position error, angle, x_cm, y_cm, roll, pitch,
-        within the joint limits] at q, xi of q or None at the ZYX singularity), ``data`` holding the kinematics at q; or None when a pass needs
+        (q, iterations, :class:`Outcome`, the levels' errors at q, (position error, angle, x_cm, y_cm, roll, pitch,
+        within the joint limits) at q, xi of q or None at the ZYX singularity), ``data`` holding the kinematics at q; or None when a pass needs
         the readable loop (:data:`FALLBACK`)."""
         platform, packed = self.platform, self.packed
         control = self._control.copy()
@@ -382,6 +382,6 @@ class NewtonLoop:
                 break
             elif code == FALLBACK:
                 return None
-        *measured, within = scal[S_POS : S_WITHIN + 1].tolist()
-        measured.append(within == 1.0)
+        pos, rot, x_cm, y_cm = float(scal[S_POS]), float(scal[S_ROT]), float(scal[S_XCM]), float(scal[S_YCM])
+        measured = (pos, rot, x_cm, y_cm, float(scal[S_ROLL]), float(scal[S_PITCH]), bool(scal[S_WITHIN]))  # as finish's
         return q, int(istate[I_IT]), Outcome(int(istate[I_STATUS])), tuple(prev[P_OUT].tolist()), measured, xi if istate[I_XI] else None

@@ -917,8 +917,16 @@ class QPMethod:
             platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol, kernel=options.kernel
         )
         self.default_levels = _DefaultLevels(platform)
-        o = options  # the compiled loop's settings (qprr.ik.newton_fast.NewtonLoop)
-        self._settings = (o.position_tol, o.orientation_tol, o.hover_tol, POLISHED, o.settle_tol, o.step_tol, o.max_step, o.max_iter)
+        self._settings = (  # the compiled loop's settings (qprr.ik.newton_fast.NewtonLoop)
+            options.position_tol,
+            options.orientation_tol,
+            options.hover_tol,
+            POLISHED,
+            options.settle_tol,
+            options.step_tol,
+            options.max_step,
+            options.max_iter,
+        )
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, opts, engine = self.platform, self.options, self.engine
