@@ -267,8 +267,7 @@ def cold_targets(platform, rng, n: int):
 def readable_solver(platform, monkeypatch, options=None):
     """An IKSolver whose QP runs the readable Newton loop (its engine offers no compiled loop)."""
     solver = ik.IKSolver(platform, "qp", options)
-    engine = solver._method_run.engine
-    monkeypatch.setattr(engine, "newton_loop", lambda *args: None)
+    monkeypatch.setattr(solver.engine, "newton_loop", lambda *args: None)
     return solver
 
 
@@ -323,7 +322,7 @@ def test_compiled_loop_matches_on_the_qprr_problems(monkeypatch):
     pairs = [(igm.solver(platform, "qp", init=init), igm.solver(platform, "qp", init=init)) for init in ("guess", "igm")]
     pairs.append((ik.IKSolver(platform, "qp", two), ik.IKSolver(platform, "qp", two)))
     for _, readable in pairs:
-        monkeypatch.setattr(readable._method_run.engine, "newton_loop", lambda *args: None)
+        monkeypatch.setattr(readable.engine, "newton_loop", lambda *args: None)
     statuses = set()
     for M in targets:
         pose.set_target(M)

@@ -844,6 +844,12 @@ class IKSolver:
 
             self._collision = collision_model(platform)
 
+    @property
+    def engine(self) -> HierarchySolver | None:
+        """The :class:`~qprr.ik.hierarchy.HierarchySolver` method ``"qp"`` keeps between solves (its QPs, joint limits,
+        kernel and compiled loop; to read, not to replace), or None for a method that keeps none."""
+        return self._method_run.engine if isinstance(self._method_run, QPMethod) else None
+
     def _guess(self, data, p_d, R_d, hover: bool):
         if self.initial_guess is not None:
             xi, label = self.initial_guess(self.platform, data, p_d, R_d)
