@@ -782,9 +782,9 @@ def cold_start_why(cold, qp, pink, two_levels) -> list[str]:
         f"one finds the step below step_tol or settle_tol) of the four-level hierarchy at about {_fmt_us(per_it)} us each, on top of "
         f"the {_fmt_us(t_fixed)} us of a solve whose start is already the answer (the IGM start, the IGM included); pink takes "
         f"{n_pink:.2f} full steps (mean) of one weighted QP over the 7 hover coordinates at {_fmt_us(t_pink / max(n_pink, 1.0))} us "
-        f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve; with the compiled kernel (qprr[fast]) the "
-        "levels' linear algebra is one numba call per iteration, and what is left of an iteration is driven from Python: "
-        "the tasks' Jacobians (Pinocchio and numpy on 2- to 9-column matrices), the step control and the glue"
+        f"each.  A 2x lead would leave {_fmt_us(t_pink / 2)} us per solve; with the compiled kernel (qprr[fast]) an "
+        "iteration is one numba call (the tasks' Jacobians, the levels' linear algebra, the step control and the "
+        "stopping tests: qprr/ik/newton_fast.py) between Pinocchio's kinematics and integrate, called from Python"
     ]
     if two_levels is not None and two_levels.times:
         t2 = float(np.median(two_levels.times))

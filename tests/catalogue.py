@@ -81,6 +81,8 @@ NOT_FED: dict[str, str] = {
     "checked: tests/test_ik_fast.py checks them against the tasks' linearize and Pinocchio's log6 / Jlog6",
     "qprr.actuation.lexicographic_fast.*": "compiled kernels (numba) on arrays their caller, qprr.actuation.lexicographic, built "
     "and checked: tests/test_lexicographic_fast.py checks them against the numpy path",
+    "qprr.ik.newton_fast.*": "the QP IK's compiled Newton loop, on arrays and levels its caller, qprr.ik.solver.QPMethod (through "
+    "HierarchySolver.newton_loop), built from checked input: tests/test_ik_fast.py checks it against the readable loop",
     "qprr.control.base.Controller*": "abstract base class (its subclasses are fed)",
     "qprr.thesis.symbolic.SymbolicModel*": "the sympy model takes seconds to derive (tests/test_symbolic.py)",
     "qprr.thesis.symbolic.symbolic_model": "the sympy model takes seconds to derive (tests/test_symbolic.py)",

@@ -651,6 +651,20 @@ def test_settle_tol_only_cuts_the_tail_of_the_lower_levels(rob, dat, hover_targe
         assert b.position_error < 1e-10 and b.orientation_error < 1e-10
 
 
+def test_solver_engine_is_the_qp_methods_hierarchy(rob):
+    """IKSolver.engine: the HierarchySolver method "qp" keeps (one per solver, with the platform's joint limits), None
+    for a method that keeps none; read-only."""
+    from qprr.ik.hierarchy import HierarchySolver
+
+    qp = qprr.ik.IKSolver(rob, "qp")
+    assert isinstance(qp.engine, HierarchySolver) and qp.engine is qp.engine
+    np.testing.assert_array_equal(qp.engine.lower, rob.arm_lower)
+    assert qp.engine is not qprr.ik.IKSolver(rob, "qp").engine
+    assert qprr.ik.IKSolver(rob, "dls").engine is None and qprr.ik.IKSolver(rob, "clika").engine is None
+    with pytest.raises(AttributeError):
+        qp.engine = None
+
+
 @pytest.mark.parametrize("method", ["qp", "dls"])
 def test_solve_many_gives_the_answers_of_one_solve_per_target(rob, dat, hover_targets, method):
     """qprr.ik.solve_many: reachable and unreachable targets, a position target and a given xi0 among them, the same

@@ -247,3 +247,127 @@ def test_steps_without_refresh_and_on_leading_levels_match(name):
         np.testing.assert_allclose(
             fused.level_errors(platform, data, q, levels, refresh=False), reference.level_errors(platform, data, q, levels), rtol=1e-10, atol=1e-14
         )
+
+
+def cold_targets(platform, rng, n: int):
+    """``n`` targets from random level configurations (every third a position alone), the solver's default guess."""
+    data = platform.data()
+    targets = []
+    for k in range(n):
+        xi = np.zeros(platform.n_xi)
+        xi[0:3] = rng.uniform(-3.0, 3.0, 3)
+        xi[5] = rng.uniform(-np.pi, np.pi)
+        xi[6:] = rng.uniform(np.maximum(platform.arm_lower, -np.pi), np.minimum(platform.arm_upper, np.pi))
+        pin.framesForwardKinematics(platform.model, data, qprr.charts.xi_to_q(xi))
+        M = data.oMf[platform.ee_frame].copy()
+        targets.append(M.translation.copy() if k % 3 == 2 else M)
+    return targets
+
+
+def readable_solver(platform, monkeypatch, options=None):
+    """An IKSolver whose QP runs the readable Newton loop (its engine offers no compiled loop)."""
+    solver = ik.IKSolver(platform, "qp", options)
+    monkeypatch.setattr(solver.engine, "newton_loop", lambda *args: None)
+    return solver
+
+
+def assert_same_answer(rc, rr):
+    """The compiled loop's result against the readable loop's: the same verdicts and iteration counts, the pose
+    errors, CoG offset and attitude to 1e-12, the configuration and the level errors to 1e-9.  Both loops take the
+    same compiled steps and differ by rounding only (the compiled loop shifts the kinematics of a base move instead of
+    asking Pinocchio again), which the lower levels' conditioning (up to 1e8 with the regularisation 1e-7) amplifies
+    where a level cannot be met: 4.5e-10 at most in q on hextilt_flying_arm_5's 150 benchmark targets."""
+    verdicts = ("status", "success", "iterations", "hover_feasible", "within_limits")
+    assert [getattr(rc, f) for f in verdicts] == [getattr(rr, f) for f in verdicts]
+    np.testing.assert_allclose(rc.q, rr.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(rc.xi, rr.xi, rtol=0, atol=1e-9)  # the compiled loop's xi of q against finish's
+    np.testing.assert_allclose(rc.level_errors, rr.level_errors, rtol=0, atol=1e-9)
+    errors = ("position_error", "orientation_error", "x_cm", "y_cm", "roll", "pitch")
+    np.testing.assert_allclose([getattr(rc, f) for f in errors], [getattr(rr, f) for f in errors], rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", PLATFORMS)
+def test_compiled_loop_matches_readable_loop(name, monkeypatch):
+    """The QP IK's Newton loop compiled (qprr/ik/newton_fast.py) against the readable loop of QPMethod on cold starts
+    from the default guess, poses and positions (hextilt_flying_arm_5's position targets freeze lower levels): the same
+    statuses, iteration counts and answers; the compiled loop ran every solve (no fallback)."""
+    from qprr.ik import newton_fast
+
+    platform = platform_of(name)
+    data = platform.data()
+    compiled, readable = ik.IKSolver(platform, "qp"), readable_solver(platform, monkeypatch)
+    ran = []
+    run = newton_fast.NewtonLoop.run
+    monkeypatch.setattr(newton_fast.NewtonLoop, "run", lambda self, *args: ran.append(run(self, *args)) or ran[-1])
+    targets = cold_targets(platform, np.random.default_rng(8), 45)
+    for target in targets:
+        assert_same_answer(compiled.solve(data, target), readable.solve(data, target))
+    assert len(ran) == len(targets) and all(out is not None for out in ran)
+
+
+def test_compiled_loop_matches_on_the_qprr_problems(monkeypatch):
+    """The Q-PRR: the thesis guess (four levels; pose then hover alone, pink's problem) and the analytic IGM start,
+    targets reachable in hover and not (status not_hover_feasible), against the readable loop."""
+    from qprr.ik.tasks import HoverTask
+    from qprr.thesis import igm
+
+    platform = qprr.load("q-prr")
+    data = platform.data()
+    rng = np.random.default_rng(3)
+    targets = [t for t in cold_targets(platform, rng, 30) if isinstance(t, pin.SE3)]
+    tilt = pin.exp3(np.array([0.3, 0.0, 0.1]))  # the end effector's y axis out of the horizontal: no hover reaches it
+    targets += [pin.SE3(tilt @ M.rotation, M.translation) for M in targets[:6]]
+    pose = PoseTask(platform, pin.SE3.Identity())
+    two = {"levels": [[pose], [HoverTask()]]}
+    pairs = [(igm.solver(platform, "qp", init=init), igm.solver(platform, "qp", init=init)) for init in ("guess", "igm")]
+    pairs.append((ik.IKSolver(platform, "qp", two), ik.IKSolver(platform, "qp", two)))
+    for _, readable in pairs:
+        monkeypatch.setattr(readable.engine, "newton_loop", lambda *args: None)
+    statuses = set()
+    for M in targets:
+        pose.set_target(M)
+        guess = igm.hover_guess(platform.params, M.translation, M.rotation)
+        for compiled, readable in pairs:
+            rc, rr = compiled.solve(data, M, guess), readable.solve(data, M, guess)
+            assert_same_answer(rc, rr)
+            statuses.add(str(rc.status))
+    assert statuses == {"converged", "not_hover_feasible"}
+
+
+def test_compiled_loop_hands_a_solve_to_the_readable_loop(monkeypatch):
+    """A pass the compiled loop cannot take (here forced at its third pass) ends it: the readable loop solves the
+    target from its start, so the answer is the readable loop's."""
+    from qprr.ik import newton_fast
+
+    platform = qprr.load("borinot_flying_arm_2")
+    data = platform.data()
+    targets = cold_targets(platform, np.random.default_rng(9), 6)
+    readable = readable_solver(platform, monkeypatch)
+    expected = [readable.solve(data, t) for t in targets]
+    newton, passes = newton_fast.newton, []
+
+    def failing(*args):
+        passes.append(1)
+        return newton_fast.FALLBACK if len(passes) % 3 == 0 else newton(*args)
+
+    monkeypatch.setattr(newton_fast, "newton", failing)
+    solver = ik.IKSolver(platform, "qp")
+    for target, rr in zip(targets, expected, strict=True):
+        passes.clear()
+        assert_same_answer(solver.solve(data, target), rr)
+        assert len(passes) >= 3
+
+
+@pytest.mark.parametrize("options", [{"max_iter": 2}, {"max_step": 0.3, "settle_tol": 1e-9}, {"require_hover": False, "position_tol": 1e-3}])
+def test_compiled_loop_matches_with_other_options(options, monkeypatch):
+    """The options the compiled loop reads (an iteration limit that ends solves with status max_iterations, a smaller
+    step cap, a tighter settle tolerance, hover not required, a looser tolerance) give the readable loop's answers."""
+    platform = qprr.load("q-prr")
+    data = platform.data()
+    compiled, readable = ik.IKSolver(platform, "qp", options), readable_solver(platform, monkeypatch, options)
+    statuses = set()
+    for target in cold_targets(platform, np.random.default_rng(4), 15):
+        rc, rr = compiled.solve(data, target), readable.solve(data, target)
+        assert_same_answer(rc, rr)
+        statuses.add(str(rc.status))
+    assert ("max_iterations" in statuses) == (options.get("max_iter") == 2)

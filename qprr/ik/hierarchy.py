@@ -148,9 +148,10 @@ class HierarchySolver:
         self._first = True  # the first step of a solve asks the tasks for their errors first (Task.error)
         self._fused = None  # qprr.ik.iteration_fast's functions, with the numba kernel
         if resolve_kernel(kernel) is Kernel.NUMBA and active_set_first:
-            from . import iteration_fast  # numba: only when this kernel is asked for
+            from . import iteration_fast, newton_fast  # numba: only when this kernel is asked for
 
-            self._fused = _Fused(iteration_fast)
+            self._fused = _Fused(iteration_fast, newton_fast.NewtonLoop)
+        self._loop = None  # the last compiled Newton loop made (newton_loop)
         self._packed: list = []  # [(levels, their CompiledLevels or None)], the last two sequences of levels asked for
         self._weights = (self.regularization, self.lower_damping, self.rank_tol, MET)  # iteration_fast.iterate's
         nb = platform.n_arm
@@ -226,6 +227,31 @@ class HierarchySolver:
                 return tuple(norms.tolist())
         return tuple(math.sqrt(sum(float(e @ e) for e in (t.error(platform, data, q) for t in level))) for level in levels)
 
+    def newton_loop(self, platform: Platform, levels, settings: tuple):
+        """The QP IK's Newton loop compiled for ``levels`` (:class:`qprr.ik.newton_fast.NewtonLoop`, its targets read
+        now, the warm starts of its compiled steps forgotten: a new solve), or None when there is no compiled kernel or
+        ``levels`` are not all default tasks.  ``settings``: the loop's options (``NewtonLoop``'s)."""
+        if self._fused is None:
+            return None
+        loop = self._loop
+        reuse = loop is not None and loop.levels is levels and loop.guesses is self._guesses and loop.settings == settings
+        if reuse and self._fused.same_tasks(levels, loop.packed):
+            self._fused.refill(platform, loop.packed)  # the levels of the last solve, retargeted
+        else:
+            packed = self._packed_for(platform, levels, True)
+            if packed is None:
+                return None
+            self._room_for(len(levels))
+            loop = self._loop = self._fused.newton_loop(platform, levels, packed, (self._limits, self._weights, self._guesses), settings)
+        self._guesses[0][:] = -1
+        return loop
+
+    def _room_for(self, K: int) -> None:
+        """The compiled step's active-set guesses with room for K levels."""
+        if self._guesses[0].shape[0] < K:
+            nb = self.platform.n_arm
+            self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
+
     def _packed_for(self, platform: Platform, levels, refresh: bool = True):
         """``levels`` packed for the compiled iteration (qprr.ik.iteration_fast.CompiledLevels), None if they are not
         all default tasks; packed once for the same tasks, whose targets are read again at every call with
@@ -254,10 +280,7 @@ class HierarchySolver:
         packed = self._packed_for(platform, levels, refresh)
         if packed is None:
             return None
-        K = len(levels)
-        if self._guesses[0].shape[0] < K:  # room for the active-set guesses of K levels
-            nb = platform.n_arm
-            self._guesses = (np.full(K, -1, dtype=np.int64), np.zeros((K, nb), dtype=bool), np.zeros((K, nb), dtype=bool))
+        self._room_for(len(levels))
         frame, base = fast.kinematics(platform, data, packed)
         status, A, b, x, x_levels, norms = fast.iterate(packed.levels, frame, base, q, self._limits, self._weights, self._guesses)
         if status == fast.FastStatus.NOT_FINITE:
@@ -274,7 +297,8 @@ class HierarchySolver:
 class _Fused:
     """The functions of :mod:`qprr.ik.iteration_fast` a solver calls (a module cannot be pickled; functions can)."""
 
-    def __init__(self, module) -> None:
+    def __init__(self, module, newton_loop) -> None:
+        self.newton_loop = newton_loop  # qprr.ik.newton_fast.NewtonLoop
         self.compiled_levels, self.refill, self.same_tasks = module.compiled_levels, module.refill, module.same_tasks
         self.kinematics, self.iterate, self.FastStatus = module.kinematics, module.iterate, module.FastStatus
         self.level_norms = module.level_norms

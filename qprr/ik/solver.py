@@ -60,6 +60,7 @@ from ..model import Platform, check_data, check_model_data, check_platform
 from ..registry import Registry
 from ..validation import as_array, as_int, as_matrix, as_real, as_vector
 from .hierarchy import DEFAULT_KERNEL, MET, HierarchySolver
+from .stepping import FLAT_STEPS, FREEZE_SCALE, LEVEL1_RATE, LIMITS_SLACK, PROGRESS_RTOL, REST_FACTOR, SATISFIABLE_RATIO, STATIONARY_STEP
 from .tasks import BaseOrientationTask, BasePoseTask, ComTask, HoverTask, PoseTask, PositionTask, PostureTask, Task, update_kinematics
 
 POLISHED = 1e-3
@@ -467,7 +468,7 @@ class Ending:
 def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     """Evaluate q with Pinocchio (FK, CoM) and build the result; decide success (``xi``: q's thesis coordinates
     when the method has them, else computed from q)."""
-    platform, data, opts = ctx.platform, ctx.data, ctx.opts
+    platform, data = ctx.platform, ctx.data
     if end.kinematics_ready:  # data already holds FK, frames and CoM at q
         c = data.com[0]
         M = data.oMf[platform.ee_frame]
@@ -481,16 +482,26 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
     r20, r21, r22 = Rb[2].tolist()
     roll = math.atan2(r21, r22)
     pitch = math.atan2(-r20, math.hypot(r21, r22))
+    q_arm = q[7:]
+    within = bool(np.all(q_arm >= platform.arm_lower - LIMITS_SLACK) and np.all(q_arm <= platform.arm_upper + LIMITS_SLACK))
+    if xi is None:
+        xi = _xi_of_q(q, Rb)
+    return _verdict(ctx, q, end, (pos_err, rot_err, float(off[0]), float(off[1]), roll, pitch, within), xi)
+
+
+def _verdict(ctx: SolveContext, q: np.ndarray, end: Ending, measured: tuple, xi: np.ndarray | None) -> IKResult:
+    """The result of q, its success decided, from what :func:`finish` measured there: (position error [m], angle
+    [rad], x_cm, y_cm [m], roll, pitch [rad], the arm within its joint limits), and its thesis coordinates xi (None at
+    the ZYX singularity)."""
+    opts = ctx.opts
+    pos_err, rot_err, x_cm, y_cm, roll, pitch, within = measured
     hover_ok = abs(roll) < opts.hover_tol and abs(pitch) < opts.hover_tol
     q_arm = q[7:]
-    within = bool(np.all(q_arm >= platform.arm_lower - 1e-12) and np.all(q_arm <= platform.arm_upper + 1e-12))
     pose_ok = pos_err < opts.position_tol and rot_err < opts.orientation_tol
     status, reason = end.status, end.reason
     success = pose_ok and within and (hover_ok or not ctx.require_hover) and not reason
     if not success:
         status, reason = _failure(ctx, end, q_arm, (pos_err, rot_err, roll, pitch), (pose_ok, within))
-    if xi is None:
-        xi = _xi_of_q(q, Rb)
     return IKResult(
         method=ctx.method,
         success=bool(success),
@@ -501,8 +512,8 @@ def finish(ctx: SolveContext, q: np.ndarray, end: Ending, xi=None) -> IKResult:
         iterations=int(end.iterations),
         position_error=pos_err,
         orientation_error=rot_err,
-        x_cm=float(off[0]),
-        y_cm=float(off[1]),
+        x_cm=x_cm,
+        y_cm=y_cm,
         roll=roll,
         pitch=pitch,
         hover_feasible=bool(hover_ok),
@@ -611,7 +622,7 @@ def prepare_xi0(platform: Platform, xi0, hover: bool) -> np.ndarray:
     """``xi0`` validated: shape, finite, arm inside its limits, level when ``hover``."""
     xi0 = ch.as_xi(xi0, "xi0", platform.n_xi)
     q_arm = xi0[6:]
-    if not ((q_arm >= platform.arm_lower - 1e-12).all() and (q_arm <= platform.arm_upper + 1e-12).all()):
+    if not ((q_arm >= platform.arm_lower - LIMITS_SLACK).all() and (q_arm <= platform.arm_upper + LIMITS_SLACK).all()):
         platform.check_arm_limits(q_arm, "xi0[6:]")  # names the joints out of their limits
     if hover and (xi0[3] != 0.0 or xi0[4] != 0.0):
         raise InputError(f"xi0 roll and pitch must be 0 for a hover method (got phi = {xi0[3]!r}, theta = {xi0[4]!r}); set hover=False or level xi0")
@@ -833,6 +844,12 @@ class IKSolver:
 
             self._collision = collision_model(platform)
 
+    @property
+    def engine(self) -> HierarchySolver | None:
+        """The :class:`~qprr.ik.hierarchy.HierarchySolver` method ``"qp"`` keeps between solves (its QPs, joint limits,
+        kernel and compiled loop; to read, not to replace), or None for a method that keeps none."""
+        return self._method_run.engine if isinstance(self._method_run, QPMethod) else None
+
     def _guess(self, data, p_d, R_d, hover: bool):
         if self.initial_guess is not None:
             xi, label = self.initial_guess(self.platform, data, p_d, R_d)
@@ -906,14 +923,38 @@ class QPMethod:
             platform, eps_abs=options.eps_abs, regularization=options.regularization, rank_tol=options.rank_tol, kernel=options.kernel
         )
         self.default_levels = _DefaultLevels(platform)
+        self._settings = (  # the compiled loop's settings (qprr.ik.newton_fast.NewtonLoop)
+            options.position_tol,
+            options.orientation_tol,
+            options.hover_tol,
+            POLISHED,
+            options.settle_tol,
+            options.step_tol,
+            options.max_step,
+            options.max_iter,
+        )
 
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
-        platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
+        platform, opts, engine = self.platform, self.options, self.engine
         q = ch.xi_to_q(xi)
         posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
-        target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-        levels = opts.levels if opts.levels is not None else self.default_levels.levels(target, posture, float(xi[5]))
-        engine.reset()
+        levels = opts.levels
+        if levels is None:
+            target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
+            levels = self.default_levels.levels(target, posture, float(xi[5]))
+        loop = engine.newton_loop(platform, levels, self._settings)  # its warm starts forgotten (a new solve)
+        if loop is not None and loop.packed.frame == platform.ee_frame:  # the success test's frame: the loop's pose errors
+            shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
+            out = loop.run(ctx.data, q, (ctx.p_d, ctx.R_d), ctx.require_hover, None if shift is None else shift.target)
+            if out is not None:  # the loop measured q as finish does (tested against it)
+                q, it, outcome, level_errors, measured, xi = out
+                return _verdict(ctx, q, Ending(IKOutcome[outcome.name], "", it, level_errors), measured, xi)
+        engine.reset()  # the readable loop, warm starts forgotten: no compiled loop, or a pass it cannot take
+        return self._readable(ctx, q, levels)
+
+    def _readable(self, ctx: SolveContext, q: np.ndarray, levels) -> IKResult:
+        """The readable Newton loop from q (the reference of :mod:`qprr.ik.newton_fast`'s compiled loop)."""
+        platform, data, opts, engine = self.platform, ctx.data, self.options, self.engine
         it, step, end = 0, None, Ending(IKOutcome.MAX_ITERATIONS)
         shaper = _StepShaper(opts)
         shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
@@ -1030,7 +1071,7 @@ class _StepShaper:
         opts = self.opts
         largest = float(np.abs(step.dv).max())
         small = largest < (opts.settle_tol if pose_ok else opts.step_tol)
-        if small and largest < 1e-15:
+        if small and largest < STATIONARY_STEP:
             return None, "converged_stationary"
         # the lower levels may converge only linearly (damped, unsatisfiable): once the pose holds, stop when their
         # errors no longer decrease, compared in priority order (the first level that moved decides: a posture error
@@ -1039,19 +1080,19 @@ class _StepShaper:
         lower = errors[1 : self.kept]
         self.flat = self.flat + 1 if (pose_ok and not _lexicographic_progress(lower, self.lower_prev)) else 0
         self.lower_prev = lower
-        if self.flat >= 3:
+        if self.flat >= FLAT_STEPS:
             return None, "converged"
         # level 1 converges quadratically on its own; the lower levels' part of the step moves along level 1's kernel
         # at first order only, and its second-order effect can hold level 1 off its target: when level 1 stops halving
         # its error, that part is halved until it does again (doubled back, up to full, when level 1 progresses)
         e1 = math.hypot(errors[0], moved)  # level 1's error before the base was moved onto its position (_BaseShift)
-        if not pose_ok and e1 > 0.5 * self.e1_prev:
-            self.rest_scale *= 0.5
+        if not pose_ok and e1 > LEVEL1_RATE * self.e1_prev:
+            self.rest_scale *= REST_FACTOR
         elif self.rest_scale < 1.0:
-            self.rest_scale = min(1.0, 2.0 * self.rest_scale)
+            self.rest_scale = min(1.0, self.rest_scale / REST_FACTOR)
         self.e1_prev = e1
         dv = step.dv
-        if self.rest_scale <= 0.25:
+        if self.rest_scale <= FREEZE_SCALE:
             self._freeze(step)
         if self.kept is not None:
             dv = step.dv_levels[self.kept - 1]
@@ -1079,24 +1120,25 @@ class _StepShaper:
             self.kept, self.rest_scale, self.e1_prev, self.lower_prev = kept, 1.0, math.inf, None
 
 
-def _satisfiable_prefix(step, ratio: float = 0.5) -> int:
+def _satisfiable_prefix(step) -> int:
     """How many leading levels the linearisation meets: level 1 always, then each level whose error the step's
-    linear model at least halves (||J_k dv - e_k|| <= ratio ||e_k||) or which is met (MET), up to the first that is not."""
+    linear model at least halves (||J_k dv - e_k|| <= SATISFIABLE_RATIO ||e_k||) or which is met (MET), up to the first
+    that is not."""
     kept = 1
     for e, r in zip(step.errors[1:], step.residuals[1:]):
-        if not (e <= MET or r <= ratio * e):
+        if not (e <= MET or r <= SATISFIABLE_RATIO * e):
             break
         kept += 1
     return kept
 
 
-def _lexicographic_progress(errors, previous, rtol: float = 1e-9) -> bool:
+def _lexicographic_progress(errors, previous) -> bool:
     """Whether ``errors`` (one norm per level, highest priority first) improve on ``previous``: the first level
-    whose error changed by more than ``rtol`` (relative) decreased."""
+    whose error changed by more than ``PROGRESS_RTOL`` (relative) decreased."""
     if previous is None:
         return True
     for e, e0 in zip(errors, previous):
-        if abs(e - e0) > rtol * max(e, e0):
+        if abs(e - e0) > PROGRESS_RTOL * max(e, e0):
             return e < e0
     return False
 
