@@ -69,13 +69,14 @@ OPTIONAL = {"mpc": ("crocoddyl", "the receding-horizon MPC (controller 'mpc')", 
 
 def _mpc(platform: Platform, **kwargs) -> Controller:
     """:class:`qprr.control.mpc.MPCController` (imported on first use: crocoddyl takes ~0.8 s to import); ``weights`` and
-    ``settings`` given as tables of fields (a gains file's ``[mpc.weights]``, ``[mpc.settings]``) become
-    :class:`~qprr.control.mpc.MPCWeights` and :class:`~qprr.control.mpc.MPCSettings`."""
-    from .mpc import MPCController, MPCSettings, MPCWeights
+    ``settings`` given as tables of fields (a gains file's ``[mpc.weights]``, ``[mpc.settings]``) replace fields of
+    the platform's default weights (:func:`qprr.control.mpc.platform_weights`) and of :class:`~qprr.control.mpc.MPCSettings`."""
+    from .mpc import MPCController, MPCSettings, platform_weights
 
-    for arg, cls in (("weights", MPCWeights), ("settings", MPCSettings)):
-        if isinstance(kwargs.get(arg), dict):
-            kwargs[arg] = replace_fields(cls(), kwargs[arg], platform.n_xi, f"mpc.{arg}")
+    if isinstance(kwargs.get("weights"), dict):
+        kwargs["weights"] = replace_fields(platform_weights(platform), kwargs["weights"], platform.n_xi, "mpc.weights")
+    if isinstance(kwargs.get("settings"), dict):
+        kwargs["settings"] = replace_fields(MPCSettings(), kwargs["settings"], platform.n_xi, "mpc.settings")
     return MPCController(platform, **kwargs)
 
 
@@ -98,7 +99,11 @@ _CORE = {
 }
 """The core's controllers (registered into :data:`CONTROLLERS` below; ``mpc`` too when crocoddyl is installed)."""
 if find_spec("crocoddyl") is not None:  # registered only when the optional dependency is installed
-    _MPC_GAINS = NoGains("cost weights and a horizon of its own (MPCWeights), not gains", ("weights", "settings"))
+    _MPC_GAINS = NoGains(
+        "cost weights and a horizon of its own, not gains; its default weights follow the platform's hover thrusts "
+        "(qprr.control.mpc.platform_weights), not bandwidth targets",
+        ("weights", "settings"),
+    )
     _CORE["mpc"] = ControllerEntry(_mpc, _MPC_GAINS, "receding-horizon MPC")
 for _name, _entry in _CORE.items():
     CONTROLLERS.register(_name, _entry)
