@@ -229,13 +229,14 @@ def platform_weights(platform: Platform, reference: MPCWeights | None = None) ->
     rotors costs (thrust / n) dF^2 = thrust_ref |f_h,ref|^2 (dF / m g)^2: a collective acceleration dF / m costs what
     it costs the Q-PRR on every mass and rotor count (to the ratio of the gravities), and the LQR poles it places
     against the state weights are the Q-PRR's (a geometrically similar robot k times heavier,
-    :meth:`~qprr.control.gains.Authority.scaled`, gets thrust / k^2 and the same closed loop).  The other weights are kept: they are in the units of the errors
-    (m, rad, m/s, rad/s), whose acceptable sizes the bandwidth :class:`~qprr.control.gains.Targets` take the same on
-    every platform, and the arm efforts are already weighted through the joint acceleration they give (tau_j / M_jj),
-    which makes the arm's LQR bandwidth (arm / arm_acceleration)^(1/4) platform-independent.  On the Q-PRR this
-    returns ``reference`` (the factor is 1 to rounding).  Measured on the 10 s hover-reach (docs/mpc.md, "Weights from
-    the platform"): position and arm RMSE within 10 % of the Q-PRR's fixed weights on borinot_flying_arm_2 and
-    examples/my_platform, no solve at the iteration limit.
+    :meth:`~qprr.control.gains.Authority.scaled`, gets thrust / k^2 and the same closed loop).  The other weights are
+    kept: they are in the units of the errors (m, rad, m/s, rad/s), whose acceptable sizes the bandwidth
+    :class:`~qprr.control.gains.Targets` take the same on every platform, and the arm efforts are already weighted
+    through the joint acceleration they give (tau_j / M_jj), which makes the arm's LQR bandwidth
+    (arm / arm_acceleration)^(1/4) platform-independent.  On the Q-PRR this returns ``reference`` (the factor is 1 to
+    rounding).  Measured on the 10 s hover-reach (docs/mpc.md, "Weights from the platform"): position and arm RMSE
+    within 10 % of the Q-PRR's fixed weights on borinot_flying_arm_2 and examples/my_platform, no solve at the
+    iteration limit.
     """
     reference = MPCWeights() if reference is None else reference
     if not isinstance(reference, MPCWeights):
