@@ -191,7 +191,9 @@ class Authority:
                 f"the rotors cannot hover the platform (thrust margin {margin:.4g} N <= 0): no gains derive from "
                 "its authority; raise f_max in the rotor file (or give the controller its gains= explicitly)"
             )
-        f_h = hover_thrusts(platform)
+        hover = np.zeros(6)
+        hover[2] = m * platform.g
+        f_h = np.clip(np.linalg.pinv(A) @ hover, f_lo, f_hi)
         swing = np.minimum(f_hi - f_h, f_h - f_lo)
         torque = np.abs(A[3:6]) @ np.maximum(swing, 0.0)
         n = platform.n_arm
@@ -217,18 +219,6 @@ class Authority:
             tuple((lo / k, hi / k) for lo, hi in self.inverse_inertia),
             self.coupling,
         )
-
-
-def hover_thrusts(platform: Platform) -> np.ndarray:
-    """The rotor thrusts f_h [N] (n_rotors,) that hold ``platform`` level at its neutral configuration: the least-squares
-    allocation pinv(A) [0, 0, m g, 0, 0, 0]^T on the rotor matrix A (body wrench per unit thrust, Thesis (5.44)-(5.46)),
-    clipped to the rotor bounds (m g / n on each of n coplanar upright rotors).  :class:`Authority` measures the torque
-    swing around them; the MPC's thrust weight is relative to them (:func:`qprr.control.mpc.platform_weights`)."""
-    platform = check_platform(platform)
-    hover = np.zeros(6)
-    hover[2] = platform.total_mass * platform.g
-    f_h = np.linalg.pinv(np.asarray(platform.rotor_matrix)) @ hover
-    return np.clip(f_h, np.asarray(platform.thrust_min), np.asarray(platform.thrust_max))
 
 
 WORKSPACE_SAMPLES = 256
@@ -574,7 +564,6 @@ __all__ = [
     "derive_mfc",
     "derive_opspace_impedance",
     "gain_lines",
-    "hover_thrusts",
     "idc_gains",
     "impedance_gains",
     "integral_limits",

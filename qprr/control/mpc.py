@@ -107,6 +107,7 @@ from dataclasses import dataclass, fields, replace
 import numpy as np
 import pinocchio as pin
 
+from ..actuation import Allocator
 from ..charts import State, euler_to_rotation, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..model import Platform
@@ -114,7 +115,7 @@ from ..trajectory import Trajectory
 from ..validation import as_int, as_real, as_vector
 from .base import Controller, Reference, check_reset
 from .filters import tilt_6_17
-from .gains import Authority, hover_thrusts
+from .gains import Authority
 from .mpc_stats import BACKENDS, INSTALL, Fallback, MPCStats, SolveStatus, chatter_fraction, health_warnings
 
 try:
@@ -212,20 +213,21 @@ class MPCWeights:
         _positive(self, tuple(f.name for f in fields(self)), allow_zero=True)
 
 
-REFERENCE_HOVER_THRUST_SQUARED = 297.4258956816002
-"""|f_h|^2 [N^2], the squared norm of the hover thrusts (:func:`qprr.control.gains.hover_thrusts`) of the platform the
+REFERENCE_HOVER_THRUST_SQUARED = 297.4258956816
+"""|f_h|^2 [N^2], the squared norm of the hover thrusts (:meth:`qprr.actuation.Allocator.hover_thrusts`) of the platform the
 defaults of :class:`MPCWeights` were tuned on: the thesis's Q-PRR (``qprr.load()``, 3.5196 kg on 4 rotors, 8.623 N
 each; tests/test_mpc.py reads it from the model)."""
 
 
 def platform_weights(platform: Platform, reference: MPCWeights | None = None) -> MPCWeights:
     """The MPC's default weights on ``platform``: ``reference`` (default :class:`MPCWeights`, tuned on the Q-PRR) with
-    the thrust residuals measured relative to the platform's hover thrusts f_h (:func:`~qprr.control.gains.hover_thrusts`),
+    the thrust residuals measured relative to the platform's hover thrusts f_h (the rotor thrusts that hold it still,
+    level, arm at 0: :meth:`qprr.actuation.Allocator.hover_thrusts`; m g / n each on n upright rotors under the CoM),
 
         thrust = thrust_ref |f_h,ref|^2 / |f_h|^2      (|f_h,ref|^2 = :data:`REFERENCE_HOVER_THRUST_SQUARED`),
 
     so that the cost w |u - u_ref|^2 is w_ref |f_h,ref|^2 |(u - u_ref) / |f_h||^2, a fraction of the platform's own hover
-    thrust.  For n coplanar upright rotors |f_h|^2 = (m g)^2 / n, and a collective force change dF spread over the
+    thrust.  For n coplanar upright rotors under the CoM |f_h|^2 = (m g)^2 / n, and a collective force change dF spread over the
     rotors costs (thrust / n) dF^2 = thrust_ref |f_h,ref|^2 (dF / m g)^2: a collective acceleration dF / m costs what
     it costs the Q-PRR on every mass and rotor count (to the ratio of the gravities), and the LQR poles it places
     against the state weights are the Q-PRR's (a geometrically similar robot k times heavier,
@@ -241,12 +243,10 @@ def platform_weights(platform: Platform, reference: MPCWeights | None = None) ->
     reference = MPCWeights() if reference is None else reference
     if not isinstance(reference, MPCWeights):
         raise InputError(f"reference must be an MPCWeights (the weights to map onto the platform), got {type(reference).__name__}")
-    f_h = hover_thrusts(platform)
+    if not isinstance(platform, Platform):
+        raise InputError(f"platform must be a qprr Platform (the MPC's weights follow its hover thrusts), got {type(platform).__name__}")
+    f_h = Allocator(platform).hover_thrusts()  # InputError naming the platform when its rotors cannot hover it
     norm2 = float(f_h @ f_h)
-    if not norm2 > 0.0:
-        raise InputError(
-            f"platform {platform.name!r} has no hover thrust (|f_h| = 0): the MPC's thrust weight is relative to it; give weights= explicitly"
-        )
     return replace(reference, thrust=reference.thrust * REFERENCE_HOVER_THRUST_SQUARED / norm2)
 
 
