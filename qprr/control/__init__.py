@@ -115,7 +115,8 @@ def make_controller(name: str, platform: Platform, *, defaults: str = "platform"
     go to its constructor.
 
     Default gains: for every controller whose entry has :class:`DerivedGains` (:data:`GAIN_ARGUMENTS`: all the
-    core's but ``mpc``, which has cost weights), ``platform_gains(name, platform)``: each coordinate of xi gets a
+    core's but ``mpc``, which has cost weights, mapped onto the platform by :func:`qprr.control.mpc.platform_weights`),
+    ``platform_gains(name, platform)``: each coordinate of xi gets a
     bandwidth w from the platform's actuator authority at its neutral configuration and a critically damped error
     polynomial, (s + w)^3 on roll, pitch, yaw (k_D = 3 w, k_P = 3 w^2, k_I = w^3) and (s + w)^2 on position and arm
     (k_D = 2 w, k_P = w^2); the impedance filters get M = the moved inertia, K = M w^2, D = 2 M w (the
