@@ -69,13 +69,14 @@ OPTIONAL = {"mpc": ("crocoddyl", "the receding-horizon MPC (controller 'mpc')", 
 
 def _mpc(platform: Platform, **kwargs) -> Controller:
     """:class:`qprr.control.mpc.MPCController` (imported on first use: crocoddyl takes ~0.8 s to import); ``weights`` and
-    ``settings`` given as tables of fields (a gains file's ``[mpc.weights]``, ``[mpc.settings]``) become
-    :class:`~qprr.control.mpc.MPCWeights` and :class:`~qprr.control.mpc.MPCSettings`."""
-    from .mpc import MPCController, MPCSettings, MPCWeights
+    ``settings`` given as tables of fields (a gains file's ``[mpc.weights]``, ``[mpc.settings]``) replace fields of
+    the platform's default weights (:func:`qprr.control.mpc.platform_weights`) and of :class:`~qprr.control.mpc.MPCSettings`."""
+    from .mpc import MPCController, MPCSettings, platform_weights
 
-    for arg, cls in (("weights", MPCWeights), ("settings", MPCSettings)):
-        if isinstance(kwargs.get(arg), dict):
-            kwargs[arg] = replace_fields(cls(), kwargs[arg], platform.n_xi, f"mpc.{arg}")
+    if isinstance(kwargs.get("weights"), dict):
+        kwargs["weights"] = replace_fields(platform_weights(platform), kwargs["weights"], platform.n_xi, "mpc.weights")
+    if isinstance(kwargs.get("settings"), dict):
+        kwargs["settings"] = replace_fields(MPCSettings(), kwargs["settings"], platform.n_xi, "mpc.settings")
     return MPCController(platform, **kwargs)
 
 
@@ -98,7 +99,11 @@ _CORE = {
 }
 """The core's controllers (registered into :data:`CONTROLLERS` below; ``mpc`` too when crocoddyl is installed)."""
 if find_spec("crocoddyl") is not None:  # registered only when the optional dependency is installed
-    _MPC_GAINS = NoGains("cost weights and a horizon of its own (MPCWeights), not gains", ("weights", "settings"))
+    _MPC_GAINS = NoGains(
+        "cost weights and a horizon of its own, not gains; its default weights follow the platform's hover thrusts "
+        "(qprr.control.mpc.platform_weights), not bandwidth targets",
+        ("weights", "settings"),
+    )
     _CORE["mpc"] = ControllerEntry(_mpc, _MPC_GAINS, "receding-horizon MPC")
 for _name, _entry in _CORE.items():
     CONTROLLERS.register(_name, _entry)
@@ -110,7 +115,8 @@ def make_controller(name: str, platform: Platform, *, defaults: str = "platform"
     go to its constructor.
 
     Default gains: for every controller whose entry has :class:`DerivedGains` (:data:`GAIN_ARGUMENTS`: all the
-    core's but ``mpc``, which has cost weights), ``platform_gains(name, platform)``: each coordinate of xi gets a
+    core's but ``mpc``, which has cost weights, mapped onto the platform by :func:`qprr.control.mpc.platform_weights`),
+    ``platform_gains(name, platform)``: each coordinate of xi gets a
     bandwidth w from the platform's actuator authority at its neutral configuration and a critically damped error
     polynomial, (s + w)^3 on roll, pitch, yaw (k_D = 3 w, k_P = 3 w^2, k_I = w^3) and (s + w)^2 on position and arm
     (k_D = 2 w, k_P = w^2); the impedance filters get M = the moved inertia, K = M w^2, D = 2 M w (the

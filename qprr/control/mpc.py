@@ -26,7 +26,8 @@ with RK2, RK3 or RK4.  RK2 costs two model evaluations per node.
   joints.  It equals the platform's N of Thesis (5.44)-(5.46) (``Platform.actuation_matrix``,
   checked in tests/test_mpc.py for the Q-PRR and the hexarotors), so tau = W u is Pinocchio's
   generalised force.
-* l_k = 1/2 sum of weighted squared residuals (:class:`MPCWeights`):
+* l_k = 1/2 sum of weighted squared residuals (:class:`MPCWeights`; by default the Q-PRR's tuned weights with the
+  thrust weight relative to the platform's hover thrusts, :func:`platform_weights`):
 
   - ``state``: x_k (-) x_ref(t_k) in the tangent space (LOCAL): base position, attitude
     (roll/pitch and yaw weighted apart), arm joints and the velocities;
@@ -101,11 +102,12 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from dataclasses import dataclass, fields
+from dataclasses import dataclass, fields, replace
 
 import numpy as np
 import pinocchio as pin
 
+from ..actuation import Allocator
 from ..charts import State, euler_to_rotation, xi_ddot_to_a, xi_to_qv
 from ..errors import InputError, MissingDependencyError, UnknownNameError
 from ..model import Platform
@@ -187,6 +189,9 @@ class MPCWeights:
     ``tilt`` is roll and pitch of the base (x, y of the LOCAL rotation error), ``yaw`` its z.
     ``cog`` [1/m^2] weights the CoG's offset from the thrust axis (body frame); 0 (the default) leaves
     the term out (module docstring).
+
+    These defaults were tuned on the thesis's Q-PRR (3.52 kg, 4 rotors); the controller's default weights on any
+    platform are these mapped onto it by :func:`platform_weights` (the thrust weight relative to its hover thrusts).
     """
 
     position: float = 100.0
@@ -206,6 +211,43 @@ class MPCWeights:
 
     def __post_init__(self) -> None:
         _positive(self, tuple(f.name for f in fields(self)), allow_zero=True)
+
+
+REFERENCE_HOVER_THRUST_SQUARED = 297.4258956816
+"""|f_h|^2 [N^2], the squared norm of the hover thrusts (:meth:`qprr.actuation.Allocator.hover_thrusts`) of the platform the
+defaults of :class:`MPCWeights` were tuned on: the thesis's Q-PRR (``qprr.load()``, 3.5196 kg on 4 rotors, 8.623 N
+each; tests/test_mpc.py reads it from the model)."""
+
+
+def platform_weights(platform: Platform, reference: MPCWeights | None = None) -> MPCWeights:
+    """The MPC's default weights on ``platform``: ``reference`` (default :class:`MPCWeights`, tuned on the Q-PRR) with
+    the thrust residuals measured relative to the platform's hover thrusts f_h (the rotor thrusts that hold it still,
+    level, arm at 0: :meth:`qprr.actuation.Allocator.hover_thrusts`; m g / n each on n upright rotors under the CoM),
+
+        thrust = thrust_ref |f_h,ref|^2 / |f_h|^2      (|f_h,ref|^2 = :data:`REFERENCE_HOVER_THRUST_SQUARED`),
+
+    so that the cost w |u - u_ref|^2 is w_ref |f_h,ref|^2 |(u - u_ref) / |f_h||^2, a fraction of the platform's own hover
+    thrust.  For n coplanar upright rotors under the CoM |f_h|^2 = (m g)^2 / n, and a collective force change dF spread over the
+    rotors costs (thrust / n) dF^2 = thrust_ref |f_h,ref|^2 (dF / m g)^2: a collective acceleration dF / m costs what
+    it costs the Q-PRR on every mass and rotor count (to the ratio of the gravities), and the LQR poles it places
+    against the state weights are the Q-PRR's (a geometrically similar robot k times heavier,
+    :meth:`~qprr.control.gains.Authority.scaled`, gets thrust / k^2 and the same closed loop).  The other weights are
+    kept: they are in the units of the errors (m, rad, m/s, rad/s), whose acceptable sizes the bandwidth
+    :class:`~qprr.control.gains.Targets` take the same on every platform, and the arm efforts are already weighted
+    through the joint acceleration they give (tau_j / M_jj), which makes the arm's LQR bandwidth
+    (arm / arm_acceleration)^(1/4) platform-independent.  On the Q-PRR this returns ``reference`` (the factor is 1 to
+    rounding).  Measured on the 10 s hover-reach (docs/mpc.md, "Weights from the platform"): position and arm RMSE
+    within 10 % of the Q-PRR's fixed weights on borinot_flying_arm_2 and examples/my_platform, no solve at the
+    iteration limit.
+    """
+    reference = MPCWeights() if reference is None else reference
+    if not isinstance(reference, MPCWeights):
+        raise InputError(f"reference must be an MPCWeights (the weights to map onto the platform), got {type(reference).__name__}")
+    if not isinstance(platform, Platform):
+        raise InputError(f"platform must be a qprr Platform (the MPC's weights follow its hover thrusts), got {type(platform).__name__}")
+    f_h = Allocator(platform).hover_thrusts()  # InputError naming the platform when its rotors cannot hover it
+    norm2 = float(f_h @ f_h)
+    return replace(reference, thrust=reference.thrust * REFERENCE_HOVER_THRUST_SQUARED / norm2)
 
 
 @dataclass(frozen=True)
@@ -348,7 +390,8 @@ class MPCController(Controller):
         horizon.  The simulator replaces it by the run's trajectory (``uses_preview``); without
         any, the current reference is extrapolated (second order).
     weights, settings
-        :class:`MPCWeights`, :class:`MPCSettings` (defaults if None).
+        :class:`MPCWeights` (None: :func:`platform_weights`, the Q-PRR's tuned weights mapped onto ``platform``),
+        :class:`MPCSettings` (defaults if None).
 
     After a run: :meth:`stats`, ``fallback_count``, ``events`` [(t, status, reason, fallback)],
     :attr:`planned_thrusts` (the latest plan), ``max_bound_violation`` [N] over every plan.
@@ -359,15 +402,15 @@ class MPCController(Controller):
     uses_preview = True
 
     def __init__(self, platform: Platform, trajectory=None, *, weights: MPCWeights | None = None, settings: MPCSettings | None = None) -> None:
-        self.weights = MPCWeights() if weights is None else weights
         self.settings = MPCSettings() if settings is None else settings
-        if not isinstance(self.weights, MPCWeights):
-            raise InputError(f"weights must be an MPCWeights, got {type(self.weights).__name__}")
+        if weights is not None and not isinstance(weights, MPCWeights):
+            raise InputError(f"weights must be an MPCWeights (None: platform_weights(platform)), got {type(weights).__name__}")
         if not isinstance(self.settings, MPCSettings):
             raise InputError(f"settings must be an MPCSettings, got {type(self.settings).__name__}")
         _check_trajectory(trajectory)
         self.backend = _resolve_backend(self.settings.backend)
         thrusters, u_lb, u_ub = _check_platform(platform)
+        self.weights = platform_weights(platform) if weights is None else weights
         self.platform = platform
         self.trajectory = trajectory
         n_rot = platform.n_rotors
@@ -875,5 +918,7 @@ __all__ = [
     "MPCWeights",
     "NodeSpec",
     "PlatformDynamics",
+    "REFERENCE_HOVER_THRUST_SQUARED",
     "SolveStatus",
+    "platform_weights",
 ]
