@@ -127,7 +127,9 @@ def make_controller(name: str, platform: Platform, *, defaults: str = "platform"
     derived gains: :class:`~qprr.errors.InputError` (pass ``gains=`` explicitly).
 
     ``defaults="class"``: the gains not given are the controller class's own fixed defaults instead (tuned for the
-    Q-PRR), nothing derived.
+    Q-PRR), nothing derived.  The MPC has no gains, so both choices build it the same: its class's default weights are
+    the Q-PRR's mapped onto the platform (:func:`qprr.control.mpc.platform_weights`); ``weights=MPCWeights()`` gives
+    the Q-PRR's unmapped.
 
     An optional controller whose dependency is missing raises :class:`~qprr.errors.MissingDependencyError`
     with the install command.
