@@ -42,7 +42,8 @@ def as_xi(xi, name: str = "xi", n: int | None = None) -> np.ndarray:
     if a.ndim != 1 or a.shape[0] < 6 or (n is not None and a.shape[0] != n):
         want = f"({n},)" if n is not None else "(6 + n_arm,)"
         raise ShapeError(f"{name} must have shape {want}, got shape {a.shape}")
-    return as_vector(a, a.shape[0], name)
+    # a finite sum means every entry is finite (as_vector's test, which names the entries otherwise)
+    return a if np.isfinite(a.sum()) else as_vector(a, a.shape[0], name)
 
 
 def xi_names(n_arm: int, arm_names=None) -> tuple[str, ...]:

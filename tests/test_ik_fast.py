@@ -111,6 +111,9 @@ def test_compiled_tasks_match_linearize(name):
             scale = 1.0 + np.abs(J).max()
             np.testing.assert_allclose(A[rows], J, rtol=0, atol=1e-12 * scale, err_msg=f"{level[0].name} J")
             np.testing.assert_allclose(b[rows], e, rtol=0, atol=1e-12 * (1.0 + np.abs(e).max()), err_msg=f"{level[0].name} e")
+        # the errors alone (no Jacobian computed) are those of the linearisation, bit for bit
+        norms = [float(np.sqrt(np.sum(b[i:j] * b[i:j]))) for i, j in zip(offsets[:-1], offsets[1:])]
+        assert fast.level_norms(packed.levels, frame, base, q).tolist() == norms
 
 
 def test_hover_task_upside_down_compiled():
@@ -129,6 +132,7 @@ def test_hover_task_upside_down_compiled():
     J, e = levels[0][0].linearize(platform, data, q)
     np.testing.assert_allclose(A, J, rtol=0, atol=1e-14)
     np.testing.assert_allclose(b, e, rtol=0, atol=1e-14)
+    assert fast.level_norms(packed.levels, frame, base, q).tolist() == [float(np.sqrt(np.sum(b * b)))]
 
 
 class Given(Task):

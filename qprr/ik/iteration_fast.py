@@ -173,9 +173,9 @@ def _hover_gain(s, wz):
 
 
 @numba.njit(**_JIT)
-def _hover_rows(R_base, J, e):
+def _hover_rows(R_base, J, e, jacobian):
     """HoverTask.linearize into J (2, nv) and e (2,): e = g(s, w_z) w_xy with w = R_b e3, and its Jacobian from
-    dw = -R_b hat(e3) omega_body (columns 3, 4)."""
+    dw = -R_b hat(e3) omega_body (columns 3, 4), unless ``jacobian`` is False (e alone)."""
     w = np.ascontiguousarray(R_base[:, 2])
     D = np.empty((3, 2))  # dw / d(omega_x, omega_y)
     D[:, 0] = -R_base[:, 1]
@@ -183,20 +183,22 @@ def _hover_rows(R_base, J, e):
     s = np.hypot(w[0], w[1])
     g, c, ok = _hover_gain(s, w[2])
     if not ok:  # upside down: tilt about body x, |e| = the angle (hover._upside_down_error)
-        J[:, 3:5] = D[0:2]
+        if jacobian:
+            J[:, 3:5] = D[0:2]
         n = max(np.hypot(R_base[0, 1], R_base[1, 1]), 1e-300)
         a = np.arctan2(s, w[2])
         e[0], e[1] = -a * R_base[0, 1] / n, -a * R_base[1, 1] / n
         return
-    # de = g dw_xy + w_xy (c w_xy . dw_xy - dw_z)
-    v = c * (w[0:2] @ D[0:2]) - D[2]
-    J[:, 3:5] = g * D[0:2] + np.outer(w[0:2], v)
+    if jacobian:  # de = g dw_xy + w_xy (c w_xy . dw_xy - dw_z)
+        v = c * (w[0:2] @ D[0:2]) - D[2]
+        J[:, 3:5] = g * D[0:2] + np.outer(w[0:2], v)
     e[0], e[1] = -g * w[0], -g * w[1]
 
 
 @numba.njit(**_JIT)
-def _task_rows(kind, par, frame, base, q, J, e):
-    """One task's (J, e) written into J (dim, nv) and e (dim,), before its row scale (``par``: its parameters)."""
+def _task_rows(kind, par, frame, base, q, J, e, jacobian):
+    """One task's (J, e) written into J (dim, nv) and e (dim,), before its row scale (``par``: its parameters); e alone
+    (J untouched) when ``jacobian`` is False."""
     J_local, M_frame = frame
     M_base, com, Jcom = base
     R_b, p_b = np.ascontiguousarray(M_base[0:3, 0:3]), np.ascontiguousarray(M_base[0:3, 3])
@@ -207,31 +209,36 @@ def _task_rows(kind, par, frame, base, q, J, e):
         R = _mm(Rdi, R_f)
         p = _mv(Rdi, p_f) + par[9:12]
         v, w, _ = log6(R, p)
-        J[:, :] = _mm(jlog6(R, p), J_local)
+        if jacobian:
+            J[:, :] = _mm(jlog6(R, p), J_local)
         e[0:3], e[3:6] = -v, -w
     elif kind == POSITION:  # p -> target, J = rows 0..2 of the LOCAL_WORLD_ALIGNED Jacobian
-        J[:, :] = _mm(R_f, J_local[0:3])
+        if jacobian:
+            J[:, :] = _mm(R_f, J_local[0:3])
         e[:] = par[0:3] - p_f
     elif kind == HOVER:
-        _hover_rows(R_b, J, e)
+        _hover_rows(R_b, J, e, jacobian)
     elif kind == BASE_ORIENTATION:  # log3(R_d^T R_b) -> 0, J = Jlog3 on the base angular velocity
         Rerr = _mm(par[0:9].copy().reshape(3, 3).T, R_b)
         w, theta = log3(Rerr)
-        J[:, :] = 0.0
-        J[:, 3:6] = jlog3(w, theta)
+        if jacobian:
+            J[:, :] = 0.0
+            J[:, 3:6] = jlog3(w, theta)
         e[:] = -w
     elif kind == COM:  # the CoG offset from the thrust axis, in B: E (c_b - point) -> target
         point, E = par[2:5], par[5:11].copy().reshape(2, 3)
         c_b = _mv(R_b.T, com - p_b)
-        J[:, :] = _mm(_mm(E, R_b.T), Jcom)
-        J[:, 0:3] -= E
-        J[:, 3:6] += _mm(E, _skew(c_b))
+        if jacobian:
+            J[:, :] = _mm(_mm(E, R_b.T), Jcom)
+            J[:, 0:3] -= E
+            J[:, 3:6] += _mm(E, _skew(c_b))
         e[:] = par[0:2] - _mv(E, c_b - point)
     else:  # POSTURE: q_arm -> reference
         n_arm = e.shape[0]
-        J[:, :] = 0.0
-        for i in range(n_arm):
-            J[i, 6 + i] = 1.0
+        if jacobian:
+            J[:, :] = 0.0
+            for i in range(n_arm):
+                J[i, 6 + i] = 1.0
         e[:] = par[0:n_arm] - q[7:]
 
 
@@ -239,6 +246,12 @@ def _task_rows(kind, par, frame, base, q, J, e):
 def linearize(levels, frame, base, q, nv):
     """Every level's (J, e), stacked: (A (m, nv), b (m,)); ``levels`` = (kinds, dims, params) with params[k] the
     parameters of level k's task followed by its row scale (:func:`_task_rows`)."""
+    return _stacked(levels, frame, base, q, nv, True)
+
+
+@numba.njit(**_JIT)
+def _stacked(levels, frame, base, q, nv, jacobian):
+    """:func:`linearize`, or every level's e alone when ``jacobian`` is False (pass nv = 0: A is then empty)."""
     kinds, dims, params = levels
     offsets = np.zeros(kinds.shape[0] + 1, dtype=np.int64)
     offsets[1:] = np.cumsum(dims)
@@ -246,7 +259,7 @@ def linearize(levels, frame, base, q, nv):
     b = np.zeros(offsets[-1])
     for k in range(kinds.shape[0]):
         J, e = A[offsets[k] : offsets[k + 1]], b[offsets[k] : offsets[k + 1]]
-        _task_rows(kinds[k], params[k], frame, base, q, J, e)
+        _task_rows(kinds[k], params[k], frame, base, q, J, e, jacobian)
         scale = params[k, params.shape[1] - dims[k] :]
         for i in range(dims[k]):
             J[i] *= scale[i]
@@ -256,8 +269,8 @@ def linearize(levels, frame, base, q, nv):
 
 @numba.njit(**_JIT)
 def level_norms(levels, frame, base, q):
-    """||e_k|| of every level (:func:`linearize`'s e_k, row scales included)."""
-    A, b, offsets = linearize(levels, frame, base, q, frame[0].shape[1])
+    """||e_k|| of every level (:func:`linearize`'s e_k, row scales included; no Jacobian is computed)."""
+    _, b, offsets = _stacked(levels, frame, base, q, 0, False)
     norms = np.zeros(offsets.shape[0] - 1)
     for k in range(norms.shape[0]):
         e = b[offsets[k] : offsets[k + 1]]

@@ -837,6 +837,7 @@ class IKSolver:
         self.unreachable_hint = unreachable_hint
         self._method_run = IK_METHODS[method].make(platform, self.options)  # the method's state (the QP's engine...)
         self._resolvable = _resolvable_below(self.options.position_tol)  # [m] targets nearer pass check_resolvable
+        self._hover_needed = _require_hover(platform, self.options)  # the success definition's hover clause
         self._data = None  # the last pin.Data checked (check_data)
         self._collision = None
         if self.options.collision_free:
@@ -876,9 +877,7 @@ class IKSolver:
         return result
 
     def _run(self, data: pin.Data, p_d, R_d, xi: np.ndarray, init: str, t0: float) -> IKResult:
-        ctx = SolveContext(
-            self.platform, data, self.method, p_d, R_d, self.options, t0, init, _require_hover(self.platform, self.options), self.unreachable_hint
-        )
+        ctx = SolveContext(self.platform, data, self.method, p_d, R_d, self.options, t0, init, self._hover_needed, self.unreachable_hint)
         return self._method_run(ctx, xi)
 
     def _collision_free(self, data: pin.Data, p_d, R_d, result: IKResult, t0: float) -> IKResult:
@@ -937,11 +936,11 @@ class QPMethod:
     def __call__(self, ctx: SolveContext, xi: np.ndarray) -> IKResult:
         platform, opts, engine = self.platform, self.options, self.engine
         q = ch.xi_to_q(xi)
-        posture = (q[7:] if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture")).copy()
+        posture = None if opts.posture is None else platform.check_arm_limits(opts.posture, "option posture").copy()
         levels = opts.levels
-        if levels is None:
+        if levels is None:  # the default levels; their posture level holds the option's, else the start's arm
             target = pin.SE3(ctx.R_d, ctx.p_d) if ctx.R_d is not None else ctx.p_d
-            levels = self.default_levels.levels(target, posture, float(xi[5]))
+            levels = self.default_levels.levels(target, q[7:].copy() if posture is None else posture, float(xi[5]))
         loop = engine.newton_loop(platform, levels, self._settings)  # its warm starts forgotten (a new solve)
         if loop is not None and loop.packed.frame == platform.ee_frame:  # the success test's frame: the loop's pose errors
             shift = _BaseShift.of(levels, POLISHED * opts.position_tol)
